@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# partscale's two commands:
+#   ./dev.sh setup   create .venv (Python 3.11), install partscale, run the demo on a real object
+#   ./dev.sh test    lint, format check and the whole test suite (installs what it needs first)
+# Optional heavy parts (Node tools for glTF validation and browser tests, Debian's chromium) are
+# installed when possible; tests that need them skip with a printed reason otherwise.
+set -euo pipefail
+cd "$(dirname "$0")"
+ROOT=$PWD
+VENV=$ROOT/.venv
+PY=$VENV/bin/python
+
+say() { printf '\033[1m==> %s\033[0m\n' "$*" >&2; }
+
+find_python() {
+  for c in python3.11 python3 python; do
+    if command -v "$c" >/dev/null 2>&1 && "$c" -c 'import sys; sys.exit(sys.version_info < (3, 11))'; then
+      echo "$c"; return 0
+    fi
+  done
+  echo "partscale needs Python 3.11 or newer on PATH" >&2; exit 2
+}
+
+ensure_venv() {
+  local stamp=$VENV/.partscale-installed
+  if [ ! -x "$PY" ]; then
+    say "creating .venv with $(find_python)"
+    "$(find_python)" -m venv "$VENV"
+  fi
+  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
+    say "installing partscale and its dependencies into .venv"
+    "$PY" -m pip install -q --upgrade pip
+    "$PY" -m pip install -q -e ".[test]"
+    touch "$stamp"
+  fi
+}
+
+ensure_node_tools() {
+  # gltf-validator (Khronos) and playwright-core for browser tests; npm registry only.
+  if ! command -v npm >/dev/null 2>&1; then
+    echo "note: npm not found; glTF validation and browser tests will be skipped" >&2; return 0
+  fi
+  if [ -f web/package.json ] && [ ! -d web/node_modules ] || [ web/package.json -nt web/node_modules ]; then
+    say "installing web tools (npm ci in web/)"
+    (cd web && npm ci --no-audit --no-fund --loglevel=error) || echo "note: npm ci failed; glTF validation and browser tests will be skipped" >&2
+  fi
+}
+
+ensure_chromium() {
+  if command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1; then return 0; fi
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    say "installing Debian's chromium for browser tests"
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null) \
+      || echo "note: could not install chromium; browser tests will be skipped" >&2
+  else
+    echo "note: chromium not found and cannot be installed here (needs root and apt-get); browser tests will be skipped" >&2
+  fi
+}
+
+demo() {
+  local out=$ROOT/out/demo
+  local obj=${PARTSCALE_DEMO_OBJECT:-$ROOT/../shared/data/kenney/table.glb}
+  mkdir -p "$out"
+  if [ ! -f "$obj" ]; then echo "demo object $obj not found (set PARTSCALE_DEMO_OBJECT)" >&2; exit 2; fi
+  local ps=$VENV/bin/partscale
+  say "demo: import $obj"
+  "$ps" import "$obj" -o "$out/table.csdf.npz" --res 128
+  "$ps" info "$out/table.csdf.npz"
+  say "demo: make it 40% longer by stretching the zone between its legs"
+  "$ps" scale "$out/table.csdf.npz" -o "$out/table_longer.csdf.npz" --axis x --zone 35% 65% --to 105% --mode stretch
+  "$ps" render "$out/table.csdf.npz" -o "$out/table.png" --view iso
+  "$ps" render "$out/table_longer.csdf.npz" -o "$out/table_longer.png" --view iso
+  "$ps" export "$out/table_longer.csdf.npz" --mesh "$out/table_longer.glb"
+  say "demo done: see $out (table.png, table_longer.png, table_longer.glb)"
+}
+
+case "${1:-}" in
+  setup)
+    ensure_venv
+    demo
+    ;;
+  test)
+    ensure_venv
+    ensure_node_tools
+    ensure_chromium
+    say "ruff"
+    "$VENV/bin/ruff" check src tests bench
+    "$VENV/bin/ruff" format --check src tests bench
+    say "pytest"
+    shift
+    "$PY" -m pytest "$@"
+    ;;
+  demo)
+    ensure_venv
+    demo
+    ;;
+  *)
+    echo "usage: ./dev.sh setup | test [pytest args] | demo" >&2; exit 2
+    ;;
+esac

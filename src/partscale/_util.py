@@ -1,0 +1,112 @@
+"""Small helpers shared by every stage: atomic writes, option checks, memory guards."""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import inspect
+import os
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import TypeVar
+
+from .errors import InputError, MemoryLimitError
+
+F = TypeVar("F", bound=Callable)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; rename it onto ``path`` only on success.
+
+    Nothing half-written is ever left: on any exception the temporary file is removed and the
+    destination is untouched. The temporary keeps ``path``'s suffix (or ``suffix``) so writers
+    that infer the format from the name still work.
+    """
+    path = Path(path)
+    if path.parent and not path.parent.exists():
+        raise InputError(f"{path}: expected an existing output folder, got none at {path.parent}")
+    suf = suffix if suffix is not None else "".join(path.suffixes)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suf}", dir=path.parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.replace(tmp_path, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            tmp_path.unlink()
+        raise
+
+
+def keyword_options(func: F) -> F:
+    """Make an unknown keyword option fail with the list of the ones that exist.
+
+    Python's own message ("unexpected keyword argument") does not say what is allowed.
+    """
+    sig = inspect.signature(func)
+    known = [
+        n
+        for n, p in sig.parameters.items()
+        if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and not n.startswith("_")
+    ]
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        unknown = [k for k in kwargs if k not in sig.parameters]
+        if unknown:
+            raise TypeError(
+                f"{func.__name__}() got unknown option(s) {', '.join(map(repr, unknown))}; "
+                f"options are: {', '.join(known)}"
+            )
+        return func(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]
+
+
+def available_memory() -> int:
+    """Bytes this process may use: ``PARTSCALE_MAX_MEMORY`` if set, else MemAvailable."""
+    env = os.environ.get("PARTSCALE_MAX_MEMORY")
+    if env:
+        return int(float(env))
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 8 << 30
+
+
+def format_bytes(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if abs(n) < 1024 or unit == "TiB":
+            return f"{n:.1f} {unit}" if unit != "B" else f"{int(n)} B"
+        n /= 1024
+    return f"{n:.1f} TiB"
+
+
+def check_memory(shape: tuple[int, ...], bytes_per_voxel: float, *, what: str) -> None:
+    """Refuse a grid whose working set would not fit, saying how much it would need.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        Grid shape (X, Y, Z).
+    bytes_per_voxel : float
+        Peak working bytes per voxel of the operation (all temporaries counted).
+    what : str
+        The request, for the message (e.g. ``"import at --res 2048"``).
+    """
+    n = 1
+    for s in shape:
+        n *= int(s)
+    need = n * bytes_per_voxel
+    have = available_memory()
+    if need > have:
+        raise MemoryLimitError(
+            f"{what}: a {'x'.join(map(str, shape))} grid would need {format_bytes(need)} "
+            f"of memory, only {format_bytes(have)} is available"
+        )

@@ -1,0 +1,68 @@
+"""What every subcommand shares: the error boundary, verbosity and the progress bar."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from ..progress import ProgressCallback
+
+stderr = Console(stderr=True)
+state = {"verbose": False}
+
+
+@contextlib.contextmanager
+def progress_bar(description: str) -> Iterator[ProgressCallback]:
+    """A rich progress bar on stderr, driven by the core's ``progress(fraction, message)``.
+
+    Hidden when stderr is not a terminal, so pipes and CI logs stay clean.
+    """
+    with Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TextColumn("{task.fields[stage]}"),
+        TimeElapsedColumn(),
+        console=stderr,
+        transient=True,
+        disable=not stderr.is_terminal,
+    ) as bar:
+        task = bar.add_task(description, total=1.0, stage="")
+
+        def callback(fraction: float, message: str) -> None:
+            bar.update(task, completed=fraction, stage=message)
+
+        yield callback
+
+
+def done(message: str) -> None:
+    """One line on stderr saying what was written."""
+    stderr.print(message, highlight=False)
+
+
+def check_output(path: Path, *, suffixes: tuple[str, ...], what: str) -> Path:
+    """Validate an output path's suffix up front, before any work is done."""
+    from ..errors import InputError
+
+    name = path.name.lower()
+    if not any(name.endswith(s) for s in suffixes):
+        raise InputError(
+            f"{path}: expected {what} ending in {' or '.join(suffixes)}, got {path.suffix or 'no suffix'}"
+        )
+    return path
+
+
+def error_line(message: str) -> None:
+    """Print one unwrapped error line on stderr (rich would wrap it at the terminal width)."""
+    first = " ".join(str(message).split())
+    sys.stderr.write(f"partscale: error: {first}\n")
+    sys.stderr.flush()
+
+
+def is_verbose() -> bool:
+    return state["verbose"] or "-v" in sys.argv or "--verbose" in sys.argv

@@ -1,0 +1,59 @@
+"""``partscale info``: what a CSDF file holds."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .. import csdf as csdf_mod
+
+
+def summary(c: csdf_mod.CSDF) -> dict:
+    """A JSON-serialisable summary of a CSDF (what ``info --json`` prints)."""
+    try:
+        sb = c.surface_bounds()
+        solid = {"min": sb[0].tolist(), "max": sb[1].tolist(), "size": (sb[1] - sb[0]).tolist()}
+    except Exception:
+        solid = None
+    gb = c.grid_bounds
+    return {
+        "shape": list(c.shape),
+        "voxel_size": c.voxel_size,
+        "origin": c.origin.tolist(),
+        "units": c.meta.get("units", "m"),
+        "grid_extent": (gb[1] - gb[0]).tolist(),
+        "solid_bounds": solid,
+        "parts": c.n_parts,
+        "source": c.meta.get("source"),
+        "history": c.meta.get("history", []),
+    }
+
+
+def info(
+    path: Annotated[Path, typer.Argument(help="A .csdf.npz file.")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
+) -> None:
+    """Show shape, voxel size, extent in world units, number of parts and the edit history."""
+    s = summary(csdf_mod.load(path))
+    if as_json:
+        typer.echo(json.dumps(s, indent=2))
+        return
+    units = s["units"]
+    typer.echo(f"file:        {path}")
+    typer.echo(
+        f"grid:        {' x '.join(map(str, s['shape']))} voxels of {s['voxel_size']:.6g} {units}"
+    )
+    typer.echo(f"grid extent: {' x '.join(f'{v:.4g}' for v in s['grid_extent'])} {units}")
+    if s["solid_bounds"]:
+        size = s["solid_bounds"]["size"]
+        typer.echo(f"solid:       {' x '.join(f'{v:.4g}' for v in size)} {units}")
+    else:
+        typer.echo("solid:       none (no voxel inside)")
+    typer.echo(f"parts:       {s['parts'] or 'not segmented'}")
+    typer.echo(f"source:      {s['source']}")
+    typer.echo(f"history:     {len(s['history'])} operation(s)")
+    for i, op in enumerate(s["history"]):
+        typer.echo(f"  {i + 1}. {json.dumps(op)}")

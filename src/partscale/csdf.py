@@ -1,0 +1,316 @@
+"""The coloured signed distance field (CSDF) and its file, ``.csdf.npz``.
+
+Conventions (used everywhere in partscale)
+------------------------------------------
+- Sign: ``sdf`` is negative inside the solid, zero on its surface, positive outside; world units.
+- Index order: array index ``(i, j, k)`` is world ``(x, y, z)``; arrays are C-ordered, so ``k``
+  (z) varies fastest in memory. Textures written for engines reorder to x fastest (see export).
+- Sample positions: voxel ``(i, j, k)``'s centre is at ``origin + (i, j, k) * voxel_size``.
+  The grid spans ``[origin - voxel_size / 2, origin + (shape - 1/2) * voxel_size]``.
+- Colour space: ``rgb`` is 8-bit sRGB, the colour of the nearest surface point. Linear colour only
+  appears where a format demands it (glTF ``COLOR_0``).
+- Parts: ``parts`` is the index of the part at the nearest surface point, -1 where there is none
+  (everything is -1 until the object is segmented).
+
+A CSDF is immutable: its arrays are read-only and functions return new CSDFs.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._util import atomic_path
+from .errors import InputError
+
+FORMAT = "partscale.csdf"
+FORMAT_VERSION = 1
+SUFFIX = ".csdf.npz"
+_NAMES = ("sdf", "rgb", "parts", "origin", "voxel_size", "meta")
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    # A read-only array is already ours to share; a writeable one may belong to the caller, so it
+    # is copied rather than frozen in place (freezing would change the caller's array).
+    if not a.flags.writeable and a.flags.c_contiguous:
+        return a
+    a = np.array(a, order="C", copy=True)
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class CSDF:
+    """A coloured signed distance field on a regular grid of cubic voxels.
+
+    Parameters
+    ----------
+    sdf : (X, Y, Z) float32
+        Signed distance in world units, negative inside.
+    rgb : (X, Y, Z, 3) uint8
+        sRGB colour of the nearest surface point.
+    parts : (X, Y, Z) int16
+        Part index of the nearest surface point, -1 where none.
+    origin : (3,) float64
+        World position of voxel (0, 0, 0)'s centre.
+    voxel_size : float
+        Edge length of a voxel in world units (> 0).
+    meta : dict
+        JSON-serialisable: ``units``, ``source``, ``history`` (list of operations), ``parts_info``...
+
+    Construct through :func:`make` (which validates and converts) unless the arrays are already
+    known to be right.
+    """
+
+    sdf: np.ndarray
+    rgb: np.ndarray
+    parts: np.ndarray
+    origin: np.ndarray
+    voxel_size: float
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    # -- geometry of the grid -------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """(X, Y, Z) number of voxels along x, y, z."""
+        return tuple(int(s) for s in self.sdf.shape)  # type: ignore[return-value]
+
+    @property
+    def grid_bounds(self) -> np.ndarray:
+        """(2, 3) float64: world min and max corner of the region the voxels cover."""
+        lo = self.origin - self.voxel_size / 2
+        hi = self.origin + (np.asarray(self.shape) - 0.5) * self.voxel_size
+        return np.stack([lo, hi])
+
+    def axis_coords(self, axis: int) -> np.ndarray:
+        """(N,) float64: world coordinate of the voxel centres along ``axis`` (0, 1, 2)."""
+        return self.origin[axis] + np.arange(self.shape[axis]) * self.voxel_size
+
+    def world_to_index(self, points: np.ndarray) -> np.ndarray:
+        """(N, 3) float64 continuous voxel indices of world points (centres at integers)."""
+        return (np.asarray(points, dtype=np.float64) - self.origin) / self.voxel_size
+
+    def index_to_world(self, index: np.ndarray) -> np.ndarray:
+        """(N, 3) float64 world points of (continuous) voxel indices."""
+        return self.origin + np.asarray(index, dtype=np.float64) * self.voxel_size
+
+    def surface_bounds(self) -> np.ndarray:
+        """(2, 3) float64: world bounding box of the solid (zero level), to sub-voxel accuracy.
+
+        Along each axis, the extreme inside voxel is refined by the linear zero crossing to its
+        outside neighbour. Raises :class:`InputError` if the CSDF has no inside voxel.
+        """
+        inside = self.sdf <= 0
+        if not inside.any():
+            raise InputError("CSDF: expected a surface (some sdf <= 0), got none")
+        out = np.empty((2, 3))
+        h = self.voxel_size
+        for ax in range(3):
+            other = tuple(a for a in range(3) if a != ax)
+            occ = inside.any(axis=other)
+            idx = np.nonzero(occ)[0]
+            for side, i in ((0, idx[0]), (1, idx[-1])):
+                step = -1 if side == 0 else 1
+                j = i + step
+                pos = self.origin[ax] + i * h
+                if 0 <= j < self.shape[ax]:
+                    # smallest |sdf| crossing among the inside voxels of that slice
+                    sl_in = np.take(self.sdf, i, axis=ax)
+                    sl_out = np.take(self.sdf, j, axis=ax)
+                    m = sl_in <= 0
+                    a, b = sl_in[m].astype(np.float64), sl_out[m].astype(np.float64)
+                    t = np.where(b > a, -a / np.maximum(b - a, 1e-12), 0.0)
+                    pos += step * h * float(np.clip(t, 0.0, 1.0).max())
+                out[side, ax] = pos
+        return out
+
+    # -- functional updates ---------------------------------------------------------------
+    def replace(self, **changes: Any) -> CSDF:
+        """Return a new CSDF with some fields replaced (validated through :func:`make`)."""
+        fields = {n: getattr(self, n) for n in ("sdf", "rgb", "parts", "origin", "voxel_size")}
+        fields["meta"] = copy.deepcopy(self.meta)
+        unknown = set(changes) - set(fields)
+        if unknown:
+            raise TypeError(
+                f"replace() got unknown field(s) {sorted(unknown)}; fields are {_NAMES}"
+            )
+        fields.update(changes)
+        return make(**fields)
+
+    def with_history(self, operation: dict[str, Any], **changes: Any) -> CSDF:
+        """Return a new CSDF with ``operation`` appended to ``meta['history']``."""
+        meta = copy.deepcopy(changes.pop("meta", self.meta))
+        meta.setdefault("history", []).append(operation)
+        return self.replace(meta=meta, **changes)
+
+    @property
+    def n_parts(self) -> int:
+        """Number of distinct parts (0 when not segmented)."""
+        return int(self.parts.max()) + 1 if self.parts.size and self.parts.max() >= 0 else 0
+
+    def __repr__(self) -> str:
+        ext = (np.asarray(self.shape) * self.voxel_size).round(4).tolist()
+        return (
+            f"CSDF(shape={self.shape}, voxel_size={self.voxel_size:.6g}, extent={ext}, "
+            f"parts={self.n_parts})"
+        )
+
+
+def make(
+    sdf: Any,
+    rgb: Any = None,
+    parts: Any = None,
+    origin: Any = (0.0, 0.0, 0.0),
+    voxel_size: float = 1.0,
+    meta: dict[str, Any] | None = None,
+) -> CSDF:
+    """Validate and convert arrays into a :class:`CSDF` (the one public constructor).
+
+    Parameters
+    ----------
+    sdf : (X, Y, Z) array_like of float
+        Signed distance, world units, negative inside. Must be finite.
+    rgb : (X, Y, Z, 3) array_like of uint8, optional
+        sRGB colour; mid grey when omitted.
+    parts : (X, Y, Z) array_like of int, optional
+        Part index, -1 where none; all -1 when omitted.
+    origin : (3,) array_like of float
+        World position of voxel (0, 0, 0)'s centre.
+    voxel_size : float
+        Voxel edge length, > 0.
+    meta : dict, optional
+        JSON-serialisable metadata; ``format``/``version``/``history`` are filled in.
+    """
+    sdf = np.asarray(sdf)
+    if sdf.ndim != 3 or min(sdf.shape) < 2:
+        raise InputError(
+            f"sdf: expected a 3D grid with >= 2 voxels per axis, got shape {sdf.shape}"
+        )
+    if not np.issubdtype(sdf.dtype, np.floating):
+        raise InputError(f"sdf: expected floating point values, got dtype {sdf.dtype}")
+    sdf = sdf.astype(np.float32, copy=False)
+    if not np.isfinite(sdf).all():
+        bad = int((~np.isfinite(sdf)).sum())
+        raise InputError(f"sdf: expected finite values, got {bad} NaN/inf voxel(s)")
+    shape = sdf.shape
+    if rgb is None:
+        rgb = np.full((*shape, 3), 128, np.uint8)
+    rgb = np.asarray(rgb)
+    if rgb.shape != (*shape, 3):
+        raise InputError(f"rgb: expected shape {(*shape, 3)}, got {rgb.shape}")
+    if rgb.dtype != np.uint8:
+        raise InputError(f"rgb: expected dtype uint8 (sRGB), got {rgb.dtype}")
+    if parts is None:
+        parts = np.full(shape, -1, np.int16)
+    parts = np.asarray(parts)
+    if parts.shape != shape:
+        raise InputError(f"parts: expected shape {shape}, got {parts.shape}")
+    if not np.issubdtype(parts.dtype, np.integer):
+        raise InputError(f"parts: expected integer part indices, got dtype {parts.dtype}")
+    if parts.size and (parts.min() < -1 or parts.max() > np.iinfo(np.int16).max):
+        raise InputError(
+            f"parts: expected indices in [-1, 32767], got [{parts.min()}, {parts.max()}]"
+        )
+    parts = parts.astype(np.int16, copy=False)
+    origin = np.asarray(origin, dtype=np.float64).reshape(-1)
+    if origin.shape != (3,) or not np.isfinite(origin).all():
+        raise InputError(f"origin: expected 3 finite numbers, got {origin.tolist()}")
+    try:
+        voxel_size = float(np.asarray(voxel_size).reshape(()))
+    except (TypeError, ValueError):
+        raise InputError(f"voxel_size: expected one number, got {voxel_size!r}") from None
+    if not (np.isfinite(voxel_size) and voxel_size > 0):
+        raise InputError(f"voxel_size: expected a finite number > 0, got {voxel_size}")
+    meta = copy.deepcopy(meta) if meta is not None else {}
+    if not isinstance(meta, dict):
+        raise InputError(f"meta: expected a JSON object, got {type(meta).__name__}")
+    meta["format"] = FORMAT
+    meta["version"] = FORMAT_VERSION
+    meta.setdefault("units", "m")
+    meta.setdefault("history", [])
+    try:
+        json.dumps(meta)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"meta: expected JSON-serialisable metadata, got {exc}") from None
+    return CSDF(
+        sdf=_frozen(sdf),
+        rgb=_frozen(rgb),
+        parts=_frozen(parts),
+        origin=_frozen(origin),
+        voxel_size=voxel_size,
+        meta=meta,
+    )
+
+
+def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
+    """Write ``csdf`` to a ``.csdf.npz`` file atomically (a temporary file, then a rename).
+
+    Returns the path written.
+    """
+    path = Path(path)
+    arrays = {
+        "sdf": csdf.sdf,
+        "rgb": csdf.rgb,
+        "parts": csdf.parts,
+        "origin": csdf.origin,
+        "voxel_size": np.float64(csdf.voxel_size),
+        "meta": np.array(json.dumps(csdf.meta)),
+    }
+    writer = np.savez_compressed if compress else np.savez
+    with atomic_path(path, suffix=".npz") as tmp:
+        writer(tmp, **arrays)
+    return path
+
+
+def load(path: str | os.PathLike) -> CSDF:
+    """Read and validate a ``.csdf.npz`` file.
+
+    Raises :class:`InputError` naming the file and the problem: missing file, not an npz,
+    truncated, missing or extra arrays, wrong shapes or dtypes, non-finite values, wrong version.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: expected an existing .csdf.npz file, got no such file")
+    try:
+        # np.load leaks its file handle when the zip is corrupt: own the handle instead.
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+            names = set(z.files)
+            missing = [n for n in _NAMES if n not in names]
+            if missing:
+                raise InputError(
+                    f"{path}: expected arrays {', '.join(_NAMES)}, missing {', '.join(missing)}"
+                )
+            data = {n: z[n] for n in _NAMES}
+    except InputError:
+        raise
+    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as exc:
+        raise InputError(f"{path}: expected a .csdf.npz (zip of .npy arrays), got {exc}") from None
+    try:
+        meta = json.loads(str(data["meta"]))
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}: expected meta to be a JSON string, got {exc}") from None
+    if meta.get("format") != FORMAT:
+        raise InputError(f"{path}: expected meta format {FORMAT!r}, got {meta.get('format')!r}")
+    if meta.get("version") != FORMAT_VERSION:
+        raise InputError(
+            f"{path}: expected format version {FORMAT_VERSION}, got {meta.get('version')!r}"
+        )
+    exact = {"sdf": np.float32, "rgb": np.uint8, "parts": np.int16}
+    for name, dt in exact.items():
+        if data[name].dtype != dt:
+            raise InputError(
+                f"{path}: expected {name} of dtype {np.dtype(dt)}, got {data[name].dtype}"
+            )
+    try:
+        return make(
+            data["sdf"], data["rgb"], data["parts"], data["origin"], data["voxel_size"], meta
+        )
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None

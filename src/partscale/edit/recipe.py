@@ -1,0 +1,264 @@
+"""Edit recipes: the one schema shared by the library, the CLI and the web editor.
+
+A recipe is a JSON object ``{"version": 1, "edits": [EDIT, ...]}``; edits apply in order, each to
+the result of the previous one. An EDIT is::
+
+    {"axis": "x" | "y" | "z",
+     "zone": [START, END],          # the slab to change, START < END
+     "to": DEST,                    # where END goes; DEST > START; DEST < END shrinks
+     "mode": "stretch" | "tile" | "global"}
+
+Positions are numbers in the object's units (metres for glTF) or strings with a ``%`` suffix:
+percent of the object's extent along that axis, measured on the solid's bounding box
+(``"0%"`` = its min, ``"100%"`` = its max) of the CSDF the edit applies to.
+
+The 1D maps below (world coordinate after the edit -> world coordinate before) define the modes;
+the Python resampler and the web editor's shader both implement exactly these.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from ..errors import InputError
+
+AXES = ("x", "y", "z")
+MODES = ("stretch", "tile", "global")
+RECIPE_VERSION = 1
+
+Position = float | str
+Mode = Literal["stretch", "tile", "global"]
+
+#: JSON Schema (draft 2020-12) of a recipe file; ``partscale scale --recipe`` and the web editor
+#: both produce and accept it.
+JSON_SCHEMA: dict[str, Any] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": "partscale recipe",
+    "type": "object",
+    "required": ["edits"],
+    "additionalProperties": False,
+    "properties": {
+        "version": {"const": RECIPE_VERSION},
+        "edits": {
+            "type": "array",
+            "items": {
+                "type": "object",
+                "required": ["axis", "zone", "to"],
+                "additionalProperties": False,
+                "properties": {
+                    "axis": {"enum": list(AXES)},
+                    "zone": {
+                        "type": "array",
+                        "minItems": 2,
+                        "maxItems": 2,
+                        "items": {"$ref": "#/$defs/position"},
+                    },
+                    "to": {"$ref": "#/$defs/position"},
+                    "mode": {"enum": list(MODES), "default": "stretch"},
+                },
+            },
+        },
+    },
+    "$defs": {
+        "position": {
+            "oneOf": [
+                {"type": "number"},
+                {"type": "string", "pattern": r"^-?[0-9]+(\.[0-9]+)?%$"},
+            ]
+        }
+    },
+}
+
+
+def _parse_position(value: Any, what: str) -> Position:
+    if isinstance(value, bool):
+        raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
+    if isinstance(value, int | float):
+        if not math.isfinite(value):
+            raise InputError(f"{what}: expected a finite number, got {value!r}")
+        return float(value)
+    if isinstance(value, str):
+        s = value.strip()
+        try:
+            if s.endswith("%"):
+                float(s[:-1])
+                return s
+            return float(s)
+        except ValueError:
+            pass
+    raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
+
+
+@dataclass(frozen=True)
+class Edit:
+    """One zone edit. Positions are floats (object units) or ``'NN%'`` strings."""
+
+    axis: str
+    start: Position
+    end: Position
+    dest: Position
+    mode: str = "stretch"
+
+    @classmethod
+    def parse(cls, obj: Any, *, where: str = "edit") -> Edit:
+        """Validate a JSON-like edit (see module docstring)."""
+        if not isinstance(obj, dict):
+            raise InputError(f"{where}: expected an object with axis, zone, to, mode; got {obj!r}")
+        unknown = set(obj) - {"axis", "zone", "to", "mode"}
+        if unknown:
+            raise InputError(
+                f"{where}: unknown key(s) {sorted(unknown)}; keys are axis, zone, to, mode"
+            )
+        for k in ("axis", "zone", "to"):
+            if k not in obj:
+                raise InputError(f"{where}: expected key {k!r}, got keys {sorted(obj)}")
+        axis = str(obj["axis"]).lower()
+        if axis not in AXES:
+            raise InputError(f"{where}.axis: expected one of x, y, z, got {obj['axis']!r}")
+        mode = str(obj.get("mode", "stretch")).lower()
+        if mode not in MODES:
+            raise InputError(
+                f"{where}.mode: expected one of {', '.join(MODES)}, got {obj['mode']!r}"
+            )
+        zone = obj["zone"]
+        if not isinstance(zone, list | tuple) or len(zone) != 2:
+            raise InputError(f"{where}.zone: expected [START, END], got {zone!r}")
+        return cls(
+            axis=axis,
+            start=_parse_position(zone[0], f"{where}.zone[0]"),
+            end=_parse_position(zone[1], f"{where}.zone[1]"),
+            dest=_parse_position(obj["to"], f"{where}.to"),
+            mode=mode,
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "axis": self.axis,
+            "zone": [self.start, self.end],
+            "to": self.dest,
+            "mode": self.mode,
+        }
+
+    @property
+    def axis_index(self) -> int:
+        return AXES.index(self.axis)
+
+    def resolve(self, lo: float, hi: float) -> tuple[float, float, float]:
+        """World ``(start, end, dest)`` given the solid's extent ``[lo, hi]`` along the axis."""
+
+        def world(p: Position) -> float:
+            if isinstance(p, str):
+                return lo + float(p.rstrip("%")) / 100.0 * (hi - lo)
+            return float(p)
+
+        return world(self.start), world(self.end), world(self.dest)
+
+
+@dataclass(frozen=True)
+class Recipe:
+    """An ordered list of :class:`Edit`; serialises to the JSON schema above."""
+
+    edits: tuple[Edit, ...] = field(default_factory=tuple)
+
+    @classmethod
+    def parse(cls, obj: Any) -> Recipe:
+        if isinstance(obj, list):
+            obj = {"edits": obj}
+        if not isinstance(obj, dict) or "edits" not in obj:
+            raise InputError(f"recipe: expected {{'edits': [...]}}, got {str(obj)[:80]!r}")
+        unknown = set(obj) - {"version", "edits"}
+        if unknown:
+            raise InputError(f"recipe: unknown key(s) {sorted(unknown)}; keys are version, edits")
+        if obj.get("version", RECIPE_VERSION) != RECIPE_VERSION:
+            raise InputError(f"recipe: expected version {RECIPE_VERSION}, got {obj['version']!r}")
+        edits = obj["edits"]
+        if not isinstance(edits, list) or not edits:
+            raise InputError(f"recipe: expected a non-empty list of edits, got {edits!r}")
+        return cls(tuple(Edit.parse(e, where=f"edits[{i}]") for i, e in enumerate(edits)))
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> Recipe:
+        path = Path(path)
+        if not path.is_file():
+            raise InputError(f"{path}: expected a recipe JSON file, got no such file")
+        try:
+            obj = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise InputError(f"{path}: expected JSON, got {exc}") from None
+        try:
+            return cls.parse(obj)
+        except InputError as exc:
+            raise InputError(f"{path}: {exc}") from None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"version": RECIPE_VERSION, "edits": [e.to_json() for e in self.edits]}
+
+
+# -- the 1D maps: output coordinate -> source coordinate --------------------------------------
+
+
+def tile_count(length: float, target: float) -> int:
+    """Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``.
+
+    Half-way cases round up (1.5 -> 2) so growing by one and a half periods adds a copy.
+    """
+    return max(1, math.floor(target / length + 0.5))
+
+
+def source_coordinate(
+    y: np.ndarray,
+    *,
+    mode: str,
+    start: float,
+    end: float,
+    dest: float,
+    lo: float | None = None,
+    hi: float | None = None,
+) -> np.ndarray:
+    """Map output world coordinates ``y`` along the edit axis to source coordinates.
+
+    Parameters
+    ----------
+    y : (N,) float64
+        Coordinates after the edit.
+    mode : {'stretch', 'tile', 'global'}
+    start, end, dest : float
+        World zone ``[start, end]`` and the new position of ``end``.
+    lo, hi : float
+        The solid's extent along the axis before the edit (``global`` only): it is scaled about
+        ``lo`` so that its length changes by ``dest - end``.
+
+    Returns
+    -------
+    (N,) float64
+        For ``tile``, copy ``m`` of ``n`` maps ``[start + m L'/n, start + (m+1) L'/n]`` onto
+        ``[start, end]``; the resampler additionally blends across seams (the map does not).
+    """
+    y = np.asarray(y, dtype=np.float64)
+    shift = dest - end
+    if mode == "global":
+        if lo is None or hi is None:
+            raise ValueError("global mode needs the solid's extent lo, hi")
+        factor = (hi - lo + shift) / (hi - lo)
+        return lo + (y - lo) / factor
+    length, target = end - start, dest - start
+    x = np.where(y < start, y, y - shift)
+    inside = (y >= start) & (y <= dest)
+    t = (y[inside] - start) / target  # 0..1 across the new zone
+    if mode == "stretch":
+        x[inside] = start + t * length
+    elif mode == "tile":
+        n = tile_count(length, target)
+        u = t * n
+        k = np.minimum(np.floor(u), n - 1)
+        x[inside] = start + (u - k) * length
+    else:
+        raise ValueError(f"mode: expected one of {MODES}, got {mode!r}")
+    return x

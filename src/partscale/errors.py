@@ -1,0 +1,30 @@
+"""Errors raised at the public boundary.
+
+Every error a user can cause is an :class:`InputError`: its message is one line that names the
+thing at fault and says what was expected and what arrived. The CLI prints it and exits with 2.
+"""
+
+from __future__ import annotations
+
+
+class PartscaleError(Exception):
+    """Base class of every error partscale raises on purpose."""
+
+
+class InputError(PartscaleError, ValueError):
+    """Bad input: a file, a grid or an option that is not what was expected.
+
+    Parameters
+    ----------
+    message : str
+        One line: what is wrong, expected vs got.
+    """
+
+
+class MemoryLimitError(InputError):
+    """A request that would need more memory than this machine allows."""
+
+
+def expected(what: str, *, expected: str, got: object) -> InputError:
+    """Build an :class:`InputError` with the house wording ``what: expected X, got Y``."""
+    return InputError(f"{what}: expected {expected}, got {got}")

@@ -1,0 +1,82 @@
+"""The zero level set of a CSDF as a triangle mesh (marching cubes), with colours and parts.
+
+Shared by export, segmentation and evaluation, so the surface every stage sees is the same one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+from scipy import ndimage
+from skimage import measure
+
+from .csdf import CSDF
+from .errors import InputError
+
+
+def sample_linear(volume: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Trilinear samples of ``volume`` at continuous voxel indices.
+
+    Parameters
+    ----------
+    volume : (X, Y, Z) or (X, Y, Z, C) array
+    index : (N, 3) float64
+        Continuous indices (voxel centres at integers); clamped to the grid.
+
+    Returns
+    -------
+    (N,) or (N, C) float64
+    """
+    vol = np.asarray(volume)
+    if vol.ndim == 3:
+        return ndimage.map_coordinates(vol.astype(np.float64), index.T, order=1, mode="nearest")
+    return np.stack(
+        [
+            ndimage.map_coordinates(
+                vol[..., c].astype(np.float64), index.T, order=1, mode="nearest"
+            )
+            for c in range(vol.shape[-1])
+        ],
+        axis=-1,
+    )
+
+
+def sample_nearest(volume: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Nearest-voxel samples of ``volume`` (any dtype) at continuous indices (N, 3)."""
+    ijk = np.rint(index).astype(np.intp)
+    for a in range(3):
+        np.clip(ijk[:, a], 0, volume.shape[a] - 1, out=ijk[:, a])
+    return volume[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+
+
+def to_mesh(csdf: CSDF, *, level: float = 0.0) -> trimesh.Trimesh:
+    """Marching cubes of ``csdf.sdf`` at ``level``, in world units, faces outward.
+
+    The grid is padded by one outside voxel so the mesh is closed even where the solid touches
+    the border. Vertex colours (sRGB uint8 RGBA, trimesh's convention) are trilinear samples of
+    ``rgb``; ``mesh.vertex_attributes['parts']`` holds the nearest voxel's part index.
+
+    Returns
+    -------
+    trimesh.Trimesh
+        Vertices (V, 3) float64 in world units; faces (F, 3) int64 wound outward.
+    """
+    sdf = csdf.sdf
+    if not (sdf <= level).any() or not (sdf > level).any():
+        raise InputError(f"CSDF: expected a surface at level {level}, got none in the grid")
+    pad_value = max(float(sdf.max()), level + csdf.voxel_size)
+    padded = np.pad(sdf, 1, mode="constant", constant_values=pad_value)
+    verts, faces, _normals, _values = measure.marching_cubes(
+        padded, level=level, allow_degenerate=False
+    )
+    index = verts - 1.0
+    world = csdf.index_to_world(index)
+    rgb = np.clip(np.rint(sample_linear(csdf.rgb, index)), 0, 255).astype(np.uint8)
+    rgba = np.concatenate([rgb, np.full((len(rgb), 1), 255, np.uint8)], axis=1)
+    # skimage orients faces so normals point toward increasing values (outside, since sdf < 0
+    # inside): keep that winding, trimesh then reports positive volume.
+    mesh = trimesh.Trimesh(world, faces[:, ::-1], vertex_colors=rgba, process=False)
+    if mesh.volume < 0:
+        mesh.invert()
+    mesh.vertex_attributes["parts"] = sample_nearest(csdf.parts, index).astype(np.int16)
+    return mesh

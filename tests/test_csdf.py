@@ -1,0 +1,139 @@
+"""The CSDF type and its file: validation, exact round trips, atomic saves, clear errors."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+
+import numpy as np
+import pytest
+from conftest import assert_bad_input
+
+import partscale
+from partscale import shapes
+from partscale._util import check_memory, keyword_options
+from partscale.csdf import load, make, save
+from partscale.errors import InputError, MemoryLimitError
+
+
+@pytest.fixture
+def ball():
+    return shapes.sphere((0.1, -0.2, 0.3), 0.25, voxel_size=0.02)
+
+
+def test_sphere_grid_matches_closed_form(ball):
+    pts = ball.index_to_world(np.argwhere(np.ones(ball.shape, bool)))
+    truth = np.linalg.norm(pts - [0.1, -0.2, 0.3], axis=1) - 0.25
+    assert np.abs(ball.sdf.reshape(-1) - truth).max() < 1e-6
+
+
+def test_arrays_are_read_only_and_caller_array_untouched():
+    sdf = np.ones((4, 5, 6), np.float32)
+    sdf[1:3, 1:4, 1:5] = -1
+    c = make(sdf)
+    assert sdf.flags.writeable  # the caller's array is not frozen behind their back
+    sdf[0, 0, 0] = 7
+    assert c.sdf[0, 0, 0] == 1
+    with pytest.raises(ValueError):
+        c.sdf[0, 0, 0] = 2
+
+
+def test_save_load_is_exact(tmp_path, ball):
+    c = ball.with_history({"op": "test", "n": 1}, parts=np.where(ball.sdf < 0, 3, -1))
+    p = save(c, tmp_path / "ball.csdf.npz")
+    d = load(p)
+    for name in ("sdf", "rgb", "parts", "origin"):
+        a, b = getattr(c, name), getattr(d, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b), name
+    assert d.voxel_size == c.voxel_size
+    assert d.meta == c.meta
+    assert d.meta["history"][-1] == {"op": "test", "n": 1}
+    assert d.n_parts == 4
+    assert list(tmp_path.iterdir()) == [p]  # no temporary left beside it
+
+
+def test_surface_bounds_subvoxel():
+    c = shapes.box((0.0, 0.0, 0.0), (1.0, 0.5, 0.25), voxel_size=0.05)
+    sb = c.surface_bounds()
+    assert np.allclose(sb, [[0, 0, 0], [1.0, 0.5, 0.25]], atol=0.05 * 0.05)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "fragment"),
+    [
+        ({"sdf": np.zeros((4, 4))}, "3D grid"),
+        ({"sdf": np.full((4, 4, 4), np.nan)}, "NaN"),
+        ({"sdf": np.zeros((4, 4, 4), int)}, "floating"),
+        ({"sdf": np.zeros((4, 4, 4)), "rgb": np.zeros((4, 4, 4, 3), float)}, "uint8"),
+        ({"sdf": np.zeros((4, 4, 4)), "parts": np.zeros((4, 4, 3), int)}, "shape"),
+        ({"sdf": np.zeros((4, 4, 4)), "voxel_size": -1}, "voxel_size"),
+        ({"sdf": np.zeros((4, 4, 4)), "origin": (0, 1)}, "origin"),
+    ],
+)
+def test_make_rejects_bad_arrays(kwargs, fragment):
+    with pytest.raises(InputError, match=fragment):
+        make(**kwargs)
+
+
+def test_load_rejects_bad_files(tmp_path, ball):
+    good = save(ball, tmp_path / "good.csdf.npz")
+    truncated = tmp_path / "trunc.csdf.npz"
+    truncated.write_bytes(good.read_bytes()[:200])
+    with pytest.raises(InputError, match=r"trunc\.csdf\.npz"):
+        load(truncated)
+    with pytest.raises(InputError, match="no such file"):
+        load(tmp_path / "missing.csdf.npz")
+    other = tmp_path / "other.npz"
+    np.savez(other, sdf=np.zeros((3, 3, 3), np.float32))
+    with pytest.raises(InputError, match="missing"):
+        load(other)
+    # a newer format version is refused, not misread
+    bumped = tmp_path / "v9.csdf.npz"
+    with zipfile.ZipFile(good) as z:
+        arrays = {n[:-4]: np.load(z.open(n)) for n in z.namelist()}
+    meta = json.loads(str(arrays["meta"]))
+    meta["version"] = 9
+    arrays["meta"] = np.array(json.dumps(meta))
+    np.savez(bumped, **arrays)
+    with pytest.raises(InputError, match="version"):
+        load(bumped)
+
+
+def test_failed_save_leaves_nothing(tmp_path, ball, monkeypatch):
+    def boom(*a, **k):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(np, "savez_compressed", boom)
+    with pytest.raises(OSError):
+        save(ball, tmp_path / "x.csdf.npz")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_memory_guard_names_the_need(monkeypatch):
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(1 << 30))
+    with pytest.raises(MemoryLimitError, match=r"would need 8\.0 GiB"):
+        check_memory((1024, 1024, 1024), 8, what="test")
+    check_memory((128, 128, 128), 8, what="test")
+
+
+def test_unknown_option_lists_the_known_ones():
+    @keyword_options
+    def f(x, *, alpha=1, beta=2):
+        return x + alpha + beta
+
+    assert f(1, beta=3) == 5
+    with pytest.raises(TypeError, match="options are: x, alpha, beta"):
+        f(1, gamma=3)
+
+
+def test_info_cli(tmp_path, ball, cli):
+    p = save(ball, tmp_path / "ball.csdf.npz")
+    proc = cli("info", p, "--json", check=True)
+    s = json.loads(proc.stdout)
+    assert s["shape"] == list(ball.shape)
+    assert s["solid_bounds"]["size"] == pytest.approx([0.5, 0.5, 0.5], abs=0.02 * 0.1)
+    assert_bad_input(cli("info", tmp_path / "nope.csdf.npz"), "nope.csdf.npz", "no such file")
+
+
+def test_version_is_exposed():
+    assert partscale.__version__

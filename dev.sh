@@ -40,9 +40,10 @@ ensure_node_tools() {
   if ! command -v npm >/dev/null 2>&1; then
     echo "note: npm not found; glTF validation and browser tests will be skipped" >&2; return 0
   fi
-  if [ -f web/package.json ] && [ ! -d web/node_modules ] || [ web/package.json -nt web/node_modules ]; then
+  local stamp=web/node_modules/.partscale-installed
+  if [ ! -f "$stamp" ] || [ web/package-lock.json -nt "$stamp" ]; then
     say "installing web tools (npm ci in web/)"
-    (cd web && npm ci --no-audit --no-fund --loglevel=error) || echo "note: npm ci failed; glTF validation and browser tests will be skipped" >&2
+    (cd web && npm ci --no-audit --no-fund --loglevel=error && touch node_modules/.partscale-installed) || echo "note: npm ci failed; glTF validation and browser tests will be skipped" >&2
   fi
 }
 

@@ -38,7 +38,7 @@ from . import _kernels
 from .mesh_io import ColoredMesh
 
 BAND = 3  # exact distances within this many voxels of the surface
-SUBDIVIDE = 4.0  # pieces longer than this many voxels are split for classification
+SUBDIVIDE = 4.0  # pieces longer than this many voxels are classified piecewise
 SLAB = 2  # x-layers per parallel work item
 BYTES_PER_VOXEL = 72  # peak working set of from_mesh per grid voxel (all temporaries)
 MIN_RES = 16
@@ -112,6 +112,11 @@ def _subdivide(tris: np.ndarray, max_edge: float):
     return np.concatenate(done_t)[order], par[order], np.concatenate(done_b)[order]
 
 
+def _longest(tris: np.ndarray) -> float:
+    e = [np.linalg.norm(tris[:, (i + 1) % 3] - tris[:, i], axis=1).max() for i in range(3)]
+    return float(max(e))
+
+
 def _winding(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
     import igl
 
@@ -135,33 +140,93 @@ def classify(V: np.ndarray, F: np.ndarray, tris: np.ndarray, eps: float) -> np.n
     nrm = nrm[ok] / ln[ok, None]
     lo = _winding(V, F, tris[ok].mean(axis=1) + eps * nrm)
     cls = np.full(len(tris), -1, np.int8)
-    sub = np.full(len(lo), 2, np.int8)
-    sub[(lo >= -0.25) & (lo <= 0.25)] = 0
-    sub[lo >= 0.75] = 1
-    cls[ok] = sub
+    cls[ok] = _class_of(lo)
     return cls
 
 
-def _primitives(tris, sub, parent, corner_bary, cls):
-    """Distance primitives: whole source triangles whose pieces agree, pieces elsewhere.
+def _class_of(lo: np.ndarray) -> np.ndarray:
+    out = np.full(len(lo), 2, np.int8)
+    out[(lo >= -0.25) & (lo <= 0.25)] = 0
+    out[lo >= 0.75] = 1
+    return out
 
-    Returns prim (P, 3, 3), prim_parent (P,), prim_bary (P, 3, 3), prim_cls (P,) int8.
+
+def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
+    """Distance primitives and their class (0 boundary, 1 buried, 2 open sheet, -1 degenerate).
+
+    Every triangle is classified at its centroid; triangles longer than ``SUBDIVIDE`` voxels
+    also at three points towards their corners, and where those disagree (a board partly
+    buried in another) they are split into pieces of at most ``SUBDIVIDE`` voxels, each
+    classified on its own. Winding-number queries next to the surface are the expensive part
+    of the import, so only as many as needed are made.
+
+    Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
+    (barycentrics of each primitive corner in its source triangle) and cls (P,) int8.
     """
-    n = len(tris)
-    lo = np.full(n, 127, np.int16)
-    hi = np.full(n, -128, np.int16)
-    np.minimum.at(lo, parent, cls)
-    np.maximum.at(hi, parent, cls)
-    n_sub = np.bincount(parent, minlength=n)
-    whole = (lo == hi) & (n_sub >= 1)
-    keep_sub = ~whole[parent]
+    tris = V[F]
+    n_tri = len(tris)
+    eps = 0.05 * h
+    e1 = tris[:, 1] - tris[:, 0]
+    e2 = tris[:, 2] - tris[:, 0]
+    nrm = np.cross(e1, e2)
+    ln = np.linalg.norm(nrm, axis=1)
+    ok = ln > 1e-14 * max(1.0, float(np.abs(tris).max())) ** 2
+    unit = np.zeros_like(nrm)
+    unit[ok] = nrm[ok] / ln[ok, None]
+    edge = np.stack(
+        [np.linalg.norm(tris[:, (i + 1) % 3] - tris[:, i], axis=1) for i in range(3)], 1
+    )
+    big = np.nonzero(ok & (edge.max(axis=1) > SUBDIVIDE * h))[0]
+    okid = np.nonzero(ok)[0]
+    corner_w = np.array([[4, 1, 1], [1, 4, 1], [1, 1, 4]], np.float64) / 6
+    probes = [tris[okid].mean(axis=1) + eps * unit[okid]]
+    for cw in corner_w:
+        probes.append(np.einsum("c,ncd->nd", cw, tris[big]) + eps * unit[big])
+    w = _winding(V, F, np.concatenate(probes))
+    cls = np.full(n_tri, -1, np.int8)
+    cls[okid] = _class_of(w[: len(okid)])
+    corner_cls = _class_of(w[len(okid) :]).reshape(3, -1)
+    mixed = big[(corner_cls != cls[big]).any(axis=0)]
+    whole = np.ones(n_tri, bool)
+    whole[mixed] = False
     wid = np.nonzero(whole)[0]
-    prim = np.concatenate([tris[wid], sub[keep_sub]])
-    prim_parent = np.concatenate([wid, parent[keep_sub]])
-    eye = np.broadcast_to(np.eye(3), (len(wid), 3, 3))
-    prim_bary = np.concatenate([eye, corner_bary[keep_sub]])
-    prim_cls = np.concatenate([lo[wid].astype(np.int8), cls[keep_sub]])
-    return prim, prim_parent, prim_bary, prim_cls
+    prim = [tris[wid]]
+    parent = [wid]
+    bary = [np.broadcast_to(np.eye(3), (len(wid), 3, 3))]
+    pcls = [cls[wid]]
+    if len(mixed):
+        sub, sp, sb = _subdivide(tris[mixed], SUBDIVIDE * h)
+        scls = classify(V, F, sub, eps)
+        prim.append(sub)
+        parent.append(mixed[sp])
+        bary.append(sb)
+        pcls.append(scls)
+    return (
+        np.concatenate(prim),
+        np.concatenate(parent),
+        np.concatenate(bary),
+        np.concatenate(pcls),
+    )
+
+
+def _thickness(V, F, tris, start: float) -> np.ndarray:
+    """(T,) distance from each triangle's centroid, inwards (against its normal), to the mesh.
+
+    inf where the ray leaves the mesh. Rays start ``start`` behind the face, so coincident
+    duplicate faces do not count.
+    """
+    import trimesh
+
+    if len(tris) == 0:
+        return np.zeros(0)
+    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    origins = tris.mean(axis=1) - start * n
+    mesh = trimesh.Trimesh(V, F, process=False)
+    loc, ray, _tri = mesh.ray.intersects_location(origins, -n, multiple_hits=False)
+    out = np.full(len(tris), np.inf)
+    out[ray] = np.linalg.norm(loc - origins[ray], axis=1) + start
+    return out
 
 
 def _band(tris, origin, h, shape, radius):
@@ -174,10 +239,12 @@ def _band(tris, origin, h, shape, radius):
     return dist2, tid
 
 
-def _component_signs(V, F, d, h, origin, progress_note):
-    """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``."""
+def _component_signs(V, F, d, free, h, origin):
+    """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
+
+    ``free``: voxels with no surface (boundary or sheet) within one voxel.
+    """
     shape = d.shape
-    free = d > h
     labels, n_comp = ndimage.label(free)
     sign = np.zeros(shape, np.int8)
     flat_lab = labels.ravel()
@@ -221,7 +288,6 @@ def _component_signs(V, F, d, h, origin, progress_note):
     lone = np.flatnonzero(near & ~(pos ^ neg))
     queries.append(lone)
     q = np.concatenate(queries) if queries else np.zeros(0, np.int64)
-    progress_note(len(q))
     if len(q):
         pts = origin + np.stack(np.unravel_index(q, shape), axis=1) * h
         w = _winding(V, F, pts)
@@ -275,10 +341,7 @@ def from_mesh(
     shape = tuple(int(s) for s in shape)
 
     report(0.0, "classifying pieces")
-    tris = V[F]
-    sub, parent, corner_bary = _subdivide(tris, SUBDIVIDE * h)
-    cls = classify(V, F, sub, eps=0.05 * h)
-    sub, parent, corner_bary, cls = _primitives(tris, sub, parent, corner_bary, cls)
+    sub, parent, corner_bary, cls = classify_pieces(V, F, h)
     boundary = np.nonzero(cls == 0)[0]
     sheet = np.nonzero(cls == 2)[0]
     if len(boundary) + len(sheet) == 0:
@@ -286,30 +349,43 @@ def from_mesh(
     thick = math.sqrt(3) / 2 * h
 
     report(0.15, "exact distances near the surface")
+    # closed pieces thinner than the grid can hold (shelves, back panels) would vanish or get
+    # holes: their faces also join the sheets, offset so that the piece is 2t thick
+    offset = np.zeros(len(sub))
+    offset[sheet] = thick
+    thickness = _thickness(V, F, sub[boundary], 0.01 * h)
+    thin = boundary[thickness < 2 * thick]
+    offset[thin] = thick - thickness[thickness < 2 * thick] / 2
+    n_open = len(np.unique(parent[sheet]))
+    n_thin = len(np.unique(parent[thin]))
+    sheet = np.concatenate([sheet, thin])
     tris_b = np.ascontiguousarray(sub[boundary])
     tris_s = np.ascontiguousarray(sub[sheet])
     d2_b, id_b = _band(tris_b, origin, h, shape, BAND * h)
     d_b = np.sqrt(d2_b, out=d2_b)
     del d2_b
+    report(0.3, "thickening open sheets")
+    d2_s, id_s = _band(tris_s, origin, h, shape, (BAND + 1) * h)
+    f_s = np.sqrt(d2_s, out=d2_s)
+    del d2_s
 
-    report(0.4, "inside/outside")
-    sign = _component_signs(V, F, d_b, h, origin, lambda n: None)
+    report(0.45, "inside/outside")
+    # open sheets block the flood as much as boundaries do: a cushion whose cloth has an open
+    # seam still encloses its inside
+    free = (d_b > h) & (f_s > h)
+    sign = _component_signs(V, F, d_b, free, h, origin)
+    del free
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
     del d_b
     win = np.where(id_b >= 0, boundary[np.maximum(id_b, 0)], -1).astype(np.int64)
     del id_b
-    if len(sheet):
-        report(0.55, "thickening open sheets")
-        d2_s, id_s = _band(tris_s, origin, h, shape, (BAND + 1) * h)
-        f_s = np.sqrt(d2_s, out=d2_s)
-        f_s -= thick
-        closer = f_s < sdf
-        sdf[closer] = f_s[closer]
-        win[closer] = sheet[id_s[closer]]
-        del d2_s, f_s, id_s, closer
-    is_sheet = np.zeros(len(sub), bool)
-    is_sheet[sheet] = True
+    has = id_s >= 0
+    f_s[has] -= offset[sheet[id_s[has]]]
+    closer = f_s < sdf
+    sdf[closer] = f_s[closer]
+    win[closer] = sheet[id_s[closer]]
+    del f_s, id_s, closer, has
 
     report(0.65, "distances beyond the band")
     band = np.abs(sdf) <= BAND * h
@@ -340,10 +416,10 @@ def from_mesh(
         w_f = win.ravel()[src]
         d, _ = _kernels.closest_points(pts, sub, w_f)
         s = sign.ravel()[far_idx]
-        d = np.where(s > 0, d - np.where(is_sheet[w_f], thick, 0.0), -d)
+        d = np.where(s > 0, d - offset[w_f], -d)
         # beyond the band a distance is at least the band's: guards the feature transform's
         # rare non-nearest picks from pulling values inside the band
-        sdf.ravel()[far_idx] = np.copysign(np.maximum(np.abs(d), BAND * h), d)
+        sdf.ravel()[far_idx] = s * np.maximum(np.abs(d), BAND * h)
         rgb.reshape(-1, 3)[far_idx] = rgb.reshape(-1, 3)[src]
     report(1.0, "done")
     n_sheet_src = len(np.unique(parent[sheet]))
@@ -357,7 +433,8 @@ def from_mesh(
                 "res": res,
                 "pad": pad,
                 "triangles": len(F),
-                "open_sheet_triangles": n_sheet_src,
+                "open_sheet_triangles": n_open,
+                "thin_piece_triangles": n_thin,
                 "sheet_half_thickness_voxels": round(math.sqrt(3) / 2, 4),
                 "band_voxels": BAND,
             }

@@ -39,6 +39,7 @@ from .mesh_io import ColoredMesh
 
 BAND = 3  # exact distances within this many voxels of the surface
 SUBDIVIDE = 4.0  # pieces longer than this many voxels are classified piecewise
+SUBDIVIDE_MIXED = 1.0  # piece size where a triangle is partly buried (at intersections)
 SLAB = 2  # x-layers per parallel work item
 BYTES_PER_VOXEL = 72  # peak working set of from_mesh per grid voxel (all temporaries)
 MIN_RES = 16
@@ -156,8 +157,9 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
 
     Every triangle is classified at its centroid; triangles longer than ``SUBDIVIDE`` voxels
     also at three points towards their corners, and where those disagree (a board partly
-    buried in another) they are split into pieces of at most ``SUBDIVIDE`` voxels, each
-    classified on its own. Winding-number queries next to the surface are the expensive part
+    buried in another) they are split into pieces of at most ``SUBDIVIDE_MIXED`` voxels, each
+    classified on its own (so surfaces are exact except within about a voxel of the curves
+    where pieces intersect). Winding-number queries next to the surface are the expensive part
     of the import, so only as many as needed are made.
 
     Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
@@ -195,7 +197,7 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
     bary = [np.broadcast_to(np.eye(3), (len(wid), 3, 3))]
     pcls = [cls[wid]]
     if len(mixed):
-        sub, sp, sb = _subdivide(tris[mixed], SUBDIVIDE * h)
+        sub, sp, sb = _subdivide(tris[mixed], SUBDIVIDE_MIXED * h)
         scls = classify(V, F, sub, eps)
         prim.append(sub)
         parent.append(mixed[sp])
@@ -209,11 +211,12 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
     )
 
 
-def _thickness(V, F, tris, start: float) -> np.ndarray:
-    """(T,) distance from each triangle's centroid, inwards (against its normal), to the mesh.
+def _thickness(tris, start: float) -> np.ndarray:
+    """(T,) distance from each boundary triangle's centroid, inwards, to the next boundary.
 
-    inf where the ray leaves the mesh. Rays start ``start`` behind the face, so coincident
-    duplicate faces do not count.
+    Only boundary triangles are hit (buried faces are inside the solid, not across it); inf
+    where the ray leaves. Rays start ``start`` behind the face, so coincident duplicate faces
+    do not count.
     """
     import trimesh
 
@@ -222,7 +225,9 @@ def _thickness(V, F, tris, start: float) -> np.ndarray:
     n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     origins = tris.mean(axis=1) - start * n
-    mesh = trimesh.Trimesh(V, F, process=False)
+    mesh = trimesh.Trimesh(
+        tris.reshape(-1, 3), np.arange(3 * len(tris)).reshape(-1, 3), process=False
+    )
     loc, ray, _tri = mesh.ray.intersects_location(origins, -n, multiple_hits=False)
     out = np.full(len(tris), np.inf)
     out[ray] = np.linalg.norm(loc - origins[ray], axis=1) + start
@@ -353,7 +358,7 @@ def from_mesh(
     # holes: their faces also join the sheets, offset so that the piece is 2t thick
     offset = np.zeros(len(sub))
     offset[sheet] = thick
-    thickness = _thickness(V, F, sub[boundary], 0.01 * h)
+    thickness = _thickness(sub[boundary], 0.01 * h)
     thin = boundary[thickness < 2 * thick]
     offset[thin] = thick - thickness[thickness < 2 * thick] / 2
     n_open = len(np.unique(parent[sheet]))
@@ -378,7 +383,9 @@ def from_mesh(
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
     del d_b
-    win = np.where(id_b >= 0, boundary[np.maximum(id_b, 0)], -1).astype(np.int64)
+    win = np.full(shape, -1, np.int64)
+    if len(boundary):
+        win[id_b >= 0] = boundary[id_b[id_b >= 0]]
     del id_b
     has = id_s >= 0
     f_s[has] -= offset[sheet[id_s[has]]]
@@ -422,7 +429,6 @@ def from_mesh(
         sdf.ravel()[far_idx] = s * np.maximum(np.abs(d), BAND * h)
         rgb.reshape(-1, 3)[far_idx] = rgb.reshape(-1, 3)[src]
     report(1.0, "done")
-    n_sheet_src = len(np.unique(parent[sheet]))
     meta = {
         "source": mesh.source,
         "units": "m",

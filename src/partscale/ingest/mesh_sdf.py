@@ -38,8 +38,8 @@ from . import _kernels
 from .mesh_io import ColoredMesh
 
 BAND = 3  # exact distances within this many voxels of the surface
-SUBDIVIDE = 4.0  # pieces longer than this many voxels are classified piecewise
-SUBDIVIDE_MIXED = 1.0  # piece size where a triangle is partly buried (at intersections)
+SUBDIVIDE = 8.0  # pieces longer than this many voxels are classified piecewise
+SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
 SLAB = 2  # x-layers per parallel work item
 BYTES_PER_VOXEL = 72  # peak working set of from_mesh per grid voxel (all temporaries)
 MIN_RES = 16

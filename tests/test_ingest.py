@@ -382,3 +382,41 @@ def test_cli_import_writes_a_loadable_csdf(tmp_path, cli):
 def test_unknown_option_lists_known_ones():
     with pytest.raises(TypeError, match="options are"):
         ingest.from_mesh(ingest.from_trimesh(trimesh.creation.box()), resolution=32)
+
+
+def test_ply_vertex_colours(tmp_path):
+    """PLY vertex colours (sRGB) come back at the vertices and blend inside triangles."""
+    box = trimesh.creation.box(extents=(1, 1, 1))
+    rng = np.random.default_rng(3)
+    cols = rng.integers(0, 256, (len(box.vertices), 4), dtype=np.uint8)
+    cols[:, 3] = 255
+    box.visual = trimesh.visual.ColorVisuals(box, vertex_colors=cols)
+    path = tmp_path / "box.ply"
+    box.export(path)
+    m = ingest.load_mesh(path)
+    f = np.arange(m.n_faces)
+    for corner in range(3):
+        got = m.color_at(f, np.eye(3)[np.full(m.n_faces, corner)])
+        # the reader may reorder vertices: match by position
+        pos = m.vertices[m.faces[:, corner]]
+        idx = [int(np.argmin(np.linalg.norm(box.vertices - p, axis=1))) for p in pos]
+        assert np.abs(got.astype(int) - cols[idx, :3].astype(int)).max() <= 1
+
+
+def test_obj_mtl_kd(tmp_path):
+    """OBJ + MTL: Kd is the piece's (display) colour; pieces keep their own material."""
+    (tmp_path / "m.mtl").write_text(
+        "newmtl red\nKd 0.8 0.1 0.1\n\nnewmtl blue\nKd 0.1 0.2 0.9\n", encoding="utf-8"
+    )
+    (tmp_path / "m.obj").write_text(
+        "mtllib m.mtl\n"
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+        "usemtl red\nf 1 3 2\nf 1 2 4\nusemtl blue\nf 1 4 3\nf 2 3 4\n",
+        encoding="utf-8",
+    )
+    m = ingest.load_mesh(tmp_path / "m.obj")
+    got = m.color_at(np.arange(m.n_faces), np.full((m.n_faces, 3), 1 / 3)).astype(int)
+    red, blue = np.array([204, 26, 26]), np.array([26, 51, 230])
+    is_red = np.abs(got - red).max(axis=1) <= 1
+    is_blue = np.abs(got - blue).max(axis=1) <= 1
+    assert is_red.sum() == 2 and is_blue.sum() == 2

@@ -2,25 +2,29 @@
 
 Method (what makes it robust on real assemblies of open and intersecting pieces)
 ---------------------------------------------------------------------------------
-1. Large triangles are split (for classification and distances only; colour is still looked up
-   on the source triangle) so no piece is longer than ~2 voxels.
-2. Each piece is classified by libigl's generalized winding number ``w`` just off both of its
-   sides. Across any triangle ``w`` jumps by 1, so the lower side value ``lo`` says it all:
-   ``lo ~ 0`` (outside on one side, inside on the other): a *boundary* of the solid, kept exactly;
-   ``lo >= 3/4``: *buried* inside another piece, ignored; anything else (``lo`` fractional or
-   below -1/4): an *open sheet* (cloth, a single-sided board), thickened into a solid of
-   half-thickness ``t = sqrt(3)/2`` voxel so its inside voxels stay 6-connected.
+1. Classification. Each triangle is classified by libigl's generalized winding number ``w``
+   just in front of it. Crossing an oriented triangle against its normal raises ``w`` by
+   exactly 1, so the front value ``lo`` (the lower side) says it all: ``|lo| <= 1/4`` (outside
+   on one side, inside on the other): a *boundary* of the solid, kept exactly; ``lo >= 3/4``:
+   *buried* inside another piece, ignored; anything else (``lo`` fractional or below -1/4): an
+   *open sheet* (cloth, a single-sided board). Triangles longer than ``SUBDIVIDE`` voxels are
+   also probed towards their corners; where the probes disagree (a board partly buried in
+   another) they are split into pieces of ``SUBDIVIDE_MIXED`` voxels classified one by one.
+2. Thin pieces. Open sheets, and closed pieces thinner than the grid can hold (shelves, back
+   panels: inward ray to the next boundary shorter than ``2 t``), become solids of thickness
+   ``2 t``, ``t = sqrt(3)/2`` voxel, so their inside voxels stay 6-connected and marching cubes
+   has no holes. Thicker closed pieces keep their surface exactly (no offset).
 3. Exact unsigned distances to boundary and to sheet pieces within a band of ``BAND`` voxels
-   (numba, slabs along x in parallel).
-4. Sign of the boundary distance: a voxel farther than one voxel from the boundary has the sign
-   of all its 6-neighbours, so the 6-connected components of ``{d > h}`` (the far field
-   included) share one sign, read from ``w > 1/2`` at a few voxels per component (all of them
-   when those disagree). Only voxels within one voxel of the boundary and with no such neighbour
-   (inside boards thinner than two voxels) are tested one by one.
-5. ``sdf = min(signed boundary distance, sheet distance - t)`` in the band; beyond it, the
-   distance to the surface point of the nearest band voxel (a Euclidean feature transform).
+   (numba, slabs along x in parallel, no races).
+4. Sign: a voxel with no surface within one voxel has the sign of all its 6-neighbours, so the
+   6-connected components of such voxels (the far field included; sheets block them as much as
+   boundaries, so a cushion with an open seam still encloses its inside) share one sign, read
+   from ``w > 1/2`` at a few voxels per component (at all of them when those disagree). Only
+   voxels near the surface with no such neighbour (inside thin boards) are tested one by one.
+5. ``sdf = min(signed boundary distance, sheet distance - offset)`` in the band; beyond it, the
+   distance to the nearest surface of the nearest band voxel (a Euclidean feature transform).
 6. Colour of a voxel = source colour at its nearest surface point (texture through the UVs),
-   propagated beyond the band by the same feature transform.
+   carried beyond the band by the same feature transform.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ BAND = 3  # exact distances within this many voxels of the surface
 SUBDIVIDE = 8.0  # pieces longer than this many voxels are classified piecewise
 SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
 SLAB = 2  # x-layers per parallel work item
-BYTES_PER_VOXEL = 72  # peak working set of from_mesh per grid voxel (all temporaries)
+BYTES_PER_VOXEL = 160  # peak working set of from_mesh per grid voxel (measured, all temporaries)
 MIN_RES = 16
 
 

@@ -97,9 +97,10 @@ def test_open_sheet_becomes_thin_solid_not_a_leak():
 def test_intersecting_pieces_union_buried_faces_ignored():
     """Two overlapping closed boxes: the solid is their union, exact distance outside.
 
-    Partly buried faces are classified in pieces of one voxel, so within about a voxel of the
-    curves where the boxes intersect a distance may be off by up to half a voxel: 98% of the
-    outside band is within 0.05 voxel, all of it within 0.5 voxel."""
+    Partly buried faces are classified in pieces (adaptively refined towards the curves where
+    the boxes intersect, down to 2 voxels), so right at those curves a sliver of face may be
+    missed and a distance be off by up to ~1 voxel: 98% of the outside band is within
+    0.05 voxel, all of it within 1.5 voxels; signs are right beyond one voxel everywhere."""
     a = trimesh.creation.box(bounds=[[0, 0, 0], [1, 0.5, 0.5]])
     b = trimesh.creation.box(bounds=[[0.6, 0.2, 0.1], [1.4, 0.9, 0.4]])
     mesh = trimesh.util.concatenate([a, b])
@@ -115,7 +116,7 @@ def test_intersecting_pieces_union_buried_faces_ignored():
     assert np.array_equal(s[far] < 0, e[far] < 0)
     out = (e > 0) & (e < 3 * h)  # outside the union, min of box SDFs is the exact distance
     err = np.abs(s[out] - e[out]) / h
-    assert np.mean(err <= 0.05) >= 0.98 and err.max() <= 0.5, (np.mean(err <= 0.05), err.max())
+    assert np.mean(err <= 0.05) >= 0.98 and err.max() <= 1.5, (np.mean(err <= 0.05), err.max())
 
 
 # -- colour ----------------------------------------------------------------------------

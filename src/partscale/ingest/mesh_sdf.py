@@ -161,9 +161,9 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
 
     Every triangle is classified at its centroid; triangles longer than ``SUBDIVIDE`` voxels
     also at three points towards their corners, and where those disagree (a board partly
-    buried in another) they are split into pieces of at most ``SUBDIVIDE_MIXED`` voxels, each
-    classified on its own (so surfaces are exact except within about a voxel of the curves
-    where pieces intersect). Winding-number queries next to the surface are the expensive part
+    buried in another) they are bisected, and the halves probed again, down to pieces of
+    ``SUBDIVIDE_MIXED`` voxels near the curves where pieces intersect (surfaces are exact
+    except within about a voxel of those curves). Winding-number queries next to the surface are the expensive part
     of the import, so only as many as needed are made.
 
     Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
@@ -200,19 +200,48 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
     parent = [wid]
     bary = [np.broadcast_to(np.eye(3), (len(wid), 3, 3))]
     pcls = [cls[wid]]
-    if len(mixed):
-        sub, sp, sb = _subdivide(tris[mixed], SUBDIVIDE_MIXED * h)
-        scls = classify(V, F, sub, eps)
-        prim.append(sub)
-        parent.append(mixed[sp])
-        bary.append(sb)
-        pcls.append(scls)
+    # refine only where the probes disagree: bisect, probe the halves, keep what agrees (a
+    # sliver of another class between the probes can be missed: surfaces may be off by up to
+    # about a voxel right at the curves where pieces intersect)
+    t = tris[mixed]
+    par = mixed
+    b = np.broadcast_to(np.eye(3), (len(mixed), 3, 3))
+    while len(t):
+        t, b, par = _bisect(t, b, par)
+        longest = np.max([np.linalg.norm(t[:, (i + 1) % 3] - t[:, i], axis=1) for i in range(3)], 0)
+        big_piece = longest > SUBDIVIDE_MIXED * h
+        n = unit[par] * eps
+        q = [t.mean(axis=1) + n]
+        q += [np.einsum("c,ncd->nd", cw, t[big_piece]) + n[big_piece] for cw in corner_w]
+        w = _winding(V, F, np.concatenate(q))
+        c = _class_of(w[: len(t)])
+        cc = _class_of(w[len(t) :]).reshape(len(corner_w), -1)
+        done = ~big_piece
+        done[big_piece] = (cc == c[big_piece]).all(axis=0)
+        prim.append(t[done])
+        parent.append(par[done])
+        bary.append(b[done])
+        pcls.append(c[done])
+        t, b, par = t[~done], b[~done], par[~done]
     return (
         np.concatenate(prim),
         np.concatenate(parent),
         np.concatenate(bary),
         np.concatenate(pcls),
     )
+
+
+def _bisect(t, b, par):
+    """Split each triangle (and its corner barycentrics) in two at its longest edge."""
+    e = np.stack([np.linalg.norm(t[:, (i + 1) % 3] - t[:, i], axis=1) for i in range(3)], 1)
+    roll = (np.arange(3)[None, :] + e.argmax(axis=1)[:, None]) % 3
+    rows = np.arange(len(t))[:, None]
+    t, b = t[rows, roll], b[rows, roll]
+    mt = (t[:, 0] + t[:, 1]) / 2
+    mb = (b[:, 0] + b[:, 1]) / 2
+    t2 = np.concatenate([np.stack([t[:, 0], mt, t[:, 2]], 1), np.stack([mt, t[:, 1], t[:, 2]], 1)])
+    b2 = np.concatenate([np.stack([b[:, 0], mb, b[:, 2]], 1), np.stack([mb, b[:, 1], b[:, 2]], 1)])
+    return t2, b2, np.concatenate([par, par])
 
 
 def _thickness(tris, start: float) -> np.ndarray:
@@ -248,10 +277,15 @@ def _band(tris, origin, h, shape, radius):
     return dist2, tid
 
 
-def _component_signs(V, F, d, free, h, origin):
+def _component_signs(V, F, d, free, in_sheet, h, origin, tris_b, id_b):
     """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
 
-    ``free``: voxels with no surface (boundary or sheet) within one voxel.
+    ``free``: voxels with no surface (boundary or sheet) within one voxel. ``in_sheet``: voxels
+    inside a thickened sheet or thin piece; they are solid whatever the boundary's sign, so
+    those that would need a query of their own (inside thin boards) are set inside directly.
+    Others that lie straight in front of or behind the face of their nearest boundary point take
+    that face's side (the segment to the nearest point crosses no surface; the front of a
+    boundary face is outside by its classification); the rest are winding-number queries.
     """
     shape = d.shape
     labels, n_comp = ndimage.label(free)
@@ -294,8 +328,26 @@ def _component_signs(V, F, d, free, h, origin):
             neg |= s < 0
     one = near & (pos ^ neg)
     sign[one] = np.where(pos[one], 1, -1)
-    lone = np.flatnonzero(near & ~(pos ^ neg))
-    queries.append(lone)
+    undecided = near & ~(pos ^ neg)
+    sign[undecided & in_sheet] = -1
+    lone = np.flatnonzero(undecided & ~in_sheet & (id_b >= 0))
+    if len(lone):
+        pts = origin + np.stack(np.unravel_index(lone, shape), axis=1) * h
+        tid = id_b.ravel()[lone].astype(np.int64)
+        _, bary = _kernels.closest_points(pts, tris_b, tid)
+        t = tris_b[tid]
+        q = np.einsum("nc,ncd->nd", bary, t)
+        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        pq = pts - q
+        side = np.einsum("nd,nd->n", pq, n)
+        # p straight in front of / behind the face at its nearest point (face interior, or an
+        # edge seen along this face's normal): the side is the face's side
+        face = np.abs(side) >= (1 - 1e-6) * np.linalg.norm(pq, axis=1)
+        face &= np.abs(side) > 1e-6 * h
+        sign.ravel()[lone[face]] = np.where(side[face] > 0, 1, -1)
+        queries.append(lone[~face])
+    queries.append(np.flatnonzero(undecided & ~in_sheet & (id_b < 0)))
     q = np.concatenate(queries) if queries else np.zeros(0, np.int64)
     if len(q):
         pts = origin + np.stack(np.unravel_index(q, shape), axis=1) * h
@@ -379,11 +431,14 @@ def from_mesh(
     del d2_s
 
     report(0.45, "inside/outside")
-    # open sheets block the flood as much as boundaries do: a cushion whose cloth has an open
-    # seam still encloses its inside
-    free = (d_b > h) & (f_s > h)
-    sign = _component_signs(V, F, d_b, free, h, origin)
-    del free
+    has = id_s >= 0
+    f_s[has] -= offset[sheet[id_s[has]]]
+    in_sheet = f_s <= 0
+    # thickened sheets block the flood as much as boundaries do (a cushion whose cloth has an
+    # open seam still encloses its inside); at 2t thick they leave no 6-connected tunnel
+    free = (d_b > h) & ~in_sheet
+    sign = _component_signs(V, F, d_b, free, in_sheet, h, origin, tris_b, id_b)
+    del free, in_sheet
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
     del d_b
@@ -391,8 +446,6 @@ def from_mesh(
     if len(boundary):
         win[id_b >= 0] = boundary[id_b[id_b >= 0]]
     del id_b
-    has = id_s >= 0
-    f_s[has] -= offset[sheet[id_s[has]]]
     closer = f_s < sdf
     sdf[closer] = f_s[closer]
     win[closer] = sheet[id_s[closer]]

@@ -38,6 +38,7 @@ import struct
 from pathlib import Path
 from typing import Any
 
+import numba
 import numpy as np
 
 from ._util import atomic_path, check_memory, keyword_options
@@ -93,19 +94,54 @@ def check_size(size: int | None) -> int | None:
 
 # -- resampling ----------------------------------------------------------------------------
 def _axis_weights(n_src: int, src_index: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per output index along one axis: lower source cell, linear weight, nearest source voxel."""
     x = np.clip(src_index, 0.0, n_src - 1.0)
-    i0 = np.minimum(np.floor(x).astype(np.intp), n_src - 2)
-    w = x - i0
-    return i0, i0 + 1, w
+    i0 = np.minimum(np.floor(x).astype(np.int64), n_src - 2)
+    return i0, (x - i0).astype(np.float32), np.rint(x).astype(np.int64)
 
 
-def _linear_along(a: np.ndarray, axis: int, src_index: np.ndarray) -> np.ndarray:
-    """Linear interpolation of ``a`` (float32) along one axis at continuous source indices."""
-    i0, i1, w = _axis_weights(a.shape[axis], src_index)
-    shape = [1] * a.ndim
-    shape[axis] = len(w)
-    w = w.astype(np.float32).reshape(shape)
-    return np.take(a, i0, axis=axis) * (1 - w) + np.take(a, i1, axis=axis) * w
+@numba.njit(cache=True, parallel=True)
+def _resample_kernel(sdf, rgb, parts, ax, ay, az, out_sdf, out_rgb, out_parts):
+    # trilinear is separable: per-axis cells and weights are precomputed, so each output voxel
+    # costs 8 reads per channel and no coordinate arrays the size of the grid are needed
+    (i0s, wxs, nxs), (j0s, wys, nys), (k0s, wzs, nzs) = ax, ay, az
+    for a in numba.prange(out_sdf.shape[0]):
+        i, fx, ni = i0s[a], wxs[a], nxs[a]
+        for b in range(out_sdf.shape[1]):
+            j, fy, nj = j0s[b], wys[b], nys[b]
+            for c in range(out_sdf.shape[2]):
+                k, fz, nk = k0s[c], wzs[c], nzs[c]
+                w000 = (1 - fx) * (1 - fy) * (1 - fz)
+                w100 = fx * (1 - fy) * (1 - fz)
+                w010 = (1 - fx) * fy * (1 - fz)
+                w110 = fx * fy * (1 - fz)
+                w001 = (1 - fx) * (1 - fy) * fz
+                w101 = fx * (1 - fy) * fz
+                w011 = (1 - fx) * fy * fz
+                w111 = fx * fy * fz
+                out_sdf[a, b, c] = (
+                    sdf[i, j, k] * w000
+                    + sdf[i + 1, j, k] * w100
+                    + sdf[i, j + 1, k] * w010
+                    + sdf[i + 1, j + 1, k] * w110
+                    + sdf[i, j, k + 1] * w001
+                    + sdf[i + 1, j, k + 1] * w101
+                    + sdf[i, j + 1, k + 1] * w011
+                    + sdf[i + 1, j + 1, k + 1] * w111
+                )
+                for ch in range(3):
+                    v = (
+                        rgb[i, j, k, ch] * w000
+                        + rgb[i + 1, j, k, ch] * w100
+                        + rgb[i, j + 1, k, ch] * w010
+                        + rgb[i + 1, j + 1, k, ch] * w110
+                        + rgb[i, j, k + 1, ch] * w001
+                        + rgb[i + 1, j, k + 1, ch] * w101
+                        + rgb[i, j + 1, k + 1, ch] * w011
+                        + rgb[i + 1, j + 1, k + 1, ch] * w111
+                    )
+                    out_rgb[a, b, c, ch] = min(max(int(v + 0.5), 0), 255)
+                out_parts[a, b, c] = parts[ni, nj, nk]
 
 
 @keyword_options
@@ -114,8 +150,8 @@ def resample(csdf: CSDF, size: int, *, progress: ProgressCallback | None = None)
 
     The new grid covers the same world box: its longest side spans exactly the old grid's extent,
     the other sides the nearest whole number of new voxels, centred on the old grid. ``sdf`` and
-    ``rgb`` are trilinear (distances stay in world units; trilinear is separable, so it runs one
-    axis at a time without a coordinate array per voxel); ``parts`` take the nearest voxel.
+    ``rgb`` are trilinear (distances stay in world units), ``parts`` take the nearest voxel; source
+    positions beyond the old grid's outer voxel centres clamp to them.
 
     Parameters
     ----------
@@ -135,7 +171,7 @@ def resample(csdf: CSDF, size: int, *, progress: ProgressCallback | None = None)
     h = float(extent.max() / size)
     new_shape = np.maximum(np.rint(extent / h).astype(int), 2)
     new_shape[int(np.argmax(extent))] = size
-    check_memory(tuple(new_shape), 4 * 3 + 3 * 4 * 3 + 2 + 3, what=f"resample to {size}")
+    check_memory(tuple(new_shape), 4 + 3 + 2, what=f"resample to {size}")
     centre = csdf.origin + (old_shape - 1) / 2 * csdf.voxel_size
     origin = centre - (new_shape - 1) / 2 * h
     # continuous source index of every new voxel centre, per axis
@@ -143,20 +179,13 @@ def resample(csdf: CSDF, size: int, *, progress: ProgressCallback | None = None)
         (origin[a] + np.arange(new_shape[a]) * h - csdf.origin[a]) / csdf.voxel_size
         for a in range(3)
     ]
-    report(0.0, "resampling distances")
-    sdf = csdf.sdf.astype(np.float32)
-    for a in range(3):
-        sdf = _linear_along(sdf, a, src[a])
-    report(0.4, "resampling colours")
-    rgb = csdf.rgb.astype(np.float32)
-    for a in range(3):
-        rgb = _linear_along(rgb, a, src[a])
-    rgb = np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
-    report(0.8, "resampling parts")
-    parts = csdf.parts
-    for a in range(3):
-        idx = np.clip(np.rint(src[a]), 0, old_shape[a] - 1).astype(np.intp)
-        parts = np.take(parts, idx, axis=a)
+    report(0.0, "resampling")
+    axes = tuple(_axis_weights(int(old_shape[a]), src[a]) for a in range(3))
+    shape = tuple(int(n) for n in new_shape)
+    sdf = np.empty(shape, np.float32)
+    rgb = np.empty((*shape, 3), np.uint8)
+    parts = np.empty(shape, np.int16)
+    _resample_kernel(csdf.sdf, csdf.rgb, csdf.parts, *axes, sdf, rgb, parts)
     report(1.0, "resampled")
     op = {
         "op": "resample",

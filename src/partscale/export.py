@@ -509,8 +509,13 @@ def export_texture(
             "tile_size": [csdf.shape[0], csdf.shape[1]],
             "tile_order": "slice z = row * columns + column; rows from the top of the image",
             "tile_axes": "x to the right, y up (row 0 of a tile is y = Y - 1)",
-            "unity": "Texture Shape 3D, Columns/Rows as above, sRGB on, Alpha Source: Input "
-            "Texture Alpha, no mipmaps, Filter Bilinear, Wrap Clamp, Compression None",
+            "atlas_size": [int(atlas.shape[1]), int(atlas.shape[0])],
+            # Unity's defaults (Max Size 2048, Non-Power of 2 ToNearest, compression) would
+            # rescale or quantise the atlas and break the decode formula above.
+            "unity": f"Texture Shape 3D, Columns {cols}, Rows {rows}, sRGB (Color Texture) on, "
+            f"Alpha Source Input Texture Alpha, Non-Power of 2 None, Max Size >= "
+            f"{max(atlas.shape[:2])}, Generate Mip Maps off, Filter Mode Bilinear, Wrap Mode "
+            "Clamp, Compression None",
         },
     }
     header = _texture_header(csdf, encoding)

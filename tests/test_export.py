@@ -330,3 +330,38 @@ def test_export_library_refuses_before_writing(box, tmp_path):
     with pytest.raises(InputError, match=r"\.glb"):
         export.export_mesh(box, tmp_path / "t.fbx")
     assert list(tmp_path.iterdir()) == []
+
+
+# -- a real object ---------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def chair():
+    from conftest import data_path
+
+    ingest = pytest.importorskip("partscale.ingest", reason="import stage not on this branch")
+    return ingest.load(data_path("kenney/chair.glb"), res=64)
+
+
+def test_real_chair_exports_valid_watertight_glb_and_textures(chair, tmp_path):
+    out = export.export_mesh(chair, tmp_path / "chair.glb")
+    _, attrs, faces = read_glb(out)
+    mesh = trimesh.Trimesh(attrs["POSITION"].astype(float), faces, process=True)
+    assert mesh.is_watertight and mesh.volume > 0
+    ref = to_mesh(chair)
+    assert abs(mesh.volume - ref.volume) <= 1e-6 * ref.volume
+    srgb = ref.visual.vertex_colors[:, :3]
+    assert np.abs(attrs["COLOR_0"] - srgb_to_linear_reference(srgb)).max() <= 1e-6
+    node = shutil.which("node")
+    if node and (ROOT / "web" / "node_modules" / "gltf-validator").is_dir():
+        proc = subprocess.run(
+            [node, str(ROOT / "tests" / "tools" / "validate_gltf.mjs"), str(out)],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        report = json.loads(proc.stdout)
+        assert report["issues"]["numErrors"] == 0, report["issues"]["messages"]
+    for suffix in (".raw", ".png"):
+        back = export.read_texture(export.export_texture(chair, tmp_path / f"c{suffix}")[0])
+        assert np.array_equal(back.rgb, chair.rgb)
+        assert np.array_equal(back.origin, chair.origin)
+        assert (np.sign(back.sdf) == np.sign(chair.sdf))[np.abs(chair.sdf) > 1e-4].all()

@@ -207,3 +207,25 @@ def test_cli_render_bad_files(cli, sphere_file, tmp_path):
     proc = cli("render", bad, "-o", out / "s.png")
     assert_bad_input(proc, "bad.csdf.npz")
     assert list(out.iterdir()) == []
+
+
+def test_real_chair_silhouette_matches_its_bounds():
+    from conftest import data_path
+
+    ingest = pytest.importorskip("partscale.ingest", reason="import stage not on this branch")
+    c = ingest.load(data_path("kenney/chair.glb"), res=64)
+    b = c.surface_bounds()
+    size = 200
+    for view, (ax_w, ax_h) in {"front": (0, 1), "side": (2, 1), "top": (0, 2)}.items():
+        image = render.render(c, view=view, size=size)
+        rows, cols = np.nonzero(foreground(image))
+        scale = render.camera(view, b, size).scale
+        # the silhouette spans the solid's extent (one pixel of rounding at each edge)
+        assert abs(np.ptp(cols) + 1 - (b[1, ax_w] - b[0, ax_w]) * scale) <= 2, view
+        assert abs(np.ptp(rows) + 1 - (b[1, ax_h] - b[0, ax_h]) * scale) <= 2, view
+    # its own colours: the rendered pixels' chromaticities come from the grid's surface colours
+    image = render.render(c, view="iso", size=size)
+    near = np.abs(c.sdf) < c.voxel_size
+    surface = chromaticity(c.rgb[near].reshape(-1, 3).astype(float) + 1)
+    seen = chromaticity(image[foreground(image)].astype(float) + 1)
+    assert np.abs(np.median(seen, axis=0) - np.median(surface, axis=0)).max() <= 0.05

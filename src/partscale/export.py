@@ -45,7 +45,6 @@ from ._util import atomic_path, check_memory, keyword_options
 from .csdf import CSDF, make
 from .errors import InputError
 from .progress import ProgressCallback, resolve
-from .surface import sample_linear, to_mesh
 
 PRESET_SIZES = (32, 64, 128, 256)
 MESH_SUFFIXES = (".glb", ".ply", ".obj")
@@ -201,6 +200,8 @@ def resample(csdf: CSDF, size: int, *, progress: ProgressCallback | None = None)
 # -- meshes --------------------------------------------------------------------------------
 def _sdf_normals(csdf: CSDF, world: np.ndarray) -> np.ndarray:
     """(N, 3) float32 unit normals: the normalised SDF gradient (central differences)."""
+    from .surface import sample_linear
+
     idx = csdf.world_to_index(world)
     g = np.empty_like(idx)
     for a in range(3):
@@ -322,6 +323,9 @@ def export_mesh(
     where the CSDF's solid is closed. Colours are sRGB in PLY/OBJ and linear in glTF ``COLOR_0``.
     The file is written atomically. Returns the path written.
     """
+    # trimesh and scikit-image load here, not at import: the CLI checks its options first, fast
+    from .surface import to_mesh
+
     path = Path(path)
     suffix = _suffix(path, MESH_SUFFIXES, "a mesh file")
     report = resolve(progress)

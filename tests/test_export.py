@@ -329,6 +329,8 @@ def test_export_library_refuses_before_writing(box, tmp_path):
         export.export_texture(box, tmp_path / "t.raw", size=48)
     with pytest.raises(InputError, match=r"\.glb"):
         export.export_mesh(box, tmp_path / "t.fbx")
+    with pytest.raises(InputError, match="surface"):
+        export.export_mesh(box.replace(sdf=np.abs(box.sdf) + 0.01), tmp_path / "t.glb")
     assert list(tmp_path.iterdir()) == []
 
 

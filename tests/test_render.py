@@ -162,6 +162,11 @@ def test_render_refuses_bad_options(sphere):
         render.render(sphere, size=8)
     with pytest.raises(TypeError, match="options are"):
         render.render(sphere, colour=True)
+    with pytest.raises(InputError, match="frame"):
+        render.render(sphere, frame=[[1, 1, 1], [0, 0, 0]])
+    empty = sphere.replace(sdf=np.abs(sphere.sdf) + 0.01)
+    with pytest.raises(InputError, match="surface"):
+        render.render(empty)
 
 
 # -- CLI -------------------------------------------------------------------------------------

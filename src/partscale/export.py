@@ -8,7 +8,8 @@ faces outward, world units, per-vertex colours.
 - ``.glb``: written here, not by trimesh, because glTF demands *linear* ``COLOR_0`` and trimesh
   writes the grid's sRGB bytes there. Positions, unit normals from the SDF gradient, ``COLOR_0``
   as float32 linear RGB, uint32 indices, one unlit-looking (non-metallic) material.
-- ``.ply``: binary, vertex colours as sRGB uint8 (the PLY convention).
+- ``.ply``: binary, vertex colours as sRGB uint8 (the PLY convention) and a ``parts`` int16
+  vertex property (the part of the nearest voxel, -1 where none).
 - ``.obj``: ``v x y z r g b`` with sRGB colours in [0, 1] (the common vertex-colour extension).
 
 3D textures (:func:`export_texture`): RGBA with colour in RGB and signed distance in A, x

@@ -14,7 +14,9 @@ import typer
 
 from ..errors import InputError
 from . import _common
+from .export import export
 from .info import info
+from .render import render
 from .scale import scale
 
 app = typer.Typer(
@@ -38,6 +40,8 @@ def _root(
 
 app.command("info")(info)
 app.command("scale")(scale)
+app.command("export")(export)
+app.command("render")(render)
 
 
 def main(argv: list[str] | None = None) -> None:

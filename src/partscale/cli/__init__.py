@@ -15,6 +15,7 @@ import typer
 from ..errors import InputError
 from . import _common
 from .export import export
+from .import_ import import_
 from .info import info
 from .render import render
 from .scale import scale
@@ -42,6 +43,7 @@ app.command("info")(info)
 app.command("scale")(scale)
 app.command("export")(export)
 app.command("render")(render)
+app.command("import")(import_)
 
 
 def main(argv: list[str] | None = None) -> None:

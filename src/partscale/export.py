@@ -471,6 +471,7 @@ def export_texture(
 
     side = _sidecar_path(path)
     if suffix == ".raw":
+        X, Y, Z = csdf.shape
         data = _rgba_half(csdf).tobytes()
         encoding = {
             "name": "rgba16f",
@@ -482,6 +483,9 @@ def export_texture(
             "iso_level": 0.0,
             "precision": "relative 2^-11 (IEEE half float)",
             "bytes": len(data),
+            # x-fastest RGBA half is Unity's own Texture3D memory layout
+            "unity": f"new Texture3D({X}, {Y}, {Z}, TextureFormat.RGBAHalf, false) then "
+            "SetPixelData(bytes, 0) and Apply(); sample the alpha as the distance",
         }
         header = _texture_header(csdf, encoding)
         with contextlib.ExitStack() as stack:

@@ -24,7 +24,8 @@ fastest in memory), so they are transposed on the way out.
   bottom (slice 0 top left); inside a tile x runs right and y runs *up* (Unity's textures start at
   the bottom row). RGB = sRGB bytes; A = ``clamp(round(128 + d / (K h) * 127), 0, 255)`` with
   ``h`` the voxel size and ``K`` = :data:`DISTANCE_BAND_VOXELS`; decode ``d = (A - 128) / 127 * K h``;
-  the surface is at A = 128. Sidecar ``NAME.png.json``.
+  the surface is at A = 128. When the depth does not factor into a near-square tile grid, empty
+  slices pad it along +z (the sidecar's size includes them). Sidecar ``NAME.png.json``.
 - ``.nrrd``: the SDF alone (float32, world units) with space origin and spacing, for ParaView and
   3D Slicer.
 """
@@ -356,10 +357,43 @@ def export_mesh(
 
 # -- 3D textures ---------------------------------------------------------------------------
 def flipbook_layout(depth: int) -> tuple[int, int]:
-    """(columns, rows) of the PNG atlas for ``depth`` slices: columns * rows == depth exactly
-    (Unity makes one slice per cell), as square as possible, columns >= rows (128 -> 16 x 8)."""
-    cols = next(c for c in range(math.ceil(math.sqrt(depth)), depth + 1) if depth % c == 0)
-    return cols, depth // cols
+    """(columns, rows) of the PNG atlas for ``depth`` z slices (Unity makes one slice per cell).
+
+    ``columns * rows == depth`` when ``depth`` factors as ``c x r`` with ``r <= c <= 2 r``
+    (128 -> 16 x 8, 64 -> 8 x 8); otherwise the smallest larger count that does (37 -> 8 x 5)
+    and the texture's grid is padded in z, because a prime depth would give a one-row strip
+    wider than engines accept.
+    """
+    d = max(int(depth), 1)
+    while True:
+        cols = next(c for c in range(math.ceil(math.sqrt(d)), d + 1) if d % c == 0)
+        if cols <= 2 * (d // cols):
+            return cols, d // cols
+        d += 1
+
+
+def _pad_z(csdf: CSDF, depth: int) -> CSDF:
+    """Extend the grid to ``depth`` slices along +z with empty (outside) voxels.
+
+    Padded distances are lower bounds of the true ones, as sphere tracing needs: the solid lies
+    at or below the last slice, so a point ``k`` further out is at least ``sqrt(d^2 + k^2)`` from
+    it (``d`` the last slice's distance); where the solid touches the border it is closed half a
+    voxel beyond the last centre.
+    """
+    n = depth - csdf.shape[2]
+    if n <= 0:
+        return csdf
+    h = csdf.voxel_size
+    edge = csdf.sdf[:, :, -1:].astype(np.float64)
+    k = np.arange(1, n + 1, dtype=np.float64) * h
+    pad = np.where(edge > 0, np.sqrt(edge**2 + k**2), k - h / 2).astype(np.float32)
+    rgb = np.repeat(csdf.rgb[:, :, -1:], n, axis=2)
+    parts = np.full((*csdf.shape[:2], n), -1, np.int16)
+    return csdf.replace(
+        sdf=np.concatenate([csdf.sdf, pad], axis=2),
+        rgb=np.concatenate([csdf.rgb, rgb], axis=2),
+        parts=np.concatenate([csdf.parts, parts], axis=2),
+    )
 
 
 def _sidecar_path(path: Path) -> Path:
@@ -499,6 +533,9 @@ def export_texture(
     from PIL import Image
 
     check_memory(csdf.shape, 4 * 3, what="PNG flipbook")
+    source_depth = csdf.shape[2]
+    cols, rows = flipbook_layout(source_depth)
+    csdf = _pad_z(csdf, cols * rows)
     atlas, cols, rows = _atlas(csdf)
     k = DISTANCE_BAND_VOXELS
     encoding = {
@@ -518,6 +555,9 @@ def export_texture(
             "tile_size": [csdf.shape[0], csdf.shape[1]],
             "tile_order": "slice z = row * columns + column; rows from the top of the image",
             "tile_axes": "x to the right, y up (row 0 of a tile is y = Y - 1)",
+            "padded_slices": cols * rows - source_depth,
+            "padding": "slices beyond the source depth are empty space added along +z so the "
+            "tiles fill the atlas; size and origin above describe the padded grid",
             "atlas_size": [int(atlas.shape[1]), int(atlas.shape[0])],
             # Unity's defaults (Max Size 2048, Non-Power of 2 ToNearest, compression) would
             # rescale or quantise the atlas and break the decode formula above.

@@ -42,7 +42,7 @@ from . import _kernels
 from .mesh_io import ColoredMesh
 
 BAND = 3  # exact distances within this many voxels of the surface
-SUBDIVIDE = 8.0  # pieces longer than this many voxels are classified piecewise
+SUBDIVIDE = 4.0  # triangles longer than this many voxels are also probed near their corners
 SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
 SLAB = 2  # x-layers per parallel work item
 BYTES_PER_VOXEL = 160  # peak working set of from_mesh per grid voxel (measured, all temporaries)
@@ -163,8 +163,10 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
     also at three points towards their corners, and where those disagree (a board partly
     buried in another) they are bisected, and the halves probed again, down to pieces of
     ``SUBDIVIDE_MIXED`` voxels near the curves where pieces intersect (surfaces are exact
-    except within about a voxel of those curves). Winding-number queries next to the surface are the expensive part
-    of the import, so only as many as needed are made.
+    except within about a voxel of those curves). A misclassified sliver is narrower than
+    ``SUBDIVIDE`` voxels, too narrow for the sign flood (voxels > 2 voxels from any surface) to
+    leak through. Winding-number queries next to the surface are the expensive part of the
+    import, so only as many as needed are made.
 
     Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
     (barycentrics of each primitive corner in its source triangle) and cls (P,) int8.
@@ -277,18 +279,33 @@ def _band(tris, origin, h, shape, radius):
     return dist2, tid
 
 
-def _component_signs(V, F, d, free, in_sheet, h, origin, tris_b, id_b):
+def _neighbour_signs(sign):
+    """(pos, neg): voxels with a 6-neighbour of sign +1 / -1."""
+    pos = np.zeros(sign.shape, bool)
+    neg = np.zeros(sign.shape, bool)
+    for ax in range(3):
+        for step in (1, -1):
+            # np.roll wraps; the border layers are free space (pad >= band), harmless
+            s = np.roll(sign, step, axis=ax)
+            pos |= s > 0
+            neg |= s < 0
+    return pos, neg
+
+
+def _component_signs(V, F, d, free, in_sheet, h, origin):
     """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
 
     ``free``: voxels with no surface (boundary or sheet) within one voxel. ``in_sheet``: voxels
     inside a thickened sheet or thin piece; they are solid whatever the boundary's sign, so
     those that would need a query of their own (inside thin boards) are set inside directly.
-    Others that lie straight in front of or behind the face of their nearest boundary point take
-    that face's side (the segment to the nearest point crosses no surface; the front of a
-    boundary face is outside by its classification); the rest are winding-number queries.
+    The rest are winding-number queries.
     """
     shape = d.shape
-    labels, n_comp = ndimage.label(free)
+    # flood the voxels > 2 voxels from any surface: a gap narrower than 4 voxels in an open
+    # assembly cannot connect an inside to the outside; the ring between 1 and 2 voxels takes
+    # the sign of its flooded neighbours
+    core = free & (d > 2 * h)
+    labels, n_comp = ndimage.label(core)
     sign = np.zeros(shape, np.int8)
     flat_lab = labels.ravel()
     idx = np.flatnonzero(flat_lab)
@@ -296,12 +313,21 @@ def _component_signs(V, F, d, free, in_sheet, h, origin, tris_b, id_b):
     if n_comp:
         lab = flat_lab[idx]
         dv = d.ravel()[idx]
-        order = np.lexsort((-np.minimum(dv, 1e30), lab))
+        # per component: its 5 voxels farthest from the surface plus a random 1 in 4000 (up to
+        # 200); the majority decides, so free space that reaches into an open container (a
+        # drawer, a bookcase) stays air even where the winding number there exceeds 1/2
+        rng = np.random.default_rng(0)
+        key = np.minimum(dv, 1e30)
+        order = np.lexsort((-key, lab))
         lab_sorted = lab[order]
         first = np.searchsorted(lab_sorted, np.arange(1, n_comp + 1))
         rank = np.arange(len(order)) - np.repeat(first, np.diff(np.append(first, len(order))))
+        size = np.bincount(lab, minlength=n_comp + 1)
+        extra = np.minimum(size // 4000, 200)
         pick = order[rank < 5]
-        samples = idx[pick]
+        r = rng.random(len(lab)) * size[lab]
+        rand = np.flatnonzero(r < extra[lab])
+        samples = idx[np.concatenate([pick, rand])]
         pts = origin + np.stack(np.unravel_index(samples, shape), axis=1) * h
         w = _winding(V, F, pts)
         inside = w > 0.5
@@ -311,49 +337,36 @@ def _component_signs(V, F, d, free, in_sheet, h, origin, tris_b, id_b):
         comp_sign = np.where(n_in * 2 > n_all, -1, 1).astype(np.int8)
         comp_sign[0] = 0
         sign.ravel()[idx] = comp_sign[lab]
-        mixed = np.nonzero((n_in > 0) & (n_in < n_all))[0]
-        if len(mixed):
-            # a component whose samples disagree (a gap in an open assembly): test each voxel
-            sel = idx[np.isin(lab, mixed)]
-            queries.append(sel)
-    # voxels near the boundary take the sign of a free 6-neighbour when those agree
+    # the ring, then voxels near the boundary, take the sign of signed 6-neighbours that agree
+    ring = free & ~core
+    todo = ring.copy()
+    for _ in range(8):  # ring voxels pass the sign on among themselves (each has d > h)
+        pos, neg = _neighbour_signs(sign)
+        one = todo & (pos ^ neg)
+        if not one.any():
+            break
+        sign[one] = np.where(pos[one], 1, -1)
+        todo &= ~one
+    queries.append(np.flatnonzero(todo))
+    _query_signs(V, F, sign, np.concatenate(queries), h, origin)
+    queries = []
     near = ~free
-    pos = np.zeros(shape, bool)
-    neg = np.zeros(shape, bool)
-    for ax in range(3):
-        for step in (1, -1):
-            s = np.roll(sign, step, axis=ax)
-            # np.roll wraps; the border layers are free space (pad >= band), harmless
-            pos |= s > 0
-            neg |= s < 0
+    pos, neg = _neighbour_signs(np.where(free, sign, 0))
     one = near & (pos ^ neg)
     sign[one] = np.where(pos[one], 1, -1)
     undecided = near & ~(pos ^ neg)
     sign[undecided & in_sheet] = -1
-    lone = np.flatnonzero(undecided & ~in_sheet & (id_b >= 0))
-    if len(lone):
-        pts = origin + np.stack(np.unravel_index(lone, shape), axis=1) * h
-        tid = id_b.ravel()[lone].astype(np.int64)
-        _, bary = _kernels.closest_points(pts, tris_b, tid)
-        t = tris_b[tid]
-        q = np.einsum("nc,ncd->nd", bary, t)
-        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-        pq = pts - q
-        side = np.einsum("nd,nd->n", pq, n)
-        # p straight in front of / behind the face at its nearest point (face interior, or an
-        # edge seen along this face's normal): the side is the face's side
-        face = np.abs(side) >= (1 - 1e-6) * np.linalg.norm(pq, axis=1)
-        face &= np.abs(side) > 1e-6 * h
-        sign.ravel()[lone[face]] = np.where(side[face] > 0, 1, -1)
-        queries.append(lone[~face])
-    queries.append(np.flatnonzero(undecided & ~in_sheet & (id_b < 0)))
-    q = np.concatenate(queries) if queries else np.zeros(0, np.int64)
-    if len(q):
-        pts = origin + np.stack(np.unravel_index(q, shape), axis=1) * h
-        w = _winding(V, F, pts)
-        sign.ravel()[q] = np.where(w > 0.5, -1, 1)
+    queries.append(np.flatnonzero(undecided & ~in_sheet))
+    _query_signs(V, F, sign, np.concatenate(queries), h, origin)
     return sign
+
+
+def _query_signs(V, F, sign, flat_idx, h, origin):
+    """Set ``sign`` at the flat voxel indices from the winding number (inside where w > 1/2)."""
+    if len(flat_idx):
+        pts = origin + np.stack(np.unravel_index(flat_idx, sign.shape), axis=1) * h
+        w = _winding(V, F, pts)
+        sign.ravel()[flat_idx] = np.where(w > 0.5, -1, 1)
 
 
 @keyword_options
@@ -437,7 +450,7 @@ def from_mesh(
     # thickened sheets block the flood as much as boundaries do (a cushion whose cloth has an
     # open seam still encloses its inside); at 2t thick they leave no 6-connected tunnel
     free = (d_b > h) & ~in_sheet
-    sign = _component_signs(V, F, d_b, free, in_sheet, h, origin, tris_b, id_b)
+    sign = _component_signs(V, F, d_b, free, in_sheet, h, origin)
     del free, in_sheet
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
@@ -450,6 +463,12 @@ def from_mesh(
     sdf[closer] = f_s[closer]
     win[closer] = sheet[id_s[closer]]
     del f_s, id_s, closer, has
+
+    # values within 1e-3 voxel of 0 are moved to +-1e-3 voxel: a surface exactly through a voxel
+    # centre (axis-aligned models) would give marching cubes degenerate triangles
+    tiny = np.float32(1e-3 * h)
+    sdf[(sdf >= 0) & (sdf < tiny)] = tiny
+    sdf[(sdf < 0) & (sdf > -tiny)] = -tiny
 
     report(0.65, "distances beyond the band")
     band = np.abs(sdf) <= BAND * h

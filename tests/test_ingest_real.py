@@ -147,21 +147,29 @@ def test_sheenchair_colour_from_textures():
 
 
 @pytest.mark.parametrize(
-    "rel",
-    ["polyhaven/sofa_03", "polyhaven/wooden_bookshelf_worn", "sweethome3d/bookcase.obj"],
+    "rel, res",
+    [
+        ("polyhaven/sofa_03", 64),
+        ("polyhaven/wooden_bookshelf_worn", 64),
+        ("sweethome3d/bookcase.obj", 64),
+        # intersecting boxes with narrow gaps: leaked through a 2-voxel gap at 128 once
+        ("kenney/bedBunk.glb", 128),
+    ],
 )
-def test_open_assemblies_without_leaks(rel):
+def test_open_assemblies_without_leaks(rel, res):
     """Non-watertight assemblies: watertight result within 1.5 voxels mean of the source, and
     inside/outside agrees with libigl's generalized winding number (inside where w > 1/2) on
-    >= 99% of the voxels more than two voxels from the source surface."""
-    mesh, c, out = _imported(rel, 64)
+    >= 99% of the voxels more than two voxels from the source surface (a random sample)."""
+    mesh, c, out = _imported(rel, res)
     assert out.is_watertight
     ch = chamfer_voxels(mesh, c, out)
     assert ch <= 1.5, ch
     h = c.voxel_size
     p = _voxel_centres(c)
     d = np.sqrt(igl.point_mesh_squared_distance(p, mesh.vertices, mesh.faces)[0])
-    far = d > 2 * h
+    far = np.flatnonzero(d > 2 * h)
+    # a seeded sample of 40 000 of them (binomial error ~0.05%) keeps libigl's part short
+    far = np.random.default_rng(0).choice(far, min(len(far), 40000), replace=False)
     w = igl.fast_winding_number(mesh.vertices, mesh.faces, p[far])
     agree = np.mean((c.sdf.ravel()[far] < 0) == (w > 0.5))
     assert agree >= 0.99, agree

@@ -105,9 +105,7 @@ def test_comb_scaled_globally_has_every_spacing_scaled():
     a = _comb(6)
     f = 1.9 / 1.6
     boxes = [((0.3 * m * f, 0, 0), ((0.3 * m + 0.1) * f, 0.4, 0.2)) for m in range(6)]
-    b = shapes.grid(
-        lambda p: shapes.boxes_sdf(p, boxes), (boxes[0][0], boxes[-1][1]), voxel_size=H
-    )
+    b = shapes.grid(lambda p: shapes.boxes_sdf(p, boxes), (boxes[0][0], boxes[-1][1]), voxel_size=H)
     geo = M.EditGeometry(0, *COMB_ZONE, 0.0, 1.6, "global")
     m = M.evaluate(a, b, geo)
     assert m["spacing_err"] == pytest.approx(f - 1, abs=0.02)
@@ -175,7 +173,9 @@ def test_distance_error_sees_a_stretched_sdf_that_was_not_re_evaluated():
 
 def test_pieces_and_watertightness():
     two = shapes.grid(
-        lambda p: shapes.boxes_sdf(p, [((0, 0, 0), (0.2, 0.2, 0.2)), ((0.4, 0, 0), (0.6, 0.2, 0.2))]),
+        lambda p: shapes.boxes_sdf(
+            p, [((0, 0, 0), (0.2, 0.2, 0.2)), ((0.4, 0, 0), (0.6, 0.2, 0.2))]
+        ),
         ((0, 0, 0), (0.6, 0.2, 0.2)),
         voxel_size=H,
     )

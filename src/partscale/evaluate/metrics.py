@@ -54,7 +54,7 @@ import trimesh
 from ..csdf import CSDF
 from ..edit.recipe import AXES, Edit, tile_count
 from ..errors import InputError
-from ..surface import sample_linear, to_mesh
+from ..surface import to_mesh
 
 #: Voxels kept between the zone's planes and the regions called outside/inside.
 MARGIN = 1.0
@@ -337,9 +337,7 @@ def _line_keys(r: Runs, h: float) -> np.ndarray:
     return np.rint(r.perp / h).astype(np.int64) @ np.array([1 << 32, 1], np.int64)
 
 
-def spacing_error(
-    a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = None
-) -> float:
+def spacing_error(a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = None) -> float:
     """Pitch distribution error of repeated elements across the zone (see module docstring)."""
     ra = runs_a if runs_a is not None else runs(a, geo.axis)
     rb = runs(b, geo.axis)
@@ -473,9 +471,7 @@ def slice_steps(csdf: CSDF, axis: int) -> tuple[np.ndarray, np.ndarray]:
     ds = np.minimum(np.abs(s[1:] - s[:-1]) / h, BAND)
     with np.errstate(invalid="ignore", divide="ignore"):
         color = np.where(count >= 3, (dc * both).sum(axis=(1, 2)) / count, np.nan)
-        shape = np.where(
-            count_either >= 3, (ds * either).sum(axis=(1, 2)) / count_either, np.nan
-        )
+        shape = np.where(count_either >= 3, (ds * either).sum(axis=(1, 2)) / count_either, np.nan)
     return color.astype(np.float64), shape.astype(np.float64)
 
 

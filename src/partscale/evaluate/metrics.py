@@ -141,9 +141,13 @@ class EditGeometry:
         return out
 
 
-def resolve_edit(csdf: CSDF, edit: Edit, *, mode: str | None = None) -> EditGeometry:
+def resolve_edit(
+    csdf: CSDF, edit: Edit, *, mode: str | None = None, snap: bool = True
+) -> EditGeometry:
     """Resolve ``edit`` (positions in units or ``'NN%'``) on ``csdf``'s solid extent.
 
+    ``snap``: move ``dest`` to ``end`` plus a whole number of voxels, as the scaling stage does
+    (grids keep their voxel size), so the metrics judge the edit that was promised.
     Raises :class:`InputError` when the zone is empty or reversed, or lies outside the solid.
     """
     ax = edit.axis_index
@@ -160,6 +164,9 @@ def resolve_edit(csdf: CSDF, edit: Edit, *, mode: str | None = None) -> EditGeom
         )
     if not d > s:
         raise InputError(f"to: expected a destination beyond the zone start {s:.4g}, got {d:.4g}")
+    if snap:
+        h = csdf.voxel_size
+        d = e + round((d - e) / h) * h
     return EditGeometry(ax, s, e, d, lo, hi, mode or edit.mode)
 
 

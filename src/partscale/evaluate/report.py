@@ -142,7 +142,7 @@ def _expectation(obj_rows: list[dict[str, Any]], kind: str) -> tuple[str, str]:
     orig = by.get("original", {})
     st, ti = by.get("stretch"), by.get("tile")
     if not st or not ti or st.get("error") or ti.get("error"):
-        return "–", "a mode failed to run"
+        return "n/a", "a mode failed to run"
     fs, ft = set(failures_of(st, orig)), set(failures_of(ti, orig))
     if kind == "repeating":
         keys = ("prop_in", "spacing_err")
@@ -236,7 +236,27 @@ def summary_markdown(result: SuiteResult) -> str:
         lines.append(_md_table(["object", "kind", "expected", "verdict", "measured"], body))
         held = sum(1 for b in body if b[3] == "held")
         lines.append(f"Held on {held} of {len(body)} object(s).\n")
+    lines.append(_timings(result))
     return "\n".join(lines)
+
+
+def _timings(result: SuiteResult) -> str:
+    stages = ("import", "reference", "edit", "metrics", "figure")
+    body = []
+    for o in result.objects:
+        if o.error:
+            continue
+        t = o.timings
+        body.append(
+            [o.entry.name, o.rows[0].get("voxels", "")]
+            + [f"{t[k]:.1f}" if k in t else "" for k in stages]
+            + [f"{sum(t.values()):.1f}"]
+        )
+    return (
+        "## Time (s)\n\n`edit`: the five edits together; `metrics`: measuring them; "
+        "`reference`: the original's mesh and runs.\n\n"
+        + _md_table(["object", "voxels", *stages, "total"], body)
+    )
 
 
 def write(result: SuiteResult) -> dict[str, Path]:

@@ -187,8 +187,9 @@ class ObjectResult:
     rows: list[dict[str, Any]] = field(default_factory=list)
     error: str | None = None
     figure: Path | None = None
-    import_s: float = math.nan
     note: str | None = None
+    #: seconds spent per stage: import, reference, edit, metrics, figure
+    timings: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -215,6 +216,9 @@ def _load_object(path: Path, res: int, progress: ProgressCallback) -> CSDF:
 def _run_mode(c: CSDF, edit: Edit, mode: str) -> CSDF:
     from .. import edit as edit_mod
 
+    if not hasattr(edit_mod, "apply_edit"):  # the stage's module, if its package does not export
+        from ..edit import scale as edit_mod  # type: ignore[no-redef]
+
     if mode.startswith("naive-"):
         return edit_mod.naive_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode[6:]))
     return edit_mod.apply_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode))
@@ -230,7 +234,7 @@ def _fmt(v: Any, digits: int = 2) -> str:
     if isinstance(v, bool):
         return "yes" if v else "NO"
     if isinstance(v, float | np.floating):
-        return "–" if math.isnan(v) else f"{v:.{digits}f}"
+        return "n/a" if math.isnan(v) else f"{v:.{digits}f}"
     return str(v)
 
 
@@ -264,7 +268,7 @@ def _run_entry(
         progress(0.0, f"{name}: import")
         t0 = time.perf_counter()
         original = _load_object(path, res, scaled(progress, 0.0, 0.3))
-        result.import_s = time.perf_counter() - t0
+        result.timings["import"] = time.perf_counter() - t0
         geo0 = metrics.resolve_edit(original, entry.edit)
     except InputError as exc:
         result.error = f"{name}: {exc}"
@@ -274,7 +278,10 @@ def _run_entry(
         return result
 
     progress(0.3, f"{name}: reference")
+    t0 = time.perf_counter()
     ref = metrics.Reference(original)
+    result.timings["reference"] = time.perf_counter() - t0
+    result.timings["edit"] = result.timings["metrics"] = 0.0
     base = {"object": name, "kind": entry.kind or "", "voxels": "x".join(map(str, original.shape))}
     result.rows.append(
         {**base, "mode": "original", **metrics.evaluate_original(ref), "time_s": math.nan}
@@ -295,7 +302,10 @@ def _run_entry(
             t0 = time.perf_counter()
             b = _run_mode(original, entry.edit, mode)
             dt = time.perf_counter() - t0
-            row = {**base, "mode": mode, **metrics.evaluate(ref, b, geo), "time_s": dt}
+            m = metrics.evaluate(ref, b, geo)
+            result.timings["edit"] += dt
+            result.timings["metrics"] += time.perf_counter() - t0 - dt
+            row = {**base, "mode": mode, **m, "time_s": dt}
             results[mode] = b
         except Exception as exc:  # recorded in the tables; the other modes still run
             msg = str(exc) if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
@@ -304,8 +314,10 @@ def _run_entry(
         result.rows.append(row)
 
     progress(0.8, f"{name}: figure")
+    t0 = time.perf_counter()
     try:
         result.figure = _figure(entry, original, results, result.rows, out_dir, panel)
+        result.timings["figure"] = time.perf_counter() - t0
     except ImportError as exc:  # the render stage is optional for the metrics
         result.note = f"{name}: no figure ({exc})"
     return result
@@ -336,9 +348,10 @@ def _figure(
             f"space {_fmt(r['spacing_err'])} seam {_fmt(r['seam_color'], 0)}"
         )
         panels.append((LABELS[mode], note, _render(res, entry.view, frame, panel)))
-    subtitle = f"{entry.path} — {entry.describe()}"
+    # ASCII only: the built-in font has no dashes
+    subtitle = f"{entry.path}  |  {entry.describe()}"
     if entry.note:
-        subtitle += f" — {entry.note}"
+        subtitle += f"  |  {entry.note}"
     subtitle += "   (* baseline: no re-evaluation, plain concatenation)"
     fig = figures.object_figure(entry.name, subtitle, panels)
     path = out_dir / f"{entry.name}.png"
@@ -406,7 +419,10 @@ def run_suite(
     if sheet:
         from PIL import Image
 
-        images = [Image.open(p) for p in sheet]
+        images = []
+        for p in sheet:
+            with Image.open(p) as im:
+                images.append(im.convert("RGB"))
         path = out / "contact_sheet.png"
         with atomic_path(path) as tmp:
             figures.contact_sheet(images).save(tmp, format="PNG")

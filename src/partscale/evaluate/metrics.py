@@ -26,8 +26,9 @@ The metrics (each a function below, gathered by :func:`evaluate`):
   stretched keeps its thickness (0); scaling by ``f`` gives ``|f - 1|``.
 - ``spacing_err``: spacing of repeated elements. On lines along the edit axis that cross at least
   three solid runs in ``a`` (lines through repeated elements), the pitches (centre-to-centre
-  distances of consecutive runs) that overlap the zone are compared with the pitches on the same
-  lines of ``b`` overlapping the new zone, with the same normalised Wasserstein distance.
+  distances of consecutive runs) with at least one of their two runs centred in the zone are
+  compared with the pitches on the same
+  lines of ``b`` touching the new zone likewise, with the same normalised Wasserstein distance.
   NaN where ``a`` has no such lines (no repeated elements along the axis).
 - ``sdf_err_mean`` / ``sdf_err_p99``: ``|sdf|`` against the true distance to ``b``'s own surface
   (its marching-cubes mesh, exact point-triangle distances) in a band of :data:`BAND` voxels.
@@ -60,8 +61,9 @@ from ..surface import to_mesh
 MARGIN = 1.0
 #: Half-width in voxels of the band where stored distances are checked against true ones.
 BAND = 3.0
-#: Fewest samples a distribution needs before it is compared.
-MIN_SAMPLES = 5
+#: Fewest samples a distribution needs before it is compared (a handful of stray runs, e.g. a
+#: bump a voxel high, would otherwise decide a region's error).
+MIN_SAMPLES = 20
 #: Most surface points / band voxels measured per comparison (a fixed-seed random subset).
 MAX_POINTS = 150_000
 
@@ -354,7 +356,13 @@ def spacing_error(a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = 
     if len(repeated_lines) == 0:
         return math.nan
     la, ca0, ca1 = _pitches(ra)
-    keep_a = np.isin(la, repeated_lines) & (ca1 > geo.start) & (ca0 < geo.end)
+
+    def touches(c0: np.ndarray, c1: np.ndarray, hi: float) -> np.ndarray:
+        # an element of the pair lies in the zone: pitches spanning the whole zone (a rung and
+        # a seat on either side of stretched legs) are meant to grow
+        return ((c0 >= geo.start) & (c0 <= hi)) | ((c1 >= geo.start) & (c1 <= hi))
+
+    keep_a = np.isin(la, repeated_lines) & touches(ca0, ca1, geo.end)
     if not keep_a.any():
         return math.nan
     keys_a = _line_keys(ra, h)
@@ -364,7 +372,7 @@ def spacing_error(a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = 
     lb, cb0, cb1 = _pitches(rb)
     keys_b = _line_keys(rb, h)
     first_b = np.searchsorted(rb.line, lb)
-    keep_b = np.isin(keys_b[first_b], wanted) & (cb1 > geo.start) & (cb0 < geo.dest)
+    keep_b = np.isin(keys_b[first_b], wanted) & touches(cb0, cb1, geo.dest)
     return distribution_error((ca1 - ca0)[keep_a], (cb1 - cb0)[keep_b])
 
 

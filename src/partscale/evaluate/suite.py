@@ -306,6 +306,8 @@ def _run_entry(
             result.timings["edit"] += dt
             result.timings["metrics"] += time.perf_counter() - t0 - dt
             row = {**base, "mode": mode, **m, "time_s": dt}
+            if geo.mode == "tile":
+                row["copies"] = geo.n_copies
             results[mode] = b
         except Exception as exc:  # recorded in the tables; the other modes still run
             msg = str(exc) if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"

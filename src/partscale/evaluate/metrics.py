@@ -17,18 +17,19 @@ The metrics (each a function below, gathered by :func:`evaluate`):
 - ``rigid_err``: 99th percentile of the distance between the surface outside the zone before and
   after (each surface point moved by the edit's translation, distance to the other surface; both
   ways).
-- ``prop_out`` / ``prop_in``: proportion error. Local thickness of the solid along each axis is
-  the length of every solid run (chord) on the voxel-centre lines, ends at the sdf's linear zero
-  crossings (sub-voxel; exact on faces, up to a voxel short on lines grazing an edge, which the
-  trimmed quantiles below absorb). Runs wholly outside (inside) the zone are pooled per axis; the error is
-  the normalised 1-Wasserstein distance between the before and after distributions (mean absolute
-  difference of their 5..95 % quantiles over the mean before), the largest over the axes. A box
-  stretched keeps its thickness (0); scaling by ``f`` gives ``|f - 1|``.
+- ``prop_out`` / ``prop_in``: proportion error. The local thickness of the solid along the edit
+  axis is the length of every solid run (chord) on the voxel-centre lines along it, ends at the
+  sdf's linear zero crossings (sub-voxel; exact on faces, up to a voxel short on lines grazing an
+  edge, which the trimmed quantiles below absorb): the thickness of shelves, balusters, legs in
+  the direction the edit changes. Runs wholly outside (inside) the zone are pooled; the error is
+  the normalised 1-Wasserstein distance between the before and after distributions (mean
+  absolute difference of their 5..95 % quantiles over the mean before). Elements kept: 0;
+  scaled by ``f``: ``|f - 1|``. (Across the axis a one-axis edit changes no thickness.)
 - ``spacing_err``: spacing of repeated elements. On lines along the edit axis that cross at least
   three solid runs in ``a`` (lines through repeated elements), the pitches (centre-to-centre
   distances of consecutive runs) with at least one of their two runs centred in the zone are
-  compared with the pitches on the same
-  lines of ``b`` touching the new zone likewise, with the same normalised Wasserstein distance.
+  compared with the pitches on the same lines of ``b`` touching the new zone likewise, with the
+  same normalised Wasserstein distance.
   NaN where ``a`` has no such lines (no repeated elements along the axis).
 - ``sdf_err_mean`` / ``sdf_err_p99``: ``|sdf|`` against the true distance to ``b``'s own surface
   (its marching-cubes mesh, exact point-triangle distances) in a band of :data:`BAND` voxels.
@@ -36,10 +37,11 @@ The metrics (each a function below, gathered by :func:`evaluate`):
   the mean is the figure to compare.
 - ``watertight`` and ``pieces``: of the marching-cubes surface (connected components of faces).
 - ``seam_color`` / ``seam_shape``: the jump across each seam plane (the zone's two planes in
-  ``b``, plus the joins between tile copies): the mean colour (sdf) difference between the two
-  voxel slices straddling the plane, over voxels within a voxel of the surface on both, minus the
-  same step in ``a`` at the corresponding plane (for joins between copies, minus ``a``'s median
-  step), clipped at 0.
+  ``b``, plus the joins between tile copies): the mean colour (sdf) difference between two voxel
+  slices :data:`SEAM_WINDOW` apart centred on the plane (so a blended seam still counts in
+  full) less the trend on either side (see :func:`slice_steps`), over voxels near the surface,
+  minus the same jump in ``a`` at the corresponding plane (for joins between copies, minus
+  ``a``'s median), clipped at 0.
 """
 
 from __future__ import annotations
@@ -64,6 +66,9 @@ BAND = 3.0
 #: Fewest samples a distribution needs before it is compared (a handful of stray runs, e.g. a
 #: bump a voxel high, would otherwise decide a region's error).
 MIN_SAMPLES = 20
+#: Seam jumps compare slices this many voxels apart, centred on the seam: wider than the scaling
+#: stage's blend (2 voxels either side of a join), which spreads a jump without removing it.
+SEAM_WINDOW = 5
 #: Most surface points / band voxels measured per comparison (a fixed-seed random subset).
 MAX_POINTS = 150_000
 
@@ -306,24 +311,27 @@ def _regions(geo: EditGeometry, h: float) -> dict[str, tuple[list, list]]:
 
 
 def proportion_error(
-    a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: list[Runs] | None = None
+    a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = None
 ) -> dict[str, float]:
-    """``{'out': e, 'in': e}``: largest per-axis thickness distribution error in each region.
+    """``{'out': e, 'in': e}``: thickness distribution error along the edit axis per region.
 
-    NaN for a region where no axis has enough runs on both sides.
+    Runs across the edit axis are left out: a one-axis edit cannot change a cross-section's
+    set of thicknesses, only how many lines see each, which says nothing about proportions.
+    Runs of ``b`` crossing a join between tile copies are left out too: their pieces were runs
+    crossing the zone's planes in ``a``, which no region holds. NaN where a region has fewer
+    than :data:`MIN_SAMPLES` runs on either side.
     """
-    runs_a = runs_a or [runs(a, ax) for ax in range(3)]
-    runs_b = [runs(b, ax) for ax in range(3)]
+    ra = runs_a if runs_a is not None else runs(a, geo.axis)
+    rb = runs(b, geo.axis)
+    joins = [y for y, source in geo.seams() if source is None]
+    clear = np.ones(len(rb.start), bool)
+    for y in joins:
+        clear &= ~((rb.start < y) & (rb.end > y))
     out: dict[str, float] = {}
     for name, (reg_a, reg_b) in _regions(geo, a.voxel_size).items():
-        errs = []
-        for ra, rb in zip(runs_a, runs_b, strict=True):
-            la = np.concatenate([ra.length[_in_region(ra, geo.axis, *r)] for r in reg_a])
-            lb = np.concatenate([rb.length[_in_region(rb, geo.axis, *r)] for r in reg_b])
-            e = distribution_error(la, lb)
-            if not math.isnan(e):
-                errs.append(e)
-        out[name] = max(errs) if errs else math.nan
+        la = np.concatenate([ra.length[_in_region(ra, geo.axis, *r)] for r in reg_a])
+        lb = np.concatenate([rb.length[_in_region(rb, geo.axis, *r) & clear] for r in reg_b])
+        out[name] = distribution_error(la, lb)
     return out
 
 
@@ -460,40 +468,60 @@ def topology(mesh: trimesh.Trimesh) -> tuple[bool, int]:
     return bool(mesh.is_watertight), len(comps)
 
 
-def slice_steps(csdf: CSDF, axis: int) -> tuple[np.ndarray, np.ndarray]:
-    """Colour and shape step between each pair of adjacent voxel slices along ``axis``.
+def slice_steps(
+    csdf: CSDF, axis: int, *, window: int = SEAM_WINDOW
+) -> tuple[np.ndarray, np.ndarray]:
+    """Colour and shape jumps between voxel slices ``window`` apart along ``axis``.
+
+    The jump between slices ``i`` and ``i + k`` (``k = window``) is their difference less the
+    trend on either side, ``|f[i-k] - 3 f[i] + 3 f[i+k] - f[i+2k]| / 2`` per voxel: zero for
+    surfaces and colours that change linearly (a slanted leg, a gradient), the full step for a
+    discontinuity however it was blended within the window.
 
     Returns
     -------
-    color : (N - 1,) float64
-        Mean sRGB distance between slice ``i`` and ``i + 1`` over voxels within one voxel of the
-        surface on both slices (NaN where fewer than 3 such voxels).
-    shape : (N - 1,) float64
-        Mean ``|sdf[i + 1] - sdf[i]|`` in voxels (clipped at ``BAND``) over voxels within one
-        voxel of the surface on either slice.
+    color : (N,) float64
+        Mean sRGB jump (Euclidean) at pair ``(i, i + k)``, over voxels within one voxel of the
+        surface on all four slices; NaN where fewer than 3 such voxels or slices are missing.
+    shape : (N,) float64
+        Mean ``sdf`` jump in voxels (clipped at ``2 * BAND``) over voxels within one voxel of
+        the surface on slice ``i`` or ``i + k``.
     """
     h = csdf.voxel_size
+    k = window
     s = np.moveaxis(csdf.sdf, axis, 0)
     c = np.moveaxis(csdf.rgb, axis, 0)
+    n = s.shape[0]
+    color = np.full(n, np.nan)
+    shape = np.full(n, np.nan)
+    if n < 3 * k + 1:
+        return color, shape
+    idx = np.arange(k, n - 2 * k)  # pairs (i, i + k) with both neighbours on the grid
     near = np.abs(s) <= h
-    both = near[1:] & near[:-1]
-    either = near[1:] | near[:-1]
-    count = both.sum(axis=(1, 2))
-    count_either = either.sum(axis=(1, 2))
-    dc = np.linalg.norm(c[1:].astype(np.float32) - c[:-1].astype(np.float32), axis=-1)
-    # a step in the surface leaves voxels near it on one slice only: count those too, with the
-    # change clipped to the band so far-field values do not dominate
-    ds = np.minimum(np.abs(s[1:] - s[:-1]) / h, BAND)
+
+    def stencil(f: np.ndarray) -> np.ndarray:
+        f = f.astype(np.float32)
+        return np.abs(f[idx - k] - 3 * f[idx] + 3 * f[idx + k] - f[idx + 2 * k]) / 2
+
+    either = near[idx] | near[idx + k]
+    every = near[idx - k] & near[idx] & near[idx + k] & near[idx + 2 * k]
+    js = np.minimum(stencil(s) / h, 2 * BAND)
+    cf = c.astype(np.float32)
+    jc = np.linalg.norm(cf[idx - k] - 3 * cf[idx] + 3 * cf[idx + k] - cf[idx + 2 * k], axis=-1) / 2
+    n_either = either.sum(axis=(1, 2))
+    n_every = every.sum(axis=(1, 2))
     with np.errstate(invalid="ignore", divide="ignore"):
-        color = np.where(count >= 3, (dc * both).sum(axis=(1, 2)) / count, np.nan)
-        shape = np.where(count_either >= 3, (ds * either).sum(axis=(1, 2)) / count_either, np.nan)
-    return color.astype(np.float64), shape.astype(np.float64)
+        color[idx] = np.where(n_every >= 3, (jc * every).sum(axis=(1, 2)) / n_every, np.nan)
+        shape[idx] = np.where(n_either >= 3, (js * either).sum(axis=(1, 2)) / n_either, np.nan)
+    return color, shape
 
 
-def _step_at(steps: np.ndarray, csdf: CSDF, axis: int, y: float) -> float:
-    # the pair of slices straddling y and one pair either side: a plane on a voxel centre, or a
-    # seam the edit blended over a few layers, still shows its largest step
-    i = math.floor((y - csdf.origin[axis]) / csdf.voxel_size)
+def _step_at(
+    steps: np.ndarray, csdf: CSDF, axis: int, y: float, window: int = SEAM_WINDOW
+) -> float:
+    # the pair of slices centred on y and one pair either side: a plane on a voxel centre still
+    # shows its largest jump
+    i = math.floor((y - csdf.origin[axis]) / csdf.voxel_size) - (window - 1) // 2
     near = steps[max(i - 1, 0) : max(i + 2, 0)]
     near = near[np.isfinite(near)]
     return float(near.max()) if len(near) else math.nan
@@ -588,7 +616,7 @@ def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, flo
             f"got {b.voxel_size:.6g}"
         )
     mesh_b = to_mesh(b)
-    prop = proportion_error(a, b, geo, runs_a=ref.runs)
+    prop = proportion_error(a, b, geo, runs_a=ref.runs[geo.axis])
     watertight, pieces = topology(mesh_b)
     sdf_mean, sdf_p99 = distance_error(b, mesh_b)
     seam_c, seam_s = seam_jumps(a, b, geo, steps_a=ref.steps(geo.axis))

@@ -337,8 +337,13 @@ def _figure(
     bounds = [c.surface_bounds() for c in [original, *done]]
     frame = np.stack([np.min([b[0] for b in bounds], 0), np.max([b[1] for b in bounds], 0)])
     by_mode = {r["mode"]: r for r in rows}
-    panels = [("original", f"{_fmt(by_mode['original']['pieces'])} piece(s)", None)]
-    panels[0] = (*panels[0][:2], _render(original, entry.view, frame, panel))
+    panels = [
+        (
+            "original",
+            f"{_fmt(by_mode['original']['pieces'])} piece(s)",
+            _render(original, entry.view, frame, panel),
+        )
+    ]
     for mode in MODES:
         r = by_mode[mode]
         res = results[mode]

@@ -39,7 +39,7 @@ The metrics (each a function below, gathered by :func:`evaluate`):
 - ``seam_color`` / ``seam_shape``: the jump across each seam plane (the zone's two planes in
   ``b``, plus the joins between tile copies): the mean colour (sdf) difference between two voxel
   slices :data:`SEAM_WINDOW` apart centred on the plane (so a blended seam still counts in
-  full) less the trend on either side (see :func:`slice_steps`), over voxels near the surface,
+  full; for the sdf, less the trend just outside, see :func:`slice_steps`), near the surface,
   minus the same jump in ``a`` at the corresponding plane (for joins between copies, minus
   ``a``'s median), clipped at 0.
 """
@@ -473,19 +473,18 @@ def slice_steps(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Colour and shape jumps between voxel slices ``window`` apart along ``axis``.
 
-    The jump between slices ``i`` and ``i + k`` (``k = window``) is their difference less the
-    trend on either side, ``|f[i-k] - 3 f[i] + 3 f[i+k] - f[i+2k]| / 2`` per voxel: zero for
-    surfaces and colours that change linearly (a slanted leg, a gradient), the full step for a
-    discontinuity however it was blended within the window.
-
     Returns
     -------
     color : (N,) float64
-        Mean sRGB jump (Euclidean) at pair ``(i, i + k)``, over voxels within one voxel of the
-        surface on all four slices; NaN where fewer than 3 such voxels or slices are missing.
+        At ``i``: mean sRGB distance between slices ``i`` and ``i + k`` (``k = window``) over
+        voxels within one voxel of the surface on both; NaN where fewer than 3 such voxels.
     shape : (N,) float64
-        Mean ``sdf`` jump in voxels (clipped at ``2 * BAND``) over voxels within one voxel of
-        the surface on slice ``i`` or ``i + k``.
+        At ``i``: mean ``sdf`` change from slice ``i`` to ``i + k`` less the trend the one-voxel
+        differences just outside the pair predict, ``|(f[i+k] - f[i]) - k (f[i] - f[i-1] +
+        f[i+k+1] - f[i+k]) / 2|``, in voxels (clipped at ``2 * BAND``), over voxels within one
+        voxel of the surface on slice ``i`` or ``i + k``: zero for a surface that changes
+        linearly (a slanted leg), the full step for a discontinuity however it was blended
+        within the pair.
     """
     h = csdf.voxel_size
     k = window
@@ -494,25 +493,21 @@ def slice_steps(
     n = s.shape[0]
     color = np.full(n, np.nan)
     shape = np.full(n, np.nan)
-    if n < 3 * k + 1:
+    if n < k + 3:
         return color, shape
-    idx = np.arange(k, n - 2 * k)  # pairs (i, i + k) with both neighbours on the grid
+    i = np.arange(1, n - k - 1)
     near = np.abs(s) <= h
-
-    def stencil(f: np.ndarray) -> np.ndarray:
-        f = f.astype(np.float32)
-        return np.abs(f[idx - k] - 3 * f[idx] + 3 * f[idx + k] - f[idx + 2 * k]) / 2
-
-    either = near[idx] | near[idx + k]
-    every = near[idx - k] & near[idx] & near[idx + k] & near[idx + 2 * k]
-    js = np.minimum(stencil(s) / h, 2 * BAND)
-    cf = c.astype(np.float32)
-    jc = np.linalg.norm(cf[idx - k] - 3 * cf[idx] + 3 * cf[idx + k] - cf[idx + 2 * k], axis=-1) / 2
+    both = near[i] & near[i + k]
+    either = near[i] | near[i + k]
+    dc = np.linalg.norm(c[i + k].astype(np.float32) - c[i].astype(np.float32), axis=-1)
+    f = s.astype(np.float32)
+    trend = k * ((f[i] - f[i - 1]) + (f[i + k + 1] - f[i + k])) / 2
+    js = np.minimum(np.abs((f[i + k] - f[i]) - trend) / h, 2 * BAND)
+    n_both = both.sum(axis=(1, 2))
     n_either = either.sum(axis=(1, 2))
-    n_every = every.sum(axis=(1, 2))
     with np.errstate(invalid="ignore", divide="ignore"):
-        color[idx] = np.where(n_every >= 3, (jc * every).sum(axis=(1, 2)) / n_every, np.nan)
-        shape[idx] = np.where(n_either >= 3, (js * either).sum(axis=(1, 2)) / n_either, np.nan)
+        color[i] = np.where(n_both >= 3, (dc * both).sum(axis=(1, 2)) / n_both, np.nan)
+        shape[i] = np.where(n_either >= 3, (js * either).sum(axis=(1, 2)) / n_either, np.nan)
     return color, shape
 
 

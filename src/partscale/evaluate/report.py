@@ -220,6 +220,7 @@ def summary_markdown(result: SuiteResult) -> str:
         by = {r["mode"]: r for r in o.rows}
         body.append([o.entry.name] + [", ".join(failures_of(by[m], orig)) or "ok" for m in modes])
     lines.append(_md_table(["object", *modes], body))
+    lines += [_failure_counts(ok, modes), ""]
     lines += [
         "## The paper's expectations",
         "",
@@ -242,6 +243,24 @@ def summary_markdown(result: SuiteResult) -> str:
         lines.append(f"Held on {held} of {judged} object(s) where it can be judged.\n")
     lines.append(_timings(result))
     return "\n".join(lines)
+
+
+def _failure_counts(ok: list, modes: list[str]) -> str:
+    """One line per mode: on how many objects it fails, and on what most often."""
+    out = []
+    for mode in modes:
+        failed, reasons = 0, {}
+        for o in ok:
+            by = {r["mode"]: r for r in o.rows}
+            f = failures_of(by[mode], o.rows[0])
+            failed += bool(f)
+            for x in f:
+                reasons[x] = reasons.get(x, 0) + 1
+        top = ", ".join(f"{k} ({v})" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
+        out.append(
+            f"- **{mode}** fails on {failed} of {len(ok)} object(s)" + (f": {top}" if top else "")
+        )
+    return "\n".join(out) + "\n"
 
 
 def _timings(result: SuiteResult) -> str:

@@ -351,8 +351,9 @@ def _figure(
             panels.append((LABELS[mode], "", figures.failed_panel(panel, res)))
             continue
         note = (
-            f"prop {_fmt(r['prop_in'])}/{_fmt(r['prop_out'])} "
-            f"space {_fmt(r['spacing_err'])} seam {_fmt(r['seam_color'], 0)}"
+            f"prop in {_fmt(r['prop_in'])} out {_fmt(r['prop_out'])}  "
+            f"space {_fmt(r['spacing_err'])}  seam {_fmt(r['seam_shape'], 1)}v "
+            f"{_fmt(r['seam_color'], 0)}c"
         )
         panels.append((LABELS[mode], note, _render(res, entry.view, frame, panel)))
     # ASCII only: the built-in font has no dashes

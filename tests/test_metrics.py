@@ -105,6 +105,7 @@ def test_comb_spacing_is_measured_right_before_and_after_tiling():
     assert np.all(np.abs(pa - 0.3) < H) and np.all(np.abs(pb - 0.3) < H)
     geo = M.EditGeometry(0, *COMB_ZONE, 0.0, 1.6, "tile")
     m = M.evaluate(a, b, geo)
+    assert m["pieces"] == m["pieces_expected"] == 7  # the tooth in the zone, copied once
     assert m["spacing_err"] < 0.01
     assert m["prop_in"] < 0.01 and m["prop_out"] < 0.01
     assert m["rigid_err"] < 0.6 and m["length_err"] < 0.01

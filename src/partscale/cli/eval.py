@@ -22,6 +22,14 @@ def eval_suite(
         ),
     ] = None,
     only: Annotated[str | None, typer.Option("--only", help="Run only this object.")] = None,
+    segment: Annotated[
+        str | None,
+        typer.Option(
+            "--segment",
+            help="Segment each object first with this method (coacd, fast; cached) and add a "
+            "row coloured by part to the figures. Off by default.",
+        ),
+    ] = None,
     data: Annotated[
         Path | None,
         typer.Option(
@@ -36,7 +44,7 @@ def eval_suite(
     summary.md; the others still ran), 2 for a bad suite file or option.
     """
     with progress_bar("eval") as bar:
-        result = run_suite(suite, out, res=res, only=only, data=data, progress=bar)
+        result = run_suite(suite, out, res=res, only=only, data=data, segment=segment, progress=bar)
     for msg in result.failures:
         error_line(msg)
     n = len(result.objects)

@@ -32,10 +32,13 @@ The metrics (each a function below, gathered by :func:`evaluate`):
   same normalised Wasserstein distance.
   NaN where ``a`` has no such lines (no repeated elements along the axis).
 - ``sdf_err_mean`` / ``sdf_err_p99``: ``|sdf|`` against the true distance to ``b``'s own surface
-  (its marching-cubes mesh, exact point-triangle distances) in a band of :data:`BAND` voxels.
+  (its marching-cubes mesh, exact point-triangle distances) in a band of :data:`BAND` voxels,
+  within the new zone and :data:`BAND` voxels either side (the whole object for ``global``).
   Marching cubes chamfers sharp edges, so an exact field scores up to ~0.5 voxel at p99 on a box;
   the mean is the figure to compare.
-- ``watertight`` and ``pieces``: of the marching-cubes surface (connected components of faces).
+- ``watertight`` and ``pieces``: of the marching-cubes surface (connected components of faces);
+  ``pieces_expected``: the original's, plus for ``tile`` one more per copy of each piece lying
+  wholly in the zone.
 - ``seam_color`` / ``seam_shape``: the jump across each seam plane (the zone's two planes in
   ``b``, plus the joins between tile copies): the mean colour (sdf) difference between two voxel
   slices :data:`SEAM_WINDOW` apart centred on the plane (so a blended seam still counts in
@@ -440,16 +443,27 @@ def _shell(sdf: np.ndarray) -> np.ndarray:
     return shell
 
 
-def distance_error(b: CSDF, mesh_b: trimesh.Trimesh) -> tuple[float, float]:
+def distance_error(
+    b: CSDF,
+    mesh_b: trimesh.Trimesh,
+    *,
+    axis: int | None = None,
+    region: tuple[float, float] | None = None,
+) -> tuple[float, float]:
     """(mean, p99) of ``| |sdf| - true distance |`` in voxels, over the band of ``BAND`` voxels.
 
     The true distance is to ``b``'s own zero level (its marching-cubes mesh), so the surface is
-    taken as given and only the stored distances are judged.
+    taken as given and only the stored distances are judged. ``region``: only band voxels whose
+    coordinate along ``axis`` lies in this world interval (where an edit changed the field).
     """
     h = b.voxel_size
     shell = _shell(b.sdf)
     near = edt.edt(~shell, parallel=1) <= BAND + 1.5
-    idx = _subset(np.argwhere(near))
+    idx = np.argwhere(near)
+    if region is not None and axis is not None:
+        y = b.origin[axis] + idx[:, axis] * h
+        idx = idx[(y >= region[0]) & (y <= region[1])]
+    idx = _subset(idx)
     pts = b.index_to_world(idx)
     true = _distance_to_mesh(pts, mesh_b)
     stored = np.abs(b.sdf[idx[:, 0], idx[:, 1], idx[:, 2]].astype(np.float64))
@@ -460,12 +474,15 @@ def distance_error(b: CSDF, mesh_b: trimesh.Trimesh) -> tuple[float, float]:
     return float(err.mean()), float(np.quantile(err, 0.99))
 
 
-def topology(mesh: trimesh.Trimesh) -> tuple[bool, int]:
-    """(watertight, number of face-connected pieces) of a surface mesh."""
-    comps = trimesh.graph.connected_components(
+def _components(mesh: trimesh.Trimesh) -> list[np.ndarray]:
+    return trimesh.graph.connected_components(
         mesh.face_adjacency, nodes=np.arange(len(mesh.faces)), min_len=1
     )
-    return bool(mesh.is_watertight), len(comps)
+
+
+def topology(mesh: trimesh.Trimesh) -> tuple[bool, int]:
+    """(watertight, number of face-connected pieces) of a surface mesh."""
+    return bool(mesh.is_watertight), len(_components(mesh))
 
 
 def slice_steps(
@@ -567,7 +584,27 @@ class Reference:
         self.mesh = to_mesh(csdf)
         self.runs = [runs(csdf, ax) for ax in range(3)]
         self._steps: dict[int, tuple] = {}
-        self.watertight, self.pieces = topology(self.mesh)
+        comps = _components(self.mesh)
+        self.watertight, self.pieces = bool(self.mesh.is_watertight), len(comps)
+        v = self.mesh.vertices
+        # (P, 2, 3): each piece's bounding box, to count the pieces a tile copies
+        self._piece_bounds = np.array(
+            [
+                [
+                    v[self.mesh.faces[f]].reshape(-1, 3).min(0),
+                    v[self.mesh.faces[f]].reshape(-1, 3).max(0),
+                ]
+                for f in comps
+            ]
+        ).reshape(-1, 2, 3)
+
+    def expected_pieces(self, geo: EditGeometry) -> int:
+        """Pieces the edit should leave: each tile copy repeats the pieces wholly in the zone."""
+        if geo.mode != "tile":
+            return self.pieces
+        lo, hi = self._piece_bounds[:, 0, geo.axis], self._piece_bounds[:, 1, geo.axis]
+        inside = int(((lo > geo.start) & (hi < geo.end)).sum())
+        return self.pieces + (geo.n_copies - 1) * inside
 
     def steps(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
         if axis not in self._steps:
@@ -585,6 +622,7 @@ METRICS = (
     "sdf_err_p99",
     "watertight",
     "pieces",
+    "pieces_expected",
     "seam_color",
     "seam_shape",
 )
@@ -613,7 +651,9 @@ def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, flo
     mesh_b = to_mesh(b)
     prop = proportion_error(a, b, geo, runs_a=ref.runs[geo.axis])
     watertight, pieces = topology(mesh_b)
-    sdf_mean, sdf_p99 = distance_error(b, mesh_b)
+    band = BAND * a.voxel_size
+    zone = None if geo.mode == "global" else (geo.start - band, geo.dest + band)
+    sdf_mean, sdf_p99 = distance_error(b, mesh_b, axis=geo.axis, region=zone)
     seam_c, seam_s = seam_jumps(a, b, geo, steps_a=ref.steps(geo.axis))
     return {
         "length_err": length_error(b, geo),
@@ -625,14 +665,24 @@ def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, flo
         "sdf_err_p99": sdf_p99,
         "watertight": watertight,
         "pieces": pieces,
+        "pieces_expected": ref.expected_pieces(geo),
         "seam_color": seam_c,
         "seam_shape": seam_s,
     }
 
 
-def evaluate_original(ref: Reference) -> dict[str, float | int | bool]:
-    """The metrics that apply to the unedited object (its stored distances and topology)."""
-    mean, p99 = distance_error(ref.csdf, ref.mesh)
+def evaluate_original(
+    ref: Reference, geo: EditGeometry | None = None
+) -> dict[str, float | int | bool]:
+    """The metrics that apply to the unedited object (its stored distances and topology).
+
+    With ``geo``, distances are judged in the zone (and a band around it) only, as
+    :func:`evaluate` does for a stretch or tile.
+    """
+    band = BAND * ref.csdf.voxel_size
+    zone = None if geo is None else (geo.start - band, geo.end + band)
+    axis = None if geo is None else geo.axis
+    mean, p99 = distance_error(ref.csdf, ref.mesh, axis=axis, region=zone)
     return {
         "sdf_err_mean": mean,
         "sdf_err_p99": p99,

@@ -24,10 +24,10 @@ CRITERIA: dict[str, tuple[str, float, float]] = {
     "prop_out": ("thickness change outside the zone (rel.)", 0.02, 0.10),
     "prop_in": ("thickness change inside the zone (rel.)", 0.02, 0.10),
     "spacing_err": ("spacing change of repeated elements (rel.)", 0.02, 0.10),
-    "sdf_err_mean": ("distance-field error, mean (vox)", 0.05, 0.25),
+    "sdf_err_mean": ("distance-field error in the zone, mean (vox)", 0.02, 0.05),
     "seam_color": ("seam colour jump (sRGB levels)", 2.0, 20.0),
     "seam_shape": ("seam shape jump (vox)", 0.1, 0.5),
-    "pieces": ("extra pieces", 0.0, 0.5),
+    "pieces": ("pieces beyond the expected count", 0.0, 0.5),
 }
 SHORT = {
     "length_err": "length",
@@ -77,7 +77,8 @@ def _score(metric: str, row: dict[str, Any], original: dict[str, Any]) -> float:
     if "error" in row and row.get("error") and metric != "pieces":
         return math.nan
     if metric == "pieces":
-        return max(0.0, _num(row.get("pieces")) - _num(original.get("pieces")))
+        expected = row.get("pieces_expected", original.get("pieces"))
+        return max(0.0, _num(row.get("pieces")) - _num(expected))
     return _num(row.get(metric))
 
 
@@ -264,7 +265,7 @@ def _failure_counts(ok: list, modes: list[str]) -> str:
 
 
 def _timings(result: SuiteResult) -> str:
-    stages = ("import", "reference", "edit", "metrics", "figure")
+    stages = ("import", "segment", "reference", "edit", "metrics", "figure")
     body = []
     for o in result.objects:
         if o.error:

@@ -163,3 +163,36 @@ def test_default_suite_file_is_valid():
     assert len(suite.entries) >= 10
     assert all(e.error is None for e in suite.entries), [e.error for e in suite.entries]
     assert {e.kind for e in suite.entries} == {"solid", "repeating"}
+
+
+@needs_stages
+@pytest.mark.skipif(not _have("partscale.segment"), reason="segmentation stage not on this branch")
+def test_segmented_run_adds_a_parts_row(tmp_path):
+    rel = "kenney/bookcaseOpen.glb"
+    if not (DATA / rel).exists():
+        pytest.skip(f"test object {rel} not found under {DATA} (set PARTSCALE_DATA)")
+    suite = S.parse_suite(
+        {
+            "data": str(DATA),
+            "objects": [
+                {
+                    "name": "bookcase",
+                    "path": rel,
+                    "view": "front",
+                    "edit": {"axis": "y", "zone": ["26.625%", "53.875%"], "to": "81.125%"},
+                }
+            ],
+        }
+    )
+    plain = S.run_suite(suite, tmp_path / "plain", res=48, panel=96)
+    parts = S.run_suite(
+        suite,
+        tmp_path / "parts",
+        res=48,
+        panel=96,
+        segment="fast",
+    )
+    assert not plain.failures and not parts.failures, (plain.failures, parts.failures)
+    with Image.open(plain.objects[0].figure) as a, Image.open(parts.objects[0].figure) as b:
+        assert b.height > 1.5 * a.height  # a second row, coloured by part
+    assert "segment" in parts.objects[0].timings

@@ -370,16 +370,19 @@ def _figure(
             panels.append((LABELS[mode], "", figures.failed_panel(panel, res)))
             continue
         note = (
-            f"prop in {_fmt(r['prop_in'])} out {_fmt(r['prop_out'])}  "
-            f"space {_fmt(r['spacing_err'])}  seam {_fmt(r['seam_shape'], 1)}v "
-            f"{_fmt(r['seam_color'], 0)}c"
+            f"prop {_fmt(r['prop_in'])}/{_fmt(r['prop_out'])} "
+            f"space {_fmt(r['spacing_err'])} seam {_fmt(r['seam_shape'], 1)}/"
+            f"{_fmt(r['seam_color'], 0)}"
         )
         panels.append((LABELS[mode], note, _render(res, entry.view, frame, panel)))
     # ASCII only: the built-in font has no dashes
     subtitle = f"{entry.path}  |  {entry.describe()}"
     if entry.note:
         subtitle += f"  |  {entry.note}"
-    subtitle += "   (* baseline: no re-evaluation, plain concatenation)"
+    subtitle += (
+        "   (* baseline: no re-evaluation, plain concatenation; notes: thickness change in/out"
+        " of the zone, spacing change, seam jump shape (vox)/colour)"
+    )
     fig = figures.object_figure(entry.name, subtitle, panels)
     if original.n_parts > 0:  # segmented: a second row coloured by part
         parts_row = [("original parts", f"{original.n_parts} parts", None)] + [

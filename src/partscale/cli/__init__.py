@@ -15,6 +15,7 @@ import typer
 from ..errors import InputError
 from . import _common
 from .info import info
+from .segment import segment
 
 app = typer.Typer(
     name="partscale",
@@ -36,6 +37,7 @@ def _root(
 
 
 app.command("info")(info)
+app.command("segment")(segment)
 
 
 def main(argv: list[str] | None = None) -> None:

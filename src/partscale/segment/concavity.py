@@ -16,6 +16,7 @@ so distances are in voxels.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
@@ -50,42 +51,111 @@ def hull_concavity(
         hull = ConvexHull(pts)
     except (QhullError, ValueError):
         return 0.0  # flat or degenerate: no volume, nothing concave
-    eq = hull.equations  # (F, 4): n . x + d <= 0 inside, |n| = 1
-    # Distance of an inside point to a convex hull's boundary = its smallest facet-plane depth.
-    depth = np.empty(len(pts))
-    step = max(1, 4_000_000 // max(len(eq), 1))
-    for s in range(0, len(pts), step):
-        d = -(pts[s : s + step] @ eq[:, :3].T + eq[:, 3])
-        depth[s : s + step] = d.min(axis=1)
-    inward = float(max(depth.max(), 0.0))
+    eq = np.ascontiguousarray(hull.equations)  # (F, 4): n . x + d <= 0 inside, |n| = 1
+    inward = _deepest(pts, eq)
     samples = _sample_triangles(pts[hull.simplices], spacing)
     if sdf is not None:
         samples = samples[sample_nearest(sdf, samples) > 1.0]
         if not len(samples):
             return inward
-    dist, _ = cKDTree(pts).query(samples, workers=-1)
+    dist, _ = cKDTree(pts).query(samples)
     return max(inward, float(dist.max()))
 
 
+@numba.njit(cache=True)
+def _deepest(pts: np.ndarray, eq: np.ndarray) -> float:  # pragma: no cover - compiled
+    # Distance of a point inside a convex hull to its boundary = its smallest facet-plane
+    # depth; the answer is the largest such distance. A point stops being scanned as soon as
+    # one facet is closer than the best so far (most points lie on the hull).
+    best = 0.0
+    for i in range(pts.shape[0]):
+        x, y, z = pts[i, 0], pts[i, 1], pts[i, 2]
+        m = np.inf
+        for j in range(eq.shape[0]):
+            d = -(x * eq[j, 0] + y * eq[j, 1] + z * eq[j, 2] + eq[j, 3])
+            if d < m:
+                m = d
+                if m <= best:
+                    break
+        if m > best:
+            best = m
+    return best
+
+
 def _sample_triangles(tri: np.ndarray, spacing: float) -> np.ndarray:
-    """(M, 3) points covering triangles ``tri`` (T, 3, 3) about ``spacing`` apart (deterministic)."""
+    """(M, 3) points on triangles ``tri`` (T, 3, 3), about one per ``spacing``² of area.
+
+    Random barycentric samples from a fixed seed (deterministic), plus the vertices.
+    """
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    edge = np.maximum(
-        np.linalg.norm(b - a, axis=1),
-        np.maximum(np.linalg.norm(c - a, axis=1), np.linalg.norm(c - b, axis=1)),
-    )
-    n = np.clip(np.ceil(edge / spacing).astype(np.int64), 1, 400)
-    out = [tri.mean(axis=1)]
-    for k in np.unique(n):
-        sel = n == k
-        # barycentric lattice with k steps per edge
-        i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
-        m = (i + j) <= k
-        u = (i[m] / k)[None, :, None]
-        v = (j[m] / k)[None, :, None]
-        aa, bb, cc = a[sel][:, None], b[sel][:, None], c[sel][:, None]
-        out.append((aa + u * (bb - aa) + v * (cc - aa)).reshape(-1, 3))
-    return np.concatenate(out)
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    n = np.ceil(area / spacing**2).astype(np.int64) + 1
+    which = np.repeat(np.arange(len(tri)), n)
+    rng = np.random.default_rng(0)
+    u, v = rng.random(len(which)), rng.random(len(which))
+    flip = u + v > 1
+    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    aa = a[which]
+    pts = aa + u[:, None] * (b[which] - aa) + v[:, None] * (c[which] - aa)
+    return np.concatenate([pts, tri.reshape(-1, 3)])
+
+
+def decimate(points: np.ndarray, cell: float) -> np.ndarray:
+    """(M, 3): one of ``points`` per occupied cube of edge ``cell`` (first in input order)."""
+    q = np.floor(points / cell).astype(np.int64)
+    q -= q.min(axis=0)
+    k = (q[:, 0] * (q[:, 1].max() + 1) + q[:, 1]) * (q[:, 2].max() + 1) + q[:, 2]
+    _, first = np.unique(k, return_index=True)
+    return points[np.sort(first)]
+
+
+class Patch:
+    """A part's surface samples with their hull vertices and a KD-tree, so the concavity of a
+    union of patches costs a hull of a few hundred points instead of all samples.
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+        Surface samples, voxel units.
+    """
+
+    def __init__(self, points: np.ndarray, _hull_points: np.ndarray | None = None):
+        self.points = np.ascontiguousarray(points, dtype=np.float64)
+        self.tree = cKDTree(self.points)
+        candidates = self.points if _hull_points is None else _hull_points
+        try:
+            self.hull_points = candidates[ConvexHull(candidates).vertices]
+        except (QhullError, ValueError):
+            self.hull_points = candidates
+
+    def merged(self, other: Patch) -> Patch:
+        """The patch of both parts (the hull of a union is the hull of the hulls' vertices)."""
+        return Patch(
+            np.concatenate([self.points, other.points]),
+            np.concatenate([self.hull_points, other.hull_points]),
+        )
+
+
+def union_concavity(
+    patches: list[Patch], *, sdf: np.ndarray | None = None, spacing: float = 1.0
+) -> float:
+    """:func:`hull_concavity` of the union of ``patches``' samples, from their parts."""
+    corners = np.concatenate([p.hull_points for p in patches])
+    if len(corners) < 4:
+        return 0.0
+    try:
+        hull = ConvexHull(corners)
+    except (QhullError, ValueError):
+        return 0.0
+    eq = np.ascontiguousarray(hull.equations)
+    inward = max(_deepest(p.points, eq) for p in patches)
+    samples = _sample_triangles(corners[hull.simplices], spacing)
+    if sdf is not None:
+        samples = samples[sample_nearest(sdf, samples) > 1.0]
+        if not len(samples):
+            return inward
+    dist = np.min([p.tree.query(samples)[0] for p in patches], axis=0)
+    return max(inward, float(dist.max()))
 
 
 def surface_samples(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> dict[int, np.ndarray]:

@@ -27,7 +27,7 @@ PARAMS = {
     "jump": 0.3,
     "min_jump": 0.05,
     "scale": 0.5,
-    "max_depth": 6,
+    "max_depth": 10,
     "min_voxels": 27,
 }
 """Options of the fast method.
@@ -84,7 +84,10 @@ def _cuts(mask: np.ndarray, jump: float, min_jump: float) -> list[np.ndarray]:
         lo, hi = np.minimum(area[:-1], area[1:]), np.maximum(area[:-1], area[1:])
         rel = 1.0 - lo / np.maximum(hi, 1.0)
         big = (hi - lo) >= min_jump * area.max()
-        out.append(np.nonzero((rel >= jump) & big)[0])
+        # a crease is a step: the change between these two slices is at least twice the
+        # change next to it (a rounded end changes area over many slices instead)
+        side = np.maximum(np.pad(rel[:-1], (1, 0)), np.pad(rel[1:], (0, 1)))
+        out.append(np.nonzero((rel >= jump) & big & (rel >= 2 * side))[0])
     return out
 
 

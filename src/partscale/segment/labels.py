@@ -14,7 +14,7 @@ from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from ..csdf import CSDF
-from .concavity import hull_concavity, surface_samples, touching_pairs
+from .concavity import Patch, decimate, surface_samples, touching_pairs, union_concavity
 
 BAND = 3.0
 """Voxels up to this many voxels outside the surface get a part; farther ones stay -1."""
@@ -36,7 +36,7 @@ def voxels_from_faces(csdf: CSDF, mesh, face_labels: np.ndarray) -> np.ndarray:
     centres = csdf.world_to_index(mesh.triangles_center)
     near = csdf.sdf < BAND * csdf.voxel_size
     ijk = np.argwhere(near)
-    _, nearest = cKDTree(centres).query(ijk, workers=-1)
+    _, nearest = cKDTree(centres).query(ijk)
     labels = np.full(csdf.shape, -1, np.int32)
     labels[near] = np.asarray(face_labels)[nearest]
     return labels
@@ -144,8 +144,10 @@ def merge_convex(
     n = int(labels.max()) + 1
     if n <= 1:
         return renumber(labels)
-    patch = surface_samples(csdf, labels, mesh=mesh)
-    surf = {p: [patch[p]] if p in patch else [] for p in range(n)}
+    # one sample per voxel is enough to decide merges at a tolerance of a voxel or more
+    patch = {
+        p: Patch(decimate(v, 1.0)) for p, v in surface_samples(csdf, labels, mesh=mesh).items()
+    }
     sdf = csdf.sdf / csdf.voxel_size
     neighbours: dict[int, set[int]] = {p: set() for p in range(n)}
     pairs = sorted(touching_pairs(csdf, labels, mesh=mesh))
@@ -154,8 +156,8 @@ def merge_convex(
         neighbours[q].add(p)
 
     def union_cost(p: int, q: int) -> float:
-        pts = surf[p] + surf[q]
-        return hull_concavity(np.concatenate(pts), sdf=sdf, spacing=1.5) if pts else 0.0
+        both = [patch[r] for r in (p, q) if r in patch]
+        return union_concavity(both, sdf=sdf, spacing=1.5) if both else 0.0
 
     alive = set(range(n))
     version = dict.fromkeys(range(n), 0)
@@ -164,23 +166,29 @@ def merge_convex(
     parent = np.arange(n)
     while heap:
         cost, p, q, vp, vq = heapq.heappop(heap)
-        if p not in alive or q not in alive or version[p] != vp or version[q] != vq:
+        if p not in alive or q not in alive:
+            continue
+        if version[p] != vp or version[q] != vq:
+            # Lazy update: a part grew since this cost was computed. Growing rarely makes a
+            # union more convex, so the old cost orders the queue and is refreshed only here.
+            heapq.heappush(heap, (union_cost(p, q), p, q, version[p], version[q]))
             continue
         if cost > tolerance and (max_parts is None or len(alive) <= max_parts):
             break
-        surf[p].extend(surf.pop(q))
+        if q in patch:
+            patch[p] = patch[p].merged(patch.pop(q)) if p in patch else patch.pop(q)
         for r in neighbours.pop(q):
             if r != p:
                 neighbours[r].discard(q)
                 neighbours[r].add(p)
                 neighbours[p].add(r)
+                a, b = min(p, r), max(p, r)
+                # a pair new to p: queue it (with q's old cost as its first estimate)
+                heapq.heappush(heap, (cost, a, b, -1, -1))
         neighbours[p].discard(q)
         alive.discard(q)
         parent[parent == q] = p
         version[p] += 1
-        for r in sorted(neighbours[p]):
-            a, b = min(p, r), max(p, r)
-            heapq.heappush(heap, (union_cost(a, b), a, b, version[a], version[b]))
     lut = np.append(parent, -1).astype(np.int32)
     return renumber(lut[labels])
 

@@ -50,6 +50,7 @@ def test_save_load_is_exact(tmp_path, ball):
     assert d.meta["history"][-1] == {"op": "test", "n": 1}
     assert d.n_parts == 4
     assert list(tmp_path.iterdir()) == [p]  # no temporary left beside it
+    assert p.stat().st_mode & 0o044  # readable by others, like any file the user writes
 
 
 def test_surface_bounds_subvoxel():
@@ -137,3 +138,15 @@ def test_info_cli(tmp_path, ball, cli):
 
 def test_version_is_exposed():
     assert partscale.__version__
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (("info",), "missing argument"),
+        (("no-such-command",), "no such command"),
+        (("info", "x.csdf.npz", "--bogus"), "no such option"),
+    ],
+)
+def test_cli_usage_errors_are_one_line(cli, args, fragment):
+    assert_bad_input(cli(*args), fragment)

@@ -19,6 +19,7 @@ from .import_ import import_
 from .info import info
 from .render import render
 from .scale import scale
+from .segment import segment
 
 app = typer.Typer(
     name="partscale",
@@ -40,6 +41,7 @@ def _root(
 
 
 app.command("info")(info)
+app.command("segment")(segment)
 app.command("scale")(scale)
 app.command("export")(export)
 app.command("render")(render)

@@ -14,6 +14,7 @@ import typer
 
 from ..errors import InputError
 from . import _common
+from .edit import edit
 from .info import info
 
 app = typer.Typer(
@@ -36,6 +37,7 @@ def _root(
 
 
 app.command("info")(info)
+app.command("edit")(edit)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -6,7 +6,6 @@ derives every path it writes from that file (never from a request).
 
 from __future__ import annotations
 
-import copy
 import tempfile
 import threading
 from pathlib import Path
@@ -199,8 +198,7 @@ class EditSession:
             raise InputError(f"export: expected 'mesh' or 'texture', got {kind!r}")
         with tempfile.TemporaryDirectory(prefix="partscale-export-") as tmp:
             out = Path(tmp) / name
-            written = writer(copy.copy(c), out)
-            written = Path(written) if written else out
+            writer(c, out)
             files = sorted(p for p in Path(tmp).iterdir() if p.is_file())
             if len(files) == 1:
                 return files[0].read_bytes(), files[0].name, media

@@ -83,10 +83,12 @@ try {
     // 1. the object is drawn, like the reference
     const initial = await shot('initial.png');
     if (args.reference) {
-      if (args.updateReference || !existsSync(args.reference)) {
+      if (args.updateReference) {
         writeFileSync(args.reference, initial);
         result.referenceWritten = true;
       }
+    }
+    if (args.reference && existsSync(args.reference)) {
       const d = diffPixels(readFileSync(args.reference), initial);
       if (d.diff) writeFileSync(join(args.out, 'reference-diff.png'), d.diff);
       result.reference = { count: d.count, total: d.total };

@@ -35,6 +35,7 @@ CANVAS = (480, 360)
 H = 0.02
 TOP = ((0.0, 0.7, 0.0), (1.2, 0.78, 0.6))
 LEGS = [((x, 0.0, z), (x + 0.08, 0.7, z + 0.08)) for x in (0.05, 1.07) for z in (0.05, 0.47)]
+PART_COLOURS = [[230, 80, 80], [80, 200, 90], [70, 110, 230], [230, 200, 60], [180, 90, 220]]
 ZONE = {"axis": "x", "mode": "stretch", "start": 0.4, "end": 0.8, "dest": 1.2}
 
 
@@ -64,13 +65,20 @@ def table() -> csdf_mod.CSDF:
         )
 
     boxes = [TOP, *LEGS]
-    return shapes.grid(
+    c = shapes.grid(
         lambda p: shapes.boxes_sdf(p, boxes),
         ((0, 0, 0), TOP[1]),
         voxel_size=H,
         color=colour,
         source="test table",
     )
+    # segmented: each voxel takes its nearest box (top = 0, legs 1..4)
+    axes = [c.axis_coords(a) for a in range(3)]
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    nearest = np.argmin([shapes.box_sdf(pts, lo, hi) for lo, hi in boxes], axis=0)
+    meta = dict(c.meta)
+    meta["parts_info"] = [{"index": i, "color": PART_COLOURS[i]} for i in range(len(boxes))]
+    return c.replace(parts=nearest.reshape(c.shape), meta=meta)
 
 
 class Server:
@@ -215,6 +223,12 @@ def test_editor_end_to_end(tmp_path):
             f"{r['reference']['count']} of {total} pixels differ from {REFERENCE.name}; "
             f"see {tmp_path / 'reference-diff.png'}"
         )
+
+        # -- parts and slice views draw something else; back in colour, the first picture again
+        assert r["views"]["parts"] > 0.02 * total
+        assert r["views"]["slice"] > 0.02 * total
+        assert r["views"]["colour"] <= 0.01 * total
+        assert float(r["percent"]) == pytest.approx(35.0)  # the default zone starts at 35 %
 
         # -- the shader's remap is recipe.source_coordinate (float32 on the GPU: 1e-4 units)
         for case, got in zip(cases, r["remap"], strict=True):

@@ -110,18 +110,19 @@ def test_state_describes_the_object(client, box_file):
     assert client.get("/api/schema").json()["title"] == "partscale recipe"
 
 
-def test_grid_is_rgba_half_x_fastest(client, box_file):
+def test_grid_is_rgba_half_in_grid_order(client, box_file):
     c = csdf_mod.load(box_file)
     X, Y, Z = c.shape
     raw = client.get("/api/grid").content
     assert len(raw) == X * Y * Z * 4 * 2
-    g = np.frombuffer(raw, "<f2").reshape(Z, Y, X, 4)
-    i, j, k = 7, 5, 3  # index (i, j, k) = world (x, y, z): texel [k, j, i]
-    assert g[k, j, i, 3] == pytest.approx(c.sdf[i, j, k] / H, rel=1e-3, abs=1e-3)
-    np.testing.assert_allclose(g[k, j, i, :3], c.rgb[i, j, k] / 255, atol=1e-3)
-    # every texel, to float16 precision (relative 2^-11)
-    np.testing.assert_allclose(g[..., 3], c.sdf.T / H, rtol=1e-3, atol=1e-3)
-    parts = np.frombuffer(client.get("/api/parts").content, "<i2").reshape(Z, Y, X)
+    g = np.frombuffer(raw, "<f2").reshape(X, Y, Z, 4)  # C order: index (i, j, k) = world x, y, z
+    i, j, k = 7, 5, 3
+    assert g[i, j, k, 3] == pytest.approx(c.sdf[i, j, k] / H, rel=1e-3, abs=1e-3)
+    np.testing.assert_allclose(g[i, j, k, :3], c.rgb[i, j, k] / 255, atol=1e-3)
+    # every voxel, to float16 precision (relative 2^-11)
+    np.testing.assert_allclose(g[..., 3], c.sdf / H, rtol=1e-3, atol=1e-3)
+    np.testing.assert_allclose(g[..., :3], c.rgb / 255, atol=5e-4)
+    parts = np.frombuffer(client.get("/api/parts").content, "<i2").reshape(X, Y, Z)
     assert (parts == -1).all()
 
 

@@ -110,6 +110,18 @@ try {
         })), args.remapCases);
     }
 
+    // view modes: parts (segmented objects) and a distance slice, then back to colour
+    result.views = {};
+    for (const mode of ['parts', 'slice', 'colour']) {
+      await page.selectOption('#view-mode', mode);
+      await idle();
+      result.views[mode] = diffPixels(initial, await shot(`view-${mode}.png`)).count;
+    }
+    // positions in % of the solid's extent
+    await page.selectOption('#units', '%');
+    result.percent = await page.inputValue('#pos-start');
+    await page.selectOption('#units', 'units');
+
     // 3. drag the end plane's handle: the zone and the preview change, the server does not
     const h = await page.evaluate(() => window.__partscale.handleScreen('end'));
     result.handle = h;

@@ -44,13 +44,13 @@ export async function getState(): Promise<State> {
   return (await check(await fetch('/api/state', { cache: 'no-store' }))).json();
 }
 
-/** RGBA float16 texels, x fastest (see session.encode_grid). */
+/** (X, Y, Z, 4) float16 bits, C order: z fastest (see session.encode_grid). */
 export async function getGrid(): Promise<Uint16Array> {
   const r = await check(await fetch('/api/grid', { cache: 'no-store' }));
   return new Uint16Array(await r.arrayBuffer());
 }
 
-/** int16 part indices, x fastest, -1 = none. */
+/** (X, Y, Z) int16 part indices, C order, -1 = none. */
 export async function getParts(): Promise<Int16Array> {
   const r = await check(await fetch('/api/parts', { cache: 'no-store' }));
   return new Int16Array(await r.arrayBuffer());

@@ -305,7 +305,8 @@ async function loadObject() {
   const [X, Y, Z] = s.shape;
   if (grid.length !== X * Y * Z * 4) throw new ApiError(`grid: expected ${X * Y * Z * 4} values, got ${grid.length}`);
   volumeTex?.dispose();
-  volumeTex = new THREE.Data3DTexture(grid, X, Y, Z);
+  // C order (z fastest): the texture's width runs along z (see raymarch.ts)
+  volumeTex = new THREE.Data3DTexture(grid, Z, Y, X);
   volumeTex.format = THREE.RGBAFormat;
   volumeTex.type = THREE.HalfFloatType;
   volumeTex.minFilter = THREE.LinearFilter;
@@ -326,7 +327,7 @@ async function loadObject() {
       rgba[i * 4 + 2] = c[2];
       rgba[i * 4 + 3] = 255;
     }
-    partsTex = new THREE.Data3DTexture(rgba, X, Y, Z);
+    partsTex = new THREE.Data3DTexture(rgba, Z, Y, X);
     partsTex.unpackAlignment = 1;
     partsTex.needsUpdate = true;
   }
@@ -475,6 +476,10 @@ function bindUI() {
     });
   }
   $('reset-zone').addEventListener('click', () => setZone(defaultZone(zones[active].axis)));
+  $('fit').addEventListener('click', () => {
+    fitCamera();
+    requestRender();
+  });
   ($('view-mode') as HTMLSelectElement).addEventListener('change', (e) => {
     const v = (e.target as HTMLSelectElement).value;
     material.uniforms.uView.value = v === 'parts' ? 1 : v === 'slice' ? 2 : 0;
@@ -490,7 +495,20 @@ function bindUI() {
   $('apply').addEventListener('click', () =>
     run('applying', async () => {
       const t0 = performance.now();
-      const s = await post('/api/apply', recipe());
+      const poll = setInterval(async () => {
+        try {
+          const p = await (await fetch('/api/progress', { cache: 'no-store' })).json();
+          if (p.busy) setStatus(`applying… ${Math.round(100 * p.fraction)}% ${p.message}`);
+        } catch {
+          /* the apply's own result reports errors */
+        }
+      }, 250);
+      let s: State;
+      try {
+        s = await post('/api/apply', recipe());
+      } finally {
+        clearInterval(poll);
+      }
       await loadObject();
       setStatus(`applied in ${(performance.now() - t0).toFixed(0)} ms (server ${s.apply_ms?.toFixed(0)} ms)`);
     }),
@@ -508,7 +526,13 @@ function bindUI() {
     }),
   );
   window.addEventListener('keydown', (e) => {
-    if (!(e.ctrlKey || e.metaKey) || (e.target as HTMLElement).tagName === 'INPUT') return;
+    if ((e.target as HTMLElement).tagName === 'INPUT') return;
+    if (e.key === 'f' && !e.ctrlKey && !e.metaKey) {
+      fitCamera();
+      requestRender();
+      return;
+    }
+    if (!(e.ctrlKey || e.metaKey)) return;
     if (e.key.toLowerCase() === 'z') {
       e.preventDefault();
       if (e.shiftKey) redo();

@@ -24,6 +24,8 @@ precision highp sampler3D;
 uniform mat4 viewMatrix;
 uniform mat4 projectionMatrix;
 uniform vec3 cameraPosition;
+// Both textures hold the grid in its own C order (z fastest): texel (s, t, r) = voxel (k, j, i),
+// so they are sampled at uvw.zyx.
 uniform sampler3D uVolume;   // rgb = sRGB colour, a = signed distance in voxels
 uniform sampler3D uParts;    // rgb = part colour (sRGB), nearest filtering
 uniform vec3 uGridMin;       // world corner of the texture (origin - voxel/2)
@@ -41,13 +43,13 @@ ${REMAP_GLSL}
 
 vec4 sampleSource(vec3 pOut) {
   vec3 uvw = (toSource(pOut) - uGridMin) / uGridSize;
-  return texture(uVolume, uvw);
+  return texture(uVolume, uvw.zyx);
 }
 
 float sdf(vec3 pOut) {
   vec3 src = toSource(pOut);
   vec3 uvw = (src - uGridMin) / uGridSize;
-  float d = texture(uVolume, uvw).a * uVoxel;
+  float d = texture(uVolume, uvw.zyx).a * uVoxel;
   // outside the grid the clamped texture repeats the border: never report less than the way back
   vec3 q = abs(src - (uGridMin + 0.5 * uGridSize)) - 0.5 * uGridSize;
   float outside = length(max(q, 0.0));
@@ -89,7 +91,7 @@ vec3 sliceColor(float dVox) {
   c *= 0.55 + 0.45 * exp(-abs(dVox) / 24.0);
   float band = abs(fract(dVox / 4.0 + 0.5) - 0.5) * 4.0;
   c *= mix(0.75, 1.0, smoothstep(0.0, 0.35, band));
-  return mix(vec3(0.0), c, smoothstep(0.0, 0.6, abs(dVox)));
+  return mix(vec3(0.0), c, smoothstep(0.05, 0.3, abs(dVox)));
 }
 
 void main() {
@@ -100,27 +102,19 @@ void main() {
   float tNear = max(seg.x, 0.0), tFar = seg.y;
   if (tFar <= tNear) discard;
 
-  float tSlice = -1.0;
   if (uView == 2) {
-    // cut away everything below the slice plane; the plane shows the distance field
-    float o = ro[uSliceAxis], dir = rd[uSliceAxis];
-    if (abs(dir) < 1e-9) {
-      if (o < uSlicePos) discard;
-    } else {
-      float tp = (uSlicePos - o) / dir;
-      bool crosses = tp > tNear && tp < tFar;
-      if (dir > 0.0) {
-        if (tFar <= tp) discard;
-        if (crosses) {
-          vec3 p = ro + rd * tp;
-          fragColor = vec4(sliceColor(sdf(p) / uVoxel), 1.0);
-          gl_FragDepth = depthOf(p);
-          return;
-        }
-      } else {
-        if (tp <= tNear) discard;
-        if (crosses) { tSlice = tp; tFar = tp; }
-      }
+    // cut away the half on the camera's side of the slice plane; the plane shows the distances
+    float side = cameraPosition[uSliceAxis] >= uSlicePos ? -1.0 : 1.0;
+    float o = (ro[uSliceAxis] - uSlicePos) * side;  // <= 0: the camera is in the cut-away half
+    float dir = rd[uSliceAxis] * side;
+    if (dir <= 1e-9) discard;  // heading away from the half that is kept
+    float tp = -o / dir;
+    if (tp >= tFar) discard;
+    if (tp > tNear) {
+      vec3 p = ro + rd * tp;
+      fragColor = vec4(sliceColor(sdf(p) / uVoxel), 1.0);
+      gl_FragDepth = depthOf(p);
+      return;
     }
   }
 
@@ -136,15 +130,7 @@ void main() {
     if (t > tFar) break;
     d = sdf(ro + rd * t);
   }
-  if (!hit) {
-    if (tSlice >= 0.0) {
-      vec3 p = ro + rd * tSlice;
-      fragColor = vec4(sliceColor(sdf(p) / uVoxel), 1.0);
-      gl_FragDepth = depthOf(p);
-      return;
-    }
-    discard;
-  }
+  if (!hit) discard;
   if (d < 0.0 && t > tPrev) {
     // overshot (minimum step): bisect back to the zero crossing
     float a = tPrev, b = t;
@@ -156,7 +142,7 @@ void main() {
   }
   vec3 p = ro + rd * t;
   vec3 n = normalAt(p);
-  vec3 base = uView == 1 ? texture(uParts, (toSource(p) - uGridMin) / uGridSize).rgb
+  vec3 base = uView == 1 ? texture(uParts, ((toSource(p) - uGridMin) / uGridSize).zyx).rgb
                          : sampleSource(p).rgb;
   vec3 albedo = toLinear(base);
   vec3 l1 = normalize(vec3(0.45, 0.8, 0.55));

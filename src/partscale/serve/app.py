@@ -8,7 +8,7 @@ GET  /                      the page
 GET  /assets/NAME           one of the built assets listed when the app was created
 GET  /api/state             JSON header: shape, origin, voxel size, bounds, parts, history...
 GET  /api/grid              binary 3D texture, see :func:`partscale.serve.session.encode_grid`
-GET  /api/parts             binary int16 part indices, x fastest
+GET  /api/parts             binary int16 part indices, C order (z fastest)
 GET  /api/schema            the recipe JSON schema
 GET  /api/progress          progress of the apply in flight
 POST /api/apply             body: recipe JSON; bakes it, returns the new state

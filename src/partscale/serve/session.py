@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import tempfile
 import threading
+from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +21,8 @@ from ..progress import ProgressCallback
 
 #: Most undo steps kept; a 128³ CSDF is ~20 MiB, so this bounds memory at ~1 GiB.
 MAX_UNDO = 48
+#: Encoded grids kept (current, previous and next object, grid and parts each).
+CACHED_ENCODINGS = 6
 
 
 def edited_path(path: Path) -> Path:
@@ -29,24 +32,28 @@ def edited_path(path: Path) -> Path:
     return path.with_name(f"{stem}.edited{csdf_mod.SUFFIX}")
 
 
-def encode_grid(c: CSDF) -> bytes:
-    """The grid as the page's 3D texture: ``(Z, Y, X, 4)`` float16 little-endian, x fastest.
+#: sRGB byte -> float16 bits of byte / 255 (one rounding, and a gather is faster than arithmetic).
+_BYTE_TO_HALF = (np.arange(256) / 255.0).astype("<f2").view("<u2")
 
+
+def encode_grid(c: CSDF) -> bytes:
+    """The grid as the page's 3D texture: ``(X, Y, Z, 4)`` float16 little-endian, C order.
+
+    That is the grid's own order, z fastest: the page uploads it as a ``Z x Y x X`` texture and
+    samples it at ``uvw.zyx``, so no transpose is ever made (it would cost more than the rest).
     Channels: r, g, b = sRGB / 255 (the stored 8-bit colour, not linearised); a = sdf /
-    voxel_size, i.e. signed distance in voxels (negative inside), which keeps float16's relative
+    voxel_size, the signed distance in voxels (negative inside), which keeps float16's relative
     precision near the surface whatever the object's units.
     """
-    x, y, z = c.shape
-    out = np.empty((z, y, x, 4), dtype="<f2")
-    out[..., :3] = c.rgb.transpose(2, 1, 0, 3)
-    out[..., :3] *= np.float16(1.0 / 255.0)
-    out[..., 3] = c.sdf.T * np.float32(1.0 / c.voxel_size)
+    out = np.empty((*c.shape, 4), dtype="<u2")
+    out[..., :3] = _BYTE_TO_HALF[c.rgb]
+    out[..., 3] = (c.sdf * np.float32(1.0 / c.voxel_size)).astype("<f2").view("<u2")
     return out.tobytes()
 
 
 def encode_parts(c: CSDF) -> bytes:
-    """``(Z, Y, X)`` int16 little-endian part indices, x fastest, -1 where none."""
-    return np.ascontiguousarray(c.parts.T, dtype="<i2").tobytes()
+    """``(X, Y, Z)`` int16 little-endian part indices, C order (z fastest), -1 where none."""
+    return np.ascontiguousarray(c.parts, dtype="<i2").tobytes()
 
 
 def header(c: CSDF) -> dict[str, Any]:
@@ -67,8 +74,9 @@ def header(c: CSDF) -> dict[str, Any]:
         "parts_info": parts_info if isinstance(parts_info, list) else [],
         "history": c.meta.get("history", []),
         "encoding": {
-            "grid": "RGBA float16 little-endian, x fastest; rgb = sRGB/255, a = sdf/voxel_size",
-            "parts": "int16 little-endian, x fastest; -1 = none",
+            "grid": "(X, Y, Z, 4) float16 little-endian, C order (z fastest); "
+            "rgb = sRGB/255, a = sdf/voxel_size",
+            "parts": "(X, Y, Z) int16 little-endian, C order (z fastest); -1 = none",
         },
     }
 
@@ -88,7 +96,7 @@ class EditSession:
         self.revision = 0
         self.saved_revision = 0
         self.lock = threading.Lock()
-        self._cache: dict[str, tuple[int, bytes]] = {}
+        self._cache: OrderedDict[tuple[int, str], tuple[CSDF, bytes]] = OrderedDict()
 
     @classmethod
     def open(cls, path: str | Path) -> EditSession:
@@ -110,17 +118,20 @@ class EditSession:
         return h
 
     def _encoded(self, kind: str) -> bytes:
-        # Encoding a 128³ grid takes tens of ms; cache it per revision (the page fetches it once
-        # after every change, a test or second tab may fetch it again).
+        # Encoding a 128³ grid takes tens of ms: keep the last few objects' encodings, so a
+        # second fetch, an undo or a redo costs nothing. Keyed by the CSDF object itself (they
+        # are immutable); the entry holds it, so its id cannot be reused while cached.
         with self.lock:
-            rev, c = self.revision, self.current
-            hit = self._cache.get(kind)
-        if hit is not None and hit[0] == rev:
-            return hit[1]
+            c = self.current
+            hit = self._cache.get((id(c), kind))
+            if hit is not None:
+                self._cache.move_to_end((id(c), kind))
+                return hit[1]
         data = encode_grid(c) if kind == "grid" else encode_parts(c)
         with self.lock:
-            if self.revision == rev:
-                self._cache[kind] = (rev, data)
+            self._cache[(id(c), kind)] = (c, data)
+            while len(self._cache) > CACHED_ENCODINGS:
+                self._cache.popitem(last=False)
         return data
 
     def grid_bytes(self) -> bytes:
@@ -145,7 +156,8 @@ class EditSession:
         with self.lock:
             new = apply_recipe(self.current, parsed, progress=progress)
             self._push(new)
-            return new
+        self.grid_bytes()  # the page fetches it next: encode while still in the worker thread
+        return new
 
     def undo(self) -> bool:
         """Restore the object before the last apply exactly (the same arrays); False if none."""

@@ -50,6 +50,7 @@ def test_save_load_is_exact(tmp_path, ball):
     assert d.meta["history"][-1] == {"op": "test", "n": 1}
     assert d.n_parts == 4
     assert list(tmp_path.iterdir()) == [p]  # no temporary left beside it
+    assert p.stat().st_mode & 0o044  # readable by others, like any file the user writes
 
 
 def test_surface_bounds_subvoxel():

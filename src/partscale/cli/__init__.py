@@ -15,7 +15,11 @@ import typer
 from ..errors import InputError
 from . import _common
 from .edit import edit
+from .export import export
+from .import_ import import_
 from .info import info
+from .render import render
+from .scale import scale
 
 app = typer.Typer(
     name="partscale",
@@ -37,6 +41,10 @@ def _root(
 
 
 app.command("info")(info)
+app.command("scale")(scale)
+app.command("export")(export)
+app.command("render")(render)
+app.command("import")(import_)
 app.command("edit")(edit)
 
 

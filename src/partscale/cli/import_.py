@@ -1,0 +1,48 @@
+"""``partscale import``: a coloured mesh or an SDF grid -> ``.csdf.npz``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .. import csdf as csdf_mod
+from .. import ingest
+from . import _common
+
+
+def import_(
+    input: Annotated[
+        Path,
+        typer.Argument(
+            help="Mesh (.glb, .gltf, .obj+.mtl, .ply) or SDF grid (.npy, .npz, AutoSDF .h5)."
+        ),
+    ],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
+    res: Annotated[
+        int, typer.Option("--res", help="Voxels along the object's longest side (>= 16).")
+    ] = 128,
+    pad: Annotated[
+        int | None,
+        typer.Option("--pad", help=f"Empty voxels around the object (default {ingest.BAND + 2})."),
+    ] = None,
+    iso: Annotated[
+        float | None,
+        typer.Option("--iso", help="Surface level of an SDF grid (default 0; AutoSDF 0.02)."),
+    ] = None,
+    colors: Annotated[
+        Path | None,
+        typer.Option("--colors", help="Colour volume (X, Y, Z, 3) .npy for an SDF grid."),
+    ] = None,
+) -> None:
+    """Import a coloured mesh or an SDF grid as a coloured SDF (.csdf.npz).
+
+    Meshes may be open assemblies: sign comes from the generalized winding number, open sheets
+    are thickened, distances are exact near the surface and colours come from the textures.
+    """
+    _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
+    with _common.progress_bar(f"import {input.name}") as progress:
+        c = ingest.load(input, res=res, pad=pad, iso=iso, colors=colors, progress=progress)
+    csdf_mod.save(c, output)
+    _common.done(f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m")

@@ -1,0 +1,77 @@
+"""``partscale scale``: stretch, tile or globally scale a zone of a CSDF (or apply a recipe)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .. import csdf as csdf_mod
+from ..edit import AXES, MODES, Edit, Recipe, apply_recipe
+from ..errors import InputError
+from . import _common
+
+
+def _position(text: str, what: str) -> float | str:
+    s = text.strip()
+    try:
+        if s.endswith("%"):
+            float(s[:-1])
+            return s
+        return float(s)
+    except ValueError:
+        raise InputError(
+            f"{what}: expected a number or a percentage like '30%', got {text!r}"
+        ) from None
+
+
+def scale(
+    src: Annotated[Path, typer.Argument(metavar="IN", help="Input .csdf.npz file.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
+    axis: Annotated[str | None, typer.Option("--axis", help="x, y or z.")] = None,
+    zone: Annotated[
+        tuple[str, str] | None,
+        typer.Option(
+            "--zone", help="START END of the zone, in object units or with % of the extent."
+        ),
+    ] = None,
+    to: Annotated[str | None, typer.Option("--to", help="DEST: where END goes.")] = None,
+    mode: Annotated[str, typer.Option("--mode", help="stretch, tile or global.")] = "stretch",
+    recipe: Annotated[
+        Path | None,
+        typer.Option("--recipe", help="A recipe JSON file (instead of --axis/--zone/--to)."),
+    ] = None,
+) -> None:
+    """Resize a zone between two planes: stretch it, tile it, or scale the whole object."""
+    _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
+    if recipe is not None:
+        if axis is not None or zone is not None or to is not None:
+            raise InputError("--recipe: expected alone, got it with --axis/--zone/--to")
+        rec = Recipe.load(recipe)
+    else:
+        missing = [n for n, v in (("--axis", axis), ("--zone", zone), ("--to", to)) if v is None]
+        if missing:
+            raise InputError(
+                f"scale: expected --axis, --zone and --to (or --recipe), missing {', '.join(missing)}"
+            )
+        if axis.lower() not in AXES:
+            raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
+        if mode.lower() not in MODES:
+            raise InputError(f"--mode: expected one of {', '.join(MODES)}, got {mode!r}")
+        rec = Recipe(
+            (
+                Edit(
+                    axis=axis.lower(),
+                    start=_position(zone[0], "--zone START"),
+                    end=_position(zone[1], "--zone END"),
+                    dest=_position(to, "--to"),
+                    mode=mode.lower(),
+                ),
+            )
+        )
+    c = csdf_mod.load(src)
+    with _common.progress_bar("scale") as bar:
+        out = apply_recipe(c, rec, progress=bar)
+    csdf_mod.save(out, output)
+    _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")

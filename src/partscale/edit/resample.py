@@ -1,0 +1,179 @@
+"""Resampling along the edit axis: the slab's new voxels read from the old grid.
+
+Everything here works on arrays with the edit axis moved first, ``(N, A, B)``; one output layer
+``j`` along the axis reads source layers by a *plan*: a continuous source index ``xa[j]`` and,
+inside a tile seam's blend window, a second one ``xb[j]`` with weight ``beta[j]`` (< 0.5, so the
+first is always the dominant one). Layers whose source index is an integer are copied exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .recipe import source_coordinate, tile_count
+
+#: Half-width of a tile seam's blend window, in output voxels.
+SEAM_VOXELS = 2.0
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Per output layer ``j`` (N',): where it reads from along the axis.
+
+    Attributes
+    ----------
+    xa : (N',) float64
+        Continuous source index of the dominant sample.
+    xb : (N',) float64
+        Continuous source index of the blended sample (tile seams), ``nan`` elsewhere.
+    beta : (N',) float64
+        Weight of ``xb`` in ``[0, 0.5]``, 0 outside seams.
+    copy : (N',) int64
+        Tile copy the layer belongs to (0 outside the slab and in stretch/global).
+    in_slab : (N',) bool
+        Output layers between the start plane and the new end plane.
+    scale : float
+        Local stretch factor of the slab (new length / old length; per copy for tile).
+    """
+
+    xa: np.ndarray
+    xb: np.ndarray
+    beta: np.ndarray
+    copy: np.ndarray
+    in_slab: np.ndarray
+    scale: float
+
+
+def make_plan(
+    *,
+    mode: str,
+    n_out: int,
+    origin: float,
+    h: float,
+    start: float,
+    end: float,
+    dest: float,
+    lo: float,
+    hi: float,
+    seam_voxels: float = SEAM_VOXELS,
+    blend: bool = True,
+) -> Plan:
+    """Build the sampling plan of an edit along one axis (world positions, ``dest`` snapped)."""
+    y = origin + np.arange(n_out) * h
+    x = source_coordinate(y, mode=mode, start=start, end=end, dest=dest, lo=lo, hi=hi)
+    xa = (x - origin) / h
+    shift_vox = round((dest - end) / h)
+    # Outside the slab the map is a whole-voxel translation: snap to exact integers so those
+    # layers are copies (rigidity), immune to rounding in the map.
+    before = y < start
+    after = y > dest
+    if mode != "global":
+        j = np.arange(n_out, dtype=np.float64)
+        xa = np.where(before, j, xa)
+        xa = np.where(after, j - shift_vox, xa)
+    in_slab = ~before & ~after
+    xb = np.full(n_out, np.nan)
+    beta = np.zeros(n_out)
+    copy = np.zeros(n_out, np.int64)
+    length, target = end - start, dest - start
+    if mode == "global":
+        scale = (hi - lo + dest - end) / (hi - lo)
+        in_slab = np.ones(n_out, bool)
+    elif mode == "stretch":
+        scale = target / length
+    else:
+        n = tile_count(length, target)
+        period = target / n
+        scale = period / length
+        u = (y - start) / period
+        copy = np.where(in_slab, np.clip(np.floor(u), 0, n - 1), 0).astype(np.int64)
+        if blend and n > 1:
+            w = min(seam_voxels * h, period / 2)
+            for m in range(1, n):
+                ys = start + m * period
+                near = np.abs(y - ys) < w
+                # left copy continued past END, right copy continued before START
+                x_left = (end + (y - ys) / scale - origin) / h
+                x_right = (start + (y - ys) / scale - origin) / h
+                ramp = np.clip((y - ys) / (2 * w) + 0.5, 0.0, 1.0)  # weight of the right copy
+                left = near & (y < ys)
+                right = near & (y >= ys)
+                xa = np.where(left, x_left, xa)
+                xb = np.where(left, x_right, xb)
+                beta = np.where(left, ramp, beta)
+                xa = np.where(right, x_right, xa)
+                xb = np.where(right, x_left, xb)
+                beta = np.where(right, 1.0 - ramp, beta)
+    return Plan(xa=xa, xb=xb, beta=beta, copy=copy, in_slab=in_slab, scale=float(scale))
+
+
+def _split(x: np.ndarray, n_src: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Integer neighbours and weight of continuous indices, clamped to the grid."""
+    x = np.clip(x, 0.0, n_src - 1.0)
+    i0 = np.floor(x).astype(np.int64)
+    w = x - i0
+    i1 = np.minimum(i0 + 1, n_src - 1)
+    return i0, i1, w
+
+
+def lerp_layers(src: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Linear interpolation of layers of ``src`` (N, ...) at continuous indices ``x`` (M,).
+
+    Returns float32 (M, ...); layers at integer ``x`` are exact copies.
+    """
+    i0, i1, w = _split(x, src.shape[0])
+    shape = (-1,) + (1,) * (src.ndim - 1)
+    w32 = w.astype(np.float32).reshape(shape)
+    a = src[i0].astype(np.float32)
+    frac = w != 0
+    if frac.any():
+        b = src[i1[frac]].astype(np.float32)
+        a[frac] = a[frac] * (1 - w32[frac]) + b * w32[frac]
+    return a
+
+
+def crisp_parts(parts: np.ndarray, sdf: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Part labels at continuous indices ``x``: no blended labels.
+
+    Between source layers ``i0`` and ``i0 + 1`` with different labels, the boundary is placed where
+    the part change is closest to the surface: at the linear zero crossing of the sdf when the
+    surface passes between them, else half-way (nearest source voxel).
+    """
+    i0, i1, w = _split(x, parts.shape[0])
+    p0 = parts[i0]
+    out = p0.copy()
+    frac = w != 0
+    if not frac.any():
+        return out
+    p1 = parts[i1[frac]]
+    a = sdf[i0[frac]].astype(np.float64)
+    b = sdf[i1[frac]].astype(np.float64)
+    shape = (-1,) + (1,) * (parts.ndim - 1)
+    cross = (a <= 0) != (b <= 0)
+    tb = np.where(cross, np.abs(a) / np.maximum(np.abs(a) + np.abs(b), 1e-30), 0.5)
+    take1 = w[frac].reshape(shape) >= tb
+    out[frac] = np.where(take1, p1, p0[frac])
+    return out
+
+
+def apply_plan(
+    sdf: np.ndarray, rgb: np.ndarray, parts: np.ndarray, plan: Plan
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Resample axis-first arrays ``(N, A, B)`` by ``plan`` into new ``(N', A, B)`` arrays."""
+    out_sdf = lerp_layers(sdf, plan.xa)
+    out_rgb = lerp_layers(rgb, plan.xa)
+    out_parts = crisp_parts(parts, sdf, plan.xa)
+    seam = plan.beta > 0
+    if seam.any():
+        xb = plan.xb[seam]
+        bt = plan.beta[seam].astype(np.float32)
+        s_b = lerp_layers(sdf, xb)
+        c_b = lerp_layers(rgb, xb)
+        out_sdf[seam] = out_sdf[seam] * (1 - bt[:, None, None]) + s_b * bt[:, None, None]
+        out_rgb[seam] = (
+            out_rgb[seam] * (1 - bt[:, None, None, None]) + c_b * bt[:, None, None, None]
+        )
+    rgb8 = np.clip(np.rint(out_rgb), 0, 255).astype(np.uint8)
+    return out_sdf, rgb8, out_parts

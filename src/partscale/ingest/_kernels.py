@@ -1,0 +1,186 @@
+"""Numba kernels of the mesh -> SDF import: exact point-triangle distances in a narrow band.
+
+Grid convention: voxel (i, j, k) has its centre at ``origin + (i, j, k) * h``.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+
+@nb.njit(cache=True, inline="always")
+def _closest_bary(px, py, pz, tri):
+    """Squared distance from p to triangle ``tri`` (3, 3) and the closest point's barycentrics.
+
+    Ericson, Real-Time Collision Detection, 5.1.5 (region tests on the Voronoi regions).
+    """
+    ax, ay, az = tri[0, 0], tri[0, 1], tri[0, 2]
+    abx, aby, abz = tri[1, 0] - ax, tri[1, 1] - ay, tri[1, 2] - az
+    acx, acy, acz = tri[2, 0] - ax, tri[2, 1] - ay, tri[2, 2] - az
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        u, v, w = 1.0, 0.0, 0.0
+    else:
+        bpx, bpy, bpz = px - tri[1, 0], py - tri[1, 1], pz - tri[1, 2]
+        d3 = abx * bpx + aby * bpy + abz * bpz
+        d4 = acx * bpx + acy * bpy + acz * bpz
+        cpx, cpy, cpz = px - tri[2, 0], py - tri[2, 1], pz - tri[2, 2]
+        d5 = abx * cpx + aby * cpy + abz * cpz
+        d6 = acx * cpx + acy * cpy + acz * cpz
+        vc = d1 * d4 - d3 * d2
+        vb = d5 * d2 - d1 * d6
+        va = d3 * d6 - d5 * d4
+        if d3 >= 0.0 and d4 <= d3:
+            u, v, w = 0.0, 1.0, 0.0
+        elif d6 >= 0.0 and d5 <= d6:
+            u, v, w = 0.0, 0.0, 1.0
+        elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+            t = d1 / (d1 - d3)
+            u, v, w = 1.0 - t, t, 0.0
+        elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+            t = d2 / (d2 - d6)
+            u, v, w = 1.0 - t, 0.0, t
+        elif va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+            t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+            u, v, w = 0.0, 1.0 - t, t
+        else:
+            den = va + vb + vc
+            if den <= 0.0:  # degenerate triangle: fall back to its first vertex
+                u, v, w = 1.0, 0.0, 0.0
+            else:
+                v = vb / den
+                w = vc / den
+                u = 1.0 - v - w
+    qx = ax + v * abx + w * acx
+    qy = ay + v * aby + w * acy
+    qz = az + v * abz + w * acz
+    dx, dy, dz = px - qx, py - qy, pz - qz
+    return dx * dx + dy * dy + dz * dz, u, v, w
+
+
+@nb.njit(cache=True, inline="always")
+def _index_range(tri, a, origin, h, radius, n):
+    mn = min(tri[0, a], tri[1, a], tri[2, a]) - radius
+    mx = max(tri[0, a], tri[1, a], tri[2, a]) + radius
+    return max(0, int(np.ceil((mn - origin[a]) / h))), min(
+        n - 1, int(np.floor((mx - origin[a]) / h))
+    )
+
+
+@nb.njit(cache=True, parallel=True)
+def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid):
+    """Minimum squared distance to ``tris`` for voxels within ``radius`` of some triangle.
+
+    Parameters
+    ----------
+    tris : (T, 3, 3) float64
+        Triangle corners, world units.
+    slab_ptr : (S + 1,) int64, slab_tris : (M,) int64
+        CSR lists of the triangles whose dilated x-range meets each slab of ``slab_width``
+        x-layers; slabs are processed in parallel, each writing only its own layers (no races).
+    origin : (3,) float64, h : float
+        Grid placement: voxel centre = origin + index * h.
+    radius : float
+        Band half-width in world units; voxels farther than this from a triangle are skipped.
+    dist2 : (X, Y, Z) float32, in/out
+        Running minimum of the squared distance (initialised to inf by the caller).
+    tid : (X, Y, Z) int32, in/out
+        Index of the triangle achieving it.
+    """
+    nx, ny, nz = dist2.shape
+    n_slabs = slab_ptr.shape[0] - 1
+    r2 = radius * radius
+    for s in nb.prange(n_slabs):
+        xs0 = s * slab_width
+        xs1 = min(nx - 1, xs0 + slab_width - 1)
+        for q in range(slab_ptr[s], slab_ptr[s + 1]):
+            t = slab_tris[q]
+            tri = tris[t]
+            i_lo, i_hi = _index_range(tri, 0, origin, h, radius, nx)
+            j_lo, j_hi = _index_range(tri, 1, origin, h, radius, ny)
+            k_lo, k_hi = _index_range(tri, 2, origin, h, radius, nz)
+            i_lo = max(i_lo, xs0)
+            i_hi = min(i_hi, xs1)
+            # plane of the triangle: skip whole runs of k farther than radius from it
+            e1x, e1y, e1z = tri[1, 0] - tri[0, 0], tri[1, 1] - tri[0, 1], tri[1, 2] - tri[0, 2]
+            e2x, e2y, e2z = tri[2, 0] - tri[0, 0], tri[2, 1] - tri[0, 1], tri[2, 2] - tri[0, 2]
+            nxv = e1y * e2z - e1z * e2y
+            nyv = e1z * e2x - e1x * e2z
+            nzv = e1x * e2y - e1y * e2x
+            nn = np.sqrt(nxv * nxv + nyv * nyv + nzv * nzv)
+            planar = nn > 1e-30
+            if planar:
+                nxv /= nn
+                nyv /= nn
+                nzv /= nn
+            for i in range(i_lo, i_hi + 1):
+                px = origin[0] + i * h
+                for j in range(j_lo, j_hi + 1):
+                    py = origin[1] + j * h
+                    k0 = k_lo
+                    k1 = k_hi
+                    if planar:
+                        pz0 = origin[2] + k0 * h
+                        pd0 = (
+                            (px - tri[0, 0]) * nxv
+                            + (py - tri[0, 1]) * nyv
+                            + (pz0 - tri[0, 2]) * nzv
+                        )
+                        step = nzv * h
+                        if abs(step) > 1e-12:
+                            ka = (-radius - pd0) / step
+                            kb = (radius - pd0) / step
+                            if ka > kb:
+                                ka, kb = kb, ka
+                            k1 = min(k1, k0 + int(np.floor(kb)))
+                            k0 = k0 + max(0, int(np.ceil(ka)))
+                        elif abs(pd0) > radius:
+                            continue
+                    for k in range(k0, k1 + 1):
+                        pz = origin[2] + k * h
+                        d2, _u, _v, _w = _closest_bary(px, py, pz, tri)
+                        if d2 <= r2 and d2 < dist2[i, j, k]:
+                            dist2[i, j, k] = d2
+                            tid[i, j, k] = t
+
+
+@nb.njit(cache=True, parallel=True)
+def closest_points(points, tris, tri_ids):
+    """Distance and barycentrics of the closest point on ``tris[tri_ids[n]]`` to ``points[n]``.
+
+    points : (N, 3) float64; tris : (T, 3, 3) float64; tri_ids : (N,) int64.
+    Returns dist (N,) float64, bary (N, 3) float64.
+    """
+    n = points.shape[0]
+    dist = np.empty(n, np.float64)
+    bary = np.empty((n, 3), np.float64)
+    for q in nb.prange(n):
+        d2, u, v, w = _closest_bary(points[q, 0], points[q, 1], points[q, 2], tris[tri_ids[q]])
+        dist[q] = np.sqrt(d2)
+        bary[q, 0] = u
+        bary[q, 1] = v
+        bary[q, 2] = w
+    return dist, bary
+
+
+def slab_lists(tris: np.ndarray, origin, h: float, radius: float, nx: int, slab_width: int):
+    """CSR lists (slab_ptr, slab_tris) of triangles per slab of ``slab_width`` x-layers."""
+    mn = tris[:, :, 0].min(axis=1) - radius
+    mx = tris[:, :, 0].max(axis=1) + radius
+    i0 = np.clip(np.ceil((mn - origin[0]) / h), 0, nx - 1).astype(np.int64)
+    i1 = np.clip(np.floor((mx - origin[0]) / h), 0, nx - 1).astype(np.int64)
+    s0 = i0 // slab_width
+    s1 = i1 // slab_width
+    count = np.maximum(s1 - s0 + 1, 0)
+    tri_of = np.repeat(np.arange(len(tris), dtype=np.int64), count)
+    first = np.repeat(s0, count)
+    offset = np.arange(len(tri_of)) - np.repeat(np.cumsum(count) - count, count)
+    slab = first + offset
+    order = np.argsort(slab, kind="stable")
+    n_slabs = (nx + slab_width - 1) // slab_width
+    ptr = np.zeros(n_slabs + 1, np.int64)
+    np.cumsum(np.bincount(slab, minlength=n_slabs), out=ptr[1:])
+    return ptr, tri_of[order]

@@ -1,0 +1,119 @@
+"""One entry point for every supported input: dispatch on the file's content, then its suffix."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from .._util import keyword_options
+from ..csdf import CSDF
+from ..errors import InputError
+from ..progress import ProgressCallback, resolve, scaled
+from .grid import from_grid, read_autosdf, read_grid
+from .mesh_io import load_mesh
+from .mesh_sdf import BAND, check_res, from_mesh
+
+FORMATS = ".glb, .gltf, .obj, .ply (meshes); .npy, .npz, .h5/.hdf5 AutoSDF (SDF grids)"
+
+
+def sniff(path: Path) -> str:
+    """Kind of file: 'mesh', 'npy', 'npz', 'hdf5'; :class:`InputError` if unknown or missing."""
+    if not path.exists():
+        raise InputError(f"{path}: expected an existing input file, got no such file")
+    if not path.is_file():
+        raise InputError(f"{path}: expected a file, got a directory")
+    with open(path, "rb") as fh:
+        head = fh.read(16)
+    suffix = path.suffix.lower()
+    if head.startswith(b"glTF") or head[:3] == b"ply":
+        return "mesh"
+    if head.startswith(b"\x93NUMPY"):
+        return "npy"
+    if head.startswith(b"\x89HDF\r\n\x1a\n"):
+        return "hdf5"
+    if head.startswith(b"PK") and suffix == ".npz":
+        return "npz"
+    if suffix in (".glb", ".gltf", ".obj", ".ply"):
+        return "mesh"  # a corrupt mesh: the mesh reader says what is wrong
+    if suffix in (".npy", ".npz"):
+        return suffix[1:]
+    if suffix in (".h5", ".hdf5"):
+        return "hdf5"
+    raise InputError(
+        f"{path}: expected one of {FORMATS}, got unknown format {suffix or '(no suffix)'}"
+    )
+
+
+@keyword_options
+def load(
+    path: str | os.PathLike,
+    *,
+    res: int = 128,
+    pad: int | None = None,
+    iso: float | None = None,
+    colors: str | os.PathLike | None = None,
+    progress: ProgressCallback | None = None,
+) -> CSDF:
+    """Import any supported file as a CSDF.
+
+    Parameters
+    ----------
+    path : path
+        Mesh (``.glb``, ``.gltf``, ``.obj`` + ``.mtl``, ``.ply``) or SDF grid (``.npy``,
+        ``.npz``, AutoSDF ``.h5``).
+    res : int
+        Voxels along the object's longest side (>= 16); grids are resampled to it.
+    pad : int, optional
+        Empty voxels around the object (default ``BAND + 2``).
+    iso : float, optional
+        Surface level of a grid (default 0, AutoSDF 0.02); not valid for meshes.
+    colors : path, optional
+        ``.npy`` colour volume (X, Y, Z, 3) for a grid, sRGB uint8 or float in [0, 1].
+    progress : callable(fraction, message), optional
+
+    Returns
+    -------
+    CSDF
+        ``meta['source']`` is the file; ``meta['history'][0]`` records the import parameters.
+    """
+    path = Path(path)
+    report = resolve(progress)
+    kind = sniff(path)
+    res = check_res(res, str(path))
+    if pad is not None and int(pad) < BAND:
+        raise InputError(f"{path}: expected --pad >= {BAND}, got {pad}")
+    if kind == "mesh":
+        if iso is not None:
+            raise InputError(
+                f"{path}: expected no --iso for a mesh (it is for SDF grids), got {iso}"
+            )
+        if colors is not None:
+            raise InputError(f"{path}: expected no colour volume for a mesh, got {colors}")
+        report(0.0, "reading mesh")
+        mesh = load_mesh(path)
+        out = from_mesh(mesh, res=res, pad=pad, progress=scaled(progress, 0.05, 1.0))
+    else:
+        args = read_autosdf(path) if kind == "hdf5" else read_grid(path)
+        if iso is not None:
+            args["iso"] = iso
+        if colors is not None:
+            args["colors"] = _read_colors(Path(colors))
+        out = from_grid(**args, res=res, pad=pad, source=str(path), progress=progress)
+    meta = dict(out.meta)
+    meta["source"] = str(path)
+    meta["history"][0]["source"] = str(path)
+    meta["history"][0]["format"] = kind
+    return out.replace(meta=meta)
+
+
+def _read_colors(path: Path):
+    import numpy as np
+
+    if not path.is_file():
+        raise InputError(f"{path}: expected an existing colour volume (.npy), got no such file")
+    try:
+        with open(path, "rb") as fh:
+            return np.load(fh, allow_pickle=False)
+    except Exception as exc:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        raise InputError(f"{path}: expected a .npy colour volume, got {msg}") from None

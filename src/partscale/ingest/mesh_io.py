@@ -1,0 +1,335 @@
+"""Coloured triangle meshes read from glTF/GLB, OBJ+MTL and PLY (through trimesh).
+
+Colour conventions
+------------------
+- Everything a user sees is 8-bit sRGB; arithmetic on colours is done in linear light.
+- glTF: ``baseColorFactor`` and ``COLOR_0`` are linear, base-colour textures are sRGB; the
+  colour at a point is ``texture(uv) * factor * vertex_colour`` in linear light (the glTF rule).
+- OBJ/MTL ``Kd`` and PLY vertex colours are display (sRGB) values; ``map_Kd`` multiplies ``Kd``.
+- UVs follow trimesh's convention (v up, image row 0 at v = 1); the sampler wraps (glTF's
+  default ``REPEAT``) and filters bilinearly, in linear light.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import struct
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
+
+
+def srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    """sRGB in [0, 1] -> linear in [0, 1] (IEC 61966-2-1), float32."""
+    c = np.asarray(c, dtype=np.float32)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
+def linear_to_srgb8(c: np.ndarray) -> np.ndarray:
+    """Linear in [0, 1] -> sRGB uint8."""
+    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
+    s = np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+    return np.clip(np.rint(s * 255.0), 0, 255).astype(np.uint8)
+
+
+@dataclass(frozen=True, eq=False)
+class Material:
+    """One surface material.
+
+    factor : (3,) float32
+        Linear RGB multiplier (glTF ``baseColorFactor``, MTL ``Kd`` linearised).
+    texture : (H, W, 3) float32 or None
+        Base-colour texture decoded to linear RGB, row 0 at the top of the image.
+    uv_transform : (2, 3) float64 or None
+        Affine map applied to UVs before lookup (glTF ``KHR_texture_transform``), in trimesh's
+        v-up convention.
+    """
+
+    factor: np.ndarray
+    texture: np.ndarray | None = None
+    uv_transform: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class ColoredMesh:
+    """A triangle soup with what is needed to evaluate its sRGB colour at any surface point.
+
+    vertices : (V, 3) float64
+        World positions (all node transforms applied), object units (metres for glTF).
+    faces : (F, 3) int64
+        Vertex indices of each triangle.
+    face_material : (F,) int32
+        Index into ``materials`` of each triangle.
+    materials : tuple of Material
+    uv : (F, 3, 2) float32 or None
+        Texture coordinates at each triangle corner (NaN-free; zeros where a piece has none).
+    corner_color : (F, 3, 3) float32 or None
+        Linear vertex colour at each triangle corner (ones where a piece has none).
+    source : str
+        File it was read from.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_material: np.ndarray
+    materials: tuple[Material, ...]
+    uv: np.ndarray | None = None
+    corner_color: np.ndarray | None = None
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        for a in (self.vertices, self.faces, self.face_material, self.uv, self.corner_color):
+            if a is not None:
+                a.flags.writeable = False
+
+    @property
+    def n_faces(self) -> int:
+        return len(self.faces)
+
+    def color_at(self, tri_ids: np.ndarray, bary: np.ndarray) -> np.ndarray:
+        """sRGB colour at surface points given as triangle + barycentric coordinates.
+
+        Parameters
+        ----------
+        tri_ids : (N,) int
+            Triangle index of each point.
+        bary : (N, 3) float
+            Barycentric coordinates of each point in its triangle (rows sum to 1).
+
+        Returns
+        -------
+        (N, 3) uint8 sRGB
+        """
+        tri_ids = np.asarray(tri_ids, dtype=np.int64)
+        bary = np.asarray(bary, dtype=np.float64)
+        lin = np.ones((len(tri_ids), 3), np.float32)
+        if self.corner_color is not None:
+            lin *= np.einsum("nc,ncj->nj", bary, self.corner_color[tri_ids]).astype(np.float32)
+        mats = self.face_material[tri_ids]
+        uv = None
+        if self.uv is not None:
+            uv = np.einsum("nc,ncj->nj", bary, self.uv[tri_ids])
+        for m_id in np.unique(mats):
+            mat = self.materials[m_id]
+            sel = mats == m_id
+            col = np.broadcast_to(mat.factor, (int(sel.sum()), 3)).astype(np.float32)
+            if mat.texture is not None and uv is not None:
+                u = uv[sel]
+                if mat.uv_transform is not None:
+                    u = u @ mat.uv_transform[:, :2].T + mat.uv_transform[:, 2]
+                col = col * sample_texture(mat.texture, u)
+            lin[sel] *= col
+        return linear_to_srgb8(lin)
+
+
+def sample_texture(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """Bilinear, repeat-wrapped lookup of ``texture`` (H, W, C) at ``uv`` (N, 2) -> (N, C)."""
+    h, w = texture.shape[:2]
+    # texel centres at (i + 0.5) / w; v up, row 0 at the top
+    x = uv[:, 0] * w - 0.5
+    y = (1.0 - uv[:, 1]) * h - 0.5
+    x0 = np.floor(x)
+    y0 = np.floor(y)
+    fx = (x - x0)[:, None].astype(np.float32)
+    fy = (y - y0)[:, None].astype(np.float32)
+    x0 = x0.astype(np.int64)
+    y0 = y0.astype(np.int64)
+    x1 = np.mod(x0 + 1, w)
+    y1 = np.mod(y0 + 1, h)
+    x0 = np.mod(x0, w)
+    y0 = np.mod(y0, h)
+    top = texture[y0, x0] * (1 - fx) + texture[y0, x1] * fx
+    bot = texture[y1, x0] * (1 - fx) + texture[y1, x1] * fx
+    return top * (1 - fy) + bot * fy
+
+
+# -- reading ------------------------------------------------------------------------------
+
+
+def _gltf_json(path: Path) -> dict | None:
+    """The glTF JSON document of a .gltf/.glb (for what trimesh does not keep), or None."""
+    try:
+        if path.suffix.lower() == ".gltf":
+            return json.loads(path.read_text(encoding="utf-8"))
+        with open(path, "rb") as fh:
+            head = fh.read(20)
+            if len(head) < 20 or head[:4] != b"glTF":
+                return None
+            length = struct.unpack("<I", head[12:16])[0]
+            return json.loads(fh.read(length))
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+
+
+def _texture_transforms(doc: dict | None) -> dict[str, np.ndarray]:
+    """Material name -> (2, 3) UV affine of its base-colour ``KHR_texture_transform``.
+
+    trimesh ignores this extension; Khronos samples (SheenChair) tile their fabric with it.
+    The matrix acts on trimesh's v-up UVs: v_gltf = 1 - v.
+    """
+    out: dict[str, np.ndarray] = {}
+    if not doc:
+        return out
+    for i, mat in enumerate(doc.get("materials", [])):
+        tex = mat.get("pbrMetallicRoughness", {}).get("baseColorTexture", {})
+        tt = tex.get("extensions", {}).get("KHR_texture_transform")
+        if not tt:
+            continue
+        ox, oy = tt.get("offset", [0.0, 0.0])
+        sx, sy = tt.get("scale", [1.0, 1.0])
+        r = float(tt.get("rotation", 0.0))
+        c, s = np.cos(r), np.sin(r)
+        # glTF: uv' = T * R * S * uv with R = [[c, s], [-s, c]] (in glTF's v-down frame)
+        m = np.array([[c, s], [-s, c]]) @ np.diag([sx, sy])
+        g = np.array([[m[0, 0], m[0, 1], ox], [m[1, 0], m[1, 1], oy], [0, 0, 1]])
+        flip = np.array([[1.0, 0, 0], [0, -1.0, 1.0], [0, 0, 1]])  # v_gltf = 1 - v
+        out[mat.get("name", f"material_{i}")] = (flip @ g @ flip)[:2]
+    return out
+
+
+def _image_linear(img) -> np.ndarray | None:
+    if img is None:
+        return None
+    a = np.asarray(img.convert("RGB"), dtype=np.float32) / 255.0
+    return srgb_to_linear(a)
+
+
+def _material_of(visual, is_gltf: bool, transforms: dict[str, np.ndarray]) -> Material:
+    from trimesh.visual.material import PBRMaterial, SimpleMaterial
+
+    mat = getattr(visual, "material", None)
+    if isinstance(mat, PBRMaterial):
+        f = mat.baseColorFactor
+        factor = (
+            np.ones(3, np.float32)
+            if f is None
+            else np.asarray(f[:3], np.float32) / (255.0 if np.asarray(f).dtype == np.uint8 else 1)
+        )
+        if not is_gltf:  # a PBR material made by trimesh from MTL keeps display values
+            factor = srgb_to_linear(factor)
+        tex = _image_linear(mat.baseColorTexture)
+        return Material(factor, tex, transforms.get(mat.name) if tex is not None else None)
+    if isinstance(mat, SimpleMaterial):
+        d = np.asarray(mat.diffuse, dtype=np.float32)[:3] / 255.0
+        return Material(srgb_to_linear(d), _image_linear(mat.image))
+    return Material(np.ones(3, np.float32))
+
+
+def load_mesh(path: str | os.PathLike) -> ColoredMesh:
+    """Read a coloured triangle mesh: glTF/GLB, OBJ+MTL or PLY.
+
+    All scene nodes are placed by their transforms. Each triangle keeps its material (base
+    colour factor and texture), its corner UVs and vertex colours, so the colour at any surface
+    point can be evaluated with :meth:`ColoredMesh.color_at`.
+
+    Raises :class:`InputError` naming the file for a missing, unreadable, corrupt or empty mesh.
+    """
+    import trimesh
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: expected an existing mesh file, got no such file")
+    suffix = path.suffix.lower()
+    if suffix not in MESH_SUFFIXES:
+        raise InputError(
+            f"{path}: expected a mesh ({', '.join(MESH_SUFFIXES)}), got suffix {suffix or 'none'}"
+        )
+    try:
+        scene = trimesh.load_scene(str(path), process=False)
+    except (
+        ValueError,
+        KeyError,
+        IndexError,
+        TypeError,
+        OSError,
+        EOFError,
+        AttributeError,
+        struct.error,
+        json.JSONDecodeError,
+        zipfile.BadZipFile,
+        NotImplementedError,
+        AssertionError,
+    ) as exc:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
+    is_gltf = suffix in (".glb", ".gltf")
+    transforms = _texture_transforms(_gltf_json(path)) if is_gltf else {}
+    verts, faces, mats, face_mat, uvs, colors = [], [], [], [], [], []
+    any_uv = any_color = False
+    n_v = 0
+    for node in scene.graph.nodes_geometry:
+        transform, geom_name = scene.graph[node]
+        geom = scene.geometry[geom_name]
+        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
+            continue
+        v = np.asarray(geom.vertices, np.float64)
+        v = v @ transform[:3, :3].T + transform[:3, 3]
+        f = np.asarray(geom.faces, np.int64)
+        if np.linalg.det(transform[:3, :3]) < 0:  # mirrored node: keep outward winding
+            f = f[:, ::-1]
+        visual = geom.visual
+        mats.append(_material_of(visual, is_gltf, transforms))
+        face_mat.append(np.full(len(f), len(mats) - 1, np.int32))
+        uv = getattr(visual, "uv", None)
+        if uv is not None and len(uv) == len(v):
+            uvs.append(np.asarray(uv, np.float32)[f])
+            any_uv = True
+        else:
+            uvs.append(np.zeros((len(f), 3, 2), np.float32))
+        vc = None
+        if visual.kind == "vertex":
+            vc = np.asarray(visual.vertex_colors, np.float32)[:, :3] / 255.0
+        elif visual.kind == "face":
+            vc = np.repeat(np.asarray(visual.face_colors, np.float32)[:, None, :3] / 255.0, 3, 1)
+        elif "color" in getattr(visual, "vertex_attributes", {}):  # COLOR_0 beside a texture
+            raw = np.asarray(visual.vertex_attributes["color"])
+            vc = raw[:, :3].astype(np.float32)
+            if np.issubdtype(raw.dtype, np.integer):
+                vc /= float(np.iinfo(raw.dtype).max)
+        if vc is not None:
+            if vc.ndim == 2:
+                vc = vc[f]
+            colors.append(vc if is_gltf else srgb_to_linear(vc))
+            any_color = True
+        else:
+            colors.append(np.ones((len(f), 3, 3), np.float32))
+        verts.append(v)
+        faces.append(f + n_v)
+        n_v += len(v)
+    if not faces:
+        raise InputError(f"{path}: expected a mesh with triangles, got none")
+    vertices = np.concatenate(verts)
+    if not np.isfinite(vertices).all():
+        raise InputError(f"{path}: expected finite vertex positions, got NaN or inf")
+    all_faces = np.concatenate(faces)
+    ext = np.ptp(vertices[np.unique(all_faces)], axis=0)
+    if not (ext.max() > 0):
+        raise InputError(f"{path}: expected a mesh with non-zero extent, got all points equal")
+    return ColoredMesh(
+        vertices=vertices,
+        faces=all_faces,
+        face_material=np.concatenate(face_mat),
+        materials=tuple(mats),
+        uv=np.concatenate(uvs) if any_uv else None,
+        corner_color=np.concatenate(colors) if any_color else None,
+        source=str(path),
+    )
+
+
+def from_trimesh(mesh, *, color=(200, 200, 200), source: str = "") -> ColoredMesh:
+    """A :class:`ColoredMesh` of one flat sRGB ``color`` from a ``trimesh.Trimesh`` (tests, demos)."""
+    f = np.asarray(mesh.faces, np.int64)
+    return ColoredMesh(
+        vertices=np.asarray(mesh.vertices, np.float64).copy(),
+        faces=f.copy(),
+        face_material=np.zeros(len(f), np.int32),
+        materials=(Material(srgb_to_linear(np.asarray(color[:3], np.float32) / 255.0)),),
+        source=source,
+    )

@@ -1,0 +1,389 @@
+"""Pictures of a CSDF made from the SDF itself: sphere tracing on the CPU, no GPU, no mesh.
+
+Orthographic views of a Y-up object (glTF's convention: +y up, +z front, +x right):
+``front`` looks along -z, ``side`` along -x (from the right), ``top`` along -y (front at the
+bottom of the image), ``iso`` along -(1, 1, 1) (from front-right-above). Every ray is marched at
+once by a numba kernel (parallel over rays) through the trilinear SDF in voxel units; shading is
+Lambert + ambient in linear light with normals from the SDF gradient, written back as sRGB.
+
+The camera fits a world box (``frame``, default the solid's bounds): its projection is centred
+and its larger projected extent spans ``size * (1 - 2 * MARGIN)`` pixels, so several objects
+rendered with the same ``frame`` share one scale.
+"""
+
+from __future__ import annotations
+
+import colorsys
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from ._util import atomic_path, keyword_options
+from .csdf import CSDF
+from .errors import InputError
+from .export import linear_to_srgb, srgb_to_linear
+from .progress import ProgressCallback, resolve
+
+VIEWS = ("front", "side", "top", "iso")
+MARGIN = 0.05
+"""Fraction of the image left empty on each side of the frame."""
+MIN_SIZE, MAX_SIZE = 16, 4096
+NO_PART_COLOR = (150, 150, 150)
+HIT_EPS = 0.01
+"""A ray hits when the SDF at its point is below this many voxels."""
+MAX_STEPS = 512
+AMBIENT = 0.35
+SCALE_BAR_BAND = 0.08
+"""Fraction of the image height kept free at the bottom for the scale bar."""
+
+# (towards the camera, screen up) per view, world coordinates
+_VIEW_AXES = {
+    "front": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
+    "side": ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
+    "top": ((0.0, 1.0, 0.0), (0.0, 0.0, -1.0)),
+    "iso": ((1.0, 1.0, 1.0), (0.0, 1.0, 0.0)),
+}
+
+# Distinct sRGB colours for parts without a stored colour (Okabe-Ito then Tableau-like tones).
+PALETTE = np.array(
+    [
+        (230, 159, 0),
+        (86, 180, 233),
+        (0, 158, 115),
+        (240, 228, 66),
+        (0, 114, 178),
+        (213, 94, 0),
+        (204, 121, 167),
+        (140, 86, 75),
+        (44, 160, 44),
+        (148, 103, 189),
+        (214, 39, 40),
+        (23, 190, 207),
+    ],
+    dtype=np.uint8,
+)
+
+
+@dataclass(frozen=True)
+class Camera:
+    """An orthographic camera: world point ``centre`` at the image centre, ``scale`` pixels per
+    world unit, unit vectors ``right``, ``up`` and ``back`` (towards the viewer); ``centre``
+    appears ``shift`` pixels above the image centre."""
+
+    centre: np.ndarray
+    right: np.ndarray
+    up: np.ndarray
+    back: np.ndarray
+    scale: float
+    size: int
+
+    shift: float = 0.0
+
+    def pixel_rays(self) -> np.ndarray:
+        """(size * size, 3) float64 world points of the pixel centres on the camera plane."""
+        s = self.size
+        u = (np.arange(s) + 0.5 - s / 2) / self.scale
+        v = (s / 2 - self.shift - (np.arange(s) + 0.5)) / self.scale
+        return (
+            self.centre[None, None, :]
+            + u[None, :, None] * self.right[None, None, :]
+            + v[:, None, None] * self.up[None, None, :]
+        ).reshape(-1, 3)
+
+
+def camera(view: str, frame: np.ndarray, size: int, *, reserve_bottom: float = 0.0) -> Camera:
+    """Fit an orthographic camera for ``view`` to the world box ``frame`` (2, 3).
+
+    The frame's projection is centred in the image and its larger extent spans
+    ``size * (1 - 2 * MARGIN)`` pixels; ``reserve_bottom`` (a fraction of ``size``) keeps a band
+    at the bottom free (for the scale bar), shrinking and lifting the fit accordingly.
+    """
+    if view not in _VIEW_AXES:
+        raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
+    back, up = (np.asarray(a, dtype=np.float64) for a in _VIEW_AXES[view])
+    back = back / np.linalg.norm(back)
+    right = np.cross(up, back)
+    right /= np.linalg.norm(right)
+    up = np.cross(back, right)
+    frame = np.asarray(frame, dtype=np.float64)
+    corners = np.array(
+        [[frame[i, 0], frame[j, 1], frame[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+    )
+    pr, pu = corners @ right, corners @ up
+    ext_r, ext_u = pr.max() - pr.min(), pu.max() - pu.min()
+    avail = size * (1 - 2 * MARGIN)
+    avail_u = avail - reserve_bottom * size
+    centre = frame.mean(axis=0)
+    centre = centre + right * ((pr.max() + pr.min()) / 2 - centre @ right)
+    centre = centre + up * ((pu.max() + pu.min()) / 2 - centre @ up)
+    scale = min(avail / max(ext_r, 1e-12), avail_u / max(ext_u, 1e-12))
+    return Camera(centre, right, up, back, float(scale), int(size), reserve_bottom * size / 2)
+
+
+# -- numba kernels (index space: voxel centres at integers, distances in voxels) -------------
+@numba.njit(cache=True, inline="always")
+def _cell(x, n):
+    if x < 0.0:
+        x = 0.0
+    elif x > n - 1.0:
+        x = n - 1.0
+    i = min(int(x), n - 2)
+    return i, x - i
+
+
+@numba.njit(cache=True, inline="always")
+def _trilinear(vol, x, y, z):
+    i, fx = _cell(x, vol.shape[0])
+    j, fy = _cell(y, vol.shape[1])
+    k, fz = _cell(z, vol.shape[2])
+    c00 = vol[i, j, k] * (1 - fx) + vol[i + 1, j, k] * fx
+    c10 = vol[i, j + 1, k] * (1 - fx) + vol[i + 1, j + 1, k] * fx
+    c01 = vol[i, j, k + 1] * (1 - fx) + vol[i + 1, j, k + 1] * fx
+    c11 = vol[i, j + 1, k + 1] * (1 - fx) + vol[i + 1, j + 1, k + 1] * fx
+    return (c00 * (1 - fy) + c10 * fy) * (1 - fz) + (c01 * (1 - fy) + c11 * fy) * fz
+
+
+@numba.njit(cache=True, parallel=True)
+def _trace(sdf, origins, d, eps, max_steps, hits):
+    """March every ray ``origins[r] + t d`` through ``sdf`` (voxel units); hits[r] = point or nan."""
+    n = origins.shape[0]
+    hi = np.array([sdf.shape[0] - 1.0, sdf.shape[1] - 1.0, sdf.shape[2] - 1.0])
+    for r in numba.prange(n):
+        t0 = -1e30
+        t1 = 1e30
+        for a in range(3):
+            o = origins[r, a]
+            if abs(d[a]) < 1e-12:
+                if o < 0.0 or o > hi[a]:
+                    t0 = 1e30
+            else:
+                ta = (0.0 - o) / d[a]
+                tb = (hi[a] - o) / d[a]
+                t0 = max(t0, min(ta, tb))
+                t1 = min(t1, max(ta, tb))
+        hits[r, 0] = np.nan
+        if t0 > t1:
+            continue
+        t = t0
+        for _ in range(max_steps):
+            x = origins[r, 0] + t * d[0]
+            y = origins[r, 1] + t * d[1]
+            z = origins[r, 2] + t * d[2]
+            v = _trilinear(sdf, x, y, z)
+            if v < eps:
+                hits[r, 0] = x
+                hits[r, 1] = y
+                hits[r, 2] = z
+                break
+            t += max(v, eps)
+            if t > t1:
+                break
+
+
+@numba.njit(cache=True, parallel=True)
+def _normals(sdf, pts, out):
+    for r in numba.prange(pts.shape[0]):
+        x, y, z = pts[r, 0], pts[r, 1], pts[r, 2]
+        gx = _trilinear(sdf, x + 0.5, y, z) - _trilinear(sdf, x - 0.5, y, z)
+        gy = _trilinear(sdf, x, y + 0.5, z) - _trilinear(sdf, x, y - 0.5, z)
+        gz = _trilinear(sdf, x, y, z + 0.5) - _trilinear(sdf, x, y, z - 0.5)
+        n = math.sqrt(gx * gx + gy * gy + gz * gz)
+        if n < 1e-12:
+            out[r, 0], out[r, 1], out[r, 2] = 0.0, 0.0, 0.0
+        else:
+            out[r, 0], out[r, 1], out[r, 2] = gx / n, gy / n, gz / n
+
+
+@numba.njit(cache=True, parallel=True)
+def _colours(rgb, pts, out):
+    for r in numba.prange(pts.shape[0]):
+        for c in range(3):
+            out[r, c] = _trilinear(rgb[..., c], pts[r, 0], pts[r, 1], pts[r, 2])
+
+
+def part_colors(csdf: CSDF) -> np.ndarray:
+    """(P, 3) uint8 sRGB display colour of each part: ``meta['parts_info'][i]['color']`` when
+    stored, else :data:`PALETTE` (then golden-angle hues beyond its length)."""
+    n = csdf.n_parts
+    info = csdf.meta.get("parts_info")
+    out = np.empty((n, 3), np.uint8)
+    for i in range(n):
+        entry = None
+        if isinstance(info, list) and i < len(info):
+            entry = info[i]
+        elif isinstance(info, dict):
+            entry = info.get(str(i))
+        colour = entry.get("color") if isinstance(entry, dict) else None
+        if colour is not None and len(colour) >= 3:
+            out[i] = np.clip(np.asarray(colour[:3], dtype=float), 0, 255)
+        elif i < len(PALETTE):
+            out[i] = PALETTE[i]
+        else:
+            h = (i * 0.618033988749895) % 1.0
+            out[i] = np.rint(np.array(colorsys.hsv_to_rgb(h, 0.65, 0.9)) * 255)
+    return out
+
+
+def _nice_length(max_length: float) -> float:
+    """The largest 1, 2 or 5 times a power of ten not above ``max_length``."""
+    p = 10.0 ** math.floor(math.log10(max_length))
+    for m in (5.0, 2.0, 1.0):
+        if m * p <= max_length * (1 + 1e-9):
+            return m * p
+    return p
+
+
+def scale_bar_label(length: float, units: str) -> str:
+    """A short label for a bar ``length`` long, e.g. ``50 cm`` for 0.5 m."""
+    if units == "m":
+        for factor, name in ((1.0, "m"), (100.0, "cm"), (1000.0, "mm")):
+            if length * factor >= 1 - 1e-9:
+                return f"{length * factor:g} {name}"
+        return f"{length * 1e6:g} µm"
+    return f"{length:g} {units}"
+
+
+def _draw_scale_bar(image: np.ndarray, cam: Camera, units: str, background) -> np.ndarray:
+    from PIL import Image, ImageDraw, ImageFont
+
+    size = cam.size
+    length = _nice_length(0.25 * size / cam.scale)
+    px = round(length * cam.scale)
+    label = scale_bar_label(length, units)
+    ink = (0, 0, 0) if sum(background) > 3 * 128 else (255, 255, 255)
+    im = Image.fromarray(image)
+    draw = ImageDraw.Draw(im)
+    font = ImageFont.load_default(size=max(10, size // 32))
+    x0 = max(4, size // 25)
+    y1 = size - max(4, size // 25)
+    thick = max(2, size // 128)
+    draw.rectangle([x0, y1 - thick, x0 + px, y1], fill=ink)
+    for x in (x0, x0 + px):
+        draw.rectangle([x - thick // 2, y1 - 3 * thick, x + (thick - 1) // 2, y1], fill=ink)
+    draw.text((x0, y1 - 3 * thick - 2), label, fill=ink, font=font, anchor="ld")
+    return np.asarray(im)
+
+
+@keyword_options
+def render(
+    csdf: CSDF,
+    *,
+    view: str = "iso",
+    size: int = 512,
+    parts: bool = False,
+    frame=None,
+    scale_bar: bool = False,
+    background=(255, 255, 255),
+    progress: ProgressCallback | None = None,
+) -> np.ndarray:
+    """Sphere-trace ``csdf`` into an image.
+
+    Parameters
+    ----------
+    csdf : CSDF
+    view : {"front", "side", "top", "iso"}
+    size : int
+        Image width and height in pixels (16..4096).
+    parts : bool
+        Colour by part (``meta['parts_info'][i]['color']`` or a fixed palette; part -1 grey)
+        instead of the CSDF's own colours. Needs a segmented CSDF.
+    frame : (2, 3) array_like, optional
+        World box the camera fits (default: the solid's bounds), for several objects at one scale.
+    scale_bar : bool
+        Draw a labelled scale bar (e.g. "50 cm") at the bottom left.
+    background : (3,) int
+        sRGB colour where no ray hits.
+
+    Returns
+    -------
+    (size, size, 3) uint8
+        sRGB image, row 0 at the top.
+    """
+    report = resolve(progress)
+    if (
+        isinstance(size, bool)
+        or not isinstance(size, (int, np.integer))
+        or not (MIN_SIZE <= size <= MAX_SIZE)
+    ):
+        raise InputError(f"size: expected an integer in [{MIN_SIZE}, {MAX_SIZE}], got {size!r}")
+    if view not in VIEWS:
+        raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
+    if parts and csdf.n_parts == 0:
+        raise InputError(
+            "render --parts: expected a segmented CSDF (run partscale segment), got no parts"
+        )
+    bg = np.asarray(background, dtype=np.int64).reshape(-1)
+    if bg.shape != (3,) or bg.min() < 0 or bg.max() > 255:
+        raise InputError(f"background: expected 3 integers in [0, 255], got {background!r}")
+    if frame is None:
+        frame = csdf.surface_bounds()
+    frame = np.asarray(frame, dtype=np.float64)
+    if frame.shape != (2, 3) or not np.isfinite(frame).all() or (frame[1] < frame[0]).any():
+        raise InputError(
+            f"frame: expected a (2, 3) world box with min <= max, got {frame.tolist()}"
+        )
+    size = int(size)
+    cam = camera(view, frame, size, reserve_bottom=SCALE_BAR_BAND if scale_bar else 0.0)
+
+    report(0.0, "tracing rays")
+    h = csdf.voxel_size
+    sdf_vox = np.ascontiguousarray(csdf.sdf / np.float32(h), dtype=np.float32)
+    origins = cam.pixel_rays()
+    origins = np.ascontiguousarray((origins - csdf.origin) / h)
+    d = np.ascontiguousarray(-cam.back)
+    hits = np.empty_like(origins)
+    _trace(sdf_vox, origins, d, HIT_EPS, MAX_STEPS, hits)
+    hit = ~np.isnan(hits[:, 0])
+    pts = np.ascontiguousarray(hits[hit])
+    report(0.7, "shading")
+
+    normals = np.empty_like(pts)
+    _normals(sdf_vox, pts, normals)
+    if parts:
+        inner = pts - 0.5 * normals  # half a voxel inside: the part of the solid, not the air
+        ijk = np.rint(inner).astype(np.intp)
+        for a in range(3):
+            np.clip(ijk[:, a], 0, csdf.shape[a] - 1, out=ijk[:, a])
+        labels = csdf.parts[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+        table = np.concatenate([part_colors(csdf), np.array([NO_PART_COLOR], np.uint8)])
+        base = table[np.where(labels >= 0, labels, len(table) - 1)].astype(np.float64)
+    else:
+        base = np.empty_like(pts)
+        _colours(np.ascontiguousarray(csdf.rgb), pts, base)
+    # key light from above, slightly left and in front, so the three faces of a box differ
+    light = -0.1 * cam.right + 0.45 * cam.up + 0.9 * cam.back
+    light /= np.linalg.norm(light)
+    lambert = np.clip(normals @ light, 0.0, 1.0)
+    shade = AMBIENT + (1 - AMBIENT) * lambert
+    lin = srgb_to_linear(np.clip(base, 0, 255)) * shade[:, None]
+    colours = np.rint(linear_to_srgb(lin) * 255).astype(np.uint8)
+
+    image = np.empty((size * size, 3), np.uint8)
+    image[:] = bg.astype(np.uint8)
+    image[hit] = colours
+    image = image.reshape(size, size, 3)
+    if scale_bar:
+        image = _draw_scale_bar(image, cam, csdf.meta.get("units", "m"), tuple(bg.tolist()))
+    report(1.0, "rendered")
+    return image
+
+
+def save_png(image: np.ndarray, path: str | os.PathLike) -> Path:
+    """Write an (H, W, 3) or (H, W, 4) uint8 image as PNG, atomically. Returns the path."""
+    from PIL import Image
+
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        raise InputError(
+            f"{path}: expected an image file ending in .png, got {path.suffix or 'no suffix'}"
+        )
+    img = np.asarray(image)
+    if img.dtype != np.uint8 or img.ndim != 3 or img.shape[2] not in (3, 4):
+        raise InputError(f"image: expected (H, W, 3|4) uint8, got {img.shape} {img.dtype}")
+    with atomic_path(path) as tmp:
+        Image.fromarray(img).save(tmp, format="PNG")
+    return path

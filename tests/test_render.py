@@ -1,0 +1,231 @@
+"""Render: sphere tracing of the SDF, views, frames, part colours, scale bar, CLI and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import assert_bad_input
+from PIL import Image
+
+from partscale import csdf as csdf_mod
+from partscale import render, shapes
+from partscale.errors import InputError
+
+WHITE = np.array([255, 255, 255])
+CENTRE, RADIUS, H = np.array([0.1, 0.2, -0.1]), 0.3, 0.02
+
+
+def to_linear(u8):
+    c = np.asarray(u8, float) / 255
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def chromaticity(u8):
+    lin = to_linear(u8)
+    return lin / lin.sum(axis=-1, keepdims=True)
+
+
+def foreground(image, background=WHITE):
+    return (image != background).any(axis=-1)
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return shapes.sphere(CENTRE, RADIUS, voxel_size=H, color=(200, 90, 40))
+
+
+def test_sphere_front_is_a_disc_of_the_expected_radius(sphere):
+    size = 256
+    frame = np.array([CENTRE - RADIUS, CENTRE + RADIUS])
+    image = render.render(sphere, view="front", size=size, frame=frame)
+    assert image.shape == (size, size, 3) and image.dtype == np.uint8
+    fg = foreground(image)
+    expected_r = RADIUS * size * (1 - 2 * render.MARGIN) / (2 * RADIUS)
+    r_area = np.sqrt(fg.sum() / np.pi)
+    assert abs(r_area - expected_r) <= 1.0, (r_area, expected_r)
+    rows, cols = np.nonzero(fg)
+    assert abs(rows.mean() + 0.5 - size / 2) <= 0.5 and abs(cols.mean() + 0.5 - size / 2) <= 0.5
+    # every foreground pixel lies within the disc (+1 px), none of the disc is missing (-1 px)
+    d = np.hypot(*np.meshgrid(np.arange(size) + 0.5 - size / 2, np.arange(size) + 0.5 - size / 2))
+    assert not fg[d > expected_r + 1].any() and fg[d < expected_r - 1].all()
+
+
+def test_sphere_shows_its_colour_with_shading(sphere):
+    image = render.render(sphere, view="front", size=128)
+    fg = foreground(image)
+    pixels = image[fg]
+    # shading scales linear light, so chromaticity stays the CSDF colour's
+    err = np.abs(chromaticity(pixels) - chromaticity(np.array([200, 90, 40]))).max()
+    assert err <= 0.02, err
+    # Lambert: some parts lit, some in shade
+    lum = to_linear(pixels).sum(axis=1)
+    assert lum.max() > 1.5 * lum.min()
+
+
+def test_same_frame_same_scale():
+    frame = np.array([[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]])
+    big = shapes.sphere((0, 0, 0), 0.4, voxel_size=H)
+    small = shapes.sphere((0, 0, 0), 0.2, voxel_size=H)
+    a = foreground(render.render(big, view="front", size=200, frame=frame)).sum()
+    b = foreground(render.render(small, view="front", size=200, frame=frame)).sum()
+    assert abs(np.sqrt(a / b) - 2.0) <= 0.03
+
+
+@pytest.mark.parametrize(
+    ("view", "ratio"),
+    [("front", 0.6 / 0.4), ("side", 0.2 / 0.4), ("top", 0.6 / 0.2)],
+)
+def test_views_look_along_the_stated_axes(view, ratio):
+    # box x 0.6, y 0.4, z 0.2: front shows x by y, side z by y, top x by z
+    c = shapes.box((0, 0, 0), (0.6, 0.4, 0.2), voxel_size=H)
+    fg = foreground(render.render(c, view=view, size=200))
+    rows, cols = np.nonzero(fg)
+    w, h = np.ptp(cols) + 1, np.ptp(rows) + 1
+    assert abs(w / h - ratio) <= 0.03 * ratio, (w, h)
+
+
+def test_iso_view_shows_three_shaded_faces():
+    c = shapes.box((0, 0, 0), (0.4, 0.4, 0.4), voxel_size=H, color=(180, 180, 180))
+    image = render.render(c, view="iso", size=128)
+    lum = np.round(to_linear(image[foreground(image)]).sum(axis=1), 2)
+    values, counts = np.unique(lum, return_counts=True)
+    faces = values[counts > 0.1 * counts.sum()]
+    assert len(faces) == 3
+
+
+def two_part_boxes(parts_info=None):
+    boxes = [((0.0, 0.0, 0.0), (0.3, 0.3, 0.3)), ((0.5, 0.0, 0.0), (0.8, 0.3, 0.3))]
+    c = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boxes), ((0, 0, 0), (0.8, 0.3, 0.3)), voxel_size=H
+    )
+    x = c.axis_coords(0)
+    parts = np.broadcast_to(np.where(x < 0.4, 0, 1)[:, None, None], c.shape)
+    meta = dict(c.meta)
+    if parts_info is not None:
+        meta["parts_info"] = parts_info
+    return c.replace(parts=parts, meta=meta)
+
+
+def test_parts_take_stored_colours():
+    info = [{"color": [220, 30, 30]}, {"color": [30, 30, 220]}]
+    c = two_part_boxes(info)
+    image = render.render(c, view="front", size=160, parts=True)
+    fg = foreground(image)
+    cols = np.nonzero(fg.any(axis=0))[0]
+    left = image[:, : cols.mean().astype(int)][fg[:, : cols.mean().astype(int)]]
+    right = image[:, cols.mean().astype(int) :][fg[:, cols.mean().astype(int) :]]
+    assert np.abs(chromaticity(left) - chromaticity(np.array(info[0]["color"]))).max() <= 0.02
+    assert np.abs(chromaticity(right) - chromaticity(np.array(info[1]["color"]))).max() <= 0.02
+
+
+def test_parts_without_stored_colours_are_distinct_and_none_is_grey():
+    c = two_part_boxes()
+    image = render.render(c, view="front", size=160, parts=True)
+    fg = foreground(image)
+    chroma = np.round(chromaticity(image[fg]), 1)
+    assert len(np.unique(chroma, axis=0)) >= 2
+    # unsegmented voxels (-1) render grey: equal channels
+    grey = c.replace(parts=np.where(c.parts == 1, -1, c.parts))
+    image = render.render(grey, view="front", size=160, parts=True)
+    right = image[:, 100:][foreground(image[:, 100:])]
+    assert len(right) > 100
+    assert (np.ptp(right.astype(int), axis=1) <= 1).all()
+
+
+def test_scale_bar_is_labelled_and_to_scale():
+    assert render.scale_bar_label(0.5, "m") == "50 cm"
+    assert render.scale_bar_label(2.0, "m") == "2 m"
+    assert render.scale_bar_label(0.005, "m") == "5 mm"
+    assert render._nice_length(0.37) == pytest.approx(0.2)
+    assert render._nice_length(0.6) == pytest.approx(0.5)
+    c = shapes.sphere((0, 0, 0), 0.3, voxel_size=H)
+    size = 256
+    image = render.render(c, view="front", size=size, scale_bar=True)
+    cam = render.camera("front", c.surface_bounds(), size, reserve_bottom=render.SCALE_BAR_BAND)
+    length = render._nice_length(0.25 * size / cam.scale)
+    dark = (image < 60).all(axis=-1)
+    bottom = dark[int(size * 0.9) :]
+    bar_row = bottom[bottom.sum(axis=1).argmax()]
+    assert abs(bar_row.sum() - length * cam.scale) <= 3
+    # the (blue) object stays clear of the bar's band: only grey ink there
+    band = image[int(size * (1 - render.SCALE_BAR_BAND)) :]
+    ink = band[foreground(band)].astype(int)
+    assert len(ink) > 100 and (np.ptp(ink, axis=1) <= 2).all()
+
+
+def test_render_refuses_bad_options(sphere):
+    with pytest.raises(InputError, match="segmented"):
+        render.render(sphere, parts=True)
+    with pytest.raises(InputError, match="front, side, top, iso"):
+        render.render(sphere, view="back")
+    with pytest.raises(InputError, match="size"):
+        render.render(sphere, size=8)
+    with pytest.raises(TypeError, match="options are"):
+        render.render(sphere, colour=True)
+
+
+# -- CLI -------------------------------------------------------------------------------------
+@pytest.fixture
+def sphere_file(sphere, tmp_path):
+    return csdf_mod.save(sphere, tmp_path / "s.csdf.npz")
+
+
+def test_cli_render_writes_a_png_of_the_asked_size(cli, sphere_file, tmp_path):
+    out = tmp_path / "s.png"
+    proc = cli("render", sphere_file, "-o", out, "--view", "top", "--size", "96")
+    assert proc.returncode == 0, proc.stderr
+    with Image.open(out) as im:
+        assert im.format == "PNG" and im.size == (96, 96) and im.mode == "RGB"
+        assert foreground(np.asarray(im)).sum() > 1000
+
+
+@pytest.mark.parametrize(
+    ("args", "fragments"),
+    [
+        (["--view", "back"], ["--view", "front, side, top, iso", "back"]),
+        (["--parts"], ["--parts", "segmented"]),
+        (["--size", "4"], ["size", "4"]),
+    ],
+)
+def test_cli_render_bad_options(cli, sphere_file, tmp_path, args, fragments):
+    out = tmp_path / "out"
+    out.mkdir()
+    proc = cli("render", sphere_file, "-o", out / "s.png", *args)
+    assert_bad_input(proc, *fragments)
+    assert list(out.iterdir()) == []
+
+
+def test_cli_render_bad_files(cli, sphere_file, tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    proc = cli("render", sphere_file, "-o", out / "s.jpg")
+    assert_bad_input(proc, "s.jpg", ".png")
+    proc = cli("render", tmp_path / "missing.csdf.npz", "-o", out / "s.png")
+    assert_bad_input(proc, "missing.csdf.npz", "no such file")
+    bad = tmp_path / "bad.csdf.npz"
+    bad.write_text("not a zip")
+    proc = cli("render", bad, "-o", out / "s.png")
+    assert_bad_input(proc, "bad.csdf.npz")
+    assert list(out.iterdir()) == []
+
+
+def test_real_chair_silhouette_matches_its_bounds():
+    from conftest import data_path
+
+    ingest = pytest.importorskip("partscale.ingest", reason="import stage not on this branch")
+    c = ingest.load(data_path("kenney/chair.glb"), res=64)
+    b = c.surface_bounds()
+    size = 200
+    for view, (ax_w, ax_h) in {"front": (0, 1), "side": (2, 1), "top": (0, 2)}.items():
+        image = render.render(c, view=view, size=size)
+        rows, cols = np.nonzero(foreground(image))
+        scale = render.camera(view, b, size).scale
+        # the silhouette spans the solid's extent (one pixel of rounding at each edge)
+        assert abs(np.ptp(cols) + 1 - (b[1, ax_w] - b[0, ax_w]) * scale) <= 2, view
+        assert abs(np.ptp(rows) + 1 - (b[1, ax_h] - b[0, ax_h]) * scale) <= 2, view
+    # its own colours: the rendered pixels' chromaticities come from the grid's surface colours
+    image = render.render(c, view="iso", size=size)
+    near = np.abs(c.sdf) < c.voxel_size
+    surface = chromaticity(c.rgb[near].reshape(-1, 3).astype(float) + 1)
+    seen = chromaticity(image[foreground(image)].astype(float) + 1)
+    assert np.abs(np.median(seen, axis=0) - np.median(surface, axis=0)).max() <= 0.05

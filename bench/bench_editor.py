@@ -96,13 +96,32 @@ class EditorProcess:
         self.proc.stderr.close()
 
 
-def median_ms(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - t0) * 1000)
-    return statistics.median(times)
+def ms_since(t0: float) -> float:
+    return (time.perf_counter() - t0) * 1000
+
+
+def browser_frames(url: str, frames: int, out: str) -> tuple[dict, str] | None:
+    """Frame time at 1280x720 in headless Chromium (software rendering here), or None."""
+    node, chromium = shutil.which("node"), shutil.which("chromium")
+    if not (node and chromium):
+        print("frame time: skipped (node or chromium not found)")
+        return None
+    args = {
+        "url": url,
+        "chromium": chromium,
+        "web": str(ROOT / "web"),
+        "out": out,
+        "canvas": [1280, 720],
+        "benchmark": frames,
+    }
+    proc = subprocess.run(
+        [node, str(ROOT / "tests/browser/editor.mjs"), json.dumps(args)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    res = json.loads(proc.stdout.splitlines()[-1])
+    return res["benchmark"], res["renderer"]
 
 
 def main() -> None:
@@ -114,84 +133,57 @@ def main() -> None:
     import httpx
 
     c = table_128()
-    rows = []
+    times: dict[str, list[float]] = {k: [] for k in ROWS}
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "table128.csdf.npz"
         csdf_mod.save(c, path)
-        base = median_ms(lambda: apply_recipe(c, RECIPE), args.repeat)
-        rows.append(("apply_recipe in process (baseline)", base))
-        out = apply_recipe(c, RECIPE)
-        rows.append(("encode_grid (float16 RGBA)", median_ms(lambda: encode_grid(out), 3)))
+        apply_recipe(c, RECIPE)  # warm: numba caches, imports
         with EditorProcess(path) as server, httpx.Client(base_url=server.url, timeout=60) as client:
-            client.get("api/grid")
-
-            def apply_only():
+            client.post("api/apply", json=RECIPE).raise_for_status()  # warm the server too
+            client.post("api/undo", json={}).raise_for_status()
+            # interleaved, so load from other processes hits baseline and editor alike
+            for _ in range(args.repeat):
+                t0 = time.perf_counter()
+                out = apply_recipe(c, RECIPE)
+                times["baseline"].append(ms_since(t0))
+                t0 = time.perf_counter()
+                encode_grid(out)
+                times["encode"].append(ms_since(t0))
+                t0 = time.perf_counter()
                 r = client.post("api/apply", json=RECIPE)
                 r.raise_for_status()
-                client.post("api/undo", json={}).raise_for_status()
-
-            def round_trip():
-                r = client.post("api/apply", json=RECIPE)
-                r.raise_for_status()
+                times["post"].append(ms_since(t0))
+                times["server"].append(r.json()["apply_ms"])
                 grid = client.get("api/grid").content
+                times["round"].append(ms_since(t0))
                 assert len(grid) == np.prod(r.json()["shape"]) * 8
+                t0 = time.perf_counter()
                 client.post("api/undo", json={}).raise_for_status()
-
-            undo = median_ms(lambda: client.post("api/undo", json={}), 1)  # warm (409)
-            del undo
-            # undo itself is O(1); time it separately and subtract from the loops
-            client.post("api/apply", json=RECIPE).raise_for_status()
-            t_undo = (
-                median_ms(
-                    lambda: (client.post("api/undo", json={}), client.post("api/redo", json={})),
-                    args.repeat,
-                )
-                / 2
-            )
-            client.post("api/undo", json={})
-            rows.append(("HTTP POST /api/apply", median_ms(apply_only, args.repeat) - t_undo))
-            rows.append(
-                (
-                    "HTTP apply + GET /api/grid (round trip)",
-                    median_ms(round_trip, args.repeat) - t_undo,
-                )
-            )
-            frame = None
-            if args.frames:
-                node, chromium = shutil.which("node"), shutil.which("chromium")
-                if node and chromium:
-                    res = json.loads(
-                        subprocess.run(
-                            [
-                                node,
-                                str(ROOT / "tests/browser/editor.mjs"),
-                                json.dumps(
-                                    {
-                                        "url": server.url,
-                                        "chromium": chromium,
-                                        "web": str(ROOT / "web"),
-                                        "out": tmp,
-                                        "canvas": [1280, 720],
-                                        "benchmark": args.frames,
-                                    }
-                                ),
-                            ],
-                            capture_output=True,
-                            text=True,
-                            timeout=600,
-                        ).stdout.splitlines()[-1]
-                    )
-                    frame = res.get("benchmark"), res.get("renderer")
-    print(f"editor round trips, {'x'.join(map(str, c.shape))} grid, median of {args.repeat}")
-    print(f"{'step':44s} {'ms':>9s} {'x baseline':>11s}")
-    for name, ms in rows:
-        print(f"{name:44s} {ms:9.1f} {ms / base:11.2f}")
+                client.get("api/grid")
+                times["undo"].append(ms_since(t0))
+            frame = browser_frames(server.url, args.frames, tmp) if args.frames else None
+    base = statistics.median(times["baseline"])
+    print(f"editor round trips, {'x'.join(map(str, c.shape))} grid, {args.repeat} runs")
+    print(f"{'step':52s} {'median ms':>10s} {'min ms':>8s} {'x baseline':>11s}")
+    for key, name in ROWS.items():
+        med = statistics.median(times[key])
+        print(f"{name:52s} {med:10.1f} {min(times[key]):8.1f} {med / base:11.2f}")
     if frame:
-        (b, renderer) = frame
+        b, renderer = frame
         print(
             f"frame at 1280x720 ({renderer}): mean {b['mean']:.1f} ms, median {b['median']:.1f} ms"
             f" over {b['n']} frames"
         )
+
+
+ROWS = {
+    "baseline": "apply_recipe in process (baseline)",
+    "encode": "encode_grid in process (float16 RGBA)",
+    "server": "server: apply_recipe + encode (apply_ms)",
+    "post": "HTTP POST /api/apply",
+    "round": "HTTP apply + GET /api/grid (round trip)",
+    "undo": "HTTP undo + GET /api/grid",
+}
 
 
 if __name__ == "__main__":

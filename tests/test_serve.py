@@ -6,6 +6,7 @@ import hashlib
 import json
 import os
 import re
+import socket
 import subprocess
 import sys
 import threading
@@ -311,6 +312,19 @@ def test_missing_or_invalid_object_is_refused(tmp_path, cli):
     bad = tmp_path / "bad.csdf.npz"
     bad.write_bytes(b"not a zip")
     assert_bad_input(cli("edit", bad, "--no-browser"), "bad.csdf.npz")
+
+
+def test_busy_port_and_foreign_address_are_refused(box_file, cli):
+    from conftest import assert_bad_input
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        proc = cli("edit", box_file, "--no-browser", "--port", str(port))
+    assert_bad_input(proc, "--port", str(port))
+    # TEST-NET-3: never an address of this machine
+    assert_bad_input(cli("edit", box_file, "--no-browser", "--host", "203.0.113.7"), "--host")
 
 
 # -- the command ------------------------------------------------------------------------------

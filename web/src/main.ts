@@ -385,13 +385,17 @@ function refreshUI() {
   const unitLabel = units === '%' ? '%' : state?.units ?? '';
   document.querySelectorAll('.unit').forEach((el) => (el.textContent = unitLabel));
   const problems = rz.map(zoneProblem).filter((p) => p !== null);
+  // dest == end leaves the object as it is in every mode: nothing to send
+  const noop = rz.every((q) => q.dest === q.end);
   const target = z.dest - z.start;
   const length = z.end - z.start;
   $('zone-info').textContent = problems.length
     ? `invalid: ${problems[0]}`
+    : noop
+    ? 'no change yet: move the destination plane'
     : `${z.mode === 'global' ? 'scale' : 'zone'} ×${(z.mode === 'global' ? (z.hi - z.lo + z.dest - z.end) / (z.hi - z.lo) : target / length).toFixed(3)}`;
   $('zone-info').classList.toggle('error', problems.length > 0);
-  ($('apply') as HTMLButtonElement).disabled = busy || problems.length > 0 || !state;
+  ($('apply') as HTMLButtonElement).disabled = busy || problems.length > 0 || noop || !state;
   ($('undo') as HTMLButtonElement).disabled = busy || !state?.can_undo;
   ($('redo') as HTMLButtonElement).disabled = busy || !state?.can_redo;
   ($('save') as HTMLButtonElement).disabled = busy || !state;

@@ -30,6 +30,13 @@ def _free_port(host: str) -> int:
         return int(s.getsockname()[1])
 
 
+def _check_port(host: str, port: int) -> int:
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        s.bind((host.strip("[]"), port))
+    return port
+
+
 @keyword_options
 def serve(
     path: str | Path,
@@ -64,18 +71,20 @@ def serve(
         raise InputError(f"--port: expected 0..65535, got {port}")
     loopback = is_loopback(host)
     app = create_app(path, allowed_hosts=LOOPBACK_HOSTS if loopback else ["*"])
+    try:
+        port = _free_port(host) if port == 0 else _check_port(host, port)
+    except OSError as exc:
+        what = (
+            "--host: expected an address of this machine"
+            if port == 0
+            else "--port: expected a free port"
+        )
+        raise InputError(f"{what}, got {host}:{port} ({exc.strerror or exc})") from None
     if not loopback:
         say(
             f"warning: serving on {host}, not loopback: anyone who can reach this machine can "
             "view, edit and save this object"
         )
-    if port == 0:
-        try:
-            port = _free_port(host)
-        except OSError as exc:
-            raise InputError(
-                f"--host: expected an address of this machine, got {host} ({exc})"
-            ) from None
     shown = "127.0.0.1" if host in ("0.0.0.0", "::") else host
     shown = f"[{shown}]" if ":" in shown and not shown.startswith("[") else shown
     url = f"http://{shown}:{port}/"

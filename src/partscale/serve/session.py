@@ -19,8 +19,10 @@ from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback
 
-#: Most undo steps kept; a 128³ CSDF is ~20 MiB, so this bounds memory at ~1 GiB.
+#: Most undo steps kept, and the most memory they may hold together (the oldest go first; one
+#: step is always kept). A 128³ CSDF is ~20 MiB, a 256³ one ~150 MiB.
 MAX_UNDO = 48
+UNDO_BYTES = 2 << 30
 #: Encoded grids kept (current, previous and next object, grid and parts each).
 CACHED_ENCODINGS = 6
 
@@ -143,6 +145,8 @@ class EditSession:
     def _push(self, new: CSDF) -> None:
         self.undo_stack.append(self.current)
         del self.undo_stack[:-MAX_UNDO]
+        while len(self.undo_stack) > 1 and sum(map(_nbytes, self.undo_stack)) > UNDO_BYTES:
+            del self.undo_stack[0]
         self.redo_stack.clear()
         self.current = new
         self.revision += 1
@@ -216,6 +220,10 @@ class EditSession:
                 return files[0].read_bytes(), files[0].name, media
             return _zip(files), f"{stem}.texture.zip", "application/zip"
         raise AssertionError("unreachable")  # pragma: no cover
+
+
+def _nbytes(c: CSDF) -> int:
+    return c.sdf.nbytes + c.rgb.nbytes + c.parts.nbytes
 
 
 #: Suffix asked of export_texture; it writes the format its suffix names.

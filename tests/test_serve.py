@@ -379,3 +379,39 @@ def test_edit_command_serves_on_loopback_and_warns_otherwise(box_file):
         assert any("warning" in ln and "not loopback" in ln for ln in lines), lines
     finally:
         _stop(proc)
+
+
+# -- a real object ----------------------------------------------------------------------------
+def test_real_table_stretch_undo_and_export(data, tmp_path):
+    from partscale.ingest import load
+
+    path = tmp_path / "table.csdf.npz"
+    csdf_mod.save(load(data("kenney/table.glb"), res=64), path)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        session = client.app.state.session
+        original = session.current
+        h = original.voxel_size
+        lo0, hi0 = np.array(client.get("/api/state").json()["solid_bounds"])
+        length = hi0[0] - lo0[0]
+        r = post(
+            client, "/api/apply", {"edits": [{"axis": "x", "zone": ["35%", "65%"], "to": "105%"}]}
+        )
+        assert r.status_code == 200, r.text
+        lo, hi = np.array(r.json()["solid_bounds"])
+        # 40 % longer along x, the rest of the box where it was (re-evaluation may move the
+        # surface by a fraction of a voxel)
+        assert abs((hi[0] - lo[0]) - 1.4 * length) <= 0.5 * h
+        np.testing.assert_allclose(lo, lo0, atol=0.5 * h)
+        np.testing.assert_allclose(hi[1:], hi0[1:], atol=0.5 * h)
+        glb = tmp_path / "dl.glb"
+        glb.write_bytes(client.get("/api/export/mesh").content)
+        (mesh,) = trimesh.load(glb).geometry.values()
+        assert abs(mesh.extents[0] - 1.4 * length) <= 1.0 * h
+        # the table's wood colour, linear in the GLB as glTF wants it
+        surface = original.rgb[np.abs(original.sdf) < h] / 255.0
+        srgb = np.median(surface, axis=0)
+        linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+        assert np.abs(srgb - 0.5).max() > 0.1  # not the grey of an uncoloured import
+        np.testing.assert_allclose(np.median(glb_vertex_colours(mesh), axis=0), linear, atol=0.03)
+        post(client, "/api/undo")
+        assert session.current is original

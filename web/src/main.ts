@@ -13,6 +13,7 @@ import {
   minJacobian,
   packZone,
   sourceCoordinate,
+  tileCount,
   type Zone,
   zoneProblem,
 } from './remap';
@@ -170,6 +171,10 @@ function requestRender() {
 function renderNow() {
   renderQueued = false;
   const t0 = performance.now();
+  // handles keep one size on screen, however far the camera is
+  for (const h of Object.values(handleMeshes)) {
+    h.scale.setScalar(0.04 * camera.position.distanceTo(h.position) * Math.tan(THREE.MathUtils.degToRad(camera.fov / 2)));
+  }
   renderer.render(scene, camera);
   // reading one pixel waits for the GPU, so the time covers the raymarch, not just its submission
   gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
@@ -236,7 +241,7 @@ function layoutPlanes(box: THREE.Box3) {
   const size = box.getSize(new THREE.Vector3());
   const centre = box.getCenter(new THREE.Vector3());
   const others = [0, 1, 2].filter((i) => i !== a);
-  const radius = 0.025 * size.length();
+  const offset = 0.05 * size.length(); // handles sit just outside the box
   for (const name of PLANES) {
     const plane = planeMeshes[name];
     const pos = centre.clone();
@@ -252,12 +257,11 @@ function layoutPlanes(box: THREE.Box3) {
     else plane.scale.set(s[0], s[1], 1);
     const handle = handleMeshes[name];
     const hp = pos.clone();
-    hp.setComponent(others[0], box.max.getComponent(others[0]) + 2 * radius);
+    hp.setComponent(others[0], box.max.getComponent(others[0]) + offset);
     // dest's handle on the opposite edge, so it stays apart from end's when they coincide
-    const side = name === 'dest' ? box.min.getComponent(others[1]) - 2 * radius : box.max.getComponent(others[1]) + 2 * radius;
+    const side = name === 'dest' ? box.min.getComponent(others[1]) - offset : box.max.getComponent(others[1]) + offset;
     hp.setComponent(others[1], side);
     handle.position.copy(hp);
-    handle.scale.setScalar(radius);
   }
 }
 
@@ -387,13 +391,11 @@ function refreshUI() {
   const problems = rz.map(zoneProblem).filter((p) => p !== null);
   // dest == end leaves the object as it is in every mode: nothing to send
   const noop = rz.every((q) => q.dest === q.end);
-  const target = z.dest - z.start;
-  const length = z.end - z.start;
   $('zone-info').textContent = problems.length
     ? `invalid: ${problems[0]}`
     : noop
-    ? 'no change yet: move the destination plane'
-    : `${z.mode === 'global' ? 'scale' : 'zone'} ×${(z.mode === 'global' ? (z.hi - z.lo + z.dest - z.end) / (z.hi - z.lo) : target / length).toFixed(3)}`;
+      ? 'no change yet: move the destination plane'
+      : zoneSummary(z);
   $('zone-info').classList.toggle('error', problems.length > 0);
   ($('apply') as HTMLButtonElement).disabled = busy || problems.length > 0 || noop || !state;
   ($('undo') as HTMLButtonElement).disabled = busy || !state?.can_undo;
@@ -410,6 +412,19 @@ function refreshUI() {
   ($('save-as') as HTMLElement).textContent = ($('overwrite') as HTMLInputElement).checked
     ? state?.name ?? ''
     : state?.save_as ?? '';
+}
+
+function zoneSummary(z: Zone): string {
+  const u = state?.units ?? '';
+  const length = z.end - z.start;
+  const target = z.dest - z.start;
+  const delta = `${z.dest >= z.end ? '+' : '−'}${fmt(Math.abs(z.dest - z.end))} ${u}`;
+  if (z.mode === 'global') return `whole object ×${fmt((z.hi - z.lo + z.dest - z.end) / (z.hi - z.lo))} (${delta})`;
+  if (z.mode === 'tile') {
+    const n = tileCount(length, target);
+    return `${n} cop${n === 1 ? 'y' : 'ies'} of ${fmt(length)} ${u}, each ×${fmt(target / (n * length))} (${delta})`;
+  }
+  return `zone ×${fmt(target / length)} (${delta})`;
 }
 
 function setZone(patch: Partial<EditZone>) {

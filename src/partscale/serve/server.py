@@ -33,6 +33,8 @@ def _free_port(host: str) -> int:
 def _check_port(host: str, port: int) -> int:
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
     with socket.socket(family, socket.SOCK_STREAM) as s:
+        # as uvicorn binds: a port left in TIME_WAIT by a previous run is free to reuse
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         s.bind((host.strip("[]"), port))
     return port
 

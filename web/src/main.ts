@@ -12,6 +12,7 @@ import {
   type Mode,
   minJacobian,
   packZone,
+  snapDest,
   sourceCoordinate,
   tileCount,
   type Zone,
@@ -115,11 +116,14 @@ function resolvedZones(): Zone[] {
   const lo = [...smin];
   const hi = [...smax];
   const out: Zone[] = [];
+  const h = voxel();
   for (const z of zones) {
     const a = AXES.indexOf(z.axis);
     const zone: Zone = { ...z, lo: lo[a], hi: hi[a] };
+    // preview what the server will make: the end moves by whole voxels
+    zone.dest = snapDest(zone, h);
     out.push(zone);
-    if (zoneProblem(zone) === null) {
+    if (zoneProblem(zone, h) === null) {
       lo[a] = forwardCoordinate(lo[a], zone);
       hi[a] = forwardCoordinate(hi[a], zone);
     }
@@ -127,8 +131,12 @@ function resolvedZones(): Zone[] {
   return out;
 }
 
+function voxel(): number {
+  return state ? state.voxel_size : 1e-3;
+}
+
 function validZones(): Zone[] {
-  return resolvedZones().filter((z) => zoneProblem(z) === null);
+  return resolvedZones().filter((z) => zoneProblem(z, voxel()) === null);
 }
 
 function outputBox(): THREE.Box3 {
@@ -151,11 +159,15 @@ function defaultZone(axis: Axis = 'x'): EditZone {
   return { axis, mode: 'stretch', start: lo + 0.35 * len, end: lo + 0.65 * len, dest: lo + 0.65 * len };
 }
 
+/** The recipe (partscale.edit.JSON_SCHEMA) of the valid zones, with the destinations as given. */
 function recipe() {
-  return {
-    version: 1,
-    edits: validZones().map((z) => ({ axis: z.axis, zone: [z.start, z.end], to: z.dest, mode: z.mode })),
-  };
+  const h = voxel();
+  const edits = resolvedZones().flatMap((z, i) =>
+    zoneProblem(z, h) === null
+      ? [{ axis: z.axis, zone: [z.start, z.end], to: zones[i].dest, mode: z.mode }]
+      : [],
+  );
+  return { version: 1, edits };
 }
 
 // -- rendering on demand ----------------------------------------------------------------------
@@ -388,7 +400,7 @@ function refreshUI() {
   }
   const unitLabel = units === '%' ? '%' : state?.units ?? '';
   document.querySelectorAll('.unit').forEach((el) => (el.textContent = unitLabel));
-  const problems = rz.map(zoneProblem).filter((p) => p !== null);
+  const problems = rz.map((q) => zoneProblem(q, voxel())).filter((p) => p !== null);
   // dest == end leaves the object as it is in every mode: nothing to send
   const noop = rz.every((q) => q.dest === q.end);
   $('zone-info').textContent = problems.length
@@ -608,15 +620,13 @@ renderer.domElement.addEventListener('pointermove', (e) => {
   if (!drag) return;
   const s = closestOnAxis(pointerRay(e), drag.origin, drag.axis);
   if (s === null) return;
-  const z = zones[active];
-  const step = state ? state.voxel_size * 0.5 : 1e-3;
+  // keep the zone one apply_recipe accepts: inside the solid, two voxels thick, dest past start
+  const z = resolvedZones()[active];
+  const h = voxel();
   let v = drag.value0 + s;
-  if (drag.name === 'start') v = Math.min(v, z.end - step, z.dest - step);
-  else v = Math.max(v, z.start + step);
-  if (drag.name === 'end' && z.mode !== 'global') {
-    // keep the zone inside the solid's reach so the map stays defined
-    v = Math.max(v, z.start + step);
-  }
+  if (drag.name === 'start') v = Math.max(z.lo, Math.min(v, z.end - 2 * h, z.dest - h));
+  else if (drag.name === 'end') v = Math.min(z.hi, Math.max(v, z.start + 2 * h));
+  else v = Math.max(v, z.start + h);
   setZone({ [drag.name]: v });
 });
 

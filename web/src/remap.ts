@@ -69,10 +69,21 @@ export function minJacobian(z: Zone): number {
   return Math.min(1, target / (n * length));
 }
 
-/** A zone the maps accept: start < end, start < dest, and a solid that keeps a positive length. */
-export function zoneProblem(z: Zone): string | null {
+/** The destination the server applies: the end moves by a whole number of voxels h. */
+export function snapDest(z: Zone, h: number): number {
+  return z.end + Math.round((z.dest - z.end) / h) * h;
+}
+
+/**
+ * Why apply_recipe would refuse the zone (partscale.edit.scale.resolve_edit), or null: the zone
+ * lies within the solid's extent (h/2 slack), is at least two voxels thick, and the (snapped)
+ * destination stays a voxel beyond the start.
+ */
+export function zoneProblem(z: Zone, h: number): string | null {
   if (!(z.start < z.end)) return 'start must be below end';
-  if (!(z.dest > z.start)) return 'destination must be above start';
+  if (z.start < z.lo - h / 2 || z.end > z.hi + h / 2) return 'the zone must lie within the object';
+  if (z.end - z.start < 2 * h) return 'the zone must be at least two voxels thick';
+  if (!(snapDest(z, h) - z.start >= h)) return 'destination must be a voxel beyond start';
   if (z.mode === 'global' && !(z.hi - z.lo + z.dest - z.end > 0)) return 'the solid would vanish';
   return null;
 }

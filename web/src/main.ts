@@ -38,11 +38,23 @@ const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as 
 const params = new URLSearchParams(location.search);
 const fixedSize = params.get('canvas')?.match(/^(\d+)x(\d+)$/);
 const view = $('view');
-const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
+function createRenderer(): THREE.WebGLRenderer {
+  try {
+    return new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
+  } catch (e) {
+    const el = document.getElementById('status');
+    if (el) {
+      el.textContent = 'This browser cannot draw the object: it needs WebGL2 (enable hardware acceleration).';
+      el.classList.add('error');
+    }
+    throw e;
+  }
+}
+const renderer = createRenderer();
 renderer.setPixelRatio(fixedSize ? 1 : Math.min(window.devicePixelRatio, 2));
 renderer.setClearColor(0x1d2126, 1);
 view.appendChild(renderer.domElement);
-const gl = renderer.getContext();
+const gl = renderer.getContext() as WebGL2RenderingContext; // three.js r187 is WebGL2-only
 
 const scene = new THREE.Scene();
 const camera = new THREE.PerspectiveCamera(35, 1, 0.001, 1000);
@@ -317,8 +329,12 @@ function srgbFloat(c: number[] | string | undefined, i: number): [number, number
 async function loadObject() {
   setStatus('loading grid…');
   const s = await getState();
-  const grid = await getGrid();
   const [X, Y, Z] = s.shape;
+  const limit = gl.getParameter(gl.MAX_3D_TEXTURE_SIZE) as number;
+  if (Math.max(X, Y, Z) > limit) {
+    throw new ApiError(`grid: expected at most ${limit} voxels per axis on this GPU, got ${s.shape.join('×')}`);
+  }
+  const grid = await getGrid();
   if (grid.length !== X * Y * Z * 4) throw new ApiError(`grid: expected ${X * Y * Z * 4} values, got ${grid.length}`);
   volumeTex?.dispose();
   // C order (z fastest): the texture's width runs along z (see raymarch.ts)

@@ -1,5 +1,5 @@
 """End to end in headless Chromium: the page draws the object, previews a drag, applies, undoes,
-exports; the shader's remap matches the Python maps.
+exports; the shader's remap (GLSL, on the GPU) and its TypeScript mirror match the Python maps.
 
 Needs node, Debian's ``chromium`` and the npm packages in ``web/node_modules`` (``./dev.sh test``
 installs them where it can); skips with the reason otherwise. One browser session drives the
@@ -24,8 +24,6 @@ import trimesh
 from partscale import csdf as csdf_mod
 from partscale import shapes
 from partscale.edit import Recipe, source_coordinate
-
-pytestmark = pytest.mark.browser
 
 ROOT = Path(__file__).resolve().parents[1]
 WEB = ROOT / "web"
@@ -192,6 +190,26 @@ def run_page(node: str, chromium: str, url: str, out: Path, **extra) -> dict:
     return result
 
 
+def test_typescript_remap_matches_source_coordinate():
+    """The page's TypeScript maps (planes, bounds, step bound) in node, no browser needed."""
+    node = shutil.which("node")
+    if not node or not (WEB / "node_modules" / "vite").is_dir():
+        pytest.skip("needs node and web/node_modules/vite (npm ci in web/); not found")
+    cases = remap_cases()
+    proc = subprocess.run(
+        [node, str(ROOT / "tests" / "browser" / "remap_node.mjs"), str(WEB)],
+        input=json.dumps(cases),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    for case, got in zip(cases, json.loads(proc.stdout), strict=True):
+        want = expected_sources(case["zones"], np.array(case["points"]))
+        assert np.abs(np.array(got) - want).max() <= 1e-9, case["zones"]
+
+
+@pytest.mark.browser
 def test_editor_end_to_end(tmp_path):
     node, chromium = find_tools()
     path = tmp_path / "table.csdf.npz"

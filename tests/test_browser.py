@@ -190,15 +190,20 @@ def run_page(node: str, chromium: str, url: str, out: Path, **extra) -> dict:
     return result
 
 
-def test_typescript_remap_matches_source_coordinate():
+def test_typescript_remap_matches_source_coordinate(tmp_path):
     """The page's TypeScript maps (planes, bounds, step bound) in node, no browser needed."""
     node = shutil.which("node")
     if not node or not (WEB / "node_modules" / "vite").is_dir():
         pytest.skip("needs node and web/node_modules/vite (npm ci in web/); not found")
     cases = remap_cases()
+    (tmp_path / "cases.json").write_text(json.dumps(cases))
     proc = subprocess.run(
-        [node, str(ROOT / "tests" / "browser" / "remap_node.mjs"), str(WEB)],
-        input=json.dumps(cases),
+        [
+            node,
+            str(ROOT / "tests" / "browser" / "remap_node.mjs"),
+            str(WEB),
+            str(tmp_path / "cases.json"),
+        ],
         capture_output=True,
         text=True,
         timeout=120,

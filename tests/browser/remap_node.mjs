@@ -1,5 +1,5 @@
 // Runs web/src/remap.ts (the TypeScript mirror of recipe.source_coordinate) in node, without a
-// browser: vite's own TypeScript transform, then import. Usage: node remap_node.mjs WEB_DIR < cases
+// browser: vite's own TypeScript transform, then import. Usage: node remap_node.mjs WEB_DIR CASES.json
 // (JSON [{zones, points}]); prints JSON [[[x, y, z], ...], ...] (points through toSource order).
 import { createRequire } from 'node:module';
 import { readFileSync, writeFileSync, mkdtempSync, rmSync } from 'node:fs';
@@ -17,7 +17,7 @@ try {
   const file = join(dir, 'remap.mjs');
   writeFileSync(file, code);
   const remap = await import(pathToFileURL(file).href);
-  const cases = JSON.parse(readFileSync(0, 'utf8'));
+  const cases = JSON.parse(readFileSync(resolve(process.argv[3]), 'utf8'));
   const out = cases.map(({ zones, points }) =>
     points.map((p) => {
       const q = [...p];

@@ -91,6 +91,7 @@ def test_built_page_is_current_with_its_sources():
 def test_page_and_its_assets_are_served(client):
     r = client.get("/")
     assert r.status_code == 200 and "text/html" in r.headers["content-type"]
+    assert "frame-ancestors 'none'" in r.headers["content-security-policy"]
     refs = re.findall(r'(?:src|href)="(/assets/[^"]+)"', r.text)
     assert any(ref.endswith(".js") for ref in refs)
     for ref in refs:

@@ -56,6 +56,18 @@ _MEDIA = {
     ".png": "image/png",
 }
 _NO_STORE = {"Cache-Control": "no-store"}
+#: The page loads only its own assets and talks only to this server; no other site may frame it
+#: (a framed editor could be clicked into saving over the input).
+_PAGE_HEADERS = {
+    "Content-Security-Policy": (
+        "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; "
+        "connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; form-action 'none'"
+    ),
+    "X-Frame-Options": "DENY",
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+    **_NO_STORE,
+}
 
 
 class _BodyTooLarge(Exception):
@@ -185,7 +197,7 @@ def create_app(
         return JSONResponse(body, headers=_NO_STORE)
 
     async def page(request: Request) -> Response:
-        return Response(index_bytes, media_type=_MEDIA[".html"], headers=_NO_STORE)
+        return Response(index_bytes, media_type=_MEDIA[".html"], headers=_PAGE_HEADERS)
 
     async def asset(request: Request) -> Response:
         hit = assets.get(request.path_params["name"])
@@ -193,7 +205,7 @@ def create_app(
             return _error("not found", 404)
         data, media = hit
         etag = hashlib.sha1(data).hexdigest()[:16]
-        return Response(data, media_type=media, headers={"ETag": etag, **_NO_STORE})
+        return Response(data, media_type=media, headers={"ETag": etag, **_PAGE_HEADERS})
 
     async def get_state(request: Request) -> Response:
         return state()

@@ -14,6 +14,7 @@ import typer
 
 from ..errors import InputError
 from . import _common
+from .edit import edit
 from .export import export
 from .import_ import import_
 from .info import info
@@ -46,6 +47,7 @@ app.command("scale")(scale)
 app.command("export")(export)
 app.command("render")(render)
 app.command("import")(import_)
+app.command("edit")(edit)
 
 
 def _click_modules() -> list:

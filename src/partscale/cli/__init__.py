@@ -15,6 +15,7 @@ import typer
 from ..errors import InputError
 from . import _common
 from .edit import edit
+from .eval import eval_suite
 from .export import export
 from .import_ import import_
 from .info import info
@@ -61,6 +62,7 @@ def _click_modules() -> list:
         except ImportError:
             pass
     return mods
+app.command("eval")(eval_suite)
 
 
 def main(argv: list[str] | None = None) -> None:

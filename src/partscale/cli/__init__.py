@@ -62,6 +62,8 @@ def _click_modules() -> list:
         except ImportError:
             pass
     return mods
+
+
 app.command("eval")(eval_suite)
 
 

@@ -80,6 +80,10 @@ def test_cli_bad_suite_file_is_one_line(cli, tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text("{not json")
     assert_bad_input(cli("eval", bad, "-o", tmp_path / "o"), "expected JSON")
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps({"objects": [{"name": "a", "path": "x.glb", "edit": EDIT}]}))
+    assert_bad_input(cli("eval", good, "-o", bad), "output folder")
+    assert_bad_input(cli("eval", good, "-o", tmp_path / "o", "--only", "b"), "--only", "a")
 
 
 @needs_stages

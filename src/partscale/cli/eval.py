@@ -40,8 +40,9 @@ def eval_suite(
     """Run each suite edit as global, stretch, tile and the naive baseline; measure and draw.
 
     Writes NAME.png per object, contact_sheet.png, metrics.csv, metrics.md and summary.md.
-    Exit code 0 when every entry ran, 1 when some could not (each listed on stderr and in
-    summary.md; the others still ran), 2 for a bad suite file or option.
+
+    Exit code 0 when every entry ran; 1 when some could not (each listed on stderr and in
+    summary.md, the others still ran); 2 for a bad suite file or option.
     """
     with progress_bar("eval") as bar:
         result = run_suite(suite, out, res=res, only=only, data=data, segment=segment, progress=bar)

@@ -454,6 +454,8 @@ def run_suite(
             names = ", ".join(e.name for e in suite.entries)
             raise InputError(f"--only: expected one of {names}, got {only!r}")
     out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: expected an output folder, got a file")
     out.mkdir(parents=True, exist_ok=True)
     folder = data_folder(suite, data)
     progress = resolve(progress)

@@ -18,7 +18,7 @@ def eval_suite(
         int | None,
         typer.Option(
             "--res",
-            help="Import resolution, voxels along the longest side (default: the suite's, 96).",
+            help="Import resolution, voxels along the longest side (default: the suite's, 128).",
         ),
     ] = None,
     only: Annotated[str | None, typer.Option("--only", help="Run only this object.")] = None,

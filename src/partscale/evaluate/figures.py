@@ -37,7 +37,7 @@ def failed_panel(size: int, message: str) -> np.ndarray:
 
 
 def object_figure(
-    title: str, subtitle: str, panels: list[tuple[str, str, np.ndarray]]
+    title: str, subtitle: str, panels: list[tuple[str, str, np.ndarray]], *, legend: str = ""
 ) -> Image.Image:
     """One object's row: a title, then the panels side by side, each with a label and a note.
 
@@ -45,19 +45,25 @@ def object_figure(
     ----------
     title, subtitle : str
         Object name and the edit in words.
+    legend : str
+        An optional third line under the subtitle (what the notes mean).
     panels : list of (label, note, (S, S, 3) uint8)
         Renders of equal size (same view and frame), e.g. original | global | stretch | tile | naive.
     """
     size = panels[0][2].shape[0]
     big, small = _font(max(12, size // 14)), _font(max(10, size // 20))
-    head = big.size + small.size + 16  # type: ignore[attr-defined]
+    lines = [subtitle, legend] if legend else [subtitle]
+    head = big.size + len(lines) * (small.size + 4) + 12  # type: ignore[attr-defined]
     label_h = big.size + small.size + 14  # type: ignore[attr-defined]
     gap = 6
     width = len(panels) * size + (len(panels) + 1) * gap
     fig = Image.new("RGB", (width, head + size + label_h + gap), BACKGROUND)
     draw = ImageDraw.Draw(fig)
     draw.text((gap, 4), title, fill=INK, font=big)
-    draw.text((gap, 8 + big.size), subtitle, fill=MUTED, font=small)  # type: ignore[attr-defined]
+    y = 8 + big.size  # type: ignore[attr-defined]
+    for text in lines:
+        draw.text((gap, y), text, fill=MUTED, font=small)
+        y += small.size + 4  # type: ignore[attr-defined]
     for i, (label, note, img) in enumerate(panels):
         x = gap + i * (size + gap)
         fig.paste(Image.fromarray(np.asarray(img, np.uint8)), (x, head))

@@ -25,8 +25,9 @@ The metrics (each a function below, gathered by :func:`evaluate`):
   the normalised 1-Wasserstein distance between the before and after distributions (mean
   absolute difference of their 5..95 % quantiles over the mean before). Elements kept: 0;
   scaled by ``f``: ``|f - 1|``. (Across the axis a one-axis edit changes no thickness.)
-- ``spacing_err``: spacing of repeated elements. On lines along the edit axis that cross at least
-  three solid runs in ``a`` (lines through repeated elements), the pitches (centre-to-centre
+- ``spacing_err``: spacing of repeated elements. On lines along the edit axis where ``a`` has
+  three solid runs evenly spaced (two consecutive pitches within :data:`PERIOD_TOLERANCE`: lines
+  through repeated elements), the pitches (centre-to-centre
   distances of consecutive runs) with at least one of their two runs centred in the zone are
   compared with the pitches on the same lines of ``b`` touching the new zone likewise, with the
   same normalised Wasserstein distance.
@@ -62,6 +63,8 @@ from ..edit.recipe import AXES, Edit, tile_count
 from ..errors import InputError
 from ..surface import to_mesh
 
+#: Two consecutive pitches on a line within this fraction of each other mark repeated elements.
+PERIOD_TOLERANCE = 0.15
 #: Voxels kept between the zone's planes and the regions called outside/inside.
 MARGIN = 1.0
 #: Half-width in voxels of the band where stored distances are checked against true ones.
@@ -362,11 +365,16 @@ def spacing_error(a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = 
     ra = runs_a if runs_a is not None else runs(a, geo.axis)
     rb = runs(b, geo.axis)
     h = a.voxel_size
-    counts = np.bincount(ra.line)
-    repeated_lines = np.nonzero(counts >= 3)[0]
+    la, ca0, ca1 = _pitches(ra)
+    # lines through repeated elements: two consecutive pitches equal within PERIOD_TOLERANCE
+    # (three elements evenly spaced), not merely three solids (rung, slanted leg, seat)
+    pa = ca1 - ca0
+    pair = (la[1:] == la[:-1]) & (
+        np.abs(pa[1:] - pa[:-1]) <= PERIOD_TOLERANCE * np.maximum(pa[1:], pa[:-1])
+    )
+    repeated_lines = np.unique(la[1:][pair])
     if len(repeated_lines) == 0:
         return math.nan
-    la, ca0, ca1 = _pitches(ra)
 
     def touches(c0: np.ndarray, c1: np.ndarray, hi: float) -> np.ndarray:
         # an element of the pair lies in the zone: pitches spanning the whole zone (a rung and

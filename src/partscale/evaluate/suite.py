@@ -3,7 +3,7 @@
 A suite file is JSON::
 
     {"version": 1,
-     "res": 96,                       # import resolution (longest side, voxels); optional
+     "res": 128,                      # import resolution (longest side, voxels); optional
      "data": "path/to/data",          # folder the object paths are relative to; optional
      "objects": [
         {"name": "table-longer", "path": "kenney/table.glb",
@@ -55,7 +55,7 @@ LABELS = {
 }
 VIEWS = ("iso", "front", "side", "top")
 KINDS = ("solid", "repeating")
-DEFAULT_RES = 96
+DEFAULT_RES = 128
 PANEL = 256
 
 
@@ -379,11 +379,11 @@ def _figure(
     subtitle = f"{entry.path}  |  {entry.describe()}"
     if entry.note:
         subtitle += f"  |  {entry.note}"
-    subtitle += (
-        "   (* baseline: no re-evaluation, plain concatenation; notes: thickness change in/out"
-        " of the zone, spacing change, seam jump shape (vox)/colour)"
+    legend = (
+        "* baseline: no re-evaluation, plain concatenation.  Notes: prop = thickness change "
+        "in/out of the zone, space = spacing change (relative); seam = jump shape (vox)/colour"
     )
-    fig = figures.object_figure(entry.name, subtitle, panels)
+    fig = figures.object_figure(entry.name, subtitle, panels, legend=legend)
     if original.n_parts > 0:  # segmented: a second row coloured by part
         parts_row = [("original parts", f"{original.n_parts} parts", None)] + [
             (LABELS[m], "", None) for m in MODES if isinstance(results[m], CSDF)
@@ -423,7 +423,7 @@ def run_suite(
         Created if missing. Receives ``NAME.png`` per object, ``contact_sheet.png``,
         ``metrics.csv``, ``metrics.md`` and ``summary.md``.
     res : int, optional
-        Import resolution (voxels along the longest side); default the suite's ``res`` (96).
+        Import resolution (voxels along the longest side); default the suite's ``res`` (128).
     only : str, optional
         Run only the entry of this name.
     data : path, optional

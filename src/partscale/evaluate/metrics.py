@@ -27,10 +27,9 @@ The metrics (each a function below, gathered by :func:`evaluate`):
   scaled by ``f``: ``|f - 1|``. (Across the axis a one-axis edit changes no thickness.)
 - ``spacing_err``: spacing of repeated elements. On lines along the edit axis where ``a`` has
   three solid runs evenly spaced (two consecutive pitches within :data:`PERIOD_TOLERANCE`: lines
-  through repeated elements), the pitches (centre-to-centre
-  distances of consecutive runs) with at least one of their two runs centred in the zone are
-  compared with the pitches on the same lines of ``b`` touching the new zone likewise, with the
-  same normalised Wasserstein distance.
+  through repeated elements), the pitches (centre-to-centre distances of consecutive runs) with
+  at least one of their two runs centred in the zone are compared with the pitches on the same
+  lines of ``b`` touching the new zone likewise, with the same normalised Wasserstein distance.
   NaN where ``a`` has no such lines (no repeated elements along the axis).
 - ``sdf_err_mean`` / ``sdf_err_p99``: ``|sdf|`` against the true distance to ``b``'s own surface
   (its marching-cubes mesh, exact point-triangle distances) in a band of :data:`BAND` voxels,

@@ -26,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+import traceback
 from pathlib import Path
 from typing import Any
 
@@ -243,11 +244,15 @@ def create_app(
     async def apply(request: Request) -> Response:
         try:
             recipe = await _json_body(request)
-            ms = await run_in_threadpool(_apply, recipe)
         except _HTTPError as exc:
             return _error(str(exc), exc.status)
+        try:
+            ms = await run_in_threadpool(_apply, recipe)
         except InputError as exc:
             return _error(str(exc), 400)
+        except Exception as exc:  # a bug, not the user's input: say so, keep the traceback
+            traceback.print_exc()
+            return _error(f"apply failed inside partscale: {type(exc).__name__}: {exc}", 500)
         return state(apply_ms=ms)
 
     async def undo(request: Request) -> Response:

@@ -138,3 +138,15 @@ def test_info_cli(tmp_path, ball, cli):
 
 def test_version_is_exposed():
     assert partscale.__version__
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (("info",), "missing argument"),
+        (("no-such-command",), "no such command"),
+        (("info", "x.csdf.npz", "--bogus"), "no such option"),
+    ],
+)
+def test_cli_usage_errors_are_one_line(cli, args, fragment):
+    assert_bad_input(cli(*args), fragment)

@@ -206,7 +206,7 @@ def test_png_flipbook_round_trip_and_layout(varied, tmp_path):
     X, Y, Z = varied.shape
     enc = side["encoding"]
     cols, rows = enc["flipbook"]["columns"], enc["flipbook"]["rows"]
-    assert cols * rows == Z
+    assert cols * rows == side["size"][2] == Z + enc["flipbook"]["padded_slices"]
     atlas = np.asarray(Image.open(paths[0]))
     assert atlas.shape == (rows * Y, cols * X, 4) and atlas.dtype == np.uint8
     # voxel (i, j, k): tile k left-to-right, top-to-bottom; y up inside a tile
@@ -217,6 +217,7 @@ def test_png_flipbook_round_trip_and_layout(varied, tmp_path):
         a = np.clip(np.rint(iso + varied.sdf[i, j, k] / (K * h) * 127), 0, 255)
         assert px[3] == a
     back = export.read_texture(paths[0])
+    back = back.replace(sdf=back.sdf[:, :, :Z], rgb=back.rgb[:, :, :Z], parts=back.parts[:, :, :Z])
     assert np.array_equal(back.rgb, varied.rgb)
     step = K * h / 127
     band = np.abs(varied.sdf) <= K * h
@@ -254,12 +255,29 @@ def test_texture_size_resamples(sphere, tmp_path):
     assert side["history"][-1]["op"] == "resample"
 
 
-def test_flipbook_layout_exact_tiles():
+def test_flipbook_layout_fills_the_atlas():
     assert export.flipbook_layout(128) == (16, 8)
     assert export.flipbook_layout(64) == (8, 8)
-    for depth in (25, 37, 100, 256):
+    assert export.flipbook_layout(37) == (8, 5)  # prime: padded, not a 37-tile strip
+    for depth in range(2, 300):
         cols, rows = export.flipbook_layout(depth)
-        assert cols * rows == depth and cols >= rows
+        assert depth <= cols * rows <= depth + cols and rows <= cols <= 2 * rows
+
+
+def test_png_flipbook_pads_an_awkward_depth(tmp_path):
+    # z extent 0.68 + margins -> 41 slices (prime): padded to 42 = 7 x 6 tiles
+    c = shapes.box((0, 0, 0), (0.2, 0.2, 0.68), voxel_size=H)
+    assert c.shape[2] == 41
+    paths = export.export_texture(c, tmp_path / "p.png")
+    side = json.loads(paths[1].read_text())
+    flip = side["encoding"]["flipbook"]
+    assert flip["columns"] * flip["rows"] == side["size"][2] == 41 + flip["padded_slices"]
+    back = export.read_texture(paths[0])
+    step = side["encoding"]["distance_step"]
+    assert np.array_equal(back.origin, c.origin)
+    assert np.abs(back.sdf[:, :, :41] - np.clip(c.sdf, -8 * H, 8 * H)).max() <= step / 2 + 1e-6
+    # padding is empty space, farther out than the last slice
+    assert (back.sdf[:, :, 41:] >= back.sdf[:, :, 40:41] - 1e-6).all()
 
 
 # -- CLI ---------------------------------------------------------------------------------------
@@ -329,6 +347,8 @@ def test_export_library_refuses_before_writing(box, tmp_path):
         export.export_texture(box, tmp_path / "t.raw", size=48)
     with pytest.raises(InputError, match=r"\.glb"):
         export.export_mesh(box, tmp_path / "t.fbx")
+    with pytest.raises(InputError, match="surface"):
+        export.export_mesh(box.replace(sdf=np.abs(box.sdf) + 0.01), tmp_path / "t.glb")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -362,6 +382,8 @@ def test_real_chair_exports_valid_watertight_glb_and_textures(chair, tmp_path):
         assert report["issues"]["numErrors"] == 0, report["issues"]["messages"]
     for suffix in (".raw", ".png"):
         back = export.read_texture(export.export_texture(chair, tmp_path / f"c{suffix}")[0])
-        assert np.array_equal(back.rgb, chair.rgb)
+        Z = chair.shape[2]  # the flipbook may pad z to fill its atlas
+        assert np.array_equal(back.rgb[:, :, :Z], chair.rgb)
         assert np.array_equal(back.origin, chair.origin)
-        assert (np.sign(back.sdf) == np.sign(chair.sdf))[np.abs(chair.sdf) > 1e-4].all()
+        same_sign = np.sign(back.sdf[:, :, :Z]) == np.sign(chair.sdf)
+        assert same_sign[np.abs(chair.sdf) > 1e-4].all()

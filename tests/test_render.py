@@ -162,6 +162,11 @@ def test_render_refuses_bad_options(sphere):
         render.render(sphere, size=8)
     with pytest.raises(TypeError, match="options are"):
         render.render(sphere, colour=True)
+    with pytest.raises(InputError, match="frame"):
+        render.render(sphere, frame=[[1, 1, 1], [0, 0, 0]])
+    empty = sphere.replace(sdf=np.abs(sphere.sdf) + 0.01)
+    with pytest.raises(InputError, match="surface"):
+        render.render(empty)
 
 
 # -- CLI -------------------------------------------------------------------------------------
@@ -229,3 +234,16 @@ def test_real_chair_silhouette_matches_its_bounds():
     surface = chromaticity(c.rgb[near].reshape(-1, 3).astype(float) + 1)
     seen = chromaticity(image[foreground(image)].astype(float) + 1)
     assert np.abs(np.median(seen, axis=0) - np.median(surface, axis=0)).max() <= 0.05
+
+
+def test_cli_render_parts_uses_part_colours(cli, tmp_path):
+    info = [{"index": 0, "color": [20, 200, 40]}, {"index": 1, "color": [200, 20, 160]}]
+    path = csdf_mod.save(two_part_boxes(info), tmp_path / "two.csdf.npz")
+    out = tmp_path / "parts.png"
+    proc = cli("render", path, "-o", out, "--parts", "--view", "front", "--size", "120")
+    assert proc.returncode == 0, proc.stderr
+    image = np.asarray(Image.open(out).convert("RGB"))
+    chroma = chromaticity(image[foreground(image)])
+    for colour in info:
+        close = np.abs(chroma - chromaticity(np.array(colour["color"]))).max(axis=1) <= 0.02
+        assert close.mean() > 0.3, colour

@@ -8,7 +8,8 @@ faces outward, world units, per-vertex colours.
 - ``.glb``: written here, not by trimesh, because glTF demands *linear* ``COLOR_0`` and trimesh
   writes the grid's sRGB bytes there. Positions, unit normals from the SDF gradient, ``COLOR_0``
   as float32 linear RGB, uint32 indices, one unlit-looking (non-metallic) material.
-- ``.ply``: binary, vertex colours as sRGB uint8 (the PLY convention).
+- ``.ply``: binary, vertex colours as sRGB uint8 (the PLY convention) and a ``parts`` int16
+  vertex property (the part of the nearest voxel, -1 where none).
 - ``.obj``: ``v x y z r g b`` with sRGB colours in [0, 1] (the common vertex-colour extension).
 
 3D textures (:func:`export_texture`): RGBA with colour in RGB and signed distance in A, x
@@ -23,7 +24,8 @@ fastest in memory), so they are transposed on the way out.
   bottom (slice 0 top left); inside a tile x runs right and y runs *up* (Unity's textures start at
   the bottom row). RGB = sRGB bytes; A = ``clamp(round(128 + d / (K h) * 127), 0, 255)`` with
   ``h`` the voxel size and ``K`` = :data:`DISTANCE_BAND_VOXELS`; decode ``d = (A - 128) / 127 * K h``;
-  the surface is at A = 128. Sidecar ``NAME.png.json``.
+  the surface is at A = 128. When the depth does not factor into a near-square tile grid, empty
+  slices pad it along +z (the sidecar's size includes them). Sidecar ``NAME.png.json``.
 - ``.nrrd``: the SDF alone (float32, world units) with space origin and spacing, for ParaView and
   3D Slicer.
 """
@@ -45,7 +47,6 @@ from ._util import atomic_path, check_memory, keyword_options
 from .csdf import CSDF, make
 from .errors import InputError
 from .progress import ProgressCallback, resolve
-from .surface import sample_linear, to_mesh
 
 PRESET_SIZES = (32, 64, 128, 256)
 MESH_SUFFIXES = (".glb", ".ply", ".obj")
@@ -201,6 +202,8 @@ def resample(csdf: CSDF, size: int, *, progress: ProgressCallback | None = None)
 # -- meshes --------------------------------------------------------------------------------
 def _sdf_normals(csdf: CSDF, world: np.ndarray) -> np.ndarray:
     """(N, 3) float32 unit normals: the normalised SDF gradient (central differences)."""
+    from .surface import sample_linear
+
     idx = csdf.world_to_index(world)
     g = np.empty_like(idx)
     for a in range(3):
@@ -322,6 +325,9 @@ def export_mesh(
     where the CSDF's solid is closed. Colours are sRGB in PLY/OBJ and linear in glTF ``COLOR_0``.
     The file is written atomically. Returns the path written.
     """
+    # trimesh and scikit-image load here, not at import: the CLI checks its options first, fast
+    from .surface import to_mesh
+
     path = Path(path)
     suffix = _suffix(path, MESH_SUFFIXES, "a mesh file")
     report = resolve(progress)
@@ -351,10 +357,43 @@ def export_mesh(
 
 # -- 3D textures ---------------------------------------------------------------------------
 def flipbook_layout(depth: int) -> tuple[int, int]:
-    """(columns, rows) of the PNG atlas for ``depth`` slices: columns * rows == depth exactly
-    (Unity makes one slice per cell), as square as possible, columns >= rows (128 -> 16 x 8)."""
-    cols = next(c for c in range(math.ceil(math.sqrt(depth)), depth + 1) if depth % c == 0)
-    return cols, depth // cols
+    """(columns, rows) of the PNG atlas for ``depth`` z slices (Unity makes one slice per cell).
+
+    ``columns * rows == depth`` when ``depth`` factors as ``c x r`` with ``r <= c <= 2 r``
+    (128 -> 16 x 8, 64 -> 8 x 8); otherwise the smallest larger count that does (37 -> 8 x 5)
+    and the texture's grid is padded in z, because a prime depth would give a one-row strip
+    wider than engines accept.
+    """
+    d = max(int(depth), 1)
+    while True:
+        cols = next(c for c in range(math.ceil(math.sqrt(d)), d + 1) if d % c == 0)
+        if cols <= 2 * (d // cols):
+            return cols, d // cols
+        d += 1
+
+
+def _pad_z(csdf: CSDF, depth: int) -> CSDF:
+    """Extend the grid to ``depth`` slices along +z with empty (outside) voxels.
+
+    Padded distances are lower bounds of the true ones, as sphere tracing needs: the solid lies
+    at or below the last slice, so a point ``k`` further out is at least ``sqrt(d^2 + k^2)`` from
+    it (``d`` the last slice's distance); where the solid touches the border it is closed half a
+    voxel beyond the last centre.
+    """
+    n = depth - csdf.shape[2]
+    if n <= 0:
+        return csdf
+    h = csdf.voxel_size
+    edge = csdf.sdf[:, :, -1:].astype(np.float64)
+    k = np.arange(1, n + 1, dtype=np.float64) * h
+    pad = np.where(edge > 0, np.sqrt(edge**2 + k**2), k - h / 2).astype(np.float32)
+    rgb = np.repeat(csdf.rgb[:, :, -1:], n, axis=2)
+    parts = np.full((*csdf.shape[:2], n), -1, np.int16)
+    return csdf.replace(
+        sdf=np.concatenate([csdf.sdf, pad], axis=2),
+        rgb=np.concatenate([csdf.rgb, rgb], axis=2),
+        parts=np.concatenate([csdf.parts, parts], axis=2),
+    )
 
 
 def _sidecar_path(path: Path) -> Path:
@@ -466,6 +505,7 @@ def export_texture(
 
     side = _sidecar_path(path)
     if suffix == ".raw":
+        X, Y, Z = csdf.shape
         data = _rgba_half(csdf).tobytes()
         encoding = {
             "name": "rgba16f",
@@ -477,6 +517,9 @@ def export_texture(
             "iso_level": 0.0,
             "precision": "relative 2^-11 (IEEE half float)",
             "bytes": len(data),
+            # x-fastest RGBA half is Unity's own Texture3D memory layout
+            "unity": f"new Texture3D({X}, {Y}, {Z}, TextureFormat.RGBAHalf, false) then "
+            "SetPixelData(bytes, 0) and Apply(); sample the alpha as the distance",
         }
         header = _texture_header(csdf, encoding)
         with contextlib.ExitStack() as stack:
@@ -490,6 +533,9 @@ def export_texture(
     from PIL import Image
 
     check_memory(csdf.shape, 4 * 3, what="PNG flipbook")
+    source_depth = csdf.shape[2]
+    cols, rows = flipbook_layout(source_depth)
+    csdf = _pad_z(csdf, cols * rows)
     atlas, cols, rows = _atlas(csdf)
     k = DISTANCE_BAND_VOXELS
     encoding = {
@@ -509,6 +555,9 @@ def export_texture(
             "tile_size": [csdf.shape[0], csdf.shape[1]],
             "tile_order": "slice z = row * columns + column; rows from the top of the image",
             "tile_axes": "x to the right, y up (row 0 of a tile is y = Y - 1)",
+            "padded_slices": cols * rows - source_depth,
+            "padding": "slices beyond the source depth are empty space added along +z so the "
+            "tiles fill the atlas; size and origin above describe the padded grid",
             "atlas_size": [int(atlas.shape[1]), int(atlas.shape[0])],
             # Unity's defaults (Max Size 2048, Non-Power of 2 ToNearest, compression) would
             # rescale or quantise the atlas and break the decode formula above.

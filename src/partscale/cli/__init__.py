@@ -15,11 +15,13 @@ import typer
 from ..errors import InputError
 from . import _common
 from .edit import edit
+from .eval import eval_suite
 from .export import export
 from .import_ import import_
 from .info import info
 from .render import render
 from .scale import scale
+from .segment import segment
 
 app = typer.Typer(
     name="partscale",
@@ -41,6 +43,7 @@ def _root(
 
 
 app.command("info")(info)
+app.command("segment")(segment)
 app.command("scale")(scale)
 app.command("export")(export)
 app.command("render")(render)
@@ -48,8 +51,28 @@ app.command("import")(import_)
 app.command("edit")(edit)
 
 
+def _click_modules() -> list:
+    """click's exception modules: typer may vendor its own copy (``typer._click``) or use click."""
+    import importlib
+
+    mods = []
+    for name in ("typer._click.exceptions", "click.exceptions"):
+        try:
+            mods.append(importlib.import_module(name))
+        except ImportError:
+            pass
+    return mods
+
+
+app.command("eval")(eval_suite)
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Entry point of the console script."""
+    """Entry point of the console script: one line and exit 2 for every user error."""
+    mods = _click_modules()
+    usage_errors = tuple(m.ClickException for m in mods)
+    exits = tuple(m.Exit for m in mods if hasattr(m, "Exit"))
+    aborts = tuple(m.Abort for m in mods if hasattr(m, "Abort"))
     try:
         app(args=argv, standalone_mode=False)
     except InputError as exc:
@@ -59,15 +82,17 @@ def main(argv: list[str] | None = None) -> None:
         sys.exit(2)
     except typer.Exit as exc:
         sys.exit(exc.exit_code)
-    except typer.Abort:
-        _common.stderr.print("partscale: aborted", highlight=False)
-        sys.exit(130)
-    except Exception as exc:  # click usage errors come through here in non-standalone mode
-        import click
-
-        if isinstance(exc, click.exceptions.ClickException):
-            exc.show(file=sys.stderr)
-            sys.exit(2)
-        if isinstance(exc, click.exceptions.Exit):
+    except usage_errors as exc:
+        if _common.is_verbose():
+            raise
+        if not exc.format_message().strip():  # bare command: click already printed the help
             sys.exit(exc.exit_code)
-        raise
+        ctx = getattr(exc, "ctx", None)
+        where = f" ({ctx.command_path} --help for usage)" if ctx is not None else ""
+        _common.error_line(f"{exc.format_message()}{where}")
+        sys.exit(2)
+    except exits as exc:
+        sys.exit(getattr(exc, "exit_code", 0))
+    except (typer.Abort, *aborts):
+        _common.error_line("aborted")
+        sys.exit(130)

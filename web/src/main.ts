@@ -340,7 +340,8 @@ function srgbFloat(c: number[] | string | undefined, i: number): [number, number
     return [(v >> 16) & 255, (v >> 8) & 255, v & 255];
   }
   if (Array.isArray(c) && c.length >= 3) {
-    const scale = c.every((v) => v <= 1) ? 255 : 1;
+    // partscale writes sRGB bytes ([r, g, b] integers); fractions in [0, 1] are accepted too
+    const scale = !c.every(Number.isInteger) && c.every((v) => v <= 1) ? 255 : 1;
     return [c[0] * scale, c[1] * scale, c[2] * scale].map((v) => Math.round(v)) as [number, number, number];
   }
   const col = new THREE.Color().setHSL(((i * 0.618034) % 1 + 1) % 1, 0.65, 0.55, THREE.SRGBColorSpace);

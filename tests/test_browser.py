@@ -266,6 +266,9 @@ def test_editor_end_to_end(tmp_path):
         assert abs(r["zoneDragged"]["end"] - r["zone0"]["end"]) > 2 * H
         assert r["dragDiff"] > 0.01 * total
         assert r["revisionAfterDrag"] == 0
+        assert r["apiDuringDrag"] == []  # the preview needs no server round trip
+        assert r["framesDuringDrag"] >= 2  # redrawn as the plane moves...
+        assert r["framesWhileIdle"] == 0  # ...and not at all while nothing changes
 
         # -- Apply: the page's recipe is a valid recipe; the server's object has the new extent
         recipe = Recipe.parse(r["recipe"])

@@ -123,13 +123,27 @@ try {
     await page.selectOption('#units', 'units');
 
     // 3. drag the end plane's handle: the zone and the preview change, the server does not
+    // rendering is on demand: nothing is drawn while nothing changes
+    const framesIdle0 = await page.evaluate(() => window.__partscale.frames);
+    await page.waitForTimeout(600);
+    result.framesWhileIdle = (await page.evaluate(() => window.__partscale.frames)) - framesIdle0;
+
     const h = await page.evaluate(() => window.__partscale.handleScreen('end'));
     result.handle = h;
+    const apiDuringDrag = [];
+    const onRequest = (req) => {
+      if (new URL(req.url()).pathname.startsWith('/api/')) apiDuringDrag.push(req.url());
+    };
+    page.on('request', onRequest);
+    const framesDrag0 = await page.evaluate(() => window.__partscale.frames);
     await page.mouse.move(h.x, h.y);
     await page.mouse.down();
     for (let i = 1; i <= 6; i++) await page.mouse.move(h.x + 10 * i, h.y + 3 * i);
     await page.mouse.up();
     await idle();
+    page.off('request', onRequest);
+    result.apiDuringDrag = apiDuringDrag;
+    result.framesDuringDrag = (await page.evaluate(() => window.__partscale.frames)) - framesDrag0;
     result.zoneDragged = await page.evaluate(() => window.__partscale.zones()[0]);
     const dragged = await shot('dragged.png');
     result.dragDiff = diffPixels(initial, dragged).count;

@@ -317,6 +317,10 @@ def test_oversized_and_foreign_requests_are_refused(client):
     assert client.get("/api/apply").status_code == 405
     # DNS rebinding: a loopback server answers loopback names only
     assert client.get("/api/state", headers={"host": "evil.example"}).status_code == 400
+    assert client.get("/api/state", headers={"host": "evil.example:80"}).status_code == 400
+    assert client.get("/api/state", headers={"host": "[::2]:8000"}).status_code == 400
+    for host in ("localhost:8000", "127.0.0.1", "[::1]:8000"):
+        assert client.get("/api/state", headers={"host": host}).status_code == 200, host
     assert client.app.state.session.revision == 0
 
 

@@ -33,7 +33,6 @@ from typing import Any
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
 from starlette.middleware import Middleware
-from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
 from starlette.responses import JSONResponse, Response
 from starlette.routing import Route
@@ -46,7 +45,7 @@ from .session import EditSession
 STATIC = Path(__file__).parent / "static"
 #: Largest request body accepted (a recipe is a few hundred bytes).
 MAX_BODY = 64 * 1024
-LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "::1", "[::1]"]
+LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "[::1]"]
 
 _MEDIA = {
     ".html": "text/html; charset=utf-8",
@@ -117,6 +116,29 @@ class LimitBody:
         except _BodyTooLarge:
             if not started:
                 await _too_large(self.limit)(scope, receive, send)
+
+
+class HostGuard:
+    """ASGI middleware: 400 unless the Host header names one of ``hosts`` (DNS rebinding guard).
+
+    Unlike a plain ``split(":")``, it reads bracketed IPv6 hosts (``[::1]:8000``) whole.
+    """
+
+    def __init__(self, app: ASGIApp, hosts: list[str]):
+        self.app, self.hosts = app, {h.lower() for h in hosts}
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or "*" in self.hosts:
+            await self.app(scope, receive, send)
+            return
+        raw = dict(scope.get("headers", [])).get(b"host", b"").decode("latin-1").lower()
+        host = raw[: raw.find("]") + 1] if raw.startswith("[") else raw.split(":")[0]
+        if host not in self.hosts:
+            await _error(f"host: expected one of {sorted(self.hosts)}, got {host!r}")(
+                scope, receive, send
+            )
+            return
+        await self.app(scope, receive, send)
 
 
 def _too_large(limit: int) -> Response:
@@ -322,7 +344,7 @@ def create_app(
     hosts = LOOPBACK_HOSTS if allowed_hosts is None else allowed_hosts
     middleware = [
         Middleware(LimitBody, limit=max_body),
-        Middleware(TrustedHostMiddleware, allowed_hosts=hosts),
+        Middleware(HostGuard, hosts=hosts),
     ]
     app = Starlette(routes=routes, middleware=middleware)
     app.state.session = session

@@ -30,6 +30,10 @@ BYTES_PER_VOXEL = 48
 #: An axial slope of the source distance below this counts as "nearest surface point lateral".
 _LATERAL = 0.05
 
+#: A slab scaled by less than this relative amount counts as rigid (error <= 1% of |distance|,
+#: 0.04 voxel at the band's edge): tiles of whole periods are copies, not stretches.
+_RIGID = 0.01
+
 
 def _as_edit(edit: Edit | dict[str, Any]) -> Edit:
     if isinstance(edit, Edit):
@@ -184,7 +188,8 @@ def _recompute_mask(
     the resampled slab. Among those, a voxel keeps its resampled value when that value is provably
     still the distance: the slab grows (scale >= 1, so the inverse map is 1-Lipschitz and old
     distances are lower bounds) and its nearest surface point lies square to the axis (axial slope
-    of the source distance ~ 0), so its distance is carried over unchanged.
+    of the source distance ~ 0), so its distance is carried over unchanged; or, in a tile copy at
+    scale ~1, the ball of its distance lies within its copy (a pure translation).
     """
     lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
     near = np.abs(out_sdf) <= lim
@@ -195,7 +200,7 @@ def _recompute_mask(
         gap = np.where(y < start, start - y, np.where(y > dest, y - dest, 0.0))
         gap = np.maximum(gap - h, 0.0).astype(np.float32)  # one voxel of slack
         affected = near & (np.abs(out_sdf) >= gap[:, None, None])
-    if plan.scale < 1.0 - 1e-9:
+    if plan.scale < 1.0 - _RIGID:
         return affected
     cand = np.nonzero(affected)
     n_src = src_sdf.shape[0]
@@ -222,8 +227,10 @@ def _recompute_mask(
         c = plan.copy[cand[0]]
         room = np.minimum(yy - (start + c * period), start + (c + 1) * period - yy)
         inside = plan.in_slab[cand[0]]
-        ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room)
-        keep &= ~inside | ok_in
+        # a copy at scale ~1 is a translation: inside that ball nothing else changed
+        rigid = abs(plan.scale - 1.0) <= _RIGID
+        ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room) & (keep | rigid)
+        keep = np.where(inside, ok_in, keep)
     mask = np.zeros(out_sdf.shape, bool)
     sel = ~keep
     mask[cand[0][sel], cand[1][sel], cand[2][sel]] = True

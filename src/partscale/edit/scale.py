@@ -130,8 +130,15 @@ def _inner_parts(sdf: np.ndarray, parts: np.ndarray, i_start: float, i_end: floa
     return np.flatnonzero(keep)
 
 
-def _update_parts_info(meta: dict[str, Any], sdf: np.ndarray, parts: np.ndarray, csdf_out):
-    """Recount voxels and bounding boxes of ``meta['parts_info']`` (new parts added by copies)."""
+def _update_parts_info(
+    meta: dict[str, Any], sdf: np.ndarray, parts: np.ndarray, grid: CSDF, copy_of: dict[str, int]
+) -> None:
+    """Recount ``meta['parts_info']`` after an edit, adding an entry for each new (copied) part.
+
+    Entries keep their other keys; ``voxels`` is the number of inside voxels (sdf <= 0) with the
+    part's label and ``bbox`` the world ``[min, max]`` of their centres (None when none is left).
+    A copy's entry is a copy of its original's, with ``index`` and ``copy_of`` set.
+    """
     info = meta.get("parts_info")
     if not isinstance(info, list):
         return
@@ -139,13 +146,12 @@ def _update_parts_info(meta: dict[str, Any], sdf: np.ndarray, parts: np.ndarray,
     inside = sdf <= 0
     lab = np.where(inside, parts.astype(np.int64) + 1, 0)
     counts = np.bincount(lab.reshape(-1), minlength=n + 1)
-    idx = np.arange(1, n + 1)
     objs = ndimage.find_objects(lab, max_label=n)
     by_index = {int(e.get("index", -1)): e for e in info if isinstance(e, dict)}
     for p in range(n):
         entry = by_index.get(p)
         if entry is None:
-            src = meta.get("_copy_of", {}).get(str(p))
+            src = copy_of.get(str(p))
             base = by_index.get(src) if src is not None else None
             entry = _copy.deepcopy(base) if base is not None else {}
             entry["index"] = p
@@ -161,12 +167,10 @@ def _update_parts_info(meta: dict[str, Any], sdf: np.ndarray, parts: np.ndarray,
             lo_i = np.array([s.start for s in sl], float)
             hi_i = np.array([s.stop - 1 for s in sl], float)
             entry["bbox"] = [
-                csdf_out.index_to_world(lo_i).tolist(),
-                csdf_out.index_to_world(hi_i).tolist(),
+                grid.index_to_world(lo_i).tolist(),
+                grid.index_to_world(hi_i).tolist(),
             ]
-    del idx
     info.sort(key=lambda e: e.get("index", -1))
-    meta.pop("_copy_of", None)
 
 
 def _recompute_mask(
@@ -376,16 +380,12 @@ def apply_edit(
     sdf, rgb, parts, extra = _edit_arrays(csdf, r, edit.mode)
     report(0.9, "recording")
     meta = _copy.deepcopy(csdf.meta)
-    if extra.get("copy_of"):
-        meta["_copy_of"] = extra["copy_of"]
+    if isinstance(meta.get("parts_info"), list):
+        # the origin does not change, so world positions of output voxels use csdf's
+        _update_parts_info(meta, sdf, parts, csdf, extra.get("copy_of", {}))
     out = csdf.with_history(
         _history_entry(edit, r, extra, "scale"), sdf=sdf, rgb=rgb, parts=parts, meta=meta
     )
-    if isinstance(out.meta.get("parts_info"), list) or "_copy_of" in out.meta:
-        m = _copy.deepcopy(out.meta)
-        _update_parts_info(m, out.sdf, out.parts, out)
-        m.pop("_copy_of", None)
-        out = out.replace(meta=m)
     report(1.0, "done")
     return out
 

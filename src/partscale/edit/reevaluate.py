@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+from scipy import ndimage
 from skimage import measure
 
 from ..csdf import CSDF
@@ -299,12 +300,15 @@ def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
     tri = np.ascontiguousarray(
         np.concatenate([corners.reshape(-1, 9), centre, radius[:, None] * (1 + 1e-9)], axis=1)
     )
-    # every band voxel of the box relays nearest triangles; half a voxel of slack beyond the band
-    order = np.flatnonzero(np.abs(sub) <= lim + 0.5 * h).astype(np.int64)
+    # band voxels near the targets relay nearest triangles (half a voxel of slack beyond the
+    # band); a voxel farther than the band from every target cannot be on a target's path
+    t_box = t_run[:, box[1], box[2]]
+    reach = ndimage.maximum_filter(t_box.view(np.uint8), size=2 * pad - 1, mode="constant")
+    order = np.flatnonzero((np.abs(sub) <= lim + 0.5 * h) & (reach > 0)).astype(np.int64)
     best_d2 = np.full(sub.size, np.inf)
     best_t = np.full(sub.size, -1, np.int64)
     _propagate(tri, order, np.array(sub.shape, np.int64), best_d2, best_t, npass)
-    tsub = t_run[:, box[1], box[2]].reshape(-1) & (best_t >= 0)
+    tsub = t_box.reshape(-1) & (best_t >= 0)
     fsel = np.flatnonzero(tsub)
     if fsel.size == 0:
         return None

@@ -295,7 +295,7 @@ def _edit_arrays(
     extra: dict[str, Any] = {"scale": plan.scale}
     if naive:
         out_sdf = lerp_layers(src_sdf, plan.xa)
-        out_rgb = np.clip(np.rint(lerp_layers(src_rgb, plan.xa)), 0, 255).astype(np.uint8)
+        out_rgb = lerp_layers(src_rgb, plan.xa)
         ix = np.clip(np.rint(plan.xa), 0, src_parts.shape[0] - 1).astype(np.int64)
         out_parts = src_parts[ix]
     else:

@@ -196,17 +196,24 @@ def _recompute_mask(
     scale ~1, the ball of its distance lies within its copy (a pure translation).
     """
     lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
-    near = np.abs(out_sdf) <= lim
+    mask = np.zeros(out_sdf.shape, bool)
     if mode == "global":
-        affected = near
+        j0, j1 = 0, out_sdf.shape[0]
+        affected = np.abs(out_sdf) <= lim
     else:
-        # distance of each output layer to the zone (0 inside the slab)
+        # distance of each output layer to the zone (0 inside the slab), one voxel of slack;
+        # layers farther from the zone than the band cannot be affected
         gap = np.where(y < start, start - y, np.where(y > dest, y - dest, 0.0))
-        gap = np.maximum(gap - h, 0.0).astype(np.float32)  # one voxel of slack
-        affected = near & (np.abs(out_sdf) >= gap[:, None, None])
+        gap = np.maximum(gap - h, 0.0).astype(np.float32)
+        rows = np.flatnonzero(gap <= lim)
+        j0, j1 = int(rows[0]), int(rows[-1]) + 1
+        a = np.abs(out_sdf[j0:j1])
+        affected = (a <= lim) & (a >= gap[j0:j1, None, None])
     if plan.scale < 1.0 - _RIGID:
-        return affected
+        mask[j0:j1] = affected
+        return mask
     cand = np.nonzero(affected)
+    cand = (cand[0] + j0, cand[1], cand[2])
     n_src = src_sdf.shape[0]
     xa = plan.xa[cand[0]]
     xc = np.clip(xa, 0, n_src - 1)
@@ -235,7 +242,6 @@ def _recompute_mask(
         rigid = abs(plan.scale - 1.0) <= _RIGID
         ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room) & (keep | rigid)
         keep = np.where(inside, ok_in, keep)
-    mask = np.zeros(out_sdf.shape, bool)
     sel = ~keep
     mask[cand[0][sel], cand[1][sel], cand[2][sel]] = True
     return mask

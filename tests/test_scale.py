@@ -293,10 +293,18 @@ def test_stretch_keeps_part_labels_crisp(row):
 
 
 def test_tile_copies_become_new_parts_with_their_info(row):
-    c, _ = row
+    c, boxes = row
+    # the segment stage's facts: bbox of the part's surface, labelled voxels, hull volume
     info = [
-        {"index": i, "voxels": 0, "bbox": None, "color": [10 * i, 0, 0], "name": f"bar {i}"}
-        for i in range(4)
+        {
+            "index": i,
+            "voxels": int((c.parts == i).sum()),
+            "bbox": [list(lo), list(hi)],
+            "hull_volume": W * 0.3 * 0.2,
+            "color": [10 * i, 0, 0],
+            "name": f"bar {i}",
+        }
+        for i, (lo, hi) in enumerate(boxes)
     ]
     c = c.replace(meta={**c.meta, "parts_info": info})
     p = W + G
@@ -309,11 +317,16 @@ def test_tile_copies_become_new_parts_with_their_info(row):
     assert [e.get("copy_of") for e in got] == [None, None, None, None, 1, 1]
     assert [e["name"] for e in got[4:]] == ["bar 1", "bar 1"]
     assert got[4]["color"] == [10, 0, 0]
-    inside = out.sdf <= 0
     for e in got:
-        assert e["voxels"] == int((inside & (out.parts == e["index"])).sum())
-        lo, hi = np.asarray(e["bbox"])
-        assert hi[0] - lo[0] == pytest.approx(W - H, abs=1.01 * H)  # voxel centres in one bar
+        assert e["voxels"] == int((out.parts == e["index"]).sum())
+        assert e["hull_volume"] == pytest.approx(W * 0.3 * 0.2, rel=0.01)
+    # boxes follow the bars: copies one and two periods on, bars 2 and 3 two periods on
+    x_min = [e["bbox"][0][0] for e in got]
+    want = [0, p, 4 * p, 5 * p, 2 * p, 3 * p]
+    assert np.allclose(x_min, want, atol=0.5 * H), (x_min, want)
+    truth = [shapes.box_sdf(world_grid(out), (x, 0, 0), (x + W, 0.3, 0.2)) for x in want]
+    for i, t in enumerate(truth):  # each bar's surface carries its own label
+        assert set(np.unique(out.parts[np.abs(t) < 0.5 * H]).tolist()) == {i}
 
 
 def test_progress_is_reported_and_monotone(ball):

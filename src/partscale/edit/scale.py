@@ -131,46 +131,66 @@ def _inner_parts(sdf: np.ndarray, parts: np.ndarray, i_start: float, i_end: floa
 
 
 def _update_parts_info(
-    meta: dict[str, Any], sdf: np.ndarray, parts: np.ndarray, grid: CSDF, copy_of: dict[str, int]
+    meta: dict[str, Any],
+    parts: np.ndarray,
+    r: dict[str, Any],
+    mode: str,
+    scale: float,
+    copy_of: dict[int, tuple[int, int]],
 ) -> None:
-    """Recount ``meta['parts_info']`` after an edit, adding an entry for each new (copied) part.
+    """Carry ``meta['parts_info']`` (the segment stage's part facts) through an edit.
 
-    Entries keep their other keys; ``voxels`` is the number of inside voxels (sdf <= 0) with the
-    part's label and ``bbox`` the world ``[min, max]`` of their centres (None when none is left).
-    A copy's entry is a copy of its original's, with ``index`` and ``copy_of`` set.
+    ``voxels`` is recounted; ``bbox`` (world box of the part's surface patch) is mapped along the
+    axis by the edit itself; ``hull_volume`` is scaled with parts lying wholly inside the zone (all
+    parts in global mode); other keys are kept. Each new (copied) part gets a copy of its
+    original's entry with ``index`` and ``copy_of`` set.
     """
     info = meta.get("parts_info")
     if not isinstance(info, list):
         return
+    ax, s, e, d = r["axis"], r["start"], r["end"], r["dest_snapped"]
+    shift = d - e
+    n_copies = tile_count(e - s, d - s) if mode == "tile" else 1
+    period = (d - s) / n_copies
+    lo = r["lo"]
+
+    def forward(x: float, copy: int) -> float:
+        if mode == "global":
+            return lo + (x - lo) * scale
+        if x < s:
+            return x
+        if x > e:
+            return x + shift
+        return s + copy * period + (x - s) * scale
+
     n = int(parts.max()) + 1 if parts.size and parts.max() >= 0 else 0
-    inside = sdf <= 0
-    lab = np.where(inside, parts.astype(np.int64) + 1, 0)
-    counts = np.bincount(lab.reshape(-1), minlength=n + 1)
-    objs = ndimage.find_objects(lab, max_label=n)
-    by_index = {int(e.get("index", -1)): e for e in info if isinstance(e, dict)}
+    counts = np.bincount(parts[parts >= 0].ravel(), minlength=n)
+    by_index = {int(x.get("index", -1)): x for x in info if isinstance(x, dict)}
+    originals = {p: _copy.deepcopy(x) for p, x in by_index.items()}
     for p in range(n):
+        src, m = copy_of.get(p, (p, 0))
+        base = originals.get(src)
+        if base is None:
+            continue
         entry = by_index.get(p)
         if entry is None:
-            src = copy_of.get(str(p))
-            base = by_index.get(src) if src is not None else None
-            entry = _copy.deepcopy(base) if base is not None else {}
+            entry = _copy.deepcopy(base)
             entry["index"] = p
-            if src is not None:
-                entry["copy_of"] = src
+            entry["copy_of"] = src
             info.append(entry)
-            by_index[p] = entry
-        entry["voxels"] = int(counts[p + 1])
-        sl = objs[p] if p < len(objs) else None
-        if sl is None:
-            entry["bbox"] = None
-        else:
-            lo_i = np.array([s.start for s in sl], float)
-            hi_i = np.array([s.stop - 1 for s in sl], float)
-            entry["bbox"] = [
-                grid.index_to_world(lo_i).tolist(),
-                grid.index_to_world(hi_i).tolist(),
-            ]
-    info.sort(key=lambda e: e.get("index", -1))
+        entry["voxels"] = int(counts[p]) if p < len(counts) else 0
+        box = base.get("bbox")
+        inner = box is not None and s < box[0][ax] and box[1][ax] < e
+        if box is not None:
+            new_box = _copy.deepcopy(box)
+            # a part crossing the zone runs through every copy: its end lies in the last one
+            last = m if inner else n_copies - 1
+            new_box[0][ax] = forward(box[0][ax], m)
+            new_box[1][ax] = forward(box[1][ax], last)
+            entry["bbox"] = new_box
+        if "hull_volume" in base and (inner or mode == "global"):
+            entry["hull_volume"] = base["hull_volume"] * scale
+    info.sort(key=lambda x: x.get("index", -1))
 
 
 def _recompute_mask(
@@ -255,12 +275,12 @@ def _renumber_copies(
     *,
     i_start: float,
     i_end: float,
-) -> dict[str, int]:
+) -> dict[int, tuple[int, int]]:
     """Give copies ``m >= 1`` of the parts lying wholly inside the zone new indices (in place).
 
     New indices follow the existing ones: copy ``m`` of inner part ``p`` (rank ``r`` among the
     ``q`` inner parts) becomes ``P + (m - 1) q + r``. Parts that cross the zone's planes run
-    continuously through every copy and keep their index. Returns ``{new: original}``.
+    continuously through every copy and keep their index. Returns ``{new: (original, m)}``.
     """
     inner = _inner_parts(src_sdf, src_parts, i_start, i_end)
     n_copies = int(plan.copy.max()) + 1
@@ -273,7 +293,7 @@ def _renumber_copies(
             f"tile: expected at most {np.iinfo(np.int16).max + 1} parts, got "
             f"{base + (n_copies - 1) * q}"
         )
-    copy_of: dict[str, int] = {}
+    copy_of: dict[int, tuple[int, int]] = {}
     for m in range(1, n_copies):
         layers = np.flatnonzero(plan.in_slab & (plan.copy == m))
         if layers.size == 0:
@@ -282,7 +302,7 @@ def _renumber_copies(
         new = base + (m - 1) * q + np.arange(q)
         lut[inner + 1] = new
         for p, nw in zip(inner.tolist(), new.tolist(), strict=True):
-            copy_of[str(nw)] = p
+            copy_of[nw] = (p, m)
         block = out_parts[layers]
         out_parts[layers] = lut[block.astype(np.int64) + 1].astype(np.int16)
     return copy_of
@@ -387,8 +407,7 @@ def apply_edit(
     report(0.9, "recording")
     meta = _copy.deepcopy(csdf.meta)
     if isinstance(meta.get("parts_info"), list):
-        # the origin does not change, so world positions of output voxels use csdf's
-        _update_parts_info(meta, sdf, parts, csdf, extra.get("copy_of", {}))
+        _update_parts_info(meta, parts, r, edit.mode, extra["scale"], extra.get("copy_of", {}))
     out = csdf.with_history(
         _history_entry(edit, r, extra, "scale"), sdf=sdf, rgb=rgb, parts=parts, meta=meta
     )

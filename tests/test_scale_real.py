@@ -182,3 +182,19 @@ def test_no_colour_seam_between_tiles_of_a_periodic_pattern():
     d = out.meta["history"][-1]["to_snapped"]
     seam, elsewhere = seam_colour_check(out, 0, [s + m * (d - s) / 3 for m in range(4)])
     assert elsewhere > 0 and seam <= elsewhere, (seam, elsewhere)
+
+
+def test_table_outside_the_zone_is_rigid(table):
+    h = table.voxel_size
+    start, end, dest = -0.6, 0.6, 1.3
+    x = table.axis_coords(0)
+    for mode, ok in (("stretch", True), ("tile", True), ("global", False)):
+        out = scale(table, axis="x", zone=(start, end), to=dest, mode=mode)
+        shift = out.shape[0] - table.shape[0]
+        before = np.flatnonzero(x < start - h)
+        after = np.flatnonzero(x > end + h)
+        a = np.concatenate([table.sdf[before], table.sdf[after]])
+        b = np.concatenate([out.sdf[before], out.sdf[after + shift]])
+        band = np.abs(a) <= 3 * h
+        p99 = np.percentile(np.abs(a - b)[band], 99) / h
+        assert (p99 <= 0.05) == ok, (mode, p99)

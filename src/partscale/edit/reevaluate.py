@@ -24,6 +24,7 @@ import numpy as np
 from scipy import ndimage
 from skimage import measure
 
+from .._util import keyword_options
 from ..csdf import CSDF
 from ..progress import ProgressCallback, resolve
 
@@ -228,8 +229,10 @@ def reevaluate_arrays(
     rgb : (X, Y, Z, 3) uint8, writeable
     parts : (X, Y, Z) int16, writeable
     voxel_size : float
-    mask : (X, Y, Z) bool
-        Voxels to recompute; those with ``|sdf| > band`` voxels are left as they are.
+    mask : (X, Y, Z) bool or uint8
+        Voxels to recompute; those with ``|sdf| > band`` voxels are left as they are. As uint8,
+        code 2 marks voxels whose current |sdf| is known to be an upper bound of the distance:
+        they keep it (and their colour and part) where it is smaller than the recomputed one.
     band : float
         Half-width of the band, in voxels.
 
@@ -240,7 +243,8 @@ def reevaluate_arrays(
     """
     h = float(voxel_size)
     lim = band * h
-    target = mask & (np.abs(sdf) <= lim)
+    mask = np.asarray(mask)
+    target = (mask > 0) & (np.abs(sdf) <= lim)
     layers = np.flatnonzero(target.any(axis=(1, 2)))
     if layers.size == 0:
         return 0
@@ -264,6 +268,13 @@ def reevaluate_arrays(
     gi = np.concatenate([f[0] for f in found])
     new = np.concatenate([f[1] for f in found])
     cp = np.concatenate([f[2] for f in found])
+    if mask.dtype == np.uint8:
+        # code 2: the old value is an upper bound of the distance; keep it where it is smaller
+        old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
+        capped = (mask[gi[:, 0], gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
+        if capped.any():
+            keep = ~capped
+            gi, new, cp = gi[keep], new[keep], cp[keep]
     col = _trilinear_rgb(rgb, cp)
     # colours and parts are all read before any is written (no voxel sees another's new colour)
     near = np.rint(cp).astype(np.int64)
@@ -322,6 +333,7 @@ def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
     return idx + np.asarray(lo), new, cp
 
 
+@keyword_options
 def reevaluate(
     csdf: CSDF,
     mask: np.ndarray | None = None,

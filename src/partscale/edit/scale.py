@@ -216,7 +216,7 @@ def _recompute_mask(
     scale ~1, the ball of its distance lies within its copy (a pure translation).
     """
     lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
-    mask = np.zeros(out_sdf.shape, bool)
+    mask = np.zeros(out_sdf.shape, np.uint8)
     if mode == "global":
         j0, j1 = 0, out_sdf.shape[0]
         affected = np.abs(out_sdf) <= lim
@@ -229,9 +229,6 @@ def _recompute_mask(
         j0, j1 = int(rows[0]), int(rows[-1]) + 1
         a = np.abs(out_sdf[j0:j1])
         affected = (a <= lim) & (a >= gap[j0:j1, None, None])
-    if plan.scale < 1.0 - _RIGID:
-        mask[j0:j1] = affected
-        return mask
     cand = np.nonzero(affected)
     cand = (cand[0] + j0, cand[1], cand[2])
     n_src = src_sdf.shape[0]
@@ -248,6 +245,14 @@ def _recompute_mask(
         )
         np.maximum(slope, np.abs(g), out=slope)
     keep = slope <= _LATERAL
+    if plan.scale < 1.0 - _RIGID:
+        # A shrinking slab can bring surface closer: everything affected is recomputed. Outside
+        # the slab, a voxel whose nearest point is square to the axis still has that point, so
+        # its old distance caps the new one (code 2): the exact value wherever nothing came
+        # closer, immune to the facets' chamfer of sharp edges.
+        code = np.where(keep & ~plan.in_slab[cand[0]], 2, 1).astype(np.uint8)
+        mask[cand] = code
+        return mask
     if mode == "tile":
         # Copies are not one monotone map: a slab voxel keeps its value only if the ball of its
         # distance stays inside its own copy (and it is not in a seam blend). Voxels outside the
@@ -263,7 +268,7 @@ def _recompute_mask(
         ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room) & (keep | rigid)
         keep = np.where(inside, ok_in, keep)
     sel = ~keep
-    mask[cand[0][sel], cand[1][sel], cand[2][sel]] = True
+    mask[cand[0][sel], cand[1][sel], cand[2][sel]] = 1
     return mask
 
 

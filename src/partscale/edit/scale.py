@@ -22,7 +22,7 @@ from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from .recipe import AXES, MODES, Edit, Recipe, tile_count
 from .reevaluate import BAND_VOXELS, reevaluate_arrays
-from .resample import Plan, apply_plan, lerp_layers, make_plan
+from .resample import SEAM_VOXELS, Plan, apply_plan, lerp_layers, make_plan
 
 #: Peak working bytes per output voxel of an edit (output arrays, float temporaries, masks).
 BYTES_PER_VOXEL = 48
@@ -217,6 +217,21 @@ def _recompute_mask(
     """
     lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
     mask = np.zeros(out_sdf.shape, np.uint8)
+    n_copies = int(plan.copy.max()) + 1
+    if mode == "tile" and abs(plan.scale - 1.0) <= _RIGID:
+        # Copies at scale ~1 are translations of the slab, and the first and last copy continue
+        # the content before and after the zone exactly: a voxel's neighbourhood is unchanged
+        # unless the ball of its distance reaches an internal seam (or it lies in a blend).
+        period = (dest - start) / n_copies
+        seams = start + period * np.arange(1, n_copies)
+        if seams.size == 0:
+            return mask
+        to_seam = np.abs(y[:, None] - seams[None, :]).min(axis=1)
+        reach = np.maximum(to_seam - SEAM_VOXELS * h, 0.0).astype(np.float32)
+        rows = np.flatnonzero(reach <= lim)
+        a = np.abs(out_sdf[rows])
+        mask[rows] = (a <= lim) & (a >= reach[rows, None, None])
+        return mask
     if mode == "global":
         j0, j1 = 0, out_sdf.shape[0]
         affected = np.abs(out_sdf) <= lim

@@ -35,6 +35,7 @@ TOP = ((0.0, 0.7, 0.0), (1.2, 0.78, 0.6))
 LEGS = [((x, 0.0, z), (x + 0.08, 0.7, z + 0.08)) for x in (0.05, 1.07) for z in (0.05, 0.47)]
 PART_COLOURS = [[230, 80, 80], [80, 200, 90], [70, 110, 230], [230, 200, 60], [180, 90, 220]]
 ZONE = {"axis": "x", "mode": "stretch", "start": 0.4, "end": 0.8, "dest": 1.2}
+ZONE2 = {"axis": "y", "mode": "stretch", "start": 0.2, "end": 0.5, "dest": 0.7}
 
 
 def find_tools() -> tuple[str, str]:
@@ -233,6 +234,7 @@ def test_editor_end_to_end(tmp_path):
             updateReference=update,
             remapCases=cases,
             zone=ZONE,
+            zone2=ZONE2,
         )
         # -- loads cleanly and draws the object like the reference (pixelmatch 0.1, <= 1 %)
         assert r["errors"] == [], r["errors"]
@@ -264,6 +266,9 @@ def test_editor_end_to_end(tmp_path):
         assert abs(r["zoneDragged"]["end"] - r["zone0"]["end"]) > 2 * H
         assert r["dragDiff"] > 0.01 * total
         assert r["revisionAfterDrag"] == 0
+        assert r["apiDuringDrag"] == []  # the preview needs no server round trip
+        assert r["framesDuringDrag"] >= 2  # redrawn as the plane moves...
+        assert r["framesWhileIdle"] == 0  # ...and not at all while nothing changes
 
         # -- Apply: the page's recipe is a valid recipe; the server's object has the new extent
         recipe = Recipe.parse(r["recipe"])
@@ -281,6 +286,13 @@ def test_editor_end_to_end(tmp_path):
         assert r["undone"]["can_redo"] and not r["undone"]["can_undo"]
         assert r["undoneDiff"] <= 0.01 * total
         assert abs(session.redo_stack[-1].surface_bounds()[1][0] - 1.6) <= 0.25 * H
+
+    # -- two zones in one recipe (x, then y): previewed together, applied in order
+    assert [e["axis"] for e in Recipe.parse(r["recipe2"]).to_json()["edits"]] == ["x", "y"]
+    assert r["twoZoneDiff"] > 0.02 * total
+    lo, hi = np.array(r["applied2"]["solid_bounds"])
+    assert abs(hi[0] - 1.6) <= 0.25 * H and abs(hi[1] - (TOP[1][1] + 0.2)) <= 0.25 * H
+    assert len(r["applied2"]["history"]) == 2
 
     # -- Export downloads a GLB that trimesh loads with vertex colours
     assert r["download"]["suggested"] == "table.edited.glb"

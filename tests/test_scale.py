@@ -271,3 +271,69 @@ def test_recipe_replay_is_bit_for_bit(ball):
         assert np.array_equal(getattr(out, name), getattr(again, name)), name
     one = apply_edit(ball, recipe[0])
     assert np.array_equal(one.sdf, apply_recipe(ball, recipe[:1]).sdf)
+
+
+# -- parts -------------------------------------------------------------------------------------
+
+
+def piece_labels(c):
+    """For each connected solid piece, the set of part labels of its inside voxels."""
+    lab, n = ndimage.label(c.sdf <= 0)
+    return [set(np.unique(c.parts[lab == i]).tolist()) for i in range(1, n + 1)]
+
+
+def test_stretch_keeps_part_labels_crisp(row):
+    c, _ = row
+    out = scale(c, axis="x", zone=(0.05, 0.27), to=0.413)  # through bars 0, 1 and 2
+    assert set(np.unique(out.parts).tolist()) == {0, 1, 2, 3}
+    assert piece_labels(out) == [{0}, {1}, {2}, {3}]
+    # along every row of voxels the label changes exactly where it did before: three times
+    changes = (np.diff(out.parts.astype(int), axis=0) != 0).sum(axis=0)
+    assert changes.max() == 3
+
+
+def test_tile_copies_become_new_parts_with_their_info(row):
+    c, boxes = row
+    # the segment stage's facts: bbox of the part's surface, labelled voxels, hull volume
+    info = [
+        {
+            "index": i,
+            "voxels": int((c.parts == i).sum()),
+            "bbox": [list(lo), list(hi)],
+            "hull_volume": W * 0.3 * 0.2,
+            "color": [10 * i, 0, 0],
+            "name": f"bar {i}",
+        }
+        for i, (lo, hi) in enumerate(boxes)
+    ]
+    c = c.replace(meta={**c.meta, "parts_info": info})
+    p = W + G
+    start, end = W + G / 2, W + G / 2 + p  # one period around bar 1
+    out = scale(c, axis="x", zone=(start, end), to=end + 2 * p, mode="tile")
+    assert out.n_parts == 6
+    assert piece_labels(out) == [{0}, {1}, {4}, {5}, {2}, {3}]
+    got = out.meta["parts_info"]
+    assert [e["index"] for e in got] == list(range(6))
+    assert [e.get("copy_of") for e in got] == [None, None, None, None, 1, 1]
+    assert [e["name"] for e in got[4:]] == ["bar 1", "bar 1"]
+    assert got[4]["color"] == [10, 0, 0]
+    for e in got:
+        assert e["voxels"] == int((out.parts == e["index"]).sum())
+        assert e["hull_volume"] == pytest.approx(W * 0.3 * 0.2, rel=0.01)
+    # boxes follow the bars: copies one and two periods on, bars 2 and 3 two periods on
+    x_min = [e["bbox"][0][0] for e in got]
+    want = [0, p, 4 * p, 5 * p, 2 * p, 3 * p]
+    assert np.allclose(x_min, want, atol=0.5 * H), (x_min, want)
+    truth = [shapes.box_sdf(world_grid(out), (x, 0, 0), (x + W, 0.3, 0.2)) for x in want]
+    for i, t in enumerate(truth):  # each bar's surface carries its own label
+        assert set(np.unique(out.parts[np.abs(t) < 0.5 * H]).tolist()) == {i}
+
+
+def test_progress_is_reported_and_monotone(ball):
+    seen = []
+    apply_recipe(
+        ball,
+        [{"axis": "x", "zone": [-0.1, 0.1], "to": 0.2}, {"axis": "y", "zone": [0, 0.2], "to": 0.4}],
+        progress=lambda f, m: seen.append(f),
+    )
+    assert seen[-1] == 1.0 and seen == sorted(seen) and len(seen) >= 4

@@ -182,3 +182,43 @@ def test_no_colour_seam_between_tiles_of_a_periodic_pattern():
     d = out.meta["history"][-1]["to_snapped"]
     seam, elsewhere = seam_colour_check(out, 0, [s + m * (d - s) / 3 for m in range(4)])
     assert elsewhere > 0 and seam <= elsewhere, (seam, elsewhere)
+
+
+def test_table_outside_the_zone_is_rigid(table):
+    h = table.voxel_size
+    start, end, dest = -0.6, 0.6, 1.3
+    x = table.axis_coords(0)
+    for mode, ok in (("stretch", True), ("tile", True), ("global", False)):
+        out = scale(table, axis="x", zone=(start, end), to=dest, mode=mode)
+        shift = out.shape[0] - table.shape[0]
+        before = np.flatnonzero(x < start - h)
+        after = np.flatnonzero(x > end + h)
+        a = np.concatenate([table.sdf[before], table.sdf[after]])
+        b = np.concatenate([out.sdf[before], out.sdf[after + shift]])
+        band = np.abs(a) <= 3 * h
+        p99 = np.percentile(np.abs(a - b)[band], 99) / h
+        assert (p99 <= 0.05) == ok, (mode, p99)
+
+
+@pytest.mark.parametrize("mode", ["stretch", "tile"])
+def test_bookcase_distances_around_the_slab_match_a_full_recomputation(bookcase, mode):
+    # The selective re-evaluation (only where something could have changed) against a
+    # re-evaluation of the whole band of the final surface; the naive baseline fails it.
+    from partscale.edit import naive_edit, reevaluate
+
+    thick, starts = boards(bookcase)
+    s = starts[0] + thick[0] / 2
+    e = s + float(np.mean(np.diff(starts)))
+    edit = {"axis": "y", "zone": [s, e], "to": s + 2.3 * (e - s), "mode": mode}
+    h = bookcase.voxel_size
+    for which, out, ok in (
+        ("ours", scale(bookcase, axis="y", zone=(s, e), to=edit["to"], mode=mode), True),
+        ("naive", naive_edit(bookcase, edit), False),
+    ):
+        ref = reevaluate(out)
+        y = out.axis_coords(1)
+        d = out.meta["history"][-1]["to_snapped"]
+        near = ((y >= s - 3 * h) & (y <= d + 3 * h))[None, :, None] & (np.abs(ref.sdf) <= 3 * h)
+        err = np.abs(out.sdf - ref.sdf)[near] / h
+        med, p99 = np.median(err), np.percentile(err, 99)
+        assert (med <= 0.05 and p99 <= 0.5) == ok, (which, med, p99)

@@ -20,7 +20,7 @@ from starlette.testclient import TestClient
 
 from partscale import csdf as csdf_mod
 from partscale import shapes
-from partscale.serve import MAX_BODY, create_app, edited_path
+from partscale.serve import MAX_BODY, create_app, edited_path, encode_grid
 from partscale.serve.app import STATIC
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -126,6 +126,20 @@ def test_grid_is_rgba_half_in_grid_order(client, box_file):
     np.testing.assert_allclose(g[..., :3], c.rgb / 255, atol=5e-4)
     parts = np.frombuffer(client.get("/api/parts").content, "<i2").reshape(X, Y, Z)
     assert (parts == -1).all()
+
+
+def test_grid_encoding_is_numpys_float16_bit_for_bit():
+    rng = np.random.default_rng(1)
+    scale = 10.0 ** rng.integers(-9, 7, size=(8, 9, 10))
+    sdf = rng.normal(size=(8, 9, 10)) * scale  # subnormal, normal and overflowing halves
+    sdf.flat[:6] = [0.0, -0.0, 65504.0, 65520.0, 2.98e-8, -1e6]
+    rgb = rng.integers(0, 256, size=(8, 9, 10, 3), dtype=np.uint8)
+    c = csdf_mod.make(sdf, rgb, voxel_size=1.0)
+    g = np.frombuffer(encode_grid(c), "<u2").reshape(8, 9, 10, 4)
+    with np.errstate(over="ignore"):
+        want = c.sdf.astype("<f2").view("<u2")
+    assert np.array_equal(g[..., 3], want)
+    assert np.array_equal(g[..., :3], (rgb / 255.0).astype("<f2").view("<u2"))
 
 
 # -- apply, undo, redo ------------------------------------------------------------------------
@@ -303,6 +317,10 @@ def test_oversized_and_foreign_requests_are_refused(client):
     assert client.get("/api/apply").status_code == 405
     # DNS rebinding: a loopback server answers loopback names only
     assert client.get("/api/state", headers={"host": "evil.example"}).status_code == 400
+    assert client.get("/api/state", headers={"host": "evil.example:80"}).status_code == 400
+    assert client.get("/api/state", headers={"host": "[::2]:8000"}).status_code == 400
+    for host in ("localhost:8000", "127.0.0.1", "[::1]:8000"):
+        assert client.get("/api/state", headers={"host": host}).status_code == 200, host
     assert client.app.state.session.revision == 0
 
 

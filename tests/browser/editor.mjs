@@ -123,13 +123,27 @@ try {
     await page.selectOption('#units', 'units');
 
     // 3. drag the end plane's handle: the zone and the preview change, the server does not
+    // rendering is on demand: nothing is drawn while nothing changes
+    const framesIdle0 = await page.evaluate(() => window.__partscale.frames);
+    await page.waitForTimeout(600);
+    result.framesWhileIdle = (await page.evaluate(() => window.__partscale.frames)) - framesIdle0;
+
     const h = await page.evaluate(() => window.__partscale.handleScreen('end'));
     result.handle = h;
+    const apiDuringDrag = [];
+    const onRequest = (req) => {
+      if (new URL(req.url()).pathname.startsWith('/api/')) apiDuringDrag.push(req.url());
+    };
+    page.on('request', onRequest);
+    const framesDrag0 = await page.evaluate(() => window.__partscale.frames);
     await page.mouse.move(h.x, h.y);
     await page.mouse.down();
     for (let i = 1; i <= 6; i++) await page.mouse.move(h.x + 10 * i, h.y + 3 * i);
     await page.mouse.up();
     await idle();
+    page.off('request', onRequest);
+    result.apiDuringDrag = apiDuringDrag;
+    result.framesDuringDrag = (await page.evaluate(() => window.__partscale.frames)) - framesDrag0;
     result.zoneDragged = await page.evaluate(() => window.__partscale.zones()[0]);
     const dragged = await shot('dragged.png');
     result.dragDiff = diffPixels(initial, dragged).count;
@@ -162,9 +176,35 @@ try {
       result.undone = await page.evaluate(() => window.__partscale.state());
       const undoneShot = await shot('undone.png');
       result.undoneDiff = diffPixels(initial, undoneShot).count;
+
+      // 6. two zones in one recipe: the same x zone, then one along y
+      if (args.zone2) {
+        const setZone = async (zz) => {
+          await page.selectOption('#axis', zz.axis);
+          await page.selectOption('#mode', zz.mode ?? 'stretch');
+          for (const [id, v] of [['#pos-start', zz.start], ['#pos-end', zz.end], ['#pos-dest', zz.dest]]) {
+            await page.fill(id, String(v));
+            await page.dispatchEvent(id, 'change');
+          }
+        };
+        await setZone(z);
+        await page.click('#add-zone');
+        await setZone(args.zone2);
+        await idle();
+        result.recipe2 = await page.evaluate(() => window.__partscale.recipe());
+        const two = await shot('two-zones.png');
+        result.twoZoneDiff = diffPixels(initial, two).count;
+        await page.click('#apply');
+        await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.undone.revision, { timeout: 60000 });
+        await idle();
+        result.applied2 = await page.evaluate(() => window.__partscale.state());
+        await page.click('#undo');
+        await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.applied2.revision, { timeout: 60000 });
+        await idle();
+      }
     }
 
-    // 6. export the mesh: a browser download
+    // 7. export the mesh: a browser download
     const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-mesh')]);
     const glb = join(args.out, 'export.glb');
     await download.saveAs(glb);

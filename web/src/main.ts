@@ -257,6 +257,28 @@ function updateScene() {
   requestRender();
 }
 
+/** The valid zones after the active one on its axis: they move its planes in the preview. */
+function laterOnAxis(): Zone[] {
+  const axis = zones[active]?.axis;
+  const h = voxel();
+  return resolvedZones()
+    .slice(active + 1)
+    .filter((z) => z.axis === axis && zoneProblem(z, h) === null);
+}
+
+/** Active zone's coordinate -> where the preview shows it (through the later zones). */
+function toPreview(v: number): number {
+  for (const z of laterOnAxis()) v = forwardCoordinate(v, z);
+  return v;
+}
+
+/** Preview coordinate -> the active zone's coordinate (the later zones' maps, last first). */
+function fromPreview(v: number): number {
+  const later = laterOnAxis();
+  for (let i = later.length - 1; i >= 0; i--) v = sourceCoordinate(v, later[i]);
+  return v;
+}
+
 function layoutPlanes(box: THREE.Box3) {
   const z = zones[active];
   planeGroup.visible = !!z;
@@ -269,7 +291,7 @@ function layoutPlanes(box: THREE.Box3) {
   for (const name of PLANES) {
     const plane = planeMeshes[name];
     const pos = centre.clone();
-    pos.setComponent(a, z[name]);
+    pos.setComponent(a, toPreview(name === 'dest' ? resolvedZones()[active].dest : z[name]));
     plane.position.copy(pos);
     // PlaneGeometry lies in xy with normal +z: turn its normal onto the axis
     plane.rotation.set(0, 0, 0);
@@ -318,7 +340,8 @@ function srgbFloat(c: number[] | string | undefined, i: number): [number, number
     return [(v >> 16) & 255, (v >> 8) & 255, v & 255];
   }
   if (Array.isArray(c) && c.length >= 3) {
-    const scale = c.every((v) => v <= 1) ? 255 : 1;
+    // partscale writes sRGB bytes ([r, g, b] integers); fractions in [0, 1] are accepted too
+    const scale = !c.every(Number.isInteger) && c.every((v) => v <= 1) ? 255 : 1;
     return [c[0] * scale, c[1] * scale, c[2] * scale].map((v) => Math.round(v)) as [number, number, number];
   }
   const col = new THREE.Color().setHSL(((i * 0.618034) % 1 + 1) % 1, 0.65, 0.55, THREE.SRGBColorSpace);
@@ -626,7 +649,9 @@ renderer.domElement.addEventListener('pointerdown', (e) => {
   const name = hit.object.userData.plane as PlaneName;
   const z = zones[active];
   const axis = new THREE.Vector3().setComponent(AXES.indexOf(z.axis), 1);
-  drag = { name, origin: hit.point.clone(), axis, value0: z[name] };
+  const a = AXES.indexOf(z.axis);
+  // the drag runs in preview space; the plane's own coordinate comes back through fromPreview
+  drag = { name, origin: hit.point.clone(), axis, value0: planeMeshes[name].position.getComponent(a) };
   controls.enabled = false;
   renderer.domElement.setPointerCapture(e.pointerId);
   e.preventDefault();
@@ -639,7 +664,7 @@ renderer.domElement.addEventListener('pointermove', (e) => {
   // keep the zone one apply_recipe accepts: inside the solid, two voxels thick, dest past start
   const z = resolvedZones()[active];
   const h = voxel();
-  let v = drag.value0 + s;
+  let v = fromPreview(drag.value0 + s);
   if (drag.name === 'start') v = Math.max(z.lo, Math.min(v, z.end - 2 * h, z.dest - h));
   else if (drag.name === 'end') v = Math.min(z.hi, Math.max(v, z.start + 2 * h));
   else v = Math.max(v, z.start + h);

@@ -21,8 +21,10 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+from scipy import ndimage
 from skimage import measure
 
+from .._util import keyword_options
 from ..csdf import CSDF
 from ..progress import ProgressCallback, resolve
 
@@ -227,8 +229,10 @@ def reevaluate_arrays(
     rgb : (X, Y, Z, 3) uint8, writeable
     parts : (X, Y, Z) int16, writeable
     voxel_size : float
-    mask : (X, Y, Z) bool
-        Voxels to recompute; those with ``|sdf| > band`` voxels are left as they are.
+    mask : (X, Y, Z) bool or uint8
+        Voxels to recompute; those with ``|sdf| > band`` voxels are left as they are. As uint8,
+        code 2 marks voxels whose current |sdf| is known to be an upper bound of the distance:
+        they keep it (and their colour and part) where it is smaller than the recomputed one.
     band : float
         Half-width of the band, in voxels.
 
@@ -239,23 +243,67 @@ def reevaluate_arrays(
     """
     h = float(voxel_size)
     lim = band * h
-    target = mask & (np.abs(sdf) <= lim)
-    if not target.any():
+    mask = np.asarray(mask)
+    target = (mask > 0) & (np.abs(sdf) <= lim)
+    layers = np.flatnonzero(target.any(axis=(1, 2)))
+    if layers.size == 0:
         return 0
-    # the box around the target voxels that holds every surface point within ``band`` of them
-    nz_ = [
-        np.flatnonzero(target.any(axis=tuple(a for a in range(3) if a != ax))) for ax in range(3)
-    ]
     pad = int(np.ceil(band)) + 2
-    lo = [max(int(ix[0]) - pad, 0) for ix in nz_]
-    hi = [min(int(ix[-1]) + pad + 1, sdf.shape[a]) for a, ix in enumerate(nz_)]
+    # Targets cluster at the zone's planes and the tile seams: one box per cluster of layers
+    # (along axis 0) instead of one box spanning them all. Every box reads the unchanged field;
+    # all writes happen at the end, so the result does not depend on the order of the boxes.
+    breaks = np.flatnonzero(np.diff(layers) > 2 * pad + 1)
+    runs = np.split(layers, breaks + 1)
+    found = []
+    for run in runs:
+        a0 = max(int(run[0]) - pad, 0)
+        a1 = min(int(run[-1]) + pad + 1, sdf.shape[0])
+        t_run = np.zeros_like(target[a0:a1])
+        t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] : run[-1] + 1]
+        got = _solve_box(sdf, t_run, a0, h, lim, pad, npass)
+        if got is not None:
+            found.append(got)
+    if not found:
+        return 0
+    gi = np.concatenate([f[0] for f in found])
+    new = np.concatenate([f[1] for f in found])
+    cp = np.concatenate([f[2] for f in found])
+    if mask.dtype == np.uint8:
+        # code 2: the old value is an upper bound of the distance; keep it where it is smaller
+        old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
+        capped = (mask[gi[:, 0], gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
+        if capped.any():
+            keep = ~capped
+            gi, new, cp = gi[keep], new[keep], cp[keep]
+    col = _trilinear_rgb(rgb, cp)
+    # colours and parts are all read before any is written (no voxel sees another's new colour)
+    near = np.rint(cp).astype(np.int64)
+    for a in range(3):
+        np.clip(near[:, a], 0, sdf.shape[a] - 1, out=near[:, a])
+    new_parts = parts[near[:, 0], near[:, 1], near[:, 2]].copy()
+    sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = new
+    rgb[gi[:, 0], gi[:, 1], gi[:, 2]] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
+    parts[gi[:, 0], gi[:, 1], gi[:, 2]] = new_parts
+    return len(gi)
+
+
+def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
+    """Distances of the targets ``t_run`` (layers ``a0 ...`` of ``sdf``) to the zero level set.
+
+    Returns ``(gi (N, 3) int64 grid indices, new sdf (N,) float32, closest points (N, 3) float64
+    in continuous grid indices)`` or None.
+    """
+    # the box around the target voxels that holds every surface point within the band of them
+    nz_ = [np.flatnonzero(t_run.any(axis=tuple(b for b in range(3) if b != ax))) for ax in range(3)]
+    lo = [a0] + [max(int(nz_[ax][0]) - pad, 0) for ax in (1, 2)]
+    hi = [a0 + t_run.shape[0]] + [min(int(nz_[ax][-1]) + pad + 1, sdf.shape[ax]) for ax in (1, 2)]
     box = tuple(slice(lo[a], hi[a]) for a in range(3))
     sub = np.array(sdf[box], dtype=np.float32)
     if min(sub.shape) < 2 or not ((sub <= 0).any() and (sub > 0).any()):
-        return 0
+        return None
     verts, faces, _n, _v = measure.marching_cubes(sub, 0.0, allow_degenerate=False)
     if len(faces) == 0:
-        return 0
+        return None
     corners = verts.astype(np.float64)[faces]  # (F, 3, 3)
     centre = corners.mean(axis=1)
     radius = np.linalg.norm(corners - centre[:, None, :], axis=2).max(axis=1)
@@ -263,38 +311,29 @@ def reevaluate_arrays(
     tri = np.ascontiguousarray(
         np.concatenate([corners.reshape(-1, 9), centre, radius[:, None] * (1 + 1e-9)], axis=1)
     )
-    # every band voxel of the box relays nearest triangles; half a voxel of slack beyond the band
-    relay = np.abs(sub) <= lim + 0.5 * h
-    flat = np.flatnonzero(relay)
-    order = flat.astype(np.int64)
+    # band voxels near the targets relay nearest triangles (half a voxel of slack beyond the
+    # band); a voxel farther than the band from every target cannot be on a target's path
+    t_box = t_run[:, box[1], box[2]]
+    reach = ndimage.maximum_filter(t_box.view(np.uint8), size=2 * pad - 1, mode="constant")
+    order = np.flatnonzero((np.abs(sub) <= lim + 0.5 * h) & (reach > 0)).astype(np.int64)
     best_d2 = np.full(sub.size, np.inf)
     best_t = np.full(sub.size, -1, np.int64)
     _propagate(tri, order, np.array(sub.shape, np.int64), best_d2, best_t, npass)
-    tsub = target[box].reshape(-1) & (best_t >= 0)
+    tsub = t_box.reshape(-1) & (best_t >= 0)
     fsel = np.flatnonzero(tsub)
     if fsel.size == 0:
-        return 0
+        return None
     idx = np.stack(np.unravel_index(fsel, sub.shape), axis=1).astype(np.int64)
-    dist = np.sqrt(best_d2[fsel]) * h
-    sign = np.where(sub.reshape(-1)[fsel] <= 0, -1.0, 1.0)  # sdf <= 0 is inside
-    gi = idx + np.asarray(lo)
     old = sub.reshape(-1)[fsel]
-    new = (sign * dist).astype(np.float32)
+    sign = np.where(old <= 0, -1.0, 1.0)  # sdf <= 0 is inside
+    new = (sign * np.sqrt(best_d2[fsel]) * h).astype(np.float32)
     # a voxel the surface passes through stays on its side (outside: > 0), never flips
     new = np.where((sign > 0) & (new <= 0), old, new)
-    sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = new
     cp = _closest_points(tri, idx, best_t[fsel]) + np.asarray(lo, np.float64)
-    col = _trilinear_rgb(rgb, cp)
-    # colours and parts are read before any is written (no voxel sees another's new colour)
-    near = np.rint(cp).astype(np.int64)
-    for a in range(3):
-        np.clip(near[:, a], 0, sdf.shape[a] - 1, out=near[:, a])
-    new_parts = parts[near[:, 0], near[:, 1], near[:, 2]].copy()
-    rgb[gi[:, 0], gi[:, 1], gi[:, 2]] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
-    parts[gi[:, 0], gi[:, 1], gi[:, 2]] = new_parts
-    return int(fsel.size)
+    return idx + np.asarray(lo), new, cp
 
 
+@keyword_options
 def reevaluate(
     csdf: CSDF,
     mask: np.ndarray | None = None,

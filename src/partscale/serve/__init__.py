@@ -2,7 +2,13 @@
 
 ``create_app(path)`` builds the ASGI app (testable with starlette's ``TestClient``);
 ``serve(path, ...)`` runs it with uvicorn. The page itself is built from ``web/`` with Vite and
-shipped, built, in ``static/`` so users need no Node.
+shipped, built, in ``static/`` so users need no Node (rebuild with ``npx vite build`` in ``web/``;
+``tests/test_serve.py`` checks ``static/build.json`` against a hash of the sources).
+
+For scripts, the page exposes ``window.__partscale``: ``frameTimeMs`` (smoothed, GPU-synchronised),
+``lastFrameMs``, ``frames``, ``idle``, ``state()``, ``zones()``, ``recipe()``,
+``benchmark(n)`` (n orbiting frames; mean and median ms), ``evalRemap(zones, points)`` (the shader's
+own GLSL map) and ``handleScreen(name)``. ``?canvas=WxH`` fixes the canvas size.
 """
 
 from .app import MAX_BODY, create_app

@@ -26,13 +26,13 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+import traceback
 from pathlib import Path
 from typing import Any
 
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
 from starlette.middleware import Middleware
-from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
 from starlette.responses import JSONResponse, Response
 from starlette.routing import Route
@@ -45,7 +45,7 @@ from .session import EditSession
 STATIC = Path(__file__).parent / "static"
 #: Largest request body accepted (a recipe is a few hundred bytes).
 MAX_BODY = 64 * 1024
-LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "::1", "[::1]"]
+LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "[::1]"]
 
 _MEDIA = {
     ".html": "text/html; charset=utf-8",
@@ -116,6 +116,29 @@ class LimitBody:
         except _BodyTooLarge:
             if not started:
                 await _too_large(self.limit)(scope, receive, send)
+
+
+class HostGuard:
+    """ASGI middleware: 400 unless the Host header names one of ``hosts`` (DNS rebinding guard).
+
+    Unlike a plain ``split(":")``, it reads bracketed IPv6 hosts (``[::1]:8000``) whole.
+    """
+
+    def __init__(self, app: ASGIApp, hosts: list[str]):
+        self.app, self.hosts = app, {h.lower() for h in hosts}
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or "*" in self.hosts:
+            await self.app(scope, receive, send)
+            return
+        raw = dict(scope.get("headers", [])).get(b"host", b"").decode("latin-1").lower()
+        host = raw[: raw.find("]") + 1] if raw.startswith("[") else raw.split(":")[0]
+        if host not in self.hosts:
+            await _error(f"host: expected one of {sorted(self.hosts)}, got {host!r}")(
+                scope, receive, send
+            )
+            return
+        await self.app(scope, receive, send)
 
 
 def _too_large(limit: int) -> Response:
@@ -243,11 +266,15 @@ def create_app(
     async def apply(request: Request) -> Response:
         try:
             recipe = await _json_body(request)
-            ms = await run_in_threadpool(_apply, recipe)
         except _HTTPError as exc:
             return _error(str(exc), exc.status)
+        try:
+            ms = await run_in_threadpool(_apply, recipe)
         except InputError as exc:
             return _error(str(exc), 400)
+        except Exception as exc:  # a bug, not the user's input: say so, keep the traceback
+            traceback.print_exc()
+            return _error(f"apply failed inside partscale: {type(exc).__name__}: {exc}", 500)
         return state(apply_ms=ms)
 
     async def undo(request: Request) -> Response:
@@ -317,7 +344,7 @@ def create_app(
     hosts = LOOPBACK_HOSTS if allowed_hosts is None else allowed_hosts
     middleware = [
         Middleware(LimitBody, limit=max_body),
-        Middleware(TrustedHostMiddleware, allowed_hosts=hosts),
+        Middleware(HostGuard, hosts=hosts),
     ]
     app = Starlette(routes=routes, middleware=middleware)
     app.state.session = session

@@ -12,6 +12,7 @@ from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
+import numba
 import numpy as np
 
 from .. import csdf as csdf_mod
@@ -38,6 +39,38 @@ def edited_path(path: Path) -> Path:
 _BYTE_TO_HALF = (np.arange(256) / 255.0).astype("<f2").view("<u2")
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _half_bits(f):  # pragma: no cover - compiled
+    # float32 bits -> float16 bits, round half to even: numpy's npy_floatbits_to_halfbits
+    h_sgn = (f & 0x80000000) >> 16
+    f_exp = f & 0x7F800000
+    if f_exp >= 0x47800000:  # overflow, inf, nan
+        if f_exp == 0x7F800000 and (f & 0x007FFFFF) != 0:
+            ret = 0x7C00 + ((f & 0x007FFFFF) >> 13)
+            return h_sgn + (ret + 1 if ret == 0x7C00 else ret)
+        return h_sgn + 0x7C00
+    if f_exp <= 0x38000000:  # subnormal half or zero
+        if f_exp < 0x33000000:
+            return h_sgn
+        f_sig = (0x00800000 + (f & 0x007FFFFF)) >> (113 - (f_exp >> 23))
+        if (f_sig & 0x00003FFF) != 0x00001000 or (f & 0x000007FF) != 0:
+            f_sig += 0x00001000
+        return h_sgn + (f_sig >> 13)
+    f_sig = f & 0x007FFFFF
+    if (f_sig & 0x00003FFF) != 0x00001000:
+        f_sig += 0x00001000
+    return h_sgn + (f_sig >> 13) + ((f_exp - 0x38000000) >> 13)
+
+
+@numba.njit(cache=True, nogil=True)
+def _encode(bits, rgb, lut, out):  # pragma: no cover - compiled
+    for n in range(bits.shape[0]):
+        out[n, 0] = lut[rgb[n, 0]]
+        out[n, 1] = lut[rgb[n, 1]]
+        out[n, 2] = lut[rgb[n, 2]]
+        out[n, 3] = _half_bits(np.uint32(bits[n]))
+
+
 def encode_grid(c: CSDF) -> bytes:
     """The grid as the page's 3D texture: ``(X, Y, Z, 4)`` float16 little-endian, C order.
 
@@ -45,11 +78,13 @@ def encode_grid(c: CSDF) -> bytes:
     samples it at ``uvw.zyx``, so no transpose is ever made (it would cost more than the rest).
     Channels: r, g, b = sRGB / 255 (the stored 8-bit colour, not linearised); a = sdf /
     voxel_size, the signed distance in voxels (negative inside), which keeps float16's relative
-    precision near the surface whatever the object's units.
+    precision near the surface whatever the object's units. Bit-identical to numpy's
+    ``astype(float16)``, in one compiled pass (4x faster than the numpy passes on 128³).
     """
-    out = np.empty((*c.shape, 4), dtype="<u2")
-    out[..., :3] = _BYTE_TO_HALF[c.rgb]
-    out[..., 3] = (c.sdf * np.float32(1.0 / c.voxel_size)).astype("<f2").view("<u2")
+    n = c.sdf.size
+    out = np.empty((n, 4), dtype="<u2")
+    bits = (c.sdf * np.float32(1.0 / c.voxel_size)).reshape(-1).view(np.uint32)
+    _encode(bits, c.rgb.reshape(n, 3), _BYTE_TO_HALF, out)
     return out.tobytes()
 
 

@@ -74,7 +74,8 @@ def main(argv: list[str] | None = None) -> None:
     exits = tuple(m.Exit for m in mods if hasattr(m, "Exit"))
     aborts = tuple(m.Abort for m in mods if hasattr(m, "Abort"))
     try:
-        app(args=argv, standalone_mode=False)
+        # Outside standalone mode click returns a command's exit code instead of exiting.
+        code = app(args=argv, standalone_mode=False)
     except InputError as exc:
         if _common.is_verbose():
             raise
@@ -96,3 +97,5 @@ def main(argv: list[str] | None = None) -> None:
     except (typer.Abort, *aborts):
         _common.error_line("aborted")
         sys.exit(130)
+    if isinstance(code, int) and code:
+        sys.exit(code)

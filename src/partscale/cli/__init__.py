@@ -14,11 +14,14 @@ import typer
 
 from ..errors import InputError
 from . import _common
+from .edit import edit
+from .eval import eval_suite
 from .export import export
 from .import_ import import_
 from .info import info
 from .render import render
 from .scale import scale
+from .segment import segment
 
 app = typer.Typer(
     name="partscale",
@@ -40,10 +43,12 @@ def _root(
 
 
 app.command("info")(info)
+app.command("segment")(segment)
 app.command("scale")(scale)
 app.command("export")(export)
 app.command("render")(render)
 app.command("import")(import_)
+app.command("edit")(edit)
 
 
 def _click_modules() -> list:
@@ -59,6 +64,9 @@ def _click_modules() -> list:
     return mods
 
 
+app.command("eval")(eval_suite)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point of the console script: one line and exit 2 for every user error."""
     mods = _click_modules()
@@ -66,7 +74,8 @@ def main(argv: list[str] | None = None) -> None:
     exits = tuple(m.Exit for m in mods if hasattr(m, "Exit"))
     aborts = tuple(m.Abort for m in mods if hasattr(m, "Abort"))
     try:
-        app(args=argv, standalone_mode=False)
+        # Outside standalone mode click returns a command's exit code instead of exiting.
+        code = app(args=argv, standalone_mode=False)
     except InputError as exc:
         if _common.is_verbose():
             raise
@@ -88,3 +97,5 @@ def main(argv: list[str] | None = None) -> None:
     except (typer.Abort, *aborts):
         _common.error_line("aborted")
         sys.exit(130)
+    if isinstance(code, int) and code:
+        sys.exit(code)

@@ -1,0 +1,56 @@
+"""``partscale segment``: split an object into nearly convex parts (kept in its .csdf.npz)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .. import csdf as csdf_mod
+from ..errors import InputError
+from . import _common
+
+
+def segment(
+    path: Annotated[Path, typer.Argument(help="Input .csdf.npz file.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
+    method: Annotated[
+        str, typer.Option(help="coacd (the reference, slow) or fast (voxel creases).")
+    ] = "coacd",
+    threshold: Annotated[
+        float, typer.Option(help="Concavity allowed in a part, relative to size, in (0, 1].")
+    ] = 0.05,
+    max_parts: Annotated[
+        int | None, typer.Option("--max-parts", help="At most this many parts.")
+    ] = None,
+    seed: Annotated[int, typer.Option(help="Random seed (same seed, same parts).")] = 0,
+    no_cache: Annotated[
+        bool, typer.Option("--no-cache", help="Recompute even if a cached result exists.")
+    ] = False,
+) -> None:
+    """Split the object into nearly convex parts; every voxel gets its part's index."""
+    from ..segment import METHODS
+    from ..segment import segment as run
+
+    # options are checked before the (possibly long) work, and before anything is written
+    if method not in METHODS:
+        raise InputError(f"--method: expected one of {', '.join(METHODS)}, got {method!r}")
+    if not 0 < threshold <= 1:
+        raise InputError(f"--threshold: expected a number in (0, 1], got {threshold}")
+    if max_parts is not None and max_parts < 1:
+        raise InputError(f"--max-parts: expected an integer >= 1, got {max_parts}")
+    _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
+    c = csdf_mod.load(path)
+    with _common.progress_bar(f"segment ({method})") as bar:
+        out = run(
+            c,
+            method=method,
+            threshold=threshold,
+            max_parts=max_parts,
+            seed=seed,
+            cache=not no_cache,
+            progress=bar,
+        )
+    csdf_mod.save(out, output)
+    _common.done(f"wrote {output}: {out.n_parts} parts ({method})")

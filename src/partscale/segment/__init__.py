@@ -1,0 +1,23 @@
+"""Segment stage: nearly convex parts of a CSDF, one label per voxel.
+
+CoACD on the marching-cubes surface is the reference method; ``fast`` cuts the voxel solid at
+its concave creases. Results are cached by grid content and parameters, so each object is
+segmented once, never per edit.
+"""
+
+from .api import DEFAULT_METHOD, METHODS, cache_key, default_cache_dir, segment
+from .concavity import concavity, hull_concavity, part_concavities
+from .labels import BAND, palette
+
+__all__ = [
+    "BAND",
+    "DEFAULT_METHOD",
+    "METHODS",
+    "cache_key",
+    "concavity",
+    "default_cache_dir",
+    "hull_concavity",
+    "palette",
+    "part_concavities",
+    "segment",
+]

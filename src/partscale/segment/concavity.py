@@ -1,0 +1,230 @@
+"""Concavity of a part: how far its surface is from its convex hull, in voxels.
+
+The measure is a Hausdorff distance between the part's share of the object's surface (its
+*patch*) and the boundary of the patch's convex hull (CoACD's concavity without its volume
+term): the larger of
+
+- the deepest patch point inside the hull (a dent, a notch, an inner corner), and
+- the hull point outside the solid farthest from the patch (the hull bridging a gap).
+
+Hull points inside the solid are where the part was cut from its neighbours: a flat cut is on
+the hull and is not a concavity, so they are left out. Measuring the patch, not the part's voxels,
+keeps the measure independent of how interior voxels are labelled (by nearest surface point,
+their borders bend near creases). Everything is in voxel-index units (voxel centres at integers),
+so distances are in voxels.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError, cKDTree
+
+from ..csdf import CSDF
+from ..surface import sample_nearest, to_mesh
+
+
+def hull_concavity(
+    points: np.ndarray, *, spacing: float = 1.0, sdf: np.ndarray | None = None
+) -> float:
+    """Hausdorff distance between sampled surface points and their convex hull's boundary.
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+        Surface samples (voxel units), about ``spacing`` apart or closer.
+    spacing : float
+        Sampling step on the hull's facets for the hull-to-points direction.
+    sdf : (X, Y, Z) float, optional
+        Signed distance in voxels; when given, only hull samples more than one voxel outside
+        the solid count in the hull-to-points direction (hull points inside are cut faces).
+
+    Returns
+    -------
+    float
+        Concavity in the units of ``points``; 0 for fewer than 4 points or a flat set.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    if len(pts) < 4:
+        return 0.0
+    try:
+        hull = ConvexHull(pts)
+    except (QhullError, ValueError):
+        return 0.0  # flat or degenerate: no volume, nothing concave
+    eq = np.ascontiguousarray(hull.equations)  # (F, 4): n . x + d <= 0 inside, |n| = 1
+    inward = _deepest(pts, eq)
+    samples = _sample_triangles(pts[hull.simplices], spacing)
+    if sdf is not None:
+        samples = samples[sample_nearest(sdf, samples) > 1.0]
+        if not len(samples):
+            return inward
+    dist, _ = cKDTree(pts).query(samples)
+    return max(inward, float(dist.max()))
+
+
+@numba.njit(cache=True)
+def _deepest(pts: np.ndarray, eq: np.ndarray) -> float:  # pragma: no cover - compiled
+    # Distance of a point inside a convex hull to its boundary = its smallest facet-plane
+    # depth; the answer is the largest such distance. A point stops being scanned as soon as
+    # one facet is closer than the best so far (most points lie on the hull).
+    best = 0.0
+    for i in range(pts.shape[0]):
+        x, y, z = pts[i, 0], pts[i, 1], pts[i, 2]
+        m = np.inf
+        for j in range(eq.shape[0]):
+            d = -(x * eq[j, 0] + y * eq[j, 1] + z * eq[j, 2] + eq[j, 3])
+            if d < m:
+                m = d
+                if m <= best:
+                    break
+        if m > best:
+            best = m
+    return best
+
+
+def _sample_triangles(tri: np.ndarray, spacing: float) -> np.ndarray:
+    """(M, 3) points on triangles ``tri`` (T, 3, 3), about one per ``spacing``² of area.
+
+    Random barycentric samples from a fixed seed (deterministic), plus the vertices.
+    """
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    n = np.ceil(area / spacing**2).astype(np.int64) + 1
+    which = np.repeat(np.arange(len(tri)), n)
+    rng = np.random.default_rng(0)
+    u, v = rng.random(len(which)), rng.random(len(which))
+    flip = u + v > 1
+    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    aa = a[which]
+    pts = aa + u[:, None] * (b[which] - aa) + v[:, None] * (c[which] - aa)
+    return np.concatenate([pts, tri.reshape(-1, 3)])
+
+
+def decimate(points: np.ndarray, cell: float) -> np.ndarray:
+    """(M, 3): one of ``points`` per occupied cube of edge ``cell`` (first in input order)."""
+    q = np.floor(points / cell).astype(np.int64)
+    q -= q.min(axis=0)
+    k = (q[:, 0] * (q[:, 1].max() + 1) + q[:, 1]) * (q[:, 2].max() + 1) + q[:, 2]
+    _, first = np.unique(k, return_index=True)
+    return points[np.sort(first)]
+
+
+class Patch:
+    """A part's surface samples with their hull vertices and a KD-tree, so the concavity of a
+    union of patches costs a hull of a few hundred points instead of all samples.
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+        Surface samples, voxel units.
+    """
+
+    def __init__(self, points: np.ndarray, _hull_points: np.ndarray | None = None):
+        self.points = np.ascontiguousarray(points, dtype=np.float64)
+        self.tree = cKDTree(self.points)
+        candidates = self.points if _hull_points is None else _hull_points
+        try:
+            self.hull_points = candidates[ConvexHull(candidates).vertices]
+        except (QhullError, ValueError):
+            self.hull_points = candidates
+
+    def merged(self, other: Patch) -> Patch:
+        """The patch of both parts (the hull of a union is the hull of the hulls' vertices)."""
+        return Patch(
+            np.concatenate([self.points, other.points]),
+            np.concatenate([self.hull_points, other.hull_points]),
+        )
+
+
+def union_concavity(
+    patches: list[Patch], *, sdf: np.ndarray | None = None, spacing: float = 1.0
+) -> float:
+    """:func:`hull_concavity` of the union of ``patches``' samples, from their parts."""
+    corners = np.concatenate([p.hull_points for p in patches])
+    if len(corners) < 4:
+        return 0.0
+    try:
+        hull = ConvexHull(corners)
+    except (QhullError, ValueError):
+        return 0.0
+    eq = np.ascontiguousarray(hull.equations)
+    inward = max(_deepest(p.points, eq) for p in patches)
+    samples = _sample_triangles(corners[hull.simplices], spacing)
+    if sdf is not None:
+        samples = samples[sample_nearest(sdf, samples) > 1.0]
+        if not len(samples):
+            return inward
+    dist = np.min([p.tree.query(samples)[0] for p in patches], axis=0)
+    return max(inward, float(dist.max()))
+
+
+def surface_samples(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> dict[int, np.ndarray]:
+    """dict part -> (N, 3) float64: the part's patch of the surface, in voxel-index units.
+
+    Marching-cubes vertices and face centroids (samples about half a voxel apart), each given
+    the label of its nearest voxel.
+    """
+    if mesh is None:
+        mesh = to_mesh(csdf)
+    idx = csdf.world_to_index(np.concatenate([mesh.vertices, mesh.triangles_center]))
+    lab = sample_nearest(np.asarray(labels), idx)
+    out: dict[int, np.ndarray] = {}
+    order = np.argsort(lab, kind="stable")
+    uniq, start = np.unique(lab[order], return_index=True)
+    for p, s, e in zip(uniq, start, [*start[1:], len(order)], strict=True):
+        if p >= 0:
+            out[int(p)] = idx[order[s:e]]
+    return out
+
+
+def touching_pairs(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> set[tuple[int, int]]:
+    """Pairs (p, q), p < q, of parts that meet: on the surface (a marching-cubes edge between
+    their patches) or inside the solid (face-adjacent inside voxels)."""
+    labels = np.asarray(labels)
+    if mesh is None:
+        mesh = to_mesh(csdf)
+    vlab = sample_nearest(labels, csdf.world_to_index(mesh.vertices)).astype(np.int64)
+    e = vlab[mesh.edges_unique]
+    keys = [np.minimum(e[:, 0], e[:, 1]) * 65536 + np.maximum(e[:, 0], e[:, 1])]
+    keys[0] = keys[0][(e[:, 0] != e[:, 1]) & (e.min(axis=1) >= 0)]
+    inside = csdf.sdf < 0
+    for ax in range(3):
+        a = [slice(None)] * 3
+        b = [slice(None)] * 3
+        a[ax] = slice(0, -1)
+        b[ax] = slice(1, None)
+        la, lb = labels[tuple(a)], labels[tuple(b)]
+        cut = inside[tuple(a)] & inside[tuple(b)] & (la != lb) & (la >= 0) & (lb >= 0)
+        pa, pb = la[cut].astype(np.int64), lb[cut].astype(np.int64)
+        keys.append(np.minimum(pa, pb) * 65536 + np.maximum(pa, pb))
+    return {(int(k) // 65536, int(k) % 65536) for k in np.unique(np.concatenate(keys))}
+
+
+def part_concavities(csdf: CSDF, parts: np.ndarray | None = None, *, mesh=None) -> np.ndarray:
+    """(P,) float64: concavity of every part in voxels (see the module's definition).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        A segmented CSDF (or any CSDF with ``parts`` given separately).
+    parts : (X, Y, Z) int, optional
+        Labels to measure instead of ``csdf.parts``.
+    """
+    labels = np.asarray(csdf.parts if parts is None else parts)
+    n = int(labels.max()) + 1 if labels.size and labels.max() >= 0 else 0
+    pts = surface_samples(csdf, labels, mesh=mesh)
+    sdf = csdf.sdf / csdf.voxel_size
+    return np.array([hull_concavity(pts[p], sdf=sdf) if p in pts else 0.0 for p in range(n)])
+
+
+def concavity(csdf: CSDF, part_index: int) -> float:
+    """Concavity of one part of a segmented CSDF, in voxels.
+
+    Raises :class:`IndexError` when ``part_index`` is not a part of ``csdf``.
+    """
+    if not 0 <= part_index < csdf.n_parts:
+        raise IndexError(f"part_index: expected 0..{csdf.n_parts - 1}, got {part_index}")
+    pts = surface_samples(csdf, csdf.parts)
+    if part_index not in pts:
+        return 0.0
+    return hull_concavity(pts[part_index], sdf=csdf.sdf / csdf.voxel_size)

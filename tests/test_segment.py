@@ -1,0 +1,262 @@
+"""Part segmentation: one part per separate solid, splits at inner corners, labels that cover the
+surface, connected parts, reproducible and cached results, and labels that travel with the file."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import assert_bad_input
+from scipy import ndimage
+
+from partscale import csdf as csdf_mod
+from partscale import shapes
+from partscale.errors import InputError
+from partscale.segment import coacd_method, concavity, part_concavities, segment
+from partscale.surface import sample_nearest, to_mesh
+
+H = 0.025  # voxel size of the analytic shapes (L: 47 x 47 x 19 voxels)
+# CoACD with a light search: the same algorithm, seconds instead of tens of seconds
+QUICK_COACD = {"preprocess_mode": "off", "resolution": 500, "mcts_iterations": 50, "mcts_nodes": 10}
+METHODS = {"coacd": QUICK_COACD, "fast": {}}
+BOXES = [
+    ((0.0, 0.0, 0.0), (0.3, 0.2, 0.4)),
+    ((0.5, 0.0, 0.0), (0.7, 0.5, 0.2)),
+    ((0.0, 0.4, 0.5), (0.6, 0.7, 0.7)),
+]
+ARM = 0.3  # L: arms [0, 1] x [0, ARM] and [0, ARM] x [0, 1], thickness ARM; inner corner at ARM
+
+
+def l_sdf(p):
+    return np.minimum(
+        shapes.box_sdf(p, (0, 0, 0), (1.0, ARM, ARM)), shapes.box_sdf(p, (0, 0, 0), (ARM, 1.0, ARM))
+    )
+
+
+@pytest.fixture(scope="module")
+def lshape():
+    return shapes.grid(l_sdf, ((0, 0, 0), (1, 1, ARM)), voxel_size=H)
+
+
+@pytest.fixture(scope="module")
+def boxes():
+    return shapes.grid(
+        lambda p: shapes.boxes_sdf(p, BOXES), ((0, 0, 0), (0.7, 0.7, 0.7)), voxel_size=H
+    )
+
+
+@pytest.fixture(scope="module")
+def table():
+    """A tabletop on four legs (legs meet the top at z = 0.5)."""
+    parts = [((0.0, 0.0, 0.5), (0.8, 0.5, 0.56))]
+    for x in (0.0, 0.72):
+        for y in (0.0, 0.42):
+            parts.append(((x, y, 0.0), (x + 0.08, y + 0.08, 0.53)))
+    return shapes.grid(
+        lambda p: np.min([shapes.box_sdf(p, lo, hi) for lo, hi in parts], axis=0),
+        ((0, 0, 0), (0.8, 0.5, 0.56)),
+        voxel_size=H,
+    )
+
+
+@pytest.fixture(scope="module")
+def segmented(lshape, boxes, table, tmp_path_factory):
+    """Every method on every analytic shape, computed once for the module."""
+    cache = tmp_path_factory.mktemp("cache")
+    out = {}
+    for name, c in (("L", lshape), ("boxes", boxes), ("table", table)):
+        for m, params in METHODS.items():
+            out[name, m] = segment(c, method=m, cache_dir=cache, **params)
+    return out
+
+
+def inside_labels(c, box):
+    lo, hi = np.asarray(box[0]), np.asarray(box[1])
+    ijk = np.argwhere(c.sdf < 0)
+    w = c.index_to_world(ijk)
+    sel = np.all((w > lo) & (w < hi), axis=1)
+    return c.parts[tuple(ijk[sel].T)]
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_disjoint_boxes_give_one_part_per_box(segmented, method):
+    s = segmented["boxes", method]
+    assert s.n_parts == len(BOXES)
+    owners = []
+    for b in BOXES:
+        lab = inside_labels(s, b)
+        assert lab.size and (lab == lab[0]).all(), np.unique(lab)
+        owners.append(int(lab[0]))
+    assert sorted(owners) == list(range(len(BOXES)))
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_l_shape_splits_in_two_at_the_inner_corner(segmented, method):
+    s = segmented["L", method]
+    assert s.n_parts == 2
+    # the two far ends are in different parts
+    far_x = s.parts[tuple(np.rint(s.world_to_index([[0.95, 0.15, 0.15]])[0]).astype(int))]
+    far_y = s.parts[tuple(np.rint(s.world_to_index([[0.15, 0.95, 0.15]])[0]).astype(int))]
+    assert {int(far_x), int(far_y)} == {0, 1}
+    # where the surface changes part: one plane, x = ARM or y = ARM, within 2 voxels
+    mesh = to_mesh(s)
+    lab = mesh.vertex_attributes["parts"]
+    e = mesh.edges_unique
+    border = mesh.vertices[e[lab[e[:, 0]] != lab[e[:, 1]]]].mean(axis=1)  # edge midpoints
+    assert len(border) > 0
+    off = np.abs(border[:, :2] - ARM).max(axis=0)  # farthest border point from each plane
+    # the border lies in one of the two corner planes (the other coordinate spans the arm)
+    assert off.min() <= 2 * H, off / H
+    axis = int(np.argmin(off))
+    other = 1 - axis
+    assert np.ptp(border[:, other]) >= ARM - 2 * H
+
+
+@pytest.mark.parametrize("shape", ["L", "boxes", "table"])
+@pytest.mark.parametrize("method", METHODS)
+def test_surface_voxels_labelled_and_parts_connected(segmented, shape, method):
+    s = segmented[shape, method]
+    surface = np.abs(s.sdf) < s.voxel_size
+    assert (s.parts[surface] >= 0).all()
+    assert (s.parts[s.sdf > 4 * s.voxel_size] == -1).all()  # far outside: no part
+    labels = np.unique(s.parts[s.parts >= 0])
+    assert labels.tolist() == list(range(s.n_parts))
+    for p in labels:
+        _, n = ndimage.label(s.parts == p, structure=np.ones((3, 3, 3), bool))
+        assert n == 1, (p, n)
+    info = s.meta["parts_info"]
+    assert [d["index"] for d in info] == list(range(s.n_parts))
+    assert [d["voxels"] for d in info] == np.bincount(s.parts[s.parts >= 0]).tolist()
+    assert len({tuple(d["color"]) for d in info}) == len(info)
+    lo, hi = s.grid_bounds
+    for d in info:
+        assert np.all(np.asarray(d["bbox"][0]) >= lo) and np.all(np.asarray(d["bbox"][1]) <= hi)
+        assert d["hull_volume"] > 0
+    assert s.meta["segmentation"]["method"] == method
+    assert s.meta["history"][-1]["op"] == "segment"
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_table_parts_are_top_and_legs(segmented, method):
+    s = segmented["table", method]
+    assert s.n_parts == 5
+    top = inside_labels(s, ((0.1, 0.1, 0.51), (0.7, 0.4, 0.55)))
+    leg = inside_labels(s, ((0.01, 0.01, 0.0), (0.07, 0.07, 0.45)))
+    assert (top == top[0]).all() and (leg == leg[0]).all() and top[0] != leg[0]
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_parts_are_nearly_convex(segmented, method):
+    # a tolerance well under the L's own concavity (about 20 voxels)
+    for shape in ("L", "boxes", "table"):
+        assert part_concavities(segmented[shape, method]).max() <= 3.0
+
+
+def test_concavity_of_l_as_one_part_matches_its_notch(lshape):
+    one = lshape.replace(parts=np.where(lshape.sdf < 3 * H, 0, -1))
+    # the middle of the hull's facet x + y = 1 + ARM is (1 - ARM) / 2 from both arms
+    truth = (1 - ARM) / 2 / H
+    assert truth - 1.5 <= concavity(one, 0) <= truth + 1.0
+    with pytest.raises(IndexError):
+        concavity(one, 1)
+
+
+def test_same_seed_same_parts(lshape, tmp_path):
+    a = segment(lshape, method="coacd", seed=3, cache=False, **QUICK_COACD)
+    b = segment(lshape, method="coacd", seed=3, cache=False, **QUICK_COACD)
+    assert np.array_equal(a.parts, b.parts)
+    assert a.meta["parts_info"] == b.meta["parts_info"]
+
+
+def test_cache_skips_the_decomposition(boxes, tmp_path, monkeypatch):
+    calls = []
+    real = coacd_method.run
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(coacd_method, "run", counting)
+    first = segment(boxes, method="coacd", cache_dir=tmp_path, **QUICK_COACD)
+    assert len(calls) == 1
+    key = first.meta["segmentation"]["key"]
+    assert (tmp_path / f"{key}.npz").is_file()
+    again = segment(boxes, method="coacd", cache_dir=tmp_path, **QUICK_COACD)
+    assert len(calls) == 1
+    assert np.array_equal(first.parts, again.parts)
+    assert first.meta["parts_info"] == again.meta["parts_info"]
+    # other parameters: another key, another run
+    segment(boxes, method="coacd", cache_dir=tmp_path, seed=1, **QUICK_COACD)
+    assert len(calls) == 2
+    # the environment variable moves the default folder
+    monkeypatch.setenv("PARTSCALE_CACHE", str(tmp_path / "env"))
+    segment(boxes, method="coacd", **QUICK_COACD)
+    assert (tmp_path / "env" / "segment" / f"{key}.npz").is_file()
+
+
+def test_cache_moves_bboxes_with_the_origin(boxes, tmp_path):
+    a = segment(boxes, method="fast", cache_dir=tmp_path)
+    moved = boxes.replace(origin=np.add(boxes.origin, (1.0, 2.0, 3.0)))
+    b = segment(moved, method="fast", cache_dir=tmp_path)
+    assert a.meta["segmentation"]["key"] == b.meta["segmentation"]["key"]
+    for da, db in zip(a.meta["parts_info"], b.meta["parts_info"], strict=True):
+        np.testing.assert_allclose(np.asarray(db["bbox"]) - da["bbox"], [[1, 2, 3]] * 2)
+
+
+def test_labels_survive_save_and_load(segmented, tmp_path):
+    s = segmented["table", "fast"]
+    path = csdf_mod.save(s, tmp_path / "t.csdf.npz")
+    back = csdf_mod.load(path)
+    assert np.array_equal(back.parts, s.parts)
+    assert back.meta["parts_info"] == s.meta["parts_info"]
+    # the mesh carries them too
+    mesh = to_mesh(back)
+    idx = back.world_to_index(mesh.vertices)
+    assert np.array_equal(mesh.vertex_attributes["parts"], sample_nearest(back.parts, idx))
+
+
+def test_labels_survive_a_stretch(segmented):
+    edit = pytest.importorskip("partscale.edit")
+    if not hasattr(edit, "apply_edit"):
+        pytest.skip("partscale.edit.apply_edit has not landed on this branch yet")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "fragment"),
+    [
+        ({"method": "magic"}, "method"),
+        ({"threshold": 0.0}, "threshold"),
+        ({"threshold": 1.5}, "threshold"),
+        ({"max_parts": 0}, "max_parts"),
+        ({"seed": -1}, "seed"),
+        ({"method": "coacd", "preprocess_mode": "sometimes"}, "preprocess_mode"),
+    ],
+)
+def test_bad_options_are_refused(boxes, kwargs, fragment):
+    with pytest.raises(InputError, match=fragment):
+        segment(boxes, cache=False, **kwargs)
+
+
+def test_unknown_method_option_lists_the_known_ones(boxes):
+    with pytest.raises(TypeError, match="preprocess_resolution"):
+        segment(boxes, method="coacd", cache=False, resolutoin=10)
+
+
+def test_object_without_surface_is_refused():
+    empty = csdf_mod.make(np.ones((8, 8, 8), np.float32))
+    with pytest.raises(InputError, match="surface"):
+        segment(empty, cache=False)
+
+
+def test_cli_segments_and_refuses_bad_input(cli, boxes, tmp_path):
+    src = csdf_mod.save(boxes, tmp_path / "in.csdf.npz")
+    out = tmp_path / "out.csdf.npz"
+    proc = cli("segment", src, "-o", out, "--method", "fast", "--no-cache")
+    assert proc.returncode == 0, proc.stderr
+    assert csdf_mod.load(out).n_parts == len(BOXES)
+    bad = tmp_path / "bad.csdf.npz"
+    assert_bad_input(cli("segment", src, "-o", bad, "--method", "magic"), "method", "magic")
+    assert_bad_input(cli("segment", src, "-o", bad, "--threshold", "0"), "threshold")
+    assert_bad_input(cli("segment", src, "-o", bad, "--threshold", "1.5"), "threshold")
+    empty = csdf_mod.save(csdf_mod.make(np.ones((8, 8, 8), np.float32)), tmp_path / "e.csdf.npz")
+    assert_bad_input(cli("segment", empty, "-o", bad, "--method", "fast"), "surface")
+    assert not bad.exists()

@@ -347,9 +347,10 @@ def _component_signs(V, F, d, free, in_sheet, h, origin):
             break
         sign[one] = np.where(pos[one], 1, -1)
         todo &= ~one
+    # ring voxels still unsigned (in narrow gaps) are queried together with the near ones
+    # below (each query call costs ~40 ms of set-up); near voxels next to them are then
+    # undecided and queried too
     queries.append(np.flatnonzero(todo))
-    _query_signs(V, F, sign, np.concatenate(queries), h, origin)
-    queries = []
     near = ~free
     pos, neg = _neighbour_signs(np.where(free, sign, 0))
     one = near & (pos ^ neg)

@@ -2,7 +2,8 @@
 
 For every object in ../shared/data/{kenney, polyhaven, khronos}: our import (mesh already read,
 the numba kernels already compiled) timed as the median of 3 runs, its peak memory (peak of
-traced numpy/Python allocations, and the process's max RSS, in a fresh subprocess per object),
+traced numpy/Python allocations in a fourth, untimed run, and the process's max RSS after the
+timed runs, in a fresh subprocess per object),
 and, in the same subprocess on the same grid, libigl's
 ``igl.signed_distance(P, V, F, sign_type=FAST_WINDING_NUMBER)`` over every voxel centre
 (one run). Accuracy columns compare the two fields: median |difference| in the 3-voxel band
@@ -52,15 +53,16 @@ def one(path: Path, res: int, run_igl: bool) -> dict:
     mesh = ingest.load_mesh(path)
     ingest.from_mesh(mesh, res=32)  # load the compiled kernels (numba cache) outside the timing
     times = []
-    tracemalloc.start()
     for _ in range(3):
-        tracemalloc.reset_peak()
         t = time.perf_counter()
         c = ingest.from_mesh(mesh, res=res)
         times.append(time.perf_counter() - t)
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    # tracing slows allocations down: peak memory is measured in a fourth, untimed run
+    tracemalloc.start()
+    ingest.from_mesh(mesh, res=res)
     traced = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
     out = {
         "name": f"{path.parent.name}/{path.name}",
         "triangles": int(mesh.n_faces),

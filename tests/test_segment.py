@@ -10,6 +10,7 @@ from scipy import ndimage
 
 from partscale import csdf as csdf_mod
 from partscale import shapes
+from partscale.edit import apply_edit
 from partscale.errors import InputError
 from partscale.segment import coacd_method, concavity, part_concavities, segment
 from partscale.surface import sample_nearest, to_mesh
@@ -215,9 +216,26 @@ def test_labels_survive_save_and_load(segmented, tmp_path):
 
 
 def test_labels_survive_a_stretch(segmented):
-    edit = pytest.importorskip("partscale.edit")
-    if not hasattr(edit, "apply_edit"):
-        pytest.skip("partscale.edit.apply_edit has not landed on this branch yet")
+    s = segmented["table", "fast"]
+    # stretch the middle of the tabletop along x by 0.2: the right legs move by 0.2
+    out = apply_edit(s, {"axis": "x", "zone": [0.3, 0.5], "to": 0.7, "mode": "stretch"})
+    assert out.n_parts == s.n_parts
+
+    def part_at(c, point):
+        return int(c.parts[tuple(np.rint(c.world_to_index([point])[0]).astype(int))])
+
+    for x, y in ((0.04, 0.04), (0.04, 0.46), (0.76, 0.04), (0.76, 0.46)):
+        moved = x + 0.2 if x > 0.5 else x
+        assert part_at(out, (moved, y, 0.25)) == part_at(s, (x, y, 0.25))
+    top = part_at(s, (0.4, 0.25, 0.53))
+    assert {part_at(out, (x, 0.25, 0.53)) for x in np.linspace(0.1, 0.9, 17)} == {top}
+    assert (out.parts[np.abs(out.sdf) < out.voxel_size] >= 0).all()
+    # parts stay in one piece in the solid and on its surface (the edit's own labels farther
+    # out, in the air, are its business)
+    solid = out.sdf < out.voxel_size
+    for p in range(out.n_parts):
+        _, n = ndimage.label((out.parts == p) & solid, structure=np.ones((3, 3, 3), bool))
+        assert n == 1, (p, n)
 
 
 @pytest.mark.parametrize(

@@ -148,9 +148,9 @@ def segment(
     method, thr, max_parts, seed, tol, params = _check_options(
         method, threshold, max_parts, seed, merge_tolerance, method_params
     )
-    if not (csdf.sdf < 0).any() or not (csdf.sdf > 0).any():
+    if not (csdf.sdf <= 0).any() or not (csdf.sdf > 0).any():
         raise InputError(
-            "segment: expected an object with a surface (some sdf < 0 and some > 0), got none"
+            "segment: expected an object with a surface (some sdf <= 0 and some > 0), got none"
         )
     report = resolve(progress)
     all_params = {

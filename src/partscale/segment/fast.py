@@ -39,6 +39,7 @@ max_depth : recursion limit; min_voxels : smaller pieces are not split further.
 """
 
 _FULL = np.ones((3, 3, 3), bool)
+_FALLBACK_SIDE = 0.0
 
 
 def check_params(params: dict) -> dict:
@@ -63,7 +64,7 @@ def check_params(params: dict) -> dict:
 
 def tolerance(csdf: CSDF, threshold: float, params: dict) -> float:
     """Concavity tolerance in voxels: ``threshold * scale *`` the solid's largest extent."""
-    inside = np.argwhere(csdf.sdf < 0)
+    inside = np.argwhere(csdf.sdf <= 0)
     extent = float((inside.max(axis=0) - inside.min(axis=0) + 1).max())
     return threshold * params["scale"] * extent
 
@@ -92,8 +93,14 @@ def _cuts(mask: np.ndarray, jump: float, min_jump: float) -> list[np.ndarray]:
 
 
 def _fallback_cut(mask: np.ndarray) -> list[np.ndarray]:
-    """One cut where the section area changes fastest (relative), else across the middle."""
-    best = (0.0, 0, 0)
+    """One cut for a concave region without a clear crease.
+
+    Among cuts leaving at least a fifth of the region on each side (so a rounded region is
+    halved rather than peeled slice by slice), the one where the section area changes most;
+    across the middle of the longest side when the area hardly changes anywhere.
+    """
+    best = (0.05, -1, -1)
+    total = float(mask.sum())
     for ax in range(3):
         other = tuple(a for a in range(3) if a != ax)
         area = mask.sum(axis=other).astype(np.float64)
@@ -101,15 +108,19 @@ def _fallback_cut(mask: np.ndarray) -> list[np.ndarray]:
             continue
         lo, hi = np.minimum(area[:-1], area[1:]), np.maximum(area[:-1], area[1:])
         rel = 1.0 - lo / np.maximum(hi, 1.0)
+        below = np.cumsum(area)[:-1] / total
+        rel[(below < _FALLBACK_SIDE) | (below > 1 - _FALLBACK_SIDE)] = 0.0
         t = int(np.argmax(rel))
         if rel[t] > best[0]:
             best = (float(rel[t]), ax, t)
     out = [np.empty(0, np.int64) for _ in range(3)]
-    if best[0] > 0.05:
+    if best[1] >= 0:
         out[best[1]] = np.array([best[2]])
     else:
         ax = int(np.argmax(mask.shape))
-        out[ax] = np.array([mask.shape[ax] // 2 - 1])
+        other = tuple(a for a in range(3) if a != ax)
+        below = np.cumsum(mask.sum(axis=other)) / total
+        out[ax] = np.array([min(int(np.searchsorted(below, 0.5)), mask.shape[ax] - 2)])
     return out
 
 
@@ -149,7 +160,7 @@ def atoms(
     """
     report = resolve(progress)
     tau = max(tolerance(csdf, threshold, params), floor)
-    inside = csdf.sdf < 0
+    inside = csdf.sdf <= 0
     comp, _ = ndimage.label(inside, structure=_FULL)
     stack = []
     for c, sl in enumerate(ndimage.find_objects(comp), start=1):

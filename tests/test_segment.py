@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import assert_bad_input
+from conftest import assert_bad_input, data_path
 from scipy import ndimage
 
 from partscale import csdf as csdf_mod
-from partscale import shapes
+from partscale import ingest, shapes
 from partscale.edit import apply_edit
 from partscale.errors import InputError
 from partscale.segment import coacd_method, concavity, part_concavities, segment
@@ -278,3 +278,45 @@ def test_cli_segments_and_refuses_bad_input(cli, boxes, tmp_path):
     empty = csdf_mod.save(csdf_mod.make(np.ones((8, 8, 8), np.float32)), tmp_path / "e.csdf.npz")
     assert_bad_input(cli("segment", empty, "-o", bad, "--method", "fast"), "surface")
     assert not bad.exists()
+
+
+@pytest.fixture(scope="module")
+def kenney_table():
+    return ingest.load(data_path("kenney/table.glb"), res=64)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_real_table_legs_and_top_are_separate_parts(kenney_table, method):
+    s = segment(kenney_table, method=method, cache=False, **METHODS[method])
+    inside = s.sdf <= 0
+    assert (s.parts[np.abs(s.sdf) < s.voxel_size] >= 0).all()
+    for p in range(s.n_parts):
+        _, n = ndimage.label(s.parts == p, structure=np.ones((3, 3, 3), bool))
+        assert n == 1, (p, n)
+    # y is up (glTF): the layer just above the floor cuts the four legs
+    ys = np.nonzero(inside.any(axis=(0, 2)))[0]
+    layer = ys[0] + 1
+    comp, n = ndimage.label(inside[:, layer, :])
+    assert n == 4
+    legs = [np.unique(s.parts[:, layer, :][comp == k]) for k in range(1, n + 1)]
+    assert all(len(leg) == 1 for leg in legs), legs
+    legs = {int(leg[0]) for leg in legs}
+    assert len(legs) == 4
+    x, z = s.shape[0] // 2, s.shape[2] // 2
+    assert inside[x, ys[-1] - 1, z]
+    assert int(s.parts[x, ys[-1] - 1, z]) not in legs
+    assert part_concavities(s).max() <= 3.0  # voxels, at 64 voxels along the table
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_max_parts_bounds_the_count(table, method):
+    s = segment(table, method=method, max_parts=2, cache=False, **METHODS[method])
+    assert s.n_parts == 2
+    for p in range(s.n_parts):
+        _, n = ndimage.label(s.parts == p, structure=np.ones((3, 3, 3), bool))
+        assert n == 1, (p, n)
+
+
+def test_max_parts_cannot_join_separate_pieces(boxes):
+    s = segment(boxes, method="fast", max_parts=1, cache=False)
+    assert s.n_parts == len(BOXES)

@@ -122,7 +122,9 @@ def segment(
     threshold : float in (0, 1]
         Concavity allowed in a part, relative to the object's size (CoACD's meaning).
     max_parts : int, optional
-        Upper bound on the number of parts (CoACD's ``max_convex_hull``; then merging).
+        Upper bound on the number of parts (CoACD's ``max_convex_hull``, then the least
+        concave merges). Separate pieces are never joined, so an object with more separate
+        pieces keeps one part per piece.
     seed : int
         Random seed of the method; the same seed gives the same parts.
     merge_tolerance : float

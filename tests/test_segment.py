@@ -11,7 +11,7 @@ from scipy import ndimage
 from partscale import csdf as csdf_mod
 from partscale import ingest, shapes
 from partscale.edit import apply_edit
-from partscale.errors import InputError
+from partscale.errors import InputError, MemoryLimitError
 from partscale.segment import coacd_method, concavity, part_concavities, segment
 from partscale.surface import sample_nearest, to_mesh
 
@@ -257,6 +257,12 @@ def test_bad_options_are_refused(boxes, kwargs, fragment):
 def test_unknown_method_option_lists_the_known_ones(boxes):
     with pytest.raises(TypeError, match="preprocess_resolution"):
         segment(boxes, method="coacd", cache=False, resolutoin=10)
+
+
+def test_huge_request_is_refused_with_what_it_needs(boxes, monkeypatch):
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", "1000")
+    with pytest.raises(MemoryLimitError, match="segment"):
+        segment(boxes, method="fast", cache=False)
 
 
 def test_object_without_surface_is_refused():

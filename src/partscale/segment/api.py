@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .._util import atomic_path
+from .._util import atomic_path, check_memory
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
@@ -154,6 +154,8 @@ def segment(
         raise InputError(
             "segment: expected an object with a surface (some sdf <= 0 and some > 0), got none"
         )
+    # peak working set: labels and masks, a feature transform (3 int64 per voxel), the mesh
+    check_memory(csdf.shape, 64, what="segment")
     report = resolve(progress)
     all_params = {
         "threshold": thr,

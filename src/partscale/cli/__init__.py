@@ -14,6 +14,8 @@ import typer
 
 from ..errors import InputError
 from . import _common
+from .edit import edit
+from .eval import eval_suite
 from .export import export
 from .import_ import import_
 from .info import info
@@ -46,6 +48,7 @@ app.command("scale")(scale)
 app.command("export")(export)
 app.command("render")(render)
 app.command("import")(import_)
+app.command("edit")(edit)
 
 
 def _click_modules() -> list:
@@ -59,6 +62,9 @@ def _click_modules() -> list:
         except ImportError:
             pass
     return mods
+
+
+app.command("eval")(eval_suite)
 
 
 def main(argv: list[str] | None = None) -> None:

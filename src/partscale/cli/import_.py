@@ -8,7 +8,6 @@ from typing import Annotated
 import typer
 
 from .. import csdf as csdf_mod
-from .. import ingest
 from . import _common
 
 
@@ -25,7 +24,10 @@ def import_(
     ] = 128,
     pad: Annotated[
         int | None,
-        typer.Option("--pad", help=f"Empty voxels around the object (default {ingest.BAND + 2})."),
+        typer.Option(
+            "--pad",
+            help="Empty voxels around the object, >= 3 (default 5: the exact band of 3 + 2).",
+        ),
     ] = None,
     iso: Annotated[
         float | None,
@@ -42,6 +44,8 @@ def import_(
     are thickened, distances are exact near the surface and colours come from the textures.
     """
     _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
+    from .. import ingest  # numba, scipy, trimesh: only when importing, not for every command
+
     with _common.progress_bar(f"import {input.name}") as progress:
         c = ingest.load(input, res=res, pad=pad, iso=iso, colors=colors, progress=progress)
     csdf_mod.save(c, output)

@@ -1,7 +1,39 @@
-"""Edit stage: part-aware selective scaling (stretch, tile, global) driven by recipes."""
+"""Edit stage: part-aware selective scaling (stretch, tile, global) driven by recipes.
+
+Public API
+----------
+- :func:`apply_edit` ``(csdf, edit, *, progress=None) -> CSDF``: one zone edit, re-evaluated.
+- :func:`apply_recipe` ``(csdf, recipe, *, progress=None) -> CSDF``: edits in order.
+- :func:`scale` ``(csdf, *, axis, zone, to, mode="stretch", progress=None) -> CSDF``.
+- :func:`naive_edit` ``(csdf, edit) -> CSDF``: the BASELINE (per-column resampling, plain
+  concatenation of tiles, no re-evaluation) that evaluations and benchmarks compare against.
+- :func:`reevaluate` ``(csdf, mask=None, *, band=BAND_VOXELS) -> CSDF``: true distances near the
+  surface, on its own.
+- :func:`recipe_from_history` ``(csdf, *, after=None) -> Recipe``: the replayable recipe.
+- :class:`Edit`, :class:`Recipe`, :data:`JSON_SCHEMA`, :func:`source_coordinate`,
+  :func:`tile_count`: the recipe schema and the 1D maps the web editor's shader shares.
+
+Semantics
+---------
+- ``DEST - END`` is snapped to whole voxels (length exact to half a voxel); content outside the
+  zone is then an exact copy of the original voxels (translated beyond the zone). The grid grows
+  or shrinks along the axis; origin and voxel size never change.
+- stretch: the slab is resampled linearly (sdf, sRGB); parts stay crisp (nearest source voxel,
+  boundary at the zero crossing where the surface passes between two differently labelled
+  voxels).
+- tile: ``tile_count`` copies each scaled to fit; across each internal seam the two copies'
+  continuations are cross-faded over ``SEAM_VOXELS`` voxels either side; copies ``m >= 1`` of parts
+  lying wholly inside the zone get new indices after the existing ones (``meta['parts_info']``
+  gains entries with ``copy_of``); parts crossing the zone's planes keep their index.
+- global: the whole solid scaled along the axis about its min to the same final length.
+- After each edit, every voxel within ``BAND_VOXELS`` voxels of the surface whose distance could
+  have changed holds the exact distance to the edited zero level set (sign and surface kept) and
+  the colour and part of its nearest surface point.
+"""
 
 from .recipe import AXES, JSON_SCHEMA, MODES, Edit, Recipe, source_coordinate, tile_count
 from .reevaluate import BAND_VOXELS, reevaluate
+from .resample import SEAM_VOXELS
 from .scale import apply_edit, apply_recipe, naive_edit, recipe_from_history, scale
 
 __all__ = [
@@ -9,6 +41,7 @@ __all__ = [
     "BAND_VOXELS",
     "JSON_SCHEMA",
     "MODES",
+    "SEAM_VOXELS",
     "Edit",
     "Recipe",
     "apply_edit",

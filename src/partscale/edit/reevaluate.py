@@ -21,8 +21,10 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+from scipy import ndimage
 from skimage import measure
 
+from .._util import keyword_options
 from ..csdf import CSDF
 from ..progress import ProgressCallback, resolve
 
@@ -74,42 +76,40 @@ def _closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
 
 
 @numba.njit(cache=True, inline="always")
-def _tri_d2(verts, faces, t, px, py, pz):
-    a = faces[t, 0]
-    b = faces[t, 1]
-    c = faces[t, 2]
+def _tri_d2(tri, t, px, py, pz):
     qx, qy, qz = _closest_on_triangle(
         px,
         py,
         pz,
-        verts[a, 0],
-        verts[a, 1],
-        verts[a, 2],
-        verts[b, 0],
-        verts[b, 1],
-        verts[b, 2],
-        verts[c, 0],
-        verts[c, 1],
-        verts[c, 2],
+        tri[t, 0],
+        tri[t, 1],
+        tri[t, 2],
+        tri[t, 3],
+        tri[t, 4],
+        tri[t, 5],
+        tri[t, 6],
+        tri[t, 7],
+        tri[t, 8],
     )
     dx, dy, dz = px - qx, py - qy, pz - qz
     return dx * dx + dy * dy + dz * dz, qx, qy, qz
 
 
 @numba.njit(cache=True)
-def _propagate(verts, faces, order, shape, best_d2, best_t, npass):
-    """Nearest triangle of every voxel in ``order`` (flat indices, by increasing |sdf|).
+def _propagate(tri, order, shape, best_d2, best_t, npass):
+    """Nearest triangle of every voxel in ``order`` (ascending flat indices of the box).
 
-    ``best_d2``/``best_t`` (flat, the box's size) start at inf / -1 and are updated in place.
+    ``tri`` (F, 13): triangle corners, bounding-sphere centre and radius. ``best_d2``/``best_t`` (flat, the box's size) start at
+    inf / -1 and are updated in place: seeds, then ``npass`` raster sweeps alternating direction
+    (raster order keeps memory access local; the band is thin, so two sweeps reach every voxel).
     """
     nx, ny, nz = shape
     syz = ny * nz
     # seeds: the eight corners of the cell each triangle lies in
-    for t in range(faces.shape[0]):
-        a = faces[t, 0]
-        cx = int(np.floor((verts[a, 0] + verts[faces[t, 1], 0] + verts[faces[t, 2], 0]) / 3.0))
-        cy = int(np.floor((verts[a, 1] + verts[faces[t, 1], 1] + verts[faces[t, 2], 1]) / 3.0))
-        cz = int(np.floor((verts[a, 2] + verts[faces[t, 1], 2] + verts[faces[t, 2], 2]) / 3.0))
+    for t in range(tri.shape[0]):
+        cx = int(np.floor((tri[t, 0] + tri[t, 3] + tri[t, 6]) / 3.0))
+        cy = int(np.floor((tri[t, 1] + tri[t, 4] + tri[t, 7]) / 3.0))
+        cz = int(np.floor((tri[t, 2] + tri[t, 5] + tri[t, 8]) / 3.0))
         for di in range(2):
             i = cx + di
             if i < 0 or i >= nx:
@@ -122,20 +122,25 @@ def _propagate(verts, faces, order, shape, best_d2, best_t, npass):
                     k = cz + dk
                     if k < 0 or k >= nz:
                         continue
-                    d2, _, _, _ = _tri_d2(verts, faces, t, float(i), float(j), float(k))
+                    d2, _, _, _ = _tri_d2(tri, t, float(i), float(j), float(k))
                     f = i * syz + j * nz + k
                     if d2 < best_d2[f]:
                         best_d2[f] = d2
                         best_t[f] = t
-    for _ in range(npass):
-        for n in range(order.shape[0]):
-            f = order[n]
+    # stamp[t] == visit: triangle t was already tried for the current voxel
+    stamp = np.zeros(tri.shape[0], np.int64)
+    visit = 0
+    m = order.shape[0]
+    for p in range(npass):
+        for n in range(m):
+            f = order[n] if p % 2 == 0 else order[m - 1 - n]
             i = f // syz
             j = (f // nz) % ny
             k = f % nz
             px, py, pz = float(i), float(j), float(k)
-            cur = best_t[f]
-            last = -1
+            visit += 1
+            if best_t[f] >= 0:
+                stamp[best_t[f]] = visit
             for di in range(-1, 2):
                 ii = i + di
                 if ii < 0 or ii >= nx:
@@ -149,24 +154,30 @@ def _propagate(verts, faces, order, shape, best_d2, best_t, npass):
                         if kk < 0 or kk >= nz:
                             continue
                         t = best_t[ii * syz + jj * nz + kk]
-                        if t < 0 or t == cur or t == last:
+                        if t < 0:
                             continue
-                        last = t
-                        d2, _, _, _ = _tri_d2(verts, faces, t, px, py, pz)
+                        if stamp[t] == visit:
+                            continue
+                        stamp[t] = visit
+                        # bounding-sphere test first: most candidates are farther than the best
+                        ex = px - tri[t, 9]
+                        ey = py - tri[t, 10]
+                        ez = pz - tri[t, 11]
+                        lb = np.sqrt(ex * ex + ey * ey + ez * ez) - tri[t, 12]
+                        if lb > 0.0 and lb * lb >= best_d2[f]:
+                            continue
+                        d2, _, _, _ = _tri_d2(tri, t, px, py, pz)
                         if d2 < best_d2[f]:
                             best_d2[f] = d2
                             best_t[f] = t
-                            cur = t
 
 
 @numba.njit(cache=True)
-def _closest_points(verts, faces, idx, tri):
+def _closest_points(tri, idx, which):
     """(N, 3) closest points on triangles ``tri`` of voxels ``idx`` (N, 3) int."""
     out = np.empty((idx.shape[0], 3))
     for n in range(idx.shape[0]):
-        _, qx, qy, qz = _tri_d2(
-            verts, faces, tri[n], float(idx[n, 0]), float(idx[n, 1]), float(idx[n, 2])
-        )
+        _, qx, qy, qz = _tri_d2(tri, which[n], float(idx[n, 0]), float(idx[n, 1]), float(idx[n, 2]))
         out[n, 0] = qx
         out[n, 1] = qy
         out[n, 2] = qz
@@ -207,6 +218,7 @@ def reevaluate_arrays(
     mask: np.ndarray,
     *,
     band: float = BAND_VOXELS,
+    npass: int = 2,
 ) -> int:
     """Recompute ``sdf``, ``rgb``, ``parts`` in place at ``mask`` voxels within ``band`` voxels.
 
@@ -217,8 +229,10 @@ def reevaluate_arrays(
     rgb : (X, Y, Z, 3) uint8, writeable
     parts : (X, Y, Z) int16, writeable
     voxel_size : float
-    mask : (X, Y, Z) bool
-        Voxels to recompute; those with ``|sdf| > band`` voxels are left as they are.
+    mask : (X, Y, Z) bool or uint8
+        Voxels to recompute; those with ``|sdf| > band`` voxels are left as they are. As uint8,
+        code 2 marks voxels whose current |sdf| is known to be an upper bound of the distance:
+        they keep it (and their colour and part) where it is smaller than the recomputed one.
     band : float
         Half-width of the band, in voxels.
 
@@ -229,53 +243,97 @@ def reevaluate_arrays(
     """
     h = float(voxel_size)
     lim = band * h
-    target = mask & (np.abs(sdf) <= lim)
-    if not target.any():
+    mask = np.asarray(mask)
+    target = (mask > 0) & (np.abs(sdf) <= lim)
+    layers = np.flatnonzero(target.any(axis=(1, 2)))
+    if layers.size == 0:
         return 0
-    # the box around the target voxels that holds every surface point within ``band`` of them
-    nz_ = [
-        np.flatnonzero(target.any(axis=tuple(a for a in range(3) if a != ax))) for ax in range(3)
-    ]
     pad = int(np.ceil(band)) + 2
-    lo = [max(int(ix[0]) - pad, 0) for ix in nz_]
-    hi = [min(int(ix[-1]) + pad + 1, sdf.shape[a]) for a, ix in enumerate(nz_)]
-    box = tuple(slice(lo[a], hi[a]) for a in range(3))
-    sub = np.array(sdf[box], dtype=np.float32)
-    if min(sub.shape) < 2 or not ((sub <= 0).any() and (sub > 0).any()):
+    # Targets cluster at the zone's planes and the tile seams: one box per cluster of layers
+    # (along axis 0) instead of one box spanning them all. Every box reads the unchanged field;
+    # all writes happen at the end, so the result does not depend on the order of the boxes.
+    breaks = np.flatnonzero(np.diff(layers) > 2 * pad + 1)
+    runs = np.split(layers, breaks + 1)
+    found = []
+    for run in runs:
+        a0 = max(int(run[0]) - pad, 0)
+        a1 = min(int(run[-1]) + pad + 1, sdf.shape[0])
+        t_run = np.zeros_like(target[a0:a1])
+        t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] : run[-1] + 1]
+        got = _solve_box(sdf, t_run, a0, h, lim, pad, npass)
+        if got is not None:
+            found.append(got)
+    if not found:
         return 0
-    verts, faces, _n, _v = measure.marching_cubes(sub, 0.0, allow_degenerate=False)
-    if len(faces) == 0:
-        return 0
-    verts = verts.astype(np.float64)
-    faces = faces.astype(np.int64)
-    # every band voxel of the box relays nearest triangles; one voxel of slack beyond the band
-    relay = np.abs(sub) <= lim + h
-    flat = np.flatnonzero(relay)
-    order = flat[np.argsort(np.abs(sub.reshape(-1)[flat]), kind="stable")]
-    best_d2 = np.full(sub.size, np.inf)
-    best_t = np.full(sub.size, -1, np.int64)
-    _propagate(verts, faces, order, np.array(sub.shape, np.int64), best_d2, best_t, 2)
-    tsub = target[box].reshape(-1) & (best_t >= 0)
-    fsel = np.flatnonzero(tsub)
-    if fsel.size == 0:
-        return 0
-    idx = np.stack(np.unravel_index(fsel, sub.shape), axis=1).astype(np.int64)
-    dist = np.sqrt(best_d2[fsel]) * h
-    sign = np.where(sub.reshape(-1)[fsel] < 0, -1.0, 1.0)
-    gi = idx + np.asarray(lo)
-    sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = (sign * dist).astype(np.float32)
-    cp = _closest_points(verts, faces, idx, best_t[fsel]) + np.asarray(lo, np.float64)
+    gi = np.concatenate([f[0] for f in found])
+    new = np.concatenate([f[1] for f in found])
+    cp = np.concatenate([f[2] for f in found])
+    if mask.dtype == np.uint8:
+        # code 2: the old value is an upper bound of the distance; keep it where it is smaller
+        old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
+        capped = (mask[gi[:, 0], gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
+        if capped.any():
+            keep = ~capped
+            gi, new, cp = gi[keep], new[keep], cp[keep]
     col = _trilinear_rgb(rgb, cp)
-    # colours and parts are read before any is written (no voxel sees another's new colour)
+    # colours and parts are all read before any is written (no voxel sees another's new colour)
     near = np.rint(cp).astype(np.int64)
     for a in range(3):
         np.clip(near[:, a], 0, sdf.shape[a] - 1, out=near[:, a])
     new_parts = parts[near[:, 0], near[:, 1], near[:, 2]].copy()
+    sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = new
     rgb[gi[:, 0], gi[:, 1], gi[:, 2]] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
     parts[gi[:, 0], gi[:, 1], gi[:, 2]] = new_parts
-    return int(fsel.size)
+    return len(gi)
 
 
+def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
+    """Distances of the targets ``t_run`` (layers ``a0 ...`` of ``sdf``) to the zero level set.
+
+    Returns ``(gi (N, 3) int64 grid indices, new sdf (N,) float32, closest points (N, 3) float64
+    in continuous grid indices)`` or None.
+    """
+    # the box around the target voxels that holds every surface point within the band of them
+    nz_ = [np.flatnonzero(t_run.any(axis=tuple(b for b in range(3) if b != ax))) for ax in range(3)]
+    lo = [a0] + [max(int(nz_[ax][0]) - pad, 0) for ax in (1, 2)]
+    hi = [a0 + t_run.shape[0]] + [min(int(nz_[ax][-1]) + pad + 1, sdf.shape[ax]) for ax in (1, 2)]
+    box = tuple(slice(lo[a], hi[a]) for a in range(3))
+    sub = np.array(sdf[box], dtype=np.float32)
+    if min(sub.shape) < 2 or not ((sub <= 0).any() and (sub > 0).any()):
+        return None
+    verts, faces, _n, _v = measure.marching_cubes(sub, 0.0, allow_degenerate=False)
+    if len(faces) == 0:
+        return None
+    corners = verts.astype(np.float64)[faces]  # (F, 3, 3)
+    centre = corners.mean(axis=1)
+    radius = np.linalg.norm(corners - centre[:, None, :], axis=2).max(axis=1)
+    # (F, 13): corners a, b, c, bounding-sphere centre and radius
+    tri = np.ascontiguousarray(
+        np.concatenate([corners.reshape(-1, 9), centre, radius[:, None] * (1 + 1e-9)], axis=1)
+    )
+    # band voxels near the targets relay nearest triangles (half a voxel of slack beyond the
+    # band); a voxel farther than the band from every target cannot be on a target's path
+    t_box = t_run[:, box[1], box[2]]
+    reach = ndimage.maximum_filter(t_box.view(np.uint8), size=2 * pad - 1, mode="constant")
+    order = np.flatnonzero((np.abs(sub) <= lim + 0.5 * h) & (reach > 0)).astype(np.int64)
+    best_d2 = np.full(sub.size, np.inf)
+    best_t = np.full(sub.size, -1, np.int64)
+    _propagate(tri, order, np.array(sub.shape, np.int64), best_d2, best_t, npass)
+    tsub = t_box.reshape(-1) & (best_t >= 0)
+    fsel = np.flatnonzero(tsub)
+    if fsel.size == 0:
+        return None
+    idx = np.stack(np.unravel_index(fsel, sub.shape), axis=1).astype(np.int64)
+    old = sub.reshape(-1)[fsel]
+    sign = np.where(old <= 0, -1.0, 1.0)  # sdf <= 0 is inside
+    new = (sign * np.sqrt(best_d2[fsel]) * h).astype(np.float32)
+    # a voxel the surface passes through stays on its side (outside: > 0), never flips
+    new = np.where((sign > 0) & (new <= 0), old, new)
+    cp = _closest_points(tri, idx, best_t[fsel]) + np.asarray(lo, np.float64)
+    return idx + np.asarray(lo), new, cp
+
+
+@keyword_options
 def reevaluate(
     csdf: CSDF,
     mask: np.ndarray | None = None,

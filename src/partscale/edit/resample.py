@@ -118,20 +118,29 @@ def _split(x: np.ndarray, n_src: int) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return i0, i1, w
 
 
+def lerp_float(src: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """float32 (M, ...) linear interpolation of layers of ``src`` (N, ...) at ``x`` (M,)."""
+    i0, i1, w = _split(x, src.shape[0])
+    w32 = w.astype(np.float32).reshape((-1,) + (1,) * (src.ndim - 1))
+    return src[i0].astype(np.float32) * (1 - w32) + src[i1].astype(np.float32) * w32
+
+
 def lerp_layers(src: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Linear interpolation of layers of ``src`` (N, ...) at continuous indices ``x`` (M,).
 
-    Returns float32 (M, ...); layers at integer ``x`` are exact copies.
+    Returns (M, ...) of ``src``'s dtype (integers rounded); layers at integer ``x`` are exact
+    copies, and only the others are computed in floating point.
     """
-    i0, i1, w = _split(x, src.shape[0])
-    shape = (-1,) + (1,) * (src.ndim - 1)
-    w32 = w.astype(np.float32).reshape(shape)
-    a = src[i0].astype(np.float32)
-    frac = w != 0
-    if frac.any():
-        b = src[i1[frac]].astype(np.float32)
-        a[frac] = a[frac] * (1 - w32[frac]) + b * w32[frac]
-    return a
+    i0, _i1, w = _split(x, src.shape[0])
+    out = src[i0]
+    frac = np.flatnonzero(w != 0)
+    if frac.size:
+        v = lerp_float(src, x[frac])
+        if np.issubdtype(src.dtype, np.integer):
+            info = np.iinfo(src.dtype)
+            v = np.clip(np.rint(v), info.min, info.max)
+        out[frac] = v
+    return out
 
 
 def crisp_parts(parts: np.ndarray, sdf: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -142,19 +151,23 @@ def crisp_parts(parts: np.ndarray, sdf: np.ndarray, x: np.ndarray) -> np.ndarray
     surface passes between them, else half-way (nearest source voxel).
     """
     i0, i1, w = _split(x, parts.shape[0])
-    p0 = parts[i0]
-    out = p0.copy()
-    frac = w != 0
-    if not frac.any():
+    out = parts[i0]
+    frac = np.flatnonzero(w != 0)
+    if frac.size == 0:
         return out
+    p0 = out[frac]
     p1 = parts[i1[frac]]
-    a = sdf[i0[frac]].astype(np.float64)
-    b = sdf[i1[frac]].astype(np.float64)
-    shape = (-1,) + (1,) * (parts.ndim - 1)
+    differ = p0 != p1
+    if not differ.any():  # e.g. not segmented: every label -1
+        return out
+    # only where the labels differ: float32 is exact enough to place a boundary
+    a = sdf[i0[frac]]
+    b = sdf[i1[frac]]
     cross = (a <= 0) != (b <= 0)
-    tb = np.where(cross, np.abs(a) / np.maximum(np.abs(a) + np.abs(b), 1e-30), 0.5)
-    take1 = w[frac].reshape(shape) >= tb
-    out[frac] = np.where(take1, p1, p0[frac])
+    aa, ab = np.abs(a), np.abs(b)
+    tb = np.where(cross, aa / np.maximum(aa + ab, np.float32(1e-30)), np.float32(0.5))
+    take1 = differ & (w[frac].astype(np.float32).reshape((-1,) + (1,) * (parts.ndim - 1)) >= tb)
+    out[frac] = np.where(take1, p1, p0)
     return out
 
 
@@ -165,15 +178,14 @@ def apply_plan(
     out_sdf = lerp_layers(sdf, plan.xa)
     out_rgb = lerp_layers(rgb, plan.xa)
     out_parts = crisp_parts(parts, sdf, plan.xa)
-    seam = plan.beta > 0
-    if seam.any():
-        xb = plan.xb[seam]
+    seam = np.flatnonzero(plan.beta > 0)
+    if seam.size:
         bt = plan.beta[seam].astype(np.float32)
-        s_b = lerp_layers(sdf, xb)
-        c_b = lerp_layers(rgb, xb)
-        out_sdf[seam] = out_sdf[seam] * (1 - bt[:, None, None]) + s_b * bt[:, None, None]
-        out_rgb[seam] = (
-            out_rgb[seam] * (1 - bt[:, None, None, None]) + c_b * bt[:, None, None, None]
+        b3 = bt[:, None, None]
+        out_sdf[seam] = (
+            lerp_float(sdf, plan.xa[seam]) * (1 - b3) + lerp_float(sdf, plan.xb[seam]) * b3
         )
-    rgb8 = np.clip(np.rint(out_rgb), 0, 255).astype(np.uint8)
-    return out_sdf, rgb8, out_parts
+        b4 = bt[:, None, None, None]
+        c = lerp_float(rgb, plan.xa[seam]) * (1 - b4) + lerp_float(rgb, plan.xb[seam]) * b4
+        out_rgb[seam] = np.clip(np.rint(c), 0, 255).astype(np.uint8)
+    return out_sdf, out_rgb, out_parts

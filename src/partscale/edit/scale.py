@@ -22,13 +22,17 @@ from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from .recipe import AXES, MODES, Edit, Recipe, tile_count
 from .reevaluate import BAND_VOXELS, reevaluate_arrays
-from .resample import Plan, apply_plan, lerp_layers, make_plan
+from .resample import SEAM_VOXELS, Plan, apply_plan, lerp_layers, make_plan
 
 #: Peak working bytes per output voxel of an edit (output arrays, float temporaries, masks).
 BYTES_PER_VOXEL = 48
 
 #: An axial slope of the source distance below this counts as "nearest surface point lateral".
 _LATERAL = 0.05
+
+#: A slab scaled by less than this relative amount counts as rigid (error <= 1% of |distance|,
+#: 0.04 voxel at the band's edge): tiles of whole periods are copies, not stretches.
+_RIGID = 0.01
 
 
 def _as_edit(edit: Edit | dict[str, Any]) -> Edit:
@@ -126,43 +130,67 @@ def _inner_parts(sdf: np.ndarray, parts: np.ndarray, i_start: float, i_end: floa
     return np.flatnonzero(keep)
 
 
-def _update_parts_info(meta: dict[str, Any], sdf: np.ndarray, parts: np.ndarray, csdf_out):
-    """Recount voxels and bounding boxes of ``meta['parts_info']`` (new parts added by copies)."""
+def _update_parts_info(
+    meta: dict[str, Any],
+    parts: np.ndarray,
+    r: dict[str, Any],
+    mode: str,
+    scale: float,
+    copy_of: dict[int, tuple[int, int]],
+) -> None:
+    """Carry ``meta['parts_info']`` (the segment stage's part facts) through an edit.
+
+    ``voxels`` is recounted; ``bbox`` (world box of the part's surface patch) is mapped along the
+    axis by the edit itself; ``hull_volume`` is scaled with parts lying wholly inside the zone (all
+    parts in global mode); other keys are kept. Each new (copied) part gets a copy of its
+    original's entry with ``index`` and ``copy_of`` set.
+    """
     info = meta.get("parts_info")
     if not isinstance(info, list):
         return
+    ax, s, e, d = r["axis"], r["start"], r["end"], r["dest_snapped"]
+    shift = d - e
+    n_copies = tile_count(e - s, d - s) if mode == "tile" else 1
+    period = (d - s) / n_copies
+    lo = r["lo"]
+
+    def forward(x: float, copy: int) -> float:
+        if mode == "global":
+            return lo + (x - lo) * scale
+        if x < s:
+            return x
+        if x > e:
+            return x + shift
+        return s + copy * period + (x - s) * scale
+
     n = int(parts.max()) + 1 if parts.size and parts.max() >= 0 else 0
-    inside = sdf <= 0
-    lab = np.where(inside, parts.astype(np.int64) + 1, 0)
-    counts = np.bincount(lab.reshape(-1), minlength=n + 1)
-    idx = np.arange(1, n + 1)
-    objs = ndimage.find_objects(lab, max_label=n)
-    by_index = {int(e.get("index", -1)): e for e in info if isinstance(e, dict)}
+    counts = np.bincount(parts[parts >= 0].ravel(), minlength=n)
+    by_index = {int(x.get("index", -1)): x for x in info if isinstance(x, dict)}
+    originals = {p: _copy.deepcopy(x) for p, x in by_index.items()}
     for p in range(n):
+        src, m = copy_of.get(p, (p, 0))
+        base = originals.get(src)
+        if base is None:
+            continue
         entry = by_index.get(p)
         if entry is None:
-            src = meta.get("_copy_of", {}).get(str(p))
-            base = by_index.get(src) if src is not None else None
-            entry = _copy.deepcopy(base) if base is not None else {}
+            entry = _copy.deepcopy(base)
             entry["index"] = p
-            if src is not None:
-                entry["copy_of"] = src
+            entry["copy_of"] = src
             info.append(entry)
-            by_index[p] = entry
-        entry["voxels"] = int(counts[p + 1])
-        sl = objs[p] if p < len(objs) else None
-        if sl is None:
-            entry["bbox"] = None
-        else:
-            lo_i = np.array([s.start for s in sl], float)
-            hi_i = np.array([s.stop - 1 for s in sl], float)
-            entry["bbox"] = [
-                csdf_out.index_to_world(lo_i).tolist(),
-                csdf_out.index_to_world(hi_i).tolist(),
-            ]
-    del idx
-    info.sort(key=lambda e: e.get("index", -1))
-    meta.pop("_copy_of", None)
+        entry["voxels"] = int(counts[p]) if p < len(counts) else 0
+        box = base.get("bbox")
+        inner = box is not None and s < box[0][ax] and box[1][ax] < e
+        if box is not None:
+            new_box = _copy.deepcopy(box)
+            # a part crossing the zone runs through every copy: its end lies in the last one
+            last = m if inner else n_copies - 1
+            new_box[0][ax] = forward(box[0][ax], m)
+            new_box[1][ax] = forward(box[1][ax], last)
+            entry["bbox"] = new_box
+        if "hull_volume" in base and (inner or mode == "global"):
+            entry["hull_volume"] = base["hull_volume"] * scale
+    info.sort(key=lambda x: x.get("index", -1))
 
 
 def _recompute_mask(
@@ -184,20 +212,40 @@ def _recompute_mask(
     the resampled slab. Among those, a voxel keeps its resampled value when that value is provably
     still the distance: the slab grows (scale >= 1, so the inverse map is 1-Lipschitz and old
     distances are lower bounds) and its nearest surface point lies square to the axis (axial slope
-    of the source distance ~ 0), so its distance is carried over unchanged.
+    of the source distance ~ 0), so its distance is carried over unchanged; or, in a tile copy at
+    scale ~1, the ball of its distance lies within its copy (a pure translation).
     """
     lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
-    near = np.abs(out_sdf) <= lim
+    mask = np.zeros(out_sdf.shape, np.uint8)
+    n_copies = int(plan.copy.max()) + 1
+    if mode == "tile" and abs(plan.scale - 1.0) <= _RIGID:
+        # Copies at scale ~1 are translations of the slab, and the first and last copy continue
+        # the content before and after the zone exactly: a voxel's neighbourhood is unchanged
+        # unless the ball of its distance reaches an internal seam (or it lies in a blend).
+        period = (dest - start) / n_copies
+        seams = start + period * np.arange(1, n_copies)
+        if seams.size == 0:
+            return mask
+        to_seam = np.abs(y[:, None] - seams[None, :]).min(axis=1)
+        reach = np.maximum(to_seam - SEAM_VOXELS * h, 0.0).astype(np.float32)
+        rows = np.flatnonzero(reach <= lim)
+        a = np.abs(out_sdf[rows])
+        mask[rows] = (a <= lim) & (a >= reach[rows, None, None])
+        return mask
     if mode == "global":
-        affected = near
+        j0, j1 = 0, out_sdf.shape[0]
+        affected = np.abs(out_sdf) <= lim
     else:
-        # distance of each output layer to the zone (0 inside the slab)
+        # distance of each output layer to the zone (0 inside the slab), one voxel of slack;
+        # layers farther from the zone than the band cannot be affected
         gap = np.where(y < start, start - y, np.where(y > dest, y - dest, 0.0))
-        gap = np.maximum(gap - h, 0.0).astype(np.float32)  # one voxel of slack
-        affected = near & (np.abs(out_sdf) >= gap[:, None, None])
-    if plan.scale < 1.0 - 1e-9:
-        return affected
+        gap = np.maximum(gap - h, 0.0).astype(np.float32)
+        rows = np.flatnonzero(gap <= lim)
+        j0, j1 = int(rows[0]), int(rows[-1]) + 1
+        a = np.abs(out_sdf[j0:j1])
+        affected = (a <= lim) & (a >= gap[j0:j1, None, None])
     cand = np.nonzero(affected)
+    cand = (cand[0] + j0, cand[1], cand[2])
     n_src = src_sdf.shape[0]
     xa = plan.xa[cand[0]]
     xc = np.clip(xa, 0, n_src - 1)
@@ -212,6 +260,14 @@ def _recompute_mask(
         )
         np.maximum(slope, np.abs(g), out=slope)
     keep = slope <= _LATERAL
+    if plan.scale < 1.0 - _RIGID:
+        # A shrinking slab can bring surface closer: everything affected is recomputed. Outside
+        # the slab, a voxel whose nearest point is square to the axis still has that point, so
+        # its old distance caps the new one (code 2): the exact value wherever nothing came
+        # closer, immune to the facets' chamfer of sharp edges.
+        code = np.where(keep & ~plan.in_slab[cand[0]], 2, 1).astype(np.uint8)
+        mask[cand] = code
+        return mask
     if mode == "tile":
         # Copies are not one monotone map: a slab voxel keeps its value only if the ball of its
         # distance stays inside its own copy (and it is not in a seam blend). Voxels outside the
@@ -222,11 +278,12 @@ def _recompute_mask(
         c = plan.copy[cand[0]]
         room = np.minimum(yy - (start + c * period), start + (c + 1) * period - yy)
         inside = plan.in_slab[cand[0]]
-        ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room)
-        keep &= ~inside | ok_in
-    mask = np.zeros(out_sdf.shape, bool)
+        # a copy at scale ~1 is a translation: inside that ball nothing else changed
+        rigid = abs(plan.scale - 1.0) <= _RIGID
+        ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room) & (keep | rigid)
+        keep = np.where(inside, ok_in, keep)
     sel = ~keep
-    mask[cand[0][sel], cand[1][sel], cand[2][sel]] = True
+    mask[cand[0][sel], cand[1][sel], cand[2][sel]] = 1
     return mask
 
 
@@ -238,12 +295,12 @@ def _renumber_copies(
     *,
     i_start: float,
     i_end: float,
-) -> dict[str, int]:
+) -> dict[int, tuple[int, int]]:
     """Give copies ``m >= 1`` of the parts lying wholly inside the zone new indices (in place).
 
     New indices follow the existing ones: copy ``m`` of inner part ``p`` (rank ``r`` among the
     ``q`` inner parts) becomes ``P + (m - 1) q + r``. Parts that cross the zone's planes run
-    continuously through every copy and keep their index. Returns ``{new: original}``.
+    continuously through every copy and keep their index. Returns ``{new: (original, m)}``.
     """
     inner = _inner_parts(src_sdf, src_parts, i_start, i_end)
     n_copies = int(plan.copy.max()) + 1
@@ -256,7 +313,7 @@ def _renumber_copies(
             f"tile: expected at most {np.iinfo(np.int16).max + 1} parts, got "
             f"{base + (n_copies - 1) * q}"
         )
-    copy_of: dict[str, int] = {}
+    copy_of: dict[int, tuple[int, int]] = {}
     for m in range(1, n_copies):
         layers = np.flatnonzero(plan.in_slab & (plan.copy == m))
         if layers.size == 0:
@@ -265,7 +322,7 @@ def _renumber_copies(
         new = base + (m - 1) * q + np.arange(q)
         lut[inner + 1] = new
         for p, nw in zip(inner.tolist(), new.tolist(), strict=True):
-            copy_of[str(nw)] = p
+            copy_of[nw] = (p, m)
         block = out_parts[layers]
         out_parts[layers] = lut[block.astype(np.int64) + 1].astype(np.int16)
     return copy_of
@@ -284,7 +341,7 @@ def _edit_arrays(
     extra: dict[str, Any] = {"scale": plan.scale}
     if naive:
         out_sdf = lerp_layers(src_sdf, plan.xa)
-        out_rgb = np.clip(np.rint(lerp_layers(src_rgb, plan.xa)), 0, 255).astype(np.uint8)
+        out_rgb = lerp_layers(src_rgb, plan.xa)
         ix = np.clip(np.rint(plan.xa), 0, src_parts.shape[0] - 1).astype(np.int64)
         out_parts = src_parts[ix]
     else:
@@ -369,16 +426,11 @@ def apply_edit(
     sdf, rgb, parts, extra = _edit_arrays(csdf, r, edit.mode)
     report(0.9, "recording")
     meta = _copy.deepcopy(csdf.meta)
-    if extra.get("copy_of"):
-        meta["_copy_of"] = extra["copy_of"]
+    if isinstance(meta.get("parts_info"), list):
+        _update_parts_info(meta, parts, r, edit.mode, extra["scale"], extra.get("copy_of", {}))
     out = csdf.with_history(
         _history_entry(edit, r, extra, "scale"), sdf=sdf, rgb=rgb, parts=parts, meta=meta
     )
-    if isinstance(out.meta.get("parts_info"), list) or "_copy_of" in out.meta:
-        m = _copy.deepcopy(out.meta)
-        _update_parts_info(m, out.sdf, out.parts, out)
-        m.pop("_copy_of", None)
-        out = out.replace(meta=m)
     report(1.0, "done")
     return out
 

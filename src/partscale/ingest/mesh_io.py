@@ -85,9 +85,13 @@ class ColoredMesh:
     source: str = ""
 
     def __post_init__(self) -> None:
-        for a in (self.vertices, self.faces, self.face_material, self.uv, self.corner_color):
-            if a is not None:
+        # read-only like a CSDF's arrays; a caller's writeable array is copied, not frozen
+        for name in ("vertices", "faces", "face_material", "uv", "corner_color"):
+            a = getattr(self, name)
+            if a is not None and a.flags.writeable:
+                a = np.array(a)
                 a.flags.writeable = False
+                object.__setattr__(self, name, a)
 
     @property
     def n_faces(self) -> int:

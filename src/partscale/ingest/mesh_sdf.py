@@ -2,25 +2,29 @@
 
 Method (what makes it robust on real assemblies of open and intersecting pieces)
 ---------------------------------------------------------------------------------
-1. Large triangles are split (for classification and distances only; colour is still looked up
-   on the source triangle) so no piece is longer than ~2 voxels.
-2. Each piece is classified by libigl's generalized winding number ``w`` just off both of its
-   sides. Across any triangle ``w`` jumps by 1, so the lower side value ``lo`` says it all:
-   ``lo ~ 0`` (outside on one side, inside on the other): a *boundary* of the solid, kept exactly;
-   ``lo >= 3/4``: *buried* inside another piece, ignored; anything else (``lo`` fractional or
-   below -1/4): an *open sheet* (cloth, a single-sided board), thickened into a solid of
-   half-thickness ``t = sqrt(3)/2`` voxel so its inside voxels stay 6-connected.
+1. Classification. Each triangle is classified by libigl's generalized winding number ``w``
+   just in front of it. Crossing an oriented triangle against its normal raises ``w`` by
+   exactly 1, so the front value ``lo`` (the lower side) says it all: ``|lo| <= 1/4`` (outside
+   on one side, inside on the other): a *boundary* of the solid, kept exactly; ``lo >= 3/4``:
+   *buried* inside another piece, ignored; anything else (``lo`` fractional or below -1/4): an
+   *open sheet* (cloth, a single-sided board). Triangles longer than ``SUBDIVIDE`` voxels are
+   also probed towards their corners; where the probes disagree (a board partly buried in
+   another) they are split into pieces of ``SUBDIVIDE_MIXED`` voxels classified one by one.
+2. Thin pieces. Open sheets, and closed pieces thinner than the grid can hold (shelves, back
+   panels: inward ray to the next boundary shorter than ``2 t``), become solids of thickness
+   ``2 t``, ``t = sqrt(3)/2`` voxel, so their inside voxels stay 6-connected and marching cubes
+   has no holes. Thicker closed pieces keep their surface exactly (no offset).
 3. Exact unsigned distances to boundary and to sheet pieces within a band of ``BAND`` voxels
-   (numba, slabs along x in parallel).
-4. Sign of the boundary distance: a voxel farther than one voxel from the boundary has the sign
-   of all its 6-neighbours, so the 6-connected components of ``{d > h}`` (the far field
-   included) share one sign, read from ``w > 1/2`` at a few voxels per component (all of them
-   when those disagree). Only voxels within one voxel of the boundary and with no such neighbour
-   (inside boards thinner than two voxels) are tested one by one.
-5. ``sdf = min(signed boundary distance, sheet distance - t)`` in the band; beyond it, the
-   distance to the surface point of the nearest band voxel (a Euclidean feature transform).
+   (numba, slabs along x in parallel, no races).
+4. Sign: a voxel with no surface within one voxel has the sign of all its 6-neighbours, so the
+   6-connected components of such voxels (the far field included; sheets block them as much as
+   boundaries, so a cushion with an open seam still encloses its inside) share one sign, read
+   from ``w > 1/2`` at a few voxels per component (at all of them when those disagree). Only
+   voxels near the surface with no such neighbour (inside thin boards) are tested one by one.
+5. ``sdf = min(signed boundary distance, sheet distance - offset)`` in the band; beyond it, the
+   distance to the nearest surface of the nearest band voxel (a Euclidean feature transform).
 6. Colour of a voxel = source colour at its nearest surface point (texture through the UVs),
-   propagated beyond the band by the same feature transform.
+   carried beyond the band by the same feature transform.
 """
 
 from __future__ import annotations
@@ -38,9 +42,10 @@ from . import _kernels
 from .mesh_io import ColoredMesh
 
 BAND = 3  # exact distances within this many voxels of the surface
-SUBDIVIDE = 4.0  # pieces longer than this many voxels are classified piecewise
+SUBDIVIDE = 8.0  # pieces longer than this many voxels are classified piecewise
+SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
 SLAB = 2  # x-layers per parallel work item
-BYTES_PER_VOXEL = 72  # peak working set of from_mesh per grid voxel (all temporaries)
+BYTES_PER_VOXEL = 160  # peak working set of from_mesh per grid voxel (measured, all temporaries)
 MIN_RES = 16
 
 
@@ -156,8 +161,9 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
 
     Every triangle is classified at its centroid; triangles longer than ``SUBDIVIDE`` voxels
     also at three points towards their corners, and where those disagree (a board partly
-    buried in another) they are split into pieces of at most ``SUBDIVIDE`` voxels, each
-    classified on its own. Winding-number queries next to the surface are the expensive part
+    buried in another) they are bisected, and the halves probed again, down to pieces of
+    ``SUBDIVIDE_MIXED`` voxels near the curves where pieces intersect (surfaces are exact
+    except within about a voxel of those curves). Winding-number queries next to the surface are the expensive part
     of the import, so only as many as needed are made.
 
     Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
@@ -194,13 +200,29 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
     parent = [wid]
     bary = [np.broadcast_to(np.eye(3), (len(wid), 3, 3))]
     pcls = [cls[wid]]
-    if len(mixed):
-        sub, sp, sb = _subdivide(tris[mixed], SUBDIVIDE * h)
-        scls = classify(V, F, sub, eps)
-        prim.append(sub)
-        parent.append(mixed[sp])
-        bary.append(sb)
-        pcls.append(scls)
+    # refine only where the probes disagree: bisect, probe the halves, keep what agrees (a
+    # sliver of another class between the probes can be missed: surfaces may be off by up to
+    # about a voxel right at the curves where pieces intersect)
+    t = tris[mixed]
+    par = mixed
+    b = np.broadcast_to(np.eye(3), (len(mixed), 3, 3))
+    while len(t):
+        t, b, par = _bisect(t, b, par)
+        longest = np.max([np.linalg.norm(t[:, (i + 1) % 3] - t[:, i], axis=1) for i in range(3)], 0)
+        big_piece = longest > SUBDIVIDE_MIXED * h
+        n = unit[par] * eps
+        q = [t.mean(axis=1) + n]
+        q += [np.einsum("c,ncd->nd", cw, t[big_piece]) + n[big_piece] for cw in corner_w]
+        w = _winding(V, F, np.concatenate(q))
+        c = _class_of(w[: len(t)])
+        cc = _class_of(w[len(t) :]).reshape(len(corner_w), -1)
+        done = ~big_piece
+        done[big_piece] = (cc == c[big_piece]).all(axis=0)
+        prim.append(t[done])
+        parent.append(par[done])
+        bary.append(b[done])
+        pcls.append(c[done])
+        t, b, par = t[~done], b[~done], par[~done]
     return (
         np.concatenate(prim),
         np.concatenate(parent),
@@ -209,11 +231,25 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
     )
 
 
-def _thickness(V, F, tris, start: float) -> np.ndarray:
-    """(T,) distance from each triangle's centroid, inwards (against its normal), to the mesh.
+def _bisect(t, b, par):
+    """Split each triangle (and its corner barycentrics) in two at its longest edge."""
+    e = np.stack([np.linalg.norm(t[:, (i + 1) % 3] - t[:, i], axis=1) for i in range(3)], 1)
+    roll = (np.arange(3)[None, :] + e.argmax(axis=1)[:, None]) % 3
+    rows = np.arange(len(t))[:, None]
+    t, b = t[rows, roll], b[rows, roll]
+    mt = (t[:, 0] + t[:, 1]) / 2
+    mb = (b[:, 0] + b[:, 1]) / 2
+    t2 = np.concatenate([np.stack([t[:, 0], mt, t[:, 2]], 1), np.stack([mt, t[:, 1], t[:, 2]], 1)])
+    b2 = np.concatenate([np.stack([b[:, 0], mb, b[:, 2]], 1), np.stack([mb, b[:, 1], b[:, 2]], 1)])
+    return t2, b2, np.concatenate([par, par])
 
-    inf where the ray leaves the mesh. Rays start ``start`` behind the face, so coincident
-    duplicate faces do not count.
+
+def _thickness(tris, start: float) -> np.ndarray:
+    """(T,) distance from each boundary triangle's centroid, inwards, to the next boundary.
+
+    Only boundary triangles are hit (buried faces are inside the solid, not across it); inf
+    where the ray leaves. Rays start ``start`` behind the face, so coincident duplicate faces
+    do not count.
     """
     import trimesh
 
@@ -222,7 +258,9 @@ def _thickness(V, F, tris, start: float) -> np.ndarray:
     n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     origins = tris.mean(axis=1) - start * n
-    mesh = trimesh.Trimesh(V, F, process=False)
+    mesh = trimesh.Trimesh(
+        tris.reshape(-1, 3), np.arange(3 * len(tris)).reshape(-1, 3), process=False
+    )
     loc, ray, _tri = mesh.ray.intersects_location(origins, -n, multiple_hits=False)
     out = np.full(len(tris), np.inf)
     out[ray] = np.linalg.norm(loc - origins[ray], axis=1) + start
@@ -239,10 +277,15 @@ def _band(tris, origin, h, shape, radius):
     return dist2, tid
 
 
-def _component_signs(V, F, d, free, h, origin):
+def _component_signs(V, F, d, free, in_sheet, h, origin, tris_b, id_b):
     """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
 
-    ``free``: voxels with no surface (boundary or sheet) within one voxel.
+    ``free``: voxels with no surface (boundary or sheet) within one voxel. ``in_sheet``: voxels
+    inside a thickened sheet or thin piece; they are solid whatever the boundary's sign, so
+    those that would need a query of their own (inside thin boards) are set inside directly.
+    Others that lie straight in front of or behind the face of their nearest boundary point take
+    that face's side (the segment to the nearest point crosses no surface; the front of a
+    boundary face is outside by its classification); the rest are winding-number queries.
     """
     shape = d.shape
     labels, n_comp = ndimage.label(free)
@@ -285,8 +328,26 @@ def _component_signs(V, F, d, free, h, origin):
             neg |= s < 0
     one = near & (pos ^ neg)
     sign[one] = np.where(pos[one], 1, -1)
-    lone = np.flatnonzero(near & ~(pos ^ neg))
-    queries.append(lone)
+    undecided = near & ~(pos ^ neg)
+    sign[undecided & in_sheet] = -1
+    lone = np.flatnonzero(undecided & ~in_sheet & (id_b >= 0))
+    if len(lone):
+        pts = origin + np.stack(np.unravel_index(lone, shape), axis=1) * h
+        tid = id_b.ravel()[lone].astype(np.int64)
+        _, bary = _kernels.closest_points(pts, tris_b, tid)
+        t = tris_b[tid]
+        q = np.einsum("nc,ncd->nd", bary, t)
+        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        pq = pts - q
+        side = np.einsum("nd,nd->n", pq, n)
+        # p straight in front of / behind the face at its nearest point (face interior, or an
+        # edge seen along this face's normal): the side is the face's side
+        face = np.abs(side) >= (1 - 1e-6) * np.linalg.norm(pq, axis=1)
+        face &= np.abs(side) > 1e-6 * h
+        sign.ravel()[lone[face]] = np.where(side[face] > 0, 1, -1)
+        queries.append(lone[~face])
+    queries.append(np.flatnonzero(undecided & ~in_sheet & (id_b < 0)))
     q = np.concatenate(queries) if queries else np.zeros(0, np.int64)
     if len(q):
         pts = origin + np.stack(np.unravel_index(q, shape), axis=1) * h
@@ -353,7 +414,7 @@ def from_mesh(
     # holes: their faces also join the sheets, offset so that the piece is 2t thick
     offset = np.zeros(len(sub))
     offset[sheet] = thick
-    thickness = _thickness(V, F, sub[boundary], 0.01 * h)
+    thickness = _thickness(sub[boundary], 0.01 * h)
     thin = boundary[thickness < 2 * thick]
     offset[thin] = thick - thickness[thickness < 2 * thick] / 2
     n_open = len(np.unique(parent[sheet]))
@@ -370,18 +431,21 @@ def from_mesh(
     del d2_s
 
     report(0.45, "inside/outside")
-    # open sheets block the flood as much as boundaries do: a cushion whose cloth has an open
-    # seam still encloses its inside
-    free = (d_b > h) & (f_s > h)
-    sign = _component_signs(V, F, d_b, free, h, origin)
-    del free
+    has = id_s >= 0
+    f_s[has] -= offset[sheet[id_s[has]]]
+    in_sheet = f_s <= 0
+    # thickened sheets block the flood as much as boundaries do (a cushion whose cloth has an
+    # open seam still encloses its inside); at 2t thick they leave no 6-connected tunnel
+    free = (d_b > h) & ~in_sheet
+    sign = _component_signs(V, F, d_b, free, in_sheet, h, origin, tris_b, id_b)
+    del free, in_sheet
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
     del d_b
-    win = np.where(id_b >= 0, boundary[np.maximum(id_b, 0)], -1).astype(np.int64)
+    win = np.full(shape, -1, np.int64)
+    if len(boundary):
+        win[id_b >= 0] = boundary[id_b[id_b >= 0]]
     del id_b
-    has = id_s >= 0
-    f_s[has] -= offset[sheet[id_s[has]]]
     closer = f_s < sdf
     sdf[closer] = f_s[closer]
     win[closer] = sheet[id_s[closer]]
@@ -422,7 +486,6 @@ def from_mesh(
         sdf.ravel()[far_idx] = s * np.maximum(np.abs(d), BAND * h)
         rgb.reshape(-1, 3)[far_idx] = rgb.reshape(-1, 3)[src]
     report(1.0, "done")
-    n_sheet_src = len(np.unique(parent[sheet]))
     meta = {
         "source": mesh.source,
         "units": "m",

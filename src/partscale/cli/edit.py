@@ -1,0 +1,32 @@
+"""``partscale edit``: the browser editor for one CSDF file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+
+def edit(
+    path: Annotated[Path, typer.Argument(help="The .csdf.npz file to edit.")],
+    port: Annotated[int, typer.Option("--port", help="Port (0 = any free one).")] = 0,
+    no_browser: Annotated[
+        bool, typer.Option("--no-browser", help="Only print the URL; do not open a browser.")
+    ] = False,
+    host: Annotated[
+        str,
+        typer.Option(
+            "--host",
+            help="Interface to bind. Default loopback; anything else is reachable by others.",
+        ),
+    ] = "127.0.0.1",
+) -> None:
+    """Open the object in the browser editor: drag zone planes, preview, apply, undo, save.
+
+    Edits are written only when you press Save: to NAME.edited.csdf.npz, or over the input when
+    you tick overwrite.
+    """
+    from ..serve import serve
+
+    serve(path, host=host, port=port, open_browser=not no_browser)

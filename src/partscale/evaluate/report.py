@@ -1,0 +1,297 @@
+"""The evaluation's tables: metrics (CSV and Markdown) and a summary of who wins and who fails."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .._util import atomic_path
+from .metrics import METRICS
+
+if TYPE_CHECKING:
+    from .suite import SuiteResult
+
+COLUMNS = ("object", "kind", "voxels", "mode", *METRICS, "copies", "time_s", "error")
+
+#: metric -> (what it measures with its unit, tie tolerance, failure threshold). Lower is better
+#: for all; ``pieces`` is judged by its change from the original.
+CRITERIA: dict[str, tuple[str, float, float]] = {
+    "length_err": ("length error (vox)", 0.5, 1.0),
+    "rigid_err": ("rigidity error outside the zone, p99 (vox)", 0.25, 1.0),
+    "prop_out": ("thickness change outside the zone (rel.)", 0.02, 0.10),
+    "prop_in": ("thickness change inside the zone (rel.)", 0.02, 0.10),
+    "spacing_err": ("spacing change of repeated elements (rel.)", 0.02, 0.10),
+    "sdf_err_mean": ("distance-field error, mean (vox)", 0.05, 0.25),
+    "seam_color": ("seam colour jump (sRGB levels)", 2.0, 20.0),
+    "seam_shape": ("seam shape jump (vox)", 0.1, 0.5),
+    "pieces": ("extra pieces", 0.0, 0.5),
+}
+SHORT = {
+    "length_err": "length",
+    "rigid_err": "rigidity",
+    "prop_out": "prop. out",
+    "prop_in": "prop. in",
+    "spacing_err": "spacing",
+    "sdf_err_mean": "distance",
+    "seam_color": "seam colour",
+    "seam_shape": "seam shape",
+    "pieces": "pieces",
+}
+
+
+def _num(v: Any) -> float:
+    if isinstance(v, bool):
+        return float(v)
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _cell(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        if math.isnan(v):
+            return ""
+        return f"{v:.3g}" if abs(v) < 1000 else f"{v:.0f}"
+    try:
+        f = float(v)
+        if isinstance(v, int) or (f.is_integer() and not isinstance(v, str)):
+            return str(int(f))
+        return f"{f:.3g}"
+    except (TypeError, ValueError):
+        return str(v)
+
+
+def _rows(result: SuiteResult) -> list[dict[str, Any]]:
+    return [row for obj in result.objects for row in obj.rows]
+
+
+def _score(metric: str, row: dict[str, Any], original: dict[str, Any]) -> float:
+    if "error" in row and row.get("error") and metric != "pieces":
+        return math.nan
+    if metric == "pieces":
+        return max(0.0, _num(row.get("pieces")) - _num(original.get("pieces")))
+    return _num(row.get(metric))
+
+
+def failures_of(row: dict[str, Any], original: dict[str, Any]) -> list[str]:
+    """The metrics on which one result fails (value above its threshold), as short names."""
+    if row.get("error"):
+        return ["error"]
+    out = []
+    for metric, (_, _, threshold) in CRITERIA.items():
+        v = _score(metric, row, original)
+        if metric == "sdf_err_mean":  # judged against what the import itself achieved
+            v = v - _num(original.get("sdf_err_mean"))
+        if math.isfinite(v) and v > threshold:
+            out.append(SHORT[metric])
+    if row.get("watertight") is False:
+        out.append("not watertight")
+    return out
+
+
+def winners(rows: list[dict[str, Any]], metric: str, original: dict[str, Any]) -> list[str]:
+    """Modes whose score is within the metric's tie tolerance (or 10 %) of the best."""
+    tol = CRITERIA[metric][1]
+    scores = {r["mode"]: _score(metric, r, original) for r in rows}
+    finite = {m: s for m, s in scores.items() if math.isfinite(s)}
+    if not finite:
+        return []
+    best = min(finite.values())
+    return [m for m, s in finite.items() if s <= best + max(tol, 0.1 * abs(best))]
+
+
+def _md_table(header: list[str], body: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(c.replace("|", "/") for c in row) + " |" for row in body]
+    return "\n".join(lines) + "\n"
+
+
+def metrics_csv(result: SuiteResult) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=COLUMNS, extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    for row in _rows(result):
+        w.writerow({k: _cell(row.get(k)) for k in COLUMNS})
+    return buf.getvalue()
+
+
+def metrics_markdown(result: SuiteResult) -> str:
+    cols = [c for c in COLUMNS if c not in ("kind", "voxels")]
+    body = [[_cell(row.get(c)) for c in cols] for row in _rows(result)]
+    legend = "\n".join(f"- `{m}`: {CRITERIA[m][0]}" for m in CRITERIA if m != "pieces")
+    return (
+        f"# Metrics (import at {result.res} voxels along the longest side)\n\n"
+        + _md_table(cols, body)
+        + "\n"
+        + legend
+        + "\n- `sdf_err_p99`: distance-field error, 99th percentile (vox); `pieces`: connected"
+        " surfaces; `copies`: tile copies; `time_s`: edit time (s). `naive-*` is the baseline"
+        " without re-evaluation.\n"
+    )
+
+
+def _expectation(obj_rows: list[dict[str, Any]], kind: str) -> tuple[str, str]:
+    by = {r["mode"]: r for r in obj_rows}
+    orig = by.get("original", {})
+    st, ti = by.get("stretch"), by.get("tile")
+    if not st or not ti or st.get("error") or ti.get("error"):
+        return "n/a", "a mode failed to run"
+    if ti.get("copies") == 1:
+        return "n/a", "one copy: tiling is stretching here"
+    fs, ft = set(failures_of(st, orig)), set(failures_of(ti, orig))
+    if kind == "repeating":
+        keys = ("prop_in", "spacing_err")
+        s = [_num(st.get(k)) for k in keys]
+        t = [_num(ti.get(k)) for k in keys]
+        worse = [
+            SHORT[k]
+            for k, a, b in zip(keys, s, t, strict=True)
+            if math.isfinite(a) and (not math.isfinite(b) or a > b + CRITERIA[k][1])
+        ]
+        held = bool(worse) and bool(fs - ft)
+        detail = (
+            f"stretch prop. in {_cell(s[0])}, spacing {_cell(s[1])}; "
+            f"tile {_cell(t[0])}, {_cell(t[1])}"
+        )
+        return ("held" if held else "not held"), detail
+    extra = sorted(ft - fs)
+    detail = "tile fails on: " + (", ".join(extra) if extra else "nothing stretch passes")
+    return ("held" if extra else "not held"), detail
+
+
+def summary_markdown(result: SuiteResult) -> str:
+    objs = result.objects
+    ok = [o for o in objs if not o.error]
+    lines = [
+        "# Evaluation summary",
+        "",
+        f"{len(ok)} of {len(objs)} object(s) ran, imported at {result.res} voxels along the "
+        f"longest side, in {result.elapsed_s:.0f} s. Modes: global, stretch, tile, and the "
+        "baseline naive-stretch / naive-tile (no re-evaluation, plain concatenation).",
+        "",
+    ]
+    if len(ok) < len(objs):
+        lines += ["## Entries that could not run", ""]
+        lines += [f"- {o.error}" for o in objs if o.error]
+        lines.append("")
+    notes = [o.note for o in objs if o.note]
+    if notes:
+        lines += ["Notes:", "", *[f"- {n}" for n in notes], ""]
+    metric_keys = list(CRITERIA)
+    lines += [
+        "## Best mode per metric",
+        "",
+        "Modes within the metric's tolerance of the best are all listed; blank: not measurable "
+        "(e.g. no repeated elements along the axis).",
+        "",
+    ]
+    body = []
+    for o in ok:
+        orig = o.rows[0]
+        edits = [r for r in o.rows[1:]]
+        body.append(
+            [o.entry.name]
+            + [
+                ("all" if len(w := winners(edits, m, orig)) == len(edits) else ", ".join(w))
+                for m in metric_keys
+            ]
+        )
+    lines.append(_md_table(["object", *[SHORT[m] for m in metric_keys]], body))
+    lines += [
+        "## Where each mode fails",
+        "",
+        "Thresholds: "
+        + "; ".join(f"{SHORT[m]} > {CRITERIA[m][2]:g}" for m in metric_keys)
+        + " (distance: above the import's own error). `ok`: no failure.",
+        "",
+    ]
+    modes = [r["mode"] for r in ok[0].rows[1:]] if ok else []
+    body = []
+    for o in ok:
+        orig = o.rows[0]
+        by = {r["mode"]: r for r in o.rows}
+        body.append([o.entry.name] + [", ".join(failures_of(by[m], orig)) or "ok" for m in modes])
+    lines.append(_md_table(["object", *modes], body))
+    lines += [_failure_counts(ok, modes), ""]
+    lines += [
+        "## The paper's expectations",
+        "",
+        "Stretch should fail on repeating structures (shelves, cushions, balusters: thickness "
+        "inside the zone and spacing change), tiling on shapes with no repeatable part (seams).",
+        "",
+    ]
+    body = []
+    for o in ok:
+        kind = o.entry.kind
+        if not kind:
+            continue
+        expect = "stretch fails" if kind == "repeating" else "tile fails"
+        verdict, detail = _expectation(o.rows, kind)
+        body.append([o.entry.name, kind, expect, verdict, detail])
+    if body:
+        lines.append(_md_table(["object", "kind", "expected", "verdict", "measured"], body))
+        held = sum(1 for b in body if b[3] == "held")
+        judged = sum(1 for b in body if b[3] in ("held", "not held"))
+        lines.append(f"Held on {held} of {judged} object(s) where it can be judged.\n")
+    lines.append(_timings(result))
+    return "\n".join(lines)
+
+
+def _failure_counts(ok: list, modes: list[str]) -> str:
+    """One line per mode: on how many objects it fails, and on what most often."""
+    out = []
+    for mode in modes:
+        failed, reasons = 0, {}
+        for o in ok:
+            by = {r["mode"]: r for r in o.rows}
+            f = failures_of(by[mode], o.rows[0])
+            failed += bool(f)
+            for x in f:
+                reasons[x] = reasons.get(x, 0) + 1
+        top = ", ".join(f"{k} ({v})" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
+        out.append(
+            f"- **{mode}** fails on {failed} of {len(ok)} object(s)" + (f": {top}" if top else "")
+        )
+    return "\n".join(out) + "\n"
+
+
+def _timings(result: SuiteResult) -> str:
+    stages = ("import", "reference", "edit", "metrics", "figure")
+    body = []
+    for o in result.objects:
+        if o.error:
+            continue
+        t = o.timings
+        body.append(
+            [o.entry.name, o.rows[0].get("voxels", "")]
+            + [f"{t[k]:.1f}" if k in t else "" for k in stages]
+            + [f"{sum(t.values()):.1f}"]
+        )
+    return (
+        "## Time (s)\n\n`edit`: the five edits together; `metrics`: measuring them; "
+        "`reference`: the original's mesh and runs.\n\n"
+        + _md_table(["object", "voxels", *stages, "total"], body)
+    )
+
+
+def write(result: SuiteResult) -> dict[str, Path]:
+    """Write ``metrics.csv``, ``metrics.md`` and ``summary.md`` into ``result.out_dir``."""
+    files = {}
+    for key, name, text in (
+        ("metrics_csv", "metrics.csv", metrics_csv(result)),
+        ("metrics_md", "metrics.md", metrics_markdown(result)),
+        ("summary", "summary.md", summary_markdown(result)),
+    ):
+        path = result.out_dir / name
+        with atomic_path(path) as tmp:
+            tmp.write_text(text)
+        files[key] = path
+    return files

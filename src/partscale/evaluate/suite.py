@@ -1,0 +1,440 @@
+"""The evaluation suite: real objects, each with one plausible edit, run in every mode and measured.
+
+A suite file is JSON::
+
+    {"version": 1,
+     "res": 96,                       # import resolution (longest side, voxels); optional
+     "data": "path/to/data",          # folder the object paths are relative to; optional
+     "objects": [
+        {"name": "table-longer", "path": "kenney/table.glb",
+         "edit": {"axis": "x", "zone": ["20%", "80%"], "to": "105%"},
+         "kind": "solid" | "repeating",   # what the paper expects: optional
+         "view": "iso" | "front" | "side" | "top",  # optional, default iso
+         "note": "..."}, ...]}
+
+``path`` may also name a ``.csdf.npz`` file (used as is, no import). The data folder is, in order:
+the ``data`` argument, ``PARTSCALE_DATA``, the suite's ``data`` key (relative to the suite file),
+``../shared/data`` from the working directory, ``../../shared/data`` from the suite file.
+
+Each entry's edit runs in every mode of :data:`MODES`: ``global``, ``stretch``, ``tile`` and the
+labelled baseline ``naive-stretch`` / ``naive-tile`` (per-column linear resampling of the slab,
+no re-evaluation, plain concatenation for repeats: what the paper's public prototype does).
+An entry that cannot run (missing file, bad edit, zone outside the solid) is reported with one
+line and the others still run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import csdf as csdf_mod
+from .._util import atomic_path, keyword_options
+from ..csdf import CSDF
+from ..edit.recipe import Edit
+from ..errors import InputError
+from ..progress import ProgressCallback, resolve, scaled
+from . import figures, metrics, report
+
+#: The modes every edit runs in, in figure order.
+MODES = ("global", "stretch", "tile", "naive-stretch", "naive-tile")
+LABELS = {
+    "original": "original",
+    "global": "global",
+    "stretch": "stretch",
+    "tile": "tile",
+    "naive-stretch": "naive stretch*",
+    "naive-tile": "naive tile*",
+}
+VIEWS = ("iso", "front", "side", "top")
+KINDS = ("solid", "repeating")
+DEFAULT_RES = 96
+PANEL = 256
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One suite object; ``error`` is set when the entry itself is malformed."""
+
+    name: str
+    path: str
+    edit: Edit | None
+    kind: str | None = None
+    view: str = "iso"
+    note: str = ""
+    error: str | None = None
+
+    def describe(self) -> str:
+        if self.edit is None:
+            return ""
+        e = self.edit
+        return f"{e.axis}: zone [{e.start}, {e.end}] to {e.dest}"
+
+
+@dataclass
+class Suite:
+    entries: list[Entry]
+    res: int = DEFAULT_RES
+    data: Path | None = None
+    source: Path | None = None
+
+
+def _entry(obj: Any, i: int) -> Entry:
+    where = f"objects[{i}]"
+    if not isinstance(obj, dict):
+        return Entry(where, "", None, error=f"{where}: expected an object, got {obj!r}")
+    name = str(obj.get("name") or where)
+    try:
+        unknown = set(obj) - {"name", "path", "edit", "kind", "view", "note"}
+        if unknown:
+            raise InputError(
+                f"unknown key(s) {sorted(unknown)}; keys are name, path, edit, kind, view, note"
+            )
+        path = obj.get("path")
+        if not isinstance(path, str) or not path:
+            raise InputError(f"path: expected a file path, got {path!r}")
+        edit_obj = obj.get("edit")
+        if isinstance(edit_obj, dict) and "mode" in edit_obj:
+            raise InputError("edit.mode: expected none (the suite runs every mode), got one")
+        edit = Edit.parse(edit_obj, where="edit")
+        kind = obj.get("kind")
+        if kind is not None and kind not in KINDS:
+            raise InputError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
+        view = obj.get("view", "iso")
+        if view not in VIEWS:
+            raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
+        return Entry(name, path, edit, kind, view, str(obj.get("note", "")))
+    except InputError as exc:
+        return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")
+
+
+def parse_suite(obj: Any, *, source: Path | None = None) -> Suite:
+    """Validate a suite's JSON. Malformed entries are kept, marked with their error."""
+    where = str(source) if source else "suite"
+    if not isinstance(obj, dict) or not isinstance(obj.get("objects"), list):
+        raise InputError(f"{where}: expected {{'objects': [...]}}, got {str(obj)[:60]!r}")
+    unknown = set(obj) - {"version", "description", "res", "data", "objects"}
+    if unknown:
+        raise InputError(
+            f"{where}: unknown key(s) {sorted(unknown)}; keys are version, description, res, "
+            "data, objects"
+        )
+    if obj.get("version", 1) != 1:
+        raise InputError(f"{where}: expected version 1, got {obj['version']!r}")
+    res = obj.get("res", DEFAULT_RES)
+    if not isinstance(res, int) or isinstance(res, bool) or not 8 <= res <= 1024:
+        raise InputError(f"{where}: res: expected an integer in 8..1024, got {res!r}")
+    entries = [_entry(o, i) for i, o in enumerate(obj["objects"])]
+    if not entries:
+        raise InputError(f"{where}: expected at least one object, got none")
+    names = [e.name for e in entries]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise InputError(f"{where}: expected unique object names, got {', '.join(dup)} twice")
+    data = None
+    if obj.get("data"):
+        data = Path(obj["data"])
+        if source is not None and not data.is_absolute():
+            data = source.parent / data
+    return Suite(entries, res, data, source)
+
+
+def load_suite(path: str | os.PathLike) -> Suite:
+    """Read a suite file (see module docstring)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: expected a suite JSON file, got no such file")
+    try:
+        obj = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: expected JSON, got {exc}") from None
+    return parse_suite(obj, source=path)
+
+
+def data_folder(suite: Suite, data: str | os.PathLike | None = None) -> Path | None:
+    """Where the suite's object paths are relative to (see module docstring); None if nowhere."""
+    candidates: list[Path] = []
+    if data is not None:
+        return Path(data)
+    if os.environ.get("PARTSCALE_DATA"):
+        candidates.append(Path(os.environ["PARTSCALE_DATA"]))
+    if suite.data is not None:
+        candidates.append(suite.data)
+    candidates.append(Path.cwd().parent / "shared" / "data")
+    if suite.source is not None:
+        candidates.append(suite.source.resolve().parent.parent.parent / "shared" / "data")
+    for c in candidates:
+        if c.is_dir():
+            return c
+    return None
+
+
+# -- running --------------------------------------------------------------------------------
+
+
+@dataclass
+class ObjectResult:
+    """What one entry produced: rows of metrics (one per mode, plus the original), or an error."""
+
+    entry: Entry
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    error: str | None = None
+    figure: Path | None = None
+    note: str | None = None
+    #: seconds spent per stage: import, reference, edit, metrics, figure
+    timings: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
+class SuiteResult:
+    objects: list[ObjectResult]
+    out_dir: Path
+    res: int
+    files: dict[str, Path] = field(default_factory=dict)
+    elapsed_s: float = math.nan
+
+    @property
+    def failures(self) -> list[str]:
+        return [o.error for o in self.objects if o.error]
+
+
+def _load_object(path: Path, res: int, progress: ProgressCallback) -> CSDF:
+    if path.name.endswith(csdf_mod.SUFFIX):
+        return csdf_mod.load(path)
+    from .. import ingest
+
+    return ingest.load(path, res=res, progress=progress)
+
+
+def _run_mode(c: CSDF, edit: Edit, mode: str) -> CSDF:
+    from .. import edit as edit_mod
+
+    if not hasattr(edit_mod, "apply_edit"):  # the stage's module, if its package does not export
+        from ..edit import scale as edit_mod  # type: ignore[no-redef]
+
+    if mode.startswith("naive-"):
+        return edit_mod.naive_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode[6:]))
+    return edit_mod.apply_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode))
+
+
+def _render(c: CSDF, view: str, frame: np.ndarray, size: int) -> np.ndarray:
+    from .. import render
+
+    return render.render(c, view=view, size=size, frame=frame, scale_bar=True)
+
+
+def _fmt(v: Any, digits: int = 2) -> str:
+    if isinstance(v, bool):
+        return "yes" if v else "NO"
+    if isinstance(v, float | np.floating):
+        return "n/a" if math.isnan(v) else f"{v:.{digits}f}"
+    return str(v)
+
+
+def _run_entry(
+    entry: Entry,
+    data: Path | None,
+    res: int,
+    out_dir: Path,
+    panel: int,
+    progress: ProgressCallback,
+) -> ObjectResult:
+    result = ObjectResult(entry)
+    name = entry.name
+    if entry.error:
+        result.error = entry.error
+        return result
+    assert entry.edit is not None
+    path = Path(entry.path)
+    if not path.is_absolute():
+        if data is None:
+            result.error = (
+                f"{name}: {entry.path}: expected a data folder to find it in "
+                "(set PARTSCALE_DATA or the suite's data key), got none"
+            )
+            return result
+        path = data / path
+    if not path.exists():
+        result.error = f"{name}: {path}: expected an object file, got no such file"
+        return result
+    try:
+        progress(0.0, f"{name}: import")
+        t0 = time.perf_counter()
+        original = _load_object(path, res, scaled(progress, 0.0, 0.3))
+        result.timings["import"] = time.perf_counter() - t0
+        geo0 = metrics.resolve_edit(original, entry.edit)
+    except InputError as exc:
+        result.error = f"{name}: {exc}"
+        return result
+    except Exception as exc:  # a bug in a stage must not stop the rest of the suite
+        result.error = f"{name}: import failed: {type(exc).__name__}: {exc}"
+        return result
+
+    progress(0.3, f"{name}: reference")
+    t0 = time.perf_counter()
+    ref = metrics.Reference(original)
+    result.timings["reference"] = time.perf_counter() - t0
+    result.timings["edit"] = result.timings["metrics"] = 0.0
+    base = {"object": name, "kind": entry.kind or "", "voxels": "x".join(map(str, original.shape))}
+    result.rows.append(
+        {**base, "mode": "original", **metrics.evaluate_original(ref), "time_s": math.nan}
+    )
+    results: dict[str, CSDF | str] = {}
+    for i, mode in enumerate(MODES):
+        progress(0.35 + 0.4 * i / len(MODES), f"{name}: {mode}")
+        geo = metrics.EditGeometry(
+            geo0.axis,
+            geo0.start,
+            geo0.end,
+            geo0.dest,
+            geo0.lo,
+            geo0.hi,
+            mode.removeprefix("naive-"),
+        )
+        try:
+            t0 = time.perf_counter()
+            b = _run_mode(original, entry.edit, mode)
+            dt = time.perf_counter() - t0
+            m = metrics.evaluate(ref, b, geo)
+            result.timings["edit"] += dt
+            result.timings["metrics"] += time.perf_counter() - t0 - dt
+            row = {**base, "mode": mode, **m, "time_s": dt}
+            if geo.mode == "tile":
+                row["copies"] = geo.n_copies
+            results[mode] = b
+        except Exception as exc:  # recorded in the tables; the other modes still run
+            msg = str(exc) if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
+            row = {**base, "mode": mode, "error": msg}
+            results[mode] = msg
+        result.rows.append(row)
+
+    progress(0.8, f"{name}: figure")
+    t0 = time.perf_counter()
+    try:
+        result.figure = _figure(entry, original, results, result.rows, out_dir, panel)
+        result.timings["figure"] = time.perf_counter() - t0
+    except ImportError as exc:  # the render stage is optional for the metrics
+        result.note = f"{name}: no figure ({exc})"
+    return result
+
+
+def _figure(
+    entry: Entry,
+    original: CSDF,
+    results: dict[str, CSDF | str],
+    rows: list[dict[str, Any]],
+    out_dir: Path,
+    panel: int,
+) -> Path:
+    done = [c for c in results.values() if isinstance(c, CSDF)]
+    bounds = [c.surface_bounds() for c in [original, *done]]
+    frame = np.stack([np.min([b[0] for b in bounds], 0), np.max([b[1] for b in bounds], 0)])
+    by_mode = {r["mode"]: r for r in rows}
+    panels = [
+        (
+            "original",
+            f"{_fmt(by_mode['original']['pieces'])} piece(s)",
+            _render(original, entry.view, frame, panel),
+        )
+    ]
+    for mode in MODES:
+        r = by_mode[mode]
+        res = results[mode]
+        if isinstance(res, str):
+            panels.append((LABELS[mode], "", figures.failed_panel(panel, res)))
+            continue
+        note = (
+            f"prop in {_fmt(r['prop_in'])} out {_fmt(r['prop_out'])}  "
+            f"space {_fmt(r['spacing_err'])}  seam {_fmt(r['seam_shape'], 1)}v "
+            f"{_fmt(r['seam_color'], 0)}c"
+        )
+        panels.append((LABELS[mode], note, _render(res, entry.view, frame, panel)))
+    # ASCII only: the built-in font has no dashes
+    subtitle = f"{entry.path}  |  {entry.describe()}"
+    if entry.note:
+        subtitle += f"  |  {entry.note}"
+    subtitle += "   (* baseline: no re-evaluation, plain concatenation)"
+    fig = figures.object_figure(entry.name, subtitle, panels)
+    path = out_dir / f"{entry.name}.png"
+    with atomic_path(path) as tmp:
+        fig.save(tmp, format="PNG")
+    return path
+
+
+@keyword_options
+def run_suite(
+    suite: Suite | str | os.PathLike,
+    out_dir: str | os.PathLike,
+    *,
+    res: int | None = None,
+    only: str | None = None,
+    data: str | os.PathLike | None = None,
+    panel: int = PANEL,
+    progress: ProgressCallback | None = None,
+) -> SuiteResult:
+    """Run every suite entry in every mode; write figures, metrics tables and a summary.
+
+    Parameters
+    ----------
+    suite : Suite or path of a suite JSON file
+    out_dir : path
+        Created if missing. Receives ``NAME.png`` per object, ``contact_sheet.png``,
+        ``metrics.csv``, ``metrics.md`` and ``summary.md``.
+    res : int, optional
+        Import resolution (voxels along the longest side); default the suite's ``res`` (96).
+    only : str, optional
+        Run only the entry of this name.
+    data : path, optional
+        Folder the object paths are relative to (see module docstring).
+    panel : int
+        Size in pixels of each render in the figures.
+
+    Returns
+    -------
+    SuiteResult
+        Per-object rows and errors (entries that could not run carry a one-line ``error``).
+    """
+    t_start = time.perf_counter()
+    if not isinstance(suite, Suite):
+        suite = load_suite(suite)
+    res = suite.res if res is None else int(res)
+    if not 8 <= res <= 1024:
+        raise InputError(f"res: expected an integer in 8..1024, got {res}")
+    entries = suite.entries
+    if only is not None:
+        entries = [e for e in entries if e.name == only]
+        if not entries:
+            names = ", ".join(e.name for e in suite.entries)
+            raise InputError(f"--only: expected one of {names}, got {only!r}")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    folder = data_folder(suite, data)
+    progress = resolve(progress)
+    objects = []
+    for i, entry in enumerate(entries):
+        sub = scaled(progress, i / len(entries), (i + 1) / len(entries))
+        objects.append(_run_entry(entry, folder, res, out, panel, sub))
+    result = SuiteResult(objects, out, res)
+    progress(1.0, "tables")
+    sheet = [o.figure for o in objects if o.figure is not None]
+    if sheet:
+        from PIL import Image
+
+        images = []
+        for p in sheet:
+            with Image.open(p) as im:
+                images.append(im.convert("RGB"))
+        path = out / "contact_sheet.png"
+        with atomic_path(path) as tmp:
+            figures.contact_sheet(images).save(tmp, format="PNG")
+        result.files["contact_sheet"] = path
+    result.elapsed_s = time.perf_counter() - t_start
+    result.files.update(report.write(result))
+    return result

@@ -1,0 +1,27 @@
+"""Serve stage: the browser editor (a local web server over one CSDF file).
+
+``create_app(path)`` builds the ASGI app (testable with starlette's ``TestClient``);
+``serve(path, ...)`` runs it with uvicorn. The page itself is built from ``web/`` with Vite and
+shipped, built, in ``static/`` so users need no Node (rebuild with ``npx vite build`` in ``web/``;
+``tests/test_serve.py`` checks ``static/build.json`` against a hash of the sources).
+
+For scripts, the page exposes ``window.__partscale``: ``frameTimeMs`` (smoothed, GPU-synchronised),
+``lastFrameMs``, ``frames``, ``idle``, ``state()``, ``zones()``, ``recipe()``,
+``benchmark(n)`` (n orbiting frames; mean and median ms), ``evalRemap(zones, points)`` (the shader's
+own GLSL map) and ``handleScreen(name)``. ``?canvas=WxH`` fixes the canvas size.
+"""
+
+from .app import MAX_BODY, create_app
+from .server import is_loopback, serve
+from .session import EditSession, edited_path, encode_grid, encode_parts
+
+__all__ = [
+    "MAX_BODY",
+    "EditSession",
+    "create_app",
+    "edited_path",
+    "encode_grid",
+    "encode_parts",
+    "is_loopback",
+    "serve",
+]

@@ -1,0 +1,351 @@
+"""The editor's HTTP API (starlette): the page's assets, the one object, apply/undo/redo, save.
+
+Routes (nothing else is served; no route reads a path, a file name or an object id from the
+request):
+
+==========================  ==================================================================
+GET  /                      the page
+GET  /assets/NAME           one of the built assets listed when the app was created
+GET  /api/state             JSON header: shape, origin, voxel size, bounds, parts, history...
+GET  /api/grid              binary 3D texture, see :func:`partscale.serve.session.encode_grid`
+GET  /api/parts             binary int16 part indices, C order (z fastest)
+GET  /api/schema            the recipe JSON schema
+GET  /api/progress          progress of the apply in flight
+POST /api/apply             body: recipe JSON; bakes it, returns the new state
+POST /api/undo, /api/redo   returns the new state
+POST /api/save              body: {"overwrite": bool}; writes NAME.edited.csdf.npz (or NAME)
+GET  /api/export/mesh       GLB download; /api/export/texture: the 3D texture file
+==========================  ==================================================================
+
+POST bodies must be JSON (``Content-Type: application/json``): a page on another origin cannot
+send that without a CORS preflight, which this server never grants.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+import traceback
+from pathlib import Path
+from typing import Any
+
+from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
+from starlette.middleware import Middleware
+from starlette.requests import Request
+from starlette.responses import JSONResponse, Response
+from starlette.routing import Route
+from starlette.types import ASGIApp, Receive, Scope, Send
+
+from ..edit import JSON_SCHEMA
+from ..errors import InputError
+from .session import EditSession
+
+STATIC = Path(__file__).parent / "static"
+#: Largest request body accepted (a recipe is a few hundred bytes).
+MAX_BODY = 64 * 1024
+LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "[::1]"]
+
+_MEDIA = {
+    ".html": "text/html; charset=utf-8",
+    ".js": "text/javascript; charset=utf-8",
+    ".css": "text/css; charset=utf-8",
+    ".json": "application/json",
+    ".svg": "image/svg+xml",
+    ".png": "image/png",
+}
+_NO_STORE = {"Cache-Control": "no-store"}
+#: The page loads only its own assets and talks only to this server; no other site may frame it
+#: (a framed editor could be clicked into saving over the input).
+_PAGE_HEADERS = {
+    "Content-Security-Policy": (
+        "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; "
+        "connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; form-action 'none'"
+    ),
+    "X-Frame-Options": "DENY",
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+    **_NO_STORE,
+}
+
+
+class _BodyTooLarge(Exception):
+    pass
+
+
+class LimitBody:
+    """ASGI middleware: 413 for a body over ``limit`` bytes, declared or streamed."""
+
+    def __init__(self, app: ASGIApp, limit: int):
+        self.app, self.limit = app, limit
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        for name, value in scope.get("headers", []):
+            if name == b"content-length":
+                try:
+                    declared = int(value)
+                except ValueError:
+                    declared = self.limit + 1
+                if declared > self.limit:
+                    await _too_large(self.limit)(scope, receive, send)
+                    return
+        seen = 0
+        started = False
+
+        async def counting_receive():
+            nonlocal seen
+            message = await receive()
+            if message["type"] == "http.request":
+                seen += len(message.get("body", b""))
+                if seen > self.limit:
+                    raise _BodyTooLarge
+            return message
+
+        async def tracking_send(message):
+            nonlocal started
+            if message["type"] == "http.response.start":
+                started = True
+            await send(message)
+
+        try:
+            await self.app(scope, counting_receive, tracking_send)
+        except _BodyTooLarge:
+            if not started:
+                await _too_large(self.limit)(scope, receive, send)
+
+
+class HostGuard:
+    """ASGI middleware: 400 unless the Host header names one of ``hosts`` (DNS rebinding guard).
+
+    Unlike a plain ``split(":")``, it reads bracketed IPv6 hosts (``[::1]:8000``) whole.
+    """
+
+    def __init__(self, app: ASGIApp, hosts: list[str]):
+        self.app, self.hosts = app, {h.lower() for h in hosts}
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or "*" in self.hosts:
+            await self.app(scope, receive, send)
+            return
+        raw = dict(scope.get("headers", [])).get(b"host", b"").decode("latin-1").lower()
+        host = raw[: raw.find("]") + 1] if raw.startswith("[") else raw.split(":")[0]
+        if host not in self.hosts:
+            await _error(f"host: expected one of {sorted(self.hosts)}, got {host!r}")(
+                scope, receive, send
+            )
+            return
+        await self.app(scope, receive, send)
+
+
+def _too_large(limit: int) -> Response:
+    return JSONResponse(
+        {"error": f"request body: expected at most {limit} bytes, got more"}, status_code=413
+    )
+
+
+def _error(message: str, status: int = 400) -> JSONResponse:
+    return JSONResponse({"error": message}, status_code=status, headers=_NO_STORE)
+
+
+async def _json_body(request: Request) -> Any:
+    ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if ctype != "application/json":
+        raise _HTTPError(415, f"request: expected Content-Type application/json, got {ctype!r}")
+    body = b""
+    async for chunk in request.stream():
+        body += chunk
+        if len(body) > MAX_BODY:
+            raise _HTTPError(413, f"request body: expected at most {MAX_BODY} bytes, got more")
+    if not body:
+        return {}
+    try:
+        return json.loads(body)
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise _HTTPError(400, f"request body: expected JSON, got {exc}") from None
+
+
+class _HTTPError(Exception):
+    def __init__(self, status: int, message: str):
+        super().__init__(message)
+        self.status = status
+
+
+def _asset_table() -> dict[str, tuple[bytes, str]]:
+    """Every built asset, read once: the page can only ever get these bytes."""
+    table: dict[str, tuple[bytes, str]] = {}
+    assets = STATIC / "assets"
+    if assets.is_dir():
+        for f in sorted(assets.iterdir()):
+            if f.is_file() and f.suffix in _MEDIA:
+                table[f.name] = (f.read_bytes(), _MEDIA[f.suffix])
+    return table
+
+
+def create_app(
+    path: str | Path,
+    *,
+    allowed_hosts: list[str] | None = None,
+    max_body: int = MAX_BODY,
+) -> Starlette:
+    """The editor's ASGI app for the one ``.csdf.npz`` at ``path``.
+
+    Parameters
+    ----------
+    path : path
+        The object to edit; loaded (and validated) now. Save writes ``NAME.edited.csdf.npz``
+        beside it, or over it when the page asks to overwrite.
+    allowed_hosts : list of str, optional
+        Host header values accepted (guards against DNS rebinding). Default: loopback names
+        only; ``["*"]`` accepts any (for ``--host``).
+    max_body : int
+        Largest request body in bytes; larger ones get 413.
+
+    ``app.state.session`` is the :class:`~partscale.serve.session.EditSession`.
+    """
+    session = EditSession.open(path)
+    index = STATIC / "index.html"
+    if not index.is_file():
+        raise InputError(f"{STATIC}: expected the built editor page (index.html), got none")
+    index_bytes = index.read_bytes()
+    assets = _asset_table()
+    progress_state: dict[str, Any] = {"fraction": 1.0, "message": "", "busy": False}
+
+    def state(**extra: Any) -> JSONResponse:
+        body = session.state()
+        body.update(extra)
+        return JSONResponse(body, headers=_NO_STORE)
+
+    async def page(request: Request) -> Response:
+        return Response(index_bytes, media_type=_MEDIA[".html"], headers=_PAGE_HEADERS)
+
+    async def asset(request: Request) -> Response:
+        hit = assets.get(request.path_params["name"])
+        if hit is None:
+            return _error("not found", 404)
+        data, media = hit
+        etag = hashlib.sha1(data).hexdigest()[:16]
+        return Response(data, media_type=media, headers={"ETag": etag, **_PAGE_HEADERS})
+
+    async def get_state(request: Request) -> Response:
+        return state()
+
+    async def grid(request: Request) -> Response:
+        data = await run_in_threadpool(session.grid_bytes)
+        return Response(
+            data,
+            media_type="application/octet-stream",
+            headers={"X-Partscale-Shape": ",".join(map(str, session.current.shape)), **_NO_STORE},
+        )
+
+    async def parts(request: Request) -> Response:
+        data = await run_in_threadpool(session.parts_bytes)
+        return Response(data, media_type="application/octet-stream", headers=_NO_STORE)
+
+    async def schema(request: Request) -> Response:
+        return JSONResponse(JSON_SCHEMA)
+
+    async def progress(request: Request) -> Response:
+        return JSONResponse(dict(progress_state), headers=_NO_STORE)
+
+    def _progress(fraction: float, message: str) -> None:
+        progress_state.update(fraction=float(fraction), message=str(message))
+
+    def _apply(recipe: Any) -> float:
+        t0 = time.perf_counter()
+        progress_state.update(fraction=0.0, message="applying", busy=True)
+        try:
+            session.apply(recipe, progress=_progress)
+        finally:
+            progress_state.update(fraction=1.0, message="", busy=False)
+        return (time.perf_counter() - t0) * 1000.0
+
+    async def apply(request: Request) -> Response:
+        try:
+            recipe = await _json_body(request)
+        except _HTTPError as exc:
+            return _error(str(exc), exc.status)
+        try:
+            ms = await run_in_threadpool(_apply, recipe)
+        except InputError as exc:
+            return _error(str(exc), 400)
+        except Exception as exc:  # a bug, not the user's input: say so, keep the traceback
+            traceback.print_exc()
+            return _error(f"apply failed inside partscale: {type(exc).__name__}: {exc}", 500)
+        return state(apply_ms=ms)
+
+    async def undo(request: Request) -> Response:
+        try:
+            await _json_body(request)
+        except _HTTPError as exc:
+            return _error(str(exc), exc.status)
+        if not await run_in_threadpool(session.undo):
+            return _error("undo: expected an edit to undo, got none", 409)
+        return state()
+
+    async def redo(request: Request) -> Response:
+        try:
+            await _json_body(request)
+        except _HTTPError as exc:
+            return _error(str(exc), exc.status)
+        if not await run_in_threadpool(session.redo):
+            return _error("redo: expected an undone edit to redo, got none", 409)
+        return state()
+
+    async def save(request: Request) -> Response:
+        try:
+            body = await _json_body(request)
+        except _HTTPError as exc:
+            return _error(str(exc), exc.status)
+        if not isinstance(body, dict) or set(body) - {"overwrite"}:
+            return _error(f"save: expected {{'overwrite': true|false}}, got {str(body)[:80]!r}")
+        overwrite = body.get("overwrite", False)
+        if not isinstance(overwrite, bool):
+            return _error(f"save.overwrite: expected true or false, got {overwrite!r}")
+        try:
+            written = await run_in_threadpool(lambda: session.save(overwrite=overwrite))
+        except InputError as exc:
+            return _error(str(exc), 400)
+        return state(saved=written.name)
+
+    def _export(kind: str):
+        async def handler(request: Request) -> Response:
+            try:
+                data, name, media = await run_in_threadpool(session.export, kind)
+            except InputError as exc:
+                return _error(str(exc), 400)
+            return Response(
+                data,
+                media_type=media,
+                headers={"Content-Disposition": f'attachment; filename="{name}"', **_NO_STORE},
+            )
+
+        return handler
+
+    routes = [
+        Route("/", page),
+        Route("/index.html", page),
+        Route("/assets/{name}", asset),
+        Route("/api/state", get_state),
+        Route("/api/grid", grid),
+        Route("/api/parts", parts),
+        Route("/api/schema", schema),
+        Route("/api/progress", progress),
+        Route("/api/apply", apply, methods=["POST"]),
+        Route("/api/undo", undo, methods=["POST"]),
+        Route("/api/redo", redo, methods=["POST"]),
+        Route("/api/save", save, methods=["POST"]),
+        Route("/api/export/mesh", _export("mesh")),
+        Route("/api/export/texture", _export("texture")),
+    ]
+    hosts = LOOPBACK_HOSTS if allowed_hosts is None else allowed_hosts
+    middleware = [
+        Middleware(LimitBody, limit=max_body),
+        Middleware(HostGuard, hosts=hosts),
+    ]
+    app = Starlette(routes=routes, middleware=middleware)
+    app.state.session = session
+    return app

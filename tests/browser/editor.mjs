@@ -1,0 +1,220 @@
+// Drives the editor page in headless Chromium (playwright-core) for tests/test_browser.py and
+// bench/bench_editor.py. Usage: node editor.mjs '<json args>'; prints one JSON result line.
+//
+// args: { url, chromium, web (folder with node_modules), out (folder), reference (png path or
+//         null), updateReference, canvas: [w, h], remapCases, zone: {axis, start, end, dest},
+//         benchmark: n frames (only load + benchmark when set) }
+import { createRequire } from 'node:module';
+import { existsSync, readFileSync, writeFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { pathToFileURL } from 'node:url';
+
+const args = JSON.parse(process.argv[2]);
+const require = createRequire(join(args.web, 'package.json'));
+const load = async (name) => import(pathToFileURL(require.resolve(name)).href);
+const pick = (mod, name) => mod[name] ?? mod.default?.[name];
+const chromium = pick(await load('playwright-core'), 'chromium');
+const pixelmatch = (await load('pixelmatch')).default;
+const PNG = pick(await load('pngjs'), 'PNG');
+
+const result = { errors: [], steps: [] };
+const [W, H] = args.canvas ?? [480, 360];
+const browser = await chromium.launch({
+  executablePath: args.chromium,
+  headless: true,
+  args: [
+    '--no-sandbox',
+    '--use-angle=swiftshader',
+    '--enable-unsafe-swiftshader',
+    '--ignore-gpu-blocklist',
+    '--disable-gpu-vsync',
+    '--force-color-profile=srgb',
+  ],
+});
+
+function diffPixels(a, b) {
+  const pa = PNG.sync.read(a);
+  const pb = PNG.sync.read(b);
+  if (pa.width !== pb.width || pa.height !== pb.height) return { count: -1, total: pa.width * pa.height };
+  const diff = new PNG({ width: pa.width, height: pa.height });
+  const count = pixelmatch(pa.data, pb.data, diff.data, pa.width, pa.height, { threshold: 0.1 });
+  return { count, total: pa.width * pa.height, diff: PNG.sync.write(diff) };
+}
+
+try {
+  const context = await browser.newContext({
+    viewport: { width: W + 260, height: H },
+    deviceScaleFactor: 1,
+    acceptDownloads: true,
+  });
+  const page = await context.newPage();
+  page.on('console', (m) => {
+    if (m.type() === 'error') result.errors.push(m.text());
+  });
+  page.on('pageerror', (e) => result.errors.push(String(e)));
+  const idle = async () => {
+    await page.waitForFunction(() => window.__partscale?.idle === true, null, { timeout: 60000 });
+    // one more frame so the canvas holds the latest state
+    await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  };
+  const shot = async (name) => {
+    // the canvas's own pixels (preserveDrawingBuffer), without the HTML overlay on top of it
+    const url = await page.evaluate(() => document.querySelector('#view canvas').toDataURL('image/png'));
+    const png = Buffer.from(url.slice(url.indexOf(',') + 1), 'base64');
+    writeFileSync(join(args.out, name), png);
+    return png;
+  };
+
+  const t0 = Date.now();
+  await page.goto(`${args.url}?canvas=${W}x${H}`);
+  await idle();
+  result.loadMs = Date.now() - t0;
+  result.state0 = await page.evaluate(() => window.__partscale.state());
+  result.zone0 = await page.evaluate(() => window.__partscale.zones()[0]);
+
+  if (args.benchmark) {
+    result.benchmark = await page.evaluate((n) => window.__partscale.benchmark(n), args.benchmark);
+    result.renderer = await page.evaluate(() => {
+      const gl = document.createElement('canvas').getContext('webgl2');
+      const ext = gl.getExtension('WEBGL_debug_renderer_info');
+      return ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER);
+    });
+  } else {
+    // 1. the object is drawn, like the reference
+    const initial = await shot('initial.png');
+    if (args.reference) {
+      if (args.updateReference) {
+        writeFileSync(args.reference, initial);
+        result.referenceWritten = true;
+      }
+    }
+    if (args.reference && existsSync(args.reference)) {
+      const d = diffPixels(readFileSync(args.reference), initial);
+      if (d.diff) writeFileSync(join(args.out, 'reference-diff.png'), d.diff);
+      result.reference = { count: d.count, total: d.total };
+    }
+    const blank = PNG.sync.read(initial);
+    const bg = [blank.data[0], blank.data[1], blank.data[2]];
+    let fg = 0;
+    for (let i = 0; i < blank.data.length; i += 4) {
+      if (Math.abs(blank.data[i] - bg[0]) + Math.abs(blank.data[i + 1] - bg[1]) + Math.abs(blank.data[i + 2] - bg[2]) > 30) fg++;
+    }
+    result.foregroundPixels = fg;
+
+    // 2. the shader's own remap on sample points
+    if (args.remapCases) {
+      result.remap = await page.evaluate((cases) =>
+        cases.map((c) => ({
+          glsl: window.__partscale.evalRemap(c.zones, c.points),
+          ts: window.__partscale.evalRemapTS(c.zones, c.points),
+        })), args.remapCases);
+    }
+
+    // view modes: parts (segmented objects) and a distance slice, then back to colour
+    result.views = {};
+    for (const mode of ['parts', 'slice', 'colour']) {
+      await page.selectOption('#view-mode', mode);
+      await idle();
+      result.views[mode] = diffPixels(initial, await shot(`view-${mode}.png`)).count;
+    }
+    // positions in % of the solid's extent
+    await page.selectOption('#units', '%');
+    result.percent = await page.inputValue('#pos-start');
+    await page.selectOption('#units', 'units');
+
+    // 3. drag the end plane's handle: the zone and the preview change, the server does not
+    // rendering is on demand: nothing is drawn while nothing changes
+    const framesIdle0 = await page.evaluate(() => window.__partscale.frames);
+    await page.waitForTimeout(600);
+    result.framesWhileIdle = (await page.evaluate(() => window.__partscale.frames)) - framesIdle0;
+
+    const h = await page.evaluate(() => window.__partscale.handleScreen('end'));
+    result.handle = h;
+    const apiDuringDrag = [];
+    const onRequest = (req) => {
+      if (new URL(req.url()).pathname.startsWith('/api/')) apiDuringDrag.push(req.url());
+    };
+    page.on('request', onRequest);
+    const framesDrag0 = await page.evaluate(() => window.__partscale.frames);
+    await page.mouse.move(h.x, h.y);
+    await page.mouse.down();
+    for (let i = 1; i <= 6; i++) await page.mouse.move(h.x + 10 * i, h.y + 3 * i);
+    await page.mouse.up();
+    await idle();
+    page.off('request', onRequest);
+    result.apiDuringDrag = apiDuringDrag;
+    result.framesDuringDrag = (await page.evaluate(() => window.__partscale.frames)) - framesDrag0;
+    result.zoneDragged = await page.evaluate(() => window.__partscale.zones()[0]);
+    const dragged = await shot('dragged.png');
+    result.dragDiff = diffPixels(initial, dragged).count;
+    result.revisionAfterDrag = (await page.evaluate(() => window.__partscale.state())).revision;
+
+    // 4. type an exact zone and apply it on the server
+    if (args.zone) {
+      const z = args.zone;
+      await page.selectOption('#units', 'units');
+      await page.selectOption('#axis', z.axis);
+      await page.selectOption('#mode', z.mode ?? 'stretch');
+      for (const [id, v] of [['#pos-start', z.start], ['#pos-end', z.end], ['#pos-dest', z.dest]]) {
+        await page.fill(id, String(v));
+        await page.dispatchEvent(id, 'change');
+      }
+      result.recipe = await page.evaluate(() => window.__partscale.recipe());
+      await idle();
+      await shot('preview.png');
+      await page.click('#apply');
+      await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.revisionAfterDrag, { timeout: 60000 });
+      await idle();
+      result.applied = await page.evaluate(() => window.__partscale.state());
+      await shot('applied.png');
+      result.statusAfterApply = await page.textContent('#status');
+
+      // 5. undo
+      await page.click('#undo');
+      await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.applied.revision, { timeout: 60000 });
+      await idle();
+      result.undone = await page.evaluate(() => window.__partscale.state());
+      const undoneShot = await shot('undone.png');
+      result.undoneDiff = diffPixels(initial, undoneShot).count;
+
+      // 6. two zones in one recipe: the same x zone, then one along y
+      if (args.zone2) {
+        const setZone = async (zz) => {
+          await page.selectOption('#axis', zz.axis);
+          await page.selectOption('#mode', zz.mode ?? 'stretch');
+          for (const [id, v] of [['#pos-start', zz.start], ['#pos-end', zz.end], ['#pos-dest', zz.dest]]) {
+            await page.fill(id, String(v));
+            await page.dispatchEvent(id, 'change');
+          }
+        };
+        await setZone(z);
+        await page.click('#add-zone');
+        await setZone(args.zone2);
+        await idle();
+        result.recipe2 = await page.evaluate(() => window.__partscale.recipe());
+        const two = await shot('two-zones.png');
+        result.twoZoneDiff = diffPixels(initial, two).count;
+        await page.click('#apply');
+        await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.undone.revision, { timeout: 60000 });
+        await idle();
+        result.applied2 = await page.evaluate(() => window.__partscale.state());
+        await page.click('#undo');
+        await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.applied2.revision, { timeout: 60000 });
+        await idle();
+      }
+    }
+
+    // 7. export the mesh: a browser download
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-mesh')]);
+    const glb = join(args.out, 'export.glb');
+    await download.saveAs(glb);
+    result.download = { path: glb, suggested: download.suggestedFilename() };
+    result.status = await page.textContent('#status');
+  }
+  await context.close();
+} catch (e) {
+  result.fatal = String(e && e.stack ? e.stack : e);
+} finally {
+  await browser.close();
+}
+process.stdout.write(JSON.stringify(result) + '\n');

@@ -1,0 +1,304 @@
+"""End to end in headless Chromium: the page draws the object, previews a drag, applies, undoes,
+exports; the shader's remap (GLSL, on the GPU) and its TypeScript mirror match the Python maps.
+
+Needs node, Debian's ``chromium`` and the npm packages in ``web/node_modules`` (``./dev.sh test``
+installs them where it can); skips with the reason otherwise. One browser session drives the
+whole scenario (tests/browser/editor.mjs) to stay within about a minute on software rendering.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import socket
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from partscale import csdf as csdf_mod
+from partscale import shapes
+from partscale.edit import Recipe, source_coordinate
+
+ROOT = Path(__file__).resolve().parents[1]
+WEB = ROOT / "web"
+SCRIPT = ROOT / "tests" / "browser" / "editor.mjs"
+REFERENCE = ROOT / "tests" / "browser" / "table_480x360.png"
+CANVAS = (480, 360)
+H = 0.02
+TOP = ((0.0, 0.7, 0.0), (1.2, 0.78, 0.6))
+LEGS = [((x, 0.0, z), (x + 0.08, 0.7, z + 0.08)) for x in (0.05, 1.07) for z in (0.05, 0.47)]
+PART_COLOURS = [[230, 80, 80], [80, 200, 90], [70, 110, 230], [230, 200, 60], [180, 90, 220]]
+ZONE = {"axis": "x", "mode": "stretch", "start": 0.4, "end": 0.8, "dest": 1.2}
+ZONE2 = {"axis": "y", "mode": "stretch", "start": 0.2, "end": 0.5, "dest": 0.7}
+
+
+def find_tools() -> tuple[str, str]:
+    """(node, chromium) executables, or skip saying what is missing."""
+    node = shutil.which("node")
+    if not node:
+        pytest.skip("browser tests need node on PATH (not found)")
+    chromium = os.environ.get("PARTSCALE_CHROMIUM") or next(
+        (p for p in map(shutil.which, ("chromium", "chromium-browser")) if p), None
+    )
+    if not chromium:
+        pytest.skip("browser tests need Debian's chromium (apt-get install chromium); not found")
+    for pkg in ("playwright-core", "pixelmatch", "pngjs"):
+        if not (WEB / "node_modules" / pkg).is_dir():
+            pytest.skip(f"browser tests need web/node_modules/{pkg} (npm ci in web/); not found")
+    return node, chromium
+
+
+def table() -> csdf_mod.CSDF:
+    """A table: top and four legs, coloured by height and position (exact SDF)."""
+
+    def colour(p):
+        top = p[:, 1] > 0.69
+        return np.stack(
+            [np.full(len(p), 200), 120 + 100 * top, 60 + 150 * np.clip(p[:, 0] / 1.2, 0, 1)], -1
+        )
+
+    boxes = [TOP, *LEGS]
+    c = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boxes),
+        ((0, 0, 0), TOP[1]),
+        voxel_size=H,
+        color=colour,
+        source="test table",
+    )
+    # segmented: each voxel takes its nearest box (top = 0, legs 1..4)
+    axes = [c.axis_coords(a) for a in range(3)]
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    nearest = np.argmin([shapes.box_sdf(pts, lo, hi) for lo, hi in boxes], axis=0)
+    meta = dict(c.meta)
+    meta["parts_info"] = [{"index": i, "color": PART_COLOURS[i]} for i in range(len(boxes))]
+    return c.replace(parts=nearest.reshape(c.shape), meta=meta)
+
+
+class Server:
+    """uvicorn serving create_app(path) on a free loopback port in a thread."""
+
+    def __init__(self, path: Path):
+        import uvicorn
+
+        from partscale.serve import create_app
+
+        self.app = create_app(path)
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            self.port = s.getsockname()[1]
+        config = uvicorn.Config(
+            self.app,
+            host="127.0.0.1",
+            port=self.port,
+            log_level="warning",
+            ws="none",
+            lifespan="off",
+        )
+        self.server = uvicorn.Server(config)
+        self.thread = threading.Thread(target=self.server.run, daemon=True)
+
+    def __enter__(self):
+        self.thread.start()
+        deadline = time.monotonic() + 30
+        while not self.server.started:
+            if time.monotonic() > deadline:
+                raise RuntimeError("uvicorn did not start")
+            time.sleep(0.05)
+        return self
+
+    def __exit__(self, *exc):
+        self.server.should_exit = True
+        self.thread.join(timeout=30)
+
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.port}/"
+
+
+def remap_cases() -> list[dict]:
+    """Zones (world units, lo/hi = the solid's extent before each) and output sample points."""
+    rng = np.random.default_rng(6)
+
+    def z(axis, mode, start, end, dest, lo=0.0, hi=1.2):
+        return {
+            "axis": axis,
+            "mode": mode,
+            "start": start,
+            "end": end,
+            "dest": dest,
+            "lo": lo,
+            "hi": hi,
+        }
+
+    zone_sets = [
+        [z("x", "stretch", 0.3, 0.7, 0.9)],
+        [z("x", "stretch", 0.3, 0.7, 0.45)],  # compression
+        [z("y", "tile", 0.2, 0.5, 1.0)],  # 0.8 / 0.3 -> 3 copies
+        [z("z", "tile", 0.1, 0.7, 0.5)],  # shrinks to 1 copy
+        [z("x", "global", 0.9, 1.2, 1.5)],
+        [z("x", "stretch", 0.3, 0.7, 0.9), z("y", "tile", 0.1, 0.3, 0.75, 0.0, 0.78)],
+        [z("x", "tile", 0.2, 0.4, 0.8), z("x", "stretch", 0.1, 1.0, 1.3, 0.0, 1.6)],
+    ]
+    cases = []
+    for zones in zone_sets:
+        pts = rng.uniform(-0.2, 1.9, size=(160, 3))
+        expected = expected_sources(zones, pts)
+        # drop points within 1e-4 of a tile seam, where the map jumps by a whole copy
+        jump = np.abs(expected_sources(zones, pts + 1e-4) - expected).max(axis=1) > 1e-3
+        jump |= np.abs(expected_sources(zones, pts - 1e-4) - expected).max(axis=1) > 1e-3
+        cases.append({"zones": zones, "points": pts[~jump].tolist()})
+    return cases
+
+
+def expected_sources(zones: list[dict], pts: np.ndarray) -> np.ndarray:
+    """The Python maps: edits apply in order, so a point goes back through the last one first."""
+    out = np.array(pts, dtype=np.float64)
+    for zone in reversed(zones):
+        a = "xyz".index(zone["axis"])
+        out[:, a] = source_coordinate(
+            out[:, a],
+            mode=zone["mode"],
+            start=zone["start"],
+            end=zone["end"],
+            dest=zone["dest"],
+            lo=zone["lo"],
+            hi=zone["hi"],
+        )
+    return out
+
+
+def run_page(node: str, chromium: str, url: str, out: Path, **extra) -> dict:
+    args = {
+        "url": url,
+        "chromium": chromium,
+        "web": str(WEB),
+        "out": str(out),
+        "canvas": list(CANVAS),
+        **extra,
+    }
+    proc = subprocess.run(
+        [node, str(SCRIPT), json.dumps(args)], capture_output=True, text=True, timeout=240
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert "fatal" not in result, result["fatal"]
+    return result
+
+
+def test_typescript_remap_matches_source_coordinate(tmp_path):
+    """The page's TypeScript maps (planes, bounds, step bound) in node, no browser needed."""
+    node = shutil.which("node")
+    if not node or not (WEB / "node_modules" / "vite").is_dir():
+        pytest.skip("needs node and web/node_modules/vite (npm ci in web/); not found")
+    cases = remap_cases()
+    (tmp_path / "cases.json").write_text(json.dumps(cases))
+    proc = subprocess.run(
+        [
+            node,
+            str(ROOT / "tests" / "browser" / "remap_node.mjs"),
+            str(WEB),
+            str(tmp_path / "cases.json"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    for case, got in zip(cases, json.loads(proc.stdout), strict=True):
+        want = expected_sources(case["zones"], np.array(case["points"]))
+        assert np.abs(np.array(got) - want).max() <= 1e-9, case["zones"]
+
+
+@pytest.mark.browser
+def test_editor_end_to_end(tmp_path):
+    node, chromium = find_tools()
+    path = tmp_path / "table.csdf.npz"
+    csdf_mod.save(table(), path)
+    cases = remap_cases()
+    update = os.environ.get("PARTSCALE_UPDATE_REFERENCE") == "1"
+    with Server(path) as server:
+        session = server.app.state.session
+        original = session.current
+        r = run_page(
+            node,
+            chromium,
+            server.url,
+            tmp_path,
+            reference=str(REFERENCE),
+            updateReference=update,
+            remapCases=cases,
+            zone=ZONE,
+            zone2=ZONE2,
+        )
+        # -- loads cleanly and draws the object like the reference (pixelmatch 0.1, <= 1 %)
+        assert r["errors"] == [], r["errors"]
+        total = CANVAS[0] * CANVAS[1]
+        assert r["foregroundPixels"] > 0.1 * total  # the object (and its box) is there
+        assert "reference" in r, (
+            f"no reference {REFERENCE}: rerun with PARTSCALE_UPDATE_REFERENCE=1"
+        )
+        assert r["reference"]["total"] == total
+        assert r["reference"]["count"] <= 0.01 * total, (
+            f"{r['reference']['count']} of {total} pixels differ from {REFERENCE.name}; "
+            f"see {tmp_path / 'reference-diff.png'}"
+        )
+
+        # -- parts and slice views draw something else; back in colour, the first picture again
+        assert r["views"]["parts"] > 0.02 * total
+        assert r["views"]["slice"] > 0.02 * total
+        assert r["views"]["colour"] <= 0.01 * total
+        assert float(r["percent"]) == pytest.approx(35.0)  # the default zone starts at 35 %
+
+        # -- the shader's remap is recipe.source_coordinate (float32 on the GPU: 1e-4 units)
+        for case, got in zip(cases, r["remap"], strict=True):
+            want = expected_sources(case["zones"], np.array(case["points"]))
+            assert len(case["points"]) > 100
+            assert np.abs(np.array(got["glsl"]) - want).max() <= 1e-4, case["zones"]
+            assert np.abs(np.array(got["ts"]) - want).max() <= 1e-9, case["zones"]
+
+        # -- dragging the end plane changes the zone and the picture, not the server's object
+        assert abs(r["zoneDragged"]["end"] - r["zone0"]["end"]) > 2 * H
+        assert r["dragDiff"] > 0.01 * total
+        assert r["revisionAfterDrag"] == 0
+        assert r["apiDuringDrag"] == []  # the preview needs no server round trip
+        assert r["framesDuringDrag"] >= 2  # redrawn as the plane moves...
+        assert r["framesWhileIdle"] == 0  # ...and not at all while nothing changes
+
+        # -- Apply: the page's recipe is a valid recipe; the server's object has the new extent
+        recipe = Recipe.parse(r["recipe"])
+        assert recipe.to_json()["edits"] == [
+            {"axis": "x", "zone": [0.4, 0.8], "to": 1.2, "mode": "stretch"}
+        ]
+        lo, hi = np.array(r["applied"]["solid_bounds"])
+        assert abs(hi[0] - 1.6) <= 0.25 * H and abs(lo[0]) <= 0.25 * H
+        np.testing.assert_allclose(hi[1:], TOP[1][1:], atol=0.25 * H)
+        assert r["applied"]["can_undo"]
+
+        # -- Undo: the very object the server started with, and the page shows it again
+        assert session.current is original
+        assert np.array_equal(session.current.sdf, csdf_mod.load(path).sdf)
+        assert r["undone"]["can_redo"] and not r["undone"]["can_undo"]
+        assert r["undoneDiff"] <= 0.01 * total
+        assert abs(session.redo_stack[-1].surface_bounds()[1][0] - 1.6) <= 0.25 * H
+
+    # -- two zones in one recipe (x, then y): previewed together, applied in order
+    assert [e["axis"] for e in Recipe.parse(r["recipe2"]).to_json()["edits"]] == ["x", "y"]
+    assert r["twoZoneDiff"] > 0.02 * total
+    lo, hi = np.array(r["applied2"]["solid_bounds"])
+    assert abs(hi[0] - 1.6) <= 0.25 * H and abs(hi[1] - (TOP[1][1] + 0.2)) <= 0.25 * H
+    assert len(r["applied2"]["history"]) == 2
+
+    # -- Export downloads a GLB that trimesh loads with vertex colours
+    assert r["download"]["suggested"] == "table.edited.glb"
+    scene = trimesh.load(r["download"]["path"])
+    (mesh,) = scene.geometry.values()
+    colours = np.asarray(mesh.visual.vertex_attributes["color"])
+    assert colours.shape[0] == len(mesh.vertices) > 1000
+    assert np.ptp(colours[:, 2]) > 0.2  # the blue ramp along x
+    np.testing.assert_allclose(mesh.bounds, [(0, 0, 0), TOP[1]], atol=0.5 * H)

@@ -1,0 +1,423 @@
+"""Import of meshes and grids against analytic truth, synthetic files and bad input.
+
+Real objects from ../shared/data are checked in ``test_ingest_real.py``.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import trimesh
+from conftest import assert_bad_input, data_path
+
+from partscale import csdf as csdf_mod
+from partscale import ingest, shapes
+from partscale.ingest.mesh_io import linear_to_srgb8, srgb_to_linear
+from partscale.surface import to_mesh
+
+
+def _centres(c):
+    idx = np.stack(np.meshgrid(*[np.arange(s) for s in c.shape], indexing="ij"), -1)
+    return c.index_to_world(idx.reshape(-1, 3))
+
+
+# -- analytic shapes -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "kind, res",
+    [("box", 32), ("sphere", 40)],
+)
+def test_closed_form_sdf_in_band_and_sign_everywhere(kind, res):
+    """Box and sphere meshes: |sdf - exact| <= 0.05 voxel within the 3-voxel band; every voxel
+    centre more than one voxel from the surface has the right sign.
+
+    The sphere mesh is an icosphere (5120 faces, radius 1) whose facets deviate from the sphere
+    by ``facet`` (~1e-3 radius, ~0.06 voxel at res 40): the tolerance is 0.05 voxel + that.
+    """
+    if kind == "box":
+        lo, hi = np.array([-0.4, -0.25, -0.1]), np.array([0.6, 0.35, 0.3])
+        mesh = trimesh.creation.box(bounds=np.stack([lo, hi]))
+        exact = lambda p: shapes.box_sdf(p, lo, hi)  # noqa: E731
+        facet = 0.0
+    else:
+        mesh = trimesh.creation.icosphere(subdivisions=4, radius=1.0)
+        exact = lambda p: shapes.sphere_sdf(p, (0, 0, 0), 1.0)  # noqa: E731
+        # the facets lie between the inscribed sphere of their planes and the unit sphere
+        facet = float(1.0 - np.einsum("ij,ij->i", mesh.triangles[:, 0], mesh.face_normals).min())
+    c = ingest.from_mesh(ingest.from_trimesh(mesh), res=res)
+    h = c.voxel_size
+    p = _centres(c)
+    e = exact(p)
+    s = c.sdf.ravel()
+    band = np.abs(e) < 3 * h - facet
+    assert band.sum() > 1000
+    err = np.abs(s[band] - e[band]) / h
+    assert err.max() <= 0.05 + facet / h, err.max()
+    far = np.abs(e) > h + facet
+    assert np.array_equal(s[far] < 0, e[far] < 0)
+
+
+def test_grid_layout_res_pad_and_meta():
+    """--res voxels along the longest side, cubic voxels, pad empty voxels around the object."""
+    mesh = trimesh.creation.box(extents=(2.0, 1.0, 0.5))
+    c = ingest.from_mesh(ingest.from_trimesh(mesh, source="box"), res=20, pad=4)
+    assert c.voxel_size == pytest.approx(0.1)
+    assert c.shape == (20 + 1 + 8, 10 + 1 + 8, 5 + 1 + 8)
+    for ax in range(3):  # the surface never touches the border: the border layers are outside
+        assert (np.take(c.sdf, [0, -1], axis=ax) > 0).all()
+    sb = c.surface_bounds()
+    assert np.allclose(sb[1] - sb[0], (2.0, 1.0, 0.5), atol=0.5 * c.voxel_size)
+    op = c.meta["history"][0]
+    assert op["op"] == "import" and op["res"] == 20 and op["pad"] == 4
+
+
+def test_open_sheet_becomes_thin_solid_not_a_leak():
+    """A single open square (no volume at all) becomes a thin watertight slab around it;
+    an open-topped box becomes a thin-walled cup, its inside stays outside (no inversion)."""
+    sheet = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    c = ingest.from_mesh(ingest.from_trimesh(sheet), res=32)
+    h = c.voxel_size
+    m = to_mesh(c)
+    assert m.is_watertight
+    thickness = m.bounds[1, 2] - m.bounds[0, 2]
+    assert h <= thickness <= 2.5 * h
+    cup = trimesh.creation.box(extents=(1, 1, 1))
+    keep = cup.face_normals[:, 2] < 0.5  # drop the top face: an open box
+    cup = trimesh.Trimesh(cup.vertices, cup.faces[keep])
+    c = ingest.from_mesh(ingest.from_trimesh(cup), res=32)
+    centre = c.world_to_index(np.zeros((1, 3)))[0].round().astype(int)
+    assert c.sdf[tuple(centre)] > 0.3  # the cup's inside is air
+    assert c.sdf[tuple(centre - (0, 0, 16))] < 0.05  # its floor is solid
+    assert to_mesh(c).is_watertight
+
+
+def test_intersecting_pieces_union_buried_faces_ignored():
+    """Two overlapping closed boxes: the solid is their union, exact distance outside.
+
+    Partly buried faces are classified in pieces (adaptively refined towards the curves where
+    the boxes intersect, down to 2 voxels), so right at those curves a sliver of face may be
+    missed and a distance be off by up to ~1 voxel: 98% of the outside band is within
+    0.05 voxel, all of it within 1.5 voxels; signs are right beyond one voxel everywhere."""
+    a = trimesh.creation.box(bounds=[[0, 0, 0], [1, 0.5, 0.5]])
+    b = trimesh.creation.box(bounds=[[0.6, 0.2, 0.1], [1.4, 0.9, 0.4]])
+    mesh = trimesh.util.concatenate([a, b])
+    c = ingest.from_mesh(ingest.from_trimesh(mesh), res=40)
+    h = c.voxel_size
+    p = _centres(c)
+    e = np.minimum(
+        shapes.box_sdf(p, (0, 0, 0), (1, 0.5, 0.5)),
+        shapes.box_sdf(p, (0.6, 0.2, 0.1), (1.4, 0.9, 0.4)),
+    )
+    s = c.sdf.ravel()
+    far = np.abs(e) > h
+    assert np.array_equal(s[far] < 0, e[far] < 0)
+    out = (e > 0) & (e < 3 * h)  # outside the union, min of box SDFs is the exact distance
+    err = np.abs(s[out] - e[out]) / h
+    assert np.mean(err <= 0.05) >= 0.98 and err.max() <= 1.5, (np.mean(err <= 0.05), err.max())
+
+
+# -- colour ----------------------------------------------------------------------------
+
+
+def _glb_with_texture(path, factor_linear, texels_srgb):
+    """One quad, UVs spanning a 2x2 texture, with a base colour factor; two nodes."""
+    from PIL import Image
+    from trimesh.visual.material import PBRMaterial
+
+    img = Image.fromarray(np.asarray(texels_srgb, np.uint8))
+    quad = trimesh.Trimesh(
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]], process=False
+    )
+    mat = PBRMaterial(baseColorFactor=[*factor_linear, 1.0], baseColorTexture=img)
+    quad.visual = trimesh.visual.TextureVisuals(uv=[[0, 0], [1, 0], [1, 1], [0, 1]], material=mat)
+    box = trimesh.creation.box(extents=(0.2, 0.2, 0.2))
+    scene = trimesh.Scene()
+    scene.add_geometry(quad, node_name="quad", geom_name="quad")
+    t = np.eye(4)
+    t[:3, 3] = (5.0, 0.0, 0.0)
+    scene.add_geometry(box, node_name="box", geom_name="box", transform=t)
+    scene.export(path)
+
+
+def test_gltf_texture_times_factor_in_linear_light_and_node_transforms(tmp_path):
+    """colour = sRGB(linear(texel) * factor); texels at their UVs; nodes placed by transforms."""
+    texels = [[[200, 30, 90], [10, 250, 128]], [[255, 255, 255], [60, 60, 200]]]
+    factor = (0.5, 0.8, 1.0)
+    path = tmp_path / "quad.glb"
+    _glb_with_texture(path, factor, texels)
+    m = ingest.load_mesh(path)
+    assert m.vertices[:, 0].max() == pytest.approx(5.1)  # the box node's translation
+    # texel centres of a 2x2 image at u, v in {1/4, 3/4} (v up: row 0 is v = 3/4)
+    quad_faces = np.nonzero(m.vertices[m.faces][:, :, 0].max(axis=1) <= 1.0)[0]
+    pts = np.array([[0.25, 0.75], [0.75, 0.75], [0.25, 0.25], [0.75, 0.25]])
+    expect_px = [texels[0][0], texels[0][1], texels[1][0], texels[1][1]]
+    tri = m.vertices[m.faces[quad_faces]]
+    for (u, v), px in zip(pts, expect_px, strict=True):
+        q = np.array([u, v, 0.0])
+        for f, t in zip(quad_faces, tri, strict=True):
+            bc = trimesh.triangles.points_to_barycentric(t[None], q[None])[0]
+            if (bc >= -1e-9).all():
+                got = m.color_at(np.array([f]), bc[None])[0]
+                lin = (np.asarray(px) / 255.0) ** 2.2  # independent approximate sRGB decode
+                want = 255 * (lin * factor) ** (1 / 2.2)
+                assert np.abs(got.astype(float) - want).max() <= 4, (got, want)
+                break
+        else:
+            raise AssertionError("point not on the quad")
+
+
+def test_srgb_round_trip():
+    x = np.arange(256, dtype=np.float32) / 255
+    assert np.array_equal(linear_to_srgb8(srgb_to_linear(x)), np.arange(256))
+
+
+def test_flat_material_colour_is_the_factor_in_srgb():
+    """Kenney table: one material, baseColorFactor (linear) -> sRGB, read from the raw glTF."""
+    path = data_path("kenney/table.glb")
+    raw = path.read_bytes()
+    n = int.from_bytes(raw[12:16], "little")
+    factor = json.loads(raw[20 : 20 + n])["materials"][0]["pbrMetallicRoughness"][
+        "baseColorFactor"
+    ][:3]
+    want = [round(255 * (1.055 * f ** (1 / 2.4) - 0.055)) for f in factor]
+    m = ingest.load_mesh(path)
+    got = m.color_at(np.arange(4), np.full((4, 3), 1 / 3))
+    assert np.abs(got.astype(int) - want).max() <= 1
+
+
+def test_textured_colour_follows_uvs():
+    """Poly Haven stool: the colour at a triangle corner is the texture's texel at its UV."""
+    from PIL import Image
+
+    folder = data_path("polyhaven/painted_wooden_stool")
+    m = ingest.load_mesh(next(folder.glob("*.gltf")))
+    img = np.asarray(Image.open(next((folder / "textures").glob("*diff*"))).convert("RGB"))
+    rng = np.random.default_rng(0)
+    f = rng.choice(m.n_faces, 300, replace=False)
+    corner = rng.integers(0, 3, 300)
+    bary = np.eye(3)[corner]
+    got = m.color_at(f, bary).astype(int)
+    uv = m.uv[f, corner].astype(np.float64) % 1.0
+    hgt, wid = img.shape[:2]
+    px = img[
+        np.clip((1 - uv[:, 1]) * hgt, 0, hgt - 1).astype(int),
+        np.clip(uv[:, 0] * wid, 0, wid - 1).astype(int),
+    ].astype(int)
+    # bilinear vs nearest texel: a mean within 6/255 on a photographed texture
+    assert np.abs(got - px).mean() <= 6
+
+
+def test_voxel_colour_is_nearest_surface_colour():
+    """Two touching boxes of different colours: voxels take the colour of their nearest box."""
+    a = ingest.from_trimesh(trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]]), color=(255, 0, 0))
+    b = ingest.from_trimesh(trimesh.creation.box(bounds=[[2, 0, 0], [3, 1, 1]]), color=(0, 0, 255))
+    mesh = ingest.ColoredMesh(
+        vertices=np.concatenate([a.vertices, b.vertices]),
+        faces=np.concatenate([a.faces, b.faces + len(a.vertices)]),
+        face_material=np.concatenate([a.face_material, b.face_material + 1]),
+        materials=(a.materials[0], b.materials[0]),
+    )
+    c = ingest.from_mesh(mesh, res=30)
+    x = c.axis_coords(0)
+    left = x < 1.4
+    right = x > 1.6
+    assert (c.rgb[left][..., 0] == 255).all() and (c.rgb[left][..., 2] == 0).all()
+    assert (c.rgb[right][..., 2] == 255).all() and (c.rgb[right][..., 0] == 0).all()
+
+
+# -- grids -----------------------------------------------------------------------------
+
+
+def _autosdf_sphere(path, n=64, radius=0.5):
+    import h5py
+
+    ax = np.linspace(-1, 1, n)
+    p = np.stack(np.meshgrid(ax, ax, ax, indexing="ij"), -1)
+    sdf = np.clip(np.linalg.norm(p, axis=-1) - radius, -0.2, 0.2).astype(np.float32)
+    with h5py.File(path, "w") as f:
+        f.create_dataset("pc_sdf_sample", data=sdf.reshape(-1))
+
+
+def test_autosdf_surface_at_level_002_and_true_distances(tmp_path, cli):
+    """AutoSDF: surface at level 0.02 of a clamped field -> sphere of radius r + 0.02;
+    after resampling to --res 64 the band holds true distances to it (<= 0.1 new voxel)."""
+    src = tmp_path / "shape.h5"
+    _autosdf_sphere(src)
+    out = tmp_path / "shape.csdf.npz"
+    cli("import", src, "-o", out, "--res", "64", check=True)
+    c = csdf_mod.load(out)
+    h = c.voxel_size
+    assert h == pytest.approx(2 * 0.52 / 64, rel=0.01)
+    p = _centres(c)
+    e = np.linalg.norm(p, axis=1) - 0.52
+    s = c.sdf.ravel()
+    band = np.abs(e) < 2.5 * h
+    assert np.abs(s[band] - e[band]).max() / h <= 0.1
+    assert np.array_equal(s[np.abs(e) > h] < 0, e[np.abs(e) > h] < 0)
+    assert c.meta["history"][0]["iso"] == pytest.approx(0.02)
+
+
+def test_npz_grid_with_colours_kept_at_its_own_sampling():
+    """from_grid without res keeps the grid: values shifted by iso, colours as given."""
+    ax = np.arange(-1, 1.0001, 0.1)
+    p = np.stack(np.meshgrid(ax, ax, ax, indexing="ij"), -1)
+    vol = np.linalg.norm(p, axis=-1) - 0.5
+    col = np.zeros((*vol.shape, 3), np.uint8)
+    col[..., 1] = 200
+    c = ingest.from_grid(vol + 0.1, iso=0.1, colors=col, origin=(-1, -1, -1), voxel_size=0.1)
+    assert np.allclose(c.sdf, vol, atol=1e-6)
+    assert (c.rgb[..., 1] == 200).all()
+
+
+def test_npy_grid_resampled_with_colour_volume(tmp_path):
+    """A coarse .npy grid resampled to --res 32 with a colour volume (.npy) beside it."""
+    ax = np.linspace(-1, 1, 24)
+    p = np.stack(np.meshgrid(ax, ax, ax, indexing="ij"), -1)
+    np.save(tmp_path / "g.npy", (np.abs(p).max(axis=-1) - 0.6).astype(np.float32))
+    col = np.zeros((24, 24, 24, 3), np.uint8)
+    col[..., 0] = np.where(p[..., 0] > 0, 250, 20)
+    np.save(tmp_path / "c.npy", col)
+    c = ingest.load(tmp_path / "g.npy", res=32, colors=tmp_path / "c.npy")
+    sb = c.surface_bounds()
+    # no origin/voxel size in a bare .npy: world units are the input's sample spacing
+    assert np.allclose(sb[1] - sb[0], 1.2 / (ax[1] - ax[0]), atol=0.1)
+    x = c.axis_coords(0) - c.axis_coords(0).mean()
+    mid = c.shape[1] // 2, c.shape[2] // 2
+    assert c.rgb[x > 3][:, mid[0], mid[1], 0].min() >= 200
+    assert c.rgb[x < -3][:, mid[0], mid[1], 0].max() <= 40
+
+
+# -- bad input -------------------------------------------------------------------------
+
+
+def _no_output(out):
+    assert not out.exists()
+    assert not list(out.parent.glob(f".{out.name}*")), "a temporary file was left behind"
+
+
+def test_missing_file(tmp_path, cli):
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", tmp_path / "nope.glb", "-o", out), "nope.glb", "no such file")
+    _no_output(out)
+
+
+def test_unknown_format(tmp_path, cli):
+    src = tmp_path / "model.xyz"
+    src.write_text("hello\n")
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", src, "-o", out), "model.xyz", "unknown format")
+    _no_output(out)
+
+
+@pytest.mark.parametrize("name", ["truncated.glb", "garbage.glb", "broken.ply", "broken.npz"])
+def test_corrupt_or_truncated(tmp_path, cli, name):
+    src = tmp_path / name
+    if name == "truncated.glb":
+        src.write_bytes(data_path("kenney/table.glb").read_bytes()[:3000])
+    elif name == "broken.npz":
+        src.write_bytes(b"PK\x03\x04" + b"\x00" * 40)
+    elif name == "broken.ply":
+        src.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 10\n")
+    else:
+        src.write_bytes(b"\x01\x02 not a mesh at all" * 10)
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", src, "-o", out), name, "expected")
+    _no_output(out)
+
+
+def test_empty_mesh(tmp_path, cli):
+    src = tmp_path / "empty.obj"
+    src.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", src, "-o", out), "empty.obj", "triangles")
+    _no_output(out)
+
+
+def test_nan_in_grid(tmp_path, cli):
+    g = np.ones((20, 20, 20), np.float32)
+    g[5:10, 5:10, 5:10] = -1
+    g[3, 4, 5] = np.nan
+    src = tmp_path / "nan.npy"
+    np.save(src, g)
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", src, "-o", out), "nan.npy", "nan")
+    _no_output(out)
+
+
+def test_res_below_16(tmp_path, cli):
+    out = tmp_path / "o.csdf.npz"
+    proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--res", "8")
+    assert_bad_input(proc, "chair.glb", "--res >= 16", "got 8")
+    _no_output(out)
+
+
+def test_res_beyond_memory(tmp_path, cli, monkeypatch):
+    """PARTSCALE_MAX_MEMORY stands in for a small machine: the message says what it would need."""
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(200 << 20))
+    out = tmp_path / "o.csdf.npz"
+    proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--res", "512")
+    assert_bad_input(proc, "chair.glb", "--res 512", "would need", "GiB")
+    _no_output(out)
+
+
+def test_iso_on_a_mesh_is_refused(tmp_path, cli):
+    out = tmp_path / "o.csdf.npz"
+    proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--iso", "0.1")
+    assert_bad_input(proc, "chair.glb", "iso")
+    _no_output(out)
+
+
+def test_cli_import_writes_a_loadable_csdf(tmp_path, cli):
+    out = tmp_path / "chair.csdf.npz"
+    proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--res", "32", check=True)
+    assert "wrote" in proc.stderr
+    c = csdf_mod.load(out)
+    assert max(c.shape) == 32 + 1 + 2 * (ingest.BAND + 2)
+    assert c.meta["source"].endswith("chair.glb")
+    assert c.meta["history"][0]["res"] == 32
+
+
+def test_unknown_option_lists_known_ones():
+    with pytest.raises(TypeError, match="options are"):
+        ingest.from_mesh(ingest.from_trimesh(trimesh.creation.box()), resolution=32)
+
+
+def test_ply_vertex_colours(tmp_path):
+    """PLY vertex colours (sRGB) come back at the vertices and blend inside triangles."""
+    box = trimesh.creation.box(extents=(1, 1, 1))
+    rng = np.random.default_rng(3)
+    cols = rng.integers(0, 256, (len(box.vertices), 4), dtype=np.uint8)
+    cols[:, 3] = 255
+    box.visual = trimesh.visual.ColorVisuals(box, vertex_colors=cols)
+    path = tmp_path / "box.ply"
+    box.export(path)
+    m = ingest.load_mesh(path)
+    f = np.arange(m.n_faces)
+    for corner in range(3):
+        got = m.color_at(f, np.eye(3)[np.full(m.n_faces, corner)])
+        # the reader may reorder vertices: match by position
+        pos = m.vertices[m.faces[:, corner]]
+        idx = [int(np.argmin(np.linalg.norm(box.vertices - p, axis=1))) for p in pos]
+        assert np.abs(got.astype(int) - cols[idx, :3].astype(int)).max() <= 1
+
+
+def test_obj_mtl_kd(tmp_path):
+    """OBJ + MTL: Kd is the piece's (display) colour; pieces keep their own material."""
+    (tmp_path / "m.mtl").write_text(
+        "newmtl red\nKd 0.8 0.1 0.1\n\nnewmtl blue\nKd 0.1 0.2 0.9\n", encoding="utf-8"
+    )
+    (tmp_path / "m.obj").write_text(
+        "mtllib m.mtl\n"
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+        "usemtl red\nf 1 3 2\nf 1 2 4\nusemtl blue\nf 1 4 3\nf 2 3 4\n",
+        encoding="utf-8",
+    )
+    m = ingest.load_mesh(tmp_path / "m.obj")
+    got = m.color_at(np.arange(m.n_faces), np.full((m.n_faces, 3), 1 / 3)).astype(int)
+    red, blue = np.array([204, 26, 26]), np.array([26, 51, 230])
+    is_red = np.abs(got - red).max(axis=1) <= 1
+    is_blue = np.abs(got - blue).max(axis=1) <= 1
+    assert is_red.sum() == 2 and is_blue.sum() == 2

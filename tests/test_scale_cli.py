@@ -1,0 +1,106 @@
+"""``partscale scale``: the command a user runs, and every class of bad input it refuses."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from conftest import assert_bad_input
+
+from partscale import shapes
+from partscale.csdf import load, save
+from partscale.edit import Recipe, apply_recipe, recipe_from_history
+
+
+@pytest.fixture(scope="module")
+def box_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("in") / "box.csdf.npz"
+    save(shapes.box((0, 0, 0), (1.0, 0.5, 0.3), voxel_size=0.02), path)
+    return path
+
+
+def test_scale_writes_the_edited_object(cli, box_file, tmp_path):
+    out = tmp_path / "long.csdf.npz"
+    proc = cli("scale", box_file, "-o", out, "--axis", "x", "--zone", "30%", "60%", "--to", "90%")
+    assert proc.returncode == 0, proc.stderr
+    c = load(out)
+    lo, hi = c.surface_bounds()[:, 0]
+    assert hi - lo == pytest.approx(1.3, abs=0.01)
+    assert c.meta["history"][-1]["given"]["zone"] == ["30%", "60%"]
+
+
+def test_recipe_file_matches_the_library_bit_for_bit(cli, box_file, tmp_path):
+    recipe = {
+        "version": 1,
+        "edits": [
+            {"axis": "x", "zone": [0.2, 0.5], "to": 0.9, "mode": "tile"},
+            {"axis": "z", "zone": ["20%", "70%"], "to": "50%"},
+        ],
+    }
+    rfile = tmp_path / "r.json"
+    rfile.write_text(json.dumps(recipe))
+    out = tmp_path / "r.csdf.npz"
+    proc = cli("scale", box_file, "-o", out, "--recipe", rfile)
+    assert proc.returncode == 0, proc.stderr
+    got = load(out)
+    want = apply_recipe(load(box_file), Recipe.parse(recipe))
+    assert np.array_equal(got.sdf, want.sdf) and np.array_equal(got.rgb, want.rgb)
+    replay = apply_recipe(load(box_file), recipe_from_history(got, after=load(box_file)))
+    assert np.array_equal(got.sdf, replay.sdf)
+
+
+BAD = [
+    (["--axis", "w", "--zone", "0.2", "0.5", "--to", "0.7"], ["--axis", "x, y, z"]),
+    (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.7", "--mode", "squash"], ["--mode"]),
+    (["--axis", "x", "--zone", "0.5", "0.2", "--to", "0.7"], ["START < END"]),
+    (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.1"], ["DEST > START"]),
+    (["--axis", "x", "--zone", "1.5", "1.8", "--to", "2.0"], ["zone", "extent"]),
+    (["--axis", "x", "--zone", "0.2", "0.23", "--to", "0.4"], ["two voxels"]),
+    (["--axis", "x", "--zone", "abc", "0.5", "--to", "0.7"], ["--zone START", "number"]),
+    (["--axis", "x", "--zone", "0.2", "0.5"], ["--to"]),
+]
+
+
+@pytest.mark.parametrize(("args", "fragments"), BAD)
+def test_bad_input_is_one_line_and_writes_nothing(cli, box_file, tmp_path, args, fragments):
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("scale", box_file, "-o", out, *args), *fragments)
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    ("content", "fragments"),
+    [
+        ("{not json", ["expected JSON"]),
+        ('{"edits": [{"axis": "x", "zone": [0.2], "to": 0.7}]}', ["zone"]),
+        ('{"edits": [{"axis": "x", "zone": [0.2, 0.5], "to": 0.7, "speed": 1}]}', ["unknown"]),
+        ('{"edits": []}', ["non-empty"]),
+    ],
+)
+def test_bad_recipe_file(cli, box_file, tmp_path, content, fragments):
+    rfile = tmp_path / "r.json"
+    rfile.write_text(content)
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("scale", box_file, "-o", out, "--recipe", rfile), *fragments)
+    assert not out.exists()
+
+
+def test_result_beyond_the_memory_limit_is_refused(box_file, tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+
+    out = tmp_path / "o.csdf.npz"
+    env = dict(os.environ, PARTSCALE_MAX_MEMORY="1000000", PYTHONPATH=str(ROOT / "src"))
+    args = ["scale", box_file, "-o", out, "--axis", "x", "--zone", "0.2", "0.5", "--to", "3"]
+    proc = subprocess.run(
+        [sys.executable, "-m", "partscale", *map(str, args)],
+        capture_output=True,
+        text=True,
+        env=env,
+    )
+    assert_bad_input(proc, "memory", "would need")
+    assert not out.exists()

@@ -1,0 +1,436 @@
+"""The editor's server: one object, exact undo, save beside the input, nothing else served."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from starlette.testclient import TestClient
+
+from partscale import csdf as csdf_mod
+from partscale import shapes
+from partscale.serve import MAX_BODY, create_app, edited_path, encode_grid
+from partscale.serve.app import STATIC
+
+ROOT = Path(__file__).resolve().parents[1]
+WEB = ROOT / "web"
+H = 0.02
+BOX = ((0.0, 0.0, 0.0), (1.0, 0.5, 0.4))
+
+
+def source_hash() -> tuple[str, list[str]]:
+    """Same file list and hashing as sourceHash() in web/vite.config.ts."""
+    files = ["index.html", "vite.config.ts", "tsconfig.json"]
+    files += [p.relative_to(WEB).as_posix() for p in (WEB / "src").rglob("*") if p.is_file()]
+    files.sort()
+    h = hashlib.sha256()
+    for f in files:
+        h.update(f.encode() + b"\0")
+        h.update((WEB / f).read_bytes())
+        h.update(b"\0")
+    return h.hexdigest(), files
+
+
+@pytest.fixture
+def box_file(tmp_path: Path) -> Path:
+    path = tmp_path / "box.csdf.npz"
+    color = lambda p: np.stack(  # noqa: E731
+        [np.full(len(p), 200), 255 * np.clip(p[:, 0], 0, 1), np.full(len(p), 60)], -1
+    )
+    csdf_mod.save(
+        shapes.grid(lambda p: shapes.box_sdf(p, *BOX), BOX, voxel_size=H, color=color), path
+    )
+    return path
+
+
+@pytest.fixture
+def client(box_file: Path):
+    with TestClient(create_app(box_file), base_url="http://127.0.0.1") as c:
+        yield c
+
+
+def post(client: TestClient, url: str, body=None):
+    return client.post(url, json={} if body is None else body)
+
+
+STRETCH = {"edits": [{"axis": "x", "zone": [0.3, 0.7], "to": 0.9, "mode": "stretch"}]}
+
+
+def glb_vertex_colours(mesh: trimesh.Trimesh) -> np.ndarray:
+    """(V, 3) float in [0, 1]: COLOR_0 as trimesh loads it (beside a material it stays a vertex
+    attribute, linear as glTF stores it; without one it becomes sRGB ``vertex_colors``)."""
+    attrs = getattr(mesh.visual, "vertex_attributes", {})
+    if "color" in attrs:
+        return np.asarray(attrs["color"], dtype=float)[:, :3]
+    assert mesh.visual.kind == "vertex", f"no vertex colours in the GLB ({mesh.visual.kind})"
+    return np.asarray(mesh.visual.vertex_colors, dtype=float)[:, :3] / 255
+
+
+# -- the built page ---------------------------------------------------------------------------
+def test_built_page_is_current_with_its_sources():
+    built = json.loads((STATIC / "build.json").read_text())
+    digest, files = source_hash()
+    assert built["files"] == files, "web/ files changed: run `npx vite build` in web/"
+    assert built["source_hash"] == digest, "web/ sources changed: run `npx vite build` in web/"
+    html = (STATIC / "index.html").read_text()
+    for ref in re.findall(r'(?:src|href)="/assets/([^"]+)"', html):
+        assert (STATIC / "assets" / ref).is_file(), ref
+
+
+def test_page_and_its_assets_are_served(client):
+    r = client.get("/")
+    assert r.status_code == 200 and "text/html" in r.headers["content-type"]
+    assert "frame-ancestors 'none'" in r.headers["content-security-policy"]
+    refs = re.findall(r'(?:src|href)="(/assets/[^"]+)"', r.text)
+    assert any(ref.endswith(".js") for ref in refs)
+    for ref in refs:
+        a = client.get(ref)
+        assert a.status_code == 200 and a.content == (STATIC / ref.lstrip("/")).read_bytes()
+
+
+# -- the object -------------------------------------------------------------------------------
+def test_state_describes_the_object(client, box_file):
+    c = csdf_mod.load(box_file)
+    s = client.get("/api/state").json()
+    assert s["shape"] == list(c.shape)
+    assert s["voxel_size"] == pytest.approx(H)
+    np.testing.assert_allclose(s["origin"], c.origin)
+    np.testing.assert_allclose(s["solid_bounds"], BOX, atol=1e-6)
+    assert s["revision"] == 0 and not s["can_undo"] and not s["can_redo"]
+    assert s["name"] == "box.csdf.npz" and s["save_as"] == "box.edited.csdf.npz"
+    assert client.get("/api/schema").json()["title"] == "partscale recipe"
+
+
+def test_grid_is_rgba_half_in_grid_order(client, box_file):
+    c = csdf_mod.load(box_file)
+    X, Y, Z = c.shape
+    raw = client.get("/api/grid").content
+    assert len(raw) == X * Y * Z * 4 * 2
+    g = np.frombuffer(raw, "<f2").reshape(X, Y, Z, 4)  # C order: index (i, j, k) = world x, y, z
+    i, j, k = 7, 5, 3
+    assert g[i, j, k, 3] == pytest.approx(c.sdf[i, j, k] / H, rel=1e-3, abs=1e-3)
+    np.testing.assert_allclose(g[i, j, k, :3], c.rgb[i, j, k] / 255, atol=1e-3)
+    # every voxel, to float16 precision (relative 2^-11)
+    np.testing.assert_allclose(g[..., 3], c.sdf / H, rtol=1e-3, atol=1e-3)
+    np.testing.assert_allclose(g[..., :3], c.rgb / 255, atol=5e-4)
+    parts = np.frombuffer(client.get("/api/parts").content, "<i2").reshape(X, Y, Z)
+    assert (parts == -1).all()
+
+
+def test_grid_encoding_is_numpys_float16_bit_for_bit():
+    rng = np.random.default_rng(1)
+    scale = 10.0 ** rng.integers(-9, 7, size=(8, 9, 10))
+    sdf = rng.normal(size=(8, 9, 10)) * scale  # subnormal, normal and overflowing halves
+    sdf.flat[:6] = [0.0, -0.0, 65504.0, 65520.0, 2.98e-8, -1e6]
+    rgb = rng.integers(0, 256, size=(8, 9, 10, 3), dtype=np.uint8)
+    c = csdf_mod.make(sdf, rgb, voxel_size=1.0)
+    g = np.frombuffer(encode_grid(c), "<u2").reshape(8, 9, 10, 4)
+    with np.errstate(over="ignore"):
+        want = c.sdf.astype("<f2").view("<u2")
+    assert np.array_equal(g[..., 3], want)
+    assert np.array_equal(g[..., :3], (rgb / 255.0).astype("<f2").view("<u2"))
+
+
+# -- apply, undo, redo ------------------------------------------------------------------------
+def test_apply_stretches_to_the_expected_extent_and_undo_restores_exactly(client, box_file):
+    session = client.app.state.session
+    original = session.current
+    grid0 = client.get("/api/grid").content
+    r = post(client, "/api/apply", STRETCH)
+    assert r.status_code == 200, r.text
+    s = r.json()
+    # the box [0, 1] with [0.3, 0.7] -> [0.3, 0.9] ends at 1.2; other axes unchanged
+    lo, hi = np.array(s["solid_bounds"])
+    assert abs(hi[0] - 1.2) <= 0.25 * H and abs(lo[0]) <= 0.25 * H
+    np.testing.assert_allclose(hi[1:], BOX[1][1:], atol=0.25 * H)
+    assert s["can_undo"] and s["revision"] == 1 and len(s["history"]) == 1
+    assert len(client.get("/api/grid").content) == np.prod(s["shape"]) * 8
+
+    s = post(client, "/api/undo").json()
+    assert session.current is original  # the very arrays, not a recomputation
+    assert client.get("/api/grid").content == grid0
+    assert s["can_redo"] and not s["can_undo"] and s["history"] == []
+
+    s = post(client, "/api/redo").json()
+    assert abs(s["solid_bounds"][1][0] - 1.2) <= 0.25 * H
+    assert post(client, "/api/redo").status_code == 409
+
+
+def test_zones_in_sequence_and_percent_positions(client):
+    session = client.app.state.session
+    original = session.current
+    assert post(client, "/api/apply", STRETCH).status_code == 200
+    # then 25% taller along y, by percent of the (new) solid's extent
+    tall = {"edits": [{"axis": "y", "zone": ["40%", "60%"], "to": "85%", "mode": "stretch"}]}
+    s = post(client, "/api/apply", tall).json()
+    assert abs(s["solid_bounds"][1][1] - 0.625) <= 0.25 * H
+    assert abs(s["solid_bounds"][1][0] - 1.2) <= 0.25 * H
+    assert len(s["history"]) == 2
+    post(client, "/api/undo")
+    post(client, "/api/undo")
+    assert session.current is original
+    assert post(client, "/api/undo").status_code == 409
+
+
+def test_bad_recipes_are_refused_with_the_reason(client):
+    session = client.app.state.session
+    cases = [
+        ({"edits": [{"axis": "w", "zone": [0.3, 0.7], "to": 0.9}]}, "axis"),
+        ({"edits": [{"axis": "x", "zone": [0.3], "to": 0.9}]}, "zone"),
+        ({"edits": [{"axis": "x", "zone": [0.3, 0.7], "to": 0.9, "path": "/etc"}]}, "path"),
+        ({"edits": []}, "edits"),
+        ({"edits": [{"axis": "x", "zone": [0.7, 0.3], "to": 0.9}]}, "zone"),
+    ]
+    for body, word in cases:
+        r = post(client, "/api/apply", body)
+        assert r.status_code == 400, (body, r.text)
+        assert word in r.json()["error"], (word, r.json())
+    r = client.post(
+        "/api/apply", content=b"{not json", headers={"content-type": "application/json"}
+    )
+    assert r.status_code == 400 and "JSON" in r.json()["error"]
+    assert session.revision == 0 and not session.undo_stack
+
+
+def test_concurrent_applies_are_serialised(client):
+    session = client.app.state.session
+    original = session.current
+    results = []
+
+    def one():
+        results.append(post(client, "/api/apply", STRETCH).status_code)
+
+    threads = [threading.Thread(target=one) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert results == [200, 200, 200]
+    # each apply saw the previous one's result: three stretches of +0.2
+    s = client.get("/api/state").json()
+    assert s["revision"] == 3 and len(s["history"]) == 3
+    assert abs(s["solid_bounds"][1][0] - 1.6) <= 0.5 * H
+    for _ in range(3):
+        post(client, "/api/undo")
+    assert session.current is original
+
+
+# -- save and export --------------------------------------------------------------------------
+def test_save_writes_beside_the_input_unless_overwrite(client, box_file, tmp_path):
+    before = box_file.read_bytes()
+    post(client, "/api/apply", STRETCH)
+    s = post(client, "/api/save").json()
+    out = edited_path(box_file)
+    assert s["saved"] == out.name and out.is_file() and not s["unsaved"]
+    assert box_file.read_bytes() == before
+    saved = csdf_mod.load(out)
+    assert saved.shape == client.app.state.session.current.shape
+    assert np.array_equal(saved.sdf, client.app.state.session.current.sdf)
+    # a path in the body is not a thing the server reads
+    r = post(client, "/api/save", {"overwrite": False, "path": str(tmp_path / "x.csdf.npz")})
+    assert r.status_code == 400 and not (tmp_path / "x.csdf.npz").exists()
+    assert post(client, "/api/save", {"overwrite": "yes"}).status_code == 400
+    s = post(client, "/api/save", {"overwrite": True}).json()
+    assert s["saved"] == box_file.name
+    assert csdf_mod.load(box_file).shape == saved.shape
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.csdf.npz", "box.edited.csdf.npz"]
+
+
+def test_export_mesh_is_a_glb_with_vertex_colours(client, tmp_path):
+    r = client.get("/api/export/mesh")
+    assert r.status_code == 200, r.text
+    assert 'filename="box.edited.glb"' in r.headers["content-disposition"]
+    path = tmp_path / "dl.glb"
+    path.write_bytes(r.content)
+    scene = trimesh.load(path)
+    (mesh,) = scene.geometry.values()
+    colours = glb_vertex_colours(mesh)
+    assert len(mesh.vertices) > 100 and colours.shape == (len(mesh.vertices), 3)
+    np.testing.assert_allclose(mesh.bounds, BOX, atol=0.5 * H)
+    assert np.ptp(colours[:, 1]) > 0.5  # the green ramp along x survives
+
+
+def test_export_texture_downloads_a_file(client):
+    r = client.get("/api/export/texture")
+    assert r.status_code == 200, r.text
+    assert "attachment" in r.headers["content-disposition"] and len(r.content) > 1000
+
+
+# -- what is refused --------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "url",
+    [
+        "/assets/..%2F..%2Fapp.py",
+        "/assets/%2e%2e/session.py",
+        "/assets/../app.py",
+        "/../../../../etc/passwd",
+        "/static/index.html",
+        "/app.py",
+        "/api/file/etc/passwd",
+        "/api/grid/../../box.csdf.npz",
+        "/box.csdf.npz",
+        "/build.json",
+        "/api/export/../../../etc/passwd",
+        "/api/export/other",
+    ],
+)
+def test_other_paths_are_not_served(client, url):
+    r = client.get(url)
+    assert r.status_code == 404, (url, r.status_code)
+    assert b"partscale.csdf" not in r.content and b"import" not in r.content
+
+
+def test_query_strings_cannot_pick_another_object(client, box_file, tmp_path):
+    other = tmp_path / "other.csdf.npz"
+    csdf_mod.save(shapes.sphere((0, 0, 0), 0.3, voxel_size=H), other)
+    grid = client.get("/api/grid").content
+    for q in (f"?path={other}", f"?file={other}", "?id=1", f"?name={other.name}"):
+        assert client.get("/api/grid" + q).content == grid
+        assert client.get("/api/state" + q).json()["name"] == "box.csdf.npz"
+
+
+def test_oversized_and_foreign_requests_are_refused(client):
+    big = b'{"edits": [' + b" " * (MAX_BODY + 10) + b"]}"
+    r = client.post("/api/apply", content=big, headers={"content-type": "application/json"})
+    assert r.status_code == 413
+
+    def chunks():  # no Content-Length: the limit holds on the streamed body too
+        for _ in range(MAX_BODY // 1000 + 2):
+            yield b" " * 1000
+
+    r = client.post("/api/apply", content=chunks(), headers={"content-type": "application/json"})
+    assert r.status_code == 413
+    # a form post from another site (no JSON content type) is refused before anything happens
+    r = client.post("/api/save", content=b"overwrite=true", headers={"content-type": "text/plain"})
+    assert r.status_code == 415
+    assert client.get("/api/apply").status_code == 405
+    # DNS rebinding: a loopback server answers loopback names only
+    assert client.get("/api/state", headers={"host": "evil.example"}).status_code == 400
+    assert client.get("/api/state", headers={"host": "evil.example:80"}).status_code == 400
+    assert client.get("/api/state", headers={"host": "[::2]:8000"}).status_code == 400
+    for host in ("localhost:8000", "127.0.0.1", "[::1]:8000"):
+        assert client.get("/api/state", headers={"host": host}).status_code == 200, host
+    assert client.app.state.session.revision == 0
+
+
+def test_missing_or_invalid_object_is_refused(tmp_path, cli):
+    from conftest import assert_bad_input
+
+    assert_bad_input(cli("edit", tmp_path / "nope.csdf.npz", "--no-browser"), "nope.csdf.npz")
+    bad = tmp_path / "bad.csdf.npz"
+    bad.write_bytes(b"not a zip")
+    assert_bad_input(cli("edit", bad, "--no-browser"), "bad.csdf.npz")
+
+
+def test_busy_port_and_foreign_address_are_refused(box_file, cli):
+    from conftest import assert_bad_input
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        proc = cli("edit", box_file, "--no-browser", "--port", str(port))
+    assert_bad_input(proc, "--port", str(port))
+    # TEST-NET-3: never an address of this machine
+    assert_bad_input(cli("edit", box_file, "--no-browser", "--host", "203.0.113.7"), "--host")
+
+
+# -- the command ------------------------------------------------------------------------------
+def _start(args: list[str]) -> tuple[subprocess.Popen, str, list[str]]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "partscale", "edit", *args, "--no-browser"],
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+        env=env,
+    )
+    lines: list[str] = []
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        lines.append(line)
+        m = re.search(r"(http://\S+/)", line)
+        if m:
+            return proc, m.group(1), lines
+    _stop(proc)
+    raise AssertionError(f"no URL printed: {''.join(lines)}")
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    proc.terminate()
+    proc.wait(timeout=20)
+    proc.stderr.close()
+
+
+def test_edit_command_serves_on_loopback_and_warns_otherwise(box_file):
+    import httpx
+
+    proc, url, lines = _start([str(box_file)])
+    try:
+        assert url.startswith("http://127.0.0.1:")
+        assert not any("warning" in ln for ln in lines)
+        for _ in range(100):
+            try:
+                r = httpx.get(url + "api/state", timeout=5)
+                break
+            except httpx.ConnectError:
+                time.sleep(0.1)
+        assert r.status_code == 200 and r.json()["name"] == "box.csdf.npz"
+    finally:
+        _stop(proc)
+    proc, url, lines = _start([str(box_file), "--host", "0.0.0.0"])
+    try:
+        assert any("warning" in ln and "not loopback" in ln for ln in lines), lines
+    finally:
+        _stop(proc)
+
+
+# -- a real object ----------------------------------------------------------------------------
+def test_real_table_stretch_undo_and_export(data, tmp_path):
+    from partscale.ingest import load
+
+    path = tmp_path / "table.csdf.npz"
+    csdf_mod.save(load(data("kenney/table.glb"), res=64), path)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        session = client.app.state.session
+        original = session.current
+        h = original.voxel_size
+        lo0, hi0 = np.array(client.get("/api/state").json()["solid_bounds"])
+        length = hi0[0] - lo0[0]
+        r = post(
+            client, "/api/apply", {"edits": [{"axis": "x", "zone": ["35%", "65%"], "to": "105%"}]}
+        )
+        assert r.status_code == 200, r.text
+        lo, hi = np.array(r.json()["solid_bounds"])
+        # 40 % longer along x, the rest of the box where it was (re-evaluation may move the
+        # surface by a fraction of a voxel)
+        assert abs((hi[0] - lo[0]) - 1.4 * length) <= 0.5 * h
+        np.testing.assert_allclose(lo, lo0, atol=0.5 * h)
+        np.testing.assert_allclose(hi[1:], hi0[1:], atol=0.5 * h)
+        glb = tmp_path / "dl.glb"
+        glb.write_bytes(client.get("/api/export/mesh").content)
+        (mesh,) = trimesh.load(glb).geometry.values()
+        assert abs(mesh.extents[0] - 1.4 * length) <= 1.0 * h
+        # the table's wood colour, linear in the GLB as glTF wants it
+        surface = original.rgb[np.abs(original.sdf) < h] / 255.0
+        srgb = np.median(surface, axis=0)
+        linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+        assert np.abs(srgb - 0.5).max() > 0.1  # not the grey of an uncoloured import
+        np.testing.assert_allclose(np.median(glb_vertex_colours(mesh), axis=0), linear, atol=0.03)
+        post(client, "/api/undo")
+        assert session.current is original

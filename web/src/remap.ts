@@ -1,0 +1,134 @@
+// The 1D edit maps of partscale.edit.recipe.source_coordinate, in TypeScript (for the planes,
+// bounds and the step bound) and in GLSL (for the raymarcher). Both must match the Python exactly:
+// tests/test_browser.py evaluates the GLSL on the GPU and compares with source_coordinate.
+//
+// A zone maps output coordinates y (after the edit) to source coordinates x (before):
+//   y < start            -> x = y                      (rigid before the zone)
+//   start <= y <= dest   -> stretch: linear [start,dest] -> [start,end]
+//                           tile: n = tileCount copies, each a linear map onto [start,end]
+//   y > dest             -> x = y - (dest - end)       (rigid after the zone, translated)
+//   global               -> x = lo + (y - lo) / f,  f = (hi - lo + dest - end) / (hi - lo)
+
+export type Axis = 'x' | 'y' | 'z';
+export type Mode = 'stretch' | 'tile' | 'global';
+export const AXES: Axis[] = ['x', 'y', 'z'];
+export const MODES: Mode[] = ['stretch', 'tile', 'global'];
+export const MAX_ZONES = 4;
+
+/** One zone in world units. lo/hi: the solid's extent along the axis before this edit. */
+export interface Zone {
+  axis: Axis;
+  mode: Mode;
+  start: number;
+  end: number;
+  dest: number;
+  lo: number;
+  hi: number;
+}
+
+/** max(1, round(target / length)), half-way rounding up, as recipe.tile_count. */
+export function tileCount(length: number, target: number): number {
+  return Math.max(1, Math.floor(target / length + 0.5));
+}
+
+export function sourceCoordinate(y: number, z: Zone): number {
+  const shift = z.dest - z.end;
+  if (z.mode === 'global') {
+    const f = (z.hi - z.lo + shift) / (z.hi - z.lo);
+    return z.lo + (y - z.lo) / f;
+  }
+  if (y < z.start) return y;
+  if (y > z.dest) return y - shift;
+  const length = z.end - z.start;
+  const t = (y - z.start) / (z.dest - z.start);
+  if (z.mode === 'stretch') return z.start + t * length;
+  const n = tileCount(length, z.dest - z.start);
+  const u = t * n;
+  const k = Math.min(Math.floor(u), n - 1);
+  return z.start + (u - k) * length;
+}
+
+/** Source -> output for the extremes of a box (monotone; tile uses the overall linear map). */
+export function forwardCoordinate(x: number, z: Zone): number {
+  const shift = z.dest - z.end;
+  if (z.mode === 'global') {
+    const f = (z.hi - z.lo + shift) / (z.hi - z.lo);
+    return z.lo + (x - z.lo) * f;
+  }
+  if (x < z.start) return x;
+  if (x > z.end) return x + shift;
+  return z.start + ((x - z.start) * (z.dest - z.start)) / (z.end - z.start);
+}
+
+/** Smallest dy/dx of the zone's output-from-source map, capped at 1 (ray step safety). */
+export function minJacobian(z: Zone): number {
+  if (z.mode === 'global') return Math.min(1, (z.hi - z.lo + z.dest - z.end) / (z.hi - z.lo));
+  const length = z.end - z.start;
+  const target = z.dest - z.start;
+  const n = z.mode === 'tile' ? tileCount(length, target) : 1;
+  return Math.min(1, target / (n * length));
+}
+
+/** The destination the server applies: the end moves by a whole number of voxels h. */
+export function snapDest(z: Zone, h: number): number {
+  return z.end + Math.round((z.dest - z.end) / h) * h;
+}
+
+/**
+ * Why apply_recipe would refuse the zone (partscale.edit.scale.resolve_edit), or null: the zone
+ * lies within the solid's extent (h/2 slack), is at least two voxels thick, and the (snapped)
+ * destination stays a voxel beyond the start.
+ */
+export function zoneProblem(z: Zone, h: number): string | null {
+  if (!(z.start < z.end)) return 'start must be below end';
+  if (z.start < z.lo - h / 2 || z.end > z.hi + h / 2) return 'the zone must lie within the object';
+  if (z.end - z.start < 2 * h) return 'the zone must be at least two voxels thick';
+  if (!(snapDest(z, h) - z.start >= h)) return 'destination must be a voxel beyond start';
+  if (z.mode === 'global' && !(z.hi - z.lo + z.dest - z.end > 0)) return 'the solid would vanish';
+  return null;
+}
+
+/** Uniform packing: a = (start, end, dest, lo), b = (hi, axis, mode, tile count). */
+export function packZone(z: Zone): [number[], number[]] {
+  const n = z.mode === 'tile' ? tileCount(z.end - z.start, z.dest - z.start) : 1;
+  return [
+    [z.start, z.end, z.dest, z.lo],
+    [z.hi, AXES.indexOf(z.axis), MODES.indexOf(z.mode), n],
+  ];
+}
+
+export const REMAP_GLSL = /* glsl */ `
+#define MAX_ZONES ${MAX_ZONES}
+uniform int uZoneCount;
+uniform vec4 uZoneA[MAX_ZONES];
+uniform vec4 uZoneB[MAX_ZONES];
+
+// recipe.source_coordinate for one zone: output coordinate y -> source coordinate.
+float sourceCoordinate(float y, vec4 a, vec4 b) {
+  float start = a.x, end = a.y, dest = a.z, lo = a.w, hi = b.x;
+  int mode = int(b.z + 0.5);
+  float shift = dest - end;
+  if (mode == 2) {
+    float f = (hi - lo + shift) / (hi - lo);
+    return lo + (y - lo) / f;
+  }
+  if (y < start) return y;
+  if (y > dest) return y - shift;
+  float t = (y - start) / (dest - start);
+  if (mode == 0) return start + t * (end - start);
+  float n = b.w;
+  float u = t * n;
+  float k = min(floor(u), n - 1.0);
+  return start + (u - k) * (end - start);
+}
+
+// Zones apply in order, so the output point goes back through the last zone first.
+vec3 toSource(vec3 p) {
+  for (int i = MAX_ZONES - 1; i >= 0; --i) {
+    if (i >= uZoneCount) continue;
+    int axis = int(uZoneB[i].y + 0.5);
+    p[axis] = sourceCoordinate(p[axis], uZoneA[i], uZoneB[i]);
+  }
+  return p;
+}
+`;

@@ -13,11 +13,11 @@ The tolerance is CoACD's threshold read in voxels: ``threshold * scale * L`` for
 largest extent ``L`` in voxels.
 
 Measured against CoACD at its defaults (``bench/bench_segment.py``, 9 objects at 128 voxels,
-2026-11-22): 16x faster (median 3.7 s against 47 s wall), and on furniture made of boards and
-legs as good or better (fewer parts, lower max concavity: the Kenney table, chair, open
-bookcase and stairs, the Sweet Home table). It misses on curved upholstery (SheenChair: max
-concavity 5.6 voxels against 3.5; axis-aligned cuts peel curved shells into slices) and where
-many boards meet at T-junctions (Sweet Home bookcase and staircase: 1.6x and 2x CoACD's parts;
+2026-11-22, 2-core x86-64): 17x faster (median 1.5 s against 29 s), and on furniture made of
+boards and legs as good or better (max concavity no worse, at most 1.5x the parts) on 5 of 9
+objects, 7 of 9 allowing half a voxel of measuring noise. It misses on curved upholstery
+(SheenChair: max concavity 5.4 voxels against 3.2; axis-aligned cuts peel curved shells into
+slices) and where many boards meet at T-junctions (Sweet Home bookcase: 16 parts against 10;
 greedy merging cannot always rebuild a whole panel once a junction piece has joined the other
 board). So CoACD stays the default method.
 """

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import assert_bad_input
+from conftest import assert_bad_input, data_path
 from scipy import ndimage
 
 from partscale import csdf as csdf_mod
-from partscale import shapes
-from partscale.errors import InputError
+from partscale import ingest, shapes
+from partscale.edit import apply_edit
+from partscale.errors import InputError, MemoryLimitError
 from partscale.segment import coacd_method, concavity, part_concavities, segment
 from partscale.surface import sample_nearest, to_mesh
 
@@ -215,9 +216,26 @@ def test_labels_survive_save_and_load(segmented, tmp_path):
 
 
 def test_labels_survive_a_stretch(segmented):
-    edit = pytest.importorskip("partscale.edit")
-    if not hasattr(edit, "apply_edit"):
-        pytest.skip("partscale.edit.apply_edit has not landed on this branch yet")
+    s = segmented["table", "fast"]
+    # stretch the middle of the tabletop along x by 0.2: the right legs move by 0.2
+    out = apply_edit(s, {"axis": "x", "zone": [0.3, 0.5], "to": 0.7, "mode": "stretch"})
+    assert out.n_parts == s.n_parts
+
+    def part_at(c, point):
+        return int(c.parts[tuple(np.rint(c.world_to_index([point])[0]).astype(int))])
+
+    for x, y in ((0.04, 0.04), (0.04, 0.46), (0.76, 0.04), (0.76, 0.46)):
+        moved = x + 0.2 if x > 0.5 else x
+        assert part_at(out, (moved, y, 0.25)) == part_at(s, (x, y, 0.25))
+    top = part_at(s, (0.4, 0.25, 0.53))
+    assert {part_at(out, (x, 0.25, 0.53)) for x in np.linspace(0.1, 0.9, 17)} == {top}
+    assert (out.parts[np.abs(out.sdf) < out.voxel_size] >= 0).all()
+    # parts stay in one piece in the solid and on its surface (the edit's own labels farther
+    # out, in the air, are its business)
+    solid = out.sdf < out.voxel_size
+    for p in range(out.n_parts):
+        _, n = ndimage.label((out.parts == p) & solid, structure=np.ones((3, 3, 3), bool))
+        assert n == 1, (p, n)
 
 
 @pytest.mark.parametrize(
@@ -241,6 +259,12 @@ def test_unknown_method_option_lists_the_known_ones(boxes):
         segment(boxes, method="coacd", cache=False, resolutoin=10)
 
 
+def test_huge_request_is_refused_with_what_it_needs(boxes, monkeypatch):
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", "1000")
+    with pytest.raises(MemoryLimitError, match="segment"):
+        segment(boxes, method="fast", cache=False)
+
+
 def test_object_without_surface_is_refused():
     empty = csdf_mod.make(np.ones((8, 8, 8), np.float32))
     with pytest.raises(InputError, match="surface"):
@@ -260,3 +284,45 @@ def test_cli_segments_and_refuses_bad_input(cli, boxes, tmp_path):
     empty = csdf_mod.save(csdf_mod.make(np.ones((8, 8, 8), np.float32)), tmp_path / "e.csdf.npz")
     assert_bad_input(cli("segment", empty, "-o", bad, "--method", "fast"), "surface")
     assert not bad.exists()
+
+
+@pytest.fixture(scope="module")
+def kenney_table():
+    return ingest.load(data_path("kenney/table.glb"), res=64)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_real_table_legs_and_top_are_separate_parts(kenney_table, method):
+    s = segment(kenney_table, method=method, cache=False, **METHODS[method])
+    inside = s.sdf <= 0
+    assert (s.parts[np.abs(s.sdf) < s.voxel_size] >= 0).all()
+    for p in range(s.n_parts):
+        _, n = ndimage.label(s.parts == p, structure=np.ones((3, 3, 3), bool))
+        assert n == 1, (p, n)
+    # y is up (glTF): the layer just above the floor cuts the four legs
+    ys = np.nonzero(inside.any(axis=(0, 2)))[0]
+    layer = ys[0] + 1
+    comp, n = ndimage.label(inside[:, layer, :])
+    assert n == 4
+    legs = [np.unique(s.parts[:, layer, :][comp == k]) for k in range(1, n + 1)]
+    assert all(len(leg) == 1 for leg in legs), legs
+    legs = {int(leg[0]) for leg in legs}
+    assert len(legs) == 4
+    x, z = s.shape[0] // 2, s.shape[2] // 2
+    assert inside[x, ys[-1] - 1, z]
+    assert int(s.parts[x, ys[-1] - 1, z]) not in legs
+    assert part_concavities(s).max() <= 3.0  # voxels, at 64 voxels along the table
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_max_parts_bounds_the_count(table, method):
+    s = segment(table, method=method, max_parts=2, cache=False, **METHODS[method])
+    assert s.n_parts == 2
+    for p in range(s.n_parts):
+        _, n = ndimage.label(s.parts == p, structure=np.ones((3, 3, 3), bool))
+        assert n == 1, (p, n)
+
+
+def test_max_parts_cannot_join_separate_pieces(boxes):
+    s = segment(boxes, method="fast", max_parts=1, cache=False)
+    assert s.n_parts == len(BOXES)

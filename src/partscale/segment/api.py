@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .._util import atomic_path
+from .._util import atomic_path, check_memory
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
@@ -27,6 +27,8 @@ from .labels import (
 
 METHODS = ("coacd", "fast")
 DEFAULT_METHOD = "coacd"
+"""CoACD stays the default: the fast method does not yet match it on every benchmark object
+(see :mod:`partscale.segment.fast`)."""
 CACHE_VERSION = 1
 """Bump when a change to the code changes results, so old cache entries are not reused."""
 
@@ -122,7 +124,9 @@ def segment(
     threshold : float in (0, 1]
         Concavity allowed in a part, relative to the object's size (CoACD's meaning).
     max_parts : int, optional
-        Upper bound on the number of parts (CoACD's ``max_convex_hull``; then merging).
+        Upper bound on the number of parts (CoACD's ``max_convex_hull``, then the least
+        concave merges). Separate pieces are never joined, so an object with more separate
+        pieces keeps one part per piece.
     seed : int
         Random seed of the method; the same seed gives the same parts.
     merge_tolerance : float
@@ -148,10 +152,12 @@ def segment(
     method, thr, max_parts, seed, tol, params = _check_options(
         method, threshold, max_parts, seed, merge_tolerance, method_params
     )
-    if not (csdf.sdf < 0).any() or not (csdf.sdf > 0).any():
+    if not (csdf.sdf <= 0).any() or not (csdf.sdf > 0).any():
         raise InputError(
-            "segment: expected an object with a surface (some sdf < 0 and some > 0), got none"
+            "segment: expected an object with a surface (some sdf <= 0 and some > 0), got none"
         )
+    # peak working set: labels and masks, a feature transform (3 int64 per voxel), the mesh
+    check_memory(csdf.shape, 64, what="segment")
     report = resolve(progress)
     all_params = {
         "threshold": thr,

@@ -82,22 +82,33 @@ def _deepest(pts: np.ndarray, eq: np.ndarray) -> float:  # pragma: no cover - co
     return best
 
 
-def _sample_triangles(tri: np.ndarray, spacing: float) -> np.ndarray:
-    """(M, 3) points on triangles ``tri`` (T, 3, 3), about one per ``spacing``² of area.
+_LATTICE_MAX = 256
+# barycentric lattice points (i, j), i + j <= k, ordered by i + j: the first (k+1)(k+2)/2 of them
+# are the lattice of a triangle cut in k steps per edge, for every k <= _LATTICE_MAX
+_I, _J = np.meshgrid(np.arange(_LATTICE_MAX + 1), np.arange(_LATTICE_MAX + 1), indexing="ij")
+_KEEP = (_I + _J) <= _LATTICE_MAX
+_ORDER = np.argsort((_I + _J)[_KEEP], kind="stable")
+_LATTICE = np.stack([_I[_KEEP][_ORDER], _J[_KEEP][_ORDER]], axis=1).astype(np.float64)
 
-    Random barycentric samples from a fixed seed (deterministic), plus the vertices.
+
+def _sample_triangles(tri: np.ndarray, spacing: float) -> np.ndarray:
+    """(M, 3) points covering triangles ``tri`` (T, 3, 3), at most ``spacing`` apart.
+
+    A barycentric lattice with ``ceil(longest edge / spacing)`` steps per edge, so long thin
+    triangles (common on hulls) are covered along their length too.
     """
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    n = np.ceil(area / spacing**2).astype(np.int64) + 1
-    which = np.repeat(np.arange(len(tri)), n)
-    rng = np.random.default_rng(0)
-    u, v = rng.random(len(which)), rng.random(len(which))
-    flip = u + v > 1
-    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    edge = np.maximum(
+        np.linalg.norm(b - a, axis=1),
+        np.maximum(np.linalg.norm(c - a, axis=1), np.linalg.norm(c - b, axis=1)),
+    )
+    k = np.clip(np.ceil(edge / spacing).astype(np.int64), 1, _LATTICE_MAX)
+    count = (k + 1) * (k + 2) // 2
+    which = np.repeat(np.arange(len(tri)), count)
+    start = np.repeat(np.cumsum(count) - count, count)
+    ij = _LATTICE[np.arange(len(which)) - start] / k[which][:, None]
     aa = a[which]
-    pts = aa + u[:, None] * (b[which] - aa) + v[:, None] * (c[which] - aa)
-    return np.concatenate([pts, tri.reshape(-1, 3)])
+    return aa + ij[:, :1] * (b[which] - aa) + ij[:, 1:] * (c[which] - aa)
 
 
 def decimate(points: np.ndarray, cell: float) -> np.ndarray:
@@ -137,9 +148,16 @@ class Patch:
 
 
 def union_concavity(
-    patches: list[Patch], *, sdf: np.ndarray | None = None, spacing: float = 1.0
+    patches: list[Patch],
+    *,
+    sdf: np.ndarray | None = None,
+    spacing: float = 1.0,
+    limit: float = np.inf,
 ) -> float:
-    """:func:`hull_concavity` of the union of ``patches``' samples, from their parts."""
+    """:func:`hull_concavity` of the union of ``patches``' samples, from their parts.
+
+    Stops early, returning a value above ``limit``, once the answer is known to exceed it.
+    """
     corners = np.concatenate([p.hull_points for p in patches])
     if len(corners) < 4:
         return 0.0
@@ -149,6 +167,8 @@ def union_concavity(
         return 0.0
     eq = np.ascontiguousarray(hull.equations)
     inward = max(_deepest(p.points, eq) for p in patches)
+    if inward > limit:
+        return inward
     samples = _sample_triangles(corners[hull.simplices], spacing)
     if sdf is not None:
         samples = samples[sample_nearest(sdf, samples) > 1.0]
@@ -158,16 +178,37 @@ def union_concavity(
     return max(inward, float(dist.max()))
 
 
+def vertex_labels(csdf: CSDF, labels: np.ndarray, mesh) -> np.ndarray:
+    """(V,) int: each marching-cubes vertex takes the label of the inside end of its grid edge.
+
+    A vertex lies on the edge between an inside and an outside voxel; the inside voxel's label
+    is the reliable one (voxels in the air between two close pieces may belong to either).
+    """
+    v = csdf.world_to_index(mesh.vertices)
+    lo = np.floor(v + 1e-6).astype(np.intp)
+    hi = np.ceil(v - 1e-6).astype(np.intp)
+    for a in range(3):
+        np.clip(lo[:, a], 0, csdf.shape[a] - 1, out=lo[:, a])
+        np.clip(hi[:, a], 0, csdf.shape[a] - 1, out=hi[:, a])
+    s_lo = csdf.sdf[lo[:, 0], lo[:, 1], lo[:, 2]]
+    s_hi = csdf.sdf[hi[:, 0], hi[:, 1], hi[:, 2]]
+    ijk = np.where((s_lo <= s_hi)[:, None], lo, hi)
+    return np.asarray(labels)[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+
+
 def surface_samples(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> dict[int, np.ndarray]:
     """dict part -> (N, 3) float64: the part's patch of the surface, in voxel-index units.
 
-    Marching-cubes vertices and face centroids (samples about half a voxel apart), each given
-    the label of its nearest voxel.
+    Marching-cubes vertices (labelled by :func:`vertex_labels`) and face centroids (labelled by
+    the majority of their vertices), samples about half a voxel apart.
     """
     if mesh is None:
         mesh = to_mesh(csdf)
+    vlab = vertex_labels(csdf, labels, mesh)
+    f = vlab[mesh.faces]
+    flab = np.where((f[:, 1] == f[:, 2]) & (f[:, 0] != f[:, 1]), f[:, 1], f[:, 0])
     idx = csdf.world_to_index(np.concatenate([mesh.vertices, mesh.triangles_center]))
-    lab = sample_nearest(np.asarray(labels), idx)
+    lab = np.concatenate([vlab, flab])
     out: dict[int, np.ndarray] = {}
     order = np.argsort(lab, kind="stable")
     uniq, start = np.unique(lab[order], return_index=True)
@@ -183,11 +224,11 @@ def touching_pairs(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> set[tuple[in
     labels = np.asarray(labels)
     if mesh is None:
         mesh = to_mesh(csdf)
-    vlab = sample_nearest(labels, csdf.world_to_index(mesh.vertices)).astype(np.int64)
+    vlab = vertex_labels(csdf, labels, mesh).astype(np.int64)
     e = vlab[mesh.edges_unique]
     keys = [np.minimum(e[:, 0], e[:, 1]) * 65536 + np.maximum(e[:, 0], e[:, 1])]
     keys[0] = keys[0][(e[:, 0] != e[:, 1]) & (e.min(axis=1) >= 0)]
-    inside = csdf.sdf < 0
+    inside = csdf.sdf <= 0
     for ax in range(3):
         a = [slice(None)] * 3
         b = [slice(None)] * 3

@@ -36,7 +36,7 @@ def voxels_from_faces(csdf: CSDF, mesh, face_labels: np.ndarray) -> np.ndarray:
     centres = csdf.world_to_index(mesh.triangles_center)
     near = csdf.sdf < BAND * csdf.voxel_size
     ijk = np.argwhere(near)
-    _, nearest = cKDTree(centres).query(ijk)
+    _, nearest = cKDTree(centres).query(ijk, workers=-1)
     labels = np.full(csdf.shape, -1, np.int32)
     labels[near] = np.asarray(face_labels)[nearest]
     return labels
@@ -157,7 +157,11 @@ def merge_convex(
 
     def union_cost(p: int, q: int) -> float:
         both = [patch[r] for r in (p, q) if r in patch]
-        return union_concavity(both, sdf=sdf, spacing=1.5) if both else 0.0
+        if not both:
+            return 0.0
+        # above the tolerance the exact value only orders merges forced by max_parts
+        limit = tolerance if max_parts is None else np.inf
+        return union_concavity(both, sdf=sdf, spacing=2.0, limit=limit)
 
     alive = set(range(n))
     version = dict.fromkeys(range(n), 0)

@@ -42,13 +42,15 @@ def _root(
     _common.state["verbose"] = verbose
 
 
+# In pipeline order, which is the order `partscale --help` lists them.
+app.command("import")(import_)
 app.command("info")(info)
 app.command("segment")(segment)
 app.command("scale")(scale)
 app.command("export")(export)
 app.command("render")(render)
-app.command("import")(import_)
 app.command("edit")(edit)
+app.command("eval")(eval_suite)
 
 
 def _click_modules() -> list:
@@ -62,9 +64,6 @@ def _click_modules() -> list:
         except ImportError:
             pass
     return mods
-
-
-app.command("eval")(eval_suite)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -54,8 +54,7 @@ def cache_key(csdf: CSDF, method: str, params: dict[str, Any]) -> str:
     h.update(np.float64(csdf.voxel_size).tobytes())
     h.update(json.dumps(params, sort_keys=True).encode())
     if method == "coacd":
-        import coacd
-
+        coacd = coacd_method.import_coacd()
         h.update(str(getattr(coacd, "__version__", "")).encode())
     return h.hexdigest()
 

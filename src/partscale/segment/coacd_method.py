@@ -66,8 +66,7 @@ def run(
     CoACD has no progress hook: it runs in a worker thread (ctypes releases the GIL) while this
     thread reports the elapsed time.
     """
-    import coacd
-
+    coacd = import_coacd()
     coacd.set_log_level("error")
     cmesh = coacd.Mesh(np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int32))
     result: dict = {}
@@ -113,3 +112,15 @@ def face_labels(mesh, hulls: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
             best[s : s + step][better] = d[better]
             label[s : s + step][better] = h
     return label
+
+
+def import_coacd():
+    """The ``coacd`` module, or a one-line error saying how to get it (or to use the fast method)."""
+    try:
+        import coacd
+    except ImportError as exc:
+        raise InputError(
+            f"method 'coacd': expected the coacd package (pip install coacd), got {exc}; "
+            "or use --method fast"
+        ) from None
+    return coacd

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import inspect
+import json
 import os
 import tempfile
 from collections.abc import Callable, Iterator
@@ -114,3 +115,13 @@ def check_memory(shape: tuple[int, ...], bytes_per_voxel: float, *, what: str) -
             f"{what}: a {'x'.join(map(str, shape))} grid would need {format_bytes(need)} "
             f"of memory, only {format_bytes(have)} is available"
         )
+
+
+def read_json(path: Path, *, what: str):
+    """Parse a JSON file, or raise :class:`InputError` naming the file (missing, not JSON)."""
+    if not path.is_file():
+        raise InputError(f"{path}: expected {what}, got no such file")
+    try:
+        return json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: expected JSON ({what}), got {exc}") from None

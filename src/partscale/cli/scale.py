@@ -9,21 +9,9 @@ import typer
 
 from .. import csdf as csdf_mod
 from ..edit import AXES, MODES, Edit, Recipe, apply_recipe
+from ..edit.recipe import parse_position
 from ..errors import InputError
 from . import _common
-
-
-def _position(text: str, what: str) -> float | str:
-    s = text.strip()
-    try:
-        if s.endswith("%"):
-            float(s[:-1])
-            return s
-        return float(s)
-    except ValueError:
-        raise InputError(
-            f"{what}: expected a number or a percentage like '30%', got {text!r}"
-        ) from None
 
 
 def scale(
@@ -63,9 +51,9 @@ def scale(
             (
                 Edit(
                     axis=axis.lower(),
-                    start=_position(zone[0], "--zone START"),
-                    end=_position(zone[1], "--zone END"),
-                    dest=_position(to, "--to"),
+                    start=parse_position(zone[0], "--zone START"),
+                    end=parse_position(zone[1], "--zone END"),
+                    dest=parse_position(to, "--to"),
                     mode=mode.lower(),
                 ),
             )

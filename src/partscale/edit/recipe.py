@@ -18,7 +18,6 @@ the Python resampler and the web editor's shader both implement exactly these.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -27,6 +26,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._util import read_json
 from ..errors import InputError
 
 AXES = ("x", "y", "z")
@@ -77,7 +77,8 @@ JSON_SCHEMA: dict[str, Any] = {
 }
 
 
-def _parse_position(value: Any, what: str) -> Position:
+def parse_position(value: Any, what: str) -> Position:
+    """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`."""
     if isinstance(value, bool):
         raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
     if isinstance(value, int | float):
@@ -132,9 +133,9 @@ class Edit:
             raise InputError(f"{where}.zone: expected [START, END], got {zone!r}")
         return cls(
             axis=axis,
-            start=_parse_position(zone[0], f"{where}.zone[0]"),
-            end=_parse_position(zone[1], f"{where}.zone[1]"),
-            dest=_parse_position(obj["to"], f"{where}.to"),
+            start=parse_position(zone[0], f"{where}.zone[0]"),
+            end=parse_position(zone[1], f"{where}.zone[1]"),
+            dest=parse_position(obj["to"], f"{where}.to"),
             mode=mode,
         )
 
@@ -186,12 +187,7 @@ class Recipe:
     @classmethod
     def load(cls, path: str | os.PathLike) -> Recipe:
         path = Path(path)
-        if not path.is_file():
-            raise InputError(f"{path}: expected a recipe JSON file, got no such file")
-        try:
-            obj = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputError(f"{path}: expected JSON, got {exc}") from None
+        obj = read_json(path, what="a recipe JSON file")
         try:
             return cls.parse(obj)
         except InputError as exc:

@@ -25,7 +25,6 @@ line and the others still run.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
@@ -36,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from .. import csdf as csdf_mod
-from .._util import atomic_path, keyword_options
+from .._util import atomic_path, keyword_options, read_json
 from ..csdf import CSDF
 from ..edit.recipe import Edit
 from ..errors import InputError
@@ -149,12 +148,7 @@ def parse_suite(obj: Any, *, source: Path | None = None) -> Suite:
 def load_suite(path: str | os.PathLike) -> Suite:
     """Read a suite file (see module docstring)."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: expected a suite JSON file, got no such file")
-    try:
-        obj = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: expected JSON, got {exc}") from None
+    obj = read_json(path, what="a suite JSON file")
     return parse_suite(obj, source=path)
 
 

@@ -15,13 +15,15 @@ The tolerance is CoACD's threshold read in voxels: ``threshold * scale * L`` for
 largest extent ``L`` in voxels.
 
 Measured against CoACD at its defaults (``bench/bench_segment.py``, 9 objects at 128 voxels,
-2026-11-22, 2-core x86-64): 17x faster (median 1.5 s against 29 s), and on furniture made of
-boards and legs as good or better (max concavity no worse, at most 1.5x the parts) on 5 of 9
-objects, 7 of 9 allowing half a voxel of measuring noise. It misses on curved upholstery
-(SheenChair: max concavity 5.4 voxels against 3.2; axis-aligned cuts peel curved shells into
-slices) and where many boards meet at T-junctions (Sweet Home bookcase: 16 parts against 10;
-greedy merging cannot always rebuild a whole panel once a junction piece has joined the other
-board). So CoACD stays the default method.
+2026-11-22, 2-core x86-64, CPU time as other jobs shared the machine): median 1.8 s against
+29 s CPU, and as good or better (max concavity no worse, at most 1.5x the parts) on 3 of 9
+objects. CoACD's parts on these grids are very nearly convex (max concavity 0.8-3.3 voxels,
+1.1 on the Sweet Home chair and bookcase), below this method's tolerance (3.5 voxels at
+128), and lowering the tolerance multiplies the parts on staircases (51 against CoACD's 19
+at scale 0.3). Plane cuts through the deepest concavity brought curved upholstery
+(SheenChair) from 10.7 to 4.7 voxels (CoACD 3.3) at 21 s CPU instead of 6 s; T-junctions
+of many boards still leave extra parts (Sweet Home bookcase: 16 against 10). So CoACD stays
+the default method.
 """
 
 from __future__ import annotations

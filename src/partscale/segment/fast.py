@@ -15,15 +15,15 @@ The tolerance is CoACD's threshold read in voxels: ``threshold * scale * L`` for
 largest extent ``L`` in voxels.
 
 Measured against CoACD at its defaults (``bench/bench_segment.py``, 9 objects at 128 voxels,
-2026-11-22, 2-core x86-64, CPU time as other jobs shared the machine): median 1.8 s against
+2026-11-22, 2-core x86-64, CPU time as other jobs shared the machine): median 1.5 s against
 29 s CPU, and as good or better (max concavity no worse, at most 1.5x the parts) on 3 of 9
 objects. CoACD's parts on these grids are very nearly convex (max concavity 0.8-3.3 voxels,
 1.1 on the Sweet Home chair and bookcase), below this method's tolerance (3.5 voxels at
 128), and lowering the tolerance multiplies the parts on staircases (51 against CoACD's 19
 at scale 0.3). Plane cuts through the deepest concavity brought curved upholstery
-(SheenChair) from 10.7 to 4.7 voxels (CoACD 3.3) at 21 s CPU instead of 6 s; T-junctions
-of many boards still leave extra parts (Sweet Home bookcase: 16 against 10). So CoACD stays
-the default method.
+(SheenChair), with a deeper recursion limit (16), from 10.7 to 3.8 voxels (CoACD 3.3) at
+26 s CPU instead of 6 s (CoACD 134 s); T-junctions of many boards still leave extra parts
+(Sweet Home bookcase: 16 against 10). So CoACD stays the default method.
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ PARAMS = {
     "jump": 0.3,
     "min_jump": 0.05,
     "scale": 0.5,
-    "max_depth": 10,
+    "max_depth": 16,
     "min_voxels": 27,
 }
 """Options of the fast method.

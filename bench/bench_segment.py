@@ -116,7 +116,11 @@ def main() -> None:
             f"{sum(strict)}/{len(rows)} objects; allowing {SLACK} voxel of measuring noise on "
             f"{sum(slack)}/{len(rows)}; misses: "
             + (
-                ", ".join(Path(r["object"]).stem for r, k in zip(rows, slack, strict=True) if not k)
+                ", ".join(
+                    str(Path(r["object"]).with_suffix(""))
+                    for r, k in zip(rows, slack, strict=True)
+                    if not k
+                )
                 or "none"
             )
         )

@@ -10,12 +10,18 @@ the measure's sampling step). Wall time depends on what else runs on the machine
 
 CoACD at defaults takes about 40-120 s per 128^3 object: the whole run takes 15-30 minutes.
 
-Run: ``PYTHONPATH=src .venv/bin/python bench/bench_segment.py [--res 128] [--json out.json]``
+``--reuse old.json`` takes a method's figures from an earlier ``--json`` run instead of running it
+again, for objects whose grid is byte-identical (sha256 of the sdf): CoACD once, then the fast
+method as often as needed.
+
+Run: ``PYTHONPATH=src .venv/bin/python bench/bench_segment.py [--res 128] [--json out.json]
+[--reuse old.json]``
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import sys
 import time
@@ -61,10 +67,16 @@ def main() -> None:
     ap.add_argument("--objects", nargs="*", default=OBJECTS, help="paths under ../shared/data")
     ap.add_argument("--methods", nargs="*", default=["coacd", "fast"])
     ap.add_argument("--json", type=Path, help="also write the figures here")
+    ap.add_argument(
+        "--reuse", type=Path, help="figures of an earlier --json run, reused on identical grids"
+    )
     args = ap.parse_args()
     if not DATA.is_dir():
         sys.exit(f"bench_segment: test objects not found under {DATA}")
 
+    old = {}
+    if args.reuse:
+        old = {(r["object"], r.get("sdf_sha256")): r for r in json.loads(args.reuse.read_text())}
     rows = []
     head = f"{'object':28s} {'grid':>13s}"
     for m in args.methods:
@@ -72,10 +84,12 @@ def main() -> None:
     print(head, flush=True)
     for rel in args.objects:
         c = ingest.load(DATA / rel, res=args.res)
-        row = {"object": rel, "shape": list(c.shape)}
+        sha = hashlib.sha256(np.ascontiguousarray(c.sdf).tobytes()).hexdigest()
+        row = {"object": rel, "shape": list(c.shape), "sdf_sha256": sha}
+        before = old.get((rel, sha), {})
         line = f"{rel:28s} {'x'.join(map(str, c.shape)):>13s}"
         for m in args.methods:
-            r = measure(c, m)
+            r = before[m] if m in before else measure(c, m)
             row[m] = r
             line += (
                 f" | {'':6s} {r['seconds']:6.1f} {r['cpu']:6.1f} {r['parts']:5d}"
@@ -102,7 +116,11 @@ def main() -> None:
             f"{sum(strict)}/{len(rows)} objects; allowing {SLACK} voxel of measuring noise on "
             f"{sum(slack)}/{len(rows)}; misses: "
             + (
-                ", ".join(Path(r["object"]).stem for r, k in zip(rows, slack, strict=True) if not k)
+                ", ".join(
+                    str(Path(r["object"]).with_suffix(""))
+                    for r, k in zip(rows, slack, strict=True)
+                    if not k
+                )
                 or "none"
             )
         )

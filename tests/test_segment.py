@@ -326,3 +326,25 @@ def test_max_parts_bounds_the_count(table, method):
 def test_max_parts_cannot_join_separate_pieces(boxes):
     s = segment(boxes, method="fast", max_parts=1, cache=False)
     assert s.n_parts == len(BOXES)
+
+
+def tilted_arch():
+    """A half ring (radius 0.4, 0.1 thick, 0.2 deep) turned off every grid axis: no creases."""
+    a, b = np.radians(35), np.radians(25)
+    rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+    rx = np.array([[1, 0, 0], [0, np.cos(b), -np.sin(b)], [0, np.sin(b), np.cos(b)]])
+
+    def sdf(p):
+        q = (p - 0.5) @ (rz @ rx)  # world -> arch frame
+        ring = np.abs(np.hypot(q[..., 0], q[..., 1]) - 0.4) - 0.05
+        return np.maximum(np.maximum(ring, np.abs(q[..., 2]) - 0.1), -q[..., 1])
+
+    return shapes.grid(sdf, ((0, 0, 0), (1, 1, 1)), voxel_size=H)
+
+
+def test_fast_cuts_a_tilted_curved_shell_across_its_bend(tmp_path):
+    # slices along the grid axes would peel the arch into slivers and leave a bent, concave
+    # rest (its inner radius is 14 voxels); cuts through its deepest point keep parts convex
+    s = segment(tilted_arch(), method="fast", cache_dir=tmp_path)
+    assert part_concavities(s).max() <= 3.0
+    assert 2 <= s.n_parts <= 8

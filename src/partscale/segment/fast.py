@@ -4,7 +4,9 @@ Furniture is mostly boards, legs and panels meeting at creases. Where a board me
 solid's cross-section area along some axis jumps from one slice to the next (a leg's section to
 a tabletop's). A region that is not yet convex (concavity above the tolerance) is cut at every
 such jump along x, y and z at once, and its pieces (connected components of the cells between
-cuts) are treated the same way, recursively. Cutting at all creases at once over-segments on
+cuts) are treated the same way, recursively. A concave region without such a jump (a bend, a
+curved shell, a board turned off the grid axes) is cut once by a plane through its deepest
+concavity, oriented along a grid or principal axis, whichever leaves the least concave pieces. Cutting at all creases at once over-segments on
 purpose (a side panel is chopped at every shelf); the common convex merge
 (:func:`labels.merge_convex`) then joins touching pieces whose union is still convex within the
 tolerance, which restores whole panels and leaves the parts split at the creases only.
@@ -13,19 +15,22 @@ The tolerance is CoACD's threshold read in voxels: ``threshold * scale * L`` for
 largest extent ``L`` in voxels.
 
 Measured against CoACD at its defaults (``bench/bench_segment.py``, 9 objects at 128 voxels,
-2026-11-22, 2-core x86-64): 17x faster (median 1.5 s against 29 s), and on furniture made of
-boards and legs as good or better (max concavity no worse, at most 1.5x the parts) on 5 of 9
-objects, 7 of 9 allowing half a voxel of measuring noise. It misses on curved upholstery
-(SheenChair: max concavity 5.4 voxels against 3.2; axis-aligned cuts peel curved shells into
-slices) and where many boards meet at T-junctions (Sweet Home bookcase: 16 parts against 10;
-greedy merging cannot always rebuild a whole panel once a junction piece has joined the other
-board). So CoACD stays the default method.
+2026-11-22, 2-core x86-64, CPU time as other jobs shared the machine): median 1.5 s against
+29 s CPU, and as good or better (max concavity no worse, at most 1.5x the parts) on 3 of 9
+objects. CoACD's parts on these grids are very nearly convex (max concavity 0.8-3.3 voxels,
+1.1 on the Sweet Home chair and bookcase), below this method's tolerance (3.5 voxels at
+128), and lowering the tolerance multiplies the parts on staircases (51 against CoACD's 19
+at scale 0.3). Plane cuts through the deepest concavity brought curved upholstery
+(SheenChair), with a deeper recursion limit (16), from 10.7 to 3.8 voxels (CoACD 3.3) at
+26 s CPU instead of 6 s (CoACD 134 s); T-junctions of many boards still leave extra parts
+(Sweet Home bookcase: 16 against 10). So CoACD stays the default method.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial import ConvexHull, QhullError
 
 from ..csdf import CSDF
 from ..errors import InputError
@@ -36,7 +41,7 @@ PARAMS = {
     "jump": 0.3,
     "min_jump": 0.05,
     "scale": 0.5,
-    "max_depth": 10,
+    "max_depth": 16,
     "min_voxels": 27,
 }
 """Options of the fast method.
@@ -48,7 +53,6 @@ max_depth : recursion limit; min_voxels : smaller pieces are not split further.
 """
 
 _FULL = np.ones((3, 3, 3), bool)
-_FALLBACK_SIDE = 0.0
 
 
 def check_params(params: dict) -> dict:
@@ -101,36 +105,61 @@ def _cuts(mask: np.ndarray, jump: float, min_jump: float) -> list[np.ndarray]:
     return out
 
 
-def _fallback_cut(mask: np.ndarray) -> list[np.ndarray]:
-    """One cut for a concave region without a clear crease.
+def _deepest_point(pts: np.ndarray) -> tuple[np.ndarray, float]:
+    """The point of ``pts`` (N, 3) deepest inside their convex hull, and its depth."""
+    try:
+        hull = ConvexHull(pts)
+    except (QhullError, ValueError):
+        return pts.mean(axis=0), 0.0
+    eq = hull.equations  # n . x + d <= 0 inside, |n| = 1
+    depth = np.full(len(pts), np.inf)
+    for chunk in range(0, len(eq), 256):  # bounded memory: N x 256 at a time
+        e = eq[chunk : chunk + 256]
+        np.minimum(depth, (-(pts @ e[:, :3].T + e[:, 3])).min(axis=1), out=depth)
+    i = int(np.argmax(depth))
+    return pts[i], float(depth[i])
 
-    Among cuts leaving at least a fifth of the region on each side (so a rounded region is
-    halved rather than peeled slice by slice), the one where the section area changes most;
-    across the middle of the longest side when the area hardly changes anywhere.
+
+def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
+    """Split a concave region by the best plane through its deepest concavity.
+
+    The deepest boundary voxel inside the region's convex hull sits in the crease or bend that
+    makes the region concave. Planes through it, normal to each axis and to each principal
+    axis of the region, are tried; the one whose pieces have the least worst concavity wins.
+    Unlike a cut across a whole grid slice, a tilted plane splits a curved shell across its
+    bend instead of peeling it slice by slice.
     """
-    best = (0.05, -1, -1)
-    total = float(mask.sum())
-    for ax in range(3):
-        other = tuple(a for a in range(3) if a != ax)
-        area = mask.sum(axis=other).astype(np.float64)
-        if len(area) < 2:
+    interior = ndimage.binary_erosion(mask, border_value=0)
+    pts = np.argwhere(mask & ~interior).astype(np.float64)
+    if len(pts) < 8:
+        return []
+    centre, _ = _deepest_point(pts)
+    vox = np.argwhere(mask).astype(np.float64)
+    vox_pca = vox[:: len(vox) // 20000 + 1]
+    _, _, axes = np.linalg.svd(vox_pca - vox_pca.mean(axis=0), full_matrices=False)
+    normals = np.concatenate([np.eye(3), axes])
+    # score each plane on the boundary voxels alone (a flat cut face adds nothing concave)
+    best_score, best_n = np.inf, None
+    for n in normals:
+        below = (pts - centre) @ n <= 0
+        if min(below.sum(), (~below).sum()) < 8:
             continue
-        lo, hi = np.minimum(area[:-1], area[1:]), np.maximum(area[:-1], area[1:])
-        rel = 1.0 - lo / np.maximum(hi, 1.0)
-        below = np.cumsum(area)[:-1] / total
-        rel[(below < _FALLBACK_SIDE) | (below > 1 - _FALLBACK_SIDE)] = 0.0
-        t = int(np.argmax(rel))
-        if rel[t] > best[0]:
-            best = (float(rel[t]), ax, t)
-    out = [np.empty(0, np.int64) for _ in range(3)]
-    if best[1] >= 0:
-        out[best[1]] = np.array([best[2]])
-    else:
-        ax = int(np.argmax(mask.shape))
-        other = tuple(a for a in range(3) if a != ax)
-        below = np.cumsum(mask.sum(axis=other)) / total
-        out[ax] = np.array([min(int(np.searchsorted(below, 0.5)), mask.shape[ax] - 2)])
-    return out
+        score = max(
+            hull_concavity(pts[below], spacing=1.5), hull_concavity(pts[~below], spacing=1.5)
+        )
+        if score < best_score:
+            best_score, best_n = score, n
+    if best_n is None:
+        return []
+    side = np.tensordot(
+        best_n, np.indices(mask.shape, dtype=np.float64) - centre[:, None, None, None], 1
+    )
+    pieces = []
+    for h in (mask & (side <= 0), mask & (side > 0)):
+        comp, _ = ndimage.label(h, structure=_FULL)
+        for c, sl in enumerate(ndimage.find_objects(comp), start=1):
+            pieces.append((comp[sl] == c, tuple(x.start for x in sl)))
+    return pieces
 
 
 def _split(mask: np.ndarray, cuts: list[np.ndarray]) -> list[tuple[np.ndarray, tuple]]:
@@ -189,9 +218,10 @@ def atoms(
         pieces = []
         if not final:
             cuts = _cuts(mask, params["jump"], params["min_jump"])
-            if not any(len(c) for c in cuts):
-                cuts = _fallback_cut(mask)
-            pieces = _split(mask, cuts)
+            if any(len(c) for c in cuts):
+                pieces = _split(mask, cuts)
+            else:
+                pieces = _plane_pieces(mask)
         if final or len(pieces) <= 1:
             view = out[
                 off[0] : off[0] + mask.shape[0],

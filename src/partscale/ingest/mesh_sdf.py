@@ -19,8 +19,10 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
 4. Sign: a voxel with no surface within one voxel has the sign of all its 6-neighbours, so the
    6-connected components of such voxels (the far field included; sheets block them as much as
    boundaries, so a cushion with an open seam still encloses its inside) share one sign, read
-   from ``w > 1/2`` at a few voxels per component (at all of them when those disagree). Only
-   voxels near the surface with no such neighbour (inside thin boards) are tested one by one.
+   from ``w > 1/2`` at a few voxels per component (at all of them when those disagree). The
+   voxels left (inside boards a few voxels thick, in narrow gaps) are grouped by steps that
+   cross no surface (``dist(p) + dist(q) > h``): enclosed groups take ``w`` at their three
+   voxels farthest from the surface where those agree; the others are tested one by one.
 5. ``sdf = min(signed boundary distance, sheet distance - offset)`` in the band; beyond it, the
    distance to the nearest surface of the nearest band voxel (a Euclidean feature transform).
 6. Colour of a voxel = source colour at its nearest surface point (texture through the UVs),
@@ -313,13 +315,15 @@ def _neighbour_signs(sign):
     return out[0], out[1]
 
 
-def _component_signs(wn, d, free, in_sheet, h, origin):
+def _component_signs(wn, d, dist, free, in_sheet, h, origin):
     """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
 
     ``free``: voxels with no surface (boundary or sheet) within one voxel. ``in_sheet``: voxels
     inside a thickened sheet or thin piece; they are solid whatever the boundary's sign, so
     those that would need a query of their own (inside thin boards) are set inside directly.
-    The rest are winding-number queries.
+    ``dist``: distance to the nearest boundary or sheet face (neighbours whose ``dist`` sum
+    to more than a voxel have no surface between them). The rest are winding-number
+    queries, three per enclosed group of such neighbours where those three agree.
     """
     shape = d.shape
     # flood the voxels > 2 voxels from any surface: a gap narrower than 4 voxels in an open
@@ -330,7 +334,6 @@ def _component_signs(wn, d, free, in_sheet, h, origin):
     sign = np.zeros(shape, np.int8)
     flat_lab = labels.ravel()
     idx = np.flatnonzero(flat_lab)
-    queries = []
     if n_comp:
         lab = flat_lab[idx]
         dv = d.ravel()[idx]
@@ -368,18 +371,42 @@ def _component_signs(wn, d, free, in_sheet, h, origin):
             break
         sign[one] = np.where(pos[one], 1, -1)
         todo &= ~one
-    # ring voxels still unsigned (in narrow gaps) are queried together with the near ones
-    # below (each query call costs ~40 ms of set-up); near voxels next to them are then
-    # undecided and queried too
-    queries.append(np.flatnonzero(todo))
+    # ring voxels still unsigned (in narrow gaps, inside boards) are signed with the
+    # undecided near ones below
     near = ~free
     pos, neg = _neighbour_signs(np.where(free, sign, 0))
     one = near & (pos ^ neg)
     sign[one] = np.where(pos[one], 1, -1)
     undecided = near & ~(pos ^ neg)
     sign[undecided & in_sheet] = -1
-    queries.append(np.flatnonzero(undecided & ~in_sheet))
-    _query_signs(wn, sign, np.concatenate(queries), h, origin)
+    # the rest: groups joined by surface-free steps. Those enclosed (inside boards 2-4 voxels
+    # thick, most of them) take the sign of a few samples where those agree
+    seeds = np.where(in_sheet, 0, sign).astype(np.int8)
+    todo_near = (undecided & ~in_sheet) | todo
+    flat, root, touch = _kernels.clear_components(todo_near, seeds, dist, h)
+    del seeds
+    # groups that reach a signed voxel are queried voxel by voxel: next to open sheets the
+    # winding number can pass 1/2 away from any surface (inside an open cup's walls)
+    seeded = touch[root].any(axis=1)
+    queries = flat[seeded]
+    flat, root = flat[~seeded], root[~seeded]
+    # enclosed groups: 3 voxels each (the farthest from the surface); where those disagree,
+    # all of the group's voxels
+    if len(flat) == 0:
+        _query_signs(wn, sign, queries, h, origin)
+        return sign
+    order = np.lexsort((-dist.ravel()[flat], root))
+    r_sorted = root[order]
+    first = np.r_[True, r_sorted[1:] != r_sorted[:-1]]
+    start = np.maximum.accumulate(np.where(first, np.arange(len(order)), 0))
+    pick = order[np.arange(len(order)) - start < 3]
+    w_pick = wn(origin + np.stack(np.unravel_index(flat[pick], shape), axis=1) * h)
+    n_in = np.bincount(root[pick], weights=w_pick > 0.5, minlength=len(touch))
+    n_all = np.bincount(root[pick], minlength=len(touch))
+    agree = (n_in == 0) | (n_in == n_all)
+    ok = agree[root]
+    sign.ravel()[flat[ok]] = np.where(n_in[root[ok]] > 0, -1, 1)
+    _query_signs(wn, sign, np.concatenate([queries, flat[~ok]]), h, origin)
     return sign
 
 
@@ -473,7 +500,12 @@ def from_mesh(
     # thickened sheets block the flood as much as boundaries do (a cushion whose cloth has an
     # open seam still encloses its inside); at 2t thick they leave no 6-connected tunnel
     free = (d_b > h) & ~in_sheet
-    sign = _component_signs(wn, d_b, free, in_sheet, h, origin)
+    # distance to the nearest boundary or (unthickened) sheet face: steps between voxels
+    # whose distances sum to more than a voxel cross no surface
+    dist = np.minimum(d_b, f_s + offset[sheet[np.maximum(id_s, 0)]] if len(sheet) else d_b)
+    dist = dist.astype(np.float32, copy=False)
+    sign = _component_signs(wn, d_b, dist, free, in_sheet, h, origin)
+    del dist
     del free, in_sheet
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band

@@ -119,6 +119,27 @@ def test_intersecting_pieces_union_buried_faces_ignored():
     assert np.mean(err <= 0.05) >= 0.98 and err.max() <= 1.5, (np.mean(err <= 0.05), err.max())
 
 
+def test_hollow_box_with_walls_a_few_voxels_thick():
+    """A closed box with a closed cavity (inner surface facing in), walls 2.4-3.6 voxels thick
+    (too thick for the thin-piece offset, too thin for any voxel > 1 voxel from both faces):
+    wall voxels are inside, the sealed cavity is outside, signs right beyond 1/4 voxel."""
+    outer = trimesh.creation.box(bounds=[[0, 0, 0], [1, 0.8, 0.6]])
+    inner = trimesh.creation.box(bounds=[[0.06, 0.06, 0.09], [0.94, 0.74, 0.51]])
+    inner.invert()
+    mesh = trimesh.util.concatenate([outer, inner])
+    c = ingest.from_mesh(ingest.from_trimesh(mesh), res=40)
+    h = c.voxel_size
+    p = _centres(c)
+    e = np.maximum(
+        shapes.box_sdf(p, (0, 0, 0), (1, 0.8, 0.6)),
+        -shapes.box_sdf(p, (0.06, 0.06, 0.09), (0.94, 0.74, 0.51)),
+    )
+    s = c.sdf.ravel()
+    clear = np.abs(e) > h / 4
+    assert np.count_nonzero(e < -h / 4) > 1000  # the walls hold voxels to check
+    assert np.array_equal(s[clear] < 0, e[clear] < 0)
+
+
 # -- colour ----------------------------------------------------------------------------
 
 

@@ -184,3 +184,78 @@ def slab_lists(tris: np.ndarray, origin, h: float, radius: float, nx: int, slab_
     ptr = np.zeros(n_slabs + 1, np.int64)
     np.cumsum(np.bincount(slab, minlength=n_slabs), out=ptr[1:])
     return ptr, tri_of[order]
+
+
+@nb.njit(cache=True, inline="always")
+def _find(parent, a):
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
+@nb.njit(cache=True)
+def clear_components(todo, seeds, dist, h):
+    """Group voxels of ``todo`` joined by surface-free steps; collect the signs they touch.
+
+    Two 6-neighbours ``h`` apart with ``dist[p] + dist[q] > h`` have no surface between them
+    (the open balls of those radii cover the segment), so they share a side. todo : (X, Y, Z)
+    bool; seeds : (X, Y, Z) int8 known signs (0 unknown); dist : (X, Y, Z) float32 distance
+    to the nearest surface. Returns flat (N,) int64 indices of the ``todo`` voxels, root (N,)
+    int64 (a component id in 0..N-1 per voxel) and touch (N, 2) bool per root (a clear
+    step reaches a +1 / -1 seed).
+    """
+    nx, ny, nz = todo.shape
+    n = 0
+    cid = np.full(todo.shape, -1, np.int64)
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                if todo[i, j, k]:
+                    cid[i, j, k] = n
+                    n += 1
+    flat = np.empty(n, np.int64)
+    parent = np.arange(n)
+    touch = np.zeros((n, 2), np.bool_)
+    lim = h * 1.001
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                p = cid[i, j, k]
+                if p < 0:
+                    continue
+                flat[p] = (i * ny + j) * nz + k
+                dp = dist[i, j, k]
+                for a in range(6):
+                    ax = a // 2
+                    st = 1 if a % 2 == 0 else -1
+                    i2, j2, k2 = i, j, k
+                    if ax == 0:
+                        i2 += st
+                    elif ax == 1:
+                        j2 += st
+                    else:
+                        k2 += st
+                    if i2 < 0 or j2 < 0 or k2 < 0 or i2 >= nx or j2 >= ny or k2 >= nz:
+                        continue
+                    if not dp + dist[i2, j2, k2] > lim:
+                        continue
+                    q = cid[i2, j2, k2]
+                    if q >= 0:
+                        ra = _find(parent, p)
+                        rb = _find(parent, q)
+                        if ra != rb:
+                            parent[ra] = rb
+                    elif seeds[i2, j2, k2] > 0:
+                        touch[p, 0] = True
+                    elif seeds[i2, j2, k2] < 0:
+                        touch[p, 1] = True
+    root = np.empty(n, np.int64)
+    for p in range(n):
+        root[p] = _find(parent, p)
+    comp = np.zeros((n, 2), np.bool_)
+    for p in range(n):
+        r = root[p]
+        comp[r, 0] |= touch[p, 0]
+        comp[r, 1] |= touch[p, 1]
+    return flat, root, comp

@@ -19,8 +19,10 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
 4. Sign: a voxel with no surface within one voxel has the sign of all its 6-neighbours, so the
    6-connected components of such voxels (the far field included; sheets block them as much as
    boundaries, so a cushion with an open seam still encloses its inside) share one sign, read
-   from ``w > 1/2`` at a few voxels per component (at all of them when those disagree). Only
-   voxels near the surface with no such neighbour (inside thin boards) are tested one by one.
+   from ``w > 1/2`` at a few voxels per component (at all of them when those disagree). The
+   voxels left (inside boards a few voxels thick, in narrow gaps) are grouped by steps that
+   cross no surface (``dist(p) + dist(q) > h``): enclosed groups take ``w`` at their three
+   voxels farthest from the surface where those agree; the others are tested one by one.
 5. ``sdf = min(signed boundary distance, sheet distance - offset)`` in the band; beyond it, the
    distance to the nearest surface of the nearest band voxel (a Euclidean feature transform).
 6. Colour of a voxel = source colour at its nearest surface point (texture through the UVs),
@@ -122,18 +124,34 @@ def _longest(tris: np.ndarray) -> float:
     return float(max(e))
 
 
-def _winding(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
-    import igl
+class _Winding:
+    """Generalized winding number of the mesh (V, F) at query points, (Q, 3) -> (Q,) float64.
 
-    if len(Q) == 0:
-        return np.zeros(0)
-    return igl.fast_winding_number(V, F, np.ascontiguousarray(Q, dtype=np.float64))
+    libigl's fast winding number with its hierarchy built once (on the first query) and
+    reused by every later call: the plain ``igl.fast_winding_number`` rebuilds it per call
+    (~40 ms+ each, and an import makes up to ~15 calls). Same values as the plain call.
+    """
+
+    def __init__(self, V: np.ndarray, F: np.ndarray):
+        self.V = V
+        self.F = F
+        self._bvh = None
+
+    def __call__(self, Q: np.ndarray) -> np.ndarray:
+        import igl
+
+        if len(Q) == 0:
+            return np.zeros(0)
+        if self._bvh is None:
+            self._bvh = igl.FastWindingNumberBVH()
+            self._bvh.init(self.V, self.F)
+        return self._bvh.winding_number(np.ascontiguousarray(Q, dtype=np.float64))
 
 
-def classify(V: np.ndarray, F: np.ndarray, tris: np.ndarray, eps: float) -> np.ndarray:
+def classify(wn: _Winding, tris: np.ndarray, eps: float) -> np.ndarray:
     """(T,) int8 class of each triangle of ``tris``: 0 boundary, 1 buried, 2 open sheet, -1 degenerate.
 
-    ``w`` is the generalized winding number of the whole mesh (V, F). Crossing an oriented
+    ``w`` is the generalized winding number ``wn`` of the whole mesh. Crossing an oriented
     triangle against its normal raises ``w`` by exactly 1, so the lower of the two side values
     is ``w`` at ``eps`` in front of the centroid: one query per triangle.
     """
@@ -143,7 +161,7 @@ def classify(V: np.ndarray, F: np.ndarray, tris: np.ndarray, eps: float) -> np.n
     ln = np.linalg.norm(nrm, axis=1)
     ok = ln > 1e-14 * max(1.0, float(np.abs(tris).max())) ** 2
     nrm = nrm[ok] / ln[ok, None]
-    lo = _winding(V, F, tris[ok].mean(axis=1) + eps * nrm)
+    lo = wn(tris[ok].mean(axis=1) + eps * nrm)
     cls = np.full(len(tris), -1, np.int8)
     cls[ok] = _class_of(lo)
     return cls
@@ -156,7 +174,7 @@ def _class_of(lo: np.ndarray) -> np.ndarray:
     return out
 
 
-def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
+def classify_pieces(wn: _Winding, h: float):
     """Distance primitives and their class (0 boundary, 1 buried, 2 open sheet, -1 degenerate).
 
     Every triangle is classified at its centroid; triangles longer than ``SUBDIVIDE`` voxels
@@ -171,7 +189,7 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
     Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
     (barycentrics of each primitive corner in its source triangle) and cls (P,) int8.
     """
-    tris = V[F]
+    tris = wn.V[wn.F]
     n_tri = len(tris)
     eps = 0.05 * h
     e1 = tris[:, 1] - tris[:, 0]
@@ -190,7 +208,7 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
     probes = [tris[okid].mean(axis=1) + eps * unit[okid]]
     for cw in corner_w:
         probes.append(np.einsum("c,ncd->nd", cw, tris[big]) + eps * unit[big])
-    w = _winding(V, F, np.concatenate(probes))
+    w = wn(np.concatenate(probes))
     cls = np.full(n_tri, -1, np.int8)
     cls[okid] = _class_of(w[: len(okid)])
     corner_cls = _class_of(w[len(okid) :]).reshape(3, -1)
@@ -215,7 +233,7 @@ def classify_pieces(V: np.ndarray, F: np.ndarray, h: float):
         n = unit[par] * eps
         q = [t.mean(axis=1) + n]
         q += [np.einsum("c,ncd->nd", cw, t[big_piece]) + n[big_piece] for cw in corner_w]
-        w = _winding(V, F, np.concatenate(q))
+        w = wn(np.concatenate(q))
         c = _class_of(w[: len(t)])
         cc = _class_of(w[len(t) :]).reshape(len(corner_w), -1)
         done = ~big_piece
@@ -281,24 +299,31 @@ def _band(tris, origin, h, shape, radius):
 
 def _neighbour_signs(sign):
     """(pos, neg): voxels with a 6-neighbour of sign +1 / -1."""
-    pos = np.zeros(sign.shape, bool)
-    neg = np.zeros(sign.shape, bool)
-    for ax in range(3):
-        for step in (1, -1):
-            # np.roll wraps; the border layers are free space (pad >= band), harmless
-            s = np.roll(sign, step, axis=ax)
-            pos |= s > 0
-            neg |= s < 0
-    return pos, neg
+    out = []
+    for src in (sign > 0, sign < 0):
+        acc = np.zeros(sign.shape, bool)
+        for ax in range(3):
+            # shifted views instead of np.roll: no full-grid temporaries (border layers are
+            # free space, pad >= band, and are signed before any neighbour is asked for)
+            lo = [slice(None)] * 3
+            hi = [slice(None)] * 3
+            lo[ax] = slice(None, -1)
+            hi[ax] = slice(1, None)
+            acc[tuple(hi)] |= src[tuple(lo)]
+            acc[tuple(lo)] |= src[tuple(hi)]
+        out.append(acc)
+    return out[0], out[1]
 
 
-def _component_signs(V, F, d, free, in_sheet, h, origin):
+def _component_signs(wn, d, dist, free, in_sheet, h, origin):
     """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
 
     ``free``: voxels with no surface (boundary or sheet) within one voxel. ``in_sheet``: voxels
     inside a thickened sheet or thin piece; they are solid whatever the boundary's sign, so
     those that would need a query of their own (inside thin boards) are set inside directly.
-    The rest are winding-number queries.
+    ``dist``: distance to the nearest boundary or sheet face (neighbours whose ``dist`` sum
+    to more than a voxel have no surface between them). The rest are winding-number
+    queries, three per enclosed group of such neighbours where those three agree.
     """
     shape = d.shape
     # flood the voxels > 2 voxels from any surface: a gap narrower than 4 voxels in an open
@@ -309,7 +334,6 @@ def _component_signs(V, F, d, free, in_sheet, h, origin):
     sign = np.zeros(shape, np.int8)
     flat_lab = labels.ravel()
     idx = np.flatnonzero(flat_lab)
-    queries = []
     if n_comp:
         lab = flat_lab[idx]
         dv = d.ravel()[idx]
@@ -329,7 +353,7 @@ def _component_signs(V, F, d, free, in_sheet, h, origin):
         rand = np.flatnonzero(r < extra[lab])
         samples = idx[np.concatenate([pick, rand])]
         pts = origin + np.stack(np.unravel_index(samples, shape), axis=1) * h
-        w = _winding(V, F, pts)
+        w = wn(pts)
         inside = w > 0.5
         comp = flat_lab[samples]
         n_in = np.bincount(comp, weights=inside, minlength=n_comp + 1)
@@ -347,26 +371,50 @@ def _component_signs(V, F, d, free, in_sheet, h, origin):
             break
         sign[one] = np.where(pos[one], 1, -1)
         todo &= ~one
-    # ring voxels still unsigned (in narrow gaps) are queried together with the near ones
-    # below (each query call costs ~40 ms of set-up); near voxels next to them are then
-    # undecided and queried too
-    queries.append(np.flatnonzero(todo))
+    # ring voxels still unsigned (in narrow gaps, inside boards) are signed with the
+    # undecided near ones below
     near = ~free
     pos, neg = _neighbour_signs(np.where(free, sign, 0))
     one = near & (pos ^ neg)
     sign[one] = np.where(pos[one], 1, -1)
     undecided = near & ~(pos ^ neg)
     sign[undecided & in_sheet] = -1
-    queries.append(np.flatnonzero(undecided & ~in_sheet))
-    _query_signs(V, F, sign, np.concatenate(queries), h, origin)
+    # the rest: groups joined by surface-free steps. Those enclosed (inside boards 2-4 voxels
+    # thick, most of them) take the sign of a few samples where those agree
+    seeds = np.where(in_sheet, 0, sign).astype(np.int8)
+    todo_near = (undecided & ~in_sheet) | todo
+    flat, root, touch = _kernels.clear_components(todo_near, seeds, dist, h)
+    del seeds
+    # groups that reach a signed voxel are queried voxel by voxel: next to open sheets the
+    # winding number can pass 1/2 away from any surface (inside an open cup's walls)
+    seeded = touch[root].any(axis=1)
+    queries = flat[seeded]
+    flat, root = flat[~seeded], root[~seeded]
+    # enclosed groups: 3 voxels each (the farthest from the surface); where those disagree,
+    # all of the group's voxels
+    if len(flat) == 0:
+        _query_signs(wn, sign, queries, h, origin)
+        return sign
+    order = np.lexsort((-dist.ravel()[flat], root))
+    r_sorted = root[order]
+    first = np.r_[True, r_sorted[1:] != r_sorted[:-1]]
+    start = np.maximum.accumulate(np.where(first, np.arange(len(order)), 0))
+    pick = order[np.arange(len(order)) - start < 3]
+    w_pick = wn(origin + np.stack(np.unravel_index(flat[pick], shape), axis=1) * h)
+    n_in = np.bincount(root[pick], weights=w_pick > 0.5, minlength=len(touch))
+    n_all = np.bincount(root[pick], minlength=len(touch))
+    agree = (n_in == 0) | (n_in == n_all)
+    ok = agree[root]
+    sign.ravel()[flat[ok]] = np.where(n_in[root[ok]] > 0, -1, 1)
+    _query_signs(wn, sign, np.concatenate([queries, flat[~ok]]), h, origin)
     return sign
 
 
-def _query_signs(V, F, sign, flat_idx, h, origin):
+def _query_signs(wn, sign, flat_idx, h, origin):
     """Set ``sign`` at the flat voxel indices from the winding number (inside where w > 1/2)."""
     if len(flat_idx):
         pts = origin + np.stack(np.unravel_index(flat_idx, sign.shape), axis=1) * h
-        w = _winding(V, F, pts)
+        w = wn(pts)
         sign.ravel()[flat_idx] = np.where(w > 0.5, -1, 1)
 
 
@@ -415,8 +463,9 @@ def from_mesh(
     check_memory(tuple(int(s) for s in shape), BYTES_PER_VOXEL, what=f"{name} at --res {res}")
     shape = tuple(int(s) for s in shape)
 
+    wn = _Winding(V, F)
     report(0.0, "classifying pieces")
-    sub, parent, corner_bary, cls = classify_pieces(V, F, h)
+    sub, parent, corner_bary, cls = classify_pieces(wn, h)
     boundary = np.nonzero(cls == 0)[0]
     sheet = np.nonzero(cls == 2)[0]
     if len(boundary) + len(sheet) == 0:
@@ -451,7 +500,12 @@ def from_mesh(
     # thickened sheets block the flood as much as boundaries do (a cushion whose cloth has an
     # open seam still encloses its inside); at 2t thick they leave no 6-connected tunnel
     free = (d_b > h) & ~in_sheet
-    sign = _component_signs(V, F, d_b, free, in_sheet, h, origin)
+    # distance to the nearest boundary or (unthickened) sheet face: steps between voxels
+    # whose distances sum to more than a voxel cross no surface
+    dist = np.minimum(d_b, f_s + offset[sheet[np.maximum(id_s, 0)]] if len(sheet) else d_b)
+    dist = dist.astype(np.float32, copy=False)
+    sign = _component_signs(wn, d_b, dist, free, in_sheet, h, origin)
+    del dist
     del free, in_sheet
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band

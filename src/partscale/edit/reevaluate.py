@@ -24,6 +24,7 @@ import numpy as np
 from scipy import ndimage
 from skimage import measure
 
+from .._kernels import closest_on_triangle
 from .._util import keyword_options
 from ..csdf import CSDF
 from ..progress import ProgressCallback, resolve
@@ -33,66 +34,16 @@ BAND_VOXELS = 3.0
 
 
 @numba.njit(cache=True, inline="always")
-def _closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
-    # Ericson, Real-Time Collision Detection 5.1.5: closest point by Voronoi region of the triangle.
-    abx, aby, abz = bx - ax, by - ay, bz - az
-    acx, acy, acz = cx - ax, cy - ay, cz - az
-    apx, apy, apz = px - ax, py - ay, pz - az
-    d1 = abx * apx + aby * apy + abz * apz
-    d2 = acx * apx + acy * apy + acz * apz
-    if d1 <= 0.0 and d2 <= 0.0:
-        return ax, ay, az
-    bpx, bpy, bpz = px - bx, py - by, pz - bz
-    d3 = abx * bpx + aby * bpy + abz * bpz
-    d4 = acx * bpx + acy * bpy + acz * bpz
-    if d3 >= 0.0 and d4 <= d3:
-        return bx, by, bz
-    vc = d1 * d4 - d3 * d2
-    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        den = d1 - d3
-        v = d1 / den if den != 0.0 else 0.0
-        return ax + v * abx, ay + v * aby, az + v * abz
-    cpx, cpy, cpz = px - cx, py - cy, pz - cz
-    d5 = abx * cpx + aby * cpy + abz * cpz
-    d6 = acx * cpx + acy * cpy + acz * cpz
-    if d6 >= 0.0 and d5 <= d6:
-        return cx, cy, cz
-    vb = d5 * d2 - d1 * d6
-    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        den = d2 - d6
-        w = d2 / den if den != 0.0 else 0.0
-        return ax + w * acx, ay + w * acy, az + w * acz
-    va = d3 * d6 - d5 * d4
-    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-        den = (d4 - d3) + (d5 - d6)
-        w = (d4 - d3) / den if den != 0.0 else 0.0
-        return bx + w * (cx - bx), by + w * (cy - by), bz + w * (cz - bz)
-    den = va + vb + vc
-    if den == 0.0:  # degenerate triangle: fall back to its first vertex
-        return ax, ay, az
-    v = vb / den
-    w = vc / den
-    return ax + abx * v + acx * w, ay + aby * v + acy * w, az + abz * v + acz * w
-
-
-@numba.njit(cache=True, inline="always")
 def _tri_d2(tri, t, px, py, pz):
-    qx, qy, qz = _closest_on_triangle(
-        px,
-        py,
-        pz,
-        tri[t, 0],
-        tri[t, 1],
-        tri[t, 2],
-        tri[t, 3],
-        tri[t, 4],
-        tri[t, 5],
-        tri[t, 6],
-        tri[t, 7],
-        tri[t, 8],
-    )
-    dx, dy, dz = px - qx, py - qy, pz - qz
-    return dx * dx + dy * dy + dz * dz, qx, qy, qz
+    """Squared distance from p to triangle ``t`` of ``tri`` (T, 9) and the closest point."""
+    ax, ay, az = tri[t, 0], tri[t, 1], tri[t, 2]
+    bx, by, bz = tri[t, 3], tri[t, 4], tri[t, 5]
+    cx, cy, cz = tri[t, 6], tri[t, 7], tri[t, 8]
+    d2, u, v, w = closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz)
+    qx = u * ax + v * bx + w * cx
+    qy = u * ay + v * by + w * cy
+    qz = u * az + v * bz + w * cz
+    return d2, qx, qy, qz
 
 
 @numba.njit(cache=True)

@@ -8,57 +8,26 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from .._kernels import closest_on_triangle
+
 
 @nb.njit(cache=True, inline="always")
 def _closest_bary(px, py, pz, tri):
-    """Squared distance from p to triangle ``tri`` (3, 3) and the closest point's barycentrics.
-
-    Ericson, Real-Time Collision Detection, 5.1.5 (region tests on the Voronoi regions).
-    """
-    ax, ay, az = tri[0, 0], tri[0, 1], tri[0, 2]
-    abx, aby, abz = tri[1, 0] - ax, tri[1, 1] - ay, tri[1, 2] - az
-    acx, acy, acz = tri[2, 0] - ax, tri[2, 1] - ay, tri[2, 2] - az
-    apx, apy, apz = px - ax, py - ay, pz - az
-    d1 = abx * apx + aby * apy + abz * apz
-    d2 = acx * apx + acy * apy + acz * apz
-    if d1 <= 0.0 and d2 <= 0.0:
-        u, v, w = 1.0, 0.0, 0.0
-    else:
-        bpx, bpy, bpz = px - tri[1, 0], py - tri[1, 1], pz - tri[1, 2]
-        d3 = abx * bpx + aby * bpy + abz * bpz
-        d4 = acx * bpx + acy * bpy + acz * bpz
-        cpx, cpy, cpz = px - tri[2, 0], py - tri[2, 1], pz - tri[2, 2]
-        d5 = abx * cpx + aby * cpy + abz * cpz
-        d6 = acx * cpx + acy * cpy + acz * cpz
-        vc = d1 * d4 - d3 * d2
-        vb = d5 * d2 - d1 * d6
-        va = d3 * d6 - d5 * d4
-        if d3 >= 0.0 and d4 <= d3:
-            u, v, w = 0.0, 1.0, 0.0
-        elif d6 >= 0.0 and d5 <= d6:
-            u, v, w = 0.0, 0.0, 1.0
-        elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-            t = d1 / (d1 - d3)
-            u, v, w = 1.0 - t, t, 0.0
-        elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-            t = d2 / (d2 - d6)
-            u, v, w = 1.0 - t, 0.0, t
-        elif va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-            t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-            u, v, w = 0.0, 1.0 - t, t
-        else:
-            den = va + vb + vc
-            if den <= 0.0:  # degenerate triangle: fall back to its first vertex
-                u, v, w = 1.0, 0.0, 0.0
-            else:
-                v = vb / den
-                w = vc / den
-                u = 1.0 - v - w
-    qx = ax + v * abx + w * acx
-    qy = ay + v * aby + w * acy
-    qz = az + v * abz + w * acz
-    dx, dy, dz = px - qx, py - qy, pz - qz
-    return dx * dx + dy * dy + dz * dz, u, v, w
+    """Squared distance from p to triangle ``tri`` (3, 3) and the closest point's barycentrics."""
+    return closest_on_triangle(
+        px,
+        py,
+        pz,
+        tri[0, 0],
+        tri[0, 1],
+        tri[0, 2],
+        tri[1, 0],
+        tri[1, 1],
+        tri[1, 2],
+        tri[2, 0],
+        tri[2, 1],
+        tri[2, 2],
+    )
 
 
 @nb.njit(cache=True, inline="always")

@@ -1,0 +1,65 @@
+"""Numba geometry kernels shared by the stages (import and re-evaluation).
+
+Coordinates are whatever the caller uses (world units or continuous voxel indices); nothing here
+knows about grids.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+
+
+@nb.njit(cache=True, inline="always")
+def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
+    """Squared distance from p to triangle abc and the closest point's barycentrics (u, v, w).
+
+    The closest point is ``u a + v b + w c``. Ericson, Real-Time Collision Detection, 5.1.5
+    (region tests on the Voronoi regions of the vertices, edges and face). A degenerate triangle
+    falls back to its first vertex.
+    """
+    abx, aby, abz = bx - ax, by - ay, bz - az
+    acx, acy, acz = cx - ax, cy - ay, cz - az
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        u, v, w = 1.0, 0.0, 0.0
+    else:
+        bpx, bpy, bpz = px - bx, py - by, pz - bz
+        d3 = abx * bpx + aby * bpy + abz * bpz
+        d4 = acx * bpx + acy * bpy + acz * bpz
+        cpx, cpy, cpz = px - cx, py - cy, pz - cz
+        d5 = abx * cpx + aby * cpy + abz * cpz
+        d6 = acx * cpx + acy * cpy + acz * cpz
+        vc = d1 * d4 - d3 * d2
+        vb = d5 * d2 - d1 * d6
+        va = d3 * d6 - d5 * d4
+        if d3 >= 0.0 and d4 <= d3:
+            u, v, w = 0.0, 1.0, 0.0
+        elif d6 >= 0.0 and d5 <= d6:
+            u, v, w = 0.0, 0.0, 1.0
+        elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+            den = d1 - d3
+            t = d1 / den if den != 0.0 else 0.0
+            u, v, w = 1.0 - t, t, 0.0
+        elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+            den = d2 - d6
+            t = d2 / den if den != 0.0 else 0.0
+            u, v, w = 1.0 - t, 0.0, t
+        elif va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+            den = (d4 - d3) + (d5 - d6)
+            t = (d4 - d3) / den if den != 0.0 else 0.0
+            u, v, w = 0.0, 1.0 - t, t
+        else:
+            den = va + vb + vc
+            if den <= 0.0:
+                u, v, w = 1.0, 0.0, 0.0
+            else:
+                v = vb / den
+                w = vc / den
+                u = 1.0 - v - w
+    qx = ax + v * abx + w * acx
+    qy = ay + v * aby + w * acy
+    qz = az + v * abz + w * acz
+    dx, dy, dz = px - qx, py - qy, pz - qz
+    return dx * dx + dy * dy + dz * dz, u, v, w

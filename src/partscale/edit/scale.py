@@ -59,13 +59,13 @@ def resolve_edit(csdf: CSDF, edit: Edit) -> dict[str, Any]:
     s, e, d = edit.resolve(lo, hi)
     name = AXES[ax]
     if not s < e:
-        raise InputError(f"zone: expected START < END, got START {_fmt(s)} >= END {_fmt(e)}")
+        raise InputError(f"zone: expected start < end, got start {_fmt(s)} >= end {_fmt(e)}")
     if not d > s:
         raise InputError(f"to: expected DEST > START {_fmt(s)}, got {_fmt(d)}")
     tol = h / 2
     if s < lo - tol or e > hi + tol:
         raise InputError(
-            f"zone: expected within the object's extent [{_fmt(lo)}, {_fmt(hi)}] along {name}, "
+            f"zone: expected inside the solid's extent [{_fmt(lo)}, {_fmt(hi)}] along {name}, "
             f"got [{_fmt(s)}, {_fmt(e)}]"
         )
     if e - s < 2 * h:

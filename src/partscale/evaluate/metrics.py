@@ -58,7 +58,8 @@ import numpy as np
 import trimesh
 
 from ..csdf import CSDF
-from ..edit.recipe import AXES, Edit, tile_count
+from ..edit.recipe import Edit, tile_count
+from ..edit.scale import resolve_edit as scale_resolve_edit
 from ..errors import InputError
 from ..surface import to_mesh
 
@@ -158,28 +159,14 @@ def resolve_edit(
 ) -> EditGeometry:
     """Resolve ``edit`` (positions in units or ``'NN%'``) on ``csdf``'s solid extent.
 
-    ``snap``: move ``dest`` to ``end`` plus a whole number of voxels, as the scaling stage does
-    (grids keep their voxel size), so the metrics judge the edit that was promised.
-    Raises :class:`InputError` when the zone is empty or reversed, or lies outside the solid.
+    Validation and snapping are the scaling stage's own (:func:`partscale.edit.scale.resolve_edit`),
+    so the metrics judge exactly the edit that stage performs. ``snap``: use ``dest`` moved to
+    ``end`` plus a whole number of voxels, as the stage does (grids keep their voxel size).
+    Raises :class:`InputError` for an edit the scaling stage would refuse.
     """
-    ax = edit.axis_index
-    b = csdf.surface_bounds()
-    lo, hi = float(b[0, ax]), float(b[1, ax])
-    s, e, d = edit.resolve(lo, hi)
-    name = AXES[ax]
-    if not s < e:
-        raise InputError(f"zone: expected start < end, got [{s:.4g}, {e:.4g}] along {name}")
-    if s < lo - 1e-9 or e > hi + 1e-9:
-        raise InputError(
-            f"zone: expected inside the solid's extent [{lo:.4g}, {hi:.4g}] along {name}, "
-            f"got [{s:.4g}, {e:.4g}]"
-        )
-    if not d > s:
-        raise InputError(f"to: expected a destination beyond the zone start {s:.4g}, got {d:.4g}")
-    if snap:
-        h = csdf.voxel_size
-        d = e + round((d - e) / h) * h
-    return EditGeometry(ax, s, e, d, lo, hi, mode or edit.mode)
+    r = scale_resolve_edit(csdf, edit)
+    dest = r["dest_snapped"] if snap else r["dest"]
+    return EditGeometry(r["axis"], r["start"], r["end"], dest, r["lo"], r["hi"], mode or edit.mode)
 
 
 # -- solid runs along grid lines ------------------------------------------------------------

@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 
-from ..evaluate import run_suite
 from ._common import done, error_line, progress_bar
 
 
@@ -45,6 +44,8 @@ def eval_suite(
     summary.md, the others still ran); 2 for a bad suite file or option.
     """
     with progress_bar("eval") as bar:
+        from ..evaluate import run_suite  # heavy (trimesh, libigl): load only when run
+
         result = run_suite(suite, out, res=res, only=only, data=data, segment=segment, progress=bar)
     for msg in result.failures:
         error_line(msg)

@@ -8,8 +8,6 @@ from typing import Annotated
 import typer
 
 from .. import csdf as csdf_mod
-from ..edit import AXES, MODES, Edit, Recipe, apply_recipe
-from ..edit.recipe import parse_position
 from ..errors import InputError
 from . import _common
 
@@ -32,6 +30,10 @@ def scale(
     ] = None,
 ) -> None:
     """Resize a zone between two planes: stretch it, tile it, or scale the whole object."""
+    # The edit stage pulls in numba, scipy and scikit-image: load it only when a command runs.
+    from ..edit import AXES, MODES, Edit, Recipe, apply_recipe
+    from ..edit.recipe import parse_position
+
     _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
     if recipe is not None:
         if axis is not None or zone is not None or to is not None:

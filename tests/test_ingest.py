@@ -349,6 +349,15 @@ def test_corrupt_or_truncated(tmp_path, cli, name):
     _no_output(out)
 
 
+@pytest.mark.parametrize("name", ["empty.glb", "empty.ply", "empty.npz", "empty.h5"])
+def test_empty_file(tmp_path, cli, name):
+    src = tmp_path / name
+    src.write_bytes(b"")
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", src, "-o", out), name, "empty file (0 bytes)")
+    _no_output(out)
+
+
 def test_empty_mesh(tmp_path, cli):
     src = tmp_path / "empty.obj"
     src.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")

@@ -25,6 +25,8 @@ def sniff(path: Path) -> str:
     with open(path, "rb") as fh:
         head = fh.read(16)
     suffix = path.suffix.lower()
+    if not head:
+        raise InputError(f"{path}: expected one of {FORMATS}, got an empty file (0 bytes)")
     if head.startswith(b"glTF") or head[:3] == b"ply":
         return "mesh"
     if head.startswith(b"\x93NUMPY"):

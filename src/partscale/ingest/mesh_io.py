@@ -245,6 +245,8 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
         raise InputError(
             f"{path}: expected a mesh ({', '.join(MESH_SUFFIXES)}), got suffix {suffix or 'none'}"
         )
+    if path.stat().st_size == 0:
+        raise InputError(f"{path}: expected a {suffix[1:]} mesh, got an empty file (0 bytes)")
     try:
         scene = trimesh.load_scene(str(path), process=False)
     except (

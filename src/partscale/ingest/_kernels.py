@@ -228,3 +228,62 @@ def clear_components(todo, seeds, dist, h):
         comp[r, 0] |= touch[p, 0]
         comp[r, 1] |= touch[p, 1]
     return flat, root, comp
+
+
+@nb.njit(cache=True, parallel=True)
+def far_field(band, ft, origin, h, tris, win, offset, sign, floor, sdf, rgb):
+    """Fill the voxels outside ``band`` from their nearest band voxel (in place).
+
+    band : (X, Y, Z) bool; ft : (3, X, Y, Z) int32, index of the nearest band voxel (a
+    Euclidean feature transform); win : (X, Y, Z) int64, each band voxel's nearest primitive of
+    ``tris`` (T, 3, 3); offset : (T,) half-thickness of thickened sheets; sign : (X, Y, Z) int8.
+    A voxel gets ``sign * max(distance to its band voxel's primitive (less the offset outside),
+    floor)`` and that band voxel's colour: ``sdf`` (X, Y, Z) float32, ``rgb`` (X, Y, Z, 3)
+    uint8. Band voxels are only read, so the layers are independent.
+    """
+    nx, ny, nz = band.shape
+    for i in nb.prange(nx):
+        px = origin[0] + i * h
+        for j in range(ny):
+            py = origin[1] + j * h
+            for k in range(nz):
+                if band[i, j, k]:
+                    continue
+                si, sj, sk = ft[0, i, j, k], ft[1, i, j, k], ft[2, i, j, k]
+                t = win[si, sj, sk]
+                d2, _u, _v, _w = _closest_bary(px, py, origin[2] + k * h, tris[t])
+                d = np.sqrt(d2)
+                s = sign[i, j, k]
+                d = d - offset[t] if s > 0 else -d
+                sdf[i, j, k] = s * max(abs(d), floor)
+                for c in range(3):
+                    rgb[i, j, k, c] = rgb[si, sj, sk, c]
+
+
+@nb.njit(cache=True)
+def deepest_per_label(lab, key, n_labels, k):
+    """Positions (into ``lab``) of the ``k`` largest ``key`` values of each label 1..n_labels.
+
+    lab : (N,) int32 labels (>= 1); key : (N,) float. Ties go to the earlier position, as a
+    stable sort by (label, -key) would pick them. Returns (M,) int64, M <= k * n_labels.
+    """
+    best = np.full((n_labels + 1, k), -1, np.int64)
+    for p in range(lab.shape[0]):
+        row = best[lab[p]]
+        v = key[p]
+        # insertion into the row, kept sorted by key descending (first come first on ties)
+        pos = k
+        while pos > 0 and (row[pos - 1] < 0 or key[row[pos - 1]] < v):
+            pos -= 1
+        if pos < k:
+            for q in range(k - 1, pos, -1):
+                row[q] = row[q - 1]
+            row[pos] = p
+    out = np.empty(n_labels * k, np.int64)
+    m = 0
+    for lbl in range(1, n_labels + 1):
+        for q in range(k):
+            if best[lbl, q] >= 0:
+                out[m] = best[lbl, q]
+                m += 1
+    return out[:m]

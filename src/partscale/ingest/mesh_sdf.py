@@ -342,14 +342,9 @@ def _component_signs(wn, d, dist, free, in_sheet, h, origin):
         # 200); the majority decides, so free space that reaches into an open container (a
         # drawer, a bookcase) stays air even where the winding number there exceeds 1/2
         rng = np.random.default_rng(0)
-        key = np.minimum(dv, 1e30)
-        order = np.lexsort((-key, lab))
-        lab_sorted = lab[order]
-        first = np.searchsorted(lab_sorted, np.arange(1, n_comp + 1))
-        rank = np.arange(len(order)) - np.repeat(first, np.diff(np.append(first, len(order))))
+        pick = _kernels.deepest_per_label(lab, np.minimum(dv, 1e30), n_comp, 5)
         size = np.bincount(lab, minlength=n_comp + 1)
         extra = np.minimum(size // 4000, 200)
-        pick = order[rank < 5]
         r = rng.random(len(lab)) * size[lab]
         rand = np.flatnonzero(r < extra[lab])
         samples = idx[np.concatenate([pick, rand])]
@@ -542,24 +537,24 @@ def from_mesh(
     rgb.reshape(-1, 3)[band_idx] = band_rgb
     del pts, bary, pbary
 
-    far = ~band
-    if far.any():
+    if not band.all():
         report(0.8, "distances beyond the band")
-        ft = ndimage.distance_transform_edt(
-            far, return_distances=False, return_indices=True
-        ).astype(np.int32, copy=False)
-        far_idx = np.flatnonzero(far)
-        src = np.ravel_multi_index(tuple(ft.reshape(3, -1)[:, far_idx]), shape)
-        del ft
-        pts = origin + np.stack(np.unravel_index(far_idx, shape), axis=1) * h
-        w_f = win.ravel()[src]
-        d, _ = _kernels.closest_points(pts, sub, w_f)
-        s = sign.ravel()[far_idx]
-        d = np.where(s > 0, d - offset[w_f], -d)
-        # beyond the band a distance is at least the band's: guards the feature transform's
-        # rare non-nearest picks from pulling values inside the band
-        sdf.ravel()[far_idx] = s * np.maximum(np.abs(d), BAND * h)
-        rgb.reshape(-1, 3)[far_idx] = rgb.reshape(-1, 3)[src]
+        ft = ndimage.distance_transform_edt(~band, return_distances=False, return_indices=True)
+        _kernels.far_field(
+            band,
+            ft.astype(np.int32, copy=False),
+            origin,
+            h,
+            sub,
+            win,
+            offset,
+            sign,
+            # beyond the band a distance is at least the band's: guards the feature
+            # transform's rare non-nearest picks from pulling values inside the band
+            BAND * h,
+            sdf,
+            rgb,
+        )
     report(1.0, "done")
     meta = {
         "source": mesh.source,

@@ -287,3 +287,42 @@ def deepest_per_label(lab, key, n_labels, k):
                 out[m] = best[lbl, q]
                 m += 1
     return out[:m]
+
+
+@nb.njit(cache=True, parallel=True)
+def bilinear_repeat(texture, uv):
+    """Bilinear, repeat-wrapped lookup of ``texture`` (H, W, C) float32 at ``uv`` (N, 2).
+
+    Texel centres sit at ``(i + 0.5) / W``; v points up and row 0 is the top of the image.
+    Returns (N, C) float32.
+    """
+    hgt, wid, nc = texture.shape
+    out = np.empty((uv.shape[0], nc), np.float32)
+    for n in nb.prange(uv.shape[0]):
+        x = uv[n, 0] * wid - 0.5
+        y = (1.0 - uv[n, 1]) * hgt - 0.5
+        x0f = np.floor(x)
+        y0f = np.floor(y)
+        fx = np.float32(x - x0f)
+        fy = np.float32(y - y0f)
+        x0 = int(x0f) % wid
+        y0 = int(y0f) % hgt
+        x1 = (x0 + 1) % wid
+        y1 = (y0 + 1) % hgt
+        for c in range(nc):
+            top = texture[y0, x0, c] * (1 - fx) + texture[y0, x1, c] * fx
+            bot = texture[y1, x0, c] * (1 - fx) + texture[y1, x1, c] * fx
+            out[n, c] = top * (1 - fy) + bot * fy
+    return out
+
+
+@nb.njit(cache=True, parallel=True)
+def linear_to_srgb8(lin):
+    """Linear RGB (N, 3) float in [0, 1] (clipped) -> sRGB (N, 3) uint8 (IEC 61966-2-1)."""
+    out = np.empty(lin.shape, np.uint8)
+    for n in nb.prange(lin.shape[0]):
+        for c in range(lin.shape[1]):
+            v = min(max(np.float64(lin[n, c]), 0.0), 1.0)
+            s = v * 12.92 if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055
+            out[n, c] = np.uint8(min(max(np.rint(s * 255.0), 0.0), 255.0))
+    return out

@@ -33,10 +33,12 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
 
 
 def linear_to_srgb8(c: np.ndarray) -> np.ndarray:
-    """Linear in [0, 1] -> sRGB uint8."""
-    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
-    s = np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
-    return np.clip(np.rint(s * 255.0), 0, 255).astype(np.uint8)
+    """Linear in [0, 1] (clipped) -> sRGB uint8, same shape."""
+    from . import _kernels
+
+    c = np.asarray(c)
+    flat = np.ascontiguousarray(c.reshape(-1, c.shape[-1] if c.ndim else 1))
+    return _kernels.linear_to_srgb8(flat).reshape(c.shape)
 
 
 @dataclass(frozen=True, eq=False)
@@ -135,23 +137,11 @@ class ColoredMesh:
 
 def sample_texture(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """Bilinear, repeat-wrapped lookup of ``texture`` (H, W, C) at ``uv`` (N, 2) -> (N, C)."""
-    h, w = texture.shape[:2]
-    # texel centres at (i + 0.5) / w; v up, row 0 at the top
-    x = uv[:, 0] * w - 0.5
-    y = (1.0 - uv[:, 1]) * h - 0.5
-    x0 = np.floor(x)
-    y0 = np.floor(y)
-    fx = (x - x0)[:, None].astype(np.float32)
-    fy = (y - y0)[:, None].astype(np.float32)
-    x0 = x0.astype(np.int64)
-    y0 = y0.astype(np.int64)
-    x1 = np.mod(x0 + 1, w)
-    y1 = np.mod(y0 + 1, h)
-    x0 = np.mod(x0, w)
-    y0 = np.mod(y0, h)
-    top = texture[y0, x0] * (1 - fx) + texture[y0, x1] * fx
-    bot = texture[y1, x0] * (1 - fx) + texture[y1, x1] * fx
-    return top * (1 - fy) + bot * fy
+    from . import _kernels
+
+    return _kernels.bilinear_repeat(
+        np.ascontiguousarray(texture, np.float32), np.ascontiguousarray(uv, np.float64)
+    )
 
 
 # -- reading ------------------------------------------------------------------------------

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from .._util import check_memory, keyword_options
+from .._util import check_memory, keyword_options, palette_colour
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
@@ -143,7 +143,8 @@ def _update_parts_info(
     ``voxels`` is recounted; ``bbox`` (world box of the part's surface patch) is mapped along the
     axis by the edit itself; ``hull_volume`` is scaled with parts lying wholly inside the zone (all
     parts in global mode); other keys are kept. Each new (copied) part gets a copy of its
-    original's entry with ``index`` and ``copy_of`` set.
+    original's entry with ``index`` and ``copy_of`` set, and its own display ``color`` (that
+    of its new index), so copies are told apart wherever parts are drawn.
     """
     info = meta.get("parts_info")
     if not isinstance(info, list):
@@ -177,6 +178,7 @@ def _update_parts_info(
             entry = _copy.deepcopy(base)
             entry["index"] = p
             entry["copy_of"] = src
+            entry["color"] = palette_colour(p)
             info.append(entry)
         entry["voxels"] = int(counts[p]) if p < len(counts) else 0
         box = base.get("bbox")

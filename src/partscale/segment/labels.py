@@ -6,13 +6,13 @@ CSDF's ``parts`` grid the same way for all methods, so methods differ only in wh
 
 from __future__ import annotations
 
-import colorsys
 import heapq
 
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
+from .._util import palette_colour
 from ..csdf import CSDF
 from .concavity import Patch, decimate, surface_samples, touching_pairs, union_concavity
 
@@ -198,14 +198,8 @@ def merge_convex(
 
 
 def palette(n: int) -> list[list[int]]:
-    """``n`` distinct sRGB display colours (golden-angle hues, alternating lightness)."""
-    out = []
-    for i in range(n):
-        h = (i * 0.618033988749895) % 1.0
-        light = 0.55 if i % 2 == 0 else 0.42
-        r, g, b = colorsys.hls_to_rgb(h, light, 0.65)
-        out.append([round(r * 255), round(g * 255), round(b * 255)])
-    return out
+    """``n`` distinct sRGB display colours, :func:`palette_colour` of 0..n-1."""
+    return [palette_colour(i) for i in range(n)]
 
 
 def parts_info(csdf: CSDF, mesh, labels: np.ndarray) -> list[dict]:

@@ -285,11 +285,30 @@ def piece_labels(c):
 def test_stretch_keeps_part_labels_crisp(row):
     c, _ = row
     out = scale(c, axis="x", zone=(0.05, 0.27), to=0.413)  # through bars 0, 1 and 2
-    assert set(np.unique(out.parts).tolist()) == {0, 1, 2, 3}
+    assert set(np.unique(out.parts[out.parts >= 0]).tolist()) == {0, 1, 2, 3}
     assert piece_labels(out) == [{0}, {1}, {2}, {3}]
-    # along every row of voxels the label changes exactly where it did before: three times
+    # along every row of voxels labelled from end to end (through the bars and the narrow
+    # gaps) the label changes exactly where it did before: three times
+    full = (out.parts >= 0).all(axis=0)
+    assert full.sum() > 100
     changes = (np.diff(out.parts.astype(int), axis=0) != 0).sum(axis=0)
-    assert changes.max() == 3
+    assert changes[full].max() == 3
+
+
+@pytest.mark.parametrize(
+    "mode, to",
+    [("stretch", 0.6), ("stretch", 0.15), ("tile", 0.6), ("global", 0.6), ("global", 0.15)],
+)
+def test_parts_stay_within_the_label_band(row, mode, to):
+    """As after segmenting: a part wherever the surface is within 3 voxels (inside included),
+    none farther out, also where the edit moved the surface away or closer."""
+    c, _ = row
+    h = c.voxel_size
+    c = c.replace(parts=np.where(c.sdf <= 3 * h, c.parts, -1).astype(np.int16))
+    out = scale(c, axis="x", zone=(0.05, 0.27), to=to, mode=mode)
+    labelled = out.parts >= 0
+    assert not (labelled & (out.sdf > 3 * h)).any()
+    assert labelled[out.sdf < 3 * h].all()
 
 
 def test_tile_copies_become_new_parts_with_their_info(row):

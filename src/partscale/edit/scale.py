@@ -375,6 +375,9 @@ def _edit_arrays(
         extra["reevaluated"] = reevaluate_arrays(
             out_sdf, out_rgb, out_parts, h, mask, band=eff_band
         )
+        # parts are labelled up to the band outside the surface (as the segment stage does);
+        # voxels the edit moved farther out lose theirs
+        out_parts[out_sdf > BAND_VOXELS * h] = -1
     back = (np.moveaxis(out_sdf, 0, ax), np.moveaxis(out_rgb, 0, ax), np.moveaxis(out_parts, 0, ax))
     return (*back, extra)
 

@@ -19,6 +19,9 @@ Units inside the kernels are voxels (continuous indices); results are scaled by 
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+
 import numba
 import numpy as np
 from scipy import ndimage
@@ -46,7 +49,7 @@ def _tri_d2(tri, t, px, py, pz):
     return d2, qx, qy, qz
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _propagate(tri, order, shape, best_d2, best_t, npass):
     """Nearest triangle of every voxel in ``order`` (ascending flat indices of the box).
 
@@ -123,7 +126,7 @@ def _propagate(tri, order, shape, best_d2, best_t, npass):
                             best_t[f] = t
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _closest_points(tri, idx, which):
     """(N, 3) closest points on triangles ``tri`` of voxels ``idx`` (N, 3) int."""
     out = np.empty((idx.shape[0], 3))
@@ -205,15 +208,22 @@ def reevaluate_arrays(
     # all writes happen at the end, so the result does not depend on the order of the boxes.
     breaks = np.flatnonzero(np.diff(layers) > 2 * pad + 1)
     runs = np.split(layers, breaks + 1)
-    found = []
-    for run in runs:
+
+    def solve(run: np.ndarray):
         a0 = max(int(run[0]) - pad, 0)
         a1 = min(int(run[-1]) + pad + 1, sdf.shape[0])
         t_run = np.zeros_like(target[a0:a1])
         t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] : run[-1] + 1]
-        got = _solve_box(sdf, t_run, a0, h, lim, pad, npass)
-        if got is not None:
-            found.append(got)
+        return _solve_box(sdf, t_run, a0, h, lim, pad, npass)
+
+    if len(runs) > 1 and (os.cpu_count() or 1) > 1:
+        # boxes are independent (each reads the unchanged field) and the propagation, their
+        # main cost, releases the GIL: solve them side by side
+        with ThreadPoolExecutor(max_workers=min(len(runs), os.cpu_count() or 1)) as pool:
+            results = list(pool.map(solve, runs))
+    else:
+        results = [solve(run) for run in runs]
+    found = [got for got in results if got is not None]
     if not found:
         return 0
     gi = np.concatenate([f[0] for f in found])

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from .recipe import source_coordinate, tile_count
@@ -125,21 +126,51 @@ def lerp_float(src: np.ndarray, x: np.ndarray) -> np.ndarray:
     return src[i0].astype(np.float32) * (1 - w32) + src[i1].astype(np.float32) * w32
 
 
-def lerp_layers(src: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Linear interpolation of layers of ``src`` (N, ...) at continuous indices ``x`` (M,).
+@nb.njit(cache=True, parallel=True)
+def _lerp_into(src, i0, i1, w, out, lo, hi):
+    """out[j] = src[i0[j]] (w[j] == 0) or the float32 blend of src[i0[j]] and src[i1[j]].
 
-    Returns (M, ...) of ``src``'s dtype (integers rounded); layers at integer ``x`` are exact
-    copies, and only the others are computed in floating point.
+    src (N, A, B, C), out (M, A, B, C): layers are independent, so they run in parallel. For an
+    integer ``out`` the blend is rounded half to even and clipped to [lo, hi].
     """
-    i0, _i1, w = _split(x, src.shape[0])
-    out = src[i0]
-    frac = np.flatnonzero(w != 0)
-    if frac.size:
-        v = lerp_float(src, x[frac])
-        if np.issubdtype(src.dtype, np.integer):
-            info = np.iinfo(src.dtype)
-            v = np.clip(np.rint(v), info.min, info.max)
-        out[frac] = v
+    A, B, C = src.shape[1], src.shape[2], src.shape[3]
+    integer = lo < hi
+    for j in nb.prange(out.shape[0]):
+        a0, a1 = i0[j], i1[j]
+        if w[j] == 0:
+            for a in range(A):
+                for b in range(B):
+                    for c in range(C):
+                        out[j, a, b, c] = src[a0, a, b, c]
+            continue
+        w1 = np.float32(w[j])
+        w0 = np.float32(1.0) - w1
+        for a in range(A):
+            for b in range(B):
+                for c in range(C):
+                    v = np.float32(src[a0, a, b, c]) * w0 + np.float32(src[a1, a, b, c]) * w1
+                    if integer:
+                        v = min(max(np.rint(v), lo), hi)
+                    out[j, a, b, c] = v
+
+
+def lerp_layers(src: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Linear interpolation of layers of ``src`` (N, A, B[, C]) at continuous indices ``x`` (M,).
+
+    Returns (M, ...) of ``src``'s dtype (integers rounded half to even, computed in float32);
+    layers at integer ``x`` are exact copies.
+    """
+    i0, i1, w = _split(x, src.shape[0])
+    out = np.empty((len(x), *src.shape[1:]), src.dtype)
+    if np.issubdtype(src.dtype, np.integer):
+        info = np.iinfo(src.dtype)
+        lo, hi = float(info.min), float(info.max)
+    else:
+        lo = hi = 0.0
+    if src.ndim == 3:  # a trailing axis of one: the kernel takes (N, A, B, C) views
+        _lerp_into(src[..., None], i0, i1, w.astype(np.float32), out[..., None], lo, hi)
+    else:
+        _lerp_into(src, i0, i1, w.astype(np.float32), out, lo, hi)
     return out
 
 

@@ -173,3 +173,30 @@ def test_open_assemblies_without_leaks(rel, res):
     w = igl.fast_winding_number(mesh.vertices, mesh.faces, p[far])
     agree = np.mean((c.sdf.ravel()[far] < 0) == (w > 0.5))
     assert agree >= 0.99, agree
+
+
+@pytest.mark.parametrize("rel", ["polyhaven/sofa_03", "sweethome3d/bookcase.obj"])
+def test_two_pass_winding_number_decides_as_the_default_accuracy(rel):
+    """The import's cheap first pass plus recomputation near the cuts takes exactly the
+    decisions libigl's default accuracy takes: triangle classes just in front of every face,
+    and inside/outside at points in and around the object."""
+    from partscale.ingest.mesh_sdf import CLASS_CUTS, INSIDE_CUTS, _class_of, _Winding
+
+    mesh = ingest.load_mesh(_path(rel))
+    V = np.ascontiguousarray(mesh.vertices, np.float64)
+    F = np.ascontiguousarray(mesh.faces, np.int64)
+    tris = V[F]
+    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    ln = np.linalg.norm(n, axis=1)
+    ok = ln > 0
+    h = float((V.max(0) - V.min(0)).max()) / 128
+    front = tris[ok].mean(axis=1) + 0.05 * h * n[ok] / ln[ok, None]
+    rng = np.random.default_rng(0)
+    pts = rng.uniform(V.min(0) - 2 * h, V.max(0) + 2 * h, (20000, 3))
+    full = igl.FastWindingNumberBVH()
+    full.init(V, F)
+    wn = _Winding(V, F)
+    assert np.array_equal(_class_of(wn(front, CLASS_CUTS)), _class_of(full.winding_number(front)))
+    inside = wn(pts, INSIDE_CUTS) > INSIDE_CUTS[0]
+    assert np.array_equal(inside, full.winding_number(pts) > INSIDE_CUTS[0])
+    assert 0.01 < inside.mean() < 0.99  # both sides are probed

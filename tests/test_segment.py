@@ -348,3 +348,29 @@ def test_fast_cuts_a_tilted_curved_shell_across_its_bend(tmp_path):
     s = segment(tilted_arch(), method="fast", cache_dir=tmp_path)
     assert part_concavities(s).max() <= 3.0
     assert 2 <= s.n_parts <= 8
+
+
+SIDES = [((0.0, 0.0, 0.0), (0.075, 1.0, 0.4)), ((0.525, 0.0, 0.0), (0.6, 1.0, 0.4))]
+SHELVES = [((0.075, 0.3, 0.0), (0.525, 0.375, 0.4)), ((0.075, 0.65, 0.0), (0.525, 0.725, 0.4))]
+
+
+def test_fast_keeps_boards_whole_at_t_junctions(tmp_path):
+    # two side panels with two shelves between them: cutting at the shelves' faces chops each
+    # panel in three; the slices of panel beside the shelves must go back to the panel
+    boards = SIDES + SHELVES
+    c = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boards), ((0, 0, 0), (0.6, 1.0, 0.4)), voxel_size=H
+    )
+    s = segment(c, method="fast", cache_dir=tmp_path)
+    assert s.n_parts == 4
+    # every inside voxel centre in a board's box (the slices beside the shelves included)
+    ijk = np.argwhere(c.sdf <= 0)
+    w = c.index_to_world(ijk)
+    seen = []
+    for lo, hi in boards:
+        mine = np.all((w > np.add(lo, 0.3 * H)) & (w < np.subtract(hi, 0.3 * H)), axis=1)
+        labels = np.unique(s.parts[tuple(ijk[mine].T)])
+        assert mine.sum() > 100 and len(labels) == 1
+        seen.append(int(labels[0]))
+    assert len(set(seen)) == 4
+    assert part_concavities(s).max() <= 2.0  # boxes sampled on voxels: within 2 voxels

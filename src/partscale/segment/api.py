@@ -20,6 +20,7 @@ from . import coacd_method, fast
 from .labels import (
     faces_from_voxels,
     make_connected,
+    merge_across_junctions,
     merge_convex,
     parts_info,
     voxels_from_faces,
@@ -205,6 +206,7 @@ def _compute(
         report(0.85, "labelling the surface")
         faces = coacd_method.face_labels(mesh, hulls)
         merge_tol = tol
+        atoms = None
     else:
         atoms = fast.atoms(
             csdf, threshold=thr, params=params, floor=tol, progress=scaled(report, 0.0, 0.5)
@@ -213,10 +215,18 @@ def _compute(
         faces = faces_from_voxels(csdf, mesh, atoms)
         merge_tol = max(tol, fast.tolerance(csdf, thr, params))
     report(0.88, "labelling voxels")
-    labels = make_connected(voxels_from_faces(csdf, mesh, faces))
+    labels = voxels_from_faces(csdf, mesh, faces)
+    if atoms is not None:
+        # the fast method cuts the grid itself: inside voxels keep their piece exactly (the
+        # nearest surface point would let a piece bleed across a crease into its neighbour)
+        inside = atoms >= 0
+        labels[inside] = atoms[inside]
+    labels = make_connected(labels)
     report(0.9, "merging convex neighbours")
     if merge_tol > 0 or max_parts is not None:
         labels = merge_convex(csdf, mesh, labels, tolerance=merge_tol, max_parts=max_parts)
+    if atoms is not None and merge_tol > 0:
+        labels = merge_across_junctions(csdf, mesh, labels, tolerance=merge_tol)
     report(0.97, "part facts")
     info = parts_info(csdf, mesh, labels)
     report(1.0, f"{len(info)} parts")

@@ -184,6 +184,12 @@ def vertex_labels(csdf: CSDF, labels: np.ndarray, mesh) -> np.ndarray:
     A vertex lies on the edge between an inside and an outside voxel; the inside voxel's label
     is the reliable one (voxels in the air between two close pieces may belong to either).
     """
+    ijk = vertex_voxels(csdf, mesh)
+    return np.asarray(labels)[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+
+
+def vertex_voxels(csdf: CSDF, mesh) -> np.ndarray:
+    """(V, 3) intp: the inside end of each marching-cubes vertex's grid edge (its voxel)."""
     v = csdf.world_to_index(mesh.vertices)
     lo = np.floor(v + 1e-6).astype(np.intp)
     hi = np.ceil(v - 1e-6).astype(np.intp)
@@ -192,8 +198,7 @@ def vertex_labels(csdf: CSDF, labels: np.ndarray, mesh) -> np.ndarray:
         np.clip(hi[:, a], 0, csdf.shape[a] - 1, out=hi[:, a])
     s_lo = csdf.sdf[lo[:, 0], lo[:, 1], lo[:, 2]]
     s_hi = csdf.sdf[hi[:, 0], hi[:, 1], hi[:, 2]]
-    ijk = np.where((s_lo <= s_hi)[:, None], lo, hi)
-    return np.asarray(labels)[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    return np.where((s_lo <= s_hi)[:, None], lo, hi)
 
 
 def surface_samples(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> dict[int, np.ndarray]:

@@ -9,12 +9,20 @@ from __future__ import annotations
 import colorsys
 import heapq
 
+import numba
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from ..csdf import CSDF
-from .concavity import Patch, decimate, surface_samples, touching_pairs, union_concavity
+from .concavity import (
+    Patch,
+    decimate,
+    surface_samples,
+    touching_pairs,
+    union_concavity,
+    vertex_voxels,
+)
 
 BAND = 3.0
 """Voxels up to this many voxels outside the surface get a part; farther ones stay -1."""
@@ -195,6 +203,153 @@ def merge_convex(
         version[p] += 1
     lut = np.append(parent, -1).astype(np.int32)
     return renumber(lut[labels])
+
+
+def merge_across_junctions(
+    csdf: CSDF, mesh, labels: np.ndarray, *, tolerance: float, min_voxels: int = 32
+) -> np.ndarray:
+    """Join two parts that a third one separates, where the third only crosses their hull.
+
+    At a T-junction of boards (a shelf meeting a side panel) the panel is cut above and below the
+    shelf, and the slice of panel between the cuts may join the shelf as well as the panel
+    pieces; once it went to the shelf, the panel pieces no longer touch and
+    :func:`merge_convex` keeps them apart. Here two parts ``a``, ``b`` that do not touch but
+    both touch a part ``s`` become one, together with ``s``'s voxels inside the convex hull of
+    their surface, when that union and what is left of ``s`` are each convex within
+    ``tolerance`` voxels and ``s`` stays in one piece.
+
+    Parameters
+    ----------
+    labels : (X, Y, Z) int
+        Parts 0..P-1, -1 where none.
+
+    Returns
+    -------
+    (X, Y, Z) int32 labels, renumbered.
+    """
+    out = np.asarray(labels, dtype=np.int32).copy()
+    ijk = vertex_voxels(csdf, mesh)
+    pts = csdf.world_to_index(mesh.vertices)
+    vlab = out[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    sdf = csdf.sdf / csdf.voxel_size
+    inside = csdf.sdf <= 0
+    nbrs: dict[int, set[int]] = {}
+    for p, q in touching_pairs(csdf, out, mesh=mesh):
+        nbrs.setdefault(p, set()).add(q)
+        nbrs.setdefault(q, set()).add(p)
+    order = np.argsort(vlab, kind="stable")
+    uniq, first = np.unique(vlab[order], return_index=True)
+    verts = {
+        int(p): order[i:j]
+        for p, i, j in zip(uniq, first, [*first[1:], len(order)], strict=True)
+        if p >= 0
+    }
+    box = {
+        p: np.array([[x.start for x in sl], [x.stop for x in sl]])
+        for p, sl in enumerate(ndimage.find_objects(out + 1))
+        if sl is not None
+    }
+    patches: dict[int, Patch] = {}
+
+    def patch(p: int) -> Patch | None:
+        if p not in patches:
+            if len(verts.get(p, ())) < 4:
+                return None
+            patches[p] = Patch(decimate(pts[verts[p]], 1.0))
+        return patches[p]
+
+    def convex(group: list[Patch]) -> bool:
+        return union_concavity(group, sdf=sdf, spacing=2.0, limit=tolerance) <= tolerance
+
+    tried: set[tuple[int, int, int]] = set()
+    todo = sorted(nbrs)
+    while todo:
+        s = todo.pop(0)
+        if s not in nbrs:
+            continue
+        # the slice of a board that s took at the junction is no thicker than s itself
+        thick = (box[s][1] - box[s][0]).min() + 2
+        around = sorted(nbrs[s])
+        done = False
+        for i, a in enumerate(around):
+            for b in around[i + 1 :]:
+                if b in nbrs[a] or (s, a, b) in tried:
+                    continue
+                tried.add((s, a, b))
+                gap = np.maximum(box[a][0] - box[b][1], box[b][0] - box[a][1]).max()
+                if gap > thick:
+                    continue
+                pa, pb = patch(a), patch(b)
+                if pa is None or pb is None:
+                    continue
+                try:
+                    eq = ConvexHull(np.concatenate([pa.hull_points, pb.hull_points])).equations
+                except (QhullError, ValueError):
+                    continue
+                sl = tuple(slice(lo, hi) for lo, hi in box[s].T)
+                here = out[sl] == s
+                # only s's voxels in the box around a and b can lie in their hull
+                lo = np.maximum(np.minimum(box[a][0], box[b][0]) - 1, box[s][0]) - box[s][0]
+                hi = np.minimum(np.maximum(box[a][1], box[b][1]) + 1, box[s][1]) - box[s][0]
+                if (hi <= lo).any():
+                    continue
+                near = tuple(slice(x, y) for x, y in zip(lo, hi, strict=True))
+                own = np.argwhere(here[near]) + lo
+                move = _in_hull((own + box[s][0]).astype(np.float64), eq, 0.5)
+                if not move.any() or move.sum() == here.sum():
+                    continue
+                moved = np.zeros(here.shape, bool)
+                moved[tuple(own[move].T)] = True
+                _, pieces = ndimage.label(here & ~moved & inside[sl], structure=_FULL)
+                if pieces > 1:
+                    continue
+                mine = verts[s]
+                local = ijk[mine] - box[s][0]
+                goes = moved[local[:, 0], local[:, 1], local[:, 2]]
+                group = [pa, pb]
+                if goes.sum() >= 4:
+                    group.append(Patch(decimate(pts[mine[goes]], 1.0)))
+                if not convex(group):
+                    continue
+                if (~goes).sum() >= 4 and not convex([Patch(decimate(pts[mine[~goes]], 1.0))]):
+                    continue
+                out[sl][moved] = a
+                sb = tuple(slice(lo, hi) for lo, hi in box[b].T)
+                out[sb][out[sb] == b] = a
+                verts[a] = np.concatenate([verts[a], verts.pop(b), mine[goes]])
+                verts[s] = mine[~goes]
+                box[a] = np.array(
+                    [np.minimum(box[a][0], box[b][0]), np.maximum(box[a][1], box[b][1])]
+                )
+                for p in (a, b, s):
+                    patches.pop(p, None)
+                for r in nbrs.pop(b):
+                    nbrs[r].discard(b)
+                    if r != a:
+                        nbrs[r].add(a)
+                        nbrs[a].add(r)
+                todo.extend(sorted({s, a} | nbrs[a]))
+                done = True
+                break
+            if done:
+                break
+    return make_connected(out, min_voxels=min_voxels)
+
+
+@numba.njit(cache=True)
+def _in_hull(pts: np.ndarray, eq: np.ndarray, margin: float) -> np.ndarray:  # pragma: no cover
+    # (N,) bool: within ``margin`` of the hull with facet planes ``eq`` (n . x + d <= 0 inside);
+    # a point is dropped at its first facet farther than the margin (most points are outside)
+    out = np.ones(pts.shape[0], np.bool_)
+    for i in range(pts.shape[0]):
+        for j in range(eq.shape[0]):
+            if (
+                pts[i, 0] * eq[j, 0] + pts[i, 1] * eq[j, 1] + pts[i, 2] * eq[j, 2] + eq[j, 3]
+                > margin
+            ):
+                out[i] = False
+                break
+    return out
 
 
 def palette(n: int) -> list[list[int]]:

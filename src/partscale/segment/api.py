@@ -22,6 +22,7 @@ from .labels import (
     make_connected,
     merge_across_junctions,
     merge_convex,
+    merge_planar_groups,
     parts_info,
     voxels_from_faces,
 )
@@ -30,7 +31,7 @@ METHODS = ("coacd", "fast")
 DEFAULT_METHOD = "coacd"
 """CoACD stays the default: the fast method does not yet match it on every benchmark object
 (see :mod:`partscale.segment.fast`)."""
-CACHE_VERSION = 2
+CACHE_VERSION = 3
 """Bump when a change to the code changes results, so old cache entries are not reused."""
 
 _METHOD_PARAMS: dict[str, dict[str, Any]] = {
@@ -227,6 +228,15 @@ def _compute(
         labels = merge_convex(csdf, mesh, labels, tolerance=merge_tol, max_parts=max_parts)
     if atoms is not None and merge_tol > 0:
         labels = merge_across_junctions(csdf, mesh, labels, tolerance=merge_tol)
+        group_tol = fast.tolerance(csdf, thr, {**params, "scale": params["group_scale"]})
+        labels = merge_planar_groups(
+            csdf,
+            mesh,
+            labels,
+            tolerance=max(group_tol, merge_tol),
+            thickness=params["thin"],
+            min_group=params["min_group"],
+        )
     report(0.97, "part facts")
     info = parts_info(csdf, mesh, labels)
     report(1.0, f"{len(info)} parts")

@@ -25,7 +25,11 @@ from ..surface import sample_nearest, to_mesh
 
 
 def hull_concavity(
-    points: np.ndarray, *, spacing: float = 1.0, sdf: np.ndarray | None = None
+    points: np.ndarray,
+    *,
+    spacing: float = 1.0,
+    sdf: np.ndarray | None = None,
+    limit: float = np.inf,
 ) -> float:
     """Hausdorff distance between sampled surface points and their convex hull's boundary.
 
@@ -38,6 +42,8 @@ def hull_concavity(
     sdf : (X, Y, Z) float, optional
         Signed distance in voxels; when given, only hull samples more than one voxel outside
         the solid count in the hull-to-points direction (hull points inside are cut faces).
+    limit : float
+        Stop early, returning a value above ``limit``, once the answer is known to exceed it.
 
     Returns
     -------
@@ -53,6 +59,8 @@ def hull_concavity(
         return 0.0  # flat or degenerate: no volume, nothing concave
     eq = np.ascontiguousarray(hull.equations)  # (F, 4): n . x + d <= 0 inside, |n| = 1
     inward = _deepest(pts, eq)
+    if inward > limit:
+        return inward
     samples = _sample_triangles(pts[hull.simplices], spacing)
     if sdf is not None:
         samples = samples[sample_nearest(sdf, samples) > 1.0]

@@ -43,13 +43,18 @@ PARAMS = {
     "scale": 0.3,
     "max_depth": 16,
     "min_voxels": 27,
+    "group_scale": 0.5,
+    "thin": 4,
+    "min_group": 4,
 }
 """Options of the fast method.
 
 jump : a cut where the section area changes by at least this fraction between two slices;
 min_jump : ... and by at least this fraction of the region's largest section;
 scale : concavity tolerance = ``threshold * scale * largest extent`` (voxels);
-max_depth : recursion limit; min_voxels : smaller pieces are not split further.
+max_depth : recursion limit; min_voxels : smaller pieces are not split further;
+group_scale : tolerance of a group merge (:func:`labels.merge_planar_groups`), as ``scale``;
+thin : most voxels thick a slab of grouped parts is; min_group : fewest parts in such a group.
 """
 
 _FULL = np.ones((3, 3, 3), bool)
@@ -64,10 +69,11 @@ def check_params(params: dict) -> dict:
         if not 0 < v < 1:
             raise InputError(f"{name}: expected a number in (0, 1), got {out[name]!r}")
         out[name] = v
-    if not float(out["scale"]) > 0:
-        raise InputError(f"scale: expected a number > 0, got {out['scale']!r}")
-    out["scale"] = float(out["scale"])
-    for name in ("max_depth", "min_voxels"):
+    for name in ("scale", "group_scale"):
+        if not float(out[name]) > 0:
+            raise InputError(f"{name}: expected a number > 0, got {out[name]!r}")
+        out[name] = float(out[name])
+    for name in ("max_depth", "min_voxels", "thin", "min_group"):
         v = out[name]
         if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 1:
             raise InputError(f"{name}: expected an integer >= 1, got {v!r}")
@@ -82,11 +88,12 @@ def tolerance(csdf: CSDF, threshold: float, params: dict) -> float:
     return threshold * params["scale"] * extent
 
 
-def _region_concavity(mask: np.ndarray) -> float:
-    """Concavity (voxels) of a voxel region, from the centres of its boundary voxels."""
+def _region_concavity(mask: np.ndarray, limit: float = np.inf) -> float:
+    """Concavity (voxels) of a voxel region, from the centres of its boundary voxels (one per
+    2-voxel cell: enough to tell a region above the tolerance, which is 2 voxels or more)."""
     interior = ndimage.binary_erosion(mask, border_value=0)
-    pts = np.argwhere(mask & ~interior).astype(np.float64)
-    return hull_concavity(pts, spacing=1.5)
+    pts = decimate(np.argwhere(mask & ~interior).astype(np.float64), 2.0)
+    return hull_concavity(pts, spacing=2.0, limit=limit)
 
 
 def _cuts(mask: np.ndarray, jump: float, min_jump: float) -> list[np.ndarray]:
@@ -140,14 +147,14 @@ def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
     normals = np.concatenate([np.eye(3), axes])
     # score each plane on the boundary voxels alone (a flat cut face adds nothing concave),
     # thinned to one per 2-voxel cell: the score only ranks the planes
-    few = decimate(pts, 2.0)
+    few = decimate(pts, 3.0)
     best_score, best_n = np.inf, None
     for n in normals:
         below = (few - centre) @ n <= 0
         if min(below.sum(), (~below).sum()) < 8:
             continue
         score = max(
-            hull_concavity(few[below], spacing=2.0), hull_concavity(few[~below], spacing=2.0)
+            hull_concavity(few[below], spacing=3.0), hull_concavity(few[~below], spacing=3.0)
         )
         if score < best_score:
             best_score, best_n = score, n
@@ -215,7 +222,7 @@ def atoms(
         final = (
             size < params["min_voxels"]
             or depth >= params["max_depth"]
-            or _region_concavity(mask) <= tau
+            or _region_concavity(mask, limit=tau) <= tau
         )
         pieces = []
         if not final:

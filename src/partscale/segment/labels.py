@@ -336,6 +336,85 @@ def merge_across_junctions(
     return make_connected(out, min_voxels=min_voxels)
 
 
+def merge_planar_groups(
+    csdf: CSDF,
+    mesh,
+    labels: np.ndarray,
+    *,
+    tolerance: float,
+    thickness: float = 4.0,
+    min_group: int = 4,
+) -> np.ndarray:
+    """Join each group of at least ``min_group`` touching parts lying in one thin slab (a board's
+    plane) into one part, when their union is convex within ``tolerance`` voxels.
+
+    A railing (stringer, balusters, handrail) or a row of slats is many thin pieces in one
+    plane: pairwise merging stops at the first two (a baluster on a long stringer leaves a
+    wide triangle of air in their hull), yet the whole comb is nearly convex, its gaps being
+    narrow. Groups are grown through touching parts from a part at most ``thickness`` voxels
+    thick along a grid axis, taking the parts inside that slab (one voxel of slack) only.
+
+    Parameters
+    ----------
+    labels : (X, Y, Z) int
+        Parts 0..P-1, -1 where none.
+
+    Returns
+    -------
+    (X, Y, Z) int32 labels, renumbered.
+    """
+    out = np.asarray(labels, dtype=np.int32).copy()
+    ijk = vertex_voxels(csdf, mesh)
+    pts = csdf.world_to_index(mesh.vertices)
+    vlab = out[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    sdf = csdf.sdf / csdf.voxel_size
+    nbrs: dict[int, set[int]] = {}
+    for p, q in touching_pairs(csdf, out, mesh=mesh):
+        nbrs.setdefault(p, set()).add(q)
+        nbrs.setdefault(q, set()).add(p)
+    # extents of the parts' inside voxels (labels reach BAND voxels into the air too)
+    box = {
+        p: np.array([[x.start for x in sl], [x.stop - 1 for x in sl]])
+        for p, sl in enumerate(ndimage.find_objects(np.where(csdf.sdf <= 0, out + 1, 0)))
+        if sl is not None
+    }
+    patches = {p: Patch(decimate(pts[vlab == p], 1.0)) for p in box if (vlab == p).sum() >= 4}
+    seen: set[frozenset] = set()
+    merged: dict[int, int] = {}
+    for ax in range(3):
+        for p in sorted(box, key=lambda p: -(box[p][1] - box[p][0]).prod()):
+            if p in merged:
+                continue
+            lo, hi = box[p][0][ax], box[p][1][ax]
+            if hi - lo + 1 > thickness:
+                continue
+            members = {
+                q
+                for q in box
+                if q not in merged and box[q][0][ax] >= lo - 1 and box[q][1][ax] <= hi + 1
+            }
+            group, front = {p}, [p]
+            while front:
+                r = front.pop()
+                for q in nbrs.get(r, ()):
+                    if q in members and q not in group:
+                        group.add(q)
+                        front.append(q)
+            key = frozenset(group)
+            if len(group) < min_group or key in seen or not all(q in patches for q in group):
+                continue
+            seen.add(key)
+            c = union_concavity([patches[q] for q in group], sdf=sdf, spacing=2.0, limit=tolerance)
+            if c <= tolerance:
+                for q in group:
+                    merged[q] = p
+    lut = np.arange(int(out.max()) + 2, dtype=np.int32)
+    for q, p in merged.items():
+        lut[q] = p
+    lut[-1] = -1
+    return renumber(lut[out])
+
+
 @numba.njit(cache=True)
 def _in_hull(pts: np.ndarray, eq: np.ndarray, margin: float) -> np.ndarray:  # pragma: no cover
     # (N,) bool: within ``margin`` of the hull with facet planes ``eq`` (n . x + d <= 0 inside);

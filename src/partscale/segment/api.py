@@ -216,13 +216,9 @@ def _compute(
         faces = faces_from_voxels(csdf, mesh, atoms)
         merge_tol = max(tol, fast.tolerance(csdf, thr, params))
     report(0.88, "labelling voxels")
-    labels = voxels_from_faces(csdf, mesh, faces)
-    if atoms is not None:
-        # the fast method cuts the grid itself: inside voxels keep their piece exactly (the
-        # nearest surface point would let a piece bleed across a crease into its neighbour)
-        inside = atoms >= 0
-        labels[inside] = atoms[inside]
-    labels = make_connected(labels)
+    # the fast method cuts the grid itself: inside voxels keep their piece exactly (the
+    # nearest surface point would let a piece bleed across a crease into its neighbour)
+    labels = make_connected(voxels_from_faces(csdf, mesh, faces, inside=atoms))
     report(0.9, "merging convex neighbours")
     if merge_tol > 0 or max_parts is not None:
         labels = merge_convex(csdf, mesh, labels, tolerance=merge_tol, max_parts=max_parts)

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from ..csdf import CSDF
-from ..surface import sample_nearest, to_mesh
+from ..surface import to_mesh
 
 
 def hull_concavity(
@@ -61,13 +61,33 @@ def hull_concavity(
     inward = _deepest(pts, eq)
     if inward > limit:
         return inward
-    samples = _sample_triangles(pts[hull.simplices], spacing)
-    if sdf is not None:
-        samples = samples[sample_nearest(sdf, samples) > 1.0]
-        if not len(samples):
-            return inward
+    samples = _hull_samples(pts[hull.simplices], spacing, sdf)
+    if not len(samples):
+        return inward
     dist, _ = cKDTree(pts).query(samples)
     return max(inward, float(dist.max()))
+
+
+def deepest_point(pts: np.ndarray, eq: np.ndarray) -> tuple[int, float]:
+    """Index of the point of ``pts`` (N, 3) deepest inside the hull with facet planes ``eq``
+    (n . x + d <= 0 inside, |n| = 1), and its depth."""
+    return _deepest_index(np.ascontiguousarray(pts, np.float64), np.ascontiguousarray(eq))
+
+
+@numba.njit(cache=True)
+def _deepest_index(pts, eq):  # pragma: no cover - compiled
+    best, arg = -np.inf, 0
+    for i in range(pts.shape[0]):
+        m = np.inf
+        for j in range(eq.shape[0]):
+            d = -(pts[i, 0] * eq[j, 0] + pts[i, 1] * eq[j, 1] + pts[i, 2] * eq[j, 2] + eq[j, 3])
+            if d < m:
+                m = d
+                if m <= best:
+                    break
+        if m > best:
+            best, arg = m, i
+    return arg, best
 
 
 @numba.njit(cache=True)
@@ -119,6 +139,59 @@ def _sample_triangles(tri: np.ndarray, spacing: float) -> np.ndarray:
     return aa + ij[:, :1] * (b[which] - aa) + ij[:, 1:] * (c[which] - aa)
 
 
+def _hull_samples(tri: np.ndarray, spacing: float, sdf: np.ndarray | None) -> np.ndarray:
+    """:func:`_sample_triangles`, keeping only the samples more than one voxel outside the solid
+    (nearest voxel of ``sdf``, in voxels) when ``sdf`` is given."""
+    return _outside_lattice(
+        np.ascontiguousarray(tri, dtype=np.float64), float(spacing), _NO_SDF if sdf is None else sdf
+    )
+
+
+_NO_SDF = np.full((1, 1, 1), np.inf, np.float32)  # every sample is "outside"
+
+
+@numba.njit(cache=True)
+def _outside_lattice(tri, spacing, sdf):  # pragma: no cover - compiled
+    # the lattice of _sample_triangles, generated and filtered in one pass (no (M, 3) temporary)
+    n = 0
+    ks = np.empty(tri.shape[0], np.int64)
+    for t in range(tri.shape[0]):
+        e = 0.0
+        for u, v in ((0, 1), (0, 2), (1, 2)):
+            d = np.sqrt(
+                (tri[t, v, 0] - tri[t, u, 0]) ** 2
+                + (tri[t, v, 1] - tri[t, u, 1]) ** 2
+                + (tri[t, v, 2] - tri[t, u, 2]) ** 2
+            )
+            e = max(e, d)
+        k = min(max(int(np.ceil(e / spacing)), 1), _LATTICE_MAX)
+        ks[t] = k
+        n += (k + 1) * (k + 2) // 2
+    out = np.empty((n, 3), np.float64)
+    m = 0
+    for t in range(tri.shape[0]):
+        k = ks[t]
+        for i in range(k + 1):
+            for j in range(k + 1 - i):
+                fi, fj = i / k, j / k
+                p = np.empty(3)
+                inside = False
+                for a in range(3):
+                    p[a] = (
+                        tri[t, 0, a]
+                        + fi * (tri[t, 1, a] - tri[t, 0, a])
+                        + fj * (tri[t, 2, a] - tri[t, 0, a])
+                    )
+                ii = min(max(int(np.rint(p[0])), 0), sdf.shape[0] - 1)
+                jj = min(max(int(np.rint(p[1])), 0), sdf.shape[1] - 1)
+                kk = min(max(int(np.rint(p[2])), 0), sdf.shape[2] - 1)
+                inside = sdf[ii, jj, kk] <= 1.0
+                if not inside:
+                    out[m] = p
+                    m += 1
+    return out[:m]
+
+
 def decimate(points: np.ndarray, cell: float) -> np.ndarray:
     """(M, 3): one of ``points`` per occupied cube of edge ``cell`` (first in input order)."""
     q = np.floor(points / cell).astype(np.int64)
@@ -146,6 +219,10 @@ class Patch:
             self.hull_points = candidates[ConvexHull(candidates).vertices]
         except (QhullError, ValueError):
             self.hull_points = candidates
+        if len(self.hull_points) > 200:
+            # a curved patch has most of its samples on its hull: one per 1.5-voxel cell moves
+            # the hull by a fraction of a voxel and keeps union hulls cheap
+            self.hull_points = decimate(self.hull_points, 1.5)
 
     def merged(self, other: Patch) -> Patch:
         """The patch of both parts (the hull of a union is the hull of the hulls' vertices)."""
@@ -177,11 +254,9 @@ def union_concavity(
     inward = max(_deepest(p.points, eq) for p in patches)
     if inward > limit:
         return inward
-    samples = _sample_triangles(corners[hull.simplices], spacing)
-    if sdf is not None:
-        samples = samples[sample_nearest(sdf, samples) > 1.0]
-        if not len(samples):
-            return inward
+    samples = _hull_samples(corners[hull.simplices], spacing, sdf)
+    if not len(samples):
+        return inward
     dist = np.min([p.tree.query(samples)[0] for p in patches], axis=0)
     return max(inward, float(dist.max()))
 

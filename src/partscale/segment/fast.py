@@ -35,7 +35,7 @@ from scipy.spatial import ConvexHull, QhullError
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
-from .concavity import decimate, hull_concavity
+from .concavity import decimate, deepest_point, hull_concavity
 
 PARAMS = {
     "jump": 0.3,
@@ -118,13 +118,8 @@ def _deepest_point(pts: np.ndarray) -> tuple[np.ndarray, float]:
         hull = ConvexHull(pts)
     except (QhullError, ValueError):
         return pts.mean(axis=0), 0.0
-    eq = hull.equations  # n . x + d <= 0 inside, |n| = 1
-    depth = np.full(len(pts), np.inf)
-    for chunk in range(0, len(eq), 256):  # bounded memory: N x 256 at a time
-        e = eq[chunk : chunk + 256]
-        np.minimum(depth, (-(pts @ e[:, :3].T + e[:, 3])).min(axis=1), out=depth)
-    i = int(np.argmax(depth))
-    return pts[i], float(depth[i])
+    i, depth = deepest_point(pts, hull.equations)
+    return pts[i], float(depth)
 
 
 def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
@@ -153,9 +148,10 @@ def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
         below = (few - centre) @ n <= 0
         if min(below.sum(), (~below).sum()) < 8:
             continue
-        score = max(
-            hull_concavity(few[below], spacing=3.0), hull_concavity(few[~below], spacing=3.0)
-        )
+        # a plane can only win with both sides below the best score so far
+        score = hull_concavity(few[below], spacing=3.0, limit=best_score)
+        if score < best_score:
+            score = max(score, hull_concavity(few[~below], spacing=3.0, limit=best_score))
         if score < best_score:
             best_score, best_n = score, n
     if best_n is None:

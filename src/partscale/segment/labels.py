@@ -30,7 +30,9 @@ BAND = 3.0
 _FULL = np.ones((3, 3, 3), bool)  # 26-connectivity
 
 
-def voxels_from_faces(csdf: CSDF, mesh, face_labels: np.ndarray) -> np.ndarray:
+def voxels_from_faces(
+    csdf: CSDF, mesh, face_labels: np.ndarray, *, inside: np.ndarray | None = None
+) -> np.ndarray:
     """(X, Y, Z) int32 labels: the label of the nearest surface point, -1 beyond :data:`BAND`.
 
     Parameters
@@ -40,12 +42,19 @@ def voxels_from_faces(csdf: CSDF, mesh, face_labels: np.ndarray) -> np.ndarray:
         ``to_mesh(csdf)``; its face centroids stand for the surface (faces are < 1 voxel).
     face_labels : (F,) int
         Part of each face, >= 0.
+    inside : (X, Y, Z) int, optional
+        Labels of the inside voxels (``sdf <= 0``) when the method knows them; only the voxels
+        outside then take the nearest surface point's.
     """
     centres = csdf.world_to_index(mesh.triangles_center)
     near = csdf.sdf < BAND * csdf.voxel_size
+    labels = np.full(csdf.shape, -1, np.int32)
+    if inside is not None:
+        solid = csdf.sdf <= 0
+        labels[solid] = inside[solid]
+        near &= ~solid
     ijk = np.argwhere(near)
     _, nearest = cKDTree(centres).query(ijk, workers=-1)
-    labels = np.full(csdf.shape, -1, np.int32)
     labels[near] = np.asarray(face_labels)[nearest]
     return labels
 
@@ -180,6 +189,9 @@ def merge_convex(
         cost, p, q, vp, vq = heapq.heappop(heap)
         if p not in alive or q not in alive:
             continue
+        if cost > tolerance and (max_parts is None or len(alive) <= max_parts):
+            # every queued cost is at least this one; refreshing a stale one rarely lowers it
+            break
         if version[p] != vp or version[q] != vq:
             # Lazy update: a part grew since this cost was computed. Growing rarely makes a
             # union more convex, so the old cost orders the queue and is refreshed only here.
@@ -280,7 +292,9 @@ def merge_across_junctions(
                 if gap > thick:
                     continue
                 pa, pb = patch(a), patch(b)
-                if pa is None or pb is None:
+                # s's slice between them is solid, so it leaves their union's concavity alone
+                # (hull points inside the solid do not count): a cheap test first
+                if pa is None or pb is None or not convex([pa, pb]):
                     continue
                 try:
                     eq = ConvexHull(np.concatenate([pa.hull_points, pb.hull_points])).equations

@@ -6,24 +6,51 @@ a tabletop's). A region that is not yet convex (concavity above the tolerance) i
 such jump along x, y and z at once, and its pieces (connected components of the cells between
 cuts) are treated the same way, recursively. A concave region without such a jump (a bend, a
 curved shell, a board turned off the grid axes) is cut once by a plane through its deepest
-concavity, oriented along a grid or principal axis, whichever leaves the least concave pieces. Cutting at all creases at once over-segments on
-purpose (a side panel is chopped at every shelf); the common convex merge
-(:func:`labels.merge_convex`) then joins touching pieces whose union is still convex within the
-tolerance, which restores whole panels and leaves the parts split at the creases only.
+concavity, oriented along a grid or principal axis, whichever leaves the least concave pieces.
 
-The tolerance is CoACD's threshold read in voxels: ``threshold * scale * L`` for the object's
-largest extent ``L`` in voxels.
+The pieces label the inside voxels exactly (only voxels outside the surface take their nearest
+surface point's part), so a part's boundary is the cut itself and does not bleed across a
+crease. Cutting at all creases at once over-segments on purpose (a side panel is chopped at
+every shelf); three merges then join pieces back:
 
-Measured against CoACD at its defaults (``bench/bench_segment.py``, 9 objects at 128 voxels,
-2026-11-22, 2-core x86-64, CPU time as other jobs shared the machine): median 1.5 s against
-29 s CPU, and as good or better (max concavity no worse, at most 1.5x the parts) on 3 of 9
-objects. CoACD's parts on these grids are very nearly convex (max concavity 0.8-3.3 voxels,
-1.1 on the Sweet Home chair and bookcase), below this method's tolerance (3.5 voxels at
-128), and lowering the tolerance multiplies the parts on staircases (51 against CoACD's 19
-at scale 0.3). Plane cuts through the deepest concavity brought curved upholstery
-(SheenChair), with a deeper recursion limit (16), from 10.7 to 3.8 voxels (CoACD 3.3) at
-26 s CPU instead of 6 s (CoACD 134 s); T-junctions of many boards still leave extra parts
-(Sweet Home bookcase: 16 against 10). So CoACD stays the default method.
+1. :func:`labels.merge_convex`: touching pieces, least concave union first, while the union is
+   convex within the tolerance (restores whole legs and slabs);
+2. :func:`labels.merge_across_junctions`: at a T-junction the slice of panel beside a shelf may
+   have joined the shelf, leaving the panel pieces above and below apart; they join, with the
+   slice, when both results stay convex (a bookcase side becomes one part again);
+3. :func:`labels.merge_planar_groups`: four or more touching thin parts in one grid-aligned slab
+   (a railing: stringer, balusters, handrail) whose union is convex within CoACD's own threshold
+   in voxels (``group_scale``), which pairwise merging cannot reach (a baluster with the
+   stringer leaves a wide triangle of air in their hull, the whole comb only narrow gaps).
+
+The tolerance is CoACD's threshold read in voxels, ``threshold * scale * L`` for the object's
+largest extent ``L`` in voxels (CoACD normalises the mesh to [-1, 1], so ``scale`` = 0.5 is its
+own reading); ``scale`` = 0.3 (2.1 voxels at 128) cuts and merges finer than CoACD, whose parts
+on these objects measure 0.8-3.3 voxels.
+
+Measured against CoACD at its defaults (``bench/bench_segment.py``, the 9 objects at 128
+voxels, 2026-11-22, 2-core x86-64, CPU seconds, other jobs sharing the machine)::
+
+    object                     CoACD cpu parts  max  | fast cpu parts  max  | match
+    kenney/table                  26.1     8   1.99  |     1.6     8   0.52 | yes
+    kenney/chair                  29.2    12   1.95  |     0.7    10   0.57 | yes
+    kenney/bookcaseOpen           30.8     8   1.53  |     1.6    11   1.22 | yes
+    kenney/stairsOpen             15.4    11   0.75  |     0.4    11   0.75 | yes
+    khronos/SheenChair           112.3    28   3.26  |     7.3    38   2.68 | yes, but > 5 s
+    sweethome3d/table             22.0    10   3.06  |     1.5     9   0.34 | yes
+    sweethome3d/chair             15.7     9   1.06  |     0.7     9   0.75 | yes
+    sweethome3d/bookcase          47.8    10   1.07  |     0.8    10   1.08 | no (+0.01)
+    sweethome3d/staircase         37.7    19   3.15  |     1.7    26   2.87 | yes
+
+Max concavity no worse and at most 1.5x the parts on 8 of 9 (9 of 9 allowing the measure's half
+voxel of sampling noise: the Sweet Home bookcase's side panel, thicker at the top by about a
+voxel, measures 1.08 as one part); median 1.5 s against 29 s CPU. Not yet the default: the
+curved SheenChair (335 pieces before merging, two thirds under 100 voxels) takes 6-7 s CPU,
+above the 5 s target, and misses by 0.01 voxel on the bookcase. Tried and dropped: labelling
+faces by the pieces' convex hulls as CoACD's are (parts leaked more), giving slivers under 12 or
+64 voxels to a neighbour before merging (broke exact board boundaries), only the deepest-point
+depth to choose planes (SheenChair parts 7 voxels concave), a larger tolerance (the Sweet Home
+chair merges a slat with a post at 2.8 voxels against CoACD's 1.06).
 """
 
 from __future__ import annotations

@@ -61,7 +61,7 @@ def hull_concavity(
     inward = _deepest(pts, eq)
     if inward > limit:
         return inward
-    samples = _hull_samples(pts[hull.simplices], spacing, sdf)
+    samples = _hull_samples(pts[hull.simplices], spacing, sdf, limit)
     if not len(samples):
         return inward
     dist, _ = cKDTree(pts).query(samples)
@@ -139,11 +139,23 @@ def _sample_triangles(tri: np.ndarray, spacing: float) -> np.ndarray:
     return aa + ij[:, :1] * (b[which] - aa) + ij[:, 1:] * (c[which] - aa)
 
 
-def _hull_samples(tri: np.ndarray, spacing: float, sdf: np.ndarray | None) -> np.ndarray:
+def _hull_samples(
+    tri: np.ndarray, spacing: float, sdf: np.ndarray | None, limit: float = np.inf
+) -> np.ndarray:
     """:func:`_sample_triangles`, keeping only the samples more than one voxel outside the solid
-    (nearest voxel of ``sdf``, in voxels) when ``sdf`` is given."""
+    (nearest voxel of ``sdf``, in voxels) when ``sdf`` is given.
+
+    With a finite ``limit``, triangles whose every point is within ``limit`` of a corner (a
+    triangle of diameter D lies within D / sqrt(3) of its nearest corner, equality for the
+    equilateral one) are left out: their corners are samples of the patch, so no point on them
+    can be farther than ``limit`` from it.
+    """
+    skip = limit * np.sqrt(3.0) if np.isfinite(limit) else -1.0
     return _outside_lattice(
-        np.ascontiguousarray(tri, dtype=np.float64), float(spacing), _NO_SDF if sdf is None else sdf
+        np.ascontiguousarray(tri, dtype=np.float64),
+        float(spacing),
+        _NO_SDF if sdf is None else sdf,
+        float(skip),
     )
 
 
@@ -151,7 +163,7 @@ _NO_SDF = np.full((1, 1, 1), np.inf, np.float32)  # every sample is "outside"
 
 
 @numba.njit(cache=True)
-def _outside_lattice(tri, spacing, sdf):  # pragma: no cover - compiled
+def _outside_lattice(tri, spacing, sdf, skip):  # pragma: no cover - compiled
     # the lattice of _sample_triangles, generated and filtered in one pass (no (M, 3) temporary)
     n = 0
     ks = np.empty(tri.shape[0], np.int64)
@@ -165,12 +177,16 @@ def _outside_lattice(tri, spacing, sdf):  # pragma: no cover - compiled
             )
             e = max(e, d)
         k = min(max(int(np.ceil(e / spacing)), 1), _LATTICE_MAX)
+        if e <= skip:
+            k = 0
         ks[t] = k
         n += (k + 1) * (k + 2) // 2
     out = np.empty((n, 3), np.float64)
     m = 0
     for t in range(tri.shape[0]):
         k = ks[t]
+        if k == 0:
+            continue
         for i in range(k + 1):
             for j in range(k + 1 - i):
                 fi, fj = i / k, j / k
@@ -254,10 +270,14 @@ def union_concavity(
     inward = max(_deepest(p.points, eq) for p in patches)
     if inward > limit:
         return inward
-    samples = _hull_samples(corners[hull.simplices], spacing, sdf)
+    samples = _hull_samples(corners[hull.simplices], spacing, sdf, limit)
     if not len(samples):
         return inward
-    dist = np.min([p.tree.query(samples)[0] for p in patches], axis=0)
+    # beyond the limit the exact distance does not matter: the trees stop searching there
+    bound = limit * 1.001 + 1e-9 if np.isfinite(limit) else np.inf
+    dist = samples[:, 0] * 0 + np.inf
+    for p in patches:
+        np.minimum(dist, p.tree.query(samples, distance_upper_bound=bound)[0], out=dist)
     return max(inward, float(dist.max()))
 
 

@@ -118,9 +118,21 @@ def tolerance(csdf: CSDF, threshold: float, params: dict) -> float:
 def _region_concavity(mask: np.ndarray, limit: float = np.inf) -> float:
     """Concavity (voxels) of a voxel region, from the centres of its boundary voxels (one per
     2-voxel cell: enough to tell a region above the tolerance, which is 2 voxels or more)."""
+    return hull_concavity(decimate(_boundary(mask), 2.0), spacing=2.0, limit=limit)
+
+
+def _boundary(mask: np.ndarray) -> np.ndarray:
+    """(N, 3) float64: centres of the region's boundary voxels; a region one voxel thick
+    (a slice cut from a curved shell) gets its two faces instead, so that its hull has volume
+    and a bend within the slice counts."""
     interior = ndimage.binary_erosion(mask, border_value=0)
-    pts = decimate(np.argwhere(mask & ~interior).astype(np.float64), 2.0)
-    return hull_concavity(pts, spacing=2.0, limit=limit)
+    pts = np.argwhere(mask & ~interior).astype(np.float64)
+    for a in range(3):
+        if mask.shape[a] == 1:
+            pts = np.concatenate([pts, pts])
+            pts[: len(pts) // 2, a] -= 0.5
+            pts[len(pts) // 2 :, a] += 0.5
+    return pts
 
 
 def _cuts(mask: np.ndarray, jump: float, min_jump: float) -> list[np.ndarray]:
@@ -158,8 +170,7 @@ def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
     Unlike a cut across a whole grid slice, a tilted plane splits a curved shell across its
     bend instead of peeling it slice by slice.
     """
-    interior = ndimage.binary_erosion(mask, border_value=0)
-    pts = np.argwhere(mask & ~interior).astype(np.float64)
+    pts = _boundary(mask)
     if len(pts) < 8:
         return []
     centre, _ = _deepest_point(pts)
@@ -169,11 +180,12 @@ def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
     normals = np.concatenate([np.eye(3), axes])
     # score each plane on the boundary voxels alone (a flat cut face adds nothing concave),
     # thinned to one per 2-voxel cell: the score only ranks the planes
-    few = decimate(pts, 3.0)
+    few = decimate(pts, 3.0) if len(pts) > 1000 else pts
     best_score, best_n = np.inf, None
     for n in normals:
         below = (few - centre) @ n <= 0
-        if min(below.sum(), (~below).sum()) < 8:
+        cut = (vox_pca - centre) @ n <= 0  # the voxels, not the boundary, must be split
+        if min(below.sum(), (~below).sum()) < 4 or cut.all() or not cut.any():
             continue
         # a plane can only win with both sides below the best score so far
         score = hull_concavity(few[below], spacing=3.0, limit=best_score)
@@ -183,9 +195,8 @@ def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
             best_score, best_n = score, n
     if best_n is None:
         return []
-    side = np.tensordot(
-        best_n, np.indices(mask.shape, dtype=np.float64) - centre[:, None, None, None], 1
-    )
+    i, j, k = np.ogrid[: mask.shape[0], : mask.shape[1], : mask.shape[2]]
+    side = best_n[0] * (i - centre[0]) + best_n[1] * (j - centre[1]) + best_n[2] * (k - centre[2])
     pieces = []
     for h in (mask & (side <= 0), mask & (side > 0)):
         comp, _ = ndimage.label(h, structure=_FULL)

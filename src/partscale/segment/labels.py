@@ -178,7 +178,7 @@ def merge_convex(
             return 0.0
         # above the tolerance the exact value only orders merges forced by max_parts
         limit = tolerance if max_parts is None else np.inf
-        return union_concavity(both, sdf=sdf, spacing=2.0, limit=limit)
+        return union_concavity(both, sdf=sdf, spacing=1.0, limit=limit)
 
     alive = set(range(n))
     version = dict.fromkeys(range(n), 0)
@@ -271,7 +271,7 @@ def merge_across_junctions(
         return patches[p]
 
     def convex(group: list[Patch]) -> bool:
-        return union_concavity(group, sdf=sdf, spacing=2.0, limit=tolerance) <= tolerance
+        return union_concavity(group, sdf=sdf, spacing=1.0, limit=tolerance) <= tolerance
 
     tried: set[tuple[int, int, int]] = set()
     todo = sorted(nbrs)
@@ -418,7 +418,7 @@ def merge_planar_groups(
             if len(group) < min_group or key in seen or not all(q in patches for q in group):
                 continue
             seen.add(key)
-            c = union_concavity([patches[q] for q in group], sdf=sdf, spacing=2.0, limit=tolerance)
+            c = union_concavity([patches[q] for q in group], sdf=sdf, spacing=1.0, limit=tolerance)
             if c <= tolerance:
                 for q in group:
                     merged[q] = p

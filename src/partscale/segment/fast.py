@@ -32,25 +32,31 @@ Measured against CoACD at its defaults (``bench/bench_segment.py``, the 9 object
 voxels, 2026-11-22, 2-core x86-64, CPU seconds, other jobs sharing the machine)::
 
     object                     CoACD cpu parts  max  | fast cpu parts  max  | match
-    kenney/table                  26.1     8   1.99  |     1.6     8   0.52 | yes
+    kenney/table                  26.1     8   1.99  |     1.4     8   0.52 | yes
     kenney/chair                  29.2    12   1.95  |     0.7    10   0.57 | yes
-    kenney/bookcaseOpen           30.8     8   1.53  |     1.6    11   1.22 | yes
+    kenney/bookcaseOpen           30.8     8   1.53  |     2.0    11   1.22 | yes
     kenney/stairsOpen             15.4    11   0.75  |     0.4    11   0.75 | yes
-    khronos/SheenChair           112.3    28   3.26  |     7.3    38   2.68 | yes, but > 5 s
-    sweethome3d/table             22.0    10   3.06  |     1.5     9   0.34 | yes
-    sweethome3d/chair             15.7     9   1.06  |     0.7     9   0.75 | yes
+    khronos/SheenChair           112.3    28   3.26  |     8.8    35   2.85 | yes, but > 5 s
+    sweethome3d/table             22.0    10   3.06  |     2.5     9   0.34 | yes
+    sweethome3d/chair             15.7     9   1.06  |     0.8     9   0.75 | yes
     sweethome3d/bookcase          47.8    10   1.07  |     0.8    10   1.08 | no (+0.01)
-    sweethome3d/staircase         37.7    19   3.15  |     1.7    26   2.87 | yes
+    sweethome3d/staircase         37.7    19   3.15  |     3.1    26   2.87 | yes
 
 Max concavity no worse and at most 1.5x the parts on 8 of 9 (9 of 9 allowing the measure's half
 voxel of sampling noise: the Sweet Home bookcase's side panel, thicker at the top by about a
-voxel, measures 1.08 as one part); median 1.5 s against 29 s CPU. Not yet the default: the
-curved SheenChair (335 pieces before merging, two thirds under 100 voxels) takes 6-7 s CPU,
-above the 5 s target, and misses by 0.01 voxel on the bookcase. Tried and dropped: labelling
-faces by the pieces' convex hulls as CoACD's are (parts leaked more), giving slivers under 12 or
-64 voxels to a neighbour before merging (broke exact board boundaries), only the deepest-point
-depth to choose planes (SheenChair parts 7 voxels concave), a larger tolerance (the Sweet Home
-chair merges a slat with a post at 2.8 voxels against CoACD's 1.06).
+voxel, measures 1.08 as one part); median 1.4 s against 29 s CPU. Not yet the default: the
+curved SheenChair (375 pieces before merging, half of them under 40 voxels, each costing the
+convex merge several union hulls) takes 6-9 s CPU depending on the machine's load, above the
+5 s target. Merges test a union at the measure's own 1-voxel spacing: at 2 voxels a narrow air
+pocket under a curved cushion went unseen and a merged part measured 5.2 voxels.
+
+Tried and dropped: labelling faces by the pieces' convex hulls as CoACD's are (parts leaked
+more); giving pieces under 8-64 voxels to a neighbour before merging (about 20% faster on the
+SheenChair, but the Kenney bookcase then merges to 1.53 voxels, just above CoACD's 1.5323);
+only the deepest-point depth, or coarser samples, to choose planes (SheenChair parts 5-7
+voxels concave); a larger tolerance (the Sweet Home chair merges a slat with a post at 2.8
+voxels against CoACD's 1.06); a second merge up to the largest concavity already present
+(little effect: 51 to 48 parts on the staircase).
 """
 
 from __future__ import annotations

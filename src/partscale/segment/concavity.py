@@ -190,20 +190,29 @@ def _outside_lattice(tri, spacing, sdf, skip):  # pragma: no cover - compiled
         for i in range(k + 1):
             for j in range(k + 1 - i):
                 fi, fj = i / k, j / k
-                p = np.empty(3)
-                inside = False
-                for a in range(3):
-                    p[a] = (
-                        tri[t, 0, a]
-                        + fi * (tri[t, 1, a] - tri[t, 0, a])
-                        + fj * (tri[t, 2, a] - tri[t, 0, a])
-                    )
-                ii = min(max(int(np.rint(p[0])), 0), sdf.shape[0] - 1)
-                jj = min(max(int(np.rint(p[1])), 0), sdf.shape[1] - 1)
-                kk = min(max(int(np.rint(p[2])), 0), sdf.shape[2] - 1)
-                inside = sdf[ii, jj, kk] <= 1.0
-                if not inside:
-                    out[m] = p
+                # scalars, not a small array per sample: no allocation in the innermost loop
+                x = (
+                    tri[t, 0, 0]
+                    + fi * (tri[t, 1, 0] - tri[t, 0, 0])
+                    + fj * (tri[t, 2, 0] - tri[t, 0, 0])
+                )
+                y = (
+                    tri[t, 0, 1]
+                    + fi * (tri[t, 1, 1] - tri[t, 0, 1])
+                    + fj * (tri[t, 2, 1] - tri[t, 0, 1])
+                )
+                z = (
+                    tri[t, 0, 2]
+                    + fi * (tri[t, 1, 2] - tri[t, 0, 2])
+                    + fj * (tri[t, 2, 2] - tri[t, 0, 2])
+                )
+                ii = min(max(int(np.rint(x)), 0), sdf.shape[0] - 1)
+                jj = min(max(int(np.rint(y)), 0), sdf.shape[1] - 1)
+                kk = min(max(int(np.rint(z)), 0), sdf.shape[2] - 1)
+                if sdf[ii, jj, kk] > 1.0:
+                    out[m, 0] = x
+                    out[m, 1] = y
+                    out[m, 2] = z
                     m += 1
     return out[:m]
 

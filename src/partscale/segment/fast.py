@@ -32,21 +32,21 @@ Measured against CoACD at its defaults (``bench/bench_segment.py``, the 9 object
 voxels, 2026-11-22, 2-core x86-64, CPU seconds, other jobs sharing the machine)::
 
     object                     CoACD cpu parts  max  | fast cpu parts  max  | match
-    kenney/table                  26.1     8   1.99  |     1.4     8   0.52 | yes
-    kenney/chair                  29.2    12   1.95  |     0.7    10   0.57 | yes
-    kenney/bookcaseOpen           30.8     8   1.53  |     2.0    11   1.22 | yes
+    kenney/table                  26.1     8   1.99  |     1.1     8   0.52 | yes
+    kenney/chair                  29.2    12   1.95  |     0.6    10   0.57 | yes
+    kenney/bookcaseOpen           30.8     8   1.53  |     1.3    11   1.22 | yes
     kenney/stairsOpen             15.4    11   0.75  |     0.4    11   0.75 | yes
-    khronos/SheenChair           112.3    28   3.26  |     8.8    35   2.85 | yes, but > 5 s
-    sweethome3d/table             22.0    10   3.06  |     2.5     9   0.34 | yes
-    sweethome3d/chair             15.7     9   1.06  |     0.8     9   0.75 | yes
+    khronos/SheenChair           112.3    28   3.26  |     7.1    35   2.85 | yes, but > 5 s
+    sweethome3d/table             22.0    10   3.06  |     1.8     9   0.34 | yes
+    sweethome3d/chair             15.7     9   1.06  |     0.7     9   0.75 | yes
     sweethome3d/bookcase          47.8    10   1.07  |     0.8    10   1.08 | no (+0.01)
-    sweethome3d/staircase         37.7    19   3.15  |     3.1    26   2.87 | yes
+    sweethome3d/staircase         37.7    19   3.15  |     2.9    26   2.87 | yes
 
 Max concavity no worse and at most 1.5x the parts on 8 of 9 (9 of 9 allowing the measure's half
 voxel of sampling noise: the Sweet Home bookcase's side panel, thicker at the top by about a
-voxel, measures 1.08 as one part); median 1.4 s against 29 s CPU. Not yet the default: the
+voxel, measures 1.08 as one part); median 1.1 s against 29 s CPU. Not yet the default: the
 curved SheenChair (375 pieces before merging, half of them under 40 voxels, each costing the
-convex merge several union hulls) takes 6-9 s CPU depending on the machine's load, above the
+convex merge several union hulls) takes 7 s CPU (up to 9 s with other jobs running), above the
 5 s target. Merges test a union at the measure's own 1-voxel spacing: at 2 voxels a narrow air
 pocket under a curved cushion went unseen and a merged part measured 5.2 voxels.
 

@@ -64,7 +64,9 @@ def hull_concavity(
     samples = _hull_samples(pts[hull.simplices], spacing, sdf, limit)
     if not len(samples):
         return inward
-    dist, _ = cKDTree(pts).query(samples)
+    # beyond the limit the exact distance does not matter: the tree stops searching there
+    bound = limit * 1.001 + 1e-9 if np.isfinite(limit) else np.inf
+    dist, _ = cKDTree(pts).query(samples, distance_upper_bound=bound)
     return max(inward, float(dist.max()))
 
 

@@ -13,6 +13,7 @@ from partscale import ingest, shapes
 from partscale.edit import apply_edit
 from partscale.errors import InputError, MemoryLimitError
 from partscale.segment import coacd_method, concavity, part_concavities, segment
+from partscale.segment import labels as labels_mod
 from partscale.surface import sample_nearest, to_mesh
 
 H = 0.025  # voxel size of the analytic shapes (L: 47 x 47 x 19 voxels)
@@ -348,3 +349,50 @@ def test_fast_cuts_a_tilted_curved_shell_across_its_bend(tmp_path):
     s = segment(tilted_arch(), method="fast", cache_dir=tmp_path)
     assert part_concavities(s).max() <= 3.0
     assert 2 <= s.n_parts <= 8
+
+
+SIDES = [((0.0, 0.0, 0.0), (0.075, 1.0, 0.4)), ((0.525, 0.0, 0.0), (0.6, 1.0, 0.4))]
+SHELVES = [((0.075, 0.3, 0.0), (0.525, 0.375, 0.4)), ((0.075, 0.65, 0.0), (0.525, 0.725, 0.4))]
+
+
+def test_fast_keeps_boards_whole_at_t_junctions(tmp_path):
+    # two side panels with two shelves between them: cutting at the shelves' faces chops each
+    # panel in three; the slices of panel beside the shelves must go back to the panel
+    boards = SIDES + SHELVES
+    c = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boards), ((0, 0, 0), (0.6, 1.0, 0.4)), voxel_size=H
+    )
+    s = segment(c, method="fast", cache_dir=tmp_path)
+    assert s.n_parts == 4
+    # every inside voxel centre in a board's box (the slices beside the shelves included)
+    ijk = np.argwhere(c.sdf <= 0)
+    w = c.index_to_world(ijk)
+    seen = []
+    for lo, hi in boards:
+        mine = np.all((w > np.add(lo, 0.3 * H)) & (w < np.subtract(hi, 0.3 * H)), axis=1)
+        labels = np.unique(s.parts[tuple(ijk[mine].T)])
+        assert mine.sum() > 100 and len(labels) == 1
+        seen.append(int(labels[0]))
+    assert len(set(seen)) == 4
+    assert part_concavities(s).max() <= 2.0  # boxes sampled on voxels: within 2 voxels
+
+
+def test_railing_in_one_plane_is_merged_as_a_group():
+    # stringer, seven balusters 4 voxels apart and a handrail, all 3 voxels thick in x: one
+    # baluster with the stringer leaves a wide triangle of air in their hull, the whole comb
+    # only its narrow gaps (2 voxels from the nearest baluster)
+    boards = [((0, 0, 0), (0.075, 0.95, 0.075)), ((0, 0, 0.5), (0.075, 0.95, 0.575))]
+    boards += [((0, y, 0.075), (0.075, y + 0.05, 0.5)) for y in np.arange(7) * 0.15]
+    c = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boards), ((0, 0, 0), (0.075, 0.95, 0.575)), voxel_size=H
+    )
+    w = c.index_to_world(np.indices(c.shape).reshape(3, -1).T)
+    each = np.stack([shapes.box_sdf(w, lo, hi) for lo, hi in boards])
+    labels = np.where(c.sdf.ravel() < 3 * H, each.argmin(axis=0), -1).reshape(c.shape)
+    mesh = to_mesh(c)
+    pair = np.where(np.isin(labels, (0, 5)), 0, np.where(labels >= 0, 1, -1))
+    assert part_concavities(c, pair)[0] > 5.0  # stringer and one baluster: far from convex
+    merged = labels_mod.merge_planar_groups(c, mesh, labels, tolerance=2.5)
+    assert merged.max() == 0 and part_concavities(c, merged).max() <= 2.5
+    kept = labels_mod.merge_planar_groups(c, mesh, labels, tolerance=1.0)
+    assert kept.max() + 1 == len(boards)

@@ -20,16 +20,18 @@ from . import coacd_method, fast
 from .labels import (
     faces_from_voxels,
     make_connected,
+    merge_across_junctions,
     merge_convex,
+    merge_planar_groups,
     parts_info,
     voxels_from_faces,
 )
 
 METHODS = ("coacd", "fast")
 DEFAULT_METHOD = "coacd"
-"""CoACD stays the default: the fast method does not yet match it on every benchmark object
-(see :mod:`partscale.segment.fast`)."""
-CACHE_VERSION = 2
+"""CoACD stays the default: the fast method matches it on 8 of the 9 benchmark objects but takes
+more than 5 s on the curved SheenChair (see :mod:`partscale.segment.fast`)."""
+CACHE_VERSION = 5
 """Bump when a change to the code changes results, so old cache entries are not reused."""
 
 _METHOD_PARAMS: dict[str, dict[str, Any]] = {
@@ -109,9 +111,10 @@ def segment(
 
     Marching cubes of the CSDF (:func:`partscale.surface.to_mesh`), a decomposition of that
     surface by ``method``, then each voxel near or inside the surface takes the part of its
-    nearest surface point (voxels more than :data:`labels.BAND` voxels outside stay -1). Parts
-    are made 26-connected, touching parts whose union is convex within ``merge_tolerance``
-    voxels are merged, and parts are numbered 0..P-1, largest first.
+    nearest surface point (voxels more than :data:`labels.BAND` voxels outside stay -1; the
+    fast method cuts the grid itself, so its inside voxels keep their piece). Parts are made
+    26-connected, touching parts whose union is convex within ``merge_tolerance`` voxels are
+    merged, and parts are numbered 0..P-1, largest first.
 
     Parameters
     ----------
@@ -119,7 +122,8 @@ def segment(
         The object; its ``sdf`` decides everything, existing ``parts`` are replaced.
     method : {"coacd", "fast"}
         ``"coacd"``: CoACD on the surface mesh (the reference; tens of seconds at 128³).
-        ``"fast"``: cuts at concave creases of the voxel grid, then convex merging.
+        ``"fast"``: cuts at concave creases of the voxel grid, then convex merging (about
+        20x faster; see :mod:`partscale.segment.fast` for how it compares).
     threshold : float in (0, 1]
         Concavity allowed in a part, relative to the object's size (CoACD's meaning).
     max_parts : int, optional
@@ -205,6 +209,7 @@ def _compute(
         report(0.85, "labelling the surface")
         faces = coacd_method.face_labels(mesh, hulls)
         merge_tol = tol
+        atoms = None
     else:
         atoms = fast.atoms(
             csdf, threshold=thr, params=params, floor=tol, progress=scaled(report, 0.0, 0.5)
@@ -213,10 +218,23 @@ def _compute(
         faces = faces_from_voxels(csdf, mesh, atoms)
         merge_tol = max(tol, fast.tolerance(csdf, thr, params))
     report(0.88, "labelling voxels")
-    labels = make_connected(voxels_from_faces(csdf, mesh, faces))
+    # the fast method cuts the grid itself: inside voxels keep their piece exactly (the
+    # nearest surface point would let a piece bleed across a crease into its neighbour)
+    labels = make_connected(voxels_from_faces(csdf, mesh, faces, inside=atoms))
     report(0.9, "merging convex neighbours")
     if merge_tol > 0 or max_parts is not None:
         labels = merge_convex(csdf, mesh, labels, tolerance=merge_tol, max_parts=max_parts)
+    if atoms is not None and merge_tol > 0:
+        labels = merge_across_junctions(csdf, mesh, labels, tolerance=merge_tol)
+        group_tol = fast.tolerance(csdf, thr, {**params, "scale": params["group_scale"]})
+        labels = merge_planar_groups(
+            csdf,
+            mesh,
+            labels,
+            tolerance=max(group_tol, merge_tol),
+            thickness=params["thin"],
+            min_group=params["min_group"],
+        )
     report(0.97, "part facts")
     info = parts_info(csdf, mesh, labels)
     report(1.0, f"{len(info)} parts")

@@ -21,11 +21,15 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from ..csdf import CSDF
-from ..surface import sample_nearest, to_mesh
+from ..surface import to_mesh
 
 
 def hull_concavity(
-    points: np.ndarray, *, spacing: float = 1.0, sdf: np.ndarray | None = None
+    points: np.ndarray,
+    *,
+    spacing: float = 1.0,
+    sdf: np.ndarray | None = None,
+    limit: float = np.inf,
 ) -> float:
     """Hausdorff distance between sampled surface points and their convex hull's boundary.
 
@@ -38,6 +42,8 @@ def hull_concavity(
     sdf : (X, Y, Z) float, optional
         Signed distance in voxels; when given, only hull samples more than one voxel outside
         the solid count in the hull-to-points direction (hull points inside are cut faces).
+    limit : float
+        Stop early, returning a value above ``limit``, once the answer is known to exceed it.
 
     Returns
     -------
@@ -53,13 +59,37 @@ def hull_concavity(
         return 0.0  # flat or degenerate: no volume, nothing concave
     eq = np.ascontiguousarray(hull.equations)  # (F, 4): n . x + d <= 0 inside, |n| = 1
     inward = _deepest(pts, eq)
-    samples = _sample_triangles(pts[hull.simplices], spacing)
-    if sdf is not None:
-        samples = samples[sample_nearest(sdf, samples) > 1.0]
-        if not len(samples):
-            return inward
-    dist, _ = cKDTree(pts).query(samples)
+    if inward > limit:
+        return inward
+    samples = _hull_samples(pts[hull.simplices], spacing, sdf, limit)
+    if not len(samples):
+        return inward
+    # beyond the limit the exact distance does not matter: the tree stops searching there
+    bound = limit * 1.001 + 1e-9 if np.isfinite(limit) else np.inf
+    dist, _ = cKDTree(pts).query(samples, distance_upper_bound=bound)
     return max(inward, float(dist.max()))
+
+
+def deepest_point(pts: np.ndarray, eq: np.ndarray) -> tuple[int, float]:
+    """Index of the point of ``pts`` (N, 3) deepest inside the hull with facet planes ``eq``
+    (n . x + d <= 0 inside, |n| = 1), and its depth."""
+    return _deepest_index(np.ascontiguousarray(pts, np.float64), np.ascontiguousarray(eq))
+
+
+@numba.njit(cache=True)
+def _deepest_index(pts, eq):  # pragma: no cover - compiled
+    best, arg = -np.inf, 0
+    for i in range(pts.shape[0]):
+        m = np.inf
+        for j in range(eq.shape[0]):
+            d = -(pts[i, 0] * eq[j, 0] + pts[i, 1] * eq[j, 1] + pts[i, 2] * eq[j, 2] + eq[j, 3])
+            if d < m:
+                m = d
+                if m <= best:
+                    break
+        if m > best:
+            best, arg = m, i
+    return arg, best
 
 
 @numba.njit(cache=True)
@@ -111,6 +141,84 @@ def _sample_triangles(tri: np.ndarray, spacing: float) -> np.ndarray:
     return aa + ij[:, :1] * (b[which] - aa) + ij[:, 1:] * (c[which] - aa)
 
 
+def _hull_samples(
+    tri: np.ndarray, spacing: float, sdf: np.ndarray | None, limit: float = np.inf
+) -> np.ndarray:
+    """:func:`_sample_triangles`, keeping only the samples more than one voxel outside the solid
+    (nearest voxel of ``sdf``, in voxels) when ``sdf`` is given.
+
+    With a finite ``limit``, triangles whose every point is within ``limit`` of a corner (a
+    triangle of diameter D lies within D / sqrt(3) of its nearest corner, equality for the
+    equilateral one) are left out: their corners are samples of the patch, so no point on them
+    can be farther than ``limit`` from it.
+    """
+    skip = limit * np.sqrt(3.0) if np.isfinite(limit) else -1.0
+    return _outside_lattice(
+        np.ascontiguousarray(tri, dtype=np.float64),
+        float(spacing),
+        _NO_SDF if sdf is None else sdf,
+        float(skip),
+    )
+
+
+_NO_SDF = np.full((1, 1, 1), np.inf, np.float32)  # every sample is "outside"
+
+
+@numba.njit(cache=True)
+def _outside_lattice(tri, spacing, sdf, skip):  # pragma: no cover - compiled
+    # the lattice of _sample_triangles, generated and filtered in one pass (no (M, 3) temporary)
+    n = 0
+    ks = np.empty(tri.shape[0], np.int64)
+    for t in range(tri.shape[0]):
+        e = 0.0
+        for u, v in ((0, 1), (0, 2), (1, 2)):
+            d = np.sqrt(
+                (tri[t, v, 0] - tri[t, u, 0]) ** 2
+                + (tri[t, v, 1] - tri[t, u, 1]) ** 2
+                + (tri[t, v, 2] - tri[t, u, 2]) ** 2
+            )
+            e = max(e, d)
+        k = min(max(int(np.ceil(e / spacing)), 1), _LATTICE_MAX)
+        if e <= skip:
+            k = 0
+        ks[t] = k
+        n += (k + 1) * (k + 2) // 2
+    out = np.empty((n, 3), np.float64)
+    m = 0
+    for t in range(tri.shape[0]):
+        k = ks[t]
+        if k == 0:
+            continue
+        for i in range(k + 1):
+            for j in range(k + 1 - i):
+                fi, fj = i / k, j / k
+                # scalars, not a small array per sample: no allocation in the innermost loop
+                x = (
+                    tri[t, 0, 0]
+                    + fi * (tri[t, 1, 0] - tri[t, 0, 0])
+                    + fj * (tri[t, 2, 0] - tri[t, 0, 0])
+                )
+                y = (
+                    tri[t, 0, 1]
+                    + fi * (tri[t, 1, 1] - tri[t, 0, 1])
+                    + fj * (tri[t, 2, 1] - tri[t, 0, 1])
+                )
+                z = (
+                    tri[t, 0, 2]
+                    + fi * (tri[t, 1, 2] - tri[t, 0, 2])
+                    + fj * (tri[t, 2, 2] - tri[t, 0, 2])
+                )
+                ii = min(max(int(np.rint(x)), 0), sdf.shape[0] - 1)
+                jj = min(max(int(np.rint(y)), 0), sdf.shape[1] - 1)
+                kk = min(max(int(np.rint(z)), 0), sdf.shape[2] - 1)
+                if sdf[ii, jj, kk] > 1.0:
+                    out[m, 0] = x
+                    out[m, 1] = y
+                    out[m, 2] = z
+                    m += 1
+    return out[:m]
+
+
 def decimate(points: np.ndarray, cell: float) -> np.ndarray:
     """(M, 3): one of ``points`` per occupied cube of edge ``cell`` (first in input order)."""
     q = np.floor(points / cell).astype(np.int64)
@@ -138,6 +246,10 @@ class Patch:
             self.hull_points = candidates[ConvexHull(candidates).vertices]
         except (QhullError, ValueError):
             self.hull_points = candidates
+        if len(self.hull_points) > 200:
+            # a curved patch has most of its samples on its hull: one per 1.5-voxel cell moves
+            # the hull by a fraction of a voxel and keeps union hulls cheap
+            self.hull_points = decimate(self.hull_points, 1.5)
 
     def merged(self, other: Patch) -> Patch:
         """The patch of both parts (the hull of a union is the hull of the hulls' vertices)."""
@@ -169,12 +281,14 @@ def union_concavity(
     inward = max(_deepest(p.points, eq) for p in patches)
     if inward > limit:
         return inward
-    samples = _sample_triangles(corners[hull.simplices], spacing)
-    if sdf is not None:
-        samples = samples[sample_nearest(sdf, samples) > 1.0]
-        if not len(samples):
-            return inward
-    dist = np.min([p.tree.query(samples)[0] for p in patches], axis=0)
+    samples = _hull_samples(corners[hull.simplices], spacing, sdf, limit)
+    if not len(samples):
+        return inward
+    # beyond the limit the exact distance does not matter: the trees stop searching there
+    bound = limit * 1.001 + 1e-9 if np.isfinite(limit) else np.inf
+    dist = samples[:, 0] * 0 + np.inf
+    for p in patches:
+        np.minimum(dist, p.tree.query(samples, distance_upper_bound=bound)[0], out=dist)
     return max(inward, float(dist.max()))
 
 
@@ -184,6 +298,12 @@ def vertex_labels(csdf: CSDF, labels: np.ndarray, mesh) -> np.ndarray:
     A vertex lies on the edge between an inside and an outside voxel; the inside voxel's label
     is the reliable one (voxels in the air between two close pieces may belong to either).
     """
+    ijk = vertex_voxels(csdf, mesh)
+    return np.asarray(labels)[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+
+
+def vertex_voxels(csdf: CSDF, mesh) -> np.ndarray:
+    """(V, 3) intp: the inside end of each marching-cubes vertex's grid edge (its voxel)."""
     v = csdf.world_to_index(mesh.vertices)
     lo = np.floor(v + 1e-6).astype(np.intp)
     hi = np.ceil(v - 1e-6).astype(np.intp)
@@ -192,8 +312,7 @@ def vertex_labels(csdf: CSDF, labels: np.ndarray, mesh) -> np.ndarray:
         np.clip(hi[:, a], 0, csdf.shape[a] - 1, out=hi[:, a])
     s_lo = csdf.sdf[lo[:, 0], lo[:, 1], lo[:, 2]]
     s_hi = csdf.sdf[hi[:, 0], hi[:, 1], hi[:, 2]]
-    ijk = np.where((s_lo <= s_hi)[:, None], lo, hi)
-    return np.asarray(labels)[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    return np.where((s_lo <= s_hi)[:, None], lo, hi)
 
 
 def surface_samples(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> dict[int, np.ndarray]:

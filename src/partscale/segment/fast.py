@@ -6,24 +6,57 @@ a tabletop's). A region that is not yet convex (concavity above the tolerance) i
 such jump along x, y and z at once, and its pieces (connected components of the cells between
 cuts) are treated the same way, recursively. A concave region without such a jump (a bend, a
 curved shell, a board turned off the grid axes) is cut once by a plane through its deepest
-concavity, oriented along a grid or principal axis, whichever leaves the least concave pieces. Cutting at all creases at once over-segments on
-purpose (a side panel is chopped at every shelf); the common convex merge
-(:func:`labels.merge_convex`) then joins touching pieces whose union is still convex within the
-tolerance, which restores whole panels and leaves the parts split at the creases only.
+concavity, oriented along a grid or principal axis, whichever leaves the least concave pieces.
 
-The tolerance is CoACD's threshold read in voxels: ``threshold * scale * L`` for the object's
-largest extent ``L`` in voxels.
+The pieces label the inside voxels exactly (only voxels outside the surface take their nearest
+surface point's part), so a part's boundary is the cut itself and does not bleed across a
+crease. Cutting at all creases at once over-segments on purpose (a side panel is chopped at
+every shelf); three merges then join pieces back:
 
-Measured against CoACD at its defaults (``bench/bench_segment.py``, 9 objects at 128 voxels,
-2026-11-22, 2-core x86-64, CPU time as other jobs shared the machine): median 1.5 s against
-29 s CPU, and as good or better (max concavity no worse, at most 1.5x the parts) on 3 of 9
-objects. CoACD's parts on these grids are very nearly convex (max concavity 0.8-3.3 voxels,
-1.1 on the Sweet Home chair and bookcase), below this method's tolerance (3.5 voxels at
-128), and lowering the tolerance multiplies the parts on staircases (51 against CoACD's 19
-at scale 0.3). Plane cuts through the deepest concavity brought curved upholstery
-(SheenChair), with a deeper recursion limit (16), from 10.7 to 3.8 voxels (CoACD 3.3) at
-26 s CPU instead of 6 s (CoACD 134 s); T-junctions of many boards still leave extra parts
-(Sweet Home bookcase: 16 against 10). So CoACD stays the default method.
+1. :func:`labels.merge_convex`: touching pieces, least concave union first, while the union is
+   convex within the tolerance (restores whole legs and slabs);
+2. :func:`labels.merge_across_junctions`: at a T-junction the slice of panel beside a shelf may
+   have joined the shelf, leaving the panel pieces above and below apart; they join, with the
+   slice, when both results stay convex (a bookcase side becomes one part again);
+3. :func:`labels.merge_planar_groups`: four or more touching thin parts in one grid-aligned slab
+   (a railing: stringer, balusters, handrail) whose union is convex within CoACD's own threshold
+   in voxels (``group_scale``), which pairwise merging cannot reach (a baluster with the
+   stringer leaves a wide triangle of air in their hull, the whole comb only narrow gaps).
+
+The tolerance is CoACD's threshold read in voxels, ``threshold * scale * L`` for the object's
+largest extent ``L`` in voxels (CoACD normalises the mesh to [-1, 1], so ``scale`` = 0.5 is its
+own reading); ``scale`` = 0.3 (2.1 voxels at 128) cuts and merges finer than CoACD, whose parts
+on these objects measure 0.8-3.3 voxels.
+
+Measured against CoACD at its defaults (``bench/bench_segment.py``, the 9 objects at 128
+voxels, 2026-11-22, 2-core x86-64, CPU seconds, other jobs sharing the machine)::
+
+    object                     CoACD cpu parts  max  | fast cpu parts  max  | match
+    kenney/table                  26.1     8   1.99  |     1.1     8   0.52 | yes
+    kenney/chair                  29.2    12   1.95  |     0.6    10   0.57 | yes
+    kenney/bookcaseOpen           30.8     8   1.53  |     1.3    11   1.22 | yes
+    kenney/stairsOpen             15.4    11   0.75  |     0.4    11   0.75 | yes
+    khronos/SheenChair           112.3    28   3.26  |     7.1    35   2.85 | yes, but > 5 s
+    sweethome3d/table             22.0    10   3.06  |     1.8     9   0.34 | yes
+    sweethome3d/chair             15.7     9   1.06  |     0.7     9   0.75 | yes
+    sweethome3d/bookcase          47.8    10   1.07  |     0.8    10   1.08 | no (+0.01)
+    sweethome3d/staircase         37.7    19   3.15  |     2.9    26   2.87 | yes
+
+Max concavity no worse and at most 1.5x the parts on 8 of 9 (9 of 9 allowing the measure's half
+voxel of sampling noise: the Sweet Home bookcase's side panel, thicker at the top by about a
+voxel, measures 1.08 as one part); median 1.1 s against 29 s CPU. Not yet the default: the
+curved SheenChair (375 pieces before merging, half of them under 40 voxels, each costing the
+convex merge several union hulls) takes 7 s CPU (up to 9 s with other jobs running), above the
+5 s target. Merges test a union at the measure's own 1-voxel spacing: at 2 voxels a narrow air
+pocket under a curved cushion went unseen and a merged part measured 5.2 voxels.
+
+Tried and dropped: labelling faces by the pieces' convex hulls as CoACD's are (parts leaked
+more); giving pieces under 8-64 voxels to a neighbour before merging (about 20% faster on the
+SheenChair, but the Kenney bookcase then merges to 1.53 voxels, just above CoACD's 1.5323);
+only the deepest-point depth, or coarser samples, to choose planes (SheenChair parts 5-7
+voxels concave); a larger tolerance (the Sweet Home chair merges a slat with a post at 2.8
+voxels against CoACD's 1.06); a second merge up to the largest concavity already present
+(little effect: 51 to 48 parts on the staircase).
 """
 
 from __future__ import annotations
@@ -35,21 +68,26 @@ from scipy.spatial import ConvexHull, QhullError
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
-from .concavity import hull_concavity
+from .concavity import decimate, deepest_point, hull_concavity
 
 PARAMS = {
     "jump": 0.3,
     "min_jump": 0.05,
-    "scale": 0.5,
+    "scale": 0.3,
     "max_depth": 16,
     "min_voxels": 27,
+    "group_scale": 0.5,
+    "thin": 4,
+    "min_group": 4,
 }
 """Options of the fast method.
 
 jump : a cut where the section area changes by at least this fraction between two slices;
 min_jump : ... and by at least this fraction of the region's largest section;
 scale : concavity tolerance = ``threshold * scale * largest extent`` (voxels);
-max_depth : recursion limit; min_voxels : smaller pieces are not split further.
+max_depth : recursion limit; min_voxels : smaller pieces are not split further;
+group_scale : tolerance of a group merge (:func:`labels.merge_planar_groups`), as ``scale``;
+thin : most voxels thick a slab of grouped parts is; min_group : fewest parts in such a group.
 """
 
 _FULL = np.ones((3, 3, 3), bool)
@@ -64,10 +102,11 @@ def check_params(params: dict) -> dict:
         if not 0 < v < 1:
             raise InputError(f"{name}: expected a number in (0, 1), got {out[name]!r}")
         out[name] = v
-    if not float(out["scale"]) > 0:
-        raise InputError(f"scale: expected a number > 0, got {out['scale']!r}")
-    out["scale"] = float(out["scale"])
-    for name in ("max_depth", "min_voxels"):
+    for name in ("scale", "group_scale"):
+        if not float(out[name]) > 0:
+            raise InputError(f"{name}: expected a number > 0, got {out[name]!r}")
+        out[name] = float(out[name])
+    for name in ("max_depth", "min_voxels", "thin", "min_group"):
         v = out[name]
         if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 1:
             raise InputError(f"{name}: expected an integer >= 1, got {v!r}")
@@ -82,11 +121,24 @@ def tolerance(csdf: CSDF, threshold: float, params: dict) -> float:
     return threshold * params["scale"] * extent
 
 
-def _region_concavity(mask: np.ndarray) -> float:
-    """Concavity (voxels) of a voxel region, from the centres of its boundary voxels."""
+def _region_concavity(mask: np.ndarray, limit: float = np.inf) -> float:
+    """Concavity (voxels) of a voxel region, from the centres of its boundary voxels (one per
+    2-voxel cell: enough to tell a region above the tolerance, which is 2 voxels or more)."""
+    return hull_concavity(decimate(_boundary(mask), 2.0), spacing=2.0, limit=limit)
+
+
+def _boundary(mask: np.ndarray) -> np.ndarray:
+    """(N, 3) float64: centres of the region's boundary voxels; a region one voxel thick
+    (a slice cut from a curved shell) gets its two faces instead, so that its hull has volume
+    and a bend within the slice counts."""
     interior = ndimage.binary_erosion(mask, border_value=0)
     pts = np.argwhere(mask & ~interior).astype(np.float64)
-    return hull_concavity(pts, spacing=1.5)
+    for a in range(3):
+        if mask.shape[a] == 1:
+            pts = np.concatenate([pts, pts])
+            pts[: len(pts) // 2, a] -= 0.5
+            pts[len(pts) // 2 :, a] += 0.5
+    return pts
 
 
 def _cuts(mask: np.ndarray, jump: float, min_jump: float) -> list[np.ndarray]:
@@ -111,13 +163,8 @@ def _deepest_point(pts: np.ndarray) -> tuple[np.ndarray, float]:
         hull = ConvexHull(pts)
     except (QhullError, ValueError):
         return pts.mean(axis=0), 0.0
-    eq = hull.equations  # n . x + d <= 0 inside, |n| = 1
-    depth = np.full(len(pts), np.inf)
-    for chunk in range(0, len(eq), 256):  # bounded memory: N x 256 at a time
-        e = eq[chunk : chunk + 256]
-        np.minimum(depth, (-(pts @ e[:, :3].T + e[:, 3])).min(axis=1), out=depth)
-    i = int(np.argmax(depth))
-    return pts[i], float(depth[i])
+    i, depth = deepest_point(pts, hull.equations)
+    return pts[i], float(depth)
 
 
 def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
@@ -129,8 +176,7 @@ def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
     Unlike a cut across a whole grid slice, a tilted plane splits a curved shell across its
     bend instead of peeling it slice by slice.
     """
-    interior = ndimage.binary_erosion(mask, border_value=0)
-    pts = np.argwhere(mask & ~interior).astype(np.float64)
+    pts = _boundary(mask)
     if len(pts) < 8:
         return []
     centre, _ = _deepest_point(pts)
@@ -138,22 +184,25 @@ def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
     vox_pca = vox[:: len(vox) // 20000 + 1]
     _, _, axes = np.linalg.svd(vox_pca - vox_pca.mean(axis=0), full_matrices=False)
     normals = np.concatenate([np.eye(3), axes])
-    # score each plane on the boundary voxels alone (a flat cut face adds nothing concave)
+    # score each plane on the boundary voxels alone (a flat cut face adds nothing concave),
+    # thinned to one per 2-voxel cell: the score only ranks the planes
+    few = decimate(pts, 3.0) if len(pts) > 1000 else pts
     best_score, best_n = np.inf, None
     for n in normals:
-        below = (pts - centre) @ n <= 0
-        if min(below.sum(), (~below).sum()) < 8:
+        below = (few - centre) @ n <= 0
+        cut = (vox_pca - centre) @ n <= 0  # the voxels, not the boundary, must be split
+        if min(below.sum(), (~below).sum()) < 4 or cut.all() or not cut.any():
             continue
-        score = max(
-            hull_concavity(pts[below], spacing=1.5), hull_concavity(pts[~below], spacing=1.5)
-        )
+        # a plane can only win with both sides below the best score so far
+        score = hull_concavity(few[below], spacing=3.0, limit=best_score)
+        if score < best_score:
+            score = max(score, hull_concavity(few[~below], spacing=3.0, limit=best_score))
         if score < best_score:
             best_score, best_n = score, n
     if best_n is None:
         return []
-    side = np.tensordot(
-        best_n, np.indices(mask.shape, dtype=np.float64) - centre[:, None, None, None], 1
-    )
+    i, j, k = np.ogrid[: mask.shape[0], : mask.shape[1], : mask.shape[2]]
+    side = best_n[0] * (i - centre[0]) + best_n[1] * (j - centre[1]) + best_n[2] * (k - centre[2])
     pieces = []
     for h in (mask & (side <= 0), mask & (side > 0)):
         comp, _ = ndimage.label(h, structure=_FULL)
@@ -213,7 +262,7 @@ def atoms(
         final = (
             size < params["min_voxels"]
             or depth >= params["max_depth"]
-            or _region_concavity(mask) <= tau
+            or _region_concavity(mask, limit=tau) <= tau
         )
         pieces = []
         if not final:

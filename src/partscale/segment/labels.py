@@ -8,13 +8,21 @@ from __future__ import annotations
 
 import heapq
 
+import numba
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .._util import palette_colour
 from ..csdf import CSDF
-from .concavity import Patch, decimate, surface_samples, touching_pairs, union_concavity
+from .concavity import (
+    Patch,
+    decimate,
+    surface_samples,
+    touching_pairs,
+    union_concavity,
+    vertex_voxels,
+)
 
 BAND = 3.0
 """Voxels up to this many voxels outside the surface get a part; farther ones stay -1."""
@@ -22,7 +30,9 @@ BAND = 3.0
 _FULL = np.ones((3, 3, 3), bool)  # 26-connectivity
 
 
-def voxels_from_faces(csdf: CSDF, mesh, face_labels: np.ndarray) -> np.ndarray:
+def voxels_from_faces(
+    csdf: CSDF, mesh, face_labels: np.ndarray, *, inside: np.ndarray | None = None
+) -> np.ndarray:
     """(X, Y, Z) int32 labels: the label of the nearest surface point, -1 beyond :data:`BAND`.
 
     Parameters
@@ -32,12 +42,19 @@ def voxels_from_faces(csdf: CSDF, mesh, face_labels: np.ndarray) -> np.ndarray:
         ``to_mesh(csdf)``; its face centroids stand for the surface (faces are < 1 voxel).
     face_labels : (F,) int
         Part of each face, >= 0.
+    inside : (X, Y, Z) int, optional
+        Labels of the inside voxels (``sdf <= 0``) when the method knows them; only the voxels
+        outside then take the nearest surface point's.
     """
     centres = csdf.world_to_index(mesh.triangles_center)
     near = csdf.sdf < BAND * csdf.voxel_size
+    labels = np.full(csdf.shape, -1, np.int32)
+    if inside is not None:
+        solid = csdf.sdf <= 0
+        labels[solid] = inside[solid]
+        near &= ~solid
     ijk = np.argwhere(near)
     _, nearest = cKDTree(centres).query(ijk, workers=-1)
-    labels = np.full(csdf.shape, -1, np.int32)
     labels[near] = np.asarray(face_labels)[nearest]
     return labels
 
@@ -161,7 +178,7 @@ def merge_convex(
             return 0.0
         # above the tolerance the exact value only orders merges forced by max_parts
         limit = tolerance if max_parts is None else np.inf
-        return union_concavity(both, sdf=sdf, spacing=2.0, limit=limit)
+        return union_concavity(both, sdf=sdf, spacing=1.0, limit=limit)
 
     alive = set(range(n))
     version = dict.fromkeys(range(n), 0)
@@ -172,6 +189,9 @@ def merge_convex(
         cost, p, q, vp, vq = heapq.heappop(heap)
         if p not in alive or q not in alive:
             continue
+        if cost > tolerance and (max_parts is None or len(alive) <= max_parts):
+            # every queued cost is at least this one; refreshing a stale one rarely lowers it
+            break
         if version[p] != vp or version[q] != vq:
             # Lazy update: a part grew since this cost was computed. Growing rarely makes a
             # union more convex, so the old cost orders the queue and is refreshed only here.
@@ -195,6 +215,234 @@ def merge_convex(
         version[p] += 1
     lut = np.append(parent, -1).astype(np.int32)
     return renumber(lut[labels])
+
+
+def merge_across_junctions(
+    csdf: CSDF, mesh, labels: np.ndarray, *, tolerance: float, min_voxels: int = 32
+) -> np.ndarray:
+    """Join two parts that a third one separates, where the third only crosses their hull.
+
+    At a T-junction of boards (a shelf meeting a side panel) the panel is cut above and below the
+    shelf, and the slice of panel between the cuts may join the shelf as well as the panel
+    pieces; once it went to the shelf, the panel pieces no longer touch and
+    :func:`merge_convex` keeps them apart. Here two parts ``a``, ``b`` that do not touch but
+    both touch a part ``s`` become one, together with ``s``'s voxels inside the convex hull of
+    their surface, when that union and what is left of ``s`` are each convex within
+    ``tolerance`` voxels and ``s`` stays in one piece.
+
+    Parameters
+    ----------
+    labels : (X, Y, Z) int
+        Parts 0..P-1, -1 where none.
+
+    Returns
+    -------
+    (X, Y, Z) int32 labels, renumbered.
+    """
+    out = np.asarray(labels, dtype=np.int32).copy()
+    ijk = vertex_voxels(csdf, mesh)
+    pts = csdf.world_to_index(mesh.vertices)
+    vlab = out[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    sdf = csdf.sdf / csdf.voxel_size
+    inside = csdf.sdf <= 0
+    nbrs: dict[int, set[int]] = {}
+    for p, q in touching_pairs(csdf, out, mesh=mesh):
+        nbrs.setdefault(p, set()).add(q)
+        nbrs.setdefault(q, set()).add(p)
+    order = np.argsort(vlab, kind="stable")
+    uniq, first = np.unique(vlab[order], return_index=True)
+    verts = {
+        int(p): order[i:j]
+        for p, i, j in zip(uniq, first, [*first[1:], len(order)], strict=True)
+        if p >= 0
+    }
+    box = {
+        p: np.array([[x.start for x in sl], [x.stop for x in sl]])
+        for p, sl in enumerate(ndimage.find_objects(out + 1))
+        if sl is not None
+    }
+    patches: dict[int, Patch] = {}
+
+    def patch(p: int) -> Patch | None:
+        if p not in patches:
+            if len(verts.get(p, ())) < 4:
+                return None
+            patches[p] = Patch(decimate(pts[verts[p]], 1.0))
+        return patches[p]
+
+    def convex(group: list[Patch]) -> bool:
+        return union_concavity(group, sdf=sdf, spacing=1.0, limit=tolerance) <= tolerance
+
+    tried: set[tuple[int, int, int]] = set()
+    todo = sorted(nbrs)
+    while todo:
+        s = todo.pop(0)
+        if s not in nbrs:
+            continue
+        # the slice of a board that s took at the junction is no thicker than s itself
+        thick = (box[s][1] - box[s][0]).min() + 2
+        around = sorted(nbrs[s])
+        done = False
+        for i, a in enumerate(around):
+            for b in around[i + 1 :]:
+                if b in nbrs[a] or (s, a, b) in tried:
+                    continue
+                tried.add((s, a, b))
+                gap = np.maximum(box[a][0] - box[b][1], box[b][0] - box[a][1]).max()
+                if gap > thick:
+                    continue
+                pa, pb = patch(a), patch(b)
+                # s's slice between them is solid, so it leaves their union's concavity alone
+                # (hull points inside the solid do not count): a cheap test first
+                if pa is None or pb is None or not convex([pa, pb]):
+                    continue
+                try:
+                    eq = ConvexHull(np.concatenate([pa.hull_points, pb.hull_points])).equations
+                except (QhullError, ValueError):
+                    continue
+                sl = tuple(slice(lo, hi) for lo, hi in box[s].T)
+                here = out[sl] == s
+                # only s's voxels in the box around a and b can lie in their hull
+                lo = np.maximum(np.minimum(box[a][0], box[b][0]) - 1, box[s][0]) - box[s][0]
+                hi = np.minimum(np.maximum(box[a][1], box[b][1]) + 1, box[s][1]) - box[s][0]
+                if (hi <= lo).any():
+                    continue
+                near = tuple(slice(x, y) for x, y in zip(lo, hi, strict=True))
+                own = np.argwhere(here[near]) + lo
+                move = _in_hull((own + box[s][0]).astype(np.float64), eq, 0.5)
+                if not move.any() or move.sum() == here.sum():
+                    continue
+                moved = np.zeros(here.shape, bool)
+                moved[tuple(own[move].T)] = True
+                _, pieces = ndimage.label(here & ~moved & inside[sl], structure=_FULL)
+                if pieces > 1:
+                    continue
+                mine = verts[s]
+                local = ijk[mine] - box[s][0]
+                goes = moved[local[:, 0], local[:, 1], local[:, 2]]
+                group = [pa, pb]
+                if goes.sum() >= 4:
+                    group.append(Patch(decimate(pts[mine[goes]], 1.0)))
+                if not convex(group):
+                    continue
+                if (~goes).sum() >= 4 and not convex([Patch(decimate(pts[mine[~goes]], 1.0))]):
+                    continue
+                out[sl][moved] = a
+                sb = tuple(slice(lo, hi) for lo, hi in box[b].T)
+                out[sb][out[sb] == b] = a
+                verts[a] = np.concatenate([verts[a], verts.pop(b), mine[goes]])
+                verts[s] = mine[~goes]
+                box[a] = np.array(
+                    [np.minimum(box[a][0], box[b][0]), np.maximum(box[a][1], box[b][1])]
+                )
+                for p in (a, b, s):
+                    patches.pop(p, None)
+                for r in nbrs.pop(b):
+                    nbrs[r].discard(b)
+                    if r != a:
+                        nbrs[r].add(a)
+                        nbrs[a].add(r)
+                todo.extend(sorted({s, a} | nbrs[a]))
+                done = True
+                break
+            if done:
+                break
+    return make_connected(out, min_voxels=min_voxels)
+
+
+def merge_planar_groups(
+    csdf: CSDF,
+    mesh,
+    labels: np.ndarray,
+    *,
+    tolerance: float,
+    thickness: float = 4.0,
+    min_group: int = 4,
+) -> np.ndarray:
+    """Join each group of at least ``min_group`` touching parts lying in one thin slab (a board's
+    plane) into one part, when their union is convex within ``tolerance`` voxels.
+
+    A railing (stringer, balusters, handrail) or a row of slats is many thin pieces in one
+    plane: pairwise merging stops at the first two (a baluster on a long stringer leaves a
+    wide triangle of air in their hull), yet the whole comb is nearly convex, its gaps being
+    narrow. Groups are grown through touching parts from a part at most ``thickness`` voxels
+    thick along a grid axis, taking the parts inside that slab (one voxel of slack) only.
+
+    Parameters
+    ----------
+    labels : (X, Y, Z) int
+        Parts 0..P-1, -1 where none.
+
+    Returns
+    -------
+    (X, Y, Z) int32 labels, renumbered.
+    """
+    out = np.asarray(labels, dtype=np.int32).copy()
+    ijk = vertex_voxels(csdf, mesh)
+    pts = csdf.world_to_index(mesh.vertices)
+    vlab = out[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    sdf = csdf.sdf / csdf.voxel_size
+    nbrs: dict[int, set[int]] = {}
+    for p, q in touching_pairs(csdf, out, mesh=mesh):
+        nbrs.setdefault(p, set()).add(q)
+        nbrs.setdefault(q, set()).add(p)
+    # extents of the parts' inside voxels (labels reach BAND voxels into the air too)
+    box = {
+        p: np.array([[x.start for x in sl], [x.stop - 1 for x in sl]])
+        for p, sl in enumerate(ndimage.find_objects(np.where(csdf.sdf <= 0, out + 1, 0)))
+        if sl is not None
+    }
+    patches = {p: Patch(decimate(pts[vlab == p], 1.0)) for p in box if (vlab == p).sum() >= 4}
+    seen: set[frozenset] = set()
+    merged: dict[int, int] = {}
+    for ax in range(3):
+        for p in sorted(box, key=lambda p: -(box[p][1] - box[p][0]).prod()):
+            if p in merged:
+                continue
+            lo, hi = box[p][0][ax], box[p][1][ax]
+            if hi - lo + 1 > thickness:
+                continue
+            members = {
+                q
+                for q in box
+                if q not in merged and box[q][0][ax] >= lo - 1 and box[q][1][ax] <= hi + 1
+            }
+            group, front = {p}, [p]
+            while front:
+                r = front.pop()
+                for q in nbrs.get(r, ()):
+                    if q in members and q not in group:
+                        group.add(q)
+                        front.append(q)
+            key = frozenset(group)
+            if len(group) < min_group or key in seen or not all(q in patches for q in group):
+                continue
+            seen.add(key)
+            c = union_concavity([patches[q] for q in group], sdf=sdf, spacing=1.0, limit=tolerance)
+            if c <= tolerance:
+                for q in group:
+                    merged[q] = p
+    lut = np.arange(int(out.max()) + 2, dtype=np.int32)
+    for q, p in merged.items():
+        lut[q] = p
+    lut[-1] = -1
+    return renumber(lut[out])
+
+
+@numba.njit(cache=True)
+def _in_hull(pts: np.ndarray, eq: np.ndarray, margin: float) -> np.ndarray:  # pragma: no cover
+    # (N,) bool: within ``margin`` of the hull with facet planes ``eq`` (n . x + d <= 0 inside);
+    # a point is dropped at its first facet farther than the margin (most points are outside)
+    out = np.ones(pts.shape[0], np.bool_)
+    for i in range(pts.shape[0]):
+        for j in range(eq.shape[0]):
+            if (
+                pts[i, 0] * eq[j, 0] + pts[i, 1] * eq[j, 1] + pts[i, 2] * eq[j, 2] + eq[j, 3]
+                > margin
+            ):
+                out[i] = False
+                break
+    return out
 
 
 def palette(n: int) -> list[list[int]]:

@@ -76,7 +76,7 @@ def deepest_point(pts: np.ndarray, eq: np.ndarray) -> tuple[int, float]:
     return _deepest_index(np.ascontiguousarray(pts, np.float64), np.ascontiguousarray(eq))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _deepest_index(pts, eq):  # pragma: no cover - compiled
     best, arg = -np.inf, 0
     for i in range(pts.shape[0]):
@@ -92,7 +92,7 @@ def _deepest_index(pts, eq):  # pragma: no cover - compiled
     return arg, best
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _deepest(pts: np.ndarray, eq: np.ndarray) -> float:  # pragma: no cover - compiled
     # Distance of a point inside a convex hull to its boundary = its smallest facet-plane
     # depth; the answer is the largest such distance. A point stops being scanned as soon as
@@ -164,7 +164,7 @@ def _hull_samples(
 _NO_SDF = np.full((1, 1, 1), np.inf, np.float32)  # every sample is "outside"
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _outside_lattice(tri, spacing, sdf, skip):  # pragma: no cover - compiled
     # the lattice of _sample_triangles, generated and filtered in one pass (no (M, 3) temporary)
     n = 0

@@ -61,6 +61,9 @@ voxels against CoACD's 1.06); a second merge up to the largest concavity already
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
@@ -249,39 +252,64 @@ def atoms(
     tau = max(tolerance(csdf, threshold, params), floor)
     inside = csdf.sdf <= 0
     comp, _ = ndimage.label(inside, structure=_FULL)
-    stack = []
-    for c, sl in enumerate(ndimage.find_objects(comp), start=1):
-        stack.append((comp[sl] == c, tuple(s.start for s in sl), 0))
-    total = float(inside.sum())
-    done = 0.0
-    out = np.full(csdf.shape, -1, np.int32)
-    n = 0
-    while stack:
-        mask, off, depth = stack.pop()
-        size = int(mask.sum())
-        final = (
-            size < params["min_voxels"]
+    roots = [
+        (comp[sl] == c, tuple(s.start for s in sl), 0)
+        for c, sl in enumerate(ndimage.find_objects(comp), start=1)
+    ]
+
+    def cut(item):
+        """(final, pieces) of one region: final when small, deep or convex enough."""
+        mask, _off, depth = item
+        if (
+            int(mask.sum()) < params["min_voxels"]
             or depth >= params["max_depth"]
             or _region_concavity(mask, limit=tau) <= tau
-        )
-        pieces = []
-        if not final:
-            cuts = _cuts(mask, params["jump"], params["min_jump"])
-            if any(len(c) for c in cuts):
-                pieces = _split(mask, cuts)
-            else:
-                pieces = _plane_pieces(mask)
-        if final or len(pieces) <= 1:
-            view = out[
-                off[0] : off[0] + mask.shape[0],
-                off[1] : off[1] + mask.shape[1],
-                off[2] : off[2] + mask.shape[2],
-            ]
-            view[mask] = n
-            n += 1
-            done += size
-            report(done / total, f"cutting at creases ({n} pieces)")
+        ):
+            return True, []
+        cuts = _cuts(mask, params["jump"], params["min_jump"])
+        pieces = _split(mask, cuts) if any(len(c) for c in cuts) else _plane_pieces(mask)
+        return len(pieces) <= 1, pieces
+
+    # Regions are independent: each generation of the cutting tree is cut in parallel (hulls,
+    # tree searches and the compiled kernels release the GIL). Pieces are then numbered in the
+    # depth-first order of a one-at-a-time recursion, so the result does not depend on timing.
+    total = float(inside.sum())
+    done = 0.0
+    children: dict[int, list[int]] = {}
+    items = list(roots)
+    frontier = list(range(len(items)))
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        while frontier:
+            results = list(pool.map(lambda i: cut(items[i]), frontier))
+            nxt = []
+            for i, (final, pieces) in zip(frontier, results, strict=True):
+                mask, off, depth = items[i]
+                if final:
+                    done += int(mask.sum())
+                    continue
+                kids = []
+                for sub, o in pieces:
+                    items.append((sub, (off[0] + o[0], off[1] + o[1], off[2] + o[2]), depth + 1))
+                    kids.append(len(items) - 1)
+                children[i] = kids
+                nxt.extend(kids)
+            frontier = nxt
+            report(done / total, f"cutting at creases ({len(items)} regions)")
+    out = np.full(csdf.shape, -1, np.int32)
+    n = 0
+    stack = list(range(len(roots)))
+    while stack:
+        i = stack.pop()
+        if i in children:
+            stack.extend(children[i])
             continue
-        for sub, o in pieces:
-            stack.append((sub, (off[0] + o[0], off[1] + o[1], off[2] + o[2]), depth + 1))
+        mask, off, _depth = items[i]
+        view = out[
+            off[0] : off[0] + mask.shape[0],
+            off[1] : off[1] + mask.shape[1],
+            off[2] : off[2] + mask.shape[2],
+        ]
+        view[mask] = n
+        n += 1
+    report(1.0, f"cutting at creases ({n} pieces)")
     return out

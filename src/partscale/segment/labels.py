@@ -7,6 +7,8 @@ CSDF's ``parts`` grid the same way for all methods, so methods differ only in wh
 from __future__ import annotations
 
 import heapq
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
@@ -139,6 +141,10 @@ def renumber(labels: np.ndarray) -> np.ndarray:
     return lut[labels]  # labels == -1 picks lut[-1] == -1
 
 
+_AHEAD = 8
+"""Stale merge costs refreshed ahead of their turn, in parallel, by :func:`merge_convex`."""
+
+
 def merge_convex(
     csdf: CSDF,
     mesh,
@@ -182,7 +188,12 @@ def merge_convex(
 
     alive = set(range(n))
     version = dict.fromkeys(range(n), 0)
-    heap = [(union_cost(p, q), p, q, 0, 0) for p, q in pairs]
+    # costs are computed side by side where they are independent (hulls and tree searches
+    # release the GIL); the merges happen in the same order as with one thread
+    pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
+    fresh: dict[tuple[int, int, int, int], float] = {}
+    costs = list(pool.map(lambda pq: union_cost(*pq), pairs))
+    heap = [(cost, p, q, 0, 0) for cost, (p, q) in zip(costs, pairs, strict=True)]
     heapq.heapify(heap)
     parent = np.arange(n)
     while heap:
@@ -195,7 +206,22 @@ def merge_convex(
         if version[p] != vp or version[q] != vq:
             # Lazy update: a part grew since this cost was computed. Growing rarely makes a
             # union more convex, so the old cost orders the queue and is refreshed only here.
-            heapq.heappush(heap, (union_cost(p, q), p, q, version[p], version[q]))
+            key = (p, q, version[p], version[q])
+            if key not in fresh:
+                # the next stale entries are refreshed alongside (in parallel); their costs
+                # wait in ``fresh`` for their turn, so the order of merges stays the one of
+                # refreshing one at a time
+                ahead = [key]
+                for _c, a, b, va, vb in heapq.nsmallest(_AHEAD, heap):
+                    k = (a, b, version.get(a, -2), version.get(b, -2))
+                    if a in alive and b in alive and (va, vb) != k[2:] and k not in fresh:
+                        ahead.append(k)
+                ahead = list(dict.fromkeys(ahead))
+                for k, c in zip(
+                    ahead, pool.map(lambda k: union_cost(k[0], k[1]), ahead), strict=True
+                ):
+                    fresh[k] = c
+            heapq.heappush(heap, (fresh.pop(key), p, q, version[p], version[q]))
             continue
         if cost > tolerance and (max_parts is None or len(alive) <= max_parts):
             break
@@ -213,6 +239,7 @@ def merge_convex(
         alive.discard(q)
         parent[parent == q] = p
         version[p] += 1
+    pool.shutdown()
     lut = np.append(parent, -1).astype(np.int32)
     return renumber(lut[labels])
 
@@ -263,15 +290,55 @@ def merge_across_junctions(
     }
     patches: dict[int, Patch] = {}
 
+    def patch_of(p: int) -> Patch | None:
+        if len(verts.get(p, ())) < 4:
+            return None
+        return Patch(decimate(pts[verts[p]], 1.0))
+
     def patch(p: int) -> Patch | None:
         if p not in patches:
-            if len(verts.get(p, ())) < 4:
+            made = patch_of(p)
+            if made is None:
                 return None
-            patches[p] = Patch(decimate(pts[verts[p]], 1.0))
+            patches[p] = made
         return patches[p]
 
     def convex(group: list[Patch]) -> bool:
         return union_concavity(group, sdf=sdf, spacing=1.0, limit=tolerance) <= tolerance
+
+    # The cheap test below (are a and b convex together?) for every pair the first pass will
+    # meet, computed side by side beforehand; a merge makes its parts' answers stale (gen).
+    gen: dict[int, int] = {}
+    first: set[tuple[int, int]] = set()
+    for s in nbrs:
+        thick = (box[s][1] - box[s][0]).min() + 2
+        around = sorted(nbrs[s])
+        for i, a in enumerate(around):
+            for b in around[i + 1 :]:
+                gap = np.maximum(box[a][0] - box[b][1], box[b][0] - box[a][1]).max()
+                if b not in nbrs[a] and gap <= thick:
+                    first.add((a, b))
+    first_list = sorted(first)
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        needed = sorted({p for ab in first_list for p in ab} - set(patches))
+        for p, made in zip(needed, pool.map(lambda p: patch_of(p), needed), strict=True):
+            if made is not None:
+                patches[p] = made
+        ok = [p in patches and q in patches for p, q in first_list]
+        tests = pool.map(
+            lambda ab: convex([patches[ab[0]], patches[ab[1]]]),
+            [ab for ab, k in zip(first_list, ok, strict=True) if k],
+        )
+        pair_ok = dict(
+            zip([ab for ab, k in zip(first_list, ok, strict=True) if k], tests, strict=True)
+        )
+    cheap = {(a, b, 0, 0): v for (a, b), v in pair_ok.items()}
+
+    def pair_convex(a: int, b: int, pa: Patch, pb: Patch) -> bool:
+        key = (a, b, gen.get(a, 0), gen.get(b, 0))
+        if key not in cheap:
+            cheap[key] = convex([pa, pb])
+        return cheap[key]
 
     tried: set[tuple[int, int, int]] = set()
     todo = sorted(nbrs)
@@ -294,7 +361,7 @@ def merge_across_junctions(
                 pa, pb = patch(a), patch(b)
                 # s's slice between them is solid, so it leaves their union's concavity alone
                 # (hull points inside the solid do not count): a cheap test first
-                if pa is None or pb is None or not convex([pa, pb]):
+                if pa is None or pb is None or not pair_convex(a, b, pa, pb):
                     continue
                 try:
                     eq = ConvexHull(np.concatenate([pa.hull_points, pb.hull_points])).equations
@@ -337,6 +404,7 @@ def merge_across_junctions(
                 )
                 for p in (a, b, s):
                     patches.pop(p, None)
+                    gen[p] = gen.get(p, 0) + 1
                 for r in nbrs.pop(b):
                     nbrs[r].discard(b)
                     if r != a:
@@ -429,7 +497,7 @@ def merge_planar_groups(
     return renumber(lut[out])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _in_hull(pts: np.ndarray, eq: np.ndarray, margin: float) -> np.ndarray:  # pragma: no cover
     # (N,) bool: within ``margin`` of the hull with facet planes ``eq`` (n . x + d <= 0 inside);
     # a point is dropped at its first facet farther than the margin (most points are outside)

@@ -170,7 +170,7 @@ def _deepest_point(pts: np.ndarray) -> tuple[np.ndarray, float]:
     return pts[i], float(depth)
 
 
-def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
+def _plane_pieces(mask: np.ndarray, min_size: int = 0) -> list[tuple[np.ndarray, tuple]]:
     """Split a concave region by the best plane through its deepest concavity.
 
     The deepest boundary voxel inside the region's convex hull sits in the crease or bend that
@@ -206,12 +206,45 @@ def _plane_pieces(mask: np.ndarray) -> list[tuple[np.ndarray, tuple]]:
         return []
     i, j, k = np.ogrid[: mask.shape[0], : mask.shape[1], : mask.shape[2]]
     side = best_n[0] * (i - centre[0]) + best_n[1] * (j - centre[1]) + best_n[2] * (k - centre[2])
-    pieces = []
+    lab = np.zeros(mask.shape, np.int32)
+    n = 0
     for h in (mask & (side <= 0), mask & (side > 0)):
-        comp, _ = ndimage.label(h, structure=_FULL)
-        for c, sl in enumerate(ndimage.find_objects(comp), start=1):
-            pieces.append((comp[sl] == c, tuple(x.start for x in sl)))
+        comp, m = ndimage.label(h, structure=_FULL)
+        lab[comp > 0] = comp[comp > 0] + n
+        n += m
+    lab = _absorb_slivers(lab, n, min_size)
+    pieces = []
+    for sl_i, sl in enumerate(ndimage.find_objects(lab), start=1):
+        if sl is not None:
+            pieces.append((lab[sl] == sl_i, tuple(x.start for x in sl)))
     return pieces
+
+
+def _absorb_slivers(lab: np.ndarray, n: int, min_size: int) -> np.ndarray:
+    """Join pieces smaller than ``min_size`` voxels to the touching piece they share the most
+    voxels of contact with. A plane across a curved shell leaves slivers at its rim; as parts of their own
+    they would only be merged back later, at a far higher cost."""
+    if n < 2 or min_size <= 1:
+        return lab
+    size = np.bincount(lab.ravel(), minlength=n + 1)
+    small = [c for c in np.argsort(size[1:], kind="stable") + 1 if 0 < size[c] < min_size]
+    for c in small:
+        if size[c] == 0 or size[c] >= min_size:
+            continue
+        sl = ndimage.find_objects((lab == c).astype(np.int8))[0]
+        grown = tuple(slice(max(x.start - 1, 0), x.stop + 1) for x in sl)
+        here = lab[grown] == c
+        ring = ndimage.binary_dilation(here) & ~here
+        touch = lab[grown][ring]
+        touch = touch[(touch > 0) & (touch != c)]
+        if touch.size == 0:
+            continue
+        counts = np.bincount(touch, minlength=n + 1)
+        best = int(np.argmax(counts))
+        lab[grown][here] = best
+        size[best] += size[c]
+        size[c] = 0
+    return lab
 
 
 def _split(mask: np.ndarray, cuts: list[np.ndarray]) -> list[tuple[np.ndarray, tuple]]:
@@ -267,7 +300,11 @@ def atoms(
         ):
             return True, []
         cuts = _cuts(mask, params["jump"], params["min_jump"])
-        pieces = _split(mask, cuts) if any(len(c) for c in cuts) else _plane_pieces(mask)
+        pieces = (
+            _split(mask, cuts)
+            if any(len(c) for c in cuts)
+            else _plane_pieces(mask, params["min_voxels"])
+        )
         return len(pieces) <= 1, pieces
 
     # Regions are independent: each generation of the cutting tree is cut in parallel (hulls,

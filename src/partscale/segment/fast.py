@@ -28,27 +28,32 @@ largest extent ``L`` in voxels (CoACD normalises the mesh to [-1, 1], so ``scale
 own reading); ``scale`` = 0.3 (2.1 voxels at 128) cuts and merges finer than CoACD, whose parts
 on these objects measure 0.8-3.3 voxels.
 
-Measured against CoACD at its defaults (``bench/bench_segment.py``, the 9 objects at 128
-voxels, 2026-11-22, 2-core x86-64, CPU seconds, other jobs sharing the machine)::
+Pieces are cut, and merge costs computed, on both cores (threads; hulls, tree searches and the
+compiled kernels release the GIL), numbered and merged in the order one thread would, so the
+parts do not depend on timing. Slivers a plane cut leaves at a curved shell's rim (under
+``min_voxels``) join the piece they touch most instead of becoming parts to merge back.
 
-    object                     CoACD cpu parts  max  | fast cpu parts  max  | match
-    kenney/table                  26.1     8   1.99  |     1.1     8   0.52 | yes
-    kenney/chair                  29.2    12   1.95  |     0.6    10   0.57 | yes
-    kenney/bookcaseOpen           30.8     8   1.53  |     1.3    11   1.22 | yes
-    kenney/stairsOpen             15.4    11   0.75  |     0.4    11   0.75 | yes
-    khronos/SheenChair           112.3    28   3.26  |     7.1    35   2.85 | yes, but > 5 s
-    sweethome3d/table             22.0    10   3.06  |     1.8     9   0.34 | yes
-    sweethome3d/chair             15.7     9   1.06  |     0.7     9   0.75 | yes
-    sweethome3d/bookcase          47.8    10   1.07  |     0.8    10   1.08 | no (+0.01)
-    sweethome3d/staircase         37.7    19   3.15  |     2.9    26   2.87 | yes
+Measured against CoACD at its defaults (``bench/bench_segment.py``, the 9 objects at 128
+voxels, 2026-11-22, 2-core x86-64, quiet machine; wall seconds, CPU in brackets)::
+
+    object                  CoACD wall (cpu) parts  max  | fast wall (cpu) parts  max  | match
+    kenney/table               17.3 (26.1)     8   1.99  |  1.2 (1.4)     8   0.52 | yes
+    kenney/chair               19.9 (29.2)    12   1.95  |  0.6 (0.7)    10   0.57 | yes
+    kenney/bookcaseOpen        23.0 (30.8)     8   1.53  |  1.6 (2.0)    11   1.22 | yes
+    kenney/stairsOpen          11.3 (15.4)    11   0.75  |  0.6 (0.7)    11   0.75 | yes
+    khronos/SheenChair         84.8 (112)     28   3.26  |  5.5 (7.7)    33   2.85 | yes, > 5 s
+    sweethome3d/table          33.1 (22.0)    10   3.06  |  1.7 (2.3)     9   0.34 | yes
+    sweethome3d/chair          13.3 (15.7)     9   1.06  |  0.6 (0.8)     9   0.75 | yes
+    sweethome3d/bookcase       37.1 (47.8)    10   1.072 |  0.9 (1.1)    10   1.075 | no
+    sweethome3d/staircase      53.9 (37.7)    19   3.15  |  2.5 (3.1)    26   2.87 | yes
 
 Max concavity no worse and at most 1.5x the parts on 8 of 9 (9 of 9 allowing the measure's half
-voxel of sampling noise: the Sweet Home bookcase's side panel, thicker at the top by about a
-voxel, measures 1.08 as one part); median 1.1 s against 29 s CPU. Not yet the default: the
-curved SheenChair (375 pieces before merging, half of them under 40 voxels, each costing the
-convex merge several union hulls) takes 7 s CPU (up to 9 s with other jobs running), above the
-5 s target. Merges test a union at the measure's own 1-voxel spacing: at 2 voxels a narrow air
-pocket under a curved cushion went unseen and a merged part measured 5.2 voxels.
+voxel of sampling noise); median 1.2 s against 23 s. The Sweet Home bookcase misses by 0.003
+voxel: its deepest patch point is a marching-cubes vertex in the rounded inner crease where a
+shelf meets the side panel, labelled with the panel. The curved SheenChair (331 pieces before
+merging) takes 5.4-5.5 s alone and up to 7 s inside a long benchmark run, above the 5 s target.
+So CoACD stays the default. Merges test a union at the measure's own 1-voxel spacing: at 2
+voxels a narrow air pocket under a curved cushion went unseen and a merged part measured 5.2.
 
 Tried and dropped: labelling faces by the pieces' convex hulls as CoACD's are (parts leaked
 more); giving pieces under 8-64 voxels to a neighbour before merging (about 20% faster on the

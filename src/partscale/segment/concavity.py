@@ -57,16 +57,24 @@ def hull_concavity(
         hull = ConvexHull(pts)
     except (QhullError, ValueError):
         return 0.0  # flat or degenerate: no volume, nothing concave
+    return _to_hull(hull, pts, [pts], lambda: [cKDTree(pts)], spacing, sdf, limit)
+
+
+def _to_hull(hull, corners, point_sets, trees, spacing, sdf, limit) -> float:
+    """The two directions of the Hausdorff distance between ``point_sets`` and ``hull`` (the
+    hull of ``corners``); ``trees()`` gives KD-trees of the point sets, only when needed."""
     eq = np.ascontiguousarray(hull.equations)  # (F, 4): n . x + d <= 0 inside, |n| = 1
-    inward = _deepest(pts, eq)
+    inward = max(_deepest(p, eq) for p in point_sets)
     if inward > limit:
         return inward
-    samples = _hull_samples(pts[hull.simplices], spacing, sdf, limit)
+    samples = _hull_samples(corners[hull.simplices], spacing, sdf, limit)
     if not len(samples):
         return inward
-    # beyond the limit the exact distance does not matter: the tree stops searching there
+    # beyond the limit the exact distance does not matter: the trees stop searching there
     bound = limit * 1.001 + 1e-9 if np.isfinite(limit) else np.inf
-    dist, _ = cKDTree(pts).query(samples, distance_upper_bound=bound)
+    dist = np.full(len(samples), np.inf)
+    for tree in trees():
+        np.minimum(dist, tree.query(samples, distance_upper_bound=bound)[0], out=dist)
     return max(inward, float(dist.max()))
 
 
@@ -277,19 +285,15 @@ def union_concavity(
         hull = ConvexHull(corners)
     except (QhullError, ValueError):
         return 0.0
-    eq = np.ascontiguousarray(hull.equations)
-    inward = max(_deepest(p.points, eq) for p in patches)
-    if inward > limit:
-        return inward
-    samples = _hull_samples(corners[hull.simplices], spacing, sdf, limit)
-    if not len(samples):
-        return inward
-    # beyond the limit the exact distance does not matter: the trees stop searching there
-    bound = limit * 1.001 + 1e-9 if np.isfinite(limit) else np.inf
-    dist = samples[:, 0] * 0 + np.inf
-    for p in patches:
-        np.minimum(dist, p.tree.query(samples, distance_upper_bound=bound)[0], out=dist)
-    return max(inward, float(dist.max()))
+    return _to_hull(
+        hull,
+        corners,
+        [p.points for p in patches],
+        lambda: [p.tree for p in patches],
+        spacing,
+        sdf,
+        limit,
+    )
 
 
 def vertex_labels(csdf: CSDF, labels: np.ndarray, mesh) -> np.ndarray:

@@ -244,6 +244,24 @@ def merge_convex(
     return renumber(lut[labels])
 
 
+def _part_graph(csdf: CSDF, mesh, labels: np.ndarray):
+    """What the merges after :func:`merge_convex` start from.
+
+    Returns a writeable int32 copy of ``labels``; each marching-cubes vertex's voxel ``ijk``
+    (V, 3), position ``pts`` (V, 3) in voxel units and label ``vlab`` (V,); and the touching
+    parts ``nbrs`` {part: set of parts}.
+    """
+    out = np.asarray(labels, dtype=np.int32).copy()
+    ijk = vertex_voxels(csdf, mesh)
+    pts = csdf.world_to_index(mesh.vertices)
+    vlab = out[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    nbrs: dict[int, set[int]] = {}
+    for p, q in touching_pairs(csdf, out, mesh=mesh):
+        nbrs.setdefault(p, set()).add(q)
+        nbrs.setdefault(q, set()).add(p)
+    return out, ijk, pts, vlab, nbrs
+
+
 def merge_across_junctions(
     csdf: CSDF, mesh, labels: np.ndarray, *, tolerance: float, min_voxels: int = 32
 ) -> np.ndarray:
@@ -266,16 +284,9 @@ def merge_across_junctions(
     -------
     (X, Y, Z) int32 labels, renumbered.
     """
-    out = np.asarray(labels, dtype=np.int32).copy()
-    ijk = vertex_voxels(csdf, mesh)
-    pts = csdf.world_to_index(mesh.vertices)
-    vlab = out[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    out, ijk, pts, vlab, nbrs = _part_graph(csdf, mesh, labels)
     sdf = csdf.sdf / csdf.voxel_size
     inside = csdf.sdf <= 0
-    nbrs: dict[int, set[int]] = {}
-    for p, q in touching_pairs(csdf, out, mesh=mesh):
-        nbrs.setdefault(p, set()).add(q)
-        nbrs.setdefault(q, set()).add(p)
     order = np.argsort(vlab, kind="stable")
     uniq, first = np.unique(vlab[order], return_index=True)
     verts = {
@@ -445,15 +456,8 @@ def merge_planar_groups(
     -------
     (X, Y, Z) int32 labels, renumbered.
     """
-    out = np.asarray(labels, dtype=np.int32).copy()
-    ijk = vertex_voxels(csdf, mesh)
-    pts = csdf.world_to_index(mesh.vertices)
-    vlab = out[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
+    out, _ijk, pts, vlab, nbrs = _part_graph(csdf, mesh, labels)
     sdf = csdf.sdf / csdf.voxel_size
-    nbrs: dict[int, set[int]] = {}
-    for p, q in touching_pairs(csdf, out, mesh=mesh):
-        nbrs.setdefault(p, set()).add(q)
-        nbrs.setdefault(q, set()).add(p)
     # extents of the parts' inside voxels (labels reach BAND voxels into the air too)
     box = {
         p: np.array([[x.start for x in sl], [x.stop - 1 for x in sl]])

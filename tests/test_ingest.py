@@ -314,56 +314,41 @@ def test_npy_grid_resampled_with_colour_volume(tmp_path):
 # -- bad input -------------------------------------------------------------------------
 
 
-def _no_output(out):
+def _refused(tmp_path, cli, src, *fragments, args=()):
+    """``partscale import SRC`` exits 2 with one line holding ``fragments``, writing nothing."""
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", src, "-o", out, *args), *fragments)
     assert not out.exists()
     assert not list(out.parent.glob(f".{out.name}*")), "a temporary file was left behind"
 
 
 def test_missing_file(tmp_path, cli):
-    out = tmp_path / "o.csdf.npz"
-    assert_bad_input(cli("import", tmp_path / "nope.glb", "-o", out), "nope.glb", "no such file")
-    _no_output(out)
+    _refused(tmp_path, cli, tmp_path / "nope.glb", "nope.glb", "no such file")
 
 
-def test_unknown_format(tmp_path, cli):
-    src = tmp_path / "model.xyz"
-    src.write_text("hello\n")
-    out = tmp_path / "o.csdf.npz"
-    assert_bad_input(cli("import", src, "-o", out), "model.xyz", "unknown format")
-    _no_output(out)
+def _truncated_glb() -> bytes:
+    return data_path("kenney/table.glb").read_bytes()[:3000]
 
 
-@pytest.mark.parametrize("name", ["truncated.glb", "garbage.glb", "broken.ply", "broken.npz"])
-def test_corrupt_or_truncated(tmp_path, cli, name):
+@pytest.mark.parametrize(
+    "name, content, fragment",
+    [
+        ("model.xyz", b"hello\n", "unknown format"),
+        ("truncated.glb", _truncated_glb, "expected"),
+        ("garbage.glb", b"\x01\x02 not a mesh at all" * 10, "expected"),
+        ("broken.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 10\n", "expected"),
+        ("broken.npz", b"PK\x03\x04" + b"\x00" * 40, "expected"),
+        ("empty.glb", b"", "empty file (0 bytes)"),
+        ("empty.ply", b"", "empty file (0 bytes)"),
+        ("empty.npz", b"", "empty file (0 bytes)"),
+        ("empty.h5", b"", "empty file (0 bytes)"),
+        ("empty.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n", "triangles"),
+    ],
+)
+def test_unreadable_unknown_or_empty_input(tmp_path, cli, name, content, fragment):
     src = tmp_path / name
-    if name == "truncated.glb":
-        src.write_bytes(data_path("kenney/table.glb").read_bytes()[:3000])
-    elif name == "broken.npz":
-        src.write_bytes(b"PK\x03\x04" + b"\x00" * 40)
-    elif name == "broken.ply":
-        src.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 10\n")
-    else:
-        src.write_bytes(b"\x01\x02 not a mesh at all" * 10)
-    out = tmp_path / "o.csdf.npz"
-    assert_bad_input(cli("import", src, "-o", out), name, "expected")
-    _no_output(out)
-
-
-@pytest.mark.parametrize("name", ["empty.glb", "empty.ply", "empty.npz", "empty.h5"])
-def test_empty_file(tmp_path, cli, name):
-    src = tmp_path / name
-    src.write_bytes(b"")
-    out = tmp_path / "o.csdf.npz"
-    assert_bad_input(cli("import", src, "-o", out), name, "empty file (0 bytes)")
-    _no_output(out)
-
-
-def test_empty_mesh(tmp_path, cli):
-    src = tmp_path / "empty.obj"
-    src.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
-    out = tmp_path / "o.csdf.npz"
-    assert_bad_input(cli("import", src, "-o", out), "empty.obj", "triangles")
-    _no_output(out)
+    src.write_bytes(content() if callable(content) else content)
+    _refused(tmp_path, cli, src, name, fragment)
 
 
 def test_nan_in_grid(tmp_path, cli):
@@ -372,32 +357,26 @@ def test_nan_in_grid(tmp_path, cli):
     g[3, 4, 5] = np.nan
     src = tmp_path / "nan.npy"
     np.save(src, g)
-    out = tmp_path / "o.csdf.npz"
-    assert_bad_input(cli("import", src, "-o", out), "nan.npy", "nan")
-    _no_output(out)
+    _refused(tmp_path, cli, src, "nan.npy", "nan")
 
 
 def test_res_below_16(tmp_path, cli):
-    out = tmp_path / "o.csdf.npz"
-    proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--res", "8")
-    assert_bad_input(proc, "chair.glb", "--res >= 16", "got 8")
-    _no_output(out)
+    chair = data_path("kenney/chair.glb")
+    _refused(tmp_path, cli, chair, "chair.glb", "--res >= 16", "got 8", args=("--res", "8"))
 
 
 def test_res_beyond_memory(tmp_path, cli, monkeypatch):
     """PARTSCALE_MAX_MEMORY stands in for a small machine: the message says what it would need."""
     monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(200 << 20))
-    out = tmp_path / "o.csdf.npz"
-    proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--res", "512")
-    assert_bad_input(proc, "chair.glb", "--res 512", "would need", "GiB")
-    _no_output(out)
+    chair = data_path("kenney/chair.glb")
+    _refused(
+        tmp_path, cli, chair, "chair.glb", "--res 512", "would need", "GiB", args=("--res", "512")
+    )
 
 
 def test_iso_on_a_mesh_is_refused(tmp_path, cli):
-    out = tmp_path / "o.csdf.npz"
-    proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--iso", "0.1")
-    assert_bad_input(proc, "chair.glb", "iso")
-    _no_output(out)
+    chair = data_path("kenney/chair.glb")
+    _refused(tmp_path, cli, chair, "chair.glb", "iso", args=("--iso", "0.1"))
 
 
 def test_cli_import_writes_a_loadable_csdf(tmp_path, cli):

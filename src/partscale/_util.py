@@ -1,4 +1,4 @@
-"""Small helpers shared by every stage: atomic writes, option checks, memory guards."""
+"""Small helpers shared by every stage: atomic writes, option checks, memory guards, threads."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import inspect
 import json
 import os
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import TypeVar
 
@@ -151,3 +152,22 @@ def palette_colour(i: int) -> list[int]:
     light = 0.55 if i % 2 == 0 else 0.42
     r, g, b = colorsys.hls_to_rgb(h, light, 0.65)
     return [round(r * 255), round(g * 255), round(b * 255)]
+
+
+_POOL: ThreadPoolExecutor | None = None
+
+
+def thread_map(fn: Callable, items: Iterable) -> list:
+    """``[fn(x) for x in items]`` on a thread per core, results in the order of ``items``.
+
+    For work that releases the GIL (qhull, KD-tree searches, ``nogil`` numba kernels). One pool
+    serves the whole process; ``fn`` must not call :func:`thread_map` itself (the pool could be
+    waiting on its own workers).
+    """
+    global _POOL
+    items = list(items)
+    if len(items) < 2 or (os.cpu_count() or 1) < 2:
+        return [fn(x) for x in items]
+    if _POOL is None:
+        _POOL = ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="partscale")
+    return list(_POOL.map(fn, items))

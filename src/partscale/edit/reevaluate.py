@@ -19,16 +19,13 @@ Units inside the kernels are voxels (continuous indices); results are scaled by 
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
-
 import numba
 import numpy as np
 from scipy import ndimage
 from skimage import measure
 
 from .._kernels import closest_on_triangle
-from .._util import keyword_options
+from .._util import keyword_options, thread_map
 from ..csdf import CSDF
 from ..progress import ProgressCallback, resolve
 
@@ -216,13 +213,9 @@ def reevaluate_arrays(
         t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] : run[-1] + 1]
         return _solve_box(sdf, t_run, a0, h, lim, pad, npass)
 
-    if len(runs) > 1 and (os.cpu_count() or 1) > 1:
-        # boxes are independent (each reads the unchanged field) and the propagation, their
-        # main cost, releases the GIL: solve them side by side
-        with ThreadPoolExecutor(max_workers=min(len(runs), os.cpu_count() or 1)) as pool:
-            results = list(pool.map(solve, runs))
-    else:
-        results = [solve(run) for run in runs]
+    # boxes are independent (each reads the unchanged field) and the propagation, their main
+    # cost, releases the GIL: they are solved side by side
+    results = thread_map(solve, runs)
     found = [got for got in results if got is not None]
     if not found:
         return 0

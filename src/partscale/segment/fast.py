@@ -66,13 +66,11 @@ voxels against CoACD's 1.06); a second merge up to the largest concavity already
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
 
+from .._util import thread_map
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
@@ -320,23 +318,22 @@ def atoms(
     children: dict[int, list[int]] = {}
     items = list(roots)
     frontier = list(range(len(items)))
-    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        while frontier:
-            results = list(pool.map(lambda i: cut(items[i]), frontier))
-            nxt = []
-            for i, (final, pieces) in zip(frontier, results, strict=True):
-                mask, off, depth = items[i]
-                if final:
-                    done += int(mask.sum())
-                    continue
-                kids = []
-                for sub, o in pieces:
-                    items.append((sub, (off[0] + o[0], off[1] + o[1], off[2] + o[2]), depth + 1))
-                    kids.append(len(items) - 1)
-                children[i] = kids
-                nxt.extend(kids)
-            frontier = nxt
-            report(done / total, f"cutting at creases ({len(items)} regions)")
+    while frontier:
+        results = thread_map(lambda i: cut(items[i]), frontier)
+        nxt = []
+        for i, (final, pieces) in zip(frontier, results, strict=True):
+            mask, off, depth = items[i]
+            if final:
+                done += int(mask.sum())
+                continue
+            kids = []
+            for sub, o in pieces:
+                items.append((sub, (off[0] + o[0], off[1] + o[1], off[2] + o[2]), depth + 1))
+                kids.append(len(items) - 1)
+            children[i] = kids
+            nxt.extend(kids)
+        frontier = nxt
+        report(done / total, f"cutting at creases ({len(items)} regions)")
     out = np.full(csdf.shape, -1, np.int32)
     n = 0
     stack = list(range(len(roots)))

@@ -7,15 +7,13 @@ CSDF's ``parts`` grid the same way for all methods, so methods differ only in wh
 from __future__ import annotations
 
 import heapq
-import os
-from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from .._util import palette_colour
+from .._util import palette_colour, thread_map
 from ..csdf import CSDF
 from .concavity import (
     Patch,
@@ -190,9 +188,8 @@ def merge_convex(
     version = dict.fromkeys(range(n), 0)
     # costs are computed side by side where they are independent (hulls and tree searches
     # release the GIL); the merges happen in the same order as with one thread
-    pool = ThreadPoolExecutor(max_workers=os.cpu_count() or 1)
     fresh: dict[tuple[int, int, int, int], float] = {}
-    costs = list(pool.map(lambda pq: union_cost(*pq), pairs))
+    costs = thread_map(lambda pq: union_cost(*pq), pairs)
     heap = [(cost, p, q, 0, 0) for cost, (p, q) in zip(costs, pairs, strict=True)]
     heapq.heapify(heap)
     parent = np.arange(n)
@@ -218,7 +215,7 @@ def merge_convex(
                         ahead.append(k)
                 ahead = list(dict.fromkeys(ahead))
                 for k, c in zip(
-                    ahead, pool.map(lambda k: union_cost(k[0], k[1]), ahead), strict=True
+                    ahead, thread_map(lambda k: union_cost(k[0], k[1]), ahead), strict=True
                 ):
                     fresh[k] = c
             heapq.heappush(heap, (fresh.pop(key), p, q, version[p], version[q]))
@@ -239,7 +236,6 @@ def merge_convex(
         alive.discard(q)
         parent[parent == q] = p
         version[p] += 1
-    pool.shutdown()
     lut = np.append(parent, -1).astype(np.int32)
     return renumber(lut[labels])
 
@@ -330,19 +326,13 @@ def merge_across_junctions(
                 if b not in nbrs[a] and gap <= thick:
                     first.add((a, b))
     first_list = sorted(first)
-    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        needed = sorted({p for ab in first_list for p in ab} - set(patches))
-        for p, made in zip(needed, pool.map(lambda p: patch_of(p), needed), strict=True):
-            if made is not None:
-                patches[p] = made
-        ok = [p in patches and q in patches for p, q in first_list]
-        tests = pool.map(
-            lambda ab: convex([patches[ab[0]], patches[ab[1]]]),
-            [ab for ab, k in zip(first_list, ok, strict=True) if k],
-        )
-        pair_ok = dict(
-            zip([ab for ab, k in zip(first_list, ok, strict=True) if k], tests, strict=True)
-        )
+    needed = sorted({p for ab in first_list for p in ab} - set(patches))
+    for p, made in zip(needed, thread_map(patch_of, needed), strict=True):
+        if made is not None:
+            patches[p] = made
+    testable = [(a, b) for a, b in first_list if a in patches and b in patches]
+    tests = thread_map(lambda ab: convex([patches[ab[0]], patches[ab[1]]]), testable)
+    pair_ok = dict(zip(testable, tests, strict=True))
     cheap = {(a, b, 0, 0): v for (a, b), v in pair_ok.items()}
 
     def pair_convex(a: int, b: int, pa: Patch, pb: Patch) -> bool:

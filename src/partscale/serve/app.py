@@ -277,23 +277,20 @@ def create_app(
             return _error(f"apply failed inside partscale: {type(exc).__name__}: {exc}", 500)
         return state(apply_ms=ms)
 
-    async def undo(request: Request) -> Response:
-        try:
-            await _json_body(request)
-        except _HTTPError as exc:
-            return _error(str(exc), exc.status)
-        if not await run_in_threadpool(session.undo):
-            return _error("undo: expected an edit to undo, got none", 409)
-        return state()
+    def history_step(step, what: str, missing: str):
+        async def handler(request: Request) -> Response:
+            try:
+                await _json_body(request)
+            except _HTTPError as exc:
+                return _error(str(exc), exc.status)
+            if not await run_in_threadpool(step):
+                return _error(f"{what}: expected {missing}, got none", 409)
+            return state()
 
-    async def redo(request: Request) -> Response:
-        try:
-            await _json_body(request)
-        except _HTTPError as exc:
-            return _error(str(exc), exc.status)
-        if not await run_in_threadpool(session.redo):
-            return _error("redo: expected an undone edit to redo, got none", 409)
-        return state()
+        return handler
+
+    undo = history_step(session.undo, "undo", "an edit to undo")
+    redo = history_step(session.redo, "redo", "an undone edit to redo")
 
     async def save(request: Request) -> Response:
         try:

@@ -200,20 +200,18 @@ class EditSession:
 
     def undo(self) -> bool:
         """Restore the object before the last apply exactly (the same arrays); False if none."""
-        with self.lock:
-            if not self.undo_stack:
-                return False
-            self.redo_stack.append(self.current)
-            self.current = self.undo_stack.pop()
-            self.revision += 1
-            return True
+        return self._step(self.undo_stack, self.redo_stack)
 
     def redo(self) -> bool:
+        """Re-apply the last undone edit (the same arrays); False if none."""
+        return self._step(self.redo_stack, self.undo_stack)
+
+    def _step(self, source: list[CSDF], other: list[CSDF]) -> bool:
         with self.lock:
-            if not self.redo_stack:
+            if not source:
                 return False
-            self.undo_stack.append(self.current)
-            self.current = self.redo_stack.pop()
+            other.append(self.current)
+            self.current = source.pop()
             self.revision += 1
             return True
 

@@ -229,11 +229,16 @@ def _outside_lattice(tri, spacing, sdf, skip):  # pragma: no cover - compiled
 
 def decimate(points: np.ndarray, cell: float) -> np.ndarray:
     """(M, 3): one of ``points`` per occupied cube of edge ``cell`` (first in input order)."""
+    return points[decimate_index(points, cell)]
+
+
+def decimate_index(points: np.ndarray, cell: float) -> np.ndarray:
+    """(M,) intp, increasing: the indices of :func:`decimate`'s points in ``points``."""
     q = np.floor(points / cell).astype(np.int64)
     q -= q.min(axis=0)
     k = (q[:, 0] * (q[:, 1].max() + 1) + q[:, 1]) * (q[:, 2].max() + 1) + q[:, 2]
     _, first = np.unique(k, return_index=True)
-    return points[np.sort(first)]
+    return np.sort(first)
 
 
 class Patch:
@@ -246,25 +251,10 @@ class Patch:
         Surface samples, voxel units.
     """
 
-    def __init__(self, points: np.ndarray, _hull_points: np.ndarray | None = None):
+    def __init__(self, points: np.ndarray):
         self.points = np.ascontiguousarray(points, dtype=np.float64)
         self.tree = cKDTree(self.points)
-        candidates = self.points if _hull_points is None else _hull_points
-        try:
-            self.hull_points = candidates[ConvexHull(candidates).vertices]
-        except (QhullError, ValueError):
-            self.hull_points = candidates
-        if len(self.hull_points) > 200:
-            # a curved patch has most of its samples on its hull: one per 1.5-voxel cell moves
-            # the hull by a fraction of a voxel and keeps union hulls cheap
-            self.hull_points = decimate(self.hull_points, 1.5)
-
-    def merged(self, other: Patch) -> Patch:
-        """The patch of both parts (the hull of a union is the hull of the hulls' vertices)."""
-        return Patch(
-            np.concatenate([self.points, other.points]),
-            np.concatenate([self.hull_points, other.hull_points]),
-        )
+        self.hull_points = self.points[_hull_vertices(self.points, np.arange(len(self.points)))]
 
 
 def union_concavity(
@@ -294,6 +284,85 @@ def union_concavity(
         sdf,
         limit,
     )
+
+
+class UnionCosts:
+    """Concavity of unions of parts' patches, computed where the patches are not objects but
+    index lists, so that worker processes can share them (see :func:`labels.merge_convex`).
+
+    A part is a list of *atoms* (the parts it started as, whose samples never change) and the
+    indices of its hull vertices; a union's hull is the hull of both parts' hull vertices.
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+        Every atom's surface samples, atom after atom (voxel units).
+    start : (A + 1,) int64
+        Atom ``a``'s samples are ``points[start[a]:start[a + 1]]``.
+    sdf : (X, Y, Z) float
+        Signed distance in voxels.
+    limit : float
+        As :func:`union_concavity`'s.
+
+    Called with ``("hull", a)``: (H,) int64, atom ``a``'s hull vertices (thinned as
+    :class:`Patch`'s). With ``("union", parts)``, ``parts`` a list of (key, atoms,
+    hull) (a key names a part's current state, e.g. (part, version)): the concavity of the
+    parts' union and the union's hull vertices, thinned (the hull of the merged part).
+    """
+
+    _KEEP = 256  # parts whose samples and KD-tree stay cached
+
+    def __init__(self, points: np.ndarray, start: np.ndarray, sdf: np.ndarray, limit: float):
+        self.points, self.start, self.sdf, self.limit = points, start, sdf, limit
+        self._cache: dict = {}
+
+    def __call__(self, task: tuple):
+        if task[0] == "hull":
+            a = task[1]
+            return _hull_vertices(self.points, np.arange(self.start[a], self.start[a + 1]))
+        parts = [self._part(key, atoms) for key, atoms, _ in task[1]]
+        idx = np.concatenate([h for _, _, h in task[1]])
+        corners = self.points[idx]
+        if len(corners) < 4:
+            return 0.0, idx
+        try:
+            hull = ConvexHull(corners)
+        except (QhullError, ValueError):
+            return 0.0, _thin(self.points, idx)  # flat: no volume, nothing concave
+        cost = _to_hull(
+            hull,
+            corners,
+            [pts for pts, _ in parts],
+            lambda: [tree for _, tree in parts],
+            1.0,
+            self.sdf,
+            self.limit,
+        )
+        return cost, _thin(self.points, idx[hull.vertices])
+
+    def _part(self, key, atoms):
+        got = self._cache.get(key)
+        if got is None:
+            pts = np.concatenate([self.points[self.start[a] : self.start[a + 1]] for a in atoms])
+            got = self._cache[key] = (pts, cKDTree(pts))
+            if len(self._cache) > self._KEEP:
+                del self._cache[next(iter(self._cache))]  # the oldest: parts only grow
+        return got
+
+
+def _hull_vertices(points: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """(H,) int64: the indices of ``idx`` whose points are hull vertices, thinned."""
+    try:
+        idx = idx[ConvexHull(points[idx]).vertices]
+    except (QhullError, ValueError):
+        pass
+    return _thin(points, idx)
+
+
+def _thin(points: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    # a curved patch has most of its samples on its hull: one per 1.5-voxel cell moves the hull
+    # by a fraction of a voxel and keeps union hulls cheap
+    return idx[decimate_index(points[idx], 1.5)] if len(idx) > 200 else idx
 
 
 def vertex_labels(csdf: CSDF, labels: np.ndarray, mesh) -> np.ndarray:

@@ -70,7 +70,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
 
-from .._util import thread_map
+from .._util import worker_pool
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
@@ -271,6 +271,31 @@ def _split(mask: np.ndarray, cuts: list[np.ndarray]) -> list[tuple[np.ndarray, t
     return pieces
 
 
+class _Cutter:
+    """Cuts one region: ``(mask, depth)`` -> ``(final, pieces)``; final when the region is small,
+    deep or convex enough, else ``pieces`` is a list of (sub-mask, offset)."""
+
+    def __init__(self, params: dict, tau: float):
+        self.params, self.tau = params, tau
+
+    def __call__(self, item: tuple[np.ndarray, int]) -> tuple[bool, list]:
+        mask, depth = item
+        params = self.params
+        if (
+            int(mask.sum()) < params["min_voxels"]
+            or depth >= params["max_depth"]
+            or _region_concavity(mask, limit=self.tau) <= self.tau
+        ):
+            return True, []
+        cuts = _cuts(mask, params["jump"], params["min_jump"])
+        pieces = (
+            _split(mask, cuts)
+            if any(len(c) for c in cuts)
+            else _plane_pieces(mask, params["min_voxels"])
+        )
+        return len(pieces) <= 1, pieces
+
+
 def atoms(
     csdf: CSDF,
     *,
@@ -293,47 +318,28 @@ def atoms(
         for c, sl in enumerate(ndimage.find_objects(comp), start=1)
     ]
 
-    def cut(item):
-        """(final, pieces) of one region: final when small, deep or convex enough."""
-        mask, _off, depth = item
-        if (
-            int(mask.sum()) < params["min_voxels"]
-            or depth >= params["max_depth"]
-            or _region_concavity(mask, limit=tau) <= tau
-        ):
-            return True, []
-        cuts = _cuts(mask, params["jump"], params["min_jump"])
-        pieces = (
-            _split(mask, cuts)
-            if any(len(c) for c in cuts)
-            else _plane_pieces(mask, params["min_voxels"])
-        )
-        return len(pieces) <= 1, pieces
-
-    # Regions are independent: each generation of the cutting tree is cut in parallel (hulls,
-    # tree searches and the compiled kernels release the GIL). Pieces are then numbered in the
-    # depth-first order of a one-at-a-time recursion, so the result does not depend on timing.
+    # Regions are independent: each is cut (in a worker process) as soon as its parent is.
+    # Pieces are then numbered in the depth-first order of a one-at-a-time recursion, so the
+    # result does not depend on timing.
     total = float(inside.sum())
     done = 0.0
     children: dict[int, list[int]] = {}
     items = list(roots)
-    frontier = list(range(len(items)))
-    while frontier:
-        results = thread_map(lambda i: cut(items[i]), frontier)
-        nxt = []
-        for i, (final, pieces) in zip(frontier, results, strict=True):
+    with worker_pool(_Cutter, params, tau) as workers:
+        pending = {workers.submit((m, d)): i for i, (m, _o, d) in enumerate(items)}
+        while pending:
+            i = pending.pop((got := workers.next_done())[0])
+            final, pieces = got[1]
             mask, off, depth = items[i]
             if final:
                 done += int(mask.sum())
-                continue
-            kids = []
-            for sub, o in pieces:
-                items.append((sub, (off[0] + o[0], off[1] + o[1], off[2] + o[2]), depth + 1))
-                kids.append(len(items) - 1)
-            children[i] = kids
-            nxt.extend(kids)
-        frontier = nxt
-        report(done / total, f"cutting at creases ({len(items)} regions)")
+            else:
+                children[i] = []
+                for sub, o in pieces:
+                    items.append((sub, (off[0] + o[0], off[1] + o[1], off[2] + o[2]), depth + 1))
+                    children[i].append(len(items) - 1)
+                    pending[workers.submit((sub, depth + 1))] = len(items) - 1
+            report(done / total, f"cutting at creases ({len(items)} regions)")
     out = np.full(csdf.shape, -1, np.int32)
     n = 0
     stack = list(range(len(roots)))

@@ -13,10 +13,11 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from .._util import palette_colour, thread_map
+from .._util import palette_colour, thread_map, worker_pool
 from ..csdf import CSDF
 from .concavity import (
     Patch,
+    UnionCosts,
     decimate,
     surface_samples,
     touching_pairs,
@@ -139,7 +140,7 @@ def renumber(labels: np.ndarray) -> np.ndarray:
     return lut[labels]  # labels == -1 picks lut[-1] == -1
 
 
-_AHEAD = 8
+_AHEAD = 16
 """Stale merge costs refreshed ahead of their turn, in parallel, by :func:`merge_convex`."""
 
 
@@ -166,32 +167,55 @@ def merge_convex(
     if n <= 1:
         return renumber(labels)
     # one sample per voxel is enough to decide merges at a tolerance of a voxel or more
-    patch = {
-        p: Patch(decimate(v, 1.0)) for p, v in surface_samples(csdf, labels, mesh=mesh).items()
-    }
-    sdf = csdf.sdf / csdf.voxel_size
+    samples = surface_samples(csdf, labels, mesh=mesh)
+    chunks = [decimate(samples[p], 1.0) if p in samples else np.empty((0, 3)) for p in range(n)]
+    start = np.concatenate([[0], np.cumsum([len(c) for c in chunks])]).astype(np.int64)
+    points = np.concatenate(chunks)
+    has = {p for p in range(n) if start[p + 1] > start[p]}  # parts with a surface patch
     neighbours: dict[int, set[int]] = {p: set() for p in range(n)}
     pairs = sorted(touching_pairs(csdf, labels, mesh=mesh))
     for p, q in pairs:
         neighbours[p].add(q)
         neighbours[q].add(p)
+    # above the tolerance the exact value only orders merges forced by max_parts
+    limit = tolerance if max_parts is None else np.inf
+    with worker_pool(UnionCosts, points, start, csdf.sdf / csdf.voxel_size, limit) as run:
+        parent = _merge_greedy(run.map, n, has, neighbours, pairs, tolerance, max_parts)
+    lut = np.append(parent, -1).astype(np.int32)
+    return renumber(lut[labels])
 
-    def union_cost(p: int, q: int) -> float:
-        both = [patch[r] for r in (p, q) if r in patch]
-        if not both:
-            return 0.0
-        # above the tolerance the exact value only orders merges forced by max_parts
-        limit = tolerance if max_parts is None else np.inf
-        return union_concavity(both, sdf=sdf, spacing=1.0, limit=limit)
 
-    alive = set(range(n))
+def _merge_greedy(run, n, has, neighbours, pairs, tolerance, max_parts) -> np.ndarray:
+    """:func:`merge_convex`'s loop over parts ``0..n-1``; ``has``: those with a patch.
+
+    ``run`` computes :class:`UnionCosts` tasks (in worker processes). Returns (n,) int64: the
+    part each part ended in.
+    """
+    atoms = {p: [p] for p in range(n)}
     version = dict.fromkeys(range(n), 0)
-    # costs are computed side by side where they are independent (hulls and tree searches
-    # release the GIL); the merges happen in the same order as with one thread
-    fresh: dict[tuple[int, int, int, int], float] = {}
-    costs = thread_map(lambda pq: union_cost(*pq), pairs)
-    heap = [(cost, p, q, 0, 0) for cost, (p, q) in zip(costs, pairs, strict=True)]
+    has = set(has)
+    hull = dict(zip(sorted(has), run([("hull", p) for p in sorted(has)]), strict=True))
+
+    def costs(keys: list) -> dict:
+        """{(p, q, vp, vq): (concavity of the union of p and q, its hull)}; a part without a
+        patch adds nothing, and two of them cost nothing."""
+        sides = [
+            [((r, v), atoms[r], hull[r]) for r, v in ((p, vp), (q, vq)) if r in has]
+            for p, q, vp, vq in keys
+        ]
+        todo = [i for i, side in enumerate(sides) if side]
+        out = dict.fromkeys(keys, (0.0, None))
+        out.update(
+            zip([keys[i] for i in todo], run([("union", sides[i]) for i in todo]), strict=True)
+        )
+        return out
+
+    # Costs are computed side by side where they are independent; the merges happen in the
+    # order of computing them one at a time, so the parts do not depend on timing.
+    known = costs([(p, q, 0, 0) for p, q in pairs])
+    heap = [(known[p, q, 0, 0][0], p, q, 0, 0) for p, q in pairs]
     heapq.heapify(heap)
+    alive = set(range(n))
     parent = np.arange(n)
     while heap:
         cost, p, q, vp, vq = heapq.heappop(heap)
@@ -200,30 +224,25 @@ def merge_convex(
         if cost > tolerance and (max_parts is None or len(alive) <= max_parts):
             # every queued cost is at least this one; refreshing a stale one rarely lowers it
             break
-        if version[p] != vp or version[q] != vq:
+        key = (p, q, version[p], version[q])
+        if (vp, vq) != key[2:]:
             # Lazy update: a part grew since this cost was computed. Growing rarely makes a
-            # union more convex, so the old cost orders the queue and is refreshed only here.
-            key = (p, q, version[p], version[q])
-            if key not in fresh:
-                # the next stale entries are refreshed alongside (in parallel); their costs
-                # wait in ``fresh`` for their turn, so the order of merges stays the one of
-                # refreshing one at a time
+            # union more convex, so the old cost orders the queue and is refreshed only here,
+            # together with the next few stale ones (their costs wait in ``known``).
+            if key not in known:
                 ahead = [key]
                 for _c, a, b, va, vb in heapq.nsmallest(_AHEAD, heap):
-                    k = (a, b, version.get(a, -2), version.get(b, -2))
-                    if a in alive and b in alive and (va, vb) != k[2:] and k not in fresh:
+                    k = (a, b, version[a], version[b])
+                    if a in alive and b in alive and (va, vb) != k[2:] and k not in known:
                         ahead.append(k)
-                ahead = list(dict.fromkeys(ahead))
-                for k, c in zip(
-                    ahead, thread_map(lambda k: union_cost(k[0], k[1]), ahead), strict=True
-                ):
-                    fresh[k] = c
-            heapq.heappush(heap, (fresh.pop(key), p, q, version[p], version[q]))
+                known.update(costs(list(dict.fromkeys(ahead))))
+            heapq.heappush(heap, (known[key][0], p, q, *key[2:]))
             continue
-        if cost > tolerance and (max_parts is None or len(alive) <= max_parts):
-            break
-        if q in patch:
-            patch[p] = patch[p].merged(patch.pop(q)) if p in patch else patch.pop(q)
+        if q in has:
+            hull[p] = known[key][1] if p in has else hull[q]
+            has.add(p)
+            has.discard(q)
+        atoms[p] = atoms[p] + atoms.pop(q)
         for r in neighbours.pop(q):
             if r != p:
                 neighbours[r].discard(q)
@@ -236,8 +255,7 @@ def merge_convex(
         alive.discard(q)
         parent[parent == q] = p
         version[p] += 1
-    lut = np.append(parent, -1).astype(np.int32)
-    return renumber(lut[labels])
+    return parent
 
 
 def _part_graph(csdf: CSDF, mesh, labels: np.ndarray):

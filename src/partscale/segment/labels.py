@@ -395,7 +395,9 @@ def merge_across_junctions(
                     continue
                 near = tuple(slice(x, y) for x, y in zip(lo, hi, strict=True))
                 own = np.argwhere(here[near]) + lo
-                move = _in_hull((own + box[s][0]).astype(np.float64), eq, 0.5)
+                # strictly inside: a margin took the voxels of s just beside the board's face
+                # (half a voxel out), and the board's hull then bulged over its whole face
+                move = _in_hull((own + box[s][0]).astype(np.float64), eq, 0.0)
                 if not move.any() or move.sum() == here.sum():
                     continue
                 moved = np.zeros(here.shape, bool)

@@ -12,7 +12,13 @@ from partscale import csdf as csdf_mod
 from partscale import ingest, shapes
 from partscale.edit import apply_edit
 from partscale.errors import InputError, MemoryLimitError
-from partscale.segment import coacd_method, concavity, part_concavities, segment
+from partscale.segment import (
+    DEFAULT_METHOD,
+    coacd_method,
+    concavity,
+    part_concavities,
+    segment,
+)
 from partscale.segment import labels as labels_mod
 from partscale.surface import sample_nearest, to_mesh
 
@@ -275,9 +281,12 @@ def test_object_without_surface_is_refused():
 def test_cli_segments_and_refuses_bad_input(cli, boxes, tmp_path):
     src = csdf_mod.save(boxes, tmp_path / "in.csdf.npz")
     out = tmp_path / "out.csdf.npz"
-    proc = cli("segment", src, "-o", out, "--method", "fast", "--no-cache")
+    proc = cli("segment", src, "-o", out, "--no-cache")
     assert proc.returncode == 0, proc.stderr
-    assert csdf_mod.load(out).n_parts == len(BOXES)
+    got = csdf_mod.load(out)
+    assert got.n_parts == len(BOXES)
+    # the command's default method is the library's, the fast one since it matched CoACD
+    assert got.meta["segmentation"]["method"] == DEFAULT_METHOD == "fast"
     bad = tmp_path / "bad.csdf.npz"
     assert_bad_input(cli("segment", src, "-o", bad, "--method", "magic"), "method", "magic")
     assert_bad_input(cli("segment", src, "-o", bad, "--threshold", "0"), "threshold")

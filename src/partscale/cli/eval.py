@@ -25,7 +25,7 @@ def eval_suite(
         str | None,
         typer.Option(
             "--segment",
-            help="Segment each object first with this method (coacd, fast; cached) and add a "
+            help="Segment each object first with this method (fast or coacd; cached) and add a "
             "row coloured by part to the figures. Off by default.",
         ),
     ] = None,

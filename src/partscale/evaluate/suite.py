@@ -427,8 +427,8 @@ def run_suite(
     segment : str, optional
         Segment each object first with this method of :mod:`partscale.segment` (results are
         cached by that stage): tile copies then become distinct parts and the figures get a row
-        coloured by part. The metrics do not use parts. Off by default (CoACD takes tens of
-        seconds an object on first run).
+        coloured by part. The metrics do not use parts. Off by default (a few seconds an object
+        with ``"fast"`` on first run, tens of seconds with ``"coacd"``).
 
     Returns
     -------

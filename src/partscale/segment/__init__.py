@@ -1,7 +1,7 @@
 """Segment stage: nearly convex parts of a CSDF, one label per voxel.
 
-CoACD on the marching-cubes surface is the reference method; ``fast`` cuts the voxel solid at
-its concave creases. Results are cached by grid content and parameters, so each object is
+``fast`` (the default) cuts the voxel solid at its concave creases and merges convex neighbours;
+CoACD on the marching-cubes surface is the reference method it is measured against. Results are cached by grid content and parameters, so each object is
 segmented once, never per edit.
 """
 

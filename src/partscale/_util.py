@@ -1,4 +1,5 @@
-"""Small helpers shared by every stage: atomic writes, option checks, memory guards, threads."""
+"""Small helpers shared by every stage: atomic writes, option checks, memory guards, threads and
+worker processes."""
 
 from __future__ import annotations
 

@@ -28,32 +28,34 @@ largest extent ``L`` in voxels (CoACD normalises the mesh to [-1, 1], so ``scale
 own reading); ``scale`` = 0.3 (2.1 voxels at 128) cuts and merges finer than CoACD, whose parts
 on these objects measure 0.8-3.3 voxels.
 
-Pieces are cut, and merge costs computed, on both cores (threads; hulls, tree searches and the
-compiled kernels release the GIL), numbered and merged in the order one thread would, so the
-parts do not depend on timing. Slivers a plane cut leaves at a curved shell's rim (under
+Pieces are cut, and merge costs computed, in forked worker processes (one per core; threads
+gained only 1.3x here, the hull and sampling code holds the GIL between compiled calls); results
+are numbered and merged in the order one process would, so the parts do not depend on timing or
+on the number of cores. Slivers a plane cut leaves at a curved shell's rim (under
 ``min_voxels``) join the piece they touch most instead of becoming parts to merge back.
 
-Measured against CoACD at its defaults (``bench/bench_segment.py``, the 9 objects at 128
-voxels, 2026-11-22, 2-core x86-64, quiet machine; wall seconds, CPU in brackets)::
+Measured against CoACD at its defaults in one run (``bench/bench_segment.py``, the 9 objects at
+128 voxels, 2026-11-22, 2-core x86-64; wall seconds, fast a median of 3, CPU in brackets
+including worker processes)::
 
     object                  CoACD wall (cpu) parts  max  | fast wall (cpu) parts  max  | match
-    kenney/table               17.3 (26.1)     8   1.99  |  1.2 (1.4)     8   0.52 | yes
-    kenney/chair               19.9 (29.2)    12   1.95  |  0.6 (0.7)    10   0.57 | yes
-    kenney/bookcaseOpen        23.0 (30.8)     8   1.53  |  1.6 (2.0)    11   1.22 | yes
-    kenney/stairsOpen          11.3 (15.4)    11   0.75  |  0.6 (0.7)    11   0.75 | yes
-    khronos/SheenChair         84.8 (112)     28   3.26  |  5.5 (7.7)    33   2.85 | yes, > 5 s
-    sweethome3d/table          33.1 (22.0)    10   3.06  |  1.7 (2.3)     9   0.34 | yes
-    sweethome3d/chair          13.3 (15.7)     9   1.06  |  0.6 (0.8)     9   0.75 | yes
-    sweethome3d/bookcase       37.1 (47.8)    10   1.072 |  0.9 (1.1)    10   1.075 | no
-    sweethome3d/staircase      53.9 (37.7)    19   3.15  |  2.5 (3.1)    26   2.87 | yes
+    kenney/table               15.4 (24.5)     8   1.99  |  0.8 (1.1)     8   0.52 | yes
+    kenney/chair               18.1 (26.8)    12   1.95  |  0.6 (0.8)    10   0.57 | yes
+    kenney/bookcaseOpen        18.3 (30.2)     8   1.53  |  0.9 (1.4)    11   1.22 | yes
+    kenney/stairsOpen           8.8 (13.2)    11   0.75  |  0.4 (0.5)    11   0.75 | yes
+    khronos/SheenChair         63.9 (103)     28   3.26  |  4.3 (6.6)    34   2.85 | yes
+    sweethome3d/table          18.1 (23.1)    10   3.06  |  2.4 (2.6)     9   0.34 | yes
+    sweethome3d/chair          10.9 (14.9)     9   1.06  |  0.7 (0.9)     9   0.75 | yes
+    sweethome3d/bookcase       28.5 (45.7)    10   1.07  |  0.9 (1.2)    10   0.73 | yes
+    sweethome3d/staircase      25.3 (35.3)    19   3.15  |  2.0 (2.9)    26   2.87 | yes
 
-Max concavity no worse and at most 1.5x the parts on 8 of 9 (9 of 9 allowing the measure's half
-voxel of sampling noise); median 1.2 s against 23 s. The Sweet Home bookcase misses by 0.003
-voxel: its deepest patch point is a marching-cubes vertex in the rounded inner crease where a
-shelf meets the side panel, labelled with the panel. The curved SheenChair (331 pieces before
-merging) takes 5.4-5.5 s alone and up to 7 s inside a long benchmark run, above the 5 s target.
-So CoACD stays the default. Merges test a union at the measure's own 1-voxel spacing: at 2
-voxels a narrow air pocket under a curved cushion went unseen and a merged part measured 5.2.
+Max concavity no worse and at most 1.5x the parts on 9 of 9, every object within 5 s; median
+0.9 s against 18 s (19x). So this is the default method (:data:`partscale.segment.DEFAULT_METHOD`). The curved
+SheenChair (331 pieces before merging) is the slowest, most of it in ``merge_convex``. Merges
+test a union at the measure's own 1-voxel spacing: at 2 voxels a narrow air pocket under a
+curved cushion went unseen and a merged part measured 5.2. Junction merges move only voxels
+strictly inside the joined boards' hull; with half a voxel of slack the Sweet Home bookcase's
+rounded shelf creases went to the panel and measured 1.075 against CoACD's 1.072.
 
 Tried and dropped: labelling faces by the pieces' convex hulls as CoACD's are (parts leaked
 more); giving pieces under 8-64 voxels to a neighbour before merging (about 20% faster on the

@@ -168,9 +168,11 @@ def test_concavity_of_l_as_one_part_matches_its_notch(lshape):
         concavity(one, 1)
 
 
-def test_same_seed_same_parts(lshape, tmp_path):
-    a = segment(lshape, method="coacd", seed=3, cache=False, **QUICK_COACD)
-    b = segment(lshape, method="coacd", seed=3, cache=False, **QUICK_COACD)
+@pytest.mark.parametrize("method", METHODS)
+def test_same_seed_same_parts(lshape, method):
+    options = QUICK_COACD if method == "coacd" else {}
+    a = segment(lshape, method=method, seed=3, cache=False, **options)
+    b = segment(lshape, method=method, seed=3, cache=False, **options)
     assert np.array_equal(a.parts, b.parts)
     assert a.meta["parts_info"] == b.meta["parts_info"]
 

@@ -66,13 +66,16 @@ demo() {
   local ps=$VENV/bin/partscale
   say "demo: import $obj"
   "$ps" import "$obj" -o "$out/table.csdf.npz" --res 128
+  say "demo: split it into nearly convex parts (top, legs, rails)"
+  "$ps" segment "$out/table.csdf.npz" -o "$out/table.csdf.npz"
   "$ps" info "$out/table.csdf.npz"
-  say "demo: make it 40% longer by stretching the zone between its legs"
+  say "demo: make it 40% longer by stretching the zone between its legs (parts carried through)"
   "$ps" scale "$out/table.csdf.npz" -o "$out/table_longer.csdf.npz" --axis x --zone 35% 65% --to 105% --mode stretch
   "$ps" render "$out/table.csdf.npz" -o "$out/table.png" --view iso
+  "$ps" render "$out/table.csdf.npz" -o "$out/table_parts.png" --view iso --parts
   "$ps" render "$out/table_longer.csdf.npz" -o "$out/table_longer.png" --view iso
   "$ps" export "$out/table_longer.csdf.npz" --mesh "$out/table_longer.glb"
-  say "demo done: see $out (table.png, table_longer.png, table_longer.glb)"
+  say "demo done: see $out (table.png, table_parts.png, table_longer.png, table_longer.glb)"
 }
 
 case "${1:-}" in

@@ -85,12 +85,26 @@ class Suite:
     source: Path | None = None
 
 
+def _plain_name(name: str) -> bool:
+    # the name becomes the figure's file name inside the output folder: never a path
+    return (
+        bool(name)
+        and not (name.startswith(".") or ".." in name or "/" in name or "\\" in name)
+        and name.isprintable()
+    )
+
+
 def _entry(obj: Any, i: int) -> Entry:
     where = f"objects[{i}]"
     if not isinstance(obj, dict):
         return Entry(where, "", None, error=f"{where}: expected an object, got {obj!r}")
-    name = str(obj.get("name") or where)
+    name = where if obj.get("name") is None else str(obj["name"])
     try:
+        if not _plain_name(name):
+            raise InputError(
+                "name: expected a plain file name (not empty, no '/', '\\', '..', leading '.' "
+                f"or control characters), got {name!r}"
+            )
         unknown = set(obj) - {"name", "path", "edit", "kind", "view", "note"}
         if unknown:
             raise InputError(
@@ -111,7 +125,8 @@ def _entry(obj: Any, i: int) -> Entry:
             raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
         return Entry(name, path, edit, kind, view, str(obj.get("note", "")))
     except InputError as exc:
-        return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")
+        label = name if _plain_name(name) else where
+        return Entry(name, str(obj.get("path", "")), None, error=f"{label}: {exc}")
 
 
 def parse_suite(obj: Any, *, source: Path | None = None) -> Suite:
@@ -232,6 +247,16 @@ def _fmt(v: Any, digits: int = 2) -> str:
     return str(v)
 
 
+def _check_segment(method: str) -> None:
+    """Refuse an unknown method once, before any object is imported."""
+    try:
+        from ..segment import METHODS
+    except ImportError:  # optional stage: each entry then gets a "not segmented" note
+        return
+    if method not in METHODS:
+        raise InputError(f"--segment: expected one of {', '.join(METHODS)}, got {method!r}")
+
+
 def _segment(c: CSDF, method: str, progress: ProgressCallback) -> CSDF:
     from .. import segment as seg  # optional stage: ImportError when it is not installed
 
@@ -335,6 +360,15 @@ def _run_entry(
         result.timings["figure"] = time.perf_counter() - t0
     except ImportError as exc:  # the render stage is optional for the metrics
         result.note = f"{name}: no figure ({exc})"
+    except InputError as exc:  # this entry fails (its rows are kept); the others still run
+        result.error = f"{name}: figure: {exc}"
+    except OSError as exc:
+        result.error = (
+            f"{name}: figure: expected a writable {out_dir / (name + '.png')}, "
+            f"got {exc.strerror or exc}"
+        )
+    except Exception as exc:  # a bug in a stage must not stop the rest of the suite
+        result.error = f"{name}: figure failed: {type(exc).__name__}: {exc}"
     return result
 
 
@@ -441,6 +475,8 @@ def run_suite(
     res = suite.res if res is None else int(res)
     if not 8 <= res <= 1024:
         raise InputError(f"res: expected an integer in 8..1024, got {res}")
+    if segment is not None:
+        _check_segment(segment)
     entries = suite.entries
     if only is not None:
         entries = [e for e in entries if e.name == only]

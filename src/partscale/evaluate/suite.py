@@ -6,7 +6,8 @@ A suite file is JSON::
      "res": 128,                      # import resolution (longest side, voxels); optional
      "data": "path/to/data",          # folder the object paths are relative to; optional
      "objects": [
-        {"name": "table-longer", "path": "kenney/table.glb",
+        {"name": "table-longer",      # a plain file name: the figure is NAME.png
+         "path": "kenney/table.glb",
          "edit": {"axis": "x", "zone": ["20%", "80%"], "to": "105%"},
          "kind": "solid" | "repeating",   # what the paper expects: optional
          "view": "iso" | "front" | "side" | "top",  # optional, default iso
@@ -19,8 +20,8 @@ the ``data`` argument, ``PARTSCALE_DATA``, the suite's ``data`` key (relative to
 Each entry's edit runs in every mode of :data:`MODES`: ``global``, ``stretch``, ``tile`` and the
 labelled baseline ``naive-stretch`` / ``naive-tile`` (per-column linear resampling of the slab,
 no re-evaluation, plain concatenation for repeats: what the paper's public prototype does).
-An entry that cannot run (missing file, bad edit, zone outside the solid) is reported with one
-line and the others still run.
+An entry that cannot run (bad name, missing file, bad edit, zone outside the solid, a figure
+that cannot be written) is reported with one line and the others still run.
 """
 
 from __future__ import annotations
@@ -462,7 +463,8 @@ def run_suite(
         Segment each object first with this method of :mod:`partscale.segment` (results are
         cached by that stage): tile copies then become distinct parts and the figures get a row
         coloured by part. The metrics do not use parts. Off by default (a few seconds an object
-        with ``"fast"`` on first run, tens of seconds with ``"coacd"``).
+        with ``"fast"`` on first run, tens of seconds with ``"coacd"``). An unknown method
+        raises :class:`InputError` before any object is read.
 
     Returns
     -------

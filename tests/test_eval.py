@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import importlib.util
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,7 @@ from conftest import DATA, assert_bad_input
 from PIL import Image
 
 from partscale.errors import InputError
+from partscale.evaluate import report
 from partscale.evaluate import suite as S
 
 
@@ -200,3 +202,116 @@ def test_segmented_run_adds_a_parts_row(tmp_path):
     with Image.open(plain.objects[0].figure) as a, Image.open(parts.objects[0].figure) as b:
         assert b.height > 1.5 * a.height  # a second row, coloured by part
     assert "segment" in parts.objects[0].timings
+
+
+# -- names, options and verdicts -------------------------------------------------------------
+NAN = math.nan
+ORIGINAL = {
+    "object": "o",
+    "mode": "original",
+    "pieces": 1,
+    "watertight": True,
+    "sdf_err_mean": 0.01,
+}
+MEASURED = {
+    "object": "o",
+    "length_err": 0.1,
+    "rigid_err": 0.1,
+    "prop_out": 0.0,
+    "prop_in": 0.0,
+    "spacing_err": 0.0,
+    "sdf_err_mean": 0.01,
+    "sdf_err_p99": 0.3,
+    "watertight": True,
+    "pieces": 3,
+    "pieces_expected": 1,
+    "seam_color": 0.0,
+    "seam_shape": 0.0,
+}
+
+
+def test_a_mode_that_failed_or_was_not_measured_never_wins():
+    rows = [{**MEASURED, "mode": m} for m in ("global", "stretch", "tile")]
+    rows.append({"object": "o", "mode": "naive-tile", "error": "boom"})
+    rows.append({**MEASURED, "mode": "naive-stretch", "pieces": None})
+    for metric in report.CRITERIA:
+        won = report.winners(rows, metric, ORIGINAL)
+        assert "naive-tile" not in won, metric
+        assert set(won) <= {"global", "stretch", "tile", "naive-stretch"}, metric
+    # two pieces too many is no win for anyone but the modes that measured it
+    assert report.winners(rows, "pieces", ORIGINAL) == ["global", "stretch", "tile"]
+    assert report.failures_of(rows[3], ORIGINAL) == ["error"]
+
+
+def _summary_verdict(tmp_path, stretch: dict, tile: dict) -> list[str]:
+    entry = S.Entry("shelf", "shelf.glb", None, kind="repeating")
+    rows = [ORIGINAL, {**MEASURED, "mode": "stretch", **stretch}]
+    rows.append({**MEASURED, "mode": "tile", "copies": 3, **tile})
+    result = S.SuiteResult([S.ObjectResult(entry, rows)], tmp_path, 64)
+    summary = report.summary_markdown(result)
+    (line,) = [ln for ln in summary.splitlines() if ln.startswith("| shelf | repeating |")]
+    return [c.strip() for c in line.strip("|").split("|")]
+
+
+def test_expectation_is_judged_only_on_what_was_measured(tmp_path):
+    # stretch 12 % thicker in the zone, tile never measured: no evidence either way
+    row = _summary_verdict(tmp_path, {"prop_in": 0.12, "spacing_err": NAN}, {"prop_in": NAN})
+    assert row[3] == "n/a" and "not measured" in row[4], row
+    # measured: held when stretch is at least twice as far off as tile, else not held
+    row = _summary_verdict(tmp_path, {"prop_in": 0.12, "spacing_err": NAN}, {"prop_in": 0.01})
+    assert row[3] == "held", row
+    row = _summary_verdict(tmp_path, {"prop_in": 0.12, "spacing_err": NAN}, {"prop_in": 0.11})
+    assert row[3] == "not held", row
+
+
+@pytest.mark.parametrize("name", ["sub/x", "../escaped", "a\\b", ".hidden", "", "a..b", "tab\tx"])
+def test_a_name_that_is_not_a_plain_file_name_is_refused(name):
+    suite = S.parse_suite(
+        {
+            "objects": [
+                {"name": name, "path": "a.glb", "edit": EDIT},
+                {"name": "ok", "path": "a.glb", "edit": EDIT},
+            ]
+        }
+    )
+    bad, ok = suite.entries
+    assert bad.error and "name: expected a plain file name" in bad.error, bad.error
+    assert f"got {name!r}" in bad.error and "\n" not in bad.error
+    assert ok.error is None
+
+
+@needs_stages
+def test_one_entrys_bad_name_or_unwritable_figure_fails_that_entry_only(tmp_path):
+    from partscale import csdf as csdf_mod
+    from partscale import shapes
+
+    csdf_mod.save(shapes.box((0, 0, 0), (1, 0.5, 0.4), voxel_size=0.05), tmp_path / "box.csdf.npz")
+    out = tmp_path / "out"
+    (out / "blocked.png").mkdir(parents=True)  # the figure cannot be written there
+    objects = [{"name": n, "path": "box.csdf.npz", "edit": EDIT} for n in ("../escaped", "blocked")]
+    objects.append({"name": "ok", "path": "box.csdf.npz", "edit": EDIT})
+    suite = S.parse_suite({"data": str(tmp_path), "objects": objects})
+    result = S.run_suite(suite, out, panel=32)
+    assert len(result.failures) == 2, result.failures
+    assert "name" in result.failures[0] and "../escaped" in result.failures[0]
+    assert result.failures[1].startswith("blocked: figure:"), result.failures[1]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.csdf.npz", "out"]
+    assert (out / "ok.png").is_file() and (out / "blocked.png").is_dir()
+    with open(out / "metrics.csv") as f:
+        measured = {r["object"] for r in csv.DictReader(f)}
+    assert measured == {"blocked", "ok"}  # the blocked entry's metrics are still reported
+    assert "blocked: figure" in (out / "summary.md").read_text()
+
+
+@pytest.mark.skipif(not _have("partscale.segment"), reason="segmentation stage not on this branch")
+def test_unknown_segment_method_is_refused_before_any_object(cli, tmp_path):
+    from partscale.segment import METHODS
+
+    suite = S.parse_suite({"objects": [{"name": "a", "path": "none.glb", "edit": EDIT}]})
+    with pytest.raises(InputError, match="--segment: expected one of " + ", ".join(METHODS)):
+        S.run_suite(suite, tmp_path / "o", segment="bogus")
+    assert not (tmp_path / "o").exists()
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps({"objects": [{"name": "a", "path": "none.glb", "edit": EDIT}]}))
+    proc = cli("eval", good, "-o", tmp_path / "o", "--segment", "bogus")
+    assert_bad_input(proc, "--segment", *METHODS, "bogus")

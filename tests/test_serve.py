@@ -9,9 +9,11 @@ import re
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 import pytest
@@ -21,6 +23,7 @@ from starlette.testclient import TestClient
 from partscale import csdf as csdf_mod
 from partscale import shapes
 from partscale.serve import MAX_BODY, create_app, edited_path, encode_grid
+from partscale.serve import session as session_mod
 from partscale.serve.app import STATIC
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -226,6 +229,89 @@ def test_concurrent_applies_are_serialised(client):
     assert session.current is original
 
 
+def test_grid_header_describes_the_grid_sent_even_when_an_apply_lands_meanwhile(
+    client, monkeypatch
+):
+    original = client.app.state.session.current
+    real = session_mod.encode_grid
+    encoding, release = threading.Event(), threading.Event()
+
+    def held(c):  # the first encoding (the GET below) waits until the apply has landed
+        if not encoding.is_set():
+            encoding.set()
+            assert release.wait(10)
+        return real(c)
+
+    monkeypatch.setattr(session_mod, "encode_grid", held)
+    got = {}
+    t = threading.Thread(target=lambda: got.update(r=client.get("/api/grid")))
+    t.start()
+    try:
+        assert encoding.wait(10)
+        assert post(client, "/api/apply", STRETCH).status_code == 200
+    finally:
+        release.set()
+        t.join(10)
+    r = got["r"]
+    shape = [int(v) for v in r.headers["x-partscale-shape"].split(",")]
+    assert client.app.state.session.current.shape != original.shape
+    # the body is the object as it was asked for; the header must say so
+    assert shape == list(original.shape)
+    assert len(r.content) == 8 * int(np.prod(shape))
+
+
+def test_progress_is_busy_until_the_last_apply_in_flight_ends(client, monkeypatch):
+    session = client.app.state.session
+    real = session.apply
+    entered = [threading.Event(), threading.Event()]
+    release = [threading.Event(), threading.Event()]
+    calls = iter(range(2))
+
+    def held(recipe, *, progress=None):  # each apply waits for its turn, then runs for real
+        i = next(calls)
+        entered[i].set()
+        assert release[i].wait(10)
+        return real(recipe, progress=progress)
+
+    monkeypatch.setattr(session, "apply", held)
+    codes = []
+    threads = [
+        threading.Thread(target=lambda: codes.append(post(client, "/api/apply", STRETCH)))
+        for _ in range(2)
+    ]
+    try:
+        threads[0].start()
+        assert entered[0].wait(10)
+        threads[1].start()
+        assert entered[1].wait(10)
+        release[0].set()
+        threads[0].join(10)
+        assert len(codes) == 1 and codes[0].status_code == 200
+        p = client.get("/api/progress").json()
+        assert p["busy"] is True, p  # the second apply is still running
+    finally:
+        for e in release:
+            e.set()
+        for t in threads:
+            t.join(10)
+    assert [r.status_code for r in codes] == [200, 200]
+    p = client.get("/api/progress").json()
+    assert p["busy"] is False and p["fraction"] == 1.0, p
+
+
+def test_request_body_limit_is_the_apps_max_body(box_file):
+    body = json.dumps(STRETCH).encode()
+    body = body[:-1] + b" " * (2 * MAX_BODY) + b"}"  # valid JSON, larger than the default
+    with TestClient(
+        create_app(box_file, max_body=4 * MAX_BODY), base_url="http://127.0.0.1"
+    ) as client:
+        r = client.post("/api/apply", content=body, headers={"content-type": "application/json"})
+        assert r.status_code == 200, r.text
+    with TestClient(create_app(box_file, max_body=1000), base_url="http://127.0.0.1") as client:
+        r = client.post("/api/apply", content=body, headers={"content-type": "application/json"})
+        assert r.status_code == 413 and "1000" in r.json()["error"]
+
+
 # -- save and export --------------------------------------------------------------------------
 def test_save_writes_beside_the_input_unless_overwrite(client, box_file, tmp_path):
     before = box_file.read_bytes()
@@ -265,6 +351,42 @@ def test_export_texture_downloads_a_file(client):
     r = client.get("/api/export/texture")
     assert r.status_code == 200, r.text
     assert "attachment" in r.headers["content-disposition"] and len(r.content) > 1000
+
+
+@pytest.mark.parametrize("stem", ['椅子 "x"', "modèle\\1"])
+def test_export_of_any_file_name_is_a_valid_attachment_header(tmp_path, stem):
+    path = tmp_path / f"{stem}.csdf.npz"
+    csdf_mod.save(shapes.box(*BOX, voxel_size=0.05), path)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        for url, suffix in (("/api/export/mesh", ".glb"), ("/api/export/texture", ".nrrd")):
+            r = client.get(url)
+            assert r.status_code == 200, r.text
+            cd = r.headers["content-disposition"]
+            cd.encode("ascii")  # headers are Latin-1 on the wire; ASCII is safe everywhere
+            m = re.fullmatch(r'attachment; filename="([ -~]*)"; filename\*=UTF-8\'\'(\S+)', cd)
+            assert m, cd
+            assert '"' not in m.group(1) and "\\" not in m.group(1)
+            assert m.group(1).endswith(".edited" + suffix)
+            # RFC 5987: the exact name, percent-encoded UTF-8
+            assert unquote(m.group(2), encoding="utf-8", errors="strict") == (
+                f"{stem}.edited{suffix}"
+            )
+
+
+def test_save_or_export_refused_by_the_file_system_is_a_json_error(
+    client, box_file, tmp_path, monkeypatch
+):
+    target = edited_path(box_file)
+    target.mkdir()
+    r = post(client, "/api/save")
+    assert r.status_code == 409, r.text
+    err = r.json()["error"]
+    assert err.startswith("save: expected a writable file at") and str(target) in err
+    assert target.is_dir() and not any(target.iterdir())
+    # export writes to a temporary folder first: one that cannot be created
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "no such folder"))
+    r = client.get("/api/export/mesh")
+    assert r.status_code == 500 and r.json()["error"].startswith("export: expected"), r.text
 
 
 # -- what is refused --------------------------------------------------------------------------
@@ -396,6 +518,32 @@ def test_edit_command_serves_on_loopback_and_warns_otherwise(box_file):
     proc, url, lines = _start([str(box_file), "--host", "0.0.0.0"])
     try:
         assert any("warning" in ln and "not loopback" in ln for ln in lines), lines
+    finally:
+        _stop(proc)
+
+
+def test_edit_command_on_another_loopback_address_answers_at_its_url(box_file):
+    import httpx
+
+    # all of 127.0.0.0/8 is loopback (on Linux every address of it reaches lo)
+    try:
+        with socket.socket() as s:
+            s.bind(("127.0.0.2", 0))
+    except OSError as exc:
+        pytest.skip(f"127.0.0.2 cannot be bound here: {exc}")
+    proc, url, lines = _start([str(box_file), "--host", "127.0.0.2"])
+    try:
+        assert url.startswith("http://127.0.0.2:") and not any("warning" in ln for ln in lines)
+        for _ in range(100):
+            try:
+                r = httpx.get(url + "api/state", timeout=5)
+                break
+            except httpx.ConnectError:
+                time.sleep(0.05)
+        assert r.status_code == 200, r.text
+        # still a DNS-rebinding guard: a foreign name is refused
+        r = httpx.get(url + "api/state", headers={"Host": "evil.example"}, timeout=5)
+        assert r.status_code == 400
     finally:
         _stop(proc)
 

@@ -74,11 +74,14 @@ def _rows(result: SuiteResult) -> list[dict[str, Any]]:
 
 
 def _score(metric: str, row: dict[str, Any], original: dict[str, Any]) -> float:
-    if "error" in row and row.get("error") and metric != "pieces":
+    """Lower is better; NaN where not measured, and for a mode that failed to run (never wins)."""
+    if row.get("error"):
         return math.nan
     if metric == "pieces":
         expected = row.get("pieces_expected", original.get("pieces"))
-        return max(0.0, _num(row.get("pieces")) - _num(expected))
+        extra = _num(row.get("pieces")) - _num(expected)
+        # max(0.0, nan) is 0.0: an unmeasured count must stay NaN, not score perfectly
+        return max(0.0, extra) if math.isfinite(extra) else math.nan
     return _num(row.get(metric))
 
 
@@ -152,20 +155,26 @@ def _expectation(obj_rows: list[dict[str, Any]], kind: str) -> tuple[str, str]:
         keys = ("prop_in", "spacing_err")
         s = [_num(st.get(k)) for k in keys]
         t = [_num(ti.get(k)) for k in keys]
-        # stretch fails on a metric where it is at least twice as far off as tile
-        worse = [
-            SHORT[k]
+        # stretch fails on a metric where it is at least twice as far off as tile; a tile value
+        # that was never measured is no evidence either way
+        fails = [
+            (k, a, b)
             for k, a, b in zip(keys, s, t, strict=True)
-            if math.isfinite(a)
-            and a > CRITERIA[k][2]
-            and (not math.isfinite(b) or a >= 2 * b + CRITERIA[k][1])
+            if math.isfinite(a) and a > CRITERIA[k][2]
         ]
-        held = bool(worse)
+        worse = [k for k, a, b in fails if math.isfinite(b) and a >= 2 * b + CRITERIA[k][1]]
+        unmeasured = [SHORT[k] for k, a, b in fails if not math.isfinite(b)]
         detail = (
             f"stretch prop. in {_cell(s[0])}, spacing {_cell(s[1])}; "
             f"tile {_cell(t[0])}, {_cell(t[1])}"
         )
-        return ("held" if held else "not held"), detail
+        if worse:
+            return "held", detail
+        if unmeasured:
+            return "n/a", f"tile not measured on {', '.join(unmeasured)}; {detail}"
+        if not any(math.isfinite(a) for a in s):
+            return "n/a", "stretch not measured (no repeated elements found along the axis)"
+        return "not held", detail
     extra = sorted(ft - fs)
     detail = "tile fails on: " + (", ".join(extra) if extra else "nothing stretch passes")
     return ("held" if extra else "not held"), detail

@@ -6,7 +6,8 @@ A suite file is JSON::
      "res": 128,                      # import resolution (longest side, voxels); optional
      "data": "path/to/data",          # folder the object paths are relative to; optional
      "objects": [
-        {"name": "table-longer", "path": "kenney/table.glb",
+        {"name": "table-longer",      # a plain file name: the figure is NAME.png
+         "path": "kenney/table.glb",
          "edit": {"axis": "x", "zone": ["20%", "80%"], "to": "105%"},
          "kind": "solid" | "repeating",   # what the paper expects: optional
          "view": "iso" | "front" | "side" | "top",  # optional, default iso
@@ -19,8 +20,8 @@ the ``data`` argument, ``PARTSCALE_DATA``, the suite's ``data`` key (relative to
 Each entry's edit runs in every mode of :data:`MODES`: ``global``, ``stretch``, ``tile`` and the
 labelled baseline ``naive-stretch`` / ``naive-tile`` (per-column linear resampling of the slab,
 no re-evaluation, plain concatenation for repeats: what the paper's public prototype does).
-An entry that cannot run (missing file, bad edit, zone outside the solid) is reported with one
-line and the others still run.
+An entry that cannot run (bad name, missing file, bad edit, zone outside the solid, a figure
+that cannot be written) is reported with one line and the others still run.
 """
 
 from __future__ import annotations
@@ -85,12 +86,26 @@ class Suite:
     source: Path | None = None
 
 
+def _plain_name(name: str) -> bool:
+    # the name becomes the figure's file name inside the output folder: never a path
+    return (
+        bool(name)
+        and not (name.startswith(".") or ".." in name or "/" in name or "\\" in name)
+        and name.isprintable()
+    )
+
+
 def _entry(obj: Any, i: int) -> Entry:
     where = f"objects[{i}]"
     if not isinstance(obj, dict):
         return Entry(where, "", None, error=f"{where}: expected an object, got {obj!r}")
-    name = str(obj.get("name") or where)
+    name = where if obj.get("name") is None else str(obj["name"])
     try:
+        if not _plain_name(name):
+            raise InputError(
+                "name: expected a plain file name (not empty, no '/', '\\', '..', leading '.' "
+                f"or control characters), got {name!r}"
+            )
         unknown = set(obj) - {"name", "path", "edit", "kind", "view", "note"}
         if unknown:
             raise InputError(
@@ -111,7 +126,8 @@ def _entry(obj: Any, i: int) -> Entry:
             raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
         return Entry(name, path, edit, kind, view, str(obj.get("note", "")))
     except InputError as exc:
-        return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")
+        label = name if _plain_name(name) else where
+        return Entry(name, str(obj.get("path", "")), None, error=f"{label}: {exc}")
 
 
 def parse_suite(obj: Any, *, source: Path | None = None) -> Suite:
@@ -232,6 +248,16 @@ def _fmt(v: Any, digits: int = 2) -> str:
     return str(v)
 
 
+def _check_segment(method: str) -> None:
+    """Refuse an unknown method once, before any object is imported."""
+    try:
+        from ..segment import METHODS
+    except ImportError:  # optional stage: each entry then gets a "not segmented" note
+        return
+    if method not in METHODS:
+        raise InputError(f"--segment: expected one of {', '.join(METHODS)}, got {method!r}")
+
+
 def _segment(c: CSDF, method: str, progress: ProgressCallback) -> CSDF:
     from .. import segment as seg  # optional stage: ImportError when it is not installed
 
@@ -335,6 +361,15 @@ def _run_entry(
         result.timings["figure"] = time.perf_counter() - t0
     except ImportError as exc:  # the render stage is optional for the metrics
         result.note = f"{name}: no figure ({exc})"
+    except InputError as exc:  # this entry fails (its rows are kept); the others still run
+        result.error = f"{name}: figure: {exc}"
+    except OSError as exc:
+        result.error = (
+            f"{name}: figure: expected a writable {out_dir / (name + '.png')}, "
+            f"got {exc.strerror or exc}"
+        )
+    except Exception as exc:  # a bug in a stage must not stop the rest of the suite
+        result.error = f"{name}: figure failed: {type(exc).__name__}: {exc}"
     return result
 
 
@@ -428,7 +463,8 @@ def run_suite(
         Segment each object first with this method of :mod:`partscale.segment` (results are
         cached by that stage): tile copies then become distinct parts and the figures get a row
         coloured by part. The metrics do not use parts. Off by default (a few seconds an object
-        with ``"fast"`` on first run, tens of seconds with ``"coacd"``).
+        with ``"fast"`` on first run, tens of seconds with ``"coacd"``). An unknown method
+        raises :class:`InputError` before any object is read.
 
     Returns
     -------
@@ -441,6 +477,8 @@ def run_suite(
     res = suite.res if res is None else int(res)
     if not 8 <= res <= 1024:
         raise InputError(f"res: expected an integer in 8..1024, got {res}")
+    if segment is not None:
+        _check_segment(segment)
     entries = suite.entries
     if only is not None:
         entries = [e for e in entries if e.name == only]

@@ -25,10 +25,12 @@ from __future__ import annotations
 
 import hashlib
 import json
+import threading
 import time
 import traceback
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
@@ -151,15 +153,26 @@ def _error(message: str, status: int = 400) -> JSONResponse:
     return JSONResponse({"error": message}, status_code=status, headers=_NO_STORE)
 
 
-async def _json_body(request: Request) -> Any:
+def content_disposition(name: str) -> str:
+    """``attachment`` header for ``name`` (RFC 6266): an ASCII fallback and the UTF-8 name.
+
+    Headers are Latin-1 on the wire, and a ``"`` or ``\\`` would end or escape the quoted
+    string: the fallback replaces those and anything outside printable ASCII with ``_``;
+    ``filename*`` (RFC 5987) carries the exact name percent-encoded.
+    """
+    fallback = "".join(c if " " <= c <= "~" and c not in '"\\' else "_" for c in name)
+    return f"attachment; filename=\"{fallback}\"; filename*=UTF-8''{quote(name, safe='')}"
+
+
+async def _json_body(request: Request, max_body: int) -> Any:
     ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if ctype != "application/json":
         raise _HTTPError(415, f"request: expected Content-Type application/json, got {ctype!r}")
     body = b""
     async for chunk in request.stream():
         body += chunk
-        if len(body) > MAX_BODY:
-            raise _HTTPError(413, f"request body: expected at most {MAX_BODY} bytes, got more")
+        if len(body) > max_body:
+            raise _HTTPError(413, f"request body: expected at most {max_body} bytes, got more")
     if not body:
         return {}
     try:
@@ -213,6 +226,9 @@ def create_app(
     index_bytes = index.read_bytes()
     assets = _asset_table()
     progress_state: dict[str, Any] = {"fraction": 1.0, "message": "", "busy": False}
+    # applies in flight (running or waiting for the session lock): busy until the last ends
+    in_flight = 0
+    progress_lock = threading.Lock()
 
     def state(**extra: Any) -> JSONResponse:
         body = session.state()
@@ -234,11 +250,12 @@ def create_app(
         return state()
 
     async def grid(request: Request) -> Response:
-        data = await run_in_threadpool(session.grid_bytes)
+        # the header describes the CSDF that was encoded, not whatever is current by now
+        c, data = await run_in_threadpool(session.encoded, "grid")
         return Response(
             data,
             media_type="application/octet-stream",
-            headers={"X-Partscale-Shape": ",".join(map(str, session.current.shape)), **_NO_STORE},
+            headers={"X-Partscale-Shape": ",".join(map(str, c.shape)), **_NO_STORE},
         )
 
     async def parts(request: Request) -> Response:
@@ -249,23 +266,33 @@ def create_app(
         return JSONResponse(JSON_SCHEMA)
 
     async def progress(request: Request) -> Response:
-        return JSONResponse(dict(progress_state), headers=_NO_STORE)
+        with progress_lock:
+            body = dict(progress_state)
+        return JSONResponse(body, headers=_NO_STORE)
 
     def _progress(fraction: float, message: str) -> None:
-        progress_state.update(fraction=float(fraction), message=str(message))
+        with progress_lock:
+            progress_state.update(fraction=float(fraction), message=str(message))
 
     def _apply(recipe: Any) -> float:
+        nonlocal in_flight
         t0 = time.perf_counter()
-        progress_state.update(fraction=0.0, message="applying", busy=True)
+        with progress_lock:
+            in_flight += 1
+            if in_flight == 1:
+                progress_state.update(fraction=0.0, message="applying", busy=True)
         try:
             session.apply(recipe, progress=_progress)
         finally:
-            progress_state.update(fraction=1.0, message="", busy=False)
+            with progress_lock:
+                in_flight -= 1
+                if in_flight == 0:
+                    progress_state.update(fraction=1.0, message="", busy=False)
         return (time.perf_counter() - t0) * 1000.0
 
     async def apply(request: Request) -> Response:
         try:
-            recipe = await _json_body(request)
+            recipe = await _json_body(request, max_body)
         except _HTTPError as exc:
             return _error(str(exc), exc.status)
         try:
@@ -280,7 +307,7 @@ def create_app(
     def history_step(step, what: str, missing: str):
         async def handler(request: Request) -> Response:
             try:
-                await _json_body(request)
+                await _json_body(request, max_body)
             except _HTTPError as exc:
                 return _error(str(exc), exc.status)
             if not await run_in_threadpool(step):
@@ -294,7 +321,7 @@ def create_app(
 
     async def save(request: Request) -> Response:
         try:
-            body = await _json_body(request)
+            body = await _json_body(request, max_body)
         except _HTTPError as exc:
             return _error(str(exc), exc.status)
         if not isinstance(body, dict) or set(body) - {"overwrite"}:
@@ -306,6 +333,15 @@ def create_app(
             written = await run_in_threadpool(lambda: session.save(overwrite=overwrite))
         except InputError as exc:
             return _error(str(exc), 400)
+        except OSError as exc:  # not the request's fault: the file system refused
+            target = session.save_target(overwrite=overwrite)
+            return _error(
+                f"save: expected a writable file at {target}, got {exc.strerror or exc}",
+                409 if target.is_dir() else 500,
+            )
+        except Exception as exc:  # a bug: say so as JSON, keep the traceback
+            traceback.print_exc()
+            return _error(f"save failed inside partscale: {type(exc).__name__}: {exc}", 500)
         return state(saved=written.name)
 
     def _export(kind: str):
@@ -314,10 +350,17 @@ def create_app(
                 data, name, media = await run_in_threadpool(session.export, kind)
             except InputError as exc:
                 return _error(str(exc), 400)
+            except OSError as exc:  # the export is written to a temporary folder first
+                return _error(
+                    f"export: expected a writable temporary folder, got {exc.strerror or exc}", 500
+                )
+            except Exception as exc:  # a bug: say so as JSON, keep the traceback
+                traceback.print_exc()
+                return _error(f"export failed inside partscale: {type(exc).__name__}: {exc}", 500)
             return Response(
                 data,
                 media_type=media,
-                headers={"Content-Disposition": f'attachment; filename="{name}"', **_NO_STORE},
+                headers={"Content-Disposition": content_disposition(name), **_NO_STORE},
             )
 
         return handler

@@ -23,6 +23,27 @@ def is_loopback(host: str) -> bool:
         return False
 
 
+def url_host(host: str) -> str:
+    """The host as the printed URL names it: a wildcard as 127.0.0.1, IPv6 in brackets."""
+    shown = "127.0.0.1" if host in ("0.0.0.0", "::", "[::]") else host
+    return f"[{shown}]" if ":" in shown and not shown.startswith("[") else shown
+
+
+def allowed_hosts(host: str) -> list[str]:
+    """Host headers the app accepts when bound to ``host``: loopback names and the URL's host.
+
+    Any for a non-loopback ``host`` (the caller asked to expose the editor). For loopback,
+    :data:`~partscale.serve.app.LOOPBACK_HOSTS` plus the host as the printed URL spells it
+    (``127.0.0.2``, ``[0:0:0:0:0:0:0:1]``), so the URL shown always answers.
+    """
+    from .app import LOOPBACK_HOSTS
+
+    if not is_loopback(host):
+        return ["*"]
+    shown = url_host(host).lower()
+    return LOOPBACK_HOSTS + ([shown] if shown not in LOOPBACK_HOSTS else [])
+
+
 def _free_port(host: str) -> int:
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
     with socket.socket(family, socket.SOCK_STREAM) as s:
@@ -66,13 +87,13 @@ def serve(
     """
     import uvicorn
 
-    from .app import LOOPBACK_HOSTS, create_app
+    from .app import create_app
 
     say = announce or (lambda m: print(m, file=sys.stderr, flush=True))
     if not (0 <= port <= 65535):
         raise InputError(f"--port: expected 0..65535, got {port}")
     loopback = is_loopback(host)
-    app = create_app(path, allowed_hosts=LOOPBACK_HOSTS if loopback else ["*"])
+    app = create_app(path, allowed_hosts=allowed_hosts(host))
     try:
         port = _free_port(host) if port == 0 else _check_port(host, port)
     except OSError as exc:
@@ -87,9 +108,7 @@ def serve(
             f"warning: serving on {host}, not loopback: anyone who can reach this machine can "
             "view, edit and save this object"
         )
-    shown = "127.0.0.1" if host in ("0.0.0.0", "::") else host
-    shown = f"[{shown}]" if ":" in shown and not shown.startswith("[") else shown
-    url = f"http://{shown}:{port}/"
+    url = f"http://{url_host(host)}:{port}/"
     say(f"partscale editor for {Path(path).name}: {url}  (Ctrl-C to stop)")
     config = uvicorn.Config(app, host=host.strip("[]"), port=port, log_level="warning")
     server = uvicorn.Server(config)

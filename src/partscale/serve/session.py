@@ -154,7 +154,12 @@ class EditSession:
         )
         return h
 
-    def _encoded(self, kind: str) -> bytes:
+    def encoded(self, kind: str) -> tuple[CSDF, bytes]:
+        """``(csdf, bytes)``: the current object and its encoding (``'grid'`` or ``'parts'``).
+
+        The CSDF is the one encoded: describe the bytes from it, not from :attr:`current`,
+        which an apply finishing meanwhile may have replaced.
+        """
         # Encoding a 128³ grid takes tens of ms: keep the last few objects' encodings, so a
         # second fetch, an undo or a redo costs nothing. Keyed by the CSDF object itself (they
         # are immutable); the entry holds it, so its id cannot be reused while cached.
@@ -163,19 +168,19 @@ class EditSession:
             hit = self._cache.get((id(c), kind))
             if hit is not None:
                 self._cache.move_to_end((id(c), kind))
-                return hit[1]
+                return hit
         data = encode_grid(c) if kind == "grid" else encode_parts(c)
         with self.lock:
             self._cache[(id(c), kind)] = (c, data)
             while len(self._cache) > CACHED_ENCODINGS:
                 self._cache.popitem(last=False)
-        return data
+        return c, data
 
     def grid_bytes(self) -> bytes:
-        return self._encoded("grid")
+        return self.encoded("grid")[1]
 
     def parts_bytes(self) -> bytes:
-        return self._encoded("parts")
+        return self.encoded("parts")[1]
 
     def _push(self, new: CSDF) -> None:
         self.undo_stack.append(self.current)
@@ -216,11 +221,15 @@ class EditSession:
             return True
 
     # -- output ---------------------------------------------------------------------------
+    def save_target(self, *, overwrite: bool = False) -> Path:
+        """Where :meth:`save` writes: ``NAME.edited.csdf.npz`` beside the input, or the input."""
+        return self.path if overwrite else edited_path(self.path)
+
     def save(self, *, overwrite: bool = False) -> Path:
         """Write the current object to ``NAME.edited.csdf.npz``, or over the input file."""
         with self.lock:
             c, rev = self.current, self.revision
-        target = self.path if overwrite else edited_path(self.path)
+        target = self.save_target(overwrite=overwrite)
         csdf_mod.save(c, target)
         with self.lock:
             self.saved_revision = rev

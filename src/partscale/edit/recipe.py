@@ -203,9 +203,11 @@ class Recipe:
 def tile_count(length: float, target: float) -> int:
     """Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``.
 
-    Half-way cases round up (1.5 -> 2) so growing by one and a half periods adds a copy.
+    Half-way cases round up (1.5 -> 2) so growing by one and a half periods adds a copy. A ratio
+    within ``1e-9`` below a half counts as the half: ``0.3 / 0.2`` is ``1.4999999999999998`` in
+    floating point. The web editor's ``tileCount`` (web/src/remap.ts) is the same expression.
     """
-    return max(1, math.floor(target / length + 0.5))
+    return max(1, math.floor(target / length + 0.5 + 1e-9))
 
 
 def source_coordinate(

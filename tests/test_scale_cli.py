@@ -59,6 +59,8 @@ BAD = [
     (["--axis", "x", "--zone", "0.2", "0.23", "--to", "0.4"], ["two voxels"]),
     (["--axis", "x", "--zone", "abc", "0.5", "--to", "0.7"], ["--zone START", "number"]),
     (["--axis", "x", "--zone", "0.2", "0.5"], ["--to"]),
+    (["--axis", "x", "--zone", "0.2", "0.5", "--to", "1e400%"], ["--to", "finite percentage"]),
+    (["--axis", "x", "--zone", "0.2", "inf", "--to", "0.7"], ["--zone END", "finite number"]),
 ]
 
 

@@ -6,10 +6,12 @@ OverflowError from deeper down.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from partscale import shapes
 from partscale.edit import scale, tile_count
+from partscale.errors import InputError
 
 H = 0.02
 
@@ -43,3 +45,41 @@ def test_tile_count_rounds_elsewhere_to_nearest():
 def test_half_way_tile_of_a_box_makes_two_copies(box):
     out = scale(box, axis="x", zone=(0.2, 0.4), to=0.5, mode="tile")
     assert out.meta["history"][-1]["copies"] == 2
+
+
+@pytest.mark.parametrize(
+    ("zone", "to", "what", "got"),
+    [
+        ((0.3, 0.7), "1e400%", "expected a finite percentage", "1e400%"),
+        ((0.3, 0.7), "inf%", "expected a finite percentage", "inf%"),
+        (("10%", "nan%"), 0.9, "expected a finite percentage", "nan%"),
+        ((0.3, 0.7), "inf", "expected a finite number", "inf"),
+        ((0.3, 0.7), float("inf"), "expected a finite number", "inf"),
+        ((float("nan"), 0.7), 0.9, "expected a finite number", "nan"),
+        ((0.3, 0.7), 1.7e308, "expected finite positions", "1.7e+308"),
+    ],
+)
+def test_non_finite_positions_are_refused(box, zone, to, what, got):
+    with pytest.raises(InputError, match=what) as exc:
+        scale(box, axis="x", zone=zone, to=to)
+    assert got in str(exc.value) and "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize(
+    ("zone", "to"),
+    [
+        ((np.float32(0.3), np.float32(0.7)), np.float32(0.9)),
+        (np.array([0.3, 0.7]), np.float64(0.9)),
+        ((np.int64(0), 0.5), np.int64(1)),
+    ],
+)
+def test_numpy_numbers_are_positions(box, zone, to):
+    out = scale(box, axis="x", zone=zone, to=to)
+    want = scale(box, axis="x", zone=tuple(float(v) for v in zone), to=float(to))
+    assert np.array_equal(out.sdf, want.sdf)
+
+
+@pytest.mark.parametrize("flag", [True, np.bool_(False)])
+def test_booleans_are_not_positions(box, flag):
+    with pytest.raises(InputError, match="expected a number or a percentage"):
+        scale(box, axis="x", zone=(0.3, 0.7), to=flag)

@@ -19,6 +19,7 @@ the Python resampler and the web editor's shader both implement exactly these.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -78,22 +79,29 @@ JSON_SCHEMA: dict[str, Any] = {
 
 
 def parse_position(value: Any, what: str) -> Position:
-    """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`."""
-    if isinstance(value, bool):
+    """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`.
+
+    Numbers are any real number (Python or numpy scalars) but not booleans; strings hold a
+    number or a percentage. Non-finite values (``inf``, ``nan``, ``'1e400%'``) are refused.
+    """
+    if isinstance(value, bool | np.bool_):
         raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
-    if isinstance(value, int | float):
-        if not math.isfinite(value):
+    if isinstance(value, numbers.Real):
+        v = float(value)
+        if not math.isfinite(v):
             raise InputError(f"{what}: expected a finite number, got {value!r}")
-        return float(value)
+        return v
     if isinstance(value, str):
         s = value.strip()
         try:
-            if s.endswith("%"):
-                float(s[:-1])
-                return s
-            return float(s)
+            v = float(s[:-1] if s.endswith("%") else s)
         except ValueError:
             pass
+        else:
+            if not math.isfinite(v):
+                kind = "percentage" if s.endswith("%") else "number"
+                raise InputError(f"{what}: expected a finite {kind}, got {value!r}")
+            return s if s.endswith("%") else v
     raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
 
 

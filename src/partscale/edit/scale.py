@@ -11,6 +11,7 @@ outside the zone an exact copy of the original voxels.
 from __future__ import annotations
 
 import copy as _copy
+import math
 from typing import Any
 
 import numpy as np
@@ -57,6 +58,10 @@ def resolve_edit(csdf: CSDF, edit: Edit) -> dict[str, Any]:
     sb = csdf.surface_bounds()
     lo, hi = float(sb[0, ax]), float(sb[1, ax])
     s, e, d = edit.resolve(lo, hi)
+    if not all(map(math.isfinite, (s, e, d, (d - e) / h))):
+        raise InputError(
+            f"zone, to: expected finite positions, got zone [{_fmt(s)}, {_fmt(e)}], to {_fmt(d)}"
+        )
     name = AXES[ax]
     if not s < e:
         raise InputError(f"zone: expected start < end, got start {_fmt(s)} >= end {_fmt(e)}")

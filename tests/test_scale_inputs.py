@@ -83,3 +83,9 @@ def test_numpy_numbers_are_positions(box, zone, to):
 def test_booleans_are_not_positions(box, flag):
     with pytest.raises(InputError, match="expected a number or a percentage"):
         scale(box, axis="x", zone=(0.3, 0.7), to=flag)
+
+
+@pytest.mark.parametrize("zone", [None, 0.3, "30%", (0.1, 0.3, 0.5)])
+def test_zone_must_be_two_positions(box, zone):
+    with pytest.raises(InputError, match=r"expected \[START, END\], got"):
+        scale(box, axis="x", zone=zone, to=0.9)

@@ -476,7 +476,9 @@ def scale(
 
     Positions are floats in the object's units or strings like ``'30%'``.
     """
-    e = Edit.parse({"axis": axis, "zone": list(zone), "to": to, "mode": mode})
+    if isinstance(zone, np.ndarray):
+        zone = zone.tolist()
+    e = Edit.parse({"axis": axis, "zone": zone, "to": to, "mode": mode})
     return apply_edit(csdf, e, progress=progress)
 
 

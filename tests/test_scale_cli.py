@@ -88,6 +88,23 @@ def test_bad_recipe_file(cli, box_file, tmp_path, content, fragments):
     assert not out.exists()
 
 
+@pytest.mark.parametrize(
+    ("extra", "fragments"),
+    [
+        (["--mode", "tile"], ["--recipe", "alone", "--mode"]),
+        (["--mode", "stretch"], ["--recipe", "alone", "--mode"]),
+        (["--axis", "x"], ["--recipe", "alone", "--axis"]),
+    ],
+)
+def test_recipe_comes_alone(cli, box_file, tmp_path, extra, fragments):
+    """--mode with --recipe would be ignored (each edit has its own mode): refused."""
+    rfile = tmp_path / "r.json"
+    rfile.write_text('{"edits": [{"axis": "x", "zone": [0.2, 0.5], "to": 0.7}]}')
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("scale", box_file, "-o", out, "--recipe", rfile, *extra), *fragments)
+    assert not out.exists()
+
+
 def test_result_beyond_the_memory_limit_is_refused(box_file, tmp_path):
     import os
     import subprocess

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from partscale import shapes
-from partscale.edit import scale, tile_count
+from partscale.edit import reevaluate, scale, tile_count
 from partscale.errors import InputError
 
 H = 0.02
@@ -89,3 +89,30 @@ def test_booleans_are_not_positions(box, flag):
 def test_zone_must_be_two_positions(box, zone):
     with pytest.raises(InputError, match=r"expected \[START, END\], got"):
         scale(box, axis="x", zone=zone, to=0.9)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "fragments"),
+    [
+        ({"mask": np.ones((2, 2, 2), bool)}, ["mask", "expected", "(2, 2, 2)"]),
+        ({"mask": np.full((57, 32, 22), 0.5)}, ["mask", "bool", "float64"]),
+        ({"band": "3"}, ["band", "finite positive", "'3'"]),
+        ({"band": -1}, ["band", "finite positive", "-1"]),
+        ({"band": 0.0}, ["band", "finite positive", "0.0"]),
+        ({"band": float("inf")}, ["band", "finite positive", "inf"]),
+        ({"band": True}, ["band", "finite positive", "True"]),
+    ],
+)
+def test_reevaluate_refuses_bad_mask_and_band(box, kwargs, fragments):
+    with pytest.raises(InputError) as exc:
+        reevaluate(box, **kwargs)
+    for f in fragments:
+        assert f in str(exc.value), (f, str(exc.value))
+
+
+def test_reevaluate_takes_numpy_band_and_integer_mask(box):
+    mask = np.zeros(box.shape, np.uint8)
+    mask[:, :, :8] = 2
+    out = reevaluate(box, mask, band=np.float32(2.0))
+    want = reevaluate(box, mask.astype(bool), band=2.0)
+    assert np.array_equal(out.sdf, want.sdf)

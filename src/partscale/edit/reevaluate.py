@@ -19,6 +19,9 @@ Units inside the kernels are voxels (continuous indices); results are scaled by 
 
 from __future__ import annotations
 
+import math
+import numbers
+
 import numba
 import numpy as np
 from scipy import ndimage
@@ -27,6 +30,7 @@ from skimage import measure
 from .._kernels import closest_on_triangle
 from .._util import keyword_options, thread_map
 from ..csdf import CSDF
+from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 
 #: Half-width, in voxels, of the band where an edit guarantees true distances.
@@ -302,9 +306,14 @@ def reevaluate(
     csdf : CSDF
         Any field whose zero level set is the surface (e.g. a naive resampling).
     mask : (X, Y, Z) bool, optional
-        Voxels to recompute; all voxels of the band when omitted.
+        Voxels to recompute (integers: nonzero); all voxels of the band when omitted.
     band : float
-        Half-width of the band, in voxels (default :data:`BAND_VOXELS`).
+        Half-width of the band, in voxels (default :data:`BAND_VOXELS`); finite and > 0.
+
+    Raises
+    ------
+    InputError
+        A mask of another shape or neither bool nor integer, a band that is not a finite positive number.
 
     Returns
     -------
@@ -312,16 +321,26 @@ def reevaluate(
         Same grid; recomputed voxels hold the exact distance to the (unmoved) zero level set,
         with the field's sign, and the colour and part of their nearest surface point.
     """
+    if (
+        isinstance(band, bool | np.bool_)
+        or not isinstance(band, numbers.Real)
+        or not (math.isfinite(band) and band > 0)
+    ):
+        raise InputError(f"band: expected a finite positive number of voxels, got {band!r}")
+    if mask is None:
+        mask = np.ones(csdf.shape, bool)
+    else:
+        got = np.asarray(mask)
+        if got.shape != csdf.shape or not (got.dtype == bool or got.dtype.kind in "iu"):
+            desc = f"shape {got.shape} {got.dtype}" if got.ndim else repr(mask)
+            raise InputError(f"mask: expected a {csdf.shape} bool array, got {desc}")
+        mask = got.astype(bool)
+    band = float(band)
     report = resolve(progress)
     report(0.0, "re-evaluating distances")
     sdf = np.array(csdf.sdf)
     rgb = np.array(csdf.rgb)
     parts = np.array(csdf.parts)
-    if mask is None:
-        mask = np.ones(sdf.shape, bool)
-    mask = np.asarray(mask, bool)
-    if mask.shape != sdf.shape:
-        raise ValueError(f"mask: expected shape {sdf.shape}, got {mask.shape}")
     reevaluate_arrays(sdf, rgb, parts, csdf.voxel_size, mask, band=band)
     report(1.0, "re-evaluated")
     return csdf.replace(sdf=sdf, rgb=rgb, parts=parts)

@@ -311,6 +311,28 @@ def test_parts_stay_within_the_label_band(row, mode, to):
     assert labelled[out.sdf < 3 * h].all()
 
 
+@pytest.mark.parametrize(
+    ("zone", "to", "mode"),
+    [((0.30, 0.36), 0.38, "stretch"), ((0.05, 0.27), 0.6, "tile"), ((0.05, 0.27), 0.15, "stretch")],
+)
+def test_parts_outside_the_zone_are_copies_like_distances(row, zone, to, mode):
+    """Every voxel labelled (as the row fixture): outside the zone, wherever the distance is the
+    source's (copied, not recomputed), the label is the source's too, also beyond the band."""
+    c, _ = row
+    out = scale(c, axis="x", zone=zone, to=to, mode=mode)
+    shift = out.shape[0] - c.shape[0]
+    x = c.axis_coords(0)
+    before = np.flatnonzero(x < zone[0])
+    after = np.flatnonzero(x > zone[1])
+    for src, dst in ((before, before), (after, after + shift)):
+        same = out.sdf[dst] == c.sdf[src]
+        assert same.sum() > 0.5 * same.size
+        assert np.array_equal(out.parts[dst][same], c.parts[src][same])
+    # far from the zone nothing at all changed
+    far = x < zone[0] - 5 * H
+    assert np.array_equal(out.parts[: far.sum()], c.parts[far])
+
+
 def test_tile_copies_become_new_parts_with_their_info(row):
     c, boxes = row
     # the segment stage's facts: bbox of the part's surface, labelled voxels, hull volume

@@ -311,6 +311,31 @@ def test_parts_stay_within_the_label_band(row, mode, to):
     assert labelled[out.sdf < 3 * h].all()
 
 
+@pytest.fixture(scope="module")
+def thin_row():
+    """Bars three voxels wide, two apart, every voxel labelled with its nearest bar."""
+    c, boxes = shapes.bars(4, width=3 * H, gap=2 * H, height=0.3, depth=0.2, axis=0, voxel_size=H)
+    d = np.stack([shapes.box_sdf(world_grid(c), lo, hi) for lo, hi in boxes])
+    return c.replace(parts=np.argmin(d, axis=0).astype(np.int16))
+
+
+@pytest.mark.parametrize("label_band", [False, True])
+@pytest.mark.parametrize(("periods", "grow"), [(2, 2.2), (1, 1.3), (2, -0.6)])
+def test_grid_aligned_faces_keep_one_part_per_piece(thin_row, label_band, periods, grow):
+    """The bars' faces lie on grid nodes (sdf exactly 0 there): re-evaluation must not read an
+    outside voxel's label (the other bar's, across the gap) into a bar's inside voxels."""
+    c = thin_row
+    if label_band:
+        c = c.replace(parts=np.where(c.sdf <= 3 * H, c.parts, -1).astype(np.int16))
+    p = 5 * H
+    start, end = 4 * H, 4 * H + periods * p  # gap to gap
+    for mode in ("tile", "stretch"):
+        out = scale(c, axis="x", zone=(start, end), to=end + grow * p, mode=mode)
+        labels = piece_labels(out)
+        assert all(len(s) == 1 for s in labels), (mode, labels)
+        assert len(set.union(*labels)) == len(labels), (mode, labels)
+
+
 @pytest.mark.parametrize(
     ("zone", "to", "mode"),
     [((0.30, 0.36), 0.38, "stretch"), ((0.05, 0.27), 0.6, "tile"), ((0.05, 0.27), 0.15, "stretch")],

@@ -12,7 +12,8 @@ for chosen voxels, the exact distance to the field's own zero level set:
    distances), twice;
 3. the chosen voxels take that distance with the sign of the field (the surface is not moved:
    linear zero crossings of the old and new values coincide where the surface is locally flat),
-   the colour at their nearest surface point (trilinear in ``rgb``) and that point's part.
+   the colour at their nearest surface point (trilinear in ``rgb``) and that point's part (the
+   label of the nearest inside voxel of its cell: the solid carries the parts).
 
 Units inside the kernels are voxels (continuous indices); results are scaled by ``voxel_size``.
 """
@@ -235,14 +236,33 @@ def reevaluate_arrays(
             gi, new, cp = gi[keep], new[keep], cp[keep]
     col = _trilinear_rgb(rgb, cp)
     # colours and parts are all read before any is written (no voxel sees another's new colour)
-    near = np.rint(cp).astype(np.int64)
-    for a in range(3):
-        np.clip(near[:, a], 0, sdf.shape[a] - 1, out=near[:, a])
-    new_parts = parts[near[:, 0], near[:, 1], near[:, 2]].copy()
+    new_parts = _surface_parts(sdf, parts, cp)
     sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = new
     rgb[gi[:, 0], gi[:, 1], gi[:, 2]] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
     parts[gi[:, 0], gi[:, 1], gi[:, 2]] = new_parts
     return len(gi)
+
+
+def _surface_parts(sdf: np.ndarray, parts: np.ndarray, cp: np.ndarray) -> np.ndarray:
+    """(N,) int16 part of surface points ``cp`` (N, 3) (continuous indices): the label of the
+    nearest inside (``sdf <= 0``) corner of the cell holding the point.
+
+    The solid carries the parts; an outside corner's label is only its nearest part, and where a
+    node lies exactly on the surface (``sdf == 0``, e.g. grid-aligned faces) the nearest corner
+    can be an outside one labelled with another part. Points whose cell has no inside corner
+    (none after marching cubes, kept for safety) take the nearest corner.
+    """
+    shape = np.asarray(sdf.shape)
+    base = np.clip(np.floor(cp).astype(np.int64), 0, np.maximum(shape - 2, 0))
+    best = np.clip(np.rint(cp).astype(np.int64), 0, shape - 1)
+    best_d2 = np.full(len(cp), np.inf)
+    for off in np.ndindex(2, 2, 2):
+        q = np.minimum(base + np.asarray(off), shape - 1)
+        d2 = ((q - cp) ** 2).sum(axis=1)
+        better = (sdf[q[:, 0], q[:, 1], q[:, 2]] <= 0) & (d2 < best_d2)
+        best[better] = q[better]
+        best_d2[better] = d2[better]
+    return parts[best[:, 0], best[:, 1], best[:, 2]].copy()
 
 
 def _solve_box(sdf, t_run, a0, h, lim, pad, npass):

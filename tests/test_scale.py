@@ -179,6 +179,32 @@ def test_reevaluation_does_not_move_the_surface(ball):
     assert np.percentile(moved, 99) <= 0.05 and moved.max() <= 0.15, moved.max()
 
 
+@pytest.mark.parametrize(
+    ("zone", "to", "length", "mode"),
+    [((0.5, 1.0), 1.5, 1.5, "stretch"), ((0.3, 0.7), 0.5, 0.8, "tile"), ((0, 1), 2, 2, "global")],
+)
+def test_distances_are_to_the_grids_surface_which_cuts_edges(zone, to, length, mode):
+    """The documented limit: re-evaluation measures the distance to the marching-cubes surface,
+    which cuts a box's sharp edges and corners (up to ~0.9 voxel off there, bound 1 voxel); two
+    voxels or more from every edge it is the box's distance (0.15 voxel)."""
+    h = 0.05
+    lo, hi = np.zeros(3), np.array([1.0, 0.6, 0.4])
+    c = shapes.grid(
+        lambda p: shapes.box_sdf(p, lo, hi), (lo - [0.013, 0.021, 0.017], hi), voxel_size=h
+    )
+    out = scale(c, axis="x", zone=zone, to=to, mode=mode)
+    top = hi.copy()
+    top[0] = length + out.meta["history"][-1]["to_snapped"] - to
+    p = world_grid(out)
+    truth = shapes.box_sdf(p, lo, top)
+    band = np.abs(truth) <= 3 * h
+    err = np.abs(out.sdf - truth) / h
+    clearance = np.minimum(p - lo, top - p)
+    near_edge = (clearance < 2 * h).sum(axis=-1) >= 2
+    assert err[band].max() <= 1.0
+    assert err[band & ~near_edge].max() <= 0.15
+
+
 # -- tiling bars -------------------------------------------------------------------------------
 
 W, G = 6 * H, 4 * H  # bar width and gap: a period of ten voxels

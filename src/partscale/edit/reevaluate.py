@@ -2,7 +2,10 @@
 
 A resampled SDF is no longer a distance: along the edit axis it is scaled by the stretch factor,
 and near the zone's planes the nearest surface may now be elsewhere. :func:`reevaluate` recomputes,
-for chosen voxels, the exact distance to the field's own zero level set:
+for chosen voxels, the distance to the field's own zero level set as the grid represents it, the
+piecewise-linear surface through its linear zero crossings (exact for flat surface and close to it
+for gently curved surface; it cuts sharp edges and corners, so distances there can differ from the
+true object's by up to about 0.9 voxel):
 
 1. the zero level set near those voxels is extracted with sub-voxel precision (marching cubes of
    the field in a box around them: vertices are the linear zero crossings along grid edges);
@@ -319,7 +322,7 @@ def reevaluate(
     band: float = BAND_VOXELS,
     progress: ProgressCallback | None = None,
 ) -> CSDF:
-    """True distances, colours and parts at ``mask`` voxels within the band of ``csdf``'s surface.
+    """Distances, colours and parts at ``mask`` voxels within the band of ``csdf``'s surface.
 
     Parameters
     ----------
@@ -338,8 +341,11 @@ def reevaluate(
     Returns
     -------
     CSDF
-        Same grid; recomputed voxels hold the exact distance to the (unmoved) zero level set,
-        with the field's sign, and the colour and part of their nearest surface point.
+        Same grid; recomputed voxels hold the exact distance to the (unmoved) zero level set's
+        piecewise-linear (marching-cubes) surface, with the field's sign, and the colour and
+        part of their nearest surface point. That surface cuts sharp edges and corners of the
+        object the grid samples: there the distance can differ from the true one by up to about
+        0.9 voxel.
     """
     if (
         isinstance(band, bool | np.bool_)

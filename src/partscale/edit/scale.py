@@ -430,8 +430,11 @@ def apply_edit(
     CSDF
         New grid, longer or shorter along the axis by ``round((DEST - END) / voxel_size)`` voxels,
         same origin and voxel size. Outside the zone the voxels are exact copies (translated beyond
-        it); within ``BAND_VOXELS`` of the surface every recomputed distance is the true distance
-        to the edited surface. ``meta['history']`` gains the edit in world units (and as given).
+        it); within ``BAND_VOXELS`` of the surface every recomputed distance is the distance to
+        the edited surface as the grid represents it (the piecewise-linear marching-cubes surface
+        through the zero crossings): exact for flat surface, but that surface cuts sharp edges
+        and corners, where distances can differ from the true object's by up to about 0.9 voxel (see :mod:`partscale.edit`). ``meta['history']`` gains the edit in
+        world units (and as given).
     """
     report = resolve(progress)
     edit = _as_edit(edit)

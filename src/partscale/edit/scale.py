@@ -435,6 +435,16 @@ def apply_edit(
         through the zero crossings): exact for flat surface, but that surface cuts sharp edges
         and corners, where distances can differ from the true object's by up to about 0.9 voxel (see :mod:`partscale.edit`). ``meta['history']`` gains the edit in
         world units (and as given).
+
+    Notes
+    -----
+    ``tile`` blends the copies across each internal seam over ``SEAM_VOXELS`` voxels either side
+    (the field stays continuous there). Thin features that exist on one side of a seam only are
+    faded by the blend: a zone plane that cuts through a board leaves a sliver at the start of
+    every copy, which thins or vanishes, and an air gap of about a voxel at a seam can close.
+    Place the zone's planes in the gaps between repeated elements or through the middle of one;
+    :func:`naive_edit` concatenates copies without blending (slivers kept, but a step in the
+    field at each seam and no re-evaluation).
     """
     report = resolve(progress)
     edit = _as_edit(edit)

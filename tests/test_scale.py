@@ -179,6 +179,32 @@ def test_reevaluation_does_not_move_the_surface(ball):
     assert np.percentile(moved, 99) <= 0.05 and moved.max() <= 0.15, moved.max()
 
 
+@pytest.mark.parametrize(
+    ("zone", "to", "length", "mode"),
+    [((0.5, 1.0), 1.5, 1.5, "stretch"), ((0.3, 0.7), 0.5, 0.8, "tile"), ((0, 1), 2, 2, "global")],
+)
+def test_distances_are_to_the_grids_surface_which_cuts_edges(zone, to, length, mode):
+    """The documented limit: re-evaluation measures the distance to the marching-cubes surface,
+    which cuts a box's sharp edges and corners (up to ~0.9 voxel off there, bound 1 voxel); two
+    voxels or more from every edge it is the box's distance (0.15 voxel)."""
+    h = 0.05
+    lo, hi = np.zeros(3), np.array([1.0, 0.6, 0.4])
+    c = shapes.grid(
+        lambda p: shapes.box_sdf(p, lo, hi), (lo - [0.013, 0.021, 0.017], hi), voxel_size=h
+    )
+    out = scale(c, axis="x", zone=zone, to=to, mode=mode)
+    top = hi.copy()
+    top[0] = length + out.meta["history"][-1]["to_snapped"] - to
+    p = world_grid(out)
+    truth = shapes.box_sdf(p, lo, top)
+    band = np.abs(truth) <= 3 * h
+    err = np.abs(out.sdf - truth) / h
+    clearance = np.minimum(p - lo, top - p)
+    near_edge = (clearance < 2 * h).sum(axis=-1) >= 2
+    assert err[band].max() <= 1.0
+    assert err[band & ~near_edge].max() <= 0.15
+
+
 # -- tiling bars -------------------------------------------------------------------------------
 
 W, G = 6 * H, 4 * H  # bar width and gap: a period of ten voxels
@@ -253,6 +279,21 @@ def test_stretch_keeps_pieces_and_tile_multiplies_those_inside_the_zone(row):
         assert len(mesh.split(only_watertight=False)) == pieces(out)
 
 
+@pytest.mark.parametrize("periods", [1, 2])
+@pytest.mark.parametrize("grow", [1.0, 1.3, 2.15, 4.4])
+def test_tile_with_planes_in_the_gaps_keeps_one_piece_per_bar_copy(periods, grow):
+    """The remedy documented for the seam blend: planes in the gaps, so each copy holds whole
+    bars; every bar copy stays one solid piece (none fades, no gap closes) at any scale."""
+    w, g = 3 * H, 6 * H
+    c, _ = shapes.bars(4, width=w, gap=g, height=0.3, depth=0.2, axis=0, voxel_size=H)
+    start = w + g / 2
+    end = start + periods * (w + g)
+    out = scale(c, axis="x", zone=(start, end), to=end + grow * (end - start), mode="tile")
+    n = out.meta["history"][-1]["copies"]
+    assert n == max(1, int(np.floor(1 + grow + 0.5)))
+    assert ndimage.label(out.sdf < 0)[1] == 4 + (n - 1) * periods
+
+
 # -- replay ------------------------------------------------------------------------------------
 
 
@@ -309,6 +350,53 @@ def test_parts_stay_within_the_label_band(row, mode, to):
     labelled = out.parts >= 0
     assert not (labelled & (out.sdf > 3 * h)).any()
     assert labelled[out.sdf < 3 * h].all()
+
+
+@pytest.fixture(scope="module")
+def thin_row():
+    """Bars three voxels wide, two apart, every voxel labelled with its nearest bar."""
+    c, boxes = shapes.bars(4, width=3 * H, gap=2 * H, height=0.3, depth=0.2, axis=0, voxel_size=H)
+    d = np.stack([shapes.box_sdf(world_grid(c), lo, hi) for lo, hi in boxes])
+    return c.replace(parts=np.argmin(d, axis=0).astype(np.int16))
+
+
+@pytest.mark.parametrize("label_band", [False, True])
+@pytest.mark.parametrize(("periods", "grow"), [(2, 2.2), (1, 1.3), (2, -0.6)])
+def test_grid_aligned_faces_keep_one_part_per_piece(thin_row, label_band, periods, grow):
+    """The bars' faces lie on grid nodes (sdf exactly 0 there): re-evaluation must not read an
+    outside voxel's label (the other bar's, across the gap) into a bar's inside voxels."""
+    c = thin_row
+    if label_band:
+        c = c.replace(parts=np.where(c.sdf <= 3 * H, c.parts, -1).astype(np.int16))
+    p = 5 * H
+    start, end = 4 * H, 4 * H + periods * p  # gap to gap
+    for mode in ("tile", "stretch"):
+        out = scale(c, axis="x", zone=(start, end), to=end + grow * p, mode=mode)
+        labels = piece_labels(out)
+        assert all(len(s) == 1 for s in labels), (mode, labels)
+        assert len(set.union(*labels)) == len(labels), (mode, labels)
+
+
+@pytest.mark.parametrize(
+    ("zone", "to", "mode"),
+    [((0.30, 0.36), 0.38, "stretch"), ((0.05, 0.27), 0.6, "tile"), ((0.05, 0.27), 0.15, "stretch")],
+)
+def test_parts_outside_the_zone_are_copies_like_distances(row, zone, to, mode):
+    """Every voxel labelled (as the row fixture): outside the zone, wherever the distance is the
+    source's (copied, not recomputed), the label is the source's too, also beyond the band."""
+    c, _ = row
+    out = scale(c, axis="x", zone=zone, to=to, mode=mode)
+    shift = out.shape[0] - c.shape[0]
+    x = c.axis_coords(0)
+    before = np.flatnonzero(x < zone[0])
+    after = np.flatnonzero(x > zone[1])
+    for src, dst in ((before, before), (after, after + shift)):
+        same = out.sdf[dst] == c.sdf[src]
+        assert same.sum() > 0.5 * same.size
+        assert np.array_equal(out.parts[dst][same], c.parts[src][same])
+    # far from the zone nothing at all changed
+    far = x < zone[0] - 5 * H
+    assert np.array_equal(out.parts[: far.sum()], c.parts[far])
 
 
 def test_tile_copies_become_new_parts_with_their_info(row):

@@ -59,6 +59,8 @@ BAD = [
     (["--axis", "x", "--zone", "0.2", "0.23", "--to", "0.4"], ["two voxels"]),
     (["--axis", "x", "--zone", "abc", "0.5", "--to", "0.7"], ["--zone START", "number"]),
     (["--axis", "x", "--zone", "0.2", "0.5"], ["--to"]),
+    (["--axis", "x", "--zone", "0.2", "0.5", "--to", "1e400%"], ["--to", "finite percentage"]),
+    (["--axis", "x", "--zone", "0.2", "inf", "--to", "0.7"], ["--zone END", "finite number"]),
 ]
 
 
@@ -83,6 +85,23 @@ def test_bad_recipe_file(cli, box_file, tmp_path, content, fragments):
     rfile.write_text(content)
     out = tmp_path / "o.csdf.npz"
     assert_bad_input(cli("scale", box_file, "-o", out, "--recipe", rfile), *fragments)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("extra", "fragments"),
+    [
+        (["--mode", "tile"], ["--recipe", "alone", "--mode"]),
+        (["--mode", "stretch"], ["--recipe", "alone", "--mode"]),
+        (["--axis", "x"], ["--recipe", "alone", "--axis"]),
+    ],
+)
+def test_recipe_comes_alone(cli, box_file, tmp_path, extra, fragments):
+    """--mode with --recipe would be ignored (each edit has its own mode): refused."""
+    rfile = tmp_path / "r.json"
+    rfile.write_text('{"edits": [{"axis": "x", "zone": [0.2, 0.5], "to": 0.7}]}')
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("scale", box_file, "-o", out, "--recipe", rfile, *extra), *fragments)
     assert not out.exists()
 
 

@@ -26,9 +26,10 @@ export interface Zone {
   hi: number;
 }
 
-/** max(1, round(target / length)), half-way rounding up, as recipe.tile_count. */
+/** max(1, round(target / length)), half-way rounding up, as recipe.tile_count: a ratio within
+ *  1e-9 below a half counts as the half (0.3 / 0.2 is 1.4999999999999998). */
 export function tileCount(length: number, target: number): number {
-  return Math.max(1, Math.floor(target / length + 0.5));
+  return Math.max(1, Math.floor(target / length + 0.5 + 1e-9));
 }
 
 export function sourceCoordinate(y: number, z: Zone): number {

@@ -23,7 +23,9 @@ def scale(
         ),
     ] = None,
     to: Annotated[str | None, typer.Option("--to", help="DEST: where END goes.")] = None,
-    mode: Annotated[str, typer.Option("--mode", help="stretch, tile or global.")] = "stretch",
+    mode: Annotated[
+        str | None, typer.Option("--mode", help="stretch, tile or global (default stretch).")
+    ] = None,
     recipe: Annotated[
         Path | None,
         typer.Option("--recipe", help="A recipe JSON file (instead of --axis/--zone/--to)."),
@@ -36,8 +38,15 @@ def scale(
 
     _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
     if recipe is not None:
-        if axis is not None or zone is not None or to is not None:
-            raise InputError("--recipe: expected alone, got it with --axis/--zone/--to")
+        given = [
+            n
+            for n, v in (("--axis", axis), ("--zone", zone), ("--to", to), ("--mode", mode))
+            if v is not None
+        ]
+        if given:
+            raise InputError(
+                f"--recipe: expected alone (modes are in the recipe), got it with {', '.join(given)}"
+            )
         rec = Recipe.load(recipe)
     else:
         missing = [n for n, v in (("--axis", axis), ("--zone", zone), ("--to", to)) if v is None]
@@ -47,6 +56,7 @@ def scale(
             )
         if axis.lower() not in AXES:
             raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
+        mode = "stretch" if mode is None else mode
         if mode.lower() not in MODES:
             raise InputError(f"--mode: expected one of {', '.join(MODES)}, got {mode!r}")
         rec = Recipe(

@@ -19,6 +19,7 @@ the Python resampler and the web editor's shader both implement exactly these.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -78,22 +79,29 @@ JSON_SCHEMA: dict[str, Any] = {
 
 
 def parse_position(value: Any, what: str) -> Position:
-    """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`."""
-    if isinstance(value, bool):
+    """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`.
+
+    Numbers are any real number (Python or numpy scalars) but not booleans; strings hold a
+    number or a percentage. Non-finite values (``inf``, ``nan``, ``'1e400%'``) are refused.
+    """
+    if isinstance(value, bool | np.bool_):
         raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
-    if isinstance(value, int | float):
-        if not math.isfinite(value):
+    if isinstance(value, numbers.Real):
+        v = float(value)
+        if not math.isfinite(v):
             raise InputError(f"{what}: expected a finite number, got {value!r}")
-        return float(value)
+        return v
     if isinstance(value, str):
         s = value.strip()
         try:
-            if s.endswith("%"):
-                float(s[:-1])
-                return s
-            return float(s)
+            v = float(s[:-1] if s.endswith("%") else s)
         except ValueError:
             pass
+        else:
+            if not math.isfinite(v):
+                kind = "percentage" if s.endswith("%") else "number"
+                raise InputError(f"{what}: expected a finite {kind}, got {value!r}")
+            return s if s.endswith("%") else v
     raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
 
 
@@ -203,9 +211,11 @@ class Recipe:
 def tile_count(length: float, target: float) -> int:
     """Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``.
 
-    Half-way cases round up (1.5 -> 2) so growing by one and a half periods adds a copy.
+    Half-way cases round up (1.5 -> 2) so growing by one and a half periods adds a copy. A ratio
+    within ``1e-9`` below a half counts as the half: ``0.3 / 0.2`` is ``1.4999999999999998`` in
+    floating point. The web editor's ``tileCount`` (web/src/remap.ts) is the same expression.
     """
-    return max(1, math.floor(target / length + 0.5))
+    return max(1, math.floor(target / length + 0.5 + 1e-9))
 
 
 def source_coordinate(

@@ -2,7 +2,10 @@
 
 A resampled SDF is no longer a distance: along the edit axis it is scaled by the stretch factor,
 and near the zone's planes the nearest surface may now be elsewhere. :func:`reevaluate` recomputes,
-for chosen voxels, the exact distance to the field's own zero level set:
+for chosen voxels, the distance to the field's own zero level set as the grid represents it, the
+piecewise-linear surface through its linear zero crossings (exact for flat surface and close to it
+for gently curved surface; it cuts sharp edges and corners, so distances there can differ from the
+true object's by up to about 0.9 voxel):
 
 1. the zero level set near those voxels is extracted with sub-voxel precision (marching cubes of
    the field in a box around them: vertices are the linear zero crossings along grid edges);
@@ -12,12 +15,16 @@ for chosen voxels, the exact distance to the field's own zero level set:
    distances), twice;
 3. the chosen voxels take that distance with the sign of the field (the surface is not moved:
    linear zero crossings of the old and new values coincide where the surface is locally flat),
-   the colour at their nearest surface point (trilinear in ``rgb``) and that point's part.
+   the colour at their nearest surface point (trilinear in ``rgb``) and that point's part (the
+   label of the nearest inside voxel of its cell: the solid carries the parts).
 
 Units inside the kernels are voxels (continuous indices); results are scaled by ``voxel_size``.
 """
 
 from __future__ import annotations
+
+import math
+import numbers
 
 import numba
 import numpy as np
@@ -27,6 +34,7 @@ from skimage import measure
 from .._kernels import closest_on_triangle
 from .._util import keyword_options, thread_map
 from ..csdf import CSDF
+from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 
 #: Half-width, in voxels, of the band where an edit guarantees true distances.
@@ -231,14 +239,33 @@ def reevaluate_arrays(
             gi, new, cp = gi[keep], new[keep], cp[keep]
     col = _trilinear_rgb(rgb, cp)
     # colours and parts are all read before any is written (no voxel sees another's new colour)
-    near = np.rint(cp).astype(np.int64)
-    for a in range(3):
-        np.clip(near[:, a], 0, sdf.shape[a] - 1, out=near[:, a])
-    new_parts = parts[near[:, 0], near[:, 1], near[:, 2]].copy()
+    new_parts = _surface_parts(sdf, parts, cp)
     sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = new
     rgb[gi[:, 0], gi[:, 1], gi[:, 2]] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
     parts[gi[:, 0], gi[:, 1], gi[:, 2]] = new_parts
     return len(gi)
+
+
+def _surface_parts(sdf: np.ndarray, parts: np.ndarray, cp: np.ndarray) -> np.ndarray:
+    """(N,) int16 part of surface points ``cp`` (N, 3) (continuous indices): the label of the
+    nearest inside (``sdf <= 0``) corner of the cell holding the point.
+
+    The solid carries the parts; an outside corner's label is only its nearest part, and where a
+    node lies exactly on the surface (``sdf == 0``, e.g. grid-aligned faces) the nearest corner
+    can be an outside one labelled with another part. Points whose cell has no inside corner
+    (none after marching cubes, kept for safety) take the nearest corner.
+    """
+    shape = np.asarray(sdf.shape)
+    base = np.clip(np.floor(cp).astype(np.int64), 0, np.maximum(shape - 2, 0))
+    best = np.clip(np.rint(cp).astype(np.int64), 0, shape - 1)
+    best_d2 = np.full(len(cp), np.inf)
+    for off in np.ndindex(2, 2, 2):
+        q = np.minimum(base + np.asarray(off), shape - 1)
+        d2 = ((q - cp) ** 2).sum(axis=1)
+        better = (sdf[q[:, 0], q[:, 1], q[:, 2]] <= 0) & (d2 < best_d2)
+        best[better] = q[better]
+        best_d2[better] = d2[better]
+    return parts[best[:, 0], best[:, 1], best[:, 2]].copy()
 
 
 def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
@@ -295,33 +322,51 @@ def reevaluate(
     band: float = BAND_VOXELS,
     progress: ProgressCallback | None = None,
 ) -> CSDF:
-    """True distances, colours and parts at ``mask`` voxels within the band of ``csdf``'s surface.
+    """Distances, colours and parts at ``mask`` voxels within the band of ``csdf``'s surface.
 
     Parameters
     ----------
     csdf : CSDF
         Any field whose zero level set is the surface (e.g. a naive resampling).
     mask : (X, Y, Z) bool, optional
-        Voxels to recompute; all voxels of the band when omitted.
+        Voxels to recompute (integers: nonzero); all voxels of the band when omitted.
     band : float
-        Half-width of the band, in voxels (default :data:`BAND_VOXELS`).
+        Half-width of the band, in voxels (default :data:`BAND_VOXELS`); finite and > 0.
+
+    Raises
+    ------
+    InputError
+        A mask of another shape or neither bool nor integer, a band that is not a finite positive number.
 
     Returns
     -------
     CSDF
-        Same grid; recomputed voxels hold the exact distance to the (unmoved) zero level set,
-        with the field's sign, and the colour and part of their nearest surface point.
+        Same grid; recomputed voxels hold the exact distance to the (unmoved) zero level set's
+        piecewise-linear (marching-cubes) surface, with the field's sign, and the colour and
+        part of their nearest surface point. That surface cuts sharp edges and corners of the
+        object the grid samples: there the distance can differ from the true one by up to about
+        0.9 voxel.
     """
+    if (
+        isinstance(band, bool | np.bool_)
+        or not isinstance(band, numbers.Real)
+        or not (math.isfinite(band) and band > 0)
+    ):
+        raise InputError(f"band: expected a finite positive number of voxels, got {band!r}")
+    if mask is None:
+        mask = np.ones(csdf.shape, bool)
+    else:
+        got = np.asarray(mask)
+        if got.shape != csdf.shape or not (got.dtype == bool or got.dtype.kind in "iu"):
+            desc = f"shape {got.shape} {got.dtype}" if got.ndim else repr(mask)
+            raise InputError(f"mask: expected a {csdf.shape} bool array, got {desc}")
+        mask = got.astype(bool)
+    band = float(band)
     report = resolve(progress)
     report(0.0, "re-evaluating distances")
     sdf = np.array(csdf.sdf)
     rgb = np.array(csdf.rgb)
     parts = np.array(csdf.parts)
-    if mask is None:
-        mask = np.ones(sdf.shape, bool)
-    mask = np.asarray(mask, bool)
-    if mask.shape != sdf.shape:
-        raise ValueError(f"mask: expected shape {sdf.shape}, got {mask.shape}")
     reevaluate_arrays(sdf, rgb, parts, csdf.voxel_size, mask, band=band)
     report(1.0, "re-evaluated")
     return csdf.replace(sdf=sdf, rgb=rgb, parts=parts)

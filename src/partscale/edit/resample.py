@@ -61,7 +61,20 @@ def make_plan(
     seam_voxels: float = SEAM_VOXELS,
     blend: bool = True,
 ) -> Plan:
-    """Build the sampling plan of an edit along one axis (world positions, ``dest`` snapped)."""
+    """Build the sampling plan of an edit along one axis (world positions, ``dest`` snapped).
+
+    For ``tile`` with ``blend``, each internal seam cross-fades the two copies' continuations
+    (left copy read past END, right copy read before START) over ``seam_voxels`` output voxels
+    either side, so the field stays continuous across the seam (METHOD.md step 6). A feature
+    thinner than that window which exists on one side of the seam only is faded by it: where a
+    zone plane cuts through a board, the sliver it leaves at the start (or end) of every copy
+    (e.g. 1.5 voxels) blends towards the other side's air and thins or vanishes, and an air gap of
+    about a voxel next to a seam can close, merging the pieces on either side. Remedy: put the
+    zone's planes in gaps between repeated elements or through the middle of one (then both
+    continuations agree and the blend changes nothing); ``blend=False`` (what
+    :func:`~partscale.edit.naive_edit` uses) concatenates the copies without blending, keeping
+    slivers but leaving a step in the field at each seam.
+    """
     y = origin + np.arange(n_out) * h
     x = source_coordinate(y, mode=mode, start=start, end=end, dest=dest, lo=lo, hi=hi)
     xa = (x - origin) / h

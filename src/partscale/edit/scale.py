@@ -11,6 +11,7 @@ outside the zone an exact copy of the original voxels.
 from __future__ import annotations
 
 import copy as _copy
+import math
 from typing import Any
 
 import numpy as np
@@ -25,7 +26,7 @@ from .reevaluate import BAND_VOXELS, reevaluate_arrays
 from .resample import SEAM_VOXELS, Plan, apply_plan, lerp_layers, make_plan
 
 #: Peak working bytes per output voxel of an edit (output arrays, float temporaries, masks).
-BYTES_PER_VOXEL = 48
+BYTES_PER_VOXEL = 56  # 48, plus the resampled sdf and parts kept to tell changed voxels
 
 #: An axial slope of the source distance below this counts as "nearest surface point lateral".
 _LATERAL = 0.05
@@ -57,6 +58,10 @@ def resolve_edit(csdf: CSDF, edit: Edit) -> dict[str, Any]:
     sb = csdf.surface_bounds()
     lo, hi = float(sb[0, ax]), float(sb[1, ax])
     s, e, d = edit.resolve(lo, hi)
+    if not all(map(math.isfinite, (s, e, d, (d - e) / h))):
+        raise InputError(
+            f"zone, to: expected finite positions, got zone [{_fmt(s)}, {_fmt(e)}], to {_fmt(d)}"
+        )
     name = AXES[ax]
     if not s < e:
         raise InputError(f"zone: expected start < end, got start {_fmt(s)} >= end {_fmt(e)}")
@@ -372,12 +377,16 @@ def _edit_arrays(
             band=band,
         )
         eff_band = (band + 1.0) * max(1.0, 1.0 / plan.scale)
+        resampled = out_sdf.copy(), out_parts.copy()
         extra["reevaluated"] = reevaluate_arrays(
             out_sdf, out_rgb, out_parts, h, mask, band=eff_band
         )
-        # parts are labelled up to the band outside the surface (as the segment stage does);
-        # voxels the edit moved farther out lose theirs
-        out_parts[out_sdf > BAND_VOXELS * h] = -1
+        # parts are labelled up to the band outside the surface (as the segment stage does):
+        # voxels the edit resampled or recomputed lose theirs beyond it; the copied layers
+        # outside the zone keep their labels as they are, like their distances
+        changed = (out_sdf != resampled[0]) | (out_parts != resampled[1])
+        changed[plan.in_slab | (plan.beta > 0)] = True
+        out_parts[changed & (out_sdf > BAND_VOXELS * h)] = -1
     back = (np.moveaxis(out_sdf, 0, ax), np.moveaxis(out_rgb, 0, ax), np.moveaxis(out_parts, 0, ax))
     return (*back, extra)
 
@@ -421,8 +430,21 @@ def apply_edit(
     CSDF
         New grid, longer or shorter along the axis by ``round((DEST - END) / voxel_size)`` voxels,
         same origin and voxel size. Outside the zone the voxels are exact copies (translated beyond
-        it); within ``BAND_VOXELS`` of the surface every recomputed distance is the true distance
-        to the edited surface. ``meta['history']`` gains the edit in world units (and as given).
+        it); within ``BAND_VOXELS`` of the surface every recomputed distance is the distance to
+        the edited surface as the grid represents it (the piecewise-linear marching-cubes surface
+        through the zero crossings): exact for flat surface, but that surface cuts sharp edges
+        and corners, where distances can differ from the true object's by up to about 0.9 voxel (see :mod:`partscale.edit`). ``meta['history']`` gains the edit in
+        world units (and as given).
+
+    Notes
+    -----
+    ``tile`` blends the copies across each internal seam over ``SEAM_VOXELS`` voxels either side
+    (the field stays continuous there). Thin features that exist on one side of a seam only are
+    faded by the blend: a zone plane that cuts through a board leaves a sliver at the start of
+    every copy, which thins or vanishes, and an air gap of about a voxel at a seam can close.
+    Place the zone's planes in the gaps between repeated elements or through the middle of one;
+    :func:`naive_edit` concatenates copies without blending (slivers kept, but a step in the
+    field at each seam and no re-evaluation).
     """
     report = resolve(progress)
     edit = _as_edit(edit)
@@ -471,7 +493,9 @@ def scale(
 
     Positions are floats in the object's units or strings like ``'30%'``.
     """
-    e = Edit.parse({"axis": axis, "zone": list(zone), "to": to, "mode": mode})
+    if isinstance(zone, np.ndarray):
+        zone = zone.tolist()
+    e = Edit.parse({"axis": axis, "zone": zone, "to": to, "mode": mode})
     return apply_edit(csdf, e, progress=progress)
 
 

@@ -26,7 +26,7 @@ from .reevaluate import BAND_VOXELS, reevaluate_arrays
 from .resample import SEAM_VOXELS, Plan, apply_plan, lerp_layers, make_plan
 
 #: Peak working bytes per output voxel of an edit (output arrays, float temporaries, masks).
-BYTES_PER_VOXEL = 56  # 48, plus the resampled sdf and parts kept to tell changed voxels
+BYTES_PER_VOXEL = 64  # 48, plus up to 16 where every voxel is re-evaluated (index, old value, flag)
 
 #: An axial slope of the source distance below this counts as "nearest surface point lateral".
 _LATERAL = 0.05
@@ -377,14 +377,19 @@ def _edit_arrays(
             band=band,
         )
         eff_band = (band + 1.0) * max(1.0, 1.0 / plan.scale)
-        resampled = out_sdf.copy(), out_parts.copy()
+        # what re-evaluation may change, as resampled: to tell the voxels it did change
+        todo = np.flatnonzero(mask)
+        sdf_was, parts_was = out_sdf.ravel()[todo], out_parts.ravel()[todo]
         extra["reevaluated"] = reevaluate_arrays(
             out_sdf, out_rgb, out_parts, h, mask, band=eff_band
         )
         # parts are labelled up to the band outside the surface (as the segment stage does):
         # voxels the edit resampled or recomputed lose theirs beyond it; the copied layers
         # outside the zone keep their labels as they are, like their distances
-        changed = (out_sdf != resampled[0]) | (out_parts != resampled[1])
+        changed = np.zeros(out_sdf.shape, bool)
+        changed.ravel()[todo] = (out_sdf.ravel()[todo] != sdf_was) | (
+            out_parts.ravel()[todo] != parts_was
+        )
         changed[plan.in_slab | (plan.beta > 0)] = True
         out_parts[changed & (out_sdf > BAND_VOXELS * h)] = -1
     back = (np.moveaxis(out_sdf, 0, ax), np.moveaxis(out_rgb, 0, ax), np.moveaxis(out_parts, 0, ax))

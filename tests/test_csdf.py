@@ -117,6 +117,15 @@ def test_memory_guard_names_the_need(monkeypatch):
     check_memory((128, 128, 128), 8, what="test")
 
 
+def test_memory_guard_message_stays_short_for_absurd_requests():
+    # a mistyped size (an edit to 1e300 m) must not print hundreds of digits
+    with pytest.raises(MemoryLimitError) as err:
+        check_memory((2 * 10**301, 13, 11), 48, what="test")
+    message = str(err.value)
+    assert len(message) < 160, message
+    assert "2.00e+301x13x11 grid" in message and "EiB" in message
+
+
 def test_unknown_option_lists_the_known_ones():
     @keyword_options
     def f(x, *, alpha=1, beta=2):

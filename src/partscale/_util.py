@@ -109,11 +109,20 @@ def available_memory() -> int:
 
 
 def format_bytes(n: float) -> str:
-    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
-        if abs(n) < 1024 or unit == "TiB":
-            return f"{n:.1f} {unit}" if unit != "B" else f"{int(n)} B"
+    """``1536 -> '1.5 KiB'``; beyond exbibytes in scientific notation (absurd requests)."""
+    n = float(n)
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"):
+        if abs(n) < 1024 or unit == "EiB":
+            break
         n /= 1024
-    return f"{n:.1f} TiB"
+    if unit == "B":
+        return f"{int(n)} B"
+    return f"{n:.1f} {unit}" if abs(n) < 1e4 else f"{n:.2e} {unit}"
+
+
+def _format_shape(shape: tuple[int, ...]) -> str:
+    # a mistyped size (--to 1e300) would otherwise print hundreds of digits
+    return "x".join(str(s) if s < 10**7 else f"{float(s):.2e}" for s in shape)
 
 
 def check_memory(shape: tuple[int, ...], bytes_per_voxel: float, *, what: str) -> None:
@@ -135,7 +144,7 @@ def check_memory(shape: tuple[int, ...], bytes_per_voxel: float, *, what: str) -
     have = available_memory()
     if need > have:
         raise MemoryLimitError(
-            f"{what}: a {'x'.join(map(str, shape))} grid would need {format_bytes(need)} "
+            f"{what}: a {_format_shape(shape)} grid would need {format_bytes(need)} "
             f"of memory, only {format_bytes(have)} is available"
         )
 

@@ -13,6 +13,7 @@ import multiprocessing
 import os
 import signal
 import tempfile
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from multiprocessing import connection as mp_connection
@@ -294,7 +295,16 @@ def worker_pool(factory: Callable, *args) -> Iterator[Workers]:
         for _ in range(cores):
             here, there = ctx.Pipe()
             proc = ctx.Process(target=_serve, args=(there, factory, args), daemon=True)
-            proc.start()
+            with warnings.catch_warnings():
+                # Python 3.12+ warns on any fork of a process with threads (our thread pool,
+                # numba's). The workers only compute on inherited arrays and talk over their
+                # pipe; they take no lock another thread could hold at the fork.
+                warnings.filterwarnings(
+                    "ignore",
+                    message=r".*fork\(\) may lead to deadlocks",
+                    category=DeprecationWarning,
+                )
+                proc.start()
             there.close()
             procs.append(proc)
             conns.append(here)

@@ -12,6 +12,7 @@ Colour conventions
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import struct
@@ -147,45 +148,105 @@ def sample_texture(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
 # -- reading ------------------------------------------------------------------------------
 
 
-def _gltf_json(path: Path) -> dict | None:
-    """The glTF JSON document of a .gltf/.glb (for what trimesh does not keep), or None."""
-    try:
-        if path.suffix.lower() == ".gltf":
-            return json.loads(path.read_text(encoding="utf-8"))
-        with open(path, "rb") as fh:
-            head = fh.read(20)
-            if len(head) < 20 or head[:4] != b"glTF":
-                return None
-            length = struct.unpack("<I", head[12:16])[0]
-            return json.loads(fh.read(length))
-    except (OSError, ValueError, UnicodeDecodeError):
-        return None
+def _read_gltf(path: Path) -> tuple[dict, bytes] | None:
+    """The glTF JSON document of a .gltf/.glb and, for a .glb, the bytes after its JSON chunk.
 
-
-def _texture_transforms(doc: dict | None) -> dict[str, np.ndarray]:
-    """Material name -> (2, 3) UV affine of its base-colour ``KHR_texture_transform``.
-
-    trimesh ignores this extension; Khronos samples (SheenChair) tile their fabric with it.
-    The matrix acts on trimesh's v-up UVs: v_gltf = 1 - v.
+    None when the document cannot be read (trimesh then reports what is wrong).
     """
-    out: dict[str, np.ndarray] = {}
-    if not doc:
-        return out
-    for i, mat in enumerate(doc.get("materials", [])):
-        tex = mat.get("pbrMetallicRoughness", {}).get("baseColorTexture", {})
-        tt = tex.get("extensions", {}).get("KHR_texture_transform")
-        if not tt:
+    try:
+        raw = path.read_bytes()
+        if path.suffix.lower() == ".gltf":
+            doc = json.loads(raw.decode("utf-8"))
+            rest = b""
+        else:
+            if len(raw) < 20 or raw[:4] != b"glTF" or raw[16:20] != b"JSON":
+                return None
+            length = struct.unpack("<I", raw[12:16])[0]
+            doc = json.loads(raw[20 : 20 + length].decode("utf-8"))
+            rest = raw[20 + length :]
+    except (OSError, ValueError, UnicodeDecodeError, struct.error):
+        return None
+    return (doc, rest) if isinstance(doc, dict) else None
+
+
+def _texture_transform(tt: dict) -> np.ndarray:
+    """(2, 3) UV affine of a ``KHR_texture_transform``, acting on trimesh's v-up UVs."""
+    ox, oy = (float(x) for x in tt.get("offset", [0.0, 0.0]))
+    sx, sy = (float(x) for x in tt.get("scale", [1.0, 1.0]))
+    r = float(tt.get("rotation", 0.0))
+    c, s = np.cos(r), np.sin(r)
+    # glTF: uv' = T * R * S * uv with R = [[c, s], [-s, c]] (in glTF's v-down frame)
+    m = np.array([[c, s], [-s, c]]) @ np.diag([sx, sy])
+    g = np.array([[m[0, 0], m[0, 1], ox], [m[1, 0], m[1, 1], oy], [0, 0, 1]])
+    flip = np.array([[1.0, 0, 0], [0, -1.0, 1.0], [0, 0, 1]])  # v_gltf = 1 - v
+    return (flip @ g @ flip)[:2]
+
+
+_MAT_TAG = "partscale-material-"
+
+
+def _prepare_gltf(path: Path) -> tuple[bytes, dict[int, np.ndarray]] | None:
+    """A rewritten copy of a glTF for trimesh, and material index -> UV affine.
+
+    trimesh keys materials by name (unnamed or repeated names collide), ignores
+    ``KHR_texture_transform`` (Khronos samples such as SheenChair tile their fabric with it) and
+    reads only ``TEXCOORD_0``. So each material is renamed to a tag holding its index, and a
+    primitive whose base-colour texture reads another UV set gets that set as ``TEXCOORD_0``.
+    Raises :class:`InputError` when that set is missing. None when the JSON cannot be read.
+    """
+    got = _read_gltf(path)
+    if got is None:
+        return None
+    doc, rest = got
+    materials = doc.get("materials")
+    meshes = doc.get("meshes")
+    if not isinstance(materials, list) or not isinstance(meshes, list):
+        return None
+    transforms: dict[int, np.ndarray] = {}
+    tex_coord: dict[int, int] = {}
+    for i, mat in enumerate(materials):
+        if not isinstance(mat, dict):
+            return None
+        label = mat.get("name") or f"#{i}"
+        mat["name"] = f"{_MAT_TAG}{i}"
+        tex = (mat.get("pbrMetallicRoughness") or {}).get("baseColorTexture") or {}
+        if not isinstance(tex, dict):
             continue
-        ox, oy = tt.get("offset", [0.0, 0.0])
-        sx, sy = tt.get("scale", [1.0, 1.0])
-        r = float(tt.get("rotation", 0.0))
-        c, s = np.cos(r), np.sin(r)
-        # glTF: uv' = T * R * S * uv with R = [[c, s], [-s, c]] (in glTF's v-down frame)
-        m = np.array([[c, s], [-s, c]]) @ np.diag([sx, sy])
-        g = np.array([[m[0, 0], m[0, 1], ox], [m[1, 0], m[1, 1], oy], [0, 0, 1]])
-        flip = np.array([[1.0, 0, 0], [0, -1.0, 1.0], [0, 0, 1]])  # v_gltf = 1 - v
-        out[mat.get("name", f"material_{i}")] = (flip @ g @ flip)[:2]
-    return out
+        tt = (tex.get("extensions") or {}).get("KHR_texture_transform")
+        n = tex.get("texCoord", 0)
+        if isinstance(tt, dict):
+            n = tt.get("texCoord", n)  # the extension's override wins
+            try:
+                transforms[i] = _texture_transform(tt)
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"{path}: expected KHR_texture_transform of material {label!r} to hold "
+                    f"numbers, got {json.dumps(tt)[:80]}"
+                ) from None
+        if n != 0:
+            tex_coord[i] = n
+            mat["_label"] = label
+    for mesh in meshes:
+        for prim in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
+            m = prim.get("material") if isinstance(prim, dict) else None
+            if m not in tex_coord:
+                continue
+            attr = prim.get("attributes") or {}
+            key = f"TEXCOORD_{tex_coord[m]}"
+            if key not in attr:
+                raise InputError(
+                    f"{path}: expected {key} on the primitives of material "
+                    f"{materials[m]['_label']!r} (its baseColorTexture.texCoord), got none"
+                )
+            attr["TEXCOORD_0"] = attr[key]
+    for mat in materials:
+        mat.pop("_label", None)
+    text = json.dumps(doc).encode("utf-8")
+    if path.suffix.lower() == ".gltf":
+        return text, transforms
+    text += b" " * (-len(text) % 4)
+    head = struct.pack("<4sII", b"glTF", 2, 20 + len(text) + len(rest))
+    return head + struct.pack("<I4s", len(text), b"JSON") + text + rest, transforms
 
 
 def _image_linear(img) -> np.ndarray | None:
@@ -195,7 +256,7 @@ def _image_linear(img) -> np.ndarray | None:
     return srgb_to_linear(a)
 
 
-def _material_of(visual, is_gltf: bool, transforms: dict[str, np.ndarray]) -> Material:
+def _material_of(visual, is_gltf: bool, transforms: dict[int, np.ndarray]) -> Material:
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
     mat = getattr(visual, "material", None)
@@ -209,7 +270,11 @@ def _material_of(visual, is_gltf: bool, transforms: dict[str, np.ndarray]) -> Ma
         if not is_gltf:  # a PBR material made by trimesh from MTL keeps display values
             factor = srgb_to_linear(factor)
         tex = _image_linear(mat.baseColorTexture)
-        return Material(factor, tex, transforms.get(mat.name) if tex is not None else None)
+        uv_tf = None
+        name = mat.name or ""
+        if tex is not None and name.startswith(_MAT_TAG) and name[len(_MAT_TAG) :].isdigit():
+            uv_tf = transforms.get(int(name[len(_MAT_TAG) :]))
+        return Material(factor, tex, uv_tf)
     if isinstance(mat, SimpleMaterial):
         d = np.asarray(mat.diffuse, dtype=np.float32)[:3] / 255.0
         return Material(srgb_to_linear(d), _image_linear(mat.image))
@@ -237,8 +302,19 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
         )
     if path.stat().st_size == 0:
         raise InputError(f"{path}: expected a {suffix[1:]} mesh, got an empty file (0 bytes)")
+    is_gltf = suffix in (".glb", ".gltf")
+    prepared = _prepare_gltf(path) if is_gltf else None
+    transforms = prepared[1] if prepared else {}
     try:
-        scene = trimesh.load_scene(str(path), process=False)
+        if prepared:
+            scene = trimesh.load_scene(
+                io.BytesIO(prepared[0]),
+                file_type=suffix[1:],
+                resolver=trimesh.resolvers.FilePathResolver(str(path)),
+                process=False,
+            )
+        else:
+            scene = trimesh.load_scene(str(path), process=False)
     except (
         ValueError,
         KeyError,
@@ -255,8 +331,6 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     ) as exc:
         msg = " ".join(str(exc).split()) or type(exc).__name__
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
-    is_gltf = suffix in (".glb", ".gltf")
-    transforms = _texture_transforms(_gltf_json(path)) if is_gltf else {}
     verts, faces, mats, face_mat, uvs, colors = [], [], [], [], [], []
     any_uv = any_color = False
     n_v = 0

@@ -1,0 +1,139 @@
+"""Reading mesh and grid files: glTF texture details, OBJ+MTL textures, damaged files.
+
+Every file is built by hand in ``tmp_path`` so the expected colour (or refusal) is known exactly.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from partscale import ingest
+from partscale.errors import InputError
+
+# 2x2 texture: top-left red, top-right green, bottom-left blue, bottom-right white. In trimesh's
+# v-up UVs the texel centres are red (.25, .75), green (.75, .75), blue (.25, .25), white (.75, .25).
+QUAD = np.array([[[255, 0, 0], [0, 255, 0]], [[0, 0, 255], [255, 255, 255]]], np.uint8)
+RED, GREEN, BLUE, WHITE = ([255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255])
+
+
+def _png(arr) -> bytes:
+    b = io.BytesIO()
+    Image.fromarray(arr).save(b, format="PNG")
+    return b.getvalue()
+
+
+def _gltf(path, prims, materials, image=QUAD):
+    """A .gltf with one mesh per primitive (one node each) and ``image`` as texture 0.
+
+    prims: dicts with ``uv0``/``uv1`` (glTF v-down UVs, one per vertex) and ``material``.
+    Each primitive is a triangle at its own x offset so faces can be told apart.
+    """
+    blob = bytearray()
+    views, accs, meshes = [], [], []
+
+    def add(arr, comp, typ):
+        arr = np.ascontiguousarray(arr)
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": arr.nbytes})
+        blob.extend(arr.tobytes())
+        blob.extend(b"\0" * (-len(blob) % 4))
+        acc = {"bufferView": len(views) - 1, "componentType": comp, "count": len(arr), "type": typ}
+        if typ == "VEC3":
+            acc["min"], acc["max"] = arr.min(0).tolist(), arr.max(0).tolist()
+        accs.append(acc)
+        return len(accs) - 1
+
+    for i, p in enumerate(prims):
+        pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], "<f4")
+        pos[:, 0] += 2.0 * i
+        attr = {"POSITION": add(pos, 5126, "VEC3")}
+        for k in (0, 1):
+            if p.get(f"uv{k}") is not None:
+                attr[f"TEXCOORD_{k}"] = add(np.asarray(p[f"uv{k}"], "<f4"), 5126, "VEC2")
+        prim = {"attributes": attr, "indices": add(np.arange(3, dtype="<u4"), 5125, "SCALAR")}
+        if p.get("material") is not None:
+            prim["material"] = p["material"]
+        meshes.append({"primitives": [prim]})
+    png = _png(image)
+    views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(png)})
+    blob.extend(png)
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": list(range(len(meshes)))}],
+        "nodes": [{"mesh": i} for i in range(len(meshes))],
+        "meshes": meshes,
+        "accessors": accs,
+        "bufferViews": views,
+        "buffers": [
+            {
+                "byteLength": len(blob),
+                "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode(),
+            }
+        ],
+        "materials": materials,
+        "images": [{"bufferView": len(views) - 1, "mimeType": "image/png"}],
+        "textures": [{"source": 0}],
+        "extensionsUsed": ["KHR_texture_transform"],
+    }
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return path
+
+
+def _face_colours(mesh) -> list[list[int]]:
+    """sRGB colour at the centroid of each face, ordered by the face's x position."""
+    order = np.argsort(mesh.vertices[mesh.faces].mean(axis=1)[:, 0])
+    return mesh.color_at(order, np.full((len(order), 3), 1 / 3)).tolist()
+
+
+def _textured(offset=None, tex_coord=None, name=None, ext_tex_coord=None) -> dict:
+    tex: dict = {"index": 0}
+    if tex_coord is not None:
+        tex["texCoord"] = tex_coord
+    if offset is not None or ext_tex_coord is not None:
+        tt: dict = {"offset": offset or [0, 0]}
+        if ext_tex_coord is not None:
+            tt["texCoord"] = ext_tex_coord
+        tex["extensions"] = {"KHR_texture_transform": tt}
+    mat: dict = {"pbrMetallicRoughness": {"baseColorTexture": tex}}
+    if name is not None:
+        mat["name"] = name
+    return mat
+
+
+# glTF UV (.25, .25) (v down) is the red texel; (.75, .75) the white one.
+UV_RED = [[0.25, 0.25]] * 3
+UV_WHITE = [[0.75, 0.75]] * 3
+
+
+def test_gltf_texture_transform_follows_the_material_index_not_its_name(tmp_path):
+    """Unnamed materials and two materials of one name each keep their own transform."""
+    mats = [
+        _textured(offset=[0.5, 0]),  # unnamed: u + .5 -> green
+        _textured(name="m"),  # named "m", no transform -> red
+        _textured(offset=[0, 0.5], name="m"),  # also "m": v + .5 -> blue
+        _textured(),  # unnamed, none -> red
+    ]
+    prims = [{"uv0": UV_RED, "material": i} for i in range(4)]
+    m = ingest.load_mesh(_gltf(tmp_path / "t.gltf", prims, mats))
+    assert _face_colours(m) == [GREEN, RED, BLUE, RED]
+
+
+def test_gltf_base_colour_texture_reads_the_uv_set_it_names(tmp_path):
+    """texCoord 1 (on the texture or as the transform's override) samples TEXCOORD_1."""
+    mats = [_textured(tex_coord=1), _textured(ext_tex_coord=1), _textured(tex_coord=0)]
+    prims = [{"uv0": UV_RED, "uv1": UV_WHITE, "material": i} for i in range(3)]
+    m = ingest.load_mesh(_gltf(tmp_path / "t.gltf", prims, mats))
+    assert _face_colours(m) == [WHITE, WHITE, RED]
+
+
+def test_gltf_missing_uv_set_is_refused_naming_the_material(tmp_path):
+    mats = [_textured(tex_coord=1, name="fabric")]
+    path = _gltf(tmp_path / "t.gltf", [{"uv0": UV_RED, "material": 0}], mats)
+    with pytest.raises(InputError, match=r"t\.gltf: expected TEXCOORD_1 .*'fabric'"):
+        ingest.load_mesh(path)

@@ -11,6 +11,7 @@ import json
 
 import numpy as np
 import pytest
+from conftest import assert_bad_input
 from PIL import Image
 
 from partscale import ingest
@@ -137,3 +138,53 @@ def test_gltf_missing_uv_set_is_refused_naming_the_material(tmp_path):
     path = _gltf(tmp_path / "t.gltf", [{"uv0": UV_RED, "material": 0}], mats)
     with pytest.raises(InputError, match=r"t\.gltf: expected TEXCOORD_1 .*'fabric'"):
         ingest.load_mesh(path)
+
+
+# -- OBJ + MTL ---------------------------------------------------------------------------
+
+
+def _obj(folder, mtl_rel, mtl_text, vt="0.25 0.75"):
+    """One triangle at UV ``vt`` (v up; the red texel by default) using material ``m``."""
+    (folder / mtl_rel).parent.mkdir(parents=True, exist_ok=True)
+    (folder / mtl_rel).write_text(mtl_text, encoding="utf-8")
+    obj = folder / "a.obj"
+    obj.write_text(
+        f"mtllib {mtl_rel}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt {vt}\nusemtl m\nf 1/1 2/1 3/1\n",
+        encoding="utf-8",
+    )
+    return obj
+
+
+@pytest.mark.parametrize(
+    ("mtl_rel", "tex_rel", "map_kd", "want"),
+    [
+        # options before the name: -o shifts u by .5 (red -> green); the others are skipped
+        ("a.mtl", "tex/q.png", "-s 1 1 1 -o 0.5 0 0 -bm 1 -mm 0 1 -clamp off tex/q.png", GREEN),
+        ("a.mtl", "tex/q.png", "-o 0 0.5 tex/q.png", BLUE),  # -o with u, v only
+        ("a.mtl", "my tex.png", "-blendu on my tex.png", RED),  # a name with a space
+        ("mats/a.mtl", "mats/q.png", "q.png", RED),  # relative to the MTL's folder
+    ],
+)
+def test_obj_map_kd_options_and_paths(tmp_path, mtl_rel, tex_rel, map_kd, want):
+    (tmp_path / tex_rel).parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(QUAD).save(tmp_path / tex_rel)
+    m = ingest.load_mesh(_obj(tmp_path, mtl_rel, f"newmtl m\nKd 1 1 1\nmap_Kd {map_kd}\n"))
+    assert _face_colours(m) == [want]
+
+
+def test_obj_map_kd_without_kd_is_the_texture_unscaled(tmp_path):
+    """No Kd beside map_Kd: the texel itself (not trimesh's default diffuse of 0.4)."""
+    Image.fromarray(QUAD).save(tmp_path / "q.png")
+    m = ingest.load_mesh(_obj(tmp_path, "a.mtl", "newmtl m\nmap_Kd q.png\n"))
+    assert _face_colours(m) == [RED]
+    m = ingest.load_mesh(_obj(tmp_path, "a.mtl", "newmtl m\nKd 0.5 0.5 0.5\nmap_Kd q.png\n"))
+    assert _face_colours(m) == [[128, 0, 0]]  # Kd (display 0.5) multiplies the texel
+
+
+def test_obj_missing_texture_is_refused(tmp_path, cli):
+    obj = _obj(tmp_path, "a.mtl", "newmtl m\nKd 0.2 0.4 0.6\nmap_Kd tex/none.png\n")
+    with pytest.raises(InputError, match=r"a\.obj: expected the texture .*none\.png named by"):
+        ingest.load_mesh(obj)
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", obj, "-o", out), "none.png", "no such file")
+    assert not out.exists()

@@ -15,6 +15,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import struct
 import zipfile
 from dataclasses import dataclass
@@ -249,6 +250,121 @@ def _prepare_gltf(path: Path) -> tuple[bytes, dict[int, np.ndarray]] | None:
     return head + struct.pack("<I4s", len(text), b"JSON") + text + rest, transforms
 
 
+# MTL texture options and how many arguments each takes (-o/-s/-t: u and optional v, w)
+_MTL_OPTION_ARGS = {
+    "-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1, "-clamp": 1, "-imfchan": 1,
+    "-mm": 2, "-texres": 1, "-type": 1, "-o": 3, "-s": 3, "-t": 3,
+}  # fmt: skip
+
+
+def _decode_text(data: bytes) -> str:
+    # OBJ/MTL carry no encoding: UTF-8 when it decodes, else Latin-1 (every byte is a character)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def _is_number(tok: str) -> bool:
+    try:
+        float(tok)
+    except ValueError:
+        return False
+    return True
+
+
+def _map_kd(line: str) -> tuple[str, np.ndarray | None]:
+    """File name and (2, 3) UV affine (``-o``/``-s``) of an MTL ``map_Kd`` line.
+
+    Options come before the file name; the rest of the line (spaces kept) is the name.
+    """
+    toks = [(m.start(), m.group()) for m in re.finditer(r"\S+", line)][1:]
+    scale, offset = [1.0, 1.0], [0.0, 0.0]
+    i = 0
+    while i < len(toks) and toks[i][1].lower() in _MTL_OPTION_ARGS:
+        opt = toks[i][1].lower()
+        n = _MTL_OPTION_ARGS[opt]
+        args = []
+        i += 1
+        while len(args) < n and i < len(toks) - 1:
+            if opt in ("-o", "-s", "-t") and not _is_number(toks[i][1]):
+                break  # v and w are optional
+            args.append(toks[i][1])
+            i += 1
+        if opt in ("-o", "-s") and args:
+            vals = [float(a) for a in args[:2]]
+            target = offset if opt == "-o" else scale
+            target[: len(vals)] = vals
+    name = line[toks[i][0] :].strip() if i < len(toks) else ""
+    if scale == [1.0, 1.0] and offset == [0.0, 0.0]:
+        return name, None
+    return name, np.array([[scale[0], 0.0, offset[0]], [0.0, scale[1], offset[1]]])
+
+
+def _read_texture(obj: Path, mtl: Path, name: str) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
+
+    tex = mtl.parent / name
+    if not tex.is_file() and "\\" in name:  # written on Windows
+        tex = mtl.parent / name.replace("\\", "/")
+    if not tex.is_file():
+        raise InputError(f"{obj}: expected the texture {tex} named by {mtl}, got no such file")
+    try:
+        with Image.open(tex) as img:
+            return _image_linear(img)
+    except (OSError, ValueError, UnidentifiedImageError) as exc:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        raise InputError(f"{obj}: expected a readable texture image {tex}, got {msg}") from None
+
+
+def _obj_materials(obj: Path, text: str) -> dict[str, Material]:
+    """Materials of the MTL files an OBJ names, by name, read here rather than by trimesh.
+
+    trimesh takes the rest of a ``map_Kd`` line as the file name (options break it), resolves
+    it against the OBJ's folder rather than the MTL's, turns a missing texture into plain white
+    and gives a textured material without ``Kd`` a diffuse of 0.4. Here options are parsed
+    (``-o``/``-s`` become a UV affine), names resolve against the MTL's folder, a missing
+    texture is an :class:`InputError` and a texture without ``Kd`` is unscaled (``Kd`` = 1).
+    """
+    out: dict[str, Material] = {}
+    for line in text.splitlines():
+        toks = line.split()
+        if not toks or toks[0] != "mtllib" or len(toks) < 2:
+            continue
+        rest = line.strip()[6:].strip()
+        libs = [rest] if (obj.parent / rest).is_file() else toks[1:]
+        for lib in libs:
+            mtl = obj.parent / lib
+            if not mtl.is_file():
+                continue  # as before: a missing MTL leaves trimesh's default material
+            entries: dict[str, dict] = {}
+            cur: dict | None = None
+            for mline in _decode_text(mtl.read_bytes()).splitlines():
+                mt = mline.split()
+                if len(mt) < 2:
+                    continue
+                key = mt[0].lower()
+                if key == "newmtl":
+                    cur = entries.setdefault(" ".join(mt[1:]), {})
+                elif cur is None:
+                    continue
+                elif key == "kd" and all(_is_number(t) for t in mt[1:4]):
+                    kd = [float(t) for t in mt[1:4]]
+                    cur["kd"] = kd * 3 if len(kd) == 1 else kd
+                elif key == "map_kd":
+                    cur["map"] = _map_kd(mline.strip())
+            for name, e in entries.items():
+                if "kd" not in e and "map" not in e:
+                    continue  # nothing to add to trimesh's reading
+                kd = np.clip(np.asarray(e.get("kd", [1.0, 1.0, 1.0]), np.float32), 0, 1)
+                tex = uv_tf = None
+                if "map" in e and e["map"][0]:
+                    tex = _read_texture(obj, mtl, e["map"][0])
+                    uv_tf = e["map"][1]
+                out.setdefault(name, Material(srgb_to_linear(kd), tex, uv_tf))
+    return out
+
+
 def _image_linear(img) -> np.ndarray | None:
     if img is None:
         return None
@@ -256,10 +372,14 @@ def _image_linear(img) -> np.ndarray | None:
     return srgb_to_linear(a)
 
 
-def _material_of(visual, is_gltf: bool, transforms: dict[int, np.ndarray]) -> Material:
+def _material_of(
+    visual, is_gltf: bool, transforms: dict[int, np.ndarray], obj_mats: dict[str, Material]
+) -> Material:
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
     mat = getattr(visual, "material", None)
+    if getattr(mat, "name", None) in obj_mats:
+        return obj_mats[mat.name]
     if isinstance(mat, PBRMaterial):
         f = mat.baseColorFactor
         factor = (
@@ -305,6 +425,7 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     is_gltf = suffix in (".glb", ".gltf")
     prepared = _prepare_gltf(path) if is_gltf else None
     transforms = prepared[1] if prepared else {}
+    obj_mats = _obj_materials(path, _decode_text(path.read_bytes())) if suffix == ".obj" else {}
     try:
         if prepared:
             scene = trimesh.load_scene(
@@ -345,7 +466,7 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
         if np.linalg.det(transform[:3, :3]) < 0:  # mirrored node: keep outward winding
             f = f[:, ::-1]
         visual = geom.visual
-        mats.append(_material_of(visual, is_gltf, transforms))
+        mats.append(_material_of(visual, is_gltf, transforms, obj_mats))
         face_mat.append(np.full(len(f), len(mats) - 1, np.int32))
         uv = getattr(visual, "uv", None)
         if uv is not None and len(uv) == len(v):

@@ -188,3 +188,44 @@ def test_obj_missing_texture_is_refused(tmp_path, cli):
     out = tmp_path / "o.csdf.npz"
     assert_bad_input(cli("import", obj, "-o", out), "none.png", "no such file")
     assert not out.exists()
+
+
+# -- damaged or unusual mesh files --------------------------------------------------------
+
+PLY_BAD_INDEX = (
+    "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+    "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+    "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"
+)
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "fragment"),
+    [
+        ("bad.ply", PLY_BAD_INDEX.encode(), r"face indices in \[0, 3\).*got \[0, 7\]"),
+        ("bad.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "index past its list"),
+        # a GLB whose JSON chunk is not UTF-8 (trimesh wants charset_normalizer for it)
+        (
+            "bad.glb",
+            b"glTF\x02\0\0\0\x24\0\0\0\x0c\0\0\0JSON{\xff\xfe\xe9\x80\x81\x82\x83}   ",
+            "glb",
+        ),
+    ],
+)
+def test_damaged_mesh_is_an_input_error(tmp_path, name, content, fragment):
+    path = tmp_path / name
+    path.write_bytes(content)
+    with pytest.raises(InputError, match=rf"{name}: expected .*{fragment}"):
+        ingest.load_mesh(path)
+
+
+def test_latin1_obj_and_mtl_load(tmp_path):
+    """OBJ/MTL declare no encoding: text that is not UTF-8 is read as Latin-1, not refused."""
+    (tmp_path / "a.mtl").write_bytes("newmtl café\nKd 0.2 0.4 0.6\n".encode("latin-1"))
+    (tmp_path / "a.obj").write_bytes(
+        "# chaise en hêtre\nmtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl café\nf 1 2 3\n".encode(
+            "latin-1"
+        )
+    )
+    m = ingest.load_mesh(tmp_path / "a.obj")
+    assert _face_colours(m) == [[51, 102, 153]]

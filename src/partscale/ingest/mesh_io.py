@@ -17,7 +17,7 @@ import json
 import os
 import re
 import struct
-import zipfile
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -317,6 +317,27 @@ def _read_texture(obj: Path, mtl: Path, name: str) -> np.ndarray:
         raise InputError(f"{obj}: expected a readable texture image {tex}, got {msg}") from None
 
 
+class _Utf8Resolver:
+    """trimesh file resolver that hands text files (MTL) over as UTF-8."""
+
+    def __init__(self, source: str):
+        import trimesh
+
+        self._inner = trimesh.resolvers.FilePathResolver(source)
+
+    def get(self, name: str) -> bytes:
+        data = self._inner.get(name)
+        if name.lower().endswith(".mtl"):
+            data = _decode_text(data).encode("utf-8")
+        return data
+
+    def __getitem__(self, name: str) -> bytes:
+        return self.get(name)
+
+    def __getattr__(self, name: str):
+        return getattr(self._inner, name)
+
+
 def _obj_materials(obj: Path, text: str) -> dict[str, Material]:
     """Materials of the MTL files an OBJ names, by name, read here rather than by trimesh.
 
@@ -425,32 +446,36 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     is_gltf = suffix in (".glb", ".gltf")
     prepared = _prepare_gltf(path) if is_gltf else None
     transforms = prepared[1] if prepared else {}
-    obj_mats = _obj_materials(path, _decode_text(path.read_bytes())) if suffix == ".obj" else {}
+    obj_mats: dict[str, Material] = {}
     try:
-        if prepared:
-            scene = trimesh.load_scene(
-                io.BytesIO(prepared[0]),
-                file_type=suffix[1:],
-                resolver=trimesh.resolvers.FilePathResolver(str(path)),
-                process=False,
-            )
-        else:
-            scene = trimesh.load_scene(str(path), process=False)
-    except (
-        ValueError,
-        KeyError,
-        IndexError,
-        TypeError,
-        OSError,
-        EOFError,
-        AttributeError,
-        struct.error,
-        json.JSONDecodeError,
-        zipfile.BadZipFile,
-        NotImplementedError,
-        AssertionError,
-    ) as exc:
+        with warnings.catch_warnings():
+            # trimesh's casts of junk numbers warn; what they produce is checked below
+            warnings.simplefilter("ignore", RuntimeWarning)
+            if prepared:
+                scene = trimesh.load_scene(
+                    io.BytesIO(prepared[0]),
+                    file_type=suffix[1:],
+                    resolver=trimesh.resolvers.FilePathResolver(str(path)),
+                    process=False,
+                )
+            elif suffix == ".obj":
+                # trimesh needs charset_normalizer for text that is not UTF-8: hand it UTF-8
+                text = _decode_text(path.read_bytes())
+                obj_mats = _obj_materials(path, text)
+                scene = trimesh.load_scene(
+                    io.BytesIO(text.encode("utf-8")),
+                    file_type="obj",
+                    resolver=_Utf8Resolver(str(path)),
+                    process=False,
+                )
+            else:
+                scene = trimesh.load_scene(str(path), process=False)
+    except (InputError, MemoryError):
+        raise
+    except Exception as exc:  # trimesh's parsers raise many kinds (even ImportError) on junk
         msg = " ".join(str(exc).split()) or type(exc).__name__
+        if isinstance(exc, IndexError):  # an OBJ face naming a vertex that is not there
+            msg = f"an index past its list ({msg})"
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
     verts, faces, mats, face_mat, uvs, colors = [], [], [], [], [], []
     any_uv = any_color = False
@@ -461,8 +486,17 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
         if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
             continue
         v = np.asarray(geom.vertices, np.float64)
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise InputError(
+                f"{path}: expected 3 coordinates per vertex in {geom_name!r}, got shape {v.shape}"
+            )
         v = v @ transform[:3, :3].T + transform[:3, 3]
         f = np.asarray(geom.faces, np.int64)
+        if f.min() < 0 or f.max() >= len(v):
+            raise InputError(
+                f"{path}: expected face indices in [0, {len(v)}) (the vertex count of "
+                f"{geom_name!r}), got [{f.min()}, {f.max()}]"
+            )
         if np.linalg.det(transform[:3, :3]) < 0:  # mirrored node: keep outward winding
             f = f[:, ::-1]
         visual = geom.visual

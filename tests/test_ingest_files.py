@@ -229,3 +229,12 @@ def test_latin1_obj_and_mtl_load(tmp_path):
     )
     m = ingest.load_mesh(tmp_path / "a.obj")
     assert _face_colours(m) == [[51, 102, 153]]
+
+
+def test_16_bit_greyscale_texture_keeps_its_grey(tmp_path):
+    """A 16-bit grey texel of 0x8080 (sRGB 50.2 %) reads as grey 128, not clipped to white."""
+    Image.fromarray(np.full((2, 2), 0x8080, np.uint16)).save(tmp_path / "g.png")
+    with Image.open(tmp_path / "g.png") as img:
+        assert img.mode.startswith("I")
+    m = ingest.load_mesh(_obj(tmp_path, "a.mtl", "newmtl m\nmap_Kd g.png\n"))
+    assert _face_colours(m) == [[128, 128, 128]]

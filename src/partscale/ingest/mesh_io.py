@@ -387,9 +387,17 @@ def _obj_materials(obj: Path, text: str) -> dict[str, Material]:
 
 
 def _image_linear(img) -> np.ndarray | None:
+    """(H, W, 3) float32 linear RGB of a PIL image (sRGB-encoded, 8 or 16 bits)."""
     if img is None:
         return None
-    a = np.asarray(img.convert("RGB"), dtype=np.float32) / 255.0
+    if img.mode.startswith("I") or img.mode == "F":
+        # 16-bit (I;16*, or I as PIL reads 16-bit PNG) and float greyscale: convert("RGB")
+        # would clip them to 255 (white); scale to [0, 1] instead
+        a = np.asarray(img, dtype=np.float64)
+        a = np.clip(a / (1.0 if img.mode == "F" else 65535.0), 0.0, 1.0)
+        a = np.repeat(a[..., None].astype(np.float32), 3, axis=-1)
+    else:
+        a = np.asarray(img.convert("RGB"), dtype=np.float32) / 255.0
     return srgb_to_linear(a)
 
 

@@ -156,6 +156,18 @@ def test_load_refuses_bad_meta_origin_and_voxel_size(tmp_path, ball, change, fra
         load(bad)
 
 
+def test_load_refuses_extra_arrays_listing_the_expected_ones(tmp_path, ball):
+    arrays = _arrays(save(ball, tmp_path / "good.csdf.npz"))
+    bad = tmp_path / "bad.csdf.npz"
+    np.savez(bad, **arrays, foo=np.zeros(3))
+    with pytest.raises(
+        InputError,
+        match=r"bad\.csdf\.npz: expected exactly the arrays sdf, rgb, "
+        r"parts, origin, voxel_size, meta, got extra foo",
+    ):
+        load(bad)
+
+
 def test_failed_save_leaves_nothing(tmp_path, ball, monkeypatch):
     def boom(*a, **k):
         raise OSError("disk full")

@@ -275,7 +275,7 @@ def load(path: str | os.PathLike) -> CSDF:
     """Read and validate a ``.csdf.npz`` file.
 
     Raises :class:`InputError` naming the file and the problem: missing file, not an npz,
-    truncated or damaged data, missing arrays, wrong shapes or dtypes, non-finite
+    truncated or damaged data, missing or extra arrays, wrong shapes or dtypes, non-finite
     values, meta that is not a JSON object (or a history that is not a list of objects), wrong
     version.
     """
@@ -287,9 +287,14 @@ def load(path: str | os.PathLike) -> CSDF:
         with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             names = set(z.files)
             missing = [n for n in _NAMES if n not in names]
-            if missing:
+            extra = sorted(names - set(_NAMES))
+            if missing or extra:
+                got = "; ".join(
+                    ([f"missing {', '.join(missing)}"] if missing else [])
+                    + ([f"extra {', '.join(extra)}"] if extra else [])
+                )
                 raise InputError(
-                    f"{path}: expected arrays {', '.join(_NAMES)}, missing {', '.join(missing)}"
+                    f"{path}: expected exactly the arrays {', '.join(_NAMES)}, got {got}"
                 )
             data = {n: z[n] for n in _NAMES}
     except (InputError, MemoryError):

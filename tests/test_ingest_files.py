@@ -238,3 +238,31 @@ def test_16_bit_greyscale_texture_keeps_its_grey(tmp_path):
         assert img.mode.startswith("I")
     m = ingest.load_mesh(_obj(tmp_path, "a.mtl", "newmtl m\nmap_Kd g.png\n"))
     assert _face_colours(m) == [[128, 128, 128]]
+
+
+# -- SDF grids -----------------------------------------------------------------------------
+
+
+def _ball_volume(n=20) -> np.ndarray:
+    ax = np.linspace(-1, 1, n)
+    p = np.stack(np.meshgrid(ax, ax, ax, indexing="ij"), -1)
+    return (np.linalg.norm(p, axis=-1) - 0.5).astype(np.float32)
+
+
+@pytest.mark.parametrize(
+    ("extra", "fragment"),
+    [
+        ({"origin": np.zeros(2)}, r"grid origin as 3 finite numbers, got \[0\.0, 0\.0\]"),
+        ({"origin": np.array([np.nan, 0, 0])}, "grid origin as 3 finite numbers, got .nan"),
+        ({"origin": np.array(["a", "b", "c"])}, "grid origin as 3 finite numbers"),
+        ({"voxel_size": np.array(0.0)}, "grid voxel_size finite and > 0, got 0.0"),
+        ({"voxel_size": np.array(np.nan)}, "grid voxel_size finite and > 0, got nan"),
+        ({"voxel_size": np.array([0.1, 0.2])}, "grid voxel_size to be one number"),
+        ({"iso": np.array([0.0, 1.0])}, "--iso to be one number"),
+    ],
+)
+def test_npz_grid_origin_voxel_size_and_iso_are_checked(tmp_path, extra, fragment):
+    path = tmp_path / "g.npz"
+    np.savez(path, sdf=_ball_volume(), **extra)
+    with pytest.raises(InputError, match=rf"g\.npz: expected (the )?{fragment}"):
+        ingest.load(path, res=16)

@@ -41,6 +41,31 @@ def _check_volume(volume, name: str) -> np.ndarray:
     return v
 
 
+def _one_number(x, what: str, source: str) -> float:
+    a = np.asarray(x)
+    if a.size != 1 or a.dtype.kind not in "iuf":
+        raise InputError(f"{source}: expected {what} to be one number, got {_show(a)}")
+    return float(a.reshape(()))
+
+
+def _show(a: np.ndarray) -> str:
+    return f"{a.tolist()}" if a.size <= 6 else f"an array of shape {a.shape}"
+
+
+def _check_origin(origin, source: str) -> np.ndarray:
+    a = np.asarray(origin)
+    if a.shape != (3,) or a.dtype.kind not in "iuf" or not np.isfinite(a).all():
+        raise InputError(f"{source}: expected the grid origin as 3 finite numbers, got {_show(a)}")
+    return a.astype(np.float64)
+
+
+def _check_voxel_size(voxel_size, source: str) -> float:
+    h = _one_number(voxel_size, "the grid voxel_size", source)
+    if not (np.isfinite(h) and h > 0):
+        raise InputError(f"{source}: expected the grid voxel_size finite and > 0, got {h}")
+    return h
+
+
 def _check_colors(colors, shape, name: str) -> np.ndarray | None:
     if colors is None:
         return None
@@ -95,9 +120,11 @@ def from_grid(
     """
     report = resolve(progress)
     v = _check_volume(sdf_volume, source)
-    iso = float(iso)
+    iso = _one_number(iso, "--iso", source)
     if not np.isfinite(iso):
         raise InputError(f"{source}: expected a finite --iso, got {iso}")
+    origin = _check_origin(origin, source)
+    voxel_size = _check_voxel_size(voxel_size, source)
     col = _check_colors(colors, v.shape, source)
     inside = v <= iso
     if not inside.any() or inside.all():
@@ -182,12 +209,10 @@ def read_grid(path: str | os.PathLike) -> dict:
     for key in ("rgb", "colors"):
         if key in arrays:
             out["colors"] = arrays[key]
-    if "origin" in arrays:
-        out["origin"] = arrays["origin"]
-    if "voxel_size" in arrays:
-        out["voxel_size"] = float(np.asarray(arrays["voxel_size"]).reshape(()))
-    if "iso" in arrays:
-        out["iso"] = float(np.asarray(arrays["iso"]).reshape(()))
+    # checked by from_grid, which names the file
+    for key in ("origin", "voxel_size", "iso"):
+        if key in arrays:
+            out[key] = arrays[key]
     return out
 
 

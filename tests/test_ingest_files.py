@@ -266,3 +266,35 @@ def test_npz_grid_origin_voxel_size_and_iso_are_checked(tmp_path, extra, fragmen
     np.savez(path, sdf=_ball_volume(), **extra)
     with pytest.raises(InputError, match=rf"g\.npz: expected (the )?{fragment}"):
         ingest.load(path, res=16)
+
+
+@pytest.mark.parametrize(
+    ("col", "want"),
+    [
+        (np.full(3, 200, np.int32), [200, 200, 200]),  # integers 0..255 as they are
+        (np.array([1.0, 0.5, 0.0]), [255, 128, 0]),  # floats with max <= 1: [0, 1]
+        (np.array([1.0005, 0.5, -0.0005]), [255, 128, 0]),  # within tolerance, clipped
+        (np.array([200.0, 100.0, 2.5]), [200, 100, 2]),  # floats with max > 2: 0..255
+    ],
+)
+def test_colour_volume_scale_rule(col, want):
+    vol = _ball_volume(8)
+    c = ingest.from_grid(vol, colors=np.broadcast_to(col, (*vol.shape, 3)))
+    assert (c.rgb == np.asarray(want, np.uint8)).all()
+
+
+@pytest.mark.parametrize(
+    ("col", "fragment"),
+    [
+        (np.array([300, 0, 0], np.int32), r"integer colours in 0\.\.255, got \[0, 300\]"),
+        (np.array([-1, 0, 0], np.int16), r"integer colours in 0\.\.255, got \[-1, 0\]"),
+        (np.array([1.5, 0.2, 0.0]), r"float colours in \[0, 1\] or 0\.\.255, got \[0, 1\.5\]"),
+        (np.array([256.0, 0.0, 0.0]), "float colours in"),
+        (np.array([0.5, -0.2, 0.0]), "float colours in"),
+        (np.array([True, False, True]), r"colours as integers in 0\.\.255.*got dtype bool"),
+    ],
+)
+def test_colour_volume_out_of_range_is_refused(col, fragment):
+    vol = _ball_volume(8)
+    with pytest.raises(InputError, match=f"grid: expected {fragment}"):
+        ingest.from_grid(vol, colors=np.broadcast_to(col, (*vol.shape, 3)))

@@ -100,6 +100,74 @@ def test_load_rejects_bad_files(tmp_path, ball):
         load(bumped)
 
 
+def _arrays(path) -> dict:
+    with zipfile.ZipFile(path) as z:
+        return {n[:-4]: np.load(z.open(n)) for n in z.namelist()}
+
+
+def _with_meta(arrays, **changes) -> dict:
+    meta = json.loads(str(arrays["meta"]))
+    meta.update(changes)
+    return {**arrays, "meta": np.array(json.dumps(meta))}
+
+
+def test_load_refuses_damaged_compressed_data(tmp_path, ball):
+    """Bytes flipped inside the compressed sdf member: an InputError wherever they land."""
+    good = save(ball, tmp_path / "good.csdf.npz")
+    src = good.read_bytes()
+    with zipfile.ZipFile(good) as z:
+        h = z.getinfo("sdf.npy").header_offset
+    # member data follow the local header, its file name and its (local) extra field
+    start = h + 30 + int.from_bytes(src[h + 26 : h + 28], "little")
+    start += int.from_bytes(src[h + 28 : h + 30], "little")
+    bad = tmp_path / "bad.csdf.npz"
+    for k in range(0, 400, 7):
+        b = bytearray(src)
+        b[start + k : start + k + 16] = bytes(x ^ 0xFF for x in b[start + k : start + k + 16])
+        bad.write_bytes(bytes(b))
+        with pytest.raises(InputError, match=r"bad\.csdf\.npz: expected"):
+            load(bad)
+
+
+@pytest.mark.parametrize(
+    ("change", "fragment"),
+    [
+        ({"meta": np.array(json.dumps([1, 2]))}, "meta to be a JSON object, got list"),
+        ({"meta": np.array(b"{}")}, "meta to be one JSON string"),
+        ({"history": 5}, "history to be a list of objects, got 5"),
+        ({"history": [1]}, "history to be a list of objects"),
+        ({"version": True}, "format version 1, got True"),
+        ({"origin": np.array(["a", "b", "c"])}, "origin to be real numbers"),
+        ({"origin": np.array([0.0, np.nan, 0.0])}, "origin: expected 3 finite numbers"),
+        ({"origin": np.zeros(2)}, "origin: expected 3 finite numbers"),
+        ({"voxel_size": np.array("x")}, "voxel_size to be real numbers"),
+        ({"voxel_size": np.float64(np.inf)}, "voxel_size: expected a finite number > 0"),
+        ({"voxel_size": np.float64(0)}, "voxel_size: expected a finite number > 0"),
+    ],
+)
+def test_load_refuses_bad_meta_origin_and_voxel_size(tmp_path, ball, change, fragment):
+    arrays = _arrays(save(ball, tmp_path / "good.csdf.npz"))
+    meta_keys = {k: v for k, v in change.items() if k in ("history", "version")}
+    arrays = _with_meta(arrays, **meta_keys) if meta_keys else arrays
+    arrays.update({k: v for k, v in change.items() if k not in meta_keys})
+    bad = tmp_path / "bad.csdf.npz"
+    np.savez(bad, **arrays)
+    with pytest.raises(InputError, match=rf"bad\.csdf\.npz: .*{fragment}"):
+        load(bad)
+
+
+def test_load_refuses_extra_arrays_listing_the_expected_ones(tmp_path, ball):
+    arrays = _arrays(save(ball, tmp_path / "good.csdf.npz"))
+    bad = tmp_path / "bad.csdf.npz"
+    np.savez(bad, **arrays, foo=np.zeros(3))
+    with pytest.raises(
+        InputError,
+        match=r"bad\.csdf\.npz: expected exactly the arrays sdf, rgb, "
+        r"parts, origin, voxel_size, meta, got extra foo",
+    ):
+        load(bad)
+
+
 def test_failed_save_leaves_nothing(tmp_path, ball, monkeypatch):
     def boom(*a, **k):
         raise OSError("disk full")

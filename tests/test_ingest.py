@@ -281,6 +281,24 @@ def test_autosdf_surface_at_level_002_and_true_distances(tmp_path, cli):
     assert c.meta["history"][0]["iso"] == pytest.approx(0.02)
 
 
+def test_autosdf_axis_order_and_y_up(tmp_path):
+    """An off-centre box of distinct extents (x 0.8, y 0.4, z 0.2) comes back where it was:
+    flat data read as (x, y, z) C-order, Y up and not flipped, surface at level 0.02."""
+    import h5py
+
+    n = 48
+    ax = np.linspace(-1, 1, n)
+    p = np.stack(np.meshgrid(ax, ax, ax, indexing="ij"), -1)
+    lo, hi = np.array([-0.2, 0.1, -0.05]), np.array([0.6, 0.5, 0.15])
+    sdf = np.clip(shapes.box_sdf(p, lo, hi), -0.2, 0.2).reshape(-1)
+    with h5py.File(tmp_path / "box.h5", "w") as f:
+        f.create_dataset("pc_sdf_sample", data=sdf.astype(np.float32))
+    c = ingest.load(tmp_path / "box.h5", res=32)
+    sb = c.surface_bounds()
+    want = np.stack([lo - 0.02, hi + 0.02])
+    assert np.abs(sb - want).max() <= 0.5 * c.voxel_size, (sb, want)
+
+
 def test_npz_grid_with_colours_kept_at_its_own_sampling():
     """from_grid without res keeps the grid: values shifted by iso, colours as given."""
     ax = np.arange(-1, 1.0001, 0.1)

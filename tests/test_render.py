@@ -84,6 +84,67 @@ def test_views_look_along_the_stated_axes(view, ratio):
     assert abs(w / h - ratio) <= 0.03 * ratio, (w, h)
 
 
+# a ball coloured by the direction of its outward normal: which colour shows where tells the view
+FACE_COLOURS = {
+    "+x": (255, 0, 0),
+    "-x": (0, 255, 255),
+    "+y": (0, 255, 0),
+    "-y": (255, 0, 255),
+    "+z": (0, 0, 255),
+    "-z": (255, 255, 0),
+}
+
+
+def _direction_ball():
+    c = shapes.sphere((0, 0, 0), 0.3, voxel_size=H)
+    p = np.stack(np.meshgrid(*(c.axis_coords(a) for a in range(3)), indexing="ij"), -1)
+    axis = np.abs(p).argmax(axis=-1)
+    sign = np.take_along_axis(p, axis[..., None], -1)[..., 0] > 0
+    rgb = np.zeros((*c.shape, 3), np.uint8)
+    for a, name in enumerate("xyz"):
+        rgb[(axis == a) & sign] = FACE_COLOURS[f"+{name}"]
+        rgb[(axis == a) & ~sign] = FACE_COLOURS[f"-{name}"]
+    return c.replace(rgb=rgb)
+
+
+def _face_at(image, disc, a, b):
+    """Name of the face colour at (a, b) disc radii right of and above the disc's centre."""
+    rows, cols = np.nonzero(disc)
+    r = (np.ptp(cols) + 1) / 2
+    px = image[int(np.rint(rows.mean() - b * r)), int(np.rint(cols.mean() + a * r))].astype(float)
+    px /= max(px.max(), 1.0)  # shading scales the colour, the hue stays
+    return min(FACE_COLOURS, key=lambda k: np.abs(np.array(FACE_COLOURS[k]) / 255 - px).sum())
+
+
+@pytest.mark.parametrize(
+    ("view", "centre", "up", "down", "left", "right"),
+    [
+        # +y up, +z towards the viewer, +x right
+        ("front", "+z", "+y", "-y", "-x", "+x"),
+        # from the right (+x): -z is on the image's right
+        ("side", "+x", "+y", "-y", "+z", "-z"),
+        # from above: the front (+z) at the bottom, +x right
+        ("top", "+y", "-z", "+z", "-x", "+x"),
+    ],
+)
+def test_views_face_the_stated_directions(view, centre, up, down, left, right):
+    """A flipped or opposite view shows other faces where these are expected."""
+    image = render.render(_direction_ball(), view=view, size=96)
+    disc = image.max(axis=-1).astype(int) - image.min(axis=-1) > 60  # saturated: the ball
+    got = [
+        _face_at(image, disc, a, b) for a, b in ((0, 0), (0, 0.8), (0, -0.8), (-0.8, 0), (0.8, 0))
+    ]
+    assert got == [centre, up, down, left, right]
+
+
+def test_iso_view_is_from_front_right_above():
+    """Looking along -(1, 1, 1): +y on top, +z lower left, +x lower right."""
+    image = render.render(_direction_ball(), view="iso", size=96)
+    disc = image.max(axis=-1).astype(int) - image.min(axis=-1) > 60
+    got = [_face_at(image, disc, a, b) for a, b in ((0, 0.6), (-0.5, -0.3), (0.5, -0.3))]
+    assert got == ["+y", "+z", "+x"]
+
+
 def test_iso_view_shows_three_shaded_faces():
     c = shapes.box((0, 0, 0), (0.4, 0.4, 0.4), voxel_size=H, color=(180, 180, 180))
     image = render.render(c, view="iso", size=128)

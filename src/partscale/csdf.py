@@ -20,7 +20,6 @@ from __future__ import annotations
 import copy
 import json
 import os
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -219,7 +218,10 @@ def make(
             f"parts: expected indices in [-1, 32767], got [{parts.min()}, {parts.max()}]"
         )
     parts = parts.astype(np.int16, copy=False)
-    origin = np.asarray(origin, dtype=np.float64).reshape(-1)
+    try:
+        origin = np.asarray(origin, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"origin: expected 3 finite numbers, got {origin!r}") from None
     if origin.shape != (3,) or not np.isfinite(origin).all():
         raise InputError(f"origin: expected 3 finite numbers, got {origin.tolist()}")
     try:
@@ -273,7 +275,9 @@ def load(path: str | os.PathLike) -> CSDF:
     """Read and validate a ``.csdf.npz`` file.
 
     Raises :class:`InputError` naming the file and the problem: missing file, not an npz,
-    truncated, missing or extra arrays, wrong shapes or dtypes, non-finite values, wrong version.
+    truncated or damaged data, missing or extra arrays, wrong shapes or dtypes, non-finite
+    values, meta that is not a JSON object (or a history that is not a list of objects), wrong
+    version.
     """
     path = Path(path)
     if not path.is_file():
@@ -283,30 +287,53 @@ def load(path: str | os.PathLike) -> CSDF:
         with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             names = set(z.files)
             missing = [n for n in _NAMES if n not in names]
-            if missing:
+            extra = sorted(names - set(_NAMES))
+            if missing or extra:
+                got = "; ".join(
+                    ([f"missing {', '.join(missing)}"] if missing else [])
+                    + ([f"extra {', '.join(extra)}"] if extra else [])
+                )
                 raise InputError(
-                    f"{path}: expected arrays {', '.join(_NAMES)}, missing {', '.join(missing)}"
+                    f"{path}: expected exactly the arrays {', '.join(_NAMES)}, got {got}"
                 )
             data = {n: z[n] for n in _NAMES}
-    except InputError:
+    except (InputError, MemoryError):
         raise
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as exc:
-        raise InputError(f"{path}: expected a .csdf.npz (zip of .npy arrays), got {exc}") from None
+    except Exception as exc:  # zipfile, zlib, numpy's header parser: many kinds on damaged data
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        raise InputError(f"{path}: expected a .csdf.npz (zip of .npy arrays), got {msg}") from None
+    m = data["meta"]
+    if m.shape != () or m.dtype.kind != "U":
+        raise InputError(
+            f"{path}: expected meta to be one JSON string, got dtype {m.dtype} shape {m.shape}"
+        )
     try:
-        meta = json.loads(str(data["meta"]))
-    except json.JSONDecodeError as exc:
+        meta = json.loads(str(m))
+    except (json.JSONDecodeError, RecursionError) as exc:
         raise InputError(f"{path}: expected meta to be a JSON string, got {exc}") from None
+    if not isinstance(meta, dict):
+        raise InputError(f"{path}: expected meta to be a JSON object, got {type(meta).__name__}")
+    history = meta.get("history", [])
+    if not isinstance(history, list) or not all(isinstance(h, dict) for h in history):
+        raise InputError(
+            f"{path}: expected meta history to be a list of objects, got {json.dumps(history)[:60]}"
+        )
     if meta.get("format") != FORMAT:
         raise InputError(f"{path}: expected meta format {FORMAT!r}, got {meta.get('format')!r}")
-    if meta.get("version") != FORMAT_VERSION:
-        raise InputError(
-            f"{path}: expected format version {FORMAT_VERSION}, got {meta.get('version')!r}"
-        )
+    version = meta.get("version")
+    if isinstance(version, bool) or version != FORMAT_VERSION:
+        raise InputError(f"{path}: expected format version {FORMAT_VERSION}, got {version!r}")
     exact = {"sdf": np.float32, "rgb": np.uint8, "parts": np.int16}
     for name, dt in exact.items():
         if data[name].dtype != dt:
             raise InputError(
                 f"{path}: expected {name} of dtype {np.dtype(dt)}, got {data[name].dtype}"
+            )
+    for name in ("origin", "voxel_size"):
+        kind = data[name].dtype.kind
+        if kind not in "iuf":
+            raise InputError(
+                f"{path}: expected {name} to be real numbers, got dtype {data[name].dtype}"
             )
     try:
         return make(

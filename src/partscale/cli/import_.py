@@ -35,7 +35,11 @@ def import_(
     ] = None,
     colors: Annotated[
         Path | None,
-        typer.Option("--colors", help="Colour volume (X, Y, Z, 3) .npy for an SDF grid."),
+        typer.Option(
+            "--colors",
+            help="Colour volume (X, Y, Z, 3) .npy for an SDF grid, sRGB: integers 0..255, or "
+            "floats in [0, 1] (max <= 1.001) or 0..255 (max > 2); other ranges are refused.",
+        ),
     ] = None,
 ) -> None:
     """Import a coloured mesh or an SDF grid as a coloured SDF (.csdf.npz).

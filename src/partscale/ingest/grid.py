@@ -41,17 +41,65 @@ def _check_volume(volume, name: str) -> np.ndarray:
     return v
 
 
+def _one_number(x, what: str, source: str) -> float:
+    a = np.asarray(x)
+    if a.size != 1 or a.dtype.kind not in "iuf":
+        raise InputError(f"{source}: expected {what} to be one number, got {_show(a)}")
+    return float(a.reshape(()))
+
+
+def _show(a: np.ndarray) -> str:
+    return f"{a.tolist()}" if a.size <= 6 else f"an array of shape {a.shape}"
+
+
+def _check_origin(origin, source: str) -> np.ndarray:
+    a = np.asarray(origin)
+    if a.shape != (3,) or a.dtype.kind not in "iuf" or not np.isfinite(a).all():
+        raise InputError(f"{source}: expected the grid origin as 3 finite numbers, got {_show(a)}")
+    return a.astype(np.float64)
+
+
+def _check_voxel_size(voxel_size, source: str) -> float:
+    h = _one_number(voxel_size, "the grid voxel_size", source)
+    if not (np.isfinite(h) and h > 0):
+        raise InputError(f"{source}: expected the grid voxel_size finite and > 0, got {h}")
+    return h
+
+
+COLOR_RULE = (
+    "integers in 0..255, or floats in [0, 1] (max <= 1.001, clipped) or in 0..255 (max > 2)"
+)
+
+
 def _check_colors(colors, shape, name: str) -> np.ndarray | None:
+    """(X, Y, Z, 3) uint8 sRGB of a colour volume, by :data:`COLOR_RULE`.
+
+    Integers must lie in 0..255 (never wrapped). Floats are [0, 1] when their max is at most
+    1.001 (clipped to [0, 1]) and 0..255 when it is above 2 (at most 255.5); a max in (1.001, 2]
+    or a min below -0.001 fits neither scale and is refused rather than guessed.
+    """
     if colors is None:
         return None
     c = np.asarray(colors)
     if c.shape != (*shape, 3):
         raise InputError(f"{name}: expected a colour volume of shape {(*shape, 3)}, got {c.shape}")
-    if np.issubdtype(c.dtype, np.floating):
-        if not np.isfinite(c).all():
-            raise InputError(f"{name}: expected finite colours, got NaN/inf")
-        c = np.clip(np.rint(c * 255.0 if c.max() <= 1.0 else c), 0, 255)
-    return c.astype(np.uint8)
+    if c.dtype == np.uint8:
+        return c
+    if np.issubdtype(c.dtype, np.integer):
+        lo, hi = int(c.min()), int(c.max())
+        if lo < 0 or hi > 255:
+            raise InputError(f"{name}: expected integer colours in 0..255, got [{lo}, {hi}]")
+        return c.astype(np.uint8)
+    if not np.issubdtype(c.dtype, np.floating):
+        raise InputError(f"{name}: expected colours as {COLOR_RULE}, got dtype {c.dtype}")
+    if not np.isfinite(c).all():
+        raise InputError(f"{name}: expected finite colours, got NaN/inf")
+    lo, hi = float(c.min()), float(c.max())
+    if lo >= -1e-3 and hi <= 1.0 + 1e-3:
+        return np.rint(np.clip(c, 0.0, 1.0) * 255.0).astype(np.uint8)
+    if lo >= -1e-3 and 2.0 < hi <= 255.5:
+        return np.rint(np.clip(c, 0.0, 255.0)).astype(np.uint8)
+    raise InputError(f"{name}: expected float colours in [0, 1] or 0..255, got [{lo:g}, {hi:g}]")
 
 
 @keyword_options
@@ -80,8 +128,10 @@ def from_grid(
         to the marching-cubes surface. None keeps the grid as given (values shifted by ``-iso``).
     pad : int, optional
         Margin of empty voxels when resampling (see :func:`from_mesh`).
-    colors : (X, Y, Z, 3) uint8 sRGB (or float in [0, 1]), optional
-        Colour volume on the same grid; mid grey when omitted.
+    colors : (X, Y, Z, 3) sRGB, optional
+        Colour volume on the same grid; mid grey when omitted. Integers must lie in 0..255;
+        floats are read as [0, 1] when their max is <= 1.001 (then clipped) and as 0..255 when
+        it is > 2; anything else (a max in (1.001, 2], negatives) is refused, not guessed.
     origin : (3,) float
         World position of sample (0, 0, 0).
     voxel_size : float
@@ -95,9 +145,11 @@ def from_grid(
     """
     report = resolve(progress)
     v = _check_volume(sdf_volume, source)
-    iso = float(iso)
+    iso = _one_number(iso, "--iso", source)
     if not np.isfinite(iso):
         raise InputError(f"{source}: expected a finite --iso, got {iso}")
+    origin = _check_origin(origin, source)
+    voxel_size = _check_voxel_size(voxel_size, source)
     col = _check_colors(colors, v.shape, source)
     inside = v <= iso
     if not inside.any() or inside.all():
@@ -182,12 +234,10 @@ def read_grid(path: str | os.PathLike) -> dict:
     for key in ("rgb", "colors"):
         if key in arrays:
             out["colors"] = arrays[key]
-    if "origin" in arrays:
-        out["origin"] = arrays["origin"]
-    if "voxel_size" in arrays:
-        out["voxel_size"] = float(np.asarray(arrays["voxel_size"]).reshape(()))
-    if "iso" in arrays:
-        out["iso"] = float(np.asarray(arrays["iso"]).reshape(()))
+    # checked by from_grid, which names the file
+    for key in ("origin", "voxel_size", "iso"):
+        if key in arrays:
+            out[key] = arrays[key]
     return out
 
 

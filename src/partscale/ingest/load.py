@@ -70,7 +70,8 @@ def load(
     iso : float, optional
         Surface level of a grid (default 0, AutoSDF 0.02); not valid for meshes.
     colors : path, optional
-        ``.npy`` colour volume (X, Y, Z, 3) for a grid, sRGB uint8 or float in [0, 1].
+        ``.npy`` colour volume (X, Y, Z, 3) for a grid, sRGB: integers in 0..255, or floats in
+        [0, 1] (max <= 1.001) or 0..255 (max > 2); other ranges are refused (see ``from_grid``).
     progress : callable(fraction, message), optional
 
     Returns

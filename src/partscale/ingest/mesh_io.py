@@ -12,10 +12,12 @@ Colour conventions
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import re
 import struct
-import zipfile
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -147,58 +149,266 @@ def sample_texture(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
 # -- reading ------------------------------------------------------------------------------
 
 
-def _gltf_json(path: Path) -> dict | None:
-    """The glTF JSON document of a .gltf/.glb (for what trimesh does not keep), or None."""
-    try:
-        if path.suffix.lower() == ".gltf":
-            return json.loads(path.read_text(encoding="utf-8"))
-        with open(path, "rb") as fh:
-            head = fh.read(20)
-            if len(head) < 20 or head[:4] != b"glTF":
-                return None
-            length = struct.unpack("<I", head[12:16])[0]
-            return json.loads(fh.read(length))
-    except (OSError, ValueError, UnicodeDecodeError):
-        return None
+def _read_gltf(path: Path) -> tuple[dict, bytes] | None:
+    """The glTF JSON document of a .gltf/.glb and, for a .glb, the bytes after its JSON chunk.
 
-
-def _texture_transforms(doc: dict | None) -> dict[str, np.ndarray]:
-    """Material name -> (2, 3) UV affine of its base-colour ``KHR_texture_transform``.
-
-    trimesh ignores this extension; Khronos samples (SheenChair) tile their fabric with it.
-    The matrix acts on trimesh's v-up UVs: v_gltf = 1 - v.
+    None when the document cannot be read (trimesh then reports what is wrong).
     """
-    out: dict[str, np.ndarray] = {}
-    if not doc:
-        return out
-    for i, mat in enumerate(doc.get("materials", [])):
-        tex = mat.get("pbrMetallicRoughness", {}).get("baseColorTexture", {})
-        tt = tex.get("extensions", {}).get("KHR_texture_transform")
-        if not tt:
+    try:
+        raw = path.read_bytes()
+        if path.suffix.lower() == ".gltf":
+            doc = json.loads(raw.decode("utf-8"))
+            rest = b""
+        else:
+            if len(raw) < 20 or raw[:4] != b"glTF" or raw[16:20] != b"JSON":
+                return None
+            length = struct.unpack("<I", raw[12:16])[0]
+            doc = json.loads(raw[20 : 20 + length].decode("utf-8"))
+            rest = raw[20 + length :]
+    except (OSError, ValueError, UnicodeDecodeError, struct.error):
+        return None
+    return (doc, rest) if isinstance(doc, dict) else None
+
+
+def _texture_transform(tt: dict) -> np.ndarray:
+    """(2, 3) UV affine of a ``KHR_texture_transform``, acting on trimesh's v-up UVs."""
+    ox, oy = (float(x) for x in tt.get("offset", [0.0, 0.0]))
+    sx, sy = (float(x) for x in tt.get("scale", [1.0, 1.0]))
+    r = float(tt.get("rotation", 0.0))
+    c, s = np.cos(r), np.sin(r)
+    # glTF: uv' = T * R * S * uv with R = [[c, s], [-s, c]] (in glTF's v-down frame)
+    m = np.array([[c, s], [-s, c]]) @ np.diag([sx, sy])
+    g = np.array([[m[0, 0], m[0, 1], ox], [m[1, 0], m[1, 1], oy], [0, 0, 1]])
+    flip = np.array([[1.0, 0, 0], [0, -1.0, 1.0], [0, 0, 1]])  # v_gltf = 1 - v
+    return (flip @ g @ flip)[:2]
+
+
+_MAT_TAG = "partscale-material-"
+
+
+def _prepare_gltf(path: Path) -> tuple[bytes, dict[int, np.ndarray]] | None:
+    """A rewritten copy of a glTF for trimesh, and material index -> UV affine.
+
+    trimesh keys materials by name (unnamed or repeated names collide), ignores
+    ``KHR_texture_transform`` (Khronos samples such as SheenChair tile their fabric with it) and
+    reads only ``TEXCOORD_0``. So each material is renamed to a tag holding its index, and a
+    primitive whose base-colour texture reads another UV set gets that set as ``TEXCOORD_0``.
+    Raises :class:`InputError` when that set is missing. None when the JSON cannot be read.
+    """
+    got = _read_gltf(path)
+    if got is None:
+        return None
+    doc, rest = got
+    materials = doc.get("materials")
+    meshes = doc.get("meshes")
+    if not isinstance(materials, list) or not isinstance(meshes, list):
+        return None
+    transforms: dict[int, np.ndarray] = {}
+    tex_coord: dict[int, int] = {}
+    for i, mat in enumerate(materials):
+        if not isinstance(mat, dict):
+            return None
+        label = mat.get("name") or f"#{i}"
+        mat["name"] = f"{_MAT_TAG}{i}"
+        tex = (mat.get("pbrMetallicRoughness") or {}).get("baseColorTexture") or {}
+        if not isinstance(tex, dict):
             continue
-        ox, oy = tt.get("offset", [0.0, 0.0])
-        sx, sy = tt.get("scale", [1.0, 1.0])
-        r = float(tt.get("rotation", 0.0))
-        c, s = np.cos(r), np.sin(r)
-        # glTF: uv' = T * R * S * uv with R = [[c, s], [-s, c]] (in glTF's v-down frame)
-        m = np.array([[c, s], [-s, c]]) @ np.diag([sx, sy])
-        g = np.array([[m[0, 0], m[0, 1], ox], [m[1, 0], m[1, 1], oy], [0, 0, 1]])
-        flip = np.array([[1.0, 0, 0], [0, -1.0, 1.0], [0, 0, 1]])  # v_gltf = 1 - v
-        out[mat.get("name", f"material_{i}")] = (flip @ g @ flip)[:2]
+        tt = (tex.get("extensions") or {}).get("KHR_texture_transform")
+        n = tex.get("texCoord", 0)
+        if isinstance(tt, dict):
+            n = tt.get("texCoord", n)  # the extension's override wins
+            try:
+                transforms[i] = _texture_transform(tt)
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"{path}: expected KHR_texture_transform of material {label!r} to hold "
+                    f"numbers, got {json.dumps(tt)[:80]}"
+                ) from None
+        if n != 0:
+            tex_coord[i] = n
+            mat["_label"] = label
+    for mesh in meshes:
+        for prim in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
+            m = prim.get("material") if isinstance(prim, dict) else None
+            if m not in tex_coord:
+                continue
+            attr = prim.get("attributes") or {}
+            key = f"TEXCOORD_{tex_coord[m]}"
+            if key not in attr:
+                raise InputError(
+                    f"{path}: expected {key} on the primitives of material "
+                    f"{materials[m]['_label']!r} (its baseColorTexture.texCoord), got none"
+                )
+            attr["TEXCOORD_0"] = attr[key]
+    for mat in materials:
+        mat.pop("_label", None)
+    text = json.dumps(doc).encode("utf-8")
+    if path.suffix.lower() == ".gltf":
+        return text, transforms
+    text += b" " * (-len(text) % 4)
+    head = struct.pack("<4sII", b"glTF", 2, 20 + len(text) + len(rest))
+    return head + struct.pack("<I4s", len(text), b"JSON") + text + rest, transforms
+
+
+# MTL texture options and how many arguments each takes (-o/-s/-t: u and optional v, w)
+_MTL_OPTION_ARGS = {
+    "-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1, "-clamp": 1, "-imfchan": 1,
+    "-mm": 2, "-texres": 1, "-type": 1, "-o": 3, "-s": 3, "-t": 3,
+}  # fmt: skip
+
+
+def _decode_text(data: bytes) -> str:
+    # OBJ/MTL carry no encoding: UTF-8 when it decodes, else Latin-1 (every byte is a character)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def _is_number(tok: str) -> bool:
+    try:
+        float(tok)
+    except ValueError:
+        return False
+    return True
+
+
+def _map_kd(line: str) -> tuple[str, np.ndarray | None]:
+    """File name and (2, 3) UV affine (``-o``/``-s``) of an MTL ``map_Kd`` line.
+
+    Options come before the file name; the rest of the line (spaces kept) is the name.
+    """
+    toks = [(m.start(), m.group()) for m in re.finditer(r"\S+", line)][1:]
+    scale, offset = [1.0, 1.0], [0.0, 0.0]
+    i = 0
+    while i < len(toks) and toks[i][1].lower() in _MTL_OPTION_ARGS:
+        opt = toks[i][1].lower()
+        n = _MTL_OPTION_ARGS[opt]
+        args = []
+        i += 1
+        while len(args) < n and i < len(toks) - 1:
+            if opt in ("-o", "-s", "-t") and not _is_number(toks[i][1]):
+                break  # v and w are optional
+            args.append(toks[i][1])
+            i += 1
+        if opt in ("-o", "-s") and args:
+            vals = [float(a) for a in args[:2]]
+            target = offset if opt == "-o" else scale
+            target[: len(vals)] = vals
+    name = line[toks[i][0] :].strip() if i < len(toks) else ""
+    if scale == [1.0, 1.0] and offset == [0.0, 0.0]:
+        return name, None
+    return name, np.array([[scale[0], 0.0, offset[0]], [0.0, scale[1], offset[1]]])
+
+
+def _read_texture(obj: Path, mtl: Path, name: str) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
+
+    tex = mtl.parent / name
+    if not tex.is_file() and "\\" in name:  # written on Windows
+        tex = mtl.parent / name.replace("\\", "/")
+    if not tex.is_file():
+        raise InputError(f"{obj}: expected the texture {tex} named by {mtl}, got no such file")
+    try:
+        with Image.open(tex) as img:
+            return _image_linear(img)
+    except (OSError, ValueError, UnidentifiedImageError) as exc:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        raise InputError(f"{obj}: expected a readable texture image {tex}, got {msg}") from None
+
+
+class _Utf8Resolver:
+    """trimesh file resolver that hands text files (MTL) over as UTF-8."""
+
+    def __init__(self, source: str):
+        import trimesh
+
+        self._inner = trimesh.resolvers.FilePathResolver(source)
+
+    def get(self, name: str) -> bytes:
+        data = self._inner.get(name)
+        if name.lower().endswith(".mtl"):
+            data = _decode_text(data).encode("utf-8")
+        return data
+
+    def __getitem__(self, name: str) -> bytes:
+        return self.get(name)
+
+    def __getattr__(self, name: str):
+        return getattr(self._inner, name)
+
+
+def _obj_materials(obj: Path, text: str) -> dict[str, Material]:
+    """Materials of the MTL files an OBJ names, by name, read here rather than by trimesh.
+
+    trimesh takes the rest of a ``map_Kd`` line as the file name (options break it), resolves
+    it against the OBJ's folder rather than the MTL's, turns a missing texture into plain white
+    and gives a textured material without ``Kd`` a diffuse of 0.4. Here options are parsed
+    (``-o``/``-s`` become a UV affine), names resolve against the MTL's folder, a missing
+    texture is an :class:`InputError` and a texture without ``Kd`` is unscaled (``Kd`` = 1).
+    """
+    out: dict[str, Material] = {}
+    for line in text.splitlines():
+        toks = line.split()
+        if not toks or toks[0] != "mtllib" or len(toks) < 2:
+            continue
+        rest = line.strip()[6:].strip()
+        libs = [rest] if (obj.parent / rest).is_file() else toks[1:]
+        for lib in libs:
+            mtl = obj.parent / lib
+            if not mtl.is_file():
+                continue  # as before: a missing MTL leaves trimesh's default material
+            entries: dict[str, dict] = {}
+            cur: dict | None = None
+            for mline in _decode_text(mtl.read_bytes()).splitlines():
+                mt = mline.split()
+                if len(mt) < 2:
+                    continue
+                key = mt[0].lower()
+                if key == "newmtl":
+                    cur = entries.setdefault(" ".join(mt[1:]), {})
+                elif cur is None:
+                    continue
+                elif key == "kd" and all(_is_number(t) for t in mt[1:4]):
+                    kd = [float(t) for t in mt[1:4]]
+                    cur["kd"] = kd * 3 if len(kd) == 1 else kd
+                elif key == "map_kd":
+                    cur["map"] = _map_kd(mline.strip())
+            for name, e in entries.items():
+                if "kd" not in e and "map" not in e:
+                    continue  # nothing to add to trimesh's reading
+                kd = np.clip(np.asarray(e.get("kd", [1.0, 1.0, 1.0]), np.float32), 0, 1)
+                tex = uv_tf = None
+                if "map" in e and e["map"][0]:
+                    tex = _read_texture(obj, mtl, e["map"][0])
+                    uv_tf = e["map"][1]
+                out.setdefault(name, Material(srgb_to_linear(kd), tex, uv_tf))
     return out
 
 
 def _image_linear(img) -> np.ndarray | None:
+    """(H, W, 3) float32 linear RGB of a PIL image (sRGB-encoded, 8 or 16 bits)."""
     if img is None:
         return None
-    a = np.asarray(img.convert("RGB"), dtype=np.float32) / 255.0
+    if img.mode.startswith("I") or img.mode == "F":
+        # 16-bit (I;16*, or I as PIL reads 16-bit PNG) and float greyscale: convert("RGB")
+        # would clip them to 255 (white); scale to [0, 1] instead
+        a = np.asarray(img, dtype=np.float64)
+        a = np.clip(a / (1.0 if img.mode == "F" else 65535.0), 0.0, 1.0)
+        a = np.repeat(a[..., None].astype(np.float32), 3, axis=-1)
+    else:
+        a = np.asarray(img.convert("RGB"), dtype=np.float32) / 255.0
     return srgb_to_linear(a)
 
 
-def _material_of(visual, is_gltf: bool, transforms: dict[str, np.ndarray]) -> Material:
+def _material_of(
+    visual, is_gltf: bool, transforms: dict[int, np.ndarray], obj_mats: dict[str, Material]
+) -> Material:
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
     mat = getattr(visual, "material", None)
+    if getattr(mat, "name", None) in obj_mats:
+        return obj_mats[mat.name]
     if isinstance(mat, PBRMaterial):
         f = mat.baseColorFactor
         factor = (
@@ -209,7 +419,11 @@ def _material_of(visual, is_gltf: bool, transforms: dict[str, np.ndarray]) -> Ma
         if not is_gltf:  # a PBR material made by trimesh from MTL keeps display values
             factor = srgb_to_linear(factor)
         tex = _image_linear(mat.baseColorTexture)
-        return Material(factor, tex, transforms.get(mat.name) if tex is not None else None)
+        uv_tf = None
+        name = mat.name or ""
+        if tex is not None and name.startswith(_MAT_TAG) and name[len(_MAT_TAG) :].isdigit():
+            uv_tf = transforms.get(int(name[len(_MAT_TAG) :]))
+        return Material(factor, tex, uv_tf)
     if isinstance(mat, SimpleMaterial):
         d = np.asarray(mat.diffuse, dtype=np.float32)[:3] / 255.0
         return Material(srgb_to_linear(d), _image_linear(mat.image))
@@ -237,26 +451,40 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
         )
     if path.stat().st_size == 0:
         raise InputError(f"{path}: expected a {suffix[1:]} mesh, got an empty file (0 bytes)")
-    try:
-        scene = trimesh.load_scene(str(path), process=False)
-    except (
-        ValueError,
-        KeyError,
-        IndexError,
-        TypeError,
-        OSError,
-        EOFError,
-        AttributeError,
-        struct.error,
-        json.JSONDecodeError,
-        zipfile.BadZipFile,
-        NotImplementedError,
-        AssertionError,
-    ) as exc:
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
     is_gltf = suffix in (".glb", ".gltf")
-    transforms = _texture_transforms(_gltf_json(path)) if is_gltf else {}
+    prepared = _prepare_gltf(path) if is_gltf else None
+    transforms = prepared[1] if prepared else {}
+    obj_mats: dict[str, Material] = {}
+    try:
+        with warnings.catch_warnings():
+            # trimesh's casts of junk numbers warn; what they produce is checked below
+            warnings.simplefilter("ignore", RuntimeWarning)
+            if prepared:
+                scene = trimesh.load_scene(
+                    io.BytesIO(prepared[0]),
+                    file_type=suffix[1:],
+                    resolver=trimesh.resolvers.FilePathResolver(str(path)),
+                    process=False,
+                )
+            elif suffix == ".obj":
+                # trimesh needs charset_normalizer for text that is not UTF-8: hand it UTF-8
+                text = _decode_text(path.read_bytes())
+                obj_mats = _obj_materials(path, text)
+                scene = trimesh.load_scene(
+                    io.BytesIO(text.encode("utf-8")),
+                    file_type="obj",
+                    resolver=_Utf8Resolver(str(path)),
+                    process=False,
+                )
+            else:
+                scene = trimesh.load_scene(str(path), process=False)
+    except (InputError, MemoryError):
+        raise
+    except Exception as exc:  # trimesh's parsers raise many kinds (even ImportError) on junk
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        if isinstance(exc, IndexError):  # an OBJ face naming a vertex that is not there
+            msg = f"an index past its list ({msg})"
+        raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
     verts, faces, mats, face_mat, uvs, colors = [], [], [], [], [], []
     any_uv = any_color = False
     n_v = 0
@@ -266,12 +494,21 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
         if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
             continue
         v = np.asarray(geom.vertices, np.float64)
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise InputError(
+                f"{path}: expected 3 coordinates per vertex in {geom_name!r}, got shape {v.shape}"
+            )
         v = v @ transform[:3, :3].T + transform[:3, 3]
         f = np.asarray(geom.faces, np.int64)
+        if f.min() < 0 or f.max() >= len(v):
+            raise InputError(
+                f"{path}: expected face indices in [0, {len(v)}) (the vertex count of "
+                f"{geom_name!r}), got [{f.min()}, {f.max()}]"
+            )
         if np.linalg.det(transform[:3, :3]) < 0:  # mirrored node: keep outward winding
             f = f[:, ::-1]
         visual = geom.visual
-        mats.append(_material_of(visual, is_gltf, transforms))
+        mats.append(_material_of(visual, is_gltf, transforms, obj_mats))
         face_mat.append(np.full(len(f), len(mats) - 1, np.int32))
         uv = getattr(visual, "uv", None)
         if uv is not None and len(uv) == len(v):

@@ -255,17 +255,35 @@ def _surface_parts(sdf: np.ndarray, parts: np.ndarray, cp: np.ndarray) -> np.nda
     can be an outside one labelled with another part. Points whose cell has no inside corner
     (none after marching cubes, kept for safety) take the nearest corner.
     """
-    shape = np.asarray(sdf.shape)
-    base = np.clip(np.floor(cp).astype(np.int64), 0, np.maximum(shape - 2, 0))
-    best = np.clip(np.rint(cp).astype(np.int64), 0, shape - 1)
-    best_d2 = np.full(len(cp), np.inf)
-    for off in np.ndindex(2, 2, 2):
-        q = np.minimum(base + np.asarray(off), shape - 1)
-        d2 = ((q - cp) ** 2).sum(axis=1)
-        better = (sdf[q[:, 0], q[:, 1], q[:, 2]] <= 0) & (d2 < best_d2)
-        best[better] = q[better]
-        best_d2[better] = d2[better]
-    return parts[best[:, 0], best[:, 1], best[:, 2]].copy()
+    return _surface_parts_kernel(sdf, parts, np.ascontiguousarray(cp, np.float64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _surface_parts_kernel(sdf, parts, cp):
+    nx, ny, nz = sdf.shape
+    out = np.empty(cp.shape[0], parts.dtype)
+    for n in range(cp.shape[0]):
+        x, y, z = cp[n, 0], cp[n, 1], cp[n, 2]
+        bx = min(max(int(np.floor(x)), 0), max(nx - 2, 0))
+        by = min(max(int(np.floor(y)), 0), max(ny - 2, 0))
+        bz = min(max(int(np.floor(z)), 0), max(nz - 2, 0))
+        # fallback: the nearest corner whatever its side
+        ix = min(max(int(np.rint(x)), 0), nx - 1)
+        iy = min(max(int(np.rint(y)), 0), ny - 1)
+        iz = min(max(int(np.rint(z)), 0), nz - 1)
+        best = np.inf
+        for dx in range(2):
+            qx = min(bx + dx, nx - 1)
+            for dy in range(2):
+                qy = min(by + dy, ny - 1)
+                for dz in range(2):
+                    qz = min(bz + dz, nz - 1)
+                    d2 = (qx - x) ** 2 + (qy - y) ** 2 + (qz - z) ** 2
+                    if sdf[qx, qy, qz] <= 0 and d2 < best:
+                        best = d2
+                        ix, iy, iz = qx, qy, qz
+        out[n] = parts[ix, iy, iz]
+    return out
 
 
 def _solve_box(sdf, t_run, a0, h, lim, pad, npass):

@@ -386,12 +386,14 @@ def _edit_arrays(
         # parts are labelled up to the band outside the surface (as the segment stage does):
         # voxels the edit resampled or recomputed lose theirs beyond it; the copied layers
         # outside the zone keep their labels as they are, like their distances
-        changed = np.zeros(out_sdf.shape, bool)
-        changed.ravel()[todo] = (out_sdf.ravel()[todo] != sdf_was) | (
-            out_parts.ravel()[todo] != parts_was
-        )
-        changed[plan.in_slab | (plan.beta > 0)] = True
-        out_parts[changed & (out_sdf > BAND_VOXELS * h)] = -1
+        far = np.float32(BAND_VOXELS * h)
+        flat_sdf, flat_parts = out_sdf.ravel(), out_parts.ravel()
+        moved = (flat_sdf[todo] != sdf_was) | (flat_parts[todo] != parts_was)
+        flat_parts[todo[moved & (flat_sdf[todo] > far)]] = -1
+        layers = plan.in_slab | (plan.beta > 0)
+        slab_parts = out_parts[layers]
+        slab_parts[out_sdf[layers] > far] = -1
+        out_parts[layers] = slab_parts
     back = (np.moveaxis(out_sdf, 0, ax), np.moveaxis(out_rgb, 0, ax), np.moveaxis(out_parts, 0, ax))
     return (*back, extra)
 

@@ -499,19 +499,24 @@ def _stop(proc: subprocess.Popen) -> None:
     proc.stderr.close()
 
 
-def test_edit_command_serves_on_loopback_and_warns_otherwise(box_file):
+def _get_state(url: str):
+    """GET the editor's state, waiting up to ~10 s for the server to listen."""
     import httpx
 
+    for _ in range(100):
+        try:
+            return httpx.get(url + "api/state", timeout=5)
+        except httpx.ConnectError:
+            time.sleep(0.1)
+    return httpx.get(url + "api/state", timeout=5)  # raises what keeps it from answering
+
+
+def test_edit_command_serves_on_loopback_and_warns_otherwise(box_file):
     proc, url, lines = _start([str(box_file)])
     try:
         assert url.startswith("http://127.0.0.1:")
         assert not any("warning" in ln for ln in lines)
-        for _ in range(100):
-            try:
-                r = httpx.get(url + "api/state", timeout=5)
-                break
-            except httpx.ConnectError:
-                time.sleep(0.1)
+        r = _get_state(url)
         assert r.status_code == 200 and r.json()["name"] == "box.csdf.npz"
     finally:
         _stop(proc)
@@ -534,12 +539,7 @@ def test_edit_command_on_another_loopback_address_answers_at_its_url(box_file):
     proc, url, lines = _start([str(box_file), "--host", "127.0.0.2"])
     try:
         assert url.startswith("http://127.0.0.2:") and not any("warning" in ln for ln in lines)
-        for _ in range(100):
-            try:
-                r = httpx.get(url + "api/state", timeout=5)
-                break
-            except httpx.ConnectError:
-                time.sleep(0.05)
+        r = _get_state(url)
         assert r.status_code == 200, r.text
         # still a DNS-rebinding guard: a foreign name is refused
         r = httpx.get(url + "api/state", headers={"Host": "evil.example"}, timeout=5)

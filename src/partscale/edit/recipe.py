@@ -137,7 +137,7 @@ class Edit:
                 f"{where}.mode: expected one of {', '.join(MODES)}, got {obj['mode']!r}"
             )
         zone = obj["zone"]
-        if not isinstance(zone, list | tuple) or len(zone) != 2:
+        if not isinstance(zone, list | tuple | np.ndarray) or np.ndim(zone) != 1 or len(zone) != 2:
             raise InputError(f"{where}.zone: expected [START, END], got {zone!r}")
         return cls(
             axis=axis,

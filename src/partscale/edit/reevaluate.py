@@ -2,10 +2,9 @@
 
 A resampled SDF is no longer a distance: along the edit axis it is scaled by the stretch factor,
 and near the zone's planes the nearest surface may now be elsewhere. :func:`reevaluate` recomputes,
-for chosen voxels, the distance to the field's own zero level set as the grid represents it, the
-piecewise-linear surface through its linear zero crossings (exact for flat surface and close to it
-for gently curved surface; it cuts sharp edges and corners, so distances there can differ from the
-true object's by up to about 0.9 voxel):
+for chosen voxels, the distance to the field's own zero level set as the grid represents it (the
+piecewise-linear surface through its zero crossings; at sharp edges and corners up to about 0.9
+voxel from the true object's, see :mod:`partscale.edit`):
 
 1. the zero level set near those voxels is extracted with sub-voxel precision (marching cubes of
    the field in a box around them: vertices are the linear zero crossings along grid edges);
@@ -354,16 +353,15 @@ def reevaluate(
     Raises
     ------
     InputError
-        A mask of another shape or neither bool nor integer, a band that is not a finite positive number.
+        A mask of another shape or neither bool nor integer; a band that is not a finite
+        positive number.
 
     Returns
     -------
     CSDF
-        Same grid; recomputed voxels hold the exact distance to the (unmoved) zero level set's
-        piecewise-linear (marching-cubes) surface, with the field's sign, and the colour and
-        part of their nearest surface point. That surface cuts sharp edges and corners of the
-        object the grid samples: there the distance can differ from the true one by up to about
-        0.9 voxel.
+        Same grid; recomputed voxels hold the distance to the (unmoved) zero level set's
+        piecewise-linear surface (see the module docstring), with the field's sign, and the
+        colour and part of their nearest surface point.
     """
     if (
         isinstance(band, bool | np.bool_)

@@ -438,20 +438,17 @@ def apply_edit(
         New grid, longer or shorter along the axis by ``round((DEST - END) / voxel_size)`` voxels,
         same origin and voxel size. Outside the zone the voxels are exact copies (translated beyond
         it); within ``BAND_VOXELS`` of the surface every recomputed distance is the distance to
-        the edited surface as the grid represents it (the piecewise-linear marching-cubes surface
-        through the zero crossings): exact for flat surface, but that surface cuts sharp edges
-        and corners, where distances can differ from the true object's by up to about 0.9 voxel (see :mod:`partscale.edit`). ``meta['history']`` gains the edit in
-        world units (and as given).
+        the edited surface as the grid represents it (exact for flat surface; see
+        :mod:`partscale.edit` for sharp edges and corners). ``meta['history']`` gains the edit
+        in world units (and as given).
 
     Notes
     -----
-    ``tile`` blends the copies across each internal seam over ``SEAM_VOXELS`` voxels either side
-    (the field stays continuous there). Thin features that exist on one side of a seam only are
-    faded by the blend: a zone plane that cuts through a board leaves a sliver at the start of
-    every copy, which thins or vanishes, and an air gap of about a voxel at a seam can close.
-    Place the zone's planes in the gaps between repeated elements or through the middle of one;
-    :func:`naive_edit` concatenates copies without blending (slivers kept, but a step in the
-    field at each seam and no re-evaluation).
+    ``tile`` blends the copies across each internal seam; thin features on one side of a seam
+    only (the sliver a zone plane leaves where it cuts a board) fade there. Put the zone's
+    planes in the gaps between repeated elements or through the middle of one (see
+    :func:`~partscale.edit.resample.make_plan`); :func:`naive_edit` concatenates without
+    blending.
     """
     report = resolve(progress)
     edit = _as_edit(edit)
@@ -500,8 +497,6 @@ def scale(
 
     Positions are floats in the object's units or strings like ``'30%'``.
     """
-    if isinstance(zone, np.ndarray):
-        zone = zone.tolist()
     e = Edit.parse({"axis": axis, "zone": zone, "to": to, "mode": mode})
     return apply_edit(csdf, e, progress=progress)
 

@@ -269,21 +269,22 @@ def union_concavity(
     Stops early, returning a value above ``limit``, once the answer is known to exceed it.
     """
     corners = np.concatenate([p.hull_points for p in patches])
+    cost, _ = _hull_cost(
+        corners, [p.points for p in patches], lambda: [p.tree for p in patches], spacing, sdf, limit
+    )
+    return cost
+
+
+def _hull_cost(corners, samples, trees, spacing, sdf, limit) -> tuple[float, ConvexHull | None]:
+    """:func:`_to_hull` of the samples to the hull of ``corners``, and that hull; (0, None)
+    where the corners span no volume (flat: nothing concave)."""
     if len(corners) < 4:
-        return 0.0
+        return 0.0, None
     try:
         hull = ConvexHull(corners)
     except (QhullError, ValueError):
-        return 0.0
-    return _to_hull(
-        hull,
-        corners,
-        [p.points for p in patches],
-        lambda: [p.tree for p in patches],
-        spacing,
-        sdf,
-        limit,
-    )
+        return 0.0, None
+    return _to_hull(hull, corners, samples, trees, spacing, sdf, limit), hull
 
 
 class UnionCosts:
@@ -322,23 +323,15 @@ class UnionCosts:
             return _hull_vertices(self.points, np.arange(self.start[a], self.start[a + 1]))
         parts = [self._part(key, atoms) for key, atoms, _ in task[1]]
         idx = np.concatenate([h for _, _, h in task[1]])
-        corners = self.points[idx]
-        if len(corners) < 4:
-            return 0.0, idx
-        try:
-            hull = ConvexHull(corners)
-        except (QhullError, ValueError):
-            return 0.0, _thin(self.points, idx)  # flat: no volume, nothing concave
-        cost = _to_hull(
-            hull,
-            corners,
+        cost, hull = _hull_cost(
+            self.points[idx],
             [pts for pts, _ in parts],
             lambda: [tree for _, tree in parts],
             1.0,
             self.sdf,
             self.limit,
         )
-        return cost, _thin(self.points, idx[hull.vertices])
+        return cost, _thin(self.points, idx if hull is None else idx[hull.vertices])
 
     def _part(self, key, atoms):
         got = self._cache.get(key)

@@ -50,8 +50,9 @@ including worker processes)::
     sweethome3d/staircase      25.3 (35.3)    19   3.15  |  2.0 (2.9)    26   2.87 | yes
 
 Max concavity no worse and at most 1.5x the parts on 9 of 9, every object within 5 s; median
-0.9 s against 18 s (19x). So this is the default method (:data:`partscale.segment.DEFAULT_METHOD`). The curved
-SheenChair (331 pieces before merging) is the slowest, most of it in ``merge_convex``. Merges
+0.9 s against 18 s (19x). So this is the default method
+(:data:`partscale.segment.DEFAULT_METHOD`). The curved SheenChair (331 pieces before merging)
+is the slowest, most of it in ``merge_convex``. Merges
 test a union at the measure's own 1-voxel spacing: at 2 voxels a narrow air pocket under a
 curved cushion went unseen and a merged part measured 5.2. Junction merges move only voxels
 strictly inside the joined boards' hull; with half a voxel of slack the Sweet Home bookcase's

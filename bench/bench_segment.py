@@ -128,8 +128,11 @@ def main() -> None:
         fast_enough = [r["fast"]["seconds"] <= TARGET_S for r in rows]
 
         def names(ok: list[bool]) -> str:
-            out = [str(Path(r["object"]).with_suffix("")) for r, k in zip(rows, ok, strict=True)]
-            return ", ".join(o for o, k in zip(out, ok, strict=True) if not k) or "none"
+            """The objects where ``ok`` is false, or 'none'."""
+            bad = [
+                Path(r["object"]).with_suffix("") for r, k in zip(rows, ok, strict=True) if not k
+            ]
+            return ", ".join(map(str, bad)) or "none"
 
         print()
         print(

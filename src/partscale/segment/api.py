@@ -29,8 +29,8 @@ from .labels import (
 
 METHODS = ("coacd", "fast")
 DEFAULT_METHOD = "fast"
-"""The fast method is the default: it matches CoACD's quality on all 9 benchmark objects, each
-within 5 s, 19x faster at the median (see :mod:`partscale.segment.fast`)."""
+"""The fast method: it matched CoACD's quality within the 5 s target on every benchmark object
+(figures in :mod:`partscale.segment.fast`)."""
 CACHE_VERSION = 7
 """Bump when a change to the code changes results, so old cache entries are not reused."""
 
@@ -122,7 +122,7 @@ def segment(
         The object; its ``sdf`` decides everything, existing ``parts`` are replaced.
     method : {"fast", "coacd"}
         ``"fast"`` (the default): cuts at concave creases of the voxel grid, then convex
-        merging; as convex as CoACD's parts on the benchmark objects, about 25x faster (see
+        merging; as convex as CoACD's parts on the benchmark objects, about 19x faster (see
         :mod:`partscale.segment.fast`). ``"coacd"``: CoACD on the surface mesh (the
         reference; tens of seconds at 128³).
     threshold : float in (0, 1]

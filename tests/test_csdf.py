@@ -178,6 +178,21 @@ def test_failed_save_leaves_nothing(tmp_path, ball, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("refuse", ["tempfile.mkstemp", "os.replace"])
+def test_file_system_refusal_is_one_input_error_naming_the_file(
+    tmp_path, ball, monkeypatch, refuse
+):
+    def denied(*a, **k):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(refuse, denied)
+    target = tmp_path / "x.csdf.npz"
+    with pytest.raises(InputError, match="expected a writable file, got Permission denied") as err:
+        save(ball, target)
+    assert str(target) in str(err.value)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_memory_guard_names_the_need(monkeypatch):
     monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(1 << 30))
     with pytest.raises(MemoryLimitError, match=r"would need 8\.0 GiB"):

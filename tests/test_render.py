@@ -275,6 +275,15 @@ def test_cli_render_bad_files(cli, sphere_file, tmp_path):
     assert list(out.iterdir()) == []
 
 
+def test_cli_render_onto_a_directory_is_refused(cli, sphere_file, tmp_path):
+    out = tmp_path / "out"
+    (out / "blocked.png").mkdir(parents=True)
+    proc = cli("render", sphere_file, "-o", out / "blocked.png")
+    assert_bad_input(proc, str(out / "blocked.png"), "expected a writable file")
+    assert [p.name for p in out.iterdir()] == ["blocked.png"]  # no temporary file left
+    assert not any((out / "blocked.png").iterdir())
+
+
 def test_real_chair_silhouette_matches_its_bounds():
     from conftest import data_path
 

@@ -31,24 +31,38 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
 
     Nothing half-written is ever left: on any exception the temporary file is removed and the
     destination is untouched. The temporary keeps ``path``'s suffix (or ``suffix``) so writers
-    that infer the format from the name still work.
+    that infer the format from the name still work. A destination the file system refuses
+    (read-only folder, a directory in the way) is an :class:`InputError` naming ``path``;
+    errors raised inside the ``with`` block propagate unchanged.
     """
     path = Path(path)
-    if path.parent and not path.parent.exists():
+    if not path.parent.exists():
         raise InputError(f"{path}: expected an existing output folder, got none at {path.parent}")
+    if path.is_dir():  # refused before the caller does any work
+        raise InputError(f"{path}: expected a writable file, got a directory")
     suf = suffix if suffix is not None else "".join(path.suffixes)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suf}", dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suf}", dir=path.parent)
+    except OSError as exc:
+        raise _unwritable(path, exc) from None
     os.close(fd)
     tmp_path = Path(tmp)
-    # mkstemp creates 0600; a written file should get the usual permissions (umask applied).
-    os.chmod(tmp_path, 0o666 & ~_umask())
     try:
+        # mkstemp creates 0600; a written file should get the usual permissions (umask applied).
+        os.chmod(tmp_path, 0o666 & ~_umask())
         yield tmp_path
-        os.replace(tmp_path, path)
     except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            tmp_path.unlink()
+        tmp_path.unlink(missing_ok=True)
         raise
+    try:
+        os.replace(tmp_path, path)
+    except OSError as exc:
+        tmp_path.unlink(missing_ok=True)
+        raise _unwritable(path, exc) from None
+
+
+def _unwritable(path: Path, exc: OSError) -> InputError:
+    return InputError(f"{path}: expected a writable file, got {exc.strerror or exc}")
 
 
 def _umask() -> int:

@@ -267,5 +267,5 @@ def _write_cache(entry: Path, csdf: CSDF, labels: np.ndarray, info: list[dict]) 
         entry.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(entry, suffix=".npz") as tmp:
             np.savez_compressed(tmp, parts=labels.astype(np.int16), info=np.array(json.dumps(rel)))
-    except OSError:
+    except (OSError, InputError):  # atomic_path reports a refused folder as InputError
         pass  # a read-only or full cache folder must not fail the segmentation

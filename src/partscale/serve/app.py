@@ -333,12 +333,6 @@ def create_app(
             written = await run_in_threadpool(lambda: session.save(overwrite=overwrite))
         except InputError as exc:
             return _error(str(exc), 400)
-        except OSError as exc:  # not the request's fault: the file system refused
-            target = session.save_target(overwrite=overwrite)
-            return _error(
-                f"save: expected a writable file at {target}, got {exc.strerror or exc}",
-                409 if target.is_dir() else 500,
-            )
         except Exception as exc:  # a bug: say so as JSON, keep the traceback
             traceback.print_exc()
             return _error(f"save failed inside partscale: {type(exc).__name__}: {exc}", 500)
@@ -350,10 +344,6 @@ def create_app(
                 data, name, media = await run_in_threadpool(session.export, kind)
             except InputError as exc:
                 return _error(str(exc), 400)
-            except OSError as exc:  # the export is written to a temporary folder first
-                return _error(
-                    f"export: expected a writable temporary folder, got {exc.strerror or exc}", 500
-                )
             except Exception as exc:  # a bug: say so as JSON, keep the traceback
                 traceback.print_exc()
                 return _error(f"export failed inside partscale: {type(exc).__name__}: {exc}", 500)

@@ -221,15 +221,11 @@ class EditSession:
             return True
 
     # -- output ---------------------------------------------------------------------------
-    def save_target(self, *, overwrite: bool = False) -> Path:
-        """Where :meth:`save` writes: ``NAME.edited.csdf.npz`` beside the input, or the input."""
-        return self.path if overwrite else edited_path(self.path)
-
     def save(self, *, overwrite: bool = False) -> Path:
         """Write the current object to ``NAME.edited.csdf.npz``, or over the input file."""
         with self.lock:
             c, rev = self.current, self.revision
-        target = self.save_target(overwrite=overwrite)
+        target = self.path if overwrite else edited_path(self.path)
         csdf_mod.save(c, target)
         with self.lock:
             self.saved_revision = rev
@@ -254,7 +250,13 @@ class EditSession:
             writer = export_mod.export_texture
         else:
             raise InputError(f"export: expected 'mesh' or 'texture', got {kind!r}")
-        with tempfile.TemporaryDirectory(prefix="partscale-export-") as tmp:
+        try:
+            tmp_dir = tempfile.TemporaryDirectory(prefix="partscale-export-")
+        except OSError as exc:  # atomic_path covers the file itself, not this folder
+            raise InputError(
+                f"export: expected a writable temporary folder, got {exc.strerror or exc}"
+            ) from None
+        with tmp_dir as tmp:
             out = Path(tmp) / name
             writer(c, out)
             files = sorted(p for p in Path(tmp).iterdir() if p.is_file())

@@ -144,9 +144,7 @@ class HostGuard:
 
 
 def _too_large(limit: int) -> Response:
-    return JSONResponse(
-        {"error": f"request body: expected at most {limit} bytes, got more"}, status_code=413
-    )
+    return _error(f"request body: expected at most {limit} bytes, got more", 413)
 
 
 def _error(message: str, status: int = 400) -> JSONResponse:
@@ -164,15 +162,12 @@ def content_disposition(name: str) -> str:
     return f"attachment; filename=\"{fallback}\"; filename*=UTF-8''{quote(name, safe='')}"
 
 
-async def _json_body(request: Request, max_body: int) -> Any:
+async def _json_body(request: Request) -> Any:
+    """The request's JSON body (``{}`` when empty); :class:`LimitBody` bounds its size."""
     ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if ctype != "application/json":
         raise _HTTPError(415, f"request: expected Content-Type application/json, got {ctype!r}")
-    body = b""
-    async for chunk in request.stream():
-        body += chunk
-        if len(body) > max_body:
-            raise _HTTPError(413, f"request body: expected at most {max_body} bytes, got more")
+    body = await request.body()
     if not body:
         return {}
     try:
@@ -292,7 +287,7 @@ def create_app(
 
     async def apply(request: Request) -> Response:
         try:
-            recipe = await _json_body(request, max_body)
+            recipe = await _json_body(request)
         except _HTTPError as exc:
             return _error(str(exc), exc.status)
         try:
@@ -307,7 +302,7 @@ def create_app(
     def history_step(step, what: str, missing: str):
         async def handler(request: Request) -> Response:
             try:
-                await _json_body(request, max_body)
+                await _json_body(request)
             except _HTTPError as exc:
                 return _error(str(exc), exc.status)
             if not await run_in_threadpool(step):
@@ -321,7 +316,7 @@ def create_app(
 
     async def save(request: Request) -> Response:
         try:
-            body = await _json_body(request, max_body)
+            body = await _json_body(request)
         except _HTTPError as exc:
             return _error(str(exc), exc.status)
         if not isinstance(body, dict) or set(body) - {"overwrite"}:

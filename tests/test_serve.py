@@ -389,6 +389,17 @@ def test_save_or_export_refused_by_the_file_system_is_a_json_error(
     assert r.status_code == 400 and r.json()["error"].startswith("export: expected"), r.text
 
 
+def test_a_bug_inside_partscale_is_a_json_500_not_a_400(client, monkeypatch, capsys):
+    def boom(*a, **k):
+        raise RuntimeError("kaboom")
+
+    monkeypatch.setattr(client.app.state.session, "apply", boom)
+    r = post(client, "/api/apply", STRETCH)
+    assert r.status_code == 500, r.text
+    assert r.json()["error"] == "apply failed inside partscale: RuntimeError: kaboom"
+    assert "Traceback" in capsys.readouterr().err  # kept for whoever runs the server
+
+
 # -- what is refused --------------------------------------------------------------------------
 @pytest.mark.parametrize(
     "url",

@@ -28,8 +28,9 @@ import json
 import threading
 import time
 import traceback
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 from urllib.parse import quote
 
 from starlette.applications import Starlette
@@ -44,6 +45,7 @@ from ..edit import JSON_SCHEMA
 from ..errors import InputError
 from .session import EditSession
 
+T = TypeVar("T")
 STATIC = Path(__file__).parent / "static"
 #: Largest request body accepted (a recipe is a few hundred bytes).
 MAX_BODY = 64 * 1024
@@ -177,9 +179,29 @@ async def _json_body(request: Request) -> Any:
 
 
 class _HTTPError(Exception):
+    """Ends a request with a JSON ``{"error": message}`` and ``status`` (see ``_http_error``)."""
+
     def __init__(self, status: int, message: str):
         super().__init__(message)
         self.status = status
+
+
+async def _http_error(request: Request, exc: _HTTPError) -> Response:
+    return _error(str(exc), exc.status)
+
+
+async def _run(what: str, fn: Callable[..., T], *args: Any) -> T:
+    """``fn(*args)`` in the thread pool: an InputError is the request's fault (400); anything
+    else is a bug in partscale (500, traceback kept on the server's stderr)."""
+    try:
+        return await run_in_threadpool(fn, *args)
+    except InputError as exc:
+        raise _HTTPError(400, str(exc)) from None
+    except Exception as exc:
+        traceback.print_exc()
+        raise _HTTPError(
+            500, f"{what} failed inside partscale: {type(exc).__name__}: {exc}"
+        ) from None
 
 
 def _asset_table() -> dict[str, tuple[bytes, str]]:
@@ -286,25 +308,12 @@ def create_app(
         return (time.perf_counter() - t0) * 1000.0
 
     async def apply(request: Request) -> Response:
-        try:
-            recipe = await _json_body(request)
-        except _HTTPError as exc:
-            return _error(str(exc), exc.status)
-        try:
-            ms = await run_in_threadpool(_apply, recipe)
-        except InputError as exc:
-            return _error(str(exc), 400)
-        except Exception as exc:  # a bug, not the user's input: say so, keep the traceback
-            traceback.print_exc()
-            return _error(f"apply failed inside partscale: {type(exc).__name__}: {exc}", 500)
-        return state(apply_ms=ms)
+        recipe = await _json_body(request)
+        return state(apply_ms=await _run("apply", _apply, recipe))
 
     def history_step(step, what: str, missing: str):
         async def handler(request: Request) -> Response:
-            try:
-                await _json_body(request)
-            except _HTTPError as exc:
-                return _error(str(exc), exc.status)
+            await _json_body(request)
             if not await run_in_threadpool(step):
                 return _error(f"{what}: expected {missing}, got none", 409)
             return state()
@@ -315,33 +324,18 @@ def create_app(
     redo = history_step(session.redo, "redo", "an undone edit to redo")
 
     async def save(request: Request) -> Response:
-        try:
-            body = await _json_body(request)
-        except _HTTPError as exc:
-            return _error(str(exc), exc.status)
+        body = await _json_body(request)
         if not isinstance(body, dict) or set(body) - {"overwrite"}:
             return _error(f"save: expected {{'overwrite': true|false}}, got {str(body)[:80]!r}")
         overwrite = body.get("overwrite", False)
         if not isinstance(overwrite, bool):
             return _error(f"save.overwrite: expected true or false, got {overwrite!r}")
-        try:
-            written = await run_in_threadpool(lambda: session.save(overwrite=overwrite))
-        except InputError as exc:
-            return _error(str(exc), 400)
-        except Exception as exc:  # a bug: say so as JSON, keep the traceback
-            traceback.print_exc()
-            return _error(f"save failed inside partscale: {type(exc).__name__}: {exc}", 500)
+        written = await _run("save", lambda: session.save(overwrite=overwrite))
         return state(saved=written.name)
 
     def _export(kind: str):
         async def handler(request: Request) -> Response:
-            try:
-                data, name, media = await run_in_threadpool(session.export, kind)
-            except InputError as exc:
-                return _error(str(exc), 400)
-            except Exception as exc:  # a bug: say so as JSON, keep the traceback
-                traceback.print_exc()
-                return _error(f"export failed inside partscale: {type(exc).__name__}: {exc}", 500)
+            data, name, media = await _run("export", session.export, kind)
             return Response(
                 data,
                 media_type=media,
@@ -371,6 +365,8 @@ def create_app(
         Middleware(LimitBody, limit=max_body),
         Middleware(HostGuard, hosts=hosts),
     ]
-    app = Starlette(routes=routes, middleware=middleware)
+    app = Starlette(
+        routes=routes, middleware=middleware, exception_handlers={_HTTPError: _http_error}
+    )
     app.state.session = session
     return app

@@ -242,7 +242,7 @@ def create_app(
         raise InputError(f"{STATIC}: expected the built editor page (index.html), got none")
     index_bytes = index.read_bytes()
     assets = _asset_table()
-    progress_state: dict[str, Any] = {"fraction": 1.0, "message": "", "busy": False}
+    progress_state: dict[str, Any] = {"fraction": 1.0, "message": ""}
     # applies in flight (running or waiting for the session lock): busy until the last ends
     in_flight = 0
     progress_lock = threading.Lock()
@@ -284,7 +284,7 @@ def create_app(
 
     async def progress(request: Request) -> Response:
         with progress_lock:
-            body = dict(progress_state)
+            body = {**progress_state, "busy": in_flight > 0}
         return JSONResponse(body, headers=_NO_STORE)
 
     def _progress(fraction: float, message: str) -> None:
@@ -297,14 +297,14 @@ def create_app(
         with progress_lock:
             in_flight += 1
             if in_flight == 1:
-                progress_state.update(fraction=0.0, message="applying", busy=True)
+                progress_state.update(fraction=0.0, message="applying")
         try:
             session.apply(recipe, progress=_progress)
         finally:
             with progress_lock:
                 in_flight -= 1
                 if in_flight == 0:
-                    progress_state.update(fraction=1.0, message="", busy=False)
+                    progress_state.update(fraction=1.0, message="")
         return (time.perf_counter() - t0) * 1000.0
 
     async def apply(request: Request) -> Response:

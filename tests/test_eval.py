@@ -264,7 +264,9 @@ def test_expectation_is_judged_only_on_what_was_measured(tmp_path):
     assert row[3] == "not held", row
 
 
-@pytest.mark.parametrize("name", ["sub/x", "../escaped", "a\\b", ".hidden", "", "a..b", "tab\tx"])
+@pytest.mark.parametrize(
+    "name", ["sub/x", "../escaped", "a\\b", ".hidden", "", "tab\tx", "contact_sheet"]
+)
 def test_a_name_that_is_not_a_plain_file_name_is_refused(name):
     suite = S.parse_suite(
         {
@@ -278,6 +280,12 @@ def test_a_name_that_is_not_a_plain_file_name_is_refused(name):
     assert bad.error and "name: expected a plain file name" in bad.error, bad.error
     assert f"got {name!r}" in bad.error and "\n" not in bad.error
     assert ok.error is None
+
+
+@pytest.mark.parametrize("name", ["v1..v2", "table.v2", "contact sheet"])
+def test_dots_inside_a_name_are_accepted(name):
+    (entry,) = S.parse_suite({"objects": [{"name": name, "path": "a.glb", "edit": EDIT}]}).entries
+    assert entry.error is None and entry.name == name
 
 
 @needs_stages

@@ -6,7 +6,7 @@ A suite file is JSON::
      "res": 128,                      # import resolution (longest side, voxels); optional
      "data": "path/to/data",          # folder the object paths are relative to; optional
      "objects": [
-        {"name": "table-longer",      # a plain file name: the figure is NAME.png
+        {"name": "table-longer",      # a plain file name (not contact_sheet): figure NAME.png
          "path": "kenney/table.glb",
          "edit": {"axis": "x", "zone": ["20%", "80%"], "to": "105%"},
          "kind": "solid" | "repeating",   # what the paper expects: optional
@@ -86,12 +86,18 @@ class Suite:
     source: Path | None = None
 
 
+#: The contact sheet's file stem: no entry may take it (its NAME.png would be overwritten).
+CONTACT_SHEET = "contact_sheet"
+
+
 def _plain_name(name: str) -> bool:
-    # the name becomes the figure's file name inside the output folder: never a path
+    # the name becomes the figure's file name inside the output folder: never a path ('..'
+    # needs a separator or a leading '.' to be one); lower(): case-insensitive file systems
     return (
         bool(name)
-        and not (name.startswith(".") or ".." in name or "/" in name or "\\" in name)
+        and not (name.startswith(".") or "/" in name or "\\" in name)
         and name.isprintable()
+        and name.lower() != CONTACT_SHEET
     )
 
 
@@ -100,12 +106,15 @@ def _entry(obj: Any, i: int) -> Entry:
     if not isinstance(obj, dict):
         return Entry(where, "", None, error=f"{where}: expected an object, got {obj!r}")
     name = where if obj.get("name") is None else str(obj["name"])
+    if not _plain_name(name):
+        return Entry(
+            name,
+            str(obj.get("path", "")),
+            None,
+            error=f"{where}: name: expected a plain file name (not empty, no '/', '\\', leading "
+            f"'.', control characters or {CONTACT_SHEET}), got {name!r}",
+        )
     try:
-        if not _plain_name(name):
-            raise InputError(
-                "name: expected a plain file name (not empty, no '/', '\\', '..', leading '.' "
-                f"or control characters), got {name!r}"
-            )
         unknown = set(obj) - {"name", "path", "edit", "kind", "view", "note"}
         if unknown:
             raise InputError(
@@ -126,8 +135,7 @@ def _entry(obj: Any, i: int) -> Entry:
             raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
         return Entry(name, path, edit, kind, view, str(obj.get("note", "")))
     except InputError as exc:
-        label = name if _plain_name(name) else where
-        return Entry(name, str(obj.get("path", "")), None, error=f"{label}: {exc}")
+        return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")
 
 
 def parse_suite(obj: Any, *, source: Path | None = None) -> Suite:
@@ -500,7 +508,7 @@ def run_suite(
         for p in sheet:
             with Image.open(p) as im:
                 images.append(im.convert("RGB"))
-        path = out / "contact_sheet.png"
+        path = out / f"{CONTACT_SHEET}.png"
         with atomic_path(path) as tmp:
             figures.contact_sheet(images).save(tmp, format="PNG")
         result.files["contact_sheet"] = path

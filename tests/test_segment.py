@@ -263,6 +263,15 @@ def test_bad_options_are_refused(boxes, kwargs, fragment):
         segment(boxes, cache=False, **kwargs)
 
 
+def test_check_method_names_the_option_and_the_methods():
+    from partscale.segment import METHODS, check_method
+
+    assert [check_method(m) for m in METHODS] == list(METHODS)
+    with pytest.raises(InputError) as err:
+        check_method("magic", what="--method")
+    assert str(err.value) == f"--method: expected one of {', '.join(METHODS)}, got 'magic'"
+
+
 def test_unknown_method_option_lists_the_known_ones(boxes):
     with pytest.raises(TypeError, match="preprocess_resolution"):
         segment(boxes, method="coacd", cache=False, resolutoin=10)

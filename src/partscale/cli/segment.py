@@ -31,12 +31,11 @@ def segment(
     ] = False,
 ) -> None:
     """Split the object into nearly convex parts; every voxel gets its part's index."""
-    from ..segment import METHODS
+    from ..segment import check_method
     from ..segment import segment as run
 
     # options are checked before the (possibly long) work, and before anything is written
-    if method not in METHODS:
-        raise InputError(f"--method: expected one of {', '.join(METHODS)}, got {method!r}")
+    check_method(method, what="--method")
     if not 0 < threshold <= 1:
         raise InputError(f"--threshold: expected a number in (0, 1], got {threshold}")
     if max_parts is not None and max_parts < 1:

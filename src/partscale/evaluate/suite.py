@@ -259,11 +259,10 @@ def _fmt(v: Any, digits: int = 2) -> str:
 def _check_segment(method: str) -> None:
     """Refuse an unknown method once, before any object is imported."""
     try:
-        from ..segment import METHODS
+        from ..segment import check_method
     except ImportError:  # optional stage: each entry then gets a "not segmented" note
         return
-    if method not in METHODS:
-        raise InputError(f"--segment: expected one of {', '.join(METHODS)}, got {method!r}")
+    check_method(method, what="--segment")
 
 
 def _segment(c: CSDF, method: str, progress: ProgressCallback) -> CSDF:

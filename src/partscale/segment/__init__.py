@@ -5,7 +5,7 @@ CoACD on the marching-cubes surface is the reference method it is measured again
 segmented once, never per edit.
 """
 
-from .api import DEFAULT_METHOD, METHODS, cache_key, default_cache_dir, segment
+from .api import DEFAULT_METHOD, METHODS, cache_key, check_method, default_cache_dir, segment
 from .concavity import concavity, hull_concavity, part_concavities
 from .labels import BAND, palette
 
@@ -14,6 +14,7 @@ __all__ = [
     "DEFAULT_METHOD",
     "METHODS",
     "cache_key",
+    "check_method",
     "concavity",
     "default_cache_dir",
     "hull_concavity",

@@ -61,11 +61,17 @@ def cache_key(csdf: CSDF, method: str, params: dict[str, Any]) -> str:
     return h.hexdigest()
 
 
+def check_method(method: str, *, what: str = "method") -> str:
+    """``method`` if it is one of :data:`METHODS`, else an InputError naming ``what``."""
+    if method not in METHODS:
+        raise InputError(f"{what}: expected one of {', '.join(METHODS)}, got {method!r}")
+    return method
+
+
 def _check_options(
     method: Any, threshold: Any, max_parts: Any, seed: Any, merge_tolerance: Any, extra: dict
 ) -> tuple[str, float, int | None, int, float, dict]:
-    if method not in METHODS:
-        raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
+    check_method(method)
     try:
         thr = float(threshold)
     except (TypeError, ValueError):

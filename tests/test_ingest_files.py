@@ -210,13 +210,22 @@ PLY_BAD_INDEX = (
             b"glTF\x02\0\0\0\x24\0\0\0\x0c\0\0\0JSON{\xff\xfe\xe9\x80\x81\x82\x83}   ",
             "glb",
         ),
+        # glTF documents of the wrong shape: (primitives, materials) for _gltf
+        ("bad.gltf", ([{"uv0": UV_RED, "material": 0}], [{"pbrMetallicRoughness": "x"}]), "gltf"),
+        ("bad.gltf", ([{"uv0": UV_RED, "material": [0]}], [_textured()]), "gltf"),
     ],
 )
-def test_damaged_mesh_is_an_input_error(tmp_path, name, content, fragment):
+def test_damaged_mesh_is_an_input_error(tmp_path, cli, name, content, fragment):
     path = tmp_path / name
-    path.write_bytes(content)
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        _gltf(path, *content)
     with pytest.raises(InputError, match=rf"{name}: expected .*{fragment}"):
         ingest.load_mesh(path)
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("import", path, "-o", out), name, "expected")
+    assert not out.exists()
 
 
 def test_latin1_obj_and_mtl_load(tmp_path):

@@ -186,6 +186,53 @@ def _texture_transform(tt: dict) -> np.ndarray:
 _MAT_TAG = "partscale-material-"
 
 
+def _rewrite_gltf(doc: dict, path: Path) -> dict[int, np.ndarray] | None:
+    """Rename the materials of ``doc`` in place and move UV sets (see :func:`_prepare_gltf`).
+
+    Trusts the document's structure: a wrong type surfaces as the built-in error it causes.
+    """
+    materials = doc.get("materials")
+    meshes = doc.get("meshes")
+    if materials is None or meshes is None:
+        return None
+    transforms: dict[int, np.ndarray] = {}
+    tex_coord: dict[int, int] = {}
+    for i, mat in enumerate(materials):
+        label = mat.get("name") or f"#{i}"
+        mat["name"] = f"{_MAT_TAG}{i}"
+        tex = (mat.get("pbrMetallicRoughness") or {}).get("baseColorTexture") or {}
+        tt = (tex.get("extensions") or {}).get("KHR_texture_transform")
+        n = tex.get("texCoord", 0)
+        if tt is not None:
+            n = tt.get("texCoord", n)  # the extension's override wins
+            try:
+                transforms[i] = _texture_transform(tt)
+            except (TypeError, ValueError):
+                raise InputError(
+                    f"{path}: expected KHR_texture_transform of material {label!r} to hold "
+                    f"numbers, got {json.dumps(tt)[:80]}"
+                ) from None
+        if n != 0:
+            tex_coord[i] = n
+            mat["_label"] = label
+    for mesh in meshes:
+        for prim in mesh.get("primitives") or []:
+            m = prim.get("material")
+            if m not in tex_coord:
+                continue
+            attr = prim.get("attributes") or {}
+            key = f"TEXCOORD_{tex_coord[m]}"
+            if key not in attr:
+                raise InputError(
+                    f"{path}: expected {key} on the primitives of material "
+                    f"{materials[m]['_label']!r} (its baseColorTexture.texCoord), got none"
+                )
+            attr["TEXCOORD_0"] = attr[key]
+    for mat in materials:
+        mat.pop("_label", None)
+    return transforms
+
+
 def _prepare_gltf(path: Path) -> tuple[bytes, dict[int, np.ndarray]] | None:
     """A rewritten copy of a glTF for trimesh, and material index -> UV affine.
 
@@ -199,49 +246,14 @@ def _prepare_gltf(path: Path) -> tuple[bytes, dict[int, np.ndarray]] | None:
     if got is None:
         return None
     doc, rest = got
-    materials = doc.get("materials")
-    meshes = doc.get("meshes")
-    if not isinstance(materials, list) or not isinstance(meshes, list):
+    try:
+        transforms = _rewrite_gltf(doc, path)
+    except InputError:
+        raise
+    except (AttributeError, TypeError, KeyError, IndexError, ValueError):
+        return None  # a malformed document: trimesh reports what is wrong with it
+    if transforms is None:
         return None
-    transforms: dict[int, np.ndarray] = {}
-    tex_coord: dict[int, int] = {}
-    for i, mat in enumerate(materials):
-        if not isinstance(mat, dict):
-            return None
-        label = mat.get("name") or f"#{i}"
-        mat["name"] = f"{_MAT_TAG}{i}"
-        tex = (mat.get("pbrMetallicRoughness") or {}).get("baseColorTexture") or {}
-        if not isinstance(tex, dict):
-            continue
-        tt = (tex.get("extensions") or {}).get("KHR_texture_transform")
-        n = tex.get("texCoord", 0)
-        if isinstance(tt, dict):
-            n = tt.get("texCoord", n)  # the extension's override wins
-            try:
-                transforms[i] = _texture_transform(tt)
-            except (TypeError, ValueError):
-                raise InputError(
-                    f"{path}: expected KHR_texture_transform of material {label!r} to hold "
-                    f"numbers, got {json.dumps(tt)[:80]}"
-                ) from None
-        if n != 0:
-            tex_coord[i] = n
-            mat["_label"] = label
-    for mesh in meshes:
-        for prim in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
-            m = prim.get("material") if isinstance(prim, dict) else None
-            if m not in tex_coord:
-                continue
-            attr = prim.get("attributes") or {}
-            key = f"TEXCOORD_{tex_coord[m]}"
-            if key not in attr:
-                raise InputError(
-                    f"{path}: expected {key} on the primitives of material "
-                    f"{materials[m]['_label']!r} (its baseColorTexture.texCoord), got none"
-                )
-            attr["TEXCOORD_0"] = attr[key]
-    for mat in materials:
-        mat.pop("_label", None)
     text = json.dumps(doc).encode("utf-8")
     if path.suffix.lower() == ".gltf":
         return text, transforms

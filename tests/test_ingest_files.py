@@ -261,19 +261,22 @@ def _ball_volume(n=20) -> np.ndarray:
 @pytest.mark.parametrize(
     ("extra", "fragment"),
     [
-        ({"origin": np.zeros(2)}, r"grid origin as 3 finite numbers, got \[0\.0, 0\.0\]"),
-        ({"origin": np.array([np.nan, 0, 0])}, "grid origin as 3 finite numbers, got .nan"),
-        ({"origin": np.array(["a", "b", "c"])}, "grid origin as 3 finite numbers"),
-        ({"voxel_size": np.array(0.0)}, "grid voxel_size finite and > 0, got 0.0"),
-        ({"voxel_size": np.array(np.nan)}, "grid voxel_size finite and > 0, got nan"),
-        ({"voxel_size": np.array([0.1, 0.2])}, "grid voxel_size to be one number"),
-        ({"iso": np.array([0.0, 1.0])}, "--iso to be one number"),
+        ({"origin": np.zeros(2)}, r"grid origin: expected 3 finite numbers, got \[0\.0, 0\.0\]"),
+        ({"origin": np.array([np.nan, 0, 0])}, "grid origin: expected 3 finite numbers, got .nan"),
+        ({"origin": np.array(["a", "b", "c"])}, "grid origin: expected 3 finite numbers"),
+        ({"voxel_size": np.array(0.0)}, "grid voxel_size: expected a finite number > 0, got 0.0"),
+        (
+            {"voxel_size": np.array(np.nan)},
+            "grid voxel_size: expected a finite number > 0, got nan",
+        ),
+        ({"voxel_size": np.array([0.1, 0.2])}, "grid voxel_size: expected one number"),
+        ({"iso": np.array([0.0, 1.0])}, "--iso: expected one finite number"),
     ],
 )
 def test_npz_grid_origin_voxel_size_and_iso_are_checked(tmp_path, extra, fragment):
     path = tmp_path / "g.npz"
     np.savez(path, sdf=_ball_volume(), **extra)
-    with pytest.raises(InputError, match=rf"g\.npz: expected (the )?{fragment}"):
+    with pytest.raises(InputError, match=rf"g\.npz: {fragment}"):
         ingest.load(path, res=16)
 
 

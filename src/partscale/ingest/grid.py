@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .._util import keyword_options
-from ..csdf import CSDF, make
+from ..csdf import CSDF, check_number, check_origin, check_voxel_size, make
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from .mesh_io import ColoredMesh, Material, srgb_to_linear
@@ -39,31 +39,6 @@ def _check_volume(volume, name: str) -> np.ndarray:
             f"{name}: expected finite SDF values, got {int(bad.sum())} NaN/inf voxel(s)"
         )
     return v
-
-
-def _one_number(x, what: str, source: str) -> float:
-    a = np.asarray(x)
-    if a.size != 1 or a.dtype.kind not in "iuf":
-        raise InputError(f"{source}: expected {what} to be one number, got {_show(a)}")
-    return float(a.reshape(()))
-
-
-def _show(a: np.ndarray) -> str:
-    return f"{a.tolist()}" if a.size <= 6 else f"an array of shape {a.shape}"
-
-
-def _check_origin(origin, source: str) -> np.ndarray:
-    a = np.asarray(origin)
-    if a.shape != (3,) or a.dtype.kind not in "iuf" or not np.isfinite(a).all():
-        raise InputError(f"{source}: expected the grid origin as 3 finite numbers, got {_show(a)}")
-    return a.astype(np.float64)
-
-
-def _check_voxel_size(voxel_size, source: str) -> float:
-    h = _one_number(voxel_size, "the grid voxel_size", source)
-    if not (np.isfinite(h) and h > 0):
-        raise InputError(f"{source}: expected the grid voxel_size finite and > 0, got {h}")
-    return h
 
 
 COLOR_RULE = (
@@ -145,11 +120,9 @@ def from_grid(
     """
     report = resolve(progress)
     v = _check_volume(sdf_volume, source)
-    iso = _one_number(iso, "--iso", source)
-    if not np.isfinite(iso):
-        raise InputError(f"{source}: expected a finite --iso, got {iso}")
-    origin = _check_origin(origin, source)
-    voxel_size = _check_voxel_size(voxel_size, source)
+    iso = check_number(iso, f"{source}: --iso")
+    origin = check_origin(origin, f"{source}: grid origin")
+    voxel_size = check_voxel_size(voxel_size, f"{source}: grid voxel_size")
     col = _check_colors(colors, v.shape, source)
     inside = v <= iso
     if not inside.any() or inside.all():

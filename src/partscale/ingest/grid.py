@@ -74,7 +74,7 @@ def _check_colors(colors, shape, name: str) -> np.ndarray | None:
         return np.rint(np.clip(c, 0.0, 1.0) * 255.0).astype(np.uint8)
     if lo >= -1e-3 and 2.0 < hi <= 255.5:
         return np.rint(np.clip(c, 0.0, 255.0)).astype(np.uint8)
-    raise InputError(f"{name}: expected float colours in [0, 1] or 0..255, got [{lo:g}, {hi:g}]")
+    raise InputError(f"{name}: expected colours as {COLOR_RULE}, got floats in [{lo:g}, {hi:g}]")
 
 
 @keyword_options

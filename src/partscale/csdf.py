@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from ._util import atomic_path
-from .errors import InputError
+from .errors import InputError, one_line
 
 FORMAT = "partscale.csdf"
 FORMAT_VERSION = 1
@@ -340,8 +340,9 @@ def load(path: str | os.PathLike) -> CSDF:
     except (InputError, MemoryError):
         raise
     except Exception as exc:  # zipfile, zlib, numpy's header parser: many kinds on damaged data
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{path}: expected a .csdf.npz (zip of .npy arrays), got {msg}") from None
+        raise InputError(
+            f"{path}: expected a .csdf.npz (zip of .npy arrays), got {one_line(exc)}"
+        ) from None
     m = data["meta"]
     if m.shape != () or m.dtype.kind != "U":
         raise InputError(

@@ -16,7 +16,7 @@ import numpy as np
 
 from .._util import keyword_options
 from ..csdf import CSDF, check_number, check_origin, check_voxel_size, make
-from ..errors import InputError
+from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
 from .mesh_io import ColoredMesh, Material, srgb_to_linear
 from .mesh_sdf import check_res, from_mesh
@@ -192,8 +192,7 @@ def read_grid(path: str | os.PathLike) -> dict:
     except InputError:
         raise
     except Exception as exc:  # numpy raises many kinds for a corrupt file
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{path}: expected a readable numpy grid, got {msg}") from None
+        raise InputError(f"{path}: expected a readable numpy grid, got {one_line(exc)}") from None
     if "sdf" in arrays:
         sdf = arrays["sdf"]
     else:
@@ -236,8 +235,7 @@ def read_autosdf(path: str | os.PathLike) -> dict:
     except InputError:
         raise
     except Exception as exc:
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{path}: expected a readable HDF5 file, got {msg}") from None
+        raise InputError(f"{path}: expected a readable HDF5 file, got {one_line(exc)}") from None
     n = round(data.size ** (1 / 3))
     if n**3 != data.size or n < 2:
         raise InputError(

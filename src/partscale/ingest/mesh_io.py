@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, one_line
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
 
@@ -325,8 +325,9 @@ def _read_texture(obj: Path, mtl: Path, name: str) -> np.ndarray:
         with Image.open(tex) as img:
             return _image_linear(img)
     except (OSError, ValueError, UnidentifiedImageError) as exc:
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{obj}: expected a readable texture image {tex}, got {msg}") from None
+        raise InputError(
+            f"{obj}: expected a readable texture image {tex}, got {one_line(exc)}"
+        ) from None
 
 
 class _Utf8Resolver:
@@ -493,7 +494,7 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     except (InputError, MemoryError):
         raise
     except Exception as exc:  # trimesh's parsers raise many kinds (even ImportError) on junk
-        msg = " ".join(str(exc).split()) or type(exc).__name__
+        msg = one_line(exc)
         if isinstance(exc, IndexError):  # an OBJ face naming a vertex that is not there
             msg = f"an index past its list ({msg})"
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None

@@ -181,6 +181,16 @@ def test_obj_map_kd_without_kd_is_the_texture_unscaled(tmp_path):
     assert _face_colours(m) == [[128, 0, 0]]  # Kd (display 0.5) multiplies the texel
 
 
+@pytest.mark.parametrize("kd", ["nan 0 inf", "1e400 0 0", "-inf"])
+def test_obj_non_finite_kd_is_refused(tmp_path, kd):
+    """A Kd that is not finite gives no colour at all (trimesh would make it black)."""
+    obj = _obj(tmp_path, "a.mtl", f"newmtl m\nKd {kd}\n")
+    with pytest.raises(
+        InputError, match=rf"a\.obj: expected Kd of material 'm' in a\.mtl .*got {kd}"
+    ):
+        ingest.load_mesh(obj)
+
+
 def test_obj_missing_texture_is_refused(tmp_path, cli):
     obj = _obj(tmp_path, "a.mtl", "newmtl m\nKd 0.2 0.4 0.6\nmap_Kd tex/none.png\n")
     with pytest.raises(InputError, match=r"a\.obj: expected the texture .*none\.png named by"):

@@ -277,12 +277,17 @@ def _decode_text(data: bytes) -> str:
         return data.decode("latin-1")
 
 
-def _is_number(tok: str) -> bool:
+def _float_or_none(tok: str) -> float | None:
     try:
-        float(tok)
+        return float(tok)
     except ValueError:
-        return False
-    return True
+        return None
+
+
+def _is_number(tok: str) -> bool:
+    """Whether ``tok`` is a finite number (nan, inf and overflowing ones are not)."""
+    x = _float_or_none(tok)
+    return x is not None and bool(np.isfinite(x))
 
 
 def _map_kd(line: str) -> tuple[str, np.ndarray | None]:
@@ -379,11 +384,19 @@ def _obj_materials(obj: Path, text: str) -> dict[str, Material]:
                     continue
                 key = mt[0].lower()
                 if key == "newmtl":
-                    cur = entries.setdefault(" ".join(mt[1:]), {})
+                    cur_name = " ".join(mt[1:])
+                    cur = entries.setdefault(cur_name, {})
                 elif cur is None:
                     continue
-                elif key == "kd" and all(_is_number(t) for t in mt[1:4]):
-                    kd = [float(t) for t in mt[1:4]]
+                elif key == "kd":
+                    kd = [_float_or_none(t) for t in mt[1:4]]
+                    if None in kd:
+                        continue  # "Kd spectral file" / "Kd xyz x y z": left to trimesh
+                    if not np.isfinite(kd).all():
+                        raise InputError(
+                            f"{obj}: expected Kd of material {cur_name!r} in {mtl.name} to be "
+                            f"finite numbers, got {' '.join(mt[1:4])}"
+                        )
                     cur["kd"] = kd * 3 if len(kd) == 1 else kd
                 elif key == "map_kd":
                     cur["map"] = _map_kd(mline.strip())

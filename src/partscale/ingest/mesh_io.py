@@ -186,7 +186,7 @@ def _texture_transform(tt: dict) -> np.ndarray:
 _MAT_TAG = "partscale-material-"
 
 
-def _rewrite_gltf(doc: dict, path: Path) -> dict[int, np.ndarray] | None:
+def _rewrite_gltf(doc: dict, path: Path) -> dict[str, np.ndarray] | None:
     """Rename the materials of ``doc`` in place and move UV sets (see :func:`_prepare_gltf`).
 
     Trusts the document's structure: a wrong type surfaces as the built-in error it causes.
@@ -195,26 +195,26 @@ def _rewrite_gltf(doc: dict, path: Path) -> dict[int, np.ndarray] | None:
     meshes = doc.get("meshes")
     if materials is None or meshes is None:
         return None
-    transforms: dict[int, np.ndarray] = {}
+    transforms: dict[str, np.ndarray] = {}
     tex_coord: dict[int, int] = {}
+    labels: dict[int, str] = {}  # material index -> its name in the file, for messages
     for i, mat in enumerate(materials):
-        label = mat.get("name") or f"#{i}"
-        mat["name"] = f"{_MAT_TAG}{i}"
+        labels[i] = mat.get("name") or f"#{i}"
+        mat["name"] = tag = f"{_MAT_TAG}{i}"
         tex = (mat.get("pbrMetallicRoughness") or {}).get("baseColorTexture") or {}
         tt = (tex.get("extensions") or {}).get("KHR_texture_transform")
         n = tex.get("texCoord", 0)
         if tt is not None:
             n = tt.get("texCoord", n)  # the extension's override wins
             try:
-                transforms[i] = _texture_transform(tt)
+                transforms[tag] = _texture_transform(tt)
             except (TypeError, ValueError):
                 raise InputError(
-                    f"{path}: expected KHR_texture_transform of material {label!r} to hold "
+                    f"{path}: expected KHR_texture_transform of material {labels[i]!r} to hold "
                     f"numbers, got {json.dumps(tt)[:80]}"
                 ) from None
         if n != 0:
             tex_coord[i] = n
-            mat["_label"] = label
     for mesh in meshes:
         for prim in mesh.get("primitives") or []:
             m = prim.get("material")
@@ -225,20 +225,18 @@ def _rewrite_gltf(doc: dict, path: Path) -> dict[int, np.ndarray] | None:
             if key not in attr:
                 raise InputError(
                     f"{path}: expected {key} on the primitives of material "
-                    f"{materials[m]['_label']!r} (its baseColorTexture.texCoord), got none"
+                    f"{labels[m]!r} (its baseColorTexture.texCoord), got none"
                 )
             attr["TEXCOORD_0"] = attr[key]
-    for mat in materials:
-        mat.pop("_label", None)
     return transforms
 
 
-def _prepare_gltf(path: Path) -> tuple[bytes, dict[int, np.ndarray]] | None:
-    """A rewritten copy of a glTF for trimesh, and material index -> UV affine.
+def _prepare_gltf(path: Path) -> tuple[bytes, dict[str, np.ndarray]] | None:
+    """A rewritten copy of a glTF for trimesh, and material tag -> UV affine.
 
     trimesh keys materials by name (unnamed or repeated names collide), ignores
     ``KHR_texture_transform`` (Khronos samples such as SheenChair tile their fabric with it) and
-    reads only ``TEXCOORD_0``. So each material is renamed to a tag holding its index, and a
+    reads only ``TEXCOORD_0``. So each material is renamed to a unique tag, and a
     primitive whose base-colour texture reads another UV set gets that set as ``TEXCOORD_0``.
     Raises :class:`InputError` when that set is missing. None when the JSON cannot be read.
     """
@@ -428,7 +426,7 @@ def _image_linear(img) -> np.ndarray | None:
 
 
 def _material_of(
-    visual, is_gltf: bool, transforms: dict[int, np.ndarray], obj_mats: dict[str, Material]
+    visual, is_gltf: bool, transforms: dict[str, np.ndarray], obj_mats: dict[str, Material]
 ) -> Material:
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
@@ -445,10 +443,7 @@ def _material_of(
         if not is_gltf:  # a PBR material made by trimesh from MTL keeps display values
             factor = srgb_to_linear(factor)
         tex = _image_linear(mat.baseColorTexture)
-        uv_tf = None
-        name = mat.name or ""
-        if tex is not None and name.startswith(_MAT_TAG) and name[len(_MAT_TAG) :].isdigit():
-            uv_tf = transforms.get(int(name[len(_MAT_TAG) :]))
+        uv_tf = transforms.get(mat.name) if tex is not None else None
         return Material(factor, tex, uv_tf)
     if isinstance(mat, SimpleMaterial):
         d = np.asarray(mat.diffuse, dtype=np.float32)[:3] / 255.0

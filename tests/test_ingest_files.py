@@ -181,6 +181,14 @@ def test_obj_map_kd_without_kd_is_the_texture_unscaled(tmp_path):
     assert _face_colours(m) == [[128, 0, 0]]  # Kd (display 0.5) multiplies the texel
 
 
+def test_obj_material_without_kd_or_texture_is_grey(tmp_path):
+    """Neither Kd nor map_Kd (or a Kd given as a spectrum): display grey 0.4, sRGB 102."""
+    m = ingest.load_mesh(_obj(tmp_path, "a.mtl", "newmtl m\nNs 10\n"))
+    assert _face_colours(m) == [[102, 102, 102]]
+    m = ingest.load_mesh(_obj(tmp_path, "a.mtl", "newmtl m\nKd spectral s.rfl\n"))
+    assert _face_colours(m) == [[102, 102, 102]]
+
+
 @pytest.mark.parametrize("kd", ["nan 0 inf", "1e400 0 0", "-inf"])
 def test_obj_non_finite_kd_is_refused(tmp_path, kd):
     """A Kd that is not finite gives no colour at all (trimesh would make it black)."""

@@ -334,17 +334,24 @@ def _read_texture(obj: Path, mtl: Path, name: str) -> np.ndarray:
 
 
 class _Utf8Resolver:
-    """trimesh file resolver that hands text files (MTL) over as UTF-8."""
+    """trimesh file resolver that hands text files (MTL) over as UTF-8.
+
+    It keeps the text of each MTL it serves (``mtl``: name -> text), so the materials are read
+    from exactly the files trimesh followed (only an OBJ's first ``mtllib``).
+    """
 
     def __init__(self, source: str):
         import trimesh
 
         self._inner = trimesh.resolvers.FilePathResolver(source)
+        self.mtl: dict[str, str] = {}
 
     def get(self, name: str) -> bytes:
         data = self._inner.get(name)
         if name.lower().endswith(".mtl"):
-            data = _decode_text(data).encode("utf-8")
+            text = _decode_text(data)
+            self.mtl[name] = text
+            data = text.encode("utf-8")
         return data
 
     def __getitem__(self, name: str) -> bytes:
@@ -354,59 +361,58 @@ class _Utf8Resolver:
         return getattr(self._inner, name)
 
 
-def _obj_materials(obj: Path, text: str) -> dict[str, Material]:
-    """Materials of the MTL files an OBJ names, by name, read here rather than by trimesh.
+# MTL Kd when a material gives none: trimesh's diffuse for an untextured material (kept so its
+# colour does not change); a texture alone is shown as it is.
+_KD_PLAIN = 0.4
+_KD_TEXTURED = 1.0
 
-    trimesh takes the rest of a ``map_Kd`` line as the file name (options break it), resolves
-    it against the OBJ's folder rather than the MTL's, turns a missing texture into plain white
-    and gives a textured material without ``Kd`` a diffuse of 0.4. Here options are parsed
-    (``-o``/``-s`` become a UV affine), names resolve against the MTL's folder, a missing
-    texture is an :class:`InputError` and a texture without ``Kd`` is unscaled (``Kd`` = 1).
+
+def _obj_materials(obj: Path, mtl_texts: dict[str, str]) -> dict[str, Material]:
+    """Materials of an OBJ's MTL files (name -> text, relative to the OBJ), by material name.
+
+    They are read here rather than taken from trimesh, which takes the rest of a ``map_Kd``
+    line as the file name (options break it), resolves it against the OBJ's folder rather than
+    the MTL's, turns a missing texture into plain white and gives a textured material without
+    ``Kd`` a diffuse of 0.4. Here options are parsed (``-o``/``-s`` become a UV affine), names
+    resolve against the MTL's folder, a missing texture is an :class:`InputError` and a texture
+    without ``Kd`` is unscaled (:data:`_KD_TEXTURED`); no ``Kd`` and no texture is
+    :data:`_KD_PLAIN` grey.
     """
     out: dict[str, Material] = {}
-    for line in text.splitlines():
-        toks = line.split()
-        if not toks or toks[0] != "mtllib" or len(toks) < 2:
-            continue
-        rest = line.strip()[6:].strip()
-        libs = [rest] if (obj.parent / rest).is_file() else toks[1:]
-        for lib in libs:
-            mtl = obj.parent / lib
-            if not mtl.is_file():
-                continue  # as before: a missing MTL leaves trimesh's default material
-            entries: dict[str, dict] = {}
-            cur: dict | None = None
-            for mline in _decode_text(mtl.read_bytes()).splitlines():
-                mt = mline.split()
-                if len(mt) < 2:
-                    continue
-                key = mt[0].lower()
-                if key == "newmtl":
-                    cur_name = " ".join(mt[1:])
-                    cur = entries.setdefault(cur_name, {})
-                elif cur is None:
-                    continue
-                elif key == "kd":
-                    kd = [_float_or_none(t) for t in mt[1:4]]
-                    if None in kd:
-                        continue  # "Kd spectral file" / "Kd xyz x y z": left to trimesh
-                    if not np.isfinite(kd).all():
-                        raise InputError(
-                            f"{obj}: expected Kd of material {cur_name!r} in {mtl.name} to be "
-                            f"finite numbers, got {' '.join(mt[1:4])}"
-                        )
-                    cur["kd"] = kd * 3 if len(kd) == 1 else kd
-                elif key == "map_kd":
-                    cur["map"] = _map_kd(mline.strip())
-            for name, e in entries.items():
-                if "kd" not in e and "map" not in e:
-                    continue  # nothing to add to trimesh's reading
-                kd = np.clip(np.asarray(e.get("kd", [1.0, 1.0, 1.0]), np.float32), 0, 1)
-                tex = uv_tf = None
-                if "map" in e and e["map"][0]:
-                    tex = _read_texture(obj, mtl, e["map"][0])
-                    uv_tf = e["map"][1]
-                out.setdefault(name, Material(srgb_to_linear(kd), tex, uv_tf))
+    for lib, text in mtl_texts.items():
+        mtl = obj.parent / lib
+        entries: dict[str, dict] = {}
+        cur: dict | None = None
+        for mline in text.splitlines():
+            mt = mline.split()
+            if len(mt) < 2:
+                continue
+            key = mt[0].lower()
+            if key == "newmtl":
+                cur_name = " ".join(mt[1:])
+                cur = entries.setdefault(cur_name, {})
+            elif cur is None:
+                continue
+            elif key == "kd":
+                kd = [_float_or_none(t) for t in mt[1:4]]
+                if None in kd:
+                    continue  # "Kd spectral file" / "Kd xyz x y z": not read, the default
+                if not np.isfinite(kd).all():
+                    raise InputError(
+                        f"{obj}: expected Kd of material {cur_name!r} in {mtl.name} to be "
+                        f"finite numbers, got {' '.join(mt[1:4])}"
+                    )
+                cur["kd"] = kd * 3 if len(kd) == 1 else kd
+            elif key == "map_kd":
+                cur["map"] = _map_kd(mline.strip())
+        for name, e in entries.items():
+            tex = uv_tf = None
+            if "map" in e and e["map"][0]:
+                tex = _read_texture(obj, mtl, e["map"][0])
+                uv_tf = e["map"][1]
+            default = _KD_TEXTURED if "map" in e else _KD_PLAIN
+            kd = np.clip(np.asarray(e.get("kd", [default] * 3), np.float32), 0, 1)
+            out.setdefault(name, Material(srgb_to_linear(kd), tex, uv_tf))
     return out
 
 
@@ -475,7 +481,6 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     is_gltf = suffix in (".glb", ".gltf")
     prepared = _prepare_gltf(path) if is_gltf else None
     transforms = prepared[1] if prepared else {}
-    obj_mats: dict[str, Material] = {}
     try:
         with warnings.catch_warnings():
             # trimesh's casts of junk numbers warn; what they produce is checked below
@@ -490,11 +495,11 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
             elif suffix == ".obj":
                 # trimesh needs charset_normalizer for text that is not UTF-8: hand it UTF-8
                 text = _decode_text(path.read_bytes())
-                obj_mats = _obj_materials(path, text)
+                resolver = _Utf8Resolver(str(path))
                 scene = trimesh.load_scene(
                     io.BytesIO(text.encode("utf-8")),
                     file_type="obj",
-                    resolver=_Utf8Resolver(str(path)),
+                    resolver=resolver,
                     process=False,
                 )
             else:
@@ -506,6 +511,8 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
         if isinstance(exc, IndexError):  # an OBJ face naming a vertex that is not there
             msg = f"an index past its list ({msg})"
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
+    # outside the try: a failure here is ours (or an InputError), not an unreadable OBJ
+    obj_mats = _obj_materials(path, resolver.mtl) if suffix == ".obj" else {}
     verts, faces, mats, face_mat, uvs, colors = [], [], [], [], [], []
     any_uv = any_color = False
     n_v = 0

@@ -69,6 +69,9 @@ def test_surface_bounds_subvoxel():
         ({"sdf": np.zeros((4, 4, 4)), "parts": np.zeros((4, 4, 3), int)}, "shape"),
         ({"sdf": np.zeros((4, 4, 4)), "voxel_size": -1}, "voxel_size"),
         ({"sdf": np.zeros((4, 4, 4)), "origin": (0, 1)}, "origin"),
+        ({"sdf": np.zeros((4, 4, 4)), "origin": ["1", "2", "3"]}, "origin: expected 3 finite"),
+        ({"sdf": np.zeros((4, 4, 4)), "voxel_size": True}, "voxel_size: expected one number"),
+        ({"sdf": np.zeros((4, 4, 4)), "meta": {"history": 5}}, "history: expected a list of"),
     ],
 )
 def test_make_rejects_bad_arrays(kwargs, fragment):
@@ -134,13 +137,16 @@ def test_load_refuses_damaged_compressed_data(tmp_path, ball):
     [
         ({"meta": np.array(json.dumps([1, 2]))}, "meta to be a JSON object, got list"),
         ({"meta": np.array(b"{}")}, "meta to be one JSON string"),
-        ({"history": 5}, "history to be a list of objects, got 5"),
-        ({"history": [1]}, "history to be a list of objects"),
+        ({"history": 5}, "meta history: expected a list of objects, got 5"),
+        ({"history": [1]}, "meta history: expected a list of objects"),
         ({"version": True}, "format version 1, got True"),
-        ({"origin": np.array(["a", "b", "c"])}, "origin to be real numbers"),
+        (
+            {"origin": np.array(["a", "b", "c"])},
+            r"origin: expected 3 finite numbers, got \['a', 'b', 'c'\]",
+        ),
         ({"origin": np.array([0.0, np.nan, 0.0])}, "origin: expected 3 finite numbers"),
         ({"origin": np.zeros(2)}, "origin: expected 3 finite numbers"),
-        ({"voxel_size": np.array("x")}, "voxel_size to be real numbers"),
+        ({"voxel_size": np.array("x")}, "voxel_size: expected one number, got 'x'"),
         ({"voxel_size": np.float64(np.inf)}, "voxel_size: expected a finite number > 0"),
         ({"voxel_size": np.float64(0)}, "voxel_size: expected a finite number > 0"),
     ],

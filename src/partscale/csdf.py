@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from ._util import atomic_path
-from .errors import InputError
+from .errors import InputError, one_line
 
 FORMAT = "partscale.csdf"
 FORMAT_VERSION = 1
@@ -162,6 +162,53 @@ class CSDF:
         )
 
 
+def _shown(x: Any) -> str:
+    """Short text of a rejected value for a message."""
+    if isinstance(x, np.ndarray):
+        return repr(x.tolist()) if x.size <= 6 else f"an array of shape {x.shape}"
+    text = repr(x)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _real_array(x: Any) -> np.ndarray | None:
+    # real numbers only: bools, strings and objects are refused rather than converted
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError):  # ragged sequences
+        return None
+    return a if a.dtype.kind in "iuf" else None
+
+
+def check_origin(x: Any, what: str) -> np.ndarray:
+    """(3,) float64 of a grid origin: three finite real numbers.
+
+    ``what`` names it in the :class:`InputError` (``"origin"``, ``"<file>: grid origin"``).
+    """
+    a = _real_array(x)
+    if a is None or a.shape != (3,) or not np.isfinite(a).all():
+        raise InputError(f"{what}: expected 3 finite numbers, got {_shown(x)}")
+    return a.astype(np.float64)
+
+
+def check_number(x: Any, what: str) -> float:
+    """One finite real number (a scalar or a size-1 array) as float; ``what`` names it."""
+    a = _real_array(x)
+    if a is None or a.size != 1 or not np.isfinite(a).all():
+        raise InputError(f"{what}: expected one finite number, got {_shown(x)}")
+    return float(a.reshape(()))
+
+
+def check_voxel_size(x: Any, what: str) -> float:
+    """Voxel edge length as float: one finite real number > 0; ``what`` names it."""
+    a = _real_array(x)
+    if a is None or a.size != 1:
+        raise InputError(f"{what}: expected one number, got {_shown(x)}")
+    h = float(a.reshape(()))
+    if not (np.isfinite(h) and h > 0):
+        raise InputError(f"{what}: expected a finite number > 0, got {h}")
+    return h
+
+
 def make(
     sdf: Any,
     rgb: Any = None,
@@ -185,7 +232,8 @@ def make(
     voxel_size : float
         Voxel edge length, > 0.
     meta : dict, optional
-        JSON-serialisable metadata; ``format``/``version``/``history`` are filled in.
+        JSON-serialisable metadata; ``format``/``version``/``history`` are filled in, and a
+        given ``history`` must be a list of objects (operations).
     """
     sdf = np.asarray(sdf)
     if sdf.ndim != 3 or min(sdf.shape) < 2:
@@ -218,25 +266,17 @@ def make(
             f"parts: expected indices in [-1, 32767], got [{parts.min()}, {parts.max()}]"
         )
     parts = parts.astype(np.int16, copy=False)
-    try:
-        origin = np.asarray(origin, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
-        raise InputError(f"origin: expected 3 finite numbers, got {origin!r}") from None
-    if origin.shape != (3,) or not np.isfinite(origin).all():
-        raise InputError(f"origin: expected 3 finite numbers, got {origin.tolist()}")
-    try:
-        voxel_size = float(np.asarray(voxel_size).reshape(()))
-    except (TypeError, ValueError):
-        raise InputError(f"voxel_size: expected one number, got {voxel_size!r}") from None
-    if not (np.isfinite(voxel_size) and voxel_size > 0):
-        raise InputError(f"voxel_size: expected a finite number > 0, got {voxel_size}")
+    origin = check_origin(origin, "origin")
+    voxel_size = check_voxel_size(voxel_size, "voxel_size")
     meta = copy.deepcopy(meta) if meta is not None else {}
     if not isinstance(meta, dict):
         raise InputError(f"meta: expected a JSON object, got {type(meta).__name__}")
+    history = meta.setdefault("history", [])
+    if not isinstance(history, list) or not all(isinstance(h, dict) for h in history):
+        raise InputError(f"meta history: expected a list of objects, got {_shown(history)}")
     meta["format"] = FORMAT
     meta["version"] = FORMAT_VERSION
     meta.setdefault("units", "m")
-    meta.setdefault("history", [])
     try:
         json.dumps(meta)
     except (TypeError, ValueError) as exc:
@@ -276,8 +316,8 @@ def load(path: str | os.PathLike) -> CSDF:
 
     Raises :class:`InputError` naming the file and the problem: missing file, not an npz,
     truncated or damaged data, missing or extra arrays, wrong shapes or dtypes, non-finite
-    values, meta that is not a JSON object (or a history that is not a list of objects), wrong
-    version.
+    values, meta that is not a JSON object, wrong format or version (reported before anything
+    else :func:`make` checks: origin, voxel size, history).
     """
     path = Path(path)
     if not path.is_file():
@@ -300,8 +340,9 @@ def load(path: str | os.PathLike) -> CSDF:
     except (InputError, MemoryError):
         raise
     except Exception as exc:  # zipfile, zlib, numpy's header parser: many kinds on damaged data
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{path}: expected a .csdf.npz (zip of .npy arrays), got {msg}") from None
+        raise InputError(
+            f"{path}: expected a .csdf.npz (zip of .npy arrays), got {one_line(exc)}"
+        ) from None
     m = data["meta"]
     if m.shape != () or m.dtype.kind != "U":
         raise InputError(
@@ -313,11 +354,6 @@ def load(path: str | os.PathLike) -> CSDF:
         raise InputError(f"{path}: expected meta to be a JSON string, got {exc}") from None
     if not isinstance(meta, dict):
         raise InputError(f"{path}: expected meta to be a JSON object, got {type(meta).__name__}")
-    history = meta.get("history", [])
-    if not isinstance(history, list) or not all(isinstance(h, dict) for h in history):
-        raise InputError(
-            f"{path}: expected meta history to be a list of objects, got {json.dumps(history)[:60]}"
-        )
     if meta.get("format") != FORMAT:
         raise InputError(f"{path}: expected meta format {FORMAT!r}, got {meta.get('format')!r}")
     version = meta.get("version")
@@ -328,12 +364,6 @@ def load(path: str | os.PathLike) -> CSDF:
         if data[name].dtype != dt:
             raise InputError(
                 f"{path}: expected {name} of dtype {np.dtype(dt)}, got {data[name].dtype}"
-            )
-    for name in ("origin", "voxel_size"):
-        kind = data[name].dtype.kind
-        if kind not in "iuf":
-            raise InputError(
-                f"{path}: expected {name} to be real numbers, got dtype {data[name].dtype}"
             )
     try:
         return make(

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from .._util import keyword_options
-from ..csdf import CSDF, make
-from ..errors import InputError
+from ..csdf import CSDF, check_number, check_origin, check_voxel_size, make
+from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
 from .mesh_io import ColoredMesh, Material, srgb_to_linear
 from .mesh_sdf import check_res, from_mesh
@@ -39,31 +39,6 @@ def _check_volume(volume, name: str) -> np.ndarray:
             f"{name}: expected finite SDF values, got {int(bad.sum())} NaN/inf voxel(s)"
         )
     return v
-
-
-def _one_number(x, what: str, source: str) -> float:
-    a = np.asarray(x)
-    if a.size != 1 or a.dtype.kind not in "iuf":
-        raise InputError(f"{source}: expected {what} to be one number, got {_show(a)}")
-    return float(a.reshape(()))
-
-
-def _show(a: np.ndarray) -> str:
-    return f"{a.tolist()}" if a.size <= 6 else f"an array of shape {a.shape}"
-
-
-def _check_origin(origin, source: str) -> np.ndarray:
-    a = np.asarray(origin)
-    if a.shape != (3,) or a.dtype.kind not in "iuf" or not np.isfinite(a).all():
-        raise InputError(f"{source}: expected the grid origin as 3 finite numbers, got {_show(a)}")
-    return a.astype(np.float64)
-
-
-def _check_voxel_size(voxel_size, source: str) -> float:
-    h = _one_number(voxel_size, "the grid voxel_size", source)
-    if not (np.isfinite(h) and h > 0):
-        raise InputError(f"{source}: expected the grid voxel_size finite and > 0, got {h}")
-    return h
 
 
 COLOR_RULE = (
@@ -99,7 +74,7 @@ def _check_colors(colors, shape, name: str) -> np.ndarray | None:
         return np.rint(np.clip(c, 0.0, 1.0) * 255.0).astype(np.uint8)
     if lo >= -1e-3 and 2.0 < hi <= 255.5:
         return np.rint(np.clip(c, 0.0, 255.0)).astype(np.uint8)
-    raise InputError(f"{name}: expected float colours in [0, 1] or 0..255, got [{lo:g}, {hi:g}]")
+    raise InputError(f"{name}: expected colours as {COLOR_RULE}, got floats in [{lo:g}, {hi:g}]")
 
 
 @keyword_options
@@ -145,11 +120,9 @@ def from_grid(
     """
     report = resolve(progress)
     v = _check_volume(sdf_volume, source)
-    iso = _one_number(iso, "--iso", source)
-    if not np.isfinite(iso):
-        raise InputError(f"{source}: expected a finite --iso, got {iso}")
-    origin = _check_origin(origin, source)
-    voxel_size = _check_voxel_size(voxel_size, source)
+    iso = check_number(iso, f"{source}: --iso")
+    origin = check_origin(origin, f"{source}: grid origin")
+    voxel_size = check_voxel_size(voxel_size, f"{source}: grid voxel_size")
     col = _check_colors(colors, v.shape, source)
     inside = v <= iso
     if not inside.any() or inside.all():
@@ -219,8 +192,7 @@ def read_grid(path: str | os.PathLike) -> dict:
     except InputError:
         raise
     except Exception as exc:  # numpy raises many kinds for a corrupt file
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{path}: expected a readable numpy grid, got {msg}") from None
+        raise InputError(f"{path}: expected a readable numpy grid, got {one_line(exc)}") from None
     if "sdf" in arrays:
         sdf = arrays["sdf"]
     else:
@@ -263,8 +235,7 @@ def read_autosdf(path: str | os.PathLike) -> dict:
     except InputError:
         raise
     except Exception as exc:
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{path}: expected a readable HDF5 file, got {msg}") from None
+        raise InputError(f"{path}: expected a readable HDF5 file, got {one_line(exc)}") from None
     n = round(data.size ** (1 / 3))
     if n**3 != data.size or n < 2:
         raise InputError(

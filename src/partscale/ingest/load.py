@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .._util import keyword_options
 from ..csdf import CSDF
-from ..errors import InputError
+from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
 from .grid import from_grid, read_autosdf, read_grid
 from .mesh_io import load_mesh
@@ -118,5 +118,4 @@ def _read_colors(path: Path):
         with open(path, "rb") as fh:
             return np.load(fh, allow_pickle=False)
     except Exception as exc:
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{path}: expected a .npy colour volume, got {msg}") from None
+        raise InputError(f"{path}: expected a .npy colour volume, got {one_line(exc)}") from None

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, one_line
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
 
@@ -186,50 +186,38 @@ def _texture_transform(tt: dict) -> np.ndarray:
 _MAT_TAG = "partscale-material-"
 
 
-def _prepare_gltf(path: Path) -> tuple[bytes, dict[int, np.ndarray]] | None:
-    """A rewritten copy of a glTF for trimesh, and material index -> UV affine.
+def _rewrite_gltf(doc: dict, path: Path) -> dict[str, np.ndarray] | None:
+    """Rename the materials of ``doc`` in place and move UV sets (see :func:`_prepare_gltf`).
 
-    trimesh keys materials by name (unnamed or repeated names collide), ignores
-    ``KHR_texture_transform`` (Khronos samples such as SheenChair tile their fabric with it) and
-    reads only ``TEXCOORD_0``. So each material is renamed to a tag holding its index, and a
-    primitive whose base-colour texture reads another UV set gets that set as ``TEXCOORD_0``.
-    Raises :class:`InputError` when that set is missing. None when the JSON cannot be read.
+    Trusts the document's structure: a wrong type surfaces as the built-in error it causes.
     """
-    got = _read_gltf(path)
-    if got is None:
-        return None
-    doc, rest = got
     materials = doc.get("materials")
     meshes = doc.get("meshes")
-    if not isinstance(materials, list) or not isinstance(meshes, list):
+    if materials is None or meshes is None:
         return None
-    transforms: dict[int, np.ndarray] = {}
+    transforms: dict[str, np.ndarray] = {}
     tex_coord: dict[int, int] = {}
+    labels: dict[int, str] = {}  # material index -> its name in the file, for messages
     for i, mat in enumerate(materials):
-        if not isinstance(mat, dict):
-            return None
-        label = mat.get("name") or f"#{i}"
-        mat["name"] = f"{_MAT_TAG}{i}"
+        labels[i] = mat.get("name") or f"#{i}"
+        mat["name"] = tag = f"{_MAT_TAG}{i}"
         tex = (mat.get("pbrMetallicRoughness") or {}).get("baseColorTexture") or {}
-        if not isinstance(tex, dict):
-            continue
         tt = (tex.get("extensions") or {}).get("KHR_texture_transform")
         n = tex.get("texCoord", 0)
-        if isinstance(tt, dict):
+        if tt is not None:
             n = tt.get("texCoord", n)  # the extension's override wins
             try:
-                transforms[i] = _texture_transform(tt)
+                transforms[tag] = _texture_transform(tt)
             except (TypeError, ValueError):
                 raise InputError(
-                    f"{path}: expected KHR_texture_transform of material {label!r} to hold "
+                    f"{path}: expected KHR_texture_transform of material {labels[i]!r} to hold "
                     f"numbers, got {json.dumps(tt)[:80]}"
                 ) from None
         if n != 0:
             tex_coord[i] = n
-            mat["_label"] = label
     for mesh in meshes:
-        for prim in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
-            m = prim.get("material") if isinstance(prim, dict) else None
+        for prim in mesh.get("primitives") or []:
+            m = prim.get("material")
             if m not in tex_coord:
                 continue
             attr = prim.get("attributes") or {}
@@ -237,11 +225,33 @@ def _prepare_gltf(path: Path) -> tuple[bytes, dict[int, np.ndarray]] | None:
             if key not in attr:
                 raise InputError(
                     f"{path}: expected {key} on the primitives of material "
-                    f"{materials[m]['_label']!r} (its baseColorTexture.texCoord), got none"
+                    f"{labels[m]!r} (its baseColorTexture.texCoord), got none"
                 )
             attr["TEXCOORD_0"] = attr[key]
-    for mat in materials:
-        mat.pop("_label", None)
+    return transforms
+
+
+def _prepare_gltf(path: Path) -> tuple[bytes, dict[str, np.ndarray]] | None:
+    """A rewritten copy of a glTF for trimesh, and material tag -> UV affine.
+
+    trimesh keys materials by name (unnamed or repeated names collide), ignores
+    ``KHR_texture_transform`` (Khronos samples such as SheenChair tile their fabric with it) and
+    reads only ``TEXCOORD_0``. So each material is renamed to a unique tag, and a
+    primitive whose base-colour texture reads another UV set gets that set as ``TEXCOORD_0``.
+    Raises :class:`InputError` when that set is missing. None when the JSON cannot be read.
+    """
+    got = _read_gltf(path)
+    if got is None:
+        return None
+    doc, rest = got
+    try:
+        transforms = _rewrite_gltf(doc, path)
+    except InputError:
+        raise
+    except (AttributeError, TypeError, KeyError, IndexError, ValueError):
+        return None  # a malformed document: trimesh reports what is wrong with it
+    if transforms is None:
+        return None
     text = json.dumps(doc).encode("utf-8")
     if path.suffix.lower() == ".gltf":
         return text, transforms
@@ -265,12 +275,17 @@ def _decode_text(data: bytes) -> str:
         return data.decode("latin-1")
 
 
-def _is_number(tok: str) -> bool:
+def _float_or_none(tok: str) -> float | None:
     try:
-        float(tok)
+        return float(tok)
     except ValueError:
-        return False
-    return True
+        return None
+
+
+def _is_number(tok: str) -> bool:
+    """Whether ``tok`` is a finite number (nan, inf and overflowing ones are not)."""
+    x = _float_or_none(tok)
+    return x is not None and bool(np.isfinite(x))
 
 
 def _map_kd(line: str) -> tuple[str, np.ndarray | None]:
@@ -313,22 +328,30 @@ def _read_texture(obj: Path, mtl: Path, name: str) -> np.ndarray:
         with Image.open(tex) as img:
             return _image_linear(img)
     except (OSError, ValueError, UnidentifiedImageError) as exc:
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"{obj}: expected a readable texture image {tex}, got {msg}") from None
+        raise InputError(
+            f"{obj}: expected a readable texture image {tex}, got {one_line(exc)}"
+        ) from None
 
 
 class _Utf8Resolver:
-    """trimesh file resolver that hands text files (MTL) over as UTF-8."""
+    """trimesh file resolver that hands text files (MTL) over as UTF-8.
+
+    It keeps the text of each MTL it serves (``mtl``: name -> text), so the materials are read
+    from exactly the files trimesh followed (only an OBJ's first ``mtllib``).
+    """
 
     def __init__(self, source: str):
         import trimesh
 
         self._inner = trimesh.resolvers.FilePathResolver(source)
+        self.mtl: dict[str, str] = {}
 
     def get(self, name: str) -> bytes:
         data = self._inner.get(name)
         if name.lower().endswith(".mtl"):
-            data = _decode_text(data).encode("utf-8")
+            text = _decode_text(data)
+            self.mtl[name] = text
+            data = text.encode("utf-8")
         return data
 
     def __getitem__(self, name: str) -> bytes:
@@ -338,51 +361,58 @@ class _Utf8Resolver:
         return getattr(self._inner, name)
 
 
-def _obj_materials(obj: Path, text: str) -> dict[str, Material]:
-    """Materials of the MTL files an OBJ names, by name, read here rather than by trimesh.
+# MTL Kd when a material gives none: trimesh's diffuse for an untextured material (kept so its
+# colour does not change); a texture alone is shown as it is.
+_KD_PLAIN = 0.4
+_KD_TEXTURED = 1.0
 
-    trimesh takes the rest of a ``map_Kd`` line as the file name (options break it), resolves
-    it against the OBJ's folder rather than the MTL's, turns a missing texture into plain white
-    and gives a textured material without ``Kd`` a diffuse of 0.4. Here options are parsed
-    (``-o``/``-s`` become a UV affine), names resolve against the MTL's folder, a missing
-    texture is an :class:`InputError` and a texture without ``Kd`` is unscaled (``Kd`` = 1).
+
+def _obj_materials(obj: Path, mtl_texts: dict[str, str]) -> dict[str, Material]:
+    """Materials of an OBJ's MTL files (name -> text, relative to the OBJ), by material name.
+
+    They are read here rather than taken from trimesh, which takes the rest of a ``map_Kd``
+    line as the file name (options break it), resolves it against the OBJ's folder rather than
+    the MTL's, turns a missing texture into plain white and gives a textured material without
+    ``Kd`` a diffuse of 0.4. Here options are parsed (``-o``/``-s`` become a UV affine), names
+    resolve against the MTL's folder, a missing texture is an :class:`InputError` and a texture
+    without ``Kd`` is unscaled (:data:`_KD_TEXTURED`); no ``Kd`` and no texture is
+    :data:`_KD_PLAIN` grey.
     """
     out: dict[str, Material] = {}
-    for line in text.splitlines():
-        toks = line.split()
-        if not toks or toks[0] != "mtllib" or len(toks) < 2:
-            continue
-        rest = line.strip()[6:].strip()
-        libs = [rest] if (obj.parent / rest).is_file() else toks[1:]
-        for lib in libs:
-            mtl = obj.parent / lib
-            if not mtl.is_file():
-                continue  # as before: a missing MTL leaves trimesh's default material
-            entries: dict[str, dict] = {}
-            cur: dict | None = None
-            for mline in _decode_text(mtl.read_bytes()).splitlines():
-                mt = mline.split()
-                if len(mt) < 2:
-                    continue
-                key = mt[0].lower()
-                if key == "newmtl":
-                    cur = entries.setdefault(" ".join(mt[1:]), {})
-                elif cur is None:
-                    continue
-                elif key == "kd" and all(_is_number(t) for t in mt[1:4]):
-                    kd = [float(t) for t in mt[1:4]]
-                    cur["kd"] = kd * 3 if len(kd) == 1 else kd
-                elif key == "map_kd":
-                    cur["map"] = _map_kd(mline.strip())
-            for name, e in entries.items():
-                if "kd" not in e and "map" not in e:
-                    continue  # nothing to add to trimesh's reading
-                kd = np.clip(np.asarray(e.get("kd", [1.0, 1.0, 1.0]), np.float32), 0, 1)
-                tex = uv_tf = None
-                if "map" in e and e["map"][0]:
-                    tex = _read_texture(obj, mtl, e["map"][0])
-                    uv_tf = e["map"][1]
-                out.setdefault(name, Material(srgb_to_linear(kd), tex, uv_tf))
+    for lib, text in mtl_texts.items():
+        mtl = obj.parent / lib
+        entries: dict[str, dict] = {}
+        cur: dict | None = None
+        for mline in text.splitlines():
+            mt = mline.split()
+            if len(mt) < 2:
+                continue
+            key = mt[0].lower()
+            if key == "newmtl":
+                cur_name = " ".join(mt[1:])
+                cur = entries.setdefault(cur_name, {})
+            elif cur is None:
+                continue
+            elif key == "kd":
+                kd = [_float_or_none(t) for t in mt[1:4]]
+                if None in kd:
+                    continue  # "Kd spectral file" / "Kd xyz x y z": not read, the default
+                if not np.isfinite(kd).all():
+                    raise InputError(
+                        f"{obj}: expected Kd of material {cur_name!r} in {mtl.name} to be "
+                        f"finite numbers, got {' '.join(mt[1:4])}"
+                    )
+                cur["kd"] = kd * 3 if len(kd) == 1 else kd
+            elif key == "map_kd":
+                cur["map"] = _map_kd(mline.strip())
+        for name, e in entries.items():
+            tex = uv_tf = None
+            if "map" in e and e["map"][0]:
+                tex = _read_texture(obj, mtl, e["map"][0])
+                uv_tf = e["map"][1]
+            default = _KD_TEXTURED if "map" in e else _KD_PLAIN
+            kd = np.clip(np.asarray(e.get("kd", [default] * 3), np.float32), 0, 1)
+            out.setdefault(name, Material(srgb_to_linear(kd), tex, uv_tf))
     return out
 
 
@@ -402,7 +432,7 @@ def _image_linear(img) -> np.ndarray | None:
 
 
 def _material_of(
-    visual, is_gltf: bool, transforms: dict[int, np.ndarray], obj_mats: dict[str, Material]
+    visual, is_gltf: bool, transforms: dict[str, np.ndarray], obj_mats: dict[str, Material]
 ) -> Material:
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
@@ -419,10 +449,7 @@ def _material_of(
         if not is_gltf:  # a PBR material made by trimesh from MTL keeps display values
             factor = srgb_to_linear(factor)
         tex = _image_linear(mat.baseColorTexture)
-        uv_tf = None
-        name = mat.name or ""
-        if tex is not None and name.startswith(_MAT_TAG) and name[len(_MAT_TAG) :].isdigit():
-            uv_tf = transforms.get(int(name[len(_MAT_TAG) :]))
+        uv_tf = transforms.get(mat.name) if tex is not None else None
         return Material(factor, tex, uv_tf)
     if isinstance(mat, SimpleMaterial):
         d = np.asarray(mat.diffuse, dtype=np.float32)[:3] / 255.0
@@ -454,7 +481,6 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     is_gltf = suffix in (".glb", ".gltf")
     prepared = _prepare_gltf(path) if is_gltf else None
     transforms = prepared[1] if prepared else {}
-    obj_mats: dict[str, Material] = {}
     try:
         with warnings.catch_warnings():
             # trimesh's casts of junk numbers warn; what they produce is checked below
@@ -469,11 +495,11 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
             elif suffix == ".obj":
                 # trimesh needs charset_normalizer for text that is not UTF-8: hand it UTF-8
                 text = _decode_text(path.read_bytes())
-                obj_mats = _obj_materials(path, text)
+                resolver = _Utf8Resolver(str(path))
                 scene = trimesh.load_scene(
                     io.BytesIO(text.encode("utf-8")),
                     file_type="obj",
-                    resolver=_Utf8Resolver(str(path)),
+                    resolver=resolver,
                     process=False,
                 )
             else:
@@ -481,10 +507,12 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     except (InputError, MemoryError):
         raise
     except Exception as exc:  # trimesh's parsers raise many kinds (even ImportError) on junk
-        msg = " ".join(str(exc).split()) or type(exc).__name__
+        msg = one_line(exc)
         if isinstance(exc, IndexError):  # an OBJ face naming a vertex that is not there
             msg = f"an index past its list ({msg})"
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
+    # outside the try: a failure here is ours (or an InputError), not an unreadable OBJ
+    obj_mats = _obj_materials(path, resolver.mtl) if suffix == ".obj" else {}
     verts, faces, mats, face_mat, uvs, colors = [], [], [], [], [], []
     any_uv = any_color = False
     n_v = 0

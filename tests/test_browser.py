@@ -1,5 +1,7 @@
 """End to end in headless Chromium: the page draws the object, previews a drag, applies, undoes,
-exports; the shader's remap (GLSL, on the GPU) and its TypeScript mirror match the Python maps.
+exports; the shader's remap (GLSL, on the GPU) and its TypeScript mirror match the Python maps;
+the page's zone rules, tile counts and part palette match Python's (the page's TypeScript run in
+node by tests/browser/page_node.mjs, no browser needed).
 
 Needs node, Debian's ``chromium`` and the npm packages in ``web/node_modules`` (``./dev.sh test``
 installs them where it can); skips with the reason otherwise. One browser session drives the
@@ -23,7 +25,9 @@ import trimesh
 
 from partscale import csdf as csdf_mod
 from partscale import shapes
-from partscale.edit import Recipe, source_coordinate
+from partscale.edit import Edit, Recipe, apply_edit, source_coordinate, tile_count
+from partscale.errors import InputError
+from partscale.segment import palette
 
 ROOT = Path(__file__).resolve().parents[1]
 WEB = ROOT / "web"
@@ -193,17 +197,16 @@ def run_page(node: str, chromium: str, url: str, out: Path, **extra) -> dict:
     return result
 
 
-def test_typescript_remap_matches_source_coordinate(tmp_path):
-    """The page's TypeScript maps (planes, bounds, step bound) in node, no browser needed."""
+def run_page_node(tmp_path: Path, cases: dict) -> dict:
+    """The page's own TypeScript (web/src) on ``cases`` in node, no browser (page_node.mjs)."""
     node = shutil.which("node")
     if not node or not (WEB / "node_modules" / "vite").is_dir():
         pytest.skip("needs node and web/node_modules/vite (npm ci in web/); not found")
-    cases = remap_cases()
     (tmp_path / "cases.json").write_text(json.dumps(cases))
     proc = subprocess.run(
         [
             node,
-            str(ROOT / "tests" / "browser" / "remap_node.mjs"),
+            str(ROOT / "tests" / "browser" / "page_node.mjs"),
             str(WEB),
             str(tmp_path / "cases.json"),
         ],
@@ -212,9 +215,133 @@ def test_typescript_remap_matches_source_coordinate(tmp_path):
         timeout=120,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
-    for case, got in zip(cases, json.loads(proc.stdout), strict=True):
+    return json.loads(proc.stdout)
+
+
+def test_typescript_remap_matches_source_coordinate(tmp_path):
+    """The page's TypeScript maps (planes, bounds, step bound) in node, no browser needed."""
+    cases = remap_cases()
+    got = run_page_node(tmp_path, {"remap": cases})["remap"]
+    for case, pts in zip(cases, got, strict=True):
         want = expected_sources(case["zones"], np.array(case["points"]))
-        assert np.abs(np.array(got) - want).max() <= 1e-9, case["zones"]
+        assert np.abs(np.array(pts) - want).max() <= 1e-9, case["zones"]
+
+
+def test_typescript_tile_count_matches_tile_count(tmp_path):
+    rng = np.random.default_rng(12)
+    pairs = [(0.2, 0.3), (0.2, 0.5), (0.3, 0.45), (0.1, 0.35), (1.0, 0.4), (0.2, 0.1), (0.7, 2.45)]
+    pairs += [(float(a), float(b)) for a, b in rng.uniform(0.01, 2.0, size=(200, 2))]
+    got = run_page_node(tmp_path, {"tiles": pairs})["tiles"]
+    assert got == [tile_count(a, b) for a, b in pairs]
+
+
+def test_typescript_palette_matches_pythons(tmp_path):
+    """Parts without a stored colour are drawn in Python's palette colours (color.ts)."""
+    got = run_page_node(tmp_path, {"palette": 24})["palette"]
+    assert got == palette(24)
+
+
+# resolve_edit's refusals (partscale.edit.scale), by the words of their messages -> the page's
+# ZoneRule names (web/src/recipe.ts zoneProblem)
+PYTHON_RULES = {
+    "expected finite positions": "finite",
+    "expected start < end": "order",
+    "expected DEST > START": "dest",
+    "inside the solid's extent": "inside",
+    "at least two voxels thick": "thickness",
+    "at least one voxel": "snapped-dest",
+}
+
+
+def python_rule(message: str) -> str:
+    rules = [rule for words, rule in PYTHON_RULES.items() if words in message]
+    assert len(rules) == 1, f"no rule for {message!r}"
+    return rules[0]
+
+
+def zone_rule_cases(lo: float, hi: float, h: float) -> list[list[dict]]:
+    """Zone lists (x unless named) around each of resolve_edit's rules, in voxels from the
+    solid's min ``lo`` (its max is ``hi``); h is a power of two, so the half-voxel cases are
+    exact."""
+
+    def v(k):
+        return lo + k * h
+
+    def z(start, end, dest, mode="stretch", axis="x"):
+        return {"axis": axis, "mode": mode, "start": start, "end": end, "dest": dest}
+
+    return [
+        [z(v(4), v(8), v(12))],
+        [z(v(4), v(10), v(7))],  # shrink
+        [z(v(2), v(5), v(11), "tile")],
+        [z(v(2), v(8), v(4), "tile")],  # one copy
+        [z(v(3), v(9), v(13), "global")],
+        [z(v(0), v(16), v(2), "global")],
+        [z(v(6), v(6), v(9))],  # start == end
+        [z(v(8), v(4), v(10))],
+        [z(v(4), v(8), v(4))],  # dest == start
+        [z(lo - 2 * h, v(4), lo - 3 * h)],  # dest below start, and outside: dest is checked first
+        [z(lo - 0.5 * h, v(4), v(6))],  # on the half-voxel slack: accepted
+        [z(lo - 0.6 * h, v(4), v(6))],
+        [z(v(10), hi + 0.5 * h, hi + 2 * h)],
+        [z(v(10), hi + 0.6 * h, hi + 2 * h)],
+        [z(v(4), v(6), v(8))],  # exactly two voxels thick
+        [z(v(4), v(5.5), v(8))],
+        [z(v(4), v(7), v(4.4))],  # snaps to start
+        [z(v(4), v(7), v(4.6))],  # snaps a voxel beyond start
+        [z(v(4), v(8), v(10.5))],  # 2.5 voxels: Python rounds half to even (2)
+        [z(v(4), v(8), v(6.5))],  # -1.5 voxels -> -2
+        [z(v(4), v(6.5), v(5))],  # -1.5 -> -2: dest snaps half a voxel past start, refused
+        [z(v(4), v(7.5), v(6))],  # -1.5 -> -2: a voxel and a half past start, accepted
+        [z(v(1), v(5), v(9), "tile", "y")],
+        # later zones are resolved on the solid as the earlier ones leave it
+        [z(v(4), v(8), v(12)), z(v(14), v(19), v(21))],  # inside only after the first
+        [z(v(4), v(8), v(12)), z(v(14), v(20.6), v(22))],
+        [z(v(4), v(8), v(12)), z(v(1), v(3), v(4), "stretch", "y")],
+        [z(v(8), v(4), v(10)), z(v(14), v(19), v(21))],  # the first refused: skipped
+        [z(v(4), v(8), v(6), "tile"), z(v(0), v(2.5), v(3), "global")],
+    ]
+
+
+def test_typescript_zone_rules_match_apply_edit(tmp_path):
+    """The page refuses (and snaps) each zone exactly as apply_edit does, on the same object.
+
+    Page: web/src/state.ts resolvedZones of a state holding the object's header and the zones.
+    Python: apply_edit of each zone in order on the CSDF, skipping those it refuses (as the page
+    leaves them out of its recipe); the destination it applied is END + (grid growth) voxels.
+    """
+    h = 0.0625
+    box = shapes.box((0.25, 0.25, 0.25), (1.25, 0.75, 0.75), voxel_size=h)
+    bounds = box.surface_bounds()
+    server = {
+        "voxel_size": h,
+        "solid_bounds": bounds.tolist(),
+        "grid_bounds": box.grid_bounds.tolist(),
+    }
+    cases = zone_rule_cases(float(bounds[0, 0]), float(bounds[1, 0]), h)
+    got = run_page_node(tmp_path, {"rules": [{"server": server, "zones": c} for c in cases]})
+    for zones, page in zip(cases, got["rules"], strict=True):
+        current, accepted = box, []
+        for zone, pz in zip(zones, page["zones"], strict=True):
+            ax = "xyz".index(zone["axis"])
+            sb = current.surface_bounds()
+            # the page forward-maps the bounds through the earlier zones; the server measures
+            assert abs(pz["lo"] - sb[0, ax]) <= 1e-9 and abs(pz["hi"] - sb[1, ax]) <= 1e-9, zones
+            edit = Edit(zone["axis"], zone["start"], zone["end"], zone["dest"], zone["mode"])
+            try:
+                out = apply_edit(current, edit)
+            except InputError as exc:
+                assert pz["problem"] is not None, (zones, str(exc))
+                assert pz["problem"]["rule"] == python_rule(str(exc)), (zones, str(exc))
+                continue
+            assert pz["problem"] is None, (zones, pz["problem"])
+            applied = zone["end"] + (out.shape[ax] - current.shape[ax]) * h
+            assert abs(pz["dest"] - applied) <= 1e-9, zones
+            accepted.append(edit)
+            current = out
+        # the recipe the page would send holds exactly the zones the server accepts
+        assert page["recipe"]["version"] == 1
+        assert [Edit.parse(e) for e in page["recipe"]["edits"]] == accepted, zones
 
 
 @pytest.mark.browser

@@ -1,4 +1,6 @@
-// The server's API (src/partscale/serve/app.py): one object, no paths in requests.
+// The server's API (src/partscale/serve/app.py): one object, no paths in requests. Every request
+// the page makes goes through here.
+import type { Recipe } from './recipe';
 
 export interface PartInfo {
   color?: number[] | string;
@@ -6,7 +8,7 @@ export interface PartInfo {
   [k: string]: unknown;
 }
 
-export interface State {
+export interface ServerState {
   shape: [number, number, number];
   origin: [number, number, number];
   voxel_size: number;
@@ -40,7 +42,7 @@ async function check(r: Response): Promise<Response> {
   throw new ApiError(msg);
 }
 
-export async function getState(): Promise<State> {
+export async function getState(): Promise<ServerState> {
   return (await check(await fetch('/api/state', { cache: 'no-store' }))).json();
 }
 
@@ -56,7 +58,26 @@ export async function getParts(): Promise<Int16Array> {
   return new Int16Array(await r.arrayBuffer());
 }
 
-export async function post(path: string, body: unknown = {}): Promise<State> {
+/** The apply in flight (GET /api/progress). */
+export interface Progress {
+  busy: boolean;
+  fraction: number;
+  message: string;
+}
+
+export async function getProgress(): Promise<Progress> {
+  return (await check(await fetch('/api/progress', { cache: 'no-store' }))).json();
+}
+
+/** POST bodies by route. */
+export interface PostBodies {
+  '/api/apply': Recipe;
+  '/api/undo': Record<string, never>;
+  '/api/redo': Record<string, never>;
+  '/api/save': { overwrite: boolean };
+}
+
+async function post<P extends keyof PostBodies>(path: P, body: PostBodies[P]): Promise<ServerState> {
   const r = await fetch(path, {
     method: 'POST',
     headers: { 'Content-Type': 'application/json' },
@@ -64,3 +85,10 @@ export async function post(path: string, body: unknown = {}): Promise<State> {
   });
   return (await check(r)).json();
 }
+
+/** Bake the recipe into the object; the new state (with apply_ms). */
+export const apply = (recipe: Recipe): Promise<ServerState> => post('/api/apply', recipe);
+export const undo = (): Promise<ServerState> => post('/api/undo', {});
+export const redo = (): Promise<ServerState> => post('/api/redo', {});
+/** Write the object (beside the input, or over it); the new state (with saved). */
+export const save = (overwrite: boolean): Promise<ServerState> => post('/api/save', { overwrite });

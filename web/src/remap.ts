@@ -1,6 +1,7 @@
 // The 1D edit maps of partscale.edit.recipe.source_coordinate, in TypeScript (for the planes,
 // bounds and the step bound) and in GLSL (for the raymarcher). Both must match the Python exactly:
-// tests/test_browser.py evaluates the GLSL on the GPU and compares with source_coordinate.
+// tests/test_browser.py evaluates the GLSL on the GPU and this module in node, and compares both
+// with source_coordinate. Zones, tile counts and the validation rules live in recipe.ts.
 //
 // A zone maps output coordinates y (after the edit) to source coordinates x (before):
 //   y < start            -> x = y                      (rigid before the zone)
@@ -9,28 +10,9 @@
 //   y > dest             -> x = y - (dest - end)       (rigid after the zone, translated)
 //   global               -> x = lo + (y - lo) / f,  f = (hi - lo + dest - end) / (hi - lo)
 
-export type Axis = 'x' | 'y' | 'z';
-export type Mode = 'stretch' | 'tile' | 'global';
-export const AXES: Axis[] = ['x', 'y', 'z'];
-export const MODES: Mode[] = ['stretch', 'tile', 'global'];
+import { AXES, MODES, tileCount, type Zone } from './recipe';
+
 export const MAX_ZONES = 4;
-
-/** One zone in world units. lo/hi: the solid's extent along the axis before this edit. */
-export interface Zone {
-  axis: Axis;
-  mode: Mode;
-  start: number;
-  end: number;
-  dest: number;
-  lo: number;
-  hi: number;
-}
-
-/** max(1, round(target / length)), half-way rounding up, as recipe.tile_count: a ratio within
- *  1e-9 below a half counts as the half (0.3 / 0.2 is 1.4999999999999998). */
-export function tileCount(length: number, target: number): number {
-  return Math.max(1, Math.floor(target / length + 0.5 + 1e-9));
-}
 
 export function sourceCoordinate(y: number, z: Zone): number {
   const shift = z.dest - z.end;
@@ -47,6 +29,16 @@ export function sourceCoordinate(y: number, z: Zone): number {
   const u = t * n;
   const k = Math.min(Math.floor(u), n - 1);
   return z.start + (u - k) * length;
+}
+
+/** A point (x, y, z) after the zones -> before them: edits apply in order, so the last goes first. */
+export function toSource(zones: readonly Zone[], p: readonly number[]): number[] {
+  const q = [...p];
+  for (let i = zones.length - 1; i >= 0; i--) {
+    const a = AXES.indexOf(zones[i].axis);
+    q[a] = sourceCoordinate(q[a], zones[i]);
+  }
+  return q;
 }
 
 /** Source -> output for the extremes of a box (monotone; tile uses the overall linear map). */
@@ -68,25 +60,6 @@ export function minJacobian(z: Zone): number {
   const target = z.dest - z.start;
   const n = z.mode === 'tile' ? tileCount(length, target) : 1;
   return Math.min(1, target / (n * length));
-}
-
-/** The destination the server applies: the end moves by a whole number of voxels h. */
-export function snapDest(z: Zone, h: number): number {
-  return z.end + Math.round((z.dest - z.end) / h) * h;
-}
-
-/**
- * Why apply_recipe would refuse the zone (partscale.edit.scale.resolve_edit), or null: the zone
- * lies within the solid's extent (h/2 slack), is at least two voxels thick, and the (snapped)
- * destination stays a voxel beyond the start.
- */
-export function zoneProblem(z: Zone, h: number): string | null {
-  if (!(z.start < z.end)) return 'start must be below end';
-  if (z.start < z.lo - h / 2 || z.end > z.hi + h / 2) return 'the zone must lie within the object';
-  if (z.end - z.start < 2 * h) return 'the zone must be at least two voxels thick';
-  if (!(snapDest(z, h) - z.start >= h)) return 'destination must be a voxel beyond start';
-  if (z.mode === 'global' && !(z.hi - z.lo + z.dest - z.end > 0)) return 'the solid would vanish';
-  return null;
 }
 
 /** Uniform packing: a = (start, end, dest, lo), b = (hi, axis, mode, tile count). */

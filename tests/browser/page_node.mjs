@@ -1,0 +1,43 @@
+// Runs the page's own TypeScript (web/src) in node, without a browser, for tests/test_browser.py:
+// vite's module runner transforms and imports the modules. Usage:
+//   node page_node.mjs WEB_DIR CASES.json
+// CASES.json: {remap: [{zones, points}], tiles: [[length, target]], rules: [{server, zones}],
+//              palette: N}, each key optional. Prints one JSON object with the same keys:
+//   remap:   points through the zones back to the source (remap.ts toSource)
+//   tiles:   recipe.ts tileCount
+//   rules:   the page's resolved zones of a state holding that object header and those zones
+//            (state.ts resolvedZones: lo, hi, snapped dest, problem) and the recipe it would send
+//   palette: color.ts paletteColour of 0..N-1
+import { createRequire } from 'node:module';
+import { readFileSync } from 'node:fs';
+import { join, resolve } from 'node:path';
+import { pathToFileURL } from 'node:url';
+
+const web = resolve(process.argv[2]);
+const require = createRequire(join(web, 'package.json'));
+const { runnerImport } = await import(pathToFileURL(require.resolve('vite')).href);
+const load = async (name) =>
+  (await runnerImport(join(web, 'src', name), { configFile: false, root: web, logLevel: 'silent' })).module;
+
+const cases = JSON.parse(readFileSync(resolve(process.argv[3]), 'utf8'));
+const out = {};
+if (cases.remap) {
+  const remap = await load('remap.ts');
+  out.remap = cases.remap.map(({ zones, points }) => points.map((p) => remap.toSource(zones, p)));
+}
+if (cases.tiles) {
+  const recipe = await load('recipe.ts');
+  out.tiles = cases.tiles.map(([length, target]) => recipe.tileCount(length, target));
+}
+if (cases.rules) {
+  const state = await load('state.ts');
+  out.rules = cases.rules.map(({ server, zones }) => {
+    const s = { ...state.initialState, server, zones };
+    return { zones: state.resolvedZones(s), recipe: state.recipe(s) };
+  });
+}
+if (cases.palette) {
+  const color = await load('color.ts');
+  out.palette = Array.from({ length: cases.palette }, (_, i) => color.paletteColour(i));
+}
+process.stdout.write(JSON.stringify(out) + '\n');

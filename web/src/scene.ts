@@ -1,0 +1,373 @@
+// The three.js side of the editor: the raymarched volume, its box and axes, the active zone's
+// planes and handles, drawn on demand whenever the state (state.ts) or the camera changes.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
+import type { ServerState } from './api';
+import { partColour } from './color';
+import { createRaymarchMaterial, evalRemapOnGPU } from './raymarch';
+import { AXES, type Zone } from './recipe';
+import { MAX_ZONES, minJacobian, packZone } from './remap';
+import {
+  type AppState,
+  outputBounds,
+  PLANES,
+  type PlaneName,
+  resolvedZones,
+  solidBounds,
+  type Store,
+  toPreview,
+  validZones,
+} from './state';
+
+const PLANE_COLORS: Record<PlaneName, number> = { start: 0x2fbf71, end: 0xe5484d, dest: 0x3b82f6 };
+const VIEW_MODES = { colour: 0, parts: 1, slice: 2 } as const;
+
+export interface Scene {
+  readonly renderer: THREE.WebGLRenderer;
+  readonly camera: THREE.PerspectiveCamera;
+  readonly controls: OrbitControls;
+  readonly planeGroup: THREE.Group;
+  readonly planeMeshes: Readonly<Record<PlaneName, THREE.Mesh>>;
+  readonly handleMeshes: Readonly<Record<PlaneName, THREE.Mesh>>;
+  /** Largest grid per axis this GPU can hold as a 3D texture. */
+  readonly maxTextureSize: number;
+  /** Smoothed and last GPU-synchronised frame time (ms), frames drawn so far. */
+  readonly perf: Readonly<{ frameTimeMs: number; lastFrameMs: number; frames: number }>;
+  /** A frame is requested and not drawn yet. */
+  readonly renderQueued: boolean;
+  /** Upload the object's grid ((X, Y, Z, 4) float16 bits) and part indices (or null). */
+  setObject(s: ServerState, grid: Uint16Array, parts: Int16Array | null): void;
+  fitCamera(): void;
+  requestRender(): void;
+  renderNow(): void;
+  /** Screen position (CSS pixels) of a plane's handle. */
+  handleScreen(name: PlaneName): { x: number; y: number };
+  /** The shader's toSource() on points (N, 3) through zones (applied in order). */
+  evalRemap(zones: Zone[], points: number[][]): number[][];
+  /** Render n frames orbiting the object; mean and median frame time in ms. */
+  benchmark(n?: number): { mean: number; median: number; n: number };
+}
+
+function createRenderer(store: Store): THREE.WebGLRenderer {
+  try {
+    return new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
+  } catch (e) {
+    store.dispatch({
+      type: 'set-status',
+      message: 'This browser cannot draw the object: it needs WebGL2 (enable hardware acceleration).',
+      error: true,
+    });
+    throw e;
+  }
+}
+
+/** Vec4 arrays of the zones, as the shader's uniforms hold them. */
+function packed(zs: Zone[]) {
+  const a = Array.from({ length: MAX_ZONES }, () => new THREE.Vector4());
+  const b = Array.from({ length: MAX_ZONES }, () => new THREE.Vector4());
+  zs.forEach((z, i) => {
+    const [pa, pb] = packZone(z);
+    a[i].set(pa[0], pa[1], pa[2], pa[3]);
+    b[i].set(pb[0], pb[1], pb[2], pb[3]);
+  });
+  return { a, b };
+}
+
+/** The scene in `view`, drawn from the store's state; fixedSize: canvas pixels, or null to fill. */
+export function createScene(store: Store, view: HTMLElement, fixedSize: [number, number] | null): Scene {
+  const renderer = createRenderer(store);
+  renderer.setPixelRatio(fixedSize ? 1 : Math.min(window.devicePixelRatio, 2));
+  renderer.setClearColor(0x1d2126, 1);
+  view.appendChild(renderer.domElement);
+  const gl = renderer.getContext() as WebGL2RenderingContext; // three.js r187 is WebGL2-only
+
+  const scene = new THREE.Scene();
+  const camera = new THREE.PerspectiveCamera(35, 1, 0.001, 1000);
+  const controls = new OrbitControls(camera, renderer.domElement);
+  controls.enableDamping = false;
+
+  const material = createRaymarchMaterial();
+  const u = material.uniforms;
+  const volumeMesh = new THREE.Mesh(new THREE.BoxGeometry(1, 1, 1), material);
+  volumeMesh.frustumCulled = false;
+  scene.add(volumeMesh);
+  const boxHelper = new THREE.Box3Helper(new THREE.Box3(), 0x8a94a6);
+  scene.add(boxHelper);
+  const axesHelper = new THREE.AxesHelper(1);
+  scene.add(axesHelper);
+
+  const planeGroup = new THREE.Group();
+  scene.add(planeGroup);
+  const planeMeshes = {} as Record<PlaneName, THREE.Mesh>;
+  const handleMeshes = {} as Record<PlaneName, THREE.Mesh>;
+  for (const name of PLANES) {
+    const plane = new THREE.Mesh(
+      new THREE.PlaneGeometry(1, 1),
+      new THREE.MeshBasicMaterial({
+        color: PLANE_COLORS[name],
+        transparent: true,
+        opacity: 0.18,
+        side: THREE.DoubleSide,
+        depthWrite: false,
+      }),
+    );
+    plane.userData.plane = name;
+    plane.renderOrder = 2;
+    const edge = new THREE.LineSegments(
+      new THREE.EdgesGeometry(new THREE.PlaneGeometry(1, 1)),
+      new THREE.LineBasicMaterial({ color: PLANE_COLORS[name] }),
+    );
+    plane.add(edge);
+    const handle = new THREE.Mesh(
+      new THREE.SphereGeometry(1, 20, 12),
+      new THREE.MeshBasicMaterial({ color: PLANE_COLORS[name] }),
+    );
+    handle.userData.plane = name;
+    planeMeshes[name] = plane;
+    handleMeshes[name] = handle;
+    planeGroup.add(plane, handle);
+  }
+
+  // GPU resources and frame bookkeeping: the renderer's own, not the editor's state
+  const textures: { volume: THREE.Data3DTexture | null; parts: THREE.Data3DTexture | null } = {
+    volume: null,
+    parts: null,
+  };
+  const partsPlaceholder = new THREE.Data3DTexture(new Uint8Array([128, 128, 128, 255]), 1, 1, 1);
+  partsPlaceholder.needsUpdate = true;
+  u.uParts.value = partsPlaceholder;
+  const perf = { frameTimeMs: 0, lastFrameMs: 0, frames: 0 };
+  const frame = { queued: false };
+  const pixel = new Uint8Array(4);
+
+  function outputBox(s: AppState): THREE.Box3 {
+    const [lo, hi] = outputBounds(s);
+    return new THREE.Box3(new THREE.Vector3(...lo), new THREE.Vector3(...hi));
+  }
+
+  function requestRender() {
+    if (frame.queued) return;
+    frame.queued = true;
+    requestAnimationFrame(renderNow);
+  }
+
+  function renderNow() {
+    frame.queued = false;
+    const t0 = performance.now();
+    // handles keep one size on screen, however far the camera is
+    for (const h of Object.values(handleMeshes)) {
+      h.scale.setScalar(
+        0.04 * camera.position.distanceTo(h.position) * Math.tan(THREE.MathUtils.degToRad(camera.fov / 2)),
+      );
+    }
+    renderer.render(scene, camera);
+    // reading one pixel waits for the GPU, so the time covers the raymarch, not just its submission
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    const ms = performance.now() - t0;
+    perf.lastFrameMs = ms;
+    perf.frameTimeMs = perf.frames === 0 ? ms : 0.8 * perf.frameTimeMs + 0.2 * ms;
+    perf.frames += 1;
+    updateOverlay();
+  }
+
+  function updateOverlay() {
+    const server = store.get().server;
+    const s = server ? server.shape.join('×') : '–';
+    const size = new THREE.Vector2();
+    renderer.getSize(size);
+    const overlay = document.getElementById('overlay');
+    if (overlay) overlay.textContent = `frame ${perf.lastFrameMs.toFixed(1)} ms · grid ${s} · ${size.x}×${size.y} px`;
+  }
+
+  function resize() {
+    const w = fixedSize ? fixedSize[0] : view.clientWidth;
+    const h = fixedSize ? fixedSize[1] : view.clientHeight;
+    renderer.setSize(w, h);
+    camera.aspect = w / h;
+    camera.updateProjectionMatrix();
+    requestRender();
+  }
+  window.addEventListener('resize', resize);
+  controls.addEventListener('change', requestRender);
+
+  function updateScene(s: AppState) {
+    const zs = validZones(s);
+    u.uZoneCount.value = zs.length;
+    let jac = 1;
+    zs.forEach((z, i) => {
+      const [a, b] = packZone(z);
+      (u.uZoneA.value as THREE.Vector4[])[i].set(a[0], a[1], a[2], a[3]);
+      (u.uZoneB.value as THREE.Vector4[])[i].set(b[0], b[1], b[2], b[3]);
+      jac *= minJacobian(z);
+    });
+    u.uStepScale.value = Math.min(1, jac);
+    const box = outputBox(s);
+    u.uBoxMin.value.copy(box.min);
+    u.uBoxMax.value.copy(box.max);
+    const size = box.getSize(new THREE.Vector3());
+    const centre = box.getCenter(new THREE.Vector3());
+    volumeMesh.position.copy(centre);
+    volumeMesh.scale.copy(size);
+    boxHelper.box.copy(box);
+    const [smin] = solidBounds(s);
+    axesHelper.position.set(smin[0], smin[1], smin[2]);
+    axesHelper.scale.setScalar(0.35 * Math.max(size.x, size.y, size.z));
+    layoutPlanes(s, box);
+    updateView(s, box);
+  }
+
+  function layoutPlanes(s: AppState, box: THREE.Box3) {
+    const z = s.zones[s.active];
+    planeGroup.visible = !!z;
+    if (!z) return;
+    const rz = resolvedZones(s)[s.active];
+    const a = AXES.indexOf(z.axis);
+    const size = box.getSize(new THREE.Vector3());
+    const centre = box.getCenter(new THREE.Vector3());
+    const others = [0, 1, 2].filter((i) => i !== a);
+    const offset = 0.05 * size.length(); // handles sit just outside the box
+    for (const name of PLANES) {
+      const plane = planeMeshes[name];
+      const pos = centre.clone();
+      pos.setComponent(a, toPreview(s, name === 'dest' ? rz.dest : z[name]));
+      plane.position.copy(pos);
+      // PlaneGeometry lies in xy with normal +z: turn its normal onto the axis
+      plane.rotation.set(0, 0, 0);
+      if (a === 0) plane.rotation.y = Math.PI / 2;
+      if (a === 1) plane.rotation.x = -Math.PI / 2;
+      const sz = [size.x, size.y, size.z].map((v) => v * 1.08);
+      if (a === 0) plane.scale.set(sz[2], sz[1], 1);
+      else if (a === 1) plane.scale.set(sz[0], sz[2], 1);
+      else plane.scale.set(sz[0], sz[1], 1);
+      const handle = handleMeshes[name];
+      const hp = pos.clone();
+      hp.setComponent(others[0], box.max.getComponent(others[0]) + offset);
+      // dest's handle on the opposite edge, so it stays apart from end's when they coincide
+      const side =
+        name === 'dest' ? box.min.getComponent(others[1]) - offset : box.max.getComponent(others[1]) + offset;
+      hp.setComponent(others[1], side);
+      handle.position.copy(hp);
+    }
+  }
+
+  /** View mode and the distance slice's plane (a fraction of the output box). */
+  function updateView(s: AppState, box: THREE.Box3) {
+    u.uView.value = VIEW_MODES[s.view.mode];
+    const axis = AXES.indexOf(s.view.sliceAxis);
+    const f = s.view.slicePos / 100;
+    u.uSliceAxis.value = axis;
+    u.uSlicePos.value = box.min.getComponent(axis) + f * (box.max.getComponent(axis) - box.min.getComponent(axis));
+  }
+
+  function fitCamera() {
+    const box = outputBox(store.get());
+    const centre = box.getCenter(new THREE.Vector3());
+    const radius = 0.5 * box.getSize(new THREE.Vector3()).length();
+    const dist = (radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2))) * 0.95;
+    const dir = new THREE.Vector3(1.0, 0.75, 1.35).normalize();
+    camera.position.copy(centre).addScaledVector(dir, dist);
+    camera.near = dist / 100;
+    camera.far = dist * 10;
+    camera.updateProjectionMatrix();
+    controls.target.copy(centre);
+    controls.update();
+  }
+
+  function setObject(s: ServerState, grid: Uint16Array, parts: Int16Array | null) {
+    const [X, Y, Z] = s.shape;
+    textures.volume?.dispose();
+    // C order (z fastest): the texture's width runs along z (see raymarch.ts)
+    const volume = new THREE.Data3DTexture(grid, Z, Y, X);
+    volume.format = THREE.RGBAFormat;
+    volume.type = THREE.HalfFloatType;
+    volume.minFilter = THREE.LinearFilter;
+    volume.magFilter = THREE.LinearFilter;
+    volume.unpackAlignment = 1;
+    volume.needsUpdate = true;
+    textures.volume = volume;
+    textures.parts?.dispose();
+    textures.parts = null;
+    if (parts && s.n_parts > 0) {
+      const palette = Array.from({ length: s.n_parts }, (_, i) => partColour(s.parts_info[i]?.color, i));
+      const rgba = new Uint8Array(parts.length * 4);
+      for (let i = 0; i < parts.length; i++) {
+        const p = parts[i];
+        const c = p >= 0 && p < palette.length ? palette[p] : [110, 110, 110];
+        rgba[i * 4] = c[0];
+        rgba[i * 4 + 1] = c[1];
+        rgba[i * 4 + 2] = c[2];
+        rgba[i * 4 + 3] = 255;
+      }
+      const tex = new THREE.Data3DTexture(rgba, Z, Y, X);
+      tex.unpackAlignment = 1;
+      tex.needsUpdate = true;
+      textures.parts = tex;
+    }
+    u.uVolume.value = volume;
+    u.uParts.value = textures.parts ?? partsPlaceholder;
+    const [gmin, gmax] = s.grid_bounds;
+    u.uGridMin.value.set(gmin[0], gmin[1], gmin[2]);
+    u.uGridSize.value.set(gmax[0] - gmin[0], gmax[1] - gmin[1], gmax[2] - gmin[2]);
+    u.uVoxel.value = s.voxel_size;
+  }
+
+  store.subscribe((s, prev) => {
+    // the first object: frame it (later ones keep the user's camera)
+    if (s.server && !prev.server) fitCamera();
+    if (s.server !== prev.server || s.zones !== prev.zones || s.active !== prev.active) {
+      updateScene(s);
+      requestRender();
+    } else if (s.view !== prev.view) {
+      updateView(s, outputBox(s));
+      requestRender();
+    }
+  });
+
+  function handleScreen(name: PlaneName): { x: number; y: number } {
+    const p = handleMeshes[name].getWorldPosition(new THREE.Vector3()).project(camera);
+    const rect = renderer.domElement.getBoundingClientRect();
+    return { x: rect.left + ((p.x + 1) / 2) * rect.width, y: rect.top + ((1 - p.y) / 2) * rect.height };
+  }
+
+  function benchmark(n = 30) {
+    const times: number[] = [];
+    const target = controls.target.clone();
+    const offset = camera.position.clone().sub(target);
+    for (let i = 0; i < n; i++) {
+      offset.applyAxisAngle(new THREE.Vector3(0, 1, 0), (2 * Math.PI) / n);
+      camera.position.copy(target).add(offset);
+      camera.lookAt(target);
+      renderNow();
+      times.push(perf.lastFrameMs);
+    }
+    times.sort((x, y) => x - y);
+    return { mean: times.reduce((acc, t) => acc + t, 0) / n, median: times[Math.floor(n / 2)], n };
+  }
+
+  updateScene(store.get());
+  resize();
+
+  return {
+    renderer,
+    camera,
+    controls,
+    planeGroup,
+    planeMeshes,
+    handleMeshes,
+    maxTextureSize: gl.getParameter(gl.MAX_3D_TEXTURE_SIZE) as number,
+    perf,
+    get renderQueued() {
+      return frame.queued;
+    },
+    setObject,
+    fitCamera,
+    requestRender,
+    renderNow,
+    handleScreen,
+    evalRemap: (zones, points) => {
+      const { a, b } = packed(zones);
+      return evalRemapOnGPU(renderer, a, b, zones.length, points);
+    },
+    benchmark,
+  };
+}

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # partscale's two commands:
 #   ./dev.sh setup   create .venv (Python 3.11), install partscale, run the demo on a real object
-#   ./dev.sh test    lint, format check and the whole test suite (installs what it needs first)
+#   ./dev.sh test    lint, format check, the page's type check and the whole test suite (installs
+#                    what it needs first)
 # Optional heavy parts (Node tools for glTF validation and browser tests, Debian's chromium) are
 # installed when possible; tests that need them skip with a printed reason otherwise.
 set -euo pipefail
@@ -90,6 +91,12 @@ case "${1:-}" in
     say "ruff"
     "$VENV/bin/ruff" check src tests bench
     "$VENV/bin/ruff" format --check src tests bench
+    if [ -x web/node_modules/.bin/tsc ]; then
+      say "tsc --noEmit (web/)"
+      web/node_modules/.bin/tsc --noEmit -p web
+    else
+      echo "note: web/node_modules not installed; the page's type check (tsc --noEmit) is skipped" >&2
+    fi
     say "pytest"
     shift
     "$PY" -m pytest "$@"

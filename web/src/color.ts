@@ -1,5 +1,5 @@
-// Part display colours: partscale's palette (Python's palette_colour, moving to
-// partscale/color.py), mirrored once here; tests/test_browser.py compares the two.
+// Part display colours: partscale's palette (partscale.segment.palette, golden-angle hues in HLS),
+// mirrored once here; tests/test_browser.py compares the two.
 
 import { roundHalfEven } from './recipe';
 

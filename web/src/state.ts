@@ -98,18 +98,14 @@ export function defaultZone(s: AppState, axis: Axis = 'x', mode: Mode = 'stretch
   return zoneAt(axis, mode, smin[a], smax[a]);
 }
 
-const resolvedCache = new WeakMap<AppState, ResolvedZone[]>();
-
 /** The zones in world units with lo/hi: the solid's extent before each one (forward-mapped
  *  through the earlier valid zones). */
 export function resolvedZones(s: AppState): ResolvedZone[] {
-  const cached = resolvedCache.get(s);
-  if (cached) return cached;
   const [smin, smax] = solidBounds(s);
   const lo = [...smin];
   const hi = [...smax];
   const h = voxel(s);
-  const out = s.zones.map((z) => {
+  return s.zones.map((z) => {
     const a = AXES.indexOf(z.axis);
     const given: Zone = { ...z, lo: lo[a], hi: hi[a] };
     const problem = zoneProblem(given, h);
@@ -121,8 +117,6 @@ export function resolvedZones(s: AppState): ResolvedZone[] {
     }
     return zone;
   });
-  resolvedCache.set(s, out);
-  return out;
 }
 
 export function validZones(s: AppState): ResolvedZone[] {

@@ -104,7 +104,7 @@ def main() -> None:
             t, _ = timed(lambda c=c, s=suf: export.export_texture(c, tmp / f"t{s}"), args.repeat)
             rows.append((name, grid, f"export {suf}", t, "", None, None))
         for size in (64, 256):
-            t, _ = timed(lambda c=c, s=size: export.resample(c, s), args.repeat)
+            t, _ = timed(lambda c=c, s=size: export.resize_grid(c, s), args.repeat)
             rows.append((name, grid, f"resample -> {size}", t, "", None, None))
     print(
         f"{'object':<24} {'grid':<12} {'task':<20} {'ours s':>8}  {'baseline':<14} {'s':>8} {'x':>6} {'same px':>8}"

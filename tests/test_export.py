@@ -146,7 +146,7 @@ def test_resample_keeps_radius_and_world_bounds(size):
     c = shapes.sphere(CENTRE, RADIUS, voxel_size=0.01)
     parts = np.where(c.axis_coords(0)[:, None, None] < CENTRE[0], 0, 1) * np.ones(c.shape, int)
     c = c.replace(parts=parts)
-    r = export.resample(c, size)
+    r = export.resize_grid(c, size)
     h = r.voxel_size
     assert max(r.shape) == size
     gb, rb = c.grid_bounds, r.grid_bounds

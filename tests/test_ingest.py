@@ -14,7 +14,7 @@ from conftest import assert_bad_input, data_path
 
 from partscale import csdf as csdf_mod
 from partscale import ingest, shapes
-from partscale.ingest.mesh_io import linear_to_srgb8, srgb_to_linear
+from partscale.color import linear_to_srgb8, srgb_to_linear
 from partscale.surface import to_mesh
 
 
@@ -402,7 +402,7 @@ def test_cli_import_writes_a_loadable_csdf(tmp_path, cli):
     proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--res", "32", check=True)
     assert "wrote" in proc.stderr
     c = csdf_mod.load(out)
-    assert max(c.shape) == 32 + 1 + 2 * (ingest.BAND + 2)
+    assert max(c.shape) == 32 + 1 + 2 * (csdf_mod.BAND_VOXELS + 2)
     assert c.meta["source"].endswith("chair.glb")
     assert c.meta["history"][0]["res"] == 32
 

@@ -4,7 +4,6 @@ worker processes."""
 from __future__ import annotations
 
 import collections
-import colorsys
 import contextlib
 import functools
 import inspect
@@ -172,15 +171,6 @@ def read_json(path: Path, *, what: str):
         return json.loads(path.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: expected JSON ({what}), got {exc}") from None
-
-
-def palette_colour(i: int) -> list[int]:
-    """sRGB display colour of part ``i``: golden-angle hues, alternating lightness, so parts
-    with nearby indices look different."""
-    h = (i * 0.618033988749895) % 1.0
-    light = 0.55 if i % 2 == 0 else 0.42
-    r, g, b = colorsys.hls_to_rgb(h, light, 0.65)
-    return [round(r * 255), round(g * 255), round(b * 255)]
 
 
 _POOL: ThreadPoolExecutor | None = None

@@ -11,6 +11,10 @@ Conventions (used everywhere in partscale)
   appears where a format demands it (glTF ``COLOR_0``).
 - Parts: ``parts`` is the index of the part at the nearest surface point, -1 where there is none
   (everything is -1 until the object is segmented).
+- Narrow band: within :data:`BAND_VOXELS` voxels of the surface the distances are exact (to the
+  surface the grid represents); farther out they are bounds that keep the sign. Import computes
+  them exactly there, edits re-evaluate them there, parts label voxels out to it, and the
+  evaluation judges distances in it.
 
 A CSDF is immutable: its arrays are read-only and functions return new CSDFs.
 """
@@ -32,6 +36,8 @@ from .errors import InputError, one_line
 FORMAT = "partscale.csdf"
 FORMAT_VERSION = 1
 SUFFIX = ".csdf.npz"
+BAND_VOXELS = 3
+"""Half-width, in voxels, of the narrow band around the surface where distances are exact."""
 _NAMES = ("sdf", "rgb", "parts", "origin", "voxel_size", "meta")
 
 

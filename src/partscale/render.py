@@ -13,7 +13,6 @@ rendered with the same ``frame`` share one scale.
 
 from __future__ import annotations
 
-import colorsys
 import math
 import os
 from dataclasses import dataclass
@@ -23,9 +22,9 @@ import numba
 import numpy as np
 
 from ._util import atomic_path, keyword_options
+from .color import linear_to_srgb, palette_colour, srgb8_to_linear
 from .csdf import CSDF
 from .errors import InputError
-from .export import linear_to_srgb, srgb_to_linear
 from .progress import ProgressCallback, resolve
 
 VIEWS = ("front", "side", "top", "iso")
@@ -47,25 +46,6 @@ _VIEW_AXES = {
     "top": ((0.0, 1.0, 0.0), (0.0, 0.0, -1.0)),
     "iso": ((1.0, 1.0, 1.0), (0.0, 1.0, 0.0)),
 }
-
-# Distinct sRGB colours for parts without a stored colour (Okabe-Ito then Tableau-like tones).
-PALETTE = np.array(
-    [
-        (230, 159, 0),
-        (86, 180, 233),
-        (0, 158, 115),
-        (240, 228, 66),
-        (0, 114, 178),
-        (213, 94, 0),
-        (204, 121, 167),
-        (140, 86, 75),
-        (44, 160, 44),
-        (148, 103, 189),
-        (214, 39, 40),
-        (23, 190, 207),
-    ],
-    dtype=np.uint8,
-)
 
 
 @dataclass(frozen=True)
@@ -207,7 +187,7 @@ def _colours(rgb, pts, out):
 
 def part_colors(csdf: CSDF) -> np.ndarray:
     """(P, 3) uint8 sRGB display colour of each part: ``meta['parts_info'][i]['color']`` when
-    stored, else :data:`PALETTE` (then golden-angle hues beyond its length)."""
+    stored, else the colour segmentation would store (:func:`partscale.color.palette_colour`)."""
     n = csdf.n_parts
     info = csdf.meta.get("parts_info")
     out = np.empty((n, 3), np.uint8)
@@ -220,11 +200,8 @@ def part_colors(csdf: CSDF) -> np.ndarray:
         colour = entry.get("color") if isinstance(entry, dict) else None
         if colour is not None and len(colour) >= 3:
             out[i] = np.clip(np.asarray(colour[:3], dtype=float), 0, 255)
-        elif i < len(PALETTE):
-            out[i] = PALETTE[i]
         else:
-            h = (i * 0.618033988749895) % 1.0
-            out[i] = np.rint(np.array(colorsys.hsv_to_rgb(h, 0.65, 0.9)) * 255)
+            out[i] = palette_colour(i)
     return out
 
 
@@ -289,7 +266,7 @@ def render(
     size : int
         Image width and height in pixels (16..4096).
     parts : bool
-        Colour by part (``meta['parts_info'][i]['color']`` or a fixed palette; part -1 grey)
+        Colour by part (``meta['parts_info'][i]['color']`` or the part palette; part -1 grey)
         instead of the CSDF's own colours. Needs a segmented CSDF.
     frame : (2, 3) array_like, optional
         World box the camera fits (default: the solid's bounds), for several objects at one scale.
@@ -359,7 +336,7 @@ def render(
     light /= np.linalg.norm(light)
     lambert = np.clip(normals @ light, 0.0, 1.0)
     shade = AMBIENT + (1 - AMBIENT) * lambert
-    lin = srgb_to_linear(np.clip(base, 0, 255)) * shade[:, None]
+    lin = srgb8_to_linear(np.clip(base, 0, 255)) * shade[:, None]
     colours = np.rint(linear_to_srgb(lin) * 255).astype(np.uint8)
 
     image = np.empty((size * size, 3), np.uint8)

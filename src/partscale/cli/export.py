@@ -30,7 +30,8 @@ def export(
         int | None,
         typer.Option(
             "--size",
-            help="Resample first to this many voxels along the longest side: 32, 64, 128 or 256.",
+            help="Resize the grid first to this many voxels along the longest side: "
+            "32, 64, 128 or 256.",
         ),
     ] = None,
 ) -> None:
@@ -64,7 +65,7 @@ def export(
             return scaled(bar, i / n, (i + 1) / n)
 
         if size is not None:
-            c = export_mod.resample(c, size, progress=part())
+            c = export_mod.resize_grid(c, size, progress=part())
         if mesh is not None:
             export_mod.export_mesh(c, mesh, progress=part())
             written.append(mesh)

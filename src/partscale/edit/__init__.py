@@ -7,8 +7,8 @@ Public API
 - :func:`scale` ``(csdf, *, axis, zone, to, mode="stretch", progress=None) -> CSDF``.
 - :func:`naive_edit` ``(csdf, edit) -> CSDF``: the BASELINE (per-column resampling, plain
   concatenation of tiles, no re-evaluation) that evaluations and benchmarks compare against.
-- :func:`reevaluate` ``(csdf, mask=None, *, band=BAND_VOXELS) -> CSDF``: re-evaluated distances
-  (to the grid's marching-cubes surface) near the surface, on its own.
+- :func:`reevaluate` ``(csdf, mask=None, *, band=partscale.csdf.BAND_VOXELS) -> CSDF``:
+  re-evaluated distances (to the grid's marching-cubes surface) near the surface, on its own.
 - :func:`recipe_from_history` ``(csdf, *, after=None) -> Recipe``: the replayable recipe.
 - :class:`Edit`, :class:`Recipe`, :data:`JSON_SCHEMA`, :func:`source_coordinate`,
   :func:`tile_count`: the recipe schema and the 1D maps the web editor's shader shares.
@@ -26,23 +26,23 @@ Semantics
   lying wholly inside the zone get new indices after the existing ones (``meta['parts_info']``
   gains entries with ``copy_of``); parts crossing the zone's planes keep their index.
 - global: the whole solid scaled along the axis about its min to the same final length.
-- After each edit, every voxel within ``BAND_VOXELS`` voxels of the surface whose distance could
-  have changed holds its distance to the edited zero level set *as the grid represents it* (sign
-  and surface kept) and the colour and part of its nearest surface point. That surface is the
-  piecewise-linear one through the sdf's linear zero crossings along grid edges (marching cubes):
+- After each edit, every voxel within ``partscale.csdf.BAND_VOXELS`` voxels of the surface whose
+  distance could have changed holds its distance to the edited zero level set *as the grid
+  represents it* (sign and surface kept) and the colour and part of its nearest surface point.
+  That surface is the piecewise-linear one through the sdf's linear zero crossings along grid
+  edges (marching cubes):
   exact for flat surface and close to it for gently curved surface, but it cuts sharp edges and
   corners, so there a recomputed distance can differ from the true object's by up to about 0.9
   voxel (near the edges and corners of an axis-aligned box sampled off the grid).
 """
 
 from .recipe import AXES, JSON_SCHEMA, MODES, Edit, Recipe, source_coordinate, tile_count
-from .reevaluate import BAND_VOXELS, reevaluate
+from .reevaluate import reevaluate
 from .resample import SEAM_VOXELS
 from .scale import apply_edit, apply_recipe, naive_edit, recipe_from_history, scale
 
 __all__ = [
     "AXES",
-    "BAND_VOXELS",
     "JSON_SCHEMA",
     "MODES",
     "SEAM_VOXELS",

@@ -32,12 +32,9 @@ from skimage import measure
 
 from .._kernels import closest_on_triangle
 from .._util import keyword_options, thread_map
-from ..csdf import CSDF
+from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
-
-#: Half-width, in voxels, of the band where an edit guarantees true distances.
-BAND_VOXELS = 3.0
 
 
 @numba.njit(cache=True, inline="always")

@@ -17,12 +17,13 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from .._util import check_memory, keyword_options, palette_colour
-from ..csdf import CSDF
+from .._util import check_memory, keyword_options
+from ..color import palette_colour
+from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from .recipe import AXES, MODES, Edit, Recipe, tile_count
-from .reevaluate import BAND_VOXELS, reevaluate_arrays
+from .reevaluate import reevaluate_arrays
 from .resample import SEAM_VOXELS, Plan, apply_plan, lerp_layers, make_plan
 
 #: Peak working bytes per output voxel of an edit (output arrays, float temporaries, masks).
@@ -534,7 +535,6 @@ def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
 
 
 __all__ = [
-    "BAND_VOXELS",
     "MODES",
     "apply_edit",
     "apply_recipe",

@@ -32,8 +32,8 @@ The metrics (each a function below, gathered by :func:`evaluate`):
   lines of ``b`` touching the new zone likewise, with the same normalised Wasserstein distance.
   NaN where ``a`` has no such lines (no repeated elements along the axis).
 - ``sdf_err_mean`` / ``sdf_err_p99``: ``|sdf|`` against the true distance to ``b``'s own surface
-  (its marching-cubes mesh, exact point-triangle distances) in a band of :data:`BAND` voxels,
-  within the new zone and :data:`BAND` voxels either side (the whole object for ``global``).
+  (its marching-cubes mesh, exact point-triangle distances) in a band of :data:`BAND_VOXELS` voxels,
+  within the new zone and :data:`BAND_VOXELS` voxels either side (the whole object for ``global``).
   Marching cubes chamfers sharp edges, so an exact field scores up to ~0.5 voxel at p99 on a box;
   the mean is the figure to compare.
 - ``watertight`` and ``pieces``: of the marching-cubes surface (connected components of faces);
@@ -57,7 +57,7 @@ import igl
 import numpy as np
 import trimesh
 
-from ..csdf import CSDF
+from ..csdf import BAND_VOXELS, CSDF
 from ..edit.recipe import Edit, tile_count
 from ..edit.scale import resolve_edit as scale_resolve_edit
 from ..errors import InputError
@@ -67,8 +67,6 @@ from ..surface import to_mesh
 PERIOD_TOLERANCE = 0.15
 #: Voxels kept between the zone's planes and the regions called outside/inside.
 MARGIN = 1.0
-#: Half-width in voxels of the band where stored distances are checked against true ones.
-BAND = 3.0
 #: Fewest samples a distribution needs before it is compared (a handful of stray runs, e.g. a
 #: bump a voxel high, would otherwise decide a region's error).
 MIN_SAMPLES = 20
@@ -444,7 +442,8 @@ def distance_error(
     axis: int | None = None,
     region: tuple[float, float] | None = None,
 ) -> tuple[float, float]:
-    """(mean, p99) of ``| |sdf| - true distance |`` in voxels, over the band of ``BAND`` voxels.
+    """(mean, p99) of ``| |sdf| - true distance |`` in voxels, over the band of
+    ``BAND_VOXELS`` voxels.
 
     The true distance is to ``b``'s own zero level (its marching-cubes mesh), so the surface is
     taken as given and only the stored distances are judged. ``region``: only band voxels whose
@@ -452,7 +451,7 @@ def distance_error(
     """
     h = b.voxel_size
     shell = _shell(b.sdf)
-    near = edt.edt(~shell, parallel=1) <= BAND + 1.5
+    near = edt.edt(~shell, parallel=1) <= BAND_VOXELS + 1.5
     idx = np.argwhere(near)
     if region is not None and axis is not None:
         y = b.origin[axis] + idx[:, axis] * h
@@ -461,7 +460,7 @@ def distance_error(
     pts = b.index_to_world(idx)
     true = _distance_to_mesh(pts, mesh_b)
     stored = np.abs(b.sdf[idx[:, 0], idx[:, 1], idx[:, 2]].astype(np.float64))
-    keep = true <= BAND * h
+    keep = true <= BAND_VOXELS * h
     if not keep.any():
         return math.nan, math.nan
     err = np.abs(stored[keep] - true[keep]) / h
@@ -492,8 +491,8 @@ def slice_steps(
     shape : (N,) float64
         At ``i``: mean ``sdf`` change from slice ``i`` to ``i + k`` less the trend the one-voxel
         differences just outside the pair predict, ``|(f[i+k] - f[i]) - k (f[i] - f[i-1] +
-        f[i+k+1] - f[i+k]) / 2|``, in voxels (clipped at ``2 * BAND``), over voxels within one
-        voxel of the surface on slice ``i`` or ``i + k``: zero for a surface that changes
+        f[i+k+1] - f[i+k]) / 2|``, in voxels (clipped at ``2 * BAND_VOXELS``), over voxels
+        within one voxel of the surface on slice ``i`` or ``i + k``: zero for a surface that changes
         linearly (a slanted leg), the full step for a discontinuity however it was blended
         within the pair.
     """
@@ -513,7 +512,7 @@ def slice_steps(
     dc = np.linalg.norm(c[i + k].astype(np.float32) - c[i].astype(np.float32), axis=-1)
     f = s.astype(np.float32)
     trend = k * ((f[i] - f[i - 1]) + (f[i + k + 1] - f[i + k])) / 2
-    js = np.minimum(np.abs((f[i + k] - f[i]) - trend) / h, 2 * BAND)
+    js = np.minimum(np.abs((f[i + k] - f[i]) - trend) / h, 2 * BAND_VOXELS)
     n_both = both.sum(axis=(1, 2))
     n_either = either.sum(axis=(1, 2))
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -645,7 +644,7 @@ def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, flo
     mesh_b = to_mesh(b)
     prop = proportion_error(a, b, geo, runs_a=ref.runs[geo.axis])
     watertight, pieces = topology(mesh_b)
-    band = BAND * a.voxel_size
+    band = BAND_VOXELS * a.voxel_size
     zone = None if geo.mode == "global" else (geo.start - band, geo.dest + band)
     sdf_mean, sdf_p99 = distance_error(b, mesh_b, axis=geo.axis, region=zone)
     seam_c, seam_s = seam_jumps(a, b, geo, steps_a=ref.steps(geo.axis))
@@ -673,7 +672,7 @@ def evaluate_original(
     With ``geo``, distances are judged in the zone (and a band around it) only, as
     :func:`evaluate` does for a stretch or tile.
     """
-    band = BAND * ref.csdf.voxel_size
+    band = BAND_VOXELS * ref.csdf.voxel_size
     zone = None if geo is None else (geo.start - band, geo.end + band)
     axis = None if geo is None else geo.axis
     mean, p99 = distance_error(ref.csdf, ref.mesh, axis=axis, region=zone)

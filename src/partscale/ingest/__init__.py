@@ -2,17 +2,23 @@
 
 Public API: :func:`load` (any supported file), :func:`load_mesh` + :func:`from_mesh` (meshes),
 :func:`from_grid`, :func:`read_grid` and :func:`read_autosdf` (SDF volumes).
+
+Modules: ``load`` (dispatch, the reader registries), one reader per format (``gltf``, ``obj``,
+``ply``; ``grid`` for ``.npy``/``.npz``/AutoSDF volumes), ``mesh`` (:class:`ColoredMesh`, what
+the mesh readers share), ``mesh_sdf`` (mesh -> CSDF).
 """
 
 from __future__ import annotations
 
 from .grid import from_grid, read_autosdf, read_grid
-from .load import load
-from .mesh_io import ColoredMesh, Material, from_trimesh, load_mesh
-from .mesh_sdf import BAND, from_mesh
+from .load import GRID_READERS, MESH_READERS, MESH_SUFFIXES, load, load_mesh
+from .mesh import ColoredMesh, Material, from_trimesh
+from .mesh_sdf import from_mesh
 
 __all__ = [
-    "BAND",
+    "GRID_READERS",
+    "MESH_READERS",
+    "MESH_SUFFIXES",
     "ColoredMesh",
     "Material",
     "from_grid",

@@ -314,15 +314,3 @@ def bilinear_repeat(texture, uv):
             bot = texture[y1, x0, c] * (1 - fx) + texture[y1, x1, c] * fx
             out[n, c] = top * (1 - fy) + bot * fy
     return out
-
-
-@nb.njit(cache=True, parallel=True)
-def linear_to_srgb8(lin):
-    """Linear RGB (N, 3) float in [0, 1] (clipped) -> sRGB (N, 3) uint8 (IEC 61966-2-1)."""
-    out = np.empty(lin.shape, np.uint8)
-    for n in nb.prange(lin.shape[0]):
-        for c in range(lin.shape[1]):
-            v = min(max(np.float64(lin[n, c]), 0.0), 1.0)
-            s = v * 12.92 if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055
-            out[n, c] = np.uint8(min(max(np.rint(s * 255.0), 0.0), 255.0))
-    return out

@@ -15,10 +15,11 @@ from pathlib import Path
 import numpy as np
 
 from .._util import keyword_options
+from ..color import srgb_to_linear
 from ..csdf import CSDF, check_number, check_origin, check_voxel_size, make
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
-from .mesh_io import ColoredMesh, Material, srgb_to_linear
+from .mesh import ColoredMesh, Material
 from .mesh_sdf import check_res, from_mesh
 
 AUTOSDF_DATASET = "pc_sdf_sample"

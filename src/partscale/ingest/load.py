@@ -1,19 +1,67 @@
-"""One entry point for every supported input: dispatch on the file's content, then its suffix."""
+"""One entry point for every supported input: dispatch on the file's content, then its suffix.
+
+Readers, one module per format, are registered by suffix in :data:`MESH_READERS` (meshes ->
+:class:`ColoredMesh`) and by sniffed kind in :data:`GRID_READERS` (SDF volumes -> the keyword
+arguments of :func:`from_grid`).
+"""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from .._util import keyword_options
-from ..csdf import CSDF
+from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
+from .gltf import load_gltf
 from .grid import from_grid, read_autosdf, read_grid
-from .mesh_io import load_mesh
-from .mesh_sdf import BAND, check_res, from_mesh
+from .mesh import ColoredMesh
+from .mesh_sdf import check_res, from_mesh
+from .obj import load_obj
+from .ply import load_ply
 
 FORMATS = ".glb, .gltf, .obj, .ply (meshes); .npy, .npz, .h5/.hdf5 AutoSDF (SDF grids)"
+
+MESH_READERS: dict[str, Callable[[Path], ColoredMesh]] = {
+    ".glb": load_gltf,
+    ".gltf": load_gltf,
+    ".obj": load_obj,
+    ".ply": load_ply,
+}
+"""Mesh reader by lower-case suffix: ``(path) -> ColoredMesh`` of an existing, non-empty file."""
+MESH_SUFFIXES = tuple(MESH_READERS)
+
+GRID_READERS: dict[str, Callable[[Path], dict[str, Any]]] = {
+    "npy": read_grid,
+    "npz": read_grid,
+    "hdf5": read_autosdf,
+}
+"""SDF volume reader by :func:`sniff` kind: ``(path) -> from_grid keyword arguments``."""
+
+
+def load_mesh(path: str | os.PathLike) -> ColoredMesh:
+    """Read a coloured triangle mesh: glTF/GLB, OBJ+MTL or PLY (by suffix, :data:`MESH_READERS`).
+
+    All scene nodes are placed by their transforms. Each triangle keeps its material (base
+    colour factor and texture), its corner UVs and vertex colours, so the colour at any surface
+    point can be evaluated with :meth:`ColoredMesh.color_at`.
+
+    Raises :class:`InputError` naming the file for a missing, unreadable, corrupt or empty mesh.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: expected an existing mesh file, got no such file")
+    suffix = path.suffix.lower()
+    if suffix not in MESH_READERS:
+        raise InputError(
+            f"{path}: expected a mesh ({', '.join(MESH_SUFFIXES)}), got suffix {suffix or 'none'}"
+        )
+    if path.stat().st_size == 0:
+        raise InputError(f"{path}: expected a {suffix[1:]} mesh, got an empty file (0 bytes)")
+    return MESH_READERS[suffix](path)
 
 
 def sniff(path: Path) -> str:
@@ -35,7 +83,7 @@ def sniff(path: Path) -> str:
         return "hdf5"
     if head.startswith(b"PK") and suffix == ".npz":
         return "npz"
-    if suffix in (".glb", ".gltf", ".obj", ".ply"):
+    if suffix in MESH_READERS:
         return "mesh"  # a corrupt mesh: the mesh reader says what is wrong
     if suffix in (".npy", ".npz"):
         return suffix[1:]
@@ -66,7 +114,7 @@ def load(
     res : int
         Voxels along the object's longest side (>= 16); grids are resampled to it.
     pad : int, optional
-        Empty voxels around the object (default ``BAND + 2``).
+        Empty voxels around the object (default ``partscale.csdf.BAND_VOXELS + 2``).
     iso : float, optional
         Surface level of a grid (default 0, AutoSDF 0.02); not valid for meshes.
     colors : path, optional
@@ -83,8 +131,8 @@ def load(
     report = resolve(progress)
     kind = sniff(path)
     res = check_res(res, str(path))
-    if pad is not None and int(pad) < BAND:
-        raise InputError(f"{path}: expected --pad >= {BAND}, got {pad}")
+    if pad is not None and int(pad) < BAND_VOXELS:
+        raise InputError(f"{path}: expected --pad >= {BAND_VOXELS}, got {pad}")
     if kind == "mesh":
         if iso is not None:
             raise InputError(
@@ -96,7 +144,7 @@ def load(
         mesh = load_mesh(path)
         out = from_mesh(mesh, res=res, pad=pad, progress=scaled(progress, 0.05, 1.0))
     else:
-        args = read_autosdf(path) if kind == "hdf5" else read_grid(path)
+        args = GRID_READERS[kind](path)
         if iso is not None:
             args["iso"] = iso
         if colors is not None:

@@ -14,8 +14,8 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
    panels: inward ray to the next boundary shorter than ``2 t``), become solids of thickness
    ``2 t``, ``t = sqrt(3)/2`` voxel, so their inside voxels stay 6-connected and marching cubes
    has no holes. Thicker closed pieces keep their surface exactly (no offset).
-3. Exact unsigned distances to boundary and to sheet pieces within a band of ``BAND`` voxels
-   (numba, slabs along x in parallel, no races).
+3. Exact unsigned distances to boundary and to sheet pieces within a band of ``BAND_VOXELS``
+   voxels (:data:`partscale.csdf.BAND_VOXELS`; numba, slabs along x in parallel, no races).
 4. Sign: a voxel with no surface within one voxel has the sign of all its 6-neighbours, so the
    6-connected components of such voxels (the far field included; sheets block them as much as
    boundaries, so a cushion with an open seam still encloses its inside) share one sign, read
@@ -37,13 +37,12 @@ import numpy as np
 from scipy import ndimage
 
 from .._util import check_memory, keyword_options
-from ..csdf import CSDF, make
+from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import _kernels
-from .mesh_io import ColoredMesh
+from .mesh import ColoredMesh
 
-BAND = 3  # exact distances within this many voxels of the surface
 SUBDIVIDE = 4.0  # triangles longer than this many voxels are also probed near their corners
 SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
 SLAB = 2  # x-layers per parallel work item
@@ -432,21 +431,21 @@ def from_mesh(
         Voxels along the object's longest side (>= 16); voxels are cubic.
     pad : int, optional
         Empty voxels between the object's bounding box and the grid border (default
-        ``BAND + 2``; at least ``BAND``).
+        ``BAND_VOXELS + 2``; at least ``BAND_VOXELS``).
     progress : callable(fraction, message), optional
 
     Returns
     -------
     CSDF
-        ``sdf`` (X, Y, Z) float32 exact within ``BAND`` voxels of the surface, negative inside;
-        ``rgb`` (X, Y, Z, 3) uint8 sRGB of the nearest surface point.
+        ``sdf`` (X, Y, Z) float32 exact within ``BAND_VOXELS`` voxels of the surface, negative
+        inside; ``rgb`` (X, Y, Z, 3) uint8 sRGB of the nearest surface point.
     """
     report = resolve(progress)
     name = mesh.source or "mesh"
     res = check_res(res, name)
-    pad = BAND + 2 if pad is None else int(pad)
-    if pad < BAND:
-        raise InputError(f"{name}: expected --pad >= {BAND} (the exact band), got {pad}")
+    pad = BAND_VOXELS + 2 if pad is None else int(pad)
+    if pad < BAND_VOXELS:
+        raise InputError(f"{name}: expected --pad >= {BAND_VOXELS} (the exact band), got {pad}")
     V = np.ascontiguousarray(mesh.vertices, np.float64)
     F = np.ascontiguousarray(mesh.faces, np.int64)
     if len(F) == 0:
@@ -481,11 +480,11 @@ def from_mesh(
     sheet = np.concatenate([sheet, thin])
     tris_b = np.ascontiguousarray(sub[boundary])
     tris_s = np.ascontiguousarray(sub[sheet])
-    d2_b, id_b = _band(tris_b, origin, h, shape, BAND * h)
+    d2_b, id_b = _band(tris_b, origin, h, shape, BAND_VOXELS * h)
     d_b = np.sqrt(d2_b, out=d2_b)
     del d2_b
     report(0.3, "thickening open sheets")
-    d2_s, id_s = _band(tris_s, origin, h, shape, (BAND + 1) * h)
+    d2_s, id_s = _band(tris_s, origin, h, shape, (BAND_VOXELS + 1) * h)
     f_s = np.sqrt(d2_s, out=d2_s)
     del d2_s
 
@@ -522,7 +521,7 @@ def from_mesh(
     sdf[(sdf < 0) & (sdf > -tiny)] = -tiny
 
     report(0.65, "distances beyond the band")
-    band = np.abs(sdf) <= BAND * h
+    band = np.abs(sdf) <= BAND_VOXELS * h
     if not band.any():
         raise InputError(f"{name}: expected a surface inside the grid, got none")
     band_idx = np.flatnonzero(band)
@@ -551,7 +550,7 @@ def from_mesh(
             sign,
             # beyond the band a distance is at least the band's: guards the feature
             # transform's rare non-nearest picks from pulling values inside the band
-            BAND * h,
+            BAND_VOXELS * h,
             sdf,
             rgb,
         )
@@ -569,7 +568,7 @@ def from_mesh(
                 "open_sheet_triangles": n_open,
                 "thin_piece_triangles": n_thin,
                 "sheet_half_thickness_voxels": round(math.sqrt(3) / 2, 4),
-                "band_voxels": BAND,
+                "band_voxels": BAND_VOXELS,
             }
         ],
     }

@@ -7,10 +7,8 @@ segmented once, never per edit.
 
 from .api import DEFAULT_METHOD, METHODS, cache_key, check_method, default_cache_dir, segment
 from .concavity import concavity, hull_concavity, part_concavities
-from .labels import BAND, palette
 
 __all__ = [
-    "BAND",
     "DEFAULT_METHOD",
     "METHODS",
     "cache_key",
@@ -18,7 +16,6 @@ __all__ = [
     "concavity",
     "default_cache_dir",
     "hull_concavity",
-    "palette",
     "part_concavities",
     "segment",
 ]

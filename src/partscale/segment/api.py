@@ -117,10 +117,10 @@ def segment(
 
     Marching cubes of the CSDF (:func:`partscale.surface.to_mesh`), a decomposition of that
     surface by ``method``, then each voxel near or inside the surface takes the part of its
-    nearest surface point (voxels more than :data:`labels.BAND` voxels outside stay -1; the
-    fast method cuts the grid itself, so its inside voxels keep their piece). Parts are made
-    26-connected, touching parts whose union is convex within ``merge_tolerance`` voxels are
-    merged, and parts are numbered 0..P-1, largest first.
+    nearest surface point (voxels more than :data:`partscale.csdf.BAND_VOXELS` voxels outside
+    stay -1; the fast method cuts the grid itself, so its inside voxels keep their piece). Parts
+    are made 26-connected, touching parts whose union is convex within ``merge_tolerance`` voxels
+    are merged, and parts are numbered 0..P-1, largest first.
 
     Parameters
     ----------

@@ -13,8 +13,9 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from .._util import palette_colour, thread_map, worker_pool
-from ..csdf import CSDF
+from .._util import thread_map, worker_pool
+from ..color import palette
+from ..csdf import BAND_VOXELS, CSDF
 from .concavity import (
     Patch,
     UnionCosts,
@@ -25,16 +26,14 @@ from .concavity import (
     vertex_voxels,
 )
 
-BAND = 3.0
-"""Voxels up to this many voxels outside the surface get a part; farther ones stay -1."""
-
 _FULL = np.ones((3, 3, 3), bool)  # 26-connectivity
 
 
 def voxels_from_faces(
     csdf: CSDF, mesh, face_labels: np.ndarray, *, inside: np.ndarray | None = None
 ) -> np.ndarray:
-    """(X, Y, Z) int32 labels: the label of the nearest surface point, -1 beyond :data:`BAND`.
+    """(X, Y, Z) int32 labels: the label of the nearest surface point, -1 beyond
+    :data:`partscale.csdf.BAND_VOXELS`.
 
     Parameters
     ----------
@@ -48,7 +47,7 @@ def voxels_from_faces(
         outside then take the nearest surface point's.
     """
     centres = csdf.world_to_index(mesh.triangles_center)
-    near = csdf.sdf < BAND * csdf.voxel_size
+    near = csdf.sdf < BAND_VOXELS * csdf.voxel_size
     labels = np.full(csdf.shape, -1, np.int32)
     if inside is not None:
         solid = csdf.sdf <= 0
@@ -468,7 +467,7 @@ def merge_planar_groups(
     """
     out, _ijk, pts, vlab, nbrs = _part_graph(csdf, mesh, labels)
     sdf = csdf.sdf / csdf.voxel_size
-    # extents of the parts' inside voxels (labels reach BAND voxels into the air too)
+    # extents of the parts' inside voxels (labels reach BAND_VOXELS voxels into the air too)
     box = {
         p: np.array([[x.start for x in sl], [x.stop - 1 for x in sl]])
         for p, sl in enumerate(ndimage.find_objects(np.where(csdf.sdf <= 0, out + 1, 0)))
@@ -525,11 +524,6 @@ def _in_hull(pts: np.ndarray, eq: np.ndarray, margin: float) -> np.ndarray:  # p
                 out[i] = False
                 break
     return out
-
-
-def palette(n: int) -> list[list[int]]:
-    """``n`` distinct sRGB display colours, :func:`palette_colour` of 0..n-1."""
-    return [palette_colour(i) for i in range(n)]
 
 
 def parts_info(csdf: CSDF, mesh, labels: np.ndarray) -> list[dict]:

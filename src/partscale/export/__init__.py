@@ -1,0 +1,58 @@
+"""Export a CSDF: a coloured mesh for every tool, 3D textures for engines and volume viewers.
+
+Formats (chosen by the output's suffix, one module per format)
+--------------------------------------------------------------
+Meshes (:func:`export_mesh`, :data:`MESH_WRITERS`): marching cubes of the zero level
+(:func:`partscale.surface.to_mesh`), faces outward, world units, per-vertex colours.
+
+- ``.glb`` (``glb``): linear ``COLOR_0`` as glTF requires, normals from the SDF gradient.
+- ``.ply``, ``.obj`` (``mesh``): sRGB vertex colours; PLY also a ``parts`` vertex property.
+
+3D textures (:func:`export_texture`, :data:`TEXTURE_WRITERS`; :func:`read_texture` decodes them):
+
+- ``.raw``, ``.png`` (``textures``): RGBA with sRGB colour in RGB and signed distance in A, x
+  fastest, each with a JSON sidecar ``NAME.EXT.json``.
+- ``.nrrd`` (``nrrd``): the SDF alone for ParaView and 3D Slicer.
+
+:func:`resize_grid` (``resize``) resamples the whole grid to a preset size first (``--size``).
+"""
+
+from .resize import PRESET_SIZES, check_size, resize_grid
+from .textures import (
+    DISTANCE_BAND_VOXELS,
+    ISO_LEVEL_8BIT,
+    TEXTURE_FORMAT,
+    decode_distance_8bit,
+    encode_distance_8bit,
+    flipbook_layout,
+)
+from .write import (
+    MESH_SUFFIXES,
+    MESH_WRITERS,
+    TEXTURE_READERS,
+    TEXTURE_SUFFIXES,
+    TEXTURE_WRITERS,
+    export_mesh,
+    export_texture,
+    read_texture,
+)
+
+__all__ = [
+    "DISTANCE_BAND_VOXELS",
+    "ISO_LEVEL_8BIT",
+    "MESH_SUFFIXES",
+    "MESH_WRITERS",
+    "PRESET_SIZES",
+    "TEXTURE_FORMAT",
+    "TEXTURE_READERS",
+    "TEXTURE_SUFFIXES",
+    "TEXTURE_WRITERS",
+    "check_size",
+    "decode_distance_8bit",
+    "encode_distance_8bit",
+    "export_mesh",
+    "export_texture",
+    "flipbook_layout",
+    "read_texture",
+    "resize_grid",
+]

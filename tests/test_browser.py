@@ -27,7 +27,7 @@ from partscale import csdf as csdf_mod
 from partscale import shapes
 from partscale.edit import Edit, Recipe, apply_edit, source_coordinate, tile_count
 from partscale.errors import InputError
-from partscale.segment import palette
+from partscale.color import palette
 
 ROOT = Path(__file__).resolve().parents[1]
 WEB = ROOT / "web"

@@ -1,4 +1,4 @@
-// Part display colours: partscale's palette (partscale.segment.palette, golden-angle hues in HLS),
+// Part display colours: partscale's palette (partscale.color.palette, golden-angle hues in HLS),
 // mirrored once here; tests/test_browser.py compares the two.
 
 import { roundHalfEven } from './recipe';

@@ -11,7 +11,8 @@ from conftest import assert_bad_input
 
 import partscale
 from partscale import shapes
-from partscale._util import check_memory, keyword_options
+from partscale._memory import check_memory
+from partscale._options import keyword_options
 from partscale.csdf import load, make, save
 from partscale.errors import InputError, MemoryLimitError
 

@@ -43,7 +43,9 @@ from typing import Any
 import numba
 import numpy as np
 
-from ._util import atomic_path, check_memory, keyword_options
+from ._files import atomic_path
+from ._memory import check_memory
+from ._options import keyword_options
 from .csdf import CSDF, make
 from .errors import InputError
 from .progress import ProgressCallback, resolve

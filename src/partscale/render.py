@@ -22,7 +22,8 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from ._util import atomic_path, keyword_options
+from ._files import atomic_path
+from ._options import keyword_options
 from .csdf import CSDF
 from .errors import InputError
 from .export import linear_to_srgb, srgb_to_linear

@@ -31,7 +31,8 @@ from scipy import ndimage
 from skimage import measure
 
 from .._kernels import closest_on_triangle
-from .._util import keyword_options, thread_map
+from .._options import keyword_options
+from .._workers import thread_map
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve

@@ -17,7 +17,9 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from .._util import check_memory, keyword_options, palette_colour
+from .._memory import check_memory
+from .._options import keyword_options
+from .._util import palette_colour
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled

@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .._util import atomic_path
+from .._files import atomic_path
 from .metrics import METRICS
 
 if TYPE_CHECKING:

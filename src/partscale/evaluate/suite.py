@@ -36,7 +36,8 @@ from typing import Any
 import numpy as np
 
 from .. import csdf as csdf_mod
-from .._util import atomic_path, keyword_options, read_json
+from .._files import atomic_path, read_json
+from .._options import keyword_options
 from ..csdf import CSDF
 from ..edit.recipe import Edit
 from ..errors import InputError

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._util import keyword_options
+from .._options import keyword_options
 from ..csdf import CSDF, check_number, check_origin, check_voxel_size, make
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .._util import keyword_options
+from .._options import keyword_options
 from ..csdf import CSDF
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled

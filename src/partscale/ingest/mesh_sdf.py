@@ -36,7 +36,8 @@ import math
 import numpy as np
 from scipy import ndimage
 
-from .._util import check_memory, keyword_options
+from .._memory import check_memory
+from .._options import keyword_options
 from ..csdf import CSDF, make
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve

@@ -13,7 +13,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from .._util import palette_colour, thread_map, worker_pool
+from .._util import palette_colour
+from .._workers import thread_map, worker_pool
 from ..csdf import CSDF
 from .concavity import (
     Patch,

@@ -1,0 +1,165 @@
+"""Parallel work: a thread pool for GIL-free work, forked worker processes for the rest."""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import multiprocessing
+import os
+import signal
+import warnings
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from multiprocessing import connection as mp_connection
+
+_POOL: ThreadPoolExecutor | None = None
+
+
+def thread_map(fn: Callable, items: Iterable) -> list:
+    """``[fn(x) for x in items]`` on a thread per core, results in the order of ``items``.
+
+    For work that releases the GIL (qhull, KD-tree searches, ``nogil`` numba kernels). One pool
+    serves the whole process; ``fn`` must not call :func:`thread_map` itself (the pool could be
+    waiting on its own workers).
+    """
+    global _POOL
+    items = list(items)
+    if len(items) < 2 or (os.cpu_count() or 1) < 2:
+        return [fn(x) for x in items]
+    if _POOL is None:
+        _POOL = ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="partscale")
+    return list(_POOL.map(fn, items))
+
+
+class Workers:
+    """What :func:`worker_pool` yields: ``map`` a batch, or ``submit`` items one at a time and
+    take results with ``next_done`` as they finish.
+
+    Each worker process talks to this one over its own pipe, so a batch of a few items costs a
+    pipe round trip each, not an executor's queues and threads (about 0.2 ms against 0.8 ms
+    per batch of four). A worker gets its next item only once it has sent its last result: with
+    two in flight, both sides could block writing to a full pipe (a large mask one way, its
+    pieces the other).
+    """
+
+    def __init__(self, worker: Callable | None = None, conns: list | None = None):
+        self._worker, self._conns = worker, conns or []
+        self._todo: collections.deque = collections.deque()
+        self._busy = {c: 0 for c in self._conns}
+        self._done: collections.deque = collections.deque()
+        self._next = 0
+
+    def submit(self, item) -> int:
+        """Queue ``worker(item)``; returns its ticket (0, 1, 2, ... in submission order)."""
+        return self._submit([item])
+
+    def _submit(self, chunk: list) -> int:
+        # a chunk of items travels as one message; its result is the list of their results
+        ticket, self._next = self._next, self._next + 1
+        if not self._conns:
+            self._done.append((ticket, [self._worker(x) for x in chunk]))
+        else:
+            self._todo.append((ticket, chunk))
+            self._dispatch()
+        return ticket
+
+    def next_done(self) -> tuple[int, object]:
+        """(ticket, result) of a finished item, waiting for one; re-raises a worker's error."""
+        ticket, results = self._next_chunk()
+        return ticket, results[0]
+
+    def _next_chunk(self) -> tuple[int, list]:
+        if self._done:
+            return self._done.popleft()
+        busy = [c for c, n in self._busy.items() if n]
+        if not busy:
+            raise RuntimeError("next_done: nothing was submitted")
+        conn = mp_connection.wait(busy)[0]
+        try:
+            ticket, ok, value = conn.recv()
+        except EOFError:
+            raise RuntimeError("a worker process died (out of memory?)") from None
+        self._busy[conn] = 0
+        self._dispatch()
+        if not ok:
+            raise value
+        return ticket, value
+
+    def map(self, items: Iterable) -> list:
+        """``[worker(x) for x in items]``, in the order of ``items``."""
+        items = list(items)
+        # a few chunks per worker: fewer round trips, and still balanced
+        size = max(1, -(-len(items) // (4 * max(len(self._conns), 1))))
+        tickets = [self._submit(items[i : i + size]) for i in range(0, len(items), size)]
+        out = {}
+        while len(out) < len(tickets):
+            t, r = self._next_chunk()
+            out[t] = r
+        return [r for t in tickets for r in out[t]]
+
+    def _dispatch(self) -> None:
+        for conn in self._conns:
+            if self._todo and not self._busy[conn]:
+                conn.send(self._todo.popleft())
+                self._busy[conn] = 1
+
+
+def _serve(conn, factory: Callable, args: tuple) -> None:  # pragma: no cover - in a worker
+    """A worker process's loop: (ticket, item) in, (ticket, ok, result or error) out."""
+    # Ctrl-C reaches the whole process group: the parent stops its workers itself
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    worker = factory(*args)
+    while (msg := conn.recv()) is not None:
+        ticket, chunk = msg
+        try:
+            conn.send((ticket, True, [worker(x) for x in chunk]))
+        except Exception as exc:  # the parent re-raises it
+            conn.send((ticket, False, exc))
+
+
+@contextlib.contextmanager
+def worker_pool(factory: Callable, *args) -> Iterator[Workers]:
+    """Yield :class:`Workers` running ``worker = factory(*args)`` on a process per core, the
+    worker made once in each process.
+
+    For work that holds the GIL too much for :func:`thread_map` (the Python around qhull and
+    tree searches scales about 1.3x on two threads, 1.9x on two processes). Workers are forked,
+    so ``args`` (grids, point buffers) are inherited without copying or pickling; items and
+    results are pickled, so keep them small. Where fork is unavailable or there is one core,
+    one ``worker`` runs in this process, item by item as submitted.
+    """
+    cores = os.cpu_count() or 1
+    if cores < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        yield Workers(factory(*args))
+        return
+    ctx = multiprocessing.get_context("fork")
+    procs, conns = [], []
+    try:
+        for _ in range(cores):
+            here, there = ctx.Pipe()
+            proc = ctx.Process(target=_serve, args=(there, factory, args), daemon=True)
+            with warnings.catch_warnings():
+                # Python 3.12+ warns on any fork of a process with threads (our thread pool,
+                # numba's). The workers only compute on inherited arrays and talk over their
+                # pipe; they take no lock another thread could hold at the fork.
+                warnings.filterwarnings(
+                    "ignore",
+                    message=r".*fork\(\) may lead to deadlocks",
+                    category=DeprecationWarning,
+                )
+                proc.start()
+            there.close()
+            procs.append(proc)
+            conns.append(here)
+        yield Workers(conns=conns)
+    finally:
+        for conn in conns:
+            with contextlib.suppress(OSError):
+                conn.send(None)
+        for proc in procs:
+            proc.join(timeout=5)
+            if proc.is_alive():
+                proc.terminate()
+                proc.join()
+        for conn in conns:
+            conn.close()

@@ -195,9 +195,6 @@ def summary_markdown(result: SuiteResult) -> str:
         lines += ["## Entries that could not run", ""]
         lines += [f"- {o.error}" for o in objs if o.error]
         lines.append("")
-    notes = [o.note for o in objs if o.note]
-    if notes:
-        lines += ["Notes:", "", *[f"- {n}" for n in notes], ""]
     metric_keys = list(CRITERIA)
     lines += [
         "## Best mode per metric",

@@ -23,7 +23,6 @@ from .mesh_sdf import check_res, from_mesh
 
 AUTOSDF_DATASET = "pc_sdf_sample"
 AUTOSDF_ISO = 0.02
-AUTOSDF_CLAMP = 0.2
 
 
 def _check_volume(volume, name: str) -> np.ndarray:

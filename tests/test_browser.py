@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import shapes
 from partscale.edit import Recipe, source_coordinate
 
@@ -54,7 +54,7 @@ def find_tools() -> tuple[str, str]:
     return node, chromium
 
 
-def table() -> csdf_mod.CSDF:
+def table() -> partscale.CSDF:
     """A table: top and four legs, coloured by height and position (exact SDF)."""
 
     def colour(p):
@@ -221,7 +221,7 @@ def test_typescript_remap_matches_source_coordinate(tmp_path):
 def test_editor_end_to_end(tmp_path):
     node, chromium = find_tools()
     path = tmp_path / "table.csdf.npz"
-    csdf_mod.save(table(), path)
+    partscale.save(table(), path)
     cases = remap_cases()
     update = os.environ.get("PARTSCALE_UPDATE_REFERENCE") == "1"
     with Server(path) as server:
@@ -284,7 +284,7 @@ def test_editor_end_to_end(tmp_path):
 
         # -- Undo: the very object the server started with, and the page shows it again
         assert session.current is original
-        assert np.array_equal(session.current.sdf, csdf_mod.load(path).sdf)
+        assert np.array_equal(session.current.sdf, partscale.load(path).sdf)
         assert r["undone"]["can_redo"] and not r["undone"]["can_undo"]
         assert r["undoneDiff"] <= 0.01 * total
         assert abs(session.redo_stack[-1].surface_bounds()[1][0] - 1.6) <= 0.25 * H

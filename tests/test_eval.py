@@ -262,10 +262,10 @@ def test_dots_inside_a_name_are_accepted(name):
 
 
 def test_one_entrys_bad_name_or_unwritable_figure_fails_that_entry_only(tmp_path):
-    from partscale import csdf as csdf_mod
+    import partscale
     from partscale import shapes
 
-    csdf_mod.save(shapes.box((0, 0, 0), (1, 0.5, 0.4), voxel_size=0.05), tmp_path / "box.csdf.npz")
+    partscale.save(shapes.box((0, 0, 0), (1, 0.5, 0.4), voxel_size=0.05), tmp_path / "box.csdf.npz")
     out = tmp_path / "out"
     (out / "blocked.png").mkdir(parents=True)  # the figure cannot be written there
     objects = [{"name": n, "path": "box.csdf.npz", "edit": EDIT} for n in ("../escaped", "blocked")]

@@ -7,7 +7,7 @@ import pytest
 from conftest import assert_bad_input
 from PIL import Image
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import render, shapes
 from partscale.errors import InputError
 
@@ -233,7 +233,7 @@ def test_render_refuses_bad_options(sphere):
 # -- CLI -------------------------------------------------------------------------------------
 @pytest.fixture
 def sphere_file(sphere, tmp_path):
-    return csdf_mod.save(sphere, tmp_path / "s.csdf.npz")
+    return partscale.save(sphere, tmp_path / "s.csdf.npz")
 
 
 def test_cli_render_writes_a_png_of_the_asked_size(cli, sphere_file, tmp_path):
@@ -308,7 +308,7 @@ def test_real_chair_silhouette_matches_its_bounds():
 
 def test_cli_render_parts_uses_part_colours(cli, tmp_path):
     info = [{"index": 0, "color": [20, 200, 40]}, {"index": 1, "color": [200, 20, 160]}]
-    path = csdf_mod.save(two_part_boxes(info), tmp_path / "two.csdf.npz")
+    path = partscale.save(two_part_boxes(info), tmp_path / "two.csdf.npz")
     out = tmp_path / "parts.png"
     proc = cli("render", path, "-o", out, "--parts", "--view", "front", "--size", "120")
     assert proc.returncode == 0, proc.stderr

@@ -54,7 +54,7 @@ def table_128() -> partscale.CSDF:
 
 
 class EditorProcess:
-    """``partscale edit PATH --no-browser`` in a subprocess, as a user runs it."""
+    """``partscale editor PATH --no-browser`` in a subprocess, as a user runs it."""
 
     def __init__(self, path: Path):
         import os
@@ -63,7 +63,7 @@ class EditorProcess:
         # the same partscale this script imported
         env["PYTHONPATH"] = str(Path(partscale.__file__).resolve().parents[1])
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "partscale", "edit", str(path), "--no-browser"],
+            [sys.executable, "-m", "partscale", "editor", str(path), "--no-browser"],
             stderr=subprocess.PIPE,
             text=True,
             env=env,

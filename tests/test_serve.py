@@ -460,10 +460,21 @@ def test_oversized_and_foreign_requests_are_refused(client):
 def test_missing_or_invalid_object_is_refused(tmp_path, cli):
     from conftest import assert_bad_input
 
-    assert_bad_input(cli("edit", tmp_path / "nope.csdf.npz", "--no-browser"), "nope.csdf.npz")
+    assert_bad_input(cli("editor", tmp_path / "nope.csdf.npz", "--no-browser"), "nope.csdf.npz")
     bad = tmp_path / "bad.csdf.npz"
     bad.write_bytes(b"not a zip")
-    assert_bad_input(cli("edit", bad, "--no-browser"), "bad.csdf.npz")
+    assert_bad_input(cli("editor", bad, "--no-browser"), "bad.csdf.npz")
+
+
+def test_the_old_command_name_still_opens_the_editor_but_is_not_listed(tmp_path, cli):
+    from conftest import assert_bad_input
+
+    # same command under its first name: the same refusal, naming the file
+    assert_bad_input(cli("edit", tmp_path / "nope.csdf.npz", "--no-browser"), "nope.csdf.npz")
+    listed = cli("--help", check=True).stdout
+    # a command's row starts with its name (after the table's border)
+    assert re.search(r"^\W*editor\s", listed, re.M), listed
+    assert not re.search(r"^\W*edit\s", listed, re.M), listed
 
 
 def test_busy_port_and_foreign_address_are_refused(box_file, cli):
@@ -473,10 +484,10 @@ def test_busy_port_and_foreign_address_are_refused(box_file, cli):
         s.bind(("127.0.0.1", 0))
         s.listen()
         port = s.getsockname()[1]
-        proc = cli("edit", box_file, "--no-browser", "--port", str(port))
+        proc = cli("editor", box_file, "--no-browser", "--port", str(port))
     assert_bad_input(proc, "--port", str(port))
     # TEST-NET-3: never an address of this machine
-    assert_bad_input(cli("edit", box_file, "--no-browser", "--host", "203.0.113.7"), "--host")
+    assert_bad_input(cli("editor", box_file, "--no-browser", "--host", "203.0.113.7"), "--host")
 
 
 # -- the command ------------------------------------------------------------------------------
@@ -484,7 +495,7 @@ def _start(args: list[str]) -> tuple[subprocess.Popen, str, list[str]]:
     env = dict(os.environ)
     env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "partscale", "edit", *args, "--no-browser"],
+        [sys.executable, "-m", "partscale", "editor", *args, "--no-browser"],
         stderr=subprocess.PIPE,
         stdout=subprocess.DEVNULL,
         text=True,

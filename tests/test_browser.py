@@ -23,11 +23,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import shapes
+from partscale.color import palette
 from partscale.edit import Edit, Recipe, apply_edit, source_coordinate, tile_count
 from partscale.errors import InputError
-from partscale.color import palette
 
 ROOT = Path(__file__).resolve().parents[1]
 WEB = ROOT / "web"
@@ -58,7 +58,7 @@ def find_tools() -> tuple[str, str]:
     return node, chromium
 
 
-def table() -> csdf_mod.CSDF:
+def table() -> partscale.CSDF:
     """A table: top and four legs, coloured by height and position (exact SDF)."""
 
     def colour(p):
@@ -348,7 +348,7 @@ def test_typescript_zone_rules_match_apply_edit(tmp_path):
 def test_editor_end_to_end(tmp_path):
     node, chromium = find_tools()
     path = tmp_path / "table.csdf.npz"
-    csdf_mod.save(table(), path)
+    partscale.save(table(), path)
     cases = remap_cases()
     update = os.environ.get("PARTSCALE_UPDATE_REFERENCE") == "1"
     with Server(path) as server:
@@ -411,7 +411,7 @@ def test_editor_end_to_end(tmp_path):
 
         # -- Undo: the very object the server started with, and the page shows it again
         assert session.current is original
-        assert np.array_equal(session.current.sdf, csdf_mod.load(path).sdf)
+        assert np.array_equal(session.current.sdf, partscale.load(path).sdf)
         assert r["undone"]["can_redo"] and not r["undone"]["can_undo"]
         assert r["undoneDiff"] <= 0.01 * total
         assert abs(session.redo_stack[-1].surface_bounds()[1][0] - 1.6) <= 0.25 * H

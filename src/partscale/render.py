@@ -21,7 +21,8 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from ._util import atomic_path, keyword_options
+from ._files import atomic_path
+from ._options import keyword_options
 from .color import linear_to_srgb, palette_colour, srgb8_to_linear
 from .csdf import CSDF
 from .errors import InputError

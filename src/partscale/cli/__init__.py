@@ -14,7 +14,7 @@ import typer
 
 from ..errors import InputError
 from . import _common
-from .edit import edit
+from .editor import editor
 from .eval import eval_suite
 from .export import export
 from .import_ import import_
@@ -49,7 +49,9 @@ app.command("segment")(segment)
 app.command("scale")(scale)
 app.command("export")(export)
 app.command("render")(render)
-app.command("edit")(edit)
+app.command("editor")(editor)
+# the editor's first name, kept working; hidden since `edit` reads as the resizing stage
+app.command("edit", hidden=True)(editor)
 app.command("eval")(eval_suite)
 
 

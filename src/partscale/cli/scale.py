@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from .. import csdf as csdf_mod
+from ..csdf import SUFFIX, load, save
 from ..errors import InputError
 from . import _common
 
@@ -33,10 +33,9 @@ def scale(
 ) -> None:
     """Resize a zone between two planes: stretch it, tile it, or scale the whole object."""
     # The edit stage pulls in numba, scipy and scikit-image: load it only when a command runs.
-    from ..edit import AXES, MODES, Edit, Recipe, apply_recipe
-    from ..edit.recipe import parse_position
+    from ..edit import AXES, MODES, Edit, Recipe, apply_recipe, parse_position
 
-    _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
+    _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     if recipe is not None:
         given = [
             n
@@ -70,8 +69,8 @@ def scale(
                 ),
             )
         )
-    c = csdf_mod.load(src)
+    c = load(src)
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
-    csdf_mod.save(out, output)
+    save(out, output)
     _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")

@@ -27,7 +27,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .._util import read_json
+from .._files import read_json
 from ..errors import InputError
 
 AXES = ("x", "y", "z")

@@ -11,7 +11,7 @@ Public API
   (to the grid's marching-cubes surface) near the surface, on its own.
 - :func:`recipe_from_history` ``(csdf, *, after=None) -> Recipe``: the replayable recipe.
 - :class:`Edit`, :class:`Recipe`, :data:`JSON_SCHEMA`, :func:`source_coordinate`,
-  :func:`tile_count`: the recipe schema and the 1D maps the web editor's shader shares.
+  :func:`forward_coordinate`, :func:`tile_count`: the recipe schema and the 1D maps the web editor's shader shares.
 
 Semantics
 ---------
@@ -35,7 +35,16 @@ Semantics
   voxel (near the edges and corners of an axis-aligned box sampled off the grid).
 """
 
-from .recipe import AXES, JSON_SCHEMA, MODES, Edit, Recipe, source_coordinate, tile_count
+from .recipe import (
+    AXES,
+    JSON_SCHEMA,
+    MODES,
+    Edit,
+    Recipe,
+    forward_coordinate,
+    source_coordinate,
+    tile_count,
+)
 from .reevaluate import BAND_VOXELS, reevaluate
 from .resample import SEAM_VOXELS
 from .scale import apply_edit, apply_recipe, naive_edit, recipe_from_history, scale
@@ -50,6 +59,7 @@ __all__ = [
     "Recipe",
     "apply_edit",
     "apply_recipe",
+    "forward_coordinate",
     "naive_edit",
     "recipe_from_history",
     "reevaluate",

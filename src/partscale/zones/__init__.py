@@ -1,5 +1,4 @@
-"""Zones that find themselves: suggested zones, snapping and fit-to-size (between segment and edit).
-"""
+"""Zones that find themselves: suggested zones, snapping and fit-to-size (between segment and edit)."""
 
 from .profile import Profile, profile
 from .suggest import Candidate, axis_candidates, suggest

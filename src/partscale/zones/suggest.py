@@ -141,7 +141,7 @@ def find_repeats(p: Profile) -> list[_Repeat]:
     err = p.shifted_distance(layers[None, :], shifts[:, None])  # (S, N)
     # repeats drift by up to JITTER between copies (hand-placed shelves): a layer matches if a
     # layer within JITTER of the shifted position does
-    w = int(round(JITTER / SHIFT_STEP))
+    w = round(JITTER / SHIFT_STEP)
     loose = ndimage.minimum_filter1d(err, 2 * w + 1, axis=0, mode="nearest")
     found: list[_Repeat] = []
     for si, s in enumerate(shifts):

@@ -25,6 +25,9 @@ from .profile import profile
 from .suggest import AXES, Candidate, axis_candidates
 from .units import parse_size
 
+#: Largest relative change of the tiled copies accepted instead of stretching a gap inside the
+#: repeat (which would make one spacing uneven).
+COPY_TOLERANCE = 0.05
 #: A slab shrinks to no less than this many voxels.
 MIN_SLAB_VOXELS = 2
 
@@ -115,7 +118,11 @@ def fit_axis(csdf: CSDF, axis: int, target: float, *, prof=None) -> tuple[list[E
         # slabs outside the whole repeat first (a gap inside it would make one spacing uneven)
         region = tiles[0].region if tile_zone is not None else None
         free = [c for c in slabs if _disjoint(c, region)]
-        free += [c for c in slabs if _disjoint(c, tile_zone) and not _disjoint(c, region)]
+        if not free and tile_zone is not None:
+            # only gaps inside the repeat: one uneven gap is worse than copies a little off
+            copies_len = float(edits[0].dest) - float(edits[0].start)
+            if abs(left) > COPY_TOLERANCE * copies_len:
+                free = [c for c in slabs if _disjoint(c, tile_zone)]
         st, rest = _stretch_edits(free, left, h, name)
         for ed in st:
             a, b = float(ed.start), float(ed.end)

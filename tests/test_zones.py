@@ -381,7 +381,9 @@ def test_stretch_candidates_on_the_table_and_the_chair(real):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["bookcase", "railing"])
 def test_snapped_naive_zone_gives_the_suite_surface(real, name):
-    suite = {o["path"]: o for o in json.load(open(ROOT / "eval" / "suite.json"))["objects"]}
+    suite = {
+        o["path"]: o for o in json.loads((ROOT / "eval" / "suite.json").read_text())["objects"]
+    }
     rel, ax, _ = PERIODS[name]
     c = real(rel)
     given = suite[rel]["edit"]
@@ -398,7 +400,7 @@ def test_snapped_naive_zone_gives_the_suite_surface(real, name):
 
 @pytest.mark.slow
 def test_fit_hits_every_suite_length(real):
-    for o in json.load(open(ROOT / "eval" / "suite.json"))["objects"]:
+    for o in json.loads((ROOT / "eval" / "suite.json").read_text())["objects"]:
         c = real(o["path"])
         ed = Edit.parse({**o["edit"], "mode": "stretch"})
         ax = ed.axis_index

@@ -17,11 +17,13 @@ from . import _common
 from .editor import editor
 from .eval import eval_suite
 from .export import export
+from .fit import fit
 from .import_ import import_
 from .info import info
 from .render import render
 from .scale import scale
 from .segment import segment
+from .suggest import suggest
 
 app = typer.Typer(
     name="partscale",
@@ -46,7 +48,9 @@ def _root(
 app.command("import")(import_)
 app.command("info")(info)
 app.command("segment")(segment)
+app.command("suggest")(suggest)
 app.command("scale")(scale)
+app.command("fit")(fit)
 app.command("export")(export)
 app.command("render")(render)
 app.command("editor")(editor)

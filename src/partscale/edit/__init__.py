@@ -14,8 +14,8 @@ Public API
   units and snapped to whole voxels, as :func:`apply_edit` performs it (:class:`ResolvedEdit`
   also maps coordinates across the edit and lists its seams).
 - :class:`Edit`, :class:`Recipe`, :data:`JSON_SCHEMA`, :func:`parse_position`,
-  :func:`source_coordinate`, :func:`tile_count`: the recipe schema and the 1D maps the web
-  editor's shader shares.
+  :func:`source_coordinate`, :func:`forward_coordinate`, :func:`tile_count`: the recipe schema
+  and the 1D maps the web editor's shader shares.
 
 Semantics
 ---------
@@ -46,6 +46,7 @@ from .recipe import (
     MODES,
     Edit,
     Recipe,
+    forward_coordinate,
     parse_position,
     source_coordinate,
     tile_count,
@@ -65,6 +66,7 @@ __all__ = [
     "ResolvedEdit",
     "apply_edit",
     "apply_recipe",
+    "forward_coordinate",
     "naive_edit",
     "parse_position",
     "recipe_from_history",

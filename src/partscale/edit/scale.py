@@ -21,7 +21,7 @@ from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from .parts import renumber_copies, update_parts_info
-from .recipe import AXES, Edit, Recipe
+from .recipe import AXES, Edit, Recipe, forward_coordinate, source_coordinate, tile_count
 from .reevaluate import recompute_mask, reevaluate_arrays
 from .resample import Plan, apply_plan, lerp_layers, make_plan
 from .resolved import ResolvedEdit, resolve_edit
@@ -183,6 +183,16 @@ def apply_edit(
     :func:`~partscale.edit.resample.make_plan`); :func:`naive_edit` concatenates without
     blending.
     """
+    return _apply_edit(csdf, edit, progress=progress)
+
+
+def _apply_edit(
+    csdf: CSDF,
+    edit: Edit | dict[str, Any],
+    *,
+    progress: ProgressCallback | None = None,
+    record: dict[str, Any] | None = None,
+) -> CSDF:
     report = resolve(progress)
     edit = _as_edit(edit)
     r = resolve_edit(csdf, edit)
@@ -192,13 +202,11 @@ def apply_edit(
     meta = _copy.deepcopy(csdf.meta)
     if isinstance(meta.get("parts_info"), list):
         update_parts_info(meta, done.parts, r, done.scale, done.copy_of)
-    out = csdf.with_history(
-        _history_entry(csdf, edit, r, done, "scale"),
-        sdf=done.sdf,
-        rgb=done.rgb,
-        parts=done.parts,
-        meta=meta,
-    )
+    entry = _history_entry(csdf, edit, r, done, "scale")
+    if edit.mode == "global":  # what its plane map needs (recipe coordinates)
+        entry.update(lo=r.lo, hi=r.hi)
+    entry.update(record or {})
+    out = csdf.with_history(entry, sdf=done.sdf, rgb=done.rgb, parts=done.parts, meta=meta)
     report(1.0, "done")
     return out
 
@@ -210,13 +218,42 @@ def apply_recipe(
     *,
     progress: ProgressCallback | None = None,
 ) -> CSDF:
-    """Apply every edit of ``recipe`` in order, each to the previous result."""
+    """Apply every edit of ``recipe`` in order, each to the previous result.
+
+    All positions refer to ``csdf`` as given (see :mod:`partscale.edit.recipe`): edit ``k``'s
+    planes are carried through the edits before it on the same axis
+    (:func:`~partscale.edit.forward_coordinate`) and its destination keeps its change. Each
+    history entry records the edit as applied (``edit``, world units on the object it applied
+    to), as given (``given``), and on the recipe's input (``input``, world units) with its
+    place in the recipe (``recipe_step``).
+    """
     if not isinstance(recipe, Recipe):
         recipe = Recipe.parse(recipe)
     n = len(recipe.edits)
+    bounds = csdf.surface_bounds() if n else None
+    applied: list[tuple[int, dict[str, Any]]] = []  # (axis, forward-map arguments)
     out = csdf
     for i, e in enumerate(recipe.edits):
-        out = apply_edit(out, e, progress=scaled(progress, i / n, (i + 1) / n))
+        ax = e.axis_index
+        s, en, d = e.resolve(float(bounds[0, ax]), float(bounds[1, ax]))
+        planes = np.array([s, en], dtype=np.float64)
+        for a, kw in applied:
+            if a == ax:
+                planes = forward_coordinate(planes, **kw)
+        s2, e2 = float(planes[0]), float(planes[1])
+        d2 = e2 + (d - en)
+        step = Edit(e.axis, s2, e2, d2, e.mode)
+        record = {
+            "given": e.to_json(),
+            "input": {"zone": [s, en], "to": d},
+            "recipe_step": i,
+        }
+        out = _apply_edit(out, step, progress=scaled(progress, i / n, (i + 1) / n), record=record)
+        h = out.meta["history"][-1]
+        kw = {"mode": e.mode, "start": s2, "end": e2, "dest": h["to_snapped"]}
+        if e.mode == "global":
+            kw.update(lo=h["lo"], hi=h["hi"])
+        applied.append((ax, kw))
     return out
 
 
@@ -258,18 +295,75 @@ def naive_edit(csdf: CSDF, edit: Edit | dict[str, Any]) -> CSDF:
     )
 
 
+def _preimage(y: float, kw: dict[str, Any]) -> float:
+    """A source position whose plane lands exactly on ``y`` after the edit ``kw`` (or nearest)."""
+    if kw["mode"] == "global":
+        lo, hi = kw["lo"], kw["hi"]
+        x = lo + (y - lo) / ((hi - lo + kw["dest"] - kw["end"]) / (hi - lo))
+    elif y <= kw["start"]:
+        return y
+    elif y >= kw["dest"]:
+        x = y - (kw["dest"] - kw["end"])
+    else:  # inside the zone: through the first copy's (or the stretch's) scale
+        x = float(source_coordinate(np.array([y]), **{**kw, "mode": "stretch"})[0])
+        if kw["mode"] == "tile":
+            n = tile_count(kw["end"] - kw["start"], kw["dest"] - kw["start"])
+            x = kw["start"] + (x - kw["start"]) * n
+    # floating point: a neighbour within a few ulps that maps back exactly, so replay is exact
+    cand, lo_c, hi_c = [x], x, x
+    for _ in range(8):
+        lo_c, hi_c = float(np.nextafter(lo_c, -np.inf)), float(np.nextafter(hi_c, np.inf))
+        cand += [lo_c, hi_c]
+    for c in cand:
+        if float(forward_coordinate(np.array([c]), **kw)[0]) == y:
+            return c
+    return x
+
+
 def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
     """The recipe of the scale edits recorded in ``csdf.meta['history']`` (world units).
 
     ``apply_recipe(original, recipe_from_history(result, after=original))`` reproduces ``result``
-    bit for bit. ``after``: skip the history entries ``after`` already had.
+    bit for bit. ``after``: skip the history entries ``after`` already had. Positions are on the
+    original (recipe coordinates, see :mod:`partscale.edit.recipe`): edits recorded by separate
+    runs are carried back through the earlier ones (exactly wherever floating point allows).
     """
     hist = csdf.meta.get("history", [])
     if after is not None:
         hist = hist[len(after.meta.get("history", [])) :]
-    edits = [Edit.parse(h["edit"]) for h in hist if isinstance(h, dict) and h.get("op") == "scale"]
-    if not edits:
+    entries = [h for h in hist if isinstance(h, dict) and h.get("op") == "scale"]
+    if not entries:
         raise InputError("history: expected at least one scale edit, got none")
+    edits: list[Edit] = []
+    earlier: list[tuple[int, dict[str, Any]]] = []  # all edits before the current run
+    run: list[tuple[int, dict[str, Any]]] = []  # edits of the current run
+    for h in entries:
+        applied = Edit.parse(h["edit"])
+        ax = applied.axis_index
+        if h.get("recipe_step", 0) == 0:
+            earlier += run
+            run = []
+        if "input" in h:
+            s, e = h["input"]["zone"]
+            d = h["input"]["to"]
+        else:  # recorded on the object it applied to (a single edit)
+            s, e, d = applied.resolve(0.0, 1.0)
+        # from this run's input back to the original, through every earlier run's edits
+        for a, kw in reversed(earlier):
+            if a == ax:
+                s0, e0 = _preimage(s, kw), _preimage(e, kw)
+                d = e0 + (d - e)
+                s, e = s0, e0
+        edits.append(Edit(applied.axis, s, e, d, applied.mode))
+        kw = {
+            "mode": applied.mode,
+            "start": float(h["edit"]["zone"][0]),
+            "end": float(h["edit"]["zone"][1]),
+            "dest": float(h["to_snapped"]),
+        }
+        if applied.mode == "global":
+            kw.update(lo=float(h.get("lo", 0.0)), hi=float(h.get("hi", 1.0)))
+        run.append((ax, kw))
     return Recipe(tuple(edits))
 
 

@@ -257,15 +257,13 @@ def assign_names(items: Iterable[Input]) -> list[Input]:
     for n, idx in groups.items():
         if len(idx) < 2 and n not in explicit:
             continue
-        parts = [items[i].path.parent.parts for i in idx]
-        depth = 1
-        while True:
-            cand = ["__".join([*p[len(p) - depth :], n]) for p in parts]
-            if len(set(cand)) == len(cand) or depth >= max(len(p) for p in parts):
-                break
-            depth += 1
-        for i, c in zip(idx, cand, strict=True):
-            names[i] = c
+        for i in idx:
+            mine = items[i].path.parent
+            others = [items[j].path.parent.parts for j in idx if items[j].path.parent != mine]
+            p, d = mine.parts, 1
+            while d < len(p) and any(o[-d:] == p[-d:] for o in others):
+                d += 1
+            names[i] = "__".join([*p[-d:], n])
     counts = Counter(names)
     if len(counts) != len(names):  # same folder and stem, different suffixes
         names = [

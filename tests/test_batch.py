@@ -313,3 +313,13 @@ def test_ray_engine_matches_local_bit_for_bit(tmp_path):
     a = _stable(read_status(tmp_path / "local" / "status.csv"))
     b = _stable(read_status(tmp_path / "ray" / "status.csv"))
     assert a == b and len(a) == 2
+
+
+def test_segment_and_render_values_may_be_left_out():
+    from partscale.cli.batch import optional_values
+
+    argv = ["batch", "--segment", "data", "-o", "o", "--render"]
+    assert optional_values(argv) == ["batch", "--segment=fast", "data", "-o", "o", "--render=iso"]
+    argv = ["batch", "--segment", "coacd", "--render", "top", "data", "-o", "o"]
+    assert optional_values(argv) == argv
+    assert optional_values(["scale", "--render"]) == ["scale", "--render"]

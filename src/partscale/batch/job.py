@@ -63,10 +63,8 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
         res = int(merged.get("res", 128))
     except (TypeError, ValueError):
         raise InputError(f"{where}: res: expected an integer, got {merged.get('res')!r}") from None
-    if isinstance(merged.get("res"), bool) or not 16 <= res <= 4096:
-        raise InputError(
-            f"{where}: res: expected an integer in [16, 4096], got {merged.get('res')!r}"
-        )
+    if isinstance(merged.get("res"), bool) or res < 16:
+        raise InputError(f"{where}: res: expected an integer >= 16, got {merged.get('res')!r}")
 
     seg = merged.get("segment")
     if isinstance(seg, bool):

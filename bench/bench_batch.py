@@ -39,6 +39,8 @@ def one(label, manifest, outdir, recipe, res, **kw):
         memory="3GiB",
         **kw,
     )
+    if r.interrupted:
+        sys.exit(130)
     rows = read_status(outdir / "status.csv")
     peaks = [float(x["peak_memory_mib"]) for x in rows.values() if x["peak_memory_mib"]]
     secs = [float(x["seconds"]) for x in rows.values() if x["seconds"]]

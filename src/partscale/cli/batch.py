@@ -180,6 +180,7 @@ def batch(
             retry_failed=retry_failed,
             progress=bar,
         )
+
     def say(line: str) -> None:
         sys.stderr.write(line + "\n")  # unwrapped: rich would wrap long paths
 

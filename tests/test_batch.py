@@ -152,6 +152,14 @@ def test_manifests_csv_and_jsonl(tmp_path):
     )
     with pytest.raises(InputError, match="unique manifest names"):
         discover([dup])
+    twice = tmp_path / "twice.jsonl"
+    twice.write_text(
+        json.dumps({"path": str(table), "name": "low", "res": 32})
+        + "\n"
+        + json.dumps({"path": str(table), "name": "high", "res": 64})
+        + "\n"
+    )
+    assert sorted(it.name for it in discover([twice, table])) == ["high", "low", "table"]
 
 
 def test_shards_partition_exactly():

@@ -135,14 +135,15 @@ def discover(sources: Sequence[str | Path], *, exclude: Path | None = None) -> l
     ``path`` key per line; other columns: ``name`` and :data:`OPTION_KEYS`).
 
     A file that is some other input's companion (a glTF's ``.bin``, an OBJ's ``.mtl``) is not an
-    input of its own. Inputs are sorted by path, each path once, and named by :func:`assign_names`.
+    input of its own. Inputs are sorted by path, each path once (or once per manifest ``name``),
+    and named by :func:`assign_names`.
     Files under ``exclude`` (the output folder) are skipped when searching folders.
 
     Raises :class:`InputError` for a missing source, a folder without inputs, a bad manifest.
     """
     if not sources:
         raise InputError("batch: expected at least one input (file, folder or manifest), got none")
-    found: dict[Path, Input] = {}
+    found: dict[tuple[Path, str], Input] = {}
     ex = exclude.resolve() if exclude is not None else None
     for src in sources:
         p = Path(src)
@@ -167,8 +168,9 @@ def discover(sources: Sequence[str | Path], *, exclude: Path | None = None) -> l
         else:
             raise InputError(f"{p}: expected an input file, folder or manifest, got no such path")
         for it in items:
-            found.setdefault(it.path, it)
-    return assign_names(sorted(found.values(), key=lambda it: str(it.path)))
+            # a manifest may list one file twice under two names (two resolutions, say)
+            found.setdefault((it.path, it.name), it)
+    return assign_names(sorted(found.values(), key=lambda it: (str(it.path), it.name)))
 
 
 def _under(path: Path, folder: Path | None) -> bool:

@@ -14,6 +14,7 @@ import typer
 
 from ..errors import InputError
 from . import _common
+from .batch import batch, optional_values
 from .editor import editor
 from .eval import eval_suite
 from .export import export
@@ -57,6 +58,7 @@ app.command("editor")(editor)
 # the editor's first name, kept working; hidden since `edit` reads as the resizing stage
 app.command("edit", hidden=True)(editor)
 app.command("eval")(eval_suite)
+app.command("batch")(batch)
 
 
 def _click_modules() -> list:
@@ -80,7 +82,8 @@ def main(argv: list[str] | None = None) -> None:
     aborts = tuple(m.Abort for m in mods if hasattr(m, "Abort"))
     try:
         # Outside standalone mode click returns a command's exit code instead of exiting.
-        code = app(args=argv, standalone_mode=False)
+        args = optional_values(list(sys.argv[1:] if argv is None else argv))
+        code = app(args=args, standalone_mode=False)
     except InputError as exc:
         if _common.is_verbose():
             raise

@@ -25,6 +25,7 @@ import trimesh
 
 import partscale
 from partscale import shapes
+from partscale import zones as zones_mod
 from partscale.color import palette
 from partscale.edit import (
     Edit,
@@ -48,6 +49,9 @@ LEGS = [((x, 0.0, z), (x + 0.08, 0.7, z + 0.08)) for x in (0.05, 1.07) for z in 
 PART_COLOURS = [[230, 80, 80], [80, 200, 90], [70, 110, 230], [230, 200, 60], [180, 90, 220]]
 ZONE = {"axis": "x", "mode": "stretch", "start": 0.4, "end": 0.8, "dest": 1.2}
 ZONE2 = {"axis": "y", "mode": "stretch", "start": 0.2, "end": 0.5, "dest": 0.7}
+# a stretch zone over the left legs: snapping moves it into the constant slab between them
+SNAP_ZONE = {"axis": "x", "mode": "stretch", "start": 0.05, "end": 0.5, "dest": 0.6}
+FIT_SIZE = ["+20cm", "=", "="]
 
 
 def find_tools() -> tuple[str, str]:
@@ -411,6 +415,7 @@ def test_editor_end_to_end(tmp_path):
             remapCases=cases,
             zone=ZONE,
             zone2=ZONE2,
+            features={"snapZone": SNAP_ZONE, "fitSize": FIT_SIZE},
         )
         # -- loads cleanly and draws the object like the reference (pixelmatch 0.1, <= 1 %)
         assert r["errors"] == [], r["errors"]
@@ -455,13 +460,18 @@ def test_editor_end_to_end(tmp_path):
         assert abs(hi[0] - 1.6) <= 0.25 * H and abs(lo[0]) <= 0.25 * H
         np.testing.assert_allclose(hi[1:], TOP[1][1:], atol=0.25 * H)
         assert r["applied"]["can_undo"]
+        # the zone stays where it was (its destination at its end: the object has the change)
+        assert r["zonesAfterApply"] == [{**ZONE, "dest": ZONE["end"]}]
 
         # -- Undo: the very object the server started with, and the page shows it again
         assert session.current is original
         assert np.array_equal(session.current.sdf, partscale.load(path).sdf)
         assert r["undone"]["can_redo"] and not r["undone"]["can_undo"]
+        # the zone that made the undone edit is back, and previews it as before the Apply
+        assert r["zonesAfterUndo"] == [ZONE]
         assert r["undoneDiff"] <= 0.01 * total
-        assert abs(session.redo_stack[-1].surface_bounds()[1][0] - 1.6) <= 0.25 * H
+        # the last edit undone is the fit's (step 8): the table 20 cm longer
+        assert abs(session.redo_stack[-1].surface_bounds()[1][0] - 1.4) <= 0.25 * H
 
     # -- two zones in one recipe (x, then y): previewed together, applied in order
     assert [e["axis"] for e in Recipe.parse(r["recipe2"]).to_json()["edits"]] == ["x", "y"]
@@ -469,6 +479,44 @@ def test_editor_end_to_end(tmp_path):
     lo, hi = np.array(r["applied2"]["solid_bounds"])
     assert abs(hi[0] - 1.6) <= 0.25 * H and abs(hi[1] - (TOP[1][1] + 0.2)) <= 0.25 * H
     assert len(r["applied2"]["history"]) == 2
+
+    # -- suggestions: a click on a band sets the zone's planes and mode to the candidate's
+    c = partscale.load(path)
+    want = [k.to_json() for k in zones_mod.suggest(c)]
+    assert r["suggestions"] == json.loads(json.dumps(want))
+    band = next(k for k in want if k["axis"] == "x")
+    assert r["afterBand"]["axis"] == "x" and r["afterBand"]["mode"] == band["kind"]
+    assert [r["afterBand"]["input"]["start"], r["afterBand"]["input"]["end"]] == band["zone"]
+    assert [r["afterBand"]["start"], r["afterBand"]["end"]] == pytest.approx(band["zone"], abs=1e-5)
+
+    # -- snap: the server moved the planes as `scale --snap` does, and said so
+    z = SNAP_ZONE
+    snapped, _ = zones_mod.snap(
+        c, {"axis": z["axis"], "zone": [z["start"], z["end"]], "to": z["dest"]}
+    )
+    assert [r["snapped"]["start"], r["snapped"]["end"], r["snapped"]["dest"]] == [
+        snapped.start,
+        snapped.end,
+        snapped.dest,
+    ]
+    assert r["snapStatus"].startswith("snap: moved start")
+
+    # -- fit to size: previewed (server untouched), applied to the size, undone exactly
+    recipe, why = zones_mod.fit(c, FIT_SIZE)
+    assert r["fitWhy"] == why
+    assert [Edit.parse(e) for e in r["fitRecipe"]["edits"]] == list(recipe.edits)
+    assert r["fitRevision"] == r["applied2"]["revision"] + 1  # the last undo, nothing since
+    assert r["fitPreviewDiff"] > 0.01 * total
+    lo, hi = np.array(r["fitApplied"]["solid_bounds"])
+    assert abs((hi[0] - lo[0]) - (TOP[1][0] + 0.2)) <= 0.5 * H
+    assert r["fitAppliedVsPreview"] <= 0.03 * total  # the preview showed what Apply made
+    fitted = [
+        {"axis": e.axis, "mode": e.mode, "start": e.start, "end": e.end, "dest": e.dest}
+        for e in recipe.edits
+    ]
+    assert r["fitZonesAfterApply"] == [{**z, "dest": z["end"]} for z in fitted]
+    assert r["fitUndone"]["solid_bounds"] == r["state0"]["solid_bounds"]
+    assert r["fitZonesAfterUndo"] == fitted
 
     # -- Export downloads a GLB that trimesh loads with vertex colours
     assert r["download"]["suggested"] == "table.edited.glb"

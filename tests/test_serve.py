@@ -604,3 +604,75 @@ def test_real_table_stretch_undo_and_export(data, tmp_path):
         np.testing.assert_allclose(np.median(glb_vertex_colours(mesh), axis=0), linear, atol=0.03)
         post(client, "/api/undo")
         assert session.current is original
+
+
+# -- zones: suggest, snap, fit (thin layers over partscale.zones) ------------------------------
+
+
+def shelf_file(tmp_path: Path, n=5, pitch=0.3, board=0.04, width=0.8, depth=0.3) -> Path:
+    """Two side panels and ``n`` boards along y, ``pitch`` apart (a bookcase), saved."""
+    height = (n - 1) * pitch + board
+    boxes = [((0, 0, 0), (0.04, height, depth)), ((width - 0.04, 0, 0), (width, height, depth))]
+    boxes += [((0, m * pitch, 0), (width, m * pitch + board, depth)) for m in range(n)]
+    bounds = np.array([[0, 0, 0], [width, height, depth]], float)
+    path = tmp_path / "shelf.csdf.npz"
+    partscale.save(shapes.grid(lambda p: shapes.boxes_sdf(p, boxes), bounds, voxel_size=H), path)
+    return path
+
+
+def test_suggest_snap_and_fit_are_the_zones_functions_on_the_current_object(tmp_path):
+    from partscale import zones
+
+    path = shelf_file(tmp_path)
+    c = partscale.load(path)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        # suggest: every axis, best first, exactly zones.suggest's candidates
+        got = client.get("/api/suggest").json()["candidates"]
+        assert got == json.loads(json.dumps([k.to_json() for k in zones.suggest(c)]))
+        y = client.get("/api/suggest?axis=y").json()["candidates"]
+        assert y and {k["axis"] for k in y} == {"y"}
+        tile = next(k for k in y if k["kind"] == "tile")
+        assert abs(tile["period"] - 0.3) <= H  # the boards' pitch, within a voxel
+
+        # snap: a naive tile zone moved to one whole period, as `scale --snap` does
+        naive = {"axis": "y", "zone": [0.4, 0.8], "to": 1.0, "mode": "tile"}
+        r = post(client, "/api/snap", naive)
+        assert r.status_code == 200, r.text
+        edit, moves = zones.snap(c, naive)
+        assert r.json()["edit"] == edit.to_json()
+        assert r.json()["moves"] == [m.to_json() for m in moves]
+        assert r.json()["message"].startswith("snap: moved ")
+
+        # fit: the recipe and its reasons, nothing applied
+        r = post(client, "/api/fit", {"size": ["=", "+30cm", "="]})
+        assert r.status_code == 200, r.text
+        recipe, why = zones.fit(c, ["=", "+30cm", "="])
+        assert r.json() == {"recipe": recipe.to_json(), "why": why}
+        assert client.get("/api/state").json()["revision"] == 0
+        # applying the fitted recipe reaches the target height within half a voxel
+        state = post(client, "/api/apply", r.json()["recipe"]).json()
+        lo, hi = np.array(state["solid_bounds"])
+        assert abs((hi[1] - lo[1]) - (1.24 + 0.3)) <= 0.5 * H
+        # the suggestions now describe the applied object
+        after = client.get("/api/suggest?axis=y").json()["candidates"]
+        assert after != y
+
+
+@pytest.mark.parametrize(
+    "url, body, words",
+    [
+        ("/api/suggest?axis=w", None, "suggest.axis: expected x, y or z"),
+        ("/api/snap", {"axis": "x", "zone": [0.3, 0.6], "to": 0.7, "mode": "tile"}, "found none"),
+        ("/api/snap", {"axis": "q", "zone": [0.3, 0.6], "to": 0.7}, "axis"),
+        ("/api/fit", {"size": ["=", "0", "="]}, "positive length"),
+        ("/api/fit", {"size": ["=", "3furlongs", "="]}, "size y"),
+        ("/api/fit", {"size": ["=", "="]}, "fit: expected"),
+        ("/api/fit", {"size": ["=", "=", "="]}, "got the current size"),
+        ("/api/fit", ["=", "=", "="], "fit: expected"),
+    ],
+)
+def test_zone_routes_refuse_bad_input_with_one_line(client, url, body, words):
+    r = client.get(url) if body is None else post(client, url, body)
+    assert r.status_code == 400, r.text
+    message = r.json()["error"]
+    assert words in message and "\n" not in message

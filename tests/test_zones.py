@@ -10,9 +10,16 @@ from conftest import ROOT, assert_bad_input
 
 from partscale import shapes
 from partscale.csdf import load, save
-from partscale.edit import Edit, Recipe, apply_edit, apply_recipe, recipe_from_history
+from partscale.edit import (
+    Edit,
+    Recipe,
+    apply_edit,
+    apply_recipe,
+    parse_position,
+    recipe_from_history,
+)
 from partscale.errors import InputError
-from partscale.zones import fit, parse_length, parse_position, parse_size, snap, suggest
+from partscale.zones import fit, parse_length, parse_size, snap, suggest
 
 H = 0.02
 
@@ -173,8 +180,15 @@ def test_parse_size_refuses(spec, units, fragment):
 
 
 def test_positions_and_lengths_with_units():
-    assert parse_position("30cm", units="m") == pytest.approx(0.3)
-    assert parse_position("45%", units="m") == "45%"
+    assert parse_position("30cm", "zone", "m") == pytest.approx(0.3)
+    assert parse_position("45%", "zone", "m") == "45%"
+    assert parse_position(" 0.25 ", "zone") == pytest.approx(0.25)
+    with pytest.raises(InputError, match="bare number"):
+        parse_position("30cm", "zone", None)  # units unknown: refused, not guessed
+    with pytest.raises(InputError, match="unit of mm, cm, m"):
+        parse_position("2ft", "zone", "m")
+    with pytest.raises(InputError, match="number or a percentage"):
+        parse_position("abc", "zone", "m")
     assert parse_length("-5cm", units="m") == pytest.approx(-0.05)
 
 

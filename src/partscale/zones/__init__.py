@@ -12,11 +12,9 @@ Public API
 - :func:`parse_size`, :func:`parse_length`: ``=``, ``2.1``, ``210cm``, ``2100mm``, ``+20cm``,
   ``-5cm``, ``120%`` (re-exported from :mod:`partscale.edit`, their one home, beside
   :func:`partscale.edit.parse_position`).
-- :func:`draw_candidates`: the object with the candidate bands, axes and ticks (``suggest --png``).
 - :func:`profile`, :class:`Profile`: the per-layer cross-sections all of it is built on.
 """
 
-from .figure import draw_candidates
 from .fit import fit, fit_axis
 from .profile import Profile, profile
 from .snap import Move, describe_moves, record_snap, snap
@@ -30,7 +28,6 @@ __all__ = [
     "Profile",
     "axis_candidates",
     "describe_moves",
-    "draw_candidates",
     "fit",
     "fit_axis",
     "parse_length",

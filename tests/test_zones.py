@@ -10,9 +10,16 @@ from conftest import ROOT, assert_bad_input
 
 from partscale import shapes
 from partscale.csdf import load, save
-from partscale.edit import Edit, Recipe, apply_edit, apply_recipe, recipe_from_history
+from partscale.edit import (
+    Edit,
+    Recipe,
+    apply_edit,
+    apply_recipe,
+    parse_position,
+    recipe_from_history,
+)
 from partscale.errors import InputError
-from partscale.zones import fit, parse_length, parse_position, parse_size, snap, suggest
+from partscale.zones import fit, parse_length, parse_size, snap, suggest
 
 H = 0.02
 
@@ -173,8 +180,15 @@ def test_parse_size_refuses(spec, units, fragment):
 
 
 def test_positions_and_lengths_with_units():
-    assert parse_position("30cm", units="m") == pytest.approx(0.3)
-    assert parse_position("45%", units="m") == "45%"
+    assert parse_position("30cm", "zone", "m") == pytest.approx(0.3)
+    assert parse_position("45%", "zone", "m") == "45%"
+    assert parse_position(" 0.25 ", "zone") == pytest.approx(0.25)
+    with pytest.raises(InputError, match="bare number"):
+        parse_position("30cm", "zone", None)  # units unknown: refused, not guessed
+    with pytest.raises(InputError, match="unit of mm, cm, m"):
+        parse_position("2ft", "zone", "m")
+    with pytest.raises(InputError, match="number or a percentage"):
+        parse_position("abc", "zone", "m")
     assert parse_length("-5cm", units="m") == pytest.approx(-0.05)
 
 
@@ -396,6 +410,34 @@ def test_snapped_naive_zone_gives_the_suite_surface(real, name):
     assert got.shape == hand.shape
     near = (np.abs(got.sdf) < 2 * c.voxel_size) | (np.abs(hand.sdf) < 2 * c.voxel_size)
     assert np.abs(got.sdf[near] - hand.sdf[near]).max() <= 0.5 * c.voxel_size
+    # every copy of a shelf (baluster) keeps its thickness and spacing: along the line crossing
+    # the most elements, each run of solid in the result is as thick as one in the original, and
+    # each pitch between consecutive runs is one of the original's, within a voxel
+    line = _most_crossed_line(c.sdf, ax)
+    before = _runs_along(c.sdf, ax, line)
+    after = _runs_along(got.sdf, ax, line)
+    copies = round(
+        (float(snapped.dest) - float(snapped.end)) / (float(snapped.end) - float(snapped.start))
+    )
+    assert copies >= 1 and len(after[0]) == len(before[0]) + copies, (before, after)
+    for got_v, orig_v in ((after[0], before[0]), (np.diff(after[1]), np.diff(before[1]))):
+        gap = np.abs(got_v[:, None] - orig_v[None, :]).min(axis=1)
+        assert gap.max() <= 1.0, (name, got_v, orig_v)
+
+
+def _runs_along(sdf, ax, line):
+    """(thicknesses, centres) in voxels of the runs of solid along ``ax`` at lateral ``line``."""
+    col = np.moveaxis(sdf, ax, 0)[(slice(None), *line)] <= 0
+    d = np.diff(np.concatenate([[0], col.astype(np.int8), [0]]))
+    start, stop = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    return (stop - start).astype(float), (start + stop - 1) / 2.0
+
+
+def _most_crossed_line(sdf, ax):
+    """The lateral index (2 ints) of the line along ``ax`` that crosses the most solid runs."""
+    solid = np.moveaxis(sdf, ax, 0) <= 0
+    starts = (np.diff(solid.astype(np.int8), axis=0) == 1).sum(axis=0)
+    return np.unravel_index(int(np.argmax(starts)), starts.shape)
 
 
 @pytest.mark.slow

@@ -109,14 +109,13 @@ def scale(
 
 def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
     """The edit from the designer's options: positions with units, --by or --copies."""
-    from ..edit import Edit
-    from ..zones import parse_length, parse_position
+    from ..edit import Edit, parse_length, parse_position
 
     units = c.meta.get("units")
-    start = parse_position(zone[0], units=units, what="--zone START")
-    end = parse_position(zone[1], units=units, what="--zone END")
+    start = parse_position(zone[0], "--zone START", units)
+    end = parse_position(zone[1], "--zone END", units)
     if to is not None:
-        return Edit(axis, start, end, parse_position(to, units=units, what="--to"), mode)
+        return Edit(axis, start, end, parse_position(to, "--to", units), mode)
     # --by and --copies need END (and START) in object units
     ax = AXES_INDEX[axis]
     sb = c.surface_bounds()

@@ -59,7 +59,27 @@ def suggest(
             )
     if png is not None:
         from ..render import save_png
-        from ..zones import draw_candidates
 
-        save_png(draw_candidates(c, cands, axis=ax), png)
+        save_png(_figure(c, cands, ax), png)
         _common.done(f"wrote {png}")
+
+
+#: Band colours (sRGB) per kind, and the most bands drawn (the best, numbered by rank).
+COLOURS = {"tile": (0, 114, 178), "stretch": (0, 158, 115)}
+MAX_BANDS = 6
+
+
+def _figure(c, cands, axis):
+    """The ``--png`` picture: the best candidates as bands on the view showing ``axis`` (side for
+    z, else front)."""
+    from ..render import render_bands
+    from ..zones import AXES
+
+    bands = [
+        (AXES.index(x.axis), x.zone[0], x.zone[1], f"{rank} {x.kind}", COLOURS[x.kind])
+        for rank, x in enumerate(cands[:MAX_BANDS], start=1)
+    ]
+    try:
+        return render_bands(c, bands, view="side" if axis == "z" else "front")
+    except InputError as e:
+        raise InputError(f"--png: {e}") from None

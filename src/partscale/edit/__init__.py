@@ -15,7 +15,10 @@ Public API
   also maps coordinates across the edit and lists its seams).
 - :class:`Edit`, :class:`Recipe`, :data:`JSON_SCHEMA`, :func:`parse_position`,
   :func:`source_coordinate`, :func:`forward_coordinate`, :func:`tile_count`: the recipe schema
-  and the 1D maps the web editor's shader shares.
+  and the 1D maps the web editor's shader shares. ``parse_position(value, what, units=None)``
+  also takes lengths with a unit (``'30cm'``) where ``units`` is ``'m'``.
+- :func:`parse_length`, :func:`parse_size`, :data:`SUFFIXES`: designer lengths (``2.1``,
+  ``210cm``, ``+20cm``, ``120%``, ``=``), the one unit table.
 
 Semantics
 ---------
@@ -55,12 +58,14 @@ from .reevaluate import reevaluate
 from .resample import SEAM_VOXELS
 from .resolved import ResolvedEdit, resolve_edit
 from .scale import apply_edit, apply_recipe, naive_edit, recipe_from_history, scale
+from .units import SUFFIXES, parse_length, parse_size
 
 __all__ = [
     "AXES",
     "JSON_SCHEMA",
     "MODES",
     "SEAM_VOXELS",
+    "SUFFIXES",
     "Edit",
     "Recipe",
     "ResolvedEdit",
@@ -68,7 +73,9 @@ __all__ = [
     "apply_recipe",
     "forward_coordinate",
     "naive_edit",
+    "parse_length",
     "parse_position",
+    "parse_size",
     "recipe_from_history",
     "reevaluate",
     "resolve_edit",

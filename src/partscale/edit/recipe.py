@@ -33,6 +33,7 @@ import numpy as np
 
 from .._files import read_json
 from ..errors import InputError
+from .units import has_unit, parse_length
 
 AXES = ("x", "y", "z")
 MODES = ("stretch", "tile", "global")
@@ -88,11 +89,13 @@ JSON_SCHEMA: dict[str, Any] = {
 }
 
 
-def parse_position(value: Any, what: str) -> Position:
+def parse_position(value: Any, what: str, units: str | None = None) -> Position:
     """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`.
 
     Numbers are any real number (Python or numpy scalars) but not booleans; strings hold a
-    number or a percentage. Non-finite values (``inf``, ``nan``, ``'1e400%'``) are refused.
+    number, a percentage, or a length with a unit (``'30cm'``, ``'300mm'``, ``'0.3m'``: converted
+    to object units, so only where ``units`` is ``'m'``; see :mod:`.units`). Non-finite values
+    (``inf``, ``nan``, ``'1e400%'``) are refused.
     """
     if isinstance(value, bool | np.bool_):
         raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
@@ -106,7 +109,8 @@ def parse_position(value: Any, what: str) -> Position:
         try:
             v = float(s[:-1] if s.endswith("%") else s)
         except ValueError:
-            pass
+            if has_unit(s):
+                return parse_length(s, units=units, what=what)
         else:
             if not math.isfinite(v):
                 kind = "percentage" if s.endswith("%") else "number"

@@ -9,18 +9,17 @@ Public API
   nearest good position for the mode; :func:`describe_moves`, :func:`record_snap`.
 - :func:`fit` ``(csdf, size) -> (Recipe, list[str])``: the recipe reaching a target extent
   (tile whole periods, absorb the rest in a constant slab, global only as a last resort).
-- :func:`parse_size`, :func:`parse_length`, :func:`parse_position`: ``=``, ``2.1``, ``210cm``,
-  ``2100mm``, ``+20cm``, ``-5cm``, ``120%``.
-- :func:`draw_candidates`: the object with the candidate bands, axes and ticks (``suggest --png``).
+- :func:`parse_size`, :func:`parse_length`: ``=``, ``2.1``, ``210cm``, ``2100mm``, ``+20cm``,
+  ``-5cm``, ``120%`` (re-exported from :mod:`partscale.edit`, their one home, beside
+  :func:`partscale.edit.parse_position`).
 - :func:`profile`, :class:`Profile`: the per-layer cross-sections all of it is built on.
 """
 
-from .figure import draw_candidates
 from .fit import fit, fit_axis
 from .profile import Profile, profile
 from .snap import Move, describe_moves, record_snap, snap
 from .suggest import AXES, Candidate, axis_candidates, suggest
-from .units import parse_length, parse_position, parse_size
+from .units import parse_length, parse_size
 
 __all__ = [
     "AXES",
@@ -29,11 +28,9 @@ __all__ = [
     "Profile",
     "axis_candidates",
     "describe_moves",
-    "draw_candidates",
     "fit",
     "fit_axis",
     "parse_length",
-    "parse_position",
     "parse_size",
     "profile",
     "record_snap",

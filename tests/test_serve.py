@@ -267,11 +267,11 @@ def test_progress_is_busy_until_the_last_apply_in_flight_ends(client, monkeypatc
     release = [threading.Event(), threading.Event()]
     calls = iter(range(2))
 
-    def held(recipe, *, progress=None):  # each apply waits for its turn, then runs for real
+    def held(recipe, **kw):  # each apply waits for its turn, then runs for real
         i = next(calls)
         entered[i].set()
         assert release[i].wait(10)
-        return real(recipe, progress=progress)
+        return real(recipe, **kw)
 
     monkeypatch.setattr(session, "apply", held)
     codes = []

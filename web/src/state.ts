@@ -52,6 +52,8 @@ export interface AppState {
 export type Action =
   | { type: 'loaded'; server: ServerState } // a new object: one default zone on the same axis
   | { type: 'saved'; server: ServerState }
+  // the server's history moved but the page still shows the object it had (its load failed)
+  | { type: 'history'; can_undo: boolean; can_redo: boolean }
   | { type: 'select-zone'; index: number }
   | { type: 'add-zone' }
   | { type: 'remove-zone' }
@@ -191,6 +193,10 @@ export function reduce(s: AppState, action: Action): AppState {
     }
     case 'saved':
       return { ...s, server: s.server ? { ...s.server, ...action.server } : action.server };
+    case 'history':
+      return s.server
+        ? { ...s, server: { ...s.server, can_undo: action.can_undo, can_redo: action.can_redo, unsaved: true } }
+        : s;
     case 'select-zone':
       return action.index >= 0 && action.index < s.zones.length ? { ...s, active: action.index } : s;
     case 'add-zone': {

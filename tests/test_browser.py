@@ -99,12 +99,13 @@ def table() -> partscale.CSDF:
 class Server:
     """uvicorn serving create_app(path) on a free loopback port in a thread."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, *, started_as: str = "127.0.0.1"):
         import uvicorn
 
-        from partscale.serve import create_app
+        from partscale.serve import allowed_hosts, create_app
 
-        self.app = create_app(path)
+        # the Host names answered are those of a server started with --host started_as
+        self.app = create_app(path, allowed_hosts=allowed_hosts(started_as))
         with socket.socket() as s:
             s.bind(("127.0.0.1", 0))
             self.port = s.getsockname()[1]
@@ -526,3 +527,39 @@ def test_editor_end_to_end(tmp_path):
     assert colours.shape[0] == len(mesh.vertices) > 1000
     assert np.ptp(colours[:, 2]) > 0.2  # the blue ramp along x
     np.testing.assert_allclose(mesh.bounds, [(0, 0, 0), TOP[1]], atol=0.5 * H)
+
+
+@pytest.mark.browser
+def test_editor_refuses_what_it_cannot_show_and_pages_of_other_names(tmp_path, monkeypatch):
+    from partscale import edit
+
+    node, chromium = find_tools()
+    path = tmp_path / "table.csdf.npz"
+    partscale.save(table(), path)
+    computed = []
+    real = edit.apply_recipe
+    monkeypatch.setattr(edit, "apply_recipe", lambda *a, **k: computed.append(1) or real(*a, **k))
+    # started as if with --host 0.0.0.0, which used to switch the Host check off
+    with Server(path, started_as="0.0.0.0") as server:
+        session = server.app.state.session
+        r = run_page(node, chromium, server.url, tmp_path, limits=True)
+        assert "fatal" not in r, r.get("fatal")
+        # -- beyond the GPU's 3D texture size: refused up front, nothing computed or changed
+        (edit_sent,) = r["tooBigRecipe"]["edits"]
+        assert edit_sent["to"] > edit_sent["zone"][1] + (r["maxTexture"] - 60) * H
+        status = r["statusTooBig"]
+        assert "applying failed: apply: expected at most" in status, status
+        assert f"{r['maxTexture']} voxels per axis" in status, status
+        assert computed == [] and session.revision == 0 and not session.undo_stack
+        assert r["stateTooBig"]["revision"] == 0 and r["undoDisabledTooBig"]
+        # -- a page of another name (DNS rebinding to this machine) gets nothing
+        assert r["rebind"]["status"] == 400 and "host: expected" in r["rebind"]["body"]
+        assert r["rebindSave"]["status"] == 400, r["rebindSave"]
+        assert not edited_path_of(path).exists() and session.saved_revision == 0
+    assert r["errors"] == [] or all("400" in e for e in r["errors"]), r["errors"]
+
+
+def edited_path_of(path: Path) -> Path:
+    from partscale.serve import edited_path
+
+    return edited_path(path)

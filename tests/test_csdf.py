@@ -277,3 +277,84 @@ def test_version_is_the_packages():
 )
 def test_cli_usage_errors_are_one_line(cli, args, fragment):
     assert_bad_input(cli(*args), fragment)
+
+
+# -- history: shared, read-only, linear cost ---------------------------------------------------
+class _Cost:
+    """Counts what recording operations copies: objects deep-copied (the size of each copy's
+    memo, which holds every container it copied) and bytes serialised to check JSON."""
+
+    def __init__(self, monkeypatch):
+        import copy
+
+        self.copies = self.json_bytes = 0
+        real_copy, real_dumps = copy.deepcopy, json.dumps
+
+        def deepcopy(x, memo=None, _nil=None):
+            memo = {} if memo is None else memo
+            before = len(memo)
+            out = real_copy(x, memo)
+            self.copies += max(1, len(memo) - before)
+            return out
+
+        def dumps(obj, *a, **kw):
+            text = real_dumps(obj, *a, **kw)
+            self.json_bytes += len(text)
+            return text
+
+        monkeypatch.setattr(copy, "deepcopy", deepcopy)
+        monkeypatch.setattr(json, "dumps", dumps)
+
+    def take(self) -> tuple[int, int]:
+        out = (self.copies, self.json_bytes)
+        self.copies = self.json_bytes = 0
+        return out
+
+
+def test_850_operations_cost_linear_history_is_shared_not_copied(ball, monkeypatch):
+    # the fuzz campaign's 850-edit session: each edit deep-copied and re-serialised the whole
+    # history (several times), so an edit's cost grew with the history and the session's with
+    # its square. Recording an operation must cost the same at entry 800 as at entry 1.
+    cost = _Cost(monkeypatch)
+    c, per_op = ball, []
+    for i in range(850):
+        op = {"op": "scale", "n": i, "edit": {"axis": "x", "zone": [0.1, 0.2], "to": 0.3}}
+        c = c.with_history(op)
+        per_op.append(cost.take())
+    first = np.array(per_op[1:51]).sum(axis=0)
+    last = np.array(per_op[-50:]).sum(axis=0)
+    assert last[0] <= first[0], (first, last)  # deep copies: the same count at any length
+    # bytes checked: only the new entry (its "n" has at most two more digits)
+    assert last[1] <= first[1] + 2 * 50, (first, last)
+    assert len(c.meta["history"]) == len(ball.meta["history"]) + 850
+    assert c.meta["history"][-1]["n"] == 849
+
+
+def test_history_is_read_only_and_behaves_as_a_list_of_dicts(ball, tmp_path):
+    import pickle
+
+    op = {"op": "test", "zone": [1.0, 2.0], "nested": {"k": [1, 2]}}
+    c = ball.with_history(op)
+    op["zone"].append(3.0)  # the caller's dict stays theirs
+    h = c.meta["history"]
+    assert h[-1] == {"op": "test", "zone": [1.0, 2.0], "nested": {"k": [1, 2]}}
+    assert h == [*ball.meta["history"], h[-1]] and isinstance(h, list)
+    for change in (
+        lambda: h.append({}),
+        lambda: h.__setitem__(0, {}),
+        lambda: h[-1].__setitem__("op", "x"),
+        lambda: h[-1]["zone"].append(1),
+        lambda: h[-1]["nested"].update(k=0),
+    ):
+        with pytest.raises(TypeError, match="read-only"):
+            change()
+    d = c.with_history({"op": "more"})
+    assert d.meta["history"][-2] is h[-1]  # shared, not copied
+    assert c.meta["history"] == h and len(d.meta["history"]) == len(h) + 1
+    assert load(save(d, tmp_path / "h.csdf.npz")).meta == d.meta
+    assert pickle.loads(pickle.dumps(d.meta)) == d.meta
+    # a plain list given to make is checked and frozen like any history
+    with pytest.raises(InputError, match="history"):
+        make(ball.sdf, meta={"history": [{"x": object()}]})
+    with pytest.raises(InputError, match="history"):
+        make(ball.sdf, meta={"history": [1]})

@@ -13,13 +13,17 @@ from scipy.spatial import cKDTree
 
 from partscale import shapes
 from partscale.edit import (
+    MAX_EDITS,
+    Recipe,
     apply_edit,
     apply_recipe,
     naive_edit,
     recipe_from_history,
+    recipe_shape,
     reevaluate,
     scale,
 )
+from partscale.errors import InputError
 from partscale.surface import to_mesh
 
 H = 0.02  # voxel size of the analytic shapes (metres)
@@ -445,3 +449,55 @@ def test_progress_is_reported_and_monotone(ball):
         progress=lambda f, m: seen.append(f),
     )
     assert seen[-1] == 1.0 and seen == sorted(seen) and len(seen) >= 4
+
+
+# -- cost and size known before computing ------------------------------------------------------
+def test_an_edits_meta_handling_does_not_grow_with_the_history(box, monkeypatch):
+    import copy
+
+    # 850 edits in one session made each edit deep-copy the whole history four times
+    long = box
+    for i in range(850):
+        long = long.with_history({"op": "scale", "n": i, "edit": {"zone": [0.2, 0.4], "to": 1}})
+    real, copied = copy.deepcopy, []
+
+    def counting(x, memo=None, _nil=None):
+        memo = {} if memo is None else memo
+        before = len(memo)
+        out = real(x, memo)
+        copied.append(max(1, len(memo) - before))  # containers copied (the memo holds each)
+        return out
+
+    monkeypatch.setattr(copy, "deepcopy", counting)
+    edit = {"axis": "x", "zone": [0.3, 0.6], "to": 0.8}
+    apply_edit(box, edit)
+    short_cost, copied[:] = sum(copied), []
+    out = apply_edit(long, edit)
+    assert sum(copied) <= short_cost, (short_cost, sum(copied))
+    assert len(out.meta["history"]) == len(long.meta["history"]) + 1
+    assert out.meta["history"][-2] is long.meta["history"][-1]  # shared
+
+
+def test_a_recipe_holds_at_most_max_edits():
+    edit = {"axis": "x", "zone": ["20%", "40%"], "to": "50%"}
+    assert len(Recipe.parse([edit] * MAX_EDITS).edits) == MAX_EDITS
+    with pytest.raises(InputError, match=f"at most {MAX_EDITS} edits, got 850"):
+        Recipe.parse({"edits": [edit] * 850})
+
+
+@pytest.mark.parametrize(
+    "edits",
+    [
+        [{"axis": "x", "zone": [0.3, 0.6], "to": 0.9, "mode": "stretch"}],
+        [{"axis": "y", "zone": ["20%", "60%"], "to": "95%", "mode": "tile"}],
+        [{"axis": "z", "zone": [0.1, 0.2], "to": 0.13, "mode": "global"}],
+        [  # two zones on one axis (planes carried through the first), one on another
+            {"axis": "x", "zone": [0.1, 0.3], "to": 0.5, "mode": "stretch"},
+            {"axis": "x", "zone": [0.6, 0.9], "to": 0.75, "mode": "tile"},
+            {"axis": "y", "zone": [0.1, 0.4], "to": 0.31, "mode": "stretch"},
+        ],
+    ],
+)
+def test_recipe_shape_predicts_the_grid_the_recipe_makes(box, edits):
+    predicted = recipe_shape(box, {"edits": edits})
+    assert predicted == apply_recipe(box, {"edits": edits}).shape

@@ -22,7 +22,14 @@ from starlette.testclient import TestClient
 
 import partscale
 from partscale import shapes
-from partscale.serve import MAX_BODY, create_app, edited_path, encode_grid
+from partscale.serve import (
+    MAX_BODY,
+    allowed_hosts,
+    create_app,
+    edited_path,
+    encode_grid,
+    is_loopback,
+)
 from partscale.serve import session as session_mod
 from partscale.serve.app import STATIC
 
@@ -267,11 +274,11 @@ def test_progress_is_busy_until_the_last_apply_in_flight_ends(client, monkeypatc
     release = [threading.Event(), threading.Event()]
     calls = iter(range(2))
 
-    def held(recipe, *, progress=None):  # each apply waits for its turn, then runs for real
+    def held(recipe, **kw):  # each apply waits for its turn, then runs for real
         i = next(calls)
         entered[i].set()
         assert release[i].wait(10)
-        return real(recipe, progress=progress)
+        return real(recipe, **kw)
 
     monkeypatch.setattr(session, "apply", held)
     codes = []
@@ -457,6 +464,116 @@ def test_oversized_and_foreign_requests_are_refused(client):
     assert client.app.state.session.revision == 0
 
 
+@pytest.mark.parametrize(
+    ("bound", "names"),
+    [
+        ("0.0.0.0", ["localhost:8000", "127.0.0.1"]),
+        ("192.0.2.5", ["192.0.2.5:8000", "localhost"]),
+        ("MyHost.LAN.", ["myhost.lan:8000", "MYHOST.lan"]),
+        ("LOCALHOST", ["localhost:8000", "[::1]"]),
+        ("127.000.000.001", ["127.0.0.1:8000", "127.000.000.001"]),
+    ],
+)
+def test_host_check_holds_whatever_host_the_server_was_started_with(box_file, bound, names):
+    # a page on evil.example rebinds its name to this machine: never answered, whatever
+    # --host was, so it cannot apply edits or save over the input
+    app = create_app(box_file, allowed_hosts=allowed_hosts(bound))
+    with TestClient(app, base_url="http://127.0.0.1") as c:
+        for host in ("evil.example", "evil.example:8000", "127.0.0.1.evil.example"):
+            r = c.get("/api/state", headers={"host": host})
+            assert r.status_code == 400 and "host: expected one of" in r.json()["error"], host
+            r = c.post("/api/save", json={"overwrite": True}, headers={"host": host})
+            assert r.status_code == 400, host
+        for host in names:
+            assert c.get("/api/state", headers={"host": host}).status_code == 200, host
+    assert not edited_path(box_file).exists()
+
+
+def test_loopback_spellings_are_loopback():
+    for host in ("LOCALHOST", "localhost.", "127.000.000.001", "127.1", "::1", "[0:0::1]"):
+        assert is_loopback(host), host
+    for host in ("evil.example", "0.0.0.0", "192.0.2.5", "localhost.evil.example"):
+        assert not is_loopback(host), host
+
+
+def test_state_changing_requests_from_another_origin_are_refused(client):
+    session = client.app.state.session
+    for origin in ("http://evil.example", "null", "http://localhost", "https://127.0.0.1"):
+        for url, body in (("/api/apply", STRETCH), ("/api/save", {"overwrite": True})):
+            r = client.post(url, json=body, headers={"origin": origin})
+            assert r.status_code == 403, (origin, url, r.text)
+            assert r.json()["error"].startswith("origin: expected"), r.json()
+    assert session.revision == 0 and not edited_path(session.path).exists()
+    # the page's own origin (and requests without one: scripts, curl) are answered
+    for origin in ("http://127.0.0.1", "http://127.0.0.1:80"):
+        r = client.post("/api/apply", json=STRETCH, headers={"origin": origin})
+        assert r.status_code == 200, (origin, r.text)
+    assert client.get("/api/state", headers={"origin": "http://evil.example"}).status_code == 200
+
+
+def test_apply_beyond_the_pages_limits_is_refused_before_computing(client, monkeypatch):
+    from partscale import edit
+
+    session = client.app.state.session
+    nx = session.current.shape[0]
+    grow = {"edits": [{"axis": "x", "zone": [0.3, 0.7], "to": 0.7 + 10 * H}]}  # +10 voxels
+    computed = []
+    real = edit.apply_recipe
+    monkeypatch.setattr(edit, "apply_recipe", lambda *a, **k: computed.append(1) or real(*a, **k))
+    r = post(client, "/api/apply", {**grow, "limits": {"max_voxels_per_axis": nx + 9}})
+    assert r.status_code == 400, r.text
+    err = r.json()["error"]
+    assert err.startswith("apply: expected at most") and "voxels per axis" in err, err
+    assert "\n" not in err and f"{nx + 10} × " in err, err
+    assert not computed and session.revision == 0 and not session.undo_stack
+    r = post(client, "/api/apply", {**grow, "limits": {"max_voxels": 10}})
+    assert r.status_code == 400 and "voxels" in r.json()["error"] and not computed
+    for bad in ({"max_voxels_per_axis": 0}, {"gpu": 1}, [1], {"max_voxels": True}):
+        r = post(client, "/api/apply", {**grow, "limits": bad})
+        assert r.status_code == 400 and r.json()["error"].startswith("limits"), (bad, r.text)
+    r = post(client, "/api/apply", {**grow, "limits": {"max_voxels_per_axis": nx + 10}})
+    assert r.status_code == 200 and r.json()["shape"][0] == nx + 10
+    assert computed and r.json()["can_undo"]
+
+
+def test_an_apply_response_describes_the_revision_it_made(client, monkeypatch):
+    # the response of apply 1 was built after the lock was released: an apply landing in
+    # between made it describe revision 2 (20 parallel applies carried 7-9 distinct revisions)
+    real = session_mod.header
+    first, landed = threading.Event(), threading.Event()
+
+    def slow_header(c):
+        if not first.is_set():
+            first.set()
+            assert landed.wait(10)
+        return real(c)
+
+    monkeypatch.setattr(session_mod, "header", slow_header)
+    got = {}
+    t = threading.Thread(target=lambda: got.update(r=post(client, "/api/apply", STRETCH)))
+    t.start()
+    try:
+        assert first.wait(30)
+        second = post(client, "/api/apply", STRETCH).json()
+    finally:
+        landed.set()
+        t.join(30)
+    one = got["r"].json()
+    assert (one["revision"], len(one["history"])) == (1, 1), one["revision"]
+    assert (second["revision"], len(second["history"])) == (2, 2)
+    assert one["shape"] != second["shape"]
+
+
+def test_save_refuses_an_object_the_page_does_not_show(client):
+    session = client.app.state.session
+    assert post(client, "/api/apply", STRETCH).status_code == 200
+    r = post(client, "/api/save", {"overwrite": False, "revision": 0})
+    assert r.status_code == 400 and "revision" in r.json()["error"], r.text
+    assert not edited_path(session.path).exists()
+    r = post(client, "/api/save", {"overwrite": False, "revision": 1})
+    assert r.status_code == 200 and edited_path(session.path).exists()
+
+
 def test_missing_or_invalid_object_is_refused(tmp_path, cli):
     from conftest import assert_bad_input
 
@@ -544,7 +661,15 @@ def test_edit_command_serves_on_loopback_and_warns_otherwise(box_file):
         _stop(proc)
     proc, url, lines = _start([str(box_file), "--host", "0.0.0.0"])
     try:
-        assert any("warning" in ln and "not loopback" in ln for ln in lines), lines
+        warn = [ln for ln in lines if "warning" in ln]
+        assert len(warn) == 1 and "not loopback" in warn[0] and "any web page" in warn[0], lines
+        # exposed on purpose, still no DNS rebinding: a name the server was not started with
+        r = _get_state(url)
+        assert r.status_code == 200, r.text
+        import httpx
+
+        r = httpx.get(url + "api/state", headers={"Host": "evil.example"}, timeout=5)
+        assert r.status_code == 400 and "host" in r.json()["error"], r.text
     finally:
         _stop(proc)
 

@@ -16,7 +16,9 @@ Conventions (used everywhere in partscale)
   them exactly there, edits re-evaluate them there, parts label voxels out to it, and the
   evaluation judges distances in it.
 
-A CSDF is immutable: its arrays are read-only and functions return new CSDFs.
+A CSDF is immutable: its arrays are read-only and functions return new CSDFs. Its history
+(``meta['history']``) is a :class:`History`: read-only entries, shared between a CSDF and the
+CSDFs made from it, so an edit costs the same whatever the history's length.
 """
 
 from __future__ import annotations
@@ -39,6 +41,94 @@ SUFFIX = ".csdf.npz"
 BAND_VOXELS = 3
 """Half-width, in voxels, of the narrow band around the surface where distances are exact."""
 _NAMES = ("sdf", "rgb", "parts", "origin", "voxel_size", "meta")
+
+
+def _read_only(self, *args: Any, **kwargs: Any) -> Any:
+    raise TypeError(
+        "a CSDF's history is read-only: expected a new entry (CSDF.with_history), got a change"
+    )
+
+
+class _FrozenDict(dict):
+    """A dict that refuses changes; copying it returns itself (it is never changed)."""
+
+    __slots__ = ()
+    __setitem__ = __delitem__ = __ior__ = _read_only
+    clear = pop = popitem = setdefault = update = _read_only
+
+    def __copy__(self) -> _FrozenDict:
+        return self
+
+    def __deepcopy__(self, memo: dict) -> _FrozenDict:
+        return self
+
+    def __reduce__(self) -> tuple:
+        return (type(self), (dict(self),))
+
+
+class _FrozenList(list):
+    """A list that refuses changes; copying it returns itself (it is never changed)."""
+
+    __slots__ = ()
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _read_only
+    append = extend = insert = remove = pop = clear = sort = reverse = _read_only
+
+    def __copy__(self) -> _FrozenList:
+        return self
+
+    def __deepcopy__(self, memo: dict) -> _FrozenList:
+        return self
+
+    def __reduce__(self) -> tuple:
+        return (type(self), (list(self),))
+
+
+def _freeze(x: Any) -> Any:
+    """``x`` with every dict and list (tuples become lists) replaced by a read-only copy."""
+    if isinstance(x, _FrozenDict | _FrozenList):
+        return x
+    if isinstance(x, dict):
+        return _FrozenDict((k, _freeze(v)) for k, v in x.items())
+    if isinstance(x, list | tuple):
+        return _FrozenList(_freeze(v) for v in x)
+    return x
+
+
+class History(_FrozenList):
+    """``meta['history']``: the list of operations, oldest first, each a read-only dict.
+
+    Compares, indexes and serialises like the list of dicts it holds; changing it (or an entry)
+    raises ``TypeError``. :meth:`appended` makes a new history sharing every entry, so neither
+    copying a CSDF's meta nor recording an operation copies the entries already there.
+    """
+
+    __slots__ = ()
+
+    @classmethod
+    def of(cls, entries: Any) -> History:
+        """``entries`` (a list of JSON objects) as a History; a History is returned as is."""
+        if isinstance(entries, History):
+            return entries
+        if not isinstance(entries, list) or not all(isinstance(h, dict) for h in entries):
+            raise InputError(f"meta history: expected a list of objects, got {_shown(entries)}")
+        return cls(_entry(h) for h in entries)
+
+    def appended(self, operation: dict[str, Any]) -> History:
+        """A new history: these entries (shared, not copied) and then ``operation``."""
+        if not isinstance(operation, dict):
+            raise InputError(f"history entry: expected an object, got {_shown(operation)}")
+        return History([*self, _entry(operation)])
+
+
+def _entry(operation: dict[str, Any]) -> _FrozenDict:
+    # an entry is checked once, when it joins a history; afterwards it is shared, never re-checked
+    if isinstance(operation, _FrozenDict):
+        return operation
+    try:
+        json.dumps(operation)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"meta history: expected JSON-serialisable entries, got {exc}") from None
+    return _freeze(operation)
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -68,7 +158,8 @@ class CSDF:
     voxel_size : float
         Edge length of a voxel in world units (> 0).
     meta : dict
-        JSON-serialisable: ``units``, ``source``, ``history`` (list of operations), ``parts_info``...
+        JSON-serialisable: ``units``, ``source``, ``history`` (a read-only :class:`History` of
+        operations), ``parts_info``...
 
     Construct through :func:`make` (which validates and converts) unless the arrays are already
     known to be right.
@@ -140,7 +231,7 @@ class CSDF:
     def replace(self, **changes: Any) -> CSDF:
         """Return a new CSDF with some fields replaced (validated through :func:`make`)."""
         fields = {n: getattr(self, n) for n in ("sdf", "rgb", "parts", "origin", "voxel_size")}
-        fields["meta"] = copy.deepcopy(self.meta)
+        fields["meta"] = self.meta  # make() copies it (the history is shared, not copied)
         unknown = set(changes) - set(fields)
         if unknown:
             raise TypeError(
@@ -150,9 +241,14 @@ class CSDF:
         return make(**fields)
 
     def with_history(self, operation: dict[str, Any], **changes: Any) -> CSDF:
-        """Return a new CSDF with ``operation`` appended to ``meta['history']``."""
-        meta = copy.deepcopy(changes.pop("meta", self.meta))
-        meta.setdefault("history", []).append(operation)
+        """Return a new CSDF with ``operation`` appended to ``meta['history']``.
+
+        ``changes['meta']``, when given, replaces the meta (its history is the one extended).
+        The entries already there are shared, not copied: recording an operation costs the same
+        whatever the history's length.
+        """
+        meta = dict(changes.pop("meta", self.meta))
+        meta["history"] = History.of(meta.get("history", [])).appended(operation)
         return self.replace(meta=meta, **changes)
 
     @property
@@ -238,8 +334,9 @@ def make(
     voxel_size : float
         Voxel edge length, > 0.
     meta : dict, optional
-        JSON-serialisable metadata; ``format``/``version``/``history`` are filled in, and a
-        given ``history`` must be a list of objects (operations).
+        JSON-serialisable metadata, copied; ``format``/``version``/``history`` are filled in,
+        and a given ``history`` must be a list of objects (operations). It is stored as a
+        read-only :class:`History` (a History given is shared as it is, not copied).
     """
     sdf = np.asarray(sdf)
     if sdf.ndim != 3 or min(sdf.shape) < 2:
@@ -274,17 +371,20 @@ def make(
     parts = parts.astype(np.int16, copy=False)
     origin = check_origin(origin, "origin")
     voxel_size = check_voxel_size(voxel_size, "voxel_size")
-    meta = copy.deepcopy(meta) if meta is not None else {}
+    if meta is None:
+        meta = {}
     if not isinstance(meta, dict):
         raise InputError(f"meta: expected a JSON object, got {type(meta).__name__}")
-    history = meta.setdefault("history", [])
-    if not isinstance(history, list) or not all(isinstance(h, dict) for h in history):
-        raise InputError(f"meta history: expected a list of objects, got {_shown(history)}")
+    # the history is immutable and shared; everything else is copied (and checked) here, so a
+    # CSDF never shares a mutable object with its caller
+    history = History.of(meta.get("history", []))
+    meta = {k: history if k == "history" else copy.deepcopy(v) for k, v in meta.items()}
+    meta.setdefault("history", history)
     meta["format"] = FORMAT
     meta["version"] = FORMAT_VERSION
     meta.setdefault("units", "m")
     try:
-        json.dumps(meta)
+        json.dumps({k: v for k, v in meta.items() if k != "history"})
     except (TypeError, ValueError) as exc:
         raise InputError(f"meta: expected JSON-serialisable metadata, got {exc}") from None
     return CSDF(

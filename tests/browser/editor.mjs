@@ -4,7 +4,9 @@
 // args: { url, chromium, web (folder with node_modules), out (folder), reference (png path or
 //         null), updateReference, canvas: [w, h], remapCases, zone: {axis, start, end, dest},
 //         benchmark: n frames (only load + benchmark when set), features: {snapZone, fitSize}
-//         (suggestion click, snap toggle, fit preview/apply/undo) }
+//         (suggestion click, snap toggle, fit preview/apply/undo),
+//         limits: true (only load, an apply beyond the GPU's 3D texture size, and a page of
+//         another name, evil.example, resolved to this server: DNS rebinding) }
 import { createRequire } from 'node:module';
 import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
@@ -30,6 +32,8 @@ const browser = await chromium.launch({
     '--ignore-gpu-blocklist',
     '--disable-gpu-vsync',
     '--force-color-profile=srgb',
+    // a foreign name resolving to this machine, as DNS rebinding makes it (for args.limits)
+    '--host-resolver-rules=MAP evil.example 127.0.0.1',
   ],
 });
 
@@ -73,7 +77,36 @@ try {
   result.state0 = await page.evaluate(() => window.__partscale.state());
   result.zone0 = await page.evaluate(() => window.__partscale.zones()[0]);
 
-  if (args.benchmark) {
+  if (args.limits) {
+    // an apply whose result this GPU could not show: refused by the server before computing
+    result.maxTexture = await page.evaluate(() =>
+      document.createElement('canvas').getContext('webgl2').getParameter(WebGL2RenderingContext.MAX_3D_TEXTURE_SIZE));
+    const s0 = result.state0;
+    const z = result.zone0;
+    const dest = z.end + (result.maxTexture - s0.shape[0] + 10) * s0.voxel_size;
+    await page.selectOption('#units', 'units');
+    for (const [id, v] of [['#pos-start', z.start], ['#pos-end', z.end], ['#pos-dest', dest]]) {
+      await page.fill(id, String(v));
+      await page.dispatchEvent(id, 'change');
+    }
+    result.tooBigRecipe = await page.evaluate(() => window.__partscale.recipe());
+    await idle();
+    await page.click('#apply');
+    await page.waitForFunction(() => document.querySelector('#status').textContent.includes('failed'), null, { timeout: 60000 });
+    await idle();
+    result.statusTooBig = await page.textContent('#status');
+    result.stateTooBig = await page.evaluate(() => window.__partscale.state());
+    result.undoDisabledTooBig = await page.isDisabled('#undo');
+    // DNS rebinding: evil.example resolves here; neither its page nor its requests are answered
+    const port = new URL(args.url).port;
+    const evil = await context.newPage();
+    const resp = await evil.goto(`http://evil.example:${port}/`);
+    result.rebind = { status: resp.status(), body: await resp.text() };
+    result.rebindSave = await evil.evaluate(async () => {
+      const r = await fetch('/api/save', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: '{"overwrite": true}' });
+      return { status: r.status, body: await r.text() };
+    });
+  } else if (args.benchmark) {
     result.benchmark = await page.evaluate((n) => window.__partscale.benchmark(n), args.benchmark);
     result.renderer = await page.evaluate(() => {
       const gl = document.createElement('canvas').getContext('webgl2');

@@ -69,6 +69,13 @@ export async function getProgress(): Promise<Progress> {
   return (await check(await fetch('/api/progress', { cache: 'no-store' }))).json();
 }
 
+/** What this page can show (PageLimits on the server): an apply whose result would not fit is
+ * refused before the server computes it, so the server never holds an object the page cannot show. */
+export interface PageLimits {
+  /** Largest grid along any axis: the GPU's MAX_3D_TEXTURE_SIZE. */
+  max_voxels_per_axis: number;
+}
+
 /** A zone candidate (partscale.zones.Candidate.to_json). */
 export interface Candidate {
   axis: Axis;
@@ -102,10 +109,11 @@ export interface Fitted {
 
 /** POST bodies and answers by route. */
 export interface PostBodies {
-  '/api/apply': Recipe;
+  '/api/apply': Recipe & { limits: PageLimits };
   '/api/undo': Record<string, never>;
   '/api/redo': Record<string, never>;
-  '/api/save': { overwrite: boolean };
+  /** revision: the one the page shows; the server refuses to save another. */
+  '/api/save': { overwrite: boolean; revision: number };
   '/api/snap': Edit;
   '/api/fit': { size: [string, string, string] };
 }
@@ -128,12 +136,14 @@ async function post<P extends keyof PostBodies>(path: P, body: PostBodies[P]): P
   return (await check(r)).json();
 }
 
-/** Bake the recipe into the object; the new state (with apply_ms). */
-export const apply = (recipe: Recipe): Promise<ServerState> => post('/api/apply', recipe);
+/** Bake the recipe into the object unless the result exceeds limits; the new state (with apply_ms). */
+export const apply = (recipe: Recipe, limits: PageLimits): Promise<ServerState> =>
+  post('/api/apply', { ...recipe, limits });
 export const undo = (): Promise<ServerState> => post('/api/undo', {});
 export const redo = (): Promise<ServerState> => post('/api/redo', {});
-/** Write the object (beside the input, or over it); the new state (with saved). */
-export const save = (overwrite: boolean): Promise<ServerState> => post('/api/save', { overwrite });
+/** Write the object shown (revision; beside the input, or over it); the new state (with saved). */
+export const save = (overwrite: boolean, revision: number): Promise<ServerState> =>
+  post('/api/save', { overwrite, revision });
 /** The edit moved to the nearest good position for its mode (`partscale scale --snap`). */
 export const snap = (edit: Edit): Promise<Snapped> => post('/api/snap', edit);
 /** The recipe that resizes the object to size (x, y, z), previewed, not applied. */

@@ -78,31 +78,44 @@ export function createCommands(store: Store, scene: Scene): Commands {
       }, 250);
       let s: api.ServerState;
       try {
-        s = await api.apply(recipe(store.get()));
+        // the server refuses, before computing, a result this page could not show
+        s = await api.apply(recipe(store.get()), { max_voxels_per_axis: scene.maxTextureSize });
       } finally {
         clearInterval(poll);
       }
-      await load('applied');
+      await loadAfter(s, 'applied');
       status(`applied in ${(performance.now() - t0).toFixed(0)} ms (server ${s.apply_ms?.toFixed(0)} ms)`);
     });
 
+  /** Show the object a history step made; if that fails, Undo and Redo still follow the server
+   * (Save names the revision shown, so the server refuses to save what the page could not show). */
+  async function loadAfter(s: api.ServerState, how: 'applied' | 'undone' | 'redone') {
+    try {
+      await load(how);
+    } catch (e) {
+      store.dispatch({ type: 'history', can_undo: s.can_undo, can_redo: s.can_redo });
+      const why = e instanceof Error ? e.message : String(e);
+      throw new ApiError(`${why}; the page still shows the previous object (Undo returns to it)`);
+    }
+  }
+
   const undo = () =>
     run('undo', async () => {
-      await api.undo();
-      await load('undone');
+      await loadAfter(await api.undo(), 'undone');
       status('undone');
     });
 
   const redo = () =>
     run('redo', async () => {
-      await api.redo();
-      await load('redone');
+      await loadAfter(await api.redo(), 'redone');
       status('redone');
     });
 
   const save = () =>
     run('saving', async () => {
-      const s = await api.save(store.get().overwrite);
+      const shown = store.get().server;
+      if (!shown) throw new ApiError('save: expected an object shown, got none');
+      const s = await api.save(store.get().overwrite, shown.revision);
       store.dispatch({ type: 'saved', server: s });
       status(`saved ${s.saved}`);
     });

@@ -74,6 +74,8 @@ export type Action =
   | { type: 'set-snap'; snap: boolean }
   | { type: 'set-fit-size'; axis: number; value: string }
   | { type: 'saved'; server: ServerState }
+  // the server's history moved but the page still shows the object it had (its load failed)
+  | { type: 'history'; can_undo: boolean; can_redo: boolean }
   | { type: 'select-zone'; index: number }
   | { type: 'add-zone' }
   | { type: 'remove-zone' }
@@ -285,6 +287,10 @@ export function reduce(s: AppState, action: Action): AppState {
     }
     case 'saved':
       return { ...s, server: s.server ? { ...s.server, ...action.server } : action.server };
+    case 'history':
+      return s.server
+        ? { ...s, server: { ...s.server, can_undo: action.can_undo, can_redo: action.can_redo, unsaved: true } }
+        : s;
     case 'select-zone':
       return action.index >= 0 && action.index < s.zones.length ? { ...s, active: action.index } : s;
     case 'add-zone': {

@@ -10,6 +10,9 @@ Public API
 - :func:`reevaluate` ``(csdf, mask=None, *, band=partscale.csdf.BAND_VOXELS) -> CSDF``:
   re-evaluated distances (to the grid's marching-cubes surface) near the surface, on its own.
 - :func:`recipe_from_history` ``(csdf, *, after=None) -> Recipe``: the replayable recipe.
+- :func:`recipe_shape` ``(csdf, recipe) -> (X, Y, Z)``: the grid shape a recipe gives, predicted
+  without computing it (the editor refuses an apply its page could not show, before computing).
+- :data:`MAX_EDITS`: most edits one recipe may hold.
 - :func:`resolve_edit` ``(csdf, edit) -> ResolvedEdit``: an edit validated on an object, in world
   units and snapped to whole voxels, as :func:`apply_edit` performs it (:class:`ResolvedEdit`
   also maps coordinates across the edit and lists its seams).
@@ -46,6 +49,7 @@ Semantics
 from .recipe import (
     AXES,
     JSON_SCHEMA,
+    MAX_EDITS,
     MODES,
     Edit,
     Recipe,
@@ -57,12 +61,20 @@ from .recipe import (
 from .reevaluate import reevaluate
 from .resample import SEAM_VOXELS
 from .resolved import ResolvedEdit, resolve_edit
-from .scale import apply_edit, apply_recipe, naive_edit, recipe_from_history, scale
+from .scale import (
+    apply_edit,
+    apply_recipe,
+    naive_edit,
+    recipe_from_history,
+    recipe_shape,
+    scale,
+)
 from .units import SUFFIXES, parse_length, parse_size
 
 __all__ = [
     "AXES",
     "JSON_SCHEMA",
+    "MAX_EDITS",
     "MODES",
     "SEAM_VOXELS",
     "SUFFIXES",
@@ -77,6 +89,7 @@ __all__ = [
     "parse_position",
     "parse_size",
     "recipe_from_history",
+    "recipe_shape",
     "reevaluate",
     "resolve_edit",
     "scale",

@@ -42,6 +42,11 @@ RECIPE_VERSION = 1
 Position = float | str
 Mode = Literal["stretch", "tile", "global"]
 
+#: Most edits one recipe may hold. Each edit's planes are carried through the earlier ones on
+#: its axis and every edit re-evaluates the grid, so a recipe's cost grows with its length;
+#: real recipes hold a few (the editor sends at most 4), hostile ones thousands.
+MAX_EDITS = 64
+
 #: JSON Schema (draft 2020-12) of a recipe file; ``partscale scale --recipe`` and the web editor
 #: both produce and accept it.
 JSON_SCHEMA: dict[str, Any] = {
@@ -60,6 +65,8 @@ JSON_SCHEMA: dict[str, Any] = {
         "version": {"const": RECIPE_VERSION},
         "edits": {
             "type": "array",
+            "minItems": 1,
+            "maxItems": MAX_EDITS,
             "items": {
                 "type": "object",
                 "required": ["axis", "zone", "to"],
@@ -204,6 +211,8 @@ class Recipe:
         edits = obj["edits"]
         if not isinstance(edits, list) or not edits:
             raise InputError(f"recipe: expected a non-empty list of edits, got {edits!r}")
+        if len(edits) > MAX_EDITS:
+            raise InputError(f"recipe: expected at most {MAX_EDITS} edits, got {len(edits)}")
         return cls(tuple(Edit.parse(e, where=f"edits[{i}]") for i, e in enumerate(edits)))
 
     @classmethod

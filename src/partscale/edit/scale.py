@@ -199,8 +199,9 @@ def _apply_edit(
     report(0.05, f"{edit.mode} along {edit.axis}")
     done = _edit_arrays(csdf, r)
     report(0.9, "recording")
-    meta = _copy.deepcopy(csdf.meta)
+    meta = dict(csdf.meta)  # the history is shared (read-only); only parts_info changes here
     if isinstance(meta.get("parts_info"), list):
+        meta["parts_info"] = _copy.deepcopy(meta["parts_info"])
         update_parts_info(meta, done.parts, r, done.scale, done.copy_of)
     entry = _history_entry(csdf, edit, r, done, "scale")
     if edit.mode == "global":  # what its plane map needs (recipe coordinates)
@@ -255,6 +256,47 @@ def apply_recipe(
             kw.update(lo=h["lo"], hi=h["hi"])
         applied.append((ax, kw))
     return out
+
+
+def recipe_shape(csdf: CSDF, recipe: Recipe | dict[str, Any] | list) -> tuple[int, int, int]:
+    """(X, Y, Z) grid shape :func:`apply_recipe` would give, without computing anything.
+
+    Each edit grows its axis by ``round((DEST - END) / voxel_size)`` voxels, its planes carried
+    through the earlier edits as :func:`apply_recipe` carries them; for ``global`` the solid's
+    extent is the input's carried the same way. A shift within rounding of half a voxel can come
+    out one voxel apart from the edit's own: compare the result again when the limit is exact.
+    Positions are not validated here (the edit does that); the shape never drops below 1.
+    """
+    if not isinstance(recipe, Recipe):
+        recipe = Recipe.parse(recipe)
+    h = csdf.voxel_size
+    shape = list(csdf.shape)
+    bounds = csdf.surface_bounds()
+    extent = [[float(bounds[0, a]), float(bounds[1, a])] for a in range(3)]
+    applied: list[tuple[int, dict[str, Any]]] = []
+    for e in recipe.edits:
+        ax = e.axis_index
+        s, en, d = e.resolve(*[float(bounds[i, ax]) for i in (0, 1)])
+        planes = np.array([s, en], dtype=np.float64)
+        for a, kw in applied:
+            if a == ax:
+                planes = forward_coordinate(planes, **kw)
+        s2, e2 = float(planes[0]), float(planes[1])
+        d2 = e2 + (d - en)
+        if not np.isfinite((d2 - e2) / h):
+            raise InputError(f"to: expected a finite position, got {d}")
+        shift = round((d2 - e2) / h)
+        shape[ax] = max(1, shape[ax] + shift)
+        kw = {"mode": e.mode, "start": s2, "end": e2, "dest": e2 + shift * h}
+        lo, hi = extent[ax]
+        if e.mode == "global":
+            kw.update(lo=lo, hi=hi)
+        if e.mode != "global" and hi - lo > 0 and e2 > s2 and kw["dest"] > s2:
+            extent[ax] = [float(v) for v in forward_coordinate(np.array([lo, hi]), **kw)]
+        elif e.mode == "global" and hi > lo:
+            extent[ax] = [lo, hi + shift * h]
+        applied.append((ax, kw))
+    return (shape[0], shape[1], shape[2])
 
 
 @keyword_options
@@ -372,5 +414,6 @@ __all__ = [
     "apply_recipe",
     "naive_edit",
     "recipe_from_history",
+    "recipe_shape",
     "scale",
 ]

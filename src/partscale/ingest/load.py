@@ -152,8 +152,8 @@ def load(
         out = from_grid(**args, res=res, pad=pad, source=str(path), progress=progress)
     meta = dict(out.meta)
     meta["source"] = str(path)
-    meta["history"][0]["source"] = str(path)
-    meta["history"][0]["format"] = kind
+    first, *rest = meta["history"]
+    meta["history"] = [{**first, "source": str(path), "format": kind}, *rest]
     return out.replace(meta=meta)
 
 

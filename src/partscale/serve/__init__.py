@@ -12,12 +12,15 @@ own GLSL map) and ``handleScreen(name)``. ``?canvas=WxH`` fixes the canvas size.
 """
 
 from .app import MAX_BODY, create_app
-from .server import is_loopback, serve
-from .session import EditSession, edited_path, encode_grid, encode_parts
+from .server import allowed_hosts, canonical_host, is_loopback, serve
+from .session import EditSession, PageLimits, edited_path, encode_grid, encode_parts
 
 __all__ = [
     "MAX_BODY",
     "EditSession",
+    "PageLimits",
+    "allowed_hosts",
+    "canonical_host",
     "create_app",
     "edited_path",
     "encode_grid",

@@ -14,14 +14,20 @@ GET  /api/progress          progress of the apply in flight
 GET  /api/suggest           zone candidates of the current object (``?axis=x|y|z``: one axis)
 POST /api/snap              body: one recipe edit; the edit snapped for its mode and the moves
 POST /api/fit               body: {"size": [X, Y, Z]}; the fitted recipe and why (not applied)
-POST /api/apply             body: recipe JSON; bakes it, returns the new state
+POST /api/apply             body: recipe JSON, optionally with ``limits`` (what the page can
+                            show, see :class:`~partscale.serve.session.PageLimits`; a result
+                            beyond them is refused before computing); returns the new state
 POST /api/undo, /api/redo   returns the new state
-POST /api/save              body: {"overwrite": bool}; writes NAME.edited.csdf.npz (or NAME)
+POST /api/save              body: {"overwrite": bool, "revision": N}; writes
+                            NAME.edited.csdf.npz (or NAME); refused unless N (the revision the
+                            page shows, optional) is the current one
 GET  /api/export/mesh       GLB download; /api/export/texture: the 3D texture file
 ==========================  ==================================================================
 
 POST bodies must be JSON (``Content-Type: application/json``): a page on another origin cannot
-send that without a CORS preflight, which this server never grants.
+send that without a CORS preflight, which this server never grants. Every request must name this
+server in its Host header, and a POST from a browser must come from this server's own page
+(Origin), whatever address the server is bound to (:class:`HostGuard`).
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ import traceback
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
-from urllib.parse import quote
+from urllib.parse import quote, urlsplit
 
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
@@ -47,7 +53,8 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from .. import zones
 from ..edit import JSON_SCHEMA, Edit
 from ..errors import InputError
-from .session import EditSession
+from .server import canonical_host
+from .session import EditSession, PageLimits
 
 T = TypeVar("T")
 STATIC = Path(__file__).parent / "static"
@@ -127,26 +134,68 @@ class LimitBody:
 
 
 class HostGuard:
-    """ASGI middleware: 400 unless the Host header names one of ``hosts`` (DNS rebinding guard).
+    """ASGI middleware: the DNS-rebinding and cross-site guard, on every request.
 
-    Unlike a plain ``split(":")``, it reads bracketed IPv6 hosts (``[::1]:8000``) whole.
+    400 unless the Host header names one of ``hosts`` (compared as
+    :func:`~partscale.serve.server.canonical_host` spells them: ``LOCALHOST`` is
+    ``localhost``, ``127.000.000.001`` is ``127.0.0.1``; bracketed IPv6 read whole). A request
+    that can change something (any method but GET and HEAD) that carries an Origin header
+    (browsers send one) gets 403 unless that origin is this server's own
+    (``http://`` + the Host header): a page of another site never acts through the user's
+    browser. No host list switches the guard off.
     """
 
     def __init__(self, app: ASGIApp, hosts: list[str]):
-        self.app, self.hosts = app, {h.lower() for h in hosts}
+        self.app, self.hosts = app, {canonical_host(h) for h in hosts}
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http" or "*" in self.hosts:
+        if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        raw = dict(scope.get("headers", [])).get(b"host", b"").decode("latin-1").lower()
-        host = raw[: raw.find("]") + 1] if raw.startswith("[") else raw.split(":")[0]
+        headers = dict(scope.get("headers", []))
+        raw = headers.get(b"host", b"").decode("latin-1")
+        host, port = _split_host(raw)
         if host not in self.hosts:
-            await _error(f"host: expected one of {sorted(self.hosts)}, got {host!r}")(
+            shown = raw if len(raw) <= 60 else raw[:57] + "..."
+            await _error(f"host: expected one of {sorted(self.hosts)}, got {shown!r}")(
                 scope, receive, send
             )
             return
+        origin = headers.get(b"origin")
+        if origin is not None and scope.get("method", "GET") not in ("GET", "HEAD"):
+            text = origin.decode("latin-1")
+            if not _same_origin(text, host, port):
+                shown = text if len(text) <= 60 else text[:57] + "..."
+                await _error(
+                    f"origin: expected this editor's page (http://{raw}), got {shown!r}", 403
+                )(scope, receive, send)
+                return
         await self.app(scope, receive, send)
+
+
+def _split_host(raw: str) -> tuple[str, int | None]:
+    """``(canonical host, port or None)`` of a Host header value (``[::1]:8000`` read whole)."""
+    raw = raw.strip()
+    if raw.startswith("["):
+        end = raw.find("]") + 1
+        name, rest = raw[:end], raw[end:]
+    else:
+        name, _, rest = raw.partition(":")
+        rest = ":" + rest if rest else ""
+    port = None
+    if rest.startswith(":") and rest[1:].isdigit():
+        port = int(rest[1:])
+    elif rest:
+        return "", None  # junk after the name: matches no host
+    return canonical_host(name), port
+
+
+def _same_origin(origin: str, host: str, port: int | None) -> bool:
+    parts = urlsplit(origin)
+    if parts.scheme != "http" or parts.path not in ("", "/") or parts.query or parts.fragment:
+        return False
+    o_host, o_port = _split_host(parts.netloc)
+    return o_host == host and (o_port or 80) == (port or 80)
 
 
 def _too_large(limit: int) -> Response:
@@ -233,8 +282,9 @@ def create_app(
         The object to edit; loaded (and validated) now. Save writes ``NAME.edited.csdf.npz``
         beside it, or over it when the page asks to overwrite.
     allowed_hosts : list of str, optional
-        Host header values accepted (guards against DNS rebinding). Default: loopback names
-        only; ``["*"]`` accepts any (for ``--host``).
+        Host header values accepted (guards against DNS rebinding), in any spelling a browser
+        reads the same. Default: loopback names only; ``serve`` adds the names it was started
+        with (:func:`~partscale.serve.server.allowed_hosts`). There is no wildcard.
     max_body : int
         Largest request body in bytes; larger ones get 413.
 
@@ -251,8 +301,9 @@ def create_app(
     in_flight = 0
     progress_lock = threading.Lock()
 
-    def state(**extra: Any) -> JSONResponse:
-        body = session.state()
+    def state(body: dict[str, Any] | None = None, **extra: Any) -> JSONResponse:
+        # body: a state built under the session lock by the request's own step (apply, undo...)
+        body = dict(session.state() if body is None else body)
         body.update(extra)
         return JSONResponse(body, headers=_NO_STORE)
 
@@ -295,7 +346,7 @@ def create_app(
         with progress_lock:
             progress_state.update(fraction=float(fraction), message=str(message))
 
-    def _apply(recipe: Any) -> float:
+    def _apply(recipe: Any, limits: PageLimits | None) -> tuple[dict[str, Any], float]:
         nonlocal in_flight
         t0 = time.perf_counter()
         with progress_lock:
@@ -303,24 +354,33 @@ def create_app(
             if in_flight == 1:
                 progress_state.update(fraction=0.0, message="applying")
         try:
-            session.apply(recipe, progress=_progress)
+            after = session.apply(recipe, limits=limits, progress=_progress)
         finally:
             with progress_lock:
                 in_flight -= 1
                 if in_flight == 0:
                     progress_state.update(fraction=1.0, message="")
-        return (time.perf_counter() - t0) * 1000.0
+        return after, (time.perf_counter() - t0) * 1000.0
 
     async def apply(request: Request) -> Response:
         recipe = await _json_body(request)
-        return state(apply_ms=await _run("apply", _apply, recipe))
+        limits = None
+        if isinstance(recipe, dict) and "limits" in recipe:  # what the page can show
+            recipe = dict(recipe)
+            try:
+                limits = PageLimits.parse(recipe.pop("limits"))
+            except InputError as exc:
+                return _error(str(exc))
+        after, ms = await _run("apply", _apply, recipe, limits)
+        return state(after, apply_ms=ms)
 
     def history_step(step, what: str, missing: str):
         async def handler(request: Request) -> Response:
             await _json_body(request)
-            if not await run_in_threadpool(step):
+            after = await run_in_threadpool(step)
+            if after is None:
                 return _error(f"{what}: expected {missing}, got none", 409)
-            return state()
+            return state(after)
 
         return handler
 
@@ -329,12 +389,17 @@ def create_app(
 
     async def save(request: Request) -> Response:
         body = await _json_body(request)
-        if not isinstance(body, dict) or set(body) - {"overwrite"}:
-            return _error(f"save: expected {{'overwrite': true|false}}, got {str(body)[:80]!r}")
+        if not isinstance(body, dict) or set(body) - {"overwrite", "revision"}:
+            return _error(
+                f"save: expected {{'overwrite': true|false, 'revision': N}}, got {str(body)[:80]!r}"
+            )
         overwrite = body.get("overwrite", False)
         if not isinstance(overwrite, bool):
             return _error(f"save.overwrite: expected true or false, got {overwrite!r}")
-        written = await _run("save", lambda: session.save(overwrite=overwrite))
+        revision = body.get("revision")
+        if revision is not None and (isinstance(revision, bool) or not isinstance(revision, int)):
+            return _error(f"save.revision: expected an integer, got {str(revision)[:40]!r}")
+        written = await _run("save", lambda: session.save(overwrite=overwrite, revision=revision))
         return state(saved=written.name)
 
     # suggestions of the current object: one entry per (object, axis), the last few kept

@@ -13,35 +13,73 @@ from .._options import keyword_options
 from ..errors import InputError
 
 
+def canonical_host(name: str) -> str:
+    """``name`` as a browser puts it in a Host header: how two spellings are compared.
+
+    Lower case without a trailing dot; IPv4 in any form browsers accept (``127.000.000.001``,
+    ``127.1``, ``0x7f.0.0.1``) as a dotted quad; IPv6 compressed, in brackets.
+    """
+    n = name.strip().lower().rstrip(".")
+    inner = n[1:-1] if n.startswith("[") and n.endswith("]") else n
+    if ":" in inner:
+        try:
+            return f"[{ipaddress.IPv6Address(inner).compressed}]"
+        except ValueError:
+            return n
+    if inner and all(c in "0123456789abcdefx." for c in inner) and inner[0].isdigit():
+        try:  # the WHATWG URL parser reads IPv4 as inet_aton does (octal, hex, short forms)
+            return socket.inet_ntoa(socket.inet_aton(inner))
+        except OSError:
+            return n
+    return n
+
+
 def is_loopback(host: str) -> bool:
-    """True for ``localhost`` and loopback addresses (127.0.0.0/8, ::1)."""
-    if host == "localhost":
+    """True for ``localhost`` and loopback addresses (127.0.0.0/8, ::1), in any spelling."""
+    c = canonical_host(host)
+    if c == "localhost":
         return True
     try:
-        return ipaddress.ip_address(host.strip("[]")).is_loopback
+        return ipaddress.ip_address(c.strip("[]")).is_loopback
     except ValueError:
         return False
 
 
+def is_wildcard(host: str) -> bool:
+    """True for an address that binds every interface (``0.0.0.0``, ``::``)."""
+    return canonical_host(host) in ("0.0.0.0", "[::]")
+
+
 def url_host(host: str) -> str:
     """The host as the printed URL names it: a wildcard as 127.0.0.1, IPv6 in brackets."""
-    shown = "127.0.0.1" if host in ("0.0.0.0", "::", "[::]") else host
-    return f"[{shown}]" if ":" in shown and not shown.startswith("[") else shown
+    return "127.0.0.1" if is_wildcard(host) else canonical_host(host)
+
+
+def _this_machine() -> list[str]:
+    # what a wildcard bind is reached by from elsewhere: this machine's name and its addresses
+    names = {socket.gethostname(), socket.getfqdn()}
+    try:
+        infos = socket.getaddrinfo(socket.gethostname(), None, proto=socket.IPPROTO_TCP)
+    except OSError:
+        infos = []
+    names |= {str(info[4][0]) for info in infos}
+    return sorted(canonical_host(n) for n in names if n)
 
 
 def allowed_hosts(host: str) -> list[str]:
-    """Host headers the app accepts when bound to ``host``: loopback names and the URL's host.
+    """Host header values the app answers when bound to ``host`` (the DNS-rebinding guard).
 
-    Any for a non-loopback ``host`` (the caller asked to expose the editor). For loopback,
-    :data:`~partscale.serve.app.LOOPBACK_HOSTS` plus the host as the printed URL spells it
-    (``127.0.0.2``, ``[0:0:0:0:0:0:0:1]``), so the URL shown always answers.
+    Always :data:`~partscale.serve.app.LOOPBACK_HOSTS` plus the host the server was started
+    with, as the printed URL spells it (``127.0.0.2``, ``[::1]``, ``192.168.1.5``,
+    ``myhost``); for a wildcard bind (``0.0.0.0``, ``::``) this machine's name and addresses
+    instead. Never any name: a page on another domain that rebinds it here is refused.
     """
     from .app import LOOPBACK_HOSTS
 
-    if not is_loopback(host):
-        return ["*"]
-    shown = url_host(host).lower()
-    return LOOPBACK_HOSTS + ([shown] if shown not in LOOPBACK_HOSTS else [])
+    names = list(LOOPBACK_HOSTS)
+    extra = _this_machine() if is_wildcard(host) else [url_host(host)]
+    names += [n for n in extra if n not in names]
+    return names
 
 
 def _free_port(host: str) -> int:
@@ -77,7 +115,8 @@ def serve(
         The ``.csdf.npz`` to edit.
     host : str
         Interface to bind; loopback by default. Any other address exposes the editor (and
-        save/export) to the network, so the caller must have asked for it explicitly.
+        save/export) to the network, so the caller must have asked for it explicitly. Whatever
+        it is, requests are answered only for the names in :func:`allowed_hosts`.
     port : int
         0 picks a free port.
     open_browser : bool
@@ -93,9 +132,11 @@ def serve(
     if not (0 <= port <= 65535):
         raise InputError(f"--port: expected 0..65535, got {port}")
     loopback = is_loopback(host)
-    app = create_app(path, allowed_hosts=allowed_hosts(host))
+    hosts = allowed_hosts(host)
+    app = create_app(path, allowed_hosts=hosts)
+    bind = canonical_host(host)  # 127.000.000.001 is 127.0.0.1 to a browser: bind that
     try:
-        port = _free_port(host) if port == 0 else _check_port(host, port)
+        port = _free_port(bind) if port == 0 else _check_port(bind, port)
     except OSError as exc:
         what = (
             "--host: expected an address of this machine"
@@ -105,12 +146,13 @@ def serve(
         raise InputError(f"{what}, got {host}:{port} ({exc.strerror or exc})") from None
     if not loopback:
         say(
-            f"warning: serving on {host}, not loopback: anyone who can reach this machine can "
-            "view, edit and save this object"
+            f"warning: serving on {host}, not loopback: anyone who can reach this machine, and "
+            "any web page opened on a machine that can, can reach this editor and view, edit "
+            f"and save this object (Host names answered: {', '.join(hosts)})"
         )
     url = f"http://{url_host(host)}:{port}/"
     say(f"partscale editor for {Path(path).name}: {url}  (Ctrl-C to stop)")
-    config = uvicorn.Config(app, host=host.strip("[]"), port=port, log_level="warning")
+    config = uvicorn.Config(app, host=bind.strip("[]"), port=port, log_level="warning")
     server = uvicorn.Server(config)
     if open_browser:
         original_startup = server.startup

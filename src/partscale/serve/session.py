@@ -6,9 +6,11 @@ derives every path it writes from that file (never from a request).
 
 from __future__ import annotations
 
+import math
 import tempfile
 import threading
 from collections import OrderedDict
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -117,6 +119,52 @@ def header(c: CSDF) -> dict[str, Any]:
     }
 
 
+@dataclass(frozen=True)
+class PageLimits:
+    """What the page can show, as it tells the server with each apply (JSON ``limits``).
+
+    Attributes
+    ----------
+    max_voxels_per_axis : int or None
+        Largest grid along any axis (the page's GPU ``MAX_3D_TEXTURE_SIZE``).
+    max_voxels : int or None
+        Most voxels in all.
+    """
+
+    max_voxels_per_axis: int | None = None
+    max_voxels: int | None = None
+
+    @classmethod
+    def parse(cls, obj: Any) -> PageLimits:
+        """From ``{"max_voxels_per_axis": N, "max_voxels": M}`` (either may be left out)."""
+        names = ("max_voxels_per_axis", "max_voxels")
+        if not isinstance(obj, dict) or set(obj) - set(names):
+            raise InputError(f"limits: expected an object with keys {names}, got {_short(obj)}")
+        for name, v in obj.items():
+            if isinstance(v, bool) or not isinstance(v, int) or not 2 <= v <= 1 << 53:
+                raise InputError(f"limits.{name}: expected an integer >= 2, got {_short(v)}")
+        return cls(**obj)
+
+    def check(self, shape: tuple[int, ...], what: str) -> None:
+        """:class:`InputError` unless a grid of ``shape`` fits."""
+        got = " × ".join(map(str, shape))
+        if self.max_voxels_per_axis is not None and max(shape) > self.max_voxels_per_axis:
+            raise InputError(
+                f"{what}: expected at most {self.max_voxels_per_axis} voxels per axis (what "
+                f"this page's GPU can show), got {got}"
+            )
+        if self.max_voxels is not None and math.prod(shape) > self.max_voxels:
+            raise InputError(
+                f"{what}: expected at most {self.max_voxels} voxels (what this page can show), "
+                f"got {got} = {math.prod(shape)}"
+            )
+
+
+def _short(x: Any) -> str:
+    text = repr(x)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 class EditSession:
     """One object being edited: current CSDF, undo and redo stacks, where to save.
 
@@ -141,16 +189,25 @@ class EditSession:
 
     # -- state ----------------------------------------------------------------------------
     def state(self) -> dict[str, Any]:
-        """Header of the current object plus the session's own state."""
-        h = header(self.current)
-        h.update(
-            revision=self.revision,
-            can_undo=bool(self.undo_stack),
-            can_redo=bool(self.redo_stack),
-            unsaved=self.revision != self.saved_revision,
-            name=self.path.name,
-            save_as=edited_path(self.path).name,
-        )
+        """Header of the current object plus the session's own state, all of one revision."""
+        with self.lock:
+            snap = self._snapshot()
+        return self._describe(snap)
+
+    def _snapshot(self) -> tuple[CSDF, dict[str, Any]]:
+        # call with the lock held: the object and the session's state of one revision
+        return self.current, {
+            "revision": self.revision,
+            "can_undo": bool(self.undo_stack),
+            "can_redo": bool(self.redo_stack),
+            "unsaved": self.revision != self.saved_revision,
+        }
+
+    def _describe(self, snap: tuple[CSDF, dict[str, Any]]) -> dict[str, Any]:
+        # outside the lock: the CSDF is immutable, so its header is that revision's
+        c, own = snap
+        h = header(c)
+        h.update(own, name=self.path.name, save_as=edited_path(self.path).name)
         return h
 
     def encoded(self, kind: str) -> tuple[CSDF, bytes]:
@@ -191,39 +248,70 @@ class EditSession:
         self.revision += 1
 
     # -- edits ----------------------------------------------------------------------------
-    def apply(self, recipe: Any, *, progress: ProgressCallback | None = None) -> CSDF:
-        """Bake ``recipe`` (a Recipe or its JSON dict) into the current object (undoable)."""
-        from ..edit import Recipe, apply_recipe
+    def apply(
+        self,
+        recipe: Any,
+        *,
+        limits: PageLimits | None = None,
+        progress: ProgressCallback | None = None,
+    ) -> dict[str, Any]:
+        """Bake ``recipe`` (a Recipe or its JSON dict) into the current object (undoable).
+
+        With ``limits``, a recipe whose result the page could not show is refused
+        (:class:`InputError`) before anything is computed (its shape predicted by
+        :func:`~partscale.edit.recipe_shape`), and the result is checked again before it is
+        kept, so the session never holds an object the page cannot show. Returns the state
+        (:meth:`state`) of the revision this apply made, whatever lands after it.
+        """
+        from ..edit import Recipe, apply_recipe, recipe_shape
 
         parsed = Recipe.parse(recipe) if not isinstance(recipe, Recipe) else recipe
         with self.lock:
+            if limits is not None:
+                limits.check(recipe_shape(self.current, parsed), "apply")
             new = apply_recipe(self.current, parsed, progress=progress)
+            if limits is not None:
+                limits.check(new.shape, "apply")
             self._push(new)
+            snap = self._snapshot()
         self.grid_bytes()  # the page fetches it next: encode while still in the worker thread
-        return new
+        return self._describe(snap)
 
-    def undo(self) -> bool:
-        """Restore the object before the last apply exactly (the same arrays); False if none."""
+    def undo(self) -> dict[str, Any] | None:
+        """Restore the object before the last apply exactly (the same arrays); None if none.
+
+        Returns the state of the revision this undo made.
+        """
         return self._step(self.undo_stack, self.redo_stack)
 
-    def redo(self) -> bool:
-        """Re-apply the last undone edit (the same arrays); False if none."""
+    def redo(self) -> dict[str, Any] | None:
+        """Re-apply the last undone edit (the same arrays); None if none (else as undo)."""
         return self._step(self.redo_stack, self.undo_stack)
 
-    def _step(self, source: list[CSDF], other: list[CSDF]) -> bool:
+    def _step(self, source: list[CSDF], other: list[CSDF]) -> dict[str, Any] | None:
         with self.lock:
             if not source:
-                return False
+                return None
             other.append(self.current)
             self.current = source.pop()
             self.revision += 1
-            return True
+            snap = self._snapshot()
+        return self._describe(snap)
 
     # -- output ---------------------------------------------------------------------------
-    def save(self, *, overwrite: bool = False) -> Path:
-        """Write the current object to ``NAME.edited.csdf.npz``, or over the input file."""
+    def save(self, *, overwrite: bool = False, revision: int | None = None) -> Path:
+        """Write the current object to ``NAME.edited.csdf.npz``, or over the input file.
+
+        ``revision``: the one the page shows; another current revision is refused
+        (:class:`InputError`), so what is saved is what the user saw.
+        """
         with self.lock:
             c, rev = self.current, self.revision
+        if revision is not None and revision != rev:
+            raise InputError(
+                f"save: expected the object shown (revision {revision}), got revision {rev} "
+                "on the server; reload the page to see it"
+            )
         target = self.path if overwrite else edited_path(self.path)
         save(c, target)
         with self.lock:

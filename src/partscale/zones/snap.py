@@ -114,9 +114,9 @@ def describe_moves(moves: list[Move], units: str | None) -> str:
 def record_snap(csdf: CSDF, moves: list[Move]) -> CSDF:
     """``csdf`` with its last history entry noting the snapped planes (``snapped``)."""
     meta = dict(csdf.meta)
-    hist = [dict(h) if isinstance(h, dict) else h for h in meta.get("history", [])]
+    hist = list(meta.get("history", []))  # entries are read-only and shared: replace the last
     if not hist or not isinstance(hist[-1], dict):
         raise InputError("history: expected an edit to record the snapping on, got none")
-    hist[-1]["snapped"] = [m.to_json() for m in moves]
+    hist[-1] = {**hist[-1], "snapped": [m.to_json() for m in moves]}
     meta["history"] = hist
     return csdf.replace(meta=meta)

@@ -14,6 +14,7 @@ import typer
 
 from ..errors import InputError
 from . import _common
+from .complete import complete
 from .edit import edit
 from .eval import eval_suite
 from .export import export
@@ -44,6 +45,7 @@ def _root(
 
 # In pipeline order, which is the order `partscale --help` lists them.
 app.command("import")(import_)
+app.command("complete")(complete)
 app.command("info")(info)
 app.command("segment")(segment)
 app.command("scale")(scale)

@@ -14,7 +14,15 @@ from __future__ import annotations
 
 from .api import complete, complete_file, completion_colors, provenance
 from .fuse import GUESSED, KIND_COLORS, KINDS, MIRRORED, OBSERVED
-from .scan import DEPTH_SCALE, Frame, frame_from_points, read_frame, read_intrinsics, read_points, read_views
+from .scan import (
+    DEPTH_SCALE,
+    Frame,
+    frame_from_points,
+    read_frame,
+    read_intrinsics,
+    read_points,
+    read_views,
+)
 
 __all__ = [
     "DEPTH_SCALE",

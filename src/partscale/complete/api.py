@@ -46,8 +46,10 @@ def _is_floor(P: np.ndarray, plane, inliers: np.ndarray) -> bool:
     a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
     a /= np.linalg.norm(a)
     b = np.cross(n, a)
+
     def extent(X):
         return max(np.subtract(*np.percentile(X @ d, [98, 2])) for d in (a, b))
+
     return extent(P[inliers]) > 1.3 * extent(rest)
 
 
@@ -240,7 +242,9 @@ def complete(
     if box is not None:
         box = tuple(int(b) for b in box)
         if len(box) != 4 or box[2] <= box[0] or box[3] <= box[1]:
-            raise InputError(f"--box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
+            raise InputError(
+                f"--box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}"
+            )
     report(0.0, "reading the scan")
     ob = observe(frames, box=box, source=source)
     frames, Q, QC, U, found = ob.frames, ob.points, ob.colors, ob.U, ob.floor
@@ -273,8 +277,14 @@ def complete(
         Vinv = np.linalg.inv(V)
         syms = [
             sym_mod.Symmetry(
-                s.kind, (V @ _sym4(s) @ Vinv)[:3, :3], (V @ _sym4(s) @ Vinv)[:3, 3],
-                s.support, s.violation, s.fold, s.bands, s.params,
+                s.kind,
+                (V @ _sym4(s) @ Vinv)[:3, :3],
+                (V @ _sym4(s) @ Vinv)[:3, 3],
+                s.support,
+                s.violation,
+                s.fold,
+                s.bands,
+                s.params,
             )
             for s in syms
         ]
@@ -354,8 +364,17 @@ def complete(
 
     report(0.55, "carving and closing")
     sdf, rgb, prov = fuse_mod.fuse(
-        grid_to_world, tuple(shape), origin, h, Sg, SC, SK, carver.free, sym_free,
-        height_world, closure,
+        grid_to_world,
+        tuple(shape),
+        origin,
+        h,
+        Sg,
+        SC,
+        SK,
+        carver.free,
+        sym_free,
+        height_world,
+        closure,
     )
     if not (sdf < 0).any():
         raise InputError(f"{source}: expected a solid after completion, got none (all carved)")
@@ -381,7 +400,10 @@ def complete(
                 "kind": "mirror",
                 "support": round(s.support, 3),
                 "violation": round(s.violation, 3),
-                "heights": [[a, b] if np.isfinite([a, b]).all() else [max(a, -1e9), min(b, 1e9)] for a, b in s.bands],
+                "heights": [
+                    [a, b] if np.isfinite([a, b]).all() else [max(a, -1e9), min(b, 1e9)]
+                    for a, b in s.bands
+                ],
             }
             for s in syms
         ]
@@ -475,8 +497,7 @@ def complete_file(
     given = [x is not None for x in (scan, depth, views)]
     if sum(given) != 1:
         raise InputError(
-            "complete: expected exactly one of a scan file, --depth or --views, got "
-            f"{sum(given)}"
+            f"complete: expected exactly one of a scan file, --depth or --views, got {sum(given)}"
         )
     if scan is not None:
         if intrinsics is not None or color is not None:

@@ -163,7 +163,9 @@ def _diffuse(rgb: np.ndarray, known: np.ndarray, band: np.ndarray) -> np.ndarray
     todo = band[~flat_known[band]]
     blurred = np.empty((len(todo), 3), np.float32)
     for c in range(3):
-        num = ndimage.gaussian_filter(rgb[..., c].astype(np.float32) * w, DIFFUSE_SIGMA, truncate=3.0)
+        num = ndimage.gaussian_filter(
+            rgb[..., c].astype(np.float32) * w, DIFFUSE_SIGMA, truncate=3.0
+        )
         blurred[:, c] = num.ravel()[todo] / np.maximum(den.ravel()[todo], 1e-12)
     reached = den.ravel()[todo] > 1e-4
     flat = rgb.reshape(-1, 3)

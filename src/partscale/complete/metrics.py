@@ -30,7 +30,12 @@ def chamfer_fscore(pred: np.ndarray, gt: np.ndarray, tau: float) -> dict:
     p = float((d_pg <= tau).mean())
     r = float((d_gp <= tau).mean())
     f = 2 * p * r / (p + r) if p + r > 0 else 0.0
-    return {"cd_l1": float((d_pg.mean() + d_gp.mean()) / 2), "precision": p, "recall": r, "fscore": f}
+    return {
+        "cd_l1": float((d_pg.mean() + d_gp.mean()) / 2),
+        "precision": p,
+        "recall": r,
+        "fscore": f,
+    }
 
 
 def colour_error(pred, pred_rgb, gt, gt_rgb, tau: float) -> float:

@@ -64,11 +64,7 @@ class Frame:
         fx, fy, cx, cy = self.K[0, 0], self.K[1, 1], self.K[0, 2], self.K[1, 2]
         cam = np.stack([(u - cx) / fx * z, (v - cy) / fy * z, z], axis=1)
         world = cam @ self.pose[:3, :3].T + self.pose[:3, 3]
-        rgb = (
-            self.color[v, u]
-            if self.color is not None
-            else np.full((len(z), 3), 160, np.uint8)
-        )
+        rgb = self.color[v, u] if self.color is not None else np.full((len(z), 3), 160, np.uint8)
         return world, rgb, v * self.depth.shape[1] + u
 
 
@@ -101,7 +97,9 @@ def check_pose(pose, what: str) -> np.ndarray:
         raise InputError(f"{what}: expected a finite 4x4 matrix, got shape {a.shape}")
     R = a[:3, :3]
     if not np.allclose(R @ R.T, np.eye(3), atol=1e-3) or np.linalg.det(R) < 0:
-        raise InputError(f"{what}: expected a rigid transform (rotation + translation), got {a[:3, :3].round(3).tolist()}")
+        raise InputError(
+            f"{what}: expected a rigid transform (rotation + translation), got {a[:3, :3].round(3).tolist()}"
+        )
     return a
 
 
@@ -192,11 +190,15 @@ def read_points(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
 
     path = Path(path)
     if not path.is_file():
-        raise InputError(f"{path}: expected a scan (PLY point cloud or range mesh), got no such file")
+        raise InputError(
+            f"{path}: expected a scan (PLY point cloud or range mesh), got no such file"
+        )
     try:
         geom = trimesh.load(str(path), process=False)
     except Exception as exc:
-        raise InputError(f"{path}: expected a PLY point cloud or mesh, got {one_line(exc)}") from None
+        raise InputError(
+            f"{path}: expected a PLY point cloud or mesh, got {one_line(exc)}"
+        ) from None
     if isinstance(geom, trimesh.Scene):
         geoms = list(geom.dump()) if geom.geometry else []
         geom = trimesh.util.concatenate(geoms) if geoms else None
@@ -295,11 +297,7 @@ def read_views(path: str | os.PathLike) -> list[Frame]:
             if "intrinsics" not in v:
                 raise InputError(f"{where}: expected intrinsics with the depth image, got none")
             K = v["intrinsics"]
-            K = (
-                path.parent / K
-                if isinstance(K, str)
-                else np.asarray(K, np.float64).reshape(3, 3)
-            )
+            K = path.parent / K if isinstance(K, str) else np.asarray(K, np.float64).reshape(3, 3)
             frames.append(
                 read_frame(
                     path.parent / v["depth"],

@@ -256,7 +256,9 @@ def rotation_axis(
             axes = np.stack([gx.ravel(), gz.ravel()], axis=1)
             mapped = np.stack(
                 [
-                    np.concatenate([B @ _rotation(a, cx, cz)[0].T + _rotation(a, cx, cz)[1] for a in angles])
+                    np.concatenate(
+                        [B @ _rotation(a, cx, cz)[0].T + _rotation(a, cx, cz)[1] for a in angles]
+                    )
                     for cx, cz in axes
                 ]
             )

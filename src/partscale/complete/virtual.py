@@ -94,7 +94,12 @@ def virtual_scan(
         s = 4 * float(np.linalg.norm(hi - lo))
         c = (lo + hi) / 2
         fv = np.array(
-            [[c[0] - s, lo[1], c[2] - s], [c[0] + s, lo[1], c[2] - s], [c[0] + s, lo[1], c[2] + s], [c[0] - s, lo[1], c[2] + s]]
+            [
+                [c[0] - s, lo[1], c[2] - s],
+                [c[0] + s, lo[1], c[2] - s],
+                [c[0] + s, lo[1], c[2] + s],
+                [c[0] - s, lo[1], c[2] + s],
+            ]
         )
         V = np.concatenate([V, fv])
         base = len(mesh.vertices)
@@ -126,13 +131,18 @@ def virtual_scan(
         col[~obj] = FLOOR_RGB
         if obj.any():
             bary = trimesh.triangles.points_to_barycentric(V[F[tri[obj]]], loc[obj])
-            col[obj] = mesh.color_at(tri[obj], np.clip(bary, 0, 1) / np.clip(bary, 0, 1).sum(1, keepdims=True))
-        col = np.clip(col.astype(np.int64) + rng.normal(0, 3, col.shape).round().astype(np.int64), 0, 255)
+            col[obj] = mesh.color_at(
+                tri[obj], np.clip(bary, 0, 1) / np.clip(bary, 0, 1).sum(1, keepdims=True)
+            )
+        col = np.clip(
+            col.astype(np.int64) + rng.normal(0, 3, col.shape).round().astype(np.int64), 0, 255
+        )
         rgb[ray] = col.astype(np.uint8)
         depth = depth.reshape(H, W)
         # no reading along depth discontinuities (mixed pixels) ...
         dz = np.maximum(
-            np.abs(ndimage.maximum_filter(depth, 3) - depth), np.abs(depth - ndimage.minimum_filter(depth, 3))
+            np.abs(ndimage.maximum_filter(depth, 3) - depth),
+            np.abs(depth - ndimage.minimum_filter(depth, 3)),
         )
         edge = (dz > 0.05 * np.maximum(depth, 1e-3)) & (rng.random(depth.shape) < 0.5)
         # ... and in blotches (IR speckle lost on dark or shiny spots)

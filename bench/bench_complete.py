@@ -65,7 +65,8 @@ def import_time(points: np.ndarray) -> float:
     from partscale.ingest import from_trimesh
 
     e = 0.002
-    tri = np.stack([points, points + [e, 0, 0], points + [0, e, 0]], axis=1)
+    dx, dy = np.array([e, 0, 0]), np.array([0, e, 0])
+    tri = np.stack([points, points + dx, points + dy], axis=1)
     mesh = trimesh.Trimesh(
         tri.reshape(-1, 3), np.arange(3 * len(points)).reshape(-1, 3), process=False
     )

@@ -6,9 +6,8 @@ import json
 
 import numpy as np
 import pytest
-from PIL import Image
-
 from conftest import assert_bad_input, data_path, run_cli
+from PIL import Image
 
 
 def _ply(path, points, colors=None):
@@ -119,7 +118,7 @@ def test_completion_is_watertight_and_records_what_it_did(chair_runs):
 
 def test_three_views_beat_one_and_colour_is_kept(chair_runs):
     raw1, full1, col1, _ = chair_runs[1]
-    raw3, full3, col3, _ = chair_runs[3]
+    _, full3, col3, _ = chair_runs[3]
     assert full3["fscore"] >= full1["fscore"]
     assert full3["recall"] >= raw1["recall"]
     # flat material colours come back within 30/255 where the geometry is right

@@ -389,7 +389,7 @@ def complete(
         "mirrored": round(counts[fuse_mod.MIRRORED] / total, 4),
         "guessed": round(counts[fuse_mod.GUESSED] / total, 4),
         "views": len(frames),
-        "points_observed": int(len(Q)),
+        "points_observed": len(Q),
         "copies_dropped_in_free_space": n_dropped,
         "floor": None
         if found is None

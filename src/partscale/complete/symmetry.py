@@ -82,7 +82,7 @@ class _Scorer:
 
     def __call__(self, mapped: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """mapped (K, M, 3) -> support (K, M) bool, violation (K, M) bool."""
-        K, M, _ = mapped.shape
+        _, M, _ = mapped.shape
         flat = mapped.reshape(-1, 3)
         idx = np.floor((flat - self.lo) / self.cell).astype(np.int64)
         ok = ((idx >= 0) & (idx < self.shape)).all(axis=1)

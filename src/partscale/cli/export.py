@@ -37,8 +37,8 @@ def export(
 ) -> None:
     """Export a CSDF as a mesh (marching cubes, vertex colours) and/or RGBA 3D textures."""
     # heavy modules (numba, trimesh, scikit-image) load only when this command runs
-    from .. import csdf as csdf_mod
     from .. import export as export_mod
+    from ..csdf import load
 
     textures = list(texture or [])
     if mesh is None and not textures:
@@ -54,7 +54,7 @@ def export(
         if not p.parent.is_dir():
             raise InputError(f"{p}: expected an existing output folder, got none at {p.parent}")
     export_mod.check_size(size)
-    c = csdf_mod.load(path)
+    c = load(path)
     written: list[Path] = []
     with progress_bar("export") as bar:
         n = len(outputs) + (size is not None)

@@ -8,10 +8,10 @@ from typing import Annotated
 
 import typer
 
-from .. import csdf as csdf_mod
+from ..csdf import CSDF, load
 
 
-def summary(c: csdf_mod.CSDF) -> dict:
+def summary(c: CSDF) -> dict:
     """A JSON-serialisable summary of a CSDF (what ``info --json`` prints)."""
     try:
         sb = c.surface_bounds()
@@ -30,7 +30,9 @@ def summary(c: csdf_mod.CSDF) -> dict:
         "source": c.meta.get("source"),
         "history": c.meta.get("history", []),
         "completion": {
-            k: v for k, v in c.meta["completion"].items() if k in ("observed", "mirrored", "guessed")
+            k: v
+            for k, v in c.meta["completion"].items()
+            if k in ("observed", "mirrored", "guessed")
         }
         if isinstance(c.meta.get("completion"), dict)
         else None,
@@ -42,7 +44,7 @@ def info(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
 ) -> None:
     """Show shape, voxel size, extent in world units, number of parts and the edit history."""
-    s = summary(csdf_mod.load(path))
+    s = summary(load(path))
     if as_json:
         typer.echo(json.dumps(s, indent=2))
         return

@@ -32,8 +32,8 @@ def render(
 ) -> None:
     """Render a CSDF to a PNG (sphere tracing of the SDF, its colours, simple shading)."""
     # heavy modules (numba, trimesh, scikit-image) load only when this command runs
-    from .. import csdf as csdf_mod
     from .. import render as render_mod
+    from ..csdf import load
 
     check_output(output, suffixes=(".png",), what="an image file")
     if view not in render_mod.VIEWS:
@@ -42,7 +42,7 @@ def render(
         raise InputError(
             f"{output}: expected an existing output folder, got none at {output.parent}"
         )
-    c = csdf_mod.load(path)
+    c = load(path)
     if completion:
         from ..complete import completion_colors
 

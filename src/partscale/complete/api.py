@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._util import keyword_options
+from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
@@ -332,7 +332,7 @@ def complete(
     Sg = _apply(world_to_grid @ Uinv, S)
     lo, hi = Sg.min(axis=0), Sg.max(axis=0)
     h = float((hi - lo).max()) / res
-    pad = int(math.ceil(closure)) + BAND_VOXELS + 2
+    pad = math.ceil(closure) + BAND_VOXELS + 2
     shape = np.ceil((hi - lo) / h - 1e-9).astype(np.int64) + 1 + 2 * pad
     origin = (lo + hi) / 2 - (shape - 1) / 2 * h
     if upright:
@@ -340,7 +340,7 @@ def complete(
         cut = int(max(0, math.floor((lo[1] - origin[1]) / h) - pad))
         origin[1] += cut * h
         shape[1] -= cut
-    from .._util import check_memory
+    from .._memory import check_memory
 
     check_memory(tuple(int(s) for s in shape), 40, what=f"{source} at --res {res}")
     carver.margin = CARVE_MARGIN * h

@@ -276,7 +276,7 @@ def read_views(path: str | os.PathLike) -> list[Frame]:
     "depth_scale"}`` per RGB-D frame or ``{"points", "pose"}`` per scan (paths relative to the
     file)."""
     path = Path(path)
-    from .._util import read_json
+    from .._files import read_json
 
     data = read_json(path, what="a list of views")
     views = data.get("views") if isinstance(data, dict) else data

@@ -82,7 +82,7 @@ class _Scorer:
 
     def __call__(self, mapped: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """mapped (K, M, 3) -> support (K, M) bool, violation (K, M) bool."""
-        _, M, _ = mapped.shape
+        K, M, _ = mapped.shape
         flat = mapped.reshape(-1, 3)
         idx = np.floor((flat - self.lo) / self.cell).astype(np.int64)
         ok = ((idx >= 0) & (idx < self.shape)).all(axis=1)
@@ -103,7 +103,7 @@ def _slab_score(sup: np.ndarray, vio: np.ndarray, slab: np.ndarray):
     MAX_VIOLATION and its support at least MIN_SUPPORT: a swivel chair's base turns
     independently of its seat, so a plane can hold above the base and fail on it.
     """
-    K, M = sup.shape
+    M = sup.shape[1]
     onehot = np.zeros((M, SLABS))
     onehot[np.arange(M), slab] = 1.0
     n = onehot.sum(axis=0)

@@ -7,7 +7,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from .._util import atomic_path, keyword_options
+from .._files import atomic_path
+from .._options import keyword_options
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve

@@ -17,7 +17,7 @@ from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import fuse as fuse_mod
 from . import symmetry as sym_mod
-from .carve import Carver
+from .carve import Carver, FreeGrid
 from .floor import clusters, find_floor
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
@@ -35,6 +35,9 @@ CARVE_MARGIN = 0.5
 
 SYMMETRY_MARGIN = 3.0
 """Voxels a symmetric copy must lie in front of a reading to contradict the scan."""
+FREE_GRID_VOXELS = 1.5
+"""Voxels between the points where the symmetry search tabulates the free space (a query reads
+the nearest, at most 0.87 of these away: well inside SYMMETRY_MARGIN)."""
 
 
 def _is_floor(P: np.ndarray, plane, inliers: np.ndarray) -> bool:
@@ -57,7 +60,7 @@ def _up_prior(frame: Frame) -> np.ndarray:
     return -frame.pose[:3, 1]
 
 
-def _isolate(frames, P, pix, height, box, cropped) -> np.ndarray:
+def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
     """(N,) bool: the object's points (above the floor, in the box, or found automatically)."""
     above = height > 2 * FLOOR_TOL
     if not above.any():
@@ -103,8 +106,32 @@ def _isolate(frames, P, pix, height, box, cropped) -> np.ndarray:
             "scan: expected an object standing on the floor (at most "
             f"{MAX_OBJECT_EXTENT} m across), got none; pick one with --box"
         )
+    # parts of the same object the sensor separated (a swivel chair's seat above its base, with
+    # the gas-lift column lost along silhouettes): clusters standing over its footprint join it
+    a = np.cross(up, [1.0, 0, 0] if abs(up[0]) < 0.9 else [0, 1.0, 0])
+    a /= np.linalg.norm(a)
+    flat = np.stack([P[idx] @ a, P[idx] @ np.cross(up, a)], axis=1)
+    members = {int(best)}
+    for _ in range(3):
+        m = np.isin(lab, list(members))
+        f_lo, f_hi = flat[m].min(axis=0) - CLUSTER_CELL, flat[m].max(axis=0) + CLUSTER_CELL
+        grew = False
+        for c in np.flatnonzero(counts >= 30):
+            if c in members:
+                continue
+            mc = lab == c
+            centre = flat[mc].mean(axis=0)
+            if not ((centre >= f_lo) & (centre <= f_hi)).all():
+                continue
+            both = P[idx[m | mc]]
+            if (both.max(axis=0) - both.min(axis=0)).max() > MAX_OBJECT_EXTENT:
+                continue
+            members.add(int(c))
+            grew = True
+        if not grew:
+            break
     out = np.zeros(len(P), bool)
-    out[idx[lab == best]] = True
+    out[idx[np.isin(lab, list(members))]] = True
     return out
 
 
@@ -184,7 +211,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = None
         height = P @ up
         height = height - height.min() + 3 * FLOOR_TOL  # every point is object
-    obj = _isolate(frames, P, pix, height, box, cropped)
+    obj = _isolate(frames, P, pix, height, up, box, cropped)
     Q, QC = P[obj], C[obj]
     if len(Q) < 30:
         raise InputError(f"{source}: expected an object of at least 30 points, got {len(Q)}")
@@ -254,9 +281,14 @@ def complete(
     carver = Carver(frames, CARVE_MARGIN * h0)
     Uinv = np.linalg.inv(U)
 
+    # symmetry tests: "clearly in front of a reading", beyond depth noise and slopes; tabulated
+    # once in the first upright frame around the object (copies land within about its size)
+    U0 = U
+    lo0, hi0 = Qu.min(axis=0) - 0.25 * ext, Qu.max(axis=0) + 0.25 * ext
+    free_grid = FreeGrid(carver, Uinv, lo0, hi0, FREE_GRID_VOXELS * h0, SYMMETRY_MARGIN * h0)
+
     def free_up(p):
-        # symmetry tests: "clearly in front of a reading", beyond depth noise and slopes
-        return carver.free(_apply(Uinv, p), SYMMETRY_MARGIN * h0)
+        return free_grid(_apply(U0 @ Uinv, p))
 
     report(0.15, "symmetries")
     syms: list[sym_mod.Symmetry] = []

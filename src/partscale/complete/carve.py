@@ -98,3 +98,46 @@ class Carver:
                 free |= front & (~inside | through[vi, ui])
             out |= free
         return out
+
+
+class FreeGrid:
+    """The carver's free-space test tabulated on a regular grid of a frame, for the many
+    queries of the symmetry search (one carving of the grid instead of one per candidate).
+
+    Parameters
+    ----------
+    carver : Carver
+    to_world : (4, 4) float64
+        The grid's frame in the world.
+    lo, hi : (3,) float64
+        Corners of the tabulated box in that frame; queries outside it ask the carver.
+    cell : float
+        Grid spacing; a query reads its nearest grid point, so ``margin`` should exceed
+        about ``cell``.
+    margin : float
+        World units in front of a reading, as :meth:`Carver.free`.
+    """
+
+    def __init__(self, carver: Carver, to_world: np.ndarray, lo, hi, cell: float, margin: float):
+        self.carver, self.to_world, self.margin = carver, np.asarray(to_world, np.float64), margin
+        self.lo = np.asarray(lo, np.float64)
+        self.cell = float(cell)
+        self.shape = np.ceil((np.asarray(hi) - self.lo) / cell).astype(np.int64) + 1
+        g = np.indices(tuple(self.shape), dtype=np.float32).reshape(3, -1).T
+        centres = self.lo.astype(np.float32) + g * np.float32(cell)
+        R, t = self.to_world[:3, :3].astype(np.float32), self.to_world[:3, 3].astype(np.float32)
+        self.table = carver.free(centres @ R.T + t, margin).reshape(tuple(self.shape))
+
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        """(N,) bool: ``points`` (N, 3) in the grid's frame that some view saw through."""
+        P = np.asarray(points)
+        idx = np.rint((P - self.lo) / self.cell).astype(np.int64)
+        inside = ((idx >= 0) & (idx < self.shape)).all(axis=1)
+        out = np.zeros(len(P), bool)
+        i = idx[inside]
+        out[inside] = self.table[i[:, 0], i[:, 1], i[:, 2]]
+        if not inside.all():
+            far = P[~inside]
+            world = far @ self.to_world[:3, :3].T + self.to_world[:3, 3]
+            out[~inside] = self.carver.free(world, self.margin)
+        return out

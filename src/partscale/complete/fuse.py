@@ -95,6 +95,9 @@ def fuse(
             hit = f(world[sel])
             keep[sel[hit]] = False
             may[sel[hit]] = False
+    # the voxels holding the surface points are solid whatever the carving says: a sheet seen
+    # from one side would otherwise lose the half of its voxels whose centres lie in front of it
+    keep |= occ.ravel()[near]
     solid = np.zeros(shape, bool)
     solid.ravel()[near[keep]] = True
     solid = ndimage.binary_fill_holes(solid)

@@ -26,6 +26,8 @@ SAMPLES = 1500
 PAIRS = 60000
 BASE_FRACTION = 0.3
 SLABS = 8
+REFINE_PEAKS = 3
+"""Vote peaks whose neighbourhoods the plane search refines (the rest are scored once)."""
 MIN_ROTATION_SUPPORT = 0.5
 MIN_COVER = 0.6
 """A symmetry must hold on slabs holding at least this fraction of the points."""
@@ -177,20 +179,26 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
     peaks = hist == ndimage.maximum_filter(hist, size=5, mode=("wrap", "constant"))
     order = np.argsort(hist[peaks])[::-1][:12]
     ti, di = np.nonzero(peaks)
-    cands = []
+    peaks = []
     for k in order:
         t0 = (ti[k] + 0.5) * np.pi / n_t
         d0 = d_lo + (di[k] + 0.5) * (d_hi - d_lo + 1e-9) / n_d
-        if any(_angle_gap(t0, t) < np.radians(30) for t in taken):
-            continue
-        for dt in np.radians(np.arange(-3, 4, 1.0)):
-            for dd in np.arange(-2, 2.01, 0.5) * cell:
-                cands.append((t0 + dt, d0 + dd))
-    if not cands:
+        if not any(_angle_gap(t0, t) < np.radians(30) for t in taken):
+            peaks.append((t0, d0))
+    if not peaks:
         return None
-    mapped = np.stack([S @ _mirror(t, d)[0].T + _mirror(t, d)[1] for t, d in cands])
-    sup, vio = scorer(mapped)
-    score, ok, covered, s_sup, s_vio = _slab_score(sup, vio, _slab_ids(S[:, 1], top))
+    slab = _slab_ids(S[:, 1], top)
+    # coarse to fine: the peaks as voted, then a fine grid around the best few of them
+    sup, vio = scorer(_mirror_all(S, np.array(peaks)))
+    score = _slab_score(sup, vio, slab)[0]
+    cands = [
+        (t0 + dt, d0 + dd)
+        for t0, d0 in (peaks[i] for i in np.argsort(score)[::-1][:REFINE_PEAKS])
+        for dt in np.radians(np.arange(-3, 4, 1.0))
+        for dd in np.arange(-2, 2.01, 0.5) * cell
+    ]
+    sup, vio = scorer(_mirror_all(S, np.array(cands)))
+    score, ok, covered, s_sup, s_vio = _slab_score(sup, vio, slab)
     best = int(np.argmax(np.where(covered >= MIN_COVER, score, -np.inf)))
     if covered[best] < MIN_COVER:
         return None
@@ -205,6 +213,13 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
         bands=_bands(ok[best], top),
         params={"theta": float(t % np.pi), "offset": float(d), "cover": float(covered[best])},
     )
+
+
+def _mirror_all(S: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    """(K, M, 3): points S (M, 3) mirrored in each vertical plane (theta, offset) of (K, 2)."""
+    n = np.stack([np.cos(planes[:, 0]), np.zeros(len(planes)), np.sin(planes[:, 0])], axis=1)
+    dist = S @ n.T - planes[:, 1]  # (M, K) signed distances to each plane
+    return S[None] - 2 * dist.T[:, :, None] * n[:, None, :]
 
 
 def _bands(ok: np.ndarray, top: float) -> tuple:
@@ -238,12 +253,12 @@ def rotation_axis(
     if len(base) < 50:
         return None
     scorer = _Scorer(base, free, cell)
-    B = base[rng.choice(len(base), min(len(base), 600), replace=False)]
+    B = base[rng.choice(len(base), min(len(base), 300), replace=False)]
     lo, hi = B[:, [0, 2]].min(axis=0), B[:, [0, 2]].max(axis=0)
     best = None
     for k in folds:
         angles = 2 * np.pi * np.arange(1, k) / k
-        step = max(cell, (hi - lo).max() / 14)
+        step = max(cell, (hi - lo).max() / 10)
         centre = None
         for _ in range(3):  # coarse to fine around the best axis so far
             if centre is None:

@@ -15,6 +15,7 @@ import typer
 from ..errors import InputError
 from . import _common
 from .batch import batch, optional_values
+from .complete import complete
 from .editor import editor
 from .eval import eval_suite
 from .export import export
@@ -47,6 +48,7 @@ def _root(
 
 # In pipeline order, which is the order `partscale --help` lists them.
 app.command("import")(import_)
+app.command("complete")(complete)
 app.command("info")(info)
 app.command("segment")(segment)
 app.command("suggest")(suggest)

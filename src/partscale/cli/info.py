@@ -29,6 +29,13 @@ def summary(c: CSDF) -> dict:
         "parts": c.n_parts,
         "source": c.meta.get("source"),
         "history": c.meta.get("history", []),
+        "completion": {
+            k: v
+            for k, v in c.meta["completion"].items()
+            if k in ("observed", "mirrored", "guessed")
+        }
+        if isinstance(c.meta.get("completion"), dict)
+        else None,
     }
 
 
@@ -54,6 +61,12 @@ def info(
         typer.echo("solid:       none (no voxel inside)")
     typer.echo(f"parts:       {s['parts'] or 'not segmented'}")
     typer.echo(f"source:      {s['source']}")
+    if s["completion"]:
+        k = s["completion"]
+        typer.echo(
+            f"completion:  surface {k['observed']:.0%} observed, {k['mirrored']:.0%} mirrored, "
+            f"{k['guessed']:.0%} guessed"
+        )
     typer.echo(f"history:     {len(s['history'])} operation(s)")
     for i, op in enumerate(s["history"]):
         typer.echo(f"  {i + 1}. {json.dumps(op)}")

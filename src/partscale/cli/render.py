@@ -19,6 +19,13 @@ def render(
     parts: Annotated[
         bool, typer.Option("--parts", help="Colour by part (needs a segmented CSDF).")
     ] = False,
+    completion: Annotated[
+        bool,
+        typer.Option(
+            "--completion",
+            help="Colour a completed scan by kind: observed blue, mirrored amber, guessed red.",
+        ),
+    ] = False,
     scale_bar: Annotated[
         bool, typer.Option("--scale-bar", help="Draw a labelled scale bar.")
     ] = False,
@@ -36,6 +43,10 @@ def render(
             f"{output}: expected an existing output folder, got none at {output.parent}"
         )
     c = load(path)
+    if completion:
+        from ..complete import completion_colors
+
+        c = c.replace(rgb=completion_colors(c))
     with progress_bar("render") as bar:
         image = render_mod.render(
             c, view=view, size=size, parts=parts, scale_bar=scale_bar, progress=bar

@@ -1,0 +1,96 @@
+"""``partscale complete``: a partial scan (range mesh, point cloud, RGB-D frame, views) -> CSDF."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import InputError
+from . import _common
+
+
+def _numbers(text: str | None, n: int, what: str) -> list[float] | None:
+    if text is None:
+        return None
+    parts = text.replace(",", " ").split()
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        raise InputError(f"{what}: expected {n} numbers, got {text!r}") from None
+    if len(vals) != n:
+        raise InputError(f"{what}: expected {n} numbers, got {len(vals)}")
+    return vals
+
+
+def complete(
+    scan: Annotated[
+        Path | None,
+        typer.Argument(help="Partial range mesh or point cloud (PLY, camera frame, metres)."),
+    ] = None,
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")] = Path(
+        "completed.csdf.npz"
+    ),
+    res: Annotated[int, typer.Option("--res", help="Voxels along the longest side.")] = 128,
+    depth: Annotated[
+        Path | None, typer.Option("--depth", help="16-bit depth PNG of an RGB-D frame.")
+    ] = None,
+    color: Annotated[Path | None, typer.Option("--color", help="Its colour image.")] = None,
+    intrinsics: Annotated[
+        Path | None, typer.Option("--intrinsics", help="Intrinsics JSON (Open3D or fx/fy/cx/cy).")
+    ] = None,
+    depth_scale: Annotated[
+        float, typer.Option("--depth-scale", help="Depth units per metre (TUM: 5000).")
+    ] = 5000.0,
+    views: Annotated[
+        Path | None,
+        typer.Option("--views", help="JSON list of registered views (depth+pose or points+pose)."),
+    ] = None,
+    camera: Annotated[
+        str | None,
+        typer.Option("--camera", help="Camera-to-world pose: 16 numbers, row major."),
+    ] = None,
+    box: Annotated[
+        str | None,
+        typer.Option("--box", help="Pixel box x0,y0,x1,y1 of the object in the (first) frame."),
+    ] = None,
+    upright: Annotated[
+        bool, typer.Option("--upright", help="Write it floor down, y up (default: input frame).")
+    ] = False,
+    no_symmetry: Annotated[
+        bool, typer.Option("--no-symmetry", help="Do not look for mirror planes or rotations.")
+    ] = False,
+) -> None:
+    """Complete a partial scan into a watertight coloured SDF (.csdf.npz).
+
+    Free space seen by the camera stays empty, the observed surface is kept, the floor gives up,
+    symmetries consistent with the free space are applied and the rest is closed thinly.
+    """
+    _common.check_output(output, suffixes=(".csdf.npz",), what="a CSDF file")
+    pose = _numbers(camera, 16, "--camera")
+    b = _numbers(box, 4, "--box")
+    from .. import complete as complete_mod
+    from .. import csdf as csdf_mod
+
+    with _common.progress_bar("complete") as progress:
+        c = complete_mod.complete_file(
+            scan,
+            depth=depth,
+            color=color,
+            intrinsics=intrinsics,
+            depth_scale=depth_scale,
+            camera=pose,
+            views=views,
+            res=res,
+            box=tuple(int(v) for v in b) if b else None,
+            upright=upright,
+            symmetry=not no_symmetry,
+            progress=progress,
+        )
+    csdf_mod.save(c, output)
+    m = c.meta["completion"]
+    _common.done(
+        f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m; surface "
+        f"{m['observed']:.0%} observed, {m['mirrored']:.0%} mirrored, {m['guessed']:.0%} guessed"
+    )

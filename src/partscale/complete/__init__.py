@@ -1,0 +1,44 @@
+"""Completion: partial scans (range meshes, point clouds, RGB-D frames) -> watertight CSDFs.
+
+Public API: :func:`complete` (frames -> CSDF), :func:`complete_file` (files -> CSDF),
+:func:`provenance` and :func:`completion_colors` (what ``render --completion`` shows), the readers
+:func:`read_frame`, :func:`read_points`, :func:`read_views`, :func:`frame_from_points`,
+:class:`Frame`, the virtual scanner :func:`virtual_scan` and the scores :func:`chamfer_fscore`.
+
+Modules: ``scan`` (frames and readers), ``floor`` (RANSAC floor, clusters), ``carve`` (free
+space), ``symmetry`` (mirror planes, rotations), ``fuse`` (the solid, distances, colours),
+``api`` (orchestration), ``virtual`` (virtual scans of complete meshes), ``metrics``.
+"""
+
+from __future__ import annotations
+
+from .api import complete, complete_file, completion_colors, provenance
+from .fuse import GUESSED, KIND_COLORS, KINDS, MIRRORED, OBSERVED
+from .scan import (
+    DEPTH_SCALE,
+    Frame,
+    frame_from_points,
+    read_frame,
+    read_intrinsics,
+    read_points,
+    read_views,
+)
+
+__all__ = [
+    "DEPTH_SCALE",
+    "GUESSED",
+    "KINDS",
+    "KIND_COLORS",
+    "MIRRORED",
+    "OBSERVED",
+    "Frame",
+    "complete",
+    "complete_file",
+    "completion_colors",
+    "frame_from_points",
+    "provenance",
+    "read_frame",
+    "read_intrinsics",
+    "read_points",
+    "read_views",
+]

@@ -1,0 +1,553 @@
+"""Partial scan -> completed CSDF: the orchestration of the completion stage."""
+
+from __future__ import annotations
+
+import base64
+import math
+import os
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._options import keyword_options
+from ..csdf import BAND_VOXELS, CSDF, make
+from ..errors import InputError
+from ..progress import ProgressCallback, resolve
+from . import fuse as fuse_mod
+from . import symmetry as sym_mod
+from .carve import Carver, FreeGrid
+from .floor import clusters, find_floor
+from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
+
+METHOD = "carve+floor+symmetry+closure"
+FLOOR_TOL = 0.015
+"""Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
+CLUSTER_CELL = 0.03
+"""Metres: points closer than about this are one object when isolating it automatically."""
+MAX_OBJECT_EXTENT = 2.0
+CLOSURE = 1.5
+"""Voxels behind a surface point that the solid extends into space nobody saw (the closure)."""
+CARVE_MARGIN = 0.5
+"""Voxels a point must lie in front of a reading to be free space (absorbs sensor noise)."""
+
+
+SYMMETRY_MARGIN = 3.0
+"""Voxels a symmetric copy must lie in front of a reading to contradict the scan."""
+FREE_GRID_VOXELS = 1.5
+"""Voxels between the points where the symmetry search tabulates the free space (a query reads
+the nearest, at most 0.87 of these away: well inside SYMMETRY_MARGIN)."""
+
+
+def _is_floor(P: np.ndarray, plane, inliers: np.ndarray) -> bool:
+    """A floor reaches beyond what stands on it (a chair's base is no wider than the chair)."""
+    rest = P[~inliers & (plane.height(P) > 2 * FLOOR_TOL)]
+    if len(rest) < 10:
+        return True
+    n = plane.normal
+    a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
+    a /= np.linalg.norm(a)
+    b = np.cross(n, a)
+
+    def extent(X):
+        return max(np.subtract(*np.percentile(X @ d, [98, 2])) for d in (a, b))
+
+    return extent(P[inliers]) > 1.3 * extent(rest)
+
+
+def _up_prior(frame: Frame) -> np.ndarray:
+    return -frame.pose[:3, 1]
+
+
+def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
+    """(N,) bool: the object's points (above the floor, in the box, or found automatically)."""
+    above = height > 2 * FLOOR_TOL
+    if not above.any():
+        raise InputError(
+            "scan: expected an object above the floor, got only floor (or no points above it)"
+        )
+    if box is not None:
+        x0, y0, x1, y1 = box
+        W = frames[0].shape[1]
+        u, v = pix % W, pix // W
+        inbox = (pix >= 0) & (u >= x0) & (u < x1) & (v >= y0) & (v < y1)
+        sel = above & inbox
+        if not sel.any():
+            raise InputError(
+                f"--box: expected scan points above the floor in pixels {list(box)}, got none"
+            )
+        lab = clusters(P[sel], CLUSTER_CELL)
+        big = np.argmax(np.bincount(lab))
+        out = np.zeros(len(P), bool)
+        out[np.flatnonzero(sel)[lab == big]] = True
+        return out
+    if cropped:
+        return above
+    idx = np.flatnonzero(above)
+    lab = clusters(P[idx], CLUSTER_CELL)
+    n = lab.max() + 1
+    H, W = frames[0].shape
+    best, best_d = -1, np.inf
+    counts = np.bincount(lab, minlength=n)
+    for c in np.flatnonzero(counts >= max(200, 0.002 * len(idx))):
+        m = idx[lab == c]
+        ext = P[m].max(axis=0) - P[m].min(axis=0)
+        if ext.max() > MAX_OBJECT_EXTENT or height[m].min() > 0.15:
+            continue  # a wall, the room, or something not standing on the floor
+        p0 = pix[m][pix[m] >= 0]
+        if len(p0) == 0:
+            continue
+        d = math.hypot(np.mean(p0 % W) - W / 2, np.mean(p0 // W) - H / 2)
+        if d < best_d:
+            best, best_d = c, d
+    if best < 0:
+        raise InputError(
+            "scan: expected an object standing on the floor (at most "
+            f"{MAX_OBJECT_EXTENT} m across), got none; pick one with --box"
+        )
+    # parts of the same object the sensor separated (a swivel chair's seat above its base, with
+    # the gas-lift column lost along silhouettes): clusters standing over its footprint join it
+    a = np.cross(up, [1.0, 0, 0] if abs(up[0]) < 0.9 else [0, 1.0, 0])
+    a /= np.linalg.norm(a)
+    flat = np.stack([P[idx] @ a, P[idx] @ np.cross(up, a)], axis=1)
+    members = {int(best)}
+    for _ in range(3):
+        m = np.isin(lab, list(members))
+        f_lo, f_hi = flat[m].min(axis=0) - CLUSTER_CELL, flat[m].max(axis=0) + CLUSTER_CELL
+        grew = False
+        for c in np.flatnonzero(counts >= 30):
+            if c in members:
+                continue
+            mc = lab == c
+            centre = flat[mc].mean(axis=0)
+            if not ((centre >= f_lo) & (centre <= f_hi)).all():
+                continue
+            both = P[idx[m | mc]]
+            if (both.max(axis=0) - both.min(axis=0)).max() > MAX_OBJECT_EXTENT:
+                continue
+            members.add(int(c))
+            grew = True
+        if not grew:
+            break
+    out = np.zeros(len(P), bool)
+    out[idx[np.isin(lab, list(members))]] = True
+    return out
+
+
+def _upright(up: np.ndarray, forward: np.ndarray, floor_offset: float, centre: np.ndarray):
+    """(4, 4) world -> upright: y = up (floor at 0), z = towards the camera, centred."""
+    y = up / np.linalg.norm(up)
+    z = -(forward - (forward @ y) * y)
+    if np.linalg.norm(z) < 1e-6:  # looking straight down
+        z = np.cross(np.array([1.0, 0, 0]), y)
+    z /= np.linalg.norm(z)
+    x = np.cross(y, z)
+    U = np.eye(4)
+    U[:3, :3] = np.stack([x, y, z])
+    U[:3, 3] = -U[:3, :3] @ centre
+    U[1, 3] = -floor_offset
+    return U
+
+
+def _apply(T: np.ndarray, P: np.ndarray) -> np.ndarray:
+    P = np.asarray(P)
+    dt = np.float32 if P.dtype == np.float32 else np.float64
+    return P @ T[:3, :3].T.astype(dt) + T[:3, 3].astype(dt)
+
+
+def _sym4(s: sym_mod.Symmetry) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = s.A, s.b
+    return T
+
+
+@dataclass(frozen=True, eq=False)
+class Observation:
+    """What a scan says about one object: its points (N, 3) world and colours (N, 3) uint8,
+    ``U`` (4, 4) world -> upright (y up, floor at 0, centred), the floor (Plane, inliers) or None,
+    and the (denoised) frames."""
+
+    frames: list
+    points: np.ndarray
+    colors: np.ndarray
+    U: np.ndarray
+    floor: object
+
+
+def observe(frames: list[Frame], *, box=None, source: str = "scan"):
+    """The object's observed points and the upright frame: what every completion starts from.
+
+    Returns
+    -------
+    Observation
+    """
+    # sensor noise would roughen every observed surface: smooth the range images (not the
+    # frames made from meshes, whose points are kept as given)
+    frames = [f if f.cropped else denoise(f) for f in frames]
+    pts, cols, pix = [], [], []
+    for i, f in enumerate(frames):
+        p, c, q = f.points()
+        pts.append(p)
+        cols.append(c)
+        pix.append(q if i == 0 else np.full(len(q), -1))
+    P, C, pix = np.concatenate(pts), np.concatenate(cols), np.concatenate(pix)
+    if len(P) < 10:
+        raise InputError(f"{source}: expected a scan with depth readings, got {len(P)} points")
+    cropped = all(f.cropped for f in frames)
+    up = _up_prior(frames[0])
+    found = find_floor(P, up, FLOOR_TOL)
+    support = None
+    if found is not None and not _is_floor(P, *found):
+        # a flat underside (a swivel chair's base) in a cropped scan: it gives up, not a floor
+        support, found = found[0], None
+    if found is not None:
+        plane, _ = found
+        up, floor_offset = plane.normal, plane.offset
+        height = plane.height(P)
+    else:
+        if support is not None:
+            up = support.normal
+        floor_offset = None
+        height = P @ up
+        height = height - height.min() + 3 * FLOOR_TOL  # every point is object
+    obj = _isolate(frames, P, pix, height, up, box, cropped)
+    Q, QC = P[obj], C[obj]
+    if len(Q) < 30:
+        raise InputError(f"{source}: expected an object of at least 30 points, got {len(Q)}")
+    if floor_offset is None:
+        floor_offset = float((Q @ up).min())
+    centre = Q.mean(axis=0)
+    U = _upright(up, frames[0].pose[:3, 2], floor_offset, centre)
+    return Observation(frames, Q, QC, U, found)
+
+
+@keyword_options
+def complete(
+    frames: list[Frame],
+    *,
+    res: int = 128,
+    box: tuple[int, int, int, int] | None = None,
+    upright: bool = False,
+    symmetry: bool = True,
+    closure: float = CLOSURE,
+    source: str = "scan",
+    progress: ProgressCallback | None = None,
+) -> CSDF:
+    """Complete a partial scan into a watertight coloured SDF.
+
+    Parameters
+    ----------
+    frames : list of Frame
+        One or more registered views (:func:`read_frame`, :func:`frame_from_points`).
+    res : int
+        Voxels along the completed object's longest side (>= 16).
+    box : (x0, y0, x1, y1), optional
+        Pixel rectangle of the first frame holding the object (default: found automatically:
+        the object standing on the floor nearest the image centre; a cropped scan is all object).
+    upright : bool
+        Write the grid in the upright frame (floor at y = 0, y up, the mirror plane at x = 0)
+        instead of the input's frame.
+    symmetry : bool
+        Look for and apply mirror planes and rotations (off: the closure alone).
+    closure : float
+        Voxels behind the surface that close the solid where nothing else does.
+
+    Returns
+    -------
+    CSDF
+        ``meta['completion']``: fractions of the surface ``observed``, ``mirrored`` (symmetric
+        copies) and ``guessed``, the symmetries and floor found, ``to_input_frame`` (4x4, grid
+        frame -> input frame) and the per-voxel provenance (:func:`provenance`).
+    """
+    from ..ingest.mesh_sdf import check_res
+
+    report = resolve(progress)
+    res = check_res(res, source)
+    if not frames:
+        raise InputError(f"{source}: expected at least one view, got none")
+    if box is not None:
+        box = tuple(int(b) for b in box)
+        if len(box) != 4 or box[2] <= box[0] or box[3] <= box[1]:
+            raise InputError(
+                f"--box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}"
+            )
+    report(0.0, "reading the scan")
+    ob = observe(frames, box=box, source=source)
+    frames, Q, QC, U, found = ob.frames, ob.points, ob.colors, ob.U, ob.floor
+    Qu = _apply(U, Q)
+    ext = Qu.max(axis=0) - Qu.min(axis=0)
+    h0 = float(ext.max()) / res
+    carver = Carver(frames, CARVE_MARGIN * h0)
+    Uinv = np.linalg.inv(U)
+
+    # symmetry tests: "clearly in front of a reading", beyond depth noise and slopes; tabulated
+    # once in the first upright frame around the object (copies land within about its size)
+    U0 = U
+    lo0, hi0 = Qu.min(axis=0) - 0.25 * ext, Qu.max(axis=0) + 0.25 * ext
+    free_grid = FreeGrid(carver, Uinv, lo0, hi0, FREE_GRID_VOXELS * h0, SYMMETRY_MARGIN * h0)
+
+    def free_up(p):
+        return free_grid(_apply(U0 @ Uinv, p))
+
+    report(0.15, "symmetries")
+    syms: list[sym_mod.Symmetry] = []
+    rng = np.random.default_rng(0)
+    sub = rng.choice(len(Qu), min(len(Qu), 20000), replace=False)
+    cell = 1.5 * h0
+    if symmetry:
+        syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell)
+    if syms:
+        # turn the upright frame so the first mirror plane is x = 0
+        p = syms[0].params
+        n = np.array([np.cos(p["theta"]), 0.0, np.sin(p["theta"])])
+        if n[0] < 0:
+            n = -n
+        V = np.eye(4)
+        V[:3, :3] = np.stack([n, [0, 1, 0], np.cross(n, [0, 1, 0])])
+        V[0, 3] = -float(n @ (syms[0].b / 2))
+        Vinv = np.linalg.inv(V)
+        syms = [
+            sym_mod.Symmetry(
+                s.kind,
+                (V @ _sym4(s) @ Vinv)[:3, :3],
+                (V @ _sym4(s) @ Vinv)[:3, 3],
+                s.support,
+                s.violation,
+                s.fold,
+                s.bands,
+                s.params,
+            )
+            for s in syms
+        ]
+        U = V @ U
+        Uinv = np.linalg.inv(U)
+        Qu = _apply(U, Q)
+    rot = sym_mod.rotation_axis(Qu[sub], free_up, cell) if symmetry else None
+
+    report(0.3, "symmetric copies")
+    # the group generated by the mirrors (two planes: also their composition), then the base's
+    # rotations; copies that land where a camera saw through are dropped
+    group = [(_sym4(s), s.where) for s in syms]
+    if len(group) == 2:
+        both = syms[0].where
+        group.append((group[1][0] @ group[0][0], lambda p: both(p) & syms[1].where(p)))
+    surf, surf_c, kind = [Qu], [QC], [np.full(len(Qu), fuse_mod.OBSERVED, np.uint8)]
+    for g, where in group:
+        w = where(Qu)
+        cp = _apply(g, Qu[w])
+        surf.append(cp)
+        surf_c.append(QC[w])
+        kind.append(np.full(len(cp), fuse_mod.MIRRORED, np.uint8))
+    rot_steps = []
+    if rot is not None:
+        allp, allc = np.concatenate(surf), np.concatenate(surf_c)
+        low = rot.where(allp)
+        step = np.eye(4)
+        for _ in range(rot.fold - 1):
+            step = _sym4(rot) @ step
+            rot_steps.append((step.copy(), rot.where))
+            surf.append(_apply(step, allp[low]))
+            surf_c.append(allc[low])
+            kind.append(np.full(int(low.sum()), fuse_mod.MIRRORED, np.uint8))
+    S, SC, SK = np.concatenate(surf), np.concatenate(surf_c), np.concatenate(kind)
+    copy = SK != fuse_mod.OBSERVED
+    if copy.any():
+        bad = np.zeros(len(S), bool)
+        bad[copy] = free_up(S[copy])
+        S, SC, SK = S[~bad], SC[~bad], SK[~bad]
+    n_dropped = int(copy.sum() - (SK != fuse_mod.OBSERVED).sum())
+
+    report(0.45, "grid")
+    grid_to_world = Uinv if upright else np.eye(4)
+    world_to_grid = np.linalg.inv(grid_to_world)
+    Sg = _apply(world_to_grid @ Uinv, S)
+    lo, hi = Sg.min(axis=0), Sg.max(axis=0)
+    h = float((hi - lo).max()) / res
+    pad = math.ceil(closure) + BAND_VOXELS + 2
+    shape = np.ceil((hi - lo) / h - 1e-9).astype(np.int64) + 1 + 2 * pad
+    origin = (lo + hi) / 2 - (shape - 1) / 2 * h
+    if upright:
+        # the floor is the solid's lowest possible level: keep the grid from wasting space below
+        cut = int(max(0, math.floor((lo[1] - origin[1]) / h) - pad))
+        origin[1] += cut * h
+        shape[1] -= cut
+    from .._memory import check_memory
+
+    check_memory(tuple(int(s) for s in shape), 40, what=f"{source} at --res {res}")
+    carver.margin = CARVE_MARGIN * h
+
+    sym_free = []
+    for g, where in group + rot_steps:
+        gi = np.linalg.inv(g)
+
+        def f(pw, gi=gi, where=where):
+            # a symmetric view of the free space, only at heights where the symmetry holds
+            pu = _apply(U, pw)
+            out = np.zeros(len(pw), bool)
+            w = where(pu)
+            out[w] = carver.free(_apply(Uinv @ gi, pu[w]))
+            return out
+
+        sym_free.append(f)
+
+    def height_world(pw):
+        return _apply(U, pw)[:, 1]
+
+    report(0.55, "carving and closing")
+    sdf, rgb, prov = fuse_mod.fuse(
+        grid_to_world,
+        tuple(shape),
+        origin,
+        h,
+        Sg,
+        SC,
+        SK,
+        carver.free,
+        sym_free,
+        height_world,
+        closure,
+    )
+    if not (sdf < 0).any():
+        raise InputError(f"{source}: expected a solid after completion, got none (all carved)")
+    report(0.95, "metadata")
+    surface = np.abs(sdf) <= h
+    counts = np.bincount(prov[surface], minlength=4).astype(np.float64)
+    total = max(counts[1:].sum(), 1.0)
+    to_input = grid_to_world
+    completion = {
+        "method": METHOD,
+        "observed": round(counts[fuse_mod.OBSERVED] / total, 4),
+        "mirrored": round(counts[fuse_mod.MIRRORED] / total, 4),
+        "guessed": round(counts[fuse_mod.GUESSED] / total, 4),
+        "views": len(frames),
+        "points_observed": len(Q),
+        "copies_dropped_in_free_space": n_dropped,
+        "floor": None
+        if found is None
+        else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
+        "up": U[1, :3].round(6).tolist(),
+        "symmetries": [
+            {
+                "kind": "mirror",
+                "support": round(s.support, 3),
+                "violation": round(s.violation, 3),
+                "heights": [
+                    [a, b] if np.isfinite([a, b]).all() else [max(a, -1e9), min(b, 1e9)]
+                    for a, b in s.bands
+                ],
+            }
+            for s in syms
+        ]
+        + (
+            [
+                {
+                    "kind": "rotation",
+                    "fold": rot.fold,
+                    "support": round(rot.support, 3),
+                    "violation": round(rot.violation, 3),
+                }
+            ]
+            if rot is not None
+            else []
+        ),
+        "frame": "upright" if upright else "input",
+        "to_input_frame": to_input.round(9).tolist(),
+        "upright_from_input": U.round(9).tolist(),
+        "provenance": _encode(prov),
+    }
+    history = {
+        "op": "complete",
+        "source": source,
+        "method": METHOD,
+        "res": res,
+        "views": len(frames),
+        "box": list(box) if box is not None else None,
+        "upright": bool(upright),
+        "symmetry": bool(symmetry),
+        "closure_voxels": closure,
+        "carve_margin_voxels": CARVE_MARGIN,
+        "floor_tol_m": FLOOR_TOL,
+        "cluster_cell_m": CLUSTER_CELL,
+        "symmetry_min_support": sym_mod.MIN_SUPPORT,
+        "symmetry_max_violation": sym_mod.MAX_VIOLATION,
+    }
+    meta = {"source": source, "units": "m", "history": [history], "completion": completion}
+    report(1.0, "done")
+    return make(sdf, rgb, None, origin, h, meta)
+
+
+def _encode(prov: np.ndarray) -> dict:
+    data = base64.b64encode(zlib.compress(np.ascontiguousarray(prov).tobytes(), 6)).decode()
+    return {"encoding": "uint8 C-order, zlib, base64", "shape": list(prov.shape), "data": data}
+
+
+def provenance(csdf: CSDF) -> np.ndarray:
+    """(X, Y, Z) uint8 kind of surface near each voxel: 0 none, 1 observed, 2 mirrored,
+    3 guessed. Raises :class:`InputError` for a CSDF that is not an unedited completion."""
+    comp = csdf.meta.get("completion")
+    if not isinstance(comp, dict) or "provenance" not in comp:
+        raise InputError(
+            "render --completion: expected a CSDF made by partscale complete, got none"
+        )
+    p = comp["provenance"]
+    if list(p.get("shape", [])) != list(csdf.shape):
+        raise InputError(
+            f"render --completion: expected the grid the completion wrote {p.get('shape')}, got "
+            f"{list(csdf.shape)} (edited since)"
+        )
+    raw = zlib.decompress(base64.b64decode(p["data"]))
+    return np.frombuffer(raw, np.uint8).reshape(csdf.shape)
+
+
+def completion_colors(csdf: CSDF) -> np.ndarray:
+    """(X, Y, Z, 3) uint8: the display colour of each voxel's kind of surface
+    (:data:`partscale.complete.fuse.KIND_COLORS`), for ``render --completion``."""
+    from scipy import ndimage
+
+    prov = provenance(csdf)
+    lut = np.full((4, 3), 128, np.uint8)
+    for k, c in fuse_mod.KIND_COLORS.items():
+        lut[k] = c
+    ind = ndimage.distance_transform_edt(prov == 0, return_distances=False, return_indices=True)
+    return lut[prov[tuple(ind)]]
+
+
+def complete_file(
+    scan: str | os.PathLike | None = None,
+    *,
+    depth: str | os.PathLike | None = None,
+    color: str | os.PathLike | None = None,
+    intrinsics: str | os.PathLike | None = None,
+    depth_scale: float = 5000.0,
+    camera=None,
+    views: str | os.PathLike | None = None,
+    **options,
+) -> CSDF:
+    """Read a scan (a PLY/OBJ range mesh or point cloud in the camera frame, an RGB-D frame, or a
+    JSON list of registered views) and :func:`complete` it."""
+    given = [x is not None for x in (scan, depth, views)]
+    if sum(given) != 1:
+        raise InputError(
+            f"complete: expected exactly one of a scan file, --depth or --views, got {sum(given)}"
+        )
+    if scan is not None:
+        if intrinsics is not None or color is not None:
+            raise InputError(
+                f"{scan}: expected --color/--intrinsics only with --depth, got them with a mesh"
+            )
+        P, C = read_points(scan)
+        pose = np.eye(4) if camera is None else camera
+        from .scan import check_pose
+
+        pose = check_pose(pose, "--camera")
+        world = P @ pose[:3, :3].T + pose[:3, 3]
+        frames = [frame_from_points(world, C, pose)]
+        source = str(scan)
+    elif depth is not None:
+        frames = [read_frame(depth, color, intrinsics, depth_scale=depth_scale, pose=camera)]
+        source = str(depth)
+    else:
+        frames = read_views(views)
+        source = str(views)
+    return complete(frames, source=Path(source).name and source, **options)

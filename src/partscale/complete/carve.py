@@ -1,0 +1,143 @@
+"""Space carving: which points did a camera see through?
+
+A point is *free* (outside every object) when some view's ray through it reached a reading
+farther than the point (by more than ``margin``), or, in a cropped scan's frame, when it projects
+outside the object's closed silhouette (the ray went past the object: the visual-hull rule).
+Everything else is unknown: behind a surface, outside every field of view, or in a pixel with no
+reading. The test is vectorised over points (voxel centres or candidate surface points).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from .scan import Frame
+
+CHUNK = 1 << 20
+HOLE_REACH = 3
+"""Pixels: how far a missing reading looks for a neighbouring one to carve with."""
+SILHOUETTE_CLOSING = 2
+"""Pixels: gaps in a cropped scan's silhouette up to about twice this wide count as holes of the
+sensor (unknown), not as background seen through."""
+SILHOUETTE_HOLE_FRACTION = 0.015
+"""Enclosed holes in the silhouette smaller than this fraction of its area are sensor holes."""
+
+
+def silhouette(frame: Frame) -> np.ndarray:
+    """(H, W) bool: the object's closed silhouette in a cropped frame (readings, small gaps and
+    small enclosed holes closed)."""
+    from skimage.morphology import remove_small_holes
+
+    valid = frame.depth > 0
+    r = SILHOUETTE_CLOSING
+    disk = np.hypot(*np.mgrid[-r : r + 1, -r : r + 1]) <= r + 0.5
+    closed = ndimage.binary_closing(np.pad(valid, r + 1), structure=disk)[
+        r + 1 : -r - 1, r + 1 : -r - 1
+    ]
+    closed |= valid
+    area = int(closed.sum())
+    return remove_small_holes(closed, max_size=max(1, int(SILHOUETTE_HOLE_FRACTION * area)))
+
+
+class Carver:
+    """Free-space test against a fixed list of frames (silhouettes computed once).
+
+    Parameters
+    ----------
+    frames : list of Frame
+    margin : float
+        World units a point must lie in front of a reading to count as free (sensor noise).
+    """
+
+    def __init__(self, frames: list[Frame], margin: float):
+        self.frames = frames
+        self.margin = float(margin)
+        self._through = [~silhouette(f) if f.cropped else None for f in frames]
+        # a pixel without a reading carves up to its farthest neighbouring reading: sensors
+        # drop pixels along silhouettes (mixed depths) and in blotches on surfaces, and in
+        # both cases the ray passed at least that far (the near side of the edge would have
+        # returned); without this every silhouette keeps a rim of unknown space
+        self._depth = []
+        for f in frames:
+            d = f.depth
+            if not f.cropped:
+                fill = ndimage.maximum_filter(d, 2 * HOLE_REACH + 1)
+                d = np.where(d > 0, d, fill)
+            self._depth.append(d)
+
+    def free(self, points: np.ndarray, margin: float | None = None) -> np.ndarray:
+        """(N,) bool: ``points`` (N, 3) world positions that some view saw through (by more
+        than ``margin``, default the carver's)."""
+        P = np.asarray(points, np.float32)
+        m = self.margin if margin is None else float(margin)
+        out = np.zeros(len(P), bool)
+        for s in range(0, len(P), CHUNK):
+            out[s : s + CHUNK] = self._free_chunk(P[s : s + CHUNK], m)
+        return out
+
+    def _free_chunk(self, P: np.ndarray, margin: float) -> np.ndarray:
+        out = np.zeros(len(P), bool)
+        for f, through, depth in zip(self.frames, self._through, self._depth, strict=True):
+            R = f.pose[:3, :3].astype(np.float32)
+            t = f.pose[:3, 3].astype(np.float32)
+            cam = (P - t) @ R
+            z = cam[:, 2]
+            front = z > 1e-6
+            zs = np.where(front, z, 1.0)
+            u = np.rint(cam[:, 0] / zs * f.K[0, 0] + f.K[0, 2]).astype(np.int64)
+            v = np.rint(cam[:, 1] / zs * f.K[1, 1] + f.K[1, 2]).astype(np.int64)
+            H, W = f.shape
+            inside = front & (u >= 0) & (u < W) & (v >= 0) & (v < H)
+            ui, vi = np.where(inside, u, 0), np.where(inside, v, 0)
+            d = depth[vi, ui]
+            free = inside & (d > 0) & (z < d - margin)
+            if through is not None:
+                # the crop removed the background: rays past the object's silhouette (or past
+                # the image, which just covers the object) saw nothing at any depth
+                free |= front & (~inside | through[vi, ui])
+            out |= free
+        return out
+
+
+class FreeGrid:
+    """The carver's free-space test tabulated on a regular grid of a frame, for the many
+    queries of the symmetry search (one carving of the grid instead of one per candidate).
+
+    Parameters
+    ----------
+    carver : Carver
+    to_world : (4, 4) float64
+        The grid's frame in the world.
+    lo, hi : (3,) float64
+        Corners of the tabulated box in that frame; queries outside it ask the carver.
+    cell : float
+        Grid spacing; a query reads its nearest grid point, so ``margin`` should exceed
+        about ``cell``.
+    margin : float
+        World units in front of a reading, as :meth:`Carver.free`.
+    """
+
+    def __init__(self, carver: Carver, to_world: np.ndarray, lo, hi, cell: float, margin: float):
+        self.carver, self.to_world, self.margin = carver, np.asarray(to_world, np.float64), margin
+        self.lo = np.asarray(lo, np.float64)
+        self.cell = float(cell)
+        self.shape = np.ceil((np.asarray(hi) - self.lo) / cell).astype(np.int64) + 1
+        g = np.indices(tuple(self.shape), dtype=np.float32).reshape(3, -1).T
+        centres = self.lo.astype(np.float32) + g * np.float32(cell)
+        R, t = self.to_world[:3, :3].astype(np.float32), self.to_world[:3, 3].astype(np.float32)
+        self.table = carver.free(centres @ R.T + t, margin).reshape(tuple(self.shape))
+
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        """(N,) bool: ``points`` (N, 3) in the grid's frame that some view saw through."""
+        P = np.asarray(points)
+        idx = np.rint((P - self.lo) / self.cell).astype(np.int64)
+        inside = ((idx >= 0) & (idx < self.shape)).all(axis=1)
+        out = np.zeros(len(P), bool)
+        i = idx[inside]
+        out[inside] = self.table[i[:, 0], i[:, 1], i[:, 2]]
+        if not inside.all():
+            far = P[~inside]
+            world = far @ self.to_world[:3, :3].T + self.to_world[:3, 3]
+            out[~inside] = self.carver.free(world, self.margin)
+        return out

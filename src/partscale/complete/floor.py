@@ -1,0 +1,104 @@
+"""The floor: a RANSAC plane that gives "up" and the support bound, and what stands on it.
+
+A floor is a plane whose normal lies within ``MAX_TILT_DEG`` of the up prior (the camera's
+negative y axis), with at least ``MIN_INLIER_FRACTION`` of the points on it and almost none below
+it (a desk top has the floor and the chairs below it; the floor has only noise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+MAX_TILT_DEG = 40.0
+MIN_INLIER_FRACTION = 0.04
+MAX_BELOW_FRACTION = 0.03
+ITERATIONS = 600
+
+
+@dataclass(frozen=True)
+class Plane:
+    """Points ``p`` with ``normal @ p == offset``; ``normal`` (3,) unit, pointing up."""
+
+    normal: np.ndarray
+    offset: float
+
+    def height(self, points: np.ndarray) -> np.ndarray:
+        """(N,) signed height of ``points`` (N, 3) above the plane."""
+        return np.asarray(points) @ self.normal - self.offset
+
+
+def _fit(points: np.ndarray, up: np.ndarray) -> Plane:
+    c = points.mean(axis=0)
+    _, _, vt = np.linalg.svd(points - c, full_matrices=False)
+    n = vt[-1]
+    n = n if n @ up >= 0 else -n
+    return Plane(n, float(n @ c))
+
+
+def find_floor(points: np.ndarray, up_prior: np.ndarray, tol: float, *, seed: int = 0):
+    """The floor plane of a scene, or None.
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+        World points of the whole scan.
+    up_prior : (3,) float64
+        Expected up direction (the camera's -y axis in the world).
+    tol : float
+        Inlier distance, world units.
+
+    Returns
+    -------
+    (Plane, (N,) bool inliers) or None when no plane qualifies.
+    """
+    P = np.asarray(points, np.float64)
+    if len(P) < 50:
+        return None
+    up = np.asarray(up_prior, np.float64)
+    up = up / np.linalg.norm(up)
+    rng = np.random.default_rng(seed)
+    sub = P[rng.choice(len(P), min(len(P), 4000), replace=False)]
+    tri = sub[rng.integers(0, len(sub), (ITERATIONS, 3))]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    norm = np.linalg.norm(n, axis=1)
+    ok = norm > 1e-12
+    n = n[ok] / norm[ok, None]
+    tri = tri[ok]
+    n *= np.where(n @ up >= 0, 1.0, -1.0)[:, None]
+    ok = n @ up >= np.cos(np.radians(MAX_TILT_DEG))
+    n, tri = n[ok], tri[ok]
+    if len(n) == 0:
+        return None
+    off = np.einsum("kd,kd->k", n, tri[:, 0])
+    h = sub @ n.T - off  # (S, K) heights
+    inl = (np.abs(h) <= tol).mean(axis=0)
+    below = (h < -3 * tol).mean(axis=0)
+    good = (inl >= MIN_INLIER_FRACTION) & (below <= MAX_BELOW_FRACTION)
+    if not good.any():
+        return None
+    best = int(np.argmax(np.where(good, inl, -1)))
+    plane = Plane(n[best], float(off[best]))
+    for _ in range(2):  # least-squares refinement on the inliers
+        inliers = np.abs(plane.height(P)) <= tol
+        plane = _fit(P[inliers], up)
+    inliers = np.abs(plane.height(P)) <= tol
+    if np.degrees(np.arccos(np.clip(plane.normal @ up, -1, 1))) > MAX_TILT_DEG:
+        return None
+    return plane, inliers
+
+
+def clusters(points: np.ndarray, cell: float) -> np.ndarray:
+    """(N,) int labels (0..C-1) of 26-connected clusters of ``points`` at ``cell`` resolution."""
+    P = np.asarray(points)
+    lo = P.min(axis=0)
+    idx = np.floor((P - lo) / cell).astype(np.int64)
+    shape = idx.max(axis=0) + 1
+    if np.prod(shape) > 64e6:  # huge scenes: coarser cells keep the grid in memory
+        return clusters(points, cell * float(np.cbrt(np.prod(shape) / 64e6)) * 1.01)
+    occ = np.zeros(tuple(shape), bool)
+    occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
+    lab, _ = ndimage.label(occ, structure=np.ones((3, 3, 3), bool))
+    return lab[idx[:, 0], idx[:, 1], idx[:, 2]] - 1

@@ -1,0 +1,180 @@
+"""Fusion: surface points, free space and symmetries -> a watertight coloured SDF on a grid.
+
+The solid is every voxel within ``closure`` voxels of a surface point (observed, or a symmetric
+copy that the free space allows) that no camera saw through, directly or in a symmetric view
+(the mirror image of a free voxel is free unless it is next to the observed surface), and that
+is above the floor; enclosed cavities are filled. So the observed surface bounds the solid where
+it was seen, a mirrored surface where it was mirrored, and elsewhere the solid is closed
+``closure`` voxels behind the surface: the conservative closure (thin, never a blob in space
+the scan says nothing about).
+
+Distances: near surface points, the exact distance to the nearest point (so the zero level
+passes through the observed and mirrored points, not through voxel corners); elsewhere the
+Euclidean distance to the other side of the voxel solid. Colours: the nearest observed or
+mirrored point's within 1.5 voxels, elsewhere diffused (normalised Gaussian, then nearest).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+from ..csdf import BAND_VOXELS
+
+OBSERVED, MIRRORED, GUESSED = 1, 2, 3
+KINDS = {OBSERVED: "observed", MIRRORED: "mirrored", GUESSED: "guessed"}
+KIND_COLORS = {OBSERVED: (70, 150, 230), MIRRORED: (240, 170, 40), GUESSED: (220, 60, 60)}
+"""Display colours of the three kinds of surface (``render --completion``): blue, amber, red."""
+SNAP_VOXELS = 1.5
+DIFFUSE_SIGMA = 2.0
+
+
+def _edt(mask: np.ndarray) -> np.ndarray:
+    import edt
+
+    return edt.edt(np.ascontiguousarray(mask), parallel=2).astype(np.float32)
+
+
+def fuse(
+    grid_to_world: np.ndarray,
+    shape: tuple[int, int, int],
+    origin: np.ndarray,
+    h: float,
+    points: np.ndarray,
+    colors: np.ndarray,
+    kind: np.ndarray,
+    free_world: Callable[[np.ndarray], np.ndarray],
+    sym_free: list[Callable[[np.ndarray], np.ndarray]],
+    height_world: Callable[[np.ndarray], np.ndarray],
+    closure: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Solid, SDF, colour and provenance on the grid.
+
+    Parameters
+    ----------
+    grid_to_world : (4, 4) float64
+        The grid frame in the world (voxel centre ``origin + ijk * h`` in grid coordinates).
+    points : (N, 3) float64
+        Surface points in grid coordinates; ``colors`` (N, 3) uint8; ``kind`` (N,) uint8
+        (``OBSERVED`` or ``MIRRORED``).
+    free_world : world points (M, 3) -> (M,) bool, the observed free space.
+    sym_free : list of the same for each symmetric view of the free space.
+    height_world : world points -> height above the floor.
+    closure : voxels behind the surface that close it where nothing else does.
+
+    Returns
+    -------
+    sdf (X, Y, Z) float32, rgb (X, Y, Z, 3) uint8, provenance (X, Y, Z) uint8 (0 away from the
+    surface, else OBSERVED / MIRRORED / GUESSED).
+    """
+    shape = tuple(int(s) for s in shape)
+    idx = np.rint((points - origin) / h).astype(np.int64)
+    inb = ((idx >= 0) & (idx < np.asarray(shape))).all(axis=1)
+    idx, points, colors, kind = idx[inb], points[inb], colors[inb], kind[inb]
+    occ = np.zeros(shape, bool)
+    occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
+    occ_obs = np.zeros(shape, bool)
+    o = idx[kind == OBSERVED]
+    occ_obs[o[:, 0], o[:, 1], o[:, 2]] = True
+    d_s = _edt(~occ)
+    near = np.flatnonzero(d_s.ravel() <= closure)
+    R = grid_to_world[:3, :3]
+    t = grid_to_world[:3, 3]
+    centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
+    world = centres @ R.T.astype(np.float32) + t.astype(np.float32)
+    keep = ~free_world(world) & (height_world(world) >= -0.5 * h)
+    if sym_free:
+        d_obs = _edt(~occ_obs).ravel()[near]
+        # a symmetric view may not carve next to what was observed
+        may = keep & (d_obs > SNAP_VOXELS)
+        for f in sym_free:
+            sel = np.flatnonzero(may)
+            hit = f(world[sel])
+            keep[sel[hit]] = False
+            may[sel[hit]] = False
+    # the voxels holding the surface points are solid whatever the carving says: a sheet seen
+    # from one side would otherwise lose the half of its voxels whose centres lie in front of it
+    keep |= occ.ravel()[near]
+    solid = np.zeros(shape, bool)
+    solid.ravel()[near[keep]] = True
+    solid = ndimage.binary_fill_holes(solid)
+    lab, n = ndimage.label(solid)
+    if n > 1:
+        size = np.bincount(lab.ravel())
+        size[0] = 0
+        obs_in = np.bincount(lab.ravel(), weights=occ_obs.ravel(), minlength=n + 1)
+        # small pieces the scan barely saw are noise (flying pixels, a neighbour's edge)
+        good = (size >= 0.02 * size.max()) | (obs_in >= 0.05 * obs_in.max())
+        good[0] = False
+        solid = good[lab]
+
+    # distances: voxel solid first, then the exact distance to surface points near it
+    e_out = _edt(~solid) - 0.5
+    e_in = _edt(solid) - 0.5
+    sdf = np.where(solid, -e_in, e_out).astype(np.float32) * h
+    band = np.flatnonzero(np.abs(sdf.ravel()) <= (BAND_VOXELS + 1) * h)
+    # points deep inside the solid are no surface (a copy landing in a filled region)
+    pidx = idx
+    boundary = ndimage.binary_dilation(solid) & ~ndimage.binary_erosion(solid)
+    on = boundary[pidx[:, 0], pidx[:, 1], pidx[:, 2]]
+    tree = cKDTree(points[on]) if on.any() else None
+    sp_col, sp_kind = colors[on], kind[on]
+    rgb = np.zeros((*shape, 3), np.uint8)
+    prov = np.zeros(shape, np.uint8)
+    band_pts = origin + np.stack(np.unravel_index(band, shape), axis=1) * h
+    if tree is not None:
+        dist, nn = tree.query(band_pts, k=1, distance_upper_bound=(BAND_VOXELS + 1) * h, workers=2)
+    else:
+        dist, nn = np.full(len(band), np.inf), np.zeros(len(band), np.int64)
+    close = np.isfinite(dist)
+    nn = np.where(close, nn, 0)
+    flat_sdf = sdf.ravel()
+    cur = flat_sdf[band]
+    exact = np.where(cur < 0, -np.minimum(dist, -cur), np.minimum(dist, cur))
+    flat_sdf[band] = np.where(close, exact, cur).astype(np.float32)
+    # keep a hair off zero so marching cubes has no degenerate cells
+    tiny = np.float32(1e-3 * h)
+    s = flat_sdf[band]
+    s[(s >= 0) & (s < tiny)] = tiny
+    s[(s < 0) & (s > -tiny)] = -tiny
+    flat_sdf[band] = s
+
+    snapped = close & (dist <= SNAP_VOXELS * h)
+    known = np.zeros(shape, bool)
+    known.ravel()[band[snapped]] = True
+    rgb.reshape(-1, 3)[band[snapped]] = sp_col[nn[snapped]]
+    surf = np.abs(flat_sdf[band]) <= 1.5 * h
+    prov.ravel()[band[surf]] = GUESSED
+    ks = snapped & surf
+    prov.ravel()[band[ks]] = np.where(sp_kind[nn[ks]] == OBSERVED, OBSERVED, MIRRORED)
+    rgb = _diffuse(rgb, known, band)
+    return sdf, rgb, prov
+
+
+def _diffuse(rgb: np.ndarray, known: np.ndarray, band: np.ndarray) -> np.ndarray:
+    """Colours where ``known`` is False: normalised Gaussian of the known colours near them,
+    then the nearest known colour (inside and far from the surface)."""
+    if not known.any():
+        rgb[...] = 160
+        return rgb
+    w = known.astype(np.float32)
+    den = ndimage.gaussian_filter(w, DIFFUSE_SIGMA, truncate=3.0)
+    flat_known = known.ravel()
+    todo = band[~flat_known[band]]
+    blurred = np.empty((len(todo), 3), np.float32)
+    for c in range(3):
+        num = ndimage.gaussian_filter(
+            rgb[..., c].astype(np.float32) * w, DIFFUSE_SIGMA, truncate=3.0
+        )
+        blurred[:, c] = num.ravel()[todo] / np.maximum(den.ravel()[todo], 1e-12)
+    reached = den.ravel()[todo] > 1e-4
+    flat = rgb.reshape(-1, 3)
+    flat[todo[reached]] = np.clip(np.rint(blurred[reached]), 0, 255).astype(np.uint8)
+    have = known.copy()
+    have.ravel()[todo[reached]] = True
+    ind = ndimage.distance_transform_edt(~have, return_distances=False, return_indices=True)
+    lin = np.ravel_multi_index(tuple(ind), known.shape)
+    return flat[lin.ravel()].reshape(rgb.shape)

@@ -1,0 +1,312 @@
+"""What a scan says: depth frames with intrinsics and poses, read from RGB-D images or point clouds.
+
+Conventions: a camera frame has x right, y down, z forward (metres, OpenCV/TUM); a pose is the
+4x4 camera-to-world matrix, identity by default, so the world is the first camera's frame.
+A depth of 0 means "no reading".
+
+Two kinds of frame, told apart by :attr:`Frame.cropped`:
+
+- a full sensor frame (an RGB-D image): pixels without a reading say nothing (unknown);
+- a frame made from a cropped range mesh or point cloud (the object cut out of its scene): pixels
+  outside the object's closed silhouette were seen through to the background, so the rays
+  through them are free space at every depth (the visual-hull rule).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, one_line
+
+DEPTH_SCALE = 5000.0
+"""TUM/Kinect convention: a 16-bit depth PNG holds metres x 5000."""
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """One depth view.
+
+    depth : (H, W) float32
+        Metres along the optical axis, 0 where there is no reading.
+    color : (H, W, 3) uint8 or None
+        sRGB registered to ``depth``.
+    K : (3, 3) float64
+        Pinhole intrinsics (fx, fy, cx, cy).
+    pose : (4, 4) float64
+        Camera-to-world transform.
+    cropped : bool
+        Made from a cropped object scan: pixels outside its silhouette are free space.
+    """
+
+    depth: np.ndarray
+    color: np.ndarray | None
+    K: np.ndarray
+    pose: np.ndarray
+    cropped: bool = False
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return tuple(int(s) for s in self.depth.shape)  # type: ignore[return-value]
+
+    def points(self, mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Back-projected readings: world points (N, 3) float64, colours (N, 3) uint8 and flat
+        pixel indices (N,) int64 of the valid pixels (within ``mask`` when given)."""
+        valid = self.depth > 0
+        if mask is not None:
+            valid &= mask
+        v, u = np.nonzero(valid)
+        z = self.depth[v, u].astype(np.float64)
+        fx, fy, cx, cy = self.K[0, 0], self.K[1, 1], self.K[0, 2], self.K[1, 2]
+        cam = np.stack([(u - cx) / fx * z, (v - cy) / fy * z, z], axis=1)
+        world = cam @ self.pose[:3, :3].T + self.pose[:3, 3]
+        rgb = self.color[v, u] if self.color is not None else np.full((len(z), 3), 160, np.uint8)
+        return world, rgb, v * self.depth.shape[1] + u
+
+
+def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
+    """The frame with its depth smoothed (normalised Gaussian over valid pixels, ``sigma``
+    pixels) except across depth discontinuities, where the reading is kept."""
+    from scipy import ndimage
+
+    d = frame.depth.astype(np.float64)
+    valid = d > 0
+    w = ndimage.gaussian_filter(valid.astype(np.float64), sigma)
+    s = ndimage.gaussian_filter(d, sigma) / np.maximum(w, 1e-9)
+    spread = ndimage.maximum_filter(np.where(valid, d, 0), 3) - ndimage.minimum_filter(
+        np.where(valid, d, np.inf), 3
+    )
+    smooth = valid & (spread < 0.03 * np.maximum(d, 1e-3)) & (w > 0.5)
+    out = np.where(smooth, s, d).astype(np.float32)
+    return Frame(out, frame.color, frame.K, frame.pose, frame.cropped)
+
+
+def check_pose(pose, what: str) -> np.ndarray:
+    """(4, 4) float64 rigid camera-to-world transform; rotation checked orthonormal."""
+    try:
+        a = np.asarray(pose, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"{what}: expected a 4x4 matrix, got {pose!r:.60}") from None
+    if a.shape == (16,):
+        a = a.reshape(4, 4)
+    if a.shape != (4, 4) or not np.isfinite(a).all():
+        raise InputError(f"{what}: expected a finite 4x4 matrix, got shape {a.shape}")
+    R = a[:3, :3]
+    if not np.allclose(R @ R.T, np.eye(3), atol=1e-3) or np.linalg.det(R) < 0:
+        raise InputError(
+            f"{what}: expected a rigid transform (rotation + translation), got {a[:3, :3].round(3).tolist()}"
+        )
+    return a
+
+
+def read_intrinsics(path: str | os.PathLike) -> np.ndarray:
+    """(3, 3) float64 intrinsics from JSON: Open3D's ``intrinsic_matrix`` (9 numbers, column
+    major) or ``{"fx", "fy", "cx", "cy"}``."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: expected an intrinsics JSON file, got no such file")
+    try:
+        data = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: expected intrinsics JSON, got {one_line(exc)}") from None
+    if isinstance(data, dict) and "intrinsic_matrix" in data:
+        m = np.asarray(data["intrinsic_matrix"], dtype=np.float64)
+        if m.size != 9:
+            raise InputError(f"{path}: expected 9 numbers in intrinsic_matrix, got {m.size}")
+        K = m.reshape(3, 3).T  # Open3D writes column major
+    elif isinstance(data, dict) and all(k in data for k in ("fx", "fy", "cx", "cy")):
+        K = np.array(
+            [[data["fx"], 0, data["cx"]], [0, data["fy"], data["cy"]], [0, 0, 1]], np.float64
+        )
+    else:
+        raise InputError(
+            f"{path}: expected intrinsic_matrix or fx, fy, cx, cy, got keys "
+            f"{sorted(data) if isinstance(data, dict) else type(data).__name__}"
+        )
+    if not (np.isfinite(K).all() and K[0, 0] > 0 and K[1, 1] > 0):
+        raise InputError(f"{path}: expected positive finite focal lengths, got {K.tolist()}")
+    return K
+
+
+def _read_image(path: Path, what: str) -> np.ndarray:
+    from PIL import Image
+
+    if not path.is_file():
+        raise InputError(f"{path}: expected a {what} image, got no such file")
+    try:
+        with Image.open(path) as im:
+            return np.asarray(im)
+    except Exception as exc:  # PIL raises many kinds on damaged files
+        raise InputError(f"{path}: expected a {what} image, got {one_line(exc)}") from None
+
+
+def read_frame(
+    depth: str | os.PathLike,
+    color: str | os.PathLike | None = None,
+    intrinsics: str | os.PathLike | np.ndarray | None = None,
+    *,
+    depth_scale: float = DEPTH_SCALE,
+    pose=None,
+) -> Frame:
+    """An RGB-D frame from a 16-bit depth PNG (value / ``depth_scale`` = metres), an optional
+    colour image of the same size and the intrinsics (a JSON file or a 3x3 matrix)."""
+    depth = Path(depth)
+    if intrinsics is None:
+        raise InputError(
+            f"{depth}: expected camera intrinsics (--intrinsics K.json) with a depth image, got none"
+        )
+    K = read_intrinsics(intrinsics) if not isinstance(intrinsics, np.ndarray) else intrinsics
+    d = _read_image(depth, "depth")
+    if d.ndim != 2 or d.dtype.kind not in "iuf":
+        raise InputError(f"{depth}: expected a single-channel depth image, got shape {d.shape}")
+    if not depth_scale > 0:
+        raise InputError(f"--depth-scale: expected a number > 0, got {depth_scale}")
+    z = (d.astype(np.float64) / depth_scale).astype(np.float32)
+    z[~np.isfinite(z) | (z < 0)] = 0
+    rgb = None
+    if color is not None:
+        color = Path(color)
+        rgb = _read_image(color, "colour")
+        if rgb.ndim == 2:
+            rgb = np.repeat(rgb[..., None], 3, axis=2)
+        rgb = np.ascontiguousarray(rgb[..., :3]).astype(np.uint8)
+        if rgb.shape[:2] != z.shape:
+            raise InputError(
+                f"{color}: expected a colour image the size of the depth image "
+                f"{z.shape[1]}x{z.shape[0]}, got {rgb.shape[1]}x{rgb.shape[0]}"
+            )
+    pose = np.eye(4) if pose is None else check_pose(pose, f"{depth}: pose")
+    return Frame(z, rgb, K, pose, cropped=False)
+
+
+def read_points(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (N, 3) float64 and their sRGB colours (N, 3) uint8 of a range mesh or point
+    cloud (PLY, OBJ ...); grey where the file has no colours."""
+    import trimesh
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(
+            f"{path}: expected a scan (PLY point cloud or range mesh), got no such file"
+        )
+    try:
+        geom = trimesh.load(str(path), process=False)
+    except Exception as exc:
+        raise InputError(
+            f"{path}: expected a PLY point cloud or mesh, got {one_line(exc)}"
+        ) from None
+    if isinstance(geom, trimesh.Scene):
+        geoms = list(geom.dump()) if geom.geometry else []
+        geom = trimesh.util.concatenate(geoms) if geoms else None
+    verts = np.asarray(getattr(geom, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    if len(verts) == 0:
+        raise InputError(f"{path}: expected scan points, got none")
+    if not np.isfinite(verts).all():
+        verts = verts[np.isfinite(verts).all(axis=1)]
+    cols = None
+    vis = getattr(geom, "visual", None)
+    if vis is not None:
+        try:
+            vc = np.asarray(vis.vertex_colors)
+            if vc.shape[0] == len(verts) and getattr(vis, "kind", None) == "vertex":
+                cols = vc[:, :3].astype(np.uint8)
+        except Exception:  # a visual without per-vertex colours
+            cols = None
+    if cols is None:
+        c = getattr(geom, "colors", None)
+        if c is not None and len(c) == len(verts):
+            cols = np.asarray(c)[:, :3].astype(np.uint8)
+    if cols is None:
+        cols = np.full((len(verts), 3), 160, np.uint8)
+    return verts, cols
+
+
+def frame_from_points(points, colors, pose=None) -> Frame:
+    """A depth frame that sees ``points`` (world, (N, 3)) as the camera at ``pose`` did.
+
+    The focal length is chosen so that neighbouring scan points fall on neighbouring pixels
+    (from the median spacing of the points against their depth), the image just covers them, and
+    each pixel keeps its nearest point (a z-buffer). The result is :attr:`Frame.cropped`.
+    """
+    from scipy.spatial import cKDTree
+
+    pose = np.eye(4) if pose is None else check_pose(pose, "--camera")
+    P = np.asarray(points, np.float64)
+    cam = (P - pose[:3, 3]) @ pose[:3, :3]
+    front = cam[:, 2] > 1e-6
+    if front.sum() < 3:
+        raise InputError(
+            f"scan: expected points in front of the camera (z > 0 in its frame), got {int(front.sum())}"
+        )
+    cam, cols = cam[front], np.asarray(colors)[front]
+    sub = cam[:: max(1, len(cam) // 5000)]
+    dist, _ = cKDTree(sub).query(sub, k=2)
+    spacing = dist[:, 1] * max(1.0, np.sqrt(len(cam) / max(len(sub), 1)))
+    # points per pixel ~1: focal = depth / lateral spacing between neighbouring samples
+    ratio = sub[:, 2] / np.maximum(spacing, 1e-9)
+    f = float(np.clip(np.median(ratio), 50.0, 5000.0))
+    u = cam[:, 0] / cam[:, 2] * f
+    v = cam[:, 1] / cam[:, 2] * f
+    margin = 8
+    u0, v0 = np.floor(u.min()) - margin, np.floor(v.min()) - margin
+    W = int(np.ceil(u.max() - u0)) + margin + 1
+    H = int(np.ceil(v.max() - v0)) + margin + 1
+    if W * H > 4096 * 4096:
+        raise InputError(f"scan: expected a range image of at most 4096^2 pixels, got {W}x{H}")
+    K = np.array([[f, 0, -u0], [0, f, -v0], [0, 0, 1]], np.float64)
+    iu = np.rint(u - u0).astype(np.int64)
+    iv = np.rint(v - v0).astype(np.int64)
+    flat = iv * W + iu
+    order = np.lexsort((cam[:, 2], flat))  # nearest point first in every pixel
+    first = np.r_[True, flat[order][1:] != flat[order][:-1]]
+    keep = order[first]
+    depth = np.zeros(H * W, np.float32)
+    rgb = np.zeros((H * W, 3), np.uint8)
+    depth[flat[keep]] = cam[keep, 2]
+    rgb[flat[keep]] = cols[keep]
+    return Frame(depth.reshape(H, W), rgb.reshape(H, W, 3), K, pose, cropped=True)
+
+
+def read_views(path: str | os.PathLike) -> list[Frame]:
+    """Registered views from a JSON list: ``{"depth", "color", "intrinsics", "pose",
+    "depth_scale"}`` per RGB-D frame or ``{"points", "pose"}`` per scan (paths relative to the
+    file)."""
+    path = Path(path)
+    from .._files import read_json
+
+    data = read_json(path, what="a list of views")
+    views = data.get("views") if isinstance(data, dict) else data
+    if not isinstance(views, list) or not views:
+        raise InputError(f"{path}: expected a non-empty list of views, got {type(views).__name__}")
+    frames = []
+    for i, v in enumerate(views):
+        if not isinstance(v, dict):
+            raise InputError(f"{path}: view {i}: expected an object, got {type(v).__name__}")
+        where = f"{path}: view {i}"
+        pose = check_pose(v.get("pose", np.eye(4)), f"{where}: pose")
+        if "points" in v:
+            P, C = read_points(path.parent / v["points"])
+            # points are stored in their camera's frame, like a single scan
+            world = P @ pose[:3, :3].T + pose[:3, 3]
+            frames.append(frame_from_points(world, C, pose))
+        elif "depth" in v:
+            if "intrinsics" not in v:
+                raise InputError(f"{where}: expected intrinsics with the depth image, got none")
+            K = v["intrinsics"]
+            K = path.parent / K if isinstance(K, str) else np.asarray(K, np.float64).reshape(3, 3)
+            frames.append(
+                read_frame(
+                    path.parent / v["depth"],
+                    path.parent / v["color"] if v.get("color") else None,
+                    K,
+                    depth_scale=float(v.get("depth_scale", DEPTH_SCALE)),
+                    pose=pose,
+                )
+            )
+        else:
+            raise InputError(f"{where}: expected 'depth' or 'points', got keys {sorted(v)}")
+    return frames

@@ -1,0 +1,303 @@
+"""Symmetries of a partial scan, found by voting and kept only where the free space agrees.
+
+Everything here works in the *upright* frame: y up, the floor at y = 0.
+
+- Mirror planes are vertical (normal horizontal). Pairs of scan points at the same height and of
+  similar colour each vote for the plane that swaps them (angle, offset); the strongest peaks are
+  refined and scored by mirroring the whole scan: ``support`` is the fraction of mirrored points
+  that land on the scan, ``violation`` the fraction that land where a camera saw through (free
+  space). A plane is accepted when ``violation <= MAX_VIOLATION`` and ``support >= MIN_SUPPORT``.
+- Rotations: 4- and 5-fold about a vertical axis, for the lowest part of the object (the bases of
+  swivel chairs and tables), the axis found by a coarse-to-fine search, accepted by the same rule.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+MIN_SUPPORT = 0.3
+MAX_VIOLATION = 0.06
+VIOLATION_WEIGHT = 4.0
+SAMPLES = 1500
+PAIRS = 60000
+BASE_FRACTION = 0.3
+SLABS = 8
+REFINE_PEAKS = 3
+"""Vote peaks whose neighbourhoods the plane search refines (the rest are scored once)."""
+MIN_ROTATION_SUPPORT = 0.5
+MIN_COVER = 0.6
+"""A symmetry must hold on slabs holding at least this fraction of the points."""
+"""Rotational symmetry is looked for, and applied, below this fraction of the object's height."""
+
+
+@dataclass(frozen=True)
+class Symmetry:
+    """A rigid map of the upright frame: ``p -> p @ A.T + b``; ``kind`` is "mirror" or "rotation"
+    (then ``fold``); ``bands`` are the height intervals where it holds and is applied."""
+
+    kind: str
+    A: np.ndarray
+    b: np.ndarray
+    support: float
+    violation: float
+    fold: int = 0
+    bands: tuple = ((-np.inf, np.inf),)
+    params: dict | None = None
+
+    def where(self, points: np.ndarray) -> np.ndarray:
+        """(N,) bool: points at heights where this symmetry holds."""
+        y = np.asarray(points)[:, 1]
+        return np.logical_or.reduce([(y >= a) & (y < b) for a, b in self.bands])
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        return np.asarray(points) @ self.A.T + self.b
+
+
+def _mirror(theta: float, d: float) -> tuple[np.ndarray, np.ndarray]:
+    n = np.array([np.cos(theta), 0.0, np.sin(theta)])
+    return np.eye(3) - 2 * np.outer(n, n), 2 * d * n
+
+
+def _rotation(angle: float, cx: float, cz: float) -> tuple[np.ndarray, np.ndarray]:
+    c, s = np.cos(angle), np.sin(angle)
+    A = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    centre = np.array([cx, 0.0, cz])
+    return A, centre - A @ centre
+
+
+class _Scorer:
+    """Support (landing on the scan) and violation (landing in free space) of mapped points."""
+
+    def __init__(self, points: np.ndarray, free: Callable[[np.ndarray], np.ndarray], cell: float):
+        self.free = free
+        self.cell = cell
+        self.lo = points.min(axis=0) - 2 * cell
+        idx = np.floor((points - self.lo) / cell).astype(np.int64)
+        self.shape = idx.max(axis=0) + 3
+        occ = np.zeros(tuple(self.shape), bool)
+        occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
+        self.occ = ndimage.binary_dilation(occ, np.ones((3, 3, 3), bool))
+
+    def __call__(self, mapped: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """mapped (K, M, 3) -> support (K, M) bool, violation (K, M) bool."""
+        K, M, _ = mapped.shape
+        flat = mapped.reshape(-1, 3)
+        idx = np.floor((flat - self.lo) / self.cell).astype(np.int64)
+        ok = ((idx >= 0) & (idx < self.shape)).all(axis=1)
+        idx = np.where(ok[:, None], idx, 0)
+        sup = ok & self.occ[idx[:, 0], idx[:, 1], idx[:, 2]]
+        vio = self.free(flat)
+        return sup.reshape(K, M), vio.reshape(K, M)
+
+
+def _slab_ids(y: np.ndarray, top: float) -> np.ndarray:
+    return np.clip((y / max(top, 1e-12) * SLABS).astype(np.int64), 0, SLABS - 1)
+
+
+def _slab_score(sup: np.ndarray, vio: np.ndarray, slab: np.ndarray):
+    """Per candidate: score, accepted slabs (K, SLABS) bool, support and violation over them.
+
+    A slab (a band of heights) takes the copy when its own violation is at most
+    MAX_VIOLATION and its support at least MIN_SUPPORT: a swivel chair's base turns
+    independently of its seat, so a plane can hold above the base and fail on it.
+    """
+    M = sup.shape[1]
+    onehot = np.zeros((M, SLABS))
+    onehot[np.arange(M), slab] = 1.0
+    n = onehot.sum(axis=0)
+    ns = sup.astype(np.float64) @ onehot
+    nv = vio.astype(np.float64) @ onehot
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ok = (n > 0) & (nv <= MAX_VIOLATION * n) & (ns >= MIN_SUPPORT * n)
+    covered = (n * ok).sum(axis=1) / M
+    s_sup = (ns * ok).sum(axis=1) / np.maximum((n * ok).sum(axis=1), 1)
+    s_vio = (nv * ok).sum(axis=1) / np.maximum((n * ok).sum(axis=1), 1)
+    score = ((ns - VIOLATION_WEIGHT * nv) * ok).sum(axis=1) / M
+    return score, ok, covered, s_sup, s_vio
+
+
+def mirror_planes(
+    points: np.ndarray,
+    colors: np.ndarray,
+    free: Callable[[np.ndarray], np.ndarray],
+    cell: float,
+    *,
+    max_planes: int = 2,
+    seed: int = 0,
+) -> list[Symmetry]:
+    """Accepted vertical mirror planes, strongest first (at most ``max_planes``, at least 30
+    degrees apart).
+
+    points : (N, 3) upright points of the object; colors : (N, 3) uint8; free : callable on
+    (M, 3) upright points -> (M,) bool; cell : the support tolerance, world units.
+    """
+    rng = np.random.default_rng(seed)
+    P = np.asarray(points, np.float64)
+    C = np.asarray(colors, np.int64)
+    pick = rng.choice(len(P), min(len(P), SAMPLES), replace=False)
+    S, SC = P[pick], C[pick]
+    scorer = _Scorer(P, free, cell)
+    top = float(P[:, 1].max())
+    found: list[Symmetry] = []
+    pts, cols = S, SC
+    for _ in range(max_planes):
+        best = _best_plane(pts, cols, scorer, cell, rng, [s.params["theta"] for s in found], top)
+        if best is None:
+            break
+        found.append(best)
+        # the next plane votes with the mirrored copy too (a table: left-right, then front-back)
+        pts = np.concatenate([pts, best.apply(pts)])
+        cols = np.concatenate([cols, cols])
+        if len(pts) > 2 * SAMPLES:
+            keep = rng.choice(len(pts), 2 * SAMPLES, replace=False)
+            pts, cols = pts[keep], cols[keep]
+    return found
+
+
+def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
+    n = len(S)
+    i = rng.integers(0, n, PAIRS)
+    j = rng.integers(0, n, PAIRS)
+    dp = S[j] - S[i]
+    horiz = np.hypot(dp[:, 0], dp[:, 2])
+    ok = (np.abs(dp[:, 1]) < cell) & (horiz > 2 * cell)
+    ok &= np.abs(SC[j] - SC[i]).sum(axis=1) < 90
+    if ok.sum() < 20:
+        return None
+    theta = np.arctan2(dp[ok, 2], dp[ok, 0]) % np.pi
+    nx, nz = np.cos(theta), np.sin(theta)
+    mid = (S[i[ok]] + S[j[ok]]) / 2
+    d = mid[:, 0] * nx + mid[:, 2] * nz
+    d_lo, d_hi = d.min(), d.max()
+    n_t, n_d = 90, max(2, int(np.ceil((d_hi - d_lo) / cell)) + 1)
+    hist, _, _ = np.histogram2d(theta, d, bins=(n_t, n_d), range=((0, np.pi), (d_lo, d_hi + 1e-9)))
+    hist = ndimage.gaussian_filter(hist, 1.0, mode=("wrap", "constant"))
+    peaks = hist == ndimage.maximum_filter(hist, size=5, mode=("wrap", "constant"))
+    order = np.argsort(hist[peaks])[::-1][:12]
+    ti, di = np.nonzero(peaks)
+    peaks = []
+    for k in order:
+        t0 = (ti[k] + 0.5) * np.pi / n_t
+        d0 = d_lo + (di[k] + 0.5) * (d_hi - d_lo + 1e-9) / n_d
+        if not any(_angle_gap(t0, t) < np.radians(30) for t in taken):
+            peaks.append((t0, d0))
+    if not peaks:
+        return None
+    slab = _slab_ids(S[:, 1], top)
+    # coarse to fine: the peaks as voted, then a fine grid around the best few of them
+    sup, vio = scorer(_mirror_all(S, np.array(peaks)))
+    score = _slab_score(sup, vio, slab)[0]
+    cands = [
+        (t0 + dt, d0 + dd)
+        for t0, d0 in (peaks[i] for i in np.argsort(score)[::-1][:REFINE_PEAKS])
+        for dt in np.radians(np.arange(-3, 4, 1.0))
+        for dd in np.arange(-2, 2.01, 0.5) * cell
+    ]
+    sup, vio = scorer(_mirror_all(S, np.array(cands)))
+    score, ok, covered, s_sup, s_vio = _slab_score(sup, vio, slab)
+    best = int(np.argmax(np.where(covered >= MIN_COVER, score, -np.inf)))
+    if covered[best] < MIN_COVER:
+        return None
+    t, d = cands[best]
+    A, b = _mirror(t, d)
+    return Symmetry(
+        "mirror",
+        A,
+        b,
+        float(s_sup[best]),
+        float(s_vio[best]),
+        bands=_bands(ok[best], top),
+        params={"theta": float(t % np.pi), "offset": float(d), "cover": float(covered[best])},
+    )
+
+
+def _mirror_all(S: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    """(K, M, 3): points S (M, 3) mirrored in each vertical plane (theta, offset) of (K, 2)."""
+    n = np.stack([np.cos(planes[:, 0]), np.zeros(len(planes)), np.sin(planes[:, 0])], axis=1)
+    dist = S @ n.T - planes[:, 1]  # (M, K) signed distances to each plane
+    return S[None] - 2 * dist.T[:, :, None] * n[:, None, :]
+
+
+def _bands(ok: np.ndarray, top: float) -> tuple:
+    """Height intervals of the accepted slabs (the lowest reaches below the floor, the highest
+    above the top, so every point of those slabs is inside)."""
+    edges = np.linspace(0, top, SLABS + 1)
+    edges[0], edges[-1] = -np.inf, np.inf
+    return tuple((float(edges[i]), float(edges[i + 1])) for i in np.flatnonzero(ok))
+
+
+def _angle_gap(a: float, b: float) -> float:
+    g = abs(a - b) % np.pi
+    return min(g, np.pi - g)
+
+
+def rotation_axis(
+    points: np.ndarray,
+    free: Callable[[np.ndarray], np.ndarray],
+    cell: float,
+    *,
+    folds: tuple[int, ...] = (5, 4),
+    seed: int = 0,
+) -> Symmetry | None:
+    """The best accepted k-fold rotation (k in ``folds``) of the object's base about a vertical
+    axis, or None. Its ``A``/``b`` are the rotation by one step; :func:`copies` gives all."""
+    rng = np.random.default_rng(seed)
+    P = np.asarray(points, np.float64)
+    top = P[:, 1].max()
+    below = BASE_FRACTION * top
+    base = P[P[:, 1] < below]
+    if len(base) < 50:
+        return None
+    scorer = _Scorer(base, free, cell)
+    B = base[rng.choice(len(base), min(len(base), 300), replace=False)]
+    lo, hi = B[:, [0, 2]].min(axis=0), B[:, [0, 2]].max(axis=0)
+    best = None
+    for k in folds:
+        angles = 2 * np.pi * np.arange(1, k) / k
+        step = max(cell, (hi - lo).max() / 10)
+        centre = None
+        for _ in range(3):  # coarse to fine around the best axis so far
+            if centre is None:
+                xs = np.arange(lo[0], hi[0] + step, step)
+                zs = np.arange(lo[1], hi[1] + step, step)
+            else:
+                xs = centre[0] + np.arange(-3, 4) * step
+                zs = centre[1] + np.arange(-3, 4) * step
+            gx, gz = np.meshgrid(xs, zs, indexing="ij")
+            axes = np.stack([gx.ravel(), gz.ravel()], axis=1)
+            mapped = np.stack(
+                [
+                    np.concatenate(
+                        [B @ _rotation(a, cx, cz)[0].T + _rotation(a, cx, cz)[1] for a in angles]
+                    )
+                    for cx, cz in axes
+                ]
+            )
+            sup, vio = scorer(mapped)
+            sup, vio = sup.mean(axis=1), vio.mean(axis=1)
+            score = sup - VIOLATION_WEIGHT * vio
+            i = int(np.argmax(score))
+            centre = axes[i]
+            step /= 3
+        if sup[i] >= MIN_ROTATION_SUPPORT and vio[i] <= MAX_VIOLATION:
+            s = float(score[i])
+            if best is None or s > best[0]:
+                A, b = _rotation(2 * np.pi / k, *centre)
+                best = (
+                    s,
+                    Symmetry(
+                        "rotation",
+                        A,
+                        b,
+                        float(sup[i]),
+                        float(vio[i]),
+                        fold=k,
+                        bands=((-np.inf, float(below)),),
+                        params={"fold": k, "axis_x": float(centre[0]), "axis_z": float(centre[1])},
+                    ),
+                )
+    return None if best is None else best[1]

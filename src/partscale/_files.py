@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from .errors import InputError, one_line
+from .errors import InputError, one_line, shown
 
 JSON_MAX_BYTES = 64 << 20
 """Largest JSON text read (recipes, suites, ``.csdf.npz`` meta, editor request bodies)."""
@@ -40,7 +40,7 @@ def _int(text: str) -> int:
 def _float(text: str) -> float:
     x = float(text)
     if not math.isfinite(x):
-        raise _JsonRefused(f"the number {shorten(text, 40)} (beyond the float range)")
+        raise _JsonRefused(f"the number {shown(text, 40)} (beyond the float range)")
     return x
 
 
@@ -89,11 +89,6 @@ def parse_json(text: str | bytes, *, what: str) -> Any:
 def dumps_json(obj: Any, **kw: Any) -> str:
     """``json.dumps`` that refuses NaN and infinities (which are not JSON) with a ValueError."""
     return json.dumps(obj, allow_nan=False, **kw)
-
-
-def shorten(text: str, limit: int = 60) -> str:
-    """``text`` cut to ``limit`` characters with ``...`` (a value shown in a message)."""
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def check_input_file(path: str | os.PathLike, *, what: str) -> Path:

@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from ._files import atomic_path, check_input_file, dumps_json, parse_json, shorten
+from ._files import atomic_path, check_input_file, dumps_json, parse_json
 from ._memory import check_bytes
-from .errors import InputError, one_line
+from .errors import InputError, one_line, shown
 
 FORMAT = "partscale.csdf"
 FORMAT_VERSION = 1
@@ -176,13 +176,6 @@ class CSDF:
         )
 
 
-def _shown(x: Any) -> str:
-    """Short text of a rejected value for a message."""
-    if isinstance(x, np.ndarray):
-        return repr(x.tolist()) if x.size <= 6 else f"an array of shape {x.shape}"
-    return shorten(repr(x))
-
-
 def _real_array(x: Any) -> np.ndarray | None:
     # real numbers only: bools, strings and objects are refused rather than converted
     try:
@@ -199,7 +192,7 @@ def check_origin(x: Any, what: str) -> np.ndarray:
     """
     a = _real_array(x)
     if a is None or a.shape != (3,) or not np.isfinite(a).all():
-        raise InputError(f"{what}: expected 3 finite numbers, got {_shown(x)}")
+        raise InputError(f"{what}: expected 3 finite numbers, got {shown(x)}")
     return a.astype(np.float64)
 
 
@@ -207,7 +200,7 @@ def check_number(x: Any, what: str) -> float:
     """One finite real number (a scalar or a size-1 array) as float; ``what`` names it."""
     a = _real_array(x)
     if a is None or a.size != 1 or not np.isfinite(a).all():
-        raise InputError(f"{what}: expected one finite number, got {_shown(x)}")
+        raise InputError(f"{what}: expected one finite number, got {shown(x)}")
     return float(a.reshape(()))
 
 
@@ -215,7 +208,7 @@ def check_voxel_size(x: Any, what: str) -> float:
     """Voxel edge length as float: one finite real number > 0; ``what`` names it."""
     a = _real_array(x)
     if a is None or a.size != 1:
-        raise InputError(f"{what}: expected one number, got {_shown(x)}")
+        raise InputError(f"{what}: expected one number, got {shown(x)}")
     h = float(a.reshape(()))
     if not (np.isfinite(h) and h > 0):
         raise InputError(f"{what}: expected a finite number > 0, got {h}")
@@ -300,7 +293,7 @@ def make(
         raise InputError(f"meta: expected a JSON object, got {type(meta).__name__}")
     history = meta.setdefault("history", [])
     if not isinstance(history, list) or not all(isinstance(h, dict) for h in history):
-        raise InputError(f"meta history: expected a list of objects, got {_shown(history)}")
+        raise InputError(f"meta history: expected a list of objects, got {shown(history)}")
     meta["format"] = FORMAT
     meta["version"] = FORMAT_VERSION
     meta.setdefault("units", "m")

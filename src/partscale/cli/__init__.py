@@ -145,7 +145,8 @@ def _main(argv: list[str] | None, seen: dict) -> None:
             raise
         _common.error_line("out of memory (the memory guard's estimate was too low)")
         sys.exit(2)
-    except typer.Exit as exc:
+    except typer.Exit as exc:  # typer turns Ctrl-C (and so SIGTERM) into Exit(130)
+        _exit_if_terminated(seen)
         sys.exit(exc.exit_code)
     except usage_errors as exc:
         if _common.is_verbose():
@@ -157,12 +158,18 @@ def _main(argv: list[str] | None, seen: dict) -> None:
         _common.error_line(f"{exc.format_message()}{where}")
         sys.exit(2)
     except exits as exc:
+        _exit_if_terminated(seen)
         sys.exit(getattr(exc, "exit_code", 0))
     except (typer.Abort, *aborts, KeyboardInterrupt):
-        if seen["term"]:
-            _common.error_line("terminated (SIGTERM); nothing half-written was left")
-            sys.exit(143)
+        _exit_if_terminated(seen)
         _common.error_line("aborted")
         sys.exit(130)
     if isinstance(code, int) and code:
+        _exit_if_terminated(seen)  # click returns Ctrl-C's 130 outside standalone mode
         sys.exit(code)
+
+
+def _exit_if_terminated(seen: dict) -> None:
+    if seen["term"]:
+        _common.error_line("terminated (SIGTERM); nothing half-written was left")
+        sys.exit(143)

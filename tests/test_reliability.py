@@ -195,7 +195,7 @@ def test_parse_json_is_the_servers_reader_too():
 
     assert parse_json(b'{"a": [1, 2.5]}', what="body") == {"a": [1, 2.5]}
     for text in HOSTILE_JSON.values():
-        with pytest.raises(partscale.errors.InputError, match="^body: expected"):
+        with pytest.raises(partscale.errors.InputError, match=r"^body: expected"):
             parse_json(text.encode(), what="body")
 
 
@@ -242,7 +242,9 @@ def test_obj_vertex_inf_is_one_line(tmp_path, capsys, monkeypatch):
 def test_huge_res_and_pad_refused(option, tmp_path, capsys, monkeypatch):
     grid = tmp_path / "g.npy"
     x = np.linspace(-1, 1, 20)
-    np.save(grid, (np.sqrt(sum(np.meshgrid(x, x, x, indexing="ij")[i] ** 2 for i in range(3))) - 0.5))
+    np.save(
+        grid, (np.sqrt(sum(np.meshgrid(x, x, x, indexing="ij")[i] ** 2 for i in range(3))) - 0.5)
+    )
     code, lines = run(
         capsys, monkeypatch, "import", grid, "-o", tmp_path / "g.csdf.npz", option,
         "99999999999999999999",

@@ -33,7 +33,9 @@ def _no_constant(name: str):
 
 def _int(text: str) -> int:
     if len(text.lstrip("-")) > JSON_MAX_DIGITS:
-        raise _JsonRefused(f"an integer of {len(text.lstrip('-'))} digits (at most {JSON_MAX_DIGITS})")
+        raise _JsonRefused(
+            f"an integer of {len(text.lstrip('-'))} digits (at most {JSON_MAX_DIGITS})"
+        )
     return int(text)
 
 
@@ -65,7 +67,9 @@ def parse_json(text: str | bytes, *, what: str) -> Any:
     ``1e400`` are refused). The one JSON reader of partscale: files, meta and request bodies.
     """
     if len(text) > JSON_MAX_BYTES:
-        raise InputError(f"{what}: expected JSON of at most {JSON_MAX_BYTES >> 20} MiB, got {len(text)} bytes")
+        raise InputError(
+            f"{what}: expected JSON of at most {JSON_MAX_BYTES >> 20} MiB, got {len(text)} bytes"
+        )
     if isinstance(text, bytes | bytearray):
         try:
             text = bytes(text).decode("utf-8")
@@ -113,7 +117,9 @@ def read_json(path: Path, *, what: str):
             )
         data = path.read_bytes()
     except OSError as exc:
-        raise InputError(f"{path}: expected a readable file ({what}), got {exc.strerror or exc}") from None
+        raise InputError(
+            f"{path}: expected a readable file ({what}), got {exc.strerror or exc}"
+        ) from None
     try:
         return parse_json(data, what=f"{path}")
     except InputError as exc:
@@ -133,7 +139,9 @@ def check_writable(path: str | os.PathLike) -> Path:
     if path.is_dir():
         raise InputError(f"{path}: expected a writable file, got a directory")
     try:
-        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".probe", dir=path.parent)
+        fd, probe = tempfile.mkstemp(
+            prefix=f".{path.name}.{os.getpid()}.", suffix=".probe", dir=path.parent
+        )
     except OSError as exc:
         raise _unwritable(path, exc) from None
     os.close(fd)

@@ -95,7 +95,9 @@ def parse_position(value: Any, what: str) -> Position:
     number or a percentage. Non-finite values (``inf``, ``nan``, ``'1e400%'``) are refused.
     """
     if isinstance(value, bool | np.bool_):
-        raise InputError(f"{what}: expected a number or a percentage like '30%', got {shown(value)}")
+        raise InputError(
+            f"{what}: expected a number or a percentage like '30%', got {shown(value)}"
+        )
     if isinstance(value, numbers.Real):
         v = float(value)
         if not math.isfinite(v):
@@ -129,7 +131,9 @@ class Edit:
     def parse(cls, obj: Any, *, where: str = "edit") -> Edit:
         """Validate a JSON-like edit (see module docstring)."""
         if not isinstance(obj, dict):
-            raise InputError(f"{where}: expected an object with axis, zone, to, mode; got {shown(obj)}")
+            raise InputError(
+                f"{where}: expected an object with axis, zone, to, mode; got {shown(obj)}"
+            )
         unknown = set(obj) - {"axis", "zone", "to", "mode"}
         if unknown:
             raise InputError(
@@ -194,9 +198,13 @@ class Recipe:
             raise InputError(f"recipe: expected {{'edits': [...]}}, got {shown(obj)}")
         unknown = set(obj) - {"version", "edits"}
         if unknown:
-            raise InputError(f"recipe: unknown key(s) {shown(sorted(unknown))}; keys are version, edits")
+            raise InputError(
+                f"recipe: unknown key(s) {shown(sorted(unknown))}; keys are version, edits"
+            )
         if obj.get("version", RECIPE_VERSION) != RECIPE_VERSION:
-            raise InputError(f"recipe: expected version {RECIPE_VERSION}, got {shown(obj['version'])}")
+            raise InputError(
+                f"recipe: expected version {RECIPE_VERSION}, got {shown(obj['version'])}"
+            )
         edits = obj["edits"]
         if not isinstance(edits, list) or not edits:
             raise InputError(f"recipe: expected a non-empty list of edits, got {shown(edits)}")

@@ -471,7 +471,9 @@ def run_suite(
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise InputError(f"{out}: expected a folder that can be created, got {exc.strerror}") from None
+        raise InputError(
+            f"{out}: expected a folder that can be created, got {exc.strerror}"
+        ) from None
     check_writable(out / "metrics.csv")  # before any object is imported
     folder = data_folder(suite, data)
     progress = resolve(progress)

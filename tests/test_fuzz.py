@@ -133,8 +133,19 @@ def _cases(folder: Path) -> list[tuple[str, list[str]]]:
                     ["info", f, "--json"],
                     ["export", f, "--mesh", out / "o.glb"],
                     ["export", f, "--texture", out / "o.raw"],
-                    ["scale", f, "-o", out / "o.csdf.npz", "--axis", "y", "--zone", "0%",
-                     "50%", "--to", "60%"],  # fmt: skip
+                    [
+                        "scale",
+                        f,
+                        "-o",
+                        out / "o.csdf.npz",
+                        "--axis",
+                        "y",
+                        "--zone",
+                        "0%",
+                        "50%",
+                        "--to",
+                        "60%",
+                    ],
                 ]
             )
         elif kind in ("mesh", "npy"):
@@ -153,10 +164,32 @@ def _cases(folder: Path) -> list[tuple[str, list[str]]]:
                 [
                     ["import", folder / "m.obj", "-o", out / "o.csdf.npz", "--res", v],
                     ["import", folder / "m.obj", "-o", out / "o.csdf.npz", "--pad", v],
-                    ["scale", good, "-o", out / "o.csdf.npz", "--axis", "x", "--zone", "0%",
-                     "50%", "--to", v],  # fmt: skip
-                    ["scale", good, "-o", out / "o.csdf.npz", "--axis", "x", "--zone", v,
-                     "50%", "--to", "60%"],  # fmt: skip
+                    [
+                        "scale",
+                        good,
+                        "-o",
+                        out / "o.csdf.npz",
+                        "--axis",
+                        "x",
+                        "--zone",
+                        "0%",
+                        "50%",
+                        "--to",
+                        v,
+                    ],
+                    [
+                        "scale",
+                        good,
+                        "-o",
+                        out / "o.csdf.npz",
+                        "--axis",
+                        "x",
+                        "--zone",
+                        v,
+                        "50%",
+                        "--to",
+                        "60%",
+                    ],
                     ["export", good, "--texture", out / "o.raw", "--size", v],
                     ["render", good, "-o", out / "o.png", "--size", v],
                 ]

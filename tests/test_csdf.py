@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import tomllib
 import zipfile
@@ -200,13 +201,17 @@ def test_load_refuses_extra_arrays_listing_the_expected_ones(tmp_path, ball):
         load(bad)
 
 
-def test_failed_save_leaves_nothing(tmp_path, ball, monkeypatch):
-    def boom(*a, **k):
-        raise OSError("disk full")
+def test_disk_full_is_one_input_error_naming_the_file_and_leaves_nothing(
+    tmp_path, ball, monkeypatch
+):
+    def full(*a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(np, "savez_compressed", boom)
-    with pytest.raises(OSError):
-        save(ball, tmp_path / "x.csdf.npz")
+    monkeypatch.setattr(np, "savez_compressed", full)
+    target = tmp_path / "x.csdf.npz"
+    with pytest.raises(InputError, match="no space left") as err:
+        save(ball, target)
+    assert str(target) in str(err.value)
     assert list(tmp_path.iterdir()) == []
 
 

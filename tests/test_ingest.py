@@ -380,7 +380,7 @@ def test_nan_in_grid(tmp_path, cli):
 
 def test_res_below_16(tmp_path, cli):
     chair = data_path("kenney/chair.glb")
-    _refused(tmp_path, cli, chair, "chair.glb", "--res >= 16", "got 8", args=("--res", "8"))
+    _refused(tmp_path, cli, chair, "chair.glb", "--res in [16,", "got 8", args=("--res", "8"))
 
 
 def test_res_beyond_memory(tmp_path, cli, monkeypatch):

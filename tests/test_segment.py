@@ -3,6 +3,8 @@ surface, connected parts, reproducible and cached results, and labels that trave
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from conftest import assert_bad_input, data_path
@@ -11,7 +13,7 @@ from scipy import ndimage
 import partscale
 from partscale import ingest, shapes
 from partscale.edit import apply_edit
-from partscale.errors import InputError, MemoryLimitError
+from partscale.errors import InputError, MemoryLimitError, PartscaleWarning
 from partscale.segment import (
     DEFAULT_METHOD,
     coacd_method,
@@ -434,3 +436,73 @@ def test_plane_cut_slivers_join_the_piece_they_touch_most():
     assert (out[lab == 4] == 4).all()
     assert np.array_equal(out[(lab == 1) | (lab == 2)], lab[(lab == 1) | (lab == 2)])
     assert np.array_equal(_absorb_slivers(lab.copy(), 4, min_size=4), lab)
+
+
+def _poison(entry, how):
+    """Damage a cache entry the ways the fault campaign did."""
+    import hashlib
+
+    raw = entry.read_bytes()
+    if how == "truncated":
+        entry.write_bytes(raw[: len(raw) // 2])
+    elif how == "bit-flipped":
+        b = bytearray(raw)
+        b[len(b) // 4] ^= 0x40  # inside the labels' compressed data
+        entry.write_bytes(bytes(b))
+    else:
+        with np.load(entry) as z:
+            parts, info = z["parts"], str(z["info"])
+        if how == "info-not-facts":
+            info = "[1, 2]"
+        elif how == "all-zero":
+            parts = np.zeros_like(parts)
+        elif how == "float-parts":
+            parts = parts.astype(np.float32)
+        # a consistent checksum: only the content checks can catch these
+        check = hashlib.sha256(np.ascontiguousarray(parts).tobytes() + info.encode()).hexdigest()
+        np.savez_compressed(entry, parts=parts, info=np.array(info), check=np.array(check))
+
+
+@pytest.mark.parametrize(
+    "how", ["truncated", "bit-flipped", "info-not-facts", "all-zero", "float-parts"]
+)
+def test_damaged_cache_entry_is_discarded_and_recomputed(boxes, tmp_path, how):
+    fresh = segment(boxes, method="fast", cache_dir=tmp_path)
+    entry = tmp_path / f"{fresh.meta['segmentation']['key']}.npz"
+    _poison(entry, how)
+    with pytest.warns(PartscaleWarning, match="damaged.*discarded, recomputing"):
+        again = segment(boxes, method="fast", cache_dir=tmp_path)
+    assert np.array_equal(again.parts, fresh.parts)
+    assert again.meta["parts_info"] == fresh.meta["parts_info"]
+    # and the entry is whole again: the next run reads it without a note
+    third = segment(boxes, method="fast", cache_dir=tmp_path)
+    assert np.array_equal(third.parts, fresh.parts)
+
+
+def test_damaged_cache_entry_cli_one_note_and_exit_0(boxes, tmp_path, cli, monkeypatch):
+    src = partscale.save(boxes, tmp_path / "b.csdf.npz")
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("PARTSCALE_CACHE", str(cache))
+    cli("segment", src, "-o", tmp_path / "a.csdf.npz", check=True)
+    (entry,) = (cache / "segment").glob("*.npz")
+    _poison(entry, "truncated")
+    proc = cli("segment", src, "-o", tmp_path / "b2.csdf.npz")
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 2 and "partscale: note:" in lines[0] and "damaged" in lines[0], lines
+
+
+def test_cache_is_capped_least_recently_used_first(lshape, boxes, tmp_path, monkeypatch):
+    a = segment(boxes, method="fast", cache_dir=tmp_path)
+    first = tmp_path / f"{a.meta['segmentation']['key']}.npz"
+    os.utime(first, (1, 1))  # long unused
+    monkeypatch.setenv("PARTSCALE_CACHE_MAX", str(first.stat().st_size + 1))
+    b = segment(lshape, method="fast", cache_dir=tmp_path)
+    assert not first.exists()
+    assert (tmp_path / f"{b.meta['segmentation']['key']}.npz").is_file()
+
+
+def test_segment_help_says_where_the_cache_is(cli):
+    proc = cli("segment", "--help")
+    text = " ".join(proc.stdout.split())
+    assert "~/.cache/partscale/segment" in text and "1 GiB" in text

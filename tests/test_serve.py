@@ -319,6 +319,23 @@ def test_request_body_limit_is_the_apps_max_body(box_file):
         assert r.status_code == 413 and "1000" in r.json()["error"]
 
 
+@pytest.mark.parametrize(
+    ("body", "words"),
+    [
+        (b"[" * 200 + b"]" * 200, "nest"),
+        (b'{"version": 1, "edits": [], "x": NaN}', "nan"),
+        (b'{"version": 1, "x": 1e400}', "1e400"),
+        (b'{"version": ' + b"9" * 4300 + b"}", "digits"),
+    ],
+)
+def test_hostile_json_bodies_are_one_line_400s(client, body, words):
+    r = client.post("/api/apply", content=body, headers={"content-type": "application/json"})
+    assert r.status_code == 400, r.text
+    message = r.json()["error"]
+    assert "\n" not in message and words in message.lower(), message
+    assert client.get("/api/state").json()["revision"] == 0
+
+
 # -- save and export --------------------------------------------------------------------------
 def test_save_writes_beside_the_input_unless_overwrite(client, box_file, tmp_path):
     before = box_file.read_bytes()

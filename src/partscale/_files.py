@@ -3,23 +3,201 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
+import math
 import os
+import re
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
-from .errors import InputError
+from .errors import InputError, one_line, shown
+
+JSON_MAX_BYTES = 64 << 20
+"""Largest JSON text read (recipes, suites, ``.csdf.npz`` meta, editor request bodies)."""
+JSON_MAX_DEPTH = 64
+"""Deepest nesting of arrays and objects a JSON text may have (partscale's own use 6)."""
+JSON_MAX_DIGITS = 30
+"""Most digits of a JSON integer (int64 has 19; more is a mistake or an attack)."""
+
+
+class _JsonRefused(ValueError):
+    pass
+
+
+def _no_constant(name: str):
+    raise _JsonRefused(f"{name} (only finite numbers are valid JSON)")
+
+
+def _int(text: str) -> int:
+    if len(text.lstrip("-")) > JSON_MAX_DIGITS:
+        raise _JsonRefused(
+            f"an integer of {len(text.lstrip('-'))} digits (at most {JSON_MAX_DIGITS})"
+        )
+    return int(text)
+
+
+def _float(text: str) -> float:
+    x = float(text)
+    if not math.isfinite(x):
+        raise _JsonRefused(f"the number {shown(text, 40)} (beyond the float range)")
+    return x
+
+
+def _depth(obj: Any) -> int:
+    # iterative: a recursive walk would itself hit the recursion limit on hostile input
+    deepest, stack = 0, [(obj, 1)]
+    while stack:
+        o, d = stack.pop()
+        if isinstance(o, dict | list):
+            deepest = max(deepest, d)
+            if d > JSON_MAX_DEPTH:
+                return d
+            stack.extend((v, d + 1) for v in (o.values() if isinstance(o, dict) else o))
+    return deepest
+
+
+def parse_json(text: str | bytes, *, what: str) -> Any:
+    """Parse JSON text strictly, or raise :class:`InputError` starting with ``what``.
+
+    Strict: at most :data:`JSON_MAX_BYTES` long and :data:`JSON_MAX_DEPTH` deep, integers of
+    at most :data:`JSON_MAX_DIGITS` digits, finite numbers only (``NaN``, ``Infinity`` and
+    ``1e400`` are refused). The one JSON reader of partscale: files, meta and request bodies.
+    """
+    if len(text) > JSON_MAX_BYTES:
+        raise InputError(
+            f"{what}: expected JSON of at most {JSON_MAX_BYTES >> 20} MiB, got {len(text)} bytes"
+        )
+    if isinstance(text, bytes | bytearray):
+        try:
+            text = bytes(text).decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise InputError(f"{what}: expected UTF-8 JSON text, got {one_line(exc)}") from None
+    try:
+        obj = json.loads(text, parse_constant=_no_constant, parse_int=_int, parse_float=_float)
+    except _JsonRefused as exc:
+        raise InputError(f"{what}: expected strict JSON, got {exc}") from None
+    except RecursionError:
+        raise InputError(
+            f"{what}: expected JSON nested at most {JSON_MAX_DEPTH} deep, got deeper"
+        ) from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{what}: expected JSON, got {exc}") from None
+    if _depth(obj) > JSON_MAX_DEPTH:
+        raise InputError(f"{what}: expected JSON nested at most {JSON_MAX_DEPTH} deep, got deeper")
+    return obj
+
+
+def dumps_json(obj: Any, **kw: Any) -> str:
+    """``json.dumps`` that refuses NaN and infinities (which are not JSON) with a ValueError."""
+    return json.dumps(obj, allow_nan=False, **kw)
+
+
+def check_input_file(path: str | os.PathLike, *, what: str) -> Path:
+    """``path`` as a Path if it is an existing file, else an :class:`InputError` saying what it is."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: expected {what}, got a directory")
+    if not path.is_file():
+        got = "no such file" if not path.exists() else "not a regular file"
+        raise InputError(f"{path}: expected {what}, got {got}")
+    return path
+
+
+def read_json(path: Path, *, what: str):
+    """Parse a JSON file strictly (see :func:`parse_json`), or raise :class:`InputError` naming it."""
+    path = check_input_file(path, what=what)
+    try:
+        if path.stat().st_size > JSON_MAX_BYTES:
+            raise InputError(
+                f"{path}: expected {what} of at most {JSON_MAX_BYTES >> 20} MiB, got "
+                f"{path.stat().st_size} bytes"
+            )
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(
+            f"{path}: expected a readable file ({what}), got {exc.strerror or exc}"
+        ) from None
+    try:
+        return parse_json(data, what=f"{path}")
+    except InputError as exc:
+        raise InputError(f"{exc} ({what})") from None
+
+
+def check_writable(path: str | os.PathLike) -> Path:
+    """``path`` as a Path if a file can be written there, else an :class:`InputError`.
+
+    Checked by creating (and removing) a file beside it, so read-only folders and file systems
+    are found before the caller does any work.
+    """
+    path = Path(path)
+    if not path.parent.is_dir():
+        what = "a file" if path.parent.exists() else "none"
+        raise InputError(f"{path}: expected an existing output folder, got {what} at {path.parent}")
+    if path.is_dir():
+        raise InputError(f"{path}: expected a writable file, got a directory")
+    try:
+        fd, probe = tempfile.mkstemp(
+            prefix=f".{path.name}.{os.getpid()}.", suffix=".probe", dir=path.parent
+        )
+    except OSError as exc:
+        raise _unwritable(path, exc) from None
+    os.close(fd)
+    os.unlink(probe)
+    return path
+
+
+def _temp_prefix(path: Path) -> str:
+    return f".{path.name}."
+
+
+_TEMP_PID = re.compile(r"\.(\d+)\.[a-z0-9_]{8}\.(tmp|probe)")
+
+
+def _remove_stale_temps(path: Path) -> None:
+    """Remove temporary files of ours beside ``path`` whose writing process has gone.
+
+    Our temporaries are named ``.<name>.<pid>.<random>.tmp<suffix>``; a kill -9 leaves them.
+    One whose process still runs (another writer of the same destination) is kept.
+    """
+    prefix = _temp_prefix(path)
+    try:
+        names = [n for n in os.listdir(path.parent) if n.startswith(prefix)]
+    except OSError:
+        return
+    for name in names:
+        m = _TEMP_PID.match(name[len(prefix) - 1 :])
+        if m is None:
+            continue
+        pid = int(m.group(1))
+        if pid == os.getpid() or _alive(pid):
+            continue
+        with contextlib.suppress(OSError):
+            os.unlink(path.parent / name)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, OSError):
+        return True  # someone else's process: not ours to judge
+    return True
 
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` only on success.
 
-    Nothing half-written is ever left: on any exception the temporary file is removed and the
-    destination is untouched. The temporary keeps ``path``'s suffix (or ``suffix``) so writers
-    that infer the format from the name still work. A destination the file system refuses
-    (read-only folder, a directory in the way) is an :class:`InputError` naming ``path``;
+    Nothing half-written is ever left: on any exception (and on SIGTERM, which the CLI turns into
+    an exception) the temporary file is removed and the destination is untouched; temporaries a
+    killed process left beside ``path`` are removed on the next write to it. The temporary keeps
+    ``path``'s suffix (or ``suffix``) so writers that infer the format from the name still work.
+    A destination the file system refuses (read-only folder, a directory in the way) and an
+    ``OSError`` while writing (disk full...) are an :class:`InputError` naming ``path``; other
     errors raised inside the ``with`` block propagate unchanged.
     """
     path = Path(path)
@@ -27,9 +205,12 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
         raise InputError(f"{path}: expected an existing output folder, got none at {path.parent}")
     if path.is_dir():  # refused before the caller does any work
         raise InputError(f"{path}: expected a writable file, got a directory")
+    _remove_stale_temps(path)
     suf = suffix if suffix is not None else "".join(path.suffixes)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suf}", dir=path.parent)
+        fd, tmp = tempfile.mkstemp(
+            prefix=f"{_temp_prefix(path)}{os.getpid()}.", suffix=f".tmp{suf}", dir=path.parent
+        )
     except OSError as exc:
         raise _unwritable(path, exc) from None
     os.close(fd)
@@ -38,6 +219,9 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
         # mkstemp creates 0600; a written file should get the usual permissions (umask applied).
         os.chmod(tmp_path, 0o666 & ~_umask())
         yield tmp_path
+    except OSError as exc:
+        tmp_path.unlink(missing_ok=True)
+        raise _unwritable(path, exc) from None
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise
@@ -49,7 +233,9 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
 
 
 def _unwritable(path: Path, exc: OSError) -> InputError:
-    return InputError(f"{path}: expected a writable file, got {exc.strerror or exc}")
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        return InputError(f"{path}: expected room to write it, got no space left on the device")
+    return InputError(f"{path}: expected a writable file, got {exc.strerror or one_line(exc)}")
 
 
 def _umask() -> int:
@@ -68,13 +254,3 @@ def _umask() -> int:
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
-
-
-def read_json(path: Path, *, what: str):
-    """Parse a JSON file, or raise :class:`InputError` naming the file (missing, not JSON)."""
-    if not path.is_file():
-        raise InputError(f"{path}: expected {what}, got no such file")
-    try:
-        return json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: expected JSON ({what}), got {exc}") from None

@@ -54,10 +54,14 @@ def check_memory(shape: tuple[int, ...], bytes_per_voxel: float, *, what: str) -
     n = 1
     for s in shape:
         n *= int(s)
-    need = n * bytes_per_voxel
+    check_bytes(n * bytes_per_voxel, what=f"{what}: a {_format_shape(shape)} grid")
+
+
+def check_bytes(need: float, *, what: str) -> None:
+    """Refuse a request of ``need`` bytes that would not fit; ``what`` starts the message."""
     have = available_memory()
     if need > have:
         raise MemoryLimitError(
-            f"{what}: a {_format_shape(shape)} grid would need {format_bytes(need)} "
-            f"of memory, only {format_bytes(have)} is available"
+            f"{what} would need {format_bytes(need)} of memory, only {format_bytes(have)} is "
+            "available"
         )

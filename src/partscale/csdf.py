@@ -24,22 +24,30 @@ CSDFs made from it, so an edit costs the same whatever the history's length.
 from __future__ import annotations
 
 import copy
-import json
 import os
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ._files import atomic_path
-from .errors import InputError, one_line
+from ._files import atomic_path, check_input_file, dumps_json, parse_json
+from ._memory import check_bytes
+from .errors import InputError, one_line, shown
 
 FORMAT = "partscale.csdf"
 FORMAT_VERSION = 1
 SUFFIX = ".csdf.npz"
 BAND_VOXELS = 3
 """Half-width, in voxels, of the narrow band around the surface where distances are exact."""
+VOXEL_SIZE_RANGE = (1e-9, 1e6)
+"""Voxel sizes :func:`make` accepts, world units (a nanometre to a thousand kilometres)."""
+WORLD_LIMIT = 1e9
+"""Largest world coordinate of a voxel centre :func:`make` accepts (either sign)."""
+SDF_LIMIT_VOXELS = 1e9
+"""Largest ``|sdf|`` :func:`make` accepts, in voxel sizes: beyond it squares and products of
+distances leave float32 and vertices leave float64 precision (all values are finite but absurd)."""
 _NAMES = ("sdf", "rgb", "parts", "origin", "voxel_size", "meta")
 
 
@@ -110,13 +118,13 @@ class History(_FrozenList):
         if isinstance(entries, History):
             return entries
         if not isinstance(entries, list) or not all(isinstance(h, dict) for h in entries):
-            raise InputError(f"meta history: expected a list of objects, got {_shown(entries)}")
+            raise InputError(f"meta history: expected a list of objects, got {shown(entries)}")
         return cls(_entry(h) for h in entries)
 
     def appended(self, operation: dict[str, Any]) -> History:
         """A new history: these entries (shared, not copied) and then ``operation``."""
         if not isinstance(operation, dict):
-            raise InputError(f"history entry: expected an object, got {_shown(operation)}")
+            raise InputError(f"history entry: expected an object, got {shown(operation)}")
         return History([*self, _entry(operation)])
 
 
@@ -125,7 +133,7 @@ def _entry(operation: dict[str, Any]) -> _FrozenDict:
     if isinstance(operation, _FrozenDict):
         return operation
     try:
-        json.dumps(operation)
+        dumps_json(operation)
     except (TypeError, ValueError) as exc:
         raise InputError(f"meta history: expected JSON-serialisable entries, got {exc}") from None
     return _freeze(operation)
@@ -264,14 +272,6 @@ class CSDF:
         )
 
 
-def _shown(x: Any) -> str:
-    """Short text of a rejected value for a message."""
-    if isinstance(x, np.ndarray):
-        return repr(x.tolist()) if x.size <= 6 else f"an array of shape {x.shape}"
-    text = repr(x)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
 def _real_array(x: Any) -> np.ndarray | None:
     # real numbers only: bools, strings and objects are refused rather than converted
     try:
@@ -288,7 +288,7 @@ def check_origin(x: Any, what: str) -> np.ndarray:
     """
     a = _real_array(x)
     if a is None or a.shape != (3,) or not np.isfinite(a).all():
-        raise InputError(f"{what}: expected 3 finite numbers, got {_shown(x)}")
+        raise InputError(f"{what}: expected 3 finite numbers, got {shown(x)}")
     return a.astype(np.float64)
 
 
@@ -296,7 +296,7 @@ def check_number(x: Any, what: str) -> float:
     """One finite real number (a scalar or a size-1 array) as float; ``what`` names it."""
     a = _real_array(x)
     if a is None or a.size != 1 or not np.isfinite(a).all():
-        raise InputError(f"{what}: expected one finite number, got {_shown(x)}")
+        raise InputError(f"{what}: expected one finite number, got {shown(x)}")
     return float(a.reshape(()))
 
 
@@ -304,10 +304,13 @@ def check_voxel_size(x: Any, what: str) -> float:
     """Voxel edge length as float: one finite real number > 0; ``what`` names it."""
     a = _real_array(x)
     if a is None or a.size != 1:
-        raise InputError(f"{what}: expected one number, got {_shown(x)}")
+        raise InputError(f"{what}: expected one number, got {shown(x)}")
     h = float(a.reshape(()))
     if not (np.isfinite(h) and h > 0):
         raise InputError(f"{what}: expected a finite number > 0, got {h}")
+    lo, hi = VOXEL_SIZE_RANGE
+    if not lo <= h <= hi:
+        raise InputError(f"{what}: expected a voxel size in [{lo:g}, {hi:g}], got {h:g}")
     return h
 
 
@@ -371,6 +374,17 @@ def make(
     parts = parts.astype(np.int16, copy=False)
     origin = check_origin(origin, "origin")
     voxel_size = check_voxel_size(voxel_size, "voxel_size")
+    far = np.abs(np.stack([origin, origin + (np.asarray(shape) - 1) * voxel_size])).max()
+    if far > WORLD_LIMIT:
+        raise InputError(
+            f"origin: expected voxel centres within +-{WORLD_LIMIT:g} world units, got {far:.3g}"
+        )
+    if sdf.size and max(-float(sdf.min()), float(sdf.max())) > SDF_LIMIT_VOXELS * voxel_size:
+        big = max(-float(sdf.min()), float(sdf.max()))
+        raise InputError(
+            f"sdf: expected |values| <= {SDF_LIMIT_VOXELS:g} voxel sizes "
+            f"({SDF_LIMIT_VOXELS * voxel_size:.3g}), got {big:.3g}"
+        )
     if meta is None:
         meta = {}
     if not isinstance(meta, dict):
@@ -384,7 +398,7 @@ def make(
     meta["version"] = FORMAT_VERSION
     meta.setdefault("units", "m")
     try:
-        json.dumps({k: v for k, v in meta.items() if k != "history"})
+        dumps_json({k: v for k, v in meta.items() if k != "history"})
     except (TypeError, ValueError) as exc:
         raise InputError(f"meta: expected JSON-serialisable metadata, got {exc}") from None
     return CSDF(
@@ -409,7 +423,7 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
         "parts": csdf.parts,
         "origin": csdf.origin,
         "voxel_size": np.float64(csdf.voxel_size),
-        "meta": np.array(json.dumps(csdf.meta)),
+        "meta": np.array(dumps_json(csdf.meta)),
     }
     writer = np.savez_compressed if compress else np.savez
     with atomic_path(path, suffix=".npz") as tmp:
@@ -425,39 +439,39 @@ def load(path: str | os.PathLike) -> CSDF:
     values, meta that is not a JSON object, wrong format or version (reported before anything
     else :func:`make` checks: origin, voxel size, history).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: expected an existing .csdf.npz file, got no such file")
+    path = check_input_file(path, what="an existing .csdf.npz file")
     try:
         # np.load leaks its file handle when the zip is corrupt: own the handle instead.
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
-            names = set(z.files)
-            missing = [n for n in _NAMES if n not in names]
-            extra = sorted(names - set(_NAMES))
-            if missing or extra:
-                got = "; ".join(
-                    ([f"missing {', '.join(missing)}"] if missing else [])
-                    + ([f"extra {', '.join(extra)}"] if extra else [])
-                )
-                raise InputError(
-                    f"{path}: expected exactly the arrays {', '.join(_NAMES)}, got {got}"
-                )
-            data = {n: z[n] for n in _NAMES}
-    except (InputError, MemoryError):
+        with open(path, "rb") as fh:
+            _check_declared(path, fh)
+            fh.seek(0)
+            with np.load(fh, allow_pickle=False) as z:
+                names = set(z.files)
+                missing = [n for n in _NAMES if n not in names]
+                extra = sorted(names - set(_NAMES))
+                if missing or extra:
+                    got = "; ".join(
+                        ([f"missing {', '.join(missing)}"] if missing else [])
+                        + ([f"extra {', '.join(extra)}"] if extra else [])
+                    )
+                    raise InputError(
+                        f"{path}: expected exactly the arrays {', '.join(_NAMES)}, got {got}"
+                    )
+                data = {n: z[n] for n in _NAMES}
+    except InputError:
         raise
     except Exception as exc:  # zipfile, zlib, numpy's header parser: many kinds on damaged data
         raise InputError(
             f"{path}: expected a .csdf.npz (zip of .npy arrays), got {one_line(exc)}"
         ) from None
+    for a in data.values():
+        a.flags.writeable = False  # ours alone: make() keeps them instead of copying
     m = data["meta"]
     if m.shape != () or m.dtype.kind != "U":
         raise InputError(
             f"{path}: expected meta to be one JSON string, got dtype {m.dtype} shape {m.shape}"
         )
-    try:
-        meta = json.loads(str(m))
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise InputError(f"{path}: expected meta to be a JSON string, got {exc}") from None
+    meta = parse_json(str(m), what=f"{path}: meta")
     if not isinstance(meta, dict):
         raise InputError(f"{path}: expected meta to be a JSON object, got {type(meta).__name__}")
     if meta.get("format") != FORMAT:
@@ -477,3 +491,24 @@ def load(path: str | os.PathLike) -> CSDF:
         )
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+
+
+def _check_declared(path: Path, fh) -> None:
+    """Refuse, before reading any array, a file whose declared arrays would not fit in memory."""
+    need = 0
+    with zipfile.ZipFile(fh) as zf:
+        for info in zf.infolist():
+            with zf.open(info) as f:
+                version = np.lib.format.read_magic(f)
+                read = (
+                    np.lib.format.read_array_header_1_0
+                    if version == (1, 0)
+                    else np.lib.format.read_array_header_2_0
+                )
+                shape, _fortran, dtype = read(f)
+            n = 1
+            for d in shape:
+                n *= int(d)
+            need += n * dtype.itemsize
+    # the arrays themselves, plus a byte per voxel for the finiteness check
+    check_bytes(need * 1.25, what=f"{path}: reading it")

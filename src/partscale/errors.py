@@ -25,6 +25,26 @@ class MemoryLimitError(InputError):
     """A request that would need more memory than this machine allows."""
 
 
+class PartscaleWarning(UserWarning):
+    """A note for the user about something partscale did on its own (e.g. a damaged cache
+    entry discarded); the CLI prints it as one line."""
+
+
 def one_line(exc: BaseException) -> str:
     """The exception's message on one line (whitespace runs become one space), or its type name."""
     return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def shown(x: object, limit: int = 60) -> str:
+    """Short text of a rejected value for a message: its repr cut to ``limit`` characters.
+
+    Arrays of more than 6 elements are described by their shape; so a 10 MB string in a recipe
+    is never echoed in full.
+    """
+    shape, size = getattr(x, "shape", None), getattr(x, "size", None)
+    if shape is not None and isinstance(size, int) and hasattr(x, "tolist"):
+        if size > 6:
+            return f"an array of shape {tuple(shape)}"
+        x = x.tolist()
+    text = repr(x)
+    return text if len(text) <= limit else text[: limit - 3] + "..."

@@ -1,18 +1,24 @@
 """The ``partscale`` command: thin typer commands over the library's public functions.
 
 Each subcommand lives in its own module and is registered here. Errors a user can cause
-(:class:`partscale.errors.InputError`) print one line and exit with code 2; ``-v`` shows the
-traceback.
+(:class:`partscale.errors.InputError`, and the operating system refusing a file or memory)
+print one line and exit with code 2; ``-v`` shows the traceback. Warnings print as one line
+each. SIGTERM stops a command like Ctrl-C: every temporary file is removed (exit 143).
 """
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import sys
+import threading
+import warnings
+from collections.abc import Iterator
 from typing import Annotated
 
 import typer
 
-from ..errors import InputError
+from ..errors import InputError, PartscaleWarning, one_line
 from . import _common
 from .batch import batch, optional_values
 from .complete import complete
@@ -76,8 +82,50 @@ def _click_modules() -> list:
     return mods
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is so that ``with`` blocks clean up (as for Ctrl-C)."""
+
+
+@contextlib.contextmanager
+def _terminate_cleanly() -> Iterator[dict]:
+    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only)."""
+    seen = {"term": False}
+    if threading.current_thread() is not threading.main_thread():
+        yield seen
+        return
+
+    def on_term(signum, frame):
+        seen["term"] = True
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, on_term)
+    try:
+        yield seen
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    kind = "note" if issubclass(category, PartscaleWarning) else "warning"
+    _common.error_line(str(message), kind=kind)
+
+
+@contextlib.contextmanager
+def _one_line_warnings() -> Iterator[None]:
+    """Warnings print as one line each; partscale's own notes always show."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("always", category=PartscaleWarning)
+        warnings.showwarning = _show_warning
+        yield
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point of the console script: one line and exit 2 for every user error."""
+    with _terminate_cleanly() as seen, _one_line_warnings():
+        _main(argv, seen)
+
+
+def _main(argv: list[str] | None, seen: dict) -> None:
     mods = _click_modules()
     usage_errors = tuple(m.ClickException for m in mods)
     exits = tuple(m.Exit for m in mods if hasattr(m, "Exit"))
@@ -91,7 +139,19 @@ def main(argv: list[str] | None = None) -> None:
             raise
         _common.error_line(str(exc))
         sys.exit(2)
-    except typer.Exit as exc:
+    except OSError as exc:  # the system refused a file the command did not guard itself
+        if _common.is_verbose():
+            raise
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        _common.error_line(f"{where}{exc.strerror or one_line(exc)}")
+        sys.exit(2)
+    except MemoryError:
+        if _common.is_verbose():
+            raise
+        _common.error_line("out of memory (the memory guard's estimate was too low)")
+        sys.exit(2)
+    except typer.Exit as exc:  # typer turns Ctrl-C (and so SIGTERM) into Exit(130)
+        _exit_if_terminated(seen)
         sys.exit(exc.exit_code)
     except usage_errors as exc:
         if _common.is_verbose():
@@ -103,9 +163,18 @@ def main(argv: list[str] | None = None) -> None:
         _common.error_line(f"{exc.format_message()}{where}")
         sys.exit(2)
     except exits as exc:
+        _exit_if_terminated(seen)
         sys.exit(getattr(exc, "exit_code", 0))
-    except (typer.Abort, *aborts):
+    except (typer.Abort, *aborts, KeyboardInterrupt):
+        _exit_if_terminated(seen)
         _common.error_line("aborted")
         sys.exit(130)
     if isinstance(code, int) and code:
+        _exit_if_terminated(seen)  # click returns Ctrl-C's 130 outside standalone mode
         sys.exit(code)
+
+
+def _exit_if_terminated(seen: dict) -> None:
+    if seen["term"]:
+        _common.error_line("terminated (SIGTERM); nothing half-written was left")
+        sys.exit(143)

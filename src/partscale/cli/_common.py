@@ -46,7 +46,9 @@ def done(message: str) -> None:
 
 
 def check_output(path: Path, *, suffixes: tuple[str, ...], what: str) -> Path:
-    """Validate an output path's suffix up front, before any work is done."""
+    """Validate an output path up front, before any work is done: its suffix, and that a file
+    can be written there (an existing folder that accepts files, no directory in the way)."""
+    from .._files import check_writable
     from ..errors import InputError
 
     name = path.name.lower()
@@ -54,13 +56,19 @@ def check_output(path: Path, *, suffixes: tuple[str, ...], what: str) -> Path:
         raise InputError(
             f"{path}: expected {what} ending in {' or '.join(suffixes)}, got {path.suffix or 'no suffix'}"
         )
-    return path
+    return check_writable(path)
 
 
-def error_line(message: str) -> None:
-    """Print one unwrapped error line on stderr (rich would wrap it at the terminal width)."""
+MAX_LINE = 1000
+"""Longest message line printed (a hostile value echoed in a message is cut, not dumped)."""
+
+
+def error_line(message: str, *, kind: str = "error") -> None:
+    """Print one unwrapped line on stderr (rich would wrap it at the terminal width)."""
     first = " ".join(str(message).split())
-    sys.stderr.write(f"partscale: error: {first}\n")
+    if len(first) > MAX_LINE:
+        first = first[: MAX_LINE - 3] + "..."
+    sys.stderr.write(f"partscale: {kind}: {first}\n")
     sys.stderr.flush()
 
 

@@ -99,6 +99,8 @@ def scale(
         rec = Recipe((edit,))
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
+    for line in _voxel_snaps(out.meta.get("history", [])[-len(rec.edits) :], out):
+        _common.stderr.print(line, highlight=False, soft_wrap=True)
     if recipe is None and snap:
         from ..zones import record_snap
 
@@ -136,3 +138,21 @@ def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
 
 
 AXES_INDEX = {"x": 0, "y": 1, "z": 2}
+
+
+def _voxel_snaps(entries: list, out) -> list[str]:
+    """A line per edit whose destination moved to whole voxels (the history keeps both:
+    ``edit.to`` as given and ``to_snapped``), saying by how much."""
+    u = f" {out.meta.get('units')}" if out.meta.get("units") else ""
+    lines = []
+    for i, h in enumerate(entries):
+        given = h.get("edit", {}).get("to") if isinstance(h, dict) else None
+        snapped = h.get("to_snapped") if isinstance(h, dict) else None
+        if given is None or snapped is None or abs(snapped - given) <= 1e-9 * out.voxel_size:
+            continue
+        where = f"edit {i + 1}: " if len(entries) > 1 else ""
+        lines.append(
+            f"{where}destination {given:.6g} -> {snapped:.6g}{u} ({snapped - given:+.4g}{u}): "
+            f"lengths change by whole voxels of {out.voxel_size:.4g}{u} (recorded in the history)"
+        )
+    return lines

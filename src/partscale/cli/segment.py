@@ -27,7 +27,14 @@ def segment(
     ] = None,
     seed: Annotated[int, typer.Option(help="Random seed (same seed, same parts).")] = 0,
     no_cache: Annotated[
-        bool, typer.Option("--no-cache", help="Recompute even if a cached result exists.")
+        bool,
+        typer.Option(
+            "--no-cache",
+            help="Neither read nor store the cache. The cache lives in $PARTSCALE_CACHE/segment "
+            "(default ~/.cache/partscale/segment), holds at most 1 GiB (PARTSCALE_CACHE_MAX "
+            "bytes; least recently used entries go first); a damaged entry is discarded and "
+            "recomputed.",
+        ),
     ] = False,
 ) -> None:
     """Split the object into nearly convex parts; every voxel gets its part's index."""

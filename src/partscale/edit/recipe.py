@@ -32,7 +32,7 @@ from typing import Any, Literal
 import numpy as np
 
 from .._files import read_json
-from ..errors import InputError
+from ..errors import InputError, shown
 from .units import has_unit, parse_length
 
 AXES = ("x", "y", "z")
@@ -105,11 +105,13 @@ def parse_position(value: Any, what: str, units: str | None = None) -> Position:
     (``inf``, ``nan``, ``'1e400%'``) are refused.
     """
     if isinstance(value, bool | np.bool_):
-        raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
+        raise InputError(
+            f"{what}: expected a number or a percentage like '30%', got {shown(value)}"
+        )
     if isinstance(value, numbers.Real):
         v = float(value)
         if not math.isfinite(v):
-            raise InputError(f"{what}: expected a finite number, got {value!r}")
+            raise InputError(f"{what}: expected a finite number, got {shown(value)}")
         return v
     if isinstance(value, str):
         s = value.strip()
@@ -121,9 +123,9 @@ def parse_position(value: Any, what: str, units: str | None = None) -> Position:
         else:
             if not math.isfinite(v):
                 kind = "percentage" if s.endswith("%") else "number"
-                raise InputError(f"{what}: expected a finite {kind}, got {value!r}")
+                raise InputError(f"{what}: expected a finite {kind}, got {shown(value)}")
             return s if s.endswith("%") else v
-    raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
+    raise InputError(f"{what}: expected a number or a percentage like '30%', got {shown(value)}")
 
 
 @dataclass(frozen=True)
@@ -140,26 +142,28 @@ class Edit:
     def parse(cls, obj: Any, *, where: str = "edit") -> Edit:
         """Validate a JSON-like edit (see module docstring)."""
         if not isinstance(obj, dict):
-            raise InputError(f"{where}: expected an object with axis, zone, to, mode; got {obj!r}")
+            raise InputError(
+                f"{where}: expected an object with axis, zone, to, mode; got {shown(obj)}"
+            )
         unknown = set(obj) - {"axis", "zone", "to", "mode"}
         if unknown:
             raise InputError(
-                f"{where}: unknown key(s) {sorted(unknown)}; keys are axis, zone, to, mode"
+                f"{where}: unknown key(s) {shown(sorted(unknown))}; keys are axis, zone, to, mode"
             )
         for k in ("axis", "zone", "to"):
             if k not in obj:
-                raise InputError(f"{where}: expected key {k!r}, got keys {sorted(obj)}")
+                raise InputError(f"{where}: expected key {k!r}, got keys {shown(sorted(obj))}")
         axis = str(obj["axis"]).lower()
         if axis not in AXES:
-            raise InputError(f"{where}.axis: expected one of x, y, z, got {obj['axis']!r}")
+            raise InputError(f"{where}.axis: expected one of x, y, z, got {shown(obj['axis'])}")
         mode = str(obj.get("mode", "stretch")).lower()
         if mode not in MODES:
             raise InputError(
-                f"{where}.mode: expected one of {', '.join(MODES)}, got {obj['mode']!r}"
+                f"{where}.mode: expected one of {', '.join(MODES)}, got {shown(obj['mode'])}"
             )
         zone = obj["zone"]
         if not isinstance(zone, list | tuple | np.ndarray) or np.ndim(zone) != 1 or len(zone) != 2:
-            raise InputError(f"{where}.zone: expected [START, END], got {zone!r}")
+            raise InputError(f"{where}.zone: expected [START, END], got {shown(zone)}")
         return cls(
             axis=axis,
             start=parse_position(zone[0], f"{where}.zone[0]"),
@@ -202,15 +206,19 @@ class Recipe:
         if isinstance(obj, list):
             obj = {"edits": obj}
         if not isinstance(obj, dict) or "edits" not in obj:
-            raise InputError(f"recipe: expected {{'edits': [...]}}, got {str(obj)[:80]!r}")
+            raise InputError(f"recipe: expected {{'edits': [...]}}, got {shown(obj)}")
         unknown = set(obj) - {"version", "edits"}
         if unknown:
-            raise InputError(f"recipe: unknown key(s) {sorted(unknown)}; keys are version, edits")
+            raise InputError(
+                f"recipe: unknown key(s) {shown(sorted(unknown))}; keys are version, edits"
+            )
         if obj.get("version", RECIPE_VERSION) != RECIPE_VERSION:
-            raise InputError(f"recipe: expected version {RECIPE_VERSION}, got {obj['version']!r}")
+            raise InputError(
+                f"recipe: expected version {RECIPE_VERSION}, got {shown(obj['version'])}"
+            )
         edits = obj["edits"]
         if not isinstance(edits, list) or not edits:
-            raise InputError(f"recipe: expected a non-empty list of edits, got {edits!r}")
+            raise InputError(f"recipe: expected a non-empty list of edits, got {shown(edits)}")
         if len(edits) > MAX_EDITS:
             raise InputError(f"recipe: expected at most {MAX_EDITS} edits, got {len(edits)}")
         return cls(tuple(Edit.parse(e, where=f"edits[{i}]") for i, e in enumerate(edits)))

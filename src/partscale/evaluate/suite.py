@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from .._files import atomic_path, read_json
+from .._files import atomic_path, check_writable, read_json
 from .._options import keyword_options
 from ..csdf import CSDF, SUFFIX, load
 from ..edit import Edit, apply_edit, naive_edit, resolve_edit
@@ -468,7 +468,13 @@ def run_suite(
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out}: expected an output folder, got a file")
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(
+            f"{out}: expected a folder that can be created, got {exc.strerror}"
+        ) from None
+    check_writable(out / "metrics.csv")  # before any object is imported
     folder = data_folder(suite, data)
     progress = resolve(progress)
     objects = []

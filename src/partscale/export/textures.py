@@ -18,6 +18,8 @@ x fastest (then y, then z): the grid arrays are indexed ``(i, j, k) = (x, y, z)`
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import io
 import json
 import math
 from pathlib import Path
@@ -25,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .._files import atomic_path
+from .._files import atomic_path, read_json
 from .._memory import check_memory
 from ..csdf import CSDF, make
 from ..errors import InputError
@@ -153,12 +155,7 @@ def write_raw(csdf: CSDF, path: Path) -> list[Path]:
         "unity": f"new Texture3D({X}, {Y}, {Z}, TextureFormat.RGBAHalf, false) then "
         "SetPixelData(bytes, 0) and Apply(); sample the alpha as the distance",
     }
-    header = _texture_header(csdf, encoding)
-    with contextlib.ExitStack() as stack:
-        tmp = stack.enter_context(atomic_path(path))
-        tmp_side = stack.enter_context(atomic_path(side))
-        tmp.write_bytes(data)
-        tmp_side.write_text(json.dumps(header, indent=2))
+    _write_pair(path, data, side, _texture_header(csdf, encoding))
     return [path, side]
 
 
@@ -202,27 +199,47 @@ def write_png(csdf: CSDF, path: Path) -> list[Path]:
             "Clamp, Compression None",
         },
     }
-    header = _texture_header(csdf, encoding)
-    with contextlib.ExitStack() as stack:
-        tmp = stack.enter_context(atomic_path(path))
-        tmp_side = stack.enter_context(atomic_path(side))
-        Image.fromarray(atlas, mode="RGBA").save(tmp, format="PNG", compress_level=6)
-        tmp_side.write_text(json.dumps(header, indent=2))
+    buf = io.BytesIO()
+    Image.fromarray(atlas, mode="RGBA").save(buf, format="PNG", compress_level=6)
+    _write_pair(path, buf.getvalue(), side, _texture_header(csdf, encoding))
     return [path, side]
+
+
+def _write_pair(path: Path, data: bytes, side: Path, header: dict[str, Any]) -> None:
+    """Write a texture and its sidecar so that a reader never takes one for the other's pair.
+
+    The sidecar records the texture's sha256 (``content_sha256``), which :func:`_read_sidecar`
+    checks. Both are written to temporaries first; the texture is renamed into place, then the
+    sidecar: if the texture's rename fails neither changes, and if the sidecar's fails the old
+    sidecar's checksum no longer matches, so the pair is refused rather than misread.
+    """
+    header = {**header, "content_sha256": hashlib.sha256(data).hexdigest()}
+    with contextlib.ExitStack() as stack:
+        # entered sidecar first: contexts exit in reverse, so the texture is renamed first
+        tmp_side = stack.enter_context(atomic_path(side))
+        tmp = stack.enter_context(atomic_path(path))
+        tmp.write_bytes(data)
+        tmp_side.write_text(json.dumps(header, indent=2))
 
 
 def _read_sidecar(path: Path) -> dict[str, Any]:
     side = _sidecar_path(path)
     if not side.is_file():
         raise InputError(f"{path}: expected its sidecar {side.name} beside it, got no such file")
+    header = read_json(side, what=f"a {TEXTURE_FORMAT} sidecar")
+    want = header.get("content_sha256") if isinstance(header, dict) else None
+    if want is not None and want != hashlib.sha256(path.read_bytes()).hexdigest():
+        raise InputError(
+            f"{side}: expected the sidecar of {path.name}, got one describing another texture "
+            "(its content_sha256 does not match; a write was interrupted?)"
+        )
     try:
-        header = json.loads(side.read_text())
         if header.get("format") != TEXTURE_FORMAT:
             raise ValueError(f"format {header.get('format')!r}")
         header["size"] = [int(s) for s in header["size"]]
         header["origin"] = [float(o) for o in header["origin"]]
         header["voxel_size"] = float(header["voxel_size"])
-    except (ValueError, KeyError, TypeError) as exc:
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
         raise InputError(f"{side}: expected a {TEXTURE_FORMAT} sidecar, got {exc}") from None
     return header
 

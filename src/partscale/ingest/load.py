@@ -12,14 +12,15 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from .._files import check_input_file
 from .._options import keyword_options
-from ..csdf import BAND_VOXELS, CSDF
+from ..csdf import CSDF
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
 from .gltf import load_gltf
 from .grid import from_grid, read_autosdf, read_grid
 from .mesh import ColoredMesh
-from .mesh_sdf import check_res, from_mesh
+from .mesh_sdf import check_pad, check_res, from_mesh
 from .obj import load_obj
 from .ply import load_ply
 
@@ -131,8 +132,8 @@ def load(
     report = resolve(progress)
     kind = sniff(path)
     res = check_res(res, str(path))
-    if pad is not None and int(pad) < BAND_VOXELS:
-        raise InputError(f"{path}: expected --pad >= {BAND_VOXELS}, got {pad}")
+    if pad is not None:
+        check_pad(pad, str(path))
     if kind == "mesh":
         if iso is not None:
             raise InputError(
@@ -160,8 +161,7 @@ def load(
 def _read_colors(path: Path):
     import numpy as np
 
-    if not path.is_file():
-        raise InputError(f"{path}: expected an existing colour volume (.npy), got no such file")
+    check_input_file(path, what="an existing colour volume (.npy)")
     try:
         with open(path, "rb") as fh:
             return np.load(fh, allow_pickle=False)

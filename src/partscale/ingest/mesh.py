@@ -185,6 +185,11 @@ def scene_to_mesh(
             raise InputError(
                 f"{path}: expected 3 coordinates per vertex in {geom_name!r}, got shape {v.shape}"
             )
+        if not np.isfinite(v).all():  # before arithmetic: inf would warn and spread NaN
+            raise InputError(
+                f"{path}: expected finite vertex coordinates, got "
+                f"{int((~np.isfinite(v)).any(axis=1).sum())} vertex(es) with NaN/inf in {geom_name!r}"
+            )
         v = v @ transform[:3, :3].T + transform[:3, 3]
         f = np.asarray(geom.faces, np.int64)
         if f.min() < 0 or f.max() >= len(v):

@@ -39,7 +39,7 @@ from scipy import ndimage
 from .._memory import check_memory
 from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF, make
-from ..errors import InputError
+from ..errors import InputError, shown
 from ..progress import ProgressCallback, resolve
 from . import _kernels
 from .mesh import ColoredMesh
@@ -49,16 +49,38 @@ SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at inters
 SLAB = 2  # x-layers per parallel work item
 BYTES_PER_VOXEL = 160  # peak working set of from_mesh per grid voxel (measured, all temporaries)
 MIN_RES = 16
+MAX_RES = 16384
+"""Largest ``--res``: far beyond any memory (the guard refuses much less), bounded so that
+grid arithmetic never overflows int64."""
+MAX_PAD = 4096
+"""Largest ``--pad`` (same reason as :data:`MAX_RES`)."""
 
 
 def check_res(res: int, what: str) -> int:
-    """Validate ``--res`` (an int >= 16)."""
-    if isinstance(res, bool) or int(res) != res:
-        raise InputError(f"{what}: expected an integer --res, got {res!r}")
+    """Validate ``--res`` (an int in [16, :data:`MAX_RES`]) before any arithmetic with it."""
+    if isinstance(res, float) and math.isfinite(res) and res.is_integer():
+        res = int(res)
+    if isinstance(res, bool) or not isinstance(res, int | np.integer):
+        raise InputError(f"{what}: expected an integer --res, got {shown(res)}")
     res = int(res)
-    if res < MIN_RES:
-        raise InputError(f"{what}: expected --res >= {MIN_RES}, got {res}")
+    if not MIN_RES <= res <= MAX_RES:
+        raise InputError(f"{what}: expected --res in [{MIN_RES}, {MAX_RES}], got {shown(res, 24)}")
     return res
+
+
+def check_pad(pad: int | None, what: str) -> int:
+    """Validate ``--pad`` (an int in [BAND_VOXELS, :data:`MAX_PAD`]; None: the default)."""
+    if pad is None:
+        return BAND_VOXELS + 2
+    if isinstance(pad, bool) or not isinstance(pad, int | np.integer):
+        raise InputError(f"{what}: expected an integer --pad, got {shown(pad)}")
+    pad = int(pad)
+    if not BAND_VOXELS <= pad <= MAX_PAD:
+        raise InputError(
+            f"{what}: expected --pad in [{BAND_VOXELS}, {MAX_PAD}] (at least the exact band), "
+            f"got {shown(pad, 24)}"
+        )
+    return pad
 
 
 def grid_for_bounds(lo, hi, res: int, pad: int):
@@ -396,9 +418,7 @@ def from_mesh(
     report = resolve(progress)
     name = mesh.source or "mesh"
     res = check_res(res, name)
-    pad = BAND_VOXELS + 2 if pad is None else int(pad)
-    if pad < BAND_VOXELS:
-        raise InputError(f"{name}: expected --pad >= {BAND_VOXELS} (the exact band), got {pad}")
+    pad = check_pad(pad, name)
     V = np.ascontiguousarray(mesh.vertices, np.float64)
     F = np.ascontiguousarray(mesh.faces, np.int64)
     if len(F) == 0:

@@ -172,6 +172,26 @@ def _obj_materials(obj: Path, mtl_texts: dict[str, str]) -> dict[str, Material]:
     return out
 
 
+def _check_mtllib(obj: Path, text: str) -> None:
+    """Refuse an OBJ whose material library (its first ``mtllib``, the one read) is missing.
+
+    trimesh would import it all white with no word; a missing texture is refused too.
+    """
+    for line in text.splitlines():
+        if line.startswith("mtllib"):
+            name = line[len("mtllib") :].strip()
+            if not name:
+                return
+            mtl = obj.parent / name
+            candidates = {name, name.replace("\\", "/"), name.split()[0]}
+            if not any((obj.parent / c).is_file() for c in candidates):
+                raise InputError(
+                    f"{obj}: expected the material library {mtl.name} it names beside it, "
+                    f"got {'a directory' if mtl.is_dir() else 'no such file'}"
+                )
+            return
+
+
 def load_obj(path: Path) -> ColoredMesh:
     """Read an ``.obj`` (an existing, non-empty file) and its MTL as a :class:`ColoredMesh`."""
     import trimesh
@@ -182,6 +202,7 @@ def load_obj(path: Path) -> ColoredMesh:
         nonlocal resolver
         # trimesh needs charset_normalizer for text that is not UTF-8: hand it UTF-8
         text = _decode_text(path.read_bytes())
+        _check_mtllib(path, text)
         resolver = _Utf8Resolver(str(path))
         return trimesh.load_scene(
             io.BytesIO(text.encode("utf-8")), file_type="obj", resolver=resolver, process=False

@@ -2,19 +2,21 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._files import atomic_path
+from .._files import atomic_path, parse_json
 from .._memory import check_memory
 from ..csdf import CSDF
-from ..errors import InputError
+from ..errors import InputError, PartscaleWarning, one_line
 from ..progress import ProgressCallback, resolve, scaled
 from ..surface import to_mesh
 from . import coacd_method, fast
@@ -33,6 +35,8 @@ DEFAULT_METHOD = "fast"
 """The fast method: it matched CoACD's quality within the 5 s target on every benchmark object
 (figures in :mod:`partscale.segment.fast`)."""
 CACHE_VERSION = 7
+CACHE_MAX_BYTES = 1 << 30
+"""Default size cap of the segment cache; the least recently used entries go first."""
 """Bump when a change to the code changes results, so old cache entries are not reused."""
 
 _METHOD_PARAMS: dict[str, dict[str, Any]] = {
@@ -143,7 +147,10 @@ def segment(
     merge_tolerance : float
         Touching parts whose union has at most this concavity (voxels) become one; 0 disables.
     cache : bool
-        Reuse (and store) the result for the same grid and parameters.
+        Reuse (and store) the result for the same grid and parameters. Entries carry a
+        checksum; a damaged or inconsistent entry is discarded and recomputed (with a
+        :class:`partscale.errors.PartscaleWarning`). The folder is kept under
+        :func:`cache_limit` bytes, least recently used entries removed first.
     cache_dir : path, optional
         Where results are cached; default :func:`default_cache_dir`.
     progress : callable (fraction, message), optional
@@ -249,19 +256,59 @@ def _compute(
     return labels, info
 
 
+def _entry_checksum(parts: np.ndarray, info_text: str) -> str:
+    h = hashlib.sha256(np.ascontiguousarray(parts).tobytes())
+    h.update(info_text.encode())
+    return h.hexdigest()
+
+
 def _read_cache(entry: Path, csdf: CSDF) -> tuple[np.ndarray, list[dict]] | None:
-    """The cached labels and part facts (bboxes moved to this grid's origin), or None."""
+    """The cached labels and part facts (bboxes moved to this grid's origin), or None.
+
+    An entry that cannot be read, whose checksum does not match its content, or whose labels
+    and part facts disagree (poisoned or from another grid) is removed, with a
+    :class:`PartscaleWarning` saying so; the caller recomputes it.
+    """
+    if not entry.is_file():
+        return None
     try:
         with open(entry, "rb") as fh, np.load(fh, allow_pickle=False) as z:
-            labels = z["parts"]
-            info = json.loads(str(z["info"]))
-    except (OSError, ValueError, KeyError, EOFError):
-        return None  # absent or unreadable: recompute (and overwrite)
-    if labels.shape != csdf.shape:
+            if sorted(z.files) == ["info", "parts"]:  # an older partscale's entry, unchecked:
+                return None  # recomputed and overwritten silently
+            labels, info_text, check = z["parts"], str(z["info"]), str(z["check"])
+        if check != _entry_checksum(labels, info_text):
+            raise ValueError("its checksum does not match its content")
+        info = parse_json(info_text, what="part facts")
+        _check_entry(labels, info, csdf)
+    except Exception as exc:  # zip, zlib, npy header, JSON, shapes: all mean "damaged"
+        entry.unlink(missing_ok=True)
+        warnings.warn(
+            f"segment cache entry {entry} was damaged ({one_line(exc)}): discarded, recomputing",
+            PartscaleWarning,
+            stacklevel=3,
+        )
         return None
+    with contextlib.suppress(OSError):
+        os.utime(entry)  # eviction removes the least recently used entries first
     for d in info:
         d["bbox"] = (np.asarray(d["bbox"]) + csdf.origin).tolist()
     return labels, info
+
+
+def _check_entry(labels: np.ndarray, info: Any, csdf: CSDF) -> None:
+    """ValueError unless ``labels`` and ``info`` are a consistent segmentation of ``csdf``."""
+    if labels.dtype != np.int16 or labels.shape != csdf.shape:
+        raise ValueError(f"labels {labels.dtype} {labels.shape} for a {csdf.shape} grid")
+    if not isinstance(info, list) or not all(isinstance(d, dict) for d in info):
+        raise ValueError("part facts are not a list of objects")
+    n = len(info)
+    if n == 0 or labels.min() < -1 or labels.max() != n - 1:
+        raise ValueError(f"labels in [{labels.min()}, {labels.max()}] for {n} parts")
+    counts = np.bincount(labels.ravel().astype(np.int64) + 1, minlength=n + 1)[1:]
+    for p, d in enumerate(info):
+        bbox = np.asarray(d.get("bbox"), dtype=np.float64)
+        if d.get("index") != p or d.get("voxels") != int(counts[p]) or bbox.shape != (2, 3):
+            raise ValueError(f"part {p}'s facts disagree with its labels")
 
 
 def _write_cache(entry: Path, csdf: CSDF, labels: np.ndarray, info: list[dict]) -> None:
@@ -270,9 +317,43 @@ def _write_cache(entry: Path, csdf: CSDF, labels: np.ndarray, info: list[dict]) 
         {**d, "bbox": (np.asarray(d["bbox"]) - csdf.origin).tolist()}
         for d in json.loads(json.dumps(info))
     ]
+    parts = labels.astype(np.int16)
+    text = json.dumps(rel)
     try:
         entry.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(entry, suffix=".npz") as tmp:
-            np.savez_compressed(tmp, parts=labels.astype(np.int16), info=np.array(json.dumps(rel)))
+            np.savez_compressed(
+                tmp, parts=parts, info=np.array(text), check=np.array(_entry_checksum(parts, text))
+            )
     except (OSError, InputError):  # atomic_path reports a refused folder as InputError
-        pass  # a read-only or full cache folder must not fail the segmentation
+        return  # a read-only or full cache folder must not fail the segmentation
+    _evict(entry.parent, keep=entry)
+
+
+def cache_limit() -> int:
+    """Bytes the segment cache may hold: ``PARTSCALE_CACHE_MAX`` (bytes) if set, else 1 GiB."""
+    env = os.environ.get("PARTSCALE_CACHE_MAX")
+    try:
+        return max(0, int(float(env))) if env else CACHE_MAX_BYTES
+    except ValueError:
+        return CACHE_MAX_BYTES
+
+
+def _evict(folder: Path, *, keep: Path) -> None:
+    """Remove the least recently used entries until the folder holds at most :func:`cache_limit`."""
+    entries = []
+    with contextlib.suppress(OSError):
+        for f in folder.glob("*.npz"):
+            with contextlib.suppress(OSError):
+                st = f.stat()
+                entries.append((st.st_mtime, st.st_size, f))
+    total = sum(size for _t, size, _f in entries)
+    limit = cache_limit()
+    for _t, size, f in sorted(entries, key=lambda e: e[0]):
+        if total <= limit:
+            break
+        if f == keep:
+            continue
+        with contextlib.suppress(OSError):
+            f.unlink()
+            total -= size

@@ -33,7 +33,6 @@ server in its Host header, and a POST from a browser must come from this server'
 from __future__ import annotations
 
 import hashlib
-import json
 import threading
 import time
 import traceback
@@ -51,6 +50,7 @@ from starlette.routing import Route
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from .. import zones
+from .._files import parse_json
 from ..edit import JSON_SCHEMA, Edit
 from ..errors import InputError
 from .server import canonical_host
@@ -225,10 +225,10 @@ async def _json_body(request: Request) -> Any:
     body = await request.body()
     if not body:
         return {}
-    try:
-        return json.loads(body)
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise _HTTPError(400, f"request body: expected JSON, got {exc}") from None
+    try:  # the one hardened reader: depth, size and number limits, no NaN/Infinity
+        return parse_json(body, what="request body")
+    except InputError as exc:
+        raise _HTTPError(400, str(exc)) from None
 
 
 class _HTTPError(Exception):

@@ -58,7 +58,7 @@ import numpy as np
 import trimesh
 
 from ..csdf import CSDF
-from ..edit.recipe import Edit, tile_count
+from ..edit.recipe import AXES, Edit, tile_count
 from ..edit.scale import resolve_edit as scale_resolve_edit
 from ..errors import InputError
 from ..surface import to_mesh
@@ -167,6 +167,188 @@ def resolve_edit(
     r = scale_resolve_edit(csdf, edit)
     dest = r["dest_snapped"] if snap else r["dest"]
     return EditGeometry(r["axis"], r["start"], r["end"], dest, r["lo"], r["hi"], mode or edit.mode)
+
+
+@dataclass(frozen=True)
+class Zone:
+    """One zone of an edit along one axis, in the original's frame and in the result's.
+
+    Attributes
+    ----------
+    axis : int
+    start, end : float
+        The zone in the original (world units).
+    new_start, new_end : float
+        Where it lies in the result (``new_end`` snapped to whole voxels as the stage does).
+    lo, hi : float
+        The original solid's extent along ``axis``.
+    mode : str
+        ``stretch``, ``tile`` or ``global``.
+    """
+
+    axis: int
+    start: float
+    end: float
+    new_start: float
+    new_end: float
+    lo: float
+    hi: float
+    mode: str = "stretch"
+
+    @property
+    def offset(self) -> float:
+        """Translation of the content just beyond the zone."""
+        return self.new_end - self.end
+
+    @property
+    def n_copies(self) -> int:
+        return tile_count(self.end - self.start, self.new_end - self.new_start)
+
+    def joins(self) -> list[float]:
+        """Result-frame planes between tile copies (none for other modes)."""
+        if self.mode != "tile":
+            return []
+        n = self.n_copies
+        step = (self.new_end - self.new_start) / n
+        return [self.new_start + m * step for m in range(1, n)]
+
+    def source_interval(self, y0: np.ndarray, y1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Map result-frame intervals inside the zone to the original (NaN: crosses a join)."""
+        y0 = np.asarray(y0, dtype=np.float64)
+        y1 = np.asarray(y1, dtype=np.float64)
+        n = self.n_copies if self.mode == "tile" else 1
+        step = (self.new_end - self.new_start) / n
+        scale = step / (self.end - self.start)
+        k = np.clip(np.floor((y0 - self.new_start) / step), 0, n - 1)
+        base = self.new_start + k * step
+        s0 = self.start + (y0 - base) / scale
+        s1 = self.start + (y1 - base) / scale
+        crosses = y1 > base + step
+        return np.where(crosses, np.nan, s0), np.where(crosses, np.nan, s1)
+
+
+@dataclass(frozen=True)
+class Zones:
+    """Every zone of an edit (one or several, on one or several axes), non-overlapping per axis.
+
+    Built from one :class:`EditGeometry` (:meth:`of`) or from a result's history
+    (:func:`zones_from_history`); every metric accepts either.
+    """
+
+    zones: tuple[Zone, ...]
+
+    @classmethod
+    def of(cls, geo: EditGeometry | Zones) -> Zones:
+        if isinstance(geo, Zones):
+            return geo
+        return cls(
+            (Zone(geo.axis, geo.start, geo.end, geo.start, geo.dest, geo.lo, geo.hi, geo.mode),)
+        )
+
+    @property
+    def axes(self) -> list[int]:
+        return sorted({z.axis for z in self.zones})
+
+    def on(self, axis: int) -> list[Zone]:
+        return sorted((z for z in self.zones if z.axis == axis), key=lambda z: z.start)
+
+    def target_length(self, axis: int) -> float:
+        zs = self.on(axis)
+        if len(zs) == 1 and zs[0].mode == "global":
+            z = zs[0]
+            return z.hi - z.lo + z.offset
+        return zs[0].hi - zs[0].lo + sum(z.offset - (z.new_start - z.start) for z in zs)
+
+    def offset(self, axis: int, y: np.ndarray, *, result: bool = False) -> np.ndarray:
+        """Translation of original-frame points ``y`` (result-frame with ``result``) outside
+        the zones on ``axis``: the offset of the last zone ending before each point."""
+        y = np.asarray(y, dtype=np.float64)
+        out = np.zeros_like(y)
+        for z in self.on(axis):
+            out = np.where(y >= (z.new_end if result else z.end), z.offset, out)
+        return out
+
+    def outside(self, axis: int, y: np.ndarray, margin: float, *, result: bool = False):
+        """Points of ``y`` more than ``margin`` outside every zone on ``axis``."""
+        keep = np.ones(np.shape(y), bool)
+        for z in self.on(axis):
+            lo, hi = (z.new_start, z.new_end) if result else (z.start, z.end)
+            keep &= (y < lo - margin) | (y > hi + margin)
+        return keep
+
+    def seams(self, axis: int) -> list[tuple[float, float | None, Zone]]:
+        """Seam planes in the result along ``axis``: (plane, original plane or None for a join
+        between tile copies, its zone)."""
+        out: list[tuple[float, float | None, Zone]] = []
+        for z in self.on(axis):
+            if z.mode == "global":
+                f = (z.hi - z.lo + z.offset) / (z.hi - z.lo)
+                out += [(z.lo + (p - z.lo) * f, p, z) for p in (z.start, z.end)]
+                continue
+            out += [(z.new_start, z.start, z), (z.new_end, z.end, z)]
+            out += [(y, None, z) for y in z.joins()]
+        return out
+
+
+def zones_from_history(edited: CSDF, original: CSDF | None = None) -> Zones:
+    """The zones of the scale edits recorded in ``edited``'s history, in ``original``'s frame.
+
+    Each history entry holds its edit in the frame of the object it was applied to (the result
+    of the edits before it); the zones are mapped back through the earlier edits on the same
+    axis. ``original``: skip the history entries it already had, and take the solid's extent
+    from it (default: every scale entry; extent from ``edited`` less the recorded shifts).
+    Raises :class:`InputError` without a scale edit, for zones that overlap on one axis (a
+    zone drawn inside an earlier one's result) and for ``global`` among several edits.
+    """
+    hist = edited.meta.get("history", [])
+    if original is not None:
+        hist = hist[len(original.meta.get("history", [])) :]
+    entries = [h for h in hist if isinstance(h, dict) and h.get("op") in ("scale", "naive_scale")]
+    if not entries:
+        raise InputError("history: expected at least one scale edit, got none")
+    ref = original if original is not None else edited
+    sb = ref.surface_bounds()
+    current: list[list[float | str | int]] = []  # [axis, start, end, new_start, new_end, mode]
+    for i, h in enumerate(entries):
+        try:
+            e = h["edit"]
+            ax = AXES.index(e["axis"])
+            s, en = (float(v) for v in e["zone"])
+            d = float(h.get("to_snapped", e["to"]))
+            mode = str(e.get("mode", "stretch"))
+        except (KeyError, ValueError, TypeError) as exc:
+            raise InputError(
+                f"history[{i}]: expected a scale edit in world units, got {h!r}"
+            ) from exc
+        if mode == "global" and len(entries) > 1:
+            raise InputError(
+                f"history: expected a global edit alone, got one among {len(entries)} edits"
+            )
+        same = [z for z in current if z[0] == ax]
+        for z in same:
+            if s < z[4] and en > z[3]:
+                raise InputError(
+                    f"history[{i}]: expected zones that do not overlap, got [{s:.6g}, {en:.6g}] "
+                    f"within an earlier zone's result [{z[3]:.6g}, {z[4]:.6g}] along "
+                    f"{AXES[ax]}"
+                )
+        before = sum(z[4] - z[2] - (z[3] - z[1]) for z in same if z[4] <= s)
+        shift = d - en
+        for z in same:  # earlier zones beyond this one move with its end
+            if z[3] >= en:
+                z[3] += shift
+                z[4] += shift
+        current.append([ax, s - before, en - before, s, d, mode])
+    if original is None:  # the extent before the edits: the result's, less each axis's growth
+        lo_hi = sb.copy()
+        for z in current:
+            lo_hi[1, z[0]] -= (z[4] - z[2]) - (z[3] - z[1])
+        sb = lo_hi
+    zones = tuple(
+        Zone(int(ax), s, en, ns, ne, float(sb[0, ax]), float(sb[1, ax]), str(mode))
+        for ax, s, en, ns, ne, mode in current
+    )
+    return Zones(zones)
 
 
 # -- solid runs along grid lines ------------------------------------------------------------
@@ -283,48 +465,84 @@ def distribution_error(before: np.ndarray, after: np.ndarray) -> float:
 # -- the metrics ------------------------------------------------------------------------------
 
 
-def length_error(b: CSDF, geo: EditGeometry) -> float:
-    """|extent of ``b``'s solid along the axis - target extent|, in voxels."""
+def length_error(b: CSDF, geo: EditGeometry | Zones) -> float:
+    """|extent of ``b``'s solid - target extent| along each edited axis, in voxels (the worst)."""
+    zs = Zones.of(geo)
     bb = b.surface_bounds()
-    got = bb[1, geo.axis] - bb[0, geo.axis]
-    return abs(got - geo.target_length) / b.voxel_size
+    return max(abs(bb[1, ax] - bb[0, ax] - zs.target_length(ax)) / b.voxel_size for ax in zs.axes)
 
 
-def _regions(geo: EditGeometry, h: float) -> dict[str, tuple[list, list]]:
-    m = MARGIN * h
-    inf = math.inf
-    return {
-        "out": (
-            [(-inf, geo.start - m), (geo.end + m, inf)],
-            [(-inf, geo.start - m), (geo.dest + m, inf)],
-        ),
-        "in": ([(geo.start + m, geo.end - m)], [(geo.start + m, geo.dest - m)]),
-    }
+def _runs_on(runs_a: Runs | list[Runs] | None, a: CSDF, axis: int) -> Runs:
+    if isinstance(runs_a, Runs):
+        return runs_a if runs_a.axis == axis else runs(a, axis)
+    return runs_a[axis] if runs_a is not None else runs(a, axis)
+
+
+def _worst(values: list[float]) -> float:
+    finite = [v for v in values if math.isfinite(v)]
+    return max(finite) if finite else math.nan
+
+
+def _crosses(r: Runs, planes: list[float]) -> np.ndarray:
+    out = np.zeros(len(r.start), bool)
+    for y in planes:
+        out |= (r.start < y) & (r.end > y)
+    return out
+
+
+def _inside_a(r: Runs, zs: list[Zone], m: float) -> np.ndarray:
+    keep = np.zeros(len(r.start), bool)
+    for z in zs:
+        keep |= (r.start >= z.start + m) & (r.end <= z.end - m)
+    return keep
+
+
+def _inside_b(r: Runs, zs: list[Zone], m: float) -> np.ndarray:
+    """Runs of the result whose source (through their own tile copy) lies where
+    :func:`_inside_a` takes the original's: a copy's elements near its ends are the original's
+    elements near the zone's planes, left out there too (like with like)."""
+    keep = np.zeros(len(r.start), bool)
+    for z in zs:
+        within = (r.start >= z.new_start) & (r.end <= z.new_end)
+        s0, s1 = z.source_interval(r.start, r.end)
+        with np.errstate(invalid="ignore"):
+            keep |= within & (s0 >= z.start + m) & (s1 <= z.end - m)
+    return keep
 
 
 def proportion_error(
-    a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = None
+    a: CSDF, b: CSDF, geo: EditGeometry | Zones, *, runs_a: Runs | list[Runs] | None = None
 ) -> dict[str, float]:
-    """``{'out': e, 'in': e}``: thickness distribution error along the edit axis per region.
+    """``{'out': e, 'in': e}``: thickness distribution error along each edited axis per region
+    (the worst axis).
 
     Runs across the edit axis are left out: a one-axis edit cannot change a cross-section's
     set of thicknesses, only how many lines see each, which says nothing about proportions.
-    Runs of ``b`` crossing a join between tile copies are left out too: their pieces were runs
-    crossing the zone's planes in ``a``, which no region holds. NaN where a region has fewer
+    "out": runs more than :data:`MARGIN` outside every zone. "in": runs of ``a`` wholly in a
+    zone, the margin in from its planes, against the runs of ``b`` whose source (mapped through
+    their tile copy) lies there too: a copy's elements touching the joins are the original's
+    elements touching the zone's planes, which neither side counts; runs crossing a join are
+    left out (their pieces crossed the zone's planes in ``a``). NaN where a region has fewer
     than :data:`MIN_SAMPLES` runs on either side.
     """
-    ra = runs_a if runs_a is not None else runs(a, geo.axis)
-    rb = runs(b, geo.axis)
-    joins = [y for y, source in geo.seams() if source is None]
-    clear = np.ones(len(rb.start), bool)
-    for y in joins:
-        clear &= ~((rb.start < y) & (rb.end > y))
-    out: dict[str, float] = {}
-    for name, (reg_a, reg_b) in _regions(geo, a.voxel_size).items():
-        la = np.concatenate([ra.length[_in_region(ra, geo.axis, *r)] for r in reg_a])
-        lb = np.concatenate([rb.length[_in_region(rb, geo.axis, *r) & clear] for r in reg_b])
-        out[name] = distribution_error(la, lb)
-    return out
+    zs = Zones.of(geo)
+    m = MARGIN * a.voxel_size
+    errs: dict[str, list[float]] = {"out": [], "in": []}
+    for ax in zs.axes:
+        on = zs.on(ax)
+        ra = _runs_on(runs_a, a, ax)
+        rb = runs(b, ax)
+        joins = [y for z in on for y in z.joins()]
+        out_a = zs.outside(ax, ra.start, m) & zs.outside(ax, ra.end, m)
+        # wholly on one side of every zone: both ends outside and the same offset
+        out_a &= zs.offset(ax, ra.start) == zs.offset(ax, ra.end)
+        out_b = zs.outside(ax, rb.start, m, result=True) & zs.outside(ax, rb.end, m, result=True)
+        out_b &= zs.offset(ax, rb.start, result=True) == zs.offset(ax, rb.end, result=True)
+        errs["out"].append(distribution_error(ra.length[out_a], rb.length[out_b]))
+        in_a = _inside_a(ra, on, m)
+        in_b = _inside_b(rb, on, m) & ~_crosses(rb, joins)
+        errs["in"].append(distribution_error(ra.length[in_a], rb.length[in_b]))
+    return {k: _worst(v) for k, v in errs.items()}
 
 
 def _pitches(r: Runs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -332,6 +550,12 @@ def _pitches(r: Runs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     c = r.centre
     same = r.line[1:] == r.line[:-1]
     return r.line[:-1][same], c[:-1][same], c[1:][same]
+
+
+def _pitch_runs(r: Runs) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the two runs of each pitch of :func:`_pitches`."""
+    same = np.nonzero(r.line[1:] == r.line[:-1])[0]
+    return same, same + 1
 
 
 def pitches(csdf: CSDF, axis: int) -> np.ndarray:
@@ -346,10 +570,23 @@ def _line_keys(r: Runs, h: float) -> np.ndarray:
     return np.rint(r.perp / h).astype(np.int64) @ np.array([1 << 32, 1], np.int64)
 
 
-def spacing_error(a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = None) -> float:
-    """Pitch distribution error of repeated elements across the zone (see module docstring)."""
-    ra = runs_a if runs_a is not None else runs(a, geo.axis)
-    rb = runs(b, geo.axis)
+def spacing_error(
+    a: CSDF, b: CSDF, geo: EditGeometry | Zones, *, runs_a: Runs | list[Runs] | None = None
+) -> float:
+    """Pitch distribution error of repeated elements across the zones (see module docstring);
+    the worst edited axis.
+
+    Pitches with a run crossing a zone's plane (or, in ``b``, a join between tile copies) are
+    left out: that element is cut by the edit and meant to change length (a seat spanning the
+    zone between two arms grows, and so do its pitches to them), not a repeated element moved.
+    """
+    zs = Zones.of(geo)
+    return _worst([_spacing_on(a, b, zs, ax, _runs_on(runs_a, a, ax)) for ax in zs.axes])
+
+
+def _spacing_on(a: CSDF, b: CSDF, zs: Zones, ax: int, ra: Runs) -> float:
+    on = zs.on(ax)
+    rb = runs(b, ax)
     h = a.voxel_size
     la, ca0, ca1 = _pitches(ra)
     # lines through repeated elements: two consecutive pitches equal within PERIOD_TOLERANCE
@@ -362,12 +599,20 @@ def spacing_error(a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = 
     if len(repeated_lines) == 0:
         return math.nan
 
-    def touches(c0: np.ndarray, c1: np.ndarray, hi: float) -> np.ndarray:
-        # an element of the pair lies in the zone: pitches spanning the whole zone (a rung and
-        # a seat on either side of stretched legs) are meant to grow
-        return ((c0 >= geo.start) & (c0 <= hi)) | ((c1 >= geo.start) & (c1 <= hi))
+    def touches(c0: np.ndarray, c1: np.ndarray, result: bool) -> np.ndarray:
+        # an element of the pair lies in a zone: pitches spanning a whole zone (a rung and a
+        # seat on either side of stretched legs) are meant to grow
+        out = np.zeros(len(c0), bool)
+        for z in on:
+            lo, hi = (z.new_start, z.new_end) if result else (z.start, z.end)
+            out |= ((c0 >= lo) & (c0 <= hi)) | ((c1 >= lo) & (c1 <= hi))
+        return out
 
-    keep_a = np.isin(la, repeated_lines) & touches(ca0, ca1, geo.end)
+    planes_a = [p for z in on for p in (z.start, z.end)]
+    planes_b = [p for z in on for p in (z.new_start, z.new_end, *z.joins())]
+    i0, i1 = _pitch_runs(ra)
+    cut_a = _crosses(ra, planes_a)
+    keep_a = np.isin(la, repeated_lines) & touches(ca0, ca1, False) & ~(cut_a[i0] | cut_a[i1])
     if not keep_a.any():
         return math.nan
     keys_a = _line_keys(ra, h)
@@ -375,9 +620,11 @@ def spacing_error(a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = 
     first_run = np.searchsorted(ra.line, repeated_lines)
     wanted = keys_a[first_run]
     lb, cb0, cb1 = _pitches(rb)
+    j0, j1 = _pitch_runs(rb)
+    cut_b = _crosses(rb, planes_b)
     keys_b = _line_keys(rb, h)
     first_b = np.searchsorted(rb.line, lb)
-    keep_b = np.isin(keys_b[first_b], wanted) & touches(cb0, cb1, geo.dest)
+    keep_b = np.isin(keys_b[first_b], wanted) & touches(cb0, cb1, True) & ~(cut_b[j0] | cut_b[j1])
     return distribution_error((ca1 - ca0)[keep_a], (cb1 - cb0)[keep_b])
 
 
@@ -400,24 +647,34 @@ def _distance_to_mesh(points: np.ndarray, mesh: trimesh.Trimesh) -> np.ndarray:
 
 
 def rigidity_error(
-    mesh_a: trimesh.Trimesh, mesh_b: trimesh.Trimesh, geo: EditGeometry, voxel_size: float
+    mesh_a: trimesh.Trimesh,
+    mesh_b: trimesh.Trimesh,
+    geo: EditGeometry | Zones,
+    voxel_size: float,
 ) -> float:
-    """99th percentile of the surface displacement outside the zone, in voxels (both ways).
+    """99th percentile of the surface displacement outside every zone, in voxels (both ways).
 
-    Not the maximum: marching cubes cuts a sharp edge differently when the grid's phase against
-    it changes (a translation by a fraction of a voxel), by up to half a voxel, on a thin set of
+    Each surface point more than :data:`MARGIN` outside every zone (on every edited axis) is
+    moved by the edit's translation there and its distance to the other surface taken. Not the
+    maximum: marching cubes cuts a sharp edge differently when the grid's phase against it
+    changes (a translation by a fraction of a voxel), by up to half a voxel, on a thin set of
     vertices along edges.
     """
+    zs = Zones.of(geo)
     m = MARGIN * voxel_size
-    ax = geo.axis
-    va = mesh_a.vertices
-    ya = va[:, ax]
-    pa = _subset(va[(ya < geo.start - m) | (ya > geo.end + m)].copy())
-    pa[:, ax] = np.where(pa[:, ax] > geo.end, pa[:, ax] + geo.shift, pa[:, ax])
-    vb = mesh_b.vertices
-    yb = vb[:, ax]
-    pb = _subset(vb[(yb < geo.start - m) | (yb > geo.dest + m)].copy())
-    pb[:, ax] = np.where(pb[:, ax] > geo.dest, pb[:, ax] - geo.shift, pb[:, ax])
+
+    def rigid(v: np.ndarray, result: bool) -> np.ndarray:
+        keep = np.ones(len(v), bool)
+        for ax in zs.axes:
+            keep &= zs.outside(ax, v[:, ax], m, result=result)
+        p = _subset(v[keep].copy())
+        sign = -1.0 if result else 1.0
+        for ax in zs.axes:
+            p[:, ax] += sign * zs.offset(ax, p[:, ax], result=result)
+        return p
+
+    pa = rigid(mesh_a.vertices, False)
+    pb = rigid(mesh_b.vertices, True)
     d = np.concatenate([_distance_to_mesh(pa, mesh_b), _distance_to_mesh(pb, mesh_a)])
     return float(np.quantile(d, 0.99)) / voxel_size if len(d) else math.nan
 
@@ -443,12 +700,14 @@ def distance_error(
     *,
     axis: int | None = None,
     region: tuple[float, float] | None = None,
+    regions: list[tuple[int, float, float]] | None = None,
 ) -> tuple[float, float]:
     """(mean, p99) of ``| |sdf| - true distance |`` in voxels, over the band of ``BAND`` voxels.
 
     The true distance is to ``b``'s own zero level (its marching-cubes mesh), so the surface is
     taken as given and only the stored distances are judged. ``region``: only band voxels whose
-    coordinate along ``axis`` lies in this world interval (where an edit changed the field).
+    coordinate along ``axis`` lies in this world interval (where an edit changed the field);
+    ``regions``: several such ``(axis, lo, hi)``, band voxels in any of them.
     """
     h = b.voxel_size
     shell = _shell(b.sdf)
@@ -457,6 +716,12 @@ def distance_error(
     if region is not None and axis is not None:
         y = b.origin[axis] + idx[:, axis] * h
         idx = idx[(y >= region[0]) & (y <= region[1])]
+    if regions is not None:
+        keep = np.zeros(len(idx), bool)
+        for ax, lo, hi in regions:
+            y = b.origin[ax] + idx[:, ax] * h
+            keep |= (y >= lo) & (y <= hi)
+        idx = idx[keep]
     idx = _subset(idx)
     pts = b.index_to_world(idx)
     true = _distance_to_mesh(pts, mesh_b)
@@ -534,32 +799,44 @@ def _step_at(
 
 
 def seam_jumps(
-    a: CSDF, b: CSDF, geo: EditGeometry, *, steps_a: tuple | None = None
+    a: CSDF, b: CSDF, geo: EditGeometry | Zones, *, steps_a: tuple | dict | None = None
 ) -> tuple[float, float]:
     """(colour jump in sRGB levels, shape jump in voxels): the worst seam of ``b``.
 
-    Each seam's step minus the step ``a`` has at the plane it continues (its median step for the
-    joins between tile copies), clipped at 0; NaN when no seam has surface on both sides.
+    Each seam's step minus the step ``a`` has at the plane it continues, clipped at 0. A join
+    between tile copies continues both zone planes at once (copy ``m``'s end meets copy
+    ``m + 1``'s start), so it is measured against the larger of ``a``'s steps at the two: a
+    board lying at a zone plane shows at every join, as in the original. NaN when no seam has
+    surface on both sides. ``steps_a``: :func:`slice_steps` of ``a`` (for one axis, or a dict
+    axis -> steps).
     """
-    ax = geo.axis
-    col_a, shp_a = steps_a if steps_a is not None else slice_steps(a, ax)
-    col_b, shp_b = slice_steps(b, ax)
-    med_c, med_s = (
-        float(np.nanmedian(x)) if np.isfinite(x).any() else math.nan for x in (col_a, shp_a)
-    )
+    zs = Zones.of(geo)
     jc, js = [], []
-    for yb, ya in geo.seams():
-        cb, sb = _step_at(col_b, b, ax, yb), _step_at(shp_b, b, ax, yb)
-        if ya is None:
-            ca, sa = med_c, med_s
+    for ax in zs.axes:
+        if isinstance(steps_a, dict):
+            col_a, shp_a = steps_a[ax] if ax in steps_a else slice_steps(a, ax)
+        elif steps_a is not None and len(zs.axes) == 1:
+            col_a, shp_a = steps_a
         else:
-            ca, sa = _step_at(col_a, a, ax, ya), _step_at(shp_a, a, ax, ya)
-        ca = ca if math.isfinite(ca) else med_c
-        sa = sa if math.isfinite(sa) else med_s
-        if math.isfinite(cb):
-            jc.append(max(0.0, cb - ca))
-        if math.isfinite(sb):
-            js.append(max(0.0, sb - sa))
+            col_a, shp_a = slice_steps(a, ax)
+        col_b, shp_b = slice_steps(b, ax)
+        med_c, med_s = (
+            float(np.nanmedian(x)) if np.isfinite(x).any() else math.nan for x in (col_a, shp_a)
+        )
+
+        def at_a(y: float, steps: np.ndarray, med: float, ax: int = ax) -> float:
+            v = _step_at(steps, a, ax, y)
+            return v if math.isfinite(v) else med
+
+        for yb, ya, z in zs.seams(ax):
+            cb, sb = _step_at(col_b, b, ax, yb), _step_at(shp_b, b, ax, yb)
+            planes = (z.start, z.end) if ya is None else (ya,)
+            ca = max(at_a(p, col_a, med_c) for p in planes)
+            sa = max(at_a(p, shp_a, med_s) for p in planes)
+            if math.isfinite(cb):
+                jc.append(max(0.0, cb - ca))
+            if math.isfinite(sb):
+                js.append(max(0.0, sb - sa))
     return (max(jc) if jc else math.nan, max(js) if js else math.nan)
 
 
@@ -592,13 +869,14 @@ class Reference:
             ]
         ).reshape(-1, 2, 3)
 
-    def expected_pieces(self, geo: EditGeometry) -> int:
-        """Pieces the edit should leave: each tile copy repeats the pieces wholly in the zone."""
-        if geo.mode != "tile":
-            return self.pieces
-        lo, hi = self._piece_bounds[:, 0, geo.axis], self._piece_bounds[:, 1, geo.axis]
-        inside = int(((lo > geo.start) & (hi < geo.end)).sum())
-        return self.pieces + (geo.n_copies - 1) * inside
+    def expected_pieces(self, geo: EditGeometry | Zones) -> int:
+        """Pieces the edit should leave: each tile copy repeats the pieces wholly in its zone."""
+        n = self.pieces
+        for z in Zones.of(geo).zones:
+            if z.mode == "tile":
+                lo, hi = self._piece_bounds[:, 0, z.axis], self._piece_bounds[:, 1, z.axis]
+                n += (z.n_copies - 1) * int(((lo > z.start) & (hi < z.end)).sum())
+        return n
 
     def steps(self, axis: int) -> tuple[np.ndarray, np.ndarray]:
         if axis not in self._steps:
@@ -622,7 +900,9 @@ METRICS = (
 )
 
 
-def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, float | int | bool]:
+def evaluate(
+    ref: Reference | CSDF, b: CSDF, geo: EditGeometry | Zones
+) -> dict[str, float | int | bool]:
     """Every metric of one edit result ``b`` against the original (see module docstring).
 
     Parameters
@@ -631,8 +911,9 @@ def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, flo
         The original (a :class:`Reference` reuses its mesh and runs across modes).
     b : CSDF
         The edited object; same voxel size as the original.
-    geo : EditGeometry
-        The edit as resolved on the original, with the mode that produced ``b``.
+    geo : EditGeometry or Zones
+        The edit as resolved on the original, with the mode that produced ``b``; a
+        :class:`Zones` for several zones (a multi-edit recipe, :func:`zones_from_history`).
     """
     if not isinstance(ref, Reference):
         ref = Reference(ref)
@@ -642,41 +923,54 @@ def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, flo
             f"edited CSDF: expected the original's voxel size {a.voxel_size:.6g}, "
             f"got {b.voxel_size:.6g}"
         )
+    zs = Zones.of(geo)
     mesh_b = to_mesh(b)
-    prop = proportion_error(a, b, geo, runs_a=ref.runs[geo.axis])
+    prop = proportion_error(a, b, zs, runs_a=ref.runs)
     watertight, pieces = topology(mesh_b)
-    band = BAND * a.voxel_size
-    zone = None if geo.mode == "global" else (geo.start - band, geo.dest + band)
-    sdf_mean, sdf_p99 = distance_error(b, mesh_b, axis=geo.axis, region=zone)
-    seam_c, seam_s = seam_jumps(a, b, geo, steps_a=ref.steps(geo.axis))
+    sdf_mean, sdf_p99 = distance_error(b, mesh_b, regions=_changed(zs, a.voxel_size, True))
+    seam_c, seam_s = seam_jumps(a, b, zs, steps_a={ax: ref.steps(ax) for ax in zs.axes})
     return {
-        "length_err": length_error(b, geo),
-        "rigid_err": rigidity_error(ref.mesh, mesh_b, geo, a.voxel_size),
+        "length_err": length_error(b, zs),
+        "rigid_err": rigidity_error(ref.mesh, mesh_b, zs, a.voxel_size),
         "prop_out": prop["out"],
         "prop_in": prop["in"],
-        "spacing_err": spacing_error(a, b, geo, runs_a=ref.runs[geo.axis]),
+        "spacing_err": spacing_error(a, b, zs, runs_a=ref.runs),
         "sdf_err_mean": sdf_mean,
         "sdf_err_p99": sdf_p99,
         "watertight": watertight,
         "pieces": pieces,
-        "pieces_expected": ref.expected_pieces(geo),
+        "pieces_expected": ref.expected_pieces(zs),
         "seam_color": seam_c,
         "seam_shape": seam_s,
     }
 
 
+def _changed(zs: Zones, h: float, result: bool) -> list[tuple[int, float, float]] | None:
+    """Where the edit changed the field: each zone and :data:`BAND` voxels either side (None:
+    everywhere, for ``global``)."""
+    if any(z.mode == "global" for z in zs.zones):
+        return None
+    band = BAND * h
+    return [
+        (
+            z.axis,
+            (z.new_start if result else z.start) - band,
+            (z.new_end if result else z.end) + band,
+        )
+        for z in zs.zones
+    ]
+
+
 def evaluate_original(
-    ref: Reference, geo: EditGeometry | None = None
+    ref: Reference, geo: EditGeometry | Zones | None = None
 ) -> dict[str, float | int | bool]:
     """The metrics that apply to the unedited object (its stored distances and topology).
 
-    With ``geo``, distances are judged in the zone (and a band around it) only, as
+    With ``geo``, distances are judged in the zones (and a band around them) only, as
     :func:`evaluate` does for a stretch or tile.
     """
-    band = BAND * ref.csdf.voxel_size
-    zone = None if geo is None else (geo.start - band, geo.end + band)
-    axis = None if geo is None else geo.axis
-    mean, p99 = distance_error(ref.csdf, ref.mesh, axis=axis, region=zone)
+    regions = None if geo is None else _changed(Zones.of(geo), ref.csdf.voxel_size, False)
+    mean, p99 = distance_error(ref.csdf, ref.mesh, regions=regions)
     return {
         "sdf_err_mean": mean,
         "sdf_err_p99": p99,

@@ -332,3 +332,36 @@ def test_a_seat_between_arms_stretched_is_no_spacing_error():
     m = M.evaluate(a, b, geo)
     assert not m["spacing_err"] > 0.02  # NaN (nothing repeats across the zone) or small
     assert m["prop_out"] < 0.02 and m["rigid_err"] < 0.6
+
+
+@needs_edit
+def test_a_two_zone_recipe_is_scored_on_both_zones():
+    """Two teeth periods of a comb tiled by one recipe: both zones' copies measured, the
+    content between and beyond them rigid, the length the sum of both growths."""
+    from partscale.edit import Recipe
+    from partscale.evaluate import score_edit
+
+    a = _comb(8)
+    recipe = Recipe.parse(
+        [
+            {"axis": "x", "zone": [0.25, 0.55], "to": 0.85, "mode": "tile"},
+            # measured on the first edit's result: the original's [1.15, 1.45], 0.3 on
+            {"axis": "x", "zone": [1.45, 1.75], "to": 2.05, "mode": "tile"},
+        ]
+    )
+    got = score_edit(a, recipe=recipe)
+    zones = got["zones"]
+    assert [z["zone"] for z in zones] == [
+        pytest.approx([0.25, 0.55]),
+        pytest.approx([1.15, 1.45], abs=H / 2),  # the first growth snapped to whole voxels
+    ]
+    m = got["metrics"]
+    assert m["length_err"] < 0.5 and m["rigid_err"] < 0.6
+    assert m["spacing_err"] < 0.05 and m["prop_in"] < 0.1
+    assert m["pieces"] == m["pieces_expected"] == 10
+    assert got["failures"] == []
+    # stretching the second zone instead breaks its spacing: seen although the first is fine
+    bad = Recipe.parse(
+        [recipe.edits[0].to_json(), {**recipe.edits[1].to_json(), "mode": "stretch"}]
+    )
+    assert "spacing" in score_edit(a, recipe=bad)["failures"]

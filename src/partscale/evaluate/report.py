@@ -146,6 +146,8 @@ def _expectation(obj_rows: list[dict[str, Any]], kind: str) -> tuple[str, str]:
     by = {r["mode"]: r for r in obj_rows}
     orig = by.get("original", {})
     st, ti = by.get("stretch"), by.get("tile")
+    if not st and not ti:
+        return "n/a", "no stretch and tile of one edit to compare (a recipe entry)"
     if not st or not ti or st.get("error") or ti.get("error"):
         return "n/a", "a mode failed to run"
     if ti.get("copies") == 1:

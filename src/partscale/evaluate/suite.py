@@ -50,6 +50,7 @@ from ..edit import Edit, Recipe, apply_edit, apply_recipe, naive_edit, resolve_e
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from ..render import VIEWS, render
+from ..zones import fit
 from . import figures, metrics, report
 
 #: The modes every edit runs in (the stage's, and the baseline's), in figure order.
@@ -61,12 +62,14 @@ LABELS = {
     "tile": "tile",
     "naive-stretch": "naive stretch*",
     "naive-tile": "naive tile*",
+    "fit": "fit (own zones)",
 }
 #: Modes whose recipe comes from a function ``(original, entry) -> Recipe | None`` (None: not
 #: for this entry), run after :data:`COMPARED_MODES` and scored on the zones the result's history
 #: records. A mode that chooses its own zones (``fit``) is one more entry here.
 RECIPE_MODES: dict[str, Callable[[CSDF, Entry], Recipe | None]] = {
     "recipe": lambda original, entry: entry.recipe,
+    "fit": lambda original, entry: fit_recipe(original, entry),
 }
 KINDS = ("solid", "repeating")
 DEFAULT_RES = 128
@@ -108,6 +111,18 @@ class Suite:
 
 #: The contact sheet's file stem: no entry may take it (its NAME.png would be overwritten).
 CONTACT_SHEET = "contact_sheet"
+
+
+def fit_recipe(original: CSDF, entry: Entry) -> Recipe | None:
+    """The recipe :func:`partscale.zones.fit` chooses for the entry's target size: along the
+    edit's axis the length the edit reaches (the extent plus ``dest - end``, as the stage
+    snaps it), the other axes unchanged. None for a recipe entry (no single target)."""
+    if entry.edit is None:
+        return None
+    r = resolve_edit(original, entry.edit)
+    size: list[str | float] = ["=", "=", "="]
+    size[r.axis] = r.target_length
+    return fit(original, size)[0]
 
 
 def _plain_name(name: str) -> bool:

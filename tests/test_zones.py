@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -413,3 +414,51 @@ def test_fit_hits_every_suite_length(real):
         recipe, _ = fit(c, size)
         out = apply_recipe(c, recipe)
         assert abs(extent(out, ax) - (hi - lo + d - e)) <= 0.5 * c.voxel_size, o["name"]
+
+
+#: The metrics fit must not lose on against the hand-picked zone's best mode (with the tie
+#: tolerances the suite's tables use); the length is checked on its own (0.5 voxel).
+FIT_METRICS = ("prop_out", "prop_in", "spacing_err", "seam_color", "seam_shape", "pieces")
+
+
+@pytest.mark.slow
+def test_fit_reaches_each_suite_length_no_worse_than_the_hand_zone(real):
+    """For every single-edit suite entry: fit to the length the hand-given edit reaches hits it
+    within half a voxel, and on each metric is no worse than the better of stretch and tile
+    with the hand-picked zone (the one with fewer failures). The cabinet's hand stretch fails
+    prop. in and spacing; fit there trades them for seam jumps still under the suite's
+    thresholds: asserted as no failure at all rather than metric by metric."""
+    from dataclasses import replace
+
+    from partscale.edit import resolve_edit
+    from partscale.evaluate import metrics as M
+    from partscale.evaluate import zones_from_history
+    from partscale.evaluate.report import CRITERIA, _score, failures_of
+    from partscale.evaluate.suite import Entry, fit_recipe
+
+    objs = json.loads((ROOT / "eval" / "suite.json").read_text())["objects"]
+    worse = {}
+    for o in (o for o in objs if "edit" in o):
+        a = real(o["path"])
+        edit = Edit.parse(o["edit"])
+        ref = M.Reference(a)
+        geo = resolve_edit(a, edit)
+        orig = M.evaluate_original(ref, geo)
+        hand = {
+            mode: M.evaluate(ref, apply_edit(a, replace(edit, mode=mode)), replace(geo, mode=mode))
+            for mode in ("stretch", "tile")
+        }
+        best = min(hand, key=lambda m: len(failures_of(hand[m], orig)))
+        b = apply_recipe(a, fit_recipe(a, Entry(o["name"], o["path"], edit)))
+        got = M.evaluate(ref, b, zones_from_history(b, a))
+        sb = b.surface_bounds()
+        assert abs(sb[1, geo.axis] - sb[0, geo.axis] - geo.target_length) <= 0.5 * a.voxel_size
+        if o["name"] == "cabinet-narrower":
+            assert failures_of(got, orig) == [], failures_of(got, orig)
+            continue
+        for k in FIT_METRICS:
+            tol = CRITERIA["pieces" if k == "pieces" else k][1]
+            f, h = _score(k, got, orig), _score(k, hand[best], orig)
+            if math.isfinite(f) and not f <= h + max(tol, 0.1 * abs(h)):
+                worse[(o["name"], k)] = (f, best, h)
+    assert not worse, worse

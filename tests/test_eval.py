@@ -294,3 +294,38 @@ def test_unknown_segment_method_is_refused_before_any_object(cli, tmp_path):
     good.write_text(json.dumps({"objects": [{"name": "a", "path": "none.glb", "edit": EDIT}]}))
     proc = cli("eval", good, "-o", tmp_path / "o", "--segment", "bogus")
     assert_bad_input(proc, "--segment", *METHODS, "bogus")
+
+
+def test_cli_scores_an_edited_file_and_a_recipe_against_the_original(cli, tmp_path):
+    from partscale import csdf as csdf_mod
+    from partscale import shapes
+
+    teeth = shapes.bars(6, width=0.1, gap=0.2, height=0.4, depth=0.2, voxel_size=0.0193)[0]
+    a = tmp_path / "a.csdf.npz"
+    csdf_mod.save(teeth, a)
+    recipe = tmp_path / "r.json"
+    recipe.write_text(
+        json.dumps(
+            {
+                "edits": [
+                    {"axis": "x", "zone": [0.25, 0.55], "to": 0.85, "mode": "tile"},
+                    {"axis": "y", "zone": ["30%", "70%"], "to": "90%", "mode": "stretch"},
+                ]
+            }
+        )
+    )
+    b = tmp_path / "b.csdf.npz"
+    cli("scale", a, "-o", b, "--recipe", recipe, check=True)
+    edited = json.loads(cli("eval", "--original", a, "--edited", b, "--json", check=True).stdout)
+    replayed = json.loads(
+        cli("eval", "--original", a, "--recipe", recipe, "--json", check=True).stdout
+    )
+    assert edited == replayed
+    assert [z["axis"] for z in edited["zones"]] == ["x", "y"]
+    assert edited["zones"][0]["copies"] == 2
+    assert edited["metrics"]["length_err"] < 0.5 and edited["failures"] == []
+    table = cli("eval", "--original", a, "--edited", b, check=True).stdout
+    assert "spacing_err" in table and "fails: none" in table
+    assert_bad_input(cli("eval", "--original", a), "--edited or --recipe")
+    assert_bad_input(cli("eval", "--original", a, "--edited", a), "scale edit")
+    assert_bad_input(cli("eval", "--edited", b), "--original")

@@ -319,3 +319,27 @@ def test_cli_render_parts_uses_part_colours(cli, tmp_path):
     for colour in info:
         close = np.abs(chroma - chromaticity(np.array(colour["color"]))).max(axis=1) <= 0.02
         assert close.mean() > 0.3, colour
+
+
+@pytest.mark.parametrize("view", ["front", "side"])
+def test_rays_grazing_thin_shelves_reach_the_back_panel(view):
+    """A shelf unit seen edge-on: rays just above a shelf top run parallel to it for the
+    shelf's whole depth (the SDF a few hundredths of a voxel all along) and must go on to the
+    back panel, not stop and show the background as a 1-pixel crack along the shelf."""
+    back = ((0, 0, 0), (1, 1, 0.05)) if view == "front" else ((0, 0, 0), (0.05, 1, 1))
+    depth = (1, 0.8) if view == "front" else (0.8, 1)
+    boxes = [back] + [((0, y, 0), (depth[0], y + 0.03, depth[1])) for y in (0.1, 0.4, 0.7)]
+    c = shapes.grid(lambda p: shapes.boxes_sdf(p, boxes), ((0, 0, 0), (1, 1, 1)), voxel_size=1 / 64)
+    magenta = (255, 0, 255)
+    image = render.render(c, view=view, size=512, background=magenta)
+    bg = ~foreground(image, np.array(magenta))
+    # the back panel fills the whole silhouette: every pixel between a row's first and last
+    # hit is a hit
+    rows = np.nonzero((~bg).any(axis=1))[0]
+    holes = 0
+    for r in rows:
+        hit = np.nonzero(~bg[r])[0]
+        holes += int(bg[r, hit[0] : hit[-1] + 1].sum())
+    assert holes == 0
+    # and the silhouette is the panel's full square, no row of it missing
+    assert rows[-1] - rows[0] + 1 == len(rows)

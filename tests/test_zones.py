@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -395,8 +396,10 @@ def test_stretch_candidates_on_the_table_and_the_chair(real):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["bookcase", "railing"])
 def test_snapped_naive_zone_gives_the_suite_surface(real, name):
-    suite = {
-        o["path"]: o for o in json.loads((ROOT / "eval" / "suite.json").read_text())["objects"]
+    suite = {  # single-edit entries (a recipe entry may share the object)
+        o["path"]: o
+        for o in json.loads((ROOT / "eval" / "suite.json").read_text())["objects"]
+        if "edit" in o
     }
     rel, ax, _ = PERIODS[name]
     c = real(rel)
@@ -440,16 +443,53 @@ def _most_crossed_line(sdf, ax):
     return np.unravel_index(int(np.argmax(starts)), starts.shape)
 
 
+#: The metrics fit must not lose on against the hand-picked zone's best mode (with the tie
+#: tolerances the suite's tables use); the length is checked on its own (0.5 voxel).
+FIT_METRICS = ("prop_out", "prop_in", "spacing_err", "seam_color", "seam_shape", "pieces")
+#: Known shortfalls (open): the chair's legs stretched 13.8 cm between planes fit puts 3 voxels
+#: into its constant slab show a seam shape of 0.31 voxel against the hand zone's 0.18 (both
+#: under the suite's 0.5 threshold).
+FIT_KNOWN_WORSE = {("chair-taller", "seam_shape")}
+
+
 @pytest.mark.slow
-def test_fit_hits_every_suite_length(real):
-    for o in json.loads((ROOT / "eval" / "suite.json").read_text())["objects"]:
-        c = real(o["path"])
-        ed = Edit.parse({**o["edit"], "mode": "stretch"})
-        ax = ed.axis_index
-        lo, hi = c.surface_bounds()[:, ax]
-        _s, e, d = ed.resolve(lo, hi)
-        size = ["=", "=", "="]
-        size[ax] = repr(float(hi - lo + d - e))
-        recipe, _ = fit(c, size)
-        out = apply_recipe(c, recipe)
-        assert abs(extent(out, ax) - (hi - lo + d - e)) <= 0.5 * c.voxel_size, o["name"]
+def test_fit_reaches_each_suite_length_no_worse_than_the_hand_zone(real):
+    """For every single-edit suite entry: fit to the length the hand-given edit reaches hits it
+    within half a voxel, and on each metric is no worse than the better of stretch and tile
+    with the hand-picked zone (the one with fewer failures). The cabinet's hand stretch fails
+    prop. in and spacing; fit there trades them for seam jumps still under the suite's
+    thresholds: asserted as no failure at all rather than metric by metric."""
+    from dataclasses import replace
+
+    from partscale.edit import resolve_edit
+    from partscale.evaluate import metrics as M
+    from partscale.evaluate import zones_from_history
+    from partscale.evaluate.report import CRITERIA, _score, failures_of
+    from partscale.evaluate.suite import Entry, fit_recipe
+
+    objs = json.loads((ROOT / "eval" / "suite.json").read_text())["objects"]
+    worse = {}
+    for o in (o for o in objs if "edit" in o):
+        a = real(o["path"])
+        edit = Edit.parse(o["edit"])
+        ref = M.Reference(a)
+        geo = resolve_edit(a, edit)
+        orig = M.evaluate_original(ref, geo)
+        hand = {
+            mode: M.evaluate(ref, apply_edit(a, replace(edit, mode=mode)), replace(geo, mode=mode))
+            for mode in ("stretch", "tile")
+        }
+        best = min(hand, key=lambda m: len(failures_of(hand[m], orig)))
+        b = apply_recipe(a, fit_recipe(a, Entry(o["name"], o["path"], edit)))
+        got = M.evaluate(ref, b, zones_from_history(b, a))
+        sb = b.surface_bounds()
+        assert abs(sb[1, geo.axis] - sb[0, geo.axis] - geo.target_length) <= 0.5 * a.voxel_size
+        if o["name"] == "cabinet-narrower":
+            assert failures_of(got, orig) == [], failures_of(got, orig)
+            continue
+        for k in FIT_METRICS:
+            tol = CRITERIA["pieces" if k == "pieces" else k][1]
+            f, h = _score(k, got, orig), _score(k, hand[best], orig)
+            if math.isfinite(f) and not f <= h + max(tol, 0.1 * abs(h)):
+                worse[(o["name"], k)] = (f, best, h)
+    assert set(worse) <= FIT_KNOWN_WORSE, worse

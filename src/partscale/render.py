@@ -36,6 +36,12 @@ NO_PART_COLOR = (150, 150, 150)
 HIT_EPS = 0.01
 """A ray hits when the SDF at its point is below this many voxels."""
 MAX_STEPS = 512
+"""Steps a ray takes at the fine minimum stride (``HIT_EPS``) before it strides on faster."""
+GRAZE_STEP = 0.1
+"""Minimum stride in voxels after ``MAX_STEPS`` steps: a ray still marching then runs parallel to
+a face just above it (a shelf top seen edge-on), where the SDF stays a few hundredths of a voxel
+for the face's whole depth. It marches on to what lies behind, never stopping short of the grid's
+far side (ending it there drew such rays as background: 1-pixel cracks along thin boards)."""
 AMBIENT = 0.35
 SCALE_BAR_BAND = 0.08
 """Fraction of the image height kept free at the bottom for the scale bar."""
@@ -129,8 +135,11 @@ def _trilinear(vol, x, y, z):
 
 
 @numba.njit(cache=True, parallel=True)
-def _trace(sdf, origins, d, eps, max_steps, hits):
-    """March every ray ``origins[r] + t d`` through ``sdf`` (voxel units); hits[r] = point or nan."""
+def _trace(sdf, origins, d, eps, max_steps, graze, hits):
+    """March every ray ``origins[r] + t d`` through ``sdf`` (voxel units); hits[r] = point or nan.
+
+    Steps are the SDF value, at least ``eps`` for ``max_steps`` steps and at least ``graze``
+    after (see :data:`GRAZE_STEP`)."""
     n = origins.shape[0]
     hi = np.array([sdf.shape[0] - 1.0, sdf.shape[1] - 1.0, sdf.shape[2] - 1.0])
     for r in numba.prange(n):
@@ -150,7 +159,11 @@ def _trace(sdf, origins, d, eps, max_steps, hits):
         if t0 > t1:
             continue
         t = t0
-        for _ in range(max_steps):
+        stride = eps
+        steps = 0
+        # ends: at a hit or past the grid; after max_steps every step is >= graze, so a ray
+        # takes at most max_steps + (t1 - t0) / graze steps
+        while t <= t1:
             x = origins[r, 0] + t * d[0]
             y = origins[r, 1] + t * d[1]
             z = origins[r, 2] + t * d[2]
@@ -160,9 +173,10 @@ def _trace(sdf, origins, d, eps, max_steps, hits):
                 hits[r, 1] = y
                 hits[r, 2] = z
                 break
-            t += max(v, eps)
-            if t > t1:
-                break
+            steps += 1
+            if steps == max_steps:
+                stride = graze
+            t += max(v, stride)
 
 
 @numba.njit(cache=True, parallel=True)
@@ -314,7 +328,7 @@ def render(
     origins = np.ascontiguousarray((origins - csdf.origin) / h)
     d = np.ascontiguousarray(-cam.back)
     hits = np.empty_like(origins)
-    _trace(sdf_vox, origins, d, HIT_EPS, MAX_STEPS, hits)
+    _trace(sdf_vox, origins, d, HIT_EPS, MAX_STEPS, GRAZE_STEP, hits)
     hit = ~np.isnan(hits[:, 0])
     pts = np.ascontiguousarray(hits[hit])
     report(0.7, "shading")

@@ -146,6 +146,8 @@ def _expectation(obj_rows: list[dict[str, Any]], kind: str) -> tuple[str, str]:
     by = {r["mode"]: r for r in obj_rows}
     orig = by.get("original", {})
     st, ti = by.get("stretch"), by.get("tile")
+    if not st and not ti:
+        return "n/a", "no stretch and tile of one edit to compare (a recipe entry)"
     if not st or not ti or st.get("error") or ti.get("error"):
         return "n/a", "a mode failed to run"
     if ti.get("copies") == 1:
@@ -223,12 +225,16 @@ def summary_markdown(result: SuiteResult) -> str:
         + " (distance: above the import's own error). `ok`: no failure.",
         "",
     ]
-    modes = [r["mode"] for r in ok[0].rows[1:]] if ok else []
+    # every mode any object ran, in first-seen order (a recipe entry runs only its recipe)
+    modes = list(dict.fromkeys(r["mode"] for o in ok for r in o.rows[1:]))
     body = []
     for o in ok:
         orig = o.rows[0]
         by = {r["mode"]: r for r in o.rows}
-        body.append([o.entry.name] + [", ".join(failures_of(by[m], orig)) or "ok" for m in modes])
+        body.append(
+            [o.entry.name]
+            + [", ".join(failures_of(by[m], orig)) or "ok" if m in by else "" for m in modes]
+        )
     lines.append(_md_table(["object", *modes], body))
     lines += [_failure_counts(ok, modes), ""]
     lines += [
@@ -261,16 +267,19 @@ def _failure_counts(ok: list, modes: list[str]) -> str:
     """One line per mode: on how many objects it fails, and on what most often."""
     out = []
     for mode in modes:
-        failed, reasons = 0, {}
+        failed, reasons, ran = 0, {}, 0
         for o in ok:
             by = {r["mode"]: r for r in o.rows}
+            if mode not in by:
+                continue
+            ran += 1
             f = failures_of(by[mode], o.rows[0])
             failed += bool(f)
             for x in f:
                 reasons[x] = reasons.get(x, 0) + 1
         top = ", ".join(f"{k} ({v})" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
         out.append(
-            f"- **{mode}** fails on {failed} of {len(ok)} object(s)" + (f": {top}" if top else "")
+            f"- **{mode}** fails on {failed} of {ran} object(s)" + (f": {top}" if top else "")
         )
     return "\n".join(out) + "\n"
 

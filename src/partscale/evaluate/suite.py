@@ -13,13 +13,20 @@ A suite file is JSON::
          "view": "iso" | "front" | "side" | "top",  # optional, default iso
          "note": "..."}, ...]}
 
+An entry may hold ``"recipe": {"edits": [...]}`` (the recipe schema of :mod:`partscale.edit`,
+several zones and axes, each edit with its mode) instead of ``"edit"``: it runs as given, one
+row, mode ``recipe``, scored on every zone (zones read from the result's history).
 ``path`` may also name a ``.csdf.npz`` file (used as is, no import). The data folder is, in order:
 the ``data`` argument, ``PARTSCALE_DATA``, the suite's ``data`` key (relative to the suite file),
 ``../shared/data`` from the working directory, ``../../shared/data`` from the suite file.
 
-Each entry's edit runs in every mode of :data:`COMPARED_MODES`: ``global``, ``stretch``, ``tile`` and the
-labelled baseline ``naive-stretch`` / ``naive-tile`` (per-column linear resampling of the slab,
-no re-evaluation, plain concatenation for repeats: what the paper's public prototype does).
+Each entry's edit runs in every mode of :data:`COMPARED_MODES`: ``global``, ``stretch``,
+``tile`` and the labelled baseline ``naive-stretch`` / ``naive-tile`` (per-column linear
+resampling of the slab, no re-evaluation, plain concatenation for repeats: what the paper's
+public prototype does).
+Then each mode of :data:`RECIPE_MODES` runs: a function of the original and the entry giving
+the recipe to apply (None: the mode does not apply to this entry); the result is scored on the
+zones its history records.
 An entry that cannot run (bad name, missing file, bad edit, zone outside the solid, a figure
 that cannot be written) is reported with one line and the others still run.
 """
@@ -29,6 +36,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -38,10 +46,11 @@ import numpy as np
 from .._files import atomic_path, check_writable, read_json
 from .._options import keyword_options
 from ..csdf import CSDF, SUFFIX, load
-from ..edit import Edit, apply_edit, naive_edit, resolve_edit
+from ..edit import Edit, Recipe, apply_edit, apply_recipe, naive_edit, resolve_edit
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from ..render import VIEWS, render
+from ..zones import fit
 from . import figures, metrics, report
 
 #: The modes every edit runs in (the stage's, and the baseline's), in figure order.
@@ -53,6 +62,14 @@ LABELS = {
     "tile": "tile",
     "naive-stretch": "naive stretch*",
     "naive-tile": "naive tile*",
+    "fit": "fit (own zones)",
+}
+#: Modes whose recipe comes from a function ``(original, entry) -> Recipe | None`` (None: not
+#: for this entry), run after :data:`COMPARED_MODES` and scored on the zones the result's history
+#: records. A mode that chooses its own zones (``fit``) is one more entry here.
+RECIPE_MODES: dict[str, Callable[[CSDF, Entry], Recipe | None]] = {
+    "recipe": lambda original, entry: entry.recipe,
+    "fit": lambda original, entry: fit_recipe(original, entry),
 }
 KINDS = ("solid", "repeating")
 DEFAULT_RES = 128
@@ -70,8 +87,14 @@ class Entry:
     view: str = "iso"
     note: str = ""
     error: str | None = None
+    recipe: Recipe | None = None
 
     def describe(self) -> str:
+        if self.recipe is not None:
+            return "; ".join(
+                f"{e.axis}: zone [{e.start}, {e.end}] to {e.dest} {e.mode}"
+                for e in self.recipe.edits
+            )
         if self.edit is None:
             return ""
         e = self.edit
@@ -88,6 +111,18 @@ class Suite:
 
 #: The contact sheet's file stem: no entry may take it (its NAME.png would be overwritten).
 CONTACT_SHEET = "contact_sheet"
+
+
+def fit_recipe(original: CSDF, entry: Entry) -> Recipe | None:
+    """The recipe :func:`partscale.zones.fit` chooses for the entry's target size: along the
+    edit's axis the length the edit reaches (the extent plus ``dest - end``, as the stage
+    snaps it), the other axes unchanged. None for a recipe entry (no single target)."""
+    if entry.edit is None:
+        return None
+    r = resolve_edit(original, entry.edit)
+    size: list[str | float] = ["=", "=", "="]
+    size[r.axis] = r.target_length
+    return fit(original, size)[0]
 
 
 def _plain_name(name: str) -> bool:
@@ -115,24 +150,34 @@ def _entry(obj: Any, i: int) -> Entry:
             f"'.', control characters or {CONTACT_SHEET}), got {name!r}",
         )
     try:
-        unknown = set(obj) - {"name", "path", "edit", "kind", "view", "note"}
+        unknown = set(obj) - {"name", "path", "edit", "recipe", "kind", "view", "note"}
         if unknown:
             raise InputError(
-                f"unknown key(s) {sorted(unknown)}; keys are name, path, edit, kind, view, note"
+                f"unknown key(s) {sorted(unknown)}; keys are name, path, edit, recipe, kind, "
+                "view, note"
             )
         path = obj.get("path")
         if not isinstance(path, str) or not path:
             raise InputError(f"path: expected a file path, got {path!r}")
+        if ("edit" in obj) == ("recipe" in obj):
+            got = "both" if "edit" in obj else "neither"
+            raise InputError(f"expected an edit or a recipe (one), got {got}")
+        view = obj.get("view", "iso")
+        if view not in VIEWS:
+            raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
+        kind = obj.get("kind")
+        if kind is not None and kind not in KINDS:
+            raise InputError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
+        if "recipe" in obj:
+            try:
+                recipe = Recipe.parse(obj["recipe"])
+            except InputError as exc:
+                raise InputError(f"recipe: {exc}") from None
+            return Entry(name, path, None, kind, view, str(obj.get("note", "")), recipe=recipe)
         edit_obj = obj.get("edit")
         if isinstance(edit_obj, dict) and "mode" in edit_obj:
             raise InputError("edit.mode: expected none (the suite runs every mode), got one")
         edit = Edit.parse(edit_obj, where="edit")
-        kind = obj.get("kind")
-        if kind is not None and kind not in KINDS:
-            raise InputError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
-        view = obj.get("view", "iso")
-        if view not in VIEWS:
-            raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
         return Entry(name, path, edit, kind, view, str(obj.get("note", "")))
     except InputError as exc:
         return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")
@@ -275,7 +320,6 @@ def _run_entry(
     if entry.error:
         result.error = entry.error
         return result
-    assert entry.edit is not None
     path = Path(entry.path)
     if not path.is_absolute():
         if data is None:
@@ -293,7 +337,7 @@ def _run_entry(
         t0 = time.perf_counter()
         original = _load_object(path, res, scaled(progress, 0.0, 0.3))
         result.timings["import"] = time.perf_counter() - t0
-        geo0 = resolve_edit(original, entry.edit)
+        geo0 = resolve_edit(original, entry.edit) if entry.edit is not None else None
     except InputError as exc:
         result.error = f"{name}: {exc}"
         return result
@@ -317,15 +361,18 @@ def _run_entry(
     result.timings["reference"] = time.perf_counter() - t0
     result.timings["edit"] = result.timings["metrics"] = 0.0
     base = {"object": name, "kind": entry.kind or "", "voxels": "x".join(map(str, original.shape))}
-    result.rows.append(
-        {**base, "mode": "original", **metrics.evaluate_original(ref, geo0), "time_s": math.nan}
-    )
+    original_row = {"mode": "original", "time_s": math.nan}
+    result.rows.append({**base, **original_row})
+    if geo0 is not None:
+        result.rows[0].update(metrics.evaluate_original(ref, geo0))
     results: dict[str, CSDF | str] = {}
-    for i, mode in enumerate(COMPARED_MODES):
+    for i, mode in enumerate(COMPARED_MODES if entry.edit is not None else ()):
         progress(0.35 + 0.4 * i / len(COMPARED_MODES), f"{name}: {mode}")
+        assert geo0 is not None
         geo = replace(geo0, mode=mode.removeprefix("naive-"))
         try:
             t0 = time.perf_counter()
+            assert entry.edit is not None
             b = _run_mode(original, entry.edit, mode)
             dt = time.perf_counter() - t0
             m = metrics.evaluate(ref, b, geo)
@@ -340,6 +387,33 @@ def _run_entry(
             row = {**base, "mode": mode, "error": msg}
             results[mode] = msg
         result.rows.append(row)
+    for mode, recipe_of in RECIPE_MODES.items():
+        progress(0.75, f"{name}: {mode}")
+        try:
+            recipe = recipe_of(original, entry)
+            if recipe is None:
+                continue
+            t0 = time.perf_counter()
+            b = apply_recipe(original, recipe)
+            dt = time.perf_counter() - t0
+            zones = metrics.zones_from_history(b, original)
+            m = metrics.evaluate(ref, b, zones)
+            result.timings["edit"] += dt
+            result.timings["metrics"] += time.perf_counter() - t0 - dt
+            row = {**base, "mode": mode, **m, "time_s": dt}
+            copies = [z.n_copies for z in zones.zones if z.mode == "tile"]
+            if copies:
+                row["copies"] = "+".join(map(str, copies))
+            if geo0 is None and "sdf_err_mean" not in result.rows[0]:
+                result.rows[0].update(metrics.evaluate_original(ref, zones))
+            results[mode] = b
+        except Exception as exc:  # recorded in the tables; the other modes still run
+            msg = str(exc) if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
+            row = {**base, "mode": mode, "error": msg}
+            results[mode] = msg
+        result.rows.append(row)
+    if geo0 is None and "sdf_err_mean" not in result.rows[0]:
+        result.rows[0].update(metrics.evaluate_original(ref))
 
     progress(0.8, f"{name}: figure")
     t0 = time.perf_counter()
@@ -372,18 +446,18 @@ def _figure(
             _render(original, entry.view, frame, panel),
         )
     ]
-    for mode in COMPARED_MODES:
+    for mode in results:
         r = by_mode[mode]
         res = results[mode]
         if isinstance(res, str):
-            panels.append((LABELS[mode], "", figures.failed_panel(panel, res)))
+            panels.append((LABELS.get(mode, mode), "", figures.failed_panel(panel, res)))
             continue
         note = (
             f"prop {_fmt(r['prop_in'])}/{_fmt(r['prop_out'])} "
             f"space {_fmt(r['spacing_err'])} seam {_fmt(r['seam_shape'], 1)}/"
             f"{_fmt(r['seam_color'], 0)}"
         )
-        panels.append((LABELS[mode], note, _render(res, entry.view, frame, panel)))
+        panels.append((LABELS.get(mode, mode), note, _render(res, entry.view, frame, panel)))
     # ASCII only: the built-in font has no dashes
     subtitle = f"{entry.path}  |  {entry.describe()}"
     if entry.note:
@@ -395,9 +469,9 @@ def _figure(
     fig = figures.object_figure(entry.name, subtitle, panels, legend=legend)
     if original.n_parts > 0:  # segmented: a second row coloured by part
         parts_row = [("original parts", f"{original.n_parts} parts", None)] + [
-            (LABELS[m], "", None) for m in COMPARED_MODES if isinstance(results[m], CSDF)
+            (LABELS.get(m, m), "", None) for m in results if isinstance(results[m], CSDF)
         ]
-        sources = [original] + [results[m] for m in COMPARED_MODES if isinstance(results[m], CSDF)]
+        sources = [original] + [results[m] for m in results if isinstance(results[m], CSDF)]
         row = [
             (label, note, _render(c, entry.view, frame, panel, parts=True))
             for (label, note, _), c in zip(parts_row, sources, strict=True)

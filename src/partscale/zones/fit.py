@@ -2,9 +2,9 @@
 
 Per axis (see :func:`fit`): where a repeat is found, tile one period with the number of copies
 that brings the length closest to the target, and absorb the remainder (less than half a period)
-by stretching the best constant slab outside that period, so spacing is kept and the length is
-exact; with no repeat, stretch the best constant slab (several, largest first, where one cannot
-shrink far enough); global scaling only where neither exists. All positions are on the input
+by stretching constant slabs outside that period, so spacing is kept and the length is exact;
+with no repeat, stretch the largest constant slab (a growth beyond doubling it spread over the
+next largest of similar length), planes a few voxels in from the slab's ends; global scaling only where neither exists. All positions are on the input
 object (recipe coordinates), so the tile and the stretch on one axis are drawn on the original.
 Every change is snapped to whole voxels up front, so the result's extent is the target to half
 a voxel.
@@ -30,6 +30,17 @@ from .units import parse_size
 COPY_TOLERANCE = 0.05
 #: A slab shrinks to no less than this many voxels.
 MIN_SLAB_VOXELS = 2
+#: A stretched slab's planes are moved this many voxels in from its ends (the stage blends two
+#: voxels either side of a plane; the seam measure looks 2.5 either side).
+INSET_VOXELS = 3
+#: ...where the slab keeps at least this many voxels between them.
+MIN_INSET_VOXELS = 4
+#: Growth beyond this fraction of the largest slab's length is spread over more slabs.
+MAX_STRETCH = 1.0
+#: Slabs shorter than this fraction of the largest one take no share of a growth.
+SPREAD_FRACTION = 0.5
+#: ...nor slabs shorter than this many voxels.
+MIN_SPREAD_VOXELS = 10
 
 
 def _fmt(x: float, units: str | None) -> str:
@@ -42,25 +53,61 @@ def _disjoint(c: Candidate, zone: tuple[float, float] | None) -> bool:
     return zone is None or c.zone[1] <= zone[0] or c.zone[0] >= zone[1]
 
 
+def _inset(c: Candidate, h: float) -> tuple[float, float]:
+    """A slab's zone moved :data:`INSET_VOXELS` in from each end where it stays long enough:
+    planes right at the slab's ends lie on the feature that bounds it (a leg's face), where a
+    stretch's blend shows as a seam."""
+    a, b = c.zone
+    n = INSET_VOXELS * h
+    if (b - a) - 2 * n >= MIN_INSET_VOXELS * h:
+        return a + n, b - n
+    return a, b
+
+
 def _stretch_edits(
     slabs: list[Candidate], change: float, h: float, axis: str
 ) -> tuple[list[Edit], float]:
-    """Stretch edits absorbing ``change`` (whole voxels) over ``slabs`` (best first)."""
-    if change >= 0 or not slabs:
-        if not slabs:
-            return [], change
-        a, b = slabs[0].zone
-        return [Edit(axis, a, b, b + change, "stretch")], 0.0
-    edits, left = [], change  # shrinking: largest slabs first, each down to MIN_SLAB_VOXELS
-    for c in sorted(slabs, key=lambda c: c.zone[0] - c.zone[1]):
-        a, b = c.zone
-        room = -round(max(0.0, (b - a) - MIN_SLAB_VOXELS * h) / h) * h
-        take = max(left, room)
-        if take < 0:
-            edits.append(Edit(axis, a, b, b + take, "stretch"))
-            left -= take
-        if left > -h / 2:
-            break
+    """Stretch edits absorbing ``change`` (whole voxels) over ``slabs``, and what is left.
+
+    Growing, the change is spread over the largest slab and, where it alone would more than
+    double (:data:`MAX_STRETCH`), the next largest of those at least :data:`SPREAD_FRACTION` of
+    its length and :data:`MIN_SPREAD_VOXELS` long, in proportion to their length: no slab is
+    stretched out of shape to absorb it alone, and no thin slab (a leg's width) is stretched at
+    all. Shrinking takes the largest slabs, as many as can give it up, each in proportion to
+    what it can give down to :data:`MIN_SLAB_VOXELS`.
+    """
+    if not slabs or change == 0:
+        return [], change
+    for zones in ([_inset(c, h) for c in slabs], [c.zone for c in slabs]):
+        zones = sorted(zones, key=lambda z: z[0] - z[1])  # largest first
+        room = [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
+        if change < 0:
+            n = 1
+            while n < len(zones) and -change > sum(room[:n]) + h / 2:
+                n += 1
+            if -change <= sum(room[:n]) + h / 2:
+                break
+            continue
+        big = zones[0][1] - zones[0][0]
+        n = 1
+        while (
+            n < len(zones)
+            and change > MAX_STRETCH * sum(z[1] - z[0] for z in zones[:n])
+            and zones[n][1] - zones[n][0] >= max(MIN_SPREAD_VOXELS * h, SPREAD_FRACTION * big)
+        ):
+            n += 1
+        break
+    chosen = zones[:n]
+    weights = [z[1] - z[0] for z in chosen] if change > 0 else room[:n]
+    total = sum(weights)
+    edits, left = [], change
+    for i, ((a, b), w) in enumerate(zip(chosen, weights, strict=True)):
+        share = left if i == n - 1 else round(change * w / total / h) * h
+        if change < 0:
+            share = max(share, -room[i])
+        if abs(share) > h / 2:
+            edits.append(Edit(axis, a, b, b + share, "stretch"))
+            left -= share
     return edits, left
 
 

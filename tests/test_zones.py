@@ -104,6 +104,24 @@ def test_mirrored_drawers_tile_one_drawer_and_its_divider():
     assert "mirrored" in t.reason
 
 
+def test_a_row_of_equal_parts_of_the_segmentation_is_a_repeat():
+    # three seat blocks glued into one bar: a constant cross-section, but three equal parts
+    w = 0.3
+    bar = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, [((0, 0, 0), (3 * w, 0.2, 0.4))]),
+        np.array([[0, 0, 0], [3 * w, 0.2, 0.4]], float),
+        voxel_size=H,
+    )
+    boxes = [{"index": i, "bbox": [[i * w, 0, 0], [(i + 1) * w, 0.2, 0.4]]} for i in range(3)]
+    assert not [c for c in suggest(bar, "x") if c.kind == "tile"]
+    tiles = [c for c in suggest(bar.replace(meta={**bar.meta, "parts_info": boxes}), "x")]
+    tiles = [c for c in tiles if c.kind == "tile"]
+    assert tiles and abs(tiles[0].period - w) <= H / 2 and tiles[0].count == 3
+    assert abs(tiles[0].zone[0] - w) <= H / 2  # the planes between parts
+    pair = bar.replace(meta={**bar.meta, "parts_info": boxes[:2]})
+    assert not [c for c in suggest(pair, "x") if c.kind == "tile"]  # two equal parts: no row
+
+
 def rod():
     """A round rod along the diagonal of x and y: every x layer differs from its neighbour."""
     a, b, r = np.array([0.0, 0.0, 0.1]), np.array([0.6, 0.6, 0.1]), 0.06

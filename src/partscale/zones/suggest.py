@@ -32,7 +32,9 @@ and one interior boundary). Such a candidate scores :data:`BOUNDED_WEIGHT` of a 
 Constant slabs: maximal runs of layers whose neighbour-to-neighbour distance stays below
 :data:`STEP` and whose ends differ by less than :data:`DRIFT`; stretching them resamples equal
 layers, so nothing is distorted. Where the CSDF is segmented, a slab's planes are moved to the
-nearest plane between parts (a part's bounding box end) within a voxel, and its reason names them.
+nearest plane between parts (a part's bounding box end) within a voxel, and its reason names them;
+a row of at least :data:`MIN_COUNT` equal parts at a constant pitch (:func:`_part_repeats`) is a
+repeat in itself, read from the segmentation's part boxes alone.
 """
 
 from __future__ import annotations
@@ -423,6 +425,44 @@ def _part_planes(csdf: CSDF, axis: int) -> np.ndarray:
     return np.unique(np.asarray(ends, dtype=np.float64))
 
 
+def _part_repeats(csdf: CSDF, axis: int) -> list[tuple[float, list[tuple[float, float]]]]:
+    """``(pitch, [(lo, hi), ...])`` (world units) of every row of repeated parts along ``axis``.
+
+    A row: at least :data:`MIN_COUNT` parts of the segmentation (``meta['parts_info']`` boxes)
+    with the same size along every axis and the same place across ``axis`` (within
+    :data:`BOUND_TOL` voxels), at a constant pitch along it: copies of one part. Two equal
+    parts are no row (any symmetric object has mirrored pairs: a table's legs).
+    """
+    info = csdf.meta.get("parts_info")
+    if not isinstance(info, list):
+        return []
+    boxes = np.array(
+        [x["bbox"] for x in info if isinstance(x, dict) and np.shape(x.get("bbox")) == (2, 3)],
+        dtype=np.float64,
+    ).reshape(-1, 2, 3)
+    if len(boxes) < MIN_COUNT:
+        return []
+    tol = BOUND_TOL * csdf.voxel_size
+    other = [a for a in range(3) if a != axis]
+    # size along all axes and place across the axis: one key per part
+    key = np.concatenate([boxes[:, 1] - boxes[:, 0], boxes[:, 0, other]], axis=1)
+    close = (np.abs(key[:, None, :] - key[None, :, :]) <= tol).all(axis=2)
+    out, used = [], np.zeros(len(boxes), bool)
+    for i in range(len(boxes)):
+        if used[i]:
+            continue
+        group = np.flatnonzero(close[i] & ~used)
+        used[group] = True
+        lo = np.sort(boxes[group, 0, axis])
+        if len(lo) < MIN_COUNT:
+            continue
+        step = np.diff(lo)
+        if step.min() > tol and np.ptp(step) <= tol:
+            size = float(np.median(key[group, axis]))
+            out.append((float(step.mean()), [(float(a), float(a) + size) for a in lo]))
+    return out
+
+
 def _axis_index(axis: str | int) -> int:
     if isinstance(axis, str) and axis.lower() in AXES:
         return AXES.index(axis.lower())
@@ -490,6 +530,37 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
                     f"{'mirrored ' if r.mirrored else ''}to {r.err:.3f}"
                 ),
                 region=(float(p.world(a)), float(p.world(b))),
+            )
+        )
+    tiles = [(c.period / h, p.index(c.region[0]), p.index(c.region[1])) for c in out]
+    for pitch, parts in _part_repeats(csdf, ax):
+        step = pitch / h
+        a, b = float(p.index(parts[0][0])), float(p.index(parts[-1][1]))
+        if any(
+            abs(step - max(1, round(step / q)) * q) <= BOUND_TOL and min(b, qb) > max(a, qa)
+            for q, qa, qb in tiles
+        ):
+            continue
+        # the region: from halfway across the gap before the first part to past the last
+        gap = step - (parts[0][1] - parts[0][0]) / h
+        a0, b0 = max(a - gap / 2, 0.0), min(b + gap / 2, p.n - 1.0)
+        # planes halfway across the gaps around the middle part
+        count = len(parts)
+        t = float(p.index(parts[(count - 1) // 2][0])) - gap / 2
+        score = (0.5 + 0.5 * min(1.0, (b - a) * h / extent)) * (1 - 1 / (count + 1))
+        out.append(
+            Candidate(
+                axis=name,
+                kind="tile",
+                zone=(float(p.world(t)), float(p.world(t)) + pitch),
+                period=float(pitch),
+                count=count,
+                score=float(np.clip(score, 0, 1)),
+                reason=(
+                    f"{count} equal parts of the segmentation at a {pitch:.4g} pitch "
+                    f"({100 * pitch / extent:.1f}% of the extent)"
+                ),
+                region=(float(p.world(a0)), float(p.world(b0))),
             )
         )
     planes = _part_planes(csdf, ax)

@@ -23,9 +23,10 @@ equally spaced (within :data:`BOUND_TOL`), each boundary narrower than half an e
 boundary is thinner than what it separates; a cushion's broad crown is no boundary), each with
 a shape of its own (no constant slab: the equal spans between a symmetric frame's supports, a
 table's legs and centre stretcher, are the space between boundaries, not elements; boards
-repeated over constant spans are the full match's), their coarse cross-sections alike, shifted or mirrored (a drawer's handle sits on the mirrored side),
-in all but a tenth of the layers (:data:`QUANTILE`), and the layers at the two planes of one
-period match (:data:`MATCH`), so the copies join seamlessly. The period is the shift carrying
+repeated over constant spans are the full match's), their coarse cross-sections alike, shifted
+or mirrored (a drawer's handle sits on the mirrored side), in all but a tenth of the layers
+(:data:`QUANTILE`), and the layers at the two planes of one period match (:data:`MATCH`), so
+the copies join seamlessly. The period is the shift carrying
 one element onto the next; the zone runs from one element's start to the next's (one element
 and one interior boundary). Such a candidate scores :data:`BOUNDED_WEIGHT` of a full match.
 
@@ -289,6 +290,7 @@ def find_bounded_repeats(p: Profile) -> list[_Bounded]:
             for sj, sb in enumerate(seps):
                 if sb[0] > sa[1]:
                     e = (ends(sa)[1], ends(sb)[0])
+                    # an element of under two layers has no shape to compare
                     if e[1] - e[0] >= 2 and max(sa[3] - sa[2], sb[3] - sb[2]) <= (e[1] - e[0]) / 2:
                         after.setdefault(si, []).append((e, sj))
 

@@ -84,6 +84,45 @@ def test_no_tile_on_a_table_and_its_top_is_a_constant_slab(desk):
     assert y and y[0].zone[1] - y[0].zone[0] >= 0.5  # the legs below the top
 
 
+def drawer_pair():
+    """Two drawers between three boards under a top, their handles mirrored about the middle."""
+    boxes = [((0, 0.56, 0), (1.1, 0.6, 0.3))]
+    boxes += [((x, 0, 0), (x + 0.04, 0.56, 0.3)) for x in (0.1, 0.53, 0.96)]
+    boxes += [((0.14, 0.1, 0.28), (0.53, 0.5, 0.3)), ((0.57, 0.1, 0.28), (0.96, 0.5, 0.3))]
+    boxes += [((0.36, 0.25, 0.3), (0.42, 0.35, 0.36)), ((0.68, 0.25, 0.3), (0.74, 0.35, 0.36))]
+    bounds = np.array([[0, 0, 0], [1.1, 0.6, 0.36]], float)
+    return shapes.grid(lambda p: shapes.boxes_sdf(p, boxes), bounds, voxel_size=H)
+
+
+def test_mirrored_drawers_tile_one_drawer_and_its_divider():
+    tiles = [c for c in suggest(drawer_pair(), "x") if c.kind == "tile"]
+    assert tiles, "two drawers between boards repeat along x, though mirrored"
+    t = tiles[0]
+    # one drawer (0.14..0.53) and one divider (0.04): the shift from one drawer to the next
+    assert abs(t.period - 0.43) <= H / 2 and t.count == 2
+    # the planes at the start of a drawer and of the next, or at their ends
+    assert min(abs(t.zone[0] - 0.14), abs(t.zone[0] - 0.53)) <= H / 2, t.zone
+    assert "mirrored" in t.reason
+
+
+def test_a_row_of_equal_parts_of_the_segmentation_is_a_repeat():
+    # three seat blocks glued into one bar: a constant cross-section, but three equal parts
+    w = 0.3
+    bar = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, [((0, 0, 0), (3 * w, 0.2, 0.4))]),
+        np.array([[0, 0, 0], [3 * w, 0.2, 0.4]], float),
+        voxel_size=H,
+    )
+    boxes = [{"index": i, "bbox": [[i * w, 0, 0], [(i + 1) * w, 0.2, 0.4]]} for i in range(3)]
+    assert not [c for c in suggest(bar, "x") if c.kind == "tile"]
+    tiles = [c for c in suggest(bar.replace(meta={**bar.meta, "parts_info": boxes}), "x")]
+    tiles = [c for c in tiles if c.kind == "tile"]
+    assert tiles and abs(tiles[0].period - w) <= H / 2 and tiles[0].count == 3
+    assert abs(tiles[0].zone[0] - w) <= H / 2  # the planes between parts
+    pair = bar.replace(meta={**bar.meta, "parts_info": boxes[:2]})
+    assert not [c for c in suggest(pair, "x") if c.kind == "tile"]  # two equal parts: no row
+
+
 def rod():
     """A round rod along the diagonal of x and y: every x layer differs from its neighbour."""
     a, b, r = np.array([0.0, 0.0, 0.1]), np.array([0.6, 0.6, 0.1]), 0.06
@@ -357,21 +396,30 @@ def best_period_error(c, ax, pct):
 @pytest.mark.slow
 def test_periods_of_the_suites_repeating_objects(real):
     errors = {k: best_period_error(real(p), ax, pct) for k, (p, ax, pct) in PERIODS.items()}
-    within = [k for k, v in errors.items() if v <= 1.0]
-    # the issue asks 5 of 6; the drawers (mirror images, not translated copies) and the sofa
-    # (soft cushions, cross-sections 0.1-0.4 apart) are not found yet: see the report
-    assert set(within) >= {"bookcase", "bookshelf", "railing", "display"}, errors
+    within = {k for k, v in errors.items() if v <= 1.0}
+    # the issue asks 5 of 6; all six are found: the drawers (mirror images) and the sofa (soft
+    # cushions) by the bounded detector, the other four by the full cross-section match
+    assert len(within) >= 5 and within == set(PERIODS), errors
+
+
+# more tables, chairs and a stool, from another catalogue (for the false-repeat check only)
+MORE_PLAIN = {
+    "sh_table": "sweethome3d/table.obj",
+    "sh_chair": "sweethome3d/chair.obj",
+    "sh_stool": "sweethome3d/stool.obj",
+}
 
 
 @pytest.mark.slow
 def test_no_false_repeats_on_non_repeating_objects(real):
-    clean = [
+    flagged = [
         (k, a)
-        for k, p in PLAIN.items()
+        for k, p in {**PLAIN, **MORE_PLAIN}.items()
         for a in range(3)
-        if not [x for x in suggest(real(p), a) if x.kind == "tile"]
+        if [x for x in suggest(real(p), a) if x.kind == "tile"]
     ]
-    assert len(clean) >= 10, clean
+    # the issue asks at least 10 clean object-axes; all 24 are
+    assert flagged == [], flagged
 
 
 @pytest.mark.slow

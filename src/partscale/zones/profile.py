@@ -18,6 +18,10 @@ from ..csdf import CSDF
 #: In-plane downsampling of the cross-sections (voxels per cell): tolerates sub-voxel lateral
 #: wobble between repeats (worn or hand-modelled copies) and keeps the Gram matrix small.
 CELL = 2
+#: Cells across the larger side of a coarse cross-section: the scale of an element's parts
+#: (a cushion's crown, a drawer's handle), at which soft or hand-modelled copies that differ by
+#: a few voxels of surface still compare equal.
+COARSE_CELLS = 16
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,6 +38,8 @@ class Profile:
         Soft inside area of each layer, in voxels.
     gram : (N, N) float64
         Inner products of the layers' (downsampled) soft occupancies.
+    coarse : (N, N) float64
+        The same at :data:`COARSE_CELLS` cells across the cross-section (tolerant comparisons).
     lo, hi : float
         The solid's extent along the axis (world units).
     voxel_size : float
@@ -46,23 +52,30 @@ class Profile:
     lo: float
     hi: float
     voxel_size: float
+    coarse: np.ndarray | None = None
 
     @property
     def n(self) -> int:
         return len(self.coords)
 
-    def distance(self, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    def distance(self, i: np.ndarray, j: np.ndarray, *, coarse: bool = False) -> np.ndarray:
         """Soft Jaccard distance in [0, 1] between layers ``i`` and ``j`` (broadcast int arrays).
 
         ``|a - b|^2 / (|a|^2 + |b|^2 - a.b)``: 0 for equal layers (two empty layers too), 1 for
         disjoint ones; for binary layers, the share of their union where only one is solid.
+        ``coarse``: compare the coarse cross-sections.
         """
-        g = self.gram
+        g = self._gram(coarse)
         gii, gjj, gij = g[i, i], g[j, j], g[i, j]
         union = gii + gjj - gij
         return np.where(union > 1e-9, (gii + gjj - 2 * gij) / np.maximum(union, 1e-9), 0.0)
 
-    def shifted_distance(self, i: np.ndarray, shift: float | np.ndarray) -> np.ndarray:
+    def _gram(self, coarse: bool) -> np.ndarray:
+        return self.coarse if coarse and self.coarse is not None else self.gram
+
+    def shifted_distance(
+        self, i: np.ndarray, shift: float | np.ndarray, *, coarse: bool = False
+    ) -> np.ndarray:
         """Distance between layer ``i`` and the layer ``shift`` (fractional, broadcast with
         ``i``) voxels beyond it.
 
@@ -79,7 +92,7 @@ class Profile:
         j0c, j1c = np.clip(j0, 0, n - 1), np.clip(j1, 0, n - 1)
         w0 = np.where(v0, 1.0 - f, 0.0)
         w1 = np.where(v1, f, 0.0)
-        g = self.gram
+        g = self._gram(coarse)
         aa = g[i, i]
         bb = w0 * w0 * g[j0c, j0c] + w1 * w1 * g[j1c, j1c] + 2 * w0 * w1 * g[j0c, j1c]
         ab = w0 * g[i, j0c] + w1 * g[i, j1c]
@@ -98,7 +111,7 @@ class Profile:
 def profile(csdf: CSDF, axis: int) -> Profile:
     """The cross-section :class:`Profile` of ``csdf``'s solid along ``axis`` (0, 1, 2).
 
-    Cost: one pass over the grid and an (N, N) Gram matrix of the downsampled layers.
+    Cost: one pass over the grid and two (N, N) Gram matrices of the downsampled layers.
     """
     h = csdf.voxel_size
     occ = np.clip(0.5 - csdf.sdf / np.float32(h), 0.0, 1.0)
@@ -110,6 +123,13 @@ def profile(csdf: CSDF, axis: int) -> Profile:
     cells = occ.reshape(n, (a + pa) // CELL, CELL, (b + pb) // CELL, CELL).mean(axis=(2, 4))
     flat = cells.reshape(n, -1).astype(np.float32)
     gram = (flat @ flat.T).astype(np.float64)
+    # coarse cells: whole CELL cells pooled again (a, b are at most a few hundred)
+    k = max(1, -(-max(cells.shape[1:]) // COARSE_CELLS))
+    ca, cb = -cells.shape[1] % k, -cells.shape[2] % k
+    big = np.pad(cells, ((0, 0), (0, ca), (0, cb))) if ca or cb else cells
+    big = big.reshape(n, big.shape[1] // k, k, big.shape[2] // k, k).mean(axis=(2, 4))
+    big = big.reshape(n, -1).astype(np.float32)
+    coarse = (big @ big.T).astype(np.float64)
     area = occ.sum(axis=(1, 2), dtype=np.float64)
     sb = csdf.surface_bounds()
     return Profile(
@@ -120,4 +140,5 @@ def profile(csdf: CSDF, axis: int) -> Profile:
         lo=float(sb[0, axis]),
         hi=float(sb[1, axis]),
         voxel_size=float(h),
+        coarse=coarse,
     )

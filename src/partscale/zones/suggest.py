@@ -14,19 +14,39 @@ only the legs). The period is the shift of least mean distance near it; multiple
 ``area / max area + distance(plane, plane + period)`` is lowest, in the middle of that low run:
 in the gaps between elements, or where the cross-sections at both planes match.
 
+Bounded repeats (:func:`find_bounded_repeats`, a second, weaker detector for copies that do not
+match layer for layer: soft cushions, mirrored drawers): repeated elements are separated by
+boundaries, a board or divider (a local maximum of the cross-section area) or a gap or groove (a
+local minimum), each changing the area by at least :data:`PROMINENCE` of the largest cross-section.
+A chain of boundaries of one kind delimits at least two elements that are copies: equally wide,
+equally spaced (within :data:`BOUND_TOL`), each boundary narrower than half an element (a
+boundary is thinner than what it separates; a cushion's broad crown is no boundary), each with
+a shape of its own (no constant slab: the equal spans between a symmetric frame's supports, a
+table's legs and centre stretcher, are the space between boundaries, not elements; boards
+repeated over constant spans are the full match's), their coarse cross-sections alike, shifted
+or mirrored (a drawer's handle sits on the mirrored side), in all but a tenth of the layers
+(:data:`QUANTILE`), and the layers at the two planes of one period match (:data:`MATCH`), so
+the copies join seamlessly. The period is the shift carrying
+one element onto the next; the zone runs from one element's start to the next's (one element
+and one interior boundary). Such a candidate scores :data:`BOUNDED_WEIGHT` of a full match.
+
 Constant slabs: maximal runs of layers whose neighbour-to-neighbour distance stays below
 :data:`STEP` and whose ends differ by less than :data:`DRIFT`; stretching them resamples equal
 layers, so nothing is distorted. Where the CSDF is segmented, a slab's planes are moved to the
-nearest plane between parts (a part's bounding box end) within a voxel, and its reason names them.
+nearest plane between parts (a part's bounding box end) within a voxel, and its reason names them;
+a row of at least :data:`MIN_COUNT` equal parts at a constant pitch (:func:`_part_repeats`) is a
+repeat in itself, read from the segmentation's part boxes alone.
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from scipy import ndimage
+from scipy.signal import find_peaks
 
 from .._options import keyword_options
 from ..csdf import CSDF
@@ -55,6 +75,14 @@ STEP = 0.02
 DRIFT = 0.06
 #: Shortest constant slab reported, voxels.
 MIN_SLAB = 3
+#: A boundary between elements changes the cross-section area by this share of the largest one.
+PROMINENCE = 0.05
+#: Copies of one element, voxelised at different phases, differ in width and spacing this much.
+BOUND_TOL = 1.0
+#: Share of an element's layers that must match its copy (the rest: knobs, seams, wear).
+QUANTILE = 0.9
+#: Score of a bounded repeat relative to a full cross-section match.
+BOUNDED_WEIGHT = 0.5
 
 
 @dataclass(frozen=True)
@@ -199,6 +227,142 @@ def _overlap(a: _Repeat, b: _Repeat) -> float:
     return max(0.0, hi - lo) / max(1e-9, min(a.span[1] - a.span[0], b.span[1] - b.span[0]))
 
 
+@dataclass(frozen=True)
+class _Bounded:
+    period: float  # voxels
+    elements: tuple[tuple[float, float], ...]  # (start, end) layer indices
+    err: float  # mean coarse distance between consecutive elements
+    mirrored: bool
+    kind: int  # +1 boards, -1 gaps
+    start: float  # zone start (layer index)
+
+
+def _boundaries(p: Profile) -> list[tuple[int, float, float, float]]:
+    """``(kind, lo, hi, cut)`` of every boundary inside the solid: ``kind`` +1 for a local
+    maximum of the area (a board: faces ``lo``..``hi`` at half prominence, where elements end),
+    -1 for a minimum (a gap or groove: elements meet at its deepest point ``cut``)."""
+    a = p.area / max(float(p.area.max()), 1e-9)
+    i0, i1 = _solid_layers(p)
+    out = []
+    for kind in (1, -1):
+        peaks, props = find_peaks(kind * a, prominence=PROMINENCE, width=0, rel_height=0.5)
+        inner = (peaks > i0) & (peaks < i1)
+        for i, lo, hi in zip(
+            peaks[inner], props["left_ips"][inner], props["right_ips"][inner], strict=True
+        ):
+            y0, y1, y2 = a[i - 1], a[i], a[i + 1]
+            den = y0 - 2 * y1 + y2
+            cut = i + float(np.clip(0.5 * (y0 - y2) / den, -0.5, 0.5)) if abs(den) > 1e-12 else i
+            out.append((kind, float(lo), float(hi), float(cut)))
+    return out
+
+
+def _element_distance(p: Profile, e: tuple[float, float], f: tuple[float, float], mirror: bool):
+    """(K,) coarse distances between element ``e``'s layers and the matching layers of ``f``."""
+    i = np.arange(int(np.ceil(e[0])), int(np.floor(e[1])) + 1)
+    t = (i - e[0]) / max(e[1] - e[0], 1e-9)
+    x = f[1] - t * (f[1] - f[0]) if mirror else f[0] + t * (f[1] - f[0])
+    return p.shifted_distance(i, x - i, coarse=True)
+
+
+def find_bounded_repeats(p: Profile) -> list[_Bounded]:
+    """Every bounded repeat of ``p`` (see module docstring), best first."""
+    i0, i1 = _solid_layers(p)
+    n_solid = i1 - i0 + 1
+    found: list[tuple[int, list[tuple[float, float]]]] = []
+    bounds = _boundaries(p)
+    for kind in (1, -1):
+        b = sorted((x for x in bounds if x[0] == kind), key=lambda x: x[1])
+        # a separator: one gap, or a run of consecutive boards (a divider of two faces); at most
+        # a quarter of the solid (narrower than half an element, two elements at least)
+        seps = [
+            (j, k, b[j][1], b[k][2], b[j][3], b[k][3])
+            for j in range(len(b))
+            for k in range(j, len(b) if kind == 1 else j + 1)
+            if b[k][2] - b[j][1] <= n_solid / 4
+        ]
+
+        def ends(sep, kind=kind):  # (where an element before it ends, after it starts)
+            return (sep[2], sep[3]) if kind == 1 else (sep[4], sep[5])
+
+        after: dict[int, list] = {}
+        for si, sa in enumerate(seps):
+            for sj, sb in enumerate(seps):
+                if sb[0] > sa[1]:
+                    e = (ends(sa)[1], ends(sb)[0])
+                    # an element of under two layers has no shape to compare
+                    if e[1] - e[0] >= 2 and max(sa[3] - sa[2], sb[3] - sb[2]) <= (e[1] - e[0]) / 2:
+                        after.setdefault(si, []).append((e, sj))
+
+        def chains(chain, last, after=after):
+            grown = False
+            for e, nxt in after.get(last, []):
+                first = chain[0]
+                if abs((e[1] - e[0]) - (first[1] - first[0])) > BOUND_TOL:
+                    continue
+                if (
+                    len(chain) >= 2
+                    and abs((e[0] - chain[-1][0]) - (chain[1][0] - first[0])) > BOUND_TOL
+                ):
+                    continue
+                grown = True
+                yield from chains([*chain, e], nxt)
+            if not grown and len(chain) >= 2:
+                yield chain
+
+        found += [(kind, c) for si in after for e, nxt in after[si] for c in chains([e], nxt)]
+    # longest chains first; sub-chains and multiples of a kept chain's period over it add nothing
+    found.sort(key=lambda c: -len(c[1]))
+    out: list[_Bounded] = []
+    for kind, chain in found:
+        period = chain[1][0] - chain[0][0]
+        if any(
+            chain[0][0] >= q.elements[0][0] - BOUND_TOL
+            and chain[-1][1] <= q.elements[-1][1] + BOUND_TOL
+            and abs(period - round(period / q.period) * q.period) <= BOUND_TOL
+            for q in out
+        ):
+            continue
+        r = _check_chain(p, chain, kind)
+        if r is not None:
+            out.append(r)
+    out.sort(key=lambda r: (-len(r.elements), r.err))
+    return out
+
+
+def _check_chain(p: Profile, chain: list[tuple[float, float]], kind: int) -> _Bounded | None:
+    """The chain as a bounded repeat if its elements are copies joining seamlessly, else None."""
+    for e in chain:  # an element has a shape of its own: no constant slab (see module)
+        i = np.arange(int(np.ceil(e[0])), int(np.floor(e[1])) + 1)
+        if p.distance(i[:, None], i[None, :]).max(initial=0.0) < DRIFT:
+            return None
+    errs, mirrored = [], False
+    for e, f in itertools.pairwise(chain):
+        best = None
+        for mirror in (False, True):
+            d = _element_distance(p, e, f, mirror)
+            if d.size and np.quantile(d, QUANTILE) <= MATCH and (best is None or d.mean() < best):
+                best, m = float(d.mean()), mirror
+        if best is None:
+            return None
+        errs.append(best)
+        mirrored |= m
+    shifts = [f[0] - e[0] for e, f in itertools.pairwise(chain)]
+    shifts += [f[1] - e[1] for e, f in itertools.pairwise(chain)]
+    period = float(np.mean(shifts))
+    # the planes: an element's start (or end) and the next's, where the layers match best
+    starts = np.array([e[0] for e in chain[:-1]] + [e[1] for e in chain[:-1]])
+    k = np.round(starts).astype(np.int64)
+    seam = p.shifted_distance(k, starts + period - k)
+    if seam.min() > MATCH:
+        return None
+    cost = np.where(seam <= MATCH, plane_cost(p, period, starts), np.inf)
+    good = np.flatnonzero(cost <= cost.min() + 0.03)
+    mid = (chain[0][0] + chain[-1][1] - period) / 2
+    start = float(starts[good[np.argmin(np.abs(starts[good] - mid))]])
+    return _Bounded(period, tuple(chain), float(np.mean(errs)), mirrored, kind, start)
+
+
 def plane_cost(p: Profile, period: float, starts: np.ndarray) -> np.ndarray:
     """(K,) cost of a tile zone ``[t, t + period]`` (layer indices ``starts``): low in gaps and
     where the two planes' cross-sections match."""
@@ -263,6 +427,44 @@ def _part_planes(csdf: CSDF, axis: int) -> np.ndarray:
     return np.unique(np.asarray(ends, dtype=np.float64))
 
 
+def _part_repeats(csdf: CSDF, axis: int) -> list[tuple[float, list[tuple[float, float]]]]:
+    """``(pitch, [(lo, hi), ...])`` (world units) of every row of repeated parts along ``axis``.
+
+    A row: at least :data:`MIN_COUNT` parts of the segmentation (``meta['parts_info']`` boxes)
+    with the same size along every axis and the same place across ``axis`` (within
+    :data:`BOUND_TOL` voxels), at a constant pitch along it: copies of one part. Two equal
+    parts are no row (any symmetric object has mirrored pairs: a table's legs).
+    """
+    info = csdf.meta.get("parts_info")
+    if not isinstance(info, list):
+        return []
+    boxes = np.array(
+        [x["bbox"] for x in info if isinstance(x, dict) and np.shape(x.get("bbox")) == (2, 3)],
+        dtype=np.float64,
+    ).reshape(-1, 2, 3)
+    if len(boxes) < MIN_COUNT:
+        return []
+    tol = BOUND_TOL * csdf.voxel_size
+    other = [a for a in range(3) if a != axis]
+    # size along all axes and place across the axis: one key per part
+    key = np.concatenate([boxes[:, 1] - boxes[:, 0], boxes[:, 0, other]], axis=1)
+    close = (np.abs(key[:, None, :] - key[None, :, :]) <= tol).all(axis=2)
+    out, used = [], np.zeros(len(boxes), bool)
+    for i in range(len(boxes)):
+        if used[i]:
+            continue
+        group = np.flatnonzero(close[i] & ~used)
+        used[group] = True
+        lo = np.sort(boxes[group, 0, axis])
+        if len(lo) < MIN_COUNT:
+            continue
+        step = np.diff(lo)
+        if step.min() > tol and np.ptp(step) <= tol:
+            size = float(np.median(key[group, axis]))
+            out.append((float(step.mean()), [(float(a), float(a) + size) for a in lo]))
+    return out
+
+
 def _axis_index(axis: str | int) -> int:
     if isinstance(axis, str) and axis.lower() in AXES:
         return AXES.index(axis.lower())
@@ -279,7 +481,8 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
     extent = max(p.hi - p.lo, h)
     name = AXES[ax]
     out: list[Candidate] = []
-    for r in find_repeats(p):
+    repeats = find_repeats(p)
+    for r in repeats:
         a, b = r.span
         t = best_phase(p, r.shift, a, b)
         period = r.shift * h
@@ -299,6 +502,67 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
                     f"the extent), cross-sections match to {r.err:.3f}"
                 ),
                 region=(float(p.world(a)), float(p.world(b))),
+            )
+        )
+    for r in find_bounded_repeats(p):
+        # a period the full match found already (or a multiple of it, over it) adds nothing
+        if any(
+            abs(r.period - round(r.period / q.shift) * q.shift) <= BOUND_TOL
+            and min(r.elements[-1][1], q.span[1]) > max(r.elements[0][0], q.span[0])
+            for q in repeats
+        ):
+            continue
+        a, b = r.elements[0][0], r.elements[-1][1]
+        period = r.period * h
+        count = len(r.elements)
+        cover = min(1.0, (b - a) * h / extent)
+        score = BOUNDED_WEIGHT * (1 - r.err / MATCH) * (0.5 + 0.5 * cover) * (1 - 1 / (count + 1))
+        what = "boards or dividers" if r.kind == 1 else "gaps or grooves"
+        out.append(
+            Candidate(
+                axis=name,
+                kind="tile",
+                zone=(float(p.world(r.start)), float(p.world(r.start)) + period),
+                period=float(period),
+                count=count,
+                score=float(np.clip(score, 0, 1)),
+                reason=(
+                    f"{count} elements between {what}, a {period:.4g} period "
+                    f"({100 * period / extent:.1f}% of the extent), coarse cross-sections match "
+                    f"{'mirrored ' if r.mirrored else ''}to {r.err:.3f}"
+                ),
+                region=(float(p.world(a)), float(p.world(b))),
+            )
+        )
+    tiles = [(c.period / h, p.index(c.region[0]), p.index(c.region[1])) for c in out]
+    for pitch, parts in _part_repeats(csdf, ax):
+        step = pitch / h
+        a, b = float(p.index(parts[0][0])), float(p.index(parts[-1][1]))
+        if any(
+            abs(step - max(1, round(step / q)) * q) <= BOUND_TOL and min(b, qb) > max(a, qa)
+            for q, qa, qb in tiles
+        ):
+            continue
+        # the region: from halfway across the gap before the first part to past the last
+        gap = step - (parts[0][1] - parts[0][0]) / h
+        a0, b0 = max(a - gap / 2, 0.0), min(b + gap / 2, p.n - 1.0)
+        # planes halfway across the gaps around the middle part
+        count = len(parts)
+        t = float(p.index(parts[(count - 1) // 2][0])) - gap / 2
+        score = (0.5 + 0.5 * min(1.0, (b - a) * h / extent)) * (1 - 1 / (count + 1))
+        out.append(
+            Candidate(
+                axis=name,
+                kind="tile",
+                zone=(float(p.world(t)), float(p.world(t)) + pitch),
+                period=float(pitch),
+                count=count,
+                score=float(np.clip(score, 0, 1)),
+                reason=(
+                    f"{count} equal parts of the segmentation at a {pitch:.4g} pitch "
+                    f"({100 * pitch / extent:.1f}% of the extent)"
+                ),
+                region=(float(p.world(a0)), float(p.world(b0))),
             )
         )
     planes = _part_planes(csdf, ax)

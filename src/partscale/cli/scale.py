@@ -11,10 +11,27 @@ from .. import csdf as csdf_mod
 from ..errors import InputError
 from . import _common
 
+# mesh in and mesh out: the mesh route (partscale.meshedit), edits applied to the source mesh
+_MESH_IN = (".glb", ".gltf", ".obj", ".ply")
+_MESH_OUT = (".glb", ".obj", ".ply")
+
 
 def scale(
-    src: Annotated[Path, typer.Argument(metavar="IN", help="Input .csdf.npz file.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
+    src: Annotated[
+        Path,
+        typer.Argument(
+            metavar="IN",
+            help="Input .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) for the mesh route.",
+        ),
+    ],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "-o",
+            "--output",
+            help="Output .csdf.npz file, or a mesh (.glb, .obj, .ply) when IN is one: the edit is applied to the source mesh itself.",
+        ),
+    ],
     axis: Annotated[str | None, typer.Option("--axis", help="x, y or z.")] = None,
     zone: Annotated[
         tuple[str, str] | None,
@@ -36,7 +53,9 @@ def scale(
     from ..edit import AXES, MODES, Edit, Recipe, apply_recipe
     from ..edit.recipe import parse_position
 
-    _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
+    mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
+    if not mesh_route:
+        _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
     if recipe is not None:
         given = [
             n
@@ -70,8 +89,23 @@ def scale(
                 ),
             )
         )
+    if mesh_route:
+        return _scale_mesh(src, output, rec)
     c = csdf_mod.load(src)
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
     csdf_mod.save(out, output)
     _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")
+
+
+def _scale_mesh(src: Path, output: Path, rec) -> None:
+    from ..meshedit import edit_mesh_file
+
+    result = edit_mesh_file(src, output, rec)
+    for seam in result.seams:
+        if not seam.ok:
+            typer.echo(f"warning: {seam.message()}", err=True)
+    _common.done(
+        f"wrote {', '.join(map(str, result.written))} (mesh route: {result.faces_in} -> "
+        f"{result.faces_out} triangles)"
+    )

@@ -1,0 +1,124 @@
+"""The mesh route: recipes applied to the source mesh (partscale.meshedit), on real objects."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from partscale import ingest
+from partscale.edit import Recipe, apply_recipe
+from partscale.meshedit import apply_recipe_to_scene, load_scene, save_scene
+from partscale.surface import sample_linear
+
+BOOKCASE = (
+    "kenney/bookcaseOpen.glb",
+    {"axis": "y", "zone": ["26.625%", "53.875%"], "to": "81.125%", "mode": "tile"},
+)
+TABLE = ("kenney/table.glb", {"axis": "x", "zone": ["25%", "75%"], "to": "125%", "mode": "stretch"})
+SHELF = (
+    "polyhaven/wooden_bookshelf_worn/wooden_bookshelf_worn_1k.gltf",
+    {"axis": "y", "zone": ["24.5%", "38.3%"], "to": "65.9%", "mode": "tile"},
+)
+
+
+def _world(scene):
+    """(V, 3) world vertices of every node, in node order, and the per-node mesh."""
+    out = []
+    for node in scene.graph.nodes_geometry:
+        T, name = scene.graph[node]
+        m = scene.geometry[name]
+        out.append((node, m, np.asarray(m.vertices) @ T[:3, :3].T + T[:3, 3]))
+    return out
+
+
+def _check_edit(before, after, edit):
+    """Vertices before the zone bit-identical, beyond translated, UVs and materials kept."""
+    ax = "xyz".index(edit["axis"])
+    allv = np.concatenate([w for _, _, w in _world(before)])
+    lo, hi = allv[:, ax].min(), allv[:, ax].max()
+    from partscale.edit import Edit
+
+    s, e, d = Edit.parse(edit).resolve(lo, hi)
+    n_before = n_beyond = 0
+    for (n0, m0, w0), (n1, m1, w1) in zip(_world(before), _world(after), strict=True):
+        assert n0 == n1
+        v0, v1 = np.asarray(m0.vertices), np.asarray(m1.vertices)
+        # the edit appends vertices: the source's rows come first, in order
+        assert len(v1) >= len(v0)
+        pre = w0[:, ax] < s
+        assert np.array_equal(v1[: len(v0)][pre], v0[pre])  # bit for bit
+        post = w0[:, ax] > e
+        moved = w1[: len(v0)][post] - w0[post]
+        # translated by DEST - END along the axis only (float64 round-off of the node frame)
+        assert np.abs(moved[:, ax] - (d - e)).max(initial=0) <= 1e-9 * (hi - lo)
+        assert np.abs(np.delete(moved, ax, axis=1)).max(initial=0) <= 1e-9 * (hi - lo)
+        n_before += pre.sum()
+        n_beyond += post.sum()
+        uv0 = getattr(m0.visual, "uv", None)
+        if uv0 is not None:
+            uv1 = m1.visual.uv
+            assert uv1 is not None and len(uv1) == len(v1)
+            assert np.array_equal(uv1[: len(v0)][pre], uv0[pre])
+            assert np.array_equal(uv1[: len(v0)][post], uv0[post])
+        assert getattr(m1.visual, "material", None) is getattr(m0.visual, "material", None)
+    assert n_before > 0 and n_beyond > 0
+    return s, e, d
+
+
+def _merged(scene):
+    m = scene.to_mesh()
+    m.merge_vertices(merge_tex=True, merge_norm=True)
+    return m
+
+
+@pytest.mark.parametrize(
+    "case", [BOOKCASE, TABLE, SHELF], ids=["bookcase-tile", "table-stretch", "shelf-tile"]
+)
+def test_mesh_route_keeps_source_outside_the_zone(data, case, tmp_path):
+    rel, edit = case
+    scene = load_scene(data(rel))
+    out, seams = apply_recipe_to_scene(scene, Recipe.parse([edit]))
+    _s, e, d = _check_edit(scene, out, edit)
+    ax = "xyz".index(edit["axis"])
+    # the whole object grew by exactly the shift
+    assert out.bounds[1, ax] - scene.bounds[1, ax] == pytest.approx(d - e, abs=1e-9)
+    assert len(out.geometry) == len(scene.geometry)
+    if _merged(scene).is_watertight:
+        assert _merged(out).is_watertight
+    if edit["mode"] == "tile":
+        assert seams  # one report per internal seam
+    # written and read back: triangles and materials survive the file
+    written = save_scene(out, tmp_path / "out.glb")
+    back = trimesh.load(written[0], force="scene", process=False)
+    assert sum(len(g.faces) for g in back.geometry.values()) == sum(
+        len(out.geometry[out.graph[n][1]].faces) for n in out.graph.nodes_geometry
+    )
+    mats = {id(getattr(g.visual, "material", None)) for g in scene.geometry.values()}
+    back_mats = {getattr(g.visual, "material", None).name for g in back.geometry.values()}
+    assert len(back_mats) == len(mats)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", [BOOKCASE, TABLE], ids=["bookcase-tile", "table-stretch"])
+def test_mesh_route_within_a_voxel_of_the_csdf_route(data, case):
+    rel, edit = case
+    path = data(rel)
+    scene = load_scene(path)
+    out, _ = apply_recipe_to_scene(scene, Recipe.parse([edit]))
+    c = apply_recipe(ingest.load(path, res=128), Recipe.parse([edit]))
+    m = out.to_mesh()
+    pts, _ = trimesh.sample.sample_surface_even(m, 20000, seed=1)
+    d = np.abs(sample_linear(c.sdf, c.world_to_index(pts))) / c.voxel_size
+    # the CSDF route snaps the shift to whole voxels and resolves % on its own surface's box
+    assert np.quantile(d, 0.99) <= 1.0, np.quantile(d, [0.5, 0.9, 0.99])
+
+
+def test_cli_mesh_route_writes_mesh_and_reports(cli, data, tmp_path):
+    src = data(TABLE[0])
+    out = tmp_path / "t.glb"
+    proc = cli("scale", src, "-o", out, "--axis", "x", "--zone", "25%", "75%", "--to", "125%")
+    assert proc.returncode == 0, proc.stderr
+    assert "mesh route: 120 ->" in proc.stdout + proc.stderr
+    m = trimesh.load(out, force="mesh")
+    assert m.extents[0] == pytest.approx(1.5 * trimesh.load(src, force="mesh").extents[0], rel=1e-6)

@@ -170,7 +170,8 @@ def write_glb(csdf: CSDF, mesh, path: Path) -> None:
 
         uv = np.array(mesh.visual.uv, np.float32)
         uv[:, 1] = 1.0 - uv[:, 1]  # trimesh keeps v = 0 at the bottom, glTF at the top
-        image = np.asarray(mesh.visual.material.image.convert("RGB"))
+        mat = mesh.visual.material
+        image = np.asarray((getattr(mat, "baseColorTexture", None) or mat.image).convert("RGB"))
         _write_glb(path, positions, normals, None, faces, extras, uv=uv, png=png_bytes(image))
         return
     colors = srgb8_to_linear(mesh.visual.vertex_colors[:, :3]).astype(np.float32)

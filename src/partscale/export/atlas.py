@@ -15,6 +15,8 @@ from ..errors import InputError
 
 ATLAS_SIZES = (256, 512, 1024, 2048, 4096)
 DEFAULT_ATLAS = 1024
+#: no chart larger than the surface's area over this
+CHART_AREA_DIVISOR = 100
 
 
 def check_atlas(size: int | None) -> int | None:
@@ -79,7 +81,15 @@ def unwrap(vertices: np.ndarray, faces: np.ndarray, size: int):
     pack.padding = 2  # texels between charts, so bilinear taps at a border stay in its chart
     pack.bilinear = True
     pack.blockAlign = True  # measured: a quarter faster to pack, same utilisation within 2%
-    atlas.generate(xatlas.ChartOptions(), pack)
+    charts = xatlas.ChartOptions()
+    # capping a chart's area bounds xatlas's chart growing, its slowest step: measured 3x faster
+    # on the SheenChair at 20k triangles (388 charts instead of 299, same texel density)
+    tri = np.asarray(vertices, np.float64)[np.asarray(faces)]
+    area = (
+        0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+    )
+    charts.max_chart_area = float(area / CHART_AREA_DIVISOR)
+    atlas.generate(charts, pack)
     vmap, idx, uv = atlas[0]
     return vmap.astype(np.int64), idx.astype(np.int64), uv.astype(np.float32)
 

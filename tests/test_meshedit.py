@@ -87,7 +87,8 @@ def test_mesh_route_keeps_source_outside_the_zone(data, case, tmp_path):
     if _merged(scene).is_watertight:
         assert _merged(out).is_watertight
     if edit["mode"] == "tile":
-        assert seams  # one report per internal seam
+        # each internal seam welded: the planes' cross-sections are the same outline
+        assert seams and all(sm.ok for sm in seams), [sm.message() for sm in seams]
     # written and read back: triangles and materials survive the file
     written = save_scene(out, tmp_path / "out.glb")
     back = trimesh.load(written[0], force="scene", process=False)
@@ -122,3 +123,38 @@ def test_cli_mesh_route_writes_mesh_and_reports(cli, data, tmp_path):
     assert "mesh route: 120 ->" in proc.stdout + proc.stderr
     m = trimesh.load(out, force="mesh")
     assert m.extents[0] == pytest.approx(1.5 * trimesh.load(src, force="mesh").extents[0], rel=1e-6)
+
+
+def test_tiled_closed_box_stays_closed_and_exact():
+    box = trimesh.creation.box((1.0, 2.0, 3.0))  # 12 triangles, diagonals differ per face
+    scene = trimesh.Scene(box)
+    recipe = Recipe.parse([{"axis": "x", "zone": ["20%", "60%"], "to": "140%", "mode": "tile"}])
+    out, seams = apply_recipe_to_scene(scene, recipe)
+    m = out.to_mesh()
+    m.merge_vertices()
+    assert len(seams) == 2 and all(sm.ok for sm in seams)
+    assert m.is_watertight
+    assert m.extents == pytest.approx((1.8, 2.0, 3.0), abs=1e-12)
+    assert m.volume == pytest.approx(1.8 * 2.0 * 3.0, rel=1e-12)
+
+
+def test_unmatched_seam_is_reported():
+    # a wedge: its cross-section shrinks along x, so no two planes match
+    wedge = trimesh.Trimesh(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]],
+        [[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [0, 3, 5], [0, 5, 2], [1, 2, 5], [1, 5, 4]],
+    )
+    assert wedge.is_watertight
+    recipe = Recipe.parse([{"axis": "x", "zone": ["20%", "60%"], "to": "100%", "mode": "tile"}])
+    _, seams = apply_recipe_to_scene(trimesh.Scene(wedge), recipe)
+    assert seams and not any(sm.ok for sm in seams)
+    assert "--snap" in seams[0].message() and "CSDF route" in seams[0].message()
+
+
+def test_stretch_normals_follow_the_surface(data):
+    """Normals inside a stretched zone are the stretched surface's (unit, renormalised)."""
+    scene = load_scene(data(TABLE[0]))
+    out, _ = apply_recipe_to_scene(scene, Recipe.parse([TABLE[1]]))
+    for g in out.geometry.values():
+        n = g.vertex_normals
+        assert np.allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-6)

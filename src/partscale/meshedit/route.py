@@ -28,8 +28,8 @@ from .cut import Piece, concatenate, cut, subset
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
 OUTPUT_SUFFIXES = (".glb", ".obj", ".ply")
 
-#: lateral distance (relative to the object's size) within which two seam vertices are one
-WELD_TOLERANCE = 1e-6
+#: lateral distance (relative to the object's size) within which two seam points are one
+WELD_TOLERANCE = 1e-5
 
 
 @dataclass(frozen=True)
@@ -144,8 +144,102 @@ def _copy_piece(p: Piece, rows: np.ndarray | None = None) -> Piece:
     )
 
 
+def _plane_edges(piece: Piece, slab: np.ndarray, axis: int, plane: float) -> np.ndarray:
+    """(E, 2) vertex pairs of slab triangles' edges lying in ``x[axis] = plane``."""
+    F = piece.faces[slab]
+    on = piece.vertices[F, axis] == plane
+    pairs = [F[on[:, k] & on[:, (k + 1) % 3]][:, [k, (k + 1) % 3]] for k in range(3)]
+    return np.concatenate(pairs)
+
+
+def _conform(piece: Piece, axis: int, s: float, e: float, tol: float) -> Piece:
+    """Split the zone planes' cross-section edges so both planes have the same vertices.
+
+    A point of one plane's cross-section that lies on an edge of the other's (the same outline
+    triangulated differently: the usual case for a board crossing the zone) becomes a vertex
+    there, in every triangle on that edge (those outside the zone too), so tiled copies meet
+    vertex to vertex and stay closed. Points on no edge are left: the weld reports them.
+    """
+    from scipy.spatial import cKDTree
+
+    lat = [a for a in range(3) if a != axis]
+    for src, dst in ((e, s), (s, e)):
+        V, F = piece.vertices, piece.faces
+        slab = (V[F, axis].mean(axis=1) > s) & (V[F, axis].mean(axis=1) < e)
+        q = V[np.unique(F[slab][V[F[slab], axis] == src])][:, lat]
+        edges = _plane_edges(piece, slab, axis, dst)
+        if len(q) == 0 or len(edges) == 0:
+            continue
+        ends = np.unique(edges)
+        near = cKDTree(V[ends][:, lat]).query(q, distance_upper_bound=tol)[0]
+        q = q[~np.isfinite(near)]
+        if len(q) == 0:
+            continue
+        A, B = V[edges[:, 0]][:, lat], V[edges[:, 1]][:, lat]
+        AB = (B - A)[None]
+        t = ((q[:, None] - A[None]) * AB).sum(-1) / np.maximum((AB * AB).sum(-1), 1e-300)
+        dist = np.linalg.norm(A[None] + np.clip(t, 0, 1)[..., None] * AB - q[:, None], axis=-1)
+        best = np.argmin(dist, axis=1)
+        tb = t[np.arange(len(q)), best]
+        ok = (dist[np.arange(len(q)), best] <= tol) & (tb > 0) & (tb < 1)
+        if not ok.any():
+            continue
+        piece = _split_edges(piece, edges[best[ok]], tb[ok], axis, dst)
+    return piece
+
+
+def _split_edges(piece: Piece, edges: np.ndarray, t: np.ndarray, axis: int, plane: float) -> Piece:
+    """Insert a vertex at ``t`` along each undirected edge ``(a, b)`` in every triangle on it."""
+    V, F = piece.vertices, piece.faces
+    a, b = edges[:, 0], edges[:, 1]
+    new_v = V[a] + t[:, None] * (V[b] - V[a])
+    new_v[:, axis] = plane
+    base = len(V)
+    vattrs = {
+        k: np.concatenate([v, v[a] + t[:, None] * (v[b] - v[a])]) for k, v in piece.vattrs.items()
+    }
+    vattrs["_mapped"][base:] = 1.0
+    # points per undirected edge, ordered from its first to its second vertex
+    points: dict[tuple[int, int], list[tuple[float, int]]] = {}
+    for i, (x, y) in enumerate(edges.tolist()):
+        points.setdefault((x, y), []).append((float(t[i]), base + i))
+    keep = np.ones(len(F), bool)
+    extra, owner = [], []
+    key = {}
+    for k in range(3):
+        for r, (x, y) in enumerate(zip(F[:, k].tolist(), F[:, (k + 1) % 3].tolist(), strict=True)):
+            if (x, y) in points or (y, x) in points:
+                key.setdefault(r, []).append(k)
+    for r, ks in key.items():
+        tri = F[r].tolist()
+        # the triangle's boundary as a polygon with the inserted points, fanned from a corner
+        poly = []
+        for k in range(3):
+            x, y = tri[k], tri[(k + 1) % 3]
+            poly.append(x)
+            if k in ks:
+                if (x, y) in points:
+                    poly += [v for _, v in sorted(points[(x, y)])]
+                else:
+                    poly += [v for _, v in sorted(points[(y, x)], reverse=True)]
+        keep[r] = False
+        # fan from the corner opposite the split edge keeps the triangles non-degenerate
+        k0 = (ks[0] + 2) % 3
+        start = poly.index(tri[k0])
+        poly = poly[start:] + poly[:start]
+        for j in range(1, len(poly) - 1):
+            extra.append((poly[0], poly[j], poly[j + 1]))
+            owner.append(r)
+    faces = np.concatenate([F[keep], np.asarray(extra, np.int64).reshape(-1, 3)])
+    order = np.concatenate([np.flatnonzero(keep), np.asarray(owner, np.int64)])
+    fattrs = {k: v[order] for k, v in piece.fattrs.items()}
+    return Piece(np.concatenate([V, new_v]), faces, vattrs, fattrs)
+
+
 def _tile(piece, axis, s, e, d, rot, size):
     piece = _cut_planes(piece, axis, (s, e))
+    if tile_count(e - s, d - s) > 1:
+        piece = _conform(piece, axis, s, e, WELD_TOLERANCE * size)
     n = tile_count(e - s, d - s)
     period = (d - s) / n
     factor = period / (e - s)

@@ -63,15 +63,15 @@ def simplify(mesh, *, voxel_size: float, faces: int | None = None, error: float 
     else:
         target, bound = 3, float(error) * voxel_size
         opts = meshoptimizer.SIMPLIFY_ERROR_ABSOLUTE
-    dst = np.empty(F.size, np.uint32)
-    n = meshoptimizer.simplify(
-        dst, F.ravel(), V, target_index_count=target, target_error=bound, options=opts
-    )
-    f = dst[:n].reshape(-1, 3).astype(np.int64)
-    # a collapse on a thin part can fold two triangles onto each other: drop such pairs
-    key = np.sort(f, axis=1)
-    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    f = f[cnt[inv.reshape(-1)] == 1]
+    lock = np.zeros(len(V), np.uint8)
+    for _ in range(_ATTEMPTS):
+        f = _collapse(meshoptimizer, V, F, target, bound, opts, lock)
+        pinched = _nonmanifold_vertices(f)
+        if len(pinched) == 0:
+            break
+        # a collapse pinched two sheets onto one edge (thin parts): keep those vertices and
+        # their neighbours from collapsing, and decimate again from the full surface
+        lock[_ring(F, pinched)] = 1
     used, f = np.unique(f, return_inverse=True)
     f = f.reshape(-1, 3)
     out = trimesh.Trimesh(
@@ -83,3 +83,88 @@ def simplify(mesh, *, voxel_size: float, faces: int | None = None, error: float 
     for k, v in mesh.vertex_attributes.items():
         out.vertex_attributes[k] = v[used]
     return out
+
+
+#: decimation attempts at most, each locking more vertices where the previous one pinched
+_ATTEMPTS = 6
+
+
+def _simplify_locked(meshoptimizer, dst, V, F, target, bound, opts, lock) -> int:
+    """meshopt_simplifyWithAttributes with locked vertices, called with declared C types.
+
+    The Python binding (0.2.30a0) calls it without argument types, which passes the sizes as
+    32-bit ints and crashes; declaring them here is the documented C signature.
+    """
+    import ctypes
+
+    fn = meshoptimizer.simplifier.lib.meshopt_simplifyWithAttributes
+    size, fp, up = ctypes.c_size_t, ctypes.POINTER(ctypes.c_float), ctypes.POINTER(ctypes.c_uint)
+    fn.argtypes = [
+        up,
+        up,
+        size,
+        fp,
+        size,
+        size,
+        fp,
+        size,
+        fp,
+        size,
+        ctypes.POINTER(ctypes.c_ubyte),
+        size,
+        ctypes.c_float,
+        ctypes.c_uint,
+        fp,
+    ]
+    fn.restype = size
+    attrs = np.zeros(len(V), np.float32)
+    weights = np.zeros(1, np.float32)
+    idx = np.ascontiguousarray(F.ravel(), np.uint32)
+    return int(
+        fn(
+            dst.ctypes.data_as(up),
+            idx.ctypes.data_as(up),
+            idx.size,
+            V.ctypes.data_as(fp),
+            len(V),
+            12,
+            attrs.ctypes.data_as(fp),
+            4,
+            weights.ctypes.data_as(fp),
+            1,
+            lock.ctypes.data_as(ctypes.POINTER(ctypes.c_ubyte)),
+            target,
+            bound,
+            opts,
+            None,
+        )
+    )
+
+
+def _collapse(meshoptimizer, V, F, target, bound, opts, lock) -> np.ndarray:
+    """(F', 3) int64 triangles kept by meshoptimizer, duplicate opposite pairs removed."""
+    dst = np.empty(F.size, np.uint32)
+    if lock.any():
+        n = _simplify_locked(meshoptimizer, dst, V, F, target, bound, opts, lock)
+    else:
+        n = meshoptimizer.simplify(
+            dst, F.ravel(), V, target_index_count=target, target_error=bound, options=opts
+        )
+    f = dst[:n].reshape(-1, 3).astype(np.int64)
+    # a collapse on a thin part can fold two triangles onto each other: drop such pairs
+    key = np.sort(f, axis=1)
+    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    return f[cnt[inv.reshape(-1)] == 1]
+
+
+def _nonmanifold_vertices(f: np.ndarray) -> np.ndarray:
+    """Vertices of edges shared by more than two triangles."""
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    u, cnt = np.unique(e, axis=0, return_counts=True)
+    return np.unique(u[cnt > 2])
+
+
+def _ring(F: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """``vertices`` and every vertex sharing a triangle with one of them."""
+    hit = np.isin(F, vertices).any(axis=1)
+    return np.unique(F[hit])

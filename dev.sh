@@ -2,7 +2,7 @@
 # partscale's two commands:
 #   ./dev.sh setup   create .venv (Python 3.11), install partscale, run the demo on a real object
 #   ./dev.sh test    lint, format check, the page's type check and the whole test suite (installs
-#                    what it needs first)
+#                    what it needs first, the optional Ray extra included)
 # Optional heavy parts (Node tools for glTF validation and browser tests, Debian's chromium) are
 # installed when possible; tests that need them skip with a printed reason otherwise.
 set -euo pipefail
@@ -33,6 +33,16 @@ ensure_venv() {
     "$PY" -m pip install -q --upgrade pip
     "$PY" -m pip install -q -e ".[test]"
     touch "$stamp"
+  fi
+}
+
+ensure_ray() {
+  # the optional [ray] extra, so the batch's Ray engine test runs; it skips with the reason otherwise
+  local stamp=$VENV/.partscale-ray-installed
+  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
+    say "installing the optional Ray extra (partscale[ray]) for the batch engine test"
+    if "$PY" -m pip install -q -e ".[test,ray]"; then touch "$stamp"
+    else echo "note: could not install ray; the batch's Ray engine test will be skipped" >&2; fi
   fi
 }
 
@@ -86,6 +96,7 @@ case "${1:-}" in
     ;;
   test)
     ensure_venv
+    ensure_ray
     ensure_node_tools
     ensure_chromium
     say "ruff"

@@ -24,7 +24,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from partscale import csdf as csdf_mod  # noqa: E402
+import partscale  # noqa: E402
 from partscale import shapes  # noqa: E402
 from partscale.edit import apply_recipe  # noqa: E402
 from partscale.serve import encode_grid  # noqa: E402
@@ -32,7 +32,7 @@ from partscale.serve import encode_grid  # noqa: E402
 RECIPE = {"edits": [{"axis": "x", "zone": ["35%", "65%"], "to": "80%", "mode": "stretch"}]}
 
 
-def table_128() -> csdf_mod.CSDF:
+def table_128() -> partscale.CSDF:
     """A table filling a unit cube: 129³ voxels (122 + 2 x 3 margin + 1)."""
     h = 1.0 / 122
     top = ((0.0, 0.9, 0.0), (1.0, 1.0, 1.0))
@@ -54,18 +54,16 @@ def table_128() -> csdf_mod.CSDF:
 
 
 class EditorProcess:
-    """``partscale edit PATH --no-browser`` in a subprocess, as a user runs it."""
+    """``partscale editor PATH --no-browser`` in a subprocess, as a user runs it."""
 
     def __init__(self, path: Path):
         import os
 
         env = dict(os.environ)
-        import partscale
-
         # the same partscale this script imported
         env["PYTHONPATH"] = str(Path(partscale.__file__).resolve().parents[1])
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "partscale", "edit", str(path), "--no-browser"],
+            [sys.executable, "-m", "partscale", "editor", str(path), "--no-browser"],
             stderr=subprocess.PIPE,
             text=True,
             env=env,
@@ -136,7 +134,7 @@ def main() -> None:
     times: dict[str, list[float]] = {k: [] for k in ROWS}
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "table128.csdf.npz"
-        csdf_mod.save(c, path)
+        partscale.save(c, path)
         apply_recipe(c, RECIPE)  # warm: numba caches, imports
         with EditorProcess(path) as server, httpx.Client(base_url=server.url, timeout=60) as client:
             client.post("api/apply", json=RECIPE).raise_for_status()  # warm the server too

@@ -26,8 +26,7 @@ import edt
 import numpy as np
 
 from partscale import shapes
-from partscale.edit import Edit, apply_edit, naive_edit, tile_count
-from partscale.edit.scale import resolve_edit
+from partscale.edit import Edit, apply_edit, naive_edit, resolve_edit, tile_count
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
@@ -74,12 +73,12 @@ def load_object(res: int):
 def naive_loop(csdf, edit):
     """Baseline (a): per-column np.interp of sdf and rgb, Python loop over the columns."""
     r = resolve_edit(csdf, type(edit).parse(edit.to_json()) if hasattr(edit, "to_json") else edit)
-    ax = r["axis"]
+    ax = r.axis
     h = csdf.voxel_size
     o = float(csdf.origin[ax])
-    n_out = r["shape"][ax]
+    n_out = csdf.shape[ax] + r.shift_voxels(h)
     y = o + np.arange(n_out) * h
-    s, e, d = r["start"], r["end"], r["dest_snapped"]
+    s, e, d = r.start, r.end, r.dest
     shift = d - e
     if edit.mode == "tile":
         n = tile_count(e - s, d - s)

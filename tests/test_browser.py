@@ -23,11 +23,20 @@ import numpy as np
 import pytest
 import trimesh
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import shapes
-from partscale.edit import Edit, Recipe, apply_edit, source_coordinate, tile_count
-from partscale.errors import InputError
+from partscale import zones as zones_mod
 from partscale.color import palette
+from partscale.edit import (
+    Edit,
+    Recipe,
+    apply_edit,
+    apply_recipe,
+    forward_coordinate,
+    source_coordinate,
+    tile_count,
+)
+from partscale.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 WEB = ROOT / "web"
@@ -40,6 +49,9 @@ LEGS = [((x, 0.0, z), (x + 0.08, 0.7, z + 0.08)) for x in (0.05, 1.07) for z in 
 PART_COLOURS = [[230, 80, 80], [80, 200, 90], [70, 110, 230], [230, 200, 60], [180, 90, 220]]
 ZONE = {"axis": "x", "mode": "stretch", "start": 0.4, "end": 0.8, "dest": 1.2}
 ZONE2 = {"axis": "y", "mode": "stretch", "start": 0.2, "end": 0.5, "dest": 0.7}
+# a stretch zone over the left legs: snapping moves it into the constant slab between them
+SNAP_ZONE = {"axis": "x", "mode": "stretch", "start": 0.05, "end": 0.5, "dest": 0.6}
+FIT_SIZE = ["+20cm", "=", "="]
 
 
 def find_tools() -> tuple[str, str]:
@@ -58,7 +70,7 @@ def find_tools() -> tuple[str, str]:
     return node, chromium
 
 
-def table() -> csdf_mod.CSDF:
+def table() -> partscale.CSDF:
     """A table: top and four legs, coloured by height and position (exact SDF)."""
 
     def colour(p):
@@ -294,21 +306,34 @@ def zone_rule_cases(lo: float, hi: float, h: float) -> list[list[dict]]:
         [z(v(4), v(6.5), v(5))],  # -1.5 -> -2: dest snaps half a voxel past start, refused
         [z(v(4), v(7.5), v(6))],  # -1.5 -> -2: a voxel and a half past start, accepted
         [z(v(1), v(5), v(9), "tile", "y")],
-        # later zones are resolved on the solid as the earlier ones leave it
-        [z(v(4), v(8), v(12)), z(v(14), v(19), v(21))],  # inside only after the first
-        [z(v(4), v(8), v(12)), z(v(14), v(20.6), v(22))],
+        # positions refer to the object as given: a later zone's planes are carried through the
+        # earlier zones on its axis, then checked on the solid as those leave it
+        [z(v(4), v(8), v(12)), z(v(10), v(14), v(16))],  # beyond the first: moved by its change
+        [z(v(4), v(8), v(12)), z(v(5), v(7), v(9))],  # inside the first: follows its stretch
+        [z(v(4), v(8), v(12)), z(v(1), v(3), v(4))],  # before the first: stays
+        [z(v(10), v(14), v(16)), z(v(4), v(8), v(12))],  # before, drawn second
+        [z(v(4), v(8), v(6)), z(v(10), v(14), v(15))],  # after a shrink
+        [z(v(2), v(5), v(11), "tile"), z(v(3), v(4), v(6))],  # inside a tile: its first copy
+        [z(v(2), v(5), v(11), "tile"), z(v(8), v(12), v(14))],
+        [z(v(3), v(9), v(13), "global"), z(v(10), v(14), v(15))],  # after a global scaling
+        [z(v(4), v(8), v(12)), z(v(10), v(14), v(16)), z(v(1), v(3), v(4), "tile")],
+        [z(v(4), v(8), v(12)), z(v(14), v(19), v(21))],  # outside the input, carried outside
+        [z(v(4), v(8), v(12)), z(v(14), v(15.6), v(17))],
         [z(v(4), v(8), v(12)), z(v(1), v(3), v(4), "stretch", "y")],
         [z(v(8), v(4), v(10)), z(v(14), v(19), v(21))],  # the first refused: skipped
         [z(v(4), v(8), v(6), "tile"), z(v(0), v(2.5), v(3), "global")],
     ]
 
 
-def test_typescript_zone_rules_match_apply_edit(tmp_path):
-    """The page refuses (and snaps) each zone exactly as apply_edit does, on the same object.
+def test_typescript_zone_rules_match_apply_recipe(tmp_path):
+    """The page refuses, carries and snaps each zone exactly as apply_recipe does, on the same
+    object, and its preview maps points back as the applied edits do.
 
-    Page: web/src/state.ts resolvedZones of a state holding the object's header and the zones.
-    Python: apply_edit of each zone in order on the CSDF, skipping those it refuses (as the page
-    leaves them out of its recipe); the destination it applied is END + (grid growth) voxels.
+    Page: web/src/state.ts resolvedZones of a state holding the object's header and the zones
+    (all on the loaded object, as in a recipe). Python: each zone's planes carried through the
+    accepted zones before it on its axis (forward_coordinate, as apply_recipe does), then
+    apply_edit, skipping those it refuses (as the page leaves them out of its recipe); the
+    accepted zones as one recipe through apply_recipe give the very same object.
     """
     h = 0.0625
     box = shapes.box((0.25, 0.25, 0.25), (1.25, 0.75, 0.75), voxel_size=h)
@@ -319,15 +344,25 @@ def test_typescript_zone_rules_match_apply_edit(tmp_path):
         "grid_bounds": box.grid_bounds.tolist(),
     }
     cases = zone_rule_cases(float(bounds[0, 0]), float(bounds[1, 0]), h)
-    got = run_page_node(tmp_path, {"rules": [{"server": server, "zones": c} for c in cases]})
+    rng = np.random.default_rng(3)
+    points = rng.uniform(0.0, 2.5, size=(60, 3))
+    got = run_page_node(
+        tmp_path,
+        {"rules": [{"server": server, "zones": c, "points": points.tolist()} for c in cases]},
+    )
     for zones, page in zip(cases, got["rules"], strict=True):
-        current, accepted = box, []
+        current, accepted, carried = box, [], []
         for zone, pz in zip(zones, page["zones"], strict=True):
             ax = "xyz".index(zone["axis"])
             sb = current.surface_bounds()
             # the page forward-maps the bounds through the earlier zones; the server measures
             assert abs(pz["lo"] - sb[0, ax]) <= 1e-9 and abs(pz["hi"] - sb[1, ax]) <= 1e-9, zones
-            edit = Edit(zone["axis"], zone["start"], zone["end"], zone["dest"], zone["mode"])
+            planes = np.array([zone["start"], zone["end"]], dtype=np.float64)
+            for a, kw in carried:
+                if a == ax:
+                    planes = forward_coordinate(planes, **kw)
+            s2, e2 = float(planes[0]), float(planes[1])
+            edit = Edit(zone["axis"], s2, e2, e2 + (zone["dest"] - zone["end"]), zone["mode"])
             try:
                 out = apply_edit(current, edit)
             except InputError as exc:
@@ -335,20 +370,36 @@ def test_typescript_zone_rules_match_apply_edit(tmp_path):
                 assert pz["problem"]["rule"] == python_rule(str(exc)), (zones, str(exc))
                 continue
             assert pz["problem"] is None, (zones, pz["problem"])
-            applied = zone["end"] + (out.shape[ax] - current.shape[ax]) * h
+            assert abs(pz["start"] - s2) <= 1e-9 and abs(pz["end"] - e2) <= 1e-9, zones
+            applied = e2 + (out.shape[ax] - current.shape[ax]) * h
             assert abs(pz["dest"] - applied) <= 1e-9, zones
-            accepted.append(edit)
+            entry = out.meta["history"][-1]
+            kw = {"mode": zone["mode"], "start": s2, "end": e2, "dest": entry["to_snapped"]}
+            if zone["mode"] == "global":
+                kw.update(lo=entry["lo"], hi=entry["hi"])
+            carried.append((ax, kw))
+            accepted.append(
+                Edit(zone["axis"], zone["start"], zone["end"], zone["dest"], zone["mode"])
+            )
             current = out
-        # the recipe the page would send holds exactly the zones the server accepts
+        # the recipe the page would send holds exactly the zones the server accepts, as given
         assert page["recipe"]["version"] == 1
         assert [Edit.parse(e) for e in page["recipe"]["edits"]] == accepted, zones
+        if accepted:
+            whole = apply_recipe(box, Recipe(tuple(accepted)))
+            assert np.array_equal(whole.sdf, current.sdf), zones
+        # the preview's map: through the applied edits, last first, each in its own frame
+        want = np.array(points)
+        for a, kw in reversed(carried):
+            want[:, a] = source_coordinate(want[:, a], **kw)
+        np.testing.assert_allclose(page["sources"], want, rtol=0, atol=1e-9, err_msg=str(zones))
 
 
 @pytest.mark.browser
 def test_editor_end_to_end(tmp_path):
     node, chromium = find_tools()
     path = tmp_path / "table.csdf.npz"
-    csdf_mod.save(table(), path)
+    partscale.save(table(), path)
     cases = remap_cases()
     update = os.environ.get("PARTSCALE_UPDATE_REFERENCE") == "1"
     with Server(path) as server:
@@ -364,6 +415,7 @@ def test_editor_end_to_end(tmp_path):
             remapCases=cases,
             zone=ZONE,
             zone2=ZONE2,
+            features={"snapZone": SNAP_ZONE, "fitSize": FIT_SIZE},
         )
         # -- loads cleanly and draws the object like the reference (pixelmatch 0.1, <= 1 %)
         assert r["errors"] == [], r["errors"]
@@ -408,13 +460,18 @@ def test_editor_end_to_end(tmp_path):
         assert abs(hi[0] - 1.6) <= 0.25 * H and abs(lo[0]) <= 0.25 * H
         np.testing.assert_allclose(hi[1:], TOP[1][1:], atol=0.25 * H)
         assert r["applied"]["can_undo"]
+        # the zone stays where it was (its destination at its end: the object has the change)
+        assert r["zonesAfterApply"] == [{**ZONE, "dest": ZONE["end"]}]
 
         # -- Undo: the very object the server started with, and the page shows it again
         assert session.current is original
-        assert np.array_equal(session.current.sdf, csdf_mod.load(path).sdf)
+        assert np.array_equal(session.current.sdf, partscale.load(path).sdf)
         assert r["undone"]["can_redo"] and not r["undone"]["can_undo"]
+        # the zone that made the undone edit is back, and previews it as before the Apply
+        assert r["zonesAfterUndo"] == [ZONE]
         assert r["undoneDiff"] <= 0.01 * total
-        assert abs(session.redo_stack[-1].surface_bounds()[1][0] - 1.6) <= 0.25 * H
+        # the last edit undone is the fit's (step 8): the table 20 cm longer
+        assert abs(session.redo_stack[-1].surface_bounds()[1][0] - 1.4) <= 0.25 * H
 
     # -- two zones in one recipe (x, then y): previewed together, applied in order
     assert [e["axis"] for e in Recipe.parse(r["recipe2"]).to_json()["edits"]] == ["x", "y"]
@@ -422,6 +479,44 @@ def test_editor_end_to_end(tmp_path):
     lo, hi = np.array(r["applied2"]["solid_bounds"])
     assert abs(hi[0] - 1.6) <= 0.25 * H and abs(hi[1] - (TOP[1][1] + 0.2)) <= 0.25 * H
     assert len(r["applied2"]["history"]) == 2
+
+    # -- suggestions: a click on a band sets the zone's planes and mode to the candidate's
+    c = partscale.load(path)
+    want = [k.to_json() for k in zones_mod.suggest(c)]
+    assert r["suggestions"] == json.loads(json.dumps(want))
+    band = next(k for k in want if k["axis"] == "x")
+    assert r["afterBand"]["axis"] == "x" and r["afterBand"]["mode"] == band["kind"]
+    assert [r["afterBand"]["input"]["start"], r["afterBand"]["input"]["end"]] == band["zone"]
+    assert [r["afterBand"]["start"], r["afterBand"]["end"]] == pytest.approx(band["zone"], abs=1e-5)
+
+    # -- snap: the server moved the planes as `scale --snap` does, and said so
+    z = SNAP_ZONE
+    snapped, _ = zones_mod.snap(
+        c, {"axis": z["axis"], "zone": [z["start"], z["end"]], "to": z["dest"]}
+    )
+    assert [r["snapped"]["start"], r["snapped"]["end"], r["snapped"]["dest"]] == [
+        snapped.start,
+        snapped.end,
+        snapped.dest,
+    ]
+    assert r["snapStatus"].startswith("snap: moved start")
+
+    # -- fit to size: previewed (server untouched), applied to the size, undone exactly
+    recipe, why = zones_mod.fit(c, FIT_SIZE)
+    assert r["fitWhy"] == why
+    assert [Edit.parse(e) for e in r["fitRecipe"]["edits"]] == list(recipe.edits)
+    assert r["fitRevision"] == r["applied2"]["revision"] + 1  # the last undo, nothing since
+    assert r["fitPreviewDiff"] > 0.01 * total
+    lo, hi = np.array(r["fitApplied"]["solid_bounds"])
+    assert abs((hi[0] - lo[0]) - (TOP[1][0] + 0.2)) <= 0.5 * H
+    assert r["fitAppliedVsPreview"] <= 0.03 * total  # the preview showed what Apply made
+    fitted = [
+        {"axis": e.axis, "mode": e.mode, "start": e.start, "end": e.end, "dest": e.dest}
+        for e in recipe.edits
+    ]
+    assert r["fitZonesAfterApply"] == [{**z, "dest": z["end"]} for z in fitted]
+    assert r["fitUndone"]["solid_bounds"] == r["state0"]["solid_bounds"]
+    assert r["fitZonesAfterUndo"] == fitted
 
     # -- Export downloads a GLB that trimesh loads with vertex colours
     assert r["download"]["suggested"] == "table.edited.glb"

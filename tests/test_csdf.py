@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import tomllib
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +13,8 @@ from conftest import assert_bad_input
 
 import partscale
 from partscale import shapes
-from partscale._util import check_memory, keyword_options
+from partscale._memory import check_memory
+from partscale._options import keyword_options
 from partscale.csdf import load, make, save
 from partscale.errors import InputError, MemoryLimitError
 
@@ -21,10 +24,33 @@ def ball():
     return shapes.sphere((0.1, -0.2, 0.3), 0.25, voxel_size=0.02)
 
 
-def test_sphere_grid_matches_closed_form(ball):
-    pts = ball.index_to_world(np.argwhere(np.ones(ball.shape, bool)))
-    truth = np.linalg.norm(pts - [0.1, -0.2, 0.3], axis=1) - 0.25
-    assert np.abs(ball.sdf.reshape(-1) - truth).max() < 1e-6
+def test_sphere_grid_holds_known_distances():
+    # a voxel lies on the centre; distances to voxels at whole-voxel offsets along Pythagorean
+    # quadruples are known by hand: |(2, 3, 6)| = 7, |(1, 2, 2)| = 3, |(0, 3, 4)| = 5
+    h = 0.05
+    c = shapes.sphere((0.0, 0.0, 0.0), 0.25, voxel_size=h)
+    centre = np.rint(-c.origin / h).astype(int)
+    assert np.abs(c.index_to_world(centre[None])[0]).max() < 1e-12
+    known = {(0, 0, 0): -0.25, (1, 2, 2): -0.1, (0, 3, 4): 0.0, (5, 0, 0): 0.0, (2, 3, 6): 0.1}
+    for offset, d in known.items():
+        for sign in (1, -1):
+            i, j, k = centre + sign * np.array(offset)
+            assert abs(c.sdf[i, j, k] - d) < 1e-6, (offset, sign)
+
+
+def test_sphere_grid_is_a_distance_field(ball):
+    # a distance has unit gradient (away from the centre, its kink) and the solid the volume of
+    # the ball
+    g = np.stack(np.gradient(ball.sdf.astype(np.float64), ball.voxel_size), axis=-1)[
+        1:-1, 1:-1, 1:-1
+    ]
+    inner = ball.sdf[1:-1, 1:-1, 1:-1]  # central differences only
+    far = inner + 0.25 > 0.1  # 5 voxels from the centre
+    norm = np.linalg.norm(g, axis=-1)[far]
+    # central differences across the curved level sets err by up to (h / rho)^2 / 2: 2% here
+    assert np.abs(norm - 1).max() < 0.02
+    volume = (ball.sdf < 0).sum() * ball.voxel_size**3
+    assert abs(volume / (4 / 3 * np.pi * 0.25**3) - 1) < 0.02
 
 
 def test_arrays_are_read_only_and_caller_array_untouched():
@@ -234,8 +260,11 @@ def test_info_cli(tmp_path, ball, cli):
     assert_bad_input(cli("info", tmp_path / "nope.csdf.npz"), "nope.csdf.npz", "no such file")
 
 
-def test_version_is_exposed():
-    assert partscale.__version__
+def test_version_is_the_packages():
+    # one version: what `import partscale` says is what the package is built and installed as
+    with open(Path(__file__).resolve().parents[1] / "pyproject.toml", "rb") as f:
+        declared = tomllib.load(f)["project"]["version"]
+    assert partscale.__version__ == declared
 
 
 @pytest.mark.parametrize(

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import importlib.util
 import json
 import math
 from pathlib import Path
@@ -15,28 +14,6 @@ from PIL import Image
 from partscale.errors import InputError
 from partscale.evaluate import report
 from partscale.evaluate import suite as S
-
-
-def _have(*modules: str) -> bool:
-    for m in modules:
-        try:
-            if importlib.util.find_spec(m) is None:
-                return False
-        except ModuleNotFoundError:
-            return False
-    return True
-
-
-def _have_edit() -> bool:
-    import partscale.edit
-
-    return hasattr(partscale.edit, "apply_edit") or _have("partscale.edit.scale")
-
-
-needs_stages = pytest.mark.skipif(
-    not (_have("partscale.ingest", "partscale.render") and _have_edit()),
-    reason="import, scaling or render stage not on this branch yet",
-)
 
 EDIT = {"axis": "x", "zone": ["20%", "80%"], "to": "105%"}
 
@@ -88,7 +65,6 @@ def test_cli_bad_suite_file_is_one_line(cli, tmp_path):
     assert_bad_input(cli("eval", good, "-o", tmp_path / "o", "--only", "b"), "--only", "a")
 
 
-@needs_stages
 def test_eval_on_a_tiny_suite_writes_figures_tables_summary_and_lists_bad_entries(cli, tmp_path):
     for rel in ("kenney/table.glb", "kenney/bookcaseOpen.glb"):
         if not (DATA / rel).exists():
@@ -129,7 +105,7 @@ def test_eval_on_a_tiny_suite_writes_figures_tables_summary_and_lists_bad_entrie
             assert img.width >= 6 * 200, (name, img.size)  # original + five modes side by side
     with open(out / "metrics.csv") as f:
         rows = list(csv.DictReader(f))
-    modes = ["original", *S.MODES]
+    modes = ["original", *S.COMPARED_MODES]
     assert [r["mode"] for r in rows] == modes * 2
     by = {(r["object"], r["mode"]): r for r in rows}
     # what users rely on: rigid modes keep the outside and its proportions, global does not;
@@ -138,7 +114,7 @@ def test_eval_on_a_tiny_suite_writes_figures_tables_summary_and_lists_bad_entrie
         for mode in ("stretch", "tile"):
             r = by[obj, mode]
             assert float(r["rigid_err"]) < 1.0 and float(r["prop_out"]) < 0.05, r
-        for mode in S.MODES:
+        for mode in S.COMPARED_MODES:
             assert float(by[obj, mode]["length_err"]) < 1.0
         assert float(by[obj, "global"]["prop_out"]) > 0.1  # legs, shelves 25 % thicker
     # tiling the bookcase keeps the shelves and their spacing, stretching does not
@@ -155,7 +131,6 @@ def test_eval_on_a_tiny_suite_writes_figures_tables_summary_and_lists_bad_entrie
     assert "## Where each mode fails" in summary and "| bookcase |" in summary
 
 
-@needs_stages
 def test_run_suite_only_and_unknown_name(tmp_path):
     suite = S.parse_suite(
         {"data": str(DATA), "objects": [{"name": "t", "path": "kenney/table.glb", "edit": EDIT}]}
@@ -171,8 +146,6 @@ def test_default_suite_file_is_valid():
     assert {e.kind for e in suite.entries} == {"solid", "repeating"}
 
 
-@needs_stages
-@pytest.mark.skipif(not _have("partscale.segment"), reason="segmentation stage not on this branch")
 def test_segmented_run_adds_a_parts_row(tmp_path):
     rel = "kenney/bookcaseOpen.glb"
     if not (DATA / rel).exists():
@@ -288,12 +261,11 @@ def test_dots_inside_a_name_are_accepted(name):
     assert entry.error is None and entry.name == name
 
 
-@needs_stages
 def test_one_entrys_bad_name_or_unwritable_figure_fails_that_entry_only(tmp_path):
-    from partscale import csdf as csdf_mod
+    import partscale
     from partscale import shapes
 
-    csdf_mod.save(shapes.box((0, 0, 0), (1, 0.5, 0.4), voxel_size=0.05), tmp_path / "box.csdf.npz")
+    partscale.save(shapes.box((0, 0, 0), (1, 0.5, 0.4), voxel_size=0.05), tmp_path / "box.csdf.npz")
     out = tmp_path / "out"
     (out / "blocked.png").mkdir(parents=True)  # the figure cannot be written there
     objects = [{"name": n, "path": "box.csdf.npz", "edit": EDIT} for n in ("../escaped", "blocked")]
@@ -311,7 +283,6 @@ def test_one_entrys_bad_name_or_unwritable_figure_fails_that_entry_only(tmp_path
     assert "blocked: figure" in (out / "summary.md").read_text()
 
 
-@pytest.mark.skipif(not _have("partscale.segment"), reason="segmentation stage not on this branch")
 def test_unknown_segment_method_is_refused_before_any_object(cli, tmp_path):
     from partscale.segment import METHODS
 

@@ -13,7 +13,7 @@ import pytest
 import trimesh
 from conftest import ROOT, assert_bad_input
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import export, shapes
 from partscale.surface import to_mesh
 
@@ -283,7 +283,7 @@ def test_png_flipbook_pads_an_awkward_depth(tmp_path):
 # -- CLI ---------------------------------------------------------------------------------------
 @pytest.fixture
 def box_file(box, tmp_path):
-    return csdf_mod.save(box, tmp_path / "box.csdf.npz")
+    return partscale.save(box, tmp_path / "box.csdf.npz")
 
 
 def test_cli_export_writes_every_output(cli, box_file, tmp_path):

@@ -12,7 +12,7 @@ import pytest
 import trimesh
 from conftest import assert_bad_input, data_path
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import ingest, shapes
 from partscale.color import linear_to_srgb8, srgb_to_linear
 from partscale.surface import to_mesh
@@ -269,7 +269,7 @@ def test_autosdf_surface_at_level_002_and_true_distances(tmp_path, cli):
     _autosdf_sphere(src)
     out = tmp_path / "shape.csdf.npz"
     cli("import", src, "-o", out, "--res", "64", check=True)
-    c = csdf_mod.load(out)
+    c = partscale.load(out)
     h = c.voxel_size
     assert h == pytest.approx(2 * 0.52 / 64, rel=0.01)
     p = _centres(c)
@@ -401,8 +401,8 @@ def test_cli_import_writes_a_loadable_csdf(tmp_path, cli):
     out = tmp_path / "chair.csdf.npz"
     proc = cli("import", data_path("kenney/chair.glb"), "-o", out, "--res", "32", check=True)
     assert "wrote" in proc.stderr
-    c = csdf_mod.load(out)
-    assert max(c.shape) == 32 + 1 + 2 * (csdf_mod.BAND_VOXELS + 2)
+    c = partscale.load(out)
+    assert max(c.shape) == 32 + 1 + 2 * (partscale.csdf.BAND_VOXELS + 2)
     assert c.meta["source"].endswith("chair.glb")
     assert c.meta["history"][0]["res"] == 32
 

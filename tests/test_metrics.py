@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from partscale import shapes
-from partscale.edit.recipe import Edit
+from partscale.edit import Edit, ResolvedEdit, apply_edit, resolve_edit
 from partscale.errors import InputError
 from partscale.evaluate import metrics as M
 
@@ -19,7 +19,7 @@ H = 0.0193
 
 def _stretch_geo(mode="stretch"):
     # a 1.0-long box, zone [0.3, 0.7] moved to end at 0.9: 1.2 long after
-    return M.EditGeometry(0, 0.3, 0.7, 0.9, 0.0, 1.0, mode)
+    return ResolvedEdit(0, 0.3, 0.7, 0.9, 0.0, 1.0, mode)
 
 
 def test_thickness_is_exact_for_a_box():
@@ -103,7 +103,7 @@ def test_comb_spacing_is_measured_right_before_and_after_tiling():
     assert np.median(pa) == pytest.approx(0.3, abs=1e-3 * H)
     assert np.median(pb) == pytest.approx(0.3, abs=1e-3 * H)
     assert np.all(np.abs(pa - 0.3) < H) and np.all(np.abs(pb - 0.3) < H)
-    geo = M.EditGeometry(0, *COMB_ZONE, 0.0, 1.6, "tile")
+    geo = ResolvedEdit(0, *COMB_ZONE, 0.0, 1.6, "tile")
     m = M.evaluate(a, b, geo)
     assert m["pieces"] == m["pieces_expected"] == 7  # the tooth in the zone, copied once
     assert m["spacing_err"] < 0.01
@@ -114,7 +114,7 @@ def test_comb_spacing_is_measured_right_before_and_after_tiling():
 def test_comb_stretched_has_spacing_and_proportion_errors():
     a = _comb(6)
     b = _comb(6, stretched_tooth=1)
-    geo = M.EditGeometry(0, *COMB_ZONE, 0.0, 1.6, "stretch")
+    geo = ResolvedEdit(0, *COMB_ZONE, 0.0, 1.6, "stretch")
     m = M.evaluate(a, b, geo)
     # tooth 1 is twice as thick; its neighbours' pitches become 0.4 and 0.5 instead of 0.3
     assert m["prop_in"] == pytest.approx(1.0, abs=0.05)
@@ -127,7 +127,7 @@ def test_comb_scaled_globally_has_every_spacing_scaled():
     f = 1.9 / 1.6
     boxes = [((0.3 * m * f, 0, 0), ((0.3 * m + 0.1) * f, 0.4, 0.2)) for m in range(6)]
     b = shapes.grid(lambda p: shapes.boxes_sdf(p, boxes), (boxes[0][0], boxes[-1][1]), voxel_size=H)
-    geo = M.EditGeometry(0, *COMB_ZONE, 0.0, 1.6, "global")
+    geo = ResolvedEdit(0, *COMB_ZONE, 0.0, 1.6, "global")
     m = M.evaluate(a, b, geo)
     assert m["spacing_err"] == pytest.approx(f - 1, abs=0.02)
     assert m["prop_out"] == pytest.approx(f - 1, abs=0.03)
@@ -162,14 +162,14 @@ def _colour_box(jump_at=None):
 def test_seam_with_a_colour_jump_is_detected_and_a_smooth_one_is_not():
     smooth = _colour_box()
     jump = _colour_box(jump_at=0.51)
-    geo = M.EditGeometry(0, 0.3, 0.51, 0.51, 0.0, 1.0, "stretch")  # seams at 0.3 and 0.51
+    geo = ResolvedEdit(0, 0.3, 0.51, 0.51, 0.0, 1.0, "stretch")  # seams at 0.3 and 0.51
     colour_jump, shape_jump = M.seam_jumps(smooth, jump, geo)
     assert colour_jump > 200  # |(220,40,40) - (40,40,220)| = 255
     assert shape_jump < 1e-3  # same geometry
     colour_smooth, _ = M.seam_jumps(smooth, smooth, geo)
     assert colour_smooth < 1
     # a join between tile copies is compared with the original's median jump (none on a ramp)
-    tile = M.EditGeometry(0, 0.3, 0.51, 0.51, 0.0, 1.0, "tile")
+    tile = ResolvedEdit(0, 0.3, 0.51, 0.51, 0.0, 1.0, "tile")
     assert M.seam_jumps(smooth, smooth, tile)[0] < 1
 
 
@@ -177,7 +177,7 @@ def test_seam_with_a_shape_jump_is_detected():
     a = shapes.box((0, 0, 0), (1.0, 0.2, 0.3), voxel_size=H)
     step = [((0, 0, 0), (0.51, 0.2, 0.3)), ((0.51, 0, 0), (1.0, 0.1, 0.3))]
     b = shapes.grid(lambda p: shapes.boxes_sdf(p, step), ((0, 0, 0), (1.0, 0.2, 0.3)), voxel_size=H)
-    geo = M.EditGeometry(0, 0.3, 0.51, 0.51, 0.0, 1.0, "stretch")
+    geo = ResolvedEdit(0, 0.3, 0.51, 0.51, 0.0, 1.0, "stretch")
     assert M.seam_jumps(a, b, geo)[1] > 0.5
     assert M.seam_jumps(a, a, geo)[1] < 1e-3
 
@@ -206,47 +206,32 @@ def test_pieces_and_watertightness():
 
 def test_resolve_edit_rejects_a_zone_outside_the_solid():
     a = shapes.box((0, 0, 0), (1.0, 0.2, 0.3), voxel_size=H)
-    geo = M.resolve_edit(a, Edit("x", "25%", "75%", "100%"), snap=False)
-    assert (geo.start, geo.end, geo.dest) == pytest.approx((0.25, 0.75, 1.0), abs=1e-6)
-    snapped = M.resolve_edit(a, Edit("x", "25%", "75%", "100%"))  # whole voxels, as edits do
-    assert (snapped.dest - snapped.end) / H == pytest.approx(13, abs=1e-9)
+    geo = resolve_edit(a, Edit("x", "25%", "75%", "100%"))
+    assert (geo.start, geo.end, geo.given_dest) == pytest.approx((0.25, 0.75, 1.0), abs=1e-6)
+    # whole voxels, as edits do: 0.25 / H = 12.95 voxels
+    assert (geo.dest - geo.end) / H == pytest.approx(13, abs=1e-9)
+    assert geo.shift_voxels(H) == 13 and geo.mode == "stretch"
     with pytest.raises(InputError, match="inside the solid"):
-        M.resolve_edit(a, Edit("x", "50%", "130%", "150%"))
+        resolve_edit(a, Edit("x", "50%", "130%", "150%"))
     with pytest.raises(InputError, match="start < end"):
-        M.resolve_edit(a, Edit("x", "60%", "40%", "80%"))
+        resolve_edit(a, Edit("x", "60%", "40%", "80%"))
 
 
-try:
-    from partscale.edit import apply_edit
-except ImportError:
-    try:
-        from partscale.edit.scale import apply_edit
-    except ImportError:
-        apply_edit = None
-
-needs_edit = pytest.mark.skipif(
-    apply_edit is None,
-    reason="the scaling stage (partscale.edit.apply_edit) has not landed on this branch",
-)
-
-
-@needs_edit
 def test_comb_tiled_by_apply_edit_keeps_its_spacing():
     a = _comb(6)
     edit = Edit("x", COMB_ZONE[0], COMB_ZONE[1], COMB_ZONE[2], "tile")
-    geo = M.resolve_edit(a, edit)
+    geo = resolve_edit(a, edit)
     m = M.evaluate(a, apply_edit(a, edit), geo)
     assert m["spacing_err"] < 0.05
     assert m["prop_in"] < 0.1 and m["prop_out"] < 0.05
     assert m["rigid_err"] < 0.5 and m["length_err"] < 0.5
 
 
-@needs_edit
 def test_box_stretched_by_apply_edit_keeps_its_thickness():
     a = shapes.box((0, 0, 0), (1.0, 0.2, 0.3), voxel_size=H)
     edit = Edit("x", 0.3, 0.7, 0.9, "stretch")
     b = apply_edit(a, edit)
-    m = M.evaluate(a, b, M.resolve_edit(a, edit))
+    m = M.evaluate(a, b, resolve_edit(a, edit))
     assert m["length_err"] < 0.5 and m["sdf_err_mean"] < 0.1 and m["rigid_err"] < 0.6
     for axis in (1, 2):
         assert np.median(M.thickness(b, axis)) == pytest.approx((0.2, 0.3)[axis - 1], abs=0.01 * H)
@@ -255,7 +240,7 @@ def test_box_stretched_by_apply_edit_keeps_its_thickness():
 def test_plates_stretched_by_apply_edit_keep_their_thickness():
     a = _dumbbell(1.0, 0.1)
     edit = Edit("x", 0.3, 0.7, 0.9, "stretch")
-    m = M.evaluate(a, apply_edit(a, edit), M.resolve_edit(a, edit))
+    m = M.evaluate(a, apply_edit(a, edit), resolve_edit(a, edit))
     assert m["prop_out"] < 0.01 and m["length_err"] < 0.5
 
 
@@ -270,13 +255,12 @@ def _slanted_leg():
     return shapes.grid(sdf, ((0, 0, 0), (0.4, 1.0, 0.2)), voxel_size=H)
 
 
-@needs_edit
 def test_tiling_a_slanted_leg_shows_a_seam_and_stretching_does_not():
     a = _slanted_leg()
     result = {}
     for mode in ("stretch", "tile"):
         edit = Edit("y", 0.3, 0.5, 0.7, mode)  # two copies of the slab
-        result[mode] = M.evaluate(a, apply_edit(a, edit), M.resolve_edit(a, edit))
+        result[mode] = M.evaluate(a, apply_edit(a, edit), resolve_edit(a, edit))
     # each copy starts back where the zone started: the leg jumps 0.3 * 0.2 = 0.06 (3 voxels)
     assert result["tile"]["seam_shape"] > 1.0
     assert result["stretch"]["seam_shape"] < 0.3

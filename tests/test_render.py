@@ -7,7 +7,7 @@ import pytest
 from conftest import assert_bad_input
 from PIL import Image
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import render, shapes
 from partscale.errors import InputError
 
@@ -199,15 +199,17 @@ def test_scale_bar_is_labelled_and_to_scale():
     assert render.scale_bar_label(0.005, "m") == "5 mm"
     assert render._nice_length(0.37) == pytest.approx(0.2)
     assert render._nice_length(0.6) == pytest.approx(0.5)
-    c = shapes.sphere((0, 0, 0), 0.3, voxel_size=H)
+    c = shapes.sphere((0, 0, 0), 0.3, voxel_size=H)  # centre on a voxel: 0.6 m across exactly
     size = 256
     image = render.render(c, view="front", size=size, scale_bar=True)
-    cam = render.camera("front", c.surface_bounds(), size, reserve_bottom=render.SCALE_BAR_BAND)
-    length = render._nice_length(0.25 * size / cam.scale)
+    # worked out by hand: the 0.6 m frame fills the image less 5% margins on each side and the
+    # bar's 8% band, 256 * (1 - 0.1 - 0.08) px, so 349.9 px/m; a quarter of the width (64 px) is
+    # 0.183 m, the bar the round length below it, 10 cm: 35.0 px (+1 for the end pixel)
+    expected_px = 0.1 * 256 * 0.82 / 0.6
     dark = (image < 60).all(axis=-1)
     bottom = dark[int(size * 0.9) :]
     bar_row = bottom[bottom.sum(axis=1).argmax()]
-    assert abs(bar_row.sum() - length * cam.scale) <= 3
+    assert abs(bar_row.sum() - expected_px) <= 3
     # the (blue) object stays clear of the bar's band: only grey ink there
     band = image[int(size * (1 - render.SCALE_BAR_BAND)) :]
     ink = band[foreground(band)].astype(int)
@@ -233,7 +235,7 @@ def test_render_refuses_bad_options(sphere):
 # -- CLI -------------------------------------------------------------------------------------
 @pytest.fixture
 def sphere_file(sphere, tmp_path):
-    return csdf_mod.save(sphere, tmp_path / "s.csdf.npz")
+    return partscale.save(sphere, tmp_path / "s.csdf.npz")
 
 
 def test_cli_render_writes_a_png_of_the_asked_size(cli, sphere_file, tmp_path):
@@ -308,7 +310,7 @@ def test_real_chair_silhouette_matches_its_bounds():
 
 def test_cli_render_parts_uses_part_colours(cli, tmp_path):
     info = [{"index": 0, "color": [20, 200, 40]}, {"index": 1, "color": [200, 20, 160]}]
-    path = csdf_mod.save(two_part_boxes(info), tmp_path / "two.csdf.npz")
+    path = partscale.save(two_part_boxes(info), tmp_path / "two.csdf.npz")
     out = tmp_path / "parts.png"
     proc = cli("render", path, "-o", out, "--parts", "--view", "front", "--size", "120")
     assert proc.returncode == 0, proc.stderr

@@ -8,7 +8,7 @@ import pytest
 from conftest import assert_bad_input, data_path
 from scipy import ndimage
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import ingest, shapes
 from partscale.edit import apply_edit
 from partscale.errors import InputError, MemoryLimitError
@@ -214,8 +214,8 @@ def test_cache_moves_bboxes_with_the_origin(boxes, tmp_path):
 
 def test_labels_survive_save_and_load(segmented, tmp_path):
     s = segmented["table", "fast"]
-    path = csdf_mod.save(s, tmp_path / "t.csdf.npz")
-    back = csdf_mod.load(path)
+    path = partscale.save(s, tmp_path / "t.csdf.npz")
+    back = partscale.load(path)
     assert np.array_equal(back.parts, s.parts)
     assert back.meta["parts_info"] == s.meta["parts_info"]
     # the mesh carries them too
@@ -284,17 +284,17 @@ def test_huge_request_is_refused_with_what_it_needs(boxes, monkeypatch):
 
 
 def test_object_without_surface_is_refused():
-    empty = csdf_mod.make(np.ones((8, 8, 8), np.float32))
+    empty = partscale.make(np.ones((8, 8, 8), np.float32))
     with pytest.raises(InputError, match="surface"):
         segment(empty, cache=False)
 
 
 def test_cli_segments_and_refuses_bad_input(cli, boxes, tmp_path):
-    src = csdf_mod.save(boxes, tmp_path / "in.csdf.npz")
+    src = partscale.save(boxes, tmp_path / "in.csdf.npz")
     out = tmp_path / "out.csdf.npz"
     proc = cli("segment", src, "-o", out, "--no-cache")
     assert proc.returncode == 0, proc.stderr
-    got = csdf_mod.load(out)
+    got = partscale.load(out)
     assert got.n_parts == len(BOXES)
     # the command's default method is the library's, the fast one since it matched CoACD
     assert got.meta["segmentation"]["method"] == DEFAULT_METHOD == "fast"
@@ -302,7 +302,7 @@ def test_cli_segments_and_refuses_bad_input(cli, boxes, tmp_path):
     assert_bad_input(cli("segment", src, "-o", bad, "--method", "magic"), "method", "magic")
     assert_bad_input(cli("segment", src, "-o", bad, "--threshold", "0"), "threshold")
     assert_bad_input(cli("segment", src, "-o", bad, "--threshold", "1.5"), "threshold")
-    empty = csdf_mod.save(csdf_mod.make(np.ones((8, 8, 8), np.float32)), tmp_path / "e.csdf.npz")
+    empty = partscale.save(partscale.make(np.ones((8, 8, 8), np.float32)), tmp_path / "e.csdf.npz")
     assert_bad_input(cli("segment", empty, "-o", bad, "--method", "fast"), "surface")
     assert not bad.exists()
 

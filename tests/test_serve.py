@@ -20,7 +20,7 @@ import pytest
 import trimesh
 from starlette.testclient import TestClient
 
-from partscale import csdf as csdf_mod
+import partscale
 from partscale import shapes
 from partscale.serve import MAX_BODY, create_app, edited_path, encode_grid
 from partscale.serve import session as session_mod
@@ -51,7 +51,7 @@ def box_file(tmp_path: Path) -> Path:
     color = lambda p: np.stack(  # noqa: E731
         [np.full(len(p), 200), 255 * np.clip(p[:, 0], 0, 1), np.full(len(p), 60)], -1
     )
-    csdf_mod.save(
+    partscale.save(
         shapes.grid(lambda p: shapes.box_sdf(p, *BOX), BOX, voxel_size=H, color=color), path
     )
     return path
@@ -104,7 +104,7 @@ def test_page_and_its_assets_are_served(client):
 
 # -- the object -------------------------------------------------------------------------------
 def test_state_describes_the_object(client, box_file):
-    c = csdf_mod.load(box_file)
+    c = partscale.load(box_file)
     s = client.get("/api/state").json()
     assert s["shape"] == list(c.shape)
     assert s["voxel_size"] == pytest.approx(H)
@@ -116,7 +116,7 @@ def test_state_describes_the_object(client, box_file):
 
 
 def test_grid_is_rgba_half_in_grid_order(client, box_file):
-    c = csdf_mod.load(box_file)
+    c = partscale.load(box_file)
     X, Y, Z = c.shape
     raw = client.get("/api/grid").content
     assert len(raw) == X * Y * Z * 4 * 2
@@ -137,7 +137,7 @@ def test_grid_encoding_is_numpys_float16_bit_for_bit():
     sdf = rng.normal(size=(8, 9, 10)) * scale  # subnormal, normal and overflowing halves
     sdf.flat[:6] = [0.0, -0.0, 65504.0, 65520.0, 2.98e-8, -1e6]
     rgb = rng.integers(0, 256, size=(8, 9, 10, 3), dtype=np.uint8)
-    c = csdf_mod.make(sdf, rgb, voxel_size=1.0)
+    c = partscale.make(sdf, rgb, voxel_size=1.0)
     g = np.frombuffer(encode_grid(c), "<u2").reshape(8, 9, 10, 4)
     with np.errstate(over="ignore"):
         want = c.sdf.astype("<f2").view("<u2")
@@ -320,7 +320,7 @@ def test_save_writes_beside_the_input_unless_overwrite(client, box_file, tmp_pat
     out = edited_path(box_file)
     assert s["saved"] == out.name and out.is_file() and not s["unsaved"]
     assert box_file.read_bytes() == before
-    saved = csdf_mod.load(out)
+    saved = partscale.load(out)
     assert saved.shape == client.app.state.session.current.shape
     assert np.array_equal(saved.sdf, client.app.state.session.current.sdf)
     # a path in the body is not a thing the server reads
@@ -329,7 +329,7 @@ def test_save_writes_beside_the_input_unless_overwrite(client, box_file, tmp_pat
     assert post(client, "/api/save", {"overwrite": "yes"}).status_code == 400
     s = post(client, "/api/save", {"overwrite": True}).json()
     assert s["saved"] == box_file.name
-    assert csdf_mod.load(box_file).shape == saved.shape
+    assert partscale.load(box_file).shape == saved.shape
     assert sorted(p.name for p in tmp_path.iterdir()) == ["box.csdf.npz", "box.edited.csdf.npz"]
 
 
@@ -356,7 +356,7 @@ def test_export_texture_downloads_a_file(client):
 @pytest.mark.parametrize("stem", ['椅子 "x"', "modèle\\1"])
 def test_export_of_any_file_name_is_a_valid_attachment_header(tmp_path, stem):
     path = tmp_path / f"{stem}.csdf.npz"
-    csdf_mod.save(shapes.box(*BOX, voxel_size=0.05), path)
+    partscale.save(shapes.box(*BOX, voxel_size=0.05), path)
     with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
         for url, suffix in (("/api/export/mesh", ".glb"), ("/api/export/texture", ".nrrd")):
             r = client.get(url)
@@ -426,7 +426,7 @@ def test_other_paths_are_not_served(client, url):
 
 def test_query_strings_cannot_pick_another_object(client, box_file, tmp_path):
     other = tmp_path / "other.csdf.npz"
-    csdf_mod.save(shapes.sphere((0, 0, 0), 0.3, voxel_size=H), other)
+    partscale.save(shapes.sphere((0, 0, 0), 0.3, voxel_size=H), other)
     grid = client.get("/api/grid").content
     for q in (f"?path={other}", f"?file={other}", "?id=1", f"?name={other.name}"):
         assert client.get("/api/grid" + q).content == grid
@@ -460,10 +460,21 @@ def test_oversized_and_foreign_requests_are_refused(client):
 def test_missing_or_invalid_object_is_refused(tmp_path, cli):
     from conftest import assert_bad_input
 
-    assert_bad_input(cli("edit", tmp_path / "nope.csdf.npz", "--no-browser"), "nope.csdf.npz")
+    assert_bad_input(cli("editor", tmp_path / "nope.csdf.npz", "--no-browser"), "nope.csdf.npz")
     bad = tmp_path / "bad.csdf.npz"
     bad.write_bytes(b"not a zip")
-    assert_bad_input(cli("edit", bad, "--no-browser"), "bad.csdf.npz")
+    assert_bad_input(cli("editor", bad, "--no-browser"), "bad.csdf.npz")
+
+
+def test_the_old_command_name_still_opens_the_editor_but_is_not_listed(tmp_path, cli):
+    from conftest import assert_bad_input
+
+    # same command under its first name: the same refusal, naming the file
+    assert_bad_input(cli("edit", tmp_path / "nope.csdf.npz", "--no-browser"), "nope.csdf.npz")
+    listed = cli("--help", check=True).stdout
+    # a command's row starts with its name (after the table's border)
+    assert re.search(r"^\W*editor\s", listed, re.M), listed
+    assert not re.search(r"^\W*edit\s", listed, re.M), listed
 
 
 def test_busy_port_and_foreign_address_are_refused(box_file, cli):
@@ -473,10 +484,10 @@ def test_busy_port_and_foreign_address_are_refused(box_file, cli):
         s.bind(("127.0.0.1", 0))
         s.listen()
         port = s.getsockname()[1]
-        proc = cli("edit", box_file, "--no-browser", "--port", str(port))
+        proc = cli("editor", box_file, "--no-browser", "--port", str(port))
     assert_bad_input(proc, "--port", str(port))
     # TEST-NET-3: never an address of this machine
-    assert_bad_input(cli("edit", box_file, "--no-browser", "--host", "203.0.113.7"), "--host")
+    assert_bad_input(cli("editor", box_file, "--no-browser", "--host", "203.0.113.7"), "--host")
 
 
 # -- the command ------------------------------------------------------------------------------
@@ -484,7 +495,7 @@ def _start(args: list[str]) -> tuple[subprocess.Popen, str, list[str]]:
     env = dict(os.environ)
     env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "partscale", "edit", *args, "--no-browser"],
+        [sys.executable, "-m", "partscale", "editor", *args, "--no-browser"],
         stderr=subprocess.PIPE,
         stdout=subprocess.DEVNULL,
         text=True,
@@ -564,7 +575,7 @@ def test_real_table_stretch_undo_and_export(data, tmp_path):
     from partscale.ingest import load
 
     path = tmp_path / "table.csdf.npz"
-    csdf_mod.save(load(data("kenney/table.glb"), res=64), path)
+    partscale.save(load(data("kenney/table.glb"), res=64), path)
     with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
         session = client.app.state.session
         original = session.current
@@ -593,3 +604,75 @@ def test_real_table_stretch_undo_and_export(data, tmp_path):
         np.testing.assert_allclose(np.median(glb_vertex_colours(mesh), axis=0), linear, atol=0.03)
         post(client, "/api/undo")
         assert session.current is original
+
+
+# -- zones: suggest, snap, fit (thin layers over partscale.zones) ------------------------------
+
+
+def shelf_file(tmp_path: Path, n=5, pitch=0.3, board=0.04, width=0.8, depth=0.3) -> Path:
+    """Two side panels and ``n`` boards along y, ``pitch`` apart (a bookcase), saved."""
+    height = (n - 1) * pitch + board
+    boxes = [((0, 0, 0), (0.04, height, depth)), ((width - 0.04, 0, 0), (width, height, depth))]
+    boxes += [((0, m * pitch, 0), (width, m * pitch + board, depth)) for m in range(n)]
+    bounds = np.array([[0, 0, 0], [width, height, depth]], float)
+    path = tmp_path / "shelf.csdf.npz"
+    partscale.save(shapes.grid(lambda p: shapes.boxes_sdf(p, boxes), bounds, voxel_size=H), path)
+    return path
+
+
+def test_suggest_snap_and_fit_are_the_zones_functions_on_the_current_object(tmp_path):
+    from partscale import zones
+
+    path = shelf_file(tmp_path)
+    c = partscale.load(path)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        # suggest: every axis, best first, exactly zones.suggest's candidates
+        got = client.get("/api/suggest").json()["candidates"]
+        assert got == json.loads(json.dumps([k.to_json() for k in zones.suggest(c)]))
+        y = client.get("/api/suggest?axis=y").json()["candidates"]
+        assert y and {k["axis"] for k in y} == {"y"}
+        tile = next(k for k in y if k["kind"] == "tile")
+        assert abs(tile["period"] - 0.3) <= H  # the boards' pitch, within a voxel
+
+        # snap: a naive tile zone moved to one whole period, as `scale --snap` does
+        naive = {"axis": "y", "zone": [0.4, 0.8], "to": 1.0, "mode": "tile"}
+        r = post(client, "/api/snap", naive)
+        assert r.status_code == 200, r.text
+        edit, moves = zones.snap(c, naive)
+        assert r.json()["edit"] == edit.to_json()
+        assert r.json()["moves"] == [m.to_json() for m in moves]
+        assert r.json()["message"].startswith("snap: moved ")
+
+        # fit: the recipe and its reasons, nothing applied
+        r = post(client, "/api/fit", {"size": ["=", "+30cm", "="]})
+        assert r.status_code == 200, r.text
+        recipe, why = zones.fit(c, ["=", "+30cm", "="])
+        assert r.json() == {"recipe": recipe.to_json(), "why": why}
+        assert client.get("/api/state").json()["revision"] == 0
+        # applying the fitted recipe reaches the target height within half a voxel
+        state = post(client, "/api/apply", r.json()["recipe"]).json()
+        lo, hi = np.array(state["solid_bounds"])
+        assert abs((hi[1] - lo[1]) - (1.24 + 0.3)) <= 0.5 * H
+        # the suggestions now describe the applied object
+        after = client.get("/api/suggest?axis=y").json()["candidates"]
+        assert after != y
+
+
+@pytest.mark.parametrize(
+    "url, body, words",
+    [
+        ("/api/suggest?axis=w", None, "suggest.axis: expected x, y or z"),
+        ("/api/snap", {"axis": "x", "zone": [0.3, 0.6], "to": 0.7, "mode": "tile"}, "found none"),
+        ("/api/snap", {"axis": "q", "zone": [0.3, 0.6], "to": 0.7}, "axis"),
+        ("/api/fit", {"size": ["=", "0", "="]}, "positive length"),
+        ("/api/fit", {"size": ["=", "3furlongs", "="]}, "size y"),
+        ("/api/fit", {"size": ["=", "="]}, "fit: expected"),
+        ("/api/fit", {"size": ["=", "=", "="]}, "got the current size"),
+        ("/api/fit", ["=", "=", "="], "fit: expected"),
+    ],
+)
+def test_zone_routes_refuse_bad_input_with_one_line(client, url, body, words):
+    r = client.get(url) if body is None else post(client, url, body)
+    assert r.status_code == 400, r.text
+    message = r.json()["error"]
+    assert words in message and "\n" not in message

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ._util import atomic_path
+from ._files import atomic_path
 from .errors import InputError, one_line
 
 FORMAT = "partscale.csdf"

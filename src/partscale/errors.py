@@ -25,11 +25,6 @@ class MemoryLimitError(InputError):
     """A request that would need more memory than this machine allows."""
 
 
-def expected(what: str, *, expected: str, got: object) -> InputError:
-    """Build an :class:`InputError` with the house wording ``what: expected X, got Y``."""
-    return InputError(f"{what}: expected {expected}, got {got}")
-
-
 def one_line(exc: BaseException) -> str:
     """The exception's message on one line (whitespace runs become one space), or its type name."""
     return " ".join(str(exc).split()) or type(exc).__name__

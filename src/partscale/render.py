@@ -21,7 +21,8 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from ._util import atomic_path, keyword_options
+from ._files import atomic_path
+from ._options import keyword_options
 from .color import linear_to_srgb, palette_colour, srgb8_to_linear
 from .csdf import CSDF
 from .errors import InputError
@@ -364,3 +365,93 @@ def save_png(image: np.ndarray, path: str | os.PathLike) -> Path:
     with atomic_path(path) as tmp:
         Image.fromarray(img).save(tmp, format="PNG")
     return path
+
+
+#: Opacity of the bands :func:`render_bands` draws.
+BAND_ALPHA = 0.28
+
+
+def _ticks(lo: float, hi: float) -> np.ndarray:
+    span = max(hi - lo, 1e-12)
+    step = 10 ** math.floor(math.log10(span / 4))
+    for m in (1, 2, 5, 10):
+        if span / (m * step) <= 6:
+            step *= m
+            break
+    return np.arange(math.ceil(lo / step) * step, hi + 1e-9 * span, step)
+
+
+def render_bands(
+    csdf: CSDF,
+    bands: list[tuple[int, float, float, str, tuple[int, int, int]]],
+    *,
+    view: str = "front",
+    size: int = 640,
+) -> np.ndarray:
+    """(size, size, 3) uint8: ``csdf`` rendered from ``view`` with translucent bands, axes with
+    ticks in object units along the frame's bottom and left edges, and a scale bar.
+
+    ``bands``: ``(axis, lo, hi, label, colour)`` tuples (axis 0-2, world ``lo``/``hi`` along it,
+    a short label, sRGB colour), the first drawn on top; those along an axis the view does not
+    show are skipped (:class:`~partscale.errors.InputError` when none is left).
+    """
+    from PIL import Image, ImageDraw, ImageFont
+
+    frame = csdf.surface_bounds()
+    image = render(csdf, view=view, size=size, scale_bar=True)
+    cam = camera(view, frame, size, reserve_bottom=SCALE_BAR_BAND)
+    units = csdf.meta.get("units") or ""
+
+    def pixel(p: np.ndarray) -> tuple[float, float]:
+        d = p - cam.centre
+        return size / 2 + (d @ cam.right) * cam.scale, size / 2 - cam.shift - (
+            d @ cam.up
+        ) * cam.scale
+
+    corner_lo, corner_hi = pixel(frame[0]), pixel(frame[1])
+    x0, x1 = sorted((corner_lo[0], corner_hi[0]))
+    y0, y1 = sorted((corner_lo[1], corner_hi[1]))
+    im = Image.fromarray(image).convert("RGBA")
+    over = Image.new("RGBA", im.size, (0, 0, 0, 0))
+    draw = ImageDraw.Draw(over)
+    font = ImageFont.load_default(size=max(10, size // 48))
+    across = next(a for a in range(3) if abs(cam.right[a]) > 0.5)
+    up = next(a for a in range(3) if abs(cam.up[a]) > 0.5)
+    shown = [b for b in bands if int(b[0]) in (across, up)]
+    if not shown:
+        raise InputError(f"bands: expected one along an axis the {view} view shows, got none")
+    # the first band on top: drawn last
+    for a, lo, hi, label, colour in reversed(shown):
+        p0, p1 = frame[0].copy(), frame[0].copy()
+        p0[int(a)], p1[int(a)] = lo, hi
+        (u0, v0), (u1, v1) = pixel(p0), pixel(p1)
+        if int(a) == across:
+            box = [min(u0, u1), y0, max(u0, u1), y1]
+        else:
+            box = [x0, min(v0, v1), x1, max(v0, v1)]
+        rgb = tuple(int(v) for v in colour)
+        draw.rectangle(box, fill=(*rgb, round(255 * BAND_ALPHA)), outline=(*rgb, 255), width=2)
+        draw.text((box[0] + 3, box[1] + 2), label, fill=(*rgb, 255), font=font)
+    ink = (0, 0, 0, 255)
+    # axes with ticks in object units along the frame's bottom and left edges
+    draw.line([x0, y1, x1, y1], fill=ink, width=1)
+    draw.line([x0, y0, x0, y1], fill=ink, width=1)
+    for a, horizontal in ((across, True), (up, False)):
+        sign = 1.0 if (cam.right if horizontal else cam.up)[a] > 0 else -1.0
+        for t in _ticks(frame[0, a], frame[1, a]):
+            p = frame[0].copy()
+            p[a] = t
+            u, v = pixel(p)
+            if horizontal:
+                draw.line([u, y1, u, y1 + 5], fill=ink)
+                draw.text((u, y1 + 6), f"{t:g}", fill=ink, font=font, anchor="ma")
+            else:
+                draw.line([x0 - 5, v, x0, v], fill=ink)
+                draw.text((x0 - 7, v), f"{t:g}", fill=ink, font=font, anchor="rm")
+        name = "xyz"[a]
+        label = f"{name}{'' if sign > 0 else ' (-)'} [{units}]" if units else name
+        if horizontal:
+            draw.text((x1, y1 + 6 + size // 40), label, fill=ink, font=font, anchor="ra")
+        else:
+            draw.text((x0 + 4, y0 - 4), label, fill=ink, font=font, anchor="ld")
+    return np.asarray(Image.alpha_composite(im, over).convert("RGB"))

@@ -3,7 +3,8 @@
 //
 // args: { url, chromium, web (folder with node_modules), out (folder), reference (png path or
 //         null), updateReference, canvas: [w, h], remapCases, zone: {axis, start, end, dest},
-//         benchmark: n frames (only load + benchmark when set) }
+//         benchmark: n frames (only load + benchmark when set), features: {snapZone, fitSize}
+//         (suggestion click, snap toggle, fit preview/apply/undo) }
 import { createRequire } from 'node:module';
 import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
@@ -166,6 +167,7 @@ try {
       await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.revisionAfterDrag, { timeout: 60000 });
       await idle();
       result.applied = await page.evaluate(() => window.__partscale.state());
+      result.zonesAfterApply = await page.evaluate(() => window.__partscale.zoneInputs());
       await shot('applied.png');
       result.statusAfterApply = await page.textContent('#status');
 
@@ -174,8 +176,10 @@ try {
       await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.applied.revision, { timeout: 60000 });
       await idle();
       result.undone = await page.evaluate(() => window.__partscale.state());
+      result.zonesAfterUndo = await page.evaluate(() => window.__partscale.zoneInputs());
       const undoneShot = await shot('undone.png');
-      result.undoneDiff = diffPixels(initial, undoneShot).count;
+      // the original object again, previewed with the zones of the undone edit
+      result.undoneDiff = diffPixels(readFileSync(join(args.out, 'preview.png')), undoneShot).count;
 
       // 6. two zones in one recipe: the same x zone, then one along y
       if (args.zone2) {
@@ -202,6 +206,60 @@ try {
         await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.applied2.revision, { timeout: 60000 });
         await idle();
       }
+    }
+
+    // 8. suggestions, snapping, fit to size
+    if (args.features) {
+      const f = args.features;
+      const revision = async () => (await page.evaluate(() => window.__partscale.state())).revision;
+      result.suggestions = await page.evaluate(() => window.__partscale.suggestions());
+      // a click on the first x band sets the active zone's planes and mode
+      await page.selectOption('#zone', '0');
+      await page.click('#suggest-x-0');
+      await idle();
+      result.afterBand = await page.evaluate(() => ({
+        input: window.__partscale.zoneInputs()[0],
+        start: Number(document.querySelector('#pos-start').value),
+        end: Number(document.querySelector('#pos-end').value),
+        mode: document.querySelector('#mode').value,
+        axis: document.querySelector('#axis').value,
+      }));
+      // snap toggle: the server snaps the zone as `scale --snap` does
+      const sz = f.snapZone;
+      await page.selectOption('#axis', sz.axis);
+      await page.selectOption('#mode', sz.mode);
+      for (const [id, v] of [['#pos-start', sz.start], ['#pos-end', sz.end], ['#pos-dest', sz.dest]]) {
+        await page.fill(id, String(v));
+        await page.dispatchEvent(id, 'change');
+      }
+      await page.check('#snap');
+      await page.waitForFunction((z) => window.__partscale.zoneInputs()[0].start !== z.start, sz, { timeout: 30000 });
+      await idle();
+      result.snapped = await page.evaluate(() => window.__partscale.zoneInputs()[0]);
+      result.snapStatus = await page.textContent('#status');
+      await page.uncheck('#snap');
+      // fit to size: preview (nothing applied), apply, undo
+      const rev0 = await revision();
+      for (const [i, axis] of ['x', 'y', 'z'].entries()) await page.fill(`#size-${axis}`, f.fitSize[i]);
+      await page.click('#size-preview');
+      await page.waitForFunction(() => window.__partscale.fitWhy().length > 0, null, { timeout: 60000 });
+      await idle();
+      result.fitWhy = await page.evaluate(() => window.__partscale.fitWhy());
+      result.fitRecipe = await page.evaluate(() => window.__partscale.recipe());
+      result.fitRevision = await revision();
+      result.fitPreviewDiff = diffPixels(initial, await shot('fit-preview.png')).count;
+      await page.click('#apply');
+      await page.waitForFunction((r) => window.__partscale.state()?.revision > r, rev0, { timeout: 60000 });
+      await idle();
+      result.fitApplied = await page.evaluate(() => window.__partscale.state());
+      result.fitZonesAfterApply = await page.evaluate(() => window.__partscale.zoneInputs());
+      const fitShot = await shot('fit-applied.png');
+      result.fitAppliedVsPreview = diffPixels(readFileSync(join(args.out, 'fit-preview.png')), fitShot).count;
+      await page.click('#undo');
+      await page.waitForFunction((r) => window.__partscale.state()?.revision > r, result.fitApplied.revision, { timeout: 60000 });
+      await idle();
+      result.fitUndone = await page.evaluate(() => window.__partscale.state());
+      result.fitZonesAfterUndo = await page.evaluate(() => window.__partscale.zoneInputs());
     }
 
     // 7. export the mesh: a browser download

@@ -6,7 +6,9 @@
 //   remap:   points through the zones back to the source (remap.ts toSource)
 //   tiles:   recipe.ts tileCount
 //   rules:   the page's resolved zones of a state holding that object header and those zones
-//            (state.ts resolvedZones: lo, hi, snapped dest, problem) and the recipe it would send
+//            (state.ts resolvedZones: as applied, lo, hi, snapped dest, problem), the recipe it
+//            would send, and (when the case has points) the preview's map of the points back to
+//            the loaded object (remap.ts toSource through the valid zones)
 //   palette: color.ts paletteColour of 0..N-1
 import { createRequire } from 'node:module';
 import { readFileSync } from 'node:fs';
@@ -31,9 +33,12 @@ if (cases.tiles) {
 }
 if (cases.rules) {
   const state = await load('state.ts');
-  out.rules = cases.rules.map(({ server, zones }) => {
+  const remap = await load('remap.ts');
+  out.rules = cases.rules.map(({ server, zones, points }) => {
     const s = { ...state.initialState, server, zones };
-    return { zones: state.resolvedZones(s), recipe: state.recipe(s) };
+    const valid = state.validZones(s);
+    const sources = (points ?? []).map((p) => remap.toSource(valid, p));
+    return { zones: state.resolvedZones(s), recipe: state.recipe(s), sources };
   });
 }
 if (cases.palette) {

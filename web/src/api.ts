@@ -1,6 +1,6 @@
 // The server's API (src/partscale/serve/app.py): one object, no paths in requests. Every request
 // the page makes goes through here.
-import type { Recipe } from './recipe';
+import type { Axis, Edit, Recipe } from './recipe';
 
 export interface PartInfo {
   color?: number[] | string;
@@ -69,15 +69,57 @@ export async function getProgress(): Promise<Progress> {
   return (await check(await fetch('/api/progress', { cache: 'no-store' }))).json();
 }
 
-/** POST bodies by route. */
+/** A zone candidate (partscale.zones.Candidate.to_json). */
+export interface Candidate {
+  axis: Axis;
+  kind: 'tile' | 'stretch';
+  zone: [number, number];
+  score: number;
+  reason: string;
+  region: [number, number];
+  period?: number;
+  count?: number;
+}
+
+/** Zone candidates of the current object, best first (all axes, or one). */
+export async function suggest(axis?: Axis): Promise<Candidate[]> {
+  const url = axis ? `/api/suggest?axis=${axis}` : '/api/suggest';
+  return (await check(await fetch(url, { cache: 'no-store' }))).json().then((b) => b.candidates);
+}
+
+/** What POST /api/snap answers: the edit snapped for its mode (world units) and what moved. */
+export interface Snapped {
+  edit: { axis: Axis; zone: [number, number]; to: number; mode: Edit['mode'] };
+  moves: { plane: 'start' | 'end' | 'to'; from: number; to: number }[];
+  message: string;
+}
+
+/** What POST /api/fit answers: the recipe reaching the size (not applied) and why. */
+export interface Fitted {
+  recipe: { version: 1; edits: Snapped['edit'][] };
+  why: string[];
+}
+
+/** POST bodies and answers by route. */
 export interface PostBodies {
   '/api/apply': Recipe;
   '/api/undo': Record<string, never>;
   '/api/redo': Record<string, never>;
   '/api/save': { overwrite: boolean };
+  '/api/snap': Edit;
+  '/api/fit': { size: [string, string, string] };
 }
 
-async function post<P extends keyof PostBodies>(path: P, body: PostBodies[P]): Promise<ServerState> {
+interface PostAnswers {
+  '/api/apply': ServerState;
+  '/api/undo': ServerState;
+  '/api/redo': ServerState;
+  '/api/save': ServerState;
+  '/api/snap': Snapped;
+  '/api/fit': Fitted;
+}
+
+async function post<P extends keyof PostBodies>(path: P, body: PostBodies[P]): Promise<PostAnswers[P]> {
   const r = await fetch(path, {
     method: 'POST',
     headers: { 'Content-Type': 'application/json' },
@@ -92,3 +134,7 @@ export const undo = (): Promise<ServerState> => post('/api/undo', {});
 export const redo = (): Promise<ServerState> => post('/api/redo', {});
 /** Write the object (beside the input, or over it); the new state (with saved). */
 export const save = (overwrite: boolean): Promise<ServerState> => post('/api/save', { overwrite });
+/** The edit moved to the nearest good position for its mode (`partscale scale --snap`). */
+export const snap = (edit: Edit): Promise<Snapped> => post('/api/snap', edit);
+/** The recipe that resizes the object to size (x, y, z), previewed, not applied. */
+export const fit = (size: [string, string, string]): Promise<Fitted> => post('/api/fit', { size });

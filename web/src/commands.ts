@@ -3,11 +3,18 @@
 import * as api from './api';
 import { ApiError } from './api';
 import type { Scene } from './scene';
-import { recipe, type Store } from './state';
+import { zoneEdit } from './recipe';
+import { recipe, type Store, type ZoneInput } from './state';
 
 export interface Commands {
-  /** Fetch the object (state, grid, parts) and show it; one default zone. */
-  load(): Promise<void>;
+  /** Fetch the object (state, grid, parts, suggestions) and show it (see the 'loaded' action). */
+  load(how?: 'first' | 'applied' | 'undone' | 'redone'): Promise<void>;
+  /** Ask the server for the fit panel's sizes and preview the recipe as the zones; whether it
+   *  could. */
+  previewFit(): Promise<boolean>;
+  /** The active zone snapped for its mode by the server (null when that fails, said in the
+   *  status); its planes are set unless the zone changed meanwhile. */
+  snapActive(): Promise<ZoneInput | null>;
   apply(): Promise<void>;
   undo(): Promise<void>;
   redo(): Promise<void>;
@@ -18,7 +25,7 @@ export interface Commands {
 export function createCommands(store: Store, scene: Scene): Commands {
   const status = (message: string, error = false) => store.dispatch({ type: 'set-status', message, error });
 
-  async function load() {
+  async function load(how: 'first' | 'applied' | 'undone' | 'redone' = 'first') {
     status('loading grid…');
     const s = await api.getState();
     const [X, Y, Z] = s.shape;
@@ -30,8 +37,18 @@ export function createCommands(store: Store, scene: Scene): Commands {
     if (grid.length !== X * Y * Z * 4) throw new ApiError(`grid: expected ${X * Y * Z * 4} values, got ${grid.length}`);
     const parts = s.n_parts > 0 ? await api.getParts() : null;
     scene.setObject(s, grid, parts);
-    store.dispatch({ type: 'loaded', server: s });
+    store.dispatch({ type: 'loaded', server: s, how });
     status(`${s.name}: ${s.history.length} operation(s) in history`);
+    let found: api.Candidate[] = [];
+    try {
+      found = await api.suggest();
+    } catch (e) {
+      status(`suggestions failed: ${e instanceof Error ? e.message : String(e)}`, true);
+    }
+    // drop them if another object was loaded meanwhile
+    if (store.get().server === s || store.get().server?.revision === s.revision) {
+      store.dispatch({ type: 'suggested', suggestions: found });
+    }
   }
 
   /** Run fn as the one request in flight (none starts while busy); failures go to the status. */
@@ -65,21 +82,21 @@ export function createCommands(store: Store, scene: Scene): Commands {
       } finally {
         clearInterval(poll);
       }
-      await load();
+      await load('applied');
       status(`applied in ${(performance.now() - t0).toFixed(0)} ms (server ${s.apply_ms?.toFixed(0)} ms)`);
     });
 
   const undo = () =>
     run('undo', async () => {
       await api.undo();
-      await load();
+      await load('undone');
       status('undone');
     });
 
   const redo = () =>
     run('redo', async () => {
       await api.redo();
-      await load();
+      await load('redone');
       status('redone');
     });
 
@@ -95,5 +112,57 @@ export function createCommands(store: Store, scene: Scene): Commands {
     scene.requestRender();
   };
 
-  return { load, apply, undo, redo, save, fit };
+  const previewFit = async () => {
+    let ok = false;
+    await run('fitting', async () => {
+      const fitted = await api.fit([...store.get().fit.size] as [string, string, string]);
+      const zones: ZoneInput[] = fitted.recipe.edits.map((e) => ({
+        axis: e.axis,
+        mode: e.mode,
+        start: e.zone[0],
+        end: e.zone[1],
+        dest: e.to,
+      }));
+      store.dispatch({ type: 'set-zones', zones, why: fitted.why });
+      status(`fit: ${zones.length} zone(s) previewed; Apply to make it`);
+      ok = true;
+    });
+    return ok;
+  };
+
+  // one snap request at a time: a newer zone waits for the one in flight, then goes alone
+  const snapping: { inFlight: boolean; again: boolean } = { inFlight: false, again: false };
+  async function snapActive(): Promise<ZoneInput | null> {
+    if (snapping.inFlight) {
+      snapping.again = true;
+      return null;
+    }
+    snapping.inFlight = true;
+    try {
+      for (;;) {
+        snapping.again = false;
+        const s = store.get();
+        const z = s.zones[s.active];
+        if (!z) return null;
+        let got: api.Snapped;
+        try {
+          got = await api.snap(zoneEdit(z));
+        } catch (e) {
+          status(`${e instanceof Error ? e.message : String(e)}`, true);
+          return null;
+        }
+        if (snapping.again) continue; // the zone moved meanwhile: snap the newer one
+        const now = store.get();
+        if (now.zones[now.active] !== z) return null;
+        const snapped: ZoneInput = { ...z, start: got.edit.zone[0], end: got.edit.zone[1], dest: got.edit.to };
+        store.dispatch({ type: 'set-zone', patch: snapped });
+        status(got.message);
+        return snapped;
+      }
+    } finally {
+      snapping.inFlight = false;
+    }
+  }
+
+  return { load, apply, undo, redo, save, fit, previewFit, snapActive };
 }

@@ -1,8 +1,9 @@
 // Dragging the active zone's planes (or their handles) along its axis with the pointer.
 import * as THREE from 'three';
 import { AXES } from './recipe';
+import type { Commands } from './commands';
 import type { Scene } from './scene';
-import { fromPreview, type PlaneName, resolvedZones, type Store, voxel } from './state';
+import { appliedFromPreview, fromApplied, type PlaneName, resolvedZones, type Store, voxel } from './state';
 
 interface Drag {
   name: PlaneName;
@@ -22,8 +23,9 @@ function closestOnAxis(ray: THREE.Ray, origin: THREE.Vector3, axis: THREE.Vector
   return (b * e - d) / denom;
 }
 
-/** Plane drags on the scene's canvas set the active zone's start, end or destination. */
-export function bindDrag(store: Store, scene: Scene): void {
+/** Plane drags on the scene's canvas set the active zone's start, end or destination; with snap
+ *  on, the server snaps the zone whenever the pointer rests and when it is released. */
+export function bindDrag(store: Store, scene: Scene, commands: Commands): void {
   const { renderer, camera, controls, planeGroup, planeMeshes, handleMeshes } = scene;
   const canvas = renderer.domElement;
   const raycaster = new THREE.Raycaster();
@@ -65,14 +67,16 @@ export function bindDrag(store: Store, scene: Scene): void {
     const t = closestOnAxis(pointerRay(e), drag.origin, drag.axis);
     if (t === null) return;
     // keep the zone one apply_recipe accepts: inside the solid, two voxels thick, dest past start
+    // (checked as it applies: in the frame the earlier zones on its axis leave)
     const s = store.get();
     const z = resolvedZones(s)[s.active];
     const h = voxel(s);
-    let v = fromPreview(s, drag.value0 + t);
+    let v = appliedFromPreview(s, drag.value0 + t);
     if (drag.name === 'start') v = Math.max(z.lo, Math.min(v, z.end - 2 * h, z.dest - h));
     else if (drag.name === 'end') v = Math.min(z.hi, Math.max(v, z.start + 2 * h));
     else v = Math.max(v, z.start + h);
-    store.dispatch({ type: 'set-zone', patch: { [drag.name]: v } });
+    store.dispatch({ type: 'set-zone', patch: { [drag.name]: fromApplied(s, drag.name, v) } });
+    if (s.snap) void commands.snapActive();
   });
 
   function endDrag(e: PointerEvent) {
@@ -80,6 +84,7 @@ export function bindDrag(store: Store, scene: Scene): void {
     current.drag = null;
     controls.enabled = true;
     if (canvas.hasPointerCapture(e.pointerId)) canvas.releasePointerCapture(e.pointerId);
+    if (store.get().snap) void commands.snapActive();
   }
   canvas.addEventListener('pointerup', endDrag);
   canvas.addEventListener('pointercancel', endDrag);

@@ -2,9 +2,9 @@
 import type { Zone } from './recipe';
 import { toSource } from './remap';
 import type { Scene } from './scene';
-import { type AppState, type PlaneName, type ResolvedZone, recipe, resolvedZones, type Store } from './state';
+import { type AppState, type PlaneName, type ResolvedZone, recipe, resolvedZones, type Store, type ZoneInput } from './state';
 import type { Recipe } from './recipe';
-import type { ServerState } from './api';
+import type { Candidate, ServerState } from './api';
 
 export interface Hooks {
   /** The object is loaded. */
@@ -13,10 +13,15 @@ export interface Hooks {
   readonly frameTimeMs: number;
   readonly lastFrameMs: number;
   readonly frames: number;
-  /** Loaded, nothing in flight, and the last change has been drawn. */
+  /** Loaded with its suggestions, nothing in flight, and the last change has been drawn. */
   readonly idle: boolean;
   state(): ServerState | null;
+  /** The zones as applied (each in the frame the earlier ones leave). */
   zones(): ResolvedZone[];
+  /** The zones as the user set them, on the loaded object (what the recipe sends). */
+  zoneInputs(): readonly ZoneInput[];
+  suggestions(): readonly Candidate[] | null;
+  fitWhy(): readonly string[];
   recipe(): Recipe;
   handleScreen(name: PlaneName): { x: number; y: number };
   /** GLSL toSource() of the shader on points (N, 3) through zones (applied in order). */
@@ -46,10 +51,13 @@ export function exposeHooks(store: Store, scene: Scene): Hooks {
       return scene.perf.frames;
     },
     get idle() {
-      return hooks.ready && !get().busy && !scene.renderQueued;
+      return hooks.ready && !get().busy && !scene.renderQueued && get().suggestions !== null;
     },
     state: () => get().server,
     zones: () => resolvedZones(get()),
+    zoneInputs: () => get().zones,
+    suggestions: () => get().suggestions,
+    fitWhy: () => get().fit.why,
     recipe: () => recipe(get()),
     handleScreen: scene.handleScreen,
     evalRemap: scene.evalRemap,

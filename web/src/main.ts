@@ -15,7 +15,7 @@ showPanel(store);
 const scene = createScene(store, document.getElementById('view') as HTMLElement, size ? [Number(size[1]), Number(size[2])] : null);
 const commands = createCommands(store, scene);
 bindPanel(store, commands);
-bindDrag(store, scene);
+bindDrag(store, scene, commands);
 exposeHooks(store, scene);
 commands.load().catch((e) =>
   store.dispatch({

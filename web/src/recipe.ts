@@ -20,13 +20,15 @@ export interface Edit {
   mode: Mode;
 }
 
-/** A recipe: edits apply in order, each to the result of the previous one. */
+/** A recipe: edits apply in order, each to the result of the previous one; all positions refer
+ *  to the recipe's input (apply_recipe carries them through the earlier edits on their axis). */
 export interface Recipe {
   version: typeof RECIPE_VERSION;
   edits: Edit[];
 }
 
-/** One zone in world units. lo/hi: the solid's extent along the axis before this edit. */
+/** One zone in world units as it applies (in the frame the earlier edits leave). lo/hi: the
+ *  solid's extent along the axis before this edit. */
 export interface Zone {
   axis: Axis;
   mode: Mode;

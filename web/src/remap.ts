@@ -12,7 +12,8 @@
 
 import { AXES, MODES, tileCount, type Zone } from './recipe';
 
-export const MAX_ZONES = 4;
+/** Zones the shader holds: fit's recipe has at most two per axis (tile and stretch). */
+export const MAX_ZONES = 6;
 
 export function sourceCoordinate(y: number, z: Zone): number {
   const shift = z.dest - z.end;
@@ -41,16 +42,19 @@ export function toSource(zones: readonly Zone[], p: readonly number[]): number[]
   return q;
 }
 
-/** Source -> output for the extremes of a box (monotone; tile uses the overall linear map). */
+/** Where a plane at source coordinate x lies after the zone: recipe.forward_coordinate. The
+ *  inverse of sourceCoordinate outside the zone; inside, it follows the stretch, the first copy
+ *  (tile) or the scaling about lo (global). Recipes carry positions through earlier zones with it. */
 export function forwardCoordinate(x: number, z: Zone): number {
   const shift = z.dest - z.end;
-  if (z.mode === 'global') {
-    const f = (z.hi - z.lo + shift) / (z.hi - z.lo);
-    return z.lo + (x - z.lo) * f;
-  }
-  if (x < z.start) return x;
-  if (x > z.end) return x + shift;
-  return z.start + ((x - z.start) * (z.dest - z.start)) / (z.end - z.start);
+  if (z.mode === 'global') return z.lo + (x - z.lo) * ((z.hi - z.lo + shift) / (z.hi - z.lo));
+  const scale =
+    z.mode === 'stretch'
+      ? (z.dest - z.start) / (z.end - z.start)
+      : (z.dest - z.start) / (tileCount(z.end - z.start, z.dest - z.start) * (z.end - z.start));
+  if (x <= z.start) return x;
+  if (x >= z.end) return x + shift;
+  return z.start + (x - z.start) * scale;
 }
 
 /** Smallest dy/dx of the zone's output-from-source map, capped at 1 (ray step safety). */

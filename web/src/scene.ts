@@ -12,10 +12,9 @@ import {
   outputBounds,
   PLANES,
   type PlaneName,
-  resolvedZones,
+  previewPlane,
   solidBounds,
   type Store,
-  toPreview,
   validZones,
 } from './state';
 
@@ -220,7 +219,6 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     const z = s.zones[s.active];
     planeGroup.visible = !!z;
     if (!z) return;
-    const rz = resolvedZones(s)[s.active];
     const a = AXES.indexOf(z.axis);
     const size = box.getSize(new THREE.Vector3());
     const centre = box.getCenter(new THREE.Vector3());
@@ -229,7 +227,7 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     for (const name of PLANES) {
       const plane = planeMeshes[name];
       const pos = centre.clone();
-      pos.setComponent(a, toPreview(s, name === 'dest' ? rz.dest : z[name]));
+      pos.setComponent(a, previewPlane(s, name));
       plane.position.copy(pos);
       // PlaneGeometry lies in xy with normal +z: turn its normal onto the axis
       plane.rotation.set(0, 0, 0);

@@ -1,7 +1,7 @@
 // The editor's one state object and its transitions. Handlers dispatch named actions; the scene
 // and the panel subscribe and draw what the state says. Everything else the page shows (resolved
 // zones, the recipe, the output box) is derived from the state by the pure functions below.
-import type { ServerState } from './api';
+import type { Candidate, ServerState } from './api';
 import { forwardCoordinate, MAX_ZONES, sourceCoordinate } from './remap';
 import {
   AXES,
@@ -20,8 +20,11 @@ export type PlaneName = 'start' | 'end' | 'dest';
 export const PLANES: readonly PlaneName[] = ['start', 'end', 'dest'];
 export type Units = 'units' | '%';
 export type ViewMode = 'colour' | 'parts' | 'slice';
+/** Applies whose zones undo can bring back. */
+const MAX_UNDONE = 48;
 
-/** A zone as the user set it (world units; the destination unsnapped). */
+/** A zone as the user set it: world units on the loaded object as it is (every zone's positions
+ *  refer to it, as in a recipe), the destination unsnapped. */
 export interface ZoneInput {
   axis: Axis;
   mode: Mode;
@@ -30,8 +33,10 @@ export interface ZoneInput {
   dest: number;
 }
 
-/** A zone resolved on the solid as the earlier zones leave it: dest snapped to whole voxels as
- *  the server will apply it; problem: why the server would refuse it (null: valid). */
+/** A zone as apply_recipe applies it: its planes carried through the earlier valid zones on its
+ *  axis (forwardCoordinate), its change dest - end kept and snapped to whole voxels; lo/hi the
+ *  solid's extent the earlier zones leave; problem: why the server would refuse it (null: valid).
+ *  The shader maps through these, each in the frame the zones before it leave. */
 export interface ResolvedZone extends Zone {
   problem: ZoneProblem | null;
 }
@@ -47,10 +52,27 @@ export interface AppState {
   readonly view: { readonly mode: ViewMode; readonly sliceAxis: Axis; readonly slicePos: number };
   readonly overwrite: boolean;
   readonly status: { readonly message: string; readonly error: boolean };
+  /** Zone candidates of the loaded object (GET /api/suggest), best first; null: not fetched. */
+  readonly suggestions: readonly Candidate[] | null;
+  /** Snap the planes while dragging (POST /api/snap), as `partscale scale --snap`. */
+  readonly snap: boolean;
+  /** The fit panel: one size per axis ('=', '2.1', '210cm', '+20cm', '120%'), and why fit chose
+   *  the zones it previews (empty: no fit previewed). */
+  readonly fit: { readonly size: readonly [string, string, string]; readonly why: readonly string[] };
+  /** The zones of each apply, last last: undo brings them back (and redo those it undid). */
+  readonly appliedZones: readonly (readonly ZoneInput[])[];
+  readonly redoZones: readonly (readonly ZoneInput[])[];
 }
 
 export type Action =
-  | { type: 'loaded'; server: ServerState } // a new object: one default zone on the same axis
+  // a new object. 'first': one default zone; 'applied': the zones stay, their destinations at
+  // their ends (the object already has the change); 'undone': the zones of the undone apply
+  | { type: 'loaded'; server: ServerState; how?: 'first' | 'applied' | 'undone' | 'redone' }
+  | { type: 'suggested'; suggestions: readonly Candidate[] }
+  | { type: 'use-candidate'; candidate: Candidate } // the active zone takes its axis, zone and mode
+  | { type: 'set-zones'; zones: readonly ZoneInput[]; why?: readonly string[] } // e.g. a fit
+  | { type: 'set-snap'; snap: boolean }
+  | { type: 'set-fit-size'; axis: number; value: string }
   | { type: 'saved'; server: ServerState }
   | { type: 'select-zone'; index: number }
   | { type: 'add-zone' }
@@ -73,6 +95,11 @@ export const initialState: AppState = {
   view: { mode: 'colour', sliceAxis: 'x', slicePos: 50 },
   overwrite: false,
   status: { message: '', error: false },
+  suggestions: null,
+  snap: false,
+  fit: { size: ['=', '=', '='], why: [] },
+  appliedZones: [],
+  redoZones: [],
 };
 
 // -- derived ----------------------------------------------------------------------------------
@@ -98,25 +125,41 @@ export function defaultZone(s: AppState, axis: Axis = 'x', mode: Mode = 'stretch
   return zoneAt(axis, mode, smin[a], smax[a]);
 }
 
-/** The zones in world units with lo/hi: the solid's extent before each one (forward-mapped
- *  through the earlier valid zones). */
+/** The zones as apply_recipe applies them (see ResolvedZone), in order. */
 export function resolvedZones(s: AppState): ResolvedZone[] {
   const [smin, smax] = solidBounds(s);
   const lo = [...smin];
   const hi = [...smax];
   const h = voxel(s);
+  const applied: ResolvedZone[] = [];
   return s.zones.map((z) => {
     const a = AXES.indexOf(z.axis);
-    const given: Zone = { ...z, lo: lo[a], hi: hi[a] };
+    const earlier = applied.filter((e) => e.axis === z.axis);
+    const start = carry(z.start, earlier);
+    const end = carry(z.end, earlier);
+    const given: Zone = { ...z, start, end, dest: end + (z.dest - z.end), lo: lo[a], hi: hi[a] };
     const problem = zoneProblem(given, h);
     // preview what the server will make: the end moves by whole voxels
     const zone: ResolvedZone = { ...given, dest: snapDest(given, h), problem };
     if (problem === null) {
       lo[a] = forwardCoordinate(lo[a], zone);
       hi[a] = forwardCoordinate(hi[a], zone);
+      applied.push(zone);
     }
     return zone;
   });
+}
+
+/** A position on the loaded object -> where it lies after the zones (same axis), in order. */
+function carry(v: number, zones: readonly Zone[]): number {
+  for (const z of zones) v = forwardCoordinate(v, z);
+  return v;
+}
+
+/** The inverse of carry: the zones' source maps, last first. */
+function uncarry(v: number, zones: readonly Zone[]): number {
+  for (let i = zones.length - 1; i >= 0; i--) v = sourceCoordinate(v, zones[i]);
+  return v;
 }
 
 export function validZones(s: AppState): ResolvedZone[] {
@@ -155,25 +198,37 @@ export function canApply(s: AppState): boolean {
   return !s.busy && !!s.server && firstProblem(s) === null && !isNoop(s);
 }
 
-/** The valid zones after the active one on its axis: they move its planes in the preview. */
-function laterOnAxis(s: AppState): ResolvedZone[] {
+/** The valid zones before (or after) the active one on its axis. */
+function onAxis(s: AppState, which: 'before' | 'after'): ResolvedZone[] {
   const axis = s.zones[s.active]?.axis;
-  return resolvedZones(s)
-    .slice(s.active + 1)
-    .filter((z) => z.axis === axis && z.problem === null);
+  const rz = resolvedZones(s);
+  const part = which === 'before' ? rz.slice(0, s.active) : rz.slice(s.active + 1);
+  return part.filter((z) => z.axis === axis && z.problem === null);
 }
 
-/** Active zone's coordinate -> where the preview shows it (through the later zones). */
-export function toPreview(s: AppState, v: number): number {
-  for (const z of laterOnAxis(s)) v = forwardCoordinate(v, z);
-  return v;
+/** Where the active zone's plane is drawn: as applied (ResolvedZone), then through the later
+ *  zones on its axis. */
+export function previewPlane(s: AppState, name: PlaneName): number {
+  const z = resolvedZones(s)[s.active];
+  return carry(z[name], onAxis(s, 'after'));
 }
 
-/** Preview coordinate -> the active zone's coordinate (the later zones' maps, last first). */
-export function fromPreview(s: AppState, v: number): number {
-  const later = laterOnAxis(s);
-  for (let i = later.length - 1; i >= 0; i--) v = sourceCoordinate(v, later[i]);
-  return v;
+/** A preview coordinate -> the active zone's frame as it applies (back through the later zones
+ *  on its axis, last first). */
+export function appliedFromPreview(s: AppState, v: number): number {
+  return uncarry(v, onAxis(s, 'after'));
+}
+
+/** A preview coordinate -> the active zone's value of that plane on the loaded object. */
+export function fromPreview(s: AppState, name: PlaneName, v: number): number {
+  return fromApplied(s, name, appliedFromPreview(s, v));
+}
+
+/** A plane of the active zone as it applies -> its value on the loaded object (ZoneInput): back
+ *  through the earlier zones on its axis; the destination keeps its change dest - end. */
+export function fromApplied(s: AppState, name: PlaneName, v: number): number {
+  if (name !== 'dest') return uncarry(v, onAxis(s, 'before'));
+  return s.zones[s.active].end + (v - resolvedZones(s)[s.active].end);
 }
 
 // -- transitions ------------------------------------------------------------------------------
@@ -186,8 +241,47 @@ function patchActive(s: AppState, patch: Partial<ZoneInput>): AppState {
 export function reduce(s: AppState, action: Action): AppState {
   switch (action.type) {
     case 'loaded': {
-      const next: AppState = { ...s, server: action.server };
-      return { ...next, zones: [defaultZone(next, s.zones[0]?.axis ?? 'x')], active: 0 };
+      const next: AppState = { ...s, server: action.server, suggestions: null, fit: { ...s.fit, why: [] } };
+      const how = s.zones.length ? action.how ?? 'applied' : 'first';
+      if (how === 'first') {
+        const zones = [defaultZone(next, s.zones[0]?.axis ?? 'x')];
+        return { ...next, zones, active: 0, appliedZones: [], redoZones: [] };
+      }
+      const last = <T>(xs: readonly T[]) => xs[xs.length - 1];
+      if (how === 'undone') {
+        // the zones that made the undone edit, ready to change and apply again
+        const zones = last(s.appliedZones);
+        if (!zones) return next;
+        const redoZones = [...s.redoZones, zones];
+        return { ...next, zones, active: Math.min(s.active, zones.length - 1), appliedZones: s.appliedZones.slice(0, -1), redoZones };
+      }
+      // the object has the change now: the zones stay where they are, with nothing left to do
+      const made = how === 'applied' ? s.zones : last(s.redoZones);
+      const zones = (made ?? s.zones).map((z) => ({ ...z, dest: z.end }));
+      const appliedZones = made ? [...s.appliedZones, made].slice(-MAX_UNDONE) : s.appliedZones;
+      const redoZones = how === 'applied' ? [] : s.redoZones.slice(0, -1);
+      return { ...next, zones, active: Math.min(s.active, zones.length - 1), appliedZones, redoZones };
+    }
+    case 'suggested':
+      return { ...s, suggestions: action.suggestions };
+    case 'use-candidate': {
+      const c = action.candidate;
+      const z = s.zones[s.active];
+      if (!z) return s;
+      const [start, end] = c.zone;
+      // keep the change the zone asked for; a tile with none yet gets one more copy
+      const change = z.dest - z.end || (c.kind === 'tile' ? end - start : 0);
+      return patchActive(s, { axis: c.axis, mode: c.kind, start, end, dest: end + change });
+    }
+    case 'set-zones':
+      if (!action.zones.length || action.zones.length > MAX_ZONES) return s;
+      return { ...s, zones: action.zones, active: 0, fit: { ...s.fit, why: action.why ?? [] } };
+    case 'set-snap':
+      return { ...s, snap: action.snap };
+    case 'set-fit-size': {
+      const size = [...s.fit.size] as [string, string, string];
+      size[action.axis] = action.value;
+      return { ...s, fit: { ...s.fit, size } };
     }
     case 'saved':
       return { ...s, server: s.server ? { ...s.server, ...action.server } : action.server };
@@ -195,11 +289,9 @@ export function reduce(s: AppState, action: Action): AppState {
       return action.index >= 0 && action.index < s.zones.length ? { ...s, active: action.index } : s;
     case 'add-zone': {
       if (s.zones.length >= MAX_ZONES) return s;
+      // positions refer to the loaded object, so the new zone's default is on it too
       const axis = s.zones[s.active]?.axis ?? 'x';
-      const added: AppState = { ...s, zones: [...s.zones, defaultZone(s, axis)], active: s.zones.length };
-      // the new zone's default sits on the solid as it is after the earlier zones
-      const z = resolvedZones(added)[added.active];
-      return patchActive(added, zoneAt(axis, 'stretch', z.lo, z.hi));
+      return { ...s, zones: [...s.zones, defaultZone(s, axis)], active: s.zones.length };
     }
     case 'remove-zone':
       if (s.zones.length <= 1) return s;

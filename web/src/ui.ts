@@ -1,5 +1,6 @@
 // The side panel (index.html): shows the state, and turns the user's input into store actions
 // and commands. Nothing here holds state of its own.
+import type { Candidate } from './api';
 import type { Commands } from './commands';
 import { AXES, type Axis, type Mode, MODES, tileCount, type Zone } from './recipe';
 import { MAX_ZONES } from './remap';
@@ -10,6 +11,7 @@ import {
   isNoop,
   PLANES,
   resolvedZones,
+  solidBounds,
   type Store,
   type Units,
   type ViewMode,
@@ -21,12 +23,73 @@ export function fmt(v: number): string {
   return Number.isFinite(v) ? String(Number(v.toPrecision(6))) : '';
 }
 
-function toDisplay(v: number, z: Zone, units: Units): number {
-  return units === '%' ? ((v - z.lo) / (z.hi - z.lo)) * 100 : v;
+/** The loaded solid's extent along the axis: % positions are of it, as in a recipe. */
+function extent(s: AppState, axis: Axis): [number, number] {
+  const [lo, hi] = solidBounds(s);
+  const a = AXES.indexOf(axis);
+  return [lo[a], hi[a]];
 }
 
-function fromDisplay(v: number, z: Zone, units: Units): number {
-  return units === '%' ? z.lo + (v / 100) * (z.hi - z.lo) : v;
+function toDisplay(v: number, [lo, hi]: [number, number], units: Units): number {
+  return units === '%' ? ((v - lo) / (hi - lo)) * 100 : v;
+}
+
+function fromDisplay(v: number, [lo, hi]: [number, number], units: Units): number {
+  return units === '%' ? lo + (v / 100) * (hi - lo) : v;
+}
+
+function candidateLabel(c: Candidate, units: string): string {
+  const span = `${fmt(c.zone[0])}–${fmt(c.zone[1])} ${units}`;
+  return c.kind === 'tile' ? `tile ${span}, period ${fmt(c.period ?? 0)} ×${c.count}` : `stretch ${span}`;
+}
+
+/** Per axis, a ruler over the solid's extent with one clickable band per candidate. */
+function renderSuggestions(s: AppState) {
+  const box = $('suggestions');
+  box.innerHTML = '';
+  if (s.suggestions === null) {
+    box.textContent = s.server ? 'looking…' : '';
+    return;
+  }
+  if (!s.suggestions.length) {
+    box.textContent = 'no zone found on any axis';
+    return;
+  }
+  const units = s.server?.units ?? '';
+  for (const axis of AXES) {
+    const found = s.suggestions.filter((c) => c.axis === axis);
+    const ruler = document.createElement('div');
+    ruler.className = 'ruler';
+    const name = document.createElement('span');
+    name.className = 'ruler-axis';
+    name.textContent = axis;
+    ruler.appendChild(name);
+    if (!found.length) ruler.appendChild(document.createTextNode(' none'));
+    const [lo, hi] = extent(s, axis);
+    found.forEach((c, i) => {
+      const band = document.createElement('button');
+      band.id = `suggest-${axis}-${i}`;
+      band.className = `band ${c.kind}`;
+      band.dataset.axis = axis;
+      band.dataset.index = String(i);
+      band.style.left = `${(100 * (c.zone[0] - lo)) / (hi - lo)}%`;
+      band.style.width = `${(100 * (c.zone[1] - c.zone[0])) / (hi - lo)}%`;
+      band.title = `${candidateLabel(c, units)} (score ${fmt(c.score)}): ${c.reason}`;
+      band.textContent = c.kind;
+      ruler.appendChild(band);
+    });
+    box.appendChild(ruler);
+  }
+}
+
+/** The band of the active zone's own candidate, if it is one. */
+function markActiveBand(s: AppState) {
+  const z = s.zones[s.active];
+  document.querySelectorAll<HTMLButtonElement>('#suggestions .band').forEach((band) => {
+    const c = s.suggestions?.filter((k) => k.axis === band.dataset.axis)[Number(band.dataset.index)];
+    band.classList.toggle('active', !!z && !!c && c.axis === z.axis && c.kind === z.mode && c.zone[0] === z.start && c.zone[1] === z.end);
+    band.disabled = s.busy;
+  });
 }
 
 function zoneSummary(z: Zone, units: string): string {
@@ -47,8 +110,33 @@ function renderStatus(s: AppState) {
   status.classList.toggle('error', s.status.error);
 }
 
+const drawn: { suggestions: AppState['suggestions'] | undefined; server: AppState['server'] | undefined } = {
+  suggestions: undefined,
+  server: undefined,
+};
+
 function render(s: AppState) {
   renderStatus(s);
+  if (s.suggestions !== drawn.suggestions || s.server !== drawn.server) {
+    renderSuggestions(s);
+    drawn.suggestions = s.suggestions;
+    drawn.server = s.server;
+  }
+  markActiveBand(s);
+  ($('snap') as HTMLInputElement).checked = s.snap;
+  AXES.forEach((axis, i) => {
+    const input = $(`size-${axis}`) as HTMLInputElement;
+    if (document.activeElement !== input) input.value = s.fit.size[i];
+  });
+  const why = $('size-why');
+  why.innerHTML = '';
+  for (const line of s.fit.why) {
+    const li = document.createElement('li');
+    li.textContent = line;
+    why.appendChild(li);
+  }
+  ($('size-preview') as HTMLButtonElement).disabled = s.busy || !s.server;
+  ($('size-apply') as HTMLButtonElement).disabled = s.busy || !s.server;
   const server = s.server;
   ($('units') as HTMLSelectElement).value = s.units;
   ($('view-mode') as HTMLSelectElement).value = s.view.mode;
@@ -62,9 +150,10 @@ function render(s: AppState) {
   if (z) {
     ($('axis') as HTMLSelectElement).value = z.axis;
     ($('mode') as HTMLSelectElement).value = z.mode;
+    const given = s.zones[s.active];
     for (const name of PLANES) {
       const input = $(`pos-${name}`) as HTMLInputElement;
-      if (document.activeElement !== input) input.value = fmt(toDisplay(z[name], z, s.units));
+      if (document.activeElement !== input) input.value = fmt(toDisplay(given[name], extent(s, z.axis), s.units));
     }
     const problem = firstProblem(s);
     $('zone-info').textContent = problem
@@ -116,18 +205,41 @@ export function bindPanel(store: Store, commands: Commands): void {
       const v = Number(input.value);
       if (input.value.trim() === '' || !Number.isFinite(v)) return;
       const s = store.get();
-      const z = resolvedZones(s)[s.active];
-      if (z) dispatch({ type: 'set-zone', patch: { [name]: fromDisplay(v, z, s.units) } });
+      const z = s.zones[s.active];
+      if (z) dispatch({ type: 'set-zone', patch: { [name]: fromDisplay(v, extent(s, z.axis), s.units) } });
     };
     input.addEventListener('input', commit);
     input.addEventListener('change', () => {
       commit();
       const s = store.get();
-      const z = resolvedZones(s)[s.active];
-      if (z) input.value = fmt(toDisplay(s.zones[s.active][name], z, s.units));
+      const z = s.zones[s.active];
+      if (z) input.value = fmt(toDisplay(z[name], extent(s, z.axis), s.units));
     });
   }
   $('reset-zone').addEventListener('click', () => dispatch({ type: 'reset-zone' }));
+  $('snap').addEventListener('change', (e) => {
+    const on = (e.target as HTMLInputElement).checked;
+    dispatch({ type: 'set-snap', snap: on });
+    if (on) void commands.snapActive();
+  });
+  $('suggestions').addEventListener('click', (e) => {
+    const band = (e.target as HTMLElement).closest<HTMLButtonElement>('.band');
+    const s = store.get();
+    const c = band && s.suggestions?.filter((k) => k.axis === band.dataset.axis)[Number(band.dataset.index)];
+    if (c && !s.busy) {
+      dispatch({ type: 'use-candidate', candidate: c });
+      dispatch({ type: 'set-status', message: `${c.kind} zone along ${c.axis}: ${c.reason}` });
+    }
+  });
+  AXES.forEach((axis, i) => {
+    $(`size-${axis}`).addEventListener('input', (e) =>
+      dispatch({ type: 'set-fit-size', axis: i, value: (e.target as HTMLInputElement).value.trim() || '=' }),
+    );
+  });
+  $('size-preview').addEventListener('click', () => void commands.previewFit());
+  $('size-apply').addEventListener('click', async () => {
+    if (await commands.previewFit()) await commands.apply();
+  });
   $('fit').addEventListener('click', commands.fit);
   $('view-mode').addEventListener('change', (e) =>
     dispatch({ type: 'set-view', view: { mode: selectValue(e) as ViewMode } }),

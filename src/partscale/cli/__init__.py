@@ -14,14 +14,17 @@ import typer
 
 from ..errors import InputError
 from . import _common
-from .edit import edit
+from .batch import batch, optional_values
+from .editor import editor
 from .eval import eval_suite
 from .export import export
+from .fit import fit
 from .import_ import import_
 from .info import info
 from .render import render
 from .scale import scale
 from .segment import segment
+from .suggest import suggest
 
 app = typer.Typer(
     name="partscale",
@@ -46,11 +49,16 @@ def _root(
 app.command("import")(import_)
 app.command("info")(info)
 app.command("segment")(segment)
+app.command("suggest")(suggest)
 app.command("scale")(scale)
+app.command("fit")(fit)
 app.command("export")(export)
 app.command("render")(render)
-app.command("edit")(edit)
+app.command("editor")(editor)
+# the editor's first name, kept working; hidden since `edit` reads as the resizing stage
+app.command("edit", hidden=True)(editor)
 app.command("eval")(eval_suite)
+app.command("batch")(batch)
 
 
 def _click_modules() -> list:
@@ -74,7 +82,8 @@ def main(argv: list[str] | None = None) -> None:
     aborts = tuple(m.Abort for m in mods if hasattr(m, "Abort"))
     try:
         # Outside standalone mode click returns a command's exit code instead of exiting.
-        code = app(args=argv, standalone_mode=False)
+        args = optional_values(list(sys.argv[1:] if argv is None else argv))
+        code = app(args=args, standalone_mode=False)
     except InputError as exc:
         if _common.is_verbose():
             raise

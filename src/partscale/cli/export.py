@@ -61,8 +61,8 @@ def export(
 ) -> None:
     """Export a CSDF as a mesh (marching cubes, vertex colours) and/or RGBA 3D textures."""
     # heavy modules (numba, trimesh, scikit-image) load only when this command runs
-    from .. import csdf as csdf_mod
     from .. import export as export_mod
+    from ..csdf import load
 
     textures = list(texture or [])
     if mesh is None and not textures:
@@ -86,16 +86,13 @@ def export(
         error = None  # full resolution
     budget = {"faces": faces, "error": error, "atlas": atlas}
     if mesh is not None:
-        from ..export.atlas import check_atlas
-        from ..export.simplify import check_budget
-
-        check_budget(faces, error)
-        check_atlas(atlas)
+        export_mod.check_budget(faces, error)
+        export_mod.check_atlas(atlas)
         if atlas is not None and mesh.suffix.lower() == ".ply":
             raise InputError(f"{mesh}: expected .glb or .obj with --atlas (PLY has no textures)")
     elif faces is not None or atlas is not None:
         raise InputError("export: expected --mesh with --faces, --error or --atlas, got no --mesh")
-    c = csdf_mod.load(path)
+    c = load(path)
     written: list[Path] = []
     with progress_bar("export") as bar:
         n = len(outputs) + (size is not None)

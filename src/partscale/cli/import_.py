@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from .. import csdf as csdf_mod
+from ..csdf import SUFFIX, save
 from . import _common
 
 
@@ -58,7 +58,7 @@ def import_(
     Meshes may be open assemblies: sign comes from the generalized winding number, open sheets
     are thickened, distances are exact near the surface and colours come from the textures.
     """
-    _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
+    _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     from .. import ingest  # numba, scipy, trimesh: only when importing, not for every command
 
     with _common.progress_bar(f"import {input.name}") as progress:
@@ -73,5 +73,5 @@ def import_(
             units=units,
             progress=progress,
         )
-    csdf_mod.save(c, output)
+    save(c, output)
     _common.done(f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m")

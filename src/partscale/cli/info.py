@@ -8,10 +8,10 @@ from typing import Annotated
 
 import typer
 
-from .. import csdf as csdf_mod
+from ..csdf import CSDF, load
 
 
-def summary(c: csdf_mod.CSDF) -> dict:
+def summary(c: CSDF) -> dict:
     """A JSON-serialisable summary of a CSDF (what ``info --json`` prints)."""
     try:
         sb = c.surface_bounds()
@@ -37,7 +37,7 @@ def info(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
 ) -> None:
     """Show shape, voxel size, extent in world units, number of parts and the edit history."""
-    s = summary(csdf_mod.load(path))
+    s = summary(load(path))
     if as_json:
         typer.echo(json.dumps(s, indent=2))
         return

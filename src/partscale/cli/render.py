@@ -25,8 +25,8 @@ def render(
 ) -> None:
     """Render a CSDF to a PNG (sphere tracing of the SDF, its colours, simple shading)."""
     # heavy modules (numba, trimesh, scikit-image) load only when this command runs
-    from .. import csdf as csdf_mod
     from .. import render as render_mod
+    from ..csdf import load
 
     check_output(output, suffixes=(".png",), what="an image file")
     if view not in render_mod.VIEWS:
@@ -35,7 +35,7 @@ def render(
         raise InputError(
             f"{output}: expected an existing output folder, got none at {output.parent}"
         )
-    c = csdf_mod.load(path)
+    c = load(path)
     with progress_bar("render") as bar:
         image = render_mod.render(
             c, view=view, size=size, parts=parts, scale_bar=scale_bar, progress=bar

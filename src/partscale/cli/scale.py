@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from .. import csdf as csdf_mod
+from ..csdf import SUFFIX, load, save
 from ..errors import InputError
 from . import _common
 
@@ -36,10 +36,26 @@ def scale(
     zone: Annotated[
         tuple[str, str] | None,
         typer.Option(
-            "--zone", help="START END of the zone, in object units or with % of the extent."
+            "--zone",
+            help="START END of the zone: object units, with a unit (30cm, 300mm, 0.3m) or % of "
+            "the extent.",
         ),
     ] = None,
     to: Annotated[str | None, typer.Option("--to", help="DEST: where END goes.")] = None,
+    by: Annotated[
+        str | None,
+        typer.Option("--by", help="Instead of --to: the change in length, e.g. +20cm or -5cm."),
+    ] = None,
+    copies: Annotated[
+        str | None,
+        typer.Option("--copies", help="Instead of --to (tile): +N more copies, or N in all."),
+    ] = None,
+    snap: Annotated[
+        bool,
+        typer.Option(
+            "--snap", help="Move the planes to the nearest good position for the mode (says so)."
+        ),
+    ] = False,
     mode: Annotated[
         str | None, typer.Option("--mode", help="stretch, tile or global (default stretch).")
     ] = None,
@@ -50,52 +66,80 @@ def scale(
 ) -> None:
     """Resize a zone between two planes: stretch it, tile it, or scale the whole object."""
     # The edit stage pulls in numba, scipy and scikit-image: load it only when a command runs.
-    from ..edit import AXES, MODES, Edit, Recipe, apply_recipe
-    from ..edit.recipe import parse_position
+    from ..edit import AXES, MODES, Recipe, apply_recipe
 
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
-        _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
+        _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
+    dest_given = [(n, v) for n, v in (("--to", to), ("--by", by), ("--copies", copies)) if v]
     if recipe is not None:
         given = [
             n
-            for n, v in (("--axis", axis), ("--zone", zone), ("--to", to), ("--mode", mode))
+            for n, v in (("--axis", axis), ("--zone", zone), ("--mode", mode), *dest_given)
             if v is not None
-        ]
+        ] + (["--snap"] if snap else [])
         if given:
             raise InputError(
                 f"--recipe: expected alone (modes are in the recipe), got it with {', '.join(given)}"
             )
         rec = Recipe.load(recipe)
+        c = None if mesh_route else load(src)
     else:
-        missing = [n for n, v in (("--axis", axis), ("--zone", zone), ("--to", to)) if v is None]
+        missing = [n for n, v in (("--axis", axis), ("--zone", zone)) if v is None]
+        if not dest_given:
+            missing.append("--to (or --by, --copies)")
         if missing:
             raise InputError(
                 f"scale: expected --axis, --zone and --to (or --recipe), missing {', '.join(missing)}"
             )
+        if len(dest_given) > 1:
+            raise InputError(
+                "scale: expected one of --to, --by, --copies, got "
+                + ", ".join(n for n, _ in dest_given)
+            )
         if axis.lower() not in AXES:
             raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
-        mode = "stretch" if mode is None else mode
+        if mode is None:
+            mode = "tile" if copies is not None else "stretch"
         if mode.lower() not in MODES:
             raise InputError(f"--mode: expected one of {', '.join(MODES)}, got {mode!r}")
-        rec = Recipe(
-            (
-                Edit(
-                    axis=axis.lower(),
-                    start=parse_position(zone[0], "--zone START"),
-                    end=parse_position(zone[1], "--zone END"),
-                    dest=parse_position(to, "--to"),
-                    mode=mode.lower(),
-                ),
+        if copies is not None and mode.lower() != "tile":
+            raise InputError(f"--copies: expected --mode tile, got --mode {mode}")
+        c = _object(src, mesh_route, snap)
+        edit = _edit(c, axis.lower(), zone, mode.lower(), to=to, by=by, copies=copies)
+        if snap:
+            from ..zones import describe_moves
+            from ..zones import snap as snap_edit
+
+            edit, moves = snap_edit(c, edit)
+            _common.stderr.print(
+                describe_moves(moves, c.meta.get("units")), highlight=False, soft_wrap=True
             )
-        )
+        rec = Recipe((edit,))
     if mesh_route:
         return _scale_mesh(src, output, rec)
-    c = csdf_mod.load(src)
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
-    csdf_mod.save(out, output)
+    if recipe is None and snap:
+        from ..zones import record_snap
+
+        out = record_snap(out, moves)
+    save(out, output)
     _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")
+
+
+def _object(src: Path, mesh_route: bool, snap: bool):
+    """What the options resolve against: the CSDF, or for the mesh route the mesh's frame (its
+    CSDF at the default resolution where --snap needs zones)."""
+    if not mesh_route:
+        return load(src)
+    if snap:
+        from ..ingest import load as import_file
+
+        return import_file(src)
+    from ..meshedit import mesh_frame
+
+    return mesh_frame(src)
 
 
 def _scale_mesh(src: Path, output: Path, rec) -> None:
@@ -109,3 +153,34 @@ def _scale_mesh(src: Path, output: Path, rec) -> None:
         f"wrote {', '.join(map(str, result.written))} (mesh route: {result.faces_in} -> "
         f"{result.faces_out} triangles)"
     )
+
+
+def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
+    """The edit from the designer's options: positions with units, --by or --copies."""
+    from ..edit import Edit, parse_length, parse_position
+
+    units = c.meta.get("units")
+    start = parse_position(zone[0], "--zone START", units)
+    end = parse_position(zone[1], "--zone END", units)
+    if to is not None:
+        return Edit(axis, start, end, parse_position(to, "--to", units), mode)
+    # --by and --copies need END (and START) in object units
+    ax = AXES_INDEX[axis]
+    sb = c.surface_bounds()
+    s, e, _ = Edit(axis, start, end, end, mode).resolve(float(sb[0, ax]), float(sb[1, ax]))
+    if by is not None:
+        return Edit(axis, start, end, e + parse_length(by, units=units, what="--by"), mode)
+    text = copies.strip()
+    try:
+        n = int(text)
+    except ValueError:
+        raise InputError(
+            f"--copies: expected +N (more copies) or N (in all), got {copies!r}"
+        ) from None
+    total = 1 + n if text.startswith(("+", "-")) else n
+    if total < 1:
+        raise InputError(f"--copies: expected at least one copy in all, got {copies!r}")
+    return Edit(axis, start, end, s + total * (e - s), mode)
+
+
+AXES_INDEX = {"x": 0, "y": 1, "z": 2}

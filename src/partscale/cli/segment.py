@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from .. import csdf as csdf_mod
+from ..csdf import SUFFIX, load, save
 from ..errors import InputError
 from . import _common
 
@@ -40,8 +40,8 @@ def segment(
         raise InputError(f"--threshold: expected a number in (0, 1], got {threshold}")
     if max_parts is not None and max_parts < 1:
         raise InputError(f"--max-parts: expected an integer >= 1, got {max_parts}")
-    _common.check_output(output, suffixes=(csdf_mod.SUFFIX,), what="a CSDF file")
-    c = csdf_mod.load(path)
+    _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
+    c = load(path)
     with _common.progress_bar(f"segment ({method})") as bar:
         out = run(
             c,
@@ -52,5 +52,5 @@ def segment(
             cache=not no_cache,
             progress=bar,
         )
-    csdf_mod.save(out, output)
+    save(out, output)
     _common.done(f"wrote {output}: {out.n_parts} parts ({method})")

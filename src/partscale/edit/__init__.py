@@ -10,8 +10,15 @@ Public API
 - :func:`reevaluate` ``(csdf, mask=None, *, band=partscale.csdf.BAND_VOXELS) -> CSDF``:
   re-evaluated distances (to the grid's marching-cubes surface) near the surface, on its own.
 - :func:`recipe_from_history` ``(csdf, *, after=None) -> Recipe``: the replayable recipe.
-- :class:`Edit`, :class:`Recipe`, :data:`JSON_SCHEMA`, :func:`source_coordinate`,
-  :func:`tile_count`: the recipe schema and the 1D maps the web editor's shader shares.
+- :func:`resolve_edit` ``(csdf, edit) -> ResolvedEdit``: an edit validated on an object, in world
+  units and snapped to whole voxels, as :func:`apply_edit` performs it (:class:`ResolvedEdit`
+  also maps coordinates across the edit and lists its seams).
+- :class:`Edit`, :class:`Recipe`, :data:`JSON_SCHEMA`, :func:`parse_position`,
+  :func:`source_coordinate`, :func:`forward_coordinate`, :func:`tile_count`: the recipe schema
+  and the 1D maps the web editor's shader shares. ``parse_position(value, what, units=None)``
+  also takes lengths with a unit (``'30cm'``) where ``units`` is ``'m'``.
+- :func:`parse_length`, :func:`parse_size`, :data:`SUFFIXES`: designer lengths (``2.1``,
+  ``210cm``, ``+20cm``, ``120%``, ``=``), the one unit table.
 
 Semantics
 ---------
@@ -36,23 +43,42 @@ Semantics
   voxel (near the edges and corners of an axis-aligned box sampled off the grid).
 """
 
-from .recipe import AXES, JSON_SCHEMA, MODES, Edit, Recipe, source_coordinate, tile_count
+from .recipe import (
+    AXES,
+    JSON_SCHEMA,
+    MODES,
+    Edit,
+    Recipe,
+    forward_coordinate,
+    parse_position,
+    source_coordinate,
+    tile_count,
+)
 from .reevaluate import reevaluate
 from .resample import SEAM_VOXELS
+from .resolved import ResolvedEdit, resolve_edit
 from .scale import apply_edit, apply_recipe, naive_edit, recipe_from_history, scale
+from .units import SUFFIXES, parse_length, parse_size
 
 __all__ = [
     "AXES",
     "JSON_SCHEMA",
     "MODES",
     "SEAM_VOXELS",
+    "SUFFIXES",
     "Edit",
     "Recipe",
+    "ResolvedEdit",
     "apply_edit",
     "apply_recipe",
+    "forward_coordinate",
     "naive_edit",
+    "parse_length",
+    "parse_position",
+    "parse_size",
     "recipe_from_history",
     "reevaluate",
+    "resolve_edit",
     "scale",
     "source_coordinate",
     "tile_count",

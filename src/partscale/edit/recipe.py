@@ -1,7 +1,11 @@
 """Edit recipes: the one schema shared by the library, the CLI and the web editor.
 
 A recipe is a JSON object ``{"version": 1, "edits": [EDIT, ...]}``; edits apply in order, each to
-the result of the previous one. An EDIT is::
+the result of the previous one, but **all positions in one recipe refer to the input object as
+given** (zones are drawn on the original): before edit ``k`` applies, its planes are carried
+through the edits before it on the same axis (:func:`forward_coordinate`: a plane beyond an
+earlier zone moves with that zone's end, one inside it follows its stretch, or its first copy for
+tile), and its destination keeps its change ``DEST - END``. An EDIT is::
 
     {"axis": "x" | "y" | "z",
      "zone": [START, END],          # the slab to change, START < END
@@ -10,7 +14,7 @@ the result of the previous one. An EDIT is::
 
 Positions are numbers in the object's units (metres for glTF) or strings with a ``%`` suffix:
 percent of the object's extent along that axis, measured on the solid's bounding box
-(``"0%"`` = its min, ``"100%"`` = its max) of the CSDF the edit applies to.
+(``"0%"`` = its min, ``"100%"`` = its max) of the recipe's input.
 
 The 1D maps below (world coordinate after the edit -> world coordinate before) define the modes;
 the Python resampler and the web editor's shader both implement exactly these.
@@ -27,8 +31,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .._util import read_json
+from .._files import read_json
 from ..errors import InputError
+from .units import has_unit, parse_length
 
 AXES = ("x", "y", "z")
 MODES = ("stretch", "tile", "global")
@@ -42,6 +47,12 @@ Mode = Literal["stretch", "tile", "global"]
 JSON_SCHEMA: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "title": "partscale recipe",
+    "description": (
+        "Edits apply in order. All positions (numbers in object units, or percent of the solid's "
+        "extent along the axis) refer to the recipe's input object as given, not to the result "
+        "of the previous edit: an edit's planes are carried through the earlier edits on the "
+        "same axis, and its destination keeps its change to - end."
+    ),
     "type": "object",
     "required": ["edits"],
     "additionalProperties": False,
@@ -78,11 +89,13 @@ JSON_SCHEMA: dict[str, Any] = {
 }
 
 
-def parse_position(value: Any, what: str) -> Position:
+def parse_position(value: Any, what: str, units: str | None = None) -> Position:
     """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`.
 
     Numbers are any real number (Python or numpy scalars) but not booleans; strings hold a
-    number or a percentage. Non-finite values (``inf``, ``nan``, ``'1e400%'``) are refused.
+    number, a percentage, or a length with a unit (``'30cm'``, ``'300mm'``, ``'0.3m'``: converted
+    to object units, so only where ``units`` is ``'m'``; see :mod:`.units`). Non-finite values
+    (``inf``, ``nan``, ``'1e400%'``) are refused.
     """
     if isinstance(value, bool | np.bool_):
         raise InputError(f"{what}: expected a number or a percentage like '30%', got {value!r}")
@@ -96,7 +109,8 @@ def parse_position(value: Any, what: str) -> Position:
         try:
             v = float(s[:-1] if s.endswith("%") else s)
         except ValueError:
-            pass
+            if has_unit(s):
+                return parse_length(s, units=units, what=what)
         else:
             if not math.isfinite(v):
                 kind = "percentage" if s.endswith("%") else "number"
@@ -268,3 +282,34 @@ def source_coordinate(
     else:
         raise ValueError(f"mode: expected one of {MODES}, got {mode!r}")
     return x
+
+
+def forward_coordinate(
+    x: np.ndarray,
+    *,
+    mode: str,
+    start: float,
+    end: float,
+    dest: float,
+    lo: float | None = None,
+    hi: float | None = None,
+) -> np.ndarray:
+    """Where planes at source coordinates ``x`` lie after an edit (world units along its axis).
+
+    The inverse of :func:`source_coordinate` outside the zone; inside it, a plane follows the
+    stretch (``stretch``), the first copy (``tile``) or the scaling about ``lo`` (``global``).
+    Recipes use it to carry positions given on their input through their earlier edits.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    shift = dest - end
+    if mode == "global":
+        if lo is None or hi is None:
+            raise ValueError("global mode needs the solid's extent lo, hi")
+        return lo + (x - lo) * ((hi - lo + shift) / (hi - lo))
+    if mode == "stretch":
+        scale = (dest - start) / (end - start)
+    elif mode == "tile":
+        scale = (dest - start) / (tile_count(end - start, dest - start) * (end - start))
+    else:
+        raise ValueError(f"mode: expected one of {MODES}, got {mode!r}")
+    return np.where(x <= start, x, np.where(x >= end, x + shift, start + (x - start) * scale))

@@ -17,6 +17,9 @@ voxel from the true object's, see :mod:`partscale.edit`):
    the colour at their nearest surface point (trilinear in ``rgb``) and that point's part (the
    label of the nearest inside voxel of its cell: the solid carries the parts).
 
+After an edit, :func:`recompute_mask` picks the voxels whose distance could have changed (the
+paper's rule, less those provably unchanged); only those are recomputed.
+
 Units inside the kernels are voxels (continuous indices); results are scaled by ``voxel_size``.
 """
 
@@ -31,10 +34,19 @@ from scipy import ndimage
 from skimage import measure
 
 from .._kernels import closest_on_triangle
-from .._util import keyword_options, thread_map
+from .._options import keyword_options
+from .._workers import thread_map
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
+from .resample import SEAM_VOXELS, Plan
+
+#: An axial slope of the source distance below this counts as "nearest surface point lateral".
+_LATERAL = 0.05
+
+#: A slab scaled by less than this relative amount counts as rigid (error <= 1% of |distance|,
+#: 0.04 voxel at the band's edge): tiles of whole periods are copies, not stretches.
+_RIGID = 0.01
 
 
 @numba.njit(cache=True, inline="always")
@@ -163,6 +175,100 @@ def _trilinear_rgb(rgb, pts):
                     for c in range(3):
                         out[n, c] += w * rgb[i0 + di, j0 + dj, k0 + dk, c]
     return out
+
+
+def recompute_mask(
+    src_sdf: np.ndarray,
+    out_sdf: np.ndarray,
+    plan: Plan,
+    *,
+    mode: str,
+    y: np.ndarray,
+    start: float,
+    end: float,
+    dest: float,
+    h: float,
+    band: float,
+) -> np.ndarray:
+    """Voxels (axis-first, output grid) whose distance could have changed and must be recomputed.
+
+    The paper's rule: voxels whose old |distance| exceeds their distance to the zone's planes, plus
+    the resampled slab. Among those, a voxel keeps its resampled value when that value is provably
+    still the distance: the slab grows (scale >= 1, so the inverse map is 1-Lipschitz and old
+    distances are lower bounds) and its nearest surface point lies square to the axis (axial slope
+    of the source distance ~ 0), so its distance is carried over unchanged; or, in a tile copy at
+    scale ~1, the ball of its distance lies within its copy (a pure translation).
+    """
+    lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
+    mask = np.zeros(out_sdf.shape, np.uint8)
+    n_copies = int(plan.copy.max()) + 1
+    if mode == "tile" and abs(plan.scale - 1.0) <= _RIGID:
+        # Copies at scale ~1 are translations of the slab, and the first and last copy continue
+        # the content before and after the zone exactly: a voxel's neighbourhood is unchanged
+        # unless the ball of its distance reaches an internal seam (or it lies in a blend).
+        period = (dest - start) / n_copies
+        seams = start + period * np.arange(1, n_copies)
+        if seams.size == 0:
+            return mask
+        to_seam = np.abs(y[:, None] - seams[None, :]).min(axis=1)
+        reach = np.maximum(to_seam - SEAM_VOXELS * h, 0.0).astype(np.float32)
+        rows = np.flatnonzero(reach <= lim)
+        a = np.abs(out_sdf[rows])
+        mask[rows] = (a <= lim) & (a >= reach[rows, None, None])
+        return mask
+    if mode == "global":
+        j0, j1 = 0, out_sdf.shape[0]
+        affected = np.abs(out_sdf) <= lim
+    else:
+        # distance of each output layer to the zone (0 inside the slab), one voxel of slack;
+        # layers farther from the zone than the band cannot be affected
+        gap = np.where(y < start, start - y, np.where(y > dest, y - dest, 0.0))
+        gap = np.maximum(gap - h, 0.0).astype(np.float32)
+        rows = np.flatnonzero(gap <= lim)
+        j0, j1 = int(rows[0]), int(rows[-1]) + 1
+        a = np.abs(out_sdf[j0:j1])
+        affected = (a <= lim) & (a >= gap[j0:j1, None, None])
+    cand = np.nonzero(affected)
+    cand = (cand[0] + j0, cand[1], cand[2])
+    n_src = src_sdf.shape[0]
+    xa = plan.xa[cand[0]]
+    xc = np.clip(xa, 0, n_src - 1)
+    i0 = np.floor(xc).astype(np.int64)
+    i1 = np.minimum(i0 + 1, n_src - 1)
+    slope = np.zeros(len(xa), np.float32)
+    for i in (i0, i1):
+        up = np.minimum(i + 1, n_src - 1)
+        dn = np.maximum(i - 1, 0)
+        g = (src_sdf[up, cand[1], cand[2]] - src_sdf[dn, cand[1], cand[2]]) / np.maximum(
+            (up - dn) * h, h
+        )
+        np.maximum(slope, np.abs(g), out=slope)
+    keep = slope <= _LATERAL
+    if plan.scale < 1.0 - _RIGID:
+        # A shrinking slab can bring surface closer: everything affected is recomputed. Outside
+        # the slab, a voxel whose nearest point is square to the axis still has that point, so
+        # its old distance caps the new one (code 2): the exact value wherever nothing came
+        # closer, immune to the facets' chamfer of sharp edges.
+        code = np.where(keep & ~plan.in_slab[cand[0]], 2, 1).astype(np.uint8)
+        mask[cand] = code
+        return mask
+    if mode == "tile":
+        # Copies are not one monotone map: a slab voxel keeps its value only if the ball of its
+        # distance stays inside its own copy (and it is not in a seam blend). Voxels outside the
+        # slab see every copy farther than its source, so the growth argument holds for them.
+        n_copies = int(plan.copy.max()) + 1
+        period = (dest - start) / n_copies
+        yy = y[cand[0]]
+        c = plan.copy[cand[0]]
+        room = np.minimum(yy - (start + c * period), start + (c + 1) * period - yy)
+        inside = plan.in_slab[cand[0]]
+        # a copy at scale ~1 is a translation: inside that ball nothing else changed
+        rigid = abs(plan.scale - 1.0) <= _RIGID
+        ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room) & (keep | rigid)
+        keep = np.where(inside, ok_in, keep)
+    sel = ~keep
+    mask[cand[0][sel], cand[1][sel], cand[2][sel]] = 1
+    return mask
 
 
 def reevaluate_arrays(

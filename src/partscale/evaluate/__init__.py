@@ -5,17 +5,15 @@
 - :mod:`.suite`: every suite object in every mode, with figures and tables (``partscale eval``).
 """
 
-from .metrics import EditGeometry, Reference, evaluate, resolve_edit
-from .suite import MODES, Suite, SuiteResult, load_suite, run_suite
+from .metrics import Reference, evaluate
+from .suite import COMPARED_MODES, Suite, SuiteResult, load_suite, run_suite
 
 __all__ = [
-    "MODES",
-    "EditGeometry",
+    "COMPARED_MODES",
     "Reference",
     "Suite",
     "SuiteResult",
     "evaluate",
     "load_suite",
-    "resolve_edit",
     "run_suite",
 ]

@@ -1,6 +1,7 @@
 """Measured quality of one edit: the original CSDF ``a`` against the edited CSDF ``b``.
 
-Every metric compares ``b`` with what the edit promised (:class:`EditGeometry`): content before
+Every metric compares ``b`` with what the edit promised (the :class:`~partscale.edit.ResolvedEdit`
+that :func:`partscale.edit.resolve_edit` gives, with the mode that produced ``b``): content before
 the zone stays put, content after it moves by ``dest - end``, the zone ``[start, end]`` becomes
 ``[start, dest]``. Geometric errors are in voxels (``voxel_size`` of ``a``; edits keep it), so they
 read the same at any resolution; colour steps are Euclidean distances of 8-bit sRGB triples
@@ -58,8 +59,7 @@ import numpy as np
 import trimesh
 
 from ..csdf import BAND_VOXELS, CSDF
-from ..edit.recipe import Edit, tile_count
-from ..edit.scale import resolve_edit as scale_resolve_edit
+from ..edit import ResolvedEdit
 from ..errors import InputError
 from ..surface import to_mesh
 
@@ -77,94 +77,6 @@ SEAM_WINDOW = 5
 MAX_POINTS = 150_000
 
 _QUANTILES = np.linspace(0.05, 0.95, 19)
-
-
-@dataclass(frozen=True)
-class EditGeometry:
-    """An edit resolved to world coordinates on the original CSDF.
-
-    Attributes
-    ----------
-    axis : int
-        0, 1, 2 for x, y, z.
-    start, end, dest : float
-        World zone ``[start, end]`` and the new position of ``end``.
-    lo, hi : float
-        The original solid's extent along ``axis``.
-    mode : str
-        ``stretch``, ``tile``, ``global`` (what the metrics assume about seams and copies).
-    """
-
-    axis: int
-    start: float
-    end: float
-    dest: float
-    lo: float
-    hi: float
-    mode: str = "stretch"
-
-    @property
-    def shift(self) -> float:
-        return self.dest - self.end
-
-    @property
-    def target_length(self) -> float:
-        return self.hi - self.lo + self.shift
-
-    @property
-    def factor(self) -> float:
-        """Scale factor of the whole solid along the axis in ``global`` mode."""
-        return self.target_length / (self.hi - self.lo)
-
-    @property
-    def n_copies(self) -> int:
-        return tile_count(self.end - self.start, self.dest - self.start)
-
-    def to_source(self, y: np.ndarray) -> np.ndarray:
-        """Map coordinates after the edit back to before, for rigid content and for ``global``."""
-        y = np.asarray(y, dtype=np.float64)
-        if self.mode == "global":
-            return self.lo + (y - self.lo) / self.factor
-        return np.where(y <= self.start, y, y - self.shift)
-
-    def to_result(self, x: np.ndarray) -> np.ndarray:
-        """Map coordinates before the edit to after (inverse of :meth:`to_source` outside)."""
-        x = np.asarray(x, dtype=np.float64)
-        if self.mode == "global":
-            return self.lo + (x - self.lo) * self.factor
-        return np.where(x <= self.start, x, x + self.shift)
-
-    def seams(self) -> list[tuple[float, float | None]]:
-        """Seam planes in the result, each with the original plane it continues (None: a join).
-
-        The zone's two planes, and for ``tile`` the joins between consecutive copies.
-        """
-        if self.mode == "global":
-            return [
-                (float(self.to_result(self.start)), self.start),
-                (float(self.to_result(self.end)), self.end),
-            ]
-        out: list[tuple[float, float | None]] = [(self.start, self.start), (self.dest, self.end)]
-        if self.mode == "tile":
-            n = self.n_copies
-            step = (self.dest - self.start) / n
-            out += [(self.start + m * step, None) for m in range(1, n)]
-        return out
-
-
-def resolve_edit(
-    csdf: CSDF, edit: Edit, *, mode: str | None = None, snap: bool = True
-) -> EditGeometry:
-    """Resolve ``edit`` (positions in units or ``'NN%'``) on ``csdf``'s solid extent.
-
-    Validation and snapping are the scaling stage's own (:func:`partscale.edit.scale.resolve_edit`),
-    so the metrics judge exactly the edit that stage performs. ``snap``: use ``dest`` moved to
-    ``end`` plus a whole number of voxels, as the stage does (grids keep their voxel size).
-    Raises :class:`InputError` for an edit the scaling stage would refuse.
-    """
-    r = scale_resolve_edit(csdf, edit)
-    dest = r["dest_snapped"] if snap else r["dest"]
-    return EditGeometry(r["axis"], r["start"], r["end"], dest, r["lo"], r["hi"], mode or edit.mode)
 
 
 # -- solid runs along grid lines ------------------------------------------------------------
@@ -281,14 +193,14 @@ def distribution_error(before: np.ndarray, after: np.ndarray) -> float:
 # -- the metrics ------------------------------------------------------------------------------
 
 
-def length_error(b: CSDF, geo: EditGeometry) -> float:
+def length_error(b: CSDF, geo: ResolvedEdit) -> float:
     """|extent of ``b``'s solid along the axis - target extent|, in voxels."""
     bb = b.surface_bounds()
     got = bb[1, geo.axis] - bb[0, geo.axis]
     return abs(got - geo.target_length) / b.voxel_size
 
 
-def _regions(geo: EditGeometry, h: float) -> dict[str, tuple[list, list]]:
+def _regions(geo: ResolvedEdit, h: float) -> dict[str, tuple[list, list]]:
     m = MARGIN * h
     inf = math.inf
     return {
@@ -301,7 +213,7 @@ def _regions(geo: EditGeometry, h: float) -> dict[str, tuple[list, list]]:
 
 
 def proportion_error(
-    a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = None
+    a: CSDF, b: CSDF, geo: ResolvedEdit, *, runs_a: Runs | None = None
 ) -> dict[str, float]:
     """``{'out': e, 'in': e}``: thickness distribution error along the edit axis per region.
 
@@ -344,7 +256,7 @@ def _line_keys(r: Runs, h: float) -> np.ndarray:
     return np.rint(r.perp / h).astype(np.int64) @ np.array([1 << 32, 1], np.int64)
 
 
-def spacing_error(a: CSDF, b: CSDF, geo: EditGeometry, *, runs_a: Runs | None = None) -> float:
+def spacing_error(a: CSDF, b: CSDF, geo: ResolvedEdit, *, runs_a: Runs | None = None) -> float:
     """Pitch distribution error of repeated elements across the zone (see module docstring)."""
     ra = runs_a if runs_a is not None else runs(a, geo.axis)
     rb = runs(b, geo.axis)
@@ -398,7 +310,7 @@ def _distance_to_mesh(points: np.ndarray, mesh: trimesh.Trimesh) -> np.ndarray:
 
 
 def rigidity_error(
-    mesh_a: trimesh.Trimesh, mesh_b: trimesh.Trimesh, geo: EditGeometry, voxel_size: float
+    mesh_a: trimesh.Trimesh, mesh_b: trimesh.Trimesh, geo: ResolvedEdit, voxel_size: float
 ) -> float:
     """99th percentile of the surface displacement outside the zone, in voxels (both ways).
 
@@ -533,7 +445,7 @@ def _step_at(
 
 
 def seam_jumps(
-    a: CSDF, b: CSDF, geo: EditGeometry, *, steps_a: tuple | None = None
+    a: CSDF, b: CSDF, geo: ResolvedEdit, *, steps_a: tuple | None = None
 ) -> tuple[float, float]:
     """(colour jump in sRGB levels, shape jump in voxels): the worst seam of ``b``.
 
@@ -591,7 +503,7 @@ class Reference:
             ]
         ).reshape(-1, 2, 3)
 
-    def expected_pieces(self, geo: EditGeometry) -> int:
+    def expected_pieces(self, geo: ResolvedEdit) -> int:
         """Pieces the edit should leave: each tile copy repeats the pieces wholly in the zone."""
         if geo.mode != "tile":
             return self.pieces
@@ -621,7 +533,7 @@ METRICS = (
 )
 
 
-def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, float | int | bool]:
+def evaluate(ref: Reference | CSDF, b: CSDF, geo: ResolvedEdit) -> dict[str, float | int | bool]:
     """Every metric of one edit result ``b`` against the original (see module docstring).
 
     Parameters
@@ -630,7 +542,7 @@ def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, flo
         The original (a :class:`Reference` reuses its mesh and runs across modes).
     b : CSDF
         The edited object; same voxel size as the original.
-    geo : EditGeometry
+    geo : ResolvedEdit
         The edit as resolved on the original, with the mode that produced ``b``.
     """
     if not isinstance(ref, Reference):
@@ -665,7 +577,7 @@ def evaluate(ref: Reference | CSDF, b: CSDF, geo: EditGeometry) -> dict[str, flo
 
 
 def evaluate_original(
-    ref: Reference, geo: EditGeometry | None = None
+    ref: Reference, geo: ResolvedEdit | None = None
 ) -> dict[str, float | int | bool]:
     """The metrics that apply to the unedited object (its stored distances and topology).
 

@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .._util import atomic_path
+from .._files import atomic_path
 from .metrics import METRICS
 
 if TYPE_CHECKING:
@@ -195,9 +195,6 @@ def summary_markdown(result: SuiteResult) -> str:
         lines += ["## Entries that could not run", ""]
         lines += [f"- {o.error}" for o in objs if o.error]
         lines.append("")
-    notes = [o.note for o in objs if o.note]
-    if notes:
-        lines += ["Notes:", "", *[f"- {n}" for n in notes], ""]
     metric_keys = list(CRITERIA)
     lines += [
         "## Best mode per metric",

@@ -17,7 +17,7 @@ A suite file is JSON::
 the ``data`` argument, ``PARTSCALE_DATA``, the suite's ``data`` key (relative to the suite file),
 ``../shared/data`` from the working directory, ``../../shared/data`` from the suite file.
 
-Each entry's edit runs in every mode of :data:`MODES`: ``global``, ``stretch``, ``tile`` and the
+Each entry's edit runs in every mode of :data:`COMPARED_MODES`: ``global``, ``stretch``, ``tile`` and the
 labelled baseline ``naive-stretch`` / ``naive-tile`` (per-column linear resampling of the slab,
 no re-evaluation, plain concatenation for repeats: what the paper's public prototype does).
 An entry that cannot run (bad name, missing file, bad edit, zone outside the solid, a figure
@@ -29,22 +29,23 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .. import csdf as csdf_mod
-from .._util import atomic_path, keyword_options, read_json
-from ..csdf import CSDF
-from ..edit.recipe import Edit
+from .._files import atomic_path, read_json
+from .._options import keyword_options
+from ..csdf import CSDF, SUFFIX, load
+from ..edit import Edit, apply_edit, naive_edit, resolve_edit
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
+from ..render import VIEWS, render
 from . import figures, metrics, report
 
-#: The modes every edit runs in, in figure order.
-MODES = ("global", "stretch", "tile", "naive-stretch", "naive-tile")
+#: The modes every edit runs in (the stage's, and the baseline's), in figure order.
+COMPARED_MODES = ("global", "stretch", "tile", "naive-stretch", "naive-tile")
 LABELS = {
     "original": "original",
     "global": "global",
@@ -53,7 +54,6 @@ LABELS = {
     "naive-stretch": "naive stretch*",
     "naive-tile": "naive tile*",
 }
-VIEWS = ("iso", "front", "side", "top")
 KINDS = ("solid", "repeating")
 DEFAULT_RES = 128
 PANEL = 256
@@ -205,7 +205,6 @@ class ObjectResult:
     rows: list[dict[str, Any]] = field(default_factory=list)
     error: str | None = None
     figure: Path | None = None
-    note: str | None = None
     #: seconds spent per stage: import, reference, edit, metrics, figure
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -224,28 +223,21 @@ class SuiteResult:
 
 
 def _load_object(path: Path, res: int, progress: ProgressCallback) -> CSDF:
-    if path.name.endswith(csdf_mod.SUFFIX):
-        return csdf_mod.load(path)
+    if path.name.endswith(SUFFIX):
+        return load(path)
     from .. import ingest
 
     return ingest.load(path, res=res, progress=progress)
 
 
 def _run_mode(c: CSDF, edit: Edit, mode: str) -> CSDF:
-    from .. import edit as edit_mod
-
-    if not hasattr(edit_mod, "apply_edit"):  # the stage's module, if its package does not export
-        from ..edit import scale as edit_mod  # type: ignore[no-redef]
-
     if mode.startswith("naive-"):
-        return edit_mod.naive_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode[6:]))
-    return edit_mod.apply_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode))
+        return naive_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode[6:]))
+    return apply_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode))
 
 
 def _render(c: CSDF, view: str, frame: np.ndarray, size: int, *, parts: bool = False) -> np.ndarray:
-    from .. import render
-
-    return render.render(c, view=view, size=size, frame=frame, scale_bar=True, parts=parts)
+    return render(c, view=view, size=size, frame=frame, scale_bar=True, parts=parts)
 
 
 def _fmt(v: Any, digits: int = 2) -> str:
@@ -258,17 +250,15 @@ def _fmt(v: Any, digits: int = 2) -> str:
 
 def _check_segment(method: str) -> None:
     """Refuse an unknown method once, before any object is imported."""
-    try:
-        from ..segment import check_method
-    except ImportError:  # optional stage: each entry then gets a "not segmented" note
-        return
+    from ..segment import check_method
+
     check_method(method, what="--segment")
 
 
 def _segment(c: CSDF, method: str, progress: ProgressCallback) -> CSDF:
-    from .. import segment as seg  # optional stage: ImportError when it is not installed
+    from ..segment import segment
 
-    return seg.segment(c, method=method, cache=True, progress=progress)
+    return segment(c, method=method, cache=True, progress=progress)
 
 
 def _run_entry(
@@ -303,7 +293,7 @@ def _run_entry(
         t0 = time.perf_counter()
         original = _load_object(path, res, scaled(progress, 0.0, 0.3))
         result.timings["import"] = time.perf_counter() - t0
-        geo0 = metrics.resolve_edit(original, entry.edit)
+        geo0 = resolve_edit(original, entry.edit)
     except InputError as exc:
         result.error = f"{name}: {exc}"
         return result
@@ -317,8 +307,6 @@ def _run_entry(
         try:
             original = _segment(original, segment, scaled(progress, 0.25, 0.3))
             result.timings["segment"] = time.perf_counter() - t0
-        except ImportError as exc:
-            result.note = f"{name}: not segmented ({exc})"
         except InputError as exc:
             result.error = f"{name}: {exc}"
             return result
@@ -333,17 +321,9 @@ def _run_entry(
         {**base, "mode": "original", **metrics.evaluate_original(ref, geo0), "time_s": math.nan}
     )
     results: dict[str, CSDF | str] = {}
-    for i, mode in enumerate(MODES):
-        progress(0.35 + 0.4 * i / len(MODES), f"{name}: {mode}")
-        geo = metrics.EditGeometry(
-            geo0.axis,
-            geo0.start,
-            geo0.end,
-            geo0.dest,
-            geo0.lo,
-            geo0.hi,
-            mode.removeprefix("naive-"),
-        )
+    for i, mode in enumerate(COMPARED_MODES):
+        progress(0.35 + 0.4 * i / len(COMPARED_MODES), f"{name}: {mode}")
+        geo = replace(geo0, mode=mode.removeprefix("naive-"))
         try:
             t0 = time.perf_counter()
             b = _run_mode(original, entry.edit, mode)
@@ -366,8 +346,6 @@ def _run_entry(
     try:
         result.figure = _figure(entry, original, results, result.rows, out_dir, panel)
         result.timings["figure"] = time.perf_counter() - t0
-    except ImportError as exc:  # the render stage is optional for the metrics
-        result.note = f"{name}: no figure ({exc})"
     except InputError as exc:  # this entry fails (its rows are kept); the others still run
         result.error = f"{name}: figure: {exc}"
     except Exception as exc:  # a bug in a stage must not stop the rest of the suite
@@ -394,7 +372,7 @@ def _figure(
             _render(original, entry.view, frame, panel),
         )
     ]
-    for mode in MODES:
+    for mode in COMPARED_MODES:
         r = by_mode[mode]
         res = results[mode]
         if isinstance(res, str):
@@ -417,9 +395,9 @@ def _figure(
     fig = figures.object_figure(entry.name, subtitle, panels, legend=legend)
     if original.n_parts > 0:  # segmented: a second row coloured by part
         parts_row = [("original parts", f"{original.n_parts} parts", None)] + [
-            (LABELS[m], "", None) for m in MODES if isinstance(results[m], CSDF)
+            (LABELS[m], "", None) for m in COMPARED_MODES if isinstance(results[m], CSDF)
         ]
-        sources = [original] + [results[m] for m in MODES if isinstance(results[m], CSDF)]
+        sources = [original] + [results[m] for m in COMPARED_MODES if isinstance(results[m], CSDF)]
         row = [
             (label, note, _render(c, entry.view, frame, panel, parts=True))
             for (label, note, _), c in zip(parts_row, sources, strict=True)

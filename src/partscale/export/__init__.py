@@ -23,9 +23,9 @@ meshoptimizer. Atlases (``atlas``): xatlas charts, the CSDF's colour baked per t
 :func:`resize_grid` (``resize``) resamples the whole grid to a preset size first (``--size``).
 """
 
-from .atlas import ATLAS_SIZES, DEFAULT_ATLAS, bake, unwrap
+from .atlas import ATLAS_SIZES, DEFAULT_ATLAS, bake, check_atlas, unwrap
 from .resize import PRESET_SIZES, check_size, resize_grid
-from .simplify import simplify
+from .simplify import check_budget, simplify
 from .textures import (
     DISTANCE_BAND_VOXELS,
     ISO_LEVEL_8BIT,
@@ -58,6 +58,8 @@ __all__ = [
     "TEXTURE_SUFFIXES",
     "TEXTURE_WRITERS",
     "bake",
+    "check_atlas",
+    "check_budget",
     "check_size",
     "decode_distance_8bit",
     "encode_distance_8bit",

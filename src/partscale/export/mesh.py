@@ -28,7 +28,7 @@ def write_obj(csdf: CSDF, mesh, path: Path) -> None:
         return
     from trimesh.exchange.obj import export_obj
 
-    from .._util import atomic_path
+    from .._files import atomic_path
 
     final = _final_name(path)
     text, files = export_obj(
@@ -51,7 +51,7 @@ def write_obj(csdf: CSDF, mesh, path: Path) -> None:
 
 def _final_name(tmp: Path) -> Path:
     """The destination an :func:`atomic_path` temporary will be renamed to."""
-    name = tmp.name  # ".NAME.RANDOM.tmpSUFFIX" (see partscale._util.atomic_path)
+    name = tmp.name  # ".NAME.RANDOM.tmpSUFFIX" (see partscale._files.atomic_path)
     if name.startswith(".") and ".tmp" in name:
         name = name[1:].rsplit(".tmp", 1)[0].rsplit(".", 1)[0]
     return tmp.with_name(name)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._util import atomic_path
+from .._files import atomic_path
 from ..csdf import CSDF, make
 from ..errors import InputError
 

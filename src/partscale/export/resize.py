@@ -9,7 +9,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .._util import check_memory, keyword_options
+from .._memory import check_memory
+from .._options import keyword_options
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve

@@ -25,7 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from .._util import atomic_path, check_memory
+from .._files import atomic_path
+from .._memory import check_memory
 from ..csdf import CSDF, make
 from ..errors import InputError
 

@@ -9,7 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from .._util import atomic_path, keyword_options
+from .._files import atomic_path
+from .._options import keyword_options
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._util import keyword_options
+from .._options import keyword_options
 from ..color import srgb_to_linear
 from ..csdf import CSDF, check_number, check_origin, check_voxel_size, make
 from ..errors import InputError, one_line
@@ -24,7 +24,6 @@ from .mesh_sdf import check_res, from_mesh
 
 AUTOSDF_DATASET = "pc_sdf_sample"
 AUTOSDF_ISO = 0.02
-AUTOSDF_CLAMP = 0.2
 
 
 def _check_volume(volume, name: str) -> np.ndarray:

@@ -12,7 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from .._util import keyword_options
+from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled

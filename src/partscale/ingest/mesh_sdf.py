@@ -36,7 +36,8 @@ import math
 import numpy as np
 from scipy import ndimage
 
-from .._util import check_memory, keyword_options
+from .._memory import check_memory
+from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
@@ -73,54 +74,6 @@ def grid_for_bounds(lo, hi, res: int, pad: int):
     centre = (lo + hi) / 2
     origin = centre - (n - 1) / 2 * h
     return origin, h, n
-
-
-def _subdivide(tris: np.ndarray, max_edge: float):
-    """Split triangles by longest-edge bisection until no edge exceeds ``max_edge``.
-
-    Bisection (rather than a uniform n x n split) keeps slivers to ~L/max_edge pieces.
-
-    tris : (F, 3, 3) float64. Returns sub (T, 3, 3) float64, parent (T,) int64 and
-    corner_bary (T, 3, 3) float64 (barycentrics of each sub-corner in its parent), sorted by
-    parent.
-    """
-    done_t, done_p, done_b = [], [], []
-    t = tris
-    p = np.arange(len(tris), dtype=np.int64)
-    b = np.broadcast_to(np.eye(3), (len(tris), 3, 3))
-    for _ in range(64):
-        e = np.stack(
-            [np.linalg.norm(t[:, (i + 1) % 3] - t[:, i], axis=1) for i in range(3)], axis=1
-        )
-        longest = e.argmax(axis=1)
-        split = e[np.arange(len(t)), longest] > max_edge
-        done_t.append(t[~split])
-        done_p.append(p[~split])
-        done_b.append(b[~split])
-        if not split.any():
-            break
-        t, p, b, longest = t[split], p[split], b[split], longest[split]
-        # rotate corners so the longest edge is (0, 1), then cut it at its midpoint
-        roll = (np.arange(3)[None, :] + longest[:, None]) % 3
-        rows = np.arange(len(t))[:, None]
-        t, b = t[rows, roll], b[rows, roll]
-        mt = (t[:, 0] + t[:, 1]) / 2
-        mb = (b[:, 0] + b[:, 1]) / 2
-        t = np.concatenate(
-            [np.stack([t[:, 0], mt, t[:, 2]], 1), np.stack([mt, t[:, 1], t[:, 2]], 1)]
-        )
-        b = np.concatenate(
-            [np.stack([b[:, 0], mb, b[:, 2]], 1), np.stack([mb, b[:, 1], b[:, 2]], 1)]
-        )
-        p = np.concatenate([p, p])
-    par = np.concatenate(done_p)
-    order = np.argsort(par, kind="stable")
-    return np.concatenate(done_t)[order], par[order], np.concatenate(done_b)[order]
-
-
-def _longest(tris: np.ndarray) -> float:
-    e = [np.linalg.norm(tris[:, (i + 1) % 3] - tris[:, i], axis=1).max() for i in range(3)]
-    return float(max(e))
 
 
 CLASS_CUTS = (-0.25, 0.25, 0.75)

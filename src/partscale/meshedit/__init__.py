@@ -12,16 +12,20 @@ Public API
 - :func:`edit_mesh_file` ``(src, dst, recipe) -> MeshEditResult``
 - :func:`apply_recipe_to_scene` ``(scene, recipe) -> (scene, seams)``
 - :func:`load_scene`, :func:`save_scene`; :data:`MESH_SUFFIXES` (in), :data:`OUTPUT_SUFFIXES`.
+- :func:`mesh_frame` ``(path) -> MeshFrame``: a mesh's bounds and units where the CLI resolves
+  ``--by``/``--copies`` (``--snap`` and ``fit`` use the mesh's CSDF: zones work on profiles).
 """
 
 from .route import (
     MESH_SUFFIXES,
     OUTPUT_SUFFIXES,
     MeshEditResult,
+    MeshFrame,
     Seam,
     apply_recipe_to_scene,
     edit_mesh_file,
     load_scene,
+    mesh_frame,
     save_scene,
 )
 
@@ -29,9 +33,11 @@ __all__ = [
     "MESH_SUFFIXES",
     "OUTPUT_SUFFIXES",
     "MeshEditResult",
+    "MeshFrame",
     "Seam",
     "apply_recipe_to_scene",
     "edit_mesh_file",
     "load_scene",
+    "mesh_frame",
     "save_scene",
 ]

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..edit import Edit, Recipe, tile_count
+from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError
 from .cut import Piece, concatenate, cut, subset
 
@@ -338,7 +338,9 @@ def apply_recipe_to_scene(scene, recipe: Recipe) -> tuple[object, list[Seam]]:
     scene : trimesh.Scene
         As loaded (``trimesh.load(path, force='scene', process=False)``).
     recipe : partscale.edit.Recipe
-        Edits in order, each resolved on the result of the previous one.
+        Edits in order; as on the CSDF route (:func:`partscale.edit.apply_recipe`) every
+        position refers to the input mesh (``%`` of its extent), planes carried through earlier
+        edits on the same axis by :func:`partscale.edit.forward_coordinate`.
 
     Returns
     -------
@@ -358,13 +360,23 @@ def apply_recipe_to_scene(scene, recipe: Recipe) -> tuple[object, list[Seam]]:
     if not instances:
         raise InputError("mesh: expected triangles in the scene, got none")
     seams: list[Seam] = []
+    allv = np.concatenate([p.piece.vertices[np.unique(p.piece.faces)] for p in instances])
+    bounds = np.stack([allv.min(axis=0), allv.max(axis=0)])
+    size = float(np.ptp(allv, axis=0).max())
+    applied: list[tuple[int, dict]] = []  # (axis, forward-map arguments), as apply_recipe
     for edit in recipe.edits:
         ax = edit.axis_index
-        used = [p.piece.vertices[np.unique(p.piece.faces)] for p in instances]
-        allv = np.concatenate(used)
-        lo, hi = float(allv[:, ax].min()), float(allv[:, ax].max())
-        size = float(np.ptp(allv, axis=0).max())
-        s, e, d = _resolve(edit, lo, hi)
+        # positions refer to the recipe's input: planes carried through earlier same-axis edits
+        lo0, hi0 = float(bounds[0, ax]), float(bounds[1, ax])
+        s0, e0, d0 = _resolve(edit, lo0, hi0)
+        planes = np.array([s0, e0])
+        for a, kw in applied:
+            if a == ax:
+                planes = forward_coordinate(planes, **kw)
+        s, e = float(planes[0]), float(planes[1])
+        d = e + (d0 - e0)
+        cur = np.concatenate([p.piece.vertices[np.unique(p.piece.faces)] for p in instances])
+        lo, hi = float(cur[:, ax].min()), float(cur[:, ax].max())
         for inst in instances:
             rot = inst.transform[:3, :3]
             if edit.mode == "stretch":
@@ -374,6 +386,10 @@ def apply_recipe_to_scene(scene, recipe: Recipe) -> tuple[object, list[Seam]]:
                 seams += sm
             else:
                 inst.piece, _ = _global(inst.piece, ax, lo, hi, d - e, rot)
+        kw = {"mode": edit.mode, "start": s, "end": e, "dest": d}
+        if edit.mode == "global":
+            kw.update(lo=lo, hi=hi)
+        applied.append((ax, kw))
     out = scene.copy()
     for inst in instances:
         name = scene.graph[inst.node][1]
@@ -460,7 +476,7 @@ def load_scene(path: str | os.PathLike):
 
 def save_scene(scene, path: str | os.PathLike) -> list[Path]:
     """Write ``scene`` (GLB; OBJ with its MTL and textures beside it; PLY), atomically."""
-    from .._util import atomic_path
+    from .._files import atomic_path
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -522,3 +538,21 @@ def edit_mesh_file(
     out, seams = apply_recipe_to_scene(scene, recipe)
     written = save_scene(out, dst)
     return MeshEditResult(written, _face_count(scene), _face_count(out), seams)
+
+
+@dataclass(frozen=True)
+class MeshFrame:
+    """A mesh file's extent and units, standing in for a CSDF where options are resolved
+    (``--by``, ``--copies``): ``meta['units']`` and :meth:`surface_bounds`."""
+
+    bounds: np.ndarray  # (2, 3) float64
+    meta: dict
+
+    def surface_bounds(self) -> np.ndarray:
+        return self.bounds
+
+
+def mesh_frame(path: str | os.PathLike) -> MeshFrame:
+    """The world bounding box of a mesh file's triangles (all nodes placed), units metres."""
+    scene = load_scene(path)
+    return MeshFrame(np.asarray(scene.bounds, np.float64), {"units": "m"})

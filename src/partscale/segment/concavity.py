@@ -120,40 +120,21 @@ def _deepest(pts: np.ndarray, eq: np.ndarray) -> float:  # pragma: no cover - co
     return best
 
 
+#: Most lattice steps per triangle edge (a hull triangle longer than this many spacings gets
+#: its samples farther apart).
 _LATTICE_MAX = 256
-# barycentric lattice points (i, j), i + j <= k, ordered by i + j: the first (k+1)(k+2)/2 of them
-# are the lattice of a triangle cut in k steps per edge, for every k <= _LATTICE_MAX
-_I, _J = np.meshgrid(np.arange(_LATTICE_MAX + 1), np.arange(_LATTICE_MAX + 1), indexing="ij")
-_KEEP = (_I + _J) <= _LATTICE_MAX
-_ORDER = np.argsort((_I + _J)[_KEEP], kind="stable")
-_LATTICE = np.stack([_I[_KEEP][_ORDER], _J[_KEEP][_ORDER]], axis=1).astype(np.float64)
-
-
-def _sample_triangles(tri: np.ndarray, spacing: float) -> np.ndarray:
-    """(M, 3) points covering triangles ``tri`` (T, 3, 3), at most ``spacing`` apart.
-
-    A barycentric lattice with ``ceil(longest edge / spacing)`` steps per edge, so long thin
-    triangles (common on hulls) are covered along their length too.
-    """
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    edge = np.maximum(
-        np.linalg.norm(b - a, axis=1),
-        np.maximum(np.linalg.norm(c - a, axis=1), np.linalg.norm(c - b, axis=1)),
-    )
-    k = np.clip(np.ceil(edge / spacing).astype(np.int64), 1, _LATTICE_MAX)
-    count = (k + 1) * (k + 2) // 2
-    which = np.repeat(np.arange(len(tri)), count)
-    start = np.repeat(np.cumsum(count) - count, count)
-    ij = _LATTICE[np.arange(len(which)) - start] / k[which][:, None]
-    aa = a[which]
-    return aa + ij[:, :1] * (b[which] - aa) + ij[:, 1:] * (c[which] - aa)
 
 
 def _hull_samples(
     tri: np.ndarray, spacing: float, sdf: np.ndarray | None, limit: float = np.inf
 ) -> np.ndarray:
-    """:func:`_sample_triangles`, keeping only the samples more than one voxel outside the solid
-    (nearest voxel of ``sdf``, in voxels) when ``sdf`` is given.
+    """(M, 3) points covering triangles ``tri`` (T, 3, 3), at most ``spacing`` apart, keeping
+    only those more than one voxel outside the solid (nearest voxel of ``sdf``, in voxels) when
+    ``sdf`` is given.
+
+    A barycentric lattice with ``ceil(longest edge / spacing)`` steps per edge (at most
+    ``_LATTICE_MAX``), so long thin triangles (common on hulls) are covered along their length
+    too.
 
     With a finite ``limit``, triangles whose every point is within ``limit`` of a corner (a
     triangle of diameter D lies within D / sqrt(3) of its nearest corner, equality for the
@@ -174,7 +155,7 @@ _NO_SDF = np.full((1, 1, 1), np.inf, np.float32)  # every sample is "outside"
 
 @numba.njit(cache=True, nogil=True)
 def _outside_lattice(tri, spacing, sdf, skip):  # pragma: no cover - compiled
-    # the lattice of _sample_triangles, generated and filtered in one pass (no (M, 3) temporary)
+    # the lattice of _hull_samples, generated and filtered in one pass (no (M, 3) temporary)
     n = 0
     ks = np.empty(tri.shape[0], np.int64)
     for t in range(tri.shape[0]):

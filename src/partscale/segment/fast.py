@@ -73,7 +73,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
 
-from .._util import worker_pool
+from .._workers import worker_pool
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve

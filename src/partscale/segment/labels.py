@@ -13,7 +13,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from .._util import thread_map, worker_pool
+from .._workers import thread_map, worker_pool
 from ..color import palette
 from ..csdf import BAND_VOXELS, CSDF
 from .concavity import (

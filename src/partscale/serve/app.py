@@ -11,6 +11,9 @@ GET  /api/grid              binary 3D texture, see :func:`partscale.serve.sessio
 GET  /api/parts             binary int16 part indices, C order (z fastest)
 GET  /api/schema            the recipe JSON schema
 GET  /api/progress          progress of the apply in flight
+GET  /api/suggest           zone candidates of the current object (``?axis=x|y|z``: one axis)
+POST /api/snap              body: one recipe edit; the edit snapped for its mode and the moves
+POST /api/fit               body: {"size": [X, Y, Z]}; the fitted recipe and why (not applied)
 POST /api/apply             body: recipe JSON; bakes it, returns the new state
 POST /api/undo, /api/redo   returns the new state
 POST /api/save              body: {"overwrite": bool}; writes NAME.edited.csdf.npz (or NAME)
@@ -41,7 +44,8 @@ from starlette.responses import JSONResponse, Response
 from starlette.routing import Route
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from ..edit import JSON_SCHEMA
+from .. import zones
+from ..edit import JSON_SCHEMA, Edit
 from ..errors import InputError
 from .session import EditSession
 
@@ -333,6 +337,60 @@ def create_app(
         written = await _run("save", lambda: session.save(overwrite=overwrite))
         return state(saved=written.name)
 
+    # suggestions of the current object: one entry per (object, axis), the last few kept
+    suggested: dict[tuple[int, str], tuple[Any, list[dict]]] = {}
+
+    def _suggest(axes: list[str]) -> list[dict]:
+        c = session.current
+        out: list[dict] = []
+        for ax in axes:
+            hit = suggested.get((id(c), ax))
+            if hit is None:
+                hit = (c, [k.to_json() for k in zones.suggest(c, ax)])
+                suggested[(id(c), ax)] = hit
+                while len(suggested) > 9:
+                    del suggested[next(iter(suggested))]
+            out += hit[1]
+        return sorted(out, key=lambda k: -k["score"])
+
+    async def suggest(request: Request) -> Response:
+        axis = request.query_params.get("axis")
+        if axis is not None and axis not in ("x", "y", "z"):
+            return _error(f"suggest.axis: expected x, y or z, got {axis[:20]!r}")
+        found = await _run("suggest", _suggest, [axis] if axis else ["x", "y", "z"])
+        return JSONResponse({"candidates": found}, headers=_NO_STORE)
+
+    def _snap(body: Any) -> dict[str, Any]:
+        c = session.current
+        edit, moves = zones.snap(c, Edit.parse(body))
+        return {
+            "edit": edit.to_json(),
+            "moves": [m.to_json() for m in moves],
+            "message": zones.describe_moves(moves, c.meta.get("units")),
+        }
+
+    async def snap(request: Request) -> Response:
+        body = await _json_body(request)
+        return JSONResponse(await _run("snap", _snap, body), headers=_NO_STORE)
+
+    def _fit(size: Any) -> dict[str, Any]:
+        recipe, why = zones.fit(session.current, size)
+        return {"recipe": recipe.to_json(), "why": why}
+
+    async def fit(request: Request) -> Response:
+        body = await _json_body(request)
+        size = body.get("size") if isinstance(body, dict) and set(body) == {"size"} else None
+        if not (
+            isinstance(size, list)
+            and len(size) == 3
+            and all(isinstance(v, str | int | float) and not isinstance(v, bool) for v in size)
+        ):
+            return _error(
+                'fit: expected {"size": [X, Y, Z]} (each "=", 2.1, "210cm", "+20cm", "120%"), '
+                f"got {str(body)[:80]!r}"
+            )
+        return JSONResponse(await _run("fit", _fit, size), headers=_NO_STORE)
+
     def _export(kind: str):
         async def handler(request: Request) -> Response:
             data, name, media = await _run("export", session.export, kind)
@@ -353,6 +411,9 @@ def create_app(
         Route("/api/parts", parts),
         Route("/api/schema", schema),
         Route("/api/progress", progress),
+        Route("/api/suggest", suggest),
+        Route("/api/snap", snap, methods=["POST"]),
+        Route("/api/fit", fit, methods=["POST"]),
         Route("/api/apply", apply, methods=["POST"]),
         Route("/api/undo", undo, methods=["POST"]),
         Route("/api/redo", redo, methods=["POST"]),

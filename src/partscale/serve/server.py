@@ -9,7 +9,7 @@ import webbrowser
 from collections.abc import Callable
 from pathlib import Path
 
-from .._util import keyword_options
+from .._options import keyword_options
 from ..errors import InputError
 
 

@@ -15,8 +15,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from .. import csdf as csdf_mod
-from ..csdf import CSDF
+from ..csdf import CSDF, SUFFIX, load, save
 from ..errors import InputError
 from ..progress import ProgressCallback
 
@@ -31,8 +30,8 @@ CACHED_ENCODINGS = 6
 def edited_path(path: Path) -> Path:
     """``NAME.csdf.npz`` -> ``NAME.edited.csdf.npz`` (beside it): where Save writes by default."""
     name = path.name
-    stem = name[: -len(csdf_mod.SUFFIX)] if name.endswith(csdf_mod.SUFFIX) else path.stem
-    return path.with_name(f"{stem}.edited{csdf_mod.SUFFIX}")
+    stem = name[: -len(SUFFIX)] if name.endswith(SUFFIX) else path.stem
+    return path.with_name(f"{stem}.edited{SUFFIX}")
 
 
 #: sRGB byte -> float16 bits of byte / 255 (one rounding, and a gather is faster than arithmetic).
@@ -138,7 +137,7 @@ class EditSession:
     @classmethod
     def open(cls, path: str | Path) -> EditSession:
         path = Path(path)
-        return cls(path, csdf_mod.load(path))
+        return cls(path, load(path))
 
     # -- state ----------------------------------------------------------------------------
     def state(self) -> dict[str, Any]:
@@ -226,7 +225,7 @@ class EditSession:
         with self.lock:
             c, rev = self.current, self.revision
         target = self.path if overwrite else edited_path(self.path)
-        csdf_mod.save(c, target)
+        save(c, target)
         with self.lock:
             self.saved_revision = rev
         return target
@@ -241,7 +240,7 @@ class EditSession:
 
         with self.lock:
             c = self.current
-        stem = edited_path(self.path).name[: -len(csdf_mod.SUFFIX)]
+        stem = edited_path(self.path).name[: -len(SUFFIX)]
         if kind == "mesh":
             name, media = f"{stem}.glb", "model/gltf-binary"
             writer = export_mod.export_mesh

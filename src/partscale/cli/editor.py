@@ -1,4 +1,5 @@
-"""``partscale edit``: the browser editor for one CSDF file."""
+"""``partscale editor``: the browser editor for one CSDF file (``partscale edit``, its old name,
+still works)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Annotated
 import typer
 
 
-def edit(
+def editor(
     path: Annotated[Path, typer.Argument(help="The .csdf.npz file to edit.")],
     port: Annotated[int, typer.Option("--port", help="Port (0 = any free one).")] = 0,
     no_browser: Annotated[

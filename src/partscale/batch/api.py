@@ -1,0 +1,308 @@
+"""``partscale.batch.run``: the same pipeline over many objects, resumable, on all cores or Ray."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .._memory import available_memory
+from .._options import keyword_options
+from ..errors import InputError
+from ..progress import ProgressCallback, resolve
+from . import status as status_mod
+from .inputs import discover, shard
+from .job import options_hash, resolve_options
+
+ENGINES = ("local", "ray")
+LOG_NAME = "workers.log"
+
+
+@dataclass
+class BatchResult:
+    """What a batch did. Names are output folder names; ``failed`` pairs a name with its line.
+
+    ``skipped``: already done with the same input and options. ``not_retried``: failed before
+    with the same input and options (rerun with ``retry_failed=True``). ``interrupted``: running
+    when Ctrl-C or SIGTERM stopped the batch.
+    """
+
+    outdir: Path
+    status: Path
+    done: list[str] = field(default_factory=list)
+    failed: list[tuple[str, str]] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
+    not_retried: list[tuple[str, str]] = field(default_factory=list)
+    interrupted: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+    slowest: list[tuple[str, float]] = field(default_factory=list)
+    peak_memory: int = 0
+    engine_info: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return not self.failed and not self.not_retried and not self.interrupted
+
+
+def parse_memory(value: str | int | None) -> int | None:
+    """``'2GiB'``, ``'500M'``, ``'1.5G'`` or bytes -> bytes; None stays None."""
+    if value is None:
+        return None
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        n = float(value)
+    else:
+        s = str(value).strip().lower().removesuffix("b").removesuffix("i")
+        mult = {"k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}.get(s[-1:], 1)
+        try:
+            n = float(s[:-1] if mult > 1 else s) * mult
+        except ValueError:
+            n = -1
+    if not n > 0:
+        raise InputError(f"--memory: expected a size such as 4GiB or 500MiB, got {value!r}")
+    return int(n)
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM (a scheduler's stop) ends the batch like Ctrl-C: a consistent table."""
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+@keyword_options
+def run(
+    inputs: Sequence[str | os.PathLike],
+    outdir: str | os.PathLike,
+    *,
+    res: int = 128,
+    segment: str | None = None,
+    recipe: str | os.PathLike | dict | None = None,
+    fit: Sequence[str] | None = None,
+    export: Sequence[str] | str = ("csdf",),
+    render: str | None = None,
+    engine: str = "local",
+    workers: int | None = None,
+    timeout: float | None = None,
+    memory: str | int | None = None,
+    address: str | None = None,
+    retries: int = 1,
+    rank: int = 0,
+    world_size: int = 1,
+    retry_failed: bool = False,
+    progress: ProgressCallback | None = None,
+) -> BatchResult:
+    """Run the pipeline on every object of ``inputs``, writing ``outdir/<name>/`` and
+    ``outdir/status.csv``.
+
+    Parameters
+    ----------
+    inputs : sequence of path
+        Files, folders (searched recursively) and ``.csv``/``.jsonl`` manifests; see
+        :func:`partscale.batch.discover`.
+    outdir : path
+        Output folder (created). Rerunning into it skips objects done with the same input
+        (content hash of all its files) and options (hash of the spec).
+    res, segment, recipe, fit, export, render
+        The pipeline per object, overridable per object in a manifest: import at ``res``,
+        segment with method ``segment`` (None: no segmentation), then the recipe (a JSON file
+        or dict) or ``fit`` (3 sizes, needs :mod:`partscale.zones`), then write each format of
+        ``export`` (``csdf``, ``glb``, ``ply``, ``obj``, ``raw``, ``png``, ``nrrd``) and, with
+        ``render`` (a view), a 512² PNG.
+    engine : {"local", "ray"}
+    workers : int, optional
+        Processes at once (default: the cores; Ray: the cluster's CPUs).
+    timeout : float, optional
+        Seconds one object may take; past it its worker is stopped and it is recorded failed.
+    memory : size, optional
+        Resident memory one worker may use (default: available memory / workers); above it the
+        worker is stopped (local engine) and the object recorded failed. Also the pipeline's
+        own guard (``PARTSCALE_MAX_MEMORY``, unless set) so a grid that would not fit is
+        refused before it is allocated.
+    address : str, optional
+        Ray cluster to join (``engine="ray"``); default: a local instance for this batch.
+    retries : int
+        Ray's retries of a task whose worker process died.
+    rank, world_size : int
+        Run only shard ``rank`` of ``world_size`` (every ``world_size``-th input from ``rank``
+        of the sorted list): shards partition the inputs exactly.
+    retry_failed : bool
+        Rerun objects that failed before with the same input and options.
+    progress : callable(fraction, message), optional
+        ``fraction`` = objects finished / objects to run.
+
+    Returns
+    -------
+    BatchResult
+    """
+    t0 = time.perf_counter()
+    if engine not in ENGINES:
+        raise InputError(f"--engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
+    if engine == "ray":
+        from .ray_engine import require_ray
+
+        require_ray()
+    elif address is not None:
+        raise InputError(f"--address: expected only with --engine ray, got it with {engine}")
+    cores = os.cpu_count() or 1
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
+    ):
+        raise InputError(f"--workers: expected an integer >= 1, got {workers!r}")
+    if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
+        raise InputError(f"--timeout: expected seconds > 0, got {timeout!r}")
+    if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
+        raise InputError(f"--retries: expected an integer >= 0, got {retries!r}")
+    outdir = Path(outdir)
+    if outdir.exists() and not outdir.is_dir():
+        raise InputError(f"{outdir}: expected an output folder, got a file")
+    batch_opts = {
+        "res": res,
+        "segment": segment,
+        "recipe": recipe,
+        "fit": fit,
+        "export": export,
+        "render": render,
+    }
+    batch_opts = {k: v for k, v in batch_opts.items() if v is not None}
+    resolve_options(batch_opts, {}, where="batch")  # the batch's own options, checked once
+    items = shard(discover(inputs, exclude=outdir), rank, world_size)
+    specs = {it.name: resolve_options(batch_opts, it.options, where=f"{it.path}") for it in items}
+    outdir.mkdir(parents=True, exist_ok=True)
+
+    n_workers = workers or cores
+    threads = max(1, cores // n_workers)
+    mem = parse_memory(memory)
+    if mem is None:
+        mem = available_memory() // n_workers
+
+    table = status_mod.StatusTable(outdir)
+    result = BatchResult(outdir=outdir, status=table.path)
+    tasks = []
+    for it in items:
+        spec = specs[it.name]
+        ih, oh = it.content_hash(), options_hash(spec)
+        prev = table.previous.get(it.name)
+        same = prev is not None and prev["input_hash"] == ih and prev["options_hash"] == oh
+        if (
+            same
+            and prev["state"] == "done"
+            and all((outdir / o).is_file() for o in prev["outputs"].split(";") if o)
+        ):
+            result.skipped.append(it.name)
+            continue
+        if same and prev["state"] == "failed" and not retry_failed:
+            result.not_retried.append((it.name, prev["error"]))
+            continue
+        tasks.append(
+            {
+                "name": it.name,
+                "path": str(it.path),
+                "spec": spec,
+                "outdir": str(outdir.resolve()),
+                "input_hash": ih,
+                "options_hash": oh,
+                "attempts": int(prev["attempts"] or 0) + 1 if prev else 1,
+            }
+        )
+
+    report = resolve(progress)
+    total = len(tasks)
+    finished = 0
+    running: set[str] = set()
+    report(0.0, f"{total} to run, {len(result.skipped)} already done")
+
+    def on_start(task: dict[str, Any]) -> None:
+        running.add(task["name"])
+        table.update(
+            task["name"],
+            input=task["path"],
+            state="running",
+            seconds="",
+            error="",
+            input_hash=task["input_hash"],
+            options_hash=task["options_hash"],
+            outputs="",
+            peak_memory_mib="",
+            started=status_mod.now(),
+            finished="",
+            attempts=task["attempts"],
+        )
+
+    def on_finish(task: dict[str, Any], res_: dict[str, Any]) -> None:
+        nonlocal finished
+        running.discard(task["name"])
+        finished += 1
+        ok = bool(res_["ok"])
+        table.update(
+            task["name"],
+            state="done" if ok else "failed",
+            seconds=f"{res_['seconds']:.3f}",
+            error=res_["error"],
+            outputs=";".join(res_["outputs"]),
+            peak_memory_mib=f"{res_['peak_memory'] / 2**20:.1f}" if res_["peak_memory"] else "",
+            finished=status_mod.now(),
+        )
+        if ok:
+            result.done.append(task["name"])
+        else:
+            result.failed.append((task["name"], res_["error"]))
+        result.slowest.append((task["name"], float(res_["seconds"])))
+        result.peak_memory = max(result.peak_memory, int(res_["peak_memory"] or 0))
+        word = "done" if ok else "failed"
+        report(finished / max(total, 1), f"{word} {task['name']}")
+
+    try:
+        with _sigterm_as_interrupt():
+            if engine == "local":
+                from .local import run_local
+
+                run_local(
+                    tasks,
+                    workers=n_workers,
+                    threads=threads,
+                    timeout=timeout,
+                    memory=mem,
+                    log=outdir / LOG_NAME,
+                    on_start=on_start,
+                    on_finish=on_finish,
+                )
+            else:
+                from .local import worker_env
+                from .ray_engine import run_ray
+
+                env = worker_env(threads, mem)
+                env = {k: v for k, v in env.items() if k not in os.environ or os.environ[k] != v}
+                result.engine_info = run_ray(
+                    tasks,
+                    workers=workers,
+                    threads=threads,
+                    timeout=timeout,
+                    env=env,
+                    address=address,
+                    retries=retries,
+                    on_start=on_start,
+                    on_finish=on_finish,
+                )
+    except KeyboardInterrupt:
+        for name in sorted(running):
+            table.update(name, state="interrupted", finished=status_mod.now())
+            result.interrupted.append(name)
+    result.slowest.sort(key=lambda x: -x[1])
+    result.seconds = time.perf_counter() - t0
+    return result

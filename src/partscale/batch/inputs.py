@@ -1,0 +1,291 @@
+"""What a batch works on: inputs found in files, folders and manifests, named and hashed.
+
+An input is one object: a main file (what :func:`partscale.ingest.load` reads) and the files it
+needs beside it (a glTF's ``.bin`` buffers and textures, an OBJ's ``.mtl`` and its texture maps),
+which travel with it and count in its content hash. Each input gets an output name, unique in
+the batch and independent of discovery order.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import re
+from collections import Counter
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+from urllib.parse import unquote
+
+from ..csdf import SUFFIX as CSDF_SUFFIX
+from ..errors import InputError
+
+INPUT_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".npy", ".npz", ".h5", ".hdf5")
+"""Suffixes a folder is searched for (lower case); ``.csdf.npz`` files are read as CSDFs."""
+MANIFEST_SUFFIXES = (".csv", ".jsonl")
+OPTION_KEYS = ("res", "segment", "recipe", "fit", "export", "render")
+"""Per-object options a manifest row may set (columns or keys besides ``path`` and ``name``)."""
+
+
+@dataclass(frozen=True)
+class Input:
+    """One object of a batch.
+
+    Attributes
+    ----------
+    path : Path
+        The main file, absolute.
+    files : tuple of Path
+        Every file the object is made of, the main file first, then its companions sorted.
+    name : str
+        Output folder name under OUTDIR (unique in the batch).
+    options : dict
+        Per-object options from a manifest (override the batch's own), else empty.
+    """
+
+    path: Path
+    files: tuple[Path, ...]
+    name: str = ""
+    options: dict[str, Any] = field(default_factory=dict)
+
+    def content_hash(self) -> str:
+        """SHA-256 (hex) over every file's name relative to the main file's folder and bytes."""
+        h = hashlib.sha256()
+        base = self.path.parent
+        for f in self.files:
+            try:
+                rel = f.relative_to(base).as_posix()
+            except ValueError:
+                rel = f.as_posix()
+            h.update(rel.encode() + b"\0")
+            try:
+                with open(f, "rb") as fh:
+                    while chunk := fh.read(1 << 20):
+                        h.update(chunk)
+            except OSError:
+                h.update(b"<missing>")  # the job will report it; the hash must not fail
+            h.update(b"\0")
+        return h.hexdigest()
+
+
+def companions(path: Path) -> list[Path]:
+    """Files ``path`` refers to that exist: glTF buffers and images, OBJ material libraries and
+    their texture maps. Unreadable or corrupt files have none (the reader reports them)."""
+    suffix = path.suffix.lower()
+    found: list[Path] = []
+    try:
+        if suffix == ".gltf":
+            doc = json.loads(path.read_text(encoding="utf-8"))
+            for key in ("buffers", "images"):
+                for item in doc.get(key, []) or []:
+                    uri = item.get("uri") if isinstance(item, dict) else None
+                    if isinstance(uri, str) and not uri.startswith("data:"):
+                        found.append(path.parent / unquote(uri))
+        elif suffix == ".obj":
+            for lib in _obj_mtllibs(path):
+                found.append(lib)
+                found += _mtl_maps(lib)
+    except (OSError, ValueError, UnicodeDecodeError, AttributeError):
+        return []
+    return sorted({p.resolve() for p in found if p.is_file()} - {path.resolve()})
+
+
+def _obj_mtllibs(path: Path) -> list[Path]:
+    libs = []
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            if line.startswith("mtllib"):
+                libs += [path.parent / n for n in line.split()[1:]]
+    return [p for p in libs if p.is_file()]
+
+
+_MAP = re.compile(r"^\s*(map_\w+|bump|disp|decal|refl)\s+(.+)$")
+
+
+def _mtl_maps(lib: Path) -> list[Path]:
+    maps = []
+    with open(lib, encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            m = _MAP.match(line)
+            if m:
+                # options (-bm 1.0 ...) come before the file name, which is the last word
+                maps.append(lib.parent / m.group(2).split()[-1])
+    return maps
+
+
+def is_input_file(path: Path) -> bool:
+    name = path.name.lower()
+    return not name.startswith(".") and (
+        name.endswith(CSDF_SUFFIX) or path.suffix.lower() in INPUT_SUFFIXES
+    )
+
+
+def _stem(path: Path) -> str:
+    name = path.name
+    if name.lower().endswith(CSDF_SUFFIX):
+        return name[: -len(CSDF_SUFFIX)]
+    return path.stem
+
+
+def discover(sources: Sequence[str | Path], *, exclude: Path | None = None) -> list[Input]:
+    """The inputs named by ``sources``: files, folders (searched recursively by suffix, see
+    :data:`INPUT_SUFFIXES`) and manifests (``.csv`` with a ``path`` column, or ``.jsonl`` with a
+    ``path`` key per line; other columns: ``name`` and :data:`OPTION_KEYS`).
+
+    A file that is some other input's companion (a glTF's ``.bin``, an OBJ's ``.mtl``) is not an
+    input of its own. Inputs are sorted by path, each path once (or once per manifest ``name``),
+    and named by :func:`assign_names`.
+    Files under ``exclude`` (the output folder) are skipped when searching folders.
+
+    Raises :class:`InputError` for a missing source, a folder without inputs, a bad manifest.
+    """
+    if not sources:
+        raise InputError("batch: expected at least one input (file, folder or manifest), got none")
+    found: dict[tuple[Path, str], Input] = {}
+    ex = exclude.resolve() if exclude is not None else None
+    for src in sources:
+        p = Path(src)
+        if p.is_dir():
+            files = [
+                f
+                for f in sorted(p.rglob("*"))
+                if f.is_file() and is_input_file(f) and not _under(f.resolve(), ex)
+            ]
+            if not files:
+                raise InputError(
+                    f"{p}: expected a folder with inputs ({', '.join(INPUT_SUFFIXES)}, "
+                    f"{CSDF_SUFFIX}), got none"
+                )
+            items = [_make(f, {}) for f in files]
+            used = {c for it in items for c in it.files[1:]}
+            items = [it for it in items if it.path not in used]
+        elif p.suffix.lower() in MANIFEST_SUFFIXES:
+            items = read_manifest(p)
+        elif p.is_file():
+            items = [_make(p, {})]
+        else:
+            raise InputError(f"{p}: expected an input file, folder or manifest, got no such path")
+        for it in items:
+            # a manifest may list one file twice under two names (two resolutions, say)
+            found.setdefault((it.path, it.name), it)
+    return assign_names(sorted(found.values(), key=lambda it: (str(it.path), it.name)))
+
+
+def _under(path: Path, folder: Path | None) -> bool:
+    return folder is not None and (path == folder or folder in path.parents)
+
+
+def _make(path: Path, options: dict[str, Any], name: str = "") -> Input:
+    path = path.resolve()
+    return Input(path=path, files=(path, *companions(path)), name=name, options=options)
+
+
+def read_manifest(path: Path) -> list[Input]:
+    """Inputs listed in a CSV (header with ``path``) or JSONL (one object per line) manifest.
+
+    Relative paths are relative to the manifest's folder. Empty cells mean "the batch's option".
+    """
+    if not path.is_file():
+        raise InputError(f"{path}: expected a manifest file, got no such file")
+    rows: list[tuple[int, dict[str, Any]]] = []
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: expected a UTF-8 manifest, got {exc}") from None
+    if path.suffix.lower() == ".csv":
+        reader = csv.DictReader(text.splitlines())
+        if not reader.fieldnames or "path" not in reader.fieldnames:
+            raise InputError(
+                f"{path}: expected a CSV header with a 'path' column, got {reader.fieldnames}"
+            )
+        for i, row in enumerate(reader, start=2):
+            rows.append((i, {k: v for k, v in row.items() if k and v not in (None, "")}))
+    else:
+        for i, line in enumerate(text.splitlines(), start=1):
+            if not line.strip():
+                continue
+            try:
+                obj = json.loads(line)
+            except json.JSONDecodeError as exc:
+                raise InputError(f"{path}:{i}: expected a JSON object, got {exc}") from None
+            if not isinstance(obj, dict):
+                raise InputError(f"{path}:{i}: expected a JSON object, got {type(obj).__name__}")
+            rows.append((i, obj))
+    out = []
+    for line, row in rows:
+        where = f"{path}:{line}"
+        unknown = sorted(set(row) - {"path", "name", *OPTION_KEYS})
+        if unknown:
+            raise InputError(
+                f"{where}: unknown key(s) {unknown}; keys are path, name, {', '.join(OPTION_KEYS)}"
+            )
+        if not isinstance(row.get("path"), str) or not row["path"]:
+            raise InputError(f"{where}: expected a 'path', got {row.get('path')!r}")
+        f = Path(row["path"])
+        f = f if f.is_absolute() else path.parent / f
+        opts = {k: row[k] for k in OPTION_KEYS if k in row}
+        if "recipe" in opts and not Path(opts["recipe"]).is_absolute():
+            opts["recipe"] = str(path.parent / opts["recipe"])
+        name = row.get("name", "")
+        if not isinstance(name, str) or "/" in name or name in (".", ".."):
+            raise InputError(f"{where}: expected a folder name for 'name', got {name!r}")
+        out.append(_make(f, opts, name))
+    if not out:
+        raise InputError(f"{path}: expected at least one row, got none")
+    return out
+
+
+def assign_names(items: Iterable[Input]) -> list[Input]:
+    """Give every input a unique output name, the same whatever order they were found in.
+
+    A manifest's ``name`` wins; otherwise the file name without its extension. Where several
+    inputs would share a name, each gets the shortest tail of its folder path that tells them
+    apart, joined with ``__`` (``kenney/chair.glb`` and ``sweethome3d/chair.obj`` become
+    ``kenney__chair`` and ``sweethome3d__chair``). Two manifest names that clash are an error.
+    """
+    items = list(items)
+    wanted = [it.name or _stem(it.path) for it in items]
+    explicit = [it.name for it in items if it.name]
+    dup = sorted({n for n in explicit if explicit.count(n) > 1})
+    if dup:
+        raise InputError(f"batch: expected unique manifest names, got {dup[0]!r} more than once")
+    names = list(wanted)
+    groups: dict[str, list[int]] = {}
+    for i, (it, n) in enumerate(zip(items, wanted, strict=True)):
+        if not it.name:
+            groups.setdefault(n, []).append(i)
+    for n, idx in groups.items():
+        if len(idx) < 2 and n not in explicit:
+            continue
+        for i in idx:
+            mine = items[i].path.parent
+            others = [items[j].path.parent.parts for j in idx if items[j].path.parent != mine]
+            p, d = mine.parts, 1
+            while d < len(p) and any(o[-d:] == p[-d:] for o in others):
+                d += 1
+            names[i] = "__".join([*p[-d:], n])
+    counts = Counter(names)
+    if len(counts) != len(names):  # same folder and stem, different suffixes
+        names = [
+            f"{n}.{it.path.suffix.lstrip('.').lower()}" if counts[n] > 1 else n
+            for n, it in zip(names, items, strict=True)
+        ]
+    return [
+        Input(path=it.path, files=it.files, name=n, options=it.options)
+        for it, n in zip(items, names, strict=True)
+    ]
+
+
+def shard(items: Sequence[Input], rank: int, world_size: int) -> list[Input]:
+    """The inputs of shard ``rank`` of ``world_size``: every ``world_size``-th from ``rank``.
+
+    The shards of 0..world_size-1 partition ``items`` exactly (each once, none missing), and
+    names were assigned before sharding, so they agree across shards.
+    """
+    if isinstance(world_size, bool) or not isinstance(world_size, int) or world_size < 1:
+        raise InputError(f"--world-size: expected an integer >= 1, got {world_size!r}")
+    if isinstance(rank, bool) or not isinstance(rank, int) or not 0 <= rank < world_size:
+        raise InputError(f"--rank: expected an integer in [0, {world_size - 1}], got {rank!r}")
+    return list(items[rank::world_size])

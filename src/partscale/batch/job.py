@@ -1,0 +1,269 @@
+"""The per-object job, the same in every engine: an input and its options -> its outputs.
+
+:func:`resolve_options` turns the batch's options and a manifest row into a *spec*, a plain
+JSON-able dict whose hash (:func:`options_hash`) decides whether a finished object is current.
+:func:`run_job` is pure: it reads the input, writes every output atomically under
+``OUTDIR/<name>/`` and returns their paths; the same input and spec give the same bytes.
+:func:`execute` wraps it for a worker: never raises, measures time and peak memory.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+import traceback
+import zipfile
+from pathlib import Path
+from typing import Any
+
+from .. import __version__
+from ..csdf import SUFFIX as CSDF_SUFFIX
+from ..errors import InputError, one_line
+
+DEFAULT_EXPORT = ("csdf",)
+MESH_FORMATS = ("glb", "ply", "obj")
+TEXTURE_FORMATS = ("raw", "png", "nrrd")
+EXPORT_FORMATS = ("csdf", *MESH_FORMATS, *TEXTURE_FORMATS)
+"""``--export`` choices: the CSDF itself, a mesh (:func:`partscale.export.export_mesh`) or a 3D
+texture (:func:`partscale.export.export_texture`); each written as ``<name>.<format>``."""
+RENDER_SIZE = 512
+THREAD_VARIABLES = (
+    "NUMBA_NUM_THREADS",
+    "OMP_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "VECLIB_MAXIMUM_THREADS",
+    "NUMEXPR_NUM_THREADS",
+    "PYTHON_CPU_COUNT",  # Python >= 3.13's os.cpu_count(); older ones get patched in the worker
+)
+_OFF = ("", "0", "false", "no", "none", "off")
+_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+
+
+def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -> dict[str, Any]:
+    """The spec of one object: the batch's options overridden by its manifest row's.
+
+    Values may come as CSV strings (``"64"``, ``"glb,png"``, ``"false"``); the spec holds
+    checked, canonical values (the recipe's content, not its path). ``where`` names the object
+    in error messages.
+    """
+    merged = {**batch, **row}
+    try:
+        res = int(merged.get("res", 128))
+    except (TypeError, ValueError):
+        raise InputError(f"{where}: res: expected an integer, got {merged.get('res')!r}") from None
+    if isinstance(merged.get("res"), bool) or res < 16:
+        raise InputError(f"{where}: res: expected an integer >= 16, got {merged.get('res')!r}")
+
+    seg = merged.get("segment")
+    if isinstance(seg, bool):
+        seg = "fast" if seg else None
+    if isinstance(seg, str) and seg.strip().lower() in _OFF:
+        seg = None
+    if seg is not None:
+        from ..segment import check_method
+
+        seg = check_method(str(seg).strip().lower(), what=f"{where}: segment")
+
+    recipe = merged.get("recipe")
+    fit = merged.get("fit")
+    if isinstance(recipe, str) and recipe.strip().lower() in _OFF:
+        recipe = None
+    if isinstance(fit, str) and fit.strip().lower() in _OFF:
+        fit = None
+    if recipe is not None and fit is not None:
+        raise InputError(f"{where}: expected a recipe or a fit, got both")
+    if recipe is not None:
+        from ..edit import Recipe
+
+        rec = (
+            Recipe.load(recipe) if isinstance(recipe, (str, os.PathLike)) else Recipe.parse(recipe)
+        )
+        recipe = rec.to_json()
+    if fit is not None:
+        size = fit.split() if isinstance(fit, str) else list(fit)
+        if len(size) != 3:
+            raise InputError(f"{where}: fit: expected 3 sizes (X Y Z), got {fit!r}")
+        fit = [str(s) for s in size]
+
+    export = merged.get("export", DEFAULT_EXPORT)
+    if isinstance(export, str):
+        export = [] if export.strip().lower() in _OFF else export.split(",")
+    formats = []
+    for f in export:
+        f = str(f).strip().lower().lstrip(".")
+        if f not in EXPORT_FORMATS:
+            raise InputError(
+                f"{where}: export: expected formats among {', '.join(EXPORT_FORMATS)}, got {f!r}"
+            )
+        if f not in formats:
+            formats.append(f)
+
+    render = merged.get("render")
+    if isinstance(render, bool):
+        render = "iso" if render else None
+    elif isinstance(render, str):
+        render = render.strip().lower()
+        render = None if render in _OFF else "iso" if render in ("1", "true", "yes") else render
+    if render is not None:
+        from ..render import VIEWS
+
+        if render not in VIEWS:
+            raise InputError(f"{where}: render: expected one of {', '.join(VIEWS)}, got {render!r}")
+    if not formats and render is None:
+        raise InputError(f"{where}: expected at least one output (--export or --render), got none")
+    return {
+        "version": __version__,
+        "res": res,
+        "segment": seg,
+        "recipe": recipe,
+        "fit": fit,
+        "export": formats,
+        "render": render,
+    }
+
+
+def options_hash(spec: dict[str, Any]) -> str:
+    """SHA-256 (hex) of the spec's canonical JSON."""
+    return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()
+
+
+def run_job(
+    path: str | os.PathLike, name: str, spec: dict[str, Any], outdir: str | os.PathLike
+) -> list[str]:
+    """Import, segment, edit and write one object; the outputs' paths relative to ``outdir``.
+
+    Segmentation bypasses the segment cache, so results never depend on what earlier runs left
+    there. Raises what the stages raise (:class:`InputError` for bad input).
+    """
+    from .. import csdf as csdf_mod
+    from ..edit import Recipe, apply_recipe
+    from ..ingest import load
+
+    path, outdir = Path(path), Path(outdir)
+    folder = outdir / name
+    folder.mkdir(parents=True, exist_ok=True)
+    if path.name.lower().endswith(CSDF_SUFFIX):
+        c = csdf_mod.load(path)
+    else:
+        c = load(path, res=spec["res"])
+    if spec["segment"]:
+        from ..segment import segment
+
+        c = segment(c, method=spec["segment"], cache=False)
+    if spec["recipe"]:
+        c = apply_recipe(c, Recipe.parse(spec["recipe"]))
+    if spec["fit"]:
+        c = _fit(c, spec["fit"])
+    written: list[Path] = []
+    for fmt in spec["export"]:
+        if fmt == "csdf":
+            written.append(save_csdf(c, folder / f"{name}{CSDF_SUFFIX}"))
+        elif fmt in MESH_FORMATS:
+            from ..export import export_mesh
+
+            written.append(export_mesh(c, folder / f"{name}.{fmt}"))
+        else:
+            from ..export import export_texture
+
+            written += export_texture(c, folder / f"{name}.{fmt}")
+    if spec["render"]:
+        from ..render import render, save_png
+
+        image = render(c, view=spec["render"], size=RENDER_SIZE)
+        written.append(save_png(image, folder / f"{name}.render-{spec['render']}.png"))
+    return [Path(p).resolve().relative_to(outdir.resolve()).as_posix() for p in written]
+
+
+def _fit(c, size):
+    # partscale.zones.fit gives the recipe that brings the object to ``size``
+    from ..edit import apply_recipe
+    from ..zones import fit
+
+    recipe, _why = fit(c, size)
+    return apply_recipe(c, recipe) if recipe.edits else c
+
+
+def save_csdf(c, path: Path) -> Path:
+    """:func:`partscale.csdf.save`, then its zip members stamped with a fixed time, so the same
+    CSDF gives the same bytes whenever it is written (numpy stamps the current time)."""
+    from .. import csdf as csdf_mod
+    from .._files import atomic_path
+
+    with atomic_path(path, suffix=".npz") as tmp:
+        csdf_mod.save(c, tmp)
+        with zipfile.ZipFile(tmp) as zin:
+            members = [(i.filename, zin.read(i)) for i in zin.infolist()]
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
+            for fname, data in members:
+                info = zipfile.ZipInfo(fname, date_time=_ZIP_TIME)
+                info.compress_type = zipfile.ZIP_DEFLATED
+                zout.writestr(info, data)
+    return path
+
+
+# -- in a worker ------------------------------------------------------------------------------
+
+
+def thread_env(threads: int) -> dict[str, str]:
+    """Environment capping numba, BLAS and OpenMP at ``threads`` threads (set before import)."""
+    return dict.fromkeys(THREAD_VARIABLES, str(max(1, int(threads))))
+
+
+def limit_threads(threads: int) -> None:
+    """In a worker: make partscale's own thread and process pools use ``threads`` cores.
+
+    They size themselves by ``os.cpu_count()``, which Python before 3.13 has no variable for.
+    """
+    n = max(1, int(threads))
+    os.environ.update(thread_env(n))
+    os.cpu_count = lambda: n  # only in this worker process
+
+
+def _reset_peak() -> bool:
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")  # resets VmHWM, the peak resident set, to the current one
+        return True
+    except OSError:
+        return False
+
+
+def peak_memory() -> int:
+    """Peak resident memory of this process in bytes (since the last reset, where possible)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError):
+        pass
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def execute(task: dict[str, Any]) -> dict[str, Any]:
+    """Run one task (``path``, ``name``, ``spec``, ``outdir``); never raises.
+
+    Returns ``{"name", "ok", "outputs", "error", "seconds", "peak_memory"}``; ``error`` is one
+    line (an :class:`InputError`'s message, else the exception's type and message).
+    """
+    _reset_peak()
+    t0 = time.perf_counter()
+    out: dict[str, Any] = {"name": task["name"], "ok": True, "outputs": [], "error": ""}
+    try:
+        out["outputs"] = run_job(task["path"], task["name"], task["spec"], task["outdir"])
+    except InputError as exc:
+        out.update(ok=False, error=one_line(exc))
+    except MemoryError:
+        out.update(ok=False, error="out of memory (MemoryError)")
+    except Exception as exc:
+        tb = traceback.extract_tb(exc.__traceback__)
+        at = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
+        out.update(ok=False, error=f"{type(exc).__name__}: {one_line(exc)}{at}")
+    out["seconds"] = time.perf_counter() - t0
+    out["peak_memory"] = peak_memory()
+    return out

@@ -1,0 +1,126 @@
+"""The status table ``OUTDIR/status.csv``: one row per object, rewritten atomically as it goes.
+
+Several processes may share one OUTDIR (shards of a Slurm array): every write takes a lock on
+``OUTDIR/.status.lock``, re-reads the table and replaces only the rows this process owns, so no
+shard's rows are lost and a reader never sees a half-written table.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import os
+from collections.abc import Iterator
+from datetime import UTC, datetime
+from pathlib import Path
+
+from .._files import atomic_path
+from ..errors import InputError
+
+STATUS_NAME = "status.csv"
+COLUMNS = (
+    "name",
+    "input",
+    "state",
+    "seconds",
+    "error",
+    "input_hash",
+    "options_hash",
+    "outputs",
+    "peak_memory_mib",
+    "started",
+    "finished",
+    "attempts",
+)
+"""Columns of ``status.csv``; ``outputs`` are paths relative to OUTDIR joined by ``;``."""
+STATES = ("done", "failed", "running", "interrupted")
+"""``running``: started and not finished (a crashed or killed batch leaves it; rerun redoes it);
+``interrupted``: stopped by Ctrl-C or SIGTERM (redone on the next run, like ``running``)."""
+
+
+def now() -> str:
+    """UTC time stamp, ISO 8601 with milliseconds."""
+    return datetime.now(UTC).isoformat(timespec="milliseconds")
+
+
+def read(path: Path) -> dict[str, dict[str, str]]:
+    """Rows of a status table by name; empty when there is none yet."""
+    if not path.exists():
+        return {}
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: expected a readable status table, got {exc}") from None
+    reader = csv.DictReader(io.StringIO(text))
+    if reader.fieldnames is None:
+        return {}
+    missing = [
+        c for c in ("name", "state", "input_hash", "options_hash") if c not in reader.fieldnames
+    ]
+    if missing:
+        raise InputError(
+            f"{path}: expected a status table with columns {COLUMNS}, missing {missing}"
+        )
+    return {row["name"]: {c: row.get(c) or "" for c in COLUMNS} for row in reader}
+
+
+def _render(rows: dict[str, dict[str, str]]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+    w.writeheader()
+    for name in sorted(rows):
+        w.writerow({c: rows[name].get(c, "") for c in COLUMNS})
+    return buf.getvalue()
+
+
+@contextlib.contextmanager
+def _locked(outdir: Path) -> Iterator[None]:
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: one writer per OUTDIR
+        yield
+        return
+    fd = os.open(outdir / ".status.lock", os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # closing releases the lock
+
+
+class StatusTable:
+    """The rows this process owns, merged into ``OUTDIR/status.csv`` on every :meth:`write`.
+
+    Parameters
+    ----------
+    outdir : Path
+        The batch's output folder (must exist).
+    """
+
+    def __init__(self, outdir: Path):
+        self.outdir = Path(outdir)
+        self.path = self.outdir / STATUS_NAME
+        self.previous = read(self.path)
+        self.rows: dict[str, dict[str, str]] = {}
+
+    def update(self, name: str, **fields: object) -> dict[str, str]:
+        """Set fields of ``name``'s row (starting from its previous row) and write the table."""
+        row = self.rows.get(name) or dict(self.previous.get(name) or dict.fromkeys(COLUMNS, ""))
+        row["name"] = name
+        for k, v in fields.items():
+            if k not in COLUMNS:
+                raise KeyError(k)
+            row[k] = "" if v is None else str(v)
+        self.rows[name] = row
+        self.write()
+        return row
+
+    def write(self) -> None:
+        """Merge this process's rows into the table on disk, atomically, under the lock."""
+        with _locked(self.outdir):
+            merged = read(self.path)
+            merged.update(self.rows)
+            text = _render(merged)
+            with atomic_path(self.path) as tmp:
+                tmp.write_text(text, encoding="utf-8")

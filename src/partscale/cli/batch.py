@@ -1,0 +1,203 @@
+"""``partscale batch``: the pipeline over many objects (a thin layer over partscale.batch.run)."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from . import _common
+
+OPTIONAL_VALUES = {
+    "--segment": ("fast", ("fast", "coacd")),
+    "--render": ("iso", ("iso", "front", "side", "top")),
+}
+"""Options whose value may be left out (typer has no such options): the default, and the values."""
+
+
+def optional_values(argv: list[str]) -> list[str]:
+    """``batch ... --segment [METHOD]``: supply the default where no value follows.
+
+    The next word is the option's value only when it is one of its values, so
+    ``batch --segment data/ -o out`` segments with ``fast`` and reads ``data/`` as an input.
+    Other commands' arguments are returned unchanged.
+    """
+    words = [a for a in argv if not a.startswith("-")]
+    if not words or words[0] != "batch":
+        return argv
+    out: list[str] = []
+    for i, a in enumerate(argv):
+        out.append(a)
+        if a in OPTIONAL_VALUES:
+            default, values = OPTIONAL_VALUES[a]
+            nxt = argv[i + 1] if i + 1 < len(argv) else None
+            if nxt is None or nxt.lower() not in values:
+                out[-1] = f"{a}={default}"
+    return out
+
+
+def _duration(seconds: float) -> str:
+    m, s = divmod(seconds, 60)
+    return f"{int(m)}m{s:04.1f}s" if m else f"{s:.1f}s"
+
+
+@contextlib.contextmanager
+def _batch_bar():
+    """One bar for the whole batch on stderr: objects done, rate, ETA (hidden without a tty)."""
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    with Progress(
+        TextColumn("[bold]batch"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[rate]}"),
+        TextColumn("ETA"),
+        TimeRemainingColumn(),
+        TimeElapsedColumn(),
+        TextColumn("{task.fields[last]}"),
+        console=_common.stderr,
+        transient=True,
+        disable=not _common.stderr.is_terminal,
+    ) as bar:
+        task = bar.add_task("batch", total=None, rate="", last="")
+        state = {"total": None}
+
+        def callback(fraction: float, message: str) -> None:
+            if state["total"] is None:  # the first call says how many are to run
+                state["total"] = int(message.split()[0]) if message[:1].isdigit() else 0
+                bar.update(task, total=max(state["total"], 1), last=message)
+                return
+            done = round(fraction * state["total"])
+            speed = bar.tasks[0].speed
+            rate = f"{speed * 60:.1f}/min" if speed else ""
+            bar.update(task, completed=done, rate=rate, last=message)
+
+        yield callback
+
+
+def batch(
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(
+            metavar="INPUTS...",
+            help="Files, folders (searched recursively by extension) or manifests (.csv with a "
+            "'path' column, .jsonl with a 'path' key; other columns: name, res, segment, recipe, "
+            "fit, export, render).",
+        ),
+    ],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output folder OUTDIR.")],
+    res: Annotated[
+        int, typer.Option("--res", help="Import resolution (voxels, longest side).")
+    ] = 128,
+    segment: Annotated[
+        str | None,
+        typer.Option(
+            "--segment",
+            metavar="[METHOD]",
+            help="Segment into parts: fast (alone: --segment) or coacd.",
+        ),
+    ] = None,
+    recipe: Annotated[
+        Path | None, typer.Option("--recipe", help="Apply this recipe JSON to every object.")
+    ] = None,
+    fit: Annotated[
+        tuple[str, str, str] | None,
+        typer.Option("--fit", help="Fit to sizes X Y Z (210cm, +20cm, 120%, =).", metavar="X Y Z"),
+    ] = None,
+    export: Annotated[
+        str,
+        typer.Option(
+            "--export",
+            help="Outputs per object, comma-separated: csdf, glb, ply, obj, raw, png, nrrd "
+            "('none' for a render only).",
+        ),
+    ] = "csdf",
+    render: Annotated[
+        str | None,
+        typer.Option(
+            "--render",
+            metavar="[VIEW]",
+            help="Also render a 512x512 PNG: iso (alone: --render), front, side or top.",
+        ),
+    ] = None,
+    engine: Annotated[str, typer.Option("--engine", help="local (process pool) or ray.")] = "local",
+    address: Annotated[
+        str | None,
+        typer.Option("--address", help="Ray cluster to join (default: a local instance)."),
+    ] = None,
+    workers: Annotated[
+        int | None, typer.Option("--workers", help="Objects at once (default: the cores).")
+    ] = None,
+    timeout: Annotated[
+        float | None, typer.Option("--timeout", help="Seconds one object may take.")
+    ] = None,
+    memory: Annotated[
+        str | None,
+        typer.Option(
+            "--memory", help="Memory one worker may use, e.g. 4GiB (default: shared out)."
+        ),
+    ] = None,
+    retries: Annotated[
+        int, typer.Option("--retries", help="Ray: retries of a task whose worker died.")
+    ] = 1,
+    rank: Annotated[int, typer.Option("--rank", help="This shard's index (Slurm arrays).")] = 0,
+    world_size: Annotated[int, typer.Option("--world-size", help="Number of shards.")] = 1,
+    retry_failed: Annotated[
+        bool, typer.Option("--retry-failed", help="Rerun objects that failed before.")
+    ] = False,
+) -> None:
+    """Run the pipeline on many objects: resumable (OUTDIR/status.csv), on all cores or Ray."""
+    from ..batch import run
+
+    with _batch_bar() as bar:
+        r = run(
+            inputs,
+            output,
+            res=res,
+            segment=segment,
+            recipe=recipe,
+            fit=list(fit) if fit else None,
+            export=export,
+            render=render,
+            engine=engine.lower(),
+            workers=workers,
+            timeout=timeout,
+            memory=memory,
+            address=address,
+            retries=retries,
+            rank=rank,
+            world_size=world_size,
+            retry_failed=retry_failed,
+            progress=bar,
+        )
+
+    def say(line: str) -> None:
+        sys.stderr.write(line + "\n")  # unwrapped: rich would wrap long paths
+
+    counts = f"{len(r.done)} done, {len(r.failed)} failed, {len(r.skipped)} skipped (already done)"
+    if r.not_retried:
+        counts += f", {len(r.not_retried)} failed before (not retried: --retry-failed)"
+    if r.interrupted:
+        counts += f", {len(r.interrupted)} interrupted"
+    say(f"batch: {counts} in {_duration(r.seconds)}; status: {r.status}")
+    if r.slowest:
+        top = ", ".join(f"{n} {s:.1f} s" for n, s in r.slowest[:5])
+        say(f"slowest: {top}")
+    for name, error in [*r.failed, *r.not_retried]:
+        # one unwrapped line each (rich would wrap at the terminal width)
+        sys.stderr.write(f"failed: {name}: {' '.join(error.split())}\n")
+    sys.stderr.flush()
+    if r.interrupted:
+        raise typer.Exit(130)
+    if not r.ok:
+        raise typer.Exit(1)

@@ -1,0 +1,78 @@
+"""``partscale fit``: the object resized to a target extent, zones and modes chosen for it."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..csdf import SUFFIX, load, save
+from . import _common
+
+
+def fit(
+    src: Annotated[
+        Path, typer.Argument(metavar="IN", help="Input .csdf.npz file, or a mesh (mesh route).")
+    ],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "-o",
+            "--output",
+            help="Output .csdf.npz file, or a mesh (.glb, .obj, .ply) for a mesh IN.",
+        ),
+    ],
+    size: Annotated[
+        tuple[str, str, str],
+        typer.Option(
+            "--size",
+            help="X Y Z target extents: = (unchanged), 2.1 / 210cm / 2100mm, +20cm / -5cm, or 120%.",
+        ),
+    ],
+    recipe_out: Annotated[
+        Path | None, typer.Option("--recipe-out", help="Write the recipe applied (JSON).")
+    ] = None,
+) -> None:
+    """Resize to a target size: tile whole periods of repeated elements, absorb the rest in a
+    slab of constant cross-section, global scaling only as a last resort; says what it chose."""
+    from .._files import atomic_path
+    from ..edit import apply_recipe
+    from ..zones import fit as fit_zones
+    from .scale import _MESH_IN, _MESH_OUT
+
+    mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
+    if not mesh_route:
+        _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
+    if recipe_out is not None:
+        _common.check_output(recipe_out, suffixes=(".json",), what="a recipe JSON file")
+    if mesh_route:
+        # zones are found on the mesh's CSDF; the recipe is then applied to the mesh itself
+        from ..ingest import load as import_file
+
+        c = import_file(src)
+    else:
+        c = load(src)
+    recipe, why = fit_zones(c, list(size))
+    for line in why:  # one line each, unwrapped
+        _common.stderr.print(line, highlight=False, soft_wrap=True)
+    if mesh_route:
+        from .scale import _scale_mesh
+
+        _scale_mesh(src, output, recipe)
+        if recipe_out is not None:
+            with atomic_path(recipe_out) as tmp:
+                tmp.write_text(json.dumps(recipe.to_json(), indent=2) + "\n")
+            _common.done(f"wrote {recipe_out}")
+        return
+    with _common.progress_bar("fit") as bar:
+        out = apply_recipe(c, recipe, progress=bar)
+    save(out, output)
+    if recipe_out is not None:
+        with atomic_path(recipe_out) as tmp:
+            tmp.write_text(json.dumps(recipe.to_json(), indent=2) + "\n")
+        _common.done(f"wrote {recipe_out}")
+    sb = out.surface_bounds()
+    ext = " x ".join(f"{v:.4g}" for v in sb[1] - sb[0])
+    _common.done(f"wrote {output} (solid {ext} {out.meta.get('units') or ''})")

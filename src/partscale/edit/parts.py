@@ -1,0 +1,142 @@
+"""Part bookkeeping of an edit: tiled copies of inner parts get new indices, and
+``meta['parts_info']`` (the segment stage's part facts) follows the edit.
+
+Arrays are axis-first (N, A, B): the edit axis is axis 0.
+"""
+
+from __future__ import annotations
+
+import copy as _copy
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from ..color import palette_colour
+from ..errors import InputError
+from .resample import Plan
+from .resolved import ResolvedEdit
+
+
+def inner_parts(sdf: np.ndarray, parts: np.ndarray, i_start: float, i_end: float) -> np.ndarray:
+    """Part indices whose inside voxels all lie strictly between layers ``i_start``, ``i_end``.
+
+    Arrays are axis-first (N, A, B).
+    """
+    n_parts = int(parts.max()) + 1 if parts.size else 0
+    if n_parts <= 0:
+        return np.zeros(0, np.int64)
+    inside = (sdf <= 0) & (parts >= 0)
+    layer = np.broadcast_to(np.arange(sdf.shape[0])[:, None, None], sdf.shape)
+    labels = np.where(inside, parts.astype(np.int64) + 1, 0)
+    idx = np.arange(1, n_parts + 1)
+    present = ndimage.sum_labels(np.ones(sdf.shape), labels, idx) > 0
+    mn = np.asarray(ndimage.minimum(layer, labels, idx), float)
+    mx = np.asarray(ndimage.maximum(layer, labels, idx), float)
+    keep = present & (mn > i_start) & (mx < i_end)
+    return np.flatnonzero(keep)
+
+
+def update_parts_info(
+    meta: dict[str, Any],
+    parts: np.ndarray,
+    r: ResolvedEdit,
+    scale: float,
+    copy_of: dict[int, tuple[int, int]],
+) -> None:
+    """Carry ``meta['parts_info']`` (the segment stage's part facts) through an edit.
+
+    ``voxels`` is recounted; ``bbox`` (world box of the part's surface patch) is mapped along the
+    axis by the edit itself; ``hull_volume`` is scaled with parts lying wholly inside the zone (all
+    parts in global mode); other keys are kept. Each new (copied) part gets a copy of its
+    original's entry with ``index`` and ``copy_of`` set, and its own display ``color`` (that
+    of its new index), so copies are told apart wherever parts are drawn.
+    """
+    info = meta.get("parts_info")
+    if not isinstance(info, list):
+        return
+    ax, s, e, d, mode = r.axis, r.start, r.end, r.dest, r.mode
+    shift = d - e
+    n_copies = r.n_copies if mode == "tile" else 1
+    period = (d - s) / n_copies
+    lo = r.lo
+
+    def forward(x: float, copy: int) -> float:
+        if mode == "global":
+            return lo + (x - lo) * scale
+        if x < s:
+            return x
+        if x > e:
+            return x + shift
+        return s + copy * period + (x - s) * scale
+
+    n = int(parts.max()) + 1 if parts.size and parts.max() >= 0 else 0
+    counts = np.bincount(parts[parts >= 0].ravel(), minlength=n)
+    by_index = {int(x.get("index", -1)): x for x in info if isinstance(x, dict)}
+    originals = {p: _copy.deepcopy(x) for p, x in by_index.items()}
+    for p in range(n):
+        src, m = copy_of.get(p, (p, 0))
+        base = originals.get(src)
+        if base is None:
+            continue
+        entry = by_index.get(p)
+        if entry is None:
+            entry = _copy.deepcopy(base)
+            entry["index"] = p
+            entry["copy_of"] = src
+            entry["color"] = palette_colour(p)
+            info.append(entry)
+        entry["voxels"] = int(counts[p]) if p < len(counts) else 0
+        box = base.get("bbox")
+        inner = box is not None and s < box[0][ax] and box[1][ax] < e
+        if box is not None:
+            new_box = _copy.deepcopy(box)
+            # a part crossing the zone runs through every copy: its end lies in the last one
+            last = m if inner else n_copies - 1
+            new_box[0][ax] = forward(box[0][ax], m)
+            new_box[1][ax] = forward(box[1][ax], last)
+            entry["bbox"] = new_box
+        if "hull_volume" in base and (inner or mode == "global"):
+            entry["hull_volume"] = base["hull_volume"] * scale
+    info.sort(key=lambda x: x.get("index", -1))
+
+
+def renumber_copies(
+    src_sdf: np.ndarray,
+    src_parts: np.ndarray,
+    out_parts: np.ndarray,
+    plan: Plan,
+    *,
+    i_start: float,
+    i_end: float,
+) -> dict[int, tuple[int, int]]:
+    """Give copies ``m >= 1`` of the parts lying wholly inside the zone new indices (in place).
+
+    New indices follow the existing ones: copy ``m`` of inner part ``p`` (rank ``r`` among the
+    ``q`` inner parts) becomes ``P + (m - 1) q + r``. Parts that cross the zone's planes run
+    continuously through every copy and keep their index. Returns ``{new: (original, m)}``.
+    """
+    inner = inner_parts(src_sdf, src_parts, i_start, i_end)
+    n_copies = int(plan.copy.max()) + 1
+    if inner.size == 0 or n_copies < 2:
+        return {}
+    base = int(src_parts.max()) + 1
+    q = inner.size
+    if base + (n_copies - 1) * q - 1 > np.iinfo(np.int16).max:
+        raise InputError(
+            f"tile: expected at most {np.iinfo(np.int16).max + 1} parts, got "
+            f"{base + (n_copies - 1) * q}"
+        )
+    copy_of: dict[int, tuple[int, int]] = {}
+    for m in range(1, n_copies):
+        layers = np.flatnonzero(plan.in_slab & (plan.copy == m))
+        if layers.size == 0:
+            continue
+        lut = np.arange(-1, base, dtype=np.int64)  # lut[p + 1] = p
+        new = base + (m - 1) * q + np.arange(q)
+        lut[inner + 1] = new
+        for p, nw in zip(inner.tolist(), new.tolist(), strict=True):
+            copy_of[nw] = (p, m)
+        block = out_parts[layers]
+        out_parts[layers] = lut[block.astype(np.int64) + 1].astype(np.int16)
+    return copy_of

@@ -1,0 +1,162 @@
+"""An edit resolved on the CSDF it applies to: world positions, validated, snapped to whole voxels.
+
+:func:`resolve_edit` is the one place an :class:`~partscale.edit.Edit` is checked against an
+object; the scaling stage performs exactly the :class:`ResolvedEdit` it returns, the evaluation
+judges the result against it, and a fit solver can try positions with it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._memory import check_memory
+from ..csdf import CSDF
+from ..errors import InputError
+from .recipe import AXES, Edit, tile_count
+
+#: Peak working bytes per output voxel of an edit (output arrays, float temporaries, masks).
+BYTES_PER_VOXEL = 64  # 48, plus up to 16 where every voxel is re-evaluated (index, old value, flag)
+
+
+@dataclass(frozen=True)
+class ResolvedEdit:
+    """One zone edit in world units on a given object.
+
+    Attributes
+    ----------
+    axis : int
+        0, 1, 2 for x, y, z.
+    start, end : float
+        The zone ``[start, end]`` before the edit.
+    dest : float
+        Where ``end`` goes: the given position snapped to ``end`` plus a whole number of voxels,
+        which is what the scaling stage performs (grids keep their voxel size).
+    lo, hi : float
+        The original solid's extent along ``axis`` (what ``%`` positions refer to).
+    mode : {'stretch', 'tile', 'global'}
+    given_dest : float or None
+        ``dest`` as given, before snapping (recorded in the history); ``dest`` if not given.
+    """
+
+    axis: int
+    start: float
+    end: float
+    dest: float
+    lo: float
+    hi: float
+    mode: str = "stretch"
+    given_dest: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.given_dest is None:
+            object.__setattr__(self, "given_dest", self.dest)
+
+    @property
+    def axis_name(self) -> str:
+        return AXES[self.axis]
+
+    @property
+    def shift(self) -> float:
+        """How far content beyond the zone moves: ``dest - end``."""
+        return self.dest - self.end
+
+    @property
+    def target_length(self) -> float:
+        """The solid's length along the axis after the edit."""
+        return self.hi - self.lo + self.shift
+
+    @property
+    def factor(self) -> float:
+        """Scale factor of the whole solid along the axis in ``global`` mode."""
+        return self.target_length / (self.hi - self.lo)
+
+    @property
+    def n_copies(self) -> int:
+        """Copies of the zone a ``tile`` makes (:func:`~partscale.edit.tile_count`)."""
+        return tile_count(self.end - self.start, self.dest - self.start)
+
+    def shift_voxels(self, voxel_size: float) -> int:
+        """Whole voxels the grid grows (shrinks, if negative) along the axis."""
+        return round(self.shift / voxel_size)
+
+    def to_source(self, y: np.ndarray) -> np.ndarray:
+        """Map coordinates after the edit back to before, for rigid content and for ``global``."""
+        y = np.asarray(y, dtype=np.float64)
+        if self.mode == "global":
+            return self.lo + (y - self.lo) / self.factor
+        return np.where(y <= self.start, y, y - self.shift)
+
+    def to_result(self, x: np.ndarray) -> np.ndarray:
+        """Map coordinates before the edit to after (inverse of :meth:`to_source` outside)."""
+        x = np.asarray(x, dtype=np.float64)
+        if self.mode == "global":
+            return self.lo + (x - self.lo) * self.factor
+        return np.where(x <= self.start, x, x + self.shift)
+
+    def seams(self) -> list[tuple[float, float | None]]:
+        """Seam planes in the result, each with the original plane it continues (None: a join).
+
+        The zone's two planes, and for ``tile`` the joins between consecutive copies.
+        """
+        if self.mode == "global":
+            return [
+                (float(self.to_result(self.start)), self.start),
+                (float(self.to_result(self.end)), self.end),
+            ]
+        out: list[tuple[float, float | None]] = [(self.start, self.start), (self.dest, self.end)]
+        if self.mode == "tile":
+            n = self.n_copies
+            step = (self.dest - self.start) / n
+            out += [(self.start + m * step, None) for m in range(1, n)]
+        return out
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.6g}"
+
+
+def resolve_edit(csdf: CSDF, edit: Edit) -> ResolvedEdit:
+    """Validate ``edit`` against ``csdf`` and resolve it to world units.
+
+    ``%`` positions refer to the solid's extent along the axis; ``dest`` is snapped to whole
+    voxels. Raises :class:`InputError` for a zone outside the solid or thinner than two voxels, a
+    destination not beyond the start, or an output grid too large for memory.
+    """
+    ax = edit.axis_index
+    h = csdf.voxel_size
+    sb = csdf.surface_bounds()
+    lo, hi = float(sb[0, ax]), float(sb[1, ax])
+    s, e, d = edit.resolve(lo, hi)
+    if not all(map(math.isfinite, (s, e, d, (d - e) / h))):
+        raise InputError(
+            f"zone, to: expected finite positions, got zone [{_fmt(s)}, {_fmt(e)}], to {_fmt(d)}"
+        )
+    name = AXES[ax]
+    if not s < e:
+        raise InputError(f"zone: expected start < end, got start {_fmt(s)} >= end {_fmt(e)}")
+    if not d > s:
+        raise InputError(f"to: expected DEST > START {_fmt(s)}, got {_fmt(d)}")
+    tol = h / 2
+    if s < lo - tol or e > hi + tol:
+        raise InputError(
+            f"zone: expected inside the solid's extent [{_fmt(lo)}, {_fmt(hi)}] along {name}, "
+            f"got [{_fmt(s)}, {_fmt(e)}]"
+        )
+    if e - s < 2 * h:
+        raise InputError(
+            f"zone: expected at least two voxels thick ({_fmt(2 * h)}), got {_fmt(e - s)}"
+        )
+    shift = round((d - e) / h)
+    d_snap = e + shift * h
+    if d_snap - s < h:
+        raise InputError(
+            f"to: expected DEST at least one voxel ({_fmt(h)}) beyond START {_fmt(s)}, "
+            f"got {_fmt(d)}"
+        )
+    shape = list(csdf.shape)
+    shape[ax] += shift
+    check_memory(tuple(shape), BYTES_PER_VOXEL, what=f"scale along {name} to {_fmt(d)}")
+    return ResolvedEdit(ax, s, e, d_snap, lo, hi, edit.mode, given_dest=d)

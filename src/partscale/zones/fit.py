@@ -1,0 +1,204 @@
+"""Fit to size: zones and modes chosen per axis so the object reaches a target extent.
+
+Per axis (see :func:`fit`): where a repeat is found, tile one period with the number of copies
+that brings the length closest to the target, and absorb the remainder (less than half a period)
+by stretching the best constant slab outside that period, so spacing is kept and the length is
+exact; with no repeat, stretch the best constant slab (several, largest first, where one cannot
+shrink far enough); global scaling only where neither exists. All positions are on the input
+object (recipe coordinates), so the tile and the stretch on one axis are drawn on the original.
+Every change is snapped to whole voxels up front, so the result's extent is the target to half
+a voxel.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .._options import keyword_options
+from ..csdf import CSDF
+from ..edit import Edit, Recipe, tile_count
+from ..errors import InputError
+from ..progress import ProgressCallback, resolve
+from .profile import profile
+from .suggest import AXES, Candidate, axis_candidates
+from .units import parse_size
+
+#: Largest relative change of the tiled copies accepted instead of stretching a gap inside the
+#: repeat (which would make one spacing uneven).
+COPY_TOLERANCE = 0.05
+#: A slab shrinks to no less than this many voxels.
+MIN_SLAB_VOXELS = 2
+
+
+def _fmt(x: float, units: str | None) -> str:
+    if units == "m":
+        return f"{x * 100:.1f} cm" if abs(x) < 1 else f"{x:.3f} m"
+    return f"{x:.4g}"
+
+
+def _disjoint(c: Candidate, zone: tuple[float, float] | None) -> bool:
+    return zone is None or c.zone[1] <= zone[0] or c.zone[0] >= zone[1]
+
+
+def _stretch_edits(
+    slabs: list[Candidate], change: float, h: float, axis: str
+) -> tuple[list[Edit], float]:
+    """Stretch edits absorbing ``change`` (whole voxels) over ``slabs`` (best first)."""
+    if change >= 0 or not slabs:
+        if not slabs:
+            return [], change
+        a, b = slabs[0].zone
+        return [Edit(axis, a, b, b + change, "stretch")], 0.0
+    edits, left = [], change  # shrinking: largest slabs first, each down to MIN_SLAB_VOXELS
+    for c in sorted(slabs, key=lambda c: c.zone[0] - c.zone[1]):
+        a, b = c.zone
+        room = -round(max(0.0, (b - a) - MIN_SLAB_VOXELS * h) / h) * h
+        take = max(left, room)
+        if take < 0:
+            edits.append(Edit(axis, a, b, b + take, "stretch"))
+            left -= take
+        if left > -h / 2:
+            break
+    return edits, left
+
+
+def fit_axis(csdf: CSDF, axis: int, target: float, *, prof=None) -> tuple[list[Edit], list[str]]:
+    """Edits (recipe coordinates) bringing the extent along ``axis`` to ``target``, and why."""
+    name = AXES[axis]
+    units = csdf.meta.get("units")
+    sb = csdf.surface_bounds()
+    lo, hi = float(sb[0, axis]), float(sb[1, axis])
+    extent = hi - lo
+    h = csdf.voxel_size
+    change = round((target - extent) / h) * h  # whole voxels: every edit moves content by voxels
+    if change == 0:
+        return [], [f"{name}: kept ({_fmt(extent, units)}, target within half a voxel)"]
+    p = prof if prof is not None else profile(csdf, axis)
+    cands = axis_candidates(csdf, axis, prof=p)
+    tiles = [c for c in cands if c.kind == "tile"]
+    slabs = [c for c in cands if c.kind == "stretch"]
+    # what cannot shrink: the extent less every slab down to its minimum and the removable periods
+    shrinkable = sum(max(0.0, c.zone[1] - c.zone[0] - MIN_SLAB_VOXELS * h) for c in slabs)
+    if tiles:
+        shrinkable = max(shrinkable, (tiles[0].count - 1) * tiles[0].period)
+    if cands and target < extent - shrinkable - h / 2:
+        raise InputError(
+            f"size along {name}: expected at least {_fmt(extent - shrinkable, units)} (the rigid "
+            f"parts' total: what no slab or repeat can give up), got {_fmt(target, units)}"
+        )
+    edits: list[Edit] = []
+    why: list[str] = []
+    left = change
+    tile_zone = None
+    if tiles:
+        t = tiles[0]
+        period = float(t.period)
+        k = int(np.floor(change / period + 0.5))
+        k = max(k, 1 - t.count)  # cannot remove more periods than the repeat holds
+        if k != 0:
+            s = t.zone[0]
+            if k > 0:  # one period, 1 + k copies
+                e = s + period
+                grow = round(k * period / h) * h
+            else:  # -k + 1 periods, one copy (starting early enough to fit in the repeat)
+                s = max(t.region[0], min(s, t.region[1] - (1 - k) * period))
+                e = s + (1 - k) * period
+                grow = round(k * period / h) * h
+            edits.append(Edit(name, s, e, e + grow, "tile"))
+            tile_zone = (s, e)
+            left = change - grow
+            why.append(
+                f"{name}: tile {abs(k)} {'more' if k > 0 else 'fewer'} period(s) of "
+                f"{_fmt(period, units)} ({t.reason}), zone {_fmt(s - lo, units)}..{_fmt(e - lo, units)} "
+                f"from the {name} min"
+            )
+    if abs(left) > h / 2:
+        # slabs outside the whole repeat first (a gap inside it would make one spacing uneven)
+        region = tiles[0].region if tile_zone is not None else None
+        free = [c for c in slabs if _disjoint(c, region)]
+        if not free and tile_zone is not None:
+            # only gaps inside the repeat: one uneven gap is worse than copies a little off
+            copies_len = float(edits[0].dest) - float(edits[0].start)
+            if abs(left) > COPY_TOLERANCE * copies_len:
+                free = [c for c in slabs if _disjoint(c, tile_zone)]
+        st, rest = _stretch_edits(free, left, h, name)
+        for ed in st:
+            a, b = float(ed.start), float(ed.end)
+            why.append(
+                f"{name}: stretch the constant slab {_fmt(a - lo, units)}..{_fmt(b - lo, units)} "
+                f"from the {name} min by {_fmt(float(ed.dest) - b, units)}"
+                + (" (the remainder after whole periods)" if tile_zone else "")
+            )
+        edits += st
+        if abs(rest) > h / 2:
+            if tile_zone is not None:  # the copies absorb it: spacing changes a little
+                t0 = edits[0]
+                dest = float(t0.dest) + rest
+                n = tile_count(float(t0.end) - float(t0.start), dest - float(t0.start))
+                edits[0] = Edit(name, t0.start, t0.end, dest, "tile")
+                pct = 100 * rest / (dest - float(t0.start))
+                why.append(
+                    f"{name}: no constant slab outside the tiled zone: its {n} copies absorb "
+                    f"{_fmt(rest, units)} (each {pct:+.1f}%)"
+                )
+            else:
+                edits = [Edit(name, lo, hi, hi + change, "global")]
+                why = [
+                    f"{name}: GLOBAL scaling (last resort): no repeated element and no slab of "
+                    f"constant cross-section along {name} could take {_fmt(change, units)}"
+                ]
+    return edits, why
+
+
+@keyword_options
+def fit(
+    csdf: CSDF,
+    size: Sequence[str | float],
+    *,
+    progress: ProgressCallback | None = None,
+) -> tuple[Recipe, list[str]]:
+    """The recipe that resizes ``csdf`` to ``size`` along x, y, z, and why it was chosen.
+
+    Parameters
+    ----------
+    csdf : CSDF
+    size : 3 specs
+        Per axis: ``'='`` (unchanged), an absolute length (``2.1``, ``'210cm'``,
+        ``'2100mm'``; bare numbers in object units), a change (``'+20cm'``, ``'-5cm'``) or a
+        percentage of the current extent (``'120%'``).
+
+    Returns
+    -------
+    (Recipe, list of str)
+        The recipe (positions on ``csdf``, world units; apply with
+        :func:`partscale.edit.apply_recipe`) and one line per choice made. An axis already
+        within half a voxel of its target gets no edit.
+
+    Raises
+    ------
+    InputError
+        A size that is not positive, unknown units, or a target below what the rigid parts
+        alone measure.
+    """
+    report = resolve(progress)
+    if isinstance(size, str) or len(size) != 3:
+        raise InputError(f"size: expected three values (x y z), got {size!r}")
+    units = csdf.meta.get("units")
+    sb = csdf.surface_bounds()
+    targets = [
+        parse_size(v, extent=float(sb[1, a] - sb[0, a]), units=units, what=f"size {AXES[a]}")
+        for a, v in enumerate(size)
+    ]
+    edits: list[Edit] = []
+    why: list[str] = []
+    for a, t in enumerate(targets):
+        report(a / 3, f"axis {AXES[a]}")
+        e, w = fit_axis(csdf, a, t)
+        edits += e
+        why += w
+    report(1.0, "done")
+    if not edits:
+        raise InputError("size: expected a change on some axis, got the current size")
+    return Recipe(tuple(edits)), why

@@ -1,0 +1,122 @@
+"""Snapping a user's zone to the nearest good one for its mode.
+
+- ``tile``: the zone becomes one whole period of the repeat it lies in (the tile candidate whose
+  repeat overlaps it most), with its planes at the best phase nearest the given start (in a gap,
+  or where the cross-sections at both planes match); the destination keeps the given growth
+  rounded to whole periods, so every copy is a copy.
+- ``stretch``: the planes move inside the constant slab that overlaps the zone most (or the
+  nearest one); where less than two voxels of the zone would remain, the zone becomes the slab.
+  The destination keeps the given change ``DEST - END``.
+- ``global``: nothing moves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..csdf import CSDF
+from ..edit import Edit, tile_count
+from ..errors import InputError
+from .profile import profile
+from .suggest import AXES, Candidate, axis_candidates, best_phase
+
+
+@dataclass(frozen=True)
+class Move:
+    """One plane moved by snapping: ``plane`` ('start', 'end' or 'to'), world ``before``/``after``."""
+
+    plane: str
+    before: float
+    after: float
+
+    @property
+    def by(self) -> float:
+        return self.after - self.before
+
+    def to_json(self) -> dict:
+        return {"plane": self.plane, "from": self.before, "to": self.after}
+
+
+def _overlap(zone: tuple[float, float], c: Candidate) -> float:
+    return min(zone[1], c.region[1]) - max(zone[0], c.region[0])
+
+
+def snap(csdf: CSDF, edit: Edit | dict, mode: str | None = None) -> tuple[Edit, list[Move]]:
+    """Snap ``edit``'s planes for ``mode`` (default: the edit's own).
+
+    Returns
+    -------
+    (Edit, list of Move)
+        The snapped edit in world units (on ``csdf``) and the planes that moved (those that
+        moved by less than 1e-9 world units are left out).
+
+    Raises
+    ------
+    InputError
+        When the axis has no candidate of the mode's kind (a non-repeating axis for tile).
+    """
+    edit = edit if isinstance(edit, Edit) else Edit.parse(edit)
+    mode = (mode or edit.mode).lower()
+    ax = edit.axis_index
+    sb = csdf.surface_bounds()
+    s, e, d = edit.resolve(float(sb[0, ax]), float(sb[1, ax]))
+    if not s < e:
+        raise InputError(f"zone: expected start < end, got [{s:.6g}, {e:.6g}]")
+    if mode == "global":
+        return Edit(edit.axis, s, e, d, mode), []
+    p = profile(csdf, ax)
+    h = p.voxel_size
+    kind = "tile" if mode == "tile" else "stretch"
+    cands = [c for c in axis_candidates(csdf, ax, prof=p) if c.kind == kind]
+    if not cands:
+        what = "repeated element" if kind == "tile" else "slab of constant cross-section"
+        raise InputError(
+            f"--snap: expected a {what} along {AXES[ax]} to snap a {mode} zone to, found none"
+        )
+    zone = (s, e)
+    best = max(cands, key=lambda c: (_overlap(zone, c), c.score))
+    if _overlap(zone, best) <= 0:  # none overlaps: the nearest
+        mid = (s + e) / 2
+        best = min(cands, key=lambda c: abs((c.region[0] + c.region[1]) / 2 - mid))
+    if kind == "tile":
+        period = float(best.period)
+        lo, hi = (float(v) for v in p.index(np.array(best.region)))
+        t = best_phase(p, period / h, lo, hi, near=float(p.index(s)))
+        s2 = float(p.world(t))
+        e2 = s2 + period
+        copies = tile_count(period, period + (d - e))
+        d2 = s2 + copies * period
+    else:
+        a, b = best.zone
+        s2, e2 = max(s, a), min(e, b)
+        if e2 - s2 < 2 * h:
+            s2, e2 = a, b
+        d2 = e2 + (d - e)
+    moves = [
+        Move(name, before, after)
+        for name, before, after in (("start", s, s2), ("end", e, e2), ("to", d, d2))
+        if abs(after - before) > 1e-9
+    ]
+    return Edit(edit.axis, s2, e2, d2, mode), moves
+
+
+def describe_moves(moves: list[Move], units: str | None) -> str:
+    """One line: what snapping moved and by how much (or that nothing moved)."""
+    if not moves:
+        return "snap: the planes were already at a good position"
+    u = f" {units}" if units else ""
+    parts = [f"{m.plane} {m.before:.4g} -> {m.after:.4g} ({m.by:+.4g}{u})" for m in moves]
+    return "snap: moved " + ", ".join(parts)
+
+
+def record_snap(csdf: CSDF, moves: list[Move]) -> CSDF:
+    """``csdf`` with its last history entry noting the snapped planes (``snapped``)."""
+    meta = dict(csdf.meta)
+    hist = [dict(h) if isinstance(h, dict) else h for h in meta.get("history", [])]
+    if not hist or not isinstance(hist[-1], dict):
+        raise InputError("history: expected an edit to record the snapping on, got none")
+    hist[-1]["snapped"] = [m.to_json() for m in moves]
+    meta["history"] = hist
+    return csdf.replace(meta=meta)

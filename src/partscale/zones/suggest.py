@@ -1,0 +1,367 @@
+"""Zone candidates found in the object itself: repeated elements (tile) and constant slabs (stretch).
+
+Repetition (in the spirit of Bokeloh et al.'s symmetry-based repetition detection, on the voxel
+grid instead of a clean mesh): along an axis, layer ``i`` and the layer ``s`` voxels beyond it are
+compared for every shift ``s`` (quarter-voxel steps, interpolated layers) by the soft Jaccard
+distance of their cross-sections (:mod:`.profile`). A *repeat* at shift ``s`` is a run of
+consecutive layers that all match the layer ``s`` beyond (distance below :data:`MATCH`), whose
+content within one period is not constant (some pair of layers less than ``s`` apart differs by
+at least :data:`CONTRAST`, so a constant slab, which matches itself at every shift, is no
+repeat), covering at least :data:`MIN_COUNT` periods, or two periods matched strongly (mean
+distance below :data:`STRONG`; a pair of drawers, but not a table's two legs, whose run covers
+only the legs). The period is the shift of least mean distance near it; multiples of a period
+(which match as well) are dropped. The zone is one period whose planes lie where the cost
+``area / max area + distance(plane, plane + period)`` is lowest, in the middle of that low run:
+in the gaps between elements, or where the cross-sections at both planes match.
+
+Constant slabs: maximal runs of layers whose neighbour-to-neighbour distance stays below
+:data:`STEP` and whose ends differ by less than :data:`DRIFT`; stretching them resamples equal
+layers, so nothing is distorted. Where the CSDF is segmented, a slab's planes are moved to the
+nearest plane between parts (a part's bounding box end) within a voxel, and its reason names them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from scipy import ndimage
+
+from .._options import keyword_options
+from ..csdf import CSDF
+from ..errors import InputError
+from ..progress import ProgressCallback, resolve
+from .profile import Profile, profile
+
+AXES = ("x", "y", "z")
+
+#: Two layers match when their soft Jaccard distance is below this.
+MATCH = 0.15
+#: A repeat's mean distance below this is a strong match (enough for two periods).
+STRONG = 0.05
+#: The content of one period must hold two layers at least this far apart.
+CONTRAST = 0.35
+#: Share of a repeat's layers whose one-period window must hold that contrast.
+VARIED = 0.9
+#: Fewest periods a repeat must cover (two are enough with a strong match).
+MIN_COUNT = 3
+#: How far (voxels) a copy may sit from its place in a strict period and still match.
+JITTER = 0.5
+#: Shift step of the period search, voxels.
+SHIFT_STEP = 0.25
+#: Constant slab: neighbouring layers closer than STEP, its two ends closer than DRIFT.
+STEP = 0.02
+DRIFT = 0.06
+#: Shortest constant slab reported, voxels.
+MIN_SLAB = 3
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A suggested zone.
+
+    Attributes
+    ----------
+    axis : {'x', 'y', 'z'}
+    kind : {'tile', 'stretch'}
+    zone : (float, float)
+        World ``(start, end)`` along the axis; for ``tile`` exactly one period long.
+    period : float or None
+        Tile: the period (world units); None for stretch.
+    count : int or None
+        Tile: how many whole periods the repeat covers; None for stretch.
+    score : float
+        0..1, higher is better; comparable across kinds and axes.
+    reason : str
+        One line: what was found.
+    region : (float, float)
+        World extent of the repeat (tile) or the slab (stretch).
+    """
+
+    axis: str
+    kind: Literal["tile", "stretch"]
+    zone: tuple[float, float]
+    period: float | None
+    count: int | None
+    score: float
+    reason: str
+    region: tuple[float, float]
+
+    def to_json(self) -> dict:
+        d = {
+            "axis": self.axis,
+            "kind": self.kind,
+            "zone": [self.zone[0], self.zone[1]],
+            "score": round(self.score, 4),
+            "reason": self.reason,
+            "region": [self.region[0], self.region[1]],
+        }
+        if self.kind == "tile":
+            d["period"] = self.period
+            d["count"] = self.count
+        return d
+
+
+def _runs(mask: np.ndarray) -> np.ndarray:
+    """(R, 2) int64 ``[first, last]`` of the runs of True in a 1D boolean array."""
+    m = np.concatenate([[False], mask, [False]])
+    d = np.diff(m.astype(np.int8))
+    return np.stack([np.flatnonzero(d == 1), np.flatnonzero(d == -1) - 1], axis=1)
+
+
+def _solid_layers(p: Profile) -> tuple[int, int]:
+    i0 = max(0, int(np.ceil(p.index(p.lo) - 0.5)))
+    i1 = min(p.n - 1, int(np.floor(p.index(p.hi) + 0.5)))
+    return i0, i1
+
+
+@dataclass(frozen=True)
+class _Repeat:
+    shift: float  # period, voxels
+    first: int  # first layer of the matching run
+    last: int  # last layer of the matching run
+    err: float  # mean distance over the run at the refined period
+    count: int
+
+    @property
+    def span(self) -> tuple[float, float]:
+        return float(self.first), float(self.last) + self.shift
+
+
+def find_repeats(p: Profile) -> list[_Repeat]:
+    """Every repeat of ``p`` (see module docstring), fundamental periods only, best first."""
+    i0, i1 = _solid_layers(p)
+    n_solid = i1 - i0 + 1
+    if n_solid < 6:
+        return []
+    dist = p.distance(np.arange(p.n)[:, None], np.arange(p.n)[None, :])
+    layers = np.arange(i0, i1 + 1)
+    shifts = np.arange(2.0, n_solid / 2 + SHIFT_STEP, SHIFT_STEP)
+    err = p.shifted_distance(layers[None, :], shifts[:, None])  # (S, N)
+    # repeats drift by up to JITTER between copies (hand-placed shelves): a layer matches if a
+    # layer within JITTER of the shifted position does
+    w = round(JITTER / SHIFT_STEP)
+    loose = ndimage.minimum_filter1d(err, 2 * w + 1, axis=0, mode="nearest")
+    found: list[_Repeat] = []
+    for si, s in enumerate(shifts):
+        e = loose[si]
+        # the shifted layer must lie within the solid too
+        ok = (e < MATCH) & (layers + s <= i1 + 0.5)
+        for a, b in _runs(ok):
+            run_len = b - a + 1
+            if run_len + s < 2 * s - 1e-9:  # fewer than two periods
+                continue
+            first, last = layers[a], layers[b]
+            # content within every period must vary (each window of one period from a layer of
+            # the run holds a layer far from it): a constant slab matches itself at every shift,
+            # and one with a feature at its end is no repeat either
+            sub = dist[first : last + 1, first : min(last + int(np.ceil(s)), p.n)]
+            off = np.arange(sub.shape[1])[None, :] - np.arange(sub.shape[0])[:, None]
+            varied = np.where((off > 0) & (off < s), sub, 0.0).max(axis=1) >= CONTRAST
+            if varied.mean() < VARIED:
+                continue
+            # the period: the shift near s of least mean (exact) distance over the run
+            near = np.flatnonzero(np.abs(shifts - s) <= JITTER + 1e-9)
+            best = near[np.argmin(err[near, a : b + 1].mean(axis=1))]
+            found.append(
+                _Repeat(float(shifts[best]), int(first), int(last), float(e[a : b + 1].mean()), 0)
+            )
+    if not found:
+        return []
+    # refine: for each (run, shift) keep the shift of least mean error among near-equal ones
+    # longest well-matched repeats first: a short run at a near-equal shift must not hide one
+    found.sort(key=lambda r: -(r.last - r.first + 1 + r.shift) * (1 - r.err / MATCH))
+    kept: list[_Repeat] = []
+    for r in found:
+        if any(abs(r.shift - q.shift) <= 1.0 and _overlap(r, q) > 0.5 for q in kept):
+            continue
+        count = int(np.floor((r.last - r.first + 1 + r.shift) / r.shift + 0.25))
+        strong = r.err < STRONG
+        if count < MIN_COUNT and not (count >= 2 and strong):
+            continue
+        kept.append(_Repeat(r.shift, r.first, r.last, r.err, count))
+    # drop multiples of a kept period over the same region (they match too)
+    out: list[_Repeat] = []
+    for r in sorted(kept, key=lambda r: r.shift):
+        if any(
+            _overlap(r, q) > 0.5 and abs(r.shift / q.shift - round(r.shift / q.shift)) * q.shift < 1
+            for q in out
+        ):
+            continue
+        out.append(r)
+    return out
+
+
+def _overlap(a: _Repeat, b: _Repeat) -> float:
+    lo = max(a.span[0], b.span[0])
+    hi = min(a.span[1], b.span[1])
+    return max(0.0, hi - lo) / max(1e-9, min(a.span[1] - a.span[0], b.span[1] - b.span[0]))
+
+
+def plane_cost(p: Profile, period: float, starts: np.ndarray) -> np.ndarray:
+    """(K,) cost of a tile zone ``[t, t + period]`` (layer indices ``starts``): low in gaps and
+    where the two planes' cross-sections match."""
+    amax = max(float(p.area.max()), 1e-9)
+    area = np.interp(starts, np.arange(p.n), p.area) / amax
+    area2 = np.interp(starts + period, np.arange(p.n), p.area) / amax
+    k = np.floor(starts).astype(np.int64)
+    f = starts - k
+    # distance between the layers at t and t + period, both interpolated (via the nearer layer)
+    base = np.where(f < 0.5, k, np.minimum(k + 1, p.n - 1))
+    d = p.shifted_distance(base, period + starts - base)
+    return 0.5 * (area + area2) + d
+
+
+def best_phase(p: Profile, period: float, lo: float, hi: float, near: float | None = None) -> float:
+    """Start (layer index) of the best one-period zone inside ``[lo, hi]`` (layer indices).
+
+    The lowest-cost run of starts (quarter-voxel steps) nearest ``near`` (default: the middle of
+    the range), and the middle of that run.
+    """
+    starts = np.arange(lo, hi - period + 1e-9, SHIFT_STEP)
+    if starts.size == 0:
+        return lo
+    cost = plane_cost(p, period, starts)
+    good = cost <= cost.min() + 0.03
+    runs = _runs(good)
+    mids = (starts[runs[:, 0]] + starts[runs[:, 1]]) / 2
+    target = (lo + hi - period) / 2 if near is None else near
+    best = runs[np.argmin(np.abs(mids - target))]
+    return float((starts[best[0]] + starts[best[1]]) / 2)
+
+
+def constant_slabs(p: Profile) -> list[tuple[int, int, float]]:
+    """``(first, last, drift)`` layer runs of constant, non-empty cross-section (see module)."""
+    i0, i1 = _solid_layers(p)
+    idx = np.arange(i0, i1)
+    step = p.distance(idx, idx + 1)
+    calm = (step < STEP) & (p.area[idx] > 0) & (p.area[idx + 1] > 0)
+    out = []
+    for a, b in _runs(calm):
+        first, last = idx[a], idx[b] + 1
+        # split where the drift from the slab's start exceeds DRIFT (a slowly changing section)
+        while last - first + 1 >= MIN_SLAB:
+            drift = p.distance(np.full(last - first + 1, first), np.arange(first, last + 1))
+            over = np.flatnonzero(drift >= DRIFT)
+            end = (over[0] - 1 + first) if over.size else last
+            if end - first + 1 >= MIN_SLAB:
+                out.append((int(first), int(end), float(drift[: end - first + 1].max())))
+            first = end + 1
+    return out
+
+
+def _part_planes(csdf: CSDF, axis: int) -> np.ndarray:
+    info = csdf.meta.get("parts_info")
+    if not isinstance(info, list):
+        return np.zeros(0)
+    ends = []
+    for x in info:
+        box = x.get("bbox") if isinstance(x, dict) else None
+        if box is not None:
+            ends += [float(box[0][axis]), float(box[1][axis])]
+    return np.unique(np.asarray(ends, dtype=np.float64))
+
+
+def _axis_index(axis: str | int) -> int:
+    if isinstance(axis, str) and axis.lower() in AXES:
+        return AXES.index(axis.lower())
+    if isinstance(axis, int | np.integer) and not isinstance(axis, bool) and 0 <= axis < 3:
+        return int(axis)
+    raise InputError(f"axis: expected one of x, y, z, got {axis!r}")
+
+
+def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -> list[Candidate]:
+    """Candidates along one axis, best first (see :func:`suggest`)."""
+    ax = _axis_index(axis)
+    p = prof if prof is not None else profile(csdf, ax)
+    h = p.voxel_size
+    extent = max(p.hi - p.lo, h)
+    name = AXES[ax]
+    out: list[Candidate] = []
+    for r in find_repeats(p):
+        a, b = r.span
+        t = best_phase(p, r.shift, a, b)
+        period = r.shift * h
+        cover = min(1.0, (b - a) * h / extent)
+        # more repeats are stronger evidence: 2 -> 0.67, 3 -> 0.75, 8 -> 0.89
+        score = (1 - r.err / MATCH) * (0.5 + 0.5 * cover) * (1 - 1 / (r.count + 1))
+        out.append(
+            Candidate(
+                axis=name,
+                kind="tile",
+                zone=(float(p.world(t)), float(p.world(t) + period)),
+                period=float(period),
+                count=r.count,
+                score=float(np.clip(score, 0, 1)),
+                reason=(
+                    f"{r.count} repeats of a {period:.4g} period ({100 * period / extent:.1f}% of "
+                    f"the extent), cross-sections match to {r.err:.3f}"
+                ),
+                region=(float(p.world(a)), float(p.world(b))),
+            )
+        )
+    planes = _part_planes(csdf, ax)
+    for first, last, drift in constant_slabs(p):
+        s, e = float(p.world(first)), float(p.world(last))
+        why = ""
+        if planes.size:
+            # prefer a plane between parts within a voxel, if still inside the slab
+            for which, v in (("start", s), ("end", e)):
+                j = np.argmin(np.abs(planes - v))
+                if abs(planes[j] - v) <= h and s - h <= planes[j] <= e + h:
+                    if which == "start":
+                        s = max(s, float(planes[j]))
+                    else:
+                        e = min(e, float(planes[j]))
+                    why = ", planes at part boundaries"
+        if e - s < 2 * h:
+            continue
+        length = (e - s) / extent
+        score = (1 - drift / DRIFT) * min(1.0, 0.3 + length)
+        out.append(
+            Candidate(
+                axis=name,
+                kind="stretch",
+                zone=(s, e),
+                period=None,
+                count=None,
+                score=float(np.clip(score, 0, 1)),
+                reason=(
+                    f"constant cross-section over {e - s:.4g} ({100 * length:.1f}% of the extent), "
+                    f"drift {drift:.3f}{why}"
+                ),
+                region=(s, e),
+            )
+        )
+    out.sort(key=lambda c: -c.score)
+    return out
+
+
+@keyword_options
+def suggest(
+    csdf: CSDF, axis: str | int | None = None, *, progress: ProgressCallback | None = None
+) -> list[Candidate]:
+    """Zone candidates of ``csdf``, ranked best first.
+
+    Parameters
+    ----------
+    csdf : CSDF
+    axis : {'x', 'y', 'z'} or None
+        One axis, or all three.
+
+    Returns
+    -------
+    list of Candidate
+        ``tile`` (one period of a repeated element, planes in the gaps) and ``stretch`` (a slab
+        of constant cross-section); an axis without either gives none.
+    """
+    report = resolve(progress)
+    axes = [_axis_index(axis)] if axis is not None else [0, 1, 2]
+    out: list[Candidate] = []
+    for n, ax in enumerate(axes):
+        report(n / len(axes), f"axis {AXES[ax]}")
+        out += axis_candidates(csdf, ax)
+    report(1.0, "done")
+    out.sort(key=lambda c: -c.score)
+    return out

@@ -207,3 +207,40 @@ def test_textured_result_renders_with_its_texture(data, tmp_path):
     # textured wood, not a flat material colour: the same palette before and after
     assert after.std(axis=0).max() > 10
     assert np.abs(after.mean(axis=0) - before.mean(axis=0)).max() <= 10
+
+
+def test_two_edits_on_one_axis_refer_to_the_input(data):
+    """As on the CSDF route, the second zone is given on the input and carried through the
+    first edit: what lies between the two zones moves by the first edit's change only."""
+    scene = load_scene(data(SHELF[0]))
+    recipe = Recipe.parse(
+        [
+            {"axis": "y", "zone": ["10%", "30%"], "to": "40%", "mode": "stretch"},
+            {"axis": "y", "zone": ["60%", "80%"], "to": "90%", "mode": "stretch"},
+        ]
+    )
+    out, _ = apply_recipe_to_scene(scene, recipe)
+    ext = scene.extents[1]
+    # each adds 10% of the input's extent
+    assert out.extents[1] == pytest.approx(1.2 * ext, rel=1e-9)
+    # the input's 60% plane moved by the first edit's +10% only: vertices there stay put after
+    w0 = np.concatenate([w for _, _, w in _world(scene)])
+    w1 = np.concatenate([w for _, _, w in _world(out)])[: len(w0)]
+    lo = scene.bounds[0, 1]
+    mid = (w0[:, 1] > lo + 0.3 * ext) & (w0[:, 1] < lo + 0.6 * ext)
+    assert mid.sum() > 100
+    assert np.abs(w1[mid, 1] - w0[mid, 1] - 0.1 * ext).max() <= 1e-9 * ext
+
+
+def test_cli_mesh_route_by_and_fit(cli, data, tmp_path):
+    src = data(TABLE[0])
+    width = trimesh.load(src, force="mesh").extents[0]
+    out = tmp_path / "by.glb"
+    proc = cli("scale", src, "-o", out, "--axis", "x", "--zone", "25%", "75%", "--by", "+40cm")
+    assert proc.returncode == 0, proc.stderr
+    assert trimesh.load(out, force="mesh").extents[0] == pytest.approx(width + 0.4, abs=1e-6)
+    out = tmp_path / "fit.obj"
+    proc = cli("fit", src, "-o", out, "--size", "3.0", "=", "=")
+    assert proc.returncode == 0, proc.stderr
+    # fit chooses its zones on the CSDF at 128: the length within a voxel (2.65 m / 128)
+    assert abs(trimesh.load(out, force="mesh").extents[0] - 3.0) <= 2.65 / 128

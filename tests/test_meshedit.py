@@ -244,3 +244,17 @@ def test_cli_mesh_route_by_and_fit(cli, data, tmp_path):
     assert proc.returncode == 0, proc.stderr
     # fit chooses its zones on the CSDF at 128: the length within a voxel (2.65 m / 128)
     assert abs(trimesh.load(out, force="mesh").extents[0] - 3.0) <= 2.65 / 128
+
+
+def test_obj_in_obj_out_keeps_its_materials(data, tmp_path):
+    """Sweet Home 3D's table (OBJ + MTL colours, no UVs): each material group survives."""
+    scene = load_scene(data("sweethome3d/table.obj"))
+    edit = {"axis": "x", "zone": ["30%", "70%"], "to": "120%", "mode": "stretch"}
+    out, _ = apply_recipe_to_scene(scene, Recipe.parse([edit]))
+    _check_edit(scene, out, edit)
+    written = save_scene(out, tmp_path / "t.obj")
+    assert [p.name for p in written] == ["t.obj", "t.mtl"]
+    back = trimesh.load(written[0], force="scene")
+    kd = sorted(tuple(g.visual.material.diffuse[:3]) for g in back.geometry.values())
+    want = sorted(tuple(g.visual.material.diffuse[:3]) for g in scene.geometry.values())
+    assert kd == want and len(kd) >= 2

@@ -433,16 +433,15 @@ def _to_trimesh(inst: _Instance):
         n = np.linalg.solve(T[:3, :3], p.vattrs["normal"].T).T
         kwargs["vertex_normals"] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
     visual = geom.visual
-    if "uv" in p.vattrs:
-        vis = trimesh.visual.TextureVisuals(uv=p.vattrs["uv"], material=visual.material)
+    if isinstance(visual, trimesh.visual.TextureVisuals):
+        # a material with or without UVs (OBJ groups with a Kd colour have none)
+        vis = trimesh.visual.TextureVisuals(uv=p.vattrs.get("uv"), material=visual.material)
     elif "color" in p.vattrs:
         vis = trimesh.visual.ColorVisuals(
             vertex_colors=np.clip(np.rint(p.vattrs["color"]), 0, 255).astype(np.uint8)
         )
     elif "color" in p.fattrs:
         vis = trimesh.visual.ColorVisuals(face_colors=p.fattrs["color"])
-    elif visual.kind is None and hasattr(visual, "material"):
-        vis = trimesh.visual.TextureVisuals(material=visual.material)
     else:
         vis = None
     mesh = trimesh.Trimesh(local, p.faces, visual=vis, process=False, **kwargs)
@@ -493,9 +492,9 @@ def save_scene(scene, path: str | os.PathLike) -> list[Path]:
     else:
         from trimesh.exchange.obj import export_obj
 
-        mesh = scene.to_mesh()
+        # the scene itself, not one concatenated mesh: one usemtl group per material
         text, extra = export_obj(
-            mesh, include_texture=True, return_texture=True, mtl_name=path.stem + ".mtl"
+            scene, include_texture=True, return_texture=True, mtl_name=path.stem + ".mtl"
         )
         data = text.encode()
         for name, blob in extra.items():

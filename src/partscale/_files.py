@@ -178,6 +178,19 @@ def _remove_stale_temps(path: Path) -> None:
             os.unlink(path.parent / name)
 
 
+_TEMP_NAME = re.compile(r"^\.(?P<name>.+)\.\d+\.[a-z0-9_]{8}\.tmp")
+
+
+def final_path(tmp: Path) -> Path:
+    """The destination an :func:`atomic_path` temporary ``tmp`` will be renamed to.
+
+    Writers that put companion files beside their output (an OBJ's ``.mtl`` and texture) name
+    them after the destination, not after the temporary they are handed.
+    """
+    m = _TEMP_NAME.match(tmp.name)
+    return tmp.with_name(m["name"]) if m else tmp
+
+
 def _alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)

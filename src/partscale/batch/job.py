@@ -138,7 +138,7 @@ def run_job(
     Segmentation bypasses the segment cache, so results never depend on what earlier runs left
     there. Raises what the stages raise (:class:`InputError` for bad input).
     """
-    from .. import csdf as csdf_mod
+    from ..csdf import load as load_csdf
     from ..edit import Recipe, apply_recipe
     from ..ingest import load
 
@@ -146,7 +146,7 @@ def run_job(
     folder = outdir / name
     folder.mkdir(parents=True, exist_ok=True)
     if path.name.lower().endswith(CSDF_SUFFIX):
-        c = csdf_mod.load(path)
+        c = load_csdf(path)
     else:
         c = load(path, res=spec["res"])
     if spec["segment"]:
@@ -189,11 +189,11 @@ def _fit(c, size):
 def save_csdf(c, path: Path) -> Path:
     """:func:`partscale.csdf.save`, then its zip members stamped with a fixed time, so the same
     CSDF gives the same bytes whenever it is written (numpy stamps the current time)."""
-    from .. import csdf as csdf_mod
     from .._files import atomic_path
+    from ..csdf import save
 
     with atomic_path(path, suffix=".npz") as tmp:
-        csdf_mod.save(c, tmp)
+        save(c, tmp)
         with zipfile.ZipFile(tmp) as zin:
             members = [(i.filename, zin.read(i)) for i in zin.infolist()]
         with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:

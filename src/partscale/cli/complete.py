@@ -70,11 +70,11 @@ def complete(
     _common.check_output(output, suffixes=(".csdf.npz",), what="a CSDF file")
     pose = _numbers(camera, 16, "--camera")
     b = _numbers(box, 4, "--box")
-    from .. import complete as complete_mod
-    from .. import csdf as csdf_mod
+    from ..complete import complete_file
+    from ..csdf import save
 
     with _common.progress_bar("complete") as progress:
-        c = complete_mod.complete_file(
+        c = complete_file(
             scan,
             depth=depth,
             color=color,
@@ -88,7 +88,7 @@ def complete(
             symmetry=not no_symmetry,
             progress=progress,
         )
-    csdf_mod.save(c, output)
+    save(c, output)
     m = c.meta["completion"]
     _common.done(
         f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m; surface "

@@ -118,14 +118,13 @@ def _score_one(
             "eval --original: expected --edited or --recipe (one), got "
             + ("both" if edited is not None else "neither")
         )
-    from .. import csdf as csdf_mod
+    from ..csdf import load
     from ..edit import Recipe
-    from ..evaluate import score_edit
-    from ..evaluate.report import CRITERIA
+    from ..evaluate import CRITERIA, score_edit
 
-    a = csdf_mod.load(original)
+    a = load(original)
     if edited is not None:
-        result = score_edit(a, csdf_mod.load(edited))
+        result = score_edit(a, load(edited))
     else:
         result = score_edit(a, recipe=Recipe.load(recipe))
 

@@ -26,6 +26,30 @@ def export(
             "OUT.png (Unity flipbook + JSON sidecar) or OUT.nrrd (SDF for ParaView/Slicer).",
         ),
     ] = None,
+    faces: Annotated[
+        int | None,
+        typer.Option(
+            "--faces",
+            help="Triangle budget: decimate the mesh to at most N triangles (meshoptimizer). "
+            "Default: --error 0.1.",
+        ),
+    ] = None,
+    error: Annotated[
+        float | None,
+        typer.Option(
+            "--error",
+            help="Or decimate as far as the surface stays within E voxels of the full one "
+            "(default 0.1; 0 keeps full resolution).",
+        ),
+    ] = None,
+    atlas: Annotated[
+        int | None,
+        typer.Option(
+            "--atlas",
+            help="Unwrap (xatlas) and bake the colour into a SIZE x SIZE base-colour texture: "
+            "256, 512, 1024, 2048 or 4096 (GLB embeds it; OBJ writes NAME.mtl + NAME.png).",
+        ),
+    ] = None,
     size: Annotated[
         int | None,
         typer.Option(
@@ -54,6 +78,20 @@ def export(
         if not p.parent.is_dir():
             raise InputError(f"{p}: expected an existing output folder, got none at {p.parent}")
     export_mod.check_size(size)
+    if faces is not None and error is not None:
+        raise InputError("export: expected --faces or --error, got both")
+    if faces is None and error is None:
+        error = DEFAULT_ERROR
+    if error == 0:
+        error = None  # full resolution
+    budget = {"faces": faces, "error": error, "atlas": atlas}
+    if mesh is not None:
+        export_mod.check_budget(faces, error)
+        export_mod.check_atlas(atlas)
+        if atlas is not None and mesh.suffix.lower() == ".ply":
+            raise InputError(f"{mesh}: expected .glb or .obj with --atlas (PLY has no textures)")
+    elif faces is not None or atlas is not None:
+        raise InputError("export: expected --mesh with --faces, --error or --atlas, got no --mesh")
     c = load(path)
     written: list[Path] = []
     with progress_bar("export") as bar:
@@ -67,8 +105,42 @@ def export(
         if size is not None:
             c = export_mod.resize_grid(c, size, progress=part())
         if mesh is not None:
-            export_mod.export_mesh(c, mesh, progress=part())
+            export_mod.export_mesh(c, mesh, **budget, progress=part())
             written.append(mesh)
         for t in textures:
             written += export_mod.export_texture(c, t, progress=part())
-    done(f"wrote {', '.join(map(str, written))} ({' x '.join(map(str, c.shape))} voxels)")
+    if mesh is not None:
+        written += _beside(mesh, atlas)
+        done(_mesh_summary(mesh, faces, error))
+    sizes = ", ".join(f"{p} ({_kb(p)})" for p in written)
+    done(f"wrote {sizes} ({' x '.join(map(str, c.shape))} voxels)")
+
+
+#: the default budget: decimate while the surface stays within a tenth of a voxel
+DEFAULT_ERROR = 0.1
+
+
+def _kb(p: Path) -> str:
+    return f"{p.stat().st_size / 1024:,.0f} KB"
+
+
+def _beside(mesh: Path, atlas: int | None) -> list[Path]:
+    """The MTL and PNG an atlased OBJ writes beside itself."""
+    if atlas is None or mesh.suffix.lower() != ".obj":
+        return []
+    return [mesh.with_suffix(".mtl"), mesh.with_suffix(".png")]
+
+
+def _mesh_summary(mesh: Path, faces: int | None, error: float | None) -> str:
+    import trimesh
+
+    n = len(trimesh.load(mesh, force="mesh", process=False).faces)
+    if faces is not None:
+        budget = f"budget --faces {faces}"
+    elif error is not None:
+        budget = f"budget --error {error:g} voxel" + (
+            " (default)" if error == DEFAULT_ERROR else ""
+        )
+    else:
+        budget = "full resolution (--error 0)"
+    return f"mesh: {n:,} triangles, {budget}"

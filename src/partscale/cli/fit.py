@@ -13,8 +13,17 @@ from . import _common
 
 
 def fit(
-    src: Annotated[Path, typer.Argument(metavar="IN", help="Input .csdf.npz file.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
+    src: Annotated[
+        Path, typer.Argument(metavar="IN", help="Input .csdf.npz file, or a mesh (mesh route).")
+    ],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "-o",
+            "--output",
+            help="Output .csdf.npz file, or a mesh (.glb, .obj, .ply) for a mesh IN.",
+        ),
+    ],
     size: Annotated[
         tuple[str, str, str],
         typer.Option(
@@ -31,14 +40,32 @@ def fit(
     from .._files import atomic_path
     from ..edit import apply_recipe
     from ..zones import fit as fit_zones
+    from .scale import _MESH_IN, _MESH_OUT
 
-    _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
+    mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
+    if not mesh_route:
+        _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     if recipe_out is not None:
         _common.check_output(recipe_out, suffixes=(".json",), what="a recipe JSON file")
-    c = load(src)
+    if mesh_route:
+        # zones are found on the mesh's CSDF; the recipe is then applied to the mesh itself
+        from ..ingest import load as import_file
+
+        c = import_file(src)
+    else:
+        c = load(src)
     recipe, why = fit_zones(c, list(size))
     for line in why:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
+    if mesh_route:
+        from .scale import _scale_mesh
+
+        _scale_mesh(src, output, recipe)
+        if recipe_out is not None:
+            with atomic_path(recipe_out) as tmp:
+                tmp.write_text(json.dumps(recipe.to_json(), indent=2) + "\n")
+            _common.done(f"wrote {recipe_out}")
+        return
     with _common.progress_bar("fit") as bar:
         out = apply_recipe(c, recipe, progress=bar)
     save(out, output)

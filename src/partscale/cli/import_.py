@@ -41,6 +41,17 @@ def import_(
             "floats in [0, 1] (max <= 1.001) or 0..255 (max > 2); other ranges are refused.",
         ),
     ] = None,
+    up: Annotated[
+        str,
+        typer.Option("--up", help="The mesh's up axis: y (glTF), z (CAD, Blender), -y, -z, x, -x."),
+    ] = "y",
+    scale: Annotated[
+        float | None, typer.Option("--scale", help="Multiply the mesh's coordinates by this.")
+    ] = None,
+    units: Annotated[
+        str | None,
+        typer.Option("--units", help="The mesh's length unit, converted to metres: mm, cm, m, in."),
+    ] = None,
 ) -> None:
     """Import a coloured mesh or an SDF grid as a coloured SDF (.csdf.npz).
 
@@ -51,6 +62,16 @@ def import_(
     from .. import ingest  # numba, scipy, trimesh: only when importing, not for every command
 
     with _common.progress_bar(f"import {input.name}") as progress:
-        c = ingest.load(input, res=res, pad=pad, iso=iso, colors=colors, progress=progress)
+        c = ingest.load(
+            input,
+            res=res,
+            pad=pad,
+            iso=iso,
+            colors=colors,
+            up=up,
+            scale=scale,
+            units=units,
+            progress=progress,
+        )
     save(c, output)
     _common.done(f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m")

@@ -11,10 +11,27 @@ from ..csdf import SUFFIX, load, save
 from ..errors import InputError
 from . import _common
 
+# mesh in and mesh out: the mesh route (partscale.meshedit), edits applied to the source mesh
+_MESH_IN = (".glb", ".gltf", ".obj", ".ply")
+_MESH_OUT = (".glb", ".obj", ".ply")
+
 
 def scale(
-    src: Annotated[Path, typer.Argument(metavar="IN", help="Input .csdf.npz file.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
+    src: Annotated[
+        Path,
+        typer.Argument(
+            metavar="IN",
+            help="Input .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) for the mesh route.",
+        ),
+    ],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "-o",
+            "--output",
+            help="Output .csdf.npz file, or a mesh (.glb, .obj, .ply) when IN is one: the edit is applied to the source mesh itself.",
+        ),
+    ],
     axis: Annotated[str | None, typer.Option("--axis", help="x, y or z.")] = None,
     zone: Annotated[
         tuple[str, str] | None,
@@ -51,7 +68,9 @@ def scale(
     # The edit stage pulls in numba, scipy and scikit-image: load it only when a command runs.
     from ..edit import AXES, MODES, Recipe, apply_recipe
 
-    _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
+    mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
+    if not mesh_route:
+        _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     dest_given = [(n, v) for n, v in (("--to", to), ("--by", by), ("--copies", copies)) if v]
     if recipe is not None:
         given = [
@@ -64,7 +83,7 @@ def scale(
                 f"--recipe: expected alone (modes are in the recipe), got it with {', '.join(given)}"
             )
         rec = Recipe.load(recipe)
-        c = load(src)
+        c = None if mesh_route else load(src)
     else:
         missing = [n for n, v in (("--axis", axis), ("--zone", zone)) if v is None]
         if not dest_given:
@@ -86,7 +105,7 @@ def scale(
             raise InputError(f"--mode: expected one of {', '.join(MODES)}, got {mode!r}")
         if copies is not None and mode.lower() != "tile":
             raise InputError(f"--copies: expected --mode tile, got --mode {mode}")
-        c = load(src)
+        c = _object(src, mesh_route, snap)
         edit = _edit(c, axis.lower(), zone, mode.lower(), to=to, by=by, copies=copies)
         if snap:
             from ..zones import describe_moves
@@ -97,6 +116,8 @@ def scale(
                 describe_moves(moves, c.meta.get("units")), highlight=False, soft_wrap=True
             )
         rec = Recipe((edit,))
+    if mesh_route:
+        return _scale_mesh(src, output, rec)
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
     for line in _voxel_snaps(out.meta.get("history", [])[-len(rec.edits) :], out):
@@ -107,6 +128,33 @@ def scale(
         out = record_snap(out, moves)
     save(out, output)
     _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")
+
+
+def _object(src: Path, mesh_route: bool, snap: bool):
+    """What the options resolve against: the CSDF, or for the mesh route the mesh's frame (its
+    CSDF at the default resolution where --snap needs zones)."""
+    if not mesh_route:
+        return load(src)
+    if snap:
+        from ..ingest import load as import_file
+
+        return import_file(src)
+    from ..meshedit import mesh_frame
+
+    return mesh_frame(src)
+
+
+def _scale_mesh(src: Path, output: Path, rec) -> None:
+    from ..meshedit import edit_mesh_file
+
+    result = edit_mesh_file(src, output, rec)
+    for seam in result.seams:
+        if not seam.ok:
+            typer.echo(f"warning: {seam.message()}", err=True)
+    _common.done(
+        f"wrote {', '.join(map(str, result.written))} (mesh route: {result.faces_in} -> "
+        f"{result.faces_out} triangles)"
+    )
 
 
 def _edit(c, axis: str, zone, mode: str, *, to, by, copies):

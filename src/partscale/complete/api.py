@@ -260,7 +260,7 @@ def complete(
         copies) and ``guessed``, the symmetries and floor found, ``to_input_frame`` (4x4, grid
         frame -> input frame) and the per-voxel provenance (:func:`provenance`).
     """
-    from ..ingest.mesh_sdf import check_res
+    from ..ingest import check_res
 
     report = resolve(progress)
     res = check_res(res, source)

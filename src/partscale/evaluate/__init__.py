@@ -9,10 +9,12 @@
 
 from .compare import score_edit
 from .metrics import Reference, Zone, Zones, evaluate, zones_from_history
+from .report import CRITERIA
 from .suite import COMPARED_MODES, RECIPE_MODES, Suite, SuiteResult, load_suite, run_suite
 
 __all__ = [
     "COMPARED_MODES",
+    "CRITERIA",
     "RECIPE_MODES",
     "Reference",
     "Suite",

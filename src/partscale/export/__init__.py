@@ -5,8 +5,14 @@ Formats (chosen by the output's suffix, one module per format)
 Meshes (:func:`export_mesh`, :data:`MESH_WRITERS`): marching cubes of the zero level
 (:func:`partscale.surface.to_mesh`), faces outward, world units, per-vertex colours.
 
-- ``.glb`` (``glb``): linear ``COLOR_0`` as glTF requires, normals from the SDF gradient.
-- ``.ply``, ``.obj`` (``mesh``): sRGB vertex colours; PLY also a ``parts`` vertex property.
+- ``.glb`` (``glb``): linear ``COLOR_0`` as glTF requires (on a primitive without a material,
+  the layout trimesh reads too), normals from the SDF gradient; with an atlas, ``TEXCOORD_0`` and
+  an embedded ``baseColorTexture`` instead.
+- ``.ply``, ``.obj`` (``mesh``): sRGB vertex colours; PLY also a ``parts`` vertex property; OBJ
+  with an atlas: ``NAME.mtl`` + ``NAME.png`` beside it.
+
+Budgets (``simplify``): ``faces=N`` or ``error=E`` voxels decimate the surface with
+meshoptimizer. Atlases (``atlas``): xatlas charts, the CSDF's colour baked per texel and padded.
 
 3D textures (:func:`export_texture`, :data:`TEXTURE_WRITERS`; :func:`read_texture` decodes them):
 
@@ -17,7 +23,9 @@ Meshes (:func:`export_mesh`, :data:`MESH_WRITERS`): marching cubes of the zero l
 :func:`resize_grid` (``resize``) resamples the whole grid to a preset size first (``--size``).
 """
 
+from .atlas import ATLAS_SIZES, DEFAULT_ATLAS, bake, check_atlas, unwrap
 from .resize import PRESET_SIZES, check_size, resize_grid
+from .simplify import check_budget, simplify
 from .textures import (
     DISTANCE_BAND_VOXELS,
     ISO_LEVEL_8BIT,
@@ -38,6 +46,8 @@ from .write import (
 )
 
 __all__ = [
+    "ATLAS_SIZES",
+    "DEFAULT_ATLAS",
     "DISTANCE_BAND_VOXELS",
     "ISO_LEVEL_8BIT",
     "MESH_SUFFIXES",
@@ -47,6 +57,9 @@ __all__ = [
     "TEXTURE_READERS",
     "TEXTURE_SUFFIXES",
     "TEXTURE_WRITERS",
+    "bake",
+    "check_atlas",
+    "check_budget",
     "check_size",
     "decode_distance_8bit",
     "encode_distance_8bit",
@@ -55,4 +68,6 @@ __all__ = [
     "flipbook_layout",
     "read_texture",
     "resize_grid",
+    "simplify",
+    "unwrap",
 ]

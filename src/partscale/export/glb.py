@@ -1,8 +1,15 @@
 """Binary glTF 2.0 (``.glb``) mesh writer.
 
 Written here, not by trimesh, because glTF demands *linear* ``COLOR_0`` and trimesh writes the
-grid's sRGB bytes there. Positions, unit normals from the SDF gradient, ``COLOR_0`` as float32
-linear RGB, uint32 indices, one unlit-looking (non-metallic) material.
+grid's sRGB bytes there. Positions, unit normals from the SDF gradient, uint32 indices, and the
+colour in the one layout each reader reads:
+
+- atlased (``--atlas``): ``TEXCOORD_0`` and a material (rough dielectric) whose
+  ``baseColorTexture`` is the baked sRGB PNG, embedded; no ``COLOR_0`` (it would multiply).
+- vertex colours: ``COLOR_0`` as float32 linear RGB on a primitive *without* a material.
+  trimesh reads ``COLOR_0`` as the mesh's colours only then (with a material it files them under
+  ``vertex_attributes`` and shows the material's white); three.js, Blender and engines apply
+  glTF's default material, times ``COLOR_0``.
 """
 
 from __future__ import annotations
@@ -48,17 +55,24 @@ def _write_glb(
     colors: np.ndarray,
     faces: np.ndarray,
     extras: dict[str, Any],
+    uv: np.ndarray | None = None,
+    png: bytes | None = None,
 ) -> None:
     """Write one indexed triangle mesh as a binary glTF 2.0 file.
 
-    positions, normals, colors : (V, 3) float32 (colours linear RGB in [0, 1])
+    positions, normals : (V, 3) float32
+    colors : (V, 3) float32 linear RGB in [0, 1], or None (with ``uv`` and ``png``)
     faces : (F, 3) uint32, counter-clockwise seen from outside
+    uv : (V, 2) float32, v = 0 at the image's top; png : the base-colour texture
     """
     arrays = [
         ("POSITION", np.ascontiguousarray(positions, dtype="<f4")),
         ("NORMAL", np.ascontiguousarray(normals, dtype="<f4")),
-        ("COLOR_0", np.ascontiguousarray(colors, dtype="<f4")),
     ]
+    if colors is not None:
+        arrays.append(("COLOR_0", np.ascontiguousarray(colors, dtype="<f4")))
+    if uv is not None:
+        arrays.append(("TEXCOORD_0", np.ascontiguousarray(uv, dtype="<f4")))
     indices = np.ascontiguousarray(faces, dtype="<u4").reshape(-1)
     blob = bytearray()
     views, accessors, attributes = [], [], {}
@@ -70,7 +84,7 @@ def _write_glb(
             "bufferView": len(views) - 1,
             "componentType": 5126,
             "count": len(arr),
-            "type": "VEC3",
+            "type": "VEC2" if name == "TEXCOORD_0" else "VEC3",
         }
         if name == "POSITION":
             acc["min"] = arr.min(axis=0).astype(float).tolist()
@@ -88,36 +102,38 @@ def _write_glb(
             "type": "SCALAR",
         }
     )
+    primitive = {"attributes": attributes, "indices": len(accessors) - 1, "mode": 4}
+    textured = {}
+    if png is not None:
+        blob = bytearray(_pad4(bytes(blob)))
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(png)})
+        blob += png
+        primitive["material"] = 0
+        textured = {
+            "images": [{"bufferView": len(views) - 1, "mimeType": "image/png"}],
+            # linear mipmapped minification: the atlas is padded so mip levels stay in charts
+            "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}],
+            "textures": [{"sampler": 0, "source": 0}],
+            # rough dielectric like paint; the texture alone decides the colour
+            "materials": [
+                {
+                    "name": "baked colour",
+                    "pbrMetallicRoughness": {
+                        "baseColorTexture": {"index": 0},
+                        "metallicFactor": 0.0,
+                        "roughnessFactor": 0.9,
+                    },
+                }
+            ],
+        }
     blob = _pad4(bytes(blob))
     gltf = {
         "asset": {"version": "2.0", "generator": "partscale"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0, "name": "csdf"}],
-        "meshes": [
-            {
-                "name": "csdf",
-                "primitives": [
-                    {
-                        "attributes": attributes,
-                        "indices": len(accessors) - 1,
-                        "material": 0,
-                        "mode": 4,
-                    }
-                ],
-            }
-        ],
-        # white base colour so COLOR_0 alone decides the colour; rough dielectric like paint
-        "materials": [
-            {
-                "name": "vertex colour",
-                "pbrMetallicRoughness": {
-                    "baseColorFactor": [1.0, 1.0, 1.0, 1.0],
-                    "metallicFactor": 0.0,
-                    "roughnessFactor": 0.9,
-                },
-            }
-        ],
+        "meshes": [{"name": "csdf", "primitives": [primitive]}],
+        **textured,
         "accessors": accessors,
         "bufferViews": views,
         "buffers": [{"byteLength": len(blob)}],
@@ -134,9 +150,12 @@ def _write_glb(
 
 
 def write_glb(csdf: CSDF, mesh, path: Path) -> None:
-    """Write ``mesh`` (the trimesh marching-cubes surface of ``csdf``) as a GLB at ``path``."""
+    """Write ``mesh`` (the trimesh surface of ``csdf``) as a GLB at ``path``.
+
+    A mesh with texture visuals (:func:`partscale.export.export_mesh` with ``atlas``) is written
+    with its UVs and texture; otherwise with linear vertex colours.
+    """
     positions = mesh.vertices.astype(np.float32)
-    colors = srgb8_to_linear(mesh.visual.vertex_colors[:, :3]).astype(np.float32)
     normals = _sdf_normals(csdf, mesh.vertices)
     extras = {
         "partscale": {
@@ -145,4 +164,15 @@ def write_glb(csdf: CSDF, mesh, path: Path) -> None:
             "voxel_size": csdf.voxel_size,
         }
     }
-    _write_glb(path, positions, normals, colors, mesh.faces.astype(np.uint32), extras)
+    faces = mesh.faces.astype(np.uint32)
+    if mesh.visual.kind == "texture":
+        from .atlas import png_bytes
+
+        uv = np.array(mesh.visual.uv, np.float32)
+        uv[:, 1] = 1.0 - uv[:, 1]  # trimesh keeps v = 0 at the bottom, glTF at the top
+        mat = mesh.visual.material
+        image = np.asarray((getattr(mat, "baseColorTexture", None) or mat.image).convert("RGB"))
+        _write_glb(path, positions, normals, None, faces, extras, uv=uv, png=png_bytes(image))
+        return
+    colors = srgb8_to_linear(mesh.visual.vertex_colors[:, :3]).astype(np.float32)
+    _write_glb(path, positions, normals, colors, faces, extras)

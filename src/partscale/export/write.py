@@ -7,15 +7,19 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .._files import atomic_path
 from .._options import keyword_options
 from ..csdf import CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
+from .atlas import bake, check_atlas, unwrap
 from .glb import write_glb
 from .mesh import write_obj, write_ply
 from .nrrd import read_nrrd, write_nrrd
 from .resize import check_size, resize_grid
+from .simplify import check_budget, simplify
 from .textures import read_png, read_raw, write_png, write_raw
 
 MESH_WRITERS: dict[str, Callable[[CSDF, Any, Path], None]] = {
@@ -52,27 +56,85 @@ def check_suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
 
 @keyword_options
 def export_mesh(
-    csdf: CSDF, path: str | os.PathLike, *, progress: ProgressCallback | None = None
+    csdf: CSDF,
+    path: str | os.PathLike,
+    *,
+    faces: int | None = None,
+    error: float | None = None,
+    atlas: int | None = None,
+    progress: ProgressCallback | None = None,
 ) -> Path:
     """Write the zero level of ``csdf`` as a coloured triangle mesh (.glb, .ply or .obj).
 
     Marching cubes via :func:`partscale.surface.to_mesh`: world units, faces outward, watertight
     where the CSDF's solid is closed. Colours are sRGB in PLY/OBJ and linear in glTF ``COLOR_0``.
     The file is written atomically. Returns the path written.
+
+    Parameters
+    ----------
+    faces : int, optional
+        Triangle budget: decimate to at most this many (:func:`.simplify.simplify`).
+    error : float, optional
+        Or decimate as far as the surface stays within about this many voxels of the full one.
+    atlas : int, optional
+        Unwrap with xatlas and bake the colour into a ``atlas``² base-colour texture (one of
+        :data:`ATLAS_SIZES`): GLB with an embedded PNG, OBJ with ``NAME.mtl`` and ``NAME.png``
+        beside it (written too). PLY has no texture convention and is refused.
     """
     # trimesh and scikit-image load here, not at import: the CLI checks its options first, fast
     from ..surface import to_mesh
 
     path = Path(path)
     suffix = check_suffix(path, MESH_SUFFIXES, "a mesh file")
+    check_budget(faces, error)
+    atlas = check_atlas(atlas)
+    if atlas is not None and suffix == ".ply":
+        raise InputError(
+            f"{path}: expected .glb or .obj with --atlas (PLY has no textures), got .ply"
+        )
     report = resolve(progress)
     report(0.0, "marching cubes")
     mesh = to_mesh(csdf)
-    report(0.6, f"writing {suffix[1:].upper()}")
+    if faces is not None or error is not None:
+        report(0.3, "decimating")
+        mesh = simplify(mesh, voxel_size=csdf.voxel_size, faces=faces, error=error)
+    if atlas is not None:
+        mesh = _atlased(csdf, mesh, atlas, lambda f, m: report(0.4 + 0.4 * f, m))
+    report(0.8, f"writing {suffix[1:].upper()}")
     with atomic_path(path) as tmp:
         MESH_WRITERS[suffix](csdf, mesh, tmp)
     report(1.0, "written")
     return path
+
+
+def _atlased(csdf: CSDF, mesh, size: int, report):
+    """``mesh`` split along xatlas's chart seams, with UVs and the baked texture as its visual."""
+    import trimesh
+    from PIL import Image
+
+    report(0.0, "unwrapping (xatlas)")
+    vmap, faces, uv = unwrap(mesh.vertices, mesh.faces, size)
+    vertices = mesh.vertices[vmap]
+    report(0.7, "baking colour")
+    image = bake(csdf, vertices, faces, uv, size)
+    tuv = uv.astype(np.float64)
+    tuv[:, 1] = 1.0 - tuv[:, 1]  # trimesh's convention: v = 0 at the image's bottom
+    # white diffuse: OBJ readers multiply Kd by map_Kd
+    material = trimesh.visual.material.SimpleMaterial(
+        image=Image.fromarray(image, "RGB"),
+        diffuse=(255, 255, 255, 255),
+        ambient=(255, 255, 255, 255),
+        specular=(0, 0, 0, 255),
+    )
+    out = trimesh.Trimesh(
+        vertices,
+        faces,
+        visual=trimesh.visual.TextureVisuals(uv=tuv, material=material),
+        process=False,
+    )
+    for k, v in mesh.vertex_attributes.items():
+        out.vertex_attributes[k] = v[vmap]
+    return out
 
 
 @keyword_options

@@ -13,7 +13,7 @@ from __future__ import annotations
 from .grid import from_grid, read_autosdf, read_grid
 from .load import GRID_READERS, MESH_READERS, MESH_SUFFIXES, load, load_mesh
 from .mesh import ColoredMesh, Material, from_trimesh
-from .mesh_sdf import from_mesh
+from .mesh_sdf import check_res, from_mesh
 
 __all__ = [
     "GRID_READERS",
@@ -21,6 +21,7 @@ __all__ = [
     "MESH_SUFFIXES",
     "ColoredMesh",
     "Material",
+    "check_res",
     "from_grid",
     "from_mesh",
     "from_trimesh",

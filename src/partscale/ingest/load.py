@@ -103,6 +103,9 @@ def load(
     pad: int | None = None,
     iso: float | None = None,
     colors: str | os.PathLike | None = None,
+    up: str = "y",
+    scale: float | None = None,
+    units: str | None = None,
     progress: ProgressCallback | None = None,
 ) -> CSDF:
     """Import any supported file as a CSDF.
@@ -121,12 +124,21 @@ def load(
     colors : path, optional
         ``.npy`` colour volume (X, Y, Z, 3) for a grid, sRGB: integers in 0..255, or floats in
         [0, 1] (max <= 1.001) or 0..255 (max > 2); other ranges are refused (see ``from_grid``).
+    up : str
+        The mesh's up axis, one of :data:`UP_AXES` (``'z'`` for Z-up CAD and Blender exports):
+        the mesh is rotated (a proper rotation) so that it points along +y, partscale's up.
+    scale : float, optional
+        Multiply the mesh's coordinates by this (> 0), after ``units``.
+    units : str, optional
+        The mesh's length unit, one of :data:`UNITS` (``'cm'`` for an armchair 190 units wide):
+        converted to metres.
     progress : callable(fraction, message), optional
 
     Returns
     -------
     CSDF
-        ``meta['source']`` is the file; ``meta['history'][0]`` records the import parameters.
+        ``meta['source']`` is the file; ``meta['history'][0]`` records the import parameters
+        (with ``up``, ``units`` and ``scale`` where given).
     """
     path = Path(path)
     report = resolve(progress)
@@ -143,8 +155,14 @@ def load(
             raise InputError(f"{path}: expected no colour volume for a mesh, got {colors}")
         report(0.0, "reading mesh")
         mesh = load_mesh(path)
+        mesh, placed = _place(mesh, up=up, scale=scale, units=units, name=str(path))
         out = from_mesh(mesh, res=res, pad=pad, progress=scaled(progress, 0.05, 1.0))
     else:
+        if up != "y" or scale is not None or units is not None:
+            raise InputError(
+                f"{path}: expected --up, --scale and --units only for meshes, got an SDF grid"
+            )
+        placed = {}
         args = GRID_READERS[kind](path)
         if iso is not None:
             args["iso"] = iso
@@ -154,8 +172,53 @@ def load(
     meta = dict(out.meta)
     meta["source"] = str(path)
     first, *rest = meta["history"]
-    meta["history"] = [{**first, "source": str(path), "format": kind}, *rest]
+    meta["history"] = [{**first, "source": str(path), "format": kind, **placed}, *rest]
     return out.replace(meta=meta)
+
+
+#: up axes a mesh may have (``--up``) and the rotation taking each onto +y (rows: new x, y, z)
+UP_AXES: dict[str, tuple[tuple[int, int, int], ...]] = {
+    "y": ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+    "-y": ((1, 0, 0), (0, -1, 0), (0, 0, -1)),
+    "z": ((1, 0, 0), (0, 0, 1), (0, -1, 0)),
+    "-z": ((1, 0, 0), (0, 0, -1), (0, 1, 0)),
+    "x": ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
+    "-x": ((0, 1, 0), (-1, 0, 0), (0, 0, 1)),
+}
+#: metres per unit (``--units``)
+UNITS = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254}
+
+
+def _place(mesh: ColoredMesh, *, up: str, scale, units, name: str):
+    """``mesh`` turned Y-up and scaled to metres, and what was done (for the history)."""
+    import dataclasses
+    import math
+
+    import numpy as np
+
+    key = str(up).lower()
+    if key not in UP_AXES:
+        raise InputError(f"{name}: expected --up one of {', '.join(UP_AXES)}, got {up!r}")
+    if units is not None and str(units).lower() not in UNITS:
+        raise InputError(f"{name}: expected --units one of {', '.join(UNITS)}, got {units!r}")
+    if scale is not None and not (
+        isinstance(scale, int | float) and math.isfinite(scale) and scale > 0
+    ):
+        raise InputError(f"{name}: expected --scale a finite number > 0, got {scale!r}")
+    factor = (UNITS[str(units).lower()] if units is not None else 1.0) * (
+        1.0 if scale is None else float(scale)
+    )
+    placed: dict = {}
+    if key == "y" and factor == 1.0:
+        if units is not None:
+            placed["units"] = str(units).lower()
+        return mesh, placed
+    rot = np.asarray(UP_AXES[key], np.float64)
+    vertices = (mesh.vertices @ rot.T) * factor
+    placed = {"up": key, "scale": factor}
+    if units is not None:
+        placed["units"] = str(units).lower()
+    return dataclasses.replace(mesh, vertices=vertices), placed
 
 
 def _read_colors(path: Path):

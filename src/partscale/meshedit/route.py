@@ -1,0 +1,557 @@
+"""The mesh route: a recipe applied to the source mesh itself (glTF/GLB, OBJ+MTL, PLY).
+
+Every scene node's mesh is taken to world coordinates, cut at the zone planes and mapped along
+the axis with the same 1D maps as the CSDF route (:func:`partscale.edit.source_coordinate`'s
+inverse): ``stretch`` scales the slab linearly, ``tile`` copies the slab's triangles
+``tile_count`` times each scaled to fit, ``global`` scales the whole object about its min.
+Positions resolve like the CSDF route's (:meth:`partscale.edit.Edit.resolve`): object units, or
+``%`` of the extent along the axis, here the mesh's own bounding box; the shift is not snapped to
+voxels (there are none). Vertices before a zone keep their stored coordinates bit for bit; those
+beyond are translated (in the node's frame, by the shift rotated into it); only vertices inside a
+zone and the new ones on its planes are mapped. UVs, vertex colours and normals are interpolated
+where a triangle is cut and copied with the slab; materials, textures and the node structure are
+kept.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..edit import Edit, Recipe, forward_coordinate, tile_count
+from ..errors import InputError
+from .cut import Piece, concatenate, cut, subset
+
+MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
+OUTPUT_SUFFIXES = (".glb", ".obj", ".ply")
+
+#: lateral distance (relative to the object's size) within which two seam points are one
+WELD_TOLERANCE = 1e-5
+
+
+@dataclass(frozen=True)
+class Seam:
+    """A tile seam between copies: where it is and how much of it was welded."""
+
+    axis: str
+    position: float
+    welded: int
+    unmatched: int
+
+    @property
+    def ok(self) -> bool:
+        return self.unmatched == 0
+
+    def message(self) -> str:
+        if self.ok:
+            return f"seam at {self.axis} = {self.position:.6g}: welded ({self.welded} vertices)"
+        return (
+            f"seam at {self.axis} = {self.position:.6g}: cannot be welded, the cross-sections at "
+            f"the zone's planes differ ({self.unmatched} of {self.welded + self.unmatched} "
+            "vertices without a partner); snap the zone to a period (partscale scale --snap) "
+            "or use the CSDF route (import, scale, export), which blends seams"
+        )
+
+
+@dataclass
+class _Instance:
+    """One scene node's mesh in world coordinates, with what is needed to go back."""
+
+    node: str
+    geometry: object  # trimesh.Trimesh
+    transform: np.ndarray  # (4, 4) node -> world
+    piece: Piece
+
+
+def _piece(mesh, transform: np.ndarray) -> Piece:
+    local = np.asarray(mesh.vertices, np.float64)
+    world = local @ transform[:3, :3].T + transform[:3, 3]
+    vattrs = {"_local": local.copy(), "_mapped": np.zeros((len(local), 1))}
+    if "vertex_normals" in mesh._cache:
+        # normals stored in the file (a computed cache entry would be dropped: it is recomputed)
+        vattrs["normal"] = np.asarray(mesh.vertex_normals, np.float64) @ transform[:3, :3].T
+    visual = mesh.visual
+    if getattr(visual, "uv", None) is not None and len(visual.uv) == len(local):
+        vattrs["uv"] = np.asarray(visual.uv, np.float64)
+    if visual.kind == "vertex":
+        vattrs["color"] = np.asarray(visual.vertex_colors, np.float64)
+    for name, a in getattr(visual, "vertex_attributes", {}).items():
+        if len(a) == len(local):
+            vattrs[f"va:{name}"] = np.asarray(a, np.float64).reshape(len(local), -1)
+    fattrs = {}
+    if visual.kind == "face":
+        fattrs["color"] = np.asarray(visual.face_colors)
+    return Piece(world, np.asarray(mesh.faces, np.int64), vattrs, fattrs)
+
+
+def _cut_planes(piece: Piece, axis: int, planes: tuple[float, ...]) -> Piece:
+    for p in planes:
+        n0 = len(piece.vertices)
+        piece = cut(piece, axis, p)
+        if len(piece.vertices) > n0:
+            piece.vattrs["_mapped"][n0:] = 1.0
+    return piece
+
+
+def _translate(piece: Piece, rows: np.ndarray, axis: int, shift: float, rot: np.ndarray) -> None:
+    """Move ``rows`` by ``shift`` along ``axis`` (world), and their stored node coordinates."""
+    d = np.zeros(3)
+    d[axis] = shift
+    piece.vertices[rows, axis] += shift
+    piece.vattrs["_local"][rows] += np.linalg.solve(rot, d)
+
+
+def _scale_normals(piece: Piece, rows: np.ndarray, axis: int, factor: float) -> None:
+    n = piece.vattrs.get("normal")
+    if n is None or not rows.any():
+        return
+    n[rows, axis] /= factor  # normals transform by the inverse transpose of the stretch
+    n[rows] /= np.maximum(np.linalg.norm(n[rows], axis=1, keepdims=True), 1e-30)
+
+
+def _stretch(piece, axis, s, e, d, rot):
+    piece = _cut_planes(piece, axis, (s, e))
+    x = piece.vertices[:, axis]
+    inside = (x > s) & (x < e)
+    beyond = x >= e
+    factor = (d - s) / (e - s)
+    x[inside] = s + (x[inside] - s) * factor
+    piece.vattrs["_mapped"][inside] = 1.0
+    _scale_normals(piece, inside, axis, factor)
+    _translate(piece, beyond, axis, d - e, rot)
+    return piece, []
+
+
+def _global(piece, axis, lo, hi, shift, rot):
+    factor = (hi - lo + shift) / (hi - lo)
+    x = piece.vertices[:, axis]
+    x[:] = lo + (x - lo) * factor
+    piece.vattrs["_mapped"][:] = 1.0
+    _scale_normals(piece, np.ones(len(x), bool), axis, factor)
+    return piece, []
+
+
+def _copy_piece(p: Piece, rows: np.ndarray | None = None) -> Piece:
+    rows = np.arange(len(p.vertices)) if rows is None else rows
+    return Piece(
+        p.vertices[rows].copy(),
+        np.zeros((0, 3), np.int64),
+        {k: v[rows].copy() for k, v in p.vattrs.items()},
+        {k: v[:0] for k, v in p.fattrs.items()},
+    )
+
+
+def _plane_edges(piece: Piece, slab: np.ndarray, axis: int, plane: float) -> np.ndarray:
+    """(E, 2) vertex pairs of slab triangles' edges lying in ``x[axis] = plane``."""
+    F = piece.faces[slab]
+    on = piece.vertices[F, axis] == plane
+    pairs = [F[on[:, k] & on[:, (k + 1) % 3]][:, [k, (k + 1) % 3]] for k in range(3)]
+    return np.concatenate(pairs)
+
+
+def _conform(piece: Piece, axis: int, s: float, e: float, tol: float) -> Piece:
+    """Split the zone planes' cross-section edges so both planes have the same vertices.
+
+    A point of one plane's cross-section that lies on an edge of the other's (the same outline
+    triangulated differently: the usual case for a board crossing the zone) becomes a vertex
+    there, in every triangle on that edge (those outside the zone too), so tiled copies meet
+    vertex to vertex and stay closed. Points on no edge are left: the weld reports them.
+    """
+    from scipy.spatial import cKDTree
+
+    lat = [a for a in range(3) if a != axis]
+    for src, dst in ((e, s), (s, e)):
+        V, F = piece.vertices, piece.faces
+        slab = (V[F, axis].mean(axis=1) > s) & (V[F, axis].mean(axis=1) < e)
+        q = V[np.unique(F[slab][V[F[slab], axis] == src])][:, lat]
+        edges = _plane_edges(piece, slab, axis, dst)
+        if len(q) == 0 or len(edges) == 0:
+            continue
+        ends = np.unique(edges)
+        near = cKDTree(V[ends][:, lat]).query(q, distance_upper_bound=tol)[0]
+        q = q[~np.isfinite(near)]
+        if len(q) == 0:
+            continue
+        A, B = V[edges[:, 0]][:, lat], V[edges[:, 1]][:, lat]
+        AB = (B - A)[None]
+        t = ((q[:, None] - A[None]) * AB).sum(-1) / np.maximum((AB * AB).sum(-1), 1e-300)
+        dist = np.linalg.norm(A[None] + np.clip(t, 0, 1)[..., None] * AB - q[:, None], axis=-1)
+        best = np.argmin(dist, axis=1)
+        tb = t[np.arange(len(q)), best]
+        ok = (dist[np.arange(len(q)), best] <= tol) & (tb > 0) & (tb < 1)
+        if not ok.any():
+            continue
+        piece = _split_edges(piece, edges[best[ok]], tb[ok], axis, dst)
+    return piece
+
+
+def _split_edges(piece: Piece, edges: np.ndarray, t: np.ndarray, axis: int, plane: float) -> Piece:
+    """Insert a vertex at ``t`` along each undirected edge ``(a, b)`` in every triangle on it."""
+    V, F = piece.vertices, piece.faces
+    a, b = edges[:, 0], edges[:, 1]
+    new_v = V[a] + t[:, None] * (V[b] - V[a])
+    new_v[:, axis] = plane
+    base = len(V)
+    vattrs = {
+        k: np.concatenate([v, v[a] + t[:, None] * (v[b] - v[a])]) for k, v in piece.vattrs.items()
+    }
+    vattrs["_mapped"][base:] = 1.0
+    # points per undirected edge, ordered from its first to its second vertex
+    points: dict[tuple[int, int], list[tuple[float, int]]] = {}
+    for i, (x, y) in enumerate(edges.tolist()):
+        points.setdefault((x, y), []).append((float(t[i]), base + i))
+    keep = np.ones(len(F), bool)
+    extra, owner = [], []
+    key = {}
+    for k in range(3):
+        for r, (x, y) in enumerate(zip(F[:, k].tolist(), F[:, (k + 1) % 3].tolist(), strict=True)):
+            if (x, y) in points or (y, x) in points:
+                key.setdefault(r, []).append(k)
+    for r, ks in key.items():
+        tri = F[r].tolist()
+        # the triangle's boundary as a polygon with the inserted points, fanned from a corner
+        poly = []
+        for k in range(3):
+            x, y = tri[k], tri[(k + 1) % 3]
+            poly.append(x)
+            if k in ks:
+                if (x, y) in points:
+                    poly += [v for _, v in sorted(points[(x, y)])]
+                else:
+                    poly += [v for _, v in sorted(points[(y, x)], reverse=True)]
+        keep[r] = False
+        # fan from the corner opposite the split edge keeps the triangles non-degenerate
+        k0 = (ks[0] + 2) % 3
+        start = poly.index(tri[k0])
+        poly = poly[start:] + poly[:start]
+        for j in range(1, len(poly) - 1):
+            extra.append((poly[0], poly[j], poly[j + 1]))
+            owner.append(r)
+    faces = np.concatenate([F[keep], np.asarray(extra, np.int64).reshape(-1, 3)])
+    order = np.concatenate([np.flatnonzero(keep), np.asarray(owner, np.int64)])
+    fattrs = {k: v[order] for k, v in piece.fattrs.items()}
+    return Piece(np.concatenate([V, new_v]), faces, vattrs, fattrs)
+
+
+def _tile(piece, axis, s, e, d, rot, size):
+    piece = _cut_planes(piece, axis, (s, e))
+    if tile_count(e - s, d - s) > 1:
+        piece = _conform(piece, axis, s, e, WELD_TOLERANCE * size)
+    n = tile_count(e - s, d - s)
+    period = (d - s) / n
+    factor = period / (e - s)
+    V, F = piece.vertices, piece.faces
+    x = V[:, axis].copy()
+    centre = V[F, axis].mean(axis=1)
+    slab_faces = (centre > s) & (centre < e)
+    slab, used = subset(piece, slab_faces)
+    sx = slab.vertices[:, axis]
+    start_l, end_l = np.flatnonzero(sx == s), np.flatnonzero(sx == e)
+    n_orig = len(V)
+    # appended: copy 0's end plane (n > 1), then copies 1..n-1 of every slab vertex
+    extra = []
+    if n > 1:
+        extra.append(_copy_piece(slab, end_l))
+        extra[0].vertices[:, axis] = s + period
+    for k in range(1, n):
+        c = _copy_piece(slab)
+        c.vertices[:, axis] = s + k * period + (sx - s) * factor
+        _scale_normals(c, np.ones(len(sx), bool), axis, factor)
+        extra.append(c)
+    for c in extra:
+        c.vattrs["_mapped"][:] = 1.0
+    inside = (x > s) & (x < e)
+    V[inside, axis] = s + (x[inside] - s) * factor
+    piece.vattrs["_mapped"][inside] = 1.0
+    _scale_normals(piece, inside, axis, factor)
+    _translate(piece, x >= e, axis, d - e, rot)
+    V[x == e, axis] = d  # exactly where the last copy ends
+    faces = [piece.faces[~slab_faces]]
+    first_end = n_orig
+    copy_base = [None] + [n_orig + len(end_l) + (k - 1) * len(sx) for k in range(1, n)]
+    for k in range(n):
+        m = used.copy() if k == 0 else copy_base[k] + np.arange(len(sx))
+        if n > 1 and k == 0:
+            m[end_l] = first_end + np.arange(len(end_l))
+        if n > 1 and k == n - 1:
+            m[end_l] = used[end_l]
+        faces.append(m[slab.faces])
+    fattrs = {
+        kk: np.concatenate([v[~slab_faces]] + [slab.fattrs[kk]] * n)
+        for kk, v in piece.fattrs.items()
+    }
+    merged = concatenate([piece, *extra]) if extra else piece
+    piece = Piece(merged.vertices, np.concatenate(faces), merged.vattrs, fattrs)
+    seams = []
+    if n > 1:
+        seams = _weld(piece, axis, slab, start_l, end_l, n, s, period, size, first_end, copy_base)
+    return piece, seams
+
+
+def _weld(piece, axis, slab, start_l, end_l, n, s, period, size, first_end, copy_base):
+    """Snap each internal seam's end-plane vertices onto the next copy's start-plane vertices."""
+    from scipy.spatial import cKDTree
+
+    lat = [a for a in range(3) if a != axis]
+    tol = WELD_TOLERANCE * size
+    ps, pe = slab.vertices[start_l][:, lat], slab.vertices[end_l][:, lat]
+    if len(ps) == 0 or len(pe) == 0:
+        unmatched, matched, j = len(ps) + len(pe), np.zeros(len(pe), bool), np.zeros(len(pe), int)
+    else:
+        dist, j = cKDTree(ps).query(pe, distance_upper_bound=tol)
+        matched = np.isfinite(dist)
+        back = cKDTree(pe).query(ps, distance_upper_bound=tol)[0]
+        unmatched = int((~matched).sum() + (~np.isfinite(back)).sum())
+    V = piece.vertices
+    seams = []
+    for k in range(n - 1):
+        ends = first_end + np.arange(len(end_l)) if k == 0 else copy_base[k] + end_l
+        starts = copy_base[k + 1] + start_l
+        V[ends[matched]] = V[starts[j[matched]]]
+        seams.append(Seam("xyz"[axis], s + (k + 1) * period, int(matched.sum()), unmatched))
+    return seams
+
+
+def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
+    s, e, d = edit.resolve(lo, hi)
+    if not s < e:
+        raise InputError(f"zone: expected start < end, got start {s:.6g} >= end {e:.6g}")
+    if not d > s:
+        raise InputError(f"to: expected DEST > START {s:.6g}, got {d:.6g}")
+    tol = 1e-9 * max(abs(lo), abs(hi), hi - lo)
+    if s < lo - tol or e > hi + tol:
+        raise InputError(
+            f"zone: expected inside the mesh's extent [{lo:.6g}, {hi:.6g}] along {edit.axis}, "
+            f"got [{s:.6g}, {e:.6g}]"
+        )
+    return s, e, d
+
+
+def apply_recipe_to_scene(scene, recipe: Recipe) -> tuple[object, list[Seam]]:
+    """Apply ``recipe`` to a trimesh Scene's meshes; returns the edited copy and its tile seams.
+
+    Parameters
+    ----------
+    scene : trimesh.Scene
+        As loaded (``trimesh.load(path, force='scene', process=False)``).
+    recipe : partscale.edit.Recipe
+        Edits in order; as on the CSDF route (:func:`partscale.edit.apply_recipe`) every
+        position refers to the input mesh (``%`` of its extent), planes carried through earlier
+        edits on the same axis by :func:`partscale.edit.forward_coordinate`.
+
+    Returns
+    -------
+    (trimesh.Scene, list of Seam)
+    """
+    import trimesh
+
+    instances = []
+    for node in scene.graph.nodes_geometry:
+        transform, name = scene.graph[node]
+        geom = scene.geometry[name]
+        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
+            continue
+        instances.append(
+            _Instance(node, geom, np.asarray(transform, float), _piece(geom, transform))
+        )
+    if not instances:
+        raise InputError("mesh: expected triangles in the scene, got none")
+    seams: list[Seam] = []
+    allv = np.concatenate([p.piece.vertices[np.unique(p.piece.faces)] for p in instances])
+    bounds = np.stack([allv.min(axis=0), allv.max(axis=0)])
+    size = float(np.ptp(allv, axis=0).max())
+    applied: list[tuple[int, dict]] = []  # (axis, forward-map arguments), as apply_recipe
+    for edit in recipe.edits:
+        ax = edit.axis_index
+        # positions refer to the recipe's input: planes carried through earlier same-axis edits
+        lo0, hi0 = float(bounds[0, ax]), float(bounds[1, ax])
+        s0, e0, d0 = _resolve(edit, lo0, hi0)
+        planes = np.array([s0, e0])
+        for a, kw in applied:
+            if a == ax:
+                planes = forward_coordinate(planes, **kw)
+        s, e = float(planes[0]), float(planes[1])
+        d = e + (d0 - e0)
+        cur = np.concatenate([p.piece.vertices[np.unique(p.piece.faces)] for p in instances])
+        lo, hi = float(cur[:, ax].min()), float(cur[:, ax].max())
+        for inst in instances:
+            rot = inst.transform[:3, :3]
+            if edit.mode == "stretch":
+                inst.piece, _ = _stretch(inst.piece, ax, s, e, d, rot)
+            elif edit.mode == "tile":
+                inst.piece, sm = _tile(inst.piece, ax, s, e, d, rot, size)
+                seams += sm
+            else:
+                inst.piece, _ = _global(inst.piece, ax, lo, hi, d - e, rot)
+        kw = {"mode": edit.mode, "start": s, "end": e, "dest": d}
+        if edit.mode == "global":
+            kw.update(lo=lo, hi=hi)
+        applied.append((ax, kw))
+    out = scene.copy()
+    for inst in instances:
+        name = scene.graph[inst.node][1]
+        if _shared(scene, inst):  # an instanced mesh is edited per instance: each its own copy
+            name = f"{name}:{inst.node}"
+            out.graph.transforms.node_data[inst.node]["geometry"] = name
+        out.geometry[name] = _to_trimesh(inst)
+    out.graph._cache.clear()
+    return out, _merge_seams(seams)
+
+
+def _shared(scene, inst) -> bool:
+    name = scene.graph[inst.node][1]
+    return sum(scene.graph[n][1] == name for n in scene.graph.nodes_geometry) > 1
+
+
+def _merge_seams(seams: list[Seam]) -> list[Seam]:
+    """One entry per seam position (each instance reports its own vertices)."""
+    by = {}
+    for sm in seams:
+        key = (sm.axis, round(sm.position, 12))
+        if key in by:
+            o = by[key]
+            by[key] = Seam(o.axis, o.position, o.welded + sm.welded, o.unmatched + sm.unmatched)
+        else:
+            by[key] = sm
+    return list(by.values())
+
+
+def _to_trimesh(inst: _Instance):
+    import trimesh
+
+    p, geom = inst.piece, inst.geometry
+    T = inst.transform
+    local = p.vattrs["_local"].copy()
+    mapped = p.vattrs["_mapped"][:, 0] > 0
+    if mapped.any():
+        local[mapped] = np.linalg.solve(T[:3, :3], (p.vertices[mapped] - T[:3, 3]).T).T
+    kwargs = {}
+    if "normal" in p.vattrs:
+        n = np.linalg.solve(T[:3, :3], p.vattrs["normal"].T).T
+        kwargs["vertex_normals"] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+    visual = geom.visual
+    if isinstance(visual, trimesh.visual.TextureVisuals):
+        # a material with or without UVs (OBJ groups with a Kd colour have none)
+        vis = trimesh.visual.TextureVisuals(uv=p.vattrs.get("uv"), material=visual.material)
+    elif "color" in p.vattrs:
+        vis = trimesh.visual.ColorVisuals(
+            vertex_colors=np.clip(np.rint(p.vattrs["color"]), 0, 255).astype(np.uint8)
+        )
+    elif "color" in p.fattrs:
+        vis = trimesh.visual.ColorVisuals(face_colors=p.fattrs["color"])
+    else:
+        vis = None
+    mesh = trimesh.Trimesh(local, p.faces, visual=vis, process=False, **kwargs)
+    for k, v in p.vattrs.items():
+        if k.startswith("va:") and hasattr(mesh.visual, "vertex_attributes"):
+            mesh.visual.vertex_attributes[k[3:]] = v.astype(np.float32)
+    mesh.metadata.update(geom.metadata)
+    return mesh
+
+
+def load_scene(path: str | os.PathLike):
+    """A mesh file as a trimesh Scene, vertices exactly as stored (no merging or reordering)."""
+    import trimesh
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: expected an existing mesh file, got no such file")
+    suffix = path.suffix.lower()
+    if suffix not in MESH_SUFFIXES:
+        raise InputError(
+            f"{path}: expected a mesh ({', '.join(MESH_SUFFIXES)}), got {suffix or 'no suffix'}"
+        )
+    try:
+        scene = trimesh.load(path, force="scene", process=False, maintain_order=True)
+    except Exception as exc:
+        raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {exc}") from None
+    if not scene.geometry:
+        raise InputError(f"{path}: expected a mesh with triangles, got none")
+    return scene
+
+
+def save_scene(scene, path: str | os.PathLike) -> list[Path]:
+    """Write ``scene`` (GLB; OBJ with its MTL and textures beside it; PLY), atomically."""
+    from .._files import atomic_path
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in OUTPUT_SUFFIXES:
+        raise InputError(
+            f"{path}: expected an output mesh ({', '.join(OUTPUT_SUFFIXES)}), got "
+            f"{suffix or 'no suffix'}"
+        )
+    written = [path]
+    if suffix == ".glb":
+        data = scene.export(file_type="glb")
+    elif suffix == ".ply":
+        data = scene.to_mesh().export(file_type="ply", encoding="binary")
+    else:
+        from trimesh.exchange.obj import export_obj
+
+        # the scene itself, not one concatenated mesh: one usemtl group per material
+        text, extra = export_obj(
+            scene, include_texture=True, return_texture=True, mtl_name=path.stem + ".mtl"
+        )
+        data = text.encode()
+        for name, blob in extra.items():
+            target = path.parent / name
+            with atomic_path(target) as tmp:
+                tmp.write_bytes(blob)
+            written.append(target)
+    with atomic_path(path) as tmp:
+        Path(tmp).write_bytes(data)
+    return written
+
+
+@dataclass(frozen=True)
+class MeshEditResult:
+    """What :func:`edit_mesh_file` did: files written, triangles before and after, seams."""
+
+    written: list[Path]
+    faces_in: int
+    faces_out: int
+    seams: list[Seam]
+
+
+def _face_count(scene) -> int:
+    return int(
+        sum(len(scene.geometry[scene.graph[n][1]].faces) for n in scene.graph.nodes_geometry)
+    )
+
+
+def edit_mesh_file(
+    src: str | os.PathLike, dst: str | os.PathLike, recipe: Recipe
+) -> MeshEditResult:
+    """Apply ``recipe`` to the mesh file ``src`` and write the edited mesh to ``dst``."""
+    dst = Path(dst)
+    if dst.suffix.lower() not in OUTPUT_SUFFIXES:
+        raise InputError(
+            f"{dst}: expected an output mesh ({', '.join(OUTPUT_SUFFIXES)}), got "
+            f"{dst.suffix or 'no suffix'}"
+        )
+    scene = load_scene(src)
+    out, seams = apply_recipe_to_scene(scene, recipe)
+    written = save_scene(out, dst)
+    return MeshEditResult(written, _face_count(scene), _face_count(out), seams)
+
+
+@dataclass(frozen=True)
+class MeshFrame:
+    """A mesh file's extent and units, standing in for a CSDF where options are resolved
+    (``--by``, ``--copies``): ``meta['units']`` and :meth:`surface_bounds`."""
+
+    bounds: np.ndarray  # (2, 3) float64
+    meta: dict
+
+    def surface_bounds(self) -> np.ndarray:
+        return self.bounds
+
+
+def mesh_frame(path: str | os.PathLike) -> MeshFrame:
+    """The world bounding box of a mesh file's triangles (all nodes placed), units metres."""
+    scene = load_scene(path)
+    return MeshFrame(np.asarray(scene.bounds, np.float64), {"units": "m"})

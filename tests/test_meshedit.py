@@ -1,0 +1,260 @@
+"""The mesh route: recipes applied to the source mesh (partscale.meshedit), on real objects."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from partscale import ingest
+from partscale.edit import Recipe, apply_recipe
+from partscale.meshedit import apply_recipe_to_scene, load_scene, save_scene
+from partscale.surface import sample_linear
+
+BOOKCASE = (
+    "kenney/bookcaseOpen.glb",
+    {"axis": "y", "zone": ["26.625%", "53.875%"], "to": "81.125%", "mode": "tile"},
+)
+TABLE = ("kenney/table.glb", {"axis": "x", "zone": ["25%", "75%"], "to": "125%", "mode": "stretch"})
+SHELF = (
+    "polyhaven/wooden_bookshelf_worn/wooden_bookshelf_worn_1k.gltf",
+    {"axis": "y", "zone": ["24.5%", "38.3%"], "to": "65.9%", "mode": "tile"},
+)
+
+
+def _world(scene):
+    """(V, 3) world vertices of every node, in node order, and the per-node mesh."""
+    out = []
+    for node in scene.graph.nodes_geometry:
+        T, name = scene.graph[node]
+        m = scene.geometry[name]
+        out.append((node, m, np.asarray(m.vertices) @ T[:3, :3].T + T[:3, 3]))
+    return out
+
+
+def _check_edit(before, after, edit):
+    """Vertices before the zone bit-identical, beyond translated, UVs and materials kept."""
+    ax = "xyz".index(edit["axis"])
+    allv = np.concatenate([w for _, _, w in _world(before)])
+    lo, hi = allv[:, ax].min(), allv[:, ax].max()
+    from partscale.edit import Edit
+
+    s, e, d = Edit.parse(edit).resolve(lo, hi)
+    n_before = n_beyond = 0
+    for (n0, m0, w0), (n1, m1, w1) in zip(_world(before), _world(after), strict=True):
+        assert n0 == n1
+        v0, v1 = np.asarray(m0.vertices), np.asarray(m1.vertices)
+        # the edit appends vertices: the source's rows come first, in order
+        assert len(v1) >= len(v0)
+        pre = w0[:, ax] < s
+        assert np.array_equal(v1[: len(v0)][pre], v0[pre])  # bit for bit
+        post = w0[:, ax] > e
+        moved = w1[: len(v0)][post] - w0[post]
+        # translated by DEST - END along the axis only (float64 round-off of the node frame)
+        assert np.abs(moved[:, ax] - (d - e)).max(initial=0) <= 1e-9 * (hi - lo)
+        assert np.abs(np.delete(moved, ax, axis=1)).max(initial=0) <= 1e-9 * (hi - lo)
+        n_before += pre.sum()
+        n_beyond += post.sum()
+        uv0 = getattr(m0.visual, "uv", None)
+        if uv0 is not None:
+            uv1 = m1.visual.uv
+            assert uv1 is not None and len(uv1) == len(v1)
+            assert np.array_equal(uv1[: len(v0)][pre], uv0[pre])
+            assert np.array_equal(uv1[: len(v0)][post], uv0[post])
+        assert getattr(m1.visual, "material", None) is getattr(m0.visual, "material", None)
+    assert n_before > 0 and n_beyond > 0
+    return s, e, d
+
+
+def _merged(scene):
+    m = scene.to_mesh()
+    m.merge_vertices(merge_tex=True, merge_norm=True)
+    return m
+
+
+@pytest.mark.parametrize(
+    "case", [BOOKCASE, TABLE, SHELF], ids=["bookcase-tile", "table-stretch", "shelf-tile"]
+)
+def test_mesh_route_keeps_source_outside_the_zone(data, case, tmp_path):
+    rel, edit = case
+    scene = load_scene(data(rel))
+    out, seams = apply_recipe_to_scene(scene, Recipe.parse([edit]))
+    _s, e, d = _check_edit(scene, out, edit)
+    ax = "xyz".index(edit["axis"])
+    # the whole object grew by exactly the shift
+    assert out.bounds[1, ax] - scene.bounds[1, ax] == pytest.approx(d - e, abs=1e-9)
+    assert len(out.geometry) == len(scene.geometry)
+    if _merged(scene).is_watertight:
+        assert _merged(out).is_watertight
+    if edit["mode"] == "tile":
+        # each internal seam welded: the planes' cross-sections are the same outline
+        assert seams and all(sm.ok for sm in seams), [sm.message() for sm in seams]
+    # written and read back: triangles and materials survive the file
+    written = save_scene(out, tmp_path / "out.glb")
+    back = trimesh.load(written[0], force="scene", process=False)
+    assert sum(len(g.faces) for g in back.geometry.values()) == sum(
+        len(out.geometry[out.graph[n][1]].faces) for n in out.graph.nodes_geometry
+    )
+    mats = {id(getattr(g.visual, "material", None)) for g in scene.geometry.values()}
+    back_mats = {getattr(g.visual, "material", None).name for g in back.geometry.values()}
+    assert len(back_mats) == len(mats)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", [BOOKCASE, TABLE], ids=["bookcase-tile", "table-stretch"])
+def test_mesh_route_within_a_voxel_of_the_csdf_route(data, case):
+    rel, edit = case
+    path = data(rel)
+    scene = load_scene(path)
+    out, _ = apply_recipe_to_scene(scene, Recipe.parse([edit]))
+    c = apply_recipe(ingest.load(path, res=128), Recipe.parse([edit]))
+    m = out.to_mesh()
+    pts, _ = trimesh.sample.sample_surface_even(m, 20000, seed=1)
+    d = np.abs(sample_linear(c.sdf, c.world_to_index(pts))) / c.voxel_size
+    # the CSDF route snaps the shift to whole voxels and resolves % on its own surface's box
+    assert np.quantile(d, 0.99) <= 1.0, np.quantile(d, [0.5, 0.9, 0.99])
+
+
+def test_cli_mesh_route_writes_mesh_and_reports(cli, data, tmp_path):
+    src = data(TABLE[0])
+    out = tmp_path / "t.glb"
+    proc = cli("scale", src, "-o", out, "--axis", "x", "--zone", "25%", "75%", "--to", "125%")
+    assert proc.returncode == 0, proc.stderr
+    assert "mesh route: 120 ->" in proc.stdout + proc.stderr
+    m = trimesh.load(out, force="mesh")
+    assert m.extents[0] == pytest.approx(1.5 * trimesh.load(src, force="mesh").extents[0], rel=1e-6)
+
+
+def test_tiled_closed_box_stays_closed_and_exact():
+    box = trimesh.creation.box((1.0, 2.0, 3.0))  # 12 triangles, diagonals differ per face
+    scene = trimesh.Scene(box)
+    recipe = Recipe.parse([{"axis": "x", "zone": ["20%", "60%"], "to": "140%", "mode": "tile"}])
+    out, seams = apply_recipe_to_scene(scene, recipe)
+    m = out.to_mesh()
+    m.merge_vertices()
+    assert len(seams) == 2 and all(sm.ok for sm in seams)
+    assert m.is_watertight
+    assert m.extents == pytest.approx((1.8, 2.0, 3.0), abs=1e-12)
+    assert m.volume == pytest.approx(1.8 * 2.0 * 3.0, rel=1e-12)
+
+
+def test_unmatched_seam_is_reported():
+    # a wedge: its cross-section shrinks along x, so no two planes match
+    wedge = trimesh.Trimesh(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]],
+        [[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [0, 3, 5], [0, 5, 2], [1, 2, 5], [1, 5, 4]],
+    )
+    assert wedge.is_watertight
+    recipe = Recipe.parse([{"axis": "x", "zone": ["20%", "60%"], "to": "100%", "mode": "tile"}])
+    _, seams = apply_recipe_to_scene(trimesh.Scene(wedge), recipe)
+    assert seams and not any(sm.ok for sm in seams)
+    assert "--snap" in seams[0].message() and "CSDF route" in seams[0].message()
+
+
+def test_stretch_normals_follow_the_surface(data):
+    """Normals inside a stretched zone are the stretched surface's (unit, renormalised)."""
+    scene = load_scene(data(TABLE[0]))
+    out, _ = apply_recipe_to_scene(scene, Recipe.parse([TABLE[1]]))
+    for g in out.geometry.values():
+        n = g.vertex_normals
+        assert np.allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-6)
+
+
+def _glb_json(path) -> dict:
+    import json
+    import struct
+
+    blob = path.read_bytes()
+    (n,) = struct.unpack_from("<I", blob, 12)
+    return json.loads(blob[20 : 20 + n])
+
+
+def test_textured_result_renders_with_its_texture(data, tmp_path):
+    """The Poly Haven bookshelf tiled: its textures travel, and three.js draws them."""
+    import json
+    import subprocess
+
+    from conftest import ROOT
+    from test_browser import WEB, find_tools
+
+    rel, edit = SHELF
+    scene = load_scene(data(rel))
+    src = save_scene(scene, tmp_path / "src.glb")[0]
+    out, _ = apply_recipe_to_scene(scene, Recipe.parse([edit]))
+    dst = save_scene(out, tmp_path / "dst.glb")[0]
+    a, b = _glb_json(src), _glb_json(dst)
+    assert len(b["images"]) == len(a["images"]) >= 1
+    assert len(b["materials"]) == len(a["materials"])
+    assert all("TEXCOORD_0" in p["attributes"] for m in b["meshes"] for p in m["primitives"])
+    node, chromium = find_tools()
+    args = {"chromium": chromium, "web": str(WEB), "files": [str(src), str(dst)]}
+    proc = subprocess.run(
+        [node, str(ROOT / "tests" / "browser" / "glb_render.mjs"), json.dumps(args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    res = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert not res["errors"], res["errors"]
+    import base64
+
+    def unlit(r):
+        px = np.frombuffer(base64.b64decode(r["unlit"]), np.uint8).reshape(256, 256, 4)[..., :3]
+        return px[px.sum(axis=2) > 0].astype(float)
+
+    before, after = (unlit(r) for r in res["renders"])
+    # textured wood, not a flat material colour: the same palette before and after
+    assert after.std(axis=0).max() > 10
+    assert np.abs(after.mean(axis=0) - before.mean(axis=0)).max() <= 10
+
+
+def test_two_edits_on_one_axis_refer_to_the_input(data):
+    """As on the CSDF route, the second zone is given on the input and carried through the
+    first edit: what lies between the two zones moves by the first edit's change only."""
+    scene = load_scene(data(SHELF[0]))
+    recipe = Recipe.parse(
+        [
+            {"axis": "y", "zone": ["10%", "30%"], "to": "40%", "mode": "stretch"},
+            {"axis": "y", "zone": ["60%", "80%"], "to": "90%", "mode": "stretch"},
+        ]
+    )
+    out, _ = apply_recipe_to_scene(scene, recipe)
+    ext = scene.extents[1]
+    # each adds 10% of the input's extent
+    assert out.extents[1] == pytest.approx(1.2 * ext, rel=1e-9)
+    # the input's 60% plane moved by the first edit's +10% only: vertices there stay put after
+    w0 = np.concatenate([w for _, _, w in _world(scene)])
+    w1 = np.concatenate([w for _, _, w in _world(out)])[: len(w0)]
+    lo = scene.bounds[0, 1]
+    mid = (w0[:, 1] > lo + 0.3 * ext) & (w0[:, 1] < lo + 0.6 * ext)
+    assert mid.sum() > 100
+    assert np.abs(w1[mid, 1] - w0[mid, 1] - 0.1 * ext).max() <= 1e-9 * ext
+
+
+def test_cli_mesh_route_by_and_fit(cli, data, tmp_path):
+    src = data(TABLE[0])
+    width = trimesh.load(src, force="mesh").extents[0]
+    out = tmp_path / "by.glb"
+    proc = cli("scale", src, "-o", out, "--axis", "x", "--zone", "25%", "75%", "--by", "+40cm")
+    assert proc.returncode == 0, proc.stderr
+    assert trimesh.load(out, force="mesh").extents[0] == pytest.approx(width + 0.4, abs=1e-6)
+    out = tmp_path / "fit.obj"
+    proc = cli("fit", src, "-o", out, "--size", "3.0", "=", "=")
+    assert proc.returncode == 0, proc.stderr
+    # fit chooses its zones on the CSDF at 128: the length within a voxel (2.65 m / 128)
+    assert abs(trimesh.load(out, force="mesh").extents[0] - 3.0) <= 2.65 / 128
+
+
+def test_obj_in_obj_out_keeps_its_materials(data, tmp_path):
+    """Sweet Home 3D's table (OBJ + MTL colours, no UVs): each material group survives."""
+    scene = load_scene(data("sweethome3d/table.obj"))
+    edit = {"axis": "x", "zone": ["30%", "70%"], "to": "120%", "mode": "stretch"}
+    out, _ = apply_recipe_to_scene(scene, Recipe.parse([edit]))
+    _check_edit(scene, out, edit)
+    written = save_scene(out, tmp_path / "t.obj")
+    assert [p.name for p in written] == ["t.obj", "t.mtl"]
+    back = trimesh.load(written[0], force="scene")
+    kd = sorted(tuple(g.visual.material.diffuse[:3]) for g in back.geometry.values())
+    want = sorted(tuple(g.visual.material.diffuse[:3]) for g in scene.geometry.values())
+    assert kd == want and len(kd) >= 2

@@ -397,7 +397,9 @@ def _figure(
         parts_row = [("original parts", f"{original.n_parts} parts", None)] + [
             (LABELS[m], "", None) for m in COMPARED_MODES if isinstance(results[m], CSDF)
         ]
-        sources = [original] + [results[m] for m in COMPARED_MODES if isinstance(results[m], CSDF)]
+        sources = [original] + [
+            r for r in (results[m] for m in COMPARED_MODES) if isinstance(r, CSDF)
+        ]
         row = [
             (label, note, _render(c, entry.view, frame, panel, parts=True))
             for (label, note, _), c in zip(parts_row, sources, strict=True)

@@ -60,8 +60,10 @@ def _write_glb(
         ("COLOR_0", np.ascontiguousarray(colors, dtype="<f4")),
     ]
     indices = np.ascontiguousarray(faces, dtype="<u4").reshape(-1)
-    blob = bytearray()
-    views, accessors, attributes = [], [], {}
+    blob: bytes | bytearray = bytearray()  # bytes once padded
+    views: list[dict[str, Any]] = []
+    accessors: list[dict[str, Any]] = []
+    attributes: dict[str, int] = {}
     for name, arr in arrays:
         offset = len(blob)
         blob += arr.tobytes()

@@ -9,6 +9,7 @@ from __future__ import annotations
 import tempfile
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -243,7 +244,7 @@ class EditSession:
         stem = edited_path(self.path).name[: -len(SUFFIX)]
         if kind == "mesh":
             name, media = f"{stem}.glb", "model/gltf-binary"
-            writer = export_mod.export_mesh
+            writer: Callable[[CSDF, Path], object] = export_mod.export_mesh
         elif kind == "texture":
             name, media = f"{stem}{TEXTURE_SUFFIX}", "application/octet-stream"
             writer = export_mod.export_texture

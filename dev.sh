@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # partscale's two commands:
 #   ./dev.sh setup   create .venv (Python 3.11), install partscale, run the demo on a real object
-#   ./dev.sh test    lint, format check, the page's type check and the whole test suite (installs
+#   ./dev.sh test    lint, format check, type checks (mypy, the page's tsc) and the whole test suite (installs
 #                    what it needs first, the optional Ray extra included)
 # Optional heavy parts (Node tools for glTF validation and browser tests, Debian's chromium) are
 # installed when possible; tests that need them skip with a printed reason otherwise.
@@ -102,6 +102,8 @@ case "${1:-}" in
     say "ruff"
     "$VENV/bin/ruff" check src tests bench
     "$VENV/bin/ruff" format --check src tests bench
+    say "mypy (src/partscale, settings in pyproject.toml)"
+    "$VENV/bin/mypy"
     if [ -x web/node_modules/.bin/tsc ]; then
       say "tsc --noEmit (web/)"
       web/node_modules/.bin/tsc --noEmit -p web

@@ -32,4 +32,4 @@ def keyword_options(func: F) -> F:
             )
         return func(*args, **kwargs)
 
-    return wrapper  # type: ignore[return-value]
+    return wrapper  # type: ignore[return-value]  # wraps() keeps func's signature; mypy cannot see it

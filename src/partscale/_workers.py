@@ -11,6 +11,7 @@ import warnings
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from multiprocessing import connection as mp_connection
+from typing import Any, cast
 
 _POOL: ThreadPoolExecutor | None = None
 
@@ -42,7 +43,9 @@ class Workers:
     pieces the other).
     """
 
-    def __init__(self, worker: Callable | None = None, conns: list | None = None):
+    def __init__(
+        self, worker: Callable | None = None, conns: list[mp_connection.Connection] | None = None
+    ):
         self._worker, self._conns = worker, conns or []
         self._todo: collections.deque = collections.deque()
         self._busy = {c: 0 for c in self._conns}
@@ -57,13 +60,14 @@ class Workers:
         # a chunk of items travels as one message; its result is the list of their results
         ticket, self._next = self._next, self._next + 1
         if not self._conns:
+            assert self._worker is not None  # made without pipes, it runs the worker here
             self._done.append((ticket, [self._worker(x) for x in chunk]))
         else:
             self._todo.append((ticket, chunk))
             self._dispatch()
         return ticket
 
-    def next_done(self) -> tuple[int, object]:
+    def next_done(self) -> tuple[int, Any]:
         """(ticket, result) of a finished item, waiting for one; re-raises a worker's error."""
         ticket, results = self._next_chunk()
         return ticket, results[0]
@@ -74,7 +78,8 @@ class Workers:
         busy = [c for c, n in self._busy.items() if n]
         if not busy:
             raise RuntimeError("next_done: nothing was submitted")
-        conn = mp_connection.wait(busy)[0]
+        # wait() returns some of the objects it was given: our pipe ends
+        conn = cast(mp_connection.Connection, mp_connection.wait(busy)[0])
         try:
             ticket, ok, value = conn.recv()
         except EOFError:
@@ -91,7 +96,7 @@ class Workers:
         # a few chunks per worker: fewer round trips, and still balanced
         size = max(1, -(-len(items) // (4 * max(len(self._conns), 1))))
         tickets = [self._submit(items[i : i + size]) for i in range(0, len(items), size)]
-        out = {}
+        out: dict[int, list] = {}
         while len(out) < len(tickets):
             t, r = self._next_chunk()
             out[t] = r

@@ -184,7 +184,8 @@ class CSDF:
     @property
     def shape(self) -> tuple[int, int, int]:
         """(X, Y, Z) number of voxels along x, y, z."""
-        return tuple(int(s) for s in self.sdf.shape)  # type: ignore[return-value]
+        nx, ny, nz = self.sdf.shape
+        return int(nx), int(ny), int(nz)
 
     @property
     def grid_bounds(self) -> np.ndarray:
@@ -417,7 +418,8 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
     Returns the path written.
     """
     path = Path(path)
-    arrays = {
+    # Any: mypy checks ** against every keyword of savez, allow_pickle: bool included
+    arrays: dict[str, Any] = {
         "sdf": csdf.sdf,
         "rgb": csdf.rgb,
         "parts": csdf.parts,

@@ -354,7 +354,7 @@ def render(
     lin = srgb8_to_linear(np.clip(base, 0, 255)) * shade[:, None]
     colours = np.rint(linear_to_srgb(lin) * 255).astype(np.uint8)
 
-    image = np.empty((size * size, 3), np.uint8)
+    image: np.ndarray = np.empty((size * size, 3), np.uint8)
     image[:] = bg.astype(np.uint8)
     image[hit] = colours
     image = image.reshape(size, size, 3)

@@ -10,13 +10,14 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .csdf import CSDF, make
 
 SdfFunction = Callable[[np.ndarray], np.ndarray]
 
 
-def box_sdf(points: np.ndarray, lo: Sequence[float], hi: Sequence[float]) -> np.ndarray:
+def box_sdf(points: np.ndarray, lo: ArrayLike, hi: ArrayLike) -> np.ndarray:
     """Exact signed distance to the axis-aligned box ``[lo, hi]``.
 
     Parameters
@@ -37,20 +38,20 @@ def box_sdf(points: np.ndarray, lo: Sequence[float], hi: Sequence[float]) -> np.
     return outside + inside
 
 
-def sphere_sdf(points: np.ndarray, center: Sequence[float], radius: float) -> np.ndarray:
+def sphere_sdf(points: np.ndarray, center: ArrayLike, radius: float) -> np.ndarray:
     """Exact signed distance to a sphere. ``points`` (..., 3) -> (...,) float64."""
     p = np.asarray(points, dtype=np.float64)
     return np.linalg.norm(p - np.asarray(center, float), axis=-1) - radius
 
 
-def boxes_sdf(points: np.ndarray, boxes: Sequence[tuple[Sequence[float], Sequence[float]]]):
+def boxes_sdf(points: np.ndarray, boxes: Sequence[tuple[ArrayLike, ArrayLike]]):
     """Exact signed distance to a union of *disjoint* boxes (min of their SDFs)."""
     return np.min([box_sdf(points, lo, hi) for lo, hi in boxes], axis=0)
 
 
 def grid(
     sdf_function: SdfFunction,
-    bounds: Sequence[Sequence[float]],
+    bounds: ArrayLike,
     *,
     voxel_size: float,
     margin: int = 3,

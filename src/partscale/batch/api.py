@@ -201,12 +201,13 @@ def run(
         same = prev is not None and prev["input_hash"] == ih and prev["options_hash"] == oh
         if (
             same
+            and prev is not None
             and prev["state"] == "done"
             and all((outdir / o).is_file() for o in prev["outputs"].split(";") if o)
         ):
             result.skipped.append(it.name)
             continue
-        if same and prev["state"] == "failed" and not retry_failed:
+        if same and prev is not None and prev["state"] == "failed" and not retry_failed:
             result.not_retried.append((it.name, prev["error"]))
             continue
         tasks.append(

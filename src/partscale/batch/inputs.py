@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
+import os
 import re
 from collections import Counter
 from collections.abc import Iterable, Sequence
@@ -129,7 +130,7 @@ def _stem(path: Path) -> str:
     return path.stem
 
 
-def discover(sources: Sequence[str | Path], *, exclude: Path | None = None) -> list[Input]:
+def discover(sources: Sequence[str | os.PathLike], *, exclude: Path | None = None) -> list[Input]:
     """The inputs named by ``sources``: files, folders (searched recursively by suffix, see
     :data:`INPUT_SUFFIXES`) and manifests (``.csv`` with a ``path`` column, or ``.jsonl`` with a
     ``path`` key per line; other columns: ``name`` and :data:`OPTION_KEYS`).
@@ -214,8 +215,8 @@ def read_manifest(path: Path) -> list[Input]:
                 raise InputError(f"{path}:{i}: expected a JSON object, got {type(obj).__name__}")
             rows.append((i, obj))
     out = []
-    for line, row in rows:
-        where = f"{path}:{line}"
+    for lineno, row in rows:
+        where = f"{path}:{lineno}"
         unknown = sorted(set(row) - {"path", "name", *OPTION_KEYS})
         if unknown:
             raise InputError(

@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from multiprocessing import Pipe
 from multiprocessing import connection as mp_connection
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from .job import thread_env
 
@@ -140,6 +140,7 @@ def run_local(
 
     def fail(w: _Worker, error: str) -> None:
         task = w.task
+        assert task is not None  # called only for a worker running a task
         result = {
             "name": task["name"],
             "ok": False,
@@ -159,7 +160,11 @@ def run_local(
                     on_start(task)
                     w.send(task)
             live = {w.conn: w for w in pool if not w.dead}
-            for conn in mp_connection.wait(list(live), timeout=POLL_SECONDS):
+            # wait() returns some of the objects it was given: our pipe ends
+            ready = cast(
+                list[mp_connection.Connection], mp_connection.wait(list(live), timeout=POLL_SECONDS)
+            )
+            for conn in ready:
                 w = live[conn]
                 try:
                     msg = conn.recv()
@@ -168,9 +173,10 @@ def run_local(
                 if msg == "ready":
                     w.ready, start_failures = True, 0
                 else:
-                    task, w.task = w.task, None
+                    finished, w.task = w.task, None
+                    assert finished is not None  # a worker sends a result only for a task
                     msg["peak_memory"] = max(msg.get("peak_memory", 0), w.peak)
-                    on_finish(task, msg)
+                    on_finish(finished, msg)
             now = time.monotonic()
             for i, w in enumerate(pool):
                 if w.dead:

@@ -70,10 +70,10 @@ def _batch_bar():
         disable=not _common.stderr.is_terminal,
     ) as bar:
         task = bar.add_task("batch", total=None, rate="", last="")
-        state = {"total": None}
+        state: dict[str, int] = {}
 
         def callback(fraction: float, message: str) -> None:
-            if state["total"] is None:  # the first call says how many are to run
+            if "total" not in state:  # the first call says how many are to run
                 state["total"] = int(message.split()[0]) if message[:1].isdigit() else 0
                 bar.update(task, total=max(state["total"], 1), last=message)
                 return

@@ -97,6 +97,7 @@ def scale(
                 "scale: expected one of --to, --by, --copies, got "
                 + ", ".join(n for n, _ in dest_given)
             )
+        assert axis is not None  # in `missing` otherwise
         if axis.lower() not in AXES:
             raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
         if mode is None:

@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._memory import check_memory
 from ..csdf import CSDF
@@ -82,14 +83,14 @@ class ResolvedEdit:
         """Whole voxels the grid grows (shrinks, if negative) along the axis."""
         return round(self.shift / voxel_size)
 
-    def to_source(self, y: np.ndarray) -> np.ndarray:
+    def to_source(self, y: ArrayLike) -> np.ndarray:
         """Map coordinates after the edit back to before, for rigid content and for ``global``."""
         y = np.asarray(y, dtype=np.float64)
         if self.mode == "global":
             return self.lo + (y - self.lo) / self.factor
         return np.where(y <= self.start, y, y - self.shift)
 
-    def to_result(self, x: np.ndarray) -> np.ndarray:
+    def to_result(self, x: ArrayLike) -> np.ndarray:
         """Map coordinates before the edit to after (inverse of :meth:`to_source` outside)."""
         x = np.asarray(x, dtype=np.float64)
         if self.mode == "global":

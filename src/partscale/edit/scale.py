@@ -236,6 +236,7 @@ def apply_recipe(
     out = csdf
     for i, e in enumerate(recipe.edits):
         ax = e.axis_index
+        assert bounds is not None  # computed whenever there are edits
         s, en, d = e.resolve(float(bounds[0, ax]), float(bounds[1, ax]))
         planes = np.array([s, en], dtype=np.float64)
         for a, kw in applied:

@@ -11,7 +11,7 @@ MUTED = (110, 110, 110)
 FAILED = (235, 225, 225)
 
 
-def _font(size: int) -> ImageFont.ImageFont:
+def _font(size: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
     return ImageFont.load_default(size=size)
 
 
@@ -19,7 +19,8 @@ def failed_panel(size: int, message: str) -> np.ndarray:
     """(size, size, 3) uint8: a pale panel with the reason a mode produced no result."""
     img = Image.new("RGB", (size, size), FAILED)
     draw = ImageDraw.Draw(img)
-    font = _font(max(10, size // 22))
+    px = max(10, size // 22)  # the font's size (bitmap fonts have no .size)
+    font = _font(px)
     words, lines, line = message.split(), [], ""
     for w in words:  # wrap to the panel's width
         trial = f"{line} {w}".strip()
@@ -32,7 +33,7 @@ def failed_panel(size: int, message: str) -> np.ndarray:
     y = size // 3
     for text in ["failed:", *lines[:8]]:
         draw.text((8, y), text, fill=INK, font=font)
-        y += font.size + 4  # type: ignore[attr-defined]
+        y += px + 4
     return np.asarray(img)
 
 
@@ -51,26 +52,27 @@ def object_figure(
         Renders of equal size (same view and frame), e.g. original | global | stretch | tile | naive.
     """
     size = panels[0][2].shape[0]
-    big, small = _font(max(12, size // 14)), _font(max(10, size // 20))
+    big_px, small_px = max(12, size // 14), max(10, size // 20)
+    big, small = _font(big_px), _font(small_px)
     lines = [subtitle, legend] if legend else [subtitle]
-    head = big.size + len(lines) * (small.size + 4) + 12  # type: ignore[attr-defined]
-    label_h = big.size + small.size + 14  # type: ignore[attr-defined]
+    head = big_px + len(lines) * (small_px + 4) + 12
+    label_h = big_px + small_px + 14
     gap = 6
     width = len(panels) * size + (len(panels) + 1) * gap
     fig = Image.new("RGB", (width, head + size + label_h + gap), BACKGROUND)
     draw = ImageDraw.Draw(fig)
     draw.text((gap, 4), title, fill=INK, font=big)
-    y = 8 + big.size  # type: ignore[attr-defined]
+    y = 8 + big_px
     for text in lines:
         draw.text((gap, y), text, fill=MUTED, font=small)
-        y += small.size + 4  # type: ignore[attr-defined]
+        y += small_px + 4
     for i, (label, note, img) in enumerate(panels):
         x = gap + i * (size + gap)
         fig.paste(Image.fromarray(np.asarray(img, np.uint8)), (x, head))
         draw.rectangle((x, head, x + size - 1, head + size - 1), outline=(215, 215, 215))
         draw.text((x + 4, head + size + 4), label, fill=INK, font=big)
         draw.text(
-            (x + 4, head + size + 8 + big.size),  # type: ignore[attr-defined]
+            (x + 4, head + size + 8 + big_px),
             note,
             fill=MUTED,
             font=small,

@@ -267,7 +267,8 @@ def _failure_counts(ok: list, modes: list[str]) -> str:
     """One line per mode: on how many objects it fails, and on what most often."""
     out = []
     for mode in modes:
-        failed, reasons, ran = 0, {}, 0
+        failed, ran = 0, 0
+        reasons: dict[str, int] = {}
         for o in ok:
             by = {r["mode"]: r for r in o.rows}
             if mode not in by:

@@ -74,8 +74,10 @@ def _write_glb(
     if uv is not None:
         arrays.append(("TEXCOORD_0", np.ascontiguousarray(uv, dtype="<f4")))
     indices = np.ascontiguousarray(faces, dtype="<u4").reshape(-1)
-    blob = bytearray()
-    views, accessors, attributes = [], [], {}
+    blob: bytes | bytearray = bytearray()  # bytes once padded
+    views: list[dict[str, Any]] = []
+    accessors: list[dict[str, Any]] = []
+    attributes: dict[str, int] = {}
     for name, arr in arrays:
         offset = len(blob)
         blob += arr.tobytes()

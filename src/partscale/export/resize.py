@@ -6,6 +6,8 @@ keeps the world box.
 
 from __future__ import annotations
 
+from typing import overload
+
 import numba
 import numpy as np
 
@@ -18,6 +20,10 @@ from ..progress import ProgressCallback, resolve
 PRESET_SIZES = (32, 64, 128, 256)
 
 
+@overload
+def check_size(size: int) -> int: ...
+@overload
+def check_size(size: None) -> None: ...
 def check_size(size: int | None) -> int | None:
     """Validate a preset texture/mesh size (voxels along the grid's longest side)."""
     if size is None:
@@ -118,12 +124,12 @@ def resize_grid(csdf: CSDF, size: int, *, progress: ProgressCallback | None = No
         for a in range(3)
     ]
     report(0.0, "resampling")
-    axes = tuple(_axis_weights(int(old_shape[a]), src[a]) for a in range(3))
+    ax, ay, az = (_axis_weights(int(old_shape[a]), src[a]) for a in range(3))
     shape = tuple(int(n) for n in new_shape)
     sdf = np.empty(shape, np.float32)
     rgb = np.empty((*shape, 3), np.uint8)
     parts = np.empty(shape, np.int16)
-    _resize_kernel(csdf.sdf, csdf.rgb, csdf.parts, *axes, sdf, rgb, parts)
+    _resize_kernel(csdf.sdf, csdf.rgb, csdf.parts, ax, ay, az, sdf, rgb, parts)
     report(1.0, "resampled")
     op = {
         "op": "resample",

@@ -61,9 +61,9 @@ def _check_colors(colors, shape, name: str) -> np.ndarray | None:
     if c.dtype == np.uint8:
         return c
     if np.issubdtype(c.dtype, np.integer):
-        lo, hi = int(c.min()), int(c.max())
-        if lo < 0 or hi > 255:
-            raise InputError(f"{name}: expected integer colours in 0..255, got [{lo}, {hi}]")
+        ilo, ihi = int(c.min()), int(c.max())
+        if ilo < 0 or ihi > 255:
+            raise InputError(f"{name}: expected integer colours in 0..255, got [{ilo}, {ihi}]")
         return c.astype(np.uint8)
     if not np.issubdtype(c.dtype, np.floating):
         raise InputError(f"{name}: expected colours as {COLOR_RULE}, got dtype {c.dtype}")

@@ -19,11 +19,15 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, overload
 
 import numpy as np
 
 from ..color import linear_to_srgb8, srgb_to_linear
 from ..errors import InputError, one_line
+
+if TYPE_CHECKING:
+    from PIL import Image
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,6 +173,7 @@ def scene_to_mesh(
         Material name -> :class:`Material` the reader made itself (used instead of trimesh's).
     """
     import trimesh
+    from trimesh.visual import ColorVisuals, TextureVisuals
 
     uv_transforms = uv_transforms or {}
     materials = materials or {}
@@ -209,11 +214,12 @@ def scene_to_mesh(
         else:
             uvs.append(np.zeros((len(f), 3, 2), np.float32))
         vc = None
-        if visual.kind == "vertex":
+        if isinstance(visual, ColorVisuals) and visual.kind == "vertex":
             vc = np.asarray(visual.vertex_colors, np.float32)[:, :3] / 255.0
-        elif visual.kind == "face":
+        elif isinstance(visual, ColorVisuals) and visual.kind == "face":
             vc = np.repeat(np.asarray(visual.face_colors, np.float32)[:, None, :3] / 255.0, 3, 1)
-        elif "color" in getattr(visual, "vertex_attributes", {}):  # COLOR_0 beside a texture
+        elif isinstance(visual, TextureVisuals) and "color" in visual.vertex_attributes:
+            # COLOR_0 beside a texture
             raw = np.asarray(visual.vertex_attributes["color"])
             vc = raw[:, :3].astype(np.float32)
             if np.issubdtype(raw.dtype, np.integer):
@@ -248,14 +254,18 @@ def scene_to_mesh(
     )
 
 
-def image_linear(img) -> np.ndarray | None:
+@overload
+def image_linear(img: None) -> None: ...
+@overload
+def image_linear(img: Image.Image) -> np.ndarray: ...
+def image_linear(img: Image.Image | None) -> np.ndarray | None:
     """(H, W, 3) float32 linear RGB of a PIL image (sRGB-encoded, 8 or 16 bits)."""
     if img is None:
         return None
     if img.mode.startswith("I") or img.mode == "F":
         # 16-bit (I;16*, or I as PIL reads 16-bit PNG) and float greyscale: convert("RGB")
         # would clip them to 255 (white); scale to [0, 1] instead
-        a = np.asarray(img, dtype=np.float64)
+        a: np.ndarray = np.asarray(img, dtype=np.float64)
         a = np.clip(a / (1.0 if img.mode == "F" else 65535.0), 0.0, 1.0)
         a = np.repeat(a[..., None].astype(np.float32), 3, axis=-1)
     else:
@@ -274,7 +284,7 @@ def material_of(
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
     mat = getattr(visual, "material", None)
-    if getattr(mat, "name", None) in materials:
+    if mat is not None and getattr(mat, "name", None) in materials:
         return materials[mat.name]
     if isinstance(mat, PBRMaterial):
         f = mat.baseColorFactor

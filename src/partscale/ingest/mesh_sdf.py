@@ -32,6 +32,7 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from scipy import ndimage
@@ -124,7 +125,7 @@ class _Winding:
     def __init__(self, V: np.ndarray, F: np.ndarray):
         self.V = V
         self.F = F
-        self._bvh = None
+        self._bvh: Any = None  # igl.FastWindingNumberBVH once built (igl is untyped)
 
     def __call__(self, Q: np.ndarray, cuts: tuple[float, ...]) -> np.ndarray:
         import igl

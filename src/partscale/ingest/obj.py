@@ -55,7 +55,7 @@ def _map_kd(line: str) -> tuple[str, np.ndarray | None]:
     while i < len(toks) and toks[i][1].lower() in _MTL_OPTION_ARGS:
         opt = toks[i][1].lower()
         n = _MTL_OPTION_ARGS[opt]
-        args = []
+        args: list[str] = []
         i += 1
         while len(args) < n and i < len(toks) - 1:
             if opt in ("-o", "-s", "-t") and not _is_number(toks[i][1]):
@@ -150,9 +150,10 @@ def _obj_materials(obj: Path, mtl_texts: dict[str, str]) -> dict[str, Material]:
             elif cur is None:
                 continue
             elif key == "kd":
-                kd = [_float_or_none(t) for t in mt[1:4]]
-                if None in kd:
+                kd_or_none = [_float_or_none(t) for t in mt[1:4]]
+                if None in kd_or_none:
                     continue  # "Kd spectral file" / "Kd xyz x y z": not read, the default
+                kd = [x for x in kd_or_none if x is not None]
                 if not np.isfinite(kd).all():
                     raise InputError(
                         f"{obj}: expected Kd of material {cur_name!r} in {mtl.name} to be "
@@ -167,8 +168,8 @@ def _obj_materials(obj: Path, mtl_texts: dict[str, str]) -> dict[str, Material]:
                 tex = _read_texture(obj, mtl, e["map"][0])
                 uv_tf = e["map"][1]
             default = _KD_TEXTURED if "map" in e else _KD_PLAIN
-            kd = np.clip(np.asarray(e.get("kd", [default] * 3), np.float32), 0, 1)
-            out.setdefault(name, Material(srgb_to_linear(kd), tex, uv_tf))
+            diffuse = np.clip(np.asarray(e.get("kd", [default] * 3), np.float32), 0, 1)
+            out.setdefault(name, Material(srgb_to_linear(diffuse), tex, uv_tf))
     return out
 
 
@@ -205,7 +206,12 @@ def load_obj(path: Path) -> ColoredMesh:
         _check_mtllib(path, text)
         resolver = _Utf8Resolver(str(path))
         return trimesh.load_scene(
-            io.BytesIO(text.encode("utf-8")), file_type="obj", resolver=resolver, process=False
+            io.BytesIO(text.encode("utf-8")),
+            file_type="obj",
+            # trimesh annotates Resolver | Mapping but only calls get()/[]; subclassing its
+            # Resolver ABC would import trimesh with this module
+            resolver=resolver,  # type: ignore[arg-type]
+            process=False,
         )
 
     scene = read_scene(path, read)

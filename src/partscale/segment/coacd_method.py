@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import threading
 import time
+from typing import Any
 
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
@@ -15,7 +16,7 @@ from scipy.spatial import ConvexHull, QhullError
 from ..errors import InputError
 from ..progress import ProgressCallback
 
-PARAMS = {
+PARAMS: dict[str, Any] = {
     "max_convex_hull": -1,
     "preprocess_mode": "auto",
     "preprocess_resolution": 50,

@@ -301,10 +301,10 @@ def merge_across_junctions(
     sdf = csdf.sdf / csdf.voxel_size
     inside = csdf.sdf <= 0
     order = np.argsort(vlab, kind="stable")
-    uniq, first = np.unique(vlab[order], return_index=True)
+    uniq, starts = np.unique(vlab[order], return_index=True)
     verts = {
         int(p): order[i:j]
-        for p, i, j in zip(uniq, first, [*first[1:], len(order)], strict=True)
+        for p, i, j in zip(uniq, starts, [*starts[1:], len(order)], strict=True)
         if p >= 0
     }
     box = {

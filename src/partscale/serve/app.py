@@ -491,8 +491,12 @@ def create_app(
         Middleware(LimitBody, limit=max_body),
         Middleware(HostGuard, hosts=hosts),
     ]
+    # starlette types every handler as taking Exception, though it calls one only for its class
+    handlers = {_HTTPError: _http_error}
     app = Starlette(
-        routes=routes, middleware=middleware, exception_handlers={_HTTPError: _http_error}
+        routes=routes,
+        middleware=middleware,
+        exception_handlers=handlers,  # type: ignore[arg-type]
     )
     app.state.session = session
     return app

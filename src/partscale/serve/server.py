@@ -161,5 +161,5 @@ def serve(
             await original_startup(sockets=sockets)
             webbrowser.open(url)
 
-        server.startup = startup  # type: ignore[method-assign]
+        server.startup = startup  # type: ignore[method-assign]  # open the page once listening
     server.run()

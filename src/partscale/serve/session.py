@@ -10,6 +10,7 @@ import math
 import tempfile
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -331,7 +332,7 @@ class EditSession:
         stem = edited_path(self.path).name[: -len(SUFFIX)]
         if kind == "mesh":
             name, media = f"{stem}.glb", "model/gltf-binary"
-            writer = export_mod.export_mesh
+            writer: Callable[[CSDF, Path], object] = export_mod.export_mesh
         elif kind == "texture":
             name, media = f"{stem}{TEXTURE_SUFFIX}", "application/octet-stream"
             writer = export_mod.export_texture

@@ -129,6 +129,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float, *, prof=None) -> tuple[list[E
     # what cannot shrink: the extent less every slab down to its minimum and the removable periods
     shrinkable = sum(max(0.0, c.zone[1] - c.zone[0] - MIN_SLAB_VOXELS * h) for c in slabs)
     if tiles:
+        assert tiles[0].count is not None and tiles[0].period is not None  # set for a tile
         shrinkable = max(shrinkable, (tiles[0].count - 1) * tiles[0].period)
     if cands and target < extent - shrinkable - h / 2:
         raise InputError(
@@ -141,6 +142,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float, *, prof=None) -> tuple[list[E
     tile_zone = None
     if tiles:
         t = tiles[0]
+        assert t.period is not None and t.count is not None  # set for a tile
         period = float(t.period)
         k = int(np.floor(change / period + 0.5))
         k = max(k, 1 - t.count)  # cannot remove more periods than the repeat holds

@@ -10,6 +10,7 @@ once from one Gram matrix, so no per-voxel or per-pair Python loop runs.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 
@@ -99,10 +100,18 @@ class Profile:
         union = aa + bb - ab
         return np.where(union > 1e-9, (aa + bb - 2 * ab) / np.maximum(union, 1e-9), 0.0)
 
+    @overload
+    def index(self, x: float) -> float: ...
+    @overload
+    def index(self, x: np.ndarray) -> np.ndarray: ...
     def index(self, x: float | np.ndarray) -> float | np.ndarray:
         """Continuous layer index of world coordinate(s) ``x``."""
         return (np.asarray(x, dtype=np.float64) - self.coords[0]) / self.voxel_size
 
+    @overload
+    def world(self, i: float) -> float: ...
+    @overload
+    def world(self, i: np.ndarray) -> np.ndarray: ...
     def world(self, i: float | np.ndarray) -> float | np.ndarray:
         """World coordinate of continuous layer index(es) ``i``."""
         return self.coords[0] + np.asarray(i, dtype=np.float64) * self.voxel_size

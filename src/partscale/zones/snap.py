@@ -81,6 +81,7 @@ def snap(csdf: CSDF, edit: Edit | dict, mode: str | None = None) -> tuple[Edit, 
         mid = (s + e) / 2
         best = min(cands, key=lambda c: abs((c.region[0] + c.region[1]) / 2 - mid))
     if kind == "tile":
+        assert best.period is not None  # a tile candidate has a period
         period = float(best.period)
         lo, hi = (float(v) for v in p.index(np.array(best.region)))
         t = best_phase(p, period / h, lo, hi, near=float(p.index(s)))

@@ -212,6 +212,21 @@ def _apply_edit(
     return out
 
 
+def _carried(
+    e: Edit, bounds: np.ndarray, applied: list[tuple[int, dict[str, Any]]]
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """``e``'s (start, end, dest) on the recipe's input, and carried through the ``applied``
+    edits before it on the same axis (recipe coordinates); the destination keeps its change."""
+    ax = e.axis_index
+    s, en, d = e.resolve(float(bounds[0, ax]), float(bounds[1, ax]))
+    planes = np.array([s, en], dtype=np.float64)
+    for a, kw in applied:
+        if a == ax:
+            planes = forward_coordinate(planes, **kw)
+    s2, e2 = float(planes[0]), float(planes[1])
+    return (s, en, d), (s2, e2, e2 + (d - en))
+
+
 @keyword_options
 def apply_recipe(
     csdf: CSDF,
@@ -237,13 +252,7 @@ def apply_recipe(
     for i, e in enumerate(recipe.edits):
         ax = e.axis_index
         assert bounds is not None  # computed whenever there are edits
-        s, en, d = e.resolve(float(bounds[0, ax]), float(bounds[1, ax]))
-        planes = np.array([s, en], dtype=np.float64)
-        for a, kw in applied:
-            if a == ax:
-                planes = forward_coordinate(planes, **kw)
-        s2, e2 = float(planes[0]), float(planes[1])
-        d2 = e2 + (d - en)
+        (s, en, d), (s2, e2, d2) = _carried(e, bounds, applied)
         step = Edit(e.axis, s2, e2, d2, e.mode)
         record = {
             "given": e.to_json(),
@@ -277,18 +286,12 @@ def recipe_shape(csdf: CSDF, recipe: Recipe | dict[str, Any] | list) -> tuple[in
     applied: list[tuple[int, dict[str, Any]]] = []
     for e in recipe.edits:
         ax = e.axis_index
-        s, en, d = e.resolve(*[float(bounds[i, ax]) for i in (0, 1)])
-        planes = np.array([s, en], dtype=np.float64)
-        for a, kw in applied:
-            if a == ax:
-                planes = forward_coordinate(planes, **kw)
-        s2, e2 = float(planes[0]), float(planes[1])
-        d2 = e2 + (d - en)
+        (_, _, d), (s2, e2, d2) = _carried(e, bounds, applied)
         if not np.isfinite((d2 - e2) / h):
             raise InputError(f"to: expected a finite position, got {d}")
         shift = round((d2 - e2) / h)
         shape[ax] = max(1, shape[ax] + shift)
-        kw = {"mode": e.mode, "start": s2, "end": e2, "dest": e2 + shift * h}
+        kw: dict[str, Any] = {"mode": e.mode, "start": s2, "end": e2, "dest": e2 + shift * h}
         lo, hi = extent[ax]
         if e.mode == "global":
             kw.update(lo=lo, hi=hi)

@@ -543,3 +543,23 @@ def test_fit_reaches_each_suite_length_no_worse_than_the_hand_zone(real):
             if math.isfinite(f) and not f <= h + max(tol, 0.1 * abs(h)):
                 worse[(o["name"], k)] = (f, best, h)
     assert set(worse) <= FIT_KNOWN_WORSE, worse
+
+
+@pytest.mark.slow
+def test_snapped_naive_zone_on_the_mirrored_drawers_runs_boundary_to_boundary(real):
+    """The drawers repeat mirrored (handles face the divider): a 40-60 % tile zone snaps to one
+    drawer and the divider, both planes on the ends of an element (within a voxel), not
+    through a drawer (the layer-matching phase put them at 34.3-78.4 %)."""
+    from partscale.zones.profile import profile
+    from partscale.zones.suggest import find_bounded_repeats
+
+    rel, ax, _ = PERIODS["drawers"]
+    c = real(rel)
+    lo, hi = c.surface_bounds()[:, ax]
+    snapped, moves = snap(c, Edit("x", "40%", "60%", lo + 0.9 * (hi - lo), "tile"))
+    p = profile(c, ax)
+    ends = np.array([x for r in find_bounded_repeats(p) for e in r.elements for x in e])
+    assert ends.size, "the drawers are found between their boards"
+    for plane in (float(snapped.start), float(snapped.end)):
+        assert np.abs(ends - p.index(plane)).min() <= 1.0, (plane, p.world(ends))
+    assert moves

@@ -2,7 +2,8 @@
 
 - ``tile``: the zone becomes one whole period of the repeat it lies in (the tile candidate whose
   repeat overlaps it most), with its planes at the best phase nearest the given start (in a gap,
-  or where the cross-sections at both planes match); the destination keeps the given growth
+  or where the cross-sections at both planes match; for elements found between boundaries, the
+  candidate's own boundary-to-boundary zone moved by whole periods); the destination keeps the given growth
   rounded to whole periods, so every copy is a copy.
 - ``stretch``: the planes move inside the constant slab that overlaps the zone most (or the
   nearest one); where less than two voxels of the zone would remain, the zone becomes the slab.
@@ -41,6 +42,29 @@ class Move:
 
 def _overlap(zone: tuple[float, float], c: Candidate) -> float:
     return min(zone[1], c.region[1]) - max(zone[0], c.region[0])
+
+
+def _from_boundaries(c: Candidate) -> bool:
+    """Whether a tile candidate came from the boundary detector (elements between boards or
+    gaps, :func:`~partscale.zones.suggest.find_bounded_repeats`), whose reason says so."""
+    return c.kind == "tile" and "elements between" in c.reason
+
+
+def _boundary_start(c: Candidate, near: float) -> float:
+    """Start (world) of ``c``'s zone moved by whole periods, inside its region, nearest ``near``.
+
+    A bounded repeat's elements need not match layer for layer (mirrored drawers), so a phase
+    off the boundaries cuts an element and joins its halves the wrong way round; its own zone,
+    one element and one boundary, is the only phase that copies whole elements.
+    """
+    assert c.period is not None  # a tile candidate has a period
+    period = float(c.period)
+    k = np.arange(-(c.count or 1), (c.count or 1) + 1)
+    starts = c.zone[0] + k * period
+    # within the repeat (a quarter of a period of slack: element ends are found to sub-voxel)
+    ok = (starts >= c.region[0] - period / 4) & (starts + period <= c.region[1] + period / 4)
+    starts = starts[ok] if ok.any() else np.array([c.zone[0]])
+    return float(starts[np.argmin(np.abs(starts - near))])
 
 
 def snap(csdf: CSDF, edit: Edit | dict, mode: str | None = None) -> tuple[Edit, list[Move]]:
@@ -83,9 +107,14 @@ def snap(csdf: CSDF, edit: Edit | dict, mode: str | None = None) -> tuple[Edit, 
     if kind == "tile":
         assert best.period is not None  # a tile candidate has a period
         period = float(best.period)
-        lo, hi = (float(v) for v in p.index(np.array(best.region)))
-        t = best_phase(p, period / h, lo, hi, near=float(p.index(s)))
-        s2 = float(p.world(t))
+        if _from_boundaries(best):
+            # elements between boundaries (mirrored drawers): only the candidate's own
+            # boundary-to-boundary zone, moved by whole periods, keeps every element whole
+            s2 = _boundary_start(best, s)
+        else:
+            lo, hi = (float(v) for v in p.index(np.array(best.region)))
+            t = best_phase(p, period / h, lo, hi, near=float(p.index(s)))
+            s2 = float(p.world(t))
         e2 = s2 + period
         copies = tile_count(period, period + (d - e))
         d2 = s2 + copies * period

@@ -126,6 +126,7 @@ def _score_one(
     if edited is not None:
         result = score_edit(a, load(edited))
     else:
+        assert recipe is not None  # exactly one of --edited, --recipe (checked above)
         result = score_edit(a, recipe=Recipe.load(recipe))
 
     def clean(v):

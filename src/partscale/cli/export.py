@@ -84,7 +84,6 @@ def export(
         error = DEFAULT_ERROR
     if error == 0:
         error = None  # full resolution
-    budget = {"faces": faces, "error": error, "atlas": atlas}
     if mesh is not None:
         export_mod.check_budget(faces, error)
         export_mod.check_atlas(atlas)
@@ -105,7 +104,7 @@ def export(
         if size is not None:
             c = export_mod.resize_grid(c, size, progress=part())
         if mesh is not None:
-            export_mod.export_mesh(c, mesh, **budget, progress=part())
+            export_mod.export_mesh(c, mesh, faces=faces, error=error, atlas=atlas, progress=part())
             written.append(mesh)
         for t in textures:
             written += export_mod.export_texture(c, t, progress=part())
@@ -134,7 +133,9 @@ def _beside(mesh: Path, atlas: int | None) -> list[Path]:
 def _mesh_summary(mesh: Path, faces: int | None, error: float | None) -> str:
     import trimesh
 
-    n = len(trimesh.load(mesh, force="mesh", process=False).faces)
+    loaded = trimesh.load(mesh, force="mesh", process=False)
+    assert isinstance(loaded, trimesh.Trimesh)  # force="mesh"
+    n = len(loaded.faces)
     if faces is not None:
         budget = f"budget --faces {faces}"
     elif error is not None:

@@ -119,6 +119,7 @@ def scale(
         rec = Recipe((edit,))
     if mesh_route:
         return _scale_mesh(src, output, rec)
+    assert c is not None  # loaded unless mesh_route
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
     for line in _voxel_snaps(out.meta.get("history", [])[-len(rec.edits) :], out):

@@ -40,7 +40,7 @@ def _edt(mask: np.ndarray) -> np.ndarray:
 
 def fuse(
     grid_to_world: np.ndarray,
-    shape: tuple[int, int, int],
+    shape: tuple[int, ...],
     origin: np.ndarray,
     h: float,
     points: np.ndarray,

@@ -194,7 +194,7 @@ def read_points(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
             f"{path}: expected a scan (PLY point cloud or range mesh), got no such file"
         )
     try:
-        geom = trimesh.load(str(path), process=False)
+        geom: trimesh.parent.Geometry | None = trimesh.load(str(path), process=False)
     except Exception as exc:
         raise InputError(
             f"{path}: expected a PLY point cloud or mesh, got {one_line(exc)}"

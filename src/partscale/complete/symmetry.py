@@ -14,7 +14,7 @@ Everything here works in the *upright* frame: y up, the floor at y = 0.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
@@ -46,7 +46,7 @@ class Symmetry:
     violation: float
     fold: int = 0
     bands: tuple = ((-np.inf, np.inf),)
-    params: dict | None = None
+    params: dict = field(default_factory=dict)
 
     def where(self, points: np.ndarray) -> np.ndarray:
         """(N,) bool: points at heights where this symmetry holds."""
@@ -283,6 +283,7 @@ def rotation_axis(
             i = int(np.argmax(score))
             centre = axes[i]
             step /= 3
+        assert centre is not None  # set by every pass of the search above
         if sup[i] >= MIN_ROTATION_SUPPORT and vio[i] <= MAX_VIOLATION:
             s = float(score[i])
             if best is None or s > best[0]:

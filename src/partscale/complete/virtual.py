@@ -117,7 +117,7 @@ def virtual_scan(
         dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
         origins = np.broadcast_to(t, dirs.shape)
         loc, ray, tri = tm.ray.intersects_location(origins, dirs, multiple_hits=False)
-        depth = np.zeros(W * H, np.float32)
+        depth: np.ndarray = np.zeros(W * H, np.float32)
         rgb = np.zeros((W * H, 3), np.uint8)
         z = (loc - t) @ R[:, 2]
         normals = tm.face_normals[tri]

@@ -471,7 +471,7 @@ def _figure(
         parts_row = [("original parts", f"{original.n_parts} parts", None)] + [
             (LABELS.get(m, m), "", None) for m in results if isinstance(results[m], CSDF)
         ]
-        sources = [original] + [results[m] for m in results if isinstance(results[m], CSDF)]
+        sources = [original] + [c for c in results.values() if isinstance(c, CSDF)]
         row = [
             (label, note, _render(c, entry.view, frame, panel, parts=True))
             for (label, note, _), c in zip(parts_row, sources, strict=True)

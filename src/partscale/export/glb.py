@@ -52,7 +52,7 @@ def _write_glb(
     path: Path,
     positions: np.ndarray,
     normals: np.ndarray,
-    colors: np.ndarray,
+    colors: np.ndarray | None,
     faces: np.ndarray,
     extras: dict[str, Any],
     uv: np.ndarray | None = None,

@@ -61,6 +61,7 @@ def simplify(mesh, *, voxel_size: float, faces: int | None = None, error: float 
     if faces is not None:
         target, bound, opts = 3 * int(faces), 1.0, 0  # error relative to the extent: no limit
     else:
+        assert error is not None  # returned above when neither is given
         target, bound = 3, float(error) * voxel_size
         opts = meshoptimizer.SIMPLIFY_ERROR_ABSOLUTE
     lock = np.zeros(len(V), np.uint8)

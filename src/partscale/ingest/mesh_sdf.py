@@ -57,7 +57,7 @@ MAX_PAD = 4096
 """Largest ``--pad`` (same reason as :data:`MAX_RES`)."""
 
 
-def check_res(res: int, what: str) -> int:
+def check_res(res: int | float, what: str) -> int:
     """Validate ``--res`` (an int in [16, :data:`MAX_RES`]) before any arithmetic with it."""
     if isinstance(res, float) and math.isfinite(res) and res.is_integer():
         res = int(res)

@@ -57,10 +57,10 @@ def cut(piece: Piece, axis: int, plane: float) -> Piece:
     new_v = V[p0] + t * (V[p1] - V[p0])
     new_v[:, axis] = plane
     base = len(V)
-    cut_index = np.full(len(a), -1, np.int64)
+    cut_index: np.ndarray = np.full(len(a), -1, np.int64)
     cut_index[np.flatnonzero(cross_edge)] = base + inverse.reshape(-1)
     cut_index = cut_index.reshape(-1, 3)  # cut vertex on edge (k, k+1) of each crossing triangle
-    faces_out, owner = [], []
+    faces_out, owner_local = [], []
     tri_side = s[crossing]
     for n in range(len(tri)):
         poly, sides = [], []
@@ -74,8 +74,8 @@ def cut(piece: Piece, axis: int, plane: float) -> Piece:
             sub = [v for v, sd in zip(poly, sides, strict=True) if sd * keep >= 0]
             for j in range(1, len(sub) - 1):
                 faces_out.append((sub[0], sub[j], sub[j + 1]))
-                owner.append(n)
-    owner = np.flatnonzero(crossing)[np.asarray(owner, np.int64)]
+                owner_local.append(n)
+    owner = np.flatnonzero(crossing)[np.asarray(owner_local, np.int64)]
     faces = np.concatenate([F[~crossing], np.asarray(faces_out, np.int64).reshape(-1, 3)])
     order = np.concatenate([np.flatnonzero(~crossing), owner])
     vattrs = {k: np.concatenate([v, v[p0] + t * (v[p1] - v[p0])]) for k, v in piece.vattrs.items()}

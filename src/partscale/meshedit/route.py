@@ -18,12 +18,16 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError
 from .cut import Piece, concatenate, cut, subset
+
+if TYPE_CHECKING:
+    import trimesh
 
 MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
 OUTPUT_SUFFIXES = (".glb", ".obj", ".ply")
@@ -61,7 +65,7 @@ class _Instance:
     """One scene node's mesh in world coordinates, with what is needed to go back."""
 
     node: str
-    geometry: object  # trimesh.Trimesh
+    geometry: trimesh.Trimesh
     transform: np.ndarray  # (4, 4) node -> world
     piece: Piece
 
@@ -205,7 +209,7 @@ def _split_edges(piece: Piece, edges: np.ndarray, t: np.ndarray, axis: int, plan
         points.setdefault((x, y), []).append((float(t[i]), base + i))
     keep = np.ones(len(F), bool)
     extra, owner = [], []
-    key = {}
+    key: dict[int, list[int]] = {}
     for k in range(3):
         for r, (x, y) in enumerate(zip(F[:, k].tolist(), F[:, (k + 1) % 3].tolist(), strict=True)):
             if (x, y) in points or (y, x) in points:
@@ -273,7 +277,12 @@ def _tile(piece, axis, s, e, d, rot, size):
     first_end = n_orig
     copy_base = [None] + [n_orig + len(end_l) + (k - 1) * len(sx) for k in range(1, n)]
     for k in range(n):
-        m = used.copy() if k == 0 else copy_base[k] + np.arange(len(sx))
+        if k == 0:
+            m = used.copy()
+        else:
+            base_k = copy_base[k]
+            assert base_k is not None  # only copy 0, the original, has no base
+            m = base_k + np.arange(len(sx))
         if n > 1 and k == 0:
             m[end_l] = first_end + np.arange(len(end_l))
         if n > 1 and k == n - 1:
@@ -408,7 +417,7 @@ def _shared(scene, inst) -> bool:
 
 def _merge_seams(seams: list[Seam]) -> list[Seam]:
     """One entry per seam position (each instance reports its own vertices)."""
-    by = {}
+    by: dict[tuple[str, float], Seam] = {}
     for sm in seams:
         key = (sm.axis, round(sm.position, 12))
         if key in by:
@@ -435,7 +444,9 @@ def _to_trimesh(inst: _Instance):
     visual = geom.visual
     if isinstance(visual, trimesh.visual.TextureVisuals):
         # a material with or without UVs (OBJ groups with a Kd colour have none)
-        vis = trimesh.visual.TextureVisuals(uv=p.vattrs.get("uv"), material=visual.material)
+        vis: trimesh.visual.TextureVisuals | trimesh.visual.ColorVisuals | None = (
+            trimesh.visual.TextureVisuals(uv=p.vattrs.get("uv"), material=visual.material)
+        )
     elif "color" in p.vattrs:
         vis = trimesh.visual.ColorVisuals(
             vertex_colors=np.clip(np.rint(p.vattrs["color"]), 0, 255).astype(np.uint8)
@@ -446,7 +457,7 @@ def _to_trimesh(inst: _Instance):
         vis = None
     mesh = trimesh.Trimesh(local, p.faces, visual=vis, process=False, **kwargs)
     for k, v in p.vattrs.items():
-        if k.startswith("va:") and hasattr(mesh.visual, "vertex_attributes"):
+        if k.startswith("va:") and isinstance(mesh.visual, trimesh.visual.TextureVisuals):
             mesh.visual.vertex_attributes[k[3:]] = v.astype(np.float32)
     mesh.metadata.update(geom.metadata)
     return mesh
@@ -468,6 +479,7 @@ def load_scene(path: str | os.PathLike):
         scene = trimesh.load(path, force="scene", process=False, maintain_order=True)
     except Exception as exc:
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {exc}") from None
+    assert isinstance(scene, trimesh.Scene)  # force="scene"
     if not scene.geometry:
         raise InputError(f"{path}: expected a mesh with triangles, got none")
     return scene

@@ -439,7 +439,7 @@ def _part_repeats(csdf: CSDF, axis: int) -> list[tuple[float, list[tuple[float, 
     if not isinstance(info, list):
         return []
     boxes = np.array(
-        [x["bbox"] for x in info if isinstance(x, dict) and np.shape(x.get("bbox")) == (2, 3)],
+        [x["bbox"] for x in info if isinstance(x, dict) and np.shape(x.get("bbox", ())) == (2, 3)],
         dtype=np.float64,
     ).reshape(-1, 2, 3)
     if len(boxes) < MIN_COUNT:
@@ -504,37 +504,41 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
                 region=(float(p.world(a)), float(p.world(b))),
             )
         )
-    for r in find_bounded_repeats(p):
+    for br in find_bounded_repeats(p):
         # a period the full match found already (or a multiple of it, over it) adds nothing
         if any(
-            abs(r.period - round(r.period / q.shift) * q.shift) <= BOUND_TOL
-            and min(r.elements[-1][1], q.span[1]) > max(r.elements[0][0], q.span[0])
+            abs(br.period - round(br.period / q.shift) * q.shift) <= BOUND_TOL
+            and min(br.elements[-1][1], q.span[1]) > max(br.elements[0][0], q.span[0])
             for q in repeats
         ):
             continue
-        a, b = r.elements[0][0], r.elements[-1][1]
-        period = r.period * h
-        count = len(r.elements)
+        a, b = br.elements[0][0], br.elements[-1][1]
+        period = br.period * h
+        count = len(br.elements)
         cover = min(1.0, (b - a) * h / extent)
-        score = BOUNDED_WEIGHT * (1 - r.err / MATCH) * (0.5 + 0.5 * cover) * (1 - 1 / (count + 1))
-        what = "boards or dividers" if r.kind == 1 else "gaps or grooves"
+        score = BOUNDED_WEIGHT * (1 - br.err / MATCH) * (0.5 + 0.5 * cover) * (1 - 1 / (count + 1))
+        what = "boards or dividers" if br.kind == 1 else "gaps or grooves"
         out.append(
             Candidate(
                 axis=name,
                 kind="tile",
-                zone=(float(p.world(r.start)), float(p.world(r.start)) + period),
+                zone=(float(p.world(br.start)), float(p.world(br.start)) + period),
                 period=float(period),
                 count=count,
                 score=float(np.clip(score, 0, 1)),
                 reason=(
                     f"{count} elements between {what}, a {period:.4g} period "
                     f"({100 * period / extent:.1f}% of the extent), coarse cross-sections match "
-                    f"{'mirrored ' if r.mirrored else ''}to {r.err:.3f}"
+                    f"{'mirrored ' if br.mirrored else ''}to {br.err:.3f}"
                 ),
                 region=(float(p.world(a)), float(p.world(b))),
             )
         )
-    tiles = [(c.period / h, p.index(c.region[0]), p.index(c.region[1])) for c in out]
+    tiles = [
+        (c.period / h, p.index(c.region[0]), p.index(c.region[1]))
+        for c in out
+        if c.period is not None  # every candidate so far is a tile, with a period
+    ]
     for pitch, parts in _part_repeats(csdf, ax):
         step = pitch / h
         a, b = float(p.index(parts[0][0])), float(p.index(parts[-1][1]))

@@ -81,7 +81,11 @@ def _edit_arrays(
         ix = np.clip(np.rint(plan.xa), 0, src_parts.shape[0] - 1).astype(np.int64)
         out_parts = src_parts[ix]
     else:
-        out_sdf, out_rgb, out_parts = apply_plan(src_sdf, src_rgb, src_parts, plan)
+        # the part-aware modes keep elements thinner than the compression or lying at a seam;
+        # global stays the plain baseline scaling
+        out_sdf, out_rgb, out_parts = apply_plan(
+            src_sdf, src_rgb, src_parts, plan, keep_thin=None if mode == "global" else h
+        )
         if mode == "tile":
             o = float(csdf.origin[ax])
             copy_of = renumber_copies(
@@ -177,11 +181,12 @@ def apply_edit(
 
     Notes
     -----
-    ``tile`` blends the copies across each internal seam; thin features on one side of a seam
-    only (the sliver a zone plane leaves where it cuts a board) fade there. Put the zone's
-    planes in the gaps between repeated elements or through the middle of one (see
-    :func:`~partscale.edit.resample.make_plan`); :func:`naive_edit` concatenates without
-    blending.
+    ``tile`` blends the copies across each internal seam; an element on one side of a seam only
+    (a thin shelf next to a zone plane, the sliver a plane leaves where it cuts a board) is kept
+    whole in its copy rather than faded, and ``stretch`` or ``tile`` compressing a slab keeps
+    elements (and gaps) thinner than the compression, each on at least one voxel (see
+    :func:`~partscale.edit.resample.apply_plan`). :func:`naive_edit` concatenates without
+    blending and resamples linearly.
     """
     return _apply_edit(csdf, edit, progress=progress)
 

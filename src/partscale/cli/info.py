@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from ..csdf import CSDF, load
+from ..thickness import thin_features
 
 
 def summary(c: CSDF) -> dict:
@@ -29,6 +30,7 @@ def summary(c: CSDF) -> dict:
         "parts": c.n_parts,
         "source": c.meta.get("source"),
         "history": c.meta.get("history", []),
+        "thin_features": thin_features(c).to_json(),
     }
 
 
@@ -36,8 +38,10 @@ def info(
     path: Annotated[Path, typer.Argument(help="A .csdf.npz file.")],
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
 ) -> None:
-    """Show shape, voxel size, extent in world units, number of parts and the edit history."""
-    s = summary(load(path))
+    """Show shape, voxel size, extent in world units, number of parts, the edit history, and a
+    warning when features thinner than ~1.5 voxels need a finer resolution."""
+    c = load(path)
+    s = summary(c)
     if as_json:
         typer.echo(json.dumps(s, indent=2))
         return
@@ -54,6 +58,9 @@ def info(
         typer.echo("solid:       none (no voxel inside)")
     typer.echo(f"parts:       {s['parts'] or 'not segmented'}")
     typer.echo(f"source:      {s['source']}")
+    thin = thin_features(c).message(c.voxel_size, units)
+    if thin:
+        typer.echo(f"warning:     thin features: {thin}")
     typer.echo(f"history:     {len(s['history'])} operation(s)")
     for i, op in enumerate(s["history"]):
         typer.echo(f"  {i + 1}. {json.dumps(op)}")

@@ -430,6 +430,17 @@ def from_mesh(
     offset[thin] = thick - thickness[thickness < 2 * thick] / 2
     n_open = len(np.unique(parent[sheet]))
     n_thin = len(np.unique(parent[thin]))
+    # what import reports (``partscale info`` too): how thin the thickened pieces really are
+    t_thin = thickness[thickness < 2 * thick] / h
+    thin_record = {}
+    if t_thin.size:
+        thin_record = {
+            "thin_piece_thickness_voxels": {
+                "min": round(float(t_thin.min()), 3),
+                "median": round(float(np.median(t_thin)), 3),
+            },
+            "below_one_voxel_triangles": len(np.unique(parent[boundary[thickness < h]])),
+        }
     sheet = np.concatenate([sheet, thin])
     tris_b = np.ascontiguousarray(sub[boundary])
     tris_s = np.ascontiguousarray(sub[sheet])
@@ -521,6 +532,7 @@ def from_mesh(
                 "open_sheet_triangles": n_open,
                 "thin_piece_triangles": n_thin,
                 "sheet_half_thickness_voxels": round(math.sqrt(3) / 2, 4),
+                **thin_record,
                 "band_voxels": BAND_VOXELS,
             }
         ],

@@ -167,14 +167,25 @@ def _lerp_into(src, i0, i1, w, out, lo, hi):
                     out[j, a, b, c] = v
 
 
-def lerp_layers(src: np.ndarray, x: np.ndarray) -> np.ndarray:
+def empty_layers(shape: tuple[int, ...], dtype, axis: int) -> np.ndarray:
+    """Uninitialised axis-first array ``shape`` (N, A, B[, C]): a view of a C-ordered array in
+    world order (the edit axis at ``axis``), so the result needs no transposing copy."""
+    world = list(shape)
+    n = world.pop(0)
+    world.insert(axis, n)
+    return np.moveaxis(np.empty(world, dtype), axis, 0)
+
+
+def lerp_layers(src: np.ndarray, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Linear interpolation of layers of ``src`` (N, A, B[, C]) at continuous indices ``x`` (M,).
 
-    Returns (M, ...) of ``src``'s dtype (integers rounded half to even, computed in float32);
-    layers at integer ``x`` are exact copies.
+    Returns (M, ...) of ``src``'s dtype (integers rounded half to even, computed in float32),
+    written into ``out`` when given (any strides, e.g. :func:`empty_layers`); layers at integer
+    ``x`` are exact copies.
     """
     i0, i1, w = _split(x, src.shape[0])
-    out = np.empty((len(x), *src.shape[1:]), src.dtype)
+    if out is None:
+        out = np.empty((len(x), *src.shape[1:]), src.dtype)
     if np.issubdtype(src.dtype, np.integer):
         info = np.iinfo(src.dtype)
         lo, hi = float(info.min), float(info.max)
@@ -187,15 +198,22 @@ def lerp_layers(src: np.ndarray, x: np.ndarray) -> np.ndarray:
     return out
 
 
-def crisp_parts(parts: np.ndarray, sdf: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Part labels at continuous indices ``x``: no blended labels.
+def crisp_parts(
+    parts: np.ndarray, sdf: np.ndarray, x: np.ndarray, out: np.ndarray | None = None
+) -> np.ndarray:
+    """Part labels at continuous indices ``x``: no blended labels (into ``out`` when given).
 
     Between source layers ``i0`` and ``i0 + 1`` with different labels, the boundary is placed where
     the part change is closest to the surface: at the linear zero crossing of the sdf when the
     surface passes between them, else half-way (nearest source voxel).
     """
     i0, i1, w = _split(x, parts.shape[0])
-    out = parts[i0]
+    if out is None:
+        out = parts[i0]
+    else:  # the kernel's copy path (weight 0), into any strides
+        _lerp_into(
+            parts[..., None], i0, i0, np.zeros(len(i0), np.float32), out[..., None], 0.0, 0.0
+        )
     frac = np.flatnonzero(w != 0)
     if frac.size == 0:
         return out
@@ -270,8 +288,12 @@ def apply_plan(
     plan: Plan,
     *,
     keep_thin: float | None = None,
+    axis: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Resample axis-first arrays ``(N, A, B)`` by ``plan`` into new ``(N', A, B)`` arrays.
+
+    The new arrays are axis-first views of C-ordered arrays in world order with the edit axis
+    at ``axis`` (:func:`empty_layers`): moved back, they are the result as it is stored.
 
     ``keep_thin`` (a distance, world units; e.g. one voxel), when given, keeps elements that the
     linear resampling would lose:
@@ -287,9 +309,12 @@ def apply_plan(
       instead of fading into the other copy's air (or a thin gap into its solid). Where both
       copies have surface within ``keep_thin`` of each other the blend is as before.
     """
-    out_sdf = lerp_layers(sdf, plan.xa)
-    out_rgb = lerp_layers(rgb, plan.xa)
-    out_parts = crisp_parts(parts, sdf, plan.xa)
+    m = len(plan.xa)
+    out_sdf = lerp_layers(sdf, plan.xa, empty_layers((m, *sdf.shape[1:]), sdf.dtype, axis))
+    out_rgb = lerp_layers(rgb, plan.xa, empty_layers((m, *rgb.shape[1:]), rgb.dtype, axis))
+    out_parts = crisp_parts(
+        parts, sdf, plan.xa, empty_layers((m, *parts.shape[1:]), parts.dtype, axis)
+    )
     seam = np.flatnonzero(plan.beta > 0)
     thinned = np.zeros((seam.size, *sdf.shape[1:]), bool)
     if keep_thin is not None:

@@ -84,7 +84,7 @@ def _edit_arrays(
         # the part-aware modes keep elements thinner than the compression or lying at a seam;
         # global stays the plain baseline scaling
         out_sdf, out_rgb, out_parts = apply_plan(
-            src_sdf, src_rgb, src_parts, plan, keep_thin=None if mode == "global" else h
+            src_sdf, src_rgb, src_parts, plan, keep_thin=None if mode == "global" else h, axis=ax
         )
         if mode == "tile":
             o = float(csdf.origin[ax])
@@ -125,10 +125,14 @@ def _edit_arrays(
         slab_parts = out_parts[layers]
         slab_parts[out_sdf[layers] > far] = -1
         out_parts[layers] = slab_parts
+    arrays = [np.moveaxis(a, 0, ax) for a in (out_sdf, out_rgb, out_parts)]
+    if not naive:
+        # apply_plan wrote them in world order and nothing else holds them: read-only, the
+        # CSDF takes them as they are instead of copying (no full copy beyond the output)
+        for a in arrays:
+            a.flags.writeable = False
     return _Edited(
-        np.moveaxis(out_sdf, 0, ax),
-        np.moveaxis(out_rgb, 0, ax),
-        np.moveaxis(out_parts, 0, ax),
+        *arrays,
         plan.scale,
         copy_of,
         reevaluated,

@@ -111,16 +111,18 @@ def _edit_arrays(
         )
         eff_band = (band + 1.0) * max(1.0, 1.0 / plan.scale)
         # what re-evaluation may change, as resampled: to tell the voxels it did change
-        todo = np.flatnonzero(mask)
-        sdf_was, parts_was = out_sdf.ravel()[todo], out_parts.ravel()[todo]
+        # (index tuples, not ravel(): the arrays are views in world order, ravel would copy)
+        todo = np.nonzero(mask)
+        sdf_was, parts_was = out_sdf[todo], out_parts[todo]
         reevaluated = reevaluate_arrays(out_sdf, out_rgb, out_parts, h, mask, band=eff_band)
         # parts are labelled up to the band outside the surface (as the segment stage does):
         # voxels the edit resampled or recomputed lose theirs beyond it; the copied layers
         # outside the zone keep their labels as they are, like their distances
         far = np.float32(BAND_VOXELS * h)
-        flat_sdf, flat_parts = out_sdf.ravel(), out_parts.ravel()
-        moved = (flat_sdf[todo] != sdf_was) | (flat_parts[todo] != parts_was)
-        flat_parts[todo[moved & (flat_sdf[todo] > far)]] = -1
+        sdf_now = out_sdf[todo]
+        moved = (sdf_now != sdf_was) | (out_parts[todo] != parts_was)
+        drop = moved & (sdf_now > far)
+        out_parts[tuple(t[drop] for t in todo)] = -1
         layers = plan.in_slab | (plan.beta > 0)
         slab_parts = out_parts[layers]
         slab_parts[out_sdf[layers] > far] = -1

@@ -1,6 +1,6 @@
 """Benchmark: ``partscale import`` at --res 128 vs libigl's winding-number signed distance.
 
-For every object in ../shared/data/{kenney, polyhaven, khronos}: our import (mesh already read,
+For every object in ../shared/data/{kenney, polyhaven, khronos} and Sweet Home 3D's radiator: our import (mesh already read,
 the numba kernels already compiled) timed as the median of 3 runs, its peak memory (peak of
 traced numpy/Python allocations in a fourth, untimed run, and the process's max RSS after the
 timed runs, in a fresh subprocess per object),
@@ -8,11 +8,16 @@ and, in the same subprocess on the same grid, libigl's
 ``igl.signed_distance(P, V, F, sign_type=FAST_WINDING_NUMBER)`` over every voxel centre
 (one run). Accuracy columns compare the two fields: median |difference| in the 3-voxel band
 (voxels) and sign agreement more than two voxels from the surface (our thickened sheets and
-dropped buried faces differ from libigl's raw field by design on open assemblies).
+dropped buried faces differ from libigl's raw field by design on open assemblies). Then the
+surface's pieces (marching cubes components), closed internal voids, and the p99 band distance
+error against exact point-to-triangle distances where the nearest triangle is a plain closed
+surface (sheets and thin pieces are thickened by design). Every resolution given (default 128
+and 256) runs per object, side by side, with the growth from the first; the load average is
+printed: on a shared machine compare ratios measured in the same run.
 
 Usage::
 
-    PYTHONPATH=src python bench/bench_import.py [--res 128] [--igl all|subset|none] [--only NAME]
+    PYTHONPATH=src python bench/bench_import.py [--res 128 256] [--igl all|subset|none] [--only NAME]
 
 ``--igl subset`` (default) runs libigl on SheenChair, the Poly Haven objects and four Kenney
 objects only (libigl takes seconds to minutes per object on 2 cores); the table says where
@@ -41,7 +46,41 @@ def objects() -> list[Path]:
     out = sorted((DATA / "kenney").glob("*.glb"))
     out += sorted((DATA / "polyhaven").glob("*/*.gltf"))
     out += sorted((DATA / "khronos").glob("*.glb"))
+    out += [p for p in [DATA / "sweethome3d" / "electricRadiator.obj"] if p.exists()]
     return out
+
+
+def band_p99(c, mesh, n: int = 100_000) -> float | None:
+    """p99 of ``| |sdf| - d |`` in voxels over band voxels (up to ``n``, sampled) whose nearest
+    triangle is a plain closed-surface one (not an open sheet or a thin piece, which the import
+    thickens by design); ``d``: exact point-to-triangle distance (libigl). None without libigl."""
+    try:
+        import igl
+    except ImportError:
+        return None
+    import math
+
+    import numpy as np
+
+    from partscale.ingest import mesh_sdf as ms  # the import's own classification, for the bench
+
+    h = c.voxel_size
+    V = np.ascontiguousarray(mesh.vertices, np.float64)
+    F = np.ascontiguousarray(mesh.faces, np.int64)
+    band = np.argwhere(np.abs(c.sdf) <= 3 * h)
+    rng = np.random.default_rng(0)
+    band = band[rng.choice(len(band), min(len(band), n), replace=False)]
+    d2, fi, _ = igl.point_mesh_squared_distance(c.index_to_world(band), V, F)
+    sub, parent, _, cls = ms.classify_pieces(ms._Winding(V, F), h)
+    boundary = np.nonzero(cls == 0)[0]
+    thin = boundary[ms._thickness(sub[boundary], 0.01 * h) < math.sqrt(3) * h]
+    plain = np.zeros(len(F), bool)
+    plain[parent[boundary]] = True
+    plain[parent[np.nonzero(cls == 2)[0]]] = False
+    plain[parent[thin]] = False
+    keep = plain[fi]
+    err = np.abs(np.abs(c.sdf[tuple(band[keep].T)]) - np.sqrt(d2[keep])) / h
+    return float(np.quantile(err, 0.99))
 
 
 def one(path: Path, res: int, run_igl: bool) -> dict:
@@ -63,7 +102,19 @@ def one(path: Path, res: int, run_igl: bool) -> dict:
     ingest.from_mesh(mesh, res=res)
     traced = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
+    from scipy import ndimage
+
+    from partscale.evaluate import metrics
+
+    lab, n_out = ndimage.label(c.sdf > 0)
+    border = set()
+    for ax in range(3):
+        border |= set(np.unique(np.take(lab, [0, -1], axis=ax)).tolist())
+    del lab
     out = {
+        "pieces": metrics.topology(metrics.to_mesh(c))[1],
+        "voids": n_out - len(border - {0}),
+        "band_p99": band_p99(c, mesh),
         "name": f"{path.parent.name}/{path.name}",
         "triangles": int(mesh.n_faces),
         "shape": list(c.shape),
@@ -93,28 +144,31 @@ def one(path: Path, res: int, run_igl: bool) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--res", type=int, default=128)
+    ap.add_argument("--res", type=int, nargs="+", default=[128, 256])
     ap.add_argument("--igl", choices=("all", "subset", "none"), default="subset")
     ap.add_argument("--only", default=None, help="run only objects whose name contains this")
     ap.add_argument("--one", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--with-igl", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.one:
-        print(json.dumps(one(Path(args.one), args.res, args.with_igl)))
+        print(json.dumps(one(Path(args.one), args.res[0], args.with_igl)))
         return
     if not DATA.exists():
         sys.exit(f"test objects not found under {DATA} (set PARTSCALE_DATA)")
     env = dict(os.environ)
     env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
     rows = []
+    load = os.getloadavg()
     print(
-        f"import at --res {args.res}: median of 3 runs; libigl signed_distance (fast winding "
-        f"number sign) on the same grid, 1 run ({args.igl})",
+        f"import at --res {' and '.join(map(str, args.res))}: median of 3 runs; libigl "
+        f"signed_distance (fast winding number sign) on the same grid, 1 run ({args.igl}); "
+        f"load average {load[0]:.1f} {load[1]:.1f} {load[2]:.1f} on {os.cpu_count()} cores",
         flush=True,
     )
     head = (
-        f"{'object':42s} {'tris':>6s} {'grid':>13s} {'ours s':>7s} {'traced':>8s} {'maxRSS':>8s}"
-        f" {'libigl s':>8s} {'speed-up':>8s} {'band d50':>8s} {'sign %':>7s}"
+        f"{'object':42s} {'res':>4s} {'tris':>6s} {'grid':>13s} {'ours s':>7s} {'traced':>8s}"
+        f" {'maxRSS':>8s} {'libigl s':>8s} {'speed-up':>8s} {'band d50':>8s} {'sign %':>7s}"
+        f" {'pieces':>6s} {'voids':>5s} {'p99 tri':>7s}"
     )
     print(head)
     print("-" * len(head), flush=True)
@@ -124,28 +178,45 @@ def main() -> None:
         run_igl = args.igl == "all" or (args.igl == "subset" and path.name in IGL_SUBSET)
         if path.parent.parent.name == "polyhaven" and args.igl == "subset":
             run_igl = True
-        cmd = [sys.executable, __file__, "--one", str(path), "--res", str(args.res)]
-        if run_igl:
-            cmd.append("--with-igl")
-        proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
-        if proc.returncode != 0:
-            print(f"{path.name}: failed\n{proc.stderr}")
-            continue
-        r = json.loads(proc.stdout.strip().splitlines()[-1])
-        rows.append(r)
-        grid = "x".join(map(str, r["shape"]))
-        mib = 1 << 20
-        igl_cols = (
-            f" {r['igl_s']:8.2f} {r['igl_s'] / r['median_s']:7.1f}x {r['band_diff_p50']:8.3f}"
-            f" {100 * r['sign_agree']:7.2f}"
-            if "igl_s" in r
-            else f" {'not run':>8s} {'':>8s} {'':>8s} {'':>7s}"
-        )
-        print(
-            f"{r['name']:42s} {r['triangles']:6d} {grid:>13s} {r['median_s']:7.2f}"
-            f" {r['traced_peak'] / mib:6.0f}Mi {r['max_rss'] / mib:6.0f}Mi{igl_cols}",
-            flush=True,
-        )
+        for res in args.res:
+            cmd = [sys.executable, __file__, "--one", str(path), "--res", str(res)]
+            if run_igl:
+                cmd.append("--with-igl")
+            proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
+            if proc.returncode != 0:
+                print(f"{path.name}: failed\n{proc.stderr}")
+                continue
+            r = json.loads(proc.stdout.strip().splitlines()[-1])
+            r["res"] = res
+            rows.append(r)
+            grid = "x".join(map(str, r["shape"]))
+            mib = 1 << 20
+            igl_cols = (
+                f" {r['igl_s']:8.2f} {r['igl_s'] / r['median_s']:7.1f}x {r['band_diff_p50']:8.3f}"
+                f" {100 * r['sign_agree']:7.2f}"
+                if "igl_s" in r
+                else f" {'not run':>8s} {'':>8s} {'':>8s} {'':>7s}"
+            )
+            p99 = "" if r.get("band_p99") is None else f"{r['band_p99']:7.3f}"
+            print(
+                f"{r['name']:42s} {res:4d} {r['triangles']:6d} {grid:>13s} {r['median_s']:7.2f}"
+                f" {r['traced_peak'] / mib:6.0f}Mi {r['max_rss'] / mib:6.0f}Mi{igl_cols}"
+                f" {r['pieces']:6d} {r['voids']:5d} {p99:>7s}",
+                flush=True,
+            )
+    if len(args.res) > 1:
+        r0 = args.res[0]
+        base = {r["name"]: r for r in rows if r["res"] == r0}
+        print(f"growth from res {r0}: import time, libigl time, pieces (same for closed objects)")
+        for r in rows:
+            b = base.get(r["name"])
+            if r["res"] == r0 or b is None:
+                continue
+            ig = f"{r['igl_s'] / b['igl_s']:6.2f}" if "igl_s" in r and "igl_s" in b else "      "
+            print(
+                f"{r['name']:42s} {r['res']:4d} ours x{r['median_s'] / b['median_s']:.2f} "
+                f"libigl x{ig} pieces {b['pieces']} -> {r['pieces']}"
+            )
     if rows:
         tot = sum(r["median_s"] for r in rows)
         with_igl = [r for r in rows if "igl_s" in r]

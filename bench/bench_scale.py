@@ -1,4 +1,5 @@
-"""Edit timings on a 128-voxel object: stretch and tile with re-evaluation, beside two baselines.
+"""Edit timings at 128 and 256 voxels, side by side: stretch and tile with re-evaluation, beside
+two baselines, and how each grows from one resolution to the next.
 
 - ours: :func:`partscale.edit.apply_edit` (resampling, seams, re-evaluation of the band, parts);
 - (a) naive: per-column linear resampling of the slab without re-evaluation, a Python loop over
@@ -11,12 +12,17 @@
 Peak memory is ``tracemalloc``'s peak (numpy buffers are traced) during one edit, against the
 size of the output grid (sdf + rgb + parts, 9 bytes a voxel).
 
-Run: ``PYTHONPATH=src .venv/bin/python bench/bench_scale.py [--repeat 10] [--res 128]``
+The machine's load average is printed with the figures: on a shared machine absolute times
+swing, ratios measured in the same run (ours / naive_edit, 256 / 128) hold better.
+
+Run: ``PYTHONPATH=src .venv/bin/python bench/bench_scale.py [--repeat 10] [--res 128 256]
+[--no-loop]``
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import time
 import tracemalloc
@@ -122,12 +128,9 @@ def median_time(fn, repeat, *, cpu=False):
     return statistics.median(times)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=10)
-    ap.add_argument("--res", type=int, default=128)
-    args = ap.parse_args()
-    c, what = load_object(args.res)
+def cases_at(res: int):
+    """The edit cases at one resolution: bookcase stretch and tile, table stretched +40%."""
+    c, what = load_object(res)
     lo, hi = c.surface_bounds()[:, 1]
     period = 0.696 * (hi - lo) / 2.552  # one shelf period of bookcaseOpen
     s = lo + 0.33 / 2.552 * (hi - lo)
@@ -135,49 +138,96 @@ def main() -> None:
         ("stretch", c, {"axis": "y", "zone": [s, s + period], "to": s + 1.6 * period}),
         ("tile", c, {"axis": "y", "zone": [s, s + period], "to": s + 3 * period, "mode": "tile"}),
     ]
-    print(f"object: {what}, grid {' x '.join(map(str, c.shape))}, median of {args.repeat}")
+    print(f"res {res}: {what}, grid {' x '.join(map(str, c.shape))}")
     table = DATA / "kenney" / "table.glb"
     try:
         from partscale import ingest
 
         if table.exists():
-            t = cube(ingest.load(table, res=args.res), args.res)
+            t = cube(ingest.load(table, res=res), res)
             tlo, thi = t.surface_bounds()[:, 0]
             edit = {"axis": "x", "zone": [-0.6, 0.6], "to": 0.6 + 0.4 * (thi - tlo)}
             cases.append(("table+40%", t, edit))
-            print(f"table+40%: kenney/table.glb at res {args.res}, padded, stretched between legs")
+            print(f"res {res}: table+40%: kenney/table.glb, padded, stretched between legs")
     except ImportError:
         pass
-    print("(a) is timed 3 times (it is slow), everything else --repeat times")
-    print(
-        f"{'edit':9} {'ours ms':>9} {'ours cpu ms':>12} {'reeval vox':>11} "
-        f"{'(a) naive loop ms':>18} {'naive_edit ms':>14} {'(b) full EDT ms':>16} "
-        f"{'peak MiB':>9} {'peak/grid':>10}"
-    )
-    for name, c, e in cases:
-        edit = Edit.parse(e)
-        apply_edit(c, edit)  # warm (numba cache load)
-        t_ours = median_time(lambda c=c, edit=edit: apply_edit(c, edit), args.repeat)
-        t_cpu = median_time(lambda c=c, edit=edit: apply_edit(c, edit), args.repeat, cpu=True)
-        out = apply_edit(c, edit)
-        nrep = max(1, min(args.repeat, 3))
-        t_loop = median_time(lambda c=c, edit=edit: naive_loop(c, edit), nrep)
+    return cases
+
+
+def measure(c, e, repeat: int, *, loop: bool) -> dict:
+    """Timings (seconds) and peak memory of one edit case."""
+    edit = Edit.parse(e)
+    apply_edit(c, edit)  # warm (numba cache load)
+    t_ours = median_time(lambda: apply_edit(c, edit), repeat)
+    t_cpu = median_time(lambda: apply_edit(c, edit), repeat, cpu=True)
+    out = apply_edit(c, edit)
+    vec = naive_edit(c, edit)
+    t_loop = float("nan")
+    if loop:
+        t_loop = median_time(lambda: naive_loop(c, edit), max(1, min(repeat, 3)))
         loop_sdf, _ = naive_loop(c, edit)
-        vec = naive_edit(c, edit)
         agree = np.abs(loop_sdf - vec.sdf).max()
         assert agree < 1e-4 * c.voxel_size, agree  # the loop is the same baseline
-        t_vec = median_time(lambda c=c, edit=edit: naive_edit(c, edit), args.repeat)
-        t_edt = median_time(lambda out=out: full_edt(out), args.repeat)
-        tracemalloc.start()
-        apply_edit(c, edit)
-        _, peak = tracemalloc.get_traced_memory()
-        tracemalloc.stop()
-        grid = int(np.prod(out.shape)) * 9
+    t_vec = median_time(lambda: naive_edit(c, edit), repeat)
+    t_edt = median_time(lambda: full_edt(out), repeat)
+    tracemalloc.start()
+    apply_edit(c, edit)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    return {
+        "ours": t_ours,
+        "cpu": t_cpu,
+        "reeval": out.meta["history"][-1]["reevaluated_voxels"],
+        "loop": t_loop,
+        "vec": t_vec,
+        "edt": t_edt,
+        "peak": peak,
+        "grid": int(np.prod(out.shape)) * 9,
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=10)
+    ap.add_argument(
+        "--res", type=int, nargs="+", default=[128, 256], help="resolutions, side by side"
+    )
+    ap.add_argument("--no-loop", action="store_true", help="skip baseline (a), the slow loop")
+    args = ap.parse_args()
+    rows: dict[tuple[str, int], dict] = {}
+    for res in args.res:
+        for name, c, e in cases_at(res):
+            rows[name, res] = measure(c, e, args.repeat, loop=not args.no_loop)
+    load = os.getloadavg()
+    print(
+        f"median of {args.repeat} ((a) of 3); load average {load[0]:.1f} {load[1]:.1f} "
+        f"{load[2]:.1f} on {os.cpu_count()} cores: compare ratios measured in one run"
+    )
+    print(
+        f"{'edit':9} {'res':>4} {'ours ms':>9} {'ours cpu ms':>12} {'reeval vox':>11} "
+        f"{'(a) naive loop ms':>18} {'naive_edit ms':>14} {'ours/naive':>11} "
+        f"{'(b) full EDT ms':>16} {'peak MiB':>9} {'peak/grid':>10}"
+    )
+    for (name, res), m in rows.items():
         print(
-            f"{name:9} {t_ours * 1e3:9.1f} {t_cpu * 1e3:12.1f} {out.meta['history'][-1]['reevaluated_voxels']:11d} "
-            f"{t_loop * 1e3:18.1f} {t_vec * 1e3:14.1f} {t_edt * 1e3:16.1f} "
-            f"{peak / 2**20:9.1f} {peak / grid:10.2f}"
+            f"{name:9} {res:4d} {m['ours'] * 1e3:9.1f} {m['cpu'] * 1e3:12.1f} {m['reeval']:11d} "
+            f"{m['loop'] * 1e3:18.1f} {m['vec'] * 1e3:14.1f} {m['ours'] / m['vec']:11.2f} "
+            f"{m['edt'] * 1e3:16.1f} {m['peak'] / 2**20:9.1f} {m['peak'] / m['grid']:10.2f}"
         )
+    if len(args.res) > 1:
+        r0 = args.res[0]
+        print(f"growth from res {r0} (voxels x{(args.res[-1] / r0) ** 3:.0f} per step to the last)")
+        print(
+            f"{'edit':9} {'res':>4} {'ours':>7} {'naive_edit':>11} {'full EDT':>9} {'reeval vox':>11}"
+        )
+        for (name, res), m in rows.items():
+            if res == r0 or (name, r0) not in rows:
+                continue
+            b = rows[name, r0]
+            print(
+                f"{name:9} {res:4d} {m['ours'] / b['ours']:7.2f} {m['vec'] / b['vec']:11.2f} "
+                f"{m['edt'] / b['edt']:9.2f} {m['reeval'] / max(b['reeval'], 1):11.2f}"
+            )
 
 
 if __name__ == "__main__":

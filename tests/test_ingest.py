@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 from conftest import assert_bad_input, data_path
+from scipy import ndimage
 
 import partscale
 from partscale import ingest, shapes
@@ -448,3 +449,34 @@ def test_obj_mtl_kd(tmp_path):
     is_red = np.abs(got - red).max(axis=1) <= 1
     is_blue = np.abs(got - blue).max(axis=1) <= 1
     assert is_red.sum() == 2 and is_blue.sum() == 2
+
+
+def _enclosed_voids(c) -> int:
+    lab, n = ndimage.label(c.sdf > 0)
+    border = set()
+    for ax in range(3):
+        border |= set(np.unique(np.take(lab, [0, -1], axis=ax)).tolist())
+    return n - len(border - {0})
+
+
+@pytest.mark.parametrize(("thickness", "voids"), [(0.3, 0), (3.0, 1)])
+def test_sub_voxel_crevices_are_no_bubbles_but_real_cavities_stay(thickness, voids):
+    """A closed cavity ``thickness`` voxels thin inside a box (the crevice two touching pieces
+    leave): thinner than a voxel it would be a bubble wherever a voxel centre falls in it (more
+    of them the finer the grid); the import fills it. A cavity of three voxels stays."""
+    from partscale.ingest.mesh_sdf import grid_for_bounds
+
+    lo, hi = np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.6, 0.4])
+    origin, h, _ = grid_for_bounds(lo, hi, 40, 5)
+    # the cavity straddles a row of voxel centres across y
+    k = np.round((0.3 - origin[1]) / h)
+    yc = origin[1] + k * h
+    cav_lo = np.array([0.2, yc - thickness * h / 2, 0.1])
+    cav_hi = np.array([0.8, yc + thickness * h / 2, 0.3])
+    outer = trimesh.creation.box(bounds=np.stack([lo, hi]))
+    cavity = trimesh.creation.box(bounds=np.stack([cav_lo, cav_hi]))
+    cavity.invert()  # facing into the cavity: the winding number there is 0
+    c = ingest.from_mesh(ingest.from_trimesh(trimesh.util.concatenate([outer, cavity])), res=40)
+    assert _enclosed_voids(c) == voids
+    filled = c.meta["history"][0]["filled_bubble_voxels"]
+    assert filled > 0 if voids == 0 else filled == 0

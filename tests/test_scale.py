@@ -297,6 +297,42 @@ def test_tile_with_planes_in_the_gaps_keeps_one_piece_per_bar_copy(periods, grow
     assert ndimage.label(out.sdf < 0)[1] == 4 + (copies - 1) * periods
 
 
+def thin_shelves(n=5):
+    """``n`` slabs 0.9 voxel thick across x, ten voxels apart, one voxel centre inside each."""
+    p = 10 * H
+    boxes = [((m * p + 0.3 * H, 0, 0), (m * p + 1.2 * H, 0.3, 0.2)) for m in range(n)]
+    bounds = np.array([[0, 0, 0], [(n - 1) * p + 2 * H, 0.3, 0.2]])
+    return shapes.grid(lambda q: shapes.boxes_sdf(q, boxes), bounds, voxel_size=H), boxes
+
+
+@pytest.mark.parametrize("copies", [2, 3])
+@pytest.mark.parametrize("near", ["end above a shelf", "start below a shelf"])
+def test_tile_keeps_a_thin_shelf_next_to_a_zone_plane(near, copies):
+    """A zone plane half a voxel from a shelf 0.9 voxel thick: every copy keeps its shelves (the
+    seam blend used to fade the shelf into the other copy's air, and resampling at a fractional
+    offset used to skip it)."""
+    c, boxes = thin_shelves()
+    p = 10 * H
+    if near == "end above a shelf":
+        start, end = 5.5 * H, boxes[2][1][0] + 0.5 * H
+    else:
+        start, end = boxes[1][0][0] - 0.5 * H, 2 * p + 5.5 * H
+    assert ndimage.label(c.sdf < 0)[1] == 5
+    out = scale(c, axis="x", zone=(start, end), to=end + (copies - 1) * (end - start), mode="tile")
+    assert out.meta["history"][-1]["copies"] == copies
+    # two shelves lie in the zone: each added copy adds two
+    assert ndimage.label(out.sdf < 0)[1] == 5 + 2 * (copies - 1)
+
+
+@pytest.mark.parametrize("factor", [0.8, 0.6, 0.45])
+def test_stretch_compression_keeps_slabs_thinner_than_the_compression(factor):
+    """Shrinking a zone holding three shelves 0.9 voxel thick: none is skipped by resampling."""
+    c, _ = thin_shelves()
+    start, end = 5.5 * H, 35.5 * H
+    out = scale(c, axis="x", zone=(start, end), to=start + factor * (end - start))
+    assert ndimage.label(out.sdf < 0)[1] == 5
+
+
 # -- replay ------------------------------------------------------------------------------------
 
 

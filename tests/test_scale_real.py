@@ -222,3 +222,28 @@ def test_bookcase_distances_around_the_slab_match_a_full_recomputation(bookcase,
         err = np.abs(out.sdf - ref.sdf)[near] / h
         med, p99 = np.median(err), np.percentile(err, 99)
         assert (med <= 0.05 and p99 <= 0.5) == ok, (which, med, p99)
+
+
+@pytest.mark.parametrize("copies", [2, 3])
+def test_tile_with_a_plane_just_above_a_thin_shelf_keeps_every_shelf(copies):
+    """Sweet Home 3D's bookcase at 128: shelves about one voxel thick. A zone from the middle of a
+    gap to 0.2 voxel above a shelf's top holds two shelves; each copy adds exactly two."""
+    c = ingest.load(data_path("sweethome3d/bookcase.obj"), res=128)
+    h = c.voxel_size
+    y = c.axis_coords(1)
+
+    def shelves(x):
+        col = x.sdf[x.shape[0] // 2, :, x.shape[2] // 2] <= 0
+        edges = np.flatnonzero(np.diff(col.astype(np.int8)))
+        return edges[0::2] + 1, edges[1::2]  # first and last inside index of each shelf
+
+    first, last = shelves(c)
+    assert len(first) == 8 and (last - first).max() <= 1  # thin: one or two voxels inside
+    start = y[(last[1] + first[2]) // 2]
+    top = y[last[3]] + h * c.sdf[c.shape[0] // 2, last[3], c.shape[2] // 2] / (
+        c.sdf[c.shape[0] // 2, last[3], c.shape[2] // 2]
+        - c.sdf[c.shape[0] // 2, last[3] + 1, c.shape[2] // 2]
+    )  # the shelf's top surface (linear zero crossing)
+    end = top + 0.2 * h
+    out = scale(c, axis="y", zone=(start, end), to=end + (copies - 1) * (end - start), mode="tile")
+    assert len(shelves(out)[0]) == 8 + 2 * (copies - 1)

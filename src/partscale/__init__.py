@@ -5,7 +5,8 @@ The pipeline, one module per stage::
     ingest (mesh/grid -> CSDF) -> segment (parts) -> edit (stretch/tile/global)
         -> export (mesh, 3D texture) / render (PNG) / serve (browser editor)
 
-The CSDF type and its file live in :mod:`partscale.csdf`.
+The CSDF type and its file live in :mod:`partscale.csdf`; :mod:`partscale.thickness` measures
+the features thinner than the grid holds well (``partscale info`` warns about them).
 """
 
 from .csdf import CSDF, load, make, save

@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from ..csdf import SUFFIX, save
+from ..thickness import thin_features
 from . import _common
 
 
@@ -75,3 +76,13 @@ def import_(
         )
     save(c, output)
     _common.done(f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m")
+    thin = thin_features(c)
+    below = thin.imported.get("below_one_voxel_triangles", 0)
+    if thin.below_one_solid or thin.below_one_gap or below:
+        typer.echo(
+            f"below one voxel: {below} triangles of closed pieces (thickened), "
+            f"{thin.below_one_solid} voxels of solid and {thin.below_one_gap} of gap"
+        )
+    msg = thin.message(c.voxel_size, c.meta.get("units", "m"))
+    if msg:
+        typer.echo(f"warning: thin features: {msg}")

@@ -9,10 +9,12 @@ from typing import Annotated
 import typer
 
 from ..csdf import CSDF, load
+from ..thickness import ThinFeatures, thin_features
 
 
-def summary(c: CSDF) -> dict:
-    """A JSON-serialisable summary of a CSDF (what ``info --json`` prints)."""
+def summary(c: CSDF, thin: ThinFeatures | None = None) -> dict:
+    """A JSON-serialisable summary of a CSDF (what ``info --json`` prints); ``thin``: its thin
+    features when already measured."""
     try:
         sb = c.surface_bounds()
         solid = {"min": sb[0].tolist(), "max": sb[1].tolist(), "size": (sb[1] - sb[0]).tolist()}
@@ -36,6 +38,7 @@ def summary(c: CSDF) -> dict:
         }
         if isinstance(c.meta.get("completion"), dict)
         else None,
+        "thin_features": (thin or thin_features(c)).to_json(),
     }
 
 
@@ -43,8 +46,11 @@ def info(
     path: Annotated[Path, typer.Argument(help="A .csdf.npz file.")],
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
 ) -> None:
-    """Show shape, voxel size, extent in world units, number of parts and the edit history."""
-    s = summary(load(path))
+    """Show shape, voxel size, extent in world units, number of parts, the edit history, and a
+    warning when features thinner than ~1.5 voxels need a finer resolution."""
+    c = load(path)
+    thin = thin_features(c)
+    s = summary(c, thin)
     if as_json:
         typer.echo(json.dumps(s, indent=2))
         return
@@ -67,6 +73,9 @@ def info(
             f"completion:  surface {k['observed']:.0%} observed, {k['mirrored']:.0%} mirrored, "
             f"{k['guessed']:.0%} guessed"
         )
+    warning = thin.message(c.voxel_size, units)
+    if warning:
+        typer.echo(f"warning:     thin features: {warning}")
     typer.echo(f"history:     {len(s['history'])} operation(s)")
     for i, op in enumerate(s["history"]):
         typer.echo(f"  {i + 1}. {json.dumps(op)}")

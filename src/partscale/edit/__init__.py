@@ -30,9 +30,12 @@ Semantics
   or shrinks along the axis; origin and voxel size never change.
 - stretch: the slab is resampled linearly (sdf, sRGB); parts stay crisp (nearest source voxel,
   boundary at the zero crossing where the surface passes between two differently labelled
-  voxels).
+  voxels). Where the slab is compressed, an element (or gap) thinner than the compression that
+  linear resampling would skip keeps one voxel with its source distance, colour and part.
 - tile: ``tile_count`` copies each scaled to fit; across each internal seam the two copies'
-  continuations are cross-faded over ``SEAM_VOXELS`` voxels either side; copies ``m >= 1`` of parts
+  continuations are cross-faded over ``SEAM_VOXELS`` voxels either side, except where that would
+  flip the side of the copy the layer belongs to against the other copy's field more than a
+  voxel away (a thin shelf next to a zone plane stays whole in its copy); copies ``m >= 1`` of parts
   lying wholly inside the zone get new indices after the existing ones (``meta['parts_info']``
   gains entries with ``copy_of``); parts crossing the zone's planes keep their index.
 - global: the whole solid scaled along the axis about its min to the same final length.

@@ -65,15 +65,15 @@ def make_plan(
 
     For ``tile`` with ``blend``, each internal seam cross-fades the two copies' continuations
     (left copy read past END, right copy read before START) over ``seam_voxels`` output voxels
-    either side, so the field stays continuous across the seam (METHOD.md step 6). A feature
-    thinner than that window which exists on one side of the seam only is faded by it: where a
-    zone plane cuts through a board, the sliver it leaves at the start (or end) of every copy
-    (e.g. 1.5 voxels) blends towards the other side's air and thins or vanishes, and an air gap of
-    about a voxel next to a seam can close, merging the pieces on either side. Remedy: put the
-    zone's planes in gaps between repeated elements or through the middle of one (then both
+    either side, so the field stays continuous across the seam (METHOD.md step 6). The blend
+    alone would fade a feature thinner than that window which exists on one side of the seam
+    only (a shelf just inside a zone plane, the sliver a plane leaves where it cuts a board) or
+    close a gap of about a voxel; :func:`apply_plan` with ``keep_thin`` keeps those whole in the
+    copy they belong to (what :func:`~partscale.edit.apply_edit` does). Planes in the gaps
+    between repeated elements, or through the middle of one, still give the smoothest seams (both
     continuations agree and the blend changes nothing); ``blend=False`` (what
-    :func:`~partscale.edit.naive_edit` uses) concatenates the copies without blending, keeping
-    slivers but leaving a step in the field at each seam.
+    :func:`~partscale.edit.naive_edit` uses) concatenates the copies without blending, leaving a
+    step in the field at each seam.
     """
     y = origin + np.arange(n_out) * h
     x = source_coordinate(y, mode=mode, start=start, end=end, dest=dest, lo=lo, hi=hi)
@@ -167,14 +167,25 @@ def _lerp_into(src, i0, i1, w, out, lo, hi):
                     out[j, a, b, c] = v
 
 
-def lerp_layers(src: np.ndarray, x: np.ndarray) -> np.ndarray:
+def empty_layers(shape: tuple[int, ...], dtype, axis: int) -> np.ndarray:
+    """Uninitialised axis-first array ``shape`` (N, A, B[, C]): a view of a C-ordered array in
+    world order (the edit axis at ``axis``), so the result needs no transposing copy."""
+    world = list(shape)
+    n = world.pop(0)
+    world.insert(axis, n)
+    return np.moveaxis(np.empty(world, dtype), axis, 0)
+
+
+def lerp_layers(src: np.ndarray, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Linear interpolation of layers of ``src`` (N, A, B[, C]) at continuous indices ``x`` (M,).
 
-    Returns (M, ...) of ``src``'s dtype (integers rounded half to even, computed in float32);
-    layers at integer ``x`` are exact copies.
+    Returns (M, ...) of ``src``'s dtype (integers rounded half to even, computed in float32),
+    written into ``out`` when given (any strides, e.g. :func:`empty_layers`); layers at integer
+    ``x`` are exact copies.
     """
     i0, i1, w = _split(x, src.shape[0])
-    out = np.empty((len(x), *src.shape[1:]), src.dtype)
+    if out is None:
+        out = np.empty((len(x), *src.shape[1:]), src.dtype)
     if np.issubdtype(src.dtype, np.integer):
         info = np.iinfo(src.dtype)
         lo, hi = float(info.min), float(info.max)
@@ -187,15 +198,22 @@ def lerp_layers(src: np.ndarray, x: np.ndarray) -> np.ndarray:
     return out
 
 
-def crisp_parts(parts: np.ndarray, sdf: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Part labels at continuous indices ``x``: no blended labels.
+def crisp_parts(
+    parts: np.ndarray, sdf: np.ndarray, x: np.ndarray, out: np.ndarray | None = None
+) -> np.ndarray:
+    """Part labels at continuous indices ``x``: no blended labels (into ``out`` when given).
 
     Between source layers ``i0`` and ``i0 + 1`` with different labels, the boundary is placed where
     the part change is closest to the surface: at the linear zero crossing of the sdf when the
     surface passes between them, else half-way (nearest source voxel).
     """
     i0, i1, w = _split(x, parts.shape[0])
-    out = parts[i0]
+    if out is None:
+        out = parts[i0]
+    else:  # the kernel's copy path (weight 0), into any strides
+        _lerp_into(
+            parts[..., None], i0, i0, np.zeros(len(i0), np.float32), out[..., None], 0.0, 0.0
+        )
     frac = np.flatnonzero(w != 0)
     if frac.size == 0:
         return out
@@ -215,21 +233,124 @@ def crisp_parts(parts: np.ndarray, sdf: np.ndarray, x: np.ndarray) -> np.ndarray
     return out
 
 
+@nb.njit(cache=True, parallel=True)
+def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
+    """Put back what linear resampling skipped between consecutive output layers (in place).
+
+    For each pair ``j, j + 1`` with ``pair[j]``, the source layers strictly between ``xa[j]``
+    and ``xa[j + 1]`` are read column by column: where both output samples are outside
+    (``> 0``) but one of those layers is inside, a solid thinner than the compression was
+    skipped; the output layer nearer to its deepest sample (and ``write``-able) takes that
+    sample's distance, colour and part. Skipped gaps (both inside, a layer between outside)
+    likewise take the largest. Columns run in parallel; layers in order, so a pair sees what
+    the one before it wrote.
+    """
+    m, na, nb_ = out.shape[0], out.shape[1], out.shape[2]
+    n_src = src.shape[0]
+    for a in nb.prange(na):
+        for j in range(m - 1):
+            if not pair[j]:
+                continue
+            q0 = max(int(np.floor(xa[j])) + 1, 0)
+            q1 = min(int(np.ceil(xa[j + 1])) - 1, n_src - 1)
+            if q1 < q0:
+                continue
+            for b in range(nb_):
+                v0 = out[j, a, b]
+                v1 = out[j + 1, a, b]
+                solid = v0 > 0  # both outside: look for a skipped solid, else for a skipped gap
+                if solid != (v1 > 0):
+                    continue
+                qb = -1
+                best = np.float32(0.0)
+                for q in range(q0, q1 + 1):
+                    v = src[q, a, b]
+                    if (solid and v < best) or (not solid and v > best):
+                        best = v
+                        qb = q
+                if qb < 0:
+                    continue
+                t = j if qb - xa[j] <= xa[j + 1] - qb else j + 1
+                if not write[t]:
+                    t = 2 * j + 1 - t
+                    if not write[t]:
+                        continue
+                out[t, a, b] = best
+                for c in range(src_rgb.shape[3]):
+                    out_rgb[t, a, b, c] = src_rgb[qb, a, b, c]
+                out_parts[t, a, b] = src_parts[qb, a, b]
+
+
 def apply_plan(
-    sdf: np.ndarray, rgb: np.ndarray, parts: np.ndarray, plan: Plan
+    sdf: np.ndarray,
+    rgb: np.ndarray,
+    parts: np.ndarray,
+    plan: Plan,
+    *,
+    keep_thin: float | None = None,
+    axis: int = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Resample axis-first arrays ``(N, A, B)`` by ``plan`` into new ``(N', A, B)`` arrays."""
-    out_sdf = lerp_layers(sdf, plan.xa)
-    out_rgb = lerp_layers(rgb, plan.xa)
-    out_parts = crisp_parts(parts, sdf, plan.xa)
+    """Resample axis-first arrays ``(N, A, B)`` by ``plan`` into new ``(N', A, B)`` arrays.
+
+    The new arrays are axis-first views of C-ordered arrays in world order with the edit axis
+    at ``axis`` (:func:`empty_layers`): moved back, they are the result as it is stored.
+
+    ``keep_thin`` (a distance, world units; e.g. one voxel), when given, keeps elements that the
+    linear resampling would lose:
+
+    - in the slab, a solid (or gap) lying between two consecutive output samples, thinner than
+      the spacing of the samples in the source (a compressed slab skips source layers), is put
+      back on the output sample nearer to it with its source distance, colour and part, so it
+      keeps at least one voxel instead of vanishing (an element thinner than the compression
+      survives it);
+    - in a tile seam's blend, where the blend flips the side of the dominant copy (its layer's
+      own) against a blended sample more than ``keep_thin`` away on the other side, the dominant
+      sample is kept: a thin shelf or sliver on one side of the seam stays whole in its copy
+      instead of fading into the other copy's air (or a thin gap into its solid). Where both
+      copies have surface within ``keep_thin`` of each other the blend is as before.
+    """
+    m = len(plan.xa)
+    out_sdf = lerp_layers(sdf, plan.xa, empty_layers((m, *sdf.shape[1:]), sdf.dtype, axis))
+    out_rgb = lerp_layers(rgb, plan.xa, empty_layers((m, *rgb.shape[1:]), rgb.dtype, axis))
+    out_parts = crisp_parts(
+        parts, sdf, plan.xa, empty_layers((m, *parts.shape[1:]), parts.dtype, axis)
+    )
     seam = np.flatnonzero(plan.beta > 0)
+    thinned = np.zeros((seam.size, *sdf.shape[1:]), bool)
+    if keep_thin is not None:
+        # consecutive layers reading one continuous stretch of the source (the dominant
+        # samples; a tile seam's jump from one copy's continuation to the other's is no pair)
+        pair = (plan.in_slab[:-1] | plan.in_slab[1:]) & (np.diff(plan.xa) > 0)
+        if pair.any():
+            was = out_sdf[seam]
+            _keep_thin(
+                sdf,
+                rgb,
+                parts,
+                plan.xa,
+                np.append(pair, False),
+                plan.in_slab,
+                out_sdf,
+                out_rgb,
+                out_parts,
+            )
+            thinned = out_sdf[seam] != was
     if seam.size:
         bt = plan.beta[seam].astype(np.float32)
         b3 = bt[:, None, None]
-        out_sdf[seam] = (
-            lerp_float(sdf, plan.xa[seam]) * (1 - b3) + lerp_float(sdf, plan.xb[seam]) * b3
-        )
+        dominant = lerp_float(sdf, plan.xa[seam])
+        dominant = np.where(thinned, out_sdf[seam], dominant)
+        other = lerp_float(sdf, plan.xb[seam])
+        blended = dominant * (1 - b3) + other * b3
         b4 = bt[:, None, None, None]
         c = lerp_float(rgb, plan.xa[seam]) * (1 - b4) + lerp_float(rgb, plan.xb[seam]) * b4
-        out_rgb[seam] = np.clip(np.rint(c), 0, 255).astype(np.uint8)
+        c = np.clip(np.rint(c), 0, 255).astype(np.uint8)
+        if keep_thin is not None:
+            far = np.float32(keep_thin)
+            flip = (dominant <= 0) != (blended <= 0)
+            keep = flip & (((dominant <= 0) & (other > far)) | ((dominant > 0) & (other < -far)))
+            blended = np.where(keep, dominant, blended)
+            c = np.where((keep | thinned)[..., None], out_rgb[seam], c)
+        out_sdf[seam] = blended
+        out_rgb[seam] = c
     return out_sdf, out_rgb, out_parts

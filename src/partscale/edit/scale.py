@@ -81,7 +81,11 @@ def _edit_arrays(
         ix = np.clip(np.rint(plan.xa), 0, src_parts.shape[0] - 1).astype(np.int64)
         out_parts = src_parts[ix]
     else:
-        out_sdf, out_rgb, out_parts = apply_plan(src_sdf, src_rgb, src_parts, plan)
+        # the part-aware modes keep elements thinner than the compression or lying at a seam;
+        # global stays the plain baseline scaling
+        out_sdf, out_rgb, out_parts = apply_plan(
+            src_sdf, src_rgb, src_parts, plan, keep_thin=None if mode == "global" else h, axis=ax
+        )
         if mode == "tile":
             o = float(csdf.origin[ax])
             copy_of = renumber_copies(
@@ -107,24 +111,32 @@ def _edit_arrays(
         )
         eff_band = (band + 1.0) * max(1.0, 1.0 / plan.scale)
         # what re-evaluation may change, as resampled: to tell the voxels it did change
-        todo = np.flatnonzero(mask)
-        sdf_was, parts_was = out_sdf.ravel()[todo], out_parts.ravel()[todo]
+        # (index tuples, not ravel(): the arrays are views in world order, ravel would copy)
+        todo = np.nonzero(mask)
+        sdf_was, parts_was = out_sdf[todo], out_parts[todo]
         reevaluated = reevaluate_arrays(out_sdf, out_rgb, out_parts, h, mask, band=eff_band)
         # parts are labelled up to the band outside the surface (as the segment stage does):
         # voxels the edit resampled or recomputed lose theirs beyond it; the copied layers
         # outside the zone keep their labels as they are, like their distances
         far = np.float32(BAND_VOXELS * h)
-        flat_sdf, flat_parts = out_sdf.ravel(), out_parts.ravel()
-        moved = (flat_sdf[todo] != sdf_was) | (flat_parts[todo] != parts_was)
-        flat_parts[todo[moved & (flat_sdf[todo] > far)]] = -1
+        sdf_now = out_sdf[todo]
+        moved = (sdf_now != sdf_was) | (out_parts[todo] != parts_was)
+        drop = moved & (sdf_now > far)
+        out_parts[tuple(t[drop] for t in todo)] = -1
         layers = plan.in_slab | (plan.beta > 0)
         slab_parts = out_parts[layers]
         slab_parts[out_sdf[layers] > far] = -1
         out_parts[layers] = slab_parts
+    sdf, rgb, parts = (np.moveaxis(a, 0, ax) for a in (out_sdf, out_rgb, out_parts))
+    if not naive:
+        # apply_plan wrote them in world order and nothing else holds them: read-only, the
+        # CSDF takes them as they are instead of copying (no full copy beyond the output)
+        for a in (sdf, rgb, parts):
+            a.flags.writeable = False
     return _Edited(
-        np.moveaxis(out_sdf, 0, ax),
-        np.moveaxis(out_rgb, 0, ax),
-        np.moveaxis(out_parts, 0, ax),
+        sdf,
+        rgb,
+        parts,
         plan.scale,
         copy_of,
         reevaluated,
@@ -177,11 +189,12 @@ def apply_edit(
 
     Notes
     -----
-    ``tile`` blends the copies across each internal seam; thin features on one side of a seam
-    only (the sliver a zone plane leaves where it cuts a board) fade there. Put the zone's
-    planes in the gaps between repeated elements or through the middle of one (see
-    :func:`~partscale.edit.resample.make_plan`); :func:`naive_edit` concatenates without
-    blending.
+    ``tile`` blends the copies across each internal seam; an element on one side of a seam only
+    (a thin shelf next to a zone plane, the sliver a plane leaves where it cuts a board) is kept
+    whole in its copy rather than faded, and ``stretch`` or ``tile`` compressing a slab keeps
+    elements (and gaps) thinner than the compression, each on at least one voxel (see
+    :func:`~partscale.edit.resample.apply_plan`). :func:`naive_edit` concatenates without
+    blending and resamples linearly.
     """
     return _apply_edit(csdf, edit, progress=progress)
 

@@ -236,6 +236,11 @@ def fit_axis(csdf: CSDF, axis: int, target: float, *, prof=None) -> tuple[list[E
         # slabs outside the whole repeat first (a gap inside it would make one spacing uneven)
         region = tiles[0].region if tile_zone is not None else None
         free = [c for c in slabs if _disjoint(c, region)]
+        if tile_zone is not None:
+            # a stretch seam within reach of a tile plane: the two blends and the seams' looks
+            # (CALM_VOXELS either side of each) overlap, and the pair shows as one larger step
+            reach = 2 * CALM_VOXELS * h
+            free = [c for c in free if all(abs(x - y) >= reach for x in c.zone for y in tile_zone)]
         if not free and tile_zone is not None:
             # only gaps inside the repeat: one uneven gap is worse than copies a little off
             copies_len = float(edits[0].dest) - float(edits[0].start)

@@ -197,7 +197,7 @@ def test_fit_brings_each_object_to_its_size(tmp_path, cli):
     grown = (after[1] - after[0]) - (before[1] - before[0])
     h = partscale.load(out).voxel_size
     assert abs(grown[0] - 0.2) <= 0.5 * h + 1e-9, grown  # fit hits its target within half a voxel
-    assert np.all(np.abs(grown[1:]) <= 1e-9), grown  # '=' keeps the other axes
+    assert np.all(np.abs(grown[1:]) <= 1e-6), grown  # "=" keeps the other axes (float noise)
 
 
 def test_engine_ray_without_ray_says_how_to_install(tmp_path):

@@ -4,7 +4,8 @@ Per axis (see :func:`fit`): where a repeat is found, tile one period with the nu
 that brings the length closest to the target, and absorb the remainder (less than half a period)
 by stretching constant slabs outside that period, so spacing is kept and the length is exact;
 with no repeat, stretch the largest constant slab (a growth beyond doubling it spread over the
-next largest of similar length), planes a few voxels in from the slab's ends; global scaling only where neither exists. All positions are on the input
+next largest of similar length), planes a few voxels in from the slab's ends, where the surface
+changes least from layer to layer; global scaling only where neither exists. All positions are on the input
 object (recipe coordinates), so the tile and the stretch on one axis are drawn on the original.
 Every change is snapped to whole voxels up front, so the result's extent is the target to half
 a voxel.
@@ -35,6 +36,14 @@ MIN_SLAB_VOXELS = 2
 INSET_VOXELS = 3
 #: ...where the slab keeps at least this many voxels between them.
 MIN_INSET_VOXELS = 4
+#: Planes whose surrounding layers change within this much (mean sdf change per layer near the
+#: surface, in voxels) of the calmest place in the slab count as calm as it: far below the
+#: half-voxel steps the seam measure reports.
+CALM_TOL = 0.05
+#: ...among the layer pairs within this many voxels of the plane: the stage blends two voxels
+#: either side, and a seam shows in the sdf's step across five layers centred on the plane
+#: against the trend one layer beyond them (3.5 voxels, rounded up to whole layer pairs).
+CALM_VOXELS = 4
 #: Growth beyond this fraction of the largest slab's length is spread over more slabs.
 MAX_STRETCH = 1.0
 #: Slabs shorter than this fraction of the largest one take no share of a growth.
@@ -53,19 +62,64 @@ def _disjoint(c: Candidate, zone: tuple[float, float] | None) -> bool:
     return zone is None or c.zone[1] <= zone[0] or c.zone[0] >= zone[1]
 
 
-def _inset(c: Candidate, h: float) -> tuple[float, float]:
-    """A slab's zone moved :data:`INSET_VOXELS` in from each end where it stays long enough:
-    planes right at the slab's ends lie on the feature that bounds it (a leg's face), where a
-    stretch's blend shows as a seam."""
+def layer_change(csdf: CSDF, axis: int) -> np.ndarray:
+    """(N - 1,) float64: mean ``|sdf[i + 1] - sdf[i]|`` (voxels) over voxels within one voxel of
+    the surface on layer ``i`` or ``i + 1`` along ``axis``; 0 where no surface is near.
+
+    A slab of constant occupancy can still change near its ends (the sdf of a leg feels the seat
+    a few voxels away): a stretch plane there changes that gradient at the plane, a seam.
+    """
+    h = csdf.voxel_size
+    s = np.moveaxis(csdf.sdf, axis, 0)
+    near = np.abs(s) <= h
+    either = near[:-1] | near[1:]
+    d = np.abs(s[1:].astype(np.float32) - s[:-1].astype(np.float32)) / np.float32(h)
+    n = either.sum(axis=(1, 2))
+    return np.where(n > 0, (d * either).sum(axis=(1, 2)) / np.maximum(n, 1), 0.0)
+
+
+def _inset(
+    c: Candidate, h: float, change: np.ndarray | None = None, first: float = 0.0
+) -> tuple[float, float]:
+    """A slab's zone moved at least :data:`INSET_VOXELS` in from each end where it stays long
+    enough: planes right at the slab's ends lie on the feature that bounds it (a leg's face), where
+    a stretch's blend shows as a seam.
+
+    With ``change`` (:func:`layer_change` along the axis; ``first``: the world coordinate of its
+    layer 0), each plane goes on to the whole-voxel position nearest its end, in its half of the
+    slab, whose layers within :data:`CALM_VOXELS` either side change least (within
+    :data:`CALM_TOL`): a gradient still fading out there (a leg near the seat) is changed by
+    the stretch's blend and shows as a seam.
+    """
     a, b = c.zone
     n = INSET_VOXELS * h
-    if (b - a) - 2 * n >= MIN_INSET_VOXELS * h:
+    if (b - a) - 2 * n < MIN_INSET_VOXELS * h:
+        return a, b
+    if change is None or change.size == 0:
         return a + n, b - n
-    return a, b
+    w = CALM_VOXELS
+    m = int(np.floor(((b - a) / h - MIN_INSET_VOXELS) / 2))  # steps in, each plane's half
+    steps = np.arange(INSET_VOXELS, max(INSET_VOXELS, m) + 1)
+    # the layer pairs within w voxels of a plane y: 2 w of them, from ceil(i - w) (i: y's index)
+    wins = np.lib.stride_tricks.sliding_window_view(np.pad(change, (0, 2 * w)), 2 * w)
+
+    def cost(y: np.ndarray) -> np.ndarray:  # the largest change among them
+        lo = np.ceil((y - first) / h - w - 1e-6).astype(np.int64)
+        return wins[np.clip(lo, 0, change.size - 1)].max(axis=1)
+
+    out = []
+    for y in (a + steps * h, b - steps * h):
+        cy = cost(y)
+        out.append(float(y[np.flatnonzero(cy <= cy.min() + CALM_TOL)[0]]))
+    return out[0], out[1]
 
 
 def _stretch_edits(
-    slabs: list[Candidate], change: float, h: float, axis: str
+    slabs: list[Candidate],
+    change: float,
+    h: float,
+    axis: str,
+    layers: tuple[np.ndarray, float] | None = None,
 ) -> tuple[list[Edit], float]:
     """Stretch edits absorbing ``change`` (whole voxels) over ``slabs``, and what is left.
 
@@ -74,20 +128,36 @@ def _stretch_edits(
     its length and :data:`MIN_SPREAD_VOXELS` long, in proportion to their length: no slab is
     stretched out of shape to absorb it alone, and no thin slab (a leg's width) is stretched at
     all. Shrinking takes the largest slabs, as many as can give it up, each in proportion to
-    what it can give down to :data:`MIN_SLAB_VOXELS`.
+    what it can give down to :data:`MIN_SLAB_VOXELS`. Planes: the calm insets of :func:`_inset`
+    (with ``layers``), else the plain ones, else the slabs' ends; shrinking, the first of those
+    needing the fewest slabs. ``layers``: :func:`layer_change` and the
+    world coordinate of its layer 0, for :func:`_inset`.
     """
     if not slabs or change == 0:
         return [], change
-    for zones in ([_inset(c, h) for c in slabs], [c.zone for c in slabs]):
-        zones = sorted(zones, key=lambda z: z[0] - z[1])  # largest first
-        room = [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
-        if change < 0:
+    options = [[_inset(c, h) for c in slabs], [c.zone for c in slabs]]
+    if layers is not None:
+        options.insert(0, [_inset(c, h, *layers) for c in slabs])
+    options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
+    if change < 0:
+        # shrinking: the planes that need the fewest slabs (each slab adds two seams, which
+        # calmer planes do not pay for), the calmest among those; the slabs' full length last
+        best = None
+        for zones in options:
+            room = [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
             n = 1
             while n < len(zones) and -change > sum(room[:n]) + h / 2:
                 n += 1
-            if -change <= sum(room[:n]) + h / 2:
-                break
-            continue
+            if -change <= sum(room[:n]) + h / 2 and (best is None or n < best[2]):
+                best = (zones, room, n)
+        if best is None:
+            zones = options[-1]
+            room = [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
+            n = len(zones)
+        else:
+            zones, room, n = best
+    else:
+        zones = options[0]
         big = zones[0][1] - zones[0][0]
         n = 1
         while (
@@ -96,7 +166,6 @@ def _stretch_edits(
             and zones[n][1] - zones[n][0] >= max(MIN_SPREAD_VOXELS * h, SPREAD_FRACTION * big)
         ):
             n += 1
-        break
     chosen = zones[:n]
     weights = [z[1] - z[0] for z in chosen] if change > 0 else room[:n]
     total = sum(weights)
@@ -167,12 +236,18 @@ def fit_axis(csdf: CSDF, axis: int, target: float, *, prof=None) -> tuple[list[E
         # slabs outside the whole repeat first (a gap inside it would make one spacing uneven)
         region = tiles[0].region if tile_zone is not None else None
         free = [c for c in slabs if _disjoint(c, region)]
+        if tile_zone is not None:
+            # a stretch seam within reach of a tile plane: the two blends and the seams' looks
+            # (CALM_VOXELS either side of each) overlap, and the pair shows as one larger step
+            reach = 2 * CALM_VOXELS * h
+            free = [c for c in free if all(abs(x - y) >= reach for x in c.zone for y in tile_zone)]
         if not free and tile_zone is not None:
             # only gaps inside the repeat: one uneven gap is worse than copies a little off
             copies_len = float(edits[0].dest) - float(edits[0].start)
             if abs(left) > COPY_TOLERANCE * copies_len:
                 free = [c for c in slabs if _disjoint(c, tile_zone)]
-        st, rest = _stretch_edits(free, left, h, name)
+        layers = (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0]))
+        st, rest = _stretch_edits(free, left, h, name, layers)
         for ed in st:
             a, b = float(ed.start), float(ed.end)
             why.append(

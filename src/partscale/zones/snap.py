@@ -21,7 +21,7 @@ from ..csdf import CSDF
 from ..edit import Edit, tile_count
 from ..errors import InputError
 from .profile import profile
-from .suggest import AXES, Candidate, axis_candidates, best_phase
+from .suggest import AXES, BOUND_TOL, Candidate, axis_candidates, best_phase
 
 
 @dataclass(frozen=True)
@@ -50,19 +50,22 @@ def _from_boundaries(c: Candidate) -> bool:
     return c.kind == "tile" and "elements between" in c.reason
 
 
-def _boundary_start(c: Candidate, near: float) -> float:
+def _boundary_start(c: Candidate, near: float, h: float) -> float:
     """Start (world) of ``c``'s zone moved by whole periods, inside its region, nearest ``near``.
 
     A bounded repeat's elements need not match layer for layer (mirrored drawers), so a phase
     off the boundaries cuts an element and joins its halves the wrong way round; its own zone,
-    one element and one boundary, is the only phase that copies whole elements.
+    one element and one boundary, is the only phase that copies whole elements. A moved zone
+    stays within the elements' span to :data:`~partscale.zones.suggest.BOUND_TOL` voxels (the
+    elements' own spacing tolerance; ``h``: the voxel size): further out it copies what lies
+    past the last element (an end board, air).
     """
     assert c.period is not None  # a tile candidate has a period
     period = float(c.period)
     k = np.arange(-(c.count or 1), (c.count or 1) + 1)
     starts = c.zone[0] + k * period
-    # within the repeat (a quarter of a period of slack: element ends are found to sub-voxel)
-    ok = (starts >= c.region[0] - period / 4) & (starts + period <= c.region[1] + period / 4)
+    slack = BOUND_TOL * h
+    ok = (starts >= c.region[0] - slack) & (starts + period <= c.region[1] + slack)
     starts = starts[ok] if ok.any() else np.array([c.zone[0]])
     return float(starts[np.argmin(np.abs(starts - near))])
 
@@ -110,7 +113,7 @@ def snap(csdf: CSDF, edit: Edit | dict, mode: str | None = None) -> tuple[Edit, 
         if _from_boundaries(best):
             # elements between boundaries (mirrored drawers): only the candidate's own
             # boundary-to-boundary zone, moved by whole periods, keeps every element whole
-            s2 = _boundary_start(best, s)
+            s2 = _boundary_start(best, s, h)
         else:
             lo, hi = (float(v) for v in p.index(np.array(best.region)))
             t = best_phase(p, period / h, lo, hi, near=float(p.index(s)))

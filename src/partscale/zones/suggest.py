@@ -50,6 +50,7 @@ from scipy.signal import find_peaks
 
 from .._options import keyword_options
 from ..csdf import CSDF
+from ..edit import SEAM_VOXELS
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from .profile import Profile, profile
@@ -265,8 +266,10 @@ def _element_distance(p: Profile, e: tuple[float, float], f: tuple[float, float]
     return p.shifted_distance(i, x - i, coarse=True)
 
 
-def find_bounded_repeats(p: Profile) -> list[_Bounded]:
-    """Every bounded repeat of ``p`` (see module docstring), best first."""
+def find_bounded_repeats(p: Profile, csdf: CSDF | None = None) -> list[_Bounded]:
+    """Every bounded repeat of ``p`` (see module docstring), best first. ``csdf``: the object
+    ``p`` is the profile of, to keep the zone's planes off thin features (see
+    :func:`join_islands`)."""
     i0, i1 = _solid_layers(p)
     n_solid = i1 - i0 + 1
     found: list[tuple[int, list[tuple[float, float]]]] = []
@@ -323,15 +326,22 @@ def find_bounded_repeats(p: Profile) -> list[_Bounded]:
             for q in out
         ):
             continue
-        r = _check_chain(p, chain, kind)
+        r = _check_chain(p, chain, kind, csdf)
         if r is not None:
             out.append(r)
     out.sort(key=lambda r: (-len(r.elements), r.err))
     return out
 
 
-def _check_chain(p: Profile, chain: list[tuple[float, float]], kind: int) -> _Bounded | None:
-    """The chain as a bounded repeat if its elements are copies joining seamlessly, else None."""
+def _check_chain(
+    p: Profile, chain: list[tuple[float, float]], kind: int, csdf: CSDF | None = None
+) -> _Bounded | None:
+    """The chain as a bounded repeat if its elements are copies joining seamlessly, else None.
+
+    The zone starts at an element's start or end: with ``csdf``, those whose joins between
+    copies cut off the fewest solid voxels (:func:`join_islands`), then the lowest
+    :func:`plane_cost`.
+    """
     for e in chain:  # an element has a shape of its own: no constant slab (see module)
         i = np.arange(int(np.ceil(e[0])), int(np.floor(e[1])) + 1)
         if p.distance(i[:, None], i[None, :]).max(initial=0.0) < DRIFT:
@@ -357,10 +367,65 @@ def _check_chain(p: Profile, chain: list[tuple[float, float]], kind: int) -> _Bo
     if seam.min() > MATCH:
         return None
     cost = np.where(seam <= MATCH, plane_cost(p, period, starts), np.inf)
+    if csdf is not None:
+        ok = np.isfinite(cost)
+        cut = np.array(
+            [
+                join_islands(csdf, p.axis, t, period) if o else 0
+                for t, o in zip(starts, ok, strict=True)
+            ]
+        )
+        cost = np.where(ok & (cut > cut[ok].min()), np.inf, cost)
     good = np.flatnonzero(cost <= cost.min() + 0.03)
     mid = (chain[0][0] + chain[-1][1] - period) / 2
     start = float(starts[good[np.argmin(np.abs(starts[good] - mid))]])
     return _Bounded(period, tuple(chain), float(np.mean(errs)), mirrored, kind, start)
+
+
+def join_islands(csdf: CSDF, axis: int, start: float, period: float) -> int:
+    """Solid voxels a join between tile copies of ``[start, start + period]`` (layer indices
+    along ``axis``) cuts off: in the join's cross-fade (:data:`~partscale.edit.SEAM_VOXELS`
+    either side, the left copy's layers past ``start + period`` weighed against the right
+    copy's past ``start``, sampled at the output's layers) and one layer beyond, the solid of
+    face-connected components touching neither end layer, less that of the same window in the
+    object on either plane whose components are apart even across edges and corners (its own
+    small parts).
+
+    A thin feature (a one-voxel strip) that ends within the cross-fade fades into the other
+    copy's air there; what is left attached only along an edge or corner is fragile (the
+    interpolated field decides whether the surface keeps it): a loose fragment, an extra piece
+    at every join, which no cross-section measure of the profile notices (a few voxels of a
+    large section).
+    """
+    s = np.moveaxis(csdf.sdf, axis, 0)
+    n = s.shape[0]
+    reach = int(np.ceil(SEAM_VOXELS)) + 1
+    ys = start + period
+    j = np.arange(int(np.ceil(ys - reach)), int(np.floor(ys + reach)) + 1)
+
+    def layers(x: np.ndarray) -> np.ndarray:  # sdf at continuous layer indices x (clamped)
+        x = np.clip(x, 0.0, n - 1.0)
+        i = np.floor(x).astype(np.int64)
+        f = (x - i).astype(np.float32)[:, None, None]
+        return (1 - f) * s[i] + f * s[np.minimum(i + 1, n - 1)]
+
+    o = j - ys
+    right = np.clip(o / (2 * SEAM_VOXELS) + 0.5, 0.0, 1.0).astype(np.float32)[:, None, None]
+    joined = (1 - right) * layers(ys + o) + right * layers(start + o)
+
+    def loose(win: np.ndarray, structure: np.ndarray | None = None) -> int:
+        lab, k = ndimage.label(win < 0, structure=structure)
+        if k == 0:
+            return 0
+        ends = np.union1d(lab[0], lab[-1])
+        size = np.bincount(lab.ravel(), minlength=k + 1)
+        size[ends] = 0
+        return int(size[1:].sum())
+
+    # the object's own small parts: apart even across edges and corners
+    full = np.ones((3, 3, 3), bool)
+    own = max(loose(layers(start + o), full), loose(layers(ys + o), full))
+    return max(0, loose(joined) - own)
 
 
 def plane_cost(p: Profile, period: float, starts: np.ndarray) -> np.ndarray:
@@ -504,7 +569,7 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
                 region=(float(p.world(a)), float(p.world(b))),
             )
         )
-    for br in find_bounded_repeats(p):
+    for br in find_bounded_repeats(p, csdf):
         # a period the full match found already (or a multiple of it, over it) adds nothing
         if any(
             abs(br.period - round(br.period / q.shift) * q.shift) <= BOUND_TOL

@@ -523,7 +523,8 @@ def test_editor_end_to_end(tmp_path):
     assert r["download"]["suggested"] == "table.edited.glb"
     scene = trimesh.load(r["download"]["path"])
     (mesh,) = scene.geometry.values()
-    colours = np.asarray(mesh.visual.vertex_attributes["color"])
+    assert mesh.visual.kind == "vertex"  # COLOR_0 without a material: trimesh reads it as colours
+    colours = np.asarray(mesh.visual.vertex_colors, dtype=np.float64) / 255
     assert colours.shape[0] == len(mesh.vertices) > 1000
     assert np.ptp(colours[:, 2]) > 0.2  # the blue ramp along x
     np.testing.assert_allclose(mesh.bounds, [(0, 0, 0), TOP[1]], atol=0.5 * H)

@@ -6,7 +6,9 @@ import contextlib
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Annotated
 
+import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -14,6 +16,9 @@ from ..progress import ProgressCallback
 
 stderr = Console(stderr=True)
 state = {"verbose": False}
+
+#: ``--res`` of the commands that import (``import``, ``batch``): one declaration, one help text.
+Res = Annotated[int, typer.Option("--res", help="Voxels along the object's longest side (>= 16).")]
 
 
 @contextlib.contextmanager

@@ -96,9 +96,7 @@ def batch(
         ),
     ],
     output: Annotated[Path, typer.Option("-o", "--output", help="Output folder OUTDIR.")],
-    res: Annotated[
-        int, typer.Option("--res", help="Import resolution (voxels, longest side).")
-    ] = 128,
+    res: _common.Res = 128,
     segment: Annotated[
         str | None,
         typer.Option(

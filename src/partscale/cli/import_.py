@@ -20,9 +20,7 @@ def import_(
         ),
     ],
     output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
-    res: Annotated[
-        int, typer.Option("--res", help="Voxels along the object's longest side (>= 16).")
-    ] = 128,
+    res: _common.Res = 128,
     pad: Annotated[
         int | None,
         typer.Option(

@@ -19,12 +19,11 @@ import numpy as np
 
 from .._options import keyword_options
 from ..csdf import CSDF
-from ..edit import Edit, Recipe, tile_count
+from ..edit import Edit, Recipe, parse_size, tile_count
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from .profile import profile
 from .suggest import AXES, Candidate, axis_candidates
-from .units import parse_size
 
 #: Largest relative change of the tiled copies accepted instead of stretching a gap inside the
 #: repeat (which would make one spacing uneven).

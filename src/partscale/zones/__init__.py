@@ -15,11 +15,11 @@ Public API
 - :func:`profile`, :class:`Profile`: the per-layer cross-sections all of it is built on.
 """
 
+from ..edit import parse_length, parse_size
 from .fit import fit, fit_axis
 from .profile import Profile, profile
 from .snap import Move, describe_moves, record_snap, snap
 from .suggest import AXES, Candidate, axis_candidates, suggest
-from .units import parse_length, parse_size
 
 __all__ = [
     "AXES",

@@ -19,12 +19,10 @@ import numpy as np
 
 from .._options import keyword_options
 from ..csdf import CSDF
-from ..edit import Edit, Recipe, tile_count
+from ..edit import Edit, Recipe, parse_size, tile_count
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
-from .profile import profile
 from .suggest import AXES, Candidate, axis_candidates
-from .units import parse_size
 
 #: Largest relative change of the tiled copies accepted instead of stretching a gap inside the
 #: repeat (which would make one spacing uneven).
@@ -180,7 +178,7 @@ def _stretch_edits(
     return edits, left
 
 
-def fit_axis(csdf: CSDF, axis: int, target: float, *, prof=None) -> tuple[list[Edit], list[str]]:
+def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str]]:
     """Edits (recipe coordinates) bringing the extent along ``axis`` to ``target``, and why."""
     name = AXES[axis]
     units = csdf.meta.get("units")
@@ -191,8 +189,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float, *, prof=None) -> tuple[list[E
     change = round((target - extent) / h) * h  # whole voxels: every edit moves content by voxels
     if change == 0:
         return [], [f"{name}: kept ({_fmt(extent, units)}, target within half a voxel)"]
-    p = prof if prof is not None else profile(csdf, axis)
-    cands = axis_candidates(csdf, axis, prof=p)
+    cands = axis_candidates(csdf, axis)
     tiles = [c for c in cands if c.kind == "tile"]
     slabs = [c for c in cands if c.kind == "stretch"]
     # what cannot shrink: the extent less every slab down to its minimum and the removable periods

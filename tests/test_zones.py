@@ -563,7 +563,7 @@ def test_snapped_naive_zone_on_the_mirrored_drawers_runs_boundary_to_boundary(re
     """The drawers repeat mirrored (handles face the divider): a 40-60 % tile zone snaps to one
     drawer and the divider, both planes on the ends of an element (within a voxel), not
     through a drawer (the layer-matching phase put them at 34.3-78.4 %)."""
-    from partscale.zones.profile import profile
+    from partscale.zones import profile
     from partscale.zones.suggest import find_bounded_repeats
 
     rel, ax, _ = PERIODS["drawers"]

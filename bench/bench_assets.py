@@ -16,10 +16,11 @@ Run: ``PYTHONPATH=src .venv/bin/python bench/bench_assets.py [--repeat 3]``
 from __future__ import annotations
 
 import argparse
-import statistics
 import tempfile
 import time
 from pathlib import Path
+
+from _timing import timed
 
 from partscale import export, ingest
 from partscale.edit import Recipe, apply_recipe
@@ -30,15 +31,6 @@ DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 CHAIR = DATA / "khronos" / "SheenChair.glb"
 SHELF = DATA / "polyhaven" / "wooden_bookshelf_worn" / "wooden_bookshelf_worn_1k.gltf"
 SHELF_EDIT = {"axis": "y", "zone": ["24.5%", "38.3%"], "to": "65.9%", "mode": "tile"}
-
-
-def timed(fn, repeat: int) -> tuple[float, object]:
-    times, out = [], None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times), out
 
 
 def main() -> None:

@@ -15,13 +15,12 @@ Run: ``PYTHONPATH=src .venv/bin/python bench/render_export.py [--repeat 3]``
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
+from _timing import timed
 from scipy import ndimage
 
 from partscale import export, render, shapes
@@ -58,15 +57,6 @@ def numpy_trace(csdf, view: str, size: int) -> np.ndarray:
         t[active] += np.maximum(v, render.HIT_EPS)
         active = active[~done & (t[active] <= t1[active])]
     return hit
-
-
-def timed(fn, repeat: int) -> tuple[float, object]:
-    times, out = [], None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times), out
 
 
 def objects():

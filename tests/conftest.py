@@ -59,3 +59,62 @@ def assert_bad_input(proc: subprocess.CompletedProcess, *fragments: str) -> None
     assert "Traceback" not in proc.stderr
     for f in fragments:
         assert f.lower() in lines[0].lower(), (f, lines[0])
+
+
+def gltf_validator_report(path: Path, *, required: bool = True) -> dict | None:
+    """The Khronos glTF validator's JSON report on ``path``.
+
+    When node or web/node_modules/gltf-validator is missing: skip the test if ``required``,
+    else return None (the caller's other checks still run).
+    """
+    import json
+    import shutil
+
+    node = shutil.which("node")
+    missing = None
+    if node is None:
+        missing = "node is not installed: cannot run the Khronos glTF validator"
+    elif not (ROOT / "web" / "node_modules" / "gltf-validator").is_dir():
+        missing = "web/node_modules/gltf-validator missing (run `npm ci` in web/)"
+    if missing is not None:
+        if required:
+            pytest.skip(missing)
+        return None
+    proc = subprocess.run(
+        [node, str(ROOT / "tests" / "tools" / "validate_gltf.mjs"), str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+def render_glbs(*paths: Path) -> list[dict]:
+    """Each GLB drawn by three.js's GLTFLoader in headless Chromium (tests/browser/glb_render.mjs).
+
+    One dict per file: "unlit" and "lit", (256, 256, 3) uint8 RGB; black is background.
+    Skips when node, Chromium or the web/ node modules are missing.
+    """
+    import base64
+    import json
+
+    import numpy as np
+    from test_browser import WEB, find_tools
+
+    node, chromium = find_tools()
+    args = {"chromium": chromium, "web": str(WEB), "files": [str(p) for p in paths]}
+    proc = subprocess.run(
+        [node, str(ROOT / "tests" / "browser" / "glb_render.mjs"), json.dumps(args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    res = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert not res["errors"], res["errors"]
+
+    def pixels(b64: str) -> np.ndarray:
+        return np.frombuffer(base64.b64decode(b64), np.uint8).reshape(256, 256, 4)[..., :3]
+
+    return [{k: pixels(r[k]) for k in ("unlit", "lit")} for r in res["renders"]]

@@ -3,13 +3,11 @@
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
 import trimesh
-from conftest import ROOT
+from conftest import ROOT, gltf_validator_report, render_glbs
 
 from partscale import export, ingest
 from partscale.surface import sample_linear, to_mesh
@@ -135,18 +133,7 @@ def test_trimesh_reads_colours(table, atlased, name, kwargs, tmp_path):
 
 
 def test_atlased_glb_passes_khronos_validator(atlased):
-    node = shutil.which("node")
-    if node is None or not (ROOT / "web" / "node_modules" / "gltf-validator").is_dir():
-        pytest.skip("node or web/node_modules/gltf-validator missing: cannot validate")
-    out = atlased[".glb"]
-    proc = subprocess.run(
-        [node, str(ROOT / "tests" / "tools" / "validate_gltf.mjs"), str(out)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert proc.returncode == 0, proc.stderr
-    report = json.loads(proc.stdout)
+    report = gltf_validator_report(atlased[".glb"])
     assert report["issues"]["numErrors"] == 0, report["issues"]["messages"]
     assert report["info"]["materialCount"] == 1
 
@@ -170,27 +157,9 @@ def test_budget_and_atlas_bad_input(cli, table, tmp_path):
 
 def test_threejs_renders_the_atlas_like_the_vertex_colours(wood, atlased, tmp_path):
     """GLTFLoader in headless Chromium: the baked texture shows the colours the vertices carry."""
-    import base64
-
-    from test_browser import WEB, find_tools
-
-    node, chromium = find_tools()
     full = export.export_mesh(wood, tmp_path / "v.glb")  # full resolution, vertex colours
-    args = {"chromium": chromium, "web": str(WEB), "files": [str(atlased[".glb"]), str(full)]}
-    proc = subprocess.run(
-        [node, str(ROOT / "tests" / "browser" / "glb_render.mjs"), json.dumps(args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert proc.returncode == 0, proc.stderr
-    res = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert not res["errors"], res["errors"]
-
-    def pixels(b64):
-        return np.frombuffer(base64.b64decode(b64), np.uint8).reshape(256, 256, 4)[..., :3]
-
-    tex, ver = (pixels(r["unlit"]) for r in res["renders"])
+    renders = render_glbs(atlased[".glb"], full)
+    tex, ver = (r["unlit"] for r in renders)
     obj_t, obj_v = tex.sum(axis=2) > 0, ver.sum(axis=2) > 0
     both = obj_t & obj_v
     # same silhouette: the decimated surface is within a fraction of a voxel of the full one
@@ -198,5 +167,5 @@ def test_threejs_renders_the_atlas_like_the_vertex_colours(wood, atlased, tmp_pa
     assert ver[both].astype(float).std(axis=0).max() > 10  # varied colour on screen
     diff = np.abs(tex[both].astype(float) - ver[both].astype(float))
     assert diff.mean() <= 8.0, diff.mean()
-    lit = pixels(res["renders"][0]["lit"])
+    lit = renders[0]["lit"]
     assert lit[obj_t].mean() > 20  # lit with its own material, not black

@@ -171,11 +171,7 @@ def _glb_json(path) -> dict:
 
 def test_textured_result_renders_with_its_texture(data, tmp_path):
     """The Poly Haven bookshelf tiled: its textures travel, and three.js draws them."""
-    import json
-    import subprocess
-
-    from conftest import ROOT
-    from test_browser import WEB, find_tools
+    from conftest import render_glbs
 
     rel, edit = SHELF
     scene = load_scene(data(rel))
@@ -186,24 +182,13 @@ def test_textured_result_renders_with_its_texture(data, tmp_path):
     assert len(b["images"]) == len(a["images"]) >= 1
     assert len(b["materials"]) == len(a["materials"])
     assert all("TEXCOORD_0" in p["attributes"] for m in b["meshes"] for p in m["primitives"])
-    node, chromium = find_tools()
-    args = {"chromium": chromium, "web": str(WEB), "files": [str(src), str(dst)]}
-    proc = subprocess.run(
-        [node, str(ROOT / "tests" / "browser" / "glb_render.mjs"), json.dumps(args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert proc.returncode == 0, proc.stderr
-    res = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert not res["errors"], res["errors"]
-    import base64
+    renders = render_glbs(src, dst)
 
     def unlit(r):
-        px = np.frombuffer(base64.b64decode(r["unlit"]), np.uint8).reshape(256, 256, 4)[..., :3]
+        px = r["unlit"]
         return px[px.sum(axis=2) > 0].astype(float)
 
-    before, after = (unlit(r) for r in res["renders"])
+    before, after = (unlit(r) for r in renders)
     # textured wood, not a flat material colour: the same palette before and after
     assert after.std(axis=0).max() > 10
     assert np.abs(after.mean(axis=0) - before.mean(axis=0)).max() <= 10

@@ -1,7 +1,8 @@
 """Import: coloured meshes and SDF grids -> CSDF (the first stage of the pipeline).
 
-Public API: :func:`load` (any supported file), :func:`load_mesh` + :func:`from_mesh` (meshes),
-:func:`from_grid`, :func:`read_grid` and :func:`read_autosdf` (SDF volumes).
+Public API: :func:`load` (any supported file), :func:`load_mesh` + :func:`from_mesh` (meshes;
+:func:`check_mesh_file` validates a mesh path), :func:`from_grid`, :func:`read_grid` and
+:func:`read_autosdf` (SDF volumes).
 
 Modules: ``load`` (dispatch, the reader registries), one reader per format (``gltf``, ``obj``,
 ``ply``; ``grid`` for ``.npy``/``.npz``/AutoSDF volumes), ``mesh`` (:class:`ColoredMesh`, what
@@ -11,7 +12,7 @@ the mesh readers share), ``mesh_sdf`` (mesh -> CSDF).
 from __future__ import annotations
 
 from .grid import from_grid, read_autosdf, read_grid
-from .load import GRID_READERS, MESH_READERS, MESH_SUFFIXES, load, load_mesh
+from .load import GRID_READERS, MESH_READERS, MESH_SUFFIXES, check_mesh_file, load, load_mesh
 from .mesh import ColoredMesh, Material, from_trimesh
 from .mesh_sdf import check_res, from_mesh
 
@@ -21,6 +22,7 @@ __all__ = [
     "MESH_SUFFIXES",
     "ColoredMesh",
     "Material",
+    "check_mesh_file",
     "check_res",
     "from_grid",
     "from_mesh",

@@ -52,9 +52,16 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
 
     Raises :class:`InputError` naming the file for a missing, unreadable, corrupt or empty mesh.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: expected an existing mesh file, got no such file")
+    path = check_mesh_file(path)
+    return MESH_READERS[path.suffix.lower()](path)
+
+
+def check_mesh_file(path: str | os.PathLike) -> Path:
+    """``path`` as a Path if it is an existing, non-empty file with a :data:`MESH_SUFFIXES` suffix.
+
+    Raises :class:`InputError` naming the file otherwise.
+    """
+    path = check_input_file(path, what="an existing mesh file")
     suffix = path.suffix.lower()
     if suffix not in MESH_READERS:
         raise InputError(
@@ -62,7 +69,7 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
         )
     if path.stat().st_size == 0:
         raise InputError(f"{path}: expected a {suffix[1:]} mesh, got an empty file (0 bytes)")
-    return MESH_READERS[suffix](path)
+    return path
 
 
 def sniff(path: Path) -> str:

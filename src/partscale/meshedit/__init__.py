@@ -16,8 +16,8 @@ Public API
   ``--by``/``--copies`` (``--snap`` and ``fit`` use the mesh's CSDF: zones work on profiles).
 """
 
+from ..ingest import MESH_SUFFIXES  # the mesh route reads what the CSDF route reads
 from .route import (
-    MESH_SUFFIXES,
     OUTPUT_SUFFIXES,
     MeshEditResult,
     MeshFrame,

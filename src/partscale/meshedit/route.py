@@ -24,12 +24,12 @@ import numpy as np
 
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError
+from ..ingest import check_mesh_file
 from .cut import Piece, concatenate, cut, subset
 
 if TYPE_CHECKING:
     import trimesh
 
-MESH_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
 OUTPUT_SUFFIXES = (".glb", ".obj", ".ply")
 
 #: lateral distance (relative to the object's size) within which two seam points are one
@@ -467,14 +467,8 @@ def load_scene(path: str | os.PathLike):
     """A mesh file as a trimesh Scene, vertices exactly as stored (no merging or reordering)."""
     import trimesh
 
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: expected an existing mesh file, got no such file")
+    path = check_mesh_file(path)
     suffix = path.suffix.lower()
-    if suffix not in MESH_SUFFIXES:
-        raise InputError(
-            f"{path}: expected a mesh ({', '.join(MESH_SUFFIXES)}), got {suffix or 'no suffix'}"
-        )
     try:
         scene = trimesh.load(path, force="scene", process=False, maintain_order=True)
     except Exception as exc:

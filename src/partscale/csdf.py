@@ -462,7 +462,7 @@ def load(path: str | os.PathLike) -> CSDF:
                 raise InputError(
                     f"{path}: expected exactly the arrays {', '.join(_NAMES)}, got {got}"
                 )
-            data = {}
+            data: dict[str, Any] = {}
             for n in _NAMES:
                 with zf.open(members[n]) as f:
                     data[n] = np.lib.format.read_array(f, allow_pickle=False)

@@ -207,7 +207,7 @@ def test_disk_full_is_one_input_error_naming_the_file_and_leaves_nothing(
     def full(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(np, "savez_compressed", full)
+    monkeypatch.setattr(np.lib.format, "write_array", full)
     target = tmp_path / "x.csdf.npz"
     with pytest.raises(InputError, match="no space left") as err:
         save(ball, target)

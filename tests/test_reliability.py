@@ -128,7 +128,7 @@ def test_disk_full_is_one_line_naming_the_destination(ball_file, tmp_path, capsy
     def full(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(np, "savez_compressed", full)
+    monkeypatch.setattr(np.lib.format, "write_array", full)
     out = tmp_path / "o.csdf.npz"
     code, lines = run(
         capsys, monkeypatch, "scale", ball_file, "-o", out, "--axis", "x", "--zone", "0%",
@@ -303,14 +303,14 @@ def test_stale_temporaries_removed_on_next_write(ball_file, tmp_path):
 
 
 def test_sigterm_cleans_up_like_ctrl_c(ball_file, tmp_path, capsys, monkeypatch):
-    real = np.savez_compressed
+    real = np.lib.format.write_array
 
     def terminated_while_writing(file, *a, **k):
         real(file, *a, **k)
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(5)  # the handler interrupts this
 
-    monkeypatch.setattr(np, "savez_compressed", terminated_while_writing)
+    monkeypatch.setattr(np.lib.format, "write_array", terminated_while_writing)
     out = tmp_path / "o.csdf.npz"
     code, lines = run(
         capsys, monkeypatch, "scale", ball_file, "-o", out, "--axis", "x", "--zone", "0%",

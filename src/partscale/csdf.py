@@ -49,6 +49,7 @@ SDF_LIMIT_VOXELS = 1e9
 """Largest ``|sdf|`` :func:`make` accepts, in voxel sizes: beyond it squares and products of
 distances leave float32 and vertices leave float64 precision (all values are finite but absurd)."""
 _NAMES = ("sdf", "rgb", "parts", "origin", "voxel_size", "meta")
+_ZIP_TIME = (1980, 1, 1, 0, 0, 0)  # the earliest a zip can say
 
 
 def _read_only(self, *args: Any, **kwargs: Any) -> Any:
@@ -415,21 +416,25 @@ def make(
 def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
     """Write ``csdf`` to a ``.csdf.npz`` file atomically (a temporary file, then a rename).
 
-    Returns the path written.
+    The zip members carry a fixed time, so the same CSDF always gives the same bytes (numpy's
+    ``savez`` stamps the current time). Returns the path written.
     """
     path = Path(path)
-    # Any: mypy checks ** against every keyword of savez, allow_pickle: bool included
-    arrays: dict[str, Any] = {
+    arrays = {
         "sdf": csdf.sdf,
         "rgb": csdf.rgb,
         "parts": csdf.parts,
         "origin": csdf.origin,
-        "voxel_size": np.float64(csdf.voxel_size),
+        "voxel_size": np.asarray(np.float64(csdf.voxel_size)),
         "meta": np.array(dumps_json(csdf.meta)),
     }
-    writer = np.savez_compressed if compress else np.savez
-    with atomic_path(path, suffix=".npz") as tmp:
-        writer(tmp, **arrays)
+    method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
+    with atomic_path(path, suffix=".npz") as tmp, zipfile.ZipFile(tmp, "w", method) as zf:
+        for name, a in arrays.items():
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_TIME)
+            info.compress_type = method
+            with zf.open(info, "w", force_zip64=True) as f:  # as savez: sizes unknown up front
+                np.lib.format.write_array(f, a, allow_pickle=False)
     return path
 
 
@@ -443,23 +448,24 @@ def load(path: str | os.PathLike) -> CSDF:
     """
     path = check_input_file(path, what="an existing .csdf.npz file")
     try:
-        # np.load leaks its file handle when the zip is corrupt: own the handle instead.
-        with open(path, "rb") as fh:
-            _check_declared(path, fh)
-            fh.seek(0)
-            with np.load(fh, allow_pickle=False) as z:
-                names = set(z.files)
-                missing = [n for n in _NAMES if n not in names]
-                extra = sorted(names - set(_NAMES))
-                if missing or extra:
-                    got = "; ".join(
-                        ([f"missing {', '.join(missing)}"] if missing else [])
-                        + ([f"extra {', '.join(extra)}"] if extra else [])
-                    )
-                    raise InputError(
-                        f"{path}: expected exactly the arrays {', '.join(_NAMES)}, got {got}"
-                    )
-                data = {n: z[n] for n in _NAMES}
+        # one zip, opened once: the headers are checked before any array is read
+        with zipfile.ZipFile(path) as zf:
+            members = {i.filename.removesuffix(".npy"): i for i in zf.infolist()}
+            _check_declared(path, zf)
+            missing = [n for n in _NAMES if n not in members]
+            extra = sorted(set(members) - set(_NAMES))
+            if missing or extra:
+                got = "; ".join(
+                    ([f"missing {', '.join(missing)}"] if missing else [])
+                    + ([f"extra {', '.join(extra)}"] if extra else [])
+                )
+                raise InputError(
+                    f"{path}: expected exactly the arrays {', '.join(_NAMES)}, got {got}"
+                )
+            data: dict[str, Any] = {}
+            for n in _NAMES:
+                with zf.open(members[n]) as f:
+                    data[n] = np.lib.format.read_array(f, allow_pickle=False)
     except InputError:
         raise
     except Exception as exc:  # zipfile, zlib, numpy's header parser: many kinds on damaged data
@@ -495,22 +501,21 @@ def load(path: str | os.PathLike) -> CSDF:
         raise InputError(f"{path}: {exc}") from None
 
 
-def _check_declared(path: Path, fh) -> None:
+def _check_declared(path: Path, zf: zipfile.ZipFile) -> None:
     """Refuse, before reading any array, a file whose declared arrays would not fit in memory."""
     need = 0
-    with zipfile.ZipFile(fh) as zf:
-        for info in zf.infolist():
-            with zf.open(info) as f:
-                version = np.lib.format.read_magic(f)
-                read = (
-                    np.lib.format.read_array_header_1_0
-                    if version == (1, 0)
-                    else np.lib.format.read_array_header_2_0
-                )
-                shape, _fortran, dtype = read(f)
-            n = 1
-            for d in shape:
-                n *= int(d)
-            need += n * dtype.itemsize
+    for info in zf.infolist():
+        with zf.open(info) as f:
+            version = np.lib.format.read_magic(f)
+            read = (
+                np.lib.format.read_array_header_1_0
+                if version == (1, 0)
+                else np.lib.format.read_array_header_2_0
+            )
+            shape, _fortran, dtype = read(f)
+        n = 1
+        for d in shape:
+            n *= int(d)
+        need += n * dtype.itemsize
     # the arrays themselves, plus a byte per voxel for the finiteness check
     check_bytes(need * 1.25, what=f"{path}: reading it")

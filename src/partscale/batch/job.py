@@ -14,7 +14,6 @@ import json
 import os
 import time
 import traceback
-import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -39,7 +38,6 @@ THREAD_VARIABLES = (
     "PYTHON_CPU_COUNT",  # Python >= 3.13's os.cpu_count(); older ones get patched in the worker
 )
 _OFF = ("", "0", "false", "no", "none", "off")
-_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 
 
 def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -> dict[str, Any]:
@@ -187,21 +185,10 @@ def _fit(c, size):
 
 
 def save_csdf(c, path: Path) -> Path:
-    """:func:`partscale.csdf.save`, then its zip members stamped with a fixed time, so the same
-    CSDF gives the same bytes whenever it is written (numpy stamps the current time)."""
-    from .._files import atomic_path
+    """:func:`partscale.csdf.save`: the same CSDF gives the same bytes whenever it is written."""
     from ..csdf import save
 
-    with atomic_path(path, suffix=".npz") as tmp:
-        save(c, tmp)
-        with zipfile.ZipFile(tmp) as zin:
-            members = [(i.filename, zin.read(i)) for i in zin.infolist()]
-        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
-            for fname, data in members:
-                info = zipfile.ZipInfo(fname, date_time=_ZIP_TIME)
-                info.compress_type = zipfile.ZIP_DEFLATED
-                zout.writestr(info, data)
-    return path
+    return save(c, path)
 
 
 # -- in a worker ------------------------------------------------------------------------------

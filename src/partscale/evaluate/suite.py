@@ -275,6 +275,12 @@ def _load_object(path: Path, res: int, progress: ProgressCallback) -> CSDF:
     return ingest.load(path, res=res, progress=progress)
 
 
+def _failed(base: dict[str, Any], mode: str, exc: Exception) -> tuple[dict[str, Any], str]:
+    """The table row and the message of a mode that raised ``exc``."""
+    msg = str(exc) if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
+    return {**base, "mode": mode, "error": msg}, msg
+
+
 def _run_mode(c: CSDF, edit: Edit, mode: str) -> CSDF:
     if mode.startswith("naive-"):
         return naive_edit(c, Edit(edit.axis, edit.start, edit.end, edit.dest, mode[6:]))
@@ -383,9 +389,7 @@ def _run_entry(
                 row["copies"] = geo.n_copies
             results[mode] = b
         except Exception as exc:  # recorded in the tables; the other modes still run
-            msg = str(exc) if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
-            row = {**base, "mode": mode, "error": msg}
-            results[mode] = msg
+            row, results[mode] = _failed(base, mode, exc)
         result.rows.append(row)
     for mode, recipe_of in RECIPE_MODES.items():
         progress(0.75, f"{name}: {mode}")
@@ -408,9 +412,7 @@ def _run_entry(
                 result.rows[0].update(metrics.evaluate_original(ref, zones))
             results[mode] = b
         except Exception as exc:  # recorded in the tables; the other modes still run
-            msg = str(exc) if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
-            row = {**base, "mode": mode, "error": msg}
-            results[mode] = msg
+            row, results[mode] = _failed(base, mode, exc)
         result.rows.append(row)
     if geo0 is None and "sdf_err_mean" not in result.rows[0]:
         result.rows[0].update(metrics.evaluate_original(ref))

@@ -480,8 +480,12 @@ def load_scene(path: str | os.PathLike):
 
 
 def save_scene(scene, path: str | os.PathLike) -> list[Path]:
-    """Write ``scene`` (GLB; OBJ with its MTL and textures beside it; PLY), atomically."""
+    """Write ``scene`` (GLB; PLY; OBJ via :func:`partscale.export.save_obj`), atomically.
+
+    Returns the files written: the mesh, then an OBJ's MTL and textures (named after it).
+    """
     from .._files import atomic_path
+    from ..export import save_obj
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -490,27 +494,16 @@ def save_scene(scene, path: str | os.PathLike) -> list[Path]:
             f"{path}: expected an output mesh ({', '.join(OUTPUT_SUFFIXES)}), got "
             f"{suffix or 'no suffix'}"
         )
-    written = [path]
+    if suffix == ".obj":
+        # the scene itself, not one concatenated mesh: one usemtl group per material
+        return save_obj(scene, path)
     if suffix == ".glb":
         data = scene.export(file_type="glb")
-    elif suffix == ".ply":
-        data = scene.to_mesh().export(file_type="ply", encoding="binary")
     else:
-        from trimesh.exchange.obj import export_obj
-
-        # the scene itself, not one concatenated mesh: one usemtl group per material
-        text, extra = export_obj(
-            scene, include_texture=True, return_texture=True, mtl_name=path.stem + ".mtl"
-        )
-        data = text.encode()
-        for name, blob in extra.items():
-            target = path.parent / name
-            with atomic_path(target) as tmp:
-                tmp.write_bytes(blob)
-            written.append(target)
+        data = scene.to_mesh().export(file_type="ply", encoding="binary")
     with atomic_path(path) as tmp:
         Path(tmp).write_bytes(data)
-    return written
+    return [path]
 
 
 @dataclass(frozen=True)

@@ -5,8 +5,9 @@ Public API
 - :func:`suggest` ``(csdf, axis=None) -> list[Candidate]``: zone candidates, best first:
   ``tile`` (one period of a repeated element, planes in the gaps) and ``stretch`` (a slab of
   constant cross-section).
-- :func:`snap` ``(csdf, edit, mode=None) -> (Edit, list[Move])``: a user's planes moved to the
-  nearest good position for the mode; :func:`describe_moves`, :func:`record_snap`.
+- :func:`snap` ``(csdf, edit, mode=None, *, candidates=None) -> (Edit, list[Move])``: a user's
+  planes moved to the nearest good position for the mode (``candidates``: those a caller found
+  already, as the editor's server does); :func:`describe_moves`, :func:`record_snap`.
 - :func:`fit` ``(csdf, size) -> (Recipe, list[str])``: the recipe reaching a target extent
   (tile whole periods, absorb the rest in a constant slab, global only as a last resort).
 - :func:`parse_size`, :func:`parse_length`: ``=``, ``2.1``, ``210cm``, ``2100mm``, ``+20cm``,

@@ -185,6 +185,20 @@ def test_cli_refuses_bad_options_with_one_line(tmp_path, cli):
     assert_bad_input(cli("batch", tmp_path / "nothing", "-o", tmp_path / "o"), "no such path")
     assert_bad_input(cli("batch", table, "-o", tmp_path / "o", "--export", "stl"), "export")
     assert_bad_input(cli("batch", table, "-o", tmp_path / "o", "--fit", "210cm", "="), "--fit")
+    # import's bounds, both of them, before any object is read
+    for res in ("8", "16385"):
+        bad = cli("batch", table, "-o", tmp_path / "o", "--res", res)
+        assert_bad_input(bad, f"expected --res in [16, 16384], got {res}")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("res", ["16385", "6.5", "many"])
+def test_manifest_res_is_refused_before_work(tmp_path, cli, res):
+    table = data_path("kenney/table.glb")
+    m = tmp_path / "m.csv"
+    m.write_text(f"path,name,res\n{table},ok,32\n{table},bad,{res}\n")
+    bad = cli("batch", m, "-o", tmp_path / "o")
+    assert_bad_input(bad, "res: expected", res)
     assert not (tmp_path / "o").exists()
 
 

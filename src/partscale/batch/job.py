@@ -9,6 +9,7 @@ JSON-able dict whose hash (:func:`options_hash`) decides whether a finished obje
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -47,13 +48,14 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
     checked, canonical values (the recipe's content, not its path). ``where`` names the object
     in error messages.
     """
+    from ..ingest import check_res
+
     merged = {**batch, **row}
-    try:
-        res = int(merged.get("res", 128))
-    except (TypeError, ValueError):
-        raise InputError(f"{where}: res: expected an integer, got {merged.get('res')!r}") from None
-    if isinstance(merged.get("res"), bool) or res < 16:
-        raise InputError(f"{where}: res: expected an integer >= 16, got {merged.get('res')!r}")
+    res = merged.get("res", 128)
+    if isinstance(res, str):
+        with contextlib.suppress(ValueError):
+            res = int(res.strip())
+    res = check_res(res, f"{where}: res")  # import's own bounds, checked before any work
 
     seg = merged.get("segment")
     if isinstance(seg, bool):

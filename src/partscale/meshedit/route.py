@@ -339,7 +339,7 @@ def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
     return s, e, d
 
 
-def apply_recipe_to_scene(scene, recipe: Recipe) -> tuple[object, list[Seam]]:
+def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh.Scene, list[Seam]]:
     """Apply ``recipe`` to a trimesh Scene's meshes; returns the edited copy and its tile seams.
 
     Parameters
@@ -463,7 +463,7 @@ def _to_trimesh(inst: _Instance):
     return mesh
 
 
-def load_scene(path: str | os.PathLike):
+def load_scene(path: str | os.PathLike) -> trimesh.Scene:
     """A mesh file as a trimesh Scene, vertices exactly as stored (no merging or reordering)."""
     import trimesh
 
@@ -479,7 +479,7 @@ def load_scene(path: str | os.PathLike):
     return scene
 
 
-def save_scene(scene, path: str | os.PathLike) -> list[Path]:
+def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
     """Write ``scene`` (GLB; PLY; OBJ via :func:`partscale.export.save_obj`), atomically.
 
     Returns the files written: the mesh, then an OBJ's MTL and textures (named after it).

@@ -842,6 +842,8 @@ def test_snap_uses_the_candidates_the_server_found_for_suggest(tmp_path, monkeyp
         ("/api/snap", {"axis": "q", "zone": [0.3, 0.6], "to": 0.7}, "axis"),
         ("/api/fit", {"size": ["=", "0", "="]}, "positive length"),
         ("/api/fit", {"size": ["=", "3furlongs", "="]}, "size y"),
+        # named as the other size messages are (not "size along y")
+        ("/api/fit", {"size": ["=", "5cm", "="]}, "size y: expected at least"),
         ("/api/fit", {"size": ["=", "="]}, "fit: expected"),
         ("/api/fit", {"size": ["=", "=", "="]}, "got the current size"),
         ("/api/fit", ["=", "=", "="], "fit: expected"),

@@ -327,6 +327,26 @@ def test_failures_are_recorded_with_one_line_and_others_complete(tmp_path):
     assert retry.returncode == 1
 
 
+def test_recipe_lengths_with_units_convert_per_object(tmp_path):
+    """A recipe's "50cm" is 0.5 on an object in metres; one of unknown units fails, one line."""
+    from partscale import shapes
+
+    table = data_path("kenney/table.glb")
+    grid = tmp_path / "grid.csdf.npz"
+    c = shapes.box((-1, 0, 0), (1, 0.5, 0.3), voxel_size=0.05)
+    partscale.save(c.replace(meta={**c.meta, "units": None}), grid)
+    edit = {"axis": "x", "zone": ["-50cm", "0.5m"], "to": "700mm"}
+    got = run([table, grid], tmp_path / "u", res=32, recipe={"edits": [edit]}, workers=1)
+    numbers = {"axis": "x", "zone": [-0.5, 0.5], "to": 0.7}
+    want = run([table], tmp_path / "n", res=32, recipe={"edits": [numbers]}, workers=1)
+    assert got.done == want.done == ["table"]
+    a = partscale.load(tmp_path / "u" / "table" / "table.csdf.npz")
+    b = partscale.load(tmp_path / "n" / "table" / "table.csdf.npz")
+    assert np.array_equal(a.sdf, b.sdf)
+    ((name, line),) = got.failed
+    assert name == "grid" and "units are unknown" in line and "\n" not in line
+
+
 def test_timeout_stops_a_slow_object(tmp_path):
     slow = data_path("khronos/SheenChair.glb")
     out = tmp_path / "out"

@@ -405,14 +405,17 @@ def create_app(
     # suggestions of the current object: one entry per (object, axis), the last few kept; the
     # object is held with them so its id is not reused while they are
     suggested: dict[tuple[int, str], tuple[Any, list[zones.Candidate]]] = {}
+    suggested_lock = threading.Lock()  # /api/suggest and /api/snap run in worker threads
 
     def _candidates(c: Any, ax: str) -> list[zones.Candidate]:
-        hit = suggested.get((id(c), ax))
+        with suggested_lock:
+            hit = suggested.get((id(c), ax))
         if hit is None:
             hit = (c, zones.suggest(c, ax))
-            suggested[(id(c), ax)] = hit
-            while len(suggested) > 9:
-                del suggested[next(iter(suggested))]
+            with suggested_lock:
+                suggested[(id(c), ax)] = hit
+                while len(suggested) > 9:
+                    del suggested[next(iter(suggested))]
         return hit[1]
 
     def _suggest(axes: list[str]) -> list[dict]:

@@ -61,15 +61,15 @@ def main() -> None:
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--no-ray", action="store_true")
     args = ap.parse_args()
-    with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
+    with tempfile.TemporaryDirectory() as tmpdir:
+        tmp = Path(tmpdir)
         recipe = tmp / "recipe.json"
         recipe.write_text(json.dumps(RECIPE))
         corrupt = tmp / "inputs" / "corrupt.glb"
         corrupt.parent.mkdir()
         corrupt.write_bytes(b"glTF" + bytes(range(256)) * 8)
         items = discover([DATA])
-        rows = [{"path": str(it.path), "name": it.name} for it in items]
+        rows: list[dict[str, str | int]] = [{"path": str(it.path), "name": it.name} for it in items]
         rows.append({"path": str(corrupt)})
         # 2048 voxels a side: far beyond the 3 GiB each worker may use
         rows.append({"path": str(DATA / "kenney" / "chair.glb"), "name": "too_large", "res": 2048})

@@ -75,6 +75,7 @@ class EditorProcess:
 
         import httpx
 
+        assert self.proc.stderr is not None  # started with stderr=PIPE
         for line in self.proc.stderr:
             m = re.search(r"(http://\S+/)", line)
             if m:
@@ -91,7 +92,8 @@ class EditorProcess:
     def __exit__(self, *exc):
         self.proc.terminate()
         self.proc.wait(timeout=20)
-        self.proc.stderr.close()
+        if self.proc.stderr is not None:
+            self.proc.stderr.close()
 
 
 def ms_since(t0: float) -> float:

@@ -68,7 +68,8 @@ def load_object(res: int):
     except ImportError:
         pass
     h = 2.55 / res
-    boxes = [((0, 0, 0), (0.05, 2.55, 0.7)), ((1.1, 0, 0), (1.15, 2.55, 0.7))]
+    Box = tuple[tuple[float, float, float], tuple[float, float, float]]
+    boxes: list[Box] = [((0, 0, 0), (0.05, 2.55, 0.7)), ((1.1, 0, 0), (1.15, 2.55, 0.7))]
     boxes += [((0.05, y, 0), (1.1, y + 0.087, 0.7)) for y in (0.29, 0.986, 1.682, 2.378)]
     c = shapes.grid(
         lambda p: shapes.boxes_sdf(p, boxes), ((0, 0, 0), (1.15, 2.55, 0.7)), voxel_size=h

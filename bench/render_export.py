@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -78,30 +79,30 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     render.render(shapes.sphere((0, 0, 0), 0.3, voxel_size=0.05), size=32)  # JIT warm-up
-    rows = []
+    rows: list[tuple[str, str, str, float, str, float | None, float | None]] = []
     tmp = Path(tempfile.mkdtemp())
     for name, c in objects():
         grid = "x".join(map(str, c.shape))
         for view in render.VIEWS:
-            t_ours, img = timed(lambda c=c, v=view: render.render(c, view=v, size=512), args.repeat)
-            t_base, hit = timed(lambda c=c, v=view: numpy_trace(c, v, 512), 1)
+            t_ours, img = timed(partial(render.render, c, view=view, size=512), args.repeat)
+            t_base, hit = timed(partial(numpy_trace, c, view, 512), 1)
             agree = float(((img != 255).any(-1).ravel() == hit).mean())
             rows.append((name, grid, f"render {view} 512²", t_ours, "numpy tracer", t_base, agree))
-        t_glb, _ = timed(lambda c=c: export.export_mesh(c, tmp / "a.glb"), args.repeat)
-        t_tm, _ = timed(lambda c=c: to_mesh(c).export(tmp / "b.glb"), args.repeat)
+        t_glb, _ = timed(partial(export.export_mesh, c, tmp / "a.glb"), args.repeat)
+        t_tm, _ = timed(partial(lambda c: to_mesh(c).export(tmp / "b.glb"), c), args.repeat)
         rows.append((name, grid, "export .glb", t_glb, "trimesh .glb", t_tm, None))
         for suf in (".raw", ".png", ".nrrd"):
-            t, _ = timed(lambda c=c, s=suf: export.export_texture(c, tmp / f"t{s}"), args.repeat)
+            t, _ = timed(partial(export.export_texture, c, tmp / f"t{suf}"), args.repeat)
             rows.append((name, grid, f"export {suf}", t, "", None, None))
         for size in (64, 256):
-            t, _ = timed(lambda c=c, s=size: export.resize_grid(c, s), args.repeat)
+            t, _ = timed(partial(export.resize_grid, c, size), args.repeat)
             rows.append((name, grid, f"resample -> {size}", t, "", None, None))
     print(
         f"{'object':<24} {'grid':<12} {'task':<20} {'ours s':>8}  {'baseline':<14} {'s':>8} {'x':>6} {'same px':>8}"
     )
-    for name, grid, task, t, base, tb, agree in rows:
+    for name, grid, task, t, base, tb, same in rows:
         b = f"{tb:8.3f} {tb / t:6.1f}" if tb is not None else f"{'':8} {'':6}"
-        a = f"{agree:8.4f}" if agree is not None else ""
+        a = f"{same:8.4f}" if same is not None else ""
         print(f"{name:<24} {grid:<12} {task:<20} {t:8.3f}  {base:<14} {b} {a}")
 
 

@@ -185,6 +185,20 @@ def test_cli_refuses_bad_options_with_one_line(tmp_path, cli):
     assert_bad_input(cli("batch", tmp_path / "nothing", "-o", tmp_path / "o"), "no such path")
     assert_bad_input(cli("batch", table, "-o", tmp_path / "o", "--export", "stl"), "export")
     assert_bad_input(cli("batch", table, "-o", tmp_path / "o", "--fit", "210cm", "="), "--fit")
+    # import's bounds, both of them, before any object is read
+    for res in ("8", "16385"):
+        bad = cli("batch", table, "-o", tmp_path / "o", "--res", res)
+        assert_bad_input(bad, f"expected --res in [16, 16384], got {res}")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("res", ["16385", "6.5", "many"])
+def test_manifest_res_is_refused_before_work(tmp_path, cli, res):
+    table = data_path("kenney/table.glb")
+    m = tmp_path / "m.csv"
+    m.write_text(f"path,name,res\n{table},ok,32\n{table},bad,{res}\n")
+    bad = cli("batch", m, "-o", tmp_path / "o")
+    assert_bad_input(bad, "res: expected", res)
     assert not (tmp_path / "o").exists()
 
 
@@ -311,6 +325,26 @@ def test_failures_are_recorded_with_one_line_and_others_complete(tmp_path):
     assert after["hog"]["state"] == "failed" and "memory" in after["hog"]["error"]
     assert after["hog"]["attempts"] == "2" and after["stool"] == status["stool"]
     assert retry.returncode == 1
+
+
+def test_recipe_lengths_with_units_convert_per_object(tmp_path):
+    """A recipe's "50cm" is 0.5 on an object in metres; one of unknown units fails, one line."""
+    from partscale import shapes
+
+    table = data_path("kenney/table.glb")
+    grid = tmp_path / "grid.csdf.npz"
+    c = shapes.box((-1, 0, 0), (1, 0.5, 0.3), voxel_size=0.05)
+    partscale.save(c.replace(meta={**c.meta, "units": None}), grid)
+    edit = {"axis": "x", "zone": ["-50cm", "0.5m"], "to": "700mm"}
+    got = run([table, grid], tmp_path / "u", res=32, recipe={"edits": [edit]}, workers=1)
+    numbers = {"axis": "x", "zone": [-0.5, 0.5], "to": 0.7}
+    want = run([table], tmp_path / "n", res=32, recipe={"edits": [numbers]}, workers=1)
+    assert got.done == want.done == ["table"]
+    a = partscale.load(tmp_path / "u" / "table" / "table.csdf.npz")
+    b = partscale.load(tmp_path / "n" / "table" / "table.csdf.npz")
+    assert np.array_equal(a.sdf, b.sdf)
+    ((name, line),) = got.failed
+    assert name == "grid" and "units are unknown" in line and "\n" not in line
 
 
 def test_timeout_stops_a_slow_object(tmp_path):

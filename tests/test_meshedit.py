@@ -243,3 +243,72 @@ def test_obj_in_obj_out_keeps_its_materials(data, tmp_path):
     kd = sorted(tuple(g.visual.material.diffuse[:3]) for g in back.geometry.values())
     want = sorted(tuple(g.visual.material.diffuse[:3]) for g in scene.geometry.values())
     assert kd == want and len(kd) >= 2
+
+
+def _textured_glb(path, rgb, material="material_0"):
+    """A box GLB whose one material (named ``material``) is a 4x4 texture of colour ``rgb``."""
+    from PIL import Image
+
+    box = trimesh.creation.box((1.0, 2.0, 0.5))
+    uv = np.column_stack([box.vertices[:, 0] + 0.5, box.vertices[:, 2] + 0.5]) * 0.5 + 0.25
+    image = Image.new("RGB", (4, 4), rgb)
+    mat = trimesh.visual.material.SimpleMaterial(image=image, name=material)
+    box.visual = trimesh.visual.TextureVisuals(uv=uv, material=mat)
+    trimesh.Scene(box).export(path)
+    return path
+
+
+def _texture_colours(obj):
+    """The texture colours (RGB) of each material of an OBJ loaded back."""
+    back = trimesh.load(obj, force="scene")
+    return [
+        tuple(np.asarray(g.visual.material.image.convert("RGB"))[0, 0])
+        for g in back.geometry.values()
+    ]
+
+
+def test_two_obj_outputs_in_one_folder_keep_their_own_textures(tmp_path):
+    """Companions are named after the output: same-named materials do not overwrite."""
+    from partscale.meshedit import edit_mesh_file
+
+    recipe = Recipe.parse([{"axis": "y", "zone": ["25%", "75%"], "to": "100%"}])
+    red = _textured_glb(tmp_path / "red.glb", (255, 0, 0))
+    blue = _textured_glb(tmp_path / "blue.glb", (0, 0, 255))
+    out = tmp_path / "out"
+    out.mkdir()
+    a = edit_mesh_file(red, out / "a.obj", recipe).written
+    b = edit_mesh_file(blue, out / "b.obj", recipe).written
+    assert [p.name for p in a] == ["a.obj", "a.mtl", "a.png"]
+    assert [p.name for p in b] == ["b.obj", "b.mtl", "b.png"]
+    assert _texture_colours(out / "a.obj") == [(255, 0, 0)]
+    assert _texture_colours(out / "b.obj") == [(0, 0, 255)]
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in a + b)
+
+
+def test_obj_with_several_textures_numbers_them_after_the_output(tmp_path):
+    from partscale.export import save_obj
+
+    scenes = [
+        load_scene(_textured_glb(tmp_path / f"{k}.glb", c, f"m{k}"))
+        for k, c in enumerate([(255, 0, 0), (0, 255, 0)])
+    ]
+    (g0,), (g1,) = (list(s.geometry.values()) for s in scenes)
+    g1 = g1.copy()
+    g1.apply_translation((3.0, 0.0, 0.0))
+    written = save_obj(trimesh.Scene([g0, g1]), tmp_path / "two.obj")
+    assert [p.name for p in written] == ["two.obj", "two.mtl", "two_0.png", "two_1.png"]
+    assert sorted(_texture_colours(written[0])) == [(0, 255, 0), (255, 0, 0)]
+
+
+def test_obj_write_refused_midway_leaves_nothing(tmp_path):
+    """A companion that cannot be written: no OBJ, no other companion, no temporary."""
+    from partscale.errors import InputError
+    from partscale.export import save_obj
+
+    scene = load_scene(_textured_glb(tmp_path / "src.glb", (255, 0, 0)))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a.png").mkdir()  # a directory where the texture goes
+    with pytest.raises(InputError, match=r"a\.png: expected a writable file, got a directory"):
+        save_obj(scene, out / "a.obj")
+    assert [p.name for p in out.iterdir()] == ["a.png"]

@@ -343,3 +343,28 @@ def test_rays_grazing_thin_shelves_reach_the_back_panel(view):
     assert holes == 0
     # and the silhouette is the panel's full square, no row of it missing
     assert rows[-1] - rows[0] + 1 == len(rows)
+
+
+@pytest.mark.parametrize("shape", [(2.0, 0.5, 0.4), (0.4, 2.0, 0.4)])
+def test_bands_picture_is_cropped_to_the_object(shape):
+    """No empty bands: the picture is the object, its bands and axes, a margin, the scale bar."""
+    lo, hi = np.zeros(3), np.array(shape)
+    c = shapes.grid(lambda p: shapes.box_sdf(p, lo, hi), [lo, hi], voxel_size=0.02)
+    size = 400
+    a = 0 if shape[0] > shape[1] else 1
+    image = render.render_bands(c, [(a, 0.5, 1.5, "1 stretch", (0, 158, 115))], size=size)
+    fg = foreground(image)
+    rows, cols = np.flatnonzero(fg.any(axis=1)), np.flatnonzero(fg.any(axis=0))
+    margin = render.BAND_MARGIN * size + 1  # one pixel of rounding
+    assert rows[0] <= margin and len(image) - 1 - rows[-1] <= margin
+    assert cols[0] <= margin and image.shape[1] - 1 - cols[-1] <= margin
+    # the object spans the view's larger side less the render margins: most of the picture
+    obj = (np.ptp(image.astype(int), axis=-1) > 20).any(axis=a)  # coloured, not grey ink
+    assert obj.sum() >= size * (1 - 2 * render.MARGIN) - 2
+    assert obj.sum() >= 0.7 * image.shape[1 - a]
+    # the other side is not padded to a square
+    assert image.shape[a] <= 0.6 * size
+    # and there is no empty band of rows anywhere (between the object and the scale bar either)
+    blank = ~fg.any(axis=1)
+    runs = np.diff(np.flatnonzero(np.concatenate([[True], ~blank, [True]]))) - 1
+    assert runs.max() <= 2 * margin

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -10,7 +11,7 @@ from conftest import assert_bad_input
 
 from partscale import shapes
 from partscale.csdf import load, save
-from partscale.edit import Recipe, apply_recipe, recipe_from_history
+from partscale.edit import JSON_SCHEMA, Recipe, apply_recipe, recipe_from_history
 
 
 @pytest.fixture(scope="module")
@@ -48,6 +49,45 @@ def test_recipe_file_matches_the_library_bit_for_bit(cli, box_file, tmp_path):
     assert np.array_equal(got.sdf, want.sdf) and np.array_equal(got.rgb, want.rgb)
     replay = apply_recipe(load(box_file), recipe_from_history(got, after=load(box_file)))
     assert np.array_equal(got.sdf, replay.sdf)
+
+
+def test_recipe_file_reads_lengths_with_units_as_the_cli_does(cli, box_file, tmp_path):
+    """``"20cm"``, ``"0.5m"``, ``"900mm"`` in a recipe: the same object as 0.2, 0.5, 0.9."""
+    with_units = {"edits": [{"axis": "x", "zone": ["20cm", " 0.5m"], "to": "900mm"}]}
+    rfile = tmp_path / "r.json"
+    rfile.write_text(json.dumps(with_units))
+    out = tmp_path / "r.csdf.npz"
+    proc = cli("scale", box_file, "-o", out, "--recipe", rfile)
+    assert proc.returncode == 0, proc.stderr
+    want = apply_recipe(
+        load(box_file), Recipe.parse([{"axis": "x", "zone": [0.2, 0.5], "to": 0.9}])
+    )
+    assert np.array_equal(load(out).sdf, want.sdf)
+    assert Recipe.parse(with_units, units="m").edits[0].dest == pytest.approx(0.9, abs=1e-12)
+    # the library converts with the object's units too, and the schema admits such positions
+    got = apply_recipe(load(box_file), with_units)
+    assert np.array_equal(got.sdf, want.sdf)
+    unit_pattern = JSON_SCHEMA["$defs"]["position"]["oneOf"][2]["pattern"]
+    assert all(re.match(unit_pattern, v) for v in ("20cm", " 0.5m", "900mm", "+20cm", "2.1m"))
+    assert not any(re.match(unit_pattern, v) for v in ("20ft", "cm", "20%", "20"))
+
+
+@pytest.mark.parametrize(
+    ("position", "meta_units", "fragments"),
+    [
+        ("50ft", "m", ["edits[0].zone[1]", "unit", "'ft'"]),
+        ("50cm", None, ["edits[0].zone[1]", "units are unknown", "cannot be converted"]),
+    ],
+)
+def test_recipe_length_with_a_bad_unit_is_one_line(cli, tmp_path, position, meta_units, fragments):
+    src = tmp_path / "b.csdf.npz"
+    c = shapes.box((0, 0, 0), (1.0, 0.5, 0.3), voxel_size=0.02)
+    save(c.replace(meta={**c.meta, "units": meta_units}), src)
+    rfile = tmp_path / "r.json"
+    rfile.write_text(json.dumps({"edits": [{"axis": "x", "zone": [0.2, position], "to": 0.9}]}))
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(cli("scale", src, "-o", out, "--recipe", rfile), str(rfile), *fragments)
+    assert not out.exists()
 
 
 BAD = [

@@ -424,18 +424,18 @@ def test_plane_cut_slivers_join_the_piece_they_touch_most():
     """A plane across a curved shell leaves slivers at its rim: each one smaller than the
     minimum piece joins the touching piece it has the most contact with; a sliver touching
     nothing, and pieces at the minimum size, stay."""
-    from partscale.segment.fast import _absorb_slivers
+    from partscale.segment import absorb_slivers
 
     lab = np.zeros((12, 6, 6), np.int32)
     lab[0:5, :, :] = 1  # 180 voxels
     lab[5:10, :, :] = 2  # 180 voxels
     lab[5, 0:2, 0:2] = 3  # 4 voxels, touching 1 (4 faces) and 2 (8 faces)
     lab[11, 0:3, 0:3] = 4  # 9 voxels touching nothing
-    out = _absorb_slivers(lab.copy(), 4, min_size=8)
+    out = absorb_slivers(lab.copy(), 4, min_size=8)
     assert (out[lab == 3] == 2).all()
     assert (out[lab == 4] == 4).all()
     assert np.array_equal(out[(lab == 1) | (lab == 2)], lab[(lab == 1) | (lab == 2)])
-    assert np.array_equal(_absorb_slivers(lab.copy(), 4, min_size=4), lab)
+    assert np.array_equal(absorb_slivers(lab.copy(), 4, min_size=4), lab)
 
 
 def _poison(entry, how):

@@ -800,6 +800,40 @@ def test_suggest_snap_and_fit_are_the_zones_functions_on_the_current_object(tmp_
         assert after != y
 
 
+def test_snap_uses_the_candidates_the_server_found_for_suggest(tmp_path, monkeypatch):
+    """/api/snap snaps to the cached /api/suggest candidates: found once, not again."""
+    import dataclasses
+
+    from partscale import zones
+
+    path = shelf_file(tmp_path)
+    found = []
+    real = zones.suggest
+
+    def doubled(c, axis=None, **kw):
+        # a tile period the shelf does not have: a snap to it can only come from this cache
+        out = [
+            dataclasses.replace(k, period=2 * k.period) if k.kind == "tile" else k
+            for k in real(c, axis, **kw)
+        ]
+        found.append((axis, out))
+        return out
+
+    monkeypatch.setattr(zones, "suggest", doubled)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        client.get("/api/suggest?axis=y")
+        naive = {"axis": "y", "zone": [0.4, 0.8], "to": 1.0, "mode": "tile"}
+        r = post(client, "/api/snap", naive)
+        assert r.status_code == 200, r.text
+        post(client, "/api/snap", naive)
+    assert [axis for axis, _ in found] == ["y"]
+    c = partscale.load(path)
+    want, _ = zones.snap(c, naive, candidates=found[0][1])
+    assert r.json()["edit"] == want.to_json()
+    zone = r.json()["edit"]["zone"]
+    assert abs((zone[1] - zone[0]) - 0.6) <= H  # twice the boards' pitch
+
+
 @pytest.mark.parametrize(
     "url, body, words",
     [
@@ -808,6 +842,8 @@ def test_suggest_snap_and_fit_are_the_zones_functions_on_the_current_object(tmp_
         ("/api/snap", {"axis": "q", "zone": [0.3, 0.6], "to": 0.7}, "axis"),
         ("/api/fit", {"size": ["=", "0", "="]}, "positive length"),
         ("/api/fit", {"size": ["=", "3furlongs", "="]}, "size y"),
+        # named as the other size messages are (not "size along y")
+        ("/api/fit", {"size": ["=", "5cm", "="]}, "size y: expected at least"),
         ("/api/fit", {"size": ["=", "="]}, "fit: expected"),
         ("/api/fit", {"size": ["=", "=", "="]}, "got the current size"),
         ("/api/fit", ["=", "=", "="], "fit: expected"),

@@ -524,9 +524,9 @@ def test_fit_reaches_each_suite_length_no_worse_than_the_hand_zone(real):
     from dataclasses import replace
 
     from partscale.edit import resolve_edit
+    from partscale.evaluate import failures_of, winners, zones_from_history
+    from partscale.evaluate import metric_score as _score
     from partscale.evaluate import metrics as M
-    from partscale.evaluate import zones_from_history
-    from partscale.evaluate.report import _score, failures_of, winners
     from partscale.evaluate.suite import Entry, fit_recipe
 
     objs = json.loads((ROOT / "eval" / "suite.json").read_text())["objects"]
@@ -563,8 +563,7 @@ def test_snapped_naive_zone_on_the_mirrored_drawers_runs_boundary_to_boundary(re
     """The drawers repeat mirrored (handles face the divider): a 40-60 % tile zone snaps to one
     drawer and the divider, both planes on the ends of an element (within a voxel), not
     through a drawer (the layer-matching phase put them at 34.3-78.4 %)."""
-    from partscale.zones import profile
-    from partscale.zones.suggest import find_bounded_repeats
+    from partscale.zones import find_bounded_repeats, profile
 
     rel, ax, _ = PERIODS["drawers"]
     c = real(rel)

@@ -239,11 +239,15 @@ def scale_bar_label(length: float, units: str) -> str:
     return f"{length:g} {units}"
 
 
-def _draw_scale_bar(image: np.ndarray, cam: Camera, units: str, background) -> np.ndarray:
+def _draw_scale_bar(
+    image: np.ndarray, cam: Camera, units: str, background, *, max_px: float | None = None
+) -> np.ndarray:
+    """``image`` with a scale bar at its bottom left, at most ``max_px`` (default a quarter of
+    the camera's image) long; sized by the camera's image, placed by ``image``'s height."""
     from PIL import Image, ImageDraw, ImageFont
 
     size = cam.size
-    length = _nice_length(0.25 * size / cam.scale)
+    length = _nice_length((0.25 * size if max_px is None else max_px) / cam.scale)
     px = round(length * cam.scale)
     label = scale_bar_label(length, units)
     ink = (0, 0, 0) if sum(background) > 3 * 128 else (255, 255, 255)
@@ -251,7 +255,7 @@ def _draw_scale_bar(image: np.ndarray, cam: Camera, units: str, background) -> n
     draw = ImageDraw.Draw(im)
     font = ImageFont.load_default(size=max(10, size // 32))
     x0 = max(4, size // 25)
-    y1 = size - max(4, size // 25)
+    y1 = image.shape[0] - max(4, size // 25)
     thick = max(2, size // 128)
     draw.rectangle([x0, y1 - thick, x0 + px, y1], fill=ink)
     for x in (x0, x0 + px):
@@ -381,6 +385,8 @@ def save_png(image: np.ndarray, path: str | os.PathLike) -> Path:
     return path
 
 
+#: Margin (a fraction of the image size) :func:`render_bands` keeps around what it draws.
+BAND_MARGIN = 0.025
 #: Opacity of the bands :func:`render_bands` draws.
 BAND_ALPHA = 0.28
 
@@ -402,23 +408,29 @@ def render_bands(
     view: str = "front",
     size: int = 640,
 ) -> np.ndarray:
-    """(size, size, 3) uint8: ``csdf`` rendered from ``view`` with translucent bands, axes with
+    """(H, W, 3) uint8: ``csdf`` rendered from ``view`` with translucent bands, axes with
     ticks in object units along the frame's bottom and left edges, and a scale bar.
 
     ``bands``: ``(axis, lo, hi, label, colour)`` tuples (axis 0-2, world ``lo``/``hi`` along it,
     a short label, sRGB colour), the first drawn on top; those along an axis the view does not
-    show are skipped (:class:`~partscale.errors.InputError` when none is left).
+    show are skipped (:class:`~partscale.errors.InputError` when none is left). The object's
+    larger side spans ``size`` less :data:`MARGIN`; the picture is cropped to the object, its
+    bands and axes with a margin of :data:`BAND_MARGIN` of ``size``, the scale bar below it.
     """
     from PIL import Image, ImageDraw, ImageFont
 
     frame = csdf.surface_bounds()
-    image = render(csdf, view=view, size=size, scale_bar=True)
-    cam = camera(view, frame, size, reserve_bottom=SCALE_BAR_BAND)
+    white = (255, 255, 255)
+    cam = camera(view, frame, size)
+    # drawn on a wider canvas (labels beside the frame never fall off it), then cropped
+    border = size // 8
+    image = render(csdf, view=view, size=size, background=white)
+    image = np.pad(image, ((border, border), (border, border), (0, 0)), constant_values=255)
     units = csdf.meta.get("units") or ""
 
     def pixel(p: np.ndarray) -> tuple[float, float]:
         d = p - cam.centre
-        return size / 2 + (d @ cam.right) * cam.scale, size / 2 - cam.shift - (
+        return border + size / 2 + (d @ cam.right) * cam.scale, border + size / 2 - cam.shift - (
             d @ cam.up
         ) * cam.scale
 
@@ -468,4 +480,17 @@ def render_bands(
             draw.text((x1, y1 + 6 + size // 40), label, fill=ink, font=font, anchor="ra")
         else:
             draw.text((x0 + 4, y0 - 4), label, fill=ink, font=font, anchor="ld")
-    return np.asarray(Image.alpha_composite(im, over).convert("RGB"))
+    # crop to what is drawn (the object lies in the frame) and a margin, the scale bar below
+    drawn = over.getbbox() or (x0, y0, x1, y1)
+    pad = round(BAND_MARGIN * size)
+    left, top = max(0, round(min(drawn[0], x0)) - pad), max(0, round(min(drawn[1], y0)) - pad)
+    right = min(im.width, round(max(drawn[2], x1)) + pad)
+    bottom = min(im.height, round(max(drawn[3], y1)) + pad)
+    out = np.asarray(Image.alpha_composite(im, over).convert("RGB"))[top:bottom, left:right]
+    # the bar and its label within the picture's width, cropped to its rows too
+    bar = min(0.25 * size, 0.8 * out.shape[1] - max(4, size // 25))
+    strip = np.full((size // 4, out.shape[1], 3), 255, np.uint8)
+    strip = _draw_scale_bar(strip, cam, csdf.meta.get("units", "m"), white, max_px=bar)
+    rows = np.flatnonzero((strip != 255).any(axis=(1, 2)))
+    strip = strip[max(0, rows[0] - pad // 2) : rows[-1] + 1 + pad]
+    return np.concatenate([out, strip])

@@ -9,6 +9,7 @@ JSON-able dict whose hash (:func:`options_hash`) decides whether a finished obje
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -47,13 +48,14 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
     checked, canonical values (the recipe's content, not its path). ``where`` names the object
     in error messages.
     """
+    from ..ingest import check_res
+
     merged = {**batch, **row}
-    try:
-        res = int(merged.get("res", 128))
-    except (TypeError, ValueError):
-        raise InputError(f"{where}: res: expected an integer, got {merged.get('res')!r}") from None
-    if isinstance(merged.get("res"), bool) or res < 16:
-        raise InputError(f"{where}: res: expected an integer >= 16, got {merged.get('res')!r}")
+    res = merged.get("res", 128)
+    if isinstance(res, str):
+        with contextlib.suppress(ValueError):
+            res = int(res.strip())
+    res = check_res(res, f"{where}: res")  # import's own bounds, checked before any work
 
     seg = merged.get("segment")
     if isinstance(seg, bool):
@@ -74,12 +76,7 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
     if recipe is not None and fit is not None:
         raise InputError(f"{where}: expected a recipe or a fit, got both")
     if recipe is not None:
-        from ..edit import Recipe
-
-        rec = (
-            Recipe.load(recipe) if isinstance(recipe, (str, os.PathLike)) else Recipe.parse(recipe)
-        )
-        recipe = rec.to_json()
+        recipe = _recipe_json(recipe)
     if fit is not None:
         size = fit.split() if isinstance(fit, str) else list(fit)
         if len(size) != 3:
@@ -123,6 +120,25 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
     }
 
 
+def _recipe_json(recipe: Any) -> Any:
+    """A recipe (a file's path or its JSON) checked, as the spec holds it: canonical JSON, or as
+    given where it has lengths with a unit (``"30cm"``), which only each object's units convert
+    (in :func:`run_job`; an object not in metres refuses them there)."""
+    from .._files import read_json
+    from ..edit import Recipe
+
+    path = Path(recipe) if isinstance(recipe, str | os.PathLike) else None
+    raw = read_json(path, what="a recipe JSON file") if path is not None else recipe
+    try:
+        try:
+            return Recipe.parse(raw).to_json()
+        except InputError:
+            Recipe.parse(raw, units="m")  # valid for an object in metres: kept as given
+            return raw
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}" if path is not None else str(exc)) from None
+
+
 def options_hash(spec: dict[str, Any]) -> str:
     """SHA-256 (hex) of the spec's canonical JSON."""
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()
@@ -137,7 +153,7 @@ def run_job(
     there. Raises what the stages raise (:class:`InputError` for bad input).
     """
     from ..csdf import load as load_csdf
-    from ..edit import Recipe, apply_recipe
+    from ..edit import apply_recipe
     from ..ingest import load
 
     path, outdir = Path(path), Path(outdir)
@@ -152,7 +168,7 @@ def run_job(
 
         c = segment(c, method=spec["segment"], cache=False)
     if spec["recipe"]:
-        c = apply_recipe(c, Recipe.parse(spec["recipe"]))
+        c = apply_recipe(c, spec["recipe"])  # parsed with the object's units
     if spec["fit"]:
         c = _fit(c, spec["fit"])
     written: list[Path] = []

@@ -18,7 +18,9 @@ stderr = Console(stderr=True)
 state = {"verbose": False}
 
 #: ``--res`` of the commands that import (``import``, ``batch``): one declaration, one help text.
-Res = Annotated[int, typer.Option("--res", help="Voxels along the object's longest side (>= 16).")]
+Res = Annotated[
+    int, typer.Option("--res", help="Voxels along the object's longest side (16 to 16384).")
+]
 
 
 @contextlib.contextmanager

@@ -82,8 +82,9 @@ def scale(
             raise InputError(
                 f"--recipe: expected alone (modes are in the recipe), got it with {', '.join(given)}"
             )
-        rec = Recipe.load(recipe)
         c = None if mesh_route else load(src)
+        # positions with a unit ("30cm") in the object's units: a mesh route's are metres
+        rec = Recipe.load(recipe, units="m" if c is None else c.meta.get("units"))
     else:
         missing = [n for n, v in (("--axis", axis), ("--zone", zone)) if v is None]
         if not dest_given:

@@ -14,7 +14,10 @@ tile), and its destination keeps its change ``DEST - END``. An EDIT is::
 
 Positions are numbers in the object's units (metres for glTF) or strings with a ``%`` suffix:
 percent of the object's extent along that axis, measured on the solid's bounding box
-(``"0%"`` = its min, ``"100%"`` = its max) of the recipe's input.
+(``"0%"`` = its min, ``"100%"`` = its max) of the recipe's input; or lengths with a unit
+(``"30cm"``, ``"2.1m"``, ``"300mm"``, as the CLI's ``--zone``/``--to`` read them), converted to
+object units when the recipe is parsed for an object in metres (``units='m'``) and refused
+otherwise.
 
 The 1D maps below (world coordinate after the edit -> world coordinate before) define the modes;
 the Python resampler and the web editor's shader both implement exactly these.
@@ -90,6 +93,10 @@ JSON_SCHEMA: dict[str, Any] = {
             "oneOf": [
                 {"type": "number"},
                 {"type": "string", "pattern": r"^-?[0-9]+(\.[0-9]+)?%$"},
+                {
+                    "type": "string",
+                    "pattern": r"^\s*[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?\s*(mm|cm|m)\s*$",
+                },
             ]
         }
     },
@@ -139,8 +146,9 @@ class Edit:
     mode: str = "stretch"
 
     @classmethod
-    def parse(cls, obj: Any, *, where: str = "edit") -> Edit:
-        """Validate a JSON-like edit (see module docstring)."""
+    def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> Edit:
+        """Validate a JSON-like edit (see module docstring); ``units``: the object's
+        (``meta['units']``), for lengths with a unit (:func:`parse_position`)."""
         if not isinstance(obj, dict):
             raise InputError(
                 f"{where}: expected an object with axis, zone, to, mode; got {shown(obj)}"
@@ -166,9 +174,9 @@ class Edit:
             raise InputError(f"{where}.zone: expected [START, END], got {shown(zone)}")
         return cls(
             axis=axis,
-            start=parse_position(zone[0], f"{where}.zone[0]"),
-            end=parse_position(zone[1], f"{where}.zone[1]"),
-            dest=parse_position(obj["to"], f"{where}.to"),
+            start=parse_position(zone[0], f"{where}.zone[0]", units),
+            end=parse_position(zone[1], f"{where}.zone[1]", units),
+            dest=parse_position(obj["to"], f"{where}.to", units),
             mode=mode,
         )
 
@@ -202,7 +210,9 @@ class Recipe:
     edits: tuple[Edit, ...] = field(default_factory=tuple)
 
     @classmethod
-    def parse(cls, obj: Any) -> Recipe:
+    def parse(cls, obj: Any, *, units: str | None = None) -> Recipe:
+        """Validate a JSON-like recipe (see module docstring); ``units``: the object's
+        (``meta['units']``) where positions with a unit (``'30cm'``) are to be converted."""
         if isinstance(obj, list):
             obj = {"edits": obj}
         if not isinstance(obj, dict) or "edits" not in obj:
@@ -221,14 +231,17 @@ class Recipe:
             raise InputError(f"recipe: expected a non-empty list of edits, got {shown(edits)}")
         if len(edits) > MAX_EDITS:
             raise InputError(f"recipe: expected at most {MAX_EDITS} edits, got {len(edits)}")
-        return cls(tuple(Edit.parse(e, where=f"edits[{i}]") for i, e in enumerate(edits)))
+        return cls(
+            tuple(Edit.parse(e, where=f"edits[{i}]", units=units) for i, e in enumerate(edits))
+        )
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> Recipe:
+    def load(cls, path: str | os.PathLike, *, units: str | None = None) -> Recipe:
+        """Read and validate a recipe JSON file (:meth:`parse`); errors name the file."""
         path = Path(path)
         obj = read_json(path, what="a recipe JSON file")
         try:
-            return cls.parse(obj)
+            return cls.parse(obj, units=units)
         except InputError as exc:
             raise InputError(f"{path}: {exc}") from None
 

@@ -257,7 +257,7 @@ def apply_recipe(
     place in the recipe (``recipe_step``).
     """
     if not isinstance(recipe, Recipe):
-        recipe = Recipe.parse(recipe)
+        recipe = Recipe.parse(recipe, units=csdf.meta.get("units"))
     n = len(recipe.edits)
     bounds = csdf.surface_bounds() if n else None
     applied: list[tuple[int, dict[str, Any]]] = []  # (axis, forward-map arguments)
@@ -291,7 +291,7 @@ def recipe_shape(csdf: CSDF, recipe: Recipe | dict[str, Any] | list) -> tuple[in
     Positions are not validated here (the edit does that); the shape never drops below 1.
     """
     if not isinstance(recipe, Recipe):
-        recipe = Recipe.parse(recipe)
+        recipe = Recipe.parse(recipe, units=csdf.meta.get("units"))
     h = csdf.voxel_size
     shape = list(csdf.shape)
     bounds = csdf.surface_bounds()

@@ -5,11 +5,13 @@
 - :mod:`.compare`: an edited file (or a recipe) against its original, zones from its history
   (``partscale eval --original A --edited B``).
 - :mod:`.suite`: every suite object in every mode, with figures and tables (``partscale eval``).
+- :func:`metric_score`, :func:`failures_of`, :func:`winners`: how the suite's report scores a
+  result on one metric, lists its failures (:data:`CRITERIA` thresholds) and picks the best modes.
 """
 
 from .compare import score_edit
 from .metrics import Reference, Zone, Zones, evaluate, zones_from_history
-from .report import CRITERIA
+from .report import CRITERIA, failures_of, metric_score, winners
 from .suite import COMPARED_MODES, RECIPE_MODES, Suite, SuiteResult, load_suite, run_suite
 
 __all__ = [
@@ -22,8 +24,11 @@ __all__ = [
     "Zone",
     "Zones",
     "evaluate",
+    "failures_of",
     "load_suite",
+    "metric_score",
     "run_suite",
     "score_edit",
+    "winners",
     "zones_from_history",
 ]

@@ -73,8 +73,12 @@ def _rows(result: SuiteResult) -> list[dict[str, Any]]:
     return [row for obj in result.objects for row in obj.rows]
 
 
-def _score(metric: str, row: dict[str, Any], original: dict[str, Any]) -> float:
-    """Lower is better; NaN where not measured, and for a mode that failed to run (never wins)."""
+def metric_score(metric: str, row: dict[str, Any], original: dict[str, Any]) -> float:
+    """One result's score on ``metric`` (a :data:`CRITERIA` key), as the suite compares modes.
+
+    Lower is better; NaN where not measured, and for a mode that failed to run (never wins).
+    ``pieces`` scores the pieces beyond those expected (``original``'s count by default).
+    """
     if row.get("error"):
         return math.nan
     if metric == "pieces":
@@ -91,7 +95,7 @@ def failures_of(row: dict[str, Any], original: dict[str, Any]) -> list[str]:
         return ["error"]
     out = []
     for metric, (_, _, threshold) in CRITERIA.items():
-        v = _score(metric, row, original)
+        v = metric_score(metric, row, original)
         if metric == "sdf_err_mean":  # judged against what the import itself achieved
             v = v - _num(original.get("sdf_err_mean"))
         if math.isfinite(v) and v > threshold:
@@ -104,7 +108,7 @@ def failures_of(row: dict[str, Any], original: dict[str, Any]) -> list[str]:
 def winners(rows: list[dict[str, Any]], metric: str, original: dict[str, Any]) -> list[str]:
     """Modes whose score is within the metric's tie tolerance (or 10 %) of the best."""
     tol = CRITERIA[metric][1]
-    scores = {r["mode"]: _score(metric, r, original) for r in rows}
+    scores = {r["mode"]: metric_score(metric, r, original) for r in rows}
     finite = {m: s for m, s in scores.items() if math.isfinite(s)}
     if not finite:
         return []

@@ -9,7 +9,8 @@ Meshes (:func:`export_mesh`, :data:`MESH_WRITERS`): marching cubes of the zero l
   the layout trimesh reads too), normals from the SDF gradient; with an atlas, ``TEXCOORD_0`` and
   an embedded ``baseColorTexture`` instead.
 - ``.ply``, ``.obj`` (``mesh``): sRGB vertex colours; PLY also a ``parts`` vertex property; OBJ
-  with an atlas: ``NAME.mtl`` + ``NAME.png`` beside it.
+  with an atlas: ``NAME.mtl`` + ``NAME.png`` beside it. :func:`save_obj` is partscale's one OBJ
+  writer (the mesh route's too): companions named after the output, all written atomically.
 
 Budgets (``simplify``): ``faces=N`` or ``error=E`` voxels decimate the surface with
 meshoptimizer. Atlases (``atlas``): xatlas charts, the CSDF's colour baked per texel and padded.
@@ -24,6 +25,7 @@ meshoptimizer. Atlases (``atlas``): xatlas charts, the CSDF's colour baked per t
 """
 
 from .atlas import ATLAS_SIZES, DEFAULT_ATLAS, bake, check_atlas, unwrap
+from .mesh import save_obj
 from .resize import PRESET_SIZES, check_size, resize_grid
 from .simplify import check_budget, simplify
 from .textures import (
@@ -68,6 +70,7 @@ __all__ = [
     "flipbook_layout",
     "read_texture",
     "resize_grid",
+    "save_obj",
     "simplify",
     "unwrap",
 ]

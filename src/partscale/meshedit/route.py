@@ -339,7 +339,7 @@ def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
     return s, e, d
 
 
-def apply_recipe_to_scene(scene, recipe: Recipe) -> tuple[object, list[Seam]]:
+def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh.Scene, list[Seam]]:
     """Apply ``recipe`` to a trimesh Scene's meshes; returns the edited copy and its tile seams.
 
     Parameters
@@ -463,7 +463,7 @@ def _to_trimesh(inst: _Instance):
     return mesh
 
 
-def load_scene(path: str | os.PathLike):
+def load_scene(path: str | os.PathLike) -> trimesh.Scene:
     """A mesh file as a trimesh Scene, vertices exactly as stored (no merging or reordering)."""
     import trimesh
 
@@ -479,9 +479,13 @@ def load_scene(path: str | os.PathLike):
     return scene
 
 
-def save_scene(scene, path: str | os.PathLike) -> list[Path]:
-    """Write ``scene`` (GLB; OBJ with its MTL and textures beside it; PLY), atomically."""
+def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
+    """Write ``scene`` (GLB; PLY; OBJ via :func:`partscale.export.save_obj`), atomically.
+
+    Returns the files written: the mesh, then an OBJ's MTL and textures (named after it).
+    """
     from .._files import atomic_path
+    from ..export import save_obj
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -490,27 +494,16 @@ def save_scene(scene, path: str | os.PathLike) -> list[Path]:
             f"{path}: expected an output mesh ({', '.join(OUTPUT_SUFFIXES)}), got "
             f"{suffix or 'no suffix'}"
         )
-    written = [path]
+    if suffix == ".obj":
+        # the scene itself, not one concatenated mesh: one usemtl group per material
+        return save_obj(scene, path)
     if suffix == ".glb":
         data = scene.export(file_type="glb")
-    elif suffix == ".ply":
-        data = scene.to_mesh().export(file_type="ply", encoding="binary")
     else:
-        from trimesh.exchange.obj import export_obj
-
-        # the scene itself, not one concatenated mesh: one usemtl group per material
-        text, extra = export_obj(
-            scene, include_texture=True, return_texture=True, mtl_name=path.stem + ".mtl"
-        )
-        data = text.encode()
-        for name, blob in extra.items():
-            target = path.parent / name
-            with atomic_path(target) as tmp:
-                tmp.write_bytes(blob)
-            written.append(target)
+        data = scene.to_mesh().export(file_type="ply", encoding="binary")
     with atomic_path(path) as tmp:
         Path(tmp).write_bytes(data)
-    return written
+    return [path]
 
 
 @dataclass(frozen=True)

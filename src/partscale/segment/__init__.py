@@ -2,15 +2,18 @@
 
 ``fast`` (the default) cuts the voxel solid at its concave creases and merges convex neighbours;
 CoACD on the marching-cubes surface is the reference method it is measured against. Results are cached by grid content and parameters, so each object is
-segmented once, never per edit.
+segmented once, never per edit. :func:`absorb_slivers`: the step that joins pieces below a
+minimum size to their neighbour (the fast method's, usable on any label grid).
 """
 
 from .api import DEFAULT_METHOD, METHODS, cache_key, check_method, default_cache_dir, segment
 from .concavity import concavity, hull_concavity, part_concavities
+from .fast import absorb_slivers
 
 __all__ = [
     "DEFAULT_METHOD",
     "METHODS",
+    "absorb_slivers",
     "cache_key",
     "check_method",
     "concavity",

@@ -218,7 +218,7 @@ def _plane_pieces(mask: np.ndarray, min_size: int = 0) -> list[tuple[np.ndarray,
         comp, m = ndimage.label(h, structure=_FULL)
         lab[comp > 0] = comp[comp > 0] + n
         n += m
-    lab = _absorb_slivers(lab, n, min_size)
+    lab = absorb_slivers(lab, n, min_size)
     pieces = []
     for sl_i, sl in enumerate(ndimage.find_objects(lab), start=1):
         if sl is not None:
@@ -226,10 +226,14 @@ def _plane_pieces(mask: np.ndarray, min_size: int = 0) -> list[tuple[np.ndarray,
     return pieces
 
 
-def _absorb_slivers(lab: np.ndarray, n: int, min_size: int) -> np.ndarray:
-    """Join pieces smaller than ``min_size`` voxels to the touching piece they share the most
-    voxels of contact with. A plane across a curved shell leaves slivers at its rim; as parts of their own
-    they would only be merged back later, at a far higher cost."""
+def absorb_slivers(lab: np.ndarray, n: int, min_size: int) -> np.ndarray:
+    """(X, Y, Z) int labels ``1..n`` (0: none) with each piece smaller than ``min_size`` voxels
+    joined to the touching piece it shares the most voxels of contact with, in place.
+
+    A plane across a curved shell leaves slivers at its rim; as parts of their own they would
+    only be merged back later, at a far higher cost. A sliver touching no piece stays. Returns
+    ``lab`` (changed) for chaining.
+    """
     if n < 2 or min_size <= 1:
         return lab
     size = np.bincount(lab.ravel(), minlength=n + 1)

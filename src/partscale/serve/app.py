@@ -402,20 +402,25 @@ def create_app(
         written = await _run("save", lambda: session.save(overwrite=overwrite, revision=revision))
         return state(saved=written.name)
 
-    # suggestions of the current object: one entry per (object, axis), the last few kept
-    suggested: dict[tuple[int, str], tuple[Any, list[dict]]] = {}
+    # suggestions of the current object: one entry per (object, axis), the last few kept; the
+    # object is held with them so its id is not reused while they are
+    suggested: dict[tuple[int, str], tuple[Any, list[zones.Candidate]]] = {}
+    suggested_lock = threading.Lock()  # /api/suggest and /api/snap run in worker threads
 
-    def _suggest(axes: list[str]) -> list[dict]:
-        c = session.current
-        out: list[dict] = []
-        for ax in axes:
+    def _candidates(c: Any, ax: str) -> list[zones.Candidate]:
+        with suggested_lock:
             hit = suggested.get((id(c), ax))
-            if hit is None:
-                hit = (c, [k.to_json() for k in zones.suggest(c, ax)])
+        if hit is None:
+            hit = (c, zones.suggest(c, ax))
+            with suggested_lock:
                 suggested[(id(c), ax)] = hit
                 while len(suggested) > 9:
                     del suggested[next(iter(suggested))]
-            out += hit[1]
+        return hit[1]
+
+    def _suggest(axes: list[str]) -> list[dict]:
+        c = session.current
+        out = [k.to_json() for ax in axes for k in _candidates(c, ax)]
         return sorted(out, key=lambda k: -k["score"])
 
     async def suggest(request: Request) -> Response:
@@ -427,7 +432,10 @@ def create_app(
 
     def _snap(body: Any) -> dict[str, Any]:
         c = session.current
-        edit, moves = zones.snap(c, Edit.parse(body))
+        edit = Edit.parse(body)
+        # the candidates /api/suggest found (or finds now, for both): computed once per object
+        cands = None if edit.mode == "global" else _candidates(c, edit.axis)
+        edit, moves = zones.snap(c, edit, candidates=cands)
         return {
             "edit": edit.to_json(),
             "moves": [m.to_json() for m in moves],

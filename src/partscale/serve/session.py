@@ -266,7 +266,8 @@ class EditSession:
         """
         from ..edit import Recipe, apply_recipe, recipe_shape
 
-        parsed = Recipe.parse(recipe) if not isinstance(recipe, Recipe) else recipe
+        units = self.current.meta.get("units")  # for positions with a unit ("30cm")
+        parsed = recipe if isinstance(recipe, Recipe) else Recipe.parse(recipe, units=units)
         with self.lock:
             if limits is not None:
                 limits.check(recipe_shape(self.current, parsed), "apply")

@@ -5,29 +5,34 @@ Public API
 - :func:`suggest` ``(csdf, axis=None) -> list[Candidate]``: zone candidates, best first:
   ``tile`` (one period of a repeated element, planes in the gaps) and ``stretch`` (a slab of
   constant cross-section).
-- :func:`snap` ``(csdf, edit, mode=None) -> (Edit, list[Move])``: a user's planes moved to the
-  nearest good position for the mode; :func:`describe_moves`, :func:`record_snap`.
+- :func:`snap` ``(csdf, edit, mode=None, *, candidates=None) -> (Edit, list[Move])``: a user's
+  planes moved to the nearest good position for the mode (``candidates``: those a caller found
+  already, as the editor's server does); :func:`describe_moves`, :func:`record_snap`.
 - :func:`fit` ``(csdf, size) -> (Recipe, list[str])``: the recipe reaching a target extent
   (tile whole periods, absorb the rest in a constant slab, global only as a last resort).
 - :func:`parse_size`, :func:`parse_length`: ``=``, ``2.1``, ``210cm``, ``2100mm``, ``+20cm``,
   ``-5cm``, ``120%`` (re-exported from :mod:`partscale.edit`, their one home, beside
   :func:`partscale.edit.parse_position`).
-- :func:`profile`, :class:`Profile`: the per-layer cross-sections all of it is built on.
+- :func:`profile`, :class:`Profile`: the per-layer cross-sections all of it is built on;
+  :func:`find_bounded_repeats` ``(profile) -> list[BoundedRepeat]``: the elements repeated
+  between boards or gaps that the weaker of the two tile detectors finds (layer indices).
 """
 
 from ..edit import parse_length, parse_size
 from .fit import fit, fit_axis
 from .profile import Profile, profile
 from .snap import Move, describe_moves, record_snap, snap
-from .suggest import AXES, Candidate, axis_candidates, suggest
+from .suggest import AXES, BoundedRepeat, Candidate, axis_candidates, find_bounded_repeats, suggest
 
 __all__ = [
     "AXES",
+    "BoundedRepeat",
     "Candidate",
     "Move",
     "Profile",
     "axis_candidates",
     "describe_moves",
+    "find_bounded_repeats",
     "fit",
     "fit_axis",
     "parse_length",

@@ -199,7 +199,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
         shrinkable = max(shrinkable, (tiles[0].count - 1) * tiles[0].period)
     if cands and target < extent - shrinkable - h / 2:
         raise InputError(
-            f"size along {name}: expected at least {_fmt(extent - shrinkable, units)} (the rigid "
+            f"size {name}: expected at least {_fmt(extent - shrinkable, units)} (the rigid "
             f"parts' total: what no slab or repeat can give up), got {_fmt(target, units)}"
         )
     edits: list[Edit] = []

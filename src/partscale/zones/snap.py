@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,8 +71,22 @@ def _boundary_start(c: Candidate, near: float, h: float) -> float:
     return float(starts[np.argmin(np.abs(starts - near))])
 
 
-def snap(csdf: CSDF, edit: Edit | dict, mode: str | None = None) -> tuple[Edit, list[Move]]:
+def snap(
+    csdf: CSDF,
+    edit: Edit | dict,
+    mode: str | None = None,
+    *,
+    candidates: Sequence[Candidate] | None = None,
+) -> tuple[Edit, list[Move]]:
     """Snap ``edit``'s planes for ``mode`` (default: the edit's own).
+
+    Parameters
+    ----------
+    candidates : sequence of Candidate, optional
+        ``csdf``'s candidates as :func:`~partscale.zones.suggest` or
+        :func:`~partscale.zones.axis_candidates` returned them (those of other axes are
+        ignored), where a caller has them already (the editor's server caches them); None:
+        found here. Candidates of another object give a wrong snap: they are not checked.
 
     Returns
     -------
@@ -93,10 +108,12 @@ def snap(csdf: CSDF, edit: Edit | dict, mode: str | None = None) -> tuple[Edit, 
         raise InputError(f"zone: expected start < end, got [{s:.6g}, {e:.6g}]")
     if mode == "global":
         return Edit(edit.axis, s, e, d, mode), []
-    p = profile(csdf, ax)
-    h = p.voxel_size
+    h = float(csdf.voxel_size)  # the profile's voxel size
+    p = profile(csdf, ax) if candidates is None else None
+    if candidates is None:
+        candidates = axis_candidates(csdf, ax, prof=p)
     kind = "tile" if mode == "tile" else "stretch"
-    cands = [c for c in axis_candidates(csdf, ax, prof=p) if c.kind == kind]
+    cands = [c for c in candidates if c.kind == kind and c.axis == AXES[ax]]
     if not cands:
         what = "repeated element" if kind == "tile" else "slab of constant cross-section"
         raise InputError(
@@ -115,6 +132,7 @@ def snap(csdf: CSDF, edit: Edit | dict, mode: str | None = None) -> tuple[Edit, 
             # boundary-to-boundary zone, moved by whole periods, keeps every element whole
             s2 = _boundary_start(best, s, h)
         else:
+            p = p if p is not None else profile(csdf, ax)
             lo, hi = (float(v) for v in p.index(np.array(best.region)))
             t = best_phase(p, period / h, lo, hi, near=float(p.index(s)))
             s2 = float(p.world(t))

@@ -229,13 +229,31 @@ def _overlap(a: _Repeat, b: _Repeat) -> float:
 
 
 @dataclass(frozen=True)
-class _Bounded:
-    period: float  # voxels
-    elements: tuple[tuple[float, float], ...]  # (start, end) layer indices
-    err: float  # mean coarse distance between consecutive elements
+class BoundedRepeat:
+    """Elements repeated between boundaries along a profile's axis (:func:`find_bounded_repeats`).
+
+    Attributes
+    ----------
+    period : float
+        The shift carrying one element onto the next, in voxels.
+    elements : tuple of (float, float)
+        Each element's ``(start, end)`` as layer indices (:meth:`Profile.world` gives world).
+    err : float
+        Mean coarse cross-section distance between consecutive elements.
+    mirrored : bool
+        Whether consecutive elements match mirrored (drawers with handles facing a divider).
+    kind : {1, -1}
+        The boundaries: ``1`` boards or dividers, ``-1`` gaps or grooves.
+    start : float
+        The zone's start (layer index): one element and one interior boundary from there.
+    """
+
+    period: float
+    elements: tuple[tuple[float, float], ...]
+    err: float
     mirrored: bool
-    kind: int  # +1 boards, -1 gaps
-    start: float  # zone start (layer index)
+    kind: int
+    start: float
 
 
 def _boundaries(p: Profile) -> list[tuple[int, float, float, float]]:
@@ -266,7 +284,7 @@ def _element_distance(p: Profile, e: tuple[float, float], f: tuple[float, float]
     return p.shifted_distance(i, x - i, coarse=True)
 
 
-def find_bounded_repeats(p: Profile, csdf: CSDF | None = None) -> list[_Bounded]:
+def find_bounded_repeats(p: Profile, csdf: CSDF | None = None) -> list[BoundedRepeat]:
     """Every bounded repeat of ``p`` (see module docstring), best first. ``csdf``: the object
     ``p`` is the profile of, to keep the zone's planes off thin features (see
     :func:`join_islands`)."""
@@ -316,7 +334,7 @@ def find_bounded_repeats(p: Profile, csdf: CSDF | None = None) -> list[_Bounded]
         found += [(kind, c) for si in after for e, nxt in after[si] for c in chains([e], nxt)]
     # longest chains first; sub-chains and multiples of a kept chain's period over it add nothing
     found.sort(key=lambda c: -len(c[1]))
-    out: list[_Bounded] = []
+    out: list[BoundedRepeat] = []
     for kind, chain in found:
         period = chain[1][0] - chain[0][0]
         if any(
@@ -335,7 +353,7 @@ def find_bounded_repeats(p: Profile, csdf: CSDF | None = None) -> list[_Bounded]
 
 def _check_chain(
     p: Profile, chain: list[tuple[float, float]], kind: int, csdf: CSDF | None = None
-) -> _Bounded | None:
+) -> BoundedRepeat | None:
     """The chain as a bounded repeat if its elements are copies joining seamlessly, else None.
 
     The zone starts at an element's start or end: with ``csdf``, those whose joins between
@@ -379,7 +397,7 @@ def _check_chain(
     good = np.flatnonzero(cost <= cost.min() + 0.03)
     mid = (chain[0][0] + chain[-1][1] - period) / 2
     start = float(starts[good[np.argmin(np.abs(starts[good] - mid))]])
-    return _Bounded(period, tuple(chain), float(np.mean(errs)), mirrored, kind, start)
+    return BoundedRepeat(period, tuple(chain), float(np.mean(errs)), mirrored, kind, start)
 
 
 def join_islands(csdf: CSDF, axis: int, start: float, period: float) -> int:

@@ -354,6 +354,7 @@ def apply_plan(
     *,
     keep_thin: float | None = None,
     axis: int = 0,
+    left_out: dict[str, int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Resample axis-first arrays ``(N, A, B)`` by ``plan`` into new ``(N', A, B)`` arrays.
 
@@ -372,7 +373,12 @@ def apply_plan(
       own) against a blended sample more than ``keep_thin`` away on the other side, the dominant
       sample is kept: a thin shelf or sliver on one side of the seam stays whole in its copy
       instead of fading into the other copy's air (or a thin gap into its solid). Where both
-      copies have surface within ``keep_thin`` of each other the blend is as before.
+      copies have surface within ``keep_thin`` of each other the blend is as before;
+    - but where a zone plane cuts an element (a board straddling END or START), the sliver the
+      plane cuts off is left out at every internal seam (:func:`cut_slivers`): the element
+      stays whole once, beyond the last copy (before the first), and no copy gets a loose
+      fragment of it. ``left_out``, when given, gets the voxels left out per plane
+      (``{"start": n, "end": n}``, only where ``n > 0``), for the edit's history.
     """
     m = len(plan.xa)
     out_sdf = lerp_layers(sdf, plan.xa, empty_layers((m, *sdf.shape[1:]), sdf.dtype, axis))
@@ -426,6 +432,15 @@ def apply_plan(
                 c = np.where(drop[..., None], c_other, c)
                 own = out_parts[seam]
                 out_parts[seam] = np.where(drop, crisp_parts(parts, sdf, plan.xb[seam]), own)
+                if left_out is not None:
+                    # a left window's layers read their copy up to END
+                    at_end = (plan.xa[seam] > plan.xb[seam])[:, None, None]
+                    for plane, n in (
+                        ("start", (drop & ~at_end).sum()),
+                        ("end", (drop & at_end).sum()),
+                    ):
+                        if n:
+                            left_out[plane] = int(n)
         out_sdf[seam] = blended
         out_rgb[seam] = c
     return out_sdf, out_rgb, out_parts

@@ -67,9 +67,10 @@ def make_plan(
     (left copy read past END, right copy read before START) over ``seam_voxels`` output voxels
     either side, so the field stays continuous across the seam (METHOD.md step 6). The blend
     alone would fade a feature thinner than that window which exists on one side of the seam
-    only (a shelf just inside a zone plane, the sliver a plane leaves where it cuts a board) or
-    close a gap of about a voxel; :func:`apply_plan` with ``keep_thin`` keeps those whole in the
-    copy they belong to (what :func:`~partscale.edit.apply_edit` does). Planes in the gaps
+    only (a shelf just inside a zone plane) or close a gap of about a voxel; :func:`apply_plan`
+    with ``keep_thin`` keeps those whole in the copy they belong to, and leaves out the sliver a
+    plane cuts off a board that goes on past it (what :func:`~partscale.edit.apply_edit`
+    does). Planes in the gaps
     between repeated elements, or through the middle of one, still give the smoothest seams (both
     continuations agree and the blend changes nothing); ``blend=False`` (what
     :func:`~partscale.edit.naive_edit` uses) concatenates the copies without blending, leaving a

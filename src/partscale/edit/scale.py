@@ -203,8 +203,10 @@ def apply_edit(
     Notes
     -----
     ``tile`` blends the copies across each internal seam; an element on one side of a seam only
-    (a thin shelf next to a zone plane, the sliver a plane leaves where it cuts a board) is kept
-    whole in its copy rather than faded, and ``stretch`` or ``tile`` compressing a slab keeps
+    (a thin shelf next to a zone plane) is kept whole in its copy rather than faded, while the
+    sliver a plane cuts off a board that goes on past it is left out at the inner seams (the
+    board stays whole once, beside the copies; the history's ``slivers_left_out`` counts its
+    voxels per plane), and ``stretch`` or ``tile`` compressing a slab keeps
     elements (and gaps) thinner than the compression, each on at least one voxel (see
     :func:`~partscale.edit.resample.apply_plan`). :func:`naive_edit` concatenates without
     blending and resamples linearly.

@@ -302,11 +302,13 @@ def cut_slivers(
     Returns
     -------
     drop : (S, A, B) bool
-        A sliver's voxels where the other copy has the opposite sign: they take the other copy's
-        sample, so the sliver is left out the same way at every internal seam.
+        A sliver's voxels where the other copy has the opposite sign: :func:`apply_plan` gives
+        them the other copy's sample where the blend would keep the sliver's side, so the
+        sliver is left out the same way at every internal seam.
     hold : (S, A, B) bool
         Voxels across the seam from a sliver where the element's continuation (the other copy)
-        would blend into the layer's own copy: they keep their own sample.
+        has the sign of the sliver and the own copy the other: there the blend keeps the own
+        sample where it would flip it.
     """
     drop = np.zeros(dominant.shape, bool)
     hold = np.zeros(dominant.shape, bool)
@@ -423,7 +425,10 @@ def apply_plan(
             flip = (dominant <= 0) != (blended <= 0)
             keep = flip & (((dominant <= 0) & (other > far)) | ((dominant > 0) & (other < -far)))
             drop, hold = cut_slivers(plan, seam, dominant, other, out_sdf)
-            keep = (keep | hold) & ~drop
+            # only where the blend alone would not do it: the sliver keeps its side (kept, or
+            # no flip), the element's continuation flips the own sample
+            drop &= keep | ~flip
+            keep = (keep | (hold & flip)) & ~drop
             blended = np.where(keep, dominant, blended)
             c = np.where((keep | thinned)[..., None], out_rgb[seam], c)
             if drop.any():

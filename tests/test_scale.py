@@ -324,6 +324,34 @@ def test_tile_keeps_a_thin_shelf_next_to_a_zone_plane(near, copies):
     assert ndimage.label(out.sdf < 0)[1] == 5 + 2 * (copies - 1)
 
 
+@pytest.mark.parametrize("copies", [2, 3])
+@pytest.mark.parametrize("cut", ["start", "end", "both"])
+def test_tile_planes_cutting_boards_leave_no_loose_sliver(cut, copies):
+    """Five loose boards four voxels thick, twelve apart; START cuts the second 1.3 voxels from
+    its end, END the fourth 1.3 voxels past its start (or the plane lies in a gap). Only the
+    third board lies in the zone: each added copy adds exactly one board, and no copy gets a cut
+    board's sliver as a loose piece (the seam keeps thin elements wholly inside a copy, and it
+    used to keep these too); the history says which plane's sliver was left out. With both
+    planes in boards the two slivers meet at each seam and make one board there, as a zone
+    through the middle of two boards does: nothing is left out."""
+    c, boxes = shapes.bars(5, width=4 * H, gap=8 * H, height=0.3, depth=0.2, axis=0, voxel_size=H)
+    start = boxes[1][1][0] - 1.3 * H if cut in ("start", "both") else boxes[2][0][0] - 4 * H
+    end = boxes[3][0][0] + 1.3 * H if cut in ("end", "both") else boxes[2][1][0] + 4 * H
+    out = scale(c, axis="x", zone=(start, end), to=end + (copies - 1) * (end - start), mode="tile")
+    entry = out.meta["history"][-1]
+    assert entry["copies"] == copies
+    boards = 5 + (copies - 1) * (2 if cut == "both" else 1)
+    assert ndimage.label(out.sdf < 0)[1] == boards
+    mesh = to_mesh(out)
+    assert mesh.is_watertight and mesh.body_count == boards
+    assert set(entry.get("slivers_left_out", {})) == (set() if cut == "both" else {cut})
+    # along the boards' middle line every run of solid is a board: none thinner than 2 voxels
+    line = out.sdf[:, out.shape[1] // 2, out.shape[2] // 2] < 0
+    d = np.diff(np.concatenate([[0], line.astype(np.int8), [0]]))
+    runs = np.flatnonzero(d == -1) - np.flatnonzero(d == 1)
+    assert len(runs) == boards and runs.min() >= 2, runs
+
+
 @pytest.mark.parametrize("factor", [0.8, 0.6, 0.45])
 def test_stretch_compression_keeps_slabs_thinner_than_the_compression(factor):
     """Shrinking a zone holding three shelves 0.9 voxel thick: none is skipped by resampling."""

@@ -90,6 +90,26 @@ def test_recipe_length_with_a_bad_unit_is_one_line(cli, tmp_path, position, meta
     assert not out.exists()
 
 
+def test_a_zone_plane_cutting_a_board_is_said_and_recorded(cli, tmp_path):
+    """END cuts the fourth of five boards 1.3 voxels in: the sliver is not repeated at the inner
+    seam, and scale says so on stderr (the plane, where, how much) and in the history."""
+    h = 0.02
+    c, boxes = shapes.bars(5, width=4 * h, gap=8 * h, height=0.3, depth=0.2, voxel_size=h)
+    src = tmp_path / "boards.csdf.npz"
+    save(c, src)
+    start, end = boxes[2][0][0] - 4 * h, boxes[3][0][0] + 1.3 * h
+    out = tmp_path / "o.csdf.npz"
+    to = end + (end - start)
+    proc = cli(
+        "scale", src, "-o", out, "--axis", "x", "--zone", start, end, "--to", to, "--mode", "tile"
+    )
+    assert proc.returncode == 0, proc.stderr
+    said = " ".join(proc.stderr.split())
+    assert "END plane (" in said and "cuts an element" in said and "left out" in said, proc.stderr
+    assert "START plane" not in said
+    assert set(load(out).meta["history"][-1]["slivers_left_out"]) == {"end"}
+
+
 BAD = [
     (["--axis", "w", "--zone", "0.2", "0.5", "--to", "0.7"], ["--axis", "x, y, z"]),
     (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.7", "--mode", "squash"], ["--mode"]),

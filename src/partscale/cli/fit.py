@@ -40,7 +40,7 @@ def fit(
     from .._files import atomic_path
     from ..edit import apply_recipe
     from ..zones import fit as fit_zones
-    from .scale import _MESH_IN, _MESH_OUT
+    from .scale import _MESH_IN, _MESH_OUT, sliver_lines
 
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
@@ -68,6 +68,8 @@ def fit(
         return
     with _common.progress_bar("fit") as bar:
         out = apply_recipe(c, recipe, progress=bar)
+    for line in sliver_lines(out.meta.get("history", [])[-len(recipe.edits) :], out):
+        _common.stderr.print(line, highlight=False, soft_wrap=True)
     save(out, output)
     if recipe_out is not None:
         with atomic_path(recipe_out) as tmp:

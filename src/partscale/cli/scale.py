@@ -123,7 +123,8 @@ def scale(
     assert c is not None  # loaded unless mesh_route
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
-    for line in _voxel_snaps(out.meta.get("history", [])[-len(rec.edits) :], out):
+    entries = out.meta.get("history", [])[-len(rec.edits) :]
+    for line in _voxel_snaps(entries, out) + sliver_lines(entries, out):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     if recipe is None and snap:
         from ..zones import record_snap
@@ -189,6 +190,30 @@ def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
 
 
 AXES_INDEX = {"x": 0, "y": 1, "z": 2}
+
+
+def sliver_lines(entries: list, out) -> list[str]:
+    """A line per tile edit whose zone plane cut an element: the sliver it cut off was left out
+    at the inner seams (history: ``slivers_left_out``, voxels per plane)."""
+    u = f" {out.meta.get('units')}" if out.meta.get("units") else ""
+    lines = []
+    for i, h in enumerate(entries):
+        cut = h.get("slivers_left_out") if isinstance(h, dict) else None
+        if not cut:
+            continue
+        zone = h["edit"]["zone"]
+        planes = " and ".join(
+            f"{p.upper()} plane ({zone[p == 'end']:.6g}{u})" for p in sorted(cut, reverse=True)
+        )
+        voxels = sum(cut.values())
+        where = f"edit {i + 1}: " if len(entries) > 1 else ""
+        lines.append(
+            f"{where}the zone's {planes} cut{'s' if len(cut) == 1 else ''} an element: the "
+            f"sliver cut off ({voxels} voxels) is left out at the inner tile seams, the element "
+            f"stays whole once, beside the copies (recorded in the history; --snap puts the "
+            f"planes in gaps)"
+        )
+    return lines
 
 
 def _voxel_snaps(entries: list, out) -> list[str]:

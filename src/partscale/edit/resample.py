@@ -67,9 +67,10 @@ def make_plan(
     (left copy read past END, right copy read before START) over ``seam_voxels`` output voxels
     either side, so the field stays continuous across the seam (METHOD.md step 6). The blend
     alone would fade a feature thinner than that window which exists on one side of the seam
-    only (a shelf just inside a zone plane, the sliver a plane leaves where it cuts a board) or
-    close a gap of about a voxel; :func:`apply_plan` with ``keep_thin`` keeps those whole in the
-    copy they belong to (what :func:`~partscale.edit.apply_edit` does). Planes in the gaps
+    only (a shelf just inside a zone plane) or close a gap of about a voxel; :func:`apply_plan`
+    with ``keep_thin`` keeps those whole in the copy they belong to, and leaves out the sliver a
+    plane cuts off a board that goes on past it (what :func:`~partscale.edit.apply_edit`
+    does). Planes in the gaps
     between repeated elements, or through the middle of one, still give the smoothest seams (both
     continuations agree and the blend changes nothing); ``blend=False`` (what
     :func:`~partscale.edit.naive_edit` uses) concatenates the copies without blending, leaving a
@@ -281,6 +282,73 @@ def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts
                 out_parts[t, a, b] = src_parts[qb, a, b]
 
 
+def cut_slivers(
+    plan: Plan, seam: np.ndarray, dominant: np.ndarray, other: np.ndarray, out_sdf: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The slivers of elements cut by a zone plane at the tile seams: two (S, A, B) bool masks.
+
+    ``seam`` (S,) are the blend layers of ``plan`` (``beta > 0``), ``dominant`` and ``other``
+    (S, A, B) their samples of the layer's own copy and of the other copy, ``out_sdf``
+    (N', A, B) the resampled layers (next to a blend window: its copy read on). Each copy, read
+    up to its own plane (the left copy up to END, the right one from START), shows in each
+    column a run of solid (or of gap) touching the seam. The run is a *cut sliver* when the
+    copy's continuation past that plane (the ``other`` sample of the nearest layer across the
+    seam) has the same sign, so the element goes on beyond the plane, and the run ends within
+    the blend window on its own side or on the layer next to it. The element it belongs to lies
+    beyond the plane and appears once, next to the last (first) copy; repeated at each internal
+    seam its sliver would be a loose fragment (or a notch). An element lying wholly inside the
+    copy (a thin shelf just inside a plane) has no continuation past the plane: no sliver.
+
+    Returns
+    -------
+    drop : (S, A, B) bool
+        A sliver's voxels where the other copy has the opposite sign: :func:`apply_plan` gives
+        them the other copy's sample where the blend would keep the sliver's side, so the
+        sliver is left out the same way at every internal seam.
+    hold : (S, A, B) bool
+        Voxels across the seam from a sliver where the element's continuation (the other copy)
+        has the sign of the sliver and the own copy the other: there the blend keeps the own
+        sample where it would flip it.
+    """
+    drop = np.zeros(dominant.shape, bool)
+    hold = np.zeros(dominant.shape, bool)
+    # an internal seam's layers: a run reading the left copy (near END, so xa > xb), then,
+    # consecutive, a run reading the right copy
+    left = plan.xa[seam] > plan.xb[seam]
+    first = np.ones(seam.size, bool)
+    first[1:] = (left[1:] != left[:-1]) | (np.diff(seam) != 1)
+    edges = np.append(np.flatnonzero(first), seam.size)
+    for a0, a1, b1 in zip(edges[:-2], edges[1:-1], edges[2:], strict=True):
+        j0, j1 = seam[a0] - 1, seam[b1 - 1] + 1
+        if not left[a0] or left[a1] or seam[a1] != seam[a1 - 1] + 1:
+            continue
+        if j0 < 0 or j1 >= out_sdf.shape[0]:
+            continue
+        lw, rw = slice(a0, a1), slice(a1, b1)
+        for solid in (True, False):
+            mine = (dominant <= 0) == solid
+            theirs = (other <= 0) == solid
+            # per side: its layers from the seam outwards, the copy's continuation past its own
+            # plane (the other side's nearest layer), the layer next to the window
+            for win, across, run, cont, beyond in (
+                (
+                    lw,
+                    rw,
+                    np.logical_and.accumulate(mine[lw][::-1], axis=0)[::-1],
+                    theirs[a1],
+                    out_sdf[j0],
+                ),
+                (rw, lw, np.logical_and.accumulate(mine[rw], axis=0), theirs[a1 - 1], out_sdf[j1]),
+            ):
+                near, whole = (run[-1], run[0]) if win is lw else (run[0], run[-1])
+                col = near & cont & ~(whole & ((beyond <= 0) == solid))
+                if not col.any():
+                    continue
+                drop[win] |= run & col & ~theirs[win]
+                hold[across] |= col & ~mine[across] & theirs[across]
+    return drop, hold
+
+
 def apply_plan(
     sdf: np.ndarray,
     rgb: np.ndarray,
@@ -289,6 +357,7 @@ def apply_plan(
     *,
     keep_thin: float | None = None,
     axis: int = 0,
+    left_out: dict[str, int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Resample axis-first arrays ``(N, A, B)`` by ``plan`` into new ``(N', A, B)`` arrays.
 
@@ -307,7 +376,12 @@ def apply_plan(
       own) against a blended sample more than ``keep_thin`` away on the other side, the dominant
       sample is kept: a thin shelf or sliver on one side of the seam stays whole in its copy
       instead of fading into the other copy's air (or a thin gap into its solid). Where both
-      copies have surface within ``keep_thin`` of each other the blend is as before.
+      copies have surface within ``keep_thin`` of each other the blend is as before;
+    - but where a zone plane cuts an element (a board straddling END or START), the sliver the
+      plane cuts off is left out at every internal seam (:func:`cut_slivers`): the element
+      stays whole once, beyond the last copy (before the first), and no copy gets a loose
+      fragment of it. ``left_out``, when given, gets the voxels left out per plane
+      (``{"start": n, "end": n}``, only where ``n > 0``), for the edit's history.
     """
     m = len(plan.xa)
     out_sdf = lerp_layers(sdf, plan.xa, empty_layers((m, *sdf.shape[1:]), sdf.dtype, axis))
@@ -343,14 +417,36 @@ def apply_plan(
         other = lerp_float(sdf, plan.xb[seam])
         blended = dominant * (1 - b3) + other * b3
         b4 = bt[:, None, None, None]
-        c = lerp_float(rgb, plan.xa[seam]) * (1 - b4) + lerp_float(rgb, plan.xb[seam]) * b4
+        c_other = lerp_float(rgb, plan.xb[seam])
+        c = lerp_float(rgb, plan.xa[seam]) * (1 - b4) + c_other * b4
         c = np.clip(np.rint(c), 0, 255).astype(np.uint8)
         if keep_thin is not None:
             far = np.float32(keep_thin)
             flip = (dominant <= 0) != (blended <= 0)
             keep = flip & (((dominant <= 0) & (other > far)) | ((dominant > 0) & (other < -far)))
+            drop, hold = cut_slivers(plan, seam, dominant, other, out_sdf)
+            # only where the blend alone would not do it: the sliver keeps its side (kept, or
+            # no flip), the element's continuation flips the own sample
+            drop &= keep | ~flip
+            keep = (keep | (hold & flip)) & ~drop
             blended = np.where(keep, dominant, blended)
             c = np.where((keep | thinned)[..., None], out_rgb[seam], c)
+            if drop.any():
+                # a cut sliver is left out: the other copy's sample, colour and part
+                blended = np.where(drop, other, blended)
+                c_other = np.clip(np.rint(c_other), 0, 255).astype(np.uint8)
+                c = np.where(drop[..., None], c_other, c)
+                own = out_parts[seam]
+                out_parts[seam] = np.where(drop, crisp_parts(parts, sdf, plan.xb[seam]), own)
+                if left_out is not None:
+                    # a left window's layers read their copy up to END
+                    at_end = (plan.xa[seam] > plan.xb[seam])[:, None, None]
+                    for plane, n in (
+                        ("start", (drop & ~at_end).sum()),
+                        ("end", (drop & at_end).sum()),
+                    ):
+                        if n:
+                            left_out[plane] = int(n)
         out_sdf[seam] = blended
         out_rgb[seam] = c
     return out_sdf, out_rgb, out_parts

@@ -61,6 +61,8 @@ class _Edited:
     copy_of: dict[int, tuple[int, int]] = field(default_factory=dict)
     #: voxels re-evaluated; None for the naive baseline (no re-evaluation)
     reevaluated: int | None = None
+    #: voxels of cut slivers the tile seams left out, per zone plane ("start", "end")
+    slivers: dict[str, int] = field(default_factory=dict)
 
 
 def _edit_arrays(
@@ -75,6 +77,7 @@ def _edit_arrays(
     src_parts = np.moveaxis(csdf.parts, ax, 0)
     copy_of: dict[int, tuple[int, int]] = {}
     reevaluated = None
+    slivers: dict[str, int] = {}
     if naive:
         out_sdf = lerp_layers(src_sdf, plan.xa)
         out_rgb = lerp_layers(src_rgb, plan.xa)
@@ -84,7 +87,13 @@ def _edit_arrays(
         # the part-aware modes keep elements thinner than the compression or lying at a seam;
         # global stays the plain baseline scaling
         out_sdf, out_rgb, out_parts = apply_plan(
-            src_sdf, src_rgb, src_parts, plan, keep_thin=None if mode == "global" else h, axis=ax
+            src_sdf,
+            src_rgb,
+            src_parts,
+            plan,
+            keep_thin=None if mode == "global" else h,
+            axis=ax,
+            left_out=slivers,
         )
         if mode == "tile":
             o = float(csdf.origin[ax])
@@ -140,6 +149,7 @@ def _edit_arrays(
         plan.scale,
         copy_of,
         reevaluated,
+        slivers,
     )
 
 
@@ -161,6 +171,9 @@ def _history_entry(csdf: CSDF, edit: Edit, r: ResolvedEdit, done: _Edited, op: s
         entry["copies"] = r.n_copies
     if done.reevaluated is not None:
         entry["reevaluated_voxels"] = int(done.reevaluated)
+    if done.slivers:
+        # a zone plane cut an element: its sliver is not repeated at the inner seams
+        entry["slivers_left_out"] = dict(done.slivers)
     return entry
 
 
@@ -190,8 +203,10 @@ def apply_edit(
     Notes
     -----
     ``tile`` blends the copies across each internal seam; an element on one side of a seam only
-    (a thin shelf next to a zone plane, the sliver a plane leaves where it cuts a board) is kept
-    whole in its copy rather than faded, and ``stretch`` or ``tile`` compressing a slab keeps
+    (a thin shelf next to a zone plane) is kept whole in its copy rather than faded, while the
+    sliver a plane cuts off a board that goes on past it is left out at the inner seams (the
+    board stays whole once, beside the copies; the history's ``slivers_left_out`` counts its
+    voxels per plane), and ``stretch`` or ``tile`` compressing a slab keeps
     elements (and gaps) thinner than the compression, each on at least one voxel (see
     :func:`~partscale.edit.resample.apply_plan`). :func:`naive_edit` concatenates without
     blending and resamples linearly.

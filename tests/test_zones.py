@@ -520,8 +520,7 @@ def test_fit_reaches_each_suite_length_no_worse_than_the_hand_zone(real):
     from dataclasses import replace
 
     from partscale.edit import resolve_edit
-    from partscale.evaluate import failures_of, winners, zones_from_history
-    from partscale.evaluate import metric_score as _score
+    from partscale.evaluate import failures_of, metric_score, winners, zones_from_history
     from partscale.evaluate import metrics as M
     from partscale.evaluate.suite import Entry, fit_recipe
 
@@ -551,7 +550,7 @@ def test_fit_reaches_each_suite_length_no_worse_than_the_hand_zone(real):
             continue
         rows = [{**got, "mode": "fit"}, {**hand[best], "mode": best}]
         for k in FIT_METRICS:
-            f, h = _score(k, got, orig), _score(k, hand[best], orig)
+            f, h = metric_score(k, got, orig), metric_score(k, hand[best], orig)
             # the suite's tie rule; an unmeasured hand value still counts against fit
             if math.isfinite(f) and not (math.isfinite(h) and "fit" in winners(rows, k, orig)):
                 worse[(o["name"], k)] = (f, best, h)

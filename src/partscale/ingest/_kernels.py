@@ -230,26 +230,145 @@ def clear_components(todo, seeds, dist, h):
     return flat, root, comp
 
 
+@nb.njit(cache=True)
+def _voronoi(f, n, d, c0, c1, g, out):
+    """One line of Maurer et al.'s exact feature transform, as ``scipy.ndimage`` computes it.
+
+    f : (n, 3) int64 features along the line (``f[i, 0] < 0``: none) after the passes over the
+    axes before ``d``; (c0, c1): the line's coordinates on those axes. Writes each position's
+    nearest feature into ``out`` (n, 3) and returns False where the line has no feature. The
+    same arithmetic and tie rules as scipy's ``_VoronoiFT`` (exact: integers in doubles), so
+    the transform is the same voxel for voxel.
+    """
+    l = -1
+    for ii in range(n):
+        if f[ii, 0] < 0:
+            continue
+        fd = float(f[ii, d])
+        wr = 0.0
+        if d > 0:
+            t = float(f[ii, 0] - c0)
+            wr += t * t
+        if d > 1:
+            t = float(f[ii, 1] - c1)
+            wr += t * t
+        while l >= 1:
+            i1 = g[l]
+            i2 = g[l - 1]
+            f1 = float(f[i1, d])
+            a = f1 - f[i2, d]
+            b = fd - f1
+            c = a + b
+            ur = 0.0
+            vr = 0.0
+            if d > 0:
+                tu = float(f[i2, 0] - c0)
+                tv = float(f[i1, 0] - c0)
+                ur += tu * tu
+                vr += tv * tv
+            if d > 1:
+                tu = float(f[i2, 1] - c1)
+                tv = float(f[i1, 1] - c1)
+                ur += tu * tu
+                vr += tv * tv
+            if c * vr - b * ur - a * wr - a * b * c <= 0.0:
+                break
+            l -= 1
+        l += 1
+        g[l] = ii
+    if l < 0:
+        return False
+    maxl = l
+    l = 0
+    for ii in range(n):
+        delta1 = _sq_to(f, g[l], ii, d, c0, c1)
+        while l < maxl:
+            delta2 = _sq_to(f, g[l + 1], ii, d, c0, c1)
+            if delta1 <= delta2:
+                break
+            delta1 = delta2
+            l += 1
+        for a in range(3):
+            out[ii, a] = f[g[l], a]
+    return True
+
+
+@nb.njit(cache=True, inline="always")
+def _sq_to(f, q, ii, d, c0, c1):
+    s = 0.0
+    for a in range(d + 1):
+        if a == d:
+            t = float(f[q, a] - ii)
+        elif a == 0:
+            t = float(f[q, a] - c0)
+        else:
+            t = float(f[q, a] - c1)
+        s += t * t
+    return s
+
+
 @nb.njit(cache=True, parallel=True)
-def far_field(band, ft, origin, h, tris, win, offset, sign, floor, sdf, rgb):
+def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
     """Fill the voxels outside ``band`` from their nearest band voxel (in place).
 
-    band : (X, Y, Z) bool; ft : (3, X, Y, Z) int32, index of the nearest band voxel (a
-    Euclidean feature transform); win : (X, Y, Z) int64, each band voxel's nearest primitive of
+    band : (X, Y, Z) bool; win : (X, Y, Z) int32, each band voxel's nearest primitive of
     ``tris`` (T, 3, 3); offset : (T,) half-thickness of thickened sheets; sign : (X, Y, Z) int8.
-    A voxel gets ``sign * max(distance to its band voxel's primitive (less the offset outside),
-    floor)`` and that band voxel's colour: ``sdf`` (X, Y, Z) float32, ``rgb`` (X, Y, Z, 3)
-    uint8. Band voxels are only read, so the layers are independent.
+    The nearest band voxel is the Euclidean feature transform of ``scipy.ndimage`` (the same
+    voxel, ties included), computed here in parallel passes along x, y, then z, the last one
+    filling each line as it goes; between passes one int32 per voxel holds the nearest feature
+    found so far in its z-plane (``i * Y + j``, -1 none). A voxel gets ``sign * max(distance
+    to its band voxel's primitive (less the offset outside), floor)`` and that band voxel's
+    colour: ``sdf`` (X, Y, Z) float32, ``rgb`` (X, Y, Z, 3) uint8. Band voxels are only read,
+    so the lines are independent.
     """
     nx, ny, nz = band.shape
-    for i in nb.prange(nx):
+    near = np.empty((nx, ny, nz), np.int32)
+    for j in nb.prange(ny):  # pass along x
+        f = np.empty((nx, 3), np.int64)
+        out = np.empty((nx, 3), np.int64)
+        g = np.empty(nx, np.int64)
+        for k in range(nz):
+            for i in range(nx):
+                f[i, 0] = i if band[i, j, k] else -1
+                f[i, 1] = j
+                f[i, 2] = k
+            if _voronoi(f, nx, 0, 0, 0, g, out):
+                for i in range(nx):
+                    near[i, j, k] = out[i, 0] * ny + j
+            else:
+                for i in range(nx):
+                    near[i, j, k] = -1
+    for i in nb.prange(nx):  # pass along y
+        f = np.empty((ny, 3), np.int64)
+        out = np.empty((ny, 3), np.int64)
+        g = np.empty(ny, np.int64)
+        for k in range(nz):
+            for j in range(ny):
+                q = near[i, j, k]
+                f[j, 0] = q // ny if q >= 0 else -1
+                f[j, 1] = q % ny if q >= 0 else 0
+                f[j, 2] = k
+            if _voronoi(f, ny, 1, i, 0, g, out):
+                for j in range(ny):
+                    near[i, j, k] = out[j, 0] * ny + out[j, 1]
+    for i in nb.prange(nx):  # pass along z, then the far field of the line
         px = origin[0] + i * h
+        f = np.empty((nz, 3), np.int64)
+        out = np.empty((nz, 3), np.int64)
+        g = np.empty(nz, np.int64)
         for j in range(ny):
             py = origin[1] + j * h
             for k in range(nz):
+                q = near[i, j, k]
+                f[k, 0] = q // ny if q >= 0 else -1
+                f[k, 1] = q % ny if q >= 0 else 0
+                f[k, 2] = k
+            if not _voronoi(f, nz, 2, i, j, g, out):
+                continue
+            for k in range(nz):
                 if band[i, j, k]:
                     continue
-                si, sj, sk = ft[0, i, j, k], ft[1, i, j, k], ft[2, i, j, k]
+                si, sj, sk = out[k, 0], out[k, 1], out[k, 2]
                 t = win[si, sj, sk]
                 d2, _u, _v, _w = _closest_bary(px, py, origin[2] + k * h, tris[t])
                 d = np.sqrt(d2)

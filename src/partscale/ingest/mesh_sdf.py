@@ -559,10 +559,8 @@ def from_mesh(
 
     if not band.all():
         report(0.8, "distances beyond the band")
-        ft = ndimage.distance_transform_edt(~band, return_distances=False, return_indices=True)
         _kernels.far_field(
             band,
-            ft.astype(np.int32, copy=False),
             origin,
             h,
             sub,

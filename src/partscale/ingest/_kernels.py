@@ -482,34 +482,42 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
     """
     nx, ny, nz = band.shape
     near = np.empty((nx, ny, nz), np.int32)
-    for j in nb.prange(ny):  # pass along x
-        f = np.empty((nx, 3), np.int64)
-        out = np.empty((nx, 3), np.int64)
-        g = np.empty(nx, np.int64)
-        for k in range(nz):
-            for i in range(nx):
-                f[i, 0] = i if band[i, j, k] else -1
-                f[i, 1] = j
-                f[i, 2] = k
-            if _voronoi(f, nx, 0, 0, 0, g, out):
-                for i in range(nx):
-                    near[i, j, k] = out[i, 0] * ny + j
-            else:
-                for i in range(nx):
-                    near[i, j, k] = -1
-    for i in nb.prange(nx):  # pass along y
-        f = np.empty((ny, 3), np.int64)
-        out = np.empty((ny, 3), np.int64)
+    for j in nb.prange(ny):
+        # pass along x: the nearest band voxel on the line, ties to the lower index (what the
+        # general pass gives in one dimension), by a sweep each way in memory order
+        last = np.full(nz, -1, np.int64)
+        for i in range(nx):
+            for k in range(nz):
+                if band[i, j, k]:
+                    last[k] = i
+                near[i, j, k] = last[k]
+        last[:] = -1
+        for i in range(nx - 1, -1, -1):
+            for k in range(nz):
+                if band[i, j, k]:
+                    last[k] = i
+                lo = near[i, j, k]
+                hi = last[k]
+                if lo < 0 or (hi >= 0 and hi - i < i - lo):
+                    lo = hi
+                near[i, j, k] = lo * ny + j if lo >= 0 else -1
+    for i in nb.prange(nx):  # pass along y, the plane gathered line by line
+        f = np.empty((nz, ny, 3), np.int64)
+        out = np.empty((nz, ny, 3), np.int64)
         g = np.empty(ny, np.int64)
-        for k in range(nz):
-            for j in range(ny):
+        found = np.empty(nz, np.bool_)
+        for j in range(ny):
+            for k in range(nz):
                 q = near[i, j, k]
-                f[j, 0] = q // ny if q >= 0 else -1
-                f[j, 1] = q % ny if q >= 0 else 0
-                f[j, 2] = k
-            if _voronoi(f, ny, 1, i, 0, g, out):
-                for j in range(ny):
-                    near[i, j, k] = out[j, 0] * ny + out[j, 1]
+                f[k, j, 0] = q // ny if q >= 0 else -1
+                f[k, j, 1] = q % ny if q >= 0 else 0
+                f[k, j, 2] = k
+        for k in range(nz):
+            found[k] = _voronoi(f[k], ny, 1, i, 0, g, out[k])
+        for j in range(ny):
+            for k in range(nz):
+                if found[k]:
+                    near[i, j, k] = out[k, j, 0] * ny + out[k, j, 1]
     for i in nb.prange(nx):  # pass along z, then the far field of the line
         px = origin[0] + i * h
         f = np.empty((nz, 3), np.int64)

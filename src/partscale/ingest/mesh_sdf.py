@@ -492,15 +492,17 @@ def from_mesh(
     free = (d_b > h) & ~in_sheet
     # distance to the nearest boundary or (unthickened) sheet face: steps between voxels
     # whose distances sum to more than a voxel cross no surface
-    dist = np.minimum(d_b, f_s + offset[sheet[np.maximum(id_s, 0)]] if len(sheet) else d_b)
-    dist = dist.astype(np.float32, copy=False)
+    dist = d_b.copy()
+    at = np.flatnonzero(has)  # elsewhere f_s is inf: dist is d_b
+    dist.ravel()[at] = np.minimum(d_b.ravel()[at], f_s.ravel()[at] + offset[sheet[id_s.ravel()[at]]])
+    del at
     sign = _component_signs(wn, d_b, dist, free, in_sheet, h, origin)
     del dist
     del free, in_sheet
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
     del d_b
-    win = np.full(shape, -1, np.int64)
+    win = np.full(shape, -1, np.int32)  # primitive ids: far fewer than 2**31
     if len(boundary):
         win[id_b >= 0] = boundary[id_b[id_b >= 0]]
     del id_b

@@ -49,7 +49,7 @@ SUBDIVIDE = 4.0  # triangles longer than this many voxels are also probed near t
 SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
 SLAB = 2  # x-layers per parallel work item
 RANDOM_CHUNK = 1 << 20  # random draws per chunk when sampling the far field's components
-BYTES_PER_VOXEL = 64  # peak working set of from_mesh per grid voxel: 39-46 measured (all temporaries)
+BYTES_PER_VOXEL = 64  # peak working set of from_mesh per voxel (39-46 measured, temporaries too)
 MIN_RES = 16
 MAX_RES = 16384
 """Largest ``--res``: far beyond any memory (the guard refuses much less), bounded so that
@@ -494,7 +494,9 @@ def from_mesh(
     # whose distances sum to more than a voxel cross no surface
     dist = d_b.copy()
     at = np.flatnonzero(has)  # elsewhere f_s is inf: dist is d_b
-    dist.ravel()[at] = np.minimum(d_b.ravel()[at], f_s.ravel()[at] + offset[sheet[id_s.ravel()[at]]])
+    dist.ravel()[at] = np.minimum(
+        d_b.ravel()[at], f_s.ravel()[at] + offset[sheet[id_s.ravel()[at]]]
+    )
     del at
     sign = _component_signs(wn, d_b, dist, free, in_sheet, h, origin)
     del dist

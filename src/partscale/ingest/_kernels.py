@@ -475,12 +475,15 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
     The nearest band voxel is the Euclidean feature transform of ``scipy.ndimage`` (the same
     voxel, ties included), computed here in parallel passes along x, y, then z, the last one
     filling each line as it goes; between passes one int32 per voxel holds the nearest feature
-    found so far in its z-plane (``i * Y + j``, -1 none). A voxel gets ``sign * max(distance
+    found so far in its z-plane (``i << 16 | j``, -1 none; ``mesh_sdf.MAX_RES`` keeps
+    grids below 2**15 voxels a side). A voxel gets ``sign * max(distance
     to its band voxel's primitive (less the offset outside), floor)`` and that band voxel's
     colour: ``sdf`` (X, Y, Z) float32, ``rgb`` (X, Y, Z, 3) uint8. Band voxels are only read,
     so the lines are independent.
     """
     nx, ny, nz = band.shape
+    if nx >= 1 << 15 or ny >= 1 << 16:
+        raise ValueError("far_field: grid too large for its int32 (i, j) pairs")
     near = np.empty((nx, ny, nz), np.int32)
     for j in nb.prange(ny):
         # pass along x: the nearest band voxel on the line, ties to the lower index (what the
@@ -500,7 +503,7 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
                 hi = last[k]
                 if lo < 0 or (hi >= 0 and hi - i < i - lo):
                     lo = hi
-                near[i, j, k] = lo * ny + j if lo >= 0 else -1
+                near[i, j, k] = (lo << 16) | j if lo >= 0 else -1
     for i in nb.prange(nx):  # pass along y, the plane gathered line by line
         f = np.empty((nz, ny, 3), np.int64)
         out = np.empty((nz, ny, 3), np.int64)
@@ -509,15 +512,15 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
         for j in range(ny):
             for k in range(nz):
                 q = near[i, j, k]
-                f[k, j, 0] = q // ny if q >= 0 else -1
-                f[k, j, 1] = q % ny if q >= 0 else 0
+                f[k, j, 0] = q >> 16 if q >= 0 else -1
+                f[k, j, 1] = q & 0xFFFF if q >= 0 else 0
                 f[k, j, 2] = k
         for k in range(nz):
             found[k] = _voronoi(f[k], ny, 1, i, 0, g, out[k])
         for j in range(ny):
             for k in range(nz):
                 if found[k]:
-                    near[i, j, k] = out[k, j, 0] * ny + out[k, j, 1]
+                    near[i, j, k] = (out[k, j, 0] << 16) | out[k, j, 1]
     for i in nb.prange(nx):  # pass along z, then the far field of the line
         px = origin[0] + i * h
         f = np.empty((nz, 3), np.int64)
@@ -527,8 +530,8 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
             py = origin[1] + j * h
             for k in range(nz):
                 q = near[i, j, k]
-                f[k, 0] = q // ny if q >= 0 else -1
-                f[k, 1] = q % ny if q >= 0 else 0
+                f[k, 0] = q >> 16 if q >= 0 else -1
+                f[k, 1] = q & 0xFFFF if q >= 0 else 0
                 f[k, 2] = k
             if not _voronoi(f, nz, 2, i, j, g, out):
                 continue

@@ -163,62 +163,73 @@ def _find(parent, a):
     return a
 
 
+@nb.njit(cache=True, inline="always")
+def _step(p, a, ny, nz, nx):
+    """Flat index of ``p``'s 6-neighbour ``a`` (0..5: +x, -x, +y, -y, +z, -z), -1 off the grid."""
+    k = p % nz
+    j = (p // nz) % ny
+    i = p // (ny * nz)
+    ax = a // 2
+    st = 1 if a % 2 == 0 else -1
+    if ax == 0:
+        i += st
+        if i < 0 or i >= nx:
+            return -1
+    elif ax == 1:
+        j += st
+        if j < 0 or j >= ny:
+            return -1
+    else:
+        k += st
+        if k < 0 or k >= nz:
+            return -1
+    return (i * ny + j) * nz + k
+
+
 @nb.njit(cache=True)
-def clear_components(todo, seeds, dist, h):
-    """Group voxels of ``todo`` joined by surface-free steps; collect the signs they touch.
+def clear_components(flat, sign, in_sheet, dist, h):
+    """Group the voxels ``flat`` joined by surface-free steps; collect the signs they touch.
 
     Two 6-neighbours ``h`` apart with ``dist[p] + dist[q] > h`` have no surface between them
-    (the open balls of those radii cover the segment), so they share a side. todo : (X, Y, Z)
-    bool; seeds : (X, Y, Z) int8 known signs (0 unknown); dist : (X, Y, Z) float32 distance
-    to the nearest surface. Returns flat (N,) int64 indices of the ``todo`` voxels, root (N,)
-    int64 (a component id in 0..N-1 per voxel) and touch (N, 2) bool per root (a clear
-    step reaches a +1 / -1 seed).
+    (the open balls of those radii cover the segment), so they share a side. flat : (N,)
+    int64 sorted flat indices of the voxels to group; sign : (X, Y, Z) int8 known signs (0
+    unknown; those ``in_sheet`` (X, Y, Z) bool count as unknown); dist : (X, Y, Z) float32
+    distance to the nearest surface. Returns root (N,) int64 (a component id in 0..N-1 per
+    voxel) and touch (N, 2) bool per root (a clear step reaches a +1 / -1 seed). Cost follows
+    N, bar one int32 id per grid voxel.
     """
-    nx, ny, nz = todo.shape
-    n = 0
-    cid = np.full(todo.shape, -1, np.int64)
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                if todo[i, j, k]:
-                    cid[i, j, k] = n
-                    n += 1
-    flat = np.empty(n, np.int64)
+    nx, ny, nz = dist.shape
+    n = flat.shape[0]
+    cid = np.full(nx * ny * nz, -1, np.int32)
+    for p in range(n):
+        cid[flat[p]] = p
+    sg = sign.ravel()
+    sh = in_sheet.ravel()
+    dv = dist.ravel()
     parent = np.arange(n)
     touch = np.zeros((n, 2), np.bool_)
     lim = h * 1.001
-    for i in range(nx):
-        for j in range(ny):
-            for k in range(nz):
-                p = cid[i, j, k]
-                if p < 0:
-                    continue
-                flat[p] = (i * ny + j) * nz + k
-                dp = dist[i, j, k]
-                for a in range(6):
-                    ax = a // 2
-                    st = 1 if a % 2 == 0 else -1
-                    i2, j2, k2 = i, j, k
-                    if ax == 0:
-                        i2 += st
-                    elif ax == 1:
-                        j2 += st
-                    else:
-                        k2 += st
-                    if i2 < 0 or j2 < 0 or k2 < 0 or i2 >= nx or j2 >= ny or k2 >= nz:
-                        continue
-                    if not dp + dist[i2, j2, k2] > lim:
-                        continue
-                    q = cid[i2, j2, k2]
-                    if q >= 0:
-                        ra = _find(parent, p)
-                        rb = _find(parent, q)
-                        if ra != rb:
-                            parent[ra] = rb
-                    elif seeds[i2, j2, k2] > 0:
-                        touch[p, 0] = True
-                    elif seeds[i2, j2, k2] < 0:
-                        touch[p, 1] = True
+    for p in range(n):
+        f = flat[p]
+        dp = dv[f]
+        for a in range(6):
+            g = _step(f, a, ny, nz, nx)
+            if g < 0:
+                continue
+            if not dp + dv[g] > lim:
+                continue
+            q = cid[g]
+            if q >= 0:
+                ra = _find(parent, p)
+                rb = _find(parent, q)
+                if ra != rb:
+                    parent[ra] = rb
+            elif sh[g]:
+                continue
+            elif sg[g] > 0:
+                touch[p, 0] = True
+            elif sg[g] < 0:
+                touch[p, 1] = True
     root = np.empty(n, np.int64)
     for p in range(n):
         root[p] = _find(parent, p)
@@ -227,29 +238,307 @@ def clear_components(todo, seeds, dist, h):
         r = root[p]
         comp[r, 0] |= touch[p, 0]
         comp[r, 1] |= touch[p, 1]
-    return flat, root, comp
+    return root, comp
+
+
+@nb.njit(cache=True)
+def spread_signs(sign, todo, rounds):
+    """Give voxels ``todo`` (flat indices) the sign of their signed 6-neighbours where those
+    agree, in up to ``rounds`` synchronous rounds (each reads the signs of the round before);
+    sign : (X, Y, Z) int8, in place. Returns the flat indices still unsigned."""
+    nx, ny, nz = sign.shape
+    sg = sign.ravel()
+    val = np.zeros(todo.shape[0], np.int8)
+    for _ in range(rounds):
+        n = todo.shape[0]
+        any_one = False
+        for t in range(n):
+            val[t] = _agreed(sg, todo[t], nx, ny, nz)
+            any_one |= val[t] != 0
+        if not any_one:
+            break
+        m = 0
+        for t in range(n):
+            if val[t] != 0:
+                sg[todo[t]] = val[t]
+            else:
+                todo[m] = todo[t]
+                m += 1
+        todo = todo[:m]
+    return todo
+
+
+@nb.njit(cache=True, inline="always")
+def _agreed(sg, p, nx, ny, nz):
+    pos = False
+    neg = False
+    for a in range(6):
+        g = _step(p, a, ny, nz, nx)
+        if g >= 0:
+            pos |= sg[g] > 0
+            neg |= sg[g] < 0
+    if pos and not neg:
+        return 1
+    if neg and not pos:
+        return -1
+    return 0
+
+
+@nb.njit(cache=True)
+def sign_near(sign, free, in_sheet, near):
+    """Sign the voxels ``near`` (flat indices of the voxels not ``free``) from their ``free``
+    6-neighbours where those agree; undecided ones ``in_sheet`` are inside (-1). sign : (X, Y,
+    Z) int8, in place (only ``near`` voxels are written, only free ones read). Returns the
+    flat indices of those left: undecided and not ``in_sheet``."""
+    nx, ny, nz = sign.shape
+    sg = sign.ravel()
+    fr = free.ravel()
+    sh = in_sheet.ravel()
+    left = np.empty(near.shape[0], np.int64)
+    m = 0
+    for t in range(near.shape[0]):
+        p = near[t]
+        pos = False
+        neg = False
+        for a in range(6):
+            g = _step(p, a, ny, nz, nx)
+            if g >= 0 and fr[g]:
+                pos |= sg[g] > 0
+                neg |= sg[g] < 0
+        if pos != neg:
+            sg[p] = 1 if pos else -1
+        elif sh[p]:
+            sg[p] = -1
+        else:
+            left[m] = p
+            m += 1
+    return left[:m]
+
+
+@nb.njit(cache=True)
+def label_stats(labels, key, n_labels, k):
+    """Voxel count per label and the flat indices of each label's ``k`` largest ``key``.
+
+    labels : (X, Y, Z) int32 (0: none); key : (X, Y, Z) float32, capped at 1e30. Ties go to
+    the earlier voxel (C order). Returns size (n_labels + 1,) int64 and picks (M,) int64,
+    label by label, largest first, M <= k * n_labels.
+    """
+    lab = labels.ravel()
+    kv = key.ravel()
+    cap = np.float32(1e30)
+    size = np.zeros(n_labels + 1, np.int64)
+    best = np.full((n_labels + 1, k), -1, np.int64)
+    bestv = np.empty((n_labels + 1, k), np.float32)
+    for p in range(lab.shape[0]):
+        lb = lab[p]
+        if lb <= 0:
+            continue
+        size[lb] += 1
+        v = min(kv[p], cap)
+        # insertion into the row, kept sorted by key descending (first come first on ties)
+        pos = k
+        while pos > 0 and (best[lb, pos - 1] < 0 or bestv[lb, pos - 1] < v):
+            pos -= 1
+        if pos < k:
+            for q in range(k - 1, pos, -1):
+                best[lb, q] = best[lb, q - 1]
+                bestv[lb, q] = bestv[lb, q - 1]
+            best[lb, pos] = p
+            bestv[lb, pos] = v
+    out = np.empty(n_labels * k, np.int64)
+    m = 0
+    for lbl in range(1, n_labels + 1):
+        for q in range(k):
+            if best[lbl, q] >= 0:
+                out[m] = best[lbl, q]
+                m += 1
+    return size, out[:m]
+
+
+@nb.njit(cache=True)
+def random_picks(labels, start, count, rnd, size, extra):
+    """Continue a scan of ``labels`` (X, Y, Z) int32 from flat index ``start`` over its next
+    ``len(rnd)`` labelled voxels (``count`` seen before): voxel number n of the scan is picked
+    where ``rnd[n - count] * size[label] < extra[label]``. Returns (picks (M,) int64 flat
+    indices, the flat index to continue from)."""
+    lab = labels.ravel()
+    out = np.empty(rnd.shape[0], np.int64)
+    m = 0
+    n = 0
+    p = start
+    while n < rnd.shape[0] and p < lab.shape[0]:
+        lb = lab[p]
+        if lb > 0:
+            if rnd[n] * size[lb] < extra[lb]:
+                out[m] = p
+                m += 1
+            n += 1
+        p += 1
+    return out[:m], p
 
 
 @nb.njit(cache=True, parallel=True)
-def far_field(band, ft, origin, h, tris, win, offset, sign, floor, sdf, rgb):
+def paint_labels(labels, value, out):
+    """``out[p] = value[labels[p]]`` where ``labels`` (X, Y, Z) int32 > 0 (in place)."""
+    nx = labels.shape[0]
+    for i in nb.prange(nx):
+        for j in range(labels.shape[1]):
+            for kk in range(labels.shape[2]):
+                lb = labels[i, j, kk]
+                if lb > 0:
+                    out[i, j, kk] = value[lb]
+
+
+@nb.njit(cache=True)
+def _voronoi(f, n, d, c0, c1, g, out):
+    """One line of Maurer et al.'s exact feature transform, as ``scipy.ndimage`` computes it.
+
+    f : (n, 3) int64 features along the line (``f[i, 0] < 0``: none) after the passes over the
+    axes before ``d``; (c0, c1): the line's coordinates on those axes. Writes each position's
+    nearest feature into ``out`` (n, 3) and returns False where the line has no feature. The
+    same arithmetic and tie rules as scipy's ``_VoronoiFT`` (exact: integers in doubles), so
+    the transform is the same voxel for voxel.
+    """
+    l = -1
+    for ii in range(n):
+        if f[ii, 0] < 0:
+            continue
+        fd = float(f[ii, d])
+        wr = 0.0
+        if d > 0:
+            t = float(f[ii, 0] - c0)
+            wr += t * t
+        if d > 1:
+            t = float(f[ii, 1] - c1)
+            wr += t * t
+        while l >= 1:
+            i1 = g[l]
+            i2 = g[l - 1]
+            f1 = float(f[i1, d])
+            a = f1 - f[i2, d]
+            b = fd - f1
+            c = a + b
+            ur = 0.0
+            vr = 0.0
+            if d > 0:
+                tu = float(f[i2, 0] - c0)
+                tv = float(f[i1, 0] - c0)
+                ur += tu * tu
+                vr += tv * tv
+            if d > 1:
+                tu = float(f[i2, 1] - c1)
+                tv = float(f[i1, 1] - c1)
+                ur += tu * tu
+                vr += tv * tv
+            if c * vr - b * ur - a * wr - a * b * c <= 0.0:
+                break
+            l -= 1
+        l += 1
+        g[l] = ii
+    if l < 0:
+        return False
+    maxl = l
+    l = 0
+    for ii in range(n):
+        delta1 = _sq_to(f, g[l], ii, d, c0, c1)
+        while l < maxl:
+            delta2 = _sq_to(f, g[l + 1], ii, d, c0, c1)
+            if delta1 <= delta2:
+                break
+            delta1 = delta2
+            l += 1
+        for a in range(3):
+            out[ii, a] = f[g[l], a]
+    return True
+
+
+@nb.njit(cache=True, inline="always")
+def _sq_to(f, q, ii, d, c0, c1):
+    s = 0.0
+    for a in range(d + 1):
+        if a == d:
+            t = float(f[q, a] - ii)
+        elif a == 0:
+            t = float(f[q, a] - c0)
+        else:
+            t = float(f[q, a] - c1)
+        s += t * t
+    return s
+
+
+@nb.njit(cache=True, parallel=True)
+def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
     """Fill the voxels outside ``band`` from their nearest band voxel (in place).
 
-    band : (X, Y, Z) bool; ft : (3, X, Y, Z) int32, index of the nearest band voxel (a
-    Euclidean feature transform); win : (X, Y, Z) int64, each band voxel's nearest primitive of
+    band : (X, Y, Z) bool; win : (X, Y, Z) int32, each band voxel's nearest primitive of
     ``tris`` (T, 3, 3); offset : (T,) half-thickness of thickened sheets; sign : (X, Y, Z) int8.
-    A voxel gets ``sign * max(distance to its band voxel's primitive (less the offset outside),
-    floor)`` and that band voxel's colour: ``sdf`` (X, Y, Z) float32, ``rgb`` (X, Y, Z, 3)
-    uint8. Band voxels are only read, so the layers are independent.
+    The nearest band voxel is the Euclidean feature transform of ``scipy.ndimage`` (the same
+    voxel, ties included), computed here in parallel passes along x, y, then z, the last one
+    filling each line as it goes; between passes one int32 per voxel holds the nearest feature
+    found so far in its z-plane (``i << 16 | j``, -1 none; ``mesh_sdf.MAX_RES`` keeps
+    grids below 2**15 voxels a side). A voxel gets ``sign * max(distance
+    to its band voxel's primitive (less the offset outside), floor)`` and that band voxel's
+    colour: ``sdf`` (X, Y, Z) float32, ``rgb`` (X, Y, Z, 3) uint8. Band voxels are only read,
+    so the lines are independent.
     """
     nx, ny, nz = band.shape
-    for i in nb.prange(nx):
+    if nx >= 1 << 15 or ny >= 1 << 16:
+        raise ValueError("far_field: grid too large for its int32 (i, j) pairs")
+    near = np.empty((nx, ny, nz), np.int32)
+    for j in nb.prange(ny):
+        # pass along x: the nearest band voxel on the line, ties to the lower index (what the
+        # general pass gives in one dimension), by a sweep each way in memory order
+        last = np.full(nz, -1, np.int64)
+        for i in range(nx):
+            for k in range(nz):
+                if band[i, j, k]:
+                    last[k] = i
+                near[i, j, k] = last[k]
+        last[:] = -1
+        for i in range(nx - 1, -1, -1):
+            for k in range(nz):
+                if band[i, j, k]:
+                    last[k] = i
+                lo = near[i, j, k]
+                hi = last[k]
+                if lo < 0 or (hi >= 0 and hi - i < i - lo):
+                    lo = hi
+                near[i, j, k] = (lo << 16) | j if lo >= 0 else -1
+    for i in nb.prange(nx):  # pass along y, the plane gathered line by line
+        f = np.empty((nz, ny, 3), np.int64)
+        out = np.empty((nz, ny, 3), np.int64)
+        g = np.empty(ny, np.int64)
+        found = np.empty(nz, np.bool_)
+        for j in range(ny):
+            for k in range(nz):
+                q = near[i, j, k]
+                f[k, j, 0] = q >> 16 if q >= 0 else -1
+                f[k, j, 1] = q & 0xFFFF if q >= 0 else 0
+                f[k, j, 2] = k
+        for k in range(nz):
+            found[k] = _voronoi(f[k], ny, 1, i, 0, g, out[k])
+        for j in range(ny):
+            for k in range(nz):
+                if found[k]:
+                    near[i, j, k] = (out[k, j, 0] << 16) | out[k, j, 1]
+    for i in nb.prange(nx):  # pass along z, then the far field of the line
         px = origin[0] + i * h
+        f = np.empty((nz, 3), np.int64)
+        out = np.empty((nz, 3), np.int64)
+        g = np.empty(nz, np.int64)
         for j in range(ny):
             py = origin[1] + j * h
             for k in range(nz):
+                q = near[i, j, k]
+                f[k, 0] = q >> 16 if q >= 0 else -1
+                f[k, 1] = q & 0xFFFF if q >= 0 else 0
+                f[k, 2] = k
+            if not _voronoi(f, nz, 2, i, j, g, out):
+                continue
+            for k in range(nz):
                 if band[i, j, k]:
                     continue
-                si, sj, sk = ft[0, i, j, k], ft[1, i, j, k], ft[2, i, j, k]
+                si, sj, sk = out[k, 0], out[k, 1], out[k, 2]
                 t = win[si, sj, sk]
                 d2, _u, _v, _w = _closest_bary(px, py, origin[2] + k * h, tris[t])
                 d = np.sqrt(d2)
@@ -258,35 +547,6 @@ def far_field(band, ft, origin, h, tris, win, offset, sign, floor, sdf, rgb):
                 sdf[i, j, k] = s * max(abs(d), floor)
                 for c in range(3):
                     rgb[i, j, k, c] = rgb[si, sj, sk, c]
-
-
-@nb.njit(cache=True)
-def deepest_per_label(lab, key, n_labels, k):
-    """Positions (into ``lab``) of the ``k`` largest ``key`` values of each label 1..n_labels.
-
-    lab : (N,) int32 labels (>= 1); key : (N,) float. Ties go to the earlier position, as a
-    stable sort by (label, -key) would pick them. Returns (M,) int64, M <= k * n_labels.
-    """
-    best = np.full((n_labels + 1, k), -1, np.int64)
-    for p in range(lab.shape[0]):
-        row = best[lab[p]]
-        v = key[p]
-        # insertion into the row, kept sorted by key descending (first come first on ties)
-        pos = k
-        while pos > 0 and (row[pos - 1] < 0 or key[row[pos - 1]] < v):
-            pos -= 1
-        if pos < k:
-            for q in range(k - 1, pos, -1):
-                row[q] = row[q - 1]
-            row[pos] = p
-    out = np.empty(n_labels * k, np.int64)
-    m = 0
-    for lbl in range(1, n_labels + 1):
-        for q in range(k):
-            if best[lbl, q] >= 0:
-                out[m] = best[lbl, q]
-                m += 1
-    return out[:m]
 
 
 @nb.njit(cache=True, parallel=True)

@@ -48,7 +48,8 @@ from .mesh import ColoredMesh
 SUBDIVIDE = 4.0  # triangles longer than this many voxels are also probed near their corners
 SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
 SLAB = 2  # x-layers per parallel work item
-BYTES_PER_VOXEL = 160  # peak working set of from_mesh per grid voxel (measured, all temporaries)
+RANDOM_CHUNK = 1 << 20  # random draws per chunk when sampling the far field's components
+BYTES_PER_VOXEL = 64  # peak working set of from_mesh per voxel (39-46 measured, temporaries too)
 MIN_RES = 16
 MAX_RES = 16384
 """Largest ``--res``: far beyond any memory (the guard refuses much less), bounded so that
@@ -273,24 +274,6 @@ def _band(tris, origin, h, shape, radius):
     return dist2, tid
 
 
-def _neighbour_signs(sign):
-    """(pos, neg): voxels with a 6-neighbour of sign +1 / -1."""
-    out = []
-    for src in (sign > 0, sign < 0):
-        acc = np.zeros(sign.shape, bool)
-        for ax in range(3):
-            # shifted views instead of np.roll: no full-grid temporaries (border layers are
-            # free space, pad >= band, and are signed before any neighbour is asked for)
-            lo = [slice(None)] * 3
-            hi = [slice(None)] * 3
-            lo[ax] = slice(None, -1)
-            hi[ax] = slice(1, None)
-            acc[tuple(hi)] |= src[tuple(lo)]
-            acc[tuple(lo)] |= src[tuple(hi)]
-        out.append(acc)
-    return out[0], out[1]
-
-
 def _component_signs(wn, d, dist, free, in_sheet, h, origin):
     """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
 
@@ -308,54 +291,46 @@ def _component_signs(wn, d, dist, free, in_sheet, h, origin):
     core = free & (d > 2 * h)
     labels, n_comp = ndimage.label(core)
     sign = np.zeros(shape, np.int8)
-    flat_lab = labels.ravel()
-    idx = np.flatnonzero(flat_lab)
     if n_comp:
-        lab = flat_lab[idx]
-        dv = d.ravel()[idx]
         # per component: its 5 voxels farthest from the surface plus a random 1 in 4000 (up to
         # 200); the majority decides, so free space that reaches into an open container (a
         # drawer, a bookcase) stays air even where the winding number there exceeds 1/2
-        rng = np.random.default_rng(0)
-        pick = _kernels.deepest_per_label(lab, np.minimum(dv, 1e30), n_comp, 5)
-        size = np.bincount(lab, minlength=n_comp + 1)
+        size, pick = _kernels.label_stats(labels, d, n_comp, 5)
         extra = np.minimum(size // 4000, 200)
-        r = rng.random(len(lab)) * size[lab]
-        rand = np.flatnonzero(r < extra[lab])
-        samples = idx[np.concatenate([pick, rand])]
+        rand = [np.zeros(0, np.int64)]
+        if extra.any():
+            # the same draws as one rng.random(number of labelled voxels), in chunks
+            rng = np.random.default_rng(0)
+            left, start, seen = int(size[1:].sum()), 0, 0
+            while left:
+                chunk = rng.random(min(left, RANDOM_CHUNK))
+                got, start = _kernels.random_picks(labels, start, seen, chunk, size, extra)
+                rand.append(got)
+                seen += len(chunk)
+                left -= len(chunk)
+        samples = np.concatenate([pick, *rand])
         pts = origin + np.stack(np.unravel_index(samples, shape), axis=1) * h
         w = wn(pts, INSIDE_CUTS)
         inside = w > INSIDE_CUTS[0]
-        comp = flat_lab[samples]
+        comp = labels.ravel()[samples]
         n_in = np.bincount(comp, weights=inside, minlength=n_comp + 1)
         n_all = np.bincount(comp, minlength=n_comp + 1)
         comp_sign = np.where(n_in * 2 > n_all, -1, 1).astype(np.int8)
         comp_sign[0] = 0
-        sign.ravel()[idx] = comp_sign[lab]
+        _kernels.paint_labels(labels, comp_sign, sign)
+    del labels
     # the ring, then voxels near the boundary, take the sign of signed 6-neighbours that agree
-    ring = free & ~core
-    todo = ring.copy()
-    for _ in range(8):  # ring voxels pass the sign on among themselves (each has d > h)
-        pos, neg = _neighbour_signs(sign)
-        one = todo & (pos ^ neg)
-        if not one.any():
-            break
-        sign[one] = np.where(pos[one], 1, -1)
-        todo &= ~one
+    # (ring voxels pass the sign on among themselves: each has d > h); all of these lie
+    # within two voxels of the surface, so they are listed and visited one by one
+    todo = _kernels.spread_signs(sign, np.flatnonzero(free & ~core), 8)
+    del core
     # ring voxels still unsigned (in narrow gaps, inside boards) are signed with the
     # undecided near ones below
-    near = ~free
-    pos, neg = _neighbour_signs(np.where(free, sign, 0))
-    one = near & (pos ^ neg)
-    sign[one] = np.where(pos[one], 1, -1)
-    undecided = near & ~(pos ^ neg)
-    sign[undecided & in_sheet] = -1
+    left = _kernels.sign_near(sign, free, in_sheet, np.flatnonzero(~free))
     # the rest: groups joined by surface-free steps. Those enclosed (inside boards 2-4 voxels
     # thick, most of them) take the sign of a few samples where those agree
-    seeds = np.where(in_sheet, 0, sign).astype(np.int8)
-    todo_near = (undecided & ~in_sheet) | todo
-    flat, root, touch = _kernels.clear_components(todo_near, seeds, dist, h)
-    del seeds
+    flat = np.sort(np.concatenate([left, todo]))
+    root, touch = _kernels.clear_components(flat, sign, in_sheet, dist, h)
     # groups that reach a signed voxel are queried voxel by voxel: next to open sheets the
     # winding number can pass 1/2 away from any surface (inside an open cup's walls)
     seeded = touch[root].any(axis=1)
@@ -517,15 +492,19 @@ def from_mesh(
     free = (d_b > h) & ~in_sheet
     # distance to the nearest boundary or (unthickened) sheet face: steps between voxels
     # whose distances sum to more than a voxel cross no surface
-    dist = np.minimum(d_b, f_s + offset[sheet[np.maximum(id_s, 0)]] if len(sheet) else d_b)
-    dist = dist.astype(np.float32, copy=False)
+    dist = d_b.copy()
+    at = np.flatnonzero(has)  # elsewhere f_s is inf: dist is d_b
+    dist.ravel()[at] = np.minimum(
+        d_b.ravel()[at], f_s.ravel()[at] + offset[sheet[id_s.ravel()[at]]]
+    )
+    del at
     sign = _component_signs(wn, d_b, dist, free, in_sheet, h, origin)
     del dist
     del free, in_sheet
 
     sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
     del d_b
-    win = np.full(shape, -1, np.int64)
+    win = np.full(shape, -1, np.int32)  # primitive ids: far fewer than 2**31
     if len(boundary):
         win[id_b >= 0] = boundary[id_b[id_b >= 0]]
     del id_b
@@ -559,10 +538,8 @@ def from_mesh(
 
     if not band.all():
         report(0.8, "distances beyond the band")
-        ft = ndimage.distance_transform_edt(~band, return_distances=False, return_indices=True)
         _kernels.far_field(
             band,
-            ft.astype(np.int32, copy=False),
             origin,
             h,
             sub,

@@ -344,8 +344,8 @@ def _component_signs(wn, d, dist, free, in_sheet, h, origin):
     order = np.lexsort((-dist.ravel()[flat], root))
     r_sorted = root[order]
     first = np.r_[True, r_sorted[1:] != r_sorted[:-1]]
-    start = np.maximum.accumulate(np.where(first, np.arange(len(order)), 0))
-    pick = order[np.arange(len(order)) - start < 3]
+    run_start = np.maximum.accumulate(np.where(first, np.arange(len(order)), 0))
+    pick = order[np.arange(len(order)) - run_start < 3]
     w_pick = wn(origin + np.stack(np.unravel_index(flat[pick], shape), axis=1) * h, INSIDE_CUTS)
     n_in = np.bincount(root[pick], weights=w_pick > INSIDE_CUTS[0], minlength=len(touch))
     n_all = np.bincount(root[pick], minlength=len(touch))

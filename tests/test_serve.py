@@ -177,6 +177,22 @@ def test_apply_stretches_to_the_expected_extent_and_undo_restores_exactly(client
     assert post(client, "/api/redo").status_code == 409
 
 
+def test_apply_says_what_the_edit_changed_like_the_cli(tmp_path):
+    """A tile whose END plane cuts the fourth of five boards: Apply's state carries the same
+    line ``partscale scale`` prints (the sliver left out), and the history records it."""
+    h = 0.02
+    c, boxes = shapes.bars(5, width=4 * h, gap=8 * h, height=0.3, depth=0.2, voxel_size=h)
+    path = tmp_path / "boards.csdf.npz"
+    partscale.save(c, path)
+    start, end = boxes[2][0][0] - 4 * h, boxes[3][0][0] + 1.3 * h
+    edit = {"axis": "x", "zone": [start, end], "to": 2 * end - start, "mode": "tile"}
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        s = post(client, "/api/apply", {"edits": [edit]}).json()
+    said = " ".join(s["notes"])
+    assert "END plane (" in said and "cuts an element" in said and "left out" in said, said
+    assert set(s["history"][-1]["slivers_left_out"]) == {"end"}
+
+
 def test_zones_in_sequence_and_percent_positions(client):
     session = client.app.state.session
     original = session.current

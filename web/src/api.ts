@@ -25,6 +25,8 @@ export interface ServerState {
   name: string;
   save_as: string;
   apply_ms?: number;
+  /** Apply only: what the edit changed from what was asked (whole-voxel lengths, cut slivers). */
+  notes?: string[];
   saved?: string;
 }
 

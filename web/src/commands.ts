@@ -84,7 +84,9 @@ export function createCommands(store: Store, scene: Scene): Commands {
         clearInterval(poll);
       }
       await loadAfter(s, 'applied');
-      status(`applied in ${(performance.now() - t0).toFixed(0)} ms (server ${s.apply_ms?.toFixed(0)} ms)`);
+      const took = `applied in ${(performance.now() - t0).toFixed(0)} ms (server ${s.apply_ms?.toFixed(0)} ms)`;
+      // say what the tool changed from what was asked, as the CLI does on stderr
+      status([took, ...(s.notes ?? [])].join('; '));
     });
 
   /** Show the object a history step made; if that fails, Undo and Redo still follow the server

@@ -38,9 +38,9 @@ def fit(
     """Resize to a target size: tile whole periods of repeated elements, absorb the rest in a
     slab of constant cross-section, global scaling only as a last resort; says what it chose."""
     from .._files import atomic_path
-    from ..edit import apply_recipe
+    from ..edit import apply_recipe, describe_changes
     from ..zones import fit as fit_zones
-    from .scale import _MESH_IN, _MESH_OUT, sliver_lines
+    from .scale import _MESH_IN, _MESH_OUT
 
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
@@ -68,7 +68,7 @@ def fit(
         return
     with _common.progress_bar("fit") as bar:
         out = apply_recipe(c, recipe, progress=bar)
-    for line in sliver_lines(out.meta.get("history", [])[-len(recipe.edits) :], out):
+    for line in describe_changes(out.meta.get("history", [])[-len(recipe.edits) :], out):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     save(out, output)
     if recipe_out is not None:

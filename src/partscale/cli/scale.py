@@ -124,7 +124,9 @@ def scale(
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
     entries = out.meta.get("history", [])[-len(rec.edits) :]
-    for line in _voxel_snaps(entries, out) + sliver_lines(entries, out):
+    from ..edit import describe_changes
+
+    for line in describe_changes(entries, out):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     if recipe is None and snap:
         from ..zones import record_snap
@@ -190,45 +192,3 @@ def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
 
 
 AXES_INDEX = {"x": 0, "y": 1, "z": 2}
-
-
-def sliver_lines(entries: list, out) -> list[str]:
-    """A line per tile edit whose zone plane cut an element: the sliver it cut off was left out
-    at the inner seams (history: ``slivers_left_out``, voxels per plane)."""
-    u = f" {out.meta.get('units')}" if out.meta.get("units") else ""
-    lines = []
-    for i, h in enumerate(entries):
-        cut = h.get("slivers_left_out") if isinstance(h, dict) else None
-        if not cut:
-            continue
-        zone = h["edit"]["zone"]
-        planes = " and ".join(
-            f"{p.upper()} plane ({zone[p == 'end']:.6g}{u})" for p in sorted(cut, reverse=True)
-        )
-        voxels = sum(cut.values())
-        where = f"edit {i + 1}: " if len(entries) > 1 else ""
-        lines.append(
-            f"{where}the zone's {planes} cut{'s' if len(cut) == 1 else ''} an element: the "
-            f"sliver cut off ({voxels} voxels) is left out at the inner tile seams, the element "
-            f"stays whole once, beside the copies (recorded in the history; --snap puts the "
-            f"planes in gaps)"
-        )
-    return lines
-
-
-def _voxel_snaps(entries: list, out) -> list[str]:
-    """A line per edit whose destination moved to whole voxels (the history keeps both:
-    ``edit.to`` as given and ``to_snapped``), saying by how much."""
-    u = f" {out.meta.get('units')}" if out.meta.get("units") else ""
-    lines = []
-    for i, h in enumerate(entries):
-        given = h.get("edit", {}).get("to") if isinstance(h, dict) else None
-        snapped = h.get("to_snapped") if isinstance(h, dict) else None
-        if given is None or snapped is None or abs(snapped - given) <= 1e-9 * out.voxel_size:
-            continue
-        where = f"edit {i + 1}: " if len(entries) > 1 else ""
-        lines.append(
-            f"{where}destination {given:.6g} -> {snapped:.6g}{u} ({snapped - given:+.4g}{u}): "
-            f"lengths change by whole voxels of {out.voxel_size:.4g}{u} (recorded in the history)"
-        )
-    return lines

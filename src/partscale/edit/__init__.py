@@ -49,6 +49,7 @@ Semantics
   voxel (near the edges and corners of an axis-aligned box sampled off the grid).
 """
 
+from .notes import describe_changes
 from .recipe import (
     AXES,
     JSON_SCHEMA,
@@ -86,6 +87,7 @@ __all__ = [
     "ResolvedEdit",
     "apply_edit",
     "apply_recipe",
+    "describe_changes",
     "forward_coordinate",
     "naive_edit",
     "parse_length",

@@ -262,9 +262,11 @@ class EditSession:
         (:class:`InputError`) before anything is computed (its shape predicted by
         :func:`~partscale.edit.recipe_shape`), and the result is checked again before it is
         kept, so the session never holds an object the page cannot show. Returns the state
-        (:meth:`state`) of the revision this apply made, whatever lands after it.
+        (:meth:`state`) of the revision this apply made, whatever lands after it, with
+        ``notes``: what the edit stage changed from what was asked
+        (:func:`~partscale.edit.describe_changes`; whole-voxel destinations, cut slivers).
         """
-        from ..edit import Recipe, apply_recipe, recipe_shape
+        from ..edit import Recipe, apply_recipe, describe_changes, recipe_shape
 
         units = self.current.meta.get("units")  # for positions with a unit ("30cm")
         parsed = recipe if isinstance(recipe, Recipe) else Recipe.parse(recipe, units=units)
@@ -277,7 +279,8 @@ class EditSession:
             self._push(new)
             snap = self._snapshot()
         self.grid_bytes()  # the page fetches it next: encode while still in the worker thread
-        return self._describe(snap)
+        entries = new.meta.get("history", [])[-len(parsed.edits) :]
+        return {**self._describe(snap), "notes": describe_changes(entries, new)}
 
     def undo(self) -> dict[str, Any] | None:
         """Restore the object before the last apply exactly (the same arrays); None if none.

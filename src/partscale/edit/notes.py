@@ -1,0 +1,78 @@
+"""What an edit changed from what was asked, in words: one home for the CLI, fit and the editor.
+
+Every line reads the history entries :func:`~partscale.edit.apply_recipe` wrote (``to_snapped``
+beside the ``edit.to`` given; ``slivers_left_out`` where a zone plane cut an element), so what is
+said is exactly what was recorded.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..csdf import CSDF
+
+
+def describe_changes(entries: list[Any], out: CSDF) -> list[str]:
+    """One line per change the edit stage made to the edits of ``entries`` (history dicts).
+
+    Parameters
+    ----------
+    entries : list of dict
+        The history entries of the edits just applied (the last ``len(recipe.edits)``).
+    out : CSDF
+        The edited object (its voxel size and units word the lines).
+
+    Returns
+    -------
+    list of str
+        Whole-voxel destinations first, then zone planes that cut an element.
+    """
+    return _voxel_snaps(entries, out) + _slivers(entries, out)
+
+
+def _units(out: CSDF) -> str:
+    return f" {out.meta.get('units')}" if out.meta.get("units") else ""
+
+
+def _where(i: int, entries: list[Any]) -> str:
+    return f"edit {i + 1}: " if len(entries) > 1 else ""
+
+
+def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
+    """A line per edit whose destination moved to whole voxels (the history keeps both:
+    ``edit.to`` as given and ``to_snapped``), saying by how much."""
+    u = _units(out)
+    lines = []
+    for i, h in enumerate(entries):
+        given = h.get("edit", {}).get("to") if isinstance(h, dict) else None
+        snapped = h.get("to_snapped") if isinstance(h, dict) else None
+        if given is None or snapped is None or abs(snapped - given) <= 1e-9 * out.voxel_size:
+            continue
+        lines.append(
+            f"{_where(i, entries)}destination {given:.6g} -> {snapped:.6g}{u} "
+            f"({snapped - given:+.4g}{u}): lengths change by whole voxels of "
+            f"{out.voxel_size:.4g}{u} (recorded in the history)"
+        )
+    return lines
+
+
+def _slivers(entries: list[Any], out: CSDF) -> list[str]:
+    """A line per tile edit whose zone plane cut an element: the sliver it cut off was left out
+    at the inner seams (history: ``slivers_left_out``, voxels per plane)."""
+    u = _units(out)
+    lines = []
+    for i, h in enumerate(entries):
+        cut = h.get("slivers_left_out") if isinstance(h, dict) else None
+        if not cut:
+            continue
+        zone = h["edit"]["zone"]
+        planes = " and ".join(
+            f"{p.upper()} plane ({zone[p == 'end']:.6g}{u})" for p in sorted(cut, reverse=True)
+        )
+        lines.append(
+            f"{_where(i, entries)}the zone's {planes} cut{'s' if len(cut) == 1 else ''} an "
+            f"element: the sliver cut off ({sum(cut.values())} voxels) is left out at the inner "
+            f"tile seams, the element stays whole once, beside the copies (recorded in the "
+            f"history; --snap puts the planes in gaps)"
+        )
+    return lines

@@ -140,31 +140,86 @@ def lerp_float(src: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 @nb.njit(cache=True, parallel=True)
-def _lerp_into(src, i0, i1, w, out, lo, hi):
-    """out[j] = src[i0[j]] (w[j] == 0) or the float32 blend of src[i0[j]] and src[i1[j]].
+def _lerp_into(src, i0, i1, w, out, lo, hi, js):
+    """out[:, j] = src[:, i0[j]] (w[j] == 0) or the float32 blend of src[:, i0[j]] and
+    src[:, i1[j]], for the output layers ``js``.
 
-    src (N, A, B, C), out (M, A, B, C): layers are independent, so they run in parallel. For an
-    integer ``out`` the blend is rounded half to even and clipped to [lo, hi].
+    src (P, N, Q), out (P, M, Q), both C-contiguous: the edit axis in the middle, so the inner
+    loop runs over contiguous memory. Rows ``(p, j)`` are independent and run in parallel. For
+    an integer ``out`` the blend is rounded half to even and clipped to [lo, hi].
     """
-    A, B, C = src.shape[1], src.shape[2], src.shape[3]
+    nq = src.shape[2]
+    nj = js.shape[0]
     integer = lo < hi
-    for j in nb.prange(out.shape[0]):
+    for t in nb.prange(src.shape[0] * nj):
+        p = t // nj
+        j = js[t % nj]
         a0, a1 = i0[j], i1[j]
         if w[j] == 0:
-            for a in range(A):
-                for b in range(B):
-                    for c in range(C):
-                        out[j, a, b, c] = src[a0, a, b, c]
+            for q in range(nq):
+                out[p, j, q] = src[p, a0, q]
             continue
         w1 = np.float32(w[j])
         w0 = np.float32(1.0) - w1
-        for a in range(A):
-            for b in range(B):
-                for c in range(C):
-                    v = np.float32(src[a0, a, b, c]) * w0 + np.float32(src[a1, a, b, c]) * w1
-                    if integer:
-                        v = min(max(np.rint(v), lo), hi)
-                    out[j, a, b, c] = v
+        if integer:
+            for q in range(nq):
+                v = np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
+                out[p, j, q] = min(max(np.rint(v), lo), hi)
+        else:
+            for q in range(nq):
+                out[p, j, q] = np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
+
+
+#: Runs of at least this many consecutive copied layers are copied as blocks (numpy's strided
+#: copy, at memory speed), not layer by layer through the kernel.
+_BLOCK_LAYERS = 4
+
+
+def _copy_runs(src: np.ndarray, i0: np.ndarray, w: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """Copy the runs of output layers that read consecutive source layers exactly (``w == 0``,
+    ``i0`` rising by one: the rigid content before and after the slab) as blocks; returns the
+    output layers left for the kernel (int64)."""
+    m = len(i0)
+    exact = w == 0
+    # a run continues where the next layer is exact and reads the next source layer
+    cont = exact[1:] & exact[:-1] & (np.diff(i0) == 1)
+    starts = np.flatnonzero(exact & ~np.concatenate(([False], cont)))
+    done = np.zeros(m, bool)
+    if starts.size:
+        ends = np.flatnonzero(exact & ~np.concatenate((cont, [False]))) + 1
+        for j0, j1 in zip(starts.tolist(), ends.tolist(), strict=True):
+            if j1 - j0 >= _BLOCK_LAYERS:
+                s0 = int(i0[j0])
+                out[j0:j1] = src[s0 : s0 + (j1 - j0)]
+                done[j0:j1] = True
+    return np.flatnonzero(~done).astype(np.int64)
+
+
+def _middle(a: np.ndarray) -> np.ndarray | None:
+    """Axis-first ``a`` (N, ...) as a (P, N, Q) view of the C-contiguous world array it was
+    moved from (the edit axis in the middle), or None when it is no such view."""
+    for ax in range(min(a.ndim, 3)):
+        world = np.moveaxis(a, 0, ax)
+        if world.flags.c_contiguous:
+            p = int(np.prod(world.shape[:ax], dtype=np.int64))
+            return world.reshape(p, a.shape[0], -1)
+    return None
+
+
+def _lerp_rest(src, i0, i1, w32, out, lo, hi):
+    """Rigid runs as block copies, the remaining layers through :func:`_lerp_into`."""
+    js = _copy_runs(src, i0, w32, out)
+    if js.size == 0:
+        return
+    s3, o3 = _middle(src), _middle(out)
+    if s3 is None or o3 is None or s3.shape[0] != o3.shape[0] or s3.shape[2] != o3.shape[2]:
+        # any other strides: through contiguous axis-first copies
+        s3 = np.ascontiguousarray(src).reshape(1, src.shape[0], -1)
+        o3 = np.empty((1, out.shape[0], s3.shape[2]), out.dtype)
+        _lerp_into(s3, i0, i1, w32, o3, lo, hi, js)
+        out[js] = o3.reshape(out.shape)[js]
+        return
+    _lerp_into(s3, i0, i1, w32, o3, lo, hi, js)
 
 
 def empty_layers(shape: tuple[int, ...], dtype, axis: int) -> np.ndarray:
@@ -191,10 +246,7 @@ def lerp_layers(src: np.ndarray, x: np.ndarray, out: np.ndarray | None = None) -
         lo, hi = float(info.min), float(info.max)
     else:
         lo = hi = 0.0
-    if src.ndim == 3:  # a trailing axis of one: the kernel takes (N, A, B, C) views
-        _lerp_into(src[..., None], i0, i1, w.astype(np.float32), out[..., None], lo, hi)
-    else:
-        _lerp_into(src, i0, i1, w.astype(np.float32), out, lo, hi)
+    _lerp_rest(src, i0, i1, w.astype(np.float32), out, lo, hi)
     return out
 
 
@@ -210,10 +262,8 @@ def crisp_parts(
     i0, i1, w = _split(x, parts.shape[0])
     if out is None:
         out = parts[i0]
-    else:  # the kernel's copy path (weight 0), into any strides
-        _lerp_into(
-            parts[..., None], i0, i0, np.zeros(len(i0), np.float32), out[..., None], 0.0, 0.0
-        )
+    else:  # copies of the nearer-below layer (weight 0), into any strides
+        _lerp_rest(parts, i0, i0, np.zeros(len(i0), np.float32), out, 0.0, 0.0)
     frac = np.flatnonzero(w != 0)
     if frac.size == 0:
         return out

@@ -189,8 +189,11 @@ def recompute_mask(
     dest: float,
     h: float,
     band: float,
-) -> np.ndarray:
+) -> tuple[np.ndarray, int]:
     """Voxels (axis-first, output grid) whose distance could have changed and must be recomputed.
+
+    Returns ``(mask, j0)``: ``mask`` (uint8) covers output layers ``j0 ...`` only (those within
+    reach of the edit; the layers beyond have nothing to recompute).
 
     The paper's rule: voxels whose old |distance| exceeds their distance to the zone's planes, plus
     the resampled slab. Among those, a voxel keeps its resampled value when that value is provably
@@ -200,7 +203,7 @@ def recompute_mask(
     scale ~1, the ball of its distance lies within its copy (a pure translation).
     """
     lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
-    mask = np.zeros(out_sdf.shape, np.uint8)
+    none = np.zeros((0, *out_sdf.shape[1:]), np.uint8), 0
     n_copies = int(plan.copy.max()) + 1
     if mode == "tile" and abs(plan.scale - 1.0) <= _RIGID:
         # Copies at scale ~1 are translations of the slab, and the first and last copy continue
@@ -209,13 +212,17 @@ def recompute_mask(
         period = (dest - start) / n_copies
         seams = start + period * np.arange(1, n_copies)
         if seams.size == 0:
-            return mask
+            return none
         to_seam = np.abs(y[:, None] - seams[None, :]).min(axis=1)
         reach = np.maximum(to_seam - SEAM_VOXELS * h, 0.0).astype(np.float32)
         rows = np.flatnonzero(reach <= lim)
+        if rows.size == 0:
+            return none
+        j0 = int(rows[0])
+        mask = np.zeros((int(rows[-1]) + 1 - j0, *out_sdf.shape[1:]), np.uint8)
         a = np.abs(out_sdf[rows])
-        mask[rows] = (a <= lim) & (a >= reach[rows, None, None])
-        return mask
+        mask[rows - j0] = (a <= lim) & (a >= reach[rows, None, None])
+        return mask, j0
     if mode == "global":
         j0, j1 = 0, out_sdf.shape[0]
         affected = np.abs(out_sdf) <= lim
@@ -225,13 +232,16 @@ def recompute_mask(
         gap = np.where(y < start, start - y, np.where(y > dest, y - dest, 0.0))
         gap = np.maximum(gap - h, 0.0).astype(np.float32)
         rows = np.flatnonzero(gap <= lim)
+        if rows.size == 0:
+            return none
         j0, j1 = int(rows[0]), int(rows[-1]) + 1
         a = np.abs(out_sdf[j0:j1])
         affected = (a <= lim) & (a >= gap[j0:j1, None, None])
-    cand = np.nonzero(affected)
-    cand = (cand[0] + j0, cand[1], cand[2])
+    mask = np.zeros(affected.shape, np.uint8)
+    cand = np.nonzero(affected)  # rows relative to j0
+    row = cand[0] + j0  # output layers
     n_src = src_sdf.shape[0]
-    xa = plan.xa[cand[0]]
+    xa = plan.xa[row]
     xc = np.clip(xa, 0, n_src - 1)
     i0 = np.floor(xc).astype(np.int64)
     i1 = np.minimum(i0 + 1, n_src - 1)
@@ -249,26 +259,26 @@ def recompute_mask(
         # the slab, a voxel whose nearest point is square to the axis still has that point, so
         # its old distance caps the new one (code 2): the exact value wherever nothing came
         # closer, immune to the facets' chamfer of sharp edges.
-        code = np.where(keep & ~plan.in_slab[cand[0]], 2, 1).astype(np.uint8)
+        code = np.where(keep & ~plan.in_slab[row], 2, 1).astype(np.uint8)
         mask[cand] = code
-        return mask
+        return mask, j0
     if mode == "tile":
         # Copies are not one monotone map: a slab voxel keeps its value only if the ball of its
         # distance stays inside its own copy (and it is not in a seam blend). Voxels outside the
         # slab see every copy farther than its source, so the growth argument holds for them.
         n_copies = int(plan.copy.max()) + 1
         period = (dest - start) / n_copies
-        yy = y[cand[0]]
-        c = plan.copy[cand[0]]
+        yy = y[row]
+        c = plan.copy[row]
         room = np.minimum(yy - (start + c * period), start + (c + 1) * period - yy)
-        inside = plan.in_slab[cand[0]]
+        inside = plan.in_slab[row]
         # a copy at scale ~1 is a translation: inside that ball nothing else changed
         rigid = abs(plan.scale - 1.0) <= _RIGID
-        ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room) & (keep | rigid)
+        ok_in = (plan.beta[row] == 0) & (np.abs(out_sdf[j0:j1][cand]) < room) & (keep | rigid)
         keep = np.where(inside, ok_in, keep)
     sel = ~keep
     mask[cand[0][sel], cand[1][sel], cand[2][sel]] = 1
-    return mask
+    return mask, j0
 
 
 def reevaluate_arrays(
@@ -280,6 +290,7 @@ def reevaluate_arrays(
     *,
     band: float = BAND_VOXELS,
     npass: int = 2,
+    row0: int = 0,
 ) -> int:
     """Recompute ``sdf``, ``rgb``, ``parts`` in place at ``mask`` voxels within ``band`` voxels.
 
@@ -290,12 +301,15 @@ def reevaluate_arrays(
     rgb : (X, Y, Z, 3) uint8, writeable
     parts : (X, Y, Z) int16, writeable
     voxel_size : float
-    mask : (X, Y, Z) bool or uint8
-        Voxels to recompute; those with ``|sdf| > band`` voxels are left as they are. As uint8,
-        code 2 marks voxels whose current |sdf| is known to be an upper bound of the distance:
-        they keep it (and their colour and part) where it is smaller than the recomputed one.
+    mask : (M, Y, Z) bool or uint8
+        Voxels to recompute, of layers ``row0 ... row0 + M - 1`` (all layers beyond hold none);
+        those with ``|sdf| > band`` voxels are left as they are. As uint8, code 2 marks voxels
+        whose current |sdf| is known to be an upper bound of the distance: they keep it (and
+        their colour and part) where it is smaller than the recomputed one.
     band : float
         Half-width of the band, in voxels.
+    row0 : int
+        First layer (along axis 0) ``mask`` covers.
 
     Returns
     -------
@@ -305,8 +319,9 @@ def reevaluate_arrays(
     h = float(voxel_size)
     lim = band * h
     mask = np.asarray(mask)
-    target = (mask > 0) & (np.abs(sdf) <= lim)
-    layers = np.flatnonzero(target.any(axis=(1, 2)))
+    # only the layers the mask covers are read: the edit's slab and band, not the whole grid
+    target = (mask > 0) & (np.abs(sdf[row0 : row0 + mask.shape[0]]) <= lim)
+    layers = np.flatnonzero(target.any(axis=(1, 2))) + row0
     if layers.size == 0:
         return 0
     pad = int(np.ceil(band)) + 2
@@ -319,8 +334,8 @@ def reevaluate_arrays(
     def solve(run: np.ndarray):
         a0 = max(int(run[0]) - pad, 0)
         a1 = min(int(run[-1]) + pad + 1, sdf.shape[0])
-        t_run = np.zeros_like(target[a0:a1])
-        t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] : run[-1] + 1]
+        t_run = np.zeros((a1 - a0, *target.shape[1:]), bool)
+        t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] - row0 : run[-1] - row0 + 1]
         return _solve_box(sdf, t_run, a0, h, lim, pad, npass)
 
     # boxes are independent (each reads the unchanged field) and the propagation, their main
@@ -335,7 +350,7 @@ def reevaluate_arrays(
     if mask.dtype == np.uint8:
         # code 2: the old value is an upper bound of the distance; keep it where it is smaller
         old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
-        capped = (mask[gi[:, 0], gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
+        capped = (mask[gi[:, 0] - row0, gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
         if capped.any():
             keep = ~capped
             gi, new, cp = gi[keep], new[keep], cp[keep]

@@ -225,7 +225,7 @@ def recompute_mask(
         return mask, j0
     if mode == "global":
         j0, j1 = 0, out_sdf.shape[0]
-        affected = np.abs(out_sdf) <= lim
+        gap = np.zeros(j1, np.float32)  # |sdf| >= 0 always: only the band counts
     else:
         # distance of each output layer to the zone (0 inside the slab), one voxel of slack;
         # layers farther from the zone than the band cannot be affected
@@ -235,50 +235,86 @@ def recompute_mask(
         if rows.size == 0:
             return none
         j0, j1 = int(rows[0]), int(rows[-1]) + 1
-        a = np.abs(out_sdf[j0:j1])
-        affected = (a <= lim) & (a >= gap[j0:j1, None, None])
-    mask = np.zeros(affected.shape, np.uint8)
-    cand = np.nonzero(affected)  # rows relative to j0
-    row = cand[0] + j0  # output layers
+    row = np.arange(j0, j1)
     n_src = src_sdf.shape[0]
-    xa = plan.xa[row]
-    xc = np.clip(xa, 0, n_src - 1)
+    xc = np.clip(plan.xa[row], 0, n_src - 1)
     i0 = np.floor(xc).astype(np.int64)
     i1 = np.minimum(i0 + 1, n_src - 1)
-    slope = np.zeros(len(xa), np.float32)
-    for i in (i0, i1):
-        up = np.minimum(i + 1, n_src - 1)
-        dn = np.maximum(i - 1, 0)
-        g = (src_sdf[up, cand[1], cand[2]] - src_sdf[dn, cand[1], cand[2]]) / np.maximum(
-            (up - dn) * h, h
-        )
-        np.maximum(slope, np.abs(g), out=slope)
-    keep = slope <= _LATERAL
     if plan.scale < 1.0 - _RIGID:
         # A shrinking slab can bring surface closer: everything affected is recomputed. Outside
         # the slab, a voxel whose nearest point is square to the axis still has that point, so
         # its old distance caps the new one (code 2): the exact value wherever nothing came
         # closer, immune to the facets' chamfer of sharp edges.
-        code = np.where(keep & ~plan.in_slab[row], 2, 1).astype(np.uint8)
-        mask[cand] = code
-        return mask, j0
-    if mode == "tile":
+        rule, room = _SHRINK, np.zeros(0)
+    elif mode == "tile":
         # Copies are not one monotone map: a slab voxel keeps its value only if the ball of its
         # distance stays inside its own copy (and it is not in a seam blend). Voxels outside the
         # slab see every copy farther than its source, so the growth argument holds for them.
-        n_copies = int(plan.copy.max()) + 1
+        # (Copies at scale ~1, translations, were handled above.)
+        rule = _TILE
         period = (dest - start) / n_copies
-        yy = y[row]
-        c = plan.copy[row]
+        yy, c = y[row], plan.copy[row]
         room = np.minimum(yy - (start + c * period), start + (c + 1) * period - yy)
-        inside = plan.in_slab[row]
-        # a copy at scale ~1 is a translation: inside that ball nothing else changed
-        rigid = abs(plan.scale - 1.0) <= _RIGID
-        ok_in = (plan.beta[row] == 0) & (np.abs(out_sdf[j0:j1][cand]) < room) & (keep | rigid)
-        keep = np.where(inside, ok_in, keep)
-    sel = ~keep
-    mask[cand[0][sel], cand[1][sel], cand[2][sel]] = 1
+    else:
+        rule, room = _GROW, np.zeros(0)
+    mask = np.zeros((j1 - j0, *out_sdf.shape[1:]), np.uint8)
+    _mask_rows(
+        src_sdf,
+        out_sdf,
+        j0,
+        i0,
+        i1,
+        gap[j0:j1],
+        np.float32(lim),
+        np.float32(_LATERAL),
+        h,
+        rule,
+        plan.in_slab[row],
+        plan.beta[row] == 0,
+        room,
+        mask,
+    )
     return mask, j0
+
+
+# rules of _mask_rows: how a voxel whose nearest point is square to the axis is treated
+_GROW, _SHRINK, _TILE = 0, 1, 2
+
+
+@numba.njit(cache=True, parallel=True)
+def _mask_rows(src, out, j0, i0, i1, gap, lim, lateral, h, rule, in_slab, unblended, room, mask):
+    """:func:`recompute_mask`'s per-voxel rule over output layers ``j0 ...`` (into ``mask``).
+
+    A voxel is affected where ``gap[j] <= |sdf| <= lim``; its axial slope is the largest
+    central difference of the source at the layers ``i0[j]``, ``i1[j]`` it was read from (as
+    float32, exactly the vectorised rule's arithmetic); slope <= ``lateral`` keeps it (per
+    ``rule``), else it is marked 1. ``_SHRINK`` marks every affected voxel: 2 where it is kept
+    outside the slab, else 1.
+    """
+    nj, na, nb_ = mask.shape[0], mask.shape[1], mask.shape[2]
+    n_src = src.shape[0]
+    for a in numba.prange(na):
+        for jj in range(nj):
+            j = j0 + jj
+            g0 = gap[jj]
+            for b in range(nb_):
+                v = abs(out[j, a, b])
+                if not (v <= lim and v >= g0):
+                    continue
+                slope = np.float32(0.0)
+                for i in (i0[jj], i1[jj]):
+                    up = min(i + 1, n_src - 1)
+                    dn = max(i - 1, 0)
+                    g = np.float64(src[up, a, b] - src[dn, a, b]) / max((up - dn) * h, h)
+                    slope = np.float32(max(np.float64(slope), abs(g)))
+                keep = slope <= lateral
+                if rule == _SHRINK:
+                    mask[jj, a, b] = 2 if keep and not in_slab[jj] else 1
+                    continue
+                if rule == _TILE and in_slab[jj]:
+                    keep = keep and unblended[jj] and np.float64(v) < room[jj]
+                if not keep:
+                    mask[jj, a, b] = 1
 
 
 def reevaluate_arrays(

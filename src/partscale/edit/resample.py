@@ -206,13 +206,20 @@ def _middle(a: np.ndarray) -> np.ndarray | None:
     return None
 
 
+def _alike(*views: np.ndarray | None) -> bool:
+    """Whether :func:`_middle` views all exist and agree across the edit axis (P and Q)."""
+    if any(v is None for v in views):
+        return False
+    return len({(v.shape[0], v.shape[2]) for v in views if v is not None}) == 1
+
+
 def _lerp_rest(src, i0, i1, w32, out, lo, hi):
     """Rigid runs as block copies, the remaining layers through :func:`_lerp_into`."""
     js = _copy_runs(src, i0, w32, out)
     if js.size == 0:
         return
     s3, o3 = _middle(src), _middle(out)
-    if s3 is None or o3 is None or s3.shape[0] != o3.shape[0] or s3.shape[2] != o3.shape[2]:
+    if not _alike(s3, o3):
         # any other strides: through contiguous axis-first copies
         s3 = np.ascontiguousarray(src).reshape(1, src.shape[0], -1)
         o3 = np.empty((1, out.shape[0], s3.shape[2]), out.dtype)
@@ -267,20 +274,47 @@ def crisp_parts(
     frac = np.flatnonzero(w != 0)
     if frac.size == 0:
         return out
-    p0 = out[frac]
-    p1 = parts[i1[frac]]
-    differ = p0 != p1
-    if not differ.any():  # e.g. not segmented: every label -1
+    p3, s3, o3 = _middle(parts), _middle(sdf), _middle(out)
+    if not _alike(p3, s3, o3):  # any other strides: contiguous copies
+        p3 = np.ascontiguousarray(parts).reshape(1, parts.shape[0], -1)
+        s3 = np.ascontiguousarray(sdf).reshape(1, sdf.shape[0], -1)
+        o3 = np.ascontiguousarray(out).reshape(1, out.shape[0], -1)
+        _crisp_into(p3, s3, i0, i1, w.astype(np.float32), frac, o3)
+        out[frac] = o3.reshape(out.shape)[frac]
         return out
-    # only where the labels differ: float32 is exact enough to place a boundary
-    a = sdf[i0[frac]]
-    b = sdf[i1[frac]]
-    cross = (a <= 0) != (b <= 0)
-    aa, ab = np.abs(a), np.abs(b)
-    tb = np.where(cross, aa / np.maximum(aa + ab, np.float32(1e-30)), np.float32(0.5))
-    take1 = differ & (w[frac].astype(np.float32).reshape((-1,) + (1,) * (parts.ndim - 1)) >= tb)
-    out[frac] = np.where(take1, p1, p0)
+    _crisp_into(p3, s3, i0, i1, w.astype(np.float32), frac, o3)
     return out
+
+
+@nb.njit(cache=True, parallel=True)
+def _crisp_into(parts, sdf, i0, i1, w, js, out):
+    """For output layers ``js`` (holding ``parts[:, i0[j]]``): take ``parts[:, i1[j]]`` where it
+    differs and ``w[j]`` reaches the boundary (the sdf's linear zero crossing between the two
+    layers when the surface passes between them, else half-way).
+
+    parts, sdf (P, N, Q) and out (P, M, Q), C-contiguous; rows (p, j) run in parallel.
+    """
+    nq = parts.shape[2]
+    nj = js.shape[0]
+    for t in nb.prange(parts.shape[0] * nj):
+        p = t // nj
+        j = js[t % nj]
+        a0, a1 = i0[j], i1[j]
+        wj = w[j]
+        for q in range(nq):
+            p0 = out[p, j, q]
+            p1 = parts[p, a1, q]
+            if p0 == p1:
+                continue
+            # only where the labels differ: float32 is exact enough to place a boundary
+            a = sdf[p, a0, q]
+            b = sdf[p, a1, q]
+            tb = np.float32(0.5)
+            if (a <= 0) != (b <= 0):
+                aa, ab = abs(a), abs(b)
+                tb = aa / max(aa + ab, np.float32(1e-30))
+            if wj >= tb:
+                out[p, j, q] = p1
 
 
 @nb.njit(cache=True, parallel=True)

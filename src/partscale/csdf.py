@@ -223,8 +223,8 @@ class CSDF:
     def _find_surface_bounds(self) -> np.ndarray:
         inside = self.sdf <= 0
         # occupancy along each axis from two reductions over the grid (not one per axis)
-        occ_xy = inside.any(axis=2)
-        occupied = (occ_xy.any(axis=1), occ_xy.any(axis=0), inside.any(axis=(0, 1)))
+        occ_xy = np.any(inside, axis=2)
+        occupied = (occ_xy.any(axis=1), occ_xy.any(axis=0), np.any(inside, axis=(0, 1)))
         if not occupied[0].any():
             raise InputError("CSDF: expected a surface (some sdf <= 0), got none")
         out = np.empty((2, 3))

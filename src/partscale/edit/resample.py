@@ -317,7 +317,6 @@ def _crisp_into(parts, sdf, i0, i1, w, js, out):
                 out[p, j, q] = p1
 
 
-@nb.njit(cache=True, parallel=True)
 def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
     """Put back what linear resampling skipped between consecutive output layers (in place).
 
@@ -329,9 +328,50 @@ def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts
     likewise take the largest. Columns run in parallel; layers in order, so a pair sees what
     the one before it wrote.
     """
-    m, na, nb_ = out.shape[0], out.shape[1], out.shape[2]
-    n_src = src.shape[0]
-    for a in nb.prange(na):
+    s3, p3, o3, op3 = (_middle(a) for a in (src, src_parts, out, out_parts))
+    c3, oc3 = _middle(src_rgb), _middle(out_rgb)
+    if (
+        s3 is not None
+        and c3 is not None
+        and oc3 is not None
+        and _alike(s3, p3, o3, op3)
+        and _alike(c3, oc3)
+        and c3.shape[0] == s3.shape[0]
+    ):
+        n_c = src_rgb.shape[-1]
+        c4 = c3.reshape(c3.shape[0], c3.shape[1], -1, n_c)
+        oc4 = oc3.reshape(oc3.shape[0], oc3.shape[1], -1, n_c)
+        _keep_thin_cols(s3, c4, p3, xa, pair, write, o3, oc4, op3)
+        return
+    # any other strides: through contiguous axis-first copies
+    flat = [np.ascontiguousarray(a) for a in (src, src_rgb, src_parts, out, out_rgb, out_parts)]
+    n, m = src.shape[0], out.shape[0]
+    s3, c3, p3, o3, oc3, op3 = (
+        a.reshape(1, a.shape[0], -1, *a.shape[3:]) if a.ndim == 4 else a.reshape(1, a.shape[0], -1)
+        for a in flat
+    )
+    assert s3.shape[1] == n and o3.shape[1] == m
+    _keep_thin_cols(s3, c3, p3, xa, pair, write, o3, oc3, op3)
+    out[...] = o3.reshape(out.shape)
+    out_rgb[...] = oc3.reshape(out_rgb.shape)
+    out_parts[...] = op3.reshape(out_parts.shape)
+
+
+#: Columns per parallel task of :func:`_keep_thin_cols` (the task also spans one row of P).
+_THIN_BLOCK = 256
+
+
+@nb.njit(cache=True, parallel=True)
+def _keep_thin_cols(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
+    """:func:`_keep_thin` on (P, N, Q) views (rgb (P, N, Q, C)), C-contiguous: columns
+    ``(p, q)`` in parallel blocks, the inner loop over contiguous ``q``."""
+    m, nq = out.shape[1], out.shape[2]
+    n_src = src.shape[1]
+    nblk = (nq + _THIN_BLOCK - 1) // _THIN_BLOCK
+    for task in nb.prange(src.shape[0] * nblk):
+        p = task // nblk
+        qa = (task % nblk) * _THIN_BLOCK
+        qe = min(qa + _THIN_BLOCK, nq)
         for j in range(m - 1):
             if not pair[j]:
                 continue
@@ -339,30 +379,30 @@ def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts
             q1 = min(int(np.ceil(xa[j + 1])) - 1, n_src - 1)
             if q1 < q0:
                 continue
-            for b in range(nb_):
-                v0 = out[j, a, b]
-                v1 = out[j + 1, a, b]
+            for q in range(qa, qe):
+                v0 = out[p, j, q]
+                v1 = out[p, j + 1, q]
                 solid = v0 > 0  # both outside: look for a skipped solid, else for a skipped gap
                 if solid != (v1 > 0):
                     continue
-                qb = -1
+                sb = -1
                 best = np.float32(0.0)
-                for q in range(q0, q1 + 1):
-                    v = src[q, a, b]
+                for s in range(q0, q1 + 1):
+                    v = src[p, s, q]
                     if (solid and v < best) or (not solid and v > best):
                         best = v
-                        qb = q
-                if qb < 0:
+                        sb = s
+                if sb < 0:
                     continue
-                t = j if qb - xa[j] <= xa[j + 1] - qb else j + 1
+                t = j if sb - xa[j] <= xa[j + 1] - sb else j + 1
                 if not write[t]:
                     t = 2 * j + 1 - t
                     if not write[t]:
                         continue
-                out[t, a, b] = best
+                out[p, t, q] = best
                 for c in range(src_rgb.shape[3]):
-                    out_rgb[t, a, b, c] = src_rgb[qb, a, b, c]
-                out_parts[t, a, b] = src_parts[qb, a, b]
+                    out_rgb[p, t, q, c] = src_rgb[p, sb, q, c]
+                out_parts[p, t, q] = src_parts[p, sb, q]
 
 
 def apply_plan(

@@ -258,6 +258,9 @@ def recompute_mask(
     else:
         rule, room = _GROW, np.zeros(0)
     mask = np.zeros((j1 - j0, *out_sdf.shape[1:]), np.uint8)
+    # first and last marked layer of each row of the cross-section (nj, -1 where none)
+    first = np.full(mask.shape[1], j1 - j0, np.int64)
+    last = np.full(mask.shape[1], -1, np.int64)
     _mask_rows(
         src_sdf,
         out_sdf,
@@ -273,8 +276,14 @@ def recompute_mask(
         plan.beta[row] == 0,
         room,
         mask,
+        first,
+        last,
     )
-    return mask, j0
+    lo, hi = int(first.min()), int(last.max())
+    if hi < lo:
+        return none
+    # only the layers holding marks travel on (a view): the rest of the band needs nothing
+    return mask[lo : hi + 1], j0 + lo
 
 
 # rules of _mask_rows: how a voxel whose nearest point is square to the axis is treated
@@ -282,14 +291,17 @@ _GROW, _SHRINK, _TILE = 0, 1, 2
 
 
 @numba.njit(cache=True, parallel=True)
-def _mask_rows(src, out, j0, i0, i1, gap, lim, lateral, h, rule, in_slab, unblended, room, mask):
+def _mask_rows(
+    src, out, j0, i0, i1, gap, lim, lateral, h, rule, in_slab, unblended, room, mask, first, last
+):
     """:func:`recompute_mask`'s per-voxel rule over output layers ``j0 ...`` (into ``mask``).
 
     A voxel is affected where ``gap[j] <= |sdf| <= lim``; its axial slope is the largest
     central difference of the source at the layers ``i0[j]``, ``i1[j]`` it was read from (as
     float32, exactly the vectorised rule's arithmetic); slope <= ``lateral`` keeps it (per
     ``rule``), else it is marked 1. ``_SHRINK`` marks every affected voxel: 2 where it is kept
-    outside the slab, else 1.
+    outside the slab, else 1. ``first[a]``, ``last[a]``: the first and last layer marked in
+    row ``a`` of the cross-section (left as they are where none).
     """
     nj, na, nb_ = mask.shape[0], mask.shape[1], mask.shape[2]
     n_src = src.shape[0]
@@ -310,11 +322,15 @@ def _mask_rows(src, out, j0, i0, i1, gap, lim, lateral, h, rule, in_slab, unblen
                 keep = slope <= lateral
                 if rule == _SHRINK:
                     mask[jj, a, b] = 2 if keep and not in_slab[jj] else 1
+                    first[a] = min(first[a], jj)
+                    last[a] = jj
                     continue
                 if rule == _TILE and in_slab[jj]:
                     keep = keep and unblended[jj] and np.float64(v) < room[jj]
                 if not keep:
                     mask[jj, a, b] = 1
+                    first[a] = min(first[a], jj)
+                    last[a] = jj
 
 
 def reevaluate_arrays(

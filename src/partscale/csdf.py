@@ -211,17 +211,26 @@ class CSDF:
         """(2, 3) float64: world bounding box of the solid (zero level), to sub-voxel accuracy.
 
         Along each axis, the extreme inside voxel is refined by the linear zero crossing to its
-        outside neighbour. Raises :class:`InputError` if the CSDF has no inside voxel.
+        outside neighbour. Raises :class:`InputError` if the CSDF has no inside voxel. Computed
+        once per CSDF (its arrays never change); each call returns a new array.
         """
+        got = self.__dict__.get("_surface_bounds")
+        if got is None:
+            got = self._find_surface_bounds()
+            object.__setattr__(self, "_surface_bounds", got)  # a cache, not a field
+        return got.copy()
+
+    def _find_surface_bounds(self) -> np.ndarray:
         inside = self.sdf <= 0
-        if not inside.any():
+        # occupancy along each axis from two reductions over the grid (not one per axis)
+        occ_xy = np.any(inside, axis=2)
+        occupied = (occ_xy.any(axis=1), occ_xy.any(axis=0), np.any(inside, axis=(0, 1)))
+        if not occupied[0].any():
             raise InputError("CSDF: expected a surface (some sdf <= 0), got none")
         out = np.empty((2, 3))
         h = self.voxel_size
         for ax in range(3):
-            other = tuple(a for a in range(3) if a != ax)
-            occ = inside.any(axis=other)
-            idx = np.nonzero(occ)[0]
+            idx = np.nonzero(occupied[ax])[0]
             for side, i in ((0, idx[0]), (1, idx[-1])):
                 step = -1 if side == 0 else 1
                 j = i + step
@@ -238,8 +247,9 @@ class CSDF:
         return out
 
     # -- functional updates ---------------------------------------------------------------
-    def replace(self, **changes: Any) -> CSDF:
-        """Return a new CSDF with some fields replaced (validated through :func:`make`)."""
+    def replace(self, *, trusted: bool = False, **changes: Any) -> CSDF:
+        """Return a new CSDF with some fields replaced (validated through :func:`make`;
+        ``trusted`` as there)."""
         fields = {n: getattr(self, n) for n in ("sdf", "rgb", "parts", "origin", "voxel_size")}
         fields["meta"] = self.meta  # make() copies it (the history is shared, not copied)
         unknown = set(changes) - set(fields)
@@ -248,18 +258,20 @@ class CSDF:
                 f"replace() got unknown field(s) {sorted(unknown)}; fields are {_NAMES}"
             )
         fields.update(changes)
-        return make(**fields)
+        return make(**fields, trusted=trusted)
 
-    def with_history(self, operation: dict[str, Any], **changes: Any) -> CSDF:
+    def with_history(
+        self, operation: dict[str, Any], *, trusted: bool = False, **changes: Any
+    ) -> CSDF:
         """Return a new CSDF with ``operation`` appended to ``meta['history']``.
 
         ``changes['meta']``, when given, replaces the meta (its history is the one extended).
         The entries already there are shared, not copied: recording an operation costs the same
-        whatever the history's length.
+        whatever the history's length. ``trusted`` as in :func:`make`.
         """
         meta = dict(changes.pop("meta", self.meta))
         meta["history"] = History.of(meta.get("history", [])).appended(operation)
-        return self.replace(meta=meta, **changes)
+        return self.replace(meta=meta, trusted=trusted, **changes)
 
     @property
     def n_parts(self) -> int:
@@ -323,6 +335,8 @@ def make(
     origin: Any = (0.0, 0.0, 0.0),
     voxel_size: float = 1.0,
     meta: dict[str, Any] | None = None,
+    *,
+    trusted: bool = False,
 ) -> CSDF:
     """Validate and convert arrays into a :class:`CSDF` (the one public constructor).
 
@@ -342,6 +356,10 @@ def make(
         JSON-serialisable metadata, copied; ``format``/``version``/``history`` are filled in,
         and a given ``history`` must be a list of objects (operations). It is stored as a
         read-only :class:`History` (a History given is shared as it is, not copied).
+    trusted : bool
+        The arrays are a stage's own result from a valid CSDF (finite, ``|sdf|`` within
+        bounds, parts in range): their values are not scanned again, only shapes, dtypes, origin,
+        voxel size and meta are checked. Never for arrays from outside the package.
     """
     sdf = np.asarray(sdf)
     if sdf.ndim != 3 or min(sdf.shape) < 2:
@@ -351,7 +369,7 @@ def make(
     if not np.issubdtype(sdf.dtype, np.floating):
         raise InputError(f"sdf: expected floating point values, got dtype {sdf.dtype}")
     sdf = sdf.astype(np.float32, copy=False)
-    if not np.isfinite(sdf).all():
+    if not trusted and not np.isfinite(sdf).all():
         bad = int((~np.isfinite(sdf)).sum())
         raise InputError(f"sdf: expected finite values, got {bad} NaN/inf voxel(s)")
     shape = sdf.shape
@@ -369,7 +387,7 @@ def make(
         raise InputError(f"parts: expected shape {shape}, got {parts.shape}")
     if not np.issubdtype(parts.dtype, np.integer):
         raise InputError(f"parts: expected integer part indices, got dtype {parts.dtype}")
-    if parts.size and (parts.min() < -1 or parts.max() > np.iinfo(np.int16).max):
+    if not trusted and parts.size and (parts.min() < -1 or parts.max() > np.iinfo(np.int16).max):
         raise InputError(
             f"parts: expected indices in [-1, 32767], got [{parts.min()}, {parts.max()}]"
         )
@@ -381,7 +399,11 @@ def make(
         raise InputError(
             f"origin: expected voxel centres within +-{WORLD_LIMIT:g} world units, got {far:.3g}"
         )
-    if sdf.size and max(-float(sdf.min()), float(sdf.max())) > SDF_LIMIT_VOXELS * voxel_size:
+    if (
+        not trusted
+        and sdf.size
+        and max(-float(sdf.min()), float(sdf.max())) > SDF_LIMIT_VOXELS * voxel_size
+    ):
         big = max(-float(sdf.min()), float(sdf.max()))
         raise InputError(
             f"sdf: expected |values| <= {SDF_LIMIT_VOXELS:g} voxel sizes "

@@ -189,8 +189,11 @@ def recompute_mask(
     dest: float,
     h: float,
     band: float,
-) -> np.ndarray:
+) -> tuple[np.ndarray, int]:
     """Voxels (axis-first, output grid) whose distance could have changed and must be recomputed.
+
+    Returns ``(mask, j0)``: ``mask`` (uint8) covers output layers ``j0 ...`` only (those within
+    reach of the edit; the layers beyond have nothing to recompute).
 
     The paper's rule: voxels whose old |distance| exceeds their distance to the zone's planes, plus
     the resampled slab. Among those, a voxel keeps its resampled value when that value is provably
@@ -200,7 +203,7 @@ def recompute_mask(
     scale ~1, the ball of its distance lies within its copy (a pure translation).
     """
     lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
-    mask = np.zeros(out_sdf.shape, np.uint8)
+    none = np.zeros((0, *out_sdf.shape[1:]), np.uint8), 0
     n_copies = int(plan.copy.max()) + 1
     if mode == "tile" and abs(plan.scale - 1.0) <= _RIGID:
         # Copies at scale ~1 are translations of the slab, and the first and last copy continue
@@ -209,66 +212,125 @@ def recompute_mask(
         period = (dest - start) / n_copies
         seams = start + period * np.arange(1, n_copies)
         if seams.size == 0:
-            return mask
+            return none
         to_seam = np.abs(y[:, None] - seams[None, :]).min(axis=1)
         reach = np.maximum(to_seam - SEAM_VOXELS * h, 0.0).astype(np.float32)
         rows = np.flatnonzero(reach <= lim)
+        if rows.size == 0:
+            return none
+        j0 = int(rows[0])
+        mask = np.zeros((int(rows[-1]) + 1 - j0, *out_sdf.shape[1:]), np.uint8)
         a = np.abs(out_sdf[rows])
-        mask[rows] = (a <= lim) & (a >= reach[rows, None, None])
-        return mask
+        mask[rows - j0] = (a <= lim) & (a >= reach[rows, None, None])
+        return mask, j0
     if mode == "global":
         j0, j1 = 0, out_sdf.shape[0]
-        affected = np.abs(out_sdf) <= lim
+        gap = np.zeros(j1, np.float32)  # |sdf| >= 0 always: only the band counts
     else:
         # distance of each output layer to the zone (0 inside the slab), one voxel of slack;
         # layers farther from the zone than the band cannot be affected
         gap = np.where(y < start, start - y, np.where(y > dest, y - dest, 0.0))
         gap = np.maximum(gap - h, 0.0).astype(np.float32)
         rows = np.flatnonzero(gap <= lim)
+        if rows.size == 0:
+            return none
         j0, j1 = int(rows[0]), int(rows[-1]) + 1
-        a = np.abs(out_sdf[j0:j1])
-        affected = (a <= lim) & (a >= gap[j0:j1, None, None])
-    cand = np.nonzero(affected)
-    cand = (cand[0] + j0, cand[1], cand[2])
+    row = np.arange(j0, j1)
     n_src = src_sdf.shape[0]
-    xa = plan.xa[cand[0]]
-    xc = np.clip(xa, 0, n_src - 1)
+    xc = np.clip(plan.xa[row], 0, n_src - 1)
     i0 = np.floor(xc).astype(np.int64)
     i1 = np.minimum(i0 + 1, n_src - 1)
-    slope = np.zeros(len(xa), np.float32)
-    for i in (i0, i1):
-        up = np.minimum(i + 1, n_src - 1)
-        dn = np.maximum(i - 1, 0)
-        g = (src_sdf[up, cand[1], cand[2]] - src_sdf[dn, cand[1], cand[2]]) / np.maximum(
-            (up - dn) * h, h
-        )
-        np.maximum(slope, np.abs(g), out=slope)
-    keep = slope <= _LATERAL
     if plan.scale < 1.0 - _RIGID:
         # A shrinking slab can bring surface closer: everything affected is recomputed. Outside
         # the slab, a voxel whose nearest point is square to the axis still has that point, so
         # its old distance caps the new one (code 2): the exact value wherever nothing came
         # closer, immune to the facets' chamfer of sharp edges.
-        code = np.where(keep & ~plan.in_slab[cand[0]], 2, 1).astype(np.uint8)
-        mask[cand] = code
-        return mask
-    if mode == "tile":
+        rule, room = _SHRINK, np.zeros(0)
+    elif mode == "tile":
         # Copies are not one monotone map: a slab voxel keeps its value only if the ball of its
         # distance stays inside its own copy (and it is not in a seam blend). Voxels outside the
         # slab see every copy farther than its source, so the growth argument holds for them.
-        n_copies = int(plan.copy.max()) + 1
+        # (Copies at scale ~1, translations, were handled above.)
+        rule = _TILE
         period = (dest - start) / n_copies
-        yy = y[cand[0]]
-        c = plan.copy[cand[0]]
+        yy, c = y[row], plan.copy[row]
         room = np.minimum(yy - (start + c * period), start + (c + 1) * period - yy)
-        inside = plan.in_slab[cand[0]]
-        # a copy at scale ~1 is a translation: inside that ball nothing else changed
-        rigid = abs(plan.scale - 1.0) <= _RIGID
-        ok_in = (plan.beta[cand[0]] == 0) & (np.abs(out_sdf[cand]) < room) & (keep | rigid)
-        keep = np.where(inside, ok_in, keep)
-    sel = ~keep
-    mask[cand[0][sel], cand[1][sel], cand[2][sel]] = 1
-    return mask
+    else:
+        rule, room = _GROW, np.zeros(0)
+    mask = np.zeros((j1 - j0, *out_sdf.shape[1:]), np.uint8)
+    # first and last marked layer of each row of the cross-section (nj, -1 where none)
+    first = np.full(mask.shape[1], j1 - j0, np.int64)
+    last = np.full(mask.shape[1], -1, np.int64)
+    _mask_rows(
+        src_sdf,
+        out_sdf,
+        j0,
+        i0,
+        i1,
+        gap[j0:j1],
+        np.float32(lim),
+        np.float32(_LATERAL),
+        h,
+        rule,
+        plan.in_slab[row],
+        plan.beta[row] == 0,
+        room,
+        mask,
+        first,
+        last,
+    )
+    lo, hi = int(first.min()), int(last.max())
+    if hi < lo:
+        return none
+    # only the layers holding marks travel on (a view): the rest of the band needs nothing
+    return mask[lo : hi + 1], j0 + lo
+
+
+# rules of _mask_rows: how a voxel whose nearest point is square to the axis is treated
+_GROW, _SHRINK, _TILE = 0, 1, 2
+
+
+@numba.njit(cache=True, parallel=True)
+def _mask_rows(
+    src, out, j0, i0, i1, gap, lim, lateral, h, rule, in_slab, unblended, room, mask, first, last
+):
+    """:func:`recompute_mask`'s per-voxel rule over output layers ``j0 ...`` (into ``mask``).
+
+    A voxel is affected where ``gap[j] <= |sdf| <= lim``; its axial slope is the largest
+    central difference of the source at the layers ``i0[j]``, ``i1[j]`` it was read from (as
+    float32, exactly the vectorised rule's arithmetic); slope <= ``lateral`` keeps it (per
+    ``rule``), else it is marked 1. ``_SHRINK`` marks every affected voxel: 2 where it is kept
+    outside the slab, else 1. ``first[a]``, ``last[a]``: the first and last layer marked in
+    row ``a`` of the cross-section (left as they are where none).
+    """
+    nj, na, nb_ = mask.shape[0], mask.shape[1], mask.shape[2]
+    n_src = src.shape[0]
+    for a in numba.prange(na):
+        for jj in range(nj):
+            j = j0 + jj
+            g0 = gap[jj]
+            for b in range(nb_):
+                v = abs(out[j, a, b])
+                if not (v <= lim and v >= g0):
+                    continue
+                slope = np.float32(0.0)
+                for i in (i0[jj], i1[jj]):
+                    up = min(i + 1, n_src - 1)
+                    dn = max(i - 1, 0)
+                    g = np.float64(src[up, a, b] - src[dn, a, b]) / max((up - dn) * h, h)
+                    slope = np.float32(max(np.float64(slope), abs(g)))
+                keep = slope <= lateral
+                if rule == _SHRINK:
+                    mask[jj, a, b] = 2 if keep and not in_slab[jj] else 1
+                    first[a] = min(first[a], jj)
+                    last[a] = jj
+                    continue
+                if rule == _TILE and in_slab[jj]:
+                    keep = keep and unblended[jj] and np.float64(v) < room[jj]
+                if not keep:
+                    mask[jj, a, b] = 1
+                    first[a] = min(first[a], jj)
+                    last[a] = jj
 
 
 def reevaluate_arrays(
@@ -280,6 +342,7 @@ def reevaluate_arrays(
     *,
     band: float = BAND_VOXELS,
     npass: int = 2,
+    row0: int = 0,
 ) -> int:
     """Recompute ``sdf``, ``rgb``, ``parts`` in place at ``mask`` voxels within ``band`` voxels.
 
@@ -290,12 +353,15 @@ def reevaluate_arrays(
     rgb : (X, Y, Z, 3) uint8, writeable
     parts : (X, Y, Z) int16, writeable
     voxel_size : float
-    mask : (X, Y, Z) bool or uint8
-        Voxels to recompute; those with ``|sdf| > band`` voxels are left as they are. As uint8,
-        code 2 marks voxels whose current |sdf| is known to be an upper bound of the distance:
-        they keep it (and their colour and part) where it is smaller than the recomputed one.
+    mask : (M, Y, Z) bool or uint8
+        Voxels to recompute, of layers ``row0 ... row0 + M - 1`` (all layers beyond hold none);
+        those with ``|sdf| > band`` voxels are left as they are. As uint8, code 2 marks voxels
+        whose current |sdf| is known to be an upper bound of the distance: they keep it (and
+        their colour and part) where it is smaller than the recomputed one.
     band : float
         Half-width of the band, in voxels.
+    row0 : int
+        First layer (along axis 0) ``mask`` covers.
 
     Returns
     -------
@@ -305,8 +371,9 @@ def reevaluate_arrays(
     h = float(voxel_size)
     lim = band * h
     mask = np.asarray(mask)
-    target = (mask > 0) & (np.abs(sdf) <= lim)
-    layers = np.flatnonzero(target.any(axis=(1, 2)))
+    # only the layers the mask covers are read: the edit's slab and band, not the whole grid
+    target = (mask > 0) & (np.abs(sdf[row0 : row0 + mask.shape[0]]) <= lim)
+    layers = np.flatnonzero(target.any(axis=(1, 2))) + row0
     if layers.size == 0:
         return 0
     pad = int(np.ceil(band)) + 2
@@ -319,8 +386,8 @@ def reevaluate_arrays(
     def solve(run: np.ndarray):
         a0 = max(int(run[0]) - pad, 0)
         a1 = min(int(run[-1]) + pad + 1, sdf.shape[0])
-        t_run = np.zeros_like(target[a0:a1])
-        t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] : run[-1] + 1]
+        t_run = np.zeros((a1 - a0, *target.shape[1:]), bool)
+        t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] - row0 : run[-1] - row0 + 1]
         return _solve_box(sdf, t_run, a0, h, lim, pad, npass)
 
     # boxes are independent (each reads the unchanged field) and the propagation, their main
@@ -335,7 +402,7 @@ def reevaluate_arrays(
     if mask.dtype == np.uint8:
         # code 2: the old value is an upper bound of the distance; keep it where it is smaller
         old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
-        capped = (mask[gi[:, 0], gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
+        capped = (mask[gi[:, 0] - row0, gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
         if capped.any():
             keep = ~capped
             gi, new, cp = gi[keep], new[keep], cp[keep]

@@ -141,31 +141,93 @@ def lerp_float(src: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 @nb.njit(cache=True, parallel=True)
-def _lerp_into(src, i0, i1, w, out, lo, hi):
-    """out[j] = src[i0[j]] (w[j] == 0) or the float32 blend of src[i0[j]] and src[i1[j]].
+def _lerp_into(src, i0, i1, w, out, lo, hi, js):
+    """out[:, j] = src[:, i0[j]] (w[j] == 0) or the float32 blend of src[:, i0[j]] and
+    src[:, i1[j]], for the output layers ``js``.
 
-    src (N, A, B, C), out (M, A, B, C): layers are independent, so they run in parallel. For an
-    integer ``out`` the blend is rounded half to even and clipped to [lo, hi].
+    src (P, N, Q), out (P, M, Q), both C-contiguous: the edit axis in the middle, so the inner
+    loop runs over contiguous memory. Rows ``(p, j)`` are independent and run in parallel. For
+    an integer ``out`` the blend is rounded half to even and clipped to [lo, hi].
     """
-    A, B, C = src.shape[1], src.shape[2], src.shape[3]
+    nq = src.shape[2]
+    nj = js.shape[0]
     integer = lo < hi
-    for j in nb.prange(out.shape[0]):
+    for t in nb.prange(src.shape[0] * nj):
+        p = t // nj
+        j = js[t % nj]
         a0, a1 = i0[j], i1[j]
         if w[j] == 0:
-            for a in range(A):
-                for b in range(B):
-                    for c in range(C):
-                        out[j, a, b, c] = src[a0, a, b, c]
+            for q in range(nq):
+                out[p, j, q] = src[p, a0, q]
             continue
         w1 = np.float32(w[j])
         w0 = np.float32(1.0) - w1
-        for a in range(A):
-            for b in range(B):
-                for c in range(C):
-                    v = np.float32(src[a0, a, b, c]) * w0 + np.float32(src[a1, a, b, c]) * w1
-                    if integer:
-                        v = min(max(np.rint(v), lo), hi)
-                    out[j, a, b, c] = v
+        if integer:
+            for q in range(nq):
+                v = np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
+                out[p, j, q] = min(max(np.rint(v), lo), hi)
+        else:
+            for q in range(nq):
+                out[p, j, q] = np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
+
+
+#: Runs of at least this many consecutive copied layers are copied as blocks (numpy's strided
+#: copy, at memory speed), not layer by layer through the kernel.
+_BLOCK_LAYERS = 4
+
+
+def _copy_runs(src: np.ndarray, i0: np.ndarray, w: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """Copy the runs of output layers that read consecutive source layers exactly (``w == 0``,
+    ``i0`` rising by one: the rigid content before and after the slab) as blocks; returns the
+    output layers left for the kernel (int64)."""
+    m = len(i0)
+    exact = w == 0
+    # a run continues where the next layer is exact and reads the next source layer
+    cont = exact[1:] & exact[:-1] & (np.diff(i0) == 1)
+    starts = np.flatnonzero(exact & ~np.concatenate(([False], cont)))
+    done = np.zeros(m, bool)
+    if starts.size:
+        ends = np.flatnonzero(exact & ~np.concatenate((cont, [False]))) + 1
+        for j0, j1 in zip(starts.tolist(), ends.tolist(), strict=True):
+            if j1 - j0 >= _BLOCK_LAYERS:
+                s0 = int(i0[j0])
+                out[j0:j1] = src[s0 : s0 + (j1 - j0)]
+                done[j0:j1] = True
+    return np.flatnonzero(~done).astype(np.int64)
+
+
+def _middle(a: np.ndarray) -> np.ndarray | None:
+    """Axis-first ``a`` (N, ...) as a (P, N, Q) view of the C-contiguous world array it was
+    moved from (the edit axis in the middle), or None when it is no such view."""
+    for ax in range(min(a.ndim, 3)):
+        world = np.moveaxis(a, 0, ax)
+        if world.flags.c_contiguous:
+            p = int(np.prod(world.shape[:ax], dtype=np.int64))
+            return world.reshape(p, a.shape[0], -1)
+    return None
+
+
+def _alike(*views: np.ndarray | None) -> bool:
+    """Whether :func:`_middle` views all exist and agree across the edit axis (P and Q)."""
+    if any(v is None for v in views):
+        return False
+    return len({(v.shape[0], v.shape[2]) for v in views if v is not None}) == 1
+
+
+def _lerp_rest(src, i0, i1, w32, out, lo, hi):
+    """Rigid runs as block copies, the remaining layers through :func:`_lerp_into`."""
+    js = _copy_runs(src, i0, w32, out)
+    if js.size == 0:
+        return
+    s3, o3 = _middle(src), _middle(out)
+    if not _alike(s3, o3):
+        # any other strides: through contiguous axis-first copies
+        s3 = np.ascontiguousarray(src).reshape(1, src.shape[0], -1)
+        o3 = np.empty((1, out.shape[0], s3.shape[2]), out.dtype)
+        _lerp_into(s3, i0, i1, w32, o3, lo, hi, js)
+        out[js] = o3.reshape(out.shape)[js]
+        return
+    _lerp_into(s3, i0, i1, w32, o3, lo, hi, js)
 
 
 def empty_layers(shape: tuple[int, ...], dtype, axis: int) -> np.ndarray:
@@ -192,10 +254,7 @@ def lerp_layers(src: np.ndarray, x: np.ndarray, out: np.ndarray | None = None) -
         lo, hi = float(info.min), float(info.max)
     else:
         lo = hi = 0.0
-    if src.ndim == 3:  # a trailing axis of one: the kernel takes (N, A, B, C) views
-        _lerp_into(src[..., None], i0, i1, w.astype(np.float32), out[..., None], lo, hi)
-    else:
-        _lerp_into(src, i0, i1, w.astype(np.float32), out, lo, hi)
+    _lerp_rest(src, i0, i1, w.astype(np.float32), out, lo, hi)
     return out
 
 
@@ -211,30 +270,54 @@ def crisp_parts(
     i0, i1, w = _split(x, parts.shape[0])
     if out is None:
         out = parts[i0]
-    else:  # the kernel's copy path (weight 0), into any strides
-        _lerp_into(
-            parts[..., None], i0, i0, np.zeros(len(i0), np.float32), out[..., None], 0.0, 0.0
-        )
+    else:  # copies of the nearer-below layer (weight 0), into any strides
+        _lerp_rest(parts, i0, i0, np.zeros(len(i0), np.float32), out, 0.0, 0.0)
     frac = np.flatnonzero(w != 0)
     if frac.size == 0:
         return out
-    p0 = out[frac]
-    p1 = parts[i1[frac]]
-    differ = p0 != p1
-    if not differ.any():  # e.g. not segmented: every label -1
+    p3, s3, o3 = _middle(parts), _middle(sdf), _middle(out)
+    if not _alike(p3, s3, o3):  # any other strides: contiguous copies
+        p3 = np.ascontiguousarray(parts).reshape(1, parts.shape[0], -1)
+        s3 = np.ascontiguousarray(sdf).reshape(1, sdf.shape[0], -1)
+        o3 = np.ascontiguousarray(out).reshape(1, out.shape[0], -1)
+        _crisp_into(p3, s3, i0, i1, w.astype(np.float32), frac, o3)
+        out[frac] = o3.reshape(out.shape)[frac]
         return out
-    # only where the labels differ: float32 is exact enough to place a boundary
-    a = sdf[i0[frac]]
-    b = sdf[i1[frac]]
-    cross = (a <= 0) != (b <= 0)
-    aa, ab = np.abs(a), np.abs(b)
-    tb = np.where(cross, aa / np.maximum(aa + ab, np.float32(1e-30)), np.float32(0.5))
-    take1 = differ & (w[frac].astype(np.float32).reshape((-1,) + (1,) * (parts.ndim - 1)) >= tb)
-    out[frac] = np.where(take1, p1, p0)
+    _crisp_into(p3, s3, i0, i1, w.astype(np.float32), frac, o3)
     return out
 
 
 @nb.njit(cache=True, parallel=True)
+def _crisp_into(parts, sdf, i0, i1, w, js, out):
+    """For output layers ``js`` (holding ``parts[:, i0[j]]``): take ``parts[:, i1[j]]`` where it
+    differs and ``w[j]`` reaches the boundary (the sdf's linear zero crossing between the two
+    layers when the surface passes between them, else half-way).
+
+    parts, sdf (P, N, Q) and out (P, M, Q), C-contiguous; rows (p, j) run in parallel.
+    """
+    nq = parts.shape[2]
+    nj = js.shape[0]
+    for t in nb.prange(parts.shape[0] * nj):
+        p = t // nj
+        j = js[t % nj]
+        a0, a1 = i0[j], i1[j]
+        wj = w[j]
+        for q in range(nq):
+            p0 = out[p, j, q]
+            p1 = parts[p, a1, q]
+            if p0 == p1:
+                continue
+            # only where the labels differ: float32 is exact enough to place a boundary
+            a = sdf[p, a0, q]
+            b = sdf[p, a1, q]
+            tb = np.float32(0.5)
+            if (a <= 0) != (b <= 0):
+                aa, ab = abs(a), abs(b)
+                tb = aa / max(aa + ab, np.float32(1e-30))
+            if wj >= tb:
+                out[p, j, q] = p1
+
+
 def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
     """Put back what linear resampling skipped between consecutive output layers (in place).
 
@@ -246,9 +329,50 @@ def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts
     likewise take the largest. Columns run in parallel; layers in order, so a pair sees what
     the one before it wrote.
     """
-    m, na, nb_ = out.shape[0], out.shape[1], out.shape[2]
-    n_src = src.shape[0]
-    for a in nb.prange(na):
+    s3, p3, o3, op3 = (_middle(a) for a in (src, src_parts, out, out_parts))
+    c3, oc3 = _middle(src_rgb), _middle(out_rgb)
+    if (
+        s3 is not None
+        and c3 is not None
+        and oc3 is not None
+        and _alike(s3, p3, o3, op3)
+        and _alike(c3, oc3)
+        and c3.shape[0] == s3.shape[0]
+    ):
+        n_c = src_rgb.shape[-1]
+        c4 = c3.reshape(c3.shape[0], c3.shape[1], -1, n_c)
+        oc4 = oc3.reshape(oc3.shape[0], oc3.shape[1], -1, n_c)
+        _keep_thin_cols(s3, c4, p3, xa, pair, write, o3, oc4, op3)
+        return
+    # any other strides: through contiguous axis-first copies
+    flat = [np.ascontiguousarray(a) for a in (src, src_rgb, src_parts, out, out_rgb, out_parts)]
+    n, m = src.shape[0], out.shape[0]
+    s3, c3, p3, o3, oc3, op3 = (
+        a.reshape(1, a.shape[0], -1, *a.shape[3:]) if a.ndim == 4 else a.reshape(1, a.shape[0], -1)
+        for a in flat
+    )
+    assert s3.shape[1] == n and o3.shape[1] == m
+    _keep_thin_cols(s3, c3, p3, xa, pair, write, o3, oc3, op3)
+    out[...] = o3.reshape(out.shape)
+    out_rgb[...] = oc3.reshape(out_rgb.shape)
+    out_parts[...] = op3.reshape(out_parts.shape)
+
+
+#: Columns per parallel task of :func:`_keep_thin_cols` (the task also spans one row of P).
+_THIN_BLOCK = 256
+
+
+@nb.njit(cache=True, parallel=True)
+def _keep_thin_cols(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
+    """:func:`_keep_thin` on (P, N, Q) views (rgb (P, N, Q, C)), C-contiguous: columns
+    ``(p, q)`` in parallel blocks, the inner loop over contiguous ``q``."""
+    m, nq = out.shape[1], out.shape[2]
+    n_src = src.shape[1]
+    nblk = (nq + _THIN_BLOCK - 1) // _THIN_BLOCK
+    for task in nb.prange(src.shape[0] * nblk):
+        p = task // nblk
+        qa = (task % nblk) * _THIN_BLOCK
+        qe = min(qa + _THIN_BLOCK, nq)
         for j in range(m - 1):
             if not pair[j]:
                 continue
@@ -256,30 +380,30 @@ def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts
             q1 = min(int(np.ceil(xa[j + 1])) - 1, n_src - 1)
             if q1 < q0:
                 continue
-            for b in range(nb_):
-                v0 = out[j, a, b]
-                v1 = out[j + 1, a, b]
+            for q in range(qa, qe):
+                v0 = out[p, j, q]
+                v1 = out[p, j + 1, q]
                 solid = v0 > 0  # both outside: look for a skipped solid, else for a skipped gap
                 if solid != (v1 > 0):
                     continue
-                qb = -1
+                sb = -1
                 best = np.float32(0.0)
-                for q in range(q0, q1 + 1):
-                    v = src[q, a, b]
+                for s in range(q0, q1 + 1):
+                    v = src[p, s, q]
                     if (solid and v < best) or (not solid and v > best):
                         best = v
-                        qb = q
-                if qb < 0:
+                        sb = s
+                if sb < 0:
                     continue
-                t = j if qb - xa[j] <= xa[j + 1] - qb else j + 1
+                t = j if sb - xa[j] <= xa[j + 1] - sb else j + 1
                 if not write[t]:
                     t = 2 * j + 1 - t
                     if not write[t]:
                         continue
-                out[t, a, b] = best
+                out[p, t, q] = best
                 for c in range(src_rgb.shape[3]):
-                    out_rgb[t, a, b, c] = src_rgb[qb, a, b, c]
-                out_parts[t, a, b] = src_parts[qb, a, b]
+                    out_rgb[p, t, q, c] = src_rgb[p, sb, q, c]
+                out_parts[p, t, q] = src_parts[p, sb, q]
 
 
 def cut_slivers(

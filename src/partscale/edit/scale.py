@@ -23,7 +23,7 @@ from ..progress import ProgressCallback, resolve, scaled
 from .parts import renumber_copies, update_parts_info
 from .recipe import AXES, Edit, Recipe, forward_coordinate, source_coordinate, tile_count
 from .reevaluate import recompute_mask, reevaluate_arrays
-from .resample import Plan, apply_plan, lerp_layers, make_plan
+from .resample import Plan, apply_plan, empty_layers, lerp_layers, make_plan
 from .resolved import ResolvedEdit, resolve_edit
 
 
@@ -79,10 +79,16 @@ def _edit_arrays(
     reevaluated = None
     slivers: dict[str, int] = {}
     if naive:
-        out_sdf = lerp_layers(src_sdf, plan.xa)
-        out_rgb = lerp_layers(src_rgb, plan.xa)
-        ix = np.clip(np.rint(plan.xa), 0, src_parts.shape[0] - 1).astype(np.int64)
-        out_parts = src_parts[ix]
+        m = len(plan.xa)
+        out_sdf, out_rgb, out_parts = (
+            lerp_layers(a, x, empty_layers((m, *a.shape[1:]), a.dtype, ax))
+            for a, x in (
+                (src_sdf, plan.xa),
+                (src_rgb, plan.xa),
+                # nearest source layer: integer positions are copies
+                (src_parts, np.clip(np.rint(plan.xa), 0, src_parts.shape[0] - 1)),
+            )
+        )
     else:
         # the part-aware modes keep elements thinner than the compression or lying at a seam;
         # global stays the plain baseline scaling
@@ -106,7 +112,7 @@ def _edit_arrays(
                 i_end=(r.end - o) / h,
             )
         y = float(csdf.origin[ax]) + np.arange(out_sdf.shape[0]) * h
-        mask = recompute_mask(
+        mask, j0 = recompute_mask(
             src_sdf,
             out_sdf,
             plan,
@@ -121,9 +127,13 @@ def _edit_arrays(
         eff_band = (band + 1.0) * max(1.0, 1.0 / plan.scale)
         # what re-evaluation may change, as resampled: to tell the voxels it did change
         # (index tuples, not ravel(): the arrays are views in world order, ravel would copy)
+        # (the mask covers the layers from j0 within reach of the edit, not the whole grid)
         todo = np.nonzero(mask)
+        todo = (todo[0] + j0, todo[1], todo[2])
         sdf_was, parts_was = out_sdf[todo], out_parts[todo]
-        reevaluated = reevaluate_arrays(out_sdf, out_rgb, out_parts, h, mask, band=eff_band)
+        reevaluated = reevaluate_arrays(
+            out_sdf, out_rgb, out_parts, h, mask, band=eff_band, row0=j0
+        )
         # parts are labelled up to the band outside the surface (as the segment stage does):
         # voxels the edit resampled or recomputed lose theirs beyond it; the copied layers
         # outside the zone keep their labels as they are, like their distances
@@ -132,16 +142,19 @@ def _edit_arrays(
         moved = (sdf_now != sdf_was) | (out_parts[todo] != parts_was)
         drop = moved & (sdf_now > far)
         out_parts[tuple(t[drop] for t in todo)] = -1
-        layers = plan.in_slab | (plan.beta > 0)
-        slab_parts = out_parts[layers]
-        slab_parts[out_sdf[layers] > far] = -1
-        out_parts[layers] = slab_parts
+        layers = np.flatnonzero(plan.in_slab | (plan.beta > 0))
+        if layers.size and layers[-1] - layers[0] + 1 == layers.size:  # the slab: a view
+            slab = slice(int(layers[0]), int(layers[-1]) + 1)
+            np.copyto(out_parts[slab], np.int16(-1), where=out_sdf[slab] > far)
+        elif layers.size:
+            slab_parts = out_parts[layers]
+            slab_parts[out_sdf[layers] > far] = -1
+            out_parts[layers] = slab_parts
     sdf, rgb, parts = (np.moveaxis(a, 0, ax) for a in (out_sdf, out_rgb, out_parts))
-    if not naive:
-        # apply_plan wrote them in world order and nothing else holds them: read-only, the
-        # CSDF takes them as they are instead of copying (no full copy beyond the output)
-        for a in (sdf, rgb, parts):
-            a.flags.writeable = False
+    # written in world order and nothing else holds them: read-only, the CSDF takes them as
+    # they are instead of copying (no full copy beyond the output)
+    for a in (sdf, rgb, parts):
+        a.flags.writeable = False
     return _Edited(
         sdf,
         rgb,
@@ -235,7 +248,10 @@ def _apply_edit(
     if edit.mode == "global":  # what its plane map needs (recipe coordinates)
         entry.update(lo=r.lo, hi=r.hi)
     entry.update(record or {})
-    out = csdf.with_history(entry, sdf=done.sdf, rgb=done.rgb, parts=done.parts, meta=meta)
+    # the arrays are the edit's own, made from a valid CSDF: not scanned again
+    out = csdf.with_history(
+        entry, trusted=True, sdf=done.sdf, rgb=done.rgb, parts=done.parts, meta=meta
+    )
     report(1.0, "done")
     return out
 
@@ -363,6 +379,7 @@ def naive_edit(csdf: CSDF, edit: Edit | dict[str, Any]) -> CSDF:
     done = _edit_arrays(csdf, r, naive=True)
     return csdf.with_history(
         _history_entry(csdf, edit, r, done, "naive_scale"),
+        trusted=True,
         sdf=done.sdf,
         rgb=done.rgb,
         parts=done.parts,

@@ -29,6 +29,11 @@ KINDS = {OBSERVED: "observed", MIRRORED: "mirrored", GUESSED: "guessed"}
 KIND_COLORS = {OBSERVED: (70, 150, 230), MIRRORED: (240, 170, 40), GUESSED: (220, 60, 60)}
 """Display colours of the three kinds of surface (``render --completion``): blue, amber, red."""
 SNAP_VOXELS = 1.5
+BACK_SHIFT = 0.4
+"""Voxels by which an unobserved boundary of the solid is drawn in (below 0.5: no voxel
+changes side, so no thin sheet loses its voxels)."""
+BEHIND_SLACK = 0.5
+"""Voxels in front of its nearest surface point that a voxel of the closure may lie."""
 DIFFUSE_SIGMA = 2.0
 
 
@@ -46,6 +51,7 @@ def fuse(
     points: np.ndarray,
     colors: np.ndarray,
     kind: np.ndarray,
+    normals: np.ndarray,
     free_world: Callable[[np.ndarray], np.ndarray],
     sym_free: list[Callable[[np.ndarray], np.ndarray]],
     height_world: Callable[[np.ndarray], np.ndarray],
@@ -59,7 +65,7 @@ def fuse(
         The grid frame in the world (voxel centre ``origin + ijk * h`` in grid coordinates).
     points : (N, 3) float64
         Surface points in grid coordinates; ``colors`` (N, 3) uint8; ``kind`` (N,) uint8
-        (``OBSERVED`` or ``MIRRORED``).
+        (``OBSERVED`` or ``MIRRORED``); ``normals`` (N, 3) unit, pointing out of the object.
     free_world : world points (M, 3) -> (M,) bool, the observed free space.
     sym_free : list of the same for each symmetric view of the free space.
     height_world : world points -> height above the floor.
@@ -73,7 +79,7 @@ def fuse(
     shape = tuple(int(s) for s in shape)
     idx = np.rint((points - origin) / h).astype(np.int64)
     inb = ((idx >= 0) & (idx < np.asarray(shape))).all(axis=1)
-    idx, points, colors, kind = idx[inb], points[inb], colors[inb], kind[inb]
+    idx, points, colors, kind, normals = idx[inb], points[inb], colors[inb], kind[inb], normals[inb]
     occ = np.zeros(shape, bool)
     occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
     occ_obs = np.zeros(shape, bool)
@@ -86,6 +92,10 @@ def fuse(
     centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
     world = centres @ R.T.astype(np.float32) + t.astype(np.float32)
     keep = ~free_world(world) & (height_world(world) >= -0.5 * h)
+    # the closure lies behind the surface: a voxel in front of its nearest surface point is
+    # space the scan says nothing about (beyond the sensor's range, a hole), not the object
+    _, nn0 = cKDTree(points).query(centres, k=1, workers=2)
+    keep &= np.einsum("ni,ni->n", centres - points[nn0], normals[nn0]) <= BEHIND_SLACK * h
     if sym_free:
         d_obs = _edt(~occ_obs).ravel()[near]
         # a symmetric view may not carve next to what was observed
@@ -113,7 +123,9 @@ def fuse(
 
     # distances: voxel solid first, then the exact distance to surface points near it
     e_out = _edt(~solid) - 0.5
-    e_in = _edt(solid) - 0.5
+    # the inside distance runs to BACK_SHIFT voxels short of the solid's voxel boundary: the
+    # unobserved side of a thin closure then lies about a voxel behind the surface it closes
+    e_in = _edt(solid) - 0.5 - BACK_SHIFT
     sdf = np.where(solid, -e_in, e_out).astype(np.float32) * h
     band = np.flatnonzero(np.abs(sdf.ravel()) <= (BAND_VOXELS + 1) * h)
     # points deep inside the solid are no surface (a copy landing in a filled region)
@@ -121,7 +133,7 @@ def fuse(
     boundary = ndimage.binary_dilation(solid) & ~ndimage.binary_erosion(solid)
     on = boundary[pidx[:, 0], pidx[:, 1], pidx[:, 2]]
     tree = cKDTree(points[on]) if on.any() else None
-    sp_col, sp_kind = colors[on], kind[on]
+    sp_col, sp_kind, sp_n = colors[on], kind[on], normals[on]
     rgb = np.zeros((*shape, 3), np.uint8)
     prov = np.zeros(shape, np.uint8)
     band_pts = origin + np.stack(np.unravel_index(band, shape), axis=1) * h
@@ -133,6 +145,12 @@ def fuse(
     nn = np.where(close, nn, 0)
     flat_sdf = sdf.ravel()
     cur = flat_sdf[band]
+    # the voxel solid reaches up to a voxel (and the carving margin) in front of the surface
+    # points; in front of its nearest point's surface a voxel is outside, so the zero level
+    # passes through the points rather than ahead of them
+    plane = np.einsum("ni,ni->n", band_pts - points[on][nn], sp_n[nn])
+    ahead = close & (plane > 0)
+    cur = np.where(ahead, np.abs(cur), cur)
     exact = np.where(cur < 0, -np.minimum(dist, -cur), np.minimum(dist, cur))
     flat_sdf[band] = np.where(close, exact, cur).astype(np.float32)
     # keep a hair off zero so marching cubes has no degenerate cells

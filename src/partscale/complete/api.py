@@ -319,8 +319,9 @@ def complete(
     rng = np.random.default_rng(0)
     sub = rng.choice(len(Qu), min(len(Qu), 20000), replace=False)
     cell = 1.5 * h0
+    Nu0 = QN @ U[:3, :3].T
     if symmetry:
-        syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell)
+        syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
     if syms:
         # turn the upright frame so the first mirror plane is x = 0
         p = syms[0].params

@@ -29,7 +29,7 @@ SLABS = 8
 REFINE_PEAKS = 3
 """Vote peaks whose neighbourhoods the plane search refines (the rest are scored once)."""
 REFINE_NEIGHBOURS = 4
-REFINE_SAMPLES = 6000
+REFINE_SAMPLES = 3000
 REFINE_FACING = 0.8
 """Cosine above which a mirrored point's normal and its counterpart's agree (same surface)."""
 MIN_ROTATION_SUPPORT = 0.5
@@ -211,7 +211,7 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
     best = int(np.argmax(np.where(covered >= MIN_COVER, score, -np.inf)))
     if covered[best] < MIN_COVER:
         return None
-    t, d = cands[best]
+    t, d = _canonical(*cands[best])
     A, b = _mirror(t, d)
     return Symmetry(
         "mirror",
@@ -220,7 +220,7 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
         float(s_sup[best]),
         float(s_vio[best]),
         bands=_bands(ok[best], top),
-        params={"theta": float(t % np.pi), "offset": float(d), "cover": float(covered[best])},
+        params={"theta": float(t), "offset": float(d), "cover": float(covered[best])},
     )
 
 
@@ -250,16 +250,19 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
         return float(dist.min(axis=1).mean())
 
     t, d = sym.params["theta"], sym.params["offset"]
-    steps = np.linspace(-1.5, 1.5, 31)
-    for what in ("d", "t", "d"):
+    # coarse to fine: offset (cells), angle (degrees), offset again
+    for what, steps in (
+        ("d", np.linspace(-1.5, 1.5, 31)),
+        ("t", np.linspace(-2.0, 2.0, 17)),
+        ("d", np.linspace(-0.3, 0.3, 13)),
+        ("t", np.linspace(-0.3, 0.3, 7)),
+    ):
         if what == "d":
             cands = [(t, d + x * cell) for x in steps]
         else:
             cands = [(t + np.radians(x), d) for x in steps]
         t, d = min(cands, key=lambda c: cost(*c))
-    if t < 0 or t >= np.pi:  # the same plane with theta in [0, pi)
-        k = np.floor(t / np.pi)
-        t, d = t - k * np.pi, d * (-1.0) ** k
+    t, d = _canonical(t, d)
     A, b = _mirror(t, d)
     return Symmetry(
         sym.kind,
@@ -270,6 +273,12 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
         bands=sym.bands,
         params={**sym.params, "theta": float(t), "offset": float(d)},
     )
+
+
+def _canonical(theta: float, offset: float) -> tuple[float, float]:
+    """The same plane with its angle in [0, pi) (the normal turned over flips the offset)."""
+    k = np.floor(theta / np.pi)
+    return float(theta - k * np.pi), float(offset * (-1.0) ** k)
 
 
 def _mirror_all(S: np.ndarray, planes: np.ndarray) -> np.ndarray:

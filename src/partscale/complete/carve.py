@@ -126,7 +126,11 @@ class FreeGrid:
         g = np.indices(tuple(self.shape), dtype=np.float32).reshape(3, -1).T
         centres = self.lo.astype(np.float32) + g * np.float32(cell)
         R, t = self.to_world[:3, :3].astype(np.float32), self.to_world[:3, 3].astype(np.float32)
-        self.table = carver.free(centres @ R.T + t, margin).reshape(tuple(self.shape))
+        table = carver.free(centres @ R.T + t, margin).reshape(tuple(self.shape))
+        # clearly free: free with all its neighbours, so a point that lands just beside a
+        # silhouette edge (a copy of an edge of the object, an object not quite symmetric)
+        # is no contradiction; outside the table counts as free
+        self.table = ndimage.binary_erosion(table, np.ones((3, 3, 3), bool), border_value=1)
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
         """(N,) bool: ``points`` (N, 3) in the grid's frame that some view saw through."""

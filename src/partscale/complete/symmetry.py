@@ -157,6 +157,20 @@ def mirror_planes(
             break
         if normals is not None:
             best = _refine_plane(best, P, np.asarray(normals, np.float64), cell)
+            # the heights where it holds, judged again with the plane where it now is
+            plane = np.array([[best.params["theta"], best.params["offset"]]])
+            sup, vio = scorer(_mirror_all(pts, plane))
+            _, ok, covered, s_sup, s_vio = _slab_score(sup, vio, _slab_ids(pts[:, 1], top))
+            if covered[0] >= MIN_COVER:
+                best = Symmetry(
+                    best.kind,
+                    best.A,
+                    best.b,
+                    float(s_sup[0]),
+                    float(s_vio[0]),
+                    bands=_bands(ok[0], top),
+                    params={**best.params, "cover": float(covered[0])},
+                )
         found.append(best)
         # the next plane votes with the mirrored copy too (a table: left-right, then front-back)
         pts = np.concatenate([pts, best.apply(pts)])

@@ -133,7 +133,7 @@ def fuse(
     boundary = ndimage.binary_dilation(solid) & ~ndimage.binary_erosion(solid)
     on = boundary[pidx[:, 0], pidx[:, 1], pidx[:, 2]]
     tree = cKDTree(points[on]) if on.any() else None
-    sp_col, sp_kind, sp_n = colors[on], kind[on], normals[on]
+    sp_col, sp_n = colors[on], normals[on]
     rgb = np.zeros((*shape, 3), np.uint8)
     prov = np.zeros(shape, np.uint8)
     band_pts = origin + np.stack(np.unravel_index(band, shape), axis=1) * h
@@ -167,7 +167,17 @@ def fuse(
     surf = np.abs(flat_sdf[band]) <= 1.5 * h
     prov.ravel()[band[surf]] = GUESSED
     ks = snapped & surf
-    prov.ravel()[band[ks]] = np.where(sp_kind[nn[ks]] == OBSERVED, OBSERVED, MIRRORED)
+    prov.ravel()[band[ks]] = MIRRORED
+    # where a symmetric copy lands on the observed surface (it does, where the plane is right),
+    # the surface was seen: observed wins, in kind and in colour
+    seen = on & (kind == OBSERVED)
+    if seen.any():
+        d_seen, nn_seen = cKDTree(points[seen]).query(
+            band_pts[ks], k=1, distance_upper_bound=SNAP_VOXELS * h, workers=2
+        )
+        hit = np.isfinite(d_seen)
+        prov.ravel()[band[ks][hit]] = OBSERVED
+        rgb.reshape(-1, 3)[band[ks][hit]] = colors[seen][nn_seen[hit]]
     rgb = _diffuse(rgb, known, band)
     return sdf, rgb, prov
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numba
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
@@ -29,6 +30,12 @@ KINDS = {OBSERVED: "observed", MIRRORED: "mirrored", GUESSED: "guessed"}
 KIND_COLORS = {OBSERVED: (70, 150, 230), MIRRORED: (240, 170, 40), GUESSED: (220, 60, 60)}
 """Display colours of the three kinds of surface (``render --completion``): blue, amber, red."""
 SNAP_VOXELS = 1.5
+BETWEEN_VOXELS = 64
+"""Voxels behind a surface point within which an opposite surface fills the solid between."""
+BETWEEN_CLOSING = 2
+"""Voxels: radius of the closing that seals the channels between filled segments."""
+BETWEEN_FACING = 0.5
+"""Cosine below which two normals face opposite ways."""
 BACK_SHIFT = 0.4
 """Voxels by which an unobserved boundary of the solid is drawn in (below 0.5: no voxel
 changes side, so no thin sheet loses its voxels)."""
@@ -56,6 +63,7 @@ def fuse(
     sym_free: list[Callable[[np.ndarray], np.ndarray]],
     height_world: Callable[[np.ndarray], np.ndarray],
     closure: float,
+    fill_between: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Solid, SDF, colour and provenance on the grid.
 
@@ -70,6 +78,7 @@ def fuse(
     sym_free : list of the same for each symmetric view of the free space.
     height_world : world points -> height above the floor.
     closure : voxels behind the surface that close it where nothing else does.
+    fill_between : fill the solid between opposite surfaces (:func:`_between`).
 
     Returns
     -------
@@ -86,9 +95,17 @@ def fuse(
     o = idx[kind == OBSERVED]
     occ_obs[o[:, 0], o[:, 1], o[:, 2]] = True
     d_s = _edt(~occ)
-    near = np.flatnonzero(d_s.ravel() <= closure)
     R = grid_to_world[:3, :3]
     t = grid_to_world[:3, 3]
+    within = d_s <= closure
+    if fill_between:
+        centres_all = (origin + np.indices(shape).reshape(3, -1).T * h).astype(np.float32)
+        free_all = free_world(centres_all @ R.T.astype(np.float32) + t.astype(np.float32)).reshape(
+            shape
+        )
+        between = _between(points, normals, idx, origin, h, shape, free_all)
+        within |= between
+    near = np.flatnonzero(within.ravel())
     centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
     world = centres @ R.T.astype(np.float32) + t.astype(np.float32)
     keep = ~free_world(world) & (height_world(world) >= -0.5 * h)
@@ -110,6 +127,16 @@ def fuse(
     keep |= occ.ravel()[near]
     solid = np.zeros(shape, bool)
     solid.ravel()[near[keep]] = True
+    if fill_between:
+        # the segments between opposite surfaces leave narrow channels (rounding, sensor
+        # holes); each would be an inner surface deep in the object: close them
+        r = BETWEEN_CLOSING
+        g = np.indices((2 * r + 1,) * 3) - r
+        ball = (g**2).sum(axis=0) <= r * r
+        closed = ndimage.binary_closing(np.pad(solid, r + 1), ball)[
+            r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
+        ]
+        solid |= closed & ~free_all
     solid = ndimage.binary_fill_holes(solid)
     lab, n = ndimage.label(solid)
     if n > 1:
@@ -180,6 +207,76 @@ def fuse(
         rgb.reshape(-1, 3)[band[ks][hit]] = colors[seen][nn_seen[hit]]
     rgb = _diffuse(rgb, known, band)
     return sdf, rgb, prov
+
+
+def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
+    """(X, Y, Z) bool: voxels between a surface point and the first surface behind it that
+    faces the other way (a leg's front and back, a seat's left and right side), within
+    ``BETWEEN_VOXELS``, where no camera saw through any voxel of the segment: the thickness the
+    scan measured, instead of a thin closure with the unseen back of its shell inside the
+    object."""
+    # which ways the points in and next to each voxel face: one bit per axis direction
+    axis = np.argmax(np.abs(normals), axis=1)
+    neg = normals[np.arange(len(normals)), axis] < 0
+    bit = (1 << (2 * axis + neg)).astype(np.uint8)
+    bits = np.zeros(shape, np.uint8)
+    np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), bit)
+    cube = np.ones((3, 3, 3), bool)
+    dil = np.zeros(shape, np.uint8)
+    for b in range(6):
+        dil |= ndimage.binary_dilation(bits & (1 << b) > 0, cube).astype(np.uint8) << b
+    dirs = np.zeros((6, 3))
+    dirs[np.arange(6), np.arange(6) // 2] = np.where(np.arange(6) % 2 == 0, 1.0, -1.0)
+    opposite = ((normals @ dirs.T < -BETWEEN_FACING) * (1 << np.arange(6))).sum(axis=1)
+    out = np.zeros(shape, bool)
+    _march(
+        ((points - origin) / h).astype(np.float64),
+        normals.astype(np.float64),
+        opposite.astype(np.uint8),
+        dil,
+        free,
+        int(BETWEEN_VOXELS),
+        out,
+    )
+    return out
+
+
+@numba.njit(cache=True, parallel=True)
+def _march(p, n, opposite, bits, free, reach, out):
+    X, Y, Z = bits.shape
+    for i in numba.prange(p.shape[0]):
+        hit = 0
+        for s in range(2, reach + 1):
+            a = int(np.rint(p[i, 0] - n[i, 0] * s))
+            b = int(np.rint(p[i, 1] - n[i, 1] * s))
+            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
+                break
+            if free[a, b, c]:
+                break
+            if bits[a, b, c] & opposite[i]:
+                hit = s
+                break
+        if hit == 0:
+            continue
+        ok = True
+        # half-voxel steps, no free voxel slipping between samples; the two ends lie on the
+        # surfaces, where half a voxel may be seen free
+        for k in range(2, 2 * hit - 1):
+            s = 0.5 * k
+            a = int(np.rint(p[i, 0] - n[i, 0] * s))
+            b = int(np.rint(p[i, 1] - n[i, 1] * s))
+            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z or free[a, b, c]:
+                ok = False
+                break
+        if ok:
+            for k in range(2 * hit + 1):
+                s = 0.5 * k
+                a = int(np.rint(p[i, 0] - n[i, 0] * s))
+                b = int(np.rint(p[i, 1] - n[i, 1] * s))
+                c = int(np.rint(p[i, 2] - n[i, 2] * s))
+                out[a, b, c] = True
 
 
 def _diffuse(rgb: np.ndarray, known: np.ndarray, band: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""partscale.complete.symmetry: mirror planes of a one-sided scan, found below the voting grid."""
+"""partscale.complete: mirror planes of a one-sided scan, and the solid between opposite surfaces."""
 
 from __future__ import annotations
 
@@ -44,3 +44,20 @@ def test_mirror_plane_of_a_one_sided_scan_maps_points_within_a_quarter_cell():
     true = P * [-1, 1, 1] + [2 * c, 0, 0]
     # every mirrored point within a quarter of a cell of where the true plane puts it
     assert np.abs(planes[0].apply(P) - true).max() <= 0.25 * cell
+
+
+def test_a_block_seen_on_its_sides_completes_solid_down_to_its_unseen_bottom():
+    # a chest-like block scanned from three views above: its top and sides are seen, its
+    # bottom never; the solid between opposite sides fills it, not a hollow shell open below
+    import trimesh
+
+    from partscale.complete import api, virtual
+    from partscale.ingest import from_trimesh
+
+    box = trimesh.creation.box([0.6, 0.3, 0.4])
+    box.apply_translation([0, 0.15, 0])
+    c = api.complete(virtual.virtual_scan(from_trimesh(box), 3), res=48)
+    inside = np.asarray(c.sdf) < 0
+    volume = inside.sum() * c.voxel_size**3
+    assert volume >= 0.85 * (0.6 * 0.3 * 0.4)
+    assert volume <= 1.15 * (0.6 * 0.3 * 0.4)

@@ -98,6 +98,7 @@ def fuse(
     R = grid_to_world[:3, :3]
     t = grid_to_world[:3, 3]
     within = d_s <= closure
+    within_closure = within.copy()
     if fill_between:
         centres_all = (origin + np.indices(shape).reshape(3, -1).T * h).astype(np.float32)
         free_all = free_world(centres_all @ R.T.astype(np.float32) + t.astype(np.float32)).reshape(
@@ -133,10 +134,19 @@ def fuse(
         r = BETWEEN_CLOSING
         g = np.indices((2 * r + 1,) * 3) - r
         ball = (g**2).sum(axis=0) <= r * r
-        closed = ndimage.binary_closing(np.pad(solid, r + 1), ball)[
-            r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
-        ]
-        solid |= closed & ~free_all
+
+        def closed(m):
+            c = ndimage.binary_closing(np.pad(m, r + 1), ball)[
+                r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
+            ]
+            return ndimage.binary_fill_holes(m | (c & ~free_all))
+
+        filled = closed(solid)
+        shell = closed(solid & within_closure)
+        # where the segments fill the object only in part (thick curved parts whose opposite
+        # sides were seen in patches) the voids between them are surfaces deep inside it: the
+        # fill is kept only when it leaves less boundary than the thin closure alone
+        solid = filled if _boundary(filled) <= _boundary(shell) else shell
     solid = ndimage.binary_fill_holes(solid)
     lab, n = ndimage.label(solid)
     if n > 1:
@@ -207,6 +217,11 @@ def fuse(
         rgb.reshape(-1, 3)[band[ks][hit]] = colors[seen][nn_seen[hit]]
     rgb = _diffuse(rgb, known, band)
     return sdf, rgb, prov
+
+
+def _boundary(solid: np.ndarray) -> int:
+    """Voxels of ``solid`` next to a voxel outside it (6-neighbourhood): its surface area."""
+    return int((solid & ~ndimage.binary_erosion(solid, border_value=0)).sum())
 
 
 def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:

@@ -91,7 +91,8 @@ def chair_runs():
     out = {}
     for views in (1, 3):
         frames = virtual.virtual_scan(mesh, views)
-        raw = metrics.chamfer_fscore(api.observe(frames).points, G, tau)
+        observed = api.observe(frames).points
+        raw = metrics.chamfer_fscore(observed, G, tau)
         c = api.complete(frames, res=64)
         P, Pc = metrics.surface_samples(c, 8000)
         out[views] = (
@@ -99,6 +100,7 @@ def chair_runs():
             metrics.chamfer_fscore(P, G, tau),
             metrics.colour_error(P, Pc, G, Gc, tau),
             c,
+            observed,
         )
     return out
 
@@ -107,7 +109,7 @@ def test_completion_is_watertight_and_records_what_it_did(chair_runs):
     from partscale.complete import provenance
     from partscale.surface import to_mesh
 
-    for views, (_, _, _, c) in chair_runs.items():
+    for views, (_, _, _, c, _) in chair_runs.items():
         assert to_mesh(c).is_watertight
         comp = c.meta["completion"]
         assert comp["views"] == views
@@ -117,12 +119,23 @@ def test_completion_is_watertight_and_records_what_it_did(chair_runs):
 
 
 def test_three_views_beat_one_and_colour_is_kept(chair_runs):
-    raw1, full1, col1, _ = chair_runs[1]
-    _, full3, col3, _ = chair_runs[3]
+    raw1, full1, col1, _, _ = chair_runs[1]
+    _, full3, col3, _, _ = chair_runs[3]
     assert full3["fscore"] >= full1["fscore"]
     assert full3["recall"] >= raw1["recall"]
     # flat material colours come back within 30/255 where the geometry is right
     assert col1 <= 30 and col3 <= 30
+
+
+def test_the_completed_surface_passes_through_the_observed_points(chair_runs):
+    # the zero level runs through the scan where it saw the object, not a voxel ahead of it
+    from partscale.surface import sample_linear
+
+    for _, _, _, c, observed in chair_runs.values():
+        s = sample_linear(np.asarray(c.sdf), c.world_to_index(observed)) / c.voxel_size
+        assert np.median(np.abs(s)) <= 0.12
+        assert abs(s.mean()) <= 0.1
+        assert np.percentile(np.abs(s), 90) <= 0.35
 
 
 def test_render_completion_and_info(chair_runs, tmp_path):

@@ -22,7 +22,7 @@ from .carve import Carver, FreeGrid
 from .floor import clusters, find_floor
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
-METHOD = "carve+floor+symmetry+closure"
+METHOD = "carve+floor+symmetry+between+closure"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
 CLUSTER_CELL = 0.03
@@ -30,6 +30,8 @@ CLUSTER_CELL = 0.03
 MAX_OBJECT_EXTENT = 2.0
 CLOSURE = 1.5
 """Voxels behind a surface point that the solid extends into space nobody saw (the closure)."""
+NORMAL_NEIGHBOURS = 12
+"""Scan points whose spread gives a point's normal (the side a camera saw it from)."""
 CARVE_MARGIN = 0.5
 """Voxels a point must lie in front of a reading to be free space (absorbs sensor noise)."""
 
@@ -167,13 +169,31 @@ def _sym4(s: sym_mod.Symmetry) -> np.ndarray:
 class Observation:
     """What a scan says about one object: its points (N, 3) world and colours (N, 3) uint8,
     ``U`` (4, 4) world -> upright (y up, floor at 0, centred), the floor (Plane, inliers) or None,
-    and the (denoised) frames."""
+    the (denoised) frames, and the points' unit normals (N, 3) world, facing their camera."""
 
     frames: list
     points: np.ndarray
     colors: np.ndarray
     U: np.ndarray
     floor: object
+    normals: np.ndarray
+
+
+def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
+    """(N, 3) float64 unit normals of scan ``points`` (N, 3): the least-variance axis of their
+    ``NORMAL_NEIGHBOURS`` nearest neighbours, turned towards the camera at ``eyes`` (N, 3) that
+    saw each point."""
+    from scipy.spatial import cKDTree
+
+    k = min(NORMAL_NEIGHBOURS, len(points))
+    _, nn = cKDTree(points).query(points, k=k, workers=2)
+    X = points[nn] - points[nn].mean(axis=1, keepdims=True)
+    cov = np.einsum("nki,nkj->nij", X, X)
+    _, vec = np.linalg.eigh(cov)
+    n = vec[:, :, 0]
+    flip = np.einsum("ni,ni->n", n, eyes - points) < 0
+    n[flip] = -n[flip]
+    return n
 
 
 def observe(frames: list[Frame], *, box=None, source: str = "scan"):
@@ -186,13 +206,15 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     # sensor noise would roughen every observed surface: smooth the range images (not the
     # frames made from meshes, whose points are kept as given)
     frames = [f if f.cropped else denoise(f) for f in frames]
-    pts, cols, pixs = [], [], []
+    pts, cols, pixs, eyes = [], [], [], []
     for i, f in enumerate(frames):
         p, c, q = f.points()
         pts.append(p)
         cols.append(c)
         pixs.append(q if i == 0 else np.full(len(q), -1))
+        eyes.append(np.broadcast_to(f.pose[:3, 3], p.shape))
     P, C, pix = np.concatenate(pts), np.concatenate(cols), np.concatenate(pixs)
+    E = np.concatenate(eyes)
     if len(P) < 10:
         raise InputError(f"{source}: expected a scan with depth readings, got {len(P)} points")
     cropped = all(f.cropped for f in frames)
@@ -220,7 +242,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = float((Q @ up).min())
     centre = Q.mean(axis=0)
     U = _upright(up, frames[0].pose[:3, 2], floor_offset, centre)
-    return Observation(frames, Q, QC, U, found)
+    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]))
 
 
 @keyword_options
@@ -276,6 +298,7 @@ def complete(
     report(0.0, "reading the scan")
     ob = observe(frames, box=box, source=source)
     frames, Q, QC, U, found = ob.frames, ob.points, ob.colors, ob.U, ob.floor
+    QN = ob.normals
     Qu = _apply(U, Q)
     ext = Qu.max(axis=0) - Qu.min(axis=0)
     h0 = float(ext.max()) / res
@@ -296,8 +319,9 @@ def complete(
     rng = np.random.default_rng(0)
     sub = rng.choice(len(Qu), min(len(Qu), 20000), replace=False)
     cell = 1.5 * h0
+    Nu0 = QN @ U[:3, :3].T
     if symmetry:
-        syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell)
+        syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
     if syms:
         # turn the upright frame so the first mirror plane is x = 0
         p = syms[0].params
@@ -335,16 +359,19 @@ def complete(
     if len(group) == 2:
         both = syms[0].where
         group.append((group[1][0] @ group[0][0], lambda p: both(p) & syms[1].where(p)))
-    surf, surf_c, kind = [Qu], [QC], [np.full(len(Qu), fuse_mod.OBSERVED, np.uint8)]
+    Nu = QN @ U[:3, :3].T
+    surf, surf_c, surf_n = [Qu], [QC], [Nu]
+    kind = [np.full(len(Qu), fuse_mod.OBSERVED, np.uint8)]
     for g, where in group:
         w = where(Qu)
         cp = _apply(g, Qu[w])
         surf.append(cp)
         surf_c.append(QC[w])
+        surf_n.append(Nu[w] @ g[:3, :3].T)
         kind.append(np.full(len(cp), fuse_mod.MIRRORED, np.uint8))
     rot_steps = []
     if rot is not None:
-        allp, allc = np.concatenate(surf), np.concatenate(surf_c)
+        allp, allc, alln = np.concatenate(surf), np.concatenate(surf_c), np.concatenate(surf_n)
         low = rot.where(allp)
         step = np.eye(4)
         for _ in range(rot.fold - 1):
@@ -352,19 +379,22 @@ def complete(
             rot_steps.append((step.copy(), rot.where))
             surf.append(_apply(step, allp[low]))
             surf_c.append(allc[low])
+            surf_n.append(alln[low] @ step[:3, :3].T)
             kind.append(np.full(int(low.sum()), fuse_mod.MIRRORED, np.uint8))
     S, SC, SK = np.concatenate(surf), np.concatenate(surf_c), np.concatenate(kind)
+    SN = np.concatenate(surf_n)
     copy = SK != fuse_mod.OBSERVED
     if copy.any():
         bad = np.zeros(len(S), bool)
         bad[copy] = free_up(S[copy])
-        S, SC, SK = S[~bad], SC[~bad], SK[~bad]
+        S, SC, SK, SN = S[~bad], SC[~bad], SK[~bad], SN[~bad]
     n_dropped = int(copy.sum() - (SK != fuse_mod.OBSERVED).sum())
 
     report(0.45, "grid")
     grid_to_world = Uinv if upright else np.eye(4)
     world_to_grid = np.linalg.inv(grid_to_world)
     Sg = _apply(world_to_grid @ Uinv, S)
+    SNg = SN @ (world_to_grid @ Uinv)[:3, :3].T
     lo, hi = Sg.min(axis=0), Sg.max(axis=0)
     h = float((hi - lo).max()) / res
     pad = math.ceil(closure) + BAND_VOXELS + 2
@@ -406,6 +436,7 @@ def complete(
         Sg,
         SC,
         SK,
+        SNg,
         carver.free,
         sym_free,
         height_world,
@@ -469,6 +500,9 @@ def complete(
         "upright": bool(upright),
         "symmetry": bool(symmetry),
         "closure_voxels": closure,
+        "between_reach_voxels": fuse_mod.BETWEEN_VOXELS,
+        "between_closing_voxels": fuse_mod.BETWEEN_CLOSING,
+        "back_shift_voxels": fuse_mod.BACK_SHIFT,
         "carve_margin_voxels": CARVE_MARGIN,
         "floor_tol_m": FLOOR_TOL,
         "cluster_cell_m": CLUSTER_CELL,

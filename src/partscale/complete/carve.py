@@ -9,6 +9,7 @@ reading. The test is vectorised over points (voxel centres or candidate surface 
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from scipy import ndimage
 
@@ -78,25 +79,16 @@ class Carver:
 
     def _free_chunk(self, P: np.ndarray, margin: float) -> np.ndarray:
         out = np.zeros(len(P), bool)
+        P = np.ascontiguousarray(P, np.float32)
         for f, through, depth in zip(self.frames, self._through, self._depth, strict=True):
-            R = f.pose[:3, :3].astype(np.float32)
-            t = f.pose[:3, 3].astype(np.float32)
-            cam = (P - t) @ R
-            z = cam[:, 2]
-            front = z > 1e-6
-            zs = np.where(front, z, 1.0)
-            u = np.rint(cam[:, 0] / zs * f.K[0, 0] + f.K[0, 2]).astype(np.int64)
-            v = np.rint(cam[:, 1] / zs * f.K[1, 1] + f.K[1, 2]).astype(np.int64)
-            H, W = f.shape
-            inside = front & (u >= 0) & (u < W) & (v >= 0) & (v < H)
-            ui, vi = np.where(inside, u, 0), np.where(inside, v, 0)
-            d = depth[vi, ui]
-            free = inside & (d > 0) & (z < d - margin)
-            if through is not None:
-                # the crop removed the background: rays past the object's silhouette (or past
-                # the image, which just covers the object) saw nothing at any depth
-                free |= front & (~inside | through[vi, ui])
-            out |= free
+            R = np.ascontiguousarray(f.pose[:3, :3], np.float32)
+            t = np.ascontiguousarray(f.pose[:3, 3], np.float32)
+            K = (float(f.K[0, 0]), float(f.K[1, 1]), float(f.K[0, 2]), float(f.K[1, 2]))
+            has = through is not None
+            thr = through if has else np.zeros((1, 1), bool)
+            _free_kernel(
+                P, R, t, *K, np.ascontiguousarray(depth, np.float32), thr, has, margin, out
+            )
         return out
 
 
@@ -126,7 +118,11 @@ class FreeGrid:
         g = np.indices(tuple(self.shape), dtype=np.float32).reshape(3, -1).T
         centres = self.lo.astype(np.float32) + g * np.float32(cell)
         R, t = self.to_world[:3, :3].astype(np.float32), self.to_world[:3, 3].astype(np.float32)
-        self.table = carver.free(centres @ R.T + t, margin).reshape(tuple(self.shape))
+        table = carver.free(centres @ R.T + t, margin).reshape(tuple(self.shape))
+        # clearly free: free with all its neighbours, so a point that lands just beside a
+        # silhouette edge (a copy of an edge of the object, an object not quite symmetric)
+        # is no contradiction; outside the table counts as free
+        self.table = ndimage.binary_erosion(table, np.ones((3, 3, 3), bool), border_value=1)
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
         """(N,) bool: ``points`` (N, 3) in the grid's frame that some view saw through."""
@@ -141,3 +137,28 @@ class FreeGrid:
             world = far @ self.to_world[:3, :3].T + self.to_world[:3, 3]
             out[~inside] = self.carver.free(world, self.margin)
         return out
+
+
+@numba.njit(cache=True, parallel=True)
+def _free_kernel(P, R, t, fx, fy, cx, cy, depth, through, has_through, margin, out):
+    """Marks ``out[i]`` where one view's ray through ``P[i]`` reached a reading beyond it by
+    more than ``margin`` or, in a cropped frame (``has_through``), passed the object's
+    silhouette or the image (the crop removed the background: those rays saw nothing)."""
+    H, W = depth.shape
+    for i in numba.prange(P.shape[0]):
+        if out[i]:
+            continue
+        x0, x1, x2 = P[i, 0] - t[0], P[i, 1] - t[1], P[i, 2] - t[2]
+        z = x0 * R[0, 2] + x1 * R[1, 2] + x2 * R[2, 2]
+        if z <= 1e-6:
+            continue
+        cx_ = x0 * R[0, 0] + x1 * R[1, 0] + x2 * R[2, 0]
+        cy_ = x0 * R[0, 1] + x1 * R[1, 1] + x2 * R[2, 1]
+        u = np.rint(cx_ / z * fx + cx)
+        v = np.rint(cy_ / z * fy + cy)
+        if u >= 0 and u < W and v >= 0 and v < H:
+            d = depth[int(v), int(u)]
+            if (d > 0 and z < d - margin) or (has_through and through[int(v), int(u)]):
+                out[i] = True
+        elif has_through:
+            out[i] = True

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numba
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
@@ -29,6 +30,17 @@ KINDS = {OBSERVED: "observed", MIRRORED: "mirrored", GUESSED: "guessed"}
 KIND_COLORS = {OBSERVED: (70, 150, 230), MIRRORED: (240, 170, 40), GUESSED: (220, 60, 60)}
 """Display colours of the three kinds of surface (``render --completion``): blue, amber, red."""
 SNAP_VOXELS = 1.5
+BETWEEN_VOXELS = 64
+"""Voxels behind a surface point within which an opposite surface fills the solid between."""
+BETWEEN_CLOSING = 2
+"""Voxels: radius of the closing that seals the channels between filled segments."""
+BETWEEN_FACING = 0.5
+"""Cosine below which two normals face opposite ways."""
+BACK_SHIFT = 0.4
+"""Voxels by which an unobserved boundary of the solid is drawn in (below 0.5: no voxel
+changes side, so no thin sheet loses its voxels)."""
+BEHIND_SLACK = 0.5
+"""Voxels in front of its nearest surface point that a voxel of the closure may lie."""
 DIFFUSE_SIGMA = 2.0
 
 
@@ -46,10 +58,12 @@ def fuse(
     points: np.ndarray,
     colors: np.ndarray,
     kind: np.ndarray,
+    normals: np.ndarray,
     free_world: Callable[[np.ndarray], np.ndarray],
     sym_free: list[Callable[[np.ndarray], np.ndarray]],
     height_world: Callable[[np.ndarray], np.ndarray],
     closure: float,
+    fill_between: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Solid, SDF, colour and provenance on the grid.
 
@@ -59,11 +73,12 @@ def fuse(
         The grid frame in the world (voxel centre ``origin + ijk * h`` in grid coordinates).
     points : (N, 3) float64
         Surface points in grid coordinates; ``colors`` (N, 3) uint8; ``kind`` (N,) uint8
-        (``OBSERVED`` or ``MIRRORED``).
+        (``OBSERVED`` or ``MIRRORED``); ``normals`` (N, 3) unit, pointing out of the object.
     free_world : world points (M, 3) -> (M,) bool, the observed free space.
     sym_free : list of the same for each symmetric view of the free space.
     height_world : world points -> height above the floor.
     closure : voxels behind the surface that close it where nothing else does.
+    fill_between : fill the solid between opposite surfaces (:func:`_between`).
 
     Returns
     -------
@@ -73,19 +88,32 @@ def fuse(
     shape = tuple(int(s) for s in shape)
     idx = np.rint((points - origin) / h).astype(np.int64)
     inb = ((idx >= 0) & (idx < np.asarray(shape))).all(axis=1)
-    idx, points, colors, kind = idx[inb], points[inb], colors[inb], kind[inb]
+    idx, points, colors, kind, normals = idx[inb], points[inb], colors[inb], kind[inb], normals[inb]
     occ = np.zeros(shape, bool)
     occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
     occ_obs = np.zeros(shape, bool)
     o = idx[kind == OBSERVED]
     occ_obs[o[:, 0], o[:, 1], o[:, 2]] = True
     d_s = _edt(~occ)
-    near = np.flatnonzero(d_s.ravel() <= closure)
     R = grid_to_world[:3, :3]
     t = grid_to_world[:3, 3]
+    within = d_s <= closure
+    within_closure = within.copy()
+    if fill_between:
+        centres_all = (origin + np.indices(shape).reshape(3, -1).T * h).astype(np.float32)
+        free_all = free_world(centres_all @ R.T.astype(np.float32) + t.astype(np.float32)).reshape(
+            shape
+        )
+        between = _between(points, normals, idx, origin, h, shape, free_all)
+        within |= between
+    near = np.flatnonzero(within.ravel())
     centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
     world = centres @ R.T.astype(np.float32) + t.astype(np.float32)
     keep = ~free_world(world) & (height_world(world) >= -0.5 * h)
+    # the closure lies behind the surface: a voxel in front of its nearest surface point is
+    # space the scan says nothing about (beyond the sensor's range, a hole), not the object
+    _, nn0 = cKDTree(points).query(centres, k=1, workers=2)
+    keep &= np.einsum("ni,ni->n", centres - points[nn0], normals[nn0]) <= BEHIND_SLACK * h
     if sym_free:
         d_obs = _edt(~occ_obs).ravel()[near]
         # a symmetric view may not carve next to what was observed
@@ -100,6 +128,25 @@ def fuse(
     keep |= occ.ravel()[near]
     solid = np.zeros(shape, bool)
     solid.ravel()[near[keep]] = True
+    if fill_between:
+        # the segments between opposite surfaces leave narrow channels (rounding, sensor
+        # holes); each would be an inner surface deep in the object: close them
+        r = BETWEEN_CLOSING
+        g = np.indices((2 * r + 1,) * 3) - r
+        ball = (g**2).sum(axis=0) <= r * r
+
+        def closed(m):
+            c = ndimage.binary_closing(np.pad(m, r + 1), ball)[
+                r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
+            ]
+            return ndimage.binary_fill_holes(m | (c & ~free_all))
+
+        filled = closed(solid)
+        shell = closed(solid & within_closure)
+        # where the segments fill the object only in part (thick curved parts whose opposite
+        # sides were seen in patches) the voids between them are surfaces deep inside it: the
+        # fill is kept only when it leaves less boundary than the thin closure alone
+        solid = filled if _boundary(filled) <= _boundary(shell) else shell
     solid = ndimage.binary_fill_holes(solid)
     lab, n = ndimage.label(solid)
     if n > 1:
@@ -113,7 +160,9 @@ def fuse(
 
     # distances: voxel solid first, then the exact distance to surface points near it
     e_out = _edt(~solid) - 0.5
-    e_in = _edt(solid) - 0.5
+    # the inside distance runs to BACK_SHIFT voxels short of the solid's voxel boundary: the
+    # unobserved side of a thin closure then lies about a voxel behind the surface it closes
+    e_in = _edt(solid) - 0.5 - BACK_SHIFT
     sdf = np.where(solid, -e_in, e_out).astype(np.float32) * h
     band = np.flatnonzero(np.abs(sdf.ravel()) <= (BAND_VOXELS + 1) * h)
     # points deep inside the solid are no surface (a copy landing in a filled region)
@@ -121,7 +170,7 @@ def fuse(
     boundary = ndimage.binary_dilation(solid) & ~ndimage.binary_erosion(solid)
     on = boundary[pidx[:, 0], pidx[:, 1], pidx[:, 2]]
     tree = cKDTree(points[on]) if on.any() else None
-    sp_col, sp_kind = colors[on], kind[on]
+    sp_col, sp_n = colors[on], normals[on]
     rgb = np.zeros((*shape, 3), np.uint8)
     prov = np.zeros(shape, np.uint8)
     band_pts = origin + np.stack(np.unravel_index(band, shape), axis=1) * h
@@ -133,6 +182,12 @@ def fuse(
     nn = np.where(close, nn, 0)
     flat_sdf = sdf.ravel()
     cur = flat_sdf[band]
+    # the voxel solid reaches up to a voxel (and the carving margin) in front of the surface
+    # points; in front of its nearest point's surface a voxel is outside, so the zero level
+    # passes through the points rather than ahead of them
+    plane = np.einsum("ni,ni->n", band_pts - points[on][nn], sp_n[nn])
+    ahead = close & (plane > 0)
+    cur = np.where(ahead, np.abs(cur), cur)
     exact = np.where(cur < 0, -np.minimum(dist, -cur), np.minimum(dist, cur))
     flat_sdf[band] = np.where(close, exact, cur).astype(np.float32)
     # keep a hair off zero so marching cubes has no degenerate cells
@@ -149,9 +204,94 @@ def fuse(
     surf = np.abs(flat_sdf[band]) <= 1.5 * h
     prov.ravel()[band[surf]] = GUESSED
     ks = snapped & surf
-    prov.ravel()[band[ks]] = np.where(sp_kind[nn[ks]] == OBSERVED, OBSERVED, MIRRORED)
+    prov.ravel()[band[ks]] = MIRRORED
+    # where a symmetric copy lands on the observed surface (it does, where the plane is right),
+    # the surface was seen: observed wins, in kind and in colour
+    seen = on & (kind == OBSERVED)
+    if seen.any():
+        d_seen, nn_seen = cKDTree(points[seen]).query(
+            band_pts[ks], k=1, distance_upper_bound=SNAP_VOXELS * h, workers=2
+        )
+        hit = np.isfinite(d_seen)
+        prov.ravel()[band[ks][hit]] = OBSERVED
+        rgb.reshape(-1, 3)[band[ks][hit]] = colors[seen][nn_seen[hit]]
     rgb = _diffuse(rgb, known, band)
     return sdf, rgb, prov
+
+
+def _boundary(solid: np.ndarray) -> int:
+    """Voxels of ``solid`` next to a voxel outside it (6-neighbourhood): its surface area."""
+    return int((solid & ~ndimage.binary_erosion(solid, border_value=0)).sum())
+
+
+def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
+    """(X, Y, Z) bool: voxels between a surface point and the first surface behind it that
+    faces the other way (a leg's front and back, a seat's left and right side), within
+    ``BETWEEN_VOXELS``, where no camera saw through any voxel of the segment: the thickness the
+    scan measured, instead of a thin closure with the unseen back of its shell inside the
+    object."""
+    # which ways the points in and next to each voxel face: one bit per axis direction
+    axis = np.argmax(np.abs(normals), axis=1)
+    neg = normals[np.arange(len(normals)), axis] < 0
+    bit = (1 << (2 * axis + neg)).astype(np.uint8)
+    bits = np.zeros(shape, np.uint8)
+    np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), bit)
+    cube = np.ones((3, 3, 3), bool)
+    dil = np.zeros(shape, np.uint8)
+    for b in range(6):
+        dil |= ndimage.binary_dilation(bits & (1 << b) > 0, cube).astype(np.uint8) << b
+    dirs = np.zeros((6, 3))
+    dirs[np.arange(6), np.arange(6) // 2] = np.where(np.arange(6) % 2 == 0, 1.0, -1.0)
+    opposite = ((normals @ dirs.T < -BETWEEN_FACING) * (1 << np.arange(6))).sum(axis=1)
+    out = np.zeros(shape, bool)
+    _march(
+        ((points - origin) / h).astype(np.float64),
+        normals.astype(np.float64),
+        opposite.astype(np.uint8),
+        dil,
+        free,
+        int(BETWEEN_VOXELS),
+        out,
+    )
+    return out
+
+
+@numba.njit(cache=True, parallel=True)
+def _march(p, n, opposite, bits, free, reach, out):
+    X, Y, Z = bits.shape
+    for i in numba.prange(p.shape[0]):
+        hit = 0
+        for s in range(2, reach + 1):
+            a = int(np.rint(p[i, 0] - n[i, 0] * s))
+            b = int(np.rint(p[i, 1] - n[i, 1] * s))
+            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
+                break
+            if free[a, b, c]:
+                break
+            if bits[a, b, c] & opposite[i]:
+                hit = s
+                break
+        if hit == 0:
+            continue
+        ok = True
+        # half-voxel steps, no free voxel slipping between samples; the two ends lie on the
+        # surfaces, where half a voxel may be seen free
+        for k in range(2, 2 * hit - 1):
+            s = 0.5 * k
+            a = int(np.rint(p[i, 0] - n[i, 0] * s))
+            b = int(np.rint(p[i, 1] - n[i, 1] * s))
+            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z or free[a, b, c]:
+                ok = False
+                break
+        if ok:
+            for k in range(2 * hit + 1):
+                s = 0.5 * k
+                a = int(np.rint(p[i, 0] - n[i, 0] * s))
+                b = int(np.rint(p[i, 1] - n[i, 1] * s))
+                c = int(np.rint(p[i, 2] - n[i, 2] * s))
+                out[a, b, c] = True
 
 
 def _diffuse(rgb: np.ndarray, known: np.ndarray, band: np.ndarray) -> np.ndarray:

@@ -28,6 +28,10 @@ BASE_FRACTION = 0.3
 SLABS = 8
 REFINE_PEAKS = 3
 """Vote peaks whose neighbourhoods the plane search refines (the rest are scored once)."""
+REFINE_NEIGHBOURS = 4
+REFINE_SAMPLES = 3000
+REFINE_FACING = 0.8
+"""Cosine above which a mirrored point's normal and its counterpart's agree (same surface)."""
 MIN_ROTATION_SUPPORT = 0.5
 MIN_COVER = 0.6
 """A symmetry must hold on slabs holding at least this fraction of the points."""
@@ -127,13 +131,16 @@ def mirror_planes(
     cell: float,
     *,
     max_planes: int = 2,
+    normals: np.ndarray | None = None,
     seed: int = 0,
 ) -> list[Symmetry]:
     """Accepted vertical mirror planes, strongest first (at most ``max_planes``, at least 30
     degrees apart).
 
     points : (N, 3) upright points of the object; colors : (N, 3) uint8; free : callable on
-    (M, 3) upright points -> (M,) bool; cell : the support tolerance, world units.
+    (M, 3) upright points -> (M,) bool; cell : the support tolerance, world units; normals :
+    (N, 3) unit normals of the points, optional: with them each plane is refined below the
+    voting grid (:func:`_refine_plane`).
     """
     rng = np.random.default_rng(seed)
     P = np.asarray(points, np.float64)
@@ -148,6 +155,22 @@ def mirror_planes(
         best = _best_plane(pts, cols, scorer, cell, rng, [s.params["theta"] for s in found], top)
         if best is None:
             break
+        if normals is not None:
+            best = _refine_plane(best, P, np.asarray(normals, np.float64), cell)
+            # the heights where it holds, judged again with the plane where it now is
+            plane = np.array([[best.params["theta"], best.params["offset"]]])
+            sup, vio = scorer(_mirror_all(pts, plane))
+            _, ok, covered, s_sup, s_vio = _slab_score(sup, vio, _slab_ids(pts[:, 1], top))
+            if covered[0] >= MIN_COVER:
+                best = Symmetry(
+                    best.kind,
+                    best.A,
+                    best.b,
+                    float(s_sup[0]),
+                    float(s_vio[0]),
+                    bands=_bands(ok[0], top),
+                    params={**best.params, "cover": float(covered[0])},
+                )
         found.append(best)
         # the next plane votes with the mirrored copy too (a table: left-right, then front-back)
         pts = np.concatenate([pts, best.apply(pts)])
@@ -202,7 +225,7 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
     best = int(np.argmax(np.where(covered >= MIN_COVER, score, -np.inf)))
     if covered[best] < MIN_COVER:
         return None
-    t, d = cands[best]
+    t, d = _canonical(*cands[best])
     A, b = _mirror(t, d)
     return Symmetry(
         "mirror",
@@ -211,8 +234,63 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
         float(s_sup[best]),
         float(s_vio[best]),
         bands=_bands(ok[best], top),
-        params={"theta": float(t % np.pi), "offset": float(d), "cover": float(covered[best])},
+        params={"theta": float(t), "offset": float(d), "cover": float(covered[best])},
     )
+
+
+def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> Symmetry:
+    """The plane moved to where the scan's mirrored points lie closest to scan points facing
+    the same way (the mean distance, capped at ``cell``, so points without a counterpart weigh
+    alike everywhere), searched below the voting grid in offset, then angle, then offset, at the
+    heights where the plane holds. The voting grid alone leaves the plane up to a cell and a
+    degree off, and a copy a voxel off costs about as much as a missing one."""
+    from scipy.spatial import cKDTree
+
+    w = sym.where(P)
+    X, XN = P[w], N[w]
+    if len(X) > REFINE_SAMPLES:
+        k = np.random.default_rng(1).choice(len(X), REFINE_SAMPLES, replace=False)
+        X, XN = X[k], XN[k]
+    tree = cKDTree(P)
+
+    def cost(t, d):
+        A, b = _mirror(t, d)
+        dist, nn = tree.query(X @ A.T + b, k=REFINE_NEIGHBOURS, distance_upper_bound=cell)
+        ok = np.isfinite(dist)
+        facing = np.einsum("nj,nkj->nk", XN @ A.T, N[np.where(ok, nn, 0)]) > REFINE_FACING
+        dist = np.where(ok & facing, dist, cell)
+        return float(dist.min(axis=1).mean())
+
+    t, d = sym.params["theta"], sym.params["offset"]
+    # coarse to fine: offset (cells), angle (degrees), offset again
+    for what, steps in (
+        ("d", np.linspace(-1.5, 1.5, 31)),
+        ("t", np.linspace(-2.0, 2.0, 17)),
+        ("d", np.linspace(-0.3, 0.3, 13)),
+        ("t", np.linspace(-0.3, 0.3, 7)),
+    ):
+        if what == "d":
+            cands = [(t, d + x * cell) for x in steps]
+        else:
+            cands = [(t + np.radians(x), d) for x in steps]
+        t, d = min(cands, key=lambda c: cost(*c))
+    t, d = _canonical(t, d)
+    A, b = _mirror(t, d)
+    return Symmetry(
+        sym.kind,
+        A,
+        b,
+        sym.support,
+        sym.violation,
+        bands=sym.bands,
+        params={**sym.params, "theta": float(t), "offset": float(d)},
+    )
+
+
+def _canonical(theta: float, offset: float) -> tuple[float, float]:
+    """The same plane with its angle in [0, pi) (the normal turned over flips the offset)."""
+    k = np.floor(theta / np.pi)
+    return float(theta - k * np.pi), float(offset * (-1.0) ** k)
 
 
 def _mirror_all(S: np.ndarray, planes: np.ndarray) -> np.ndarray:

@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import trimesh
 
 from partscale import ingest
 from partscale.complete import api, metrics, symmetry, virtual
@@ -47,7 +48,7 @@ OBJECTS = [
 def mirror_baseline(ob) -> np.ndarray:
     """Observed points plus their image in the strongest vertical plane (no free-space test)."""
     U, Uinv = ob.U, np.linalg.inv(ob.U)
-    Qu = api._apply(U, ob.points)
+    Qu = trimesh.transform_points(ob.points, U)
     ext = Qu.max(axis=0) - Qu.min(axis=0)
     cell = 1.5 * float(ext.max()) / 128
     planes = symmetry.mirror_planes(
@@ -55,7 +56,7 @@ def mirror_baseline(ob) -> np.ndarray:
     )
     if not planes:
         return ob.points
-    return np.concatenate([ob.points, api._apply(Uinv, planes[0].apply(Qu))])
+    return np.concatenate([ob.points, trimesh.transform_points(planes[0].apply(Qu), Uinv)])
 
 
 def import_time(points: np.ndarray) -> float:

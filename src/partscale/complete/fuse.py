@@ -278,19 +278,19 @@ def _march(p, n, opposite, bits, free, reach, out):
         # half-voxel steps, no free voxel slipping between samples; the two ends lie on the
         # surfaces, where half a voxel may be seen free
         for k in range(2, 2 * hit - 1):
-            s = 0.5 * k
-            a = int(np.rint(p[i, 0] - n[i, 0] * s))
-            b = int(np.rint(p[i, 1] - n[i, 1] * s))
-            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            t = 0.5 * k
+            a = int(np.rint(p[i, 0] - n[i, 0] * t))
+            b = int(np.rint(p[i, 1] - n[i, 1] * t))
+            c = int(np.rint(p[i, 2] - n[i, 2] * t))
             if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z or free[a, b, c]:
                 ok = False
                 break
         if ok:
             for k in range(2 * hit + 1):
-                s = 0.5 * k
-                a = int(np.rint(p[i, 0] - n[i, 0] * s))
-                b = int(np.rint(p[i, 1] - n[i, 1] * s))
-                c = int(np.rint(p[i, 2] - n[i, 2] * s))
+                t = 0.5 * k
+                a = int(np.rint(p[i, 0] - n[i, 0] * t))
+                b = int(np.rint(p[i, 1] - n[i, 1] * t))
+                c = int(np.rint(p[i, 2] - n[i, 2] * t))
                 out[a, b, c] = True
 
 

@@ -1,6 +1,7 @@
-"""Editor round trips on a 128³ object: HTTP apply (+ grid download) against in-process apply_recipe.
+"""Editor round trips on a 128³ (or ``--res N``) object: HTTP apply (+ grid download) against
+in-process apply_recipe.
 
-Usage: PYTHONPATH=src python bench/bench_editor.py [--repeat 5] [--frames 0]
+Usage: PYTHONPATH=src python bench/bench_editor.py [--repeat 5] [--frames 0] [--res 128 256]
 
 Prints a table of median times. The baseline is ``apply_recipe`` called in this process on the
 same object and recipe; the HTTP figures add what the editor adds: JSON request, the lock, the
@@ -32,9 +33,9 @@ from partscale.serve import encode_grid  # noqa: E402
 RECIPE = {"edits": [{"axis": "x", "zone": ["35%", "65%"], "to": "80%", "mode": "stretch"}]}
 
 
-def table_128() -> partscale.CSDF:
-    """A table filling a unit cube: 129³ voxels (122 + 2 x 3 margin + 1)."""
-    h = 1.0 / 122
+def table(res: int = 128) -> partscale.CSDF:
+    """A table filling a unit cube: (res + 1)³ voxels (res - 6 + 2 x 3 margin + 1)."""
+    h = 1.0 / (res - 6)
     top = ((0.0, 0.9, 0.0), (1.0, 1.0, 1.0))
     legs = [((x, 0.0, z), (x + 0.08, 0.9, z + 0.08)) for x in (0.04, 0.88) for z in (0.04, 0.88)]
 
@@ -128,21 +129,26 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--frames", type=int, default=0)
+    ap.add_argument("--res", type=int, nargs="+", default=[128], help="resolutions, in turn")
     args = ap.parse_args()
+    for res in args.res:
+        run(res, args.repeat, args.frames)
 
+
+def run(res: int, repeat: int, frames: int) -> None:
     import httpx
 
-    c = table_128()
+    c = table(res)
     times: dict[str, list[float]] = {k: [] for k in ROWS}
     with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "table128.csdf.npz"
+        path = Path(tmp) / f"table{res}.csdf.npz"
         partscale.save(c, path)
         apply_recipe(c, RECIPE)  # warm: numba caches, imports
         with EditorProcess(path) as server, httpx.Client(base_url=server.url, timeout=60) as client:
             client.post("api/apply", json=RECIPE).raise_for_status()  # warm the server too
             client.post("api/undo", json={}).raise_for_status()
             # interleaved, so load from other processes hits baseline and editor alike
-            for _ in range(args.repeat):
+            for _ in range(repeat):
                 t0 = time.perf_counter()
                 out = apply_recipe(c, RECIPE)
                 times["baseline"].append(ms_since(t0))
@@ -161,9 +167,9 @@ def main() -> None:
                 client.post("api/undo", json={}).raise_for_status()
                 client.get("api/grid")
                 times["undo"].append(ms_since(t0))
-            frame = browser_frames(server.url, args.frames, tmp) if args.frames else None
+            frame = browser_frames(server.url, frames, tmp) if frames else None
     base = statistics.median(times["baseline"])
-    print(f"editor round trips, {'x'.join(map(str, c.shape))} grid, {args.repeat} runs")
+    print(f"editor round trips, {'x'.join(map(str, c.shape))} grid, {repeat} runs")
     print(f"{'step':52s} {'median ms':>10s} {'min ms':>8s} {'x baseline':>11s}")
     for key, name in ROWS.items():
         med = statistics.median(times[key])

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -70,8 +71,8 @@ def find_tools() -> tuple[str, str]:
     return node, chromium
 
 
-def table() -> partscale.CSDF:
-    """A table: top and four legs, coloured by height and position (exact SDF)."""
+def table(h: float = H) -> partscale.CSDF:
+    """A table: top and four legs, coloured by height and position (exact SDF), voxel size h."""
 
     def colour(p):
         top = p[:, 1] > 0.69
@@ -83,7 +84,7 @@ def table() -> partscale.CSDF:
     c = shapes.grid(
         lambda p: shapes.boxes_sdf(p, boxes),
         ((0, 0, 0), TOP[1]),
-        voxel_size=H,
+        voxel_size=h,
         color=colour,
         source="test table",
     )
@@ -528,6 +529,36 @@ def test_editor_end_to_end(tmp_path):
     assert colours.shape[0] == len(mesh.vertices) > 1000
     assert np.ptp(colours[:, 2]) > 0.2  # the blue ramp along x
     np.testing.assert_allclose(mesh.bounds, [(0, 0, 0), TOP[1]], atol=0.5 * H)
+
+
+@pytest.mark.browser
+def test_editor_loads_previews_applies_and_undoes_at_256(tmp_path):
+    """256 voxels along the table's length (issue 15): the page draws it, previews a typed
+    zone, applies it on the server (the new extent) and undoes it; its status line reports the
+    Apply round trip the page measured."""
+    node, chromium = find_tools()
+    h = TOP[1][0] / 250  # 256 voxels along x with the 3-voxel margins
+    path = tmp_path / "table256.csdf.npz"
+    c = table(h)
+    assert max(c.shape) >= 256, c.shape
+    partscale.save(c, path)
+    with Server(path) as server:
+        session = server.app.state.session
+        original = session.current
+        r = run_page(node, chromium, server.url, tmp_path, zone=ZONE)
+        assert r["errors"] == [], r["errors"]
+        total = CANVAS[0] * CANVAS[1]
+        assert r["foregroundPixels"] > 0.1 * total
+        assert r["dragDiff"] > 0.01 * total and r["revisionAfterDrag"] == 0  # the preview moves
+        lo, hi = np.array(r["applied"]["solid_bounds"])
+        # 0.4 is 83.3 voxels: the length grows by 83 whole ones, and the page says so
+        assert abs(hi[0] - 1.6) <= 0.5 * h + 0.25 * h and abs(lo[0]) <= 0.25 * h
+        assert r["applied"]["shape"][0] > c.shape[0]
+        status = r["statusAfterApply"]
+        assert re.match(r"applied in \d+ ms \(server \d+ ms\)", status), status
+        assert "destination 1.2 -> 1.1984" in status and "whole voxels" in status, status
+        assert session.current is original  # undone: the very object again
+        assert r["undoneDiff"] <= 0.01 * total
 
 
 @pytest.mark.browser

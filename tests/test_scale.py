@@ -487,6 +487,7 @@ def test_tile_copies_become_new_parts_with_their_info(row):
     assert out.n_parts == 6
     assert piece_labels(out) == [{0}, {1}, {4}, {5}, {2}, {3}]
     got = out.meta["parts_info"]
+    assert c.meta["parts_info"] == info  # the input's facts stay its own
     assert [e["index"] for e in got] == list(range(6))
     assert [e.get("copy_of") for e in got] == [None, None, None, None, 1, 1]
     assert [e["name"] for e in got[4:]] == ["bar 1", "bar 1"]
@@ -503,6 +504,29 @@ def test_tile_copies_become_new_parts_with_their_info(row):
     truth = [shapes.box_sdf(world_grid(out), (x, 0, 0), (x + W, 0.3, 0.2)) for x in want]
     for i, t in enumerate(truth):  # each bar's surface carries its own label
         assert set(np.unique(out.parts[np.abs(t) < 0.5 * H]).tolist()) == {i}
+
+
+@pytest.mark.parametrize(("i_start", "i_end"), [(2.5, 9.5), (3.0, 9.0), (-4.0, 6.2), (0.5, 40.0)])
+def test_inner_parts_are_those_inside_only_between_the_planes(i_start, i_end):
+    """Against the definition: every inside voxel of the part strictly between the planes."""
+    from partscale.edit.parts import inner_parts
+
+    rng = np.random.default_rng(7)
+    sdf = rng.normal(size=(12, 5, 4)).astype(np.float32)
+    parts = np.full(sdf.shape, -1, np.int16)
+    for p in range(9):  # each part in a run of layers, some crossing or touching the planes
+        a = int(rng.integers(0, 11))
+        parts[a : a + int(rng.integers(1, 5)), p % 5, p % 4] = p
+    layer = np.arange(sdf.shape[0])[:, None, None] + np.zeros(sdf.shape, int)
+    want = [
+        p
+        for p in range(9)
+        if ((parts == p) & (sdf <= 0)).any()
+        and np.all((layer > i_start) & (layer < i_end) | ~((parts == p) & (sdf <= 0)))
+    ]
+    got = inner_parts(sdf, parts, i_start, i_end)
+    assert got.tolist() == want
+    assert 0 < len(want) < 9  # the case tells inner parts from others
 
 
 def test_progress_is_reported_and_monotone(ball):

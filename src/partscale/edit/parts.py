@@ -7,10 +7,10 @@ Arrays are axis-first (N, A, B): the edit axis is axis 0.
 from __future__ import annotations
 
 import copy as _copy
+import math
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from ..color import palette_colour
 from ..errors import InputError
@@ -23,18 +23,27 @@ def inner_parts(sdf: np.ndarray, parts: np.ndarray, i_start: float, i_end: float
 
     Arrays are axis-first (N, A, B).
     """
-    n_parts = int(parts.max()) + 1 if parts.size else 0
-    if n_parts <= 0:
+    n = sdf.shape[0]
+    # the layers strictly between the planes; a part is inner when it is inside there and
+    # nowhere else (one pass over each side, no per-part extremes over the whole grid)
+    lo = max(0, math.floor(i_start) + 1) if math.isfinite(i_start) else 0
+    hi = min(n, math.ceil(i_end)) if math.isfinite(i_end) else n
+    if lo >= hi:
         return np.zeros(0, np.int64)
-    inside = (sdf <= 0) & (parts >= 0)
-    layer = np.broadcast_to(np.arange(sdf.shape[0])[:, None, None], sdf.shape)
-    labels = np.where(inside, parts.astype(np.int64) + 1, 0)
-    idx = np.arange(1, n_parts + 1)
-    present = ndimage.sum_labels(np.ones(sdf.shape), labels, idx) > 0
-    mn = np.asarray(ndimage.minimum(layer, labels, idx), float)
-    mx = np.asarray(ndimage.maximum(layer, labels, idx), float)
-    keep = present & (mn > i_start) & (mx < i_end)
+    within = _inside_counts(sdf[lo:hi], parts[lo:hi])
+    if not within.any():
+        return np.zeros(0, np.int64)
+    keep = within > 0
+    for side in (slice(0, lo), slice(hi, n)):
+        out = _inside_counts(sdf[side], parts[side])[: keep.size]
+        keep[: out.size] &= out == 0
     return np.flatnonzero(keep)
+
+
+def _inside_counts(sdf: np.ndarray, parts: np.ndarray) -> np.ndarray:
+    """(P,) int64: inside voxels (``sdf <= 0``) of each part index ``p >= 0`` in the block."""
+    labels = parts[(sdf <= 0) & (parts >= 0)]
+    return np.bincount(labels.astype(np.int64)) if labels.size else np.zeros(0, np.int64)
 
 
 def update_parts_info(
@@ -73,7 +82,9 @@ def update_parts_info(
     n = int(parts.max()) + 1 if parts.size and parts.max() >= 0 else 0
     counts = np.bincount(parts[parts >= 0].ravel(), minlength=n)
     by_index = {int(x.get("index", -1)): x for x in info if isinstance(x, dict)}
-    originals = {p: _copy.deepcopy(x) for p, x in by_index.items()}
+    # entries are changed by replacing their keys, never in place: shallow copies keep the
+    # originals' facts for the copies made from them
+    originals = {p: dict(x) for p, x in by_index.items()}
     for p in range(n):
         src, m = copy_of.get(p, (p, 0))
         base = originals.get(src)

@@ -10,7 +10,6 @@ outside the zone an exact copy of the original voxels.
 
 from __future__ import annotations
 
-import copy as _copy
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -242,7 +241,9 @@ def _apply_edit(
     report(0.9, "recording")
     meta = dict(csdf.meta)  # the history is shared (read-only); only parts_info changes here
     if isinstance(meta.get("parts_info"), list):
-        meta["parts_info"] = _copy.deepcopy(meta["parts_info"])
+        # update_parts_info replaces keys and never changes a value in place: shallow copies of
+        # the entries leave the input's untouched (the new CSDF copies its meta anyway)
+        meta["parts_info"] = [dict(x) if isinstance(x, dict) else x for x in meta["parts_info"]]
         update_parts_info(meta, done.parts, r, done.scale, done.copy_of)
     entry = _history_entry(csdf, edit, r, done, "scale")
     if edit.mode == "global":  # what its plane map needs (recipe coordinates)

@@ -144,9 +144,10 @@ def fuse(
         filled = closed(solid)
         shell = closed(solid & within_closure)
         # where the segments fill the object only in part (thick curved parts whose opposite
-        # sides were seen in patches) the voids between them are surfaces deep inside it: the
-        # fill is kept only when it leaves less boundary than the thin closure alone
-        solid = filled if _boundary(filled) <= _boundary(shell) else shell
+        # sides were seen in patches) the voids between them are surfaces deep inside it: each
+        # region of the fill is kept only where it leaves less boundary than the thin closure
+        # alone, so a leg or a seat that closes cleanly keeps it beside a cushion that does not
+        solid = shell | _fill_regions(shell, filled & ~shell)
     solid = ndimage.binary_fill_holes(solid)
     lab, n = ndimage.label(solid)
     if n > 1:
@@ -219,9 +220,37 @@ def fuse(
     return sdf, rgb, prov
 
 
-def _boundary(solid: np.ndarray) -> int:
-    """Voxels of ``solid`` next to a voxel outside it (6-neighbourhood): its surface area."""
-    return int((solid & ~ndimage.binary_erosion(solid, border_value=0)).sum())
+def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) bool: the connected regions of ``extra`` (the fill beyond ``shell``) whose union
+    with ``shell`` has no more boundary voxels (:func:`_edge`) than ``shell`` alone.
+
+    Each region is judged in its own box, one voxel wider than it (the voxels whose side it can
+    change) and two wider for the erosion, so the cost follows the fill, not the grid."""
+    lab, n = ndimage.label(extra)
+    keep = np.zeros(n + 1, bool)
+    shape = shell.shape
+    for k, sl in enumerate(ndimage.find_objects(lab), start=1):
+        if sl is None:
+            continue
+        lo = [max(s.start - 2, 0) for s in sl]
+        hi = [min(s.stop + 2, d) for s, d in zip(sl, shape, strict=True)]
+        win = tuple(slice(a, b) for a, b in zip(lo, hi, strict=True))
+        # the counted box: one voxel around the region (inside the window's own edge, where the
+        # erosion would see outside that is not there, unless that edge is the grid's)
+        inner = tuple(
+            slice(max(s.start - 1, 0) - a, min(s.stop + 1, d) - a)
+            for s, a, d in zip(sl, lo, shape, strict=True)
+        )
+        sh = shell[win]
+        with_k = sh | (lab[win] == k)
+        keep[k] = _edge(with_k)[inner].sum() <= _edge(sh)[inner].sum()
+    keep[0] = False
+    return keep[lab]
+
+
+def _edge(solid: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) bool: voxels of ``solid`` next to a voxel outside it (6-neighbourhood)."""
+    return solid & ~ndimage.binary_erosion(solid, border_value=0)
 
 
 def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:

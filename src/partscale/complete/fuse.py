@@ -136,10 +136,16 @@ def fuse(
         ball = (g**2).sum(axis=0) <= r * r
 
         def closed(m):
-            c = ndimage.binary_closing(np.pad(m, r + 1), ball)[
+            # in the box of m, r + 2 voxels wider (or to the grid's edge): the closing reaches no
+            # further, and the empty rim around it is the outside the hole filling needs
+            box = _box(m, r + 2)
+            mb = m[box]
+            c = ndimage.binary_closing(np.pad(mb, r + 1), ball)[
                 r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
             ]
-            return ndimage.binary_fill_holes(m | (c & ~free_all))
+            out = np.zeros_like(m)
+            out[box] = ndimage.binary_fill_holes(mb | (c & ~free_all[box]))
+            return out
 
         filled = closed(solid)
         shell = closed(solid & within_closure)
@@ -218,6 +224,17 @@ def fuse(
         rgb.reshape(-1, 3)[band[ks][hit]] = colors[seen][nn_seen[hit]]
     rgb = _diffuse(rgb, known, band)
     return sdf, rgb, prov
+
+
+def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:
+    """The bounding box of ``m`` (X, Y, Z) bool, ``margin`` voxels wider within the grid."""
+    box = []
+    for ax in range(m.ndim):
+        hit = np.flatnonzero(m.any(axis=tuple(a for a in range(m.ndim) if a != ax)))
+        if len(hit) == 0:
+            return tuple(slice(0, 0) for _ in m.shape)
+        box.append(slice(max(hit[0] - margin, 0), min(hit[-1] + 1 + margin, m.shape[ax])))
+    return tuple(box)
 
 
 def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:

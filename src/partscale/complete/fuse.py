@@ -239,7 +239,7 @@ def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:
 
 def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
     """(X, Y, Z) bool: the connected regions of ``extra`` (the fill beyond ``shell``) whose union
-    with ``shell`` has no more boundary voxels (:func:`_edge`) than ``shell`` alone.
+    with ``shell`` has fewer boundary voxels (:func:`_edge`) than ``shell`` alone.
 
     Each region is judged in its own box, one voxel wider than it (the voxels whose side it can
     change) and two wider for the erosion, so the cost follows the fill, not the grid."""
@@ -260,7 +260,7 @@ def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
         )
         sh = shell[win]
         with_k = sh | (lab[win] == k)
-        keep[k] = _edge(with_k)[inner].sum() <= _edge(sh)[inner].sum()
+        keep[k] = _edge(with_k)[inner].sum() < _edge(sh)[inner].sum()
     keep[0] = False
     return keep[lab]
 

@@ -61,3 +61,54 @@ def test_a_block_seen_on_its_sides_completes_solid_down_to_its_unseen_bottom():
     volume = inside.sum() * c.voxel_size**3
     assert volume >= 0.85 * (0.6 * 0.3 * 0.4)
     assert volume <= 1.15 * (0.6 * 0.3 * 0.4)
+
+
+def _grid_face(lo, hi, axis, side, rows=None):
+    """Points (N, 3) every half voxel on one face of a box, and their normals; ``rows``: keep
+    only those whose z lies within half a voxel of a row start ``lo_z + 12 k``."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    a, b = (x for x in range(3) if x != axis)
+    U, V = np.meshgrid(
+        np.arange(lo[a], hi[a] + 1e-9, 0.5), np.arange(lo[b], hi[b] + 1e-9, 0.5), indexing="ij"
+    )
+    P = np.zeros((U.size, 3))
+    P[:, a], P[:, b] = U.ravel(), V.ravel()
+    P[:, axis] = hi[axis] if side > 0 else lo[axis]
+    if rows:
+        P = P[(P[:, 2] - lo[2]) % 12 < 1]
+    N = np.zeros_like(P)
+    N[:, axis] = side
+    return P, N
+
+
+def test_the_fill_is_kept_where_it_closes_a_part_and_dropped_where_it_leaves_voids():
+    # two parts on one grid (voxel units): a block seen on all sides but its bottom, whose fill
+    # closes it; and a long box whose two sides were seen only along thin rows 12 voxels apart,
+    # whose fill is slabs with wide voids between them, each void a surface inside the object
+    from partscale.complete import fuse
+
+    a_lo, a_hi, b_lo, b_hi = (4, 2, 4), (16, 14, 16), (24, 2, 4), (36, 14, 64)
+    faces = [
+        _grid_face(a_lo, a_hi, ax, s) for ax in range(3) for s in (1, -1) if (ax, s) != (1, -1)
+    ]
+    faces += [_grid_face(b_lo, b_hi, 0, s, rows=True) for s in (1, -1)]
+    faces.append(_grid_face(b_lo, b_hi, 1, 1))
+    P = np.concatenate([p for p, _ in faces])
+    N = np.concatenate([n for _, n in faces])
+    shape = (42, 18, 70)
+    never = lambda p: np.zeros(len(p), bool)  # noqa: E731
+    above = lambda p: p[:, 1] + 10.0  # noqa: E731
+    args = (np.eye(4), shape, np.zeros(3), 1.0, P, np.full((len(P), 3), 128, np.uint8))
+    args += (np.full(len(P), fuse.OBSERVED, np.uint8), N, never, [], above, 2.0)
+    with_fill = fuse.fuse(*args)[0] < 0
+    without = fuse.fuse(*args, fill_between=False)[0] < 0
+
+    def area(inside, box):
+        return sum(int((np.diff(inside[box], axis=a) != 0).sum()) for a in range(3))
+
+    # the block is solid deep inside (the thin closure alone leaves it hollow) ...
+    assert with_fill[10, 8, 10]
+    assert not without[10, 8, 10]
+    # ... while the long box has at most 3 % more surface than its thin closure alone
+    b = (slice(22, 39), slice(0, 17), slice(2, 67))
+    assert area(with_fill, b) <= 1.03 * area(without, b)

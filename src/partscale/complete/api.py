@@ -312,6 +312,10 @@ def complete(
     free_grid = FreeGrid(carver, Uinv, lo0, hi0, FREE_GRID_VOXELS * h0, SYMMETRY_MARGIN * h0)
 
     def free_up(p):
+        # until the frame turns (the mirror search) the upright frame is the table's: millions
+        # of candidate points skip a transform by the identity
+        if U is U0:
+            return free_grid(p)
         return free_grid(_apply(U0 @ Uinv, p))
 
     report(0.15, "symmetries")

@@ -136,17 +136,24 @@ def fuse(
         ball = (g**2).sum(axis=0) <= r * r
 
         def closed(m):
-            c = ndimage.binary_closing(np.pad(m, r + 1), ball)[
+            # in the box of m, r + 2 voxels wider (or to the grid's edge): the closing reaches no
+            # further, and the empty rim around it is the outside the hole filling needs
+            box = _box(m, r + 2)
+            mb = m[box]
+            c = ndimage.binary_closing(np.pad(mb, r + 1), ball)[
                 r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
             ]
-            return ndimage.binary_fill_holes(m | (c & ~free_all))
+            out = np.zeros_like(m)
+            out[box] = ndimage.binary_fill_holes(mb | (c & ~free_all[box]))
+            return out
 
         filled = closed(solid)
         shell = closed(solid & within_closure)
         # where the segments fill the object only in part (thick curved parts whose opposite
-        # sides were seen in patches) the voids between them are surfaces deep inside it: the
-        # fill is kept only when it leaves less boundary than the thin closure alone
-        solid = filled if _boundary(filled) <= _boundary(shell) else shell
+        # sides were seen in patches) the voids between them are surfaces deep inside it: each
+        # region of the fill is kept only where it leaves less boundary than the thin closure
+        # alone, so a leg or a seat that closes cleanly keeps it beside a cushion that does not
+        solid = shell | _fill_regions(shell, filled & ~shell)
     solid = ndimage.binary_fill_holes(solid)
     lab, n = ndimage.label(solid)
     if n > 1:
@@ -219,9 +226,48 @@ def fuse(
     return sdf, rgb, prov
 
 
-def _boundary(solid: np.ndarray) -> int:
-    """Voxels of ``solid`` next to a voxel outside it (6-neighbourhood): its surface area."""
-    return int((solid & ~ndimage.binary_erosion(solid, border_value=0)).sum())
+def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:
+    """The bounding box of ``m`` (X, Y, Z) bool, ``margin`` voxels wider within the grid."""
+    box = []
+    for ax in range(m.ndim):
+        hit = np.flatnonzero(m.any(axis=tuple(a for a in range(m.ndim) if a != ax)))
+        if len(hit) == 0:
+            return tuple(slice(0, 0) for _ in m.shape)
+        box.append(slice(max(hit[0] - margin, 0), min(hit[-1] + 1 + margin, m.shape[ax])))
+    return tuple(box)
+
+
+def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) bool: the connected regions of ``extra`` (the fill beyond ``shell``) whose union
+    with ``shell`` has fewer boundary voxels (:func:`_edge`) than ``shell`` alone.
+
+    Each region is judged in its own box, one voxel wider than it (the voxels whose side it can
+    change) and two wider for the erosion, so the cost follows the fill, not the grid."""
+    lab, n = ndimage.label(extra)
+    keep = np.zeros(n + 1, bool)
+    shape = shell.shape
+    for k, sl in enumerate(ndimage.find_objects(lab), start=1):
+        if sl is None:
+            continue
+        lo = [max(s.start - 2, 0) for s in sl]
+        hi = [min(s.stop + 2, d) for s, d in zip(sl, shape, strict=True)]
+        win = tuple(slice(a, b) for a, b in zip(lo, hi, strict=True))
+        # the counted box: one voxel around the region (inside the window's own edge, where the
+        # erosion would see outside that is not there, unless that edge is the grid's)
+        inner = tuple(
+            slice(max(s.start - 1, 0) - a, min(s.stop + 1, d) - a)
+            for s, a, d in zip(sl, lo, shape, strict=True)
+        )
+        sh = shell[win]
+        with_k = sh | (lab[win] == k)
+        keep[k] = _edge(with_k)[inner].sum() < _edge(sh)[inner].sum()
+    keep[0] = False
+    return keep[lab]
+
+
+def _edge(solid: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) bool: voxels of ``solid`` next to a voxel outside it (6-neighbourhood)."""
+    return solid & ~ndimage.binary_erosion(solid, border_value=0)
 
 
 def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
@@ -236,10 +282,16 @@ def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
     bit = (1 << (2 * axis + neg)).astype(np.uint8)
     bits = np.zeros(shape, np.uint8)
     np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), bit)
-    cube = np.ones((3, 3, 3), bool)
-    dil = np.zeros(shape, np.uint8)
-    for b in range(6):
-        dil |= ndimage.binary_dilation(bits & (1 << b) > 0, cube).astype(np.uint8) << b
+    # the six bits dilated by a 3x3x3 cube at once: the cube is separable, a shifted OR per axis
+    dil = bits
+    for ax in range(3):
+        d = dil.copy()
+        lo = [slice(None)] * 3
+        hi = [slice(None)] * 3
+        lo[ax], hi[ax] = slice(None, -1), slice(1, None)
+        d[tuple(lo)] |= dil[tuple(hi)]
+        d[tuple(hi)] |= dil[tuple(lo)]
+        dil = d
     dirs = np.zeros((6, 3))
     dirs[np.arange(6), np.arange(6) // 2] = np.where(np.arange(6) % 2 == 0, 1.0, -1.0)
     opposite = ((normals @ dirs.T < -BETWEEN_FACING) * (1 << np.arange(6))).sum(axis=1)

@@ -255,7 +255,9 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
 
     def cost(t, d):
         A, b = _mirror(t, d)
-        dist, nn = tree.query(X @ A.T + b, k=REFINE_NEIGHBOURS, distance_upper_bound=cell)
+        dist, nn = tree.query(
+            X @ A.T + b, k=REFINE_NEIGHBOURS, distance_upper_bound=cell, workers=2
+        )
         ok = np.isfinite(dist)
         facing = np.einsum("nj,nkj->nk", XN @ A.T, N[np.where(ok, nn, 0)]) > REFINE_FACING
         dist = np.where(ok & facing, dist, cell)

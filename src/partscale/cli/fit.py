@@ -37,7 +37,6 @@ def fit(
 ) -> None:
     """Resize to a target size: tile whole periods of repeated elements, absorb the rest in a
     slab of constant cross-section, global scaling only as a last resort; says what it chose."""
-    from .._files import atomic_path
     from ..edit import apply_recipe, describe_changes
     from ..zones import fit as fit_zones
     from .scale import _MESH_IN, _MESH_OUT
@@ -61,20 +60,25 @@ def fit(
         from .scale import _scale_mesh
 
         _scale_mesh(src, output, recipe)
-        if recipe_out is not None:
-            with atomic_path(recipe_out) as tmp:
-                tmp.write_text(json.dumps(recipe.to_json(), indent=2) + "\n")
-            _common.done(f"wrote {recipe_out}")
+        _write_recipe(recipe, recipe_out)
         return
     with _common.progress_bar("fit") as bar:
         out = apply_recipe(c, recipe, progress=bar)
     for line in describe_changes(out.meta.get("history", [])[-len(recipe.edits) :], out):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     save(out, output)
-    if recipe_out is not None:
-        with atomic_path(recipe_out) as tmp:
-            tmp.write_text(json.dumps(recipe.to_json(), indent=2) + "\n")
-        _common.done(f"wrote {recipe_out}")
+    _write_recipe(recipe, recipe_out)
     sb = out.surface_bounds()
     ext = " x ".join(f"{v:.4g}" for v in sb[1] - sb[0])
     _common.done(f"wrote {output} (solid {ext} {out.meta.get('units') or ''})")
+
+
+def _write_recipe(recipe, path: Path | None) -> None:
+    """--recipe-out: the recipe fit applied, as JSON (written whole or not at all)."""
+    if path is None:
+        return
+    from .._files import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(recipe.to_json(), indent=2) + "\n")
+    _common.done(f"wrote {path}")

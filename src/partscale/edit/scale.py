@@ -141,14 +141,11 @@ def _edit_arrays(
         moved = (sdf_now != sdf_was) | (out_parts[todo] != parts_was)
         drop = moved & (sdf_now > far)
         out_parts[tuple(t[drop] for t in todo)] = -1
+        # the slab (between START and the new END, seams inside it) is one run of layers: a view
         layers = np.flatnonzero(plan.in_slab | (plan.beta > 0))
-        if layers.size and layers[-1] - layers[0] + 1 == layers.size:  # the slab: a view
+        if layers.size:
             slab = slice(int(layers[0]), int(layers[-1]) + 1)
             np.copyto(out_parts[slab], np.int16(-1), where=out_sdf[slab] > far)
-        elif layers.size:
-            slab_parts = out_parts[layers]
-            slab_parts[out_sdf[layers] > far] = -1
-            out_parts[layers] = slab_parts
     sdf, rgb, parts = (np.moveaxis(a, 0, ax) for a in (out_sdf, out_rgb, out_parts))
     # written in world order and nothing else holds them: read-only, the CSDF takes them as
     # they are instead of copying (no full copy beyond the output)

@@ -18,3 +18,18 @@ def timed(fn: Callable[[], T], repeat: int) -> tuple[float, T]:
         out = fn()
         times.append(time.perf_counter() - t)
     return statistics.median(times), out
+
+
+def timed_cpu(fn: Callable[[], object], repeat: int) -> tuple[float, float]:
+    """(median wall seconds, median process CPU seconds) of the same ``repeat`` calls of ``fn``.
+
+    CPU time beside wall time: other jobs share this machine's two cores, and a parallel
+    kernel's CPU time exceeds its wall time.
+    """
+    wall, cpu = [], []
+    for _ in range(repeat):
+        t, c = time.perf_counter(), time.process_time()
+        fn()
+        wall.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
+    return statistics.median(wall), statistics.median(cpu)

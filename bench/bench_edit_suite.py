@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
-import time
 from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
 from pathlib import Path
+
+from _timing import timed_cpu
 
 from partscale import ingest
 from partscale.edit import Edit, apply_edit, apply_recipe, naive_edit
@@ -37,13 +37,8 @@ TARGET_MS = 100.0
 def times(fn: Callable[[], object], repeat: int) -> tuple[float, float]:
     """(median wall ms, median CPU ms) of ``repeat`` calls after one warm-up."""
     fn()
-    wall, cpu = [], []
-    for _ in range(repeat):
-        t, c = time.perf_counter(), time.process_time()
-        fn()
-        wall.append(1e3 * (time.perf_counter() - t))
-        cpu.append(1e3 * (time.process_time() - c))
-    return statistics.median(wall), statistics.median(cpu)
+    wall, cpu = timed_cpu(fn, repeat)
+    return 1e3 * wall, 1e3 * cpu
 
 
 def main() -> None:

@@ -23,13 +23,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
-import time
 import tracemalloc
 from pathlib import Path
 
 import edt
 import numpy as np
+from _timing import timed, timed_cpu
 
 from partscale import shapes
 from partscale.edit import Edit, apply_edit, naive_edit, resolve_edit, tile_count
@@ -118,17 +117,6 @@ def full_edt(csdf):
     return np.where(inside, -ins, out).astype(np.float32)
 
 
-def median_time(fn, repeat, *, cpu=False):
-    """Median wall time (or process CPU time: other jobs share this machine's two cores)."""
-    clock = time.process_time if cpu else time.perf_counter
-    times = []
-    for _ in range(repeat):
-        t = clock()
-        fn()
-        times.append(clock() - t)
-    return statistics.median(times)
-
-
 def cases_at(res: int):
     """The edit cases at one resolution: bookcase stretch and tile, table stretched +40%."""
     c, what = load_object(res)
@@ -159,18 +147,17 @@ def measure(c, e, repeat: int, *, loop: bool) -> dict:
     """Timings (seconds) and peak memory of one edit case."""
     edit = Edit.parse(e)
     apply_edit(c, edit)  # warm (numba cache load)
-    t_ours = median_time(lambda: apply_edit(c, edit), repeat)
-    t_cpu = median_time(lambda: apply_edit(c, edit), repeat, cpu=True)
+    t_ours, t_cpu = timed_cpu(lambda: apply_edit(c, edit), repeat)
     out = apply_edit(c, edit)
     vec = naive_edit(c, edit)
     t_loop = float("nan")
     if loop:
-        t_loop = median_time(lambda: naive_loop(c, edit), max(1, min(repeat, 3)))
+        t_loop, _ = timed(lambda: naive_loop(c, edit), max(1, min(repeat, 3)))
         loop_sdf, _ = naive_loop(c, edit)
         agree = np.abs(loop_sdf - vec.sdf).max()
         assert agree < 1e-4 * c.voxel_size, agree  # the loop is the same baseline
-    t_vec = median_time(lambda: naive_edit(c, edit), repeat)
-    t_edt = median_time(lambda: full_edt(out), repeat)
+    t_vec, _ = timed(lambda: naive_edit(c, edit), repeat)
+    t_edt, _ = timed(lambda: full_edt(out), repeat)
     tracemalloc.start()
     apply_edit(c, edit)
     _, peak = tracemalloc.get_traced_memory()

@@ -8,7 +8,10 @@ and their image in the best vertical plane by voting, no free-space test) and th
 in one run; the colour error on Kenney objects (flat material colours); and the time of a
 completion beside a plain ``import`` of the same partial scan (its points as a range mesh).
 
-    .venv/bin/python bench/bench_complete.py [--quick]
+    .venv/bin/python bench/bench_complete.py [--quick] [--only SUBSTRING]
+
+Objects are scanned and scored at their real size (the virtual sensor is metric; a file in
+other units is scaled by its row's metres per unit).
 """
 
 from __future__ import annotations

@@ -70,9 +70,18 @@ def _half_bits(f):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _encode_half(bits, out):  # pragma: no cover - compiled
-    for n in range(bits.shape[0]):
-        out[n] = _half_bits(np.uint32(bits[n]))
+def _encode_half(sdf, scale, out):  # pragma: no cover - compiled
+    # out (flat, C order of the box) = float16 bits of float32(sdf * scale), in one pass over a
+    # possibly strided box: no scaled copy, no gather
+    one = np.empty(1, np.float32)
+    bits = one.view(np.uint32)
+    n = 0
+    for i in range(sdf.shape[0]):
+        for j in range(sdf.shape[1]):
+            for k in range(sdf.shape[2]):
+                one[0] = sdf[i, j, k] * scale
+                out[n] = _half_bits(bits[0])
+                n += 1
 
 
 def _layers(axis: int, start: int, stop: int) -> tuple[slice, ...]:
@@ -89,8 +98,7 @@ def encode_slab(c: CSDF, axis: int, start: int, stop: int) -> bytes:
     sdf, rgb = c.sdf[box], c.rgb[box]
     n = sdf.size
     out = np.empty(n * GRID_BYTES_PER_VOXEL, dtype=np.uint8)
-    bits = (sdf * np.float32(1.0 / c.voxel_size)).reshape(-1).view(np.uint32)
-    _encode_half(bits, out[: 2 * n].view("<u2"))
+    _encode_half(sdf, np.float32(1.0 / c.voxel_size), out[: 2 * n].view("<u2"))
     out[2 * n :].reshape(rgb.shape)[...] = rgb
     return out.tobytes()
 
@@ -129,7 +137,8 @@ class GridDelta:
 
 @numba.njit(cache=True, nogil=True)
 def _same_layers(sdf_a, sdf_b, rgb_a, rgb_b, parts_a, parts_b, limit):  # pragma: no cover
-    # how many leading layers (first axis) are equal in all three arrays: sdf bits, rgb, parts
+    # how many leading layers (first axis) are equal in all three arrays (sdf as bits), at most
+    # limit; stops at the first difference
     for i in range(limit):
         for j in range(sdf_a.shape[1]):
             for k in range(sdf_a.shape[2]):
@@ -160,6 +169,7 @@ def grid_delta(base: CSDF, new: CSDF) -> GridDelta | None:
     limit = min(base.shape[axis], new.shape[axis])
 
     def arrays(c: CSDF, flip: bool) -> list[np.ndarray]:
+        # bit patterns: -0.0 is not 0.0 to the page
         out = [np.moveaxis(x, axis, 0) for x in (c.sdf.view(np.uint32), c.rgb, c.parts)]
         return [x[::-1] for x in out] if flip else out
 

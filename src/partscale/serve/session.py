@@ -88,7 +88,13 @@ def _layers(axis: int, start: int, stop: int) -> tuple[slice, ...]:
     return tuple(slice(start, stop) if a == axis else slice(None) for a in range(3))
 
 
-def encode_slab(c: CSDF, axis: int, start: int, stop: int) -> bytes:
+def _frozen(a: np.ndarray) -> memoryview:
+    # the array's own bytes, read-only: a copy into ``bytes`` costs as much as the encoding
+    a.flags.writeable = False
+    return a.data
+
+
+def encode_slab(c: CSDF, axis: int, start: int, stop: int) -> memoryview:
     """Layers ``start:stop`` of ``c`` along ``axis`` as :func:`encode_grid` encodes the grid.
 
     The box is ``c``'s grid cut to those layers (shape ``S``, its own C order); the bytes are
@@ -100,11 +106,12 @@ def encode_slab(c: CSDF, axis: int, start: int, stop: int) -> bytes:
     out = np.empty(n * GRID_BYTES_PER_VOXEL, dtype=np.uint8)
     _encode_half(sdf, np.float32(1.0 / c.voxel_size), out[: 2 * n].view("<u2"))
     out[2 * n :].reshape(rgb.shape)[...] = rgb
-    return out.tobytes()
+    return _frozen(out)
 
 
-def encode_grid(c: CSDF) -> bytes:
-    """The grid for the page's 3D textures: two planes, each ``(X, Y, Z)`` in C order.
+def encode_grid(c: CSDF) -> memoryview:
+    """The grid for the page's 3D textures (read-only bytes): two planes, each ``(X, Y, Z)``
+    in C order.
 
     That is the grid's own order, z fastest: the page uploads them as ``Z x Y x X`` textures and
     samples them at ``uvw.zyx``, so no transpose is ever made (it would cost more than the rest).
@@ -182,13 +189,14 @@ def grid_delta(base: CSDF, new: CSDF) -> GridDelta | None:
     return GridDelta(axis, head, tail)
 
 
-def encode_parts(c: CSDF, axis: int = 0, start: int = 0, stop: int | None = None) -> bytes:
-    """``(X, Y, Z)`` int16 little-endian part indices, C order (z fastest), -1 where none.
+def encode_parts(c: CSDF, axis: int = 0, start: int = 0, stop: int | None = None) -> memoryview:
+    """``(X, Y, Z)`` int16 little-endian part indices (read-only bytes), C order (z fastest),
+    -1 where none.
 
     With ``axis``, ``start``, ``stop``: only those layers (as :func:`encode_slab`).
     """
     box = _layers(axis, start, c.shape[axis] if stop is None else stop)
-    return np.ascontiguousarray(c.parts[box], dtype="<i2").tobytes()
+    return _frozen(np.array(c.parts[box], dtype="<i2", order="C")).cast("B")
 
 
 @dataclass(frozen=True)
@@ -201,15 +209,15 @@ class Encoding:
         The object encoded (describe the bytes from it, not from the session's current one).
     revision : int
         The session revision that showed it: what the page names as ``?base=`` next time.
-    data : bytes
-        The whole encoding, or with ``delta`` only its layers ``head : shape[axis] - tail``.
+    data : memoryview
+        Read-only bytes: the whole encoding, or with ``delta`` only its layers ``head : shape[axis] - tail``.
     delta : GridDelta or None
         How the rest follows from the base the page named; None for the whole object.
     """
 
     csdf: CSDF
     revision: int
-    data: bytes
+    data: memoryview
     delta: GridDelta | None = None
 
 
@@ -344,13 +352,18 @@ class EditSession:
         with self.lock:
             c, rev = self.current, self.revision
             old = self._shown.get(base) if base is not None else None
-        delta = None if old is None else self._cached(("delta", old, c), grid_delta, old, c)
+        delta = None if old is None else self._delta(old, c)
         if delta is None:
             encode = encode_grid if kind == "grid" else encode_parts
             return Encoding(c, rev, self._cached((kind, c), encode, c))
         stop = c.shape[delta.axis] - delta.tail
         encode = encode_slab if kind == "grid" else encode_parts
         return Encoding(c, rev, encode(c, delta.axis, delta.head, stop), delta)
+
+    def _delta(self, a: CSDF, b: CSDF) -> GridDelta | None:
+        # grid_delta is symmetric: an undo's delta is its apply's, found once
+        pair = (a, b) if id(a) <= id(b) else (b, a)
+        return self._cached(("delta", *pair), grid_delta, *pair)
 
     def _cached(self, key: tuple, fn: Callable[..., T], *args: Any) -> T:
         # Encoding a 256³ grid takes a few hundred ms: keep the last few results, so a second
@@ -370,10 +383,10 @@ class EditSession:
         return value
 
     def grid_bytes(self) -> bytes:
-        return self.encoded("grid").data
+        return bytes(self.encoded("grid").data)
 
     def parts_bytes(self) -> bytes:
-        return self.encoded("parts").data
+        return bytes(self.encoded("parts").data)
 
     def _record(self) -> None:
         # call with the lock held, after the current object or the revision changed
@@ -424,7 +437,7 @@ class EditSession:
             snap = self._snapshot()
         # the page asks next for what changed since the object it shows: find it while still
         # in the worker thread
-        self._cached(("delta", old, new), grid_delta, old, new)
+        self._delta(old, new)
         entries = new.meta.get("history", [])[-len(parsed.edits) :]
         return {**self._describe(snap), "notes": describe_changes(entries, new)}
 

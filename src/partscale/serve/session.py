@@ -354,11 +354,11 @@ class EditSession:
             old = self._shown.get(base) if base is not None else None
         delta = None if old is None else self._delta(old, c)
         if delta is None:
-            encode = encode_grid if kind == "grid" else encode_parts
-            return Encoding(c, rev, self._cached((kind, c), encode, c))
+            whole = encode_grid if kind == "grid" else encode_parts
+            return Encoding(c, rev, self._cached((kind, c), whole, c))
         stop = c.shape[delta.axis] - delta.tail
-        encode = encode_slab if kind == "grid" else encode_parts
-        return Encoding(c, rev, encode(c, delta.axis, delta.head, stop), delta)
+        layers = encode_slab if kind == "grid" else encode_parts
+        return Encoding(c, rev, layers(c, delta.axis, delta.head, stop), delta)
 
     def _delta(self, a: CSDF, b: CSDF) -> GridDelta | None:
         # grid_delta is symmetric: an undo's delta is its apply's, found once

@@ -8,7 +8,8 @@ import { zoneEdit } from './recipe';
 import { recipe, type Store, type ZoneInput } from './state';
 
 export interface Commands {
-  /** Fetch the object (state, grid, parts, suggestions) and show it (see the 'loaded' action). */
+  /** Fetch the object (state, grid, parts) and show it (see the 'loaded' action); its zone
+   *  suggestions follow (the 'suggested' action) without being waited for. */
   load(how?: 'first' | 'applied' | 'undone' | 'redone'): Promise<void>;
   /** Ask the server for the fit panel's sizes and preview the recipe as the zones; whether it
    *  could. */
@@ -49,6 +50,12 @@ export function createCommands(store: Store, scene: Scene): Commands {
     if (parts) held.parts = parts;
     store.dispatch({ type: 'loaded', server: s, how });
     status(`${s.name}: ${s.history.length} operation(s) in history`);
+    // not awaited: the object is shown and usable now; its zone candidates (seconds at 256³)
+    // fill the panel when they come
+    void suggestFor(s);
+  }
+
+  async function suggestFor(s: api.ServerState) {
     let found: api.Candidate[] = [];
     try {
       found = await api.suggest();

@@ -139,6 +139,7 @@ def test_grid_is_half_distances_then_srgb_bytes_in_grid_order(client, box_file):
     r = client.get("/api/grid")
     assert r.headers["x-partscale-shape"] == f"{X},{Y},{Z}"
     assert r.headers["x-partscale-revision"] == "0" and "x-partscale-delta" not in r.headers
+    assert client.get("/api/state").json()["encoding"]["version"] == 2  # web/src/api.ts
     dist, rgb = split_grid(r.content, c.shape)  # C order: index (i, j, k) = world x, y, z
     i, j, k = 7, 5, 3
     assert dist[i, j, k] == pytest.approx(c.sdf[i, j, k] / H, rel=1e-3, abs=1e-3)

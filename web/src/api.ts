@@ -19,6 +19,8 @@ export interface ServerState {
   n_parts: number;
   parts_info: PartInfo[];
   history: unknown[];
+  /** The grid protocol (session.header): version must be GRID_FORMAT. */
+  encoding: { version: number };
   revision: number;
   can_undo: boolean;
   can_redo: boolean;
@@ -48,6 +50,9 @@ async function check(r: Response): Promise<Response> {
 export async function getState(): Promise<ServerState> {
   return (await check(await fetch('/api/state', { cache: 'no-store' }))).json();
 }
+
+/** The grid protocol this page reads (session.GRID_FORMAT on the server). */
+export const GRID_FORMAT = 2;
 
 /** GET path: the whole object, or with base (the revision whose object the page holds) maybe only
  * the layers that changed since (X-Partscale-Delta; see grid.ts and app.py). */

@@ -32,6 +32,9 @@ export function createCommands(store: Store, scene: Scene): Commands {
   async function load(how: 'first' | 'applied' | 'undone' | 'redone' = 'first') {
     status('loading grid…');
     const s = await api.getState();
+    if (s.encoding?.version !== api.GRID_FORMAT) {
+      throw new ApiError(`grid: expected format ${api.GRID_FORMAT}, got ${s.encoding?.version} (reload the page)`);
+    }
     const [X, Y, Z] = s.shape;
     const limit = scene.maxTextureSize;
     if (Math.max(X, Y, Z) > limit) {

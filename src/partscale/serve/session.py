@@ -44,6 +44,9 @@ def edited_path(path: Path) -> Path:
 
 #: Bytes a voxel takes in :func:`encode_grid`: a float16 distance and three sRGB bytes.
 GRID_BYTES_PER_VOXEL = 5
+#: The grid protocol's version, in the state's ``encoding`` (1: RGBA float16, whole grids; 2:
+#: float16 distance + sRGB bytes, deltas); the page refuses another.
+GRID_FORMAT = 2
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -239,6 +242,7 @@ def header(c: CSDF) -> dict[str, Any]:
         "parts_info": parts_info if isinstance(parts_info, list) else [],
         "history": c.meta.get("history", []),
         "encoding": {
+            "version": GRID_FORMAT,
             "grid": "(X, Y, Z) float16 little-endian sdf/voxel_size, then (X, Y, Z, 3) uint8 "
             "sRGB; C order (z fastest); with X-Partscale-Delta only the changed layers",
             "parts": "(X, Y, Z) int16 little-endian, C order (z fastest); -1 = none",

@@ -5,7 +5,9 @@ Usage: PYTHONPATH=src python bench/bench_editor.py [--repeat 5] [--frames 0] [--
 
 Prints a table of median times. The baseline is ``apply_recipe`` called in this process on the
 same object and recipe; the HTTP figures add what the editor adds: JSON request, the lock, the
-undo stack, the float16 grid encoding and its download over loopback. ``--frames N`` also renders
+undo stack, finding the layers the edit changed, their encoding (float16 distance + sRGB bytes)
+and their download over loopback, as the page asks for them (``GET /api/grid?base=N``, N the
+revision it shows). ``--frames N`` also renders
 N frames at 1280x720 in headless Chromium (software rendering here: not a GPU measure).
 """
 
@@ -28,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 import partscale  # noqa: E402
 from partscale import shapes  # noqa: E402
 from partscale.edit import apply_recipe  # noqa: E402
-from partscale.serve import encode_grid  # noqa: E402
+from partscale.serve import GRID_BYTES_PER_VOXEL, encode_grid  # noqa: E402
 
 RECIPE = {"edits": [{"axis": "x", "zone": ["35%", "65%"], "to": "80%", "mode": "stretch"}]}
 
@@ -147,6 +149,8 @@ def run(res: int, repeat: int, frames: int) -> None:
         with EditorProcess(path) as server, httpx.Client(base_url=server.url, timeout=60) as client:
             client.post("api/apply", json=RECIPE).raise_for_status()  # warm the server too
             client.post("api/undo", json={}).raise_for_status()
+            shown = int(client.get("api/grid").headers["x-partscale-revision"])  # the page's
+            sent: list[int] = []
             # interleaved, so load from other processes hits baseline and editor alike
             for _ in range(repeat):
                 t0 = time.perf_counter()
@@ -160,13 +164,15 @@ def run(res: int, repeat: int, frames: int) -> None:
                 r.raise_for_status()
                 times["post"].append(ms_since(t0))
                 times["server"].append(r.json()["apply_ms"])
-                grid = client.get("api/grid").content
+                g = client.get("api/grid", params={"base": shown})
                 times["round"].append(ms_since(t0))
-                assert len(grid) == np.prod(r.json()["shape"]) * 8
+                shown = check_delta(g, r.json()["shape"])
+                sent.append(len(g.content))
                 t0 = time.perf_counter()
                 client.post("api/undo", json={}).raise_for_status()
-                client.get("api/grid")
+                g = client.get("api/grid", params={"base": shown})
                 times["undo"].append(ms_since(t0))
+                shown = check_delta(g, c.shape)
             frame = browser_frames(server.url, frames, tmp) if frames else None
     base = statistics.median(times["baseline"])
     print(f"editor round trips, {'x'.join(map(str, c.shape))} grid, {repeat} runs")
@@ -174,6 +180,11 @@ def run(res: int, repeat: int, frames: int) -> None:
     for key, name in ROWS.items():
         med = statistics.median(times[key])
         print(f"{name:52s} {med:10.1f} {min(times[key]):8.1f} {med / base:11.2f}")
+    whole = np.prod(out.shape) * GRID_BYTES_PER_VOXEL
+    print(
+        f"grid sent after apply: {statistics.median(sent) / 1e6:.1f} MB "
+        f"(the whole {'x'.join(map(str, out.shape))} grid: {whole / 1e6:.1f} MB)"
+    )
     if frame:
         b, renderer = frame
         print(
@@ -182,13 +193,23 @@ def run(res: int, repeat: int, frames: int) -> None:
         )
 
 
+def check_delta(r, shape) -> int:
+    """The revision of a grid answer, after checking it holds the changed layers of ``shape``."""
+    assert r.headers["x-partscale-shape"] == ",".join(map(str, shape))
+    axis, head, tail = map(int, r.headers["x-partscale-delta"].split(","))
+    body = list(shape)
+    body[axis] -= head + tail
+    assert len(r.content) == np.prod(body) * GRID_BYTES_PER_VOXEL
+    return int(r.headers["x-partscale-revision"])
+
+
 ROWS = {
     "baseline": "apply_recipe in process (baseline)",
-    "encode": "encode_grid in process (float16 RGBA)",
-    "server": "server: apply_recipe + encode (apply_ms)",
+    "encode": "encode_grid in process (whole grid, 5 B a voxel)",
+    "server": "server: apply_recipe + changed layers (apply_ms)",
     "post": "HTTP POST /api/apply",
-    "round": "HTTP apply + GET /api/grid (round trip)",
-    "undo": "HTTP undo + GET /api/grid",
+    "round": "HTTP apply + GET /api/grid?base (round trip)",
+    "undo": "HTTP undo + GET /api/grid?base",
 }
 
 

@@ -267,6 +267,39 @@ PYTHON_RULES = {
 }
 
 
+def test_typescript_splice_rebuilds_the_grid_from_the_changed_layers(tmp_path):
+    """grid.ts spliceLayers, what the page does with X-Partscale-Delta: the base's first head and
+    last tail layers around the body's, along each axis, for 1 and 4 values a voxel."""
+    rng = np.random.default_rng(3)
+    cases, want = [], []
+    for axis in range(3):
+        for channels in (1, 4):
+            base_shape, shape = [4, 5, 6], [4, 5, 6]
+            shape[axis] += 2
+            head, tail = 2, 1
+            base = rng.integers(0, 60000, size=(*base_shape, channels))
+            body_shape = list(shape)
+            body_shape[axis] -= head + tail
+            body = rng.integers(0, 60000, size=(*body_shape, channels))
+            parts = [
+                np.take(base, range(head), axis),
+                body,
+                np.take(base, range(base_shape[axis] - tail, base_shape[axis]), axis),
+            ]
+            want.append(np.concatenate(parts, axis).ravel().tolist())
+            cases.append(
+                {
+                    "base": base.ravel().tolist(),
+                    "baseShape": base_shape,
+                    "shape": shape,
+                    "channels": channels,
+                    "delta": [axis, head, tail],
+                    "body": body.ravel().tolist(),
+                }
+            )
+    assert run_page_node(tmp_path, {"splice": cases})["splice"] == want
+
+
 def python_rule(message: str) -> str:
     rules = [rule for words, rule in PYTHON_RULES.items() if words in message]
     assert len(rules) == 1, f"no rule for {message!r}"

@@ -368,3 +368,24 @@ def test_bands_picture_is_cropped_to_the_object(shape):
     blank = ~fg.any(axis=1)
     runs = np.diff(np.flatnonzero(np.concatenate([[True], ~blank, [True]]))) - 1
     assert runs.max() <= 2 * margin
+
+
+def test_bands_beyond_the_first_few_are_outlined_not_filled():
+    """Many overlapping candidates do not wash a light object out: only the first few tint it."""
+    lo, hi = np.zeros(3), np.array([2.0, 0.5, 0.4])
+    c = shapes.grid(lambda p: shapes.box_sdf(p, lo, hi), [lo, hi], voxel_size=0.02)
+    c = c.replace(rgb=np.full_like(c.rgb, 240))
+    first = [(0, 0.5, 1.5, str(k), (0, 158, 115)) for k in range(render.FILLED_BANDS)]
+    more = [(0, 0.2, 1.8, str(k), (200, 0, 0)) for k in range(4)]
+    one = render.render_bands(c, first, size=300)
+    many = render.render_bands(c, first + more, size=300)
+    assert one.shape == many.shape
+    # x in (0.25, 0.45) is covered by the later bands only: the object there is as without them
+    w = one.shape[1]
+    fg = foreground(one)
+    rows = np.flatnonzero(fg[:, w // 2])
+    cols = np.flatnonzero(fg[rows[len(rows) // 2]])
+    x0, x1 = cols[0], cols[-1]  # the object's extent in x on a middle row
+    band = slice(x0 + int(0.3 / 2 * (x1 - x0)), x0 + int(0.4 / 2 * (x1 - x0)))
+    middle = slice(rows[0] + len(rows) // 4, rows[0] + len(rows) // 2)
+    assert np.abs(one[middle, band].astype(int) - many[middle, band].astype(int)).max() <= 2

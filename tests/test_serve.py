@@ -22,12 +22,15 @@ from starlette.testclient import TestClient
 
 import partscale
 from partscale import shapes
+from partscale.segment import segment
 from partscale.serve import (
+    GRID_BYTES_PER_VOXEL,
     MAX_BODY,
     allowed_hosts,
     create_app,
     edited_path,
     encode_grid,
+    encode_slab,
     is_loopback,
 )
 from partscale.serve import session as session_mod
@@ -122,18 +125,27 @@ def test_state_describes_the_object(client, box_file):
     assert client.get("/api/schema").json()["title"] == "partscale recipe"
 
 
-def test_grid_is_rgba_half_in_grid_order(client, box_file):
+def split_grid(raw: bytes, shape) -> tuple[np.ndarray, np.ndarray]:
+    """The two planes of encode_grid: (X, Y, Z) float16 distances, (X, Y, Z, 3) uint8 sRGB."""
+    n = int(np.prod(shape))
+    assert len(raw) == n * GRID_BYTES_PER_VOXEL == n * 5
+    dist = np.frombuffer(raw, "<f2", count=n).reshape(shape)
+    return dist, np.frombuffer(raw, np.uint8, offset=2 * n).reshape(*shape, 3)
+
+
+def test_grid_is_half_distances_then_srgb_bytes_in_grid_order(client, box_file):
     c = partscale.load(box_file)
     X, Y, Z = c.shape
-    raw = client.get("/api/grid").content
-    assert len(raw) == X * Y * Z * 4 * 2
-    g = np.frombuffer(raw, "<f2").reshape(X, Y, Z, 4)  # C order: index (i, j, k) = world x, y, z
+    r = client.get("/api/grid")
+    assert r.headers["x-partscale-shape"] == f"{X},{Y},{Z}"
+    assert r.headers["x-partscale-revision"] == "0" and "x-partscale-delta" not in r.headers
+    assert client.get("/api/state").json()["encoding"]["version"] == 2  # web/src/api.ts
+    dist, rgb = split_grid(r.content, c.shape)  # C order: index (i, j, k) = world x, y, z
     i, j, k = 7, 5, 3
-    assert g[i, j, k, 3] == pytest.approx(c.sdf[i, j, k] / H, rel=1e-3, abs=1e-3)
-    np.testing.assert_allclose(g[i, j, k, :3], c.rgb[i, j, k] / 255, atol=1e-3)
-    # every voxel, to float16 precision (relative 2^-11)
-    np.testing.assert_allclose(g[..., 3], c.sdf / H, rtol=1e-3, atol=1e-3)
-    np.testing.assert_allclose(g[..., :3], c.rgb / 255, atol=5e-4)
+    assert dist[i, j, k] == pytest.approx(c.sdf[i, j, k] / H, rel=1e-3, abs=1e-3)
+    # every voxel, to float16 precision (relative 2^-11); the colour exactly as stored
+    np.testing.assert_allclose(dist, c.sdf / H, rtol=1e-3, atol=1e-3)
+    assert np.array_equal(rgb, c.rgb)
     parts = np.frombuffer(client.get("/api/parts").content, "<i2").reshape(X, Y, Z)
     assert (parts == -1).all()
 
@@ -145,11 +157,82 @@ def test_grid_encoding_is_numpys_float16_bit_for_bit():
     sdf.flat[:6] = [0.0, -0.0, 65504.0, 65520.0, 2.98e-8, -1e6]
     rgb = rng.integers(0, 256, size=(8, 9, 10, 3), dtype=np.uint8)
     c = partscale.make(sdf, rgb, voxel_size=1.0)
-    g = np.frombuffer(encode_grid(c), "<u2").reshape(8, 9, 10, 4)
+    raw = encode_grid(c)
     with np.errstate(over="ignore"):
         want = c.sdf.astype("<f2").view("<u2")
-    assert np.array_equal(g[..., 3], want)
-    assert np.array_equal(g[..., :3], (rgb / 255.0).astype("<f2").view("<u2"))
+    assert np.array_equal(np.frombuffer(raw, "<u2", count=c.sdf.size).reshape(8, 9, 10), want)
+    assert np.array_equal(split_grid(raw, c.shape)[1], rgb)
+    # a slab is the same bytes as the whole grid cut to those layers, along any axis
+    for axis in range(3):
+        box = tuple(slice(2, 5) if a == axis else slice(None) for a in range(3))
+        d, colour = split_grid(encode_slab(c, axis, 2, 5), want[box].shape)
+        assert np.array_equal(d.view("<u2"), want[box]) and np.array_equal(colour, rgb[box])
+
+
+def splice(base: np.ndarray, new_shape, delta: str, body: np.ndarray) -> np.ndarray:
+    """What the page does with X-Partscale-Delta (web/src/grid.ts spliceLayers)."""
+    axis, head, tail = map(int, delta.split(","))
+    n, nb = new_shape[axis], base.shape[axis]
+    out = np.empty(tuple(new_shape) + base.shape[3:], base.dtype)
+    take = lambda a, lo, hi: a[(slice(None),) * axis + (slice(lo, hi),)]  # noqa: E731
+    take(out, 0, head)[...] = take(base, 0, head)
+    take(out, head, n - tail)[...] = body
+    take(out, n - tail, n)[...] = take(base, nb - tail, nb)
+    return out
+
+
+@pytest.mark.parametrize("axis", ["x", "y", "z"])
+def test_grid_after_apply_and_undo_is_only_the_changed_layers(tmp_path, axis):
+    path = tmp_path / "parts.csdf.npz"
+    boxes = [((0, 0, 0), (0.3, 0.3, 0.3)), ((0.5, 0.4, 0.2), (0.9, 0.7, 0.6))]
+    c = segment(
+        shapes.grid(
+            lambda p: shapes.boxes_sdf(p, boxes), ((0, 0, 0), (0.9, 0.7, 0.6)), voxel_size=H
+        ),
+        cache=False,
+    )
+    assert c.n_parts >= 2
+    partscale.save(c, path)
+    recipe = {"edits": [{"axis": axis, "zone": ["35%", "60%"], "to": "80%", "mode": "stretch"}]}
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        session = client.app.state.session
+        # what the page holds: per kind, (revision, the whole decoded arrays)
+        held = {"grid": (0, *split_grid(client.get("/api/grid").content, c.shape))}
+        held["parts"] = (0, np.frombuffer(client.get("/api/parts").content, "<i2").reshape(c.shape))
+        for step in ("apply", "undo", "redo"):
+            r = post(client, f"/api/{step}", recipe if step == "apply" else None)
+            assert r.status_code == 200, r.text
+            want = session.current
+            for kind, (base, *arrays) in held.items():
+                r = client.get(f"/api/{kind}?base={base}")
+                assert r.headers["x-partscale-revision"] == str(session.revision)
+                shape = [int(v) for v in r.headers["x-partscale-shape"].split(",")]
+                assert shape == list(want.shape)
+                delta = r.headers["x-partscale-delta"]
+                a, head, tail = map(int, delta.split(","))
+                assert a == "xyz".index(axis)
+                # the zone's layers and a little more are sent; the rest is the base's
+                assert 0 < shape[a] - head - tail <= 0.6 * shape[a], (head, tail, shape)
+                body_shape = list(shape)
+                body_shape[a] -= head + tail
+                if kind == "grid":
+                    body = split_grid(r.content, body_shape)
+                    got = [splice(x, shape, delta, y) for x, y in zip(arrays, body, strict=True)]
+                    w_d, w_c = split_grid(encode_grid(want), want.shape)
+                    assert np.array_equal(got[0].view("<u2"), w_d.view("<u2"))
+                    assert np.array_equal(got[1], w_c)
+                else:
+                    body = np.frombuffer(r.content, "<i2").reshape(body_shape)
+                    got = [splice(arrays[0], shape, delta, body)]
+                    assert np.array_equal(got[0], want.parts)
+                held[kind] = (session.revision, *got)
+        # a base the session no longer knows, or none: the whole object
+        for q in ("", "?base=9999"):
+            r = client.get("/api/grid" + q)
+            assert "x-partscale-delta" not in r.headers
+            assert r.content == encode_grid(session.current)
+        assert client.get("/api/grid?base=-1").status_code == 400
+        assert client.get("/api/parts?base=x").status_code == 400
 
 
 # -- apply, undo, redo ------------------------------------------------------------------------
@@ -165,7 +248,7 @@ def test_apply_stretches_to_the_expected_extent_and_undo_restores_exactly(client
     assert abs(hi[0] - 1.2) <= 0.25 * H and abs(lo[0]) <= 0.25 * H
     np.testing.assert_allclose(hi[1:], BOX[1][1:], atol=0.25 * H)
     assert s["can_undo"] and s["revision"] == 1 and len(s["history"]) == 1
-    assert len(client.get("/api/grid").content) == np.prod(s["shape"]) * 8
+    assert len(client.get("/api/grid").content) == np.prod(s["shape"]) * GRID_BYTES_PER_VOXEL
 
     s = post(client, "/api/undo").json()
     assert session.current is original  # the very arrays, not a recomputation
@@ -280,7 +363,7 @@ def test_grid_header_describes_the_grid_sent_even_when_an_apply_lands_meanwhile(
     assert client.app.state.session.current.shape != original.shape
     # the body is the object as it was asked for; the header must say so
     assert shape == list(original.shape)
-    assert len(r.content) == 8 * int(np.prod(shape))
+    assert len(r.content) == GRID_BYTES_PER_VOXEL * int(np.prod(shape))
 
 
 def test_progress_is_busy_until_the_last_apply_in_flight_ends(client, monkeypatch):

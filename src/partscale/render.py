@@ -387,8 +387,11 @@ def save_png(image: np.ndarray, path: str | os.PathLike) -> Path:
 
 #: Margin (a fraction of the image size) :func:`render_bands` keeps around what it draws.
 BAND_MARGIN = 0.025
-#: Opacity of the bands :func:`render_bands` draws.
+#: Opacity of the bands :func:`render_bands` fills.
 BAND_ALPHA = 0.28
+#: How many of the first bands :func:`render_bands` fills; the rest are outlined only, so that
+#: overlapping candidates do not wash a light object out.
+FILLED_BANDS = 2
 
 
 def _ticks(lo: float, hi: float) -> np.ndarray:
@@ -412,8 +415,8 @@ def render_bands(
     ticks in object units along the frame's bottom and left edges, and a scale bar.
 
     ``bands``: ``(axis, lo, hi, label, colour)`` tuples (axis 0-2, world ``lo``/``hi`` along it,
-    a short label, sRGB colour), the first drawn on top; those along an axis the view does not
-    show are skipped (:class:`~partscale.errors.InputError` when none is left). The object's
+    a short label, sRGB colour), the first drawn on top and only the first :data:`FILLED_BANDS`
+    filled (the rest outlined); those along an axis the view does not show are skipped (:class:`~partscale.errors.InputError` when none is left). The object's
     larger side spans ``size`` less :data:`MARGIN`; the picture is cropped to the object, its
     bands and axes with a margin of :data:`BAND_MARGIN` of ``size``, the scale bar below it.
     """
@@ -447,7 +450,7 @@ def render_bands(
     if not shown:
         raise InputError(f"bands: expected one along an axis the {view} view shows, got none")
     # the first band on top: drawn last
-    for a, lo, hi, label, colour in reversed(shown):
+    for rank, (a, lo, hi, label, colour) in reversed(list(enumerate(shown))):
         p0, p1 = frame[0].copy(), frame[0].copy()
         p0[int(a)], p1[int(a)] = lo, hi
         (u0, v0), (u1, v1) = pixel(p0), pixel(p1)
@@ -456,7 +459,8 @@ def render_bands(
         else:
             box = [x0, min(v0, v1), x1, max(v0, v1)]
         rgb = tuple(int(v) for v in colour)
-        draw.rectangle(box, fill=(*rgb, round(255 * BAND_ALPHA)), outline=(*rgb, 255), width=2)
+        fill = (*rgb, round(255 * BAND_ALPHA)) if rank < FILLED_BANDS else None
+        draw.rectangle(box, fill=fill, outline=(*rgb, 255), width=2)
         draw.text((box[0] + 3, box[1] + 2), label, fill=(*rgb, 255), font=font)
     ink = (0, 0, 0, 255)
     # axes with ticks in object units along the frame's bottom and left edges

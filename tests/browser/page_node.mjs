@@ -10,6 +10,8 @@
 //            would send, and (when the case has points) the preview's map of the points back to
 //            the loaded object (remap.ts toSource through the valid zones)
 //   palette: color.ts paletteColour of 0..N-1
+//   splice:  grid.ts spliceLayers on [{base, baseShape, shape, channels, delta, body}] (Uint16
+//            values), the spliced array
 import { createRequire } from 'node:module';
 import { readFileSync } from 'node:fs';
 import { join, resolve } from 'node:path';
@@ -44,5 +46,10 @@ if (cases.rules) {
 if (cases.palette) {
   const color = await load('color.ts');
   out.palette = Array.from({ length: cases.palette }, (_, i) => color.paletteColour(i));
+}
+if (cases.splice) {
+  const grid = await load('grid.ts');
+  out.splice = cases.splice.map((c) =>
+    Array.from(grid.spliceLayers(Uint16Array.from(c.base), c.baseShape, c.shape, c.channels, c.delta, Uint16Array.from(c.body))));
 }
 process.stdout.write(JSON.stringify(out) + '\n');

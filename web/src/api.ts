@@ -1,5 +1,6 @@
 // The server's API (src/partscale/serve/app.py): one object, no paths in requests. Every request
 // the page makes goes through here.
+import type { Delta, Encoded, Shape } from './grid';
 import type { Axis, Edit, Recipe } from './recipe';
 
 export interface PartInfo {
@@ -18,6 +19,8 @@ export interface ServerState {
   n_parts: number;
   parts_info: PartInfo[];
   history: unknown[];
+  /** The grid protocol (session.header): version must be GRID_FORMAT. */
+  encoding: { version: number };
   revision: number;
   can_undo: boolean;
   can_redo: boolean;
@@ -48,17 +51,35 @@ export async function getState(): Promise<ServerState> {
   return (await check(await fetch('/api/state', { cache: 'no-store' }))).json();
 }
 
-/** (X, Y, Z, 4) float16 bits, C order: z fastest (see session.encode_grid). */
-export async function getGrid(): Promise<Uint16Array> {
-  const r = await check(await fetch('/api/grid', { cache: 'no-store' }));
-  return new Uint16Array(await r.arrayBuffer());
+/** The grid protocol this page reads (session.GRID_FORMAT on the server). */
+export const GRID_FORMAT = 2;
+
+/** GET path: the whole object, or with base (the revision whose object the page holds) maybe only
+ * the layers that changed since (X-Partscale-Delta; see grid.ts and app.py). */
+async function getEncoded(path: string, base: number | null): Promise<Encoded> {
+  const url = base === null ? path : `${path}?base=${base}`;
+  const r = await check(await fetch(url, { cache: 'no-store' }));
+  const ints = (name: string, n: number): number[] => {
+    const v = (r.headers.get(name) ?? '').split(',').map(Number);
+    if (v.length !== n || !v.every((x) => Number.isInteger(x) && x >= 0)) {
+      throw new ApiError(`${path}: expected ${n} integers in ${name}, got ${r.headers.get(name)}`);
+    }
+    return v;
+  };
+  const delta = r.headers.has('X-Partscale-Delta') ? (ints('X-Partscale-Delta', 3) as Delta) : null;
+  return {
+    shape: ints('X-Partscale-Shape', 3) as Shape,
+    revision: ints('X-Partscale-Revision', 1)[0],
+    delta,
+    body: await r.arrayBuffer(),
+  };
 }
 
-/** (X, Y, Z) int16 part indices, C order, -1 = none. */
-export async function getParts(): Promise<Int16Array> {
-  const r = await check(await fetch('/api/parts', { cache: 'no-store' }));
-  return new Int16Array(await r.arrayBuffer());
-}
+/** Float16 distances and sRGB bytes (see session.encode_grid), whole or the changed layers. */
+export const getGrid = (base: number | null): Promise<Encoded> => getEncoded('/api/grid', base);
+
+/** Int16 part indices, C order, -1 = none; whole or the changed layers. */
+export const getParts = (base: number | null): Promise<Encoded> => getEncoded('/api/parts', base);
 
 /** The apply in flight (GET /api/progress). */
 export interface Progress {

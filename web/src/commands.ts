@@ -2,12 +2,14 @@
 // is in flight, the status line, the new object loaded into the scene.
 import * as api from './api';
 import { ApiError } from './api';
+import { type Parts, partsFrom, type Volume, volumeFrom } from './grid';
 import type { Scene } from './scene';
 import { zoneEdit } from './recipe';
 import { recipe, type Store, type ZoneInput } from './state';
 
 export interface Commands {
-  /** Fetch the object (state, grid, parts, suggestions) and show it (see the 'loaded' action). */
+  /** Fetch the object (state, grid, parts) and show it (see the 'loaded' action); its zone
+   *  suggestions follow (the 'suggested' action) without being waited for. */
   load(how?: 'first' | 'applied' | 'undone' | 'redone'): Promise<void>;
   /** Ask the server for the fit panel's sizes and preview the recipe as the zones; whether it
    *  could. */
@@ -24,21 +26,39 @@ export interface Commands {
 
 export function createCommands(store: Store, scene: Scene): Commands {
   const status = (message: string, error = false) => store.dispatch({ type: 'set-status', message, error });
+  // the arrays shown: the base the server sends later objects against (only what changed)
+  const held: { volume: Volume | null; parts: Parts | null } = { volume: null, parts: null };
 
   async function load(how: 'first' | 'applied' | 'undone' | 'redone' = 'first') {
     status('loading grid…');
     const s = await api.getState();
+    if (s.encoding?.version !== api.GRID_FORMAT) {
+      throw new ApiError(`grid: expected format ${api.GRID_FORMAT}, got ${s.encoding?.version} (reload the page)`);
+    }
     const [X, Y, Z] = s.shape;
     const limit = scene.maxTextureSize;
     if (Math.max(X, Y, Z) > limit) {
       throw new ApiError(`grid: expected at most ${limit} voxels per axis on this GPU, got ${s.shape.join('×')}`);
     }
-    const grid = await api.getGrid();
-    if (grid.length !== X * Y * Z * 4) throw new ApiError(`grid: expected ${X * Y * Z * 4} values, got ${grid.length}`);
-    const parts = s.n_parts > 0 ? await api.getParts() : null;
-    scene.setObject(s, grid, parts);
+    const volume = volumeFrom(await api.getGrid(held.volume?.revision ?? null), held.volume);
+    if (volume.shape.join() !== s.shape.join()) {
+      throw new ApiError(`grid: expected ${s.shape.join('×')} voxels, got ${volume.shape.join('×')}`);
+    }
+    const parts = s.n_parts > 0 ? partsFrom(await api.getParts(held.parts?.revision ?? null), held.parts) : null;
+    if (parts && parts.shape.join() !== s.shape.join()) {
+      throw new ApiError(`parts: expected ${s.shape.join('×')} voxels, got ${parts.shape.join('×')}`);
+    }
+    scene.setObject(s, volume, parts?.parts ?? null);
+    held.volume = volume;
+    if (parts) held.parts = parts;
     store.dispatch({ type: 'loaded', server: s, how });
     status(`${s.name}: ${s.history.length} operation(s) in history`);
+    // not awaited: the object is shown and usable now; its zone candidates (seconds at 256³)
+    // fill the panel when they come
+    void suggestFor(s);
+  }
+
+  async function suggestFor(s: api.ServerState) {
     let found: api.Candidate[] = [];
     try {
       found = await api.suggest();

@@ -26,7 +26,8 @@ uniform mat4 projectionMatrix;
 uniform vec3 cameraPosition;
 // Both textures hold the grid in its own C order (z fastest): texel (s, t, r) = voxel (k, j, i),
 // so they are sampled at uvw.zyx.
-uniform sampler3D uVolume;   // rgb = sRGB colour, a = signed distance in voxels
+uniform sampler3D uDistance; // r = signed distance in voxels (float16)
+uniform sampler3D uColour;   // rgb = sRGB colour (8 bits)
 uniform sampler3D uParts;    // rgb = part colour (sRGB), nearest filtering
 uniform vec3 uGridMin;       // world corner of the texture (origin - voxel/2)
 uniform vec3 uGridSize;      // world extent of the texture
@@ -43,13 +44,13 @@ ${REMAP_GLSL}
 
 vec4 sampleSource(vec3 pOut) {
   vec3 uvw = (toSource(pOut) - uGridMin) / uGridSize;
-  return texture(uVolume, uvw.zyx);
+  return texture(uColour, uvw.zyx);
 }
 
 float sdf(vec3 pOut) {
   vec3 src = toSource(pOut);
   vec3 uvw = (src - uGridMin) / uGridSize;
-  float d = texture(uVolume, uvw.zyx).a * uVoxel;
+  float d = texture(uDistance, uvw.zyx).r * uVoxel;
   // outside the grid the clamped texture repeats the border: never report less than the way back
   vec3 q = abs(src - (uGridMin + 0.5 * uGridSize)) - 0.5 * uGridSize;
   float outside = length(max(q, 0.0));
@@ -165,7 +166,8 @@ export function createRaymarchMaterial(): THREE.RawShaderMaterial {
     fragmentShader: fragment,
     side: THREE.BackSide,
     uniforms: {
-      uVolume: { value: null },
+      uDistance: { value: null },
+      uColour: { value: null },
       uParts: { value: null },
       uGridMin: { value: new THREE.Vector3() },
       uGridSize: { value: new THREE.Vector3(1, 1, 1) },

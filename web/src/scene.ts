@@ -4,6 +4,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import type { ServerState } from './api';
 import { partColour } from './color';
+import type { Volume } from './grid';
 import { createRaymarchMaterial, evalRemapOnGPU } from './raymarch';
 import { AXES, type Zone } from './recipe';
 import { MAX_ZONES, minJacobian, packZone } from './remap';
@@ -34,8 +35,8 @@ export interface Scene {
   readonly perf: Readonly<{ frameTimeMs: number; lastFrameMs: number; frames: number }>;
   /** A frame is requested and not drawn yet. */
   readonly renderQueued: boolean;
-  /** Upload the object's grid ((X, Y, Z, 4) float16 bits) and part indices (or null). */
-  setObject(s: ServerState, grid: Uint16Array, parts: Int16Array | null): void;
+  /** Upload the object's distances and colours (grid.ts Volume) and part indices (or null). */
+  setObject(s: ServerState, volume: Volume, parts: Int16Array | null): void;
   fitCamera(): void;
   requestRender(): void;
   renderNow(): void;
@@ -128,10 +129,11 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
   }
 
   // GPU resources and frame bookkeeping: the renderer's own, not the editor's state
-  const textures: { volume: THREE.Data3DTexture | null; parts: THREE.Data3DTexture | null } = {
-    volume: null,
-    parts: null,
-  };
+  const textures: {
+    distance: THREE.Data3DTexture | null;
+    colour: THREE.Data3DTexture | null;
+    parts: THREE.Data3DTexture | null;
+  } = { distance: null, colour: null, parts: null };
   const partsPlaceholder = new THREE.Data3DTexture(new Uint8Array([128, 128, 128, 255]), 1, 1, 1);
   partsPlaceholder.needsUpdate = true;
   u.uParts.value = partsPlaceholder;
@@ -271,18 +273,25 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     controls.update();
   }
 
-  function setObject(s: ServerState, grid: Uint16Array, parts: Int16Array | null) {
-    const [X, Y, Z] = s.shape;
-    textures.volume?.dispose();
+  function volumeTexture(data: Uint16Array | Uint8Array, shape: number[], format: THREE.PixelFormat, type: THREE.TextureDataType) {
+    const [X, Y, Z] = shape;
     // C order (z fastest): the texture's width runs along z (see raymarch.ts)
-    const volume = new THREE.Data3DTexture(grid, Z, Y, X);
-    volume.format = THREE.RGBAFormat;
-    volume.type = THREE.HalfFloatType;
-    volume.minFilter = THREE.LinearFilter;
-    volume.magFilter = THREE.LinearFilter;
-    volume.unpackAlignment = 1;
-    volume.needsUpdate = true;
-    textures.volume = volume;
+    const tex = new THREE.Data3DTexture(data, Z, Y, X);
+    tex.format = format;
+    tex.type = type;
+    tex.minFilter = THREE.LinearFilter;
+    tex.magFilter = THREE.LinearFilter;
+    tex.unpackAlignment = 1;
+    tex.needsUpdate = true;
+    return tex;
+  }
+
+  function setObject(s: ServerState, volume: Volume, parts: Int16Array | null) {
+    const [X, Y, Z] = s.shape;
+    textures.distance?.dispose();
+    textures.colour?.dispose();
+    textures.distance = volumeTexture(volume.distance, s.shape, THREE.RedFormat, THREE.HalfFloatType);
+    textures.colour = volumeTexture(volume.rgba, s.shape, THREE.RGBAFormat, THREE.UnsignedByteType);
     textures.parts?.dispose();
     textures.parts = null;
     if (parts && s.n_parts > 0) {
@@ -301,7 +310,8 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
       tex.needsUpdate = true;
       textures.parts = tex;
     }
-    u.uVolume.value = volume;
+    u.uDistance.value = textures.distance;
+    u.uColour.value = textures.colour;
     u.uParts.value = textures.parts ?? partsPlaceholder;
     const [gmin, gmax] = s.grid_bounds;
     u.uGridMin.value.set(gmin[0], gmin[1], gmin[2]);

@@ -27,7 +27,12 @@ FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
 CLUSTER_CELL = 0.03
 """Metres: points closer than about this are one object when isolating it automatically."""
-MAX_OBJECT_EXTENT = 2.0
+MAX_OBJECT_EXTENT = 4.0
+"""Metres: the largest object isolated automatically (a 3.3 m lounge sofa, a table for ten);
+larger clusters are walls or the room."""
+JOIN_WITHIN = 0.9
+"""Share of a cluster standing within an object's footprint (or of the object within the
+cluster's) that makes it part of the object when isolating automatically."""
 CLOSURE = 1.5
 """Voxels behind a surface point that the solid extends into space nobody saw (the closure)."""
 NORMAL_NEIGHBOURS = 12
@@ -44,7 +49,9 @@ the nearest, at most 0.87 of these away: well inside SYMMETRY_MARGIN)."""
 
 
 def _is_floor(P: np.ndarray, plane, inliers: np.ndarray) -> bool:
-    """A floor reaches beyond what stands on it (a chair's base is no wider than the chair)."""
+    """A floor reaches beyond what stands on it (a chair's base is no wider than the chair): the
+    test for a plane under a cropped scan, where the object's own flat underside is the other
+    explanation."""
     rest = P[~inliers & (plane.height(P) > 2 * FLOOR_TOL)]
     if len(rest) < 10:
         return True
@@ -91,7 +98,7 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
     lab = clusters(P[idx], CLUSTER_CELL)
     n = lab.max() + 1
     H, W = frames[0].shape
-    best, best_d = -1, np.inf
+    best, best_key = -1, (np.inf, 0)
     counts = np.bincount(lab, minlength=n)
     for c in np.flatnonzero(counts >= max(200, 0.002 * len(idx))):
         m = idx[lab == c]
@@ -101,30 +108,43 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
         p0 = pix[m][pix[m] >= 0]
         if len(p0) == 0:
             continue
-        d = math.hypot(np.mean(p0 % W) - W / 2, np.mean(p0 // W) - H / 2)
-        if d < best_d:
-            best, best_d = int(c), d
+        # nearest the centre: the distance from the image centre to the cluster's pixel box, the
+        # largest of those around it first (a stool's leg cut off by its seat's shadow is nearer
+        # the centre than the stool by its mean, not by its box)
+        u, v = p0 % W, p0 // W
+        du = max(u.min() - W / 2, W / 2 - u.max(), 0.0)
+        dv = max(v.min() - H / 2, H / 2 - v.max(), 0.0)
+        key = (math.hypot(du, dv), -int(counts[c]))
+        if key < best_key:
+            best, best_key = int(c), key
     if best < 0:
         raise InputError(
             "scan: expected an object standing on the floor (at most "
             f"{MAX_OBJECT_EXTENT} m across), got none; pick one with --box"
         )
     # parts of the same object the sensor separated (a swivel chair's seat above its base, with
-    # the gas-lift column lost along silhouettes): clusters standing over its footprint join it
+    # the gas-lift column lost along silhouettes; a stool's leg cut off its seat along the
+    # seat's shadow; a table's top above its legs): a cluster joins when nearly all of it stands
+    # within the object's footprint, or nearly all of the object within the cluster's (the
+    # cluster picked may be the leg). A chair half under a desk is neither
     a = np.cross(up, [1.0, 0, 0] if abs(up[0]) < 0.9 else [0, 1.0, 0])
     a /= np.linalg.norm(a)
     flat = np.stack([P[idx] @ a, P[idx] @ np.cross(up, a)], axis=1)
+
+    def within(X, Y):
+        # the share of footprint points X inside the box around footprint points Y
+        lo_, hi_ = Y.min(axis=0) - CLUSTER_CELL, Y.max(axis=0) + CLUSTER_CELL
+        return float(((X >= lo_) & (X <= hi_)).all(axis=1).mean())
+
     members = {int(best)}
     for _ in range(3):
         m = np.isin(lab, list(members))
-        f_lo, f_hi = flat[m].min(axis=0) - CLUSTER_CELL, flat[m].max(axis=0) + CLUSTER_CELL
         grew = False
         for c in np.flatnonzero(counts >= 30):
             if c in members:
                 continue
             mc = lab == c
-            centre = flat[mc].mean(axis=0)
-            if not ((centre >= f_lo) & (centre <= f_hi)).all():
+            if max(within(flat[mc], flat[m]), within(flat[m], flat[mc])) < JOIN_WITHIN:
                 continue
             both = P[idx[m | mc]]
             if (both.max(axis=0) - both.min(axis=0)).max() > MAX_OBJECT_EXTENT:
@@ -221,8 +241,10 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     up = _up_prior(frames[0])
     found = find_floor(P, up, FLOOR_TOL)
     support = None
-    if found is not None and not _is_floor(P, *found):
-        # a flat underside (a swivel chair's base) in a cropped scan: it gives up, not a floor
+    if found is not None and cropped and not _is_floor(P, *found):
+        # a flat underside (a swivel chair's base) in a cropped scan: it gives up, not a floor.
+        # Only there: a sensor frame sees the room, and a large object framed closely (a sofa)
+        # leaves little floor beside it, which would make the floor itself an underside
         support, found = found[0], None
     if found is not None:
         plane, _ = found

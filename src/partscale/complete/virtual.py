@@ -22,6 +22,10 @@ FOCAL = 280.0
 FLOOR_RGB = (150, 150, 150)
 MAX_RANGE = 4.5
 """Metres: farther than this the sensor gives no reading (a Kinect's range)."""
+MAX_OBJECT_DEPTH = 4.2
+"""Metres: how far a camera lets the object's far side be (inside the range, for the noise)."""
+FRAME_MARGIN = 0.05
+"""Fraction of the image's width and height kept clear of the object's bounding box each side."""
 
 
 def _look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
@@ -39,19 +43,42 @@ def _look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
 
 
 def camera_poses(mesh: ColoredMesh, views: int) -> list[np.ndarray]:
-    """Poses (4, 4) of ``views`` (1 or 3) cameras framing the object."""
+    """Poses (4, 4) of ``views`` (1 or 3) cameras framing the object.
+
+    A camera stands where the object's bounding sphere fills the narrower field of view, or
+    closer where the object's far side would otherwise lie beyond ``MAX_OBJECT_DEPTH`` (a sofa:
+    framed by its sphere, its far end would be 6 m away), but never so close that a corner of its
+    bounding box leaves the image (``FRAME_MARGIN``).
+    """
     V = np.asarray(mesh.vertices)[np.unique(mesh.faces)]
     lo, hi = V.min(axis=0), V.max(axis=0)
     centre = (lo + hi) / 2
     r = float(np.linalg.norm(hi - lo)) / 2
     vfov = 2 * np.arctan(SIZE[1] / 2 / FOCAL)
     dist = r / np.sin(vfov / 2) * 1.05
+    corners = np.stack(np.meshgrid(*zip(lo, hi, strict=True), indexing="ij"), -1).reshape(-1, 3)
+    half = (np.array(SIZE) / 2 - FRAME_MARGIN * np.array(SIZE)) / FOCAL
+
+    def fits(t, d):
+        T = _look_at(centre + t * d, centre)
+        cam = (corners - T[:3, 3]) @ T[:3, :3]
+        return bool((cam[:, 2] > 0).all() and (np.abs(cam[:, :2]) <= half * cam[:, 2:]).all())
+
     el = np.radians(ELEVATION_DEG)
     poses = []
     for az in AZIMUTHS_DEG[views]:
         a = np.radians(az)
-        eye = centre + dist * np.array([np.cos(el) * np.sin(a), np.sin(el), np.cos(el) * np.cos(a)])
-        poses.append(_look_at(eye, centre))
+        d = np.array([np.cos(el) * np.sin(a), np.sin(el), np.cos(el) * np.cos(a)])
+        # depth of a point p seen from centre + t d towards the centre: t - (p - centre) @ d
+        in_range = MAX_OBJECT_DEPTH + float(((V - centre) @ d).min())
+        t = dist
+        if in_range < dist:
+            near, far = r, dist  # bisection: the image fits at dist, not inside the sphere
+            for _ in range(30):
+                mid = (near + far) / 2
+                near, far = (near, mid) if fits(mid, d) else (mid, far)
+            t = max(in_range, far)
+        poses.append(_look_at(centre + t * d, centre))
     return poses
 
 
@@ -69,7 +96,8 @@ def virtual_scan(
     Parameters
     ----------
     mesh : ColoredMesh
-        The complete object, Y up, metres.
+        The complete object, Y up, metres (a mesh in other units must be scaled first: the
+        sensor's noise and range and the completion's tolerances are metric).
     noise, holes : float
         Scale of the depth noise (sigma = noise * (0.5 mm + 1 mm * z^2), z in metres: 5 mm at 2 m) and of the
         blotch dropout (about 5 % of the pixels at 1).
@@ -79,6 +107,13 @@ def virtual_scan(
     Returns
     -------
     list of Frame, poses in the mesh's frame (full sensor frames, not cropped).
+
+    Raises
+    ------
+    ValueError
+        When the framed object lies beyond the sensor's range (``MAX_RANGE``) from a camera,
+        where the sensor would read nothing of it: an object so large is not in metres (a Sweet
+        Home 3D chair 9 units tall, in decimetres).
     """
     import trimesh
 
@@ -87,9 +122,17 @@ def virtual_scan(
     rng = np.random.default_rng(seed)
     V = np.asarray(mesh.vertices, np.float64)
     F = np.asarray(mesh.faces, np.int64)
-    lo = V[np.unique(F)].min(axis=0)
-    hi = V[np.unique(F)].max(axis=0)
+    used = V[np.unique(F)]
+    lo, hi = used.min(axis=0), used.max(axis=0)
     n_obj = len(F)
+    poses = camera_poses(mesh, views)
+    nearest = max(float(((used - T[:3, 3]) @ T[:3, 2]).min()) for T in poses)
+    if nearest >= MAX_RANGE:
+        raise ValueError(
+            f"virtual_scan: expected an object in metres, within the sensor's range of "
+            f"{MAX_RANGE} m from cameras framing it, got one {float(np.linalg.norm(hi - lo)):.3g} "
+            f"units across whose nearest point is {nearest:.3g} m away: scale the mesh to metres"
+        )
     if floor:
         s = 4 * float(np.linalg.norm(hi - lo))
         c = (lo + hi) / 2
@@ -111,7 +154,7 @@ def virtual_scan(
     d_cam = np.stack([(u - K[0, 2]) / FOCAL, (v - K[1, 2]) / FOCAL, np.ones_like(u, float)], -1)
     d_cam = d_cam.reshape(-1, 3)
     frames = []
-    for pose in camera_poses(mesh, views):
+    for pose in poses:
         R, t = pose[:3, :3], pose[:3, 3]
         dirs = d_cam @ R.T
         dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)

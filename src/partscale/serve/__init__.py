@@ -13,11 +13,25 @@ own GLSL map) and ``handleScreen(name)``. ``?canvas=WxH`` fixes the canvas size.
 
 from .app import MAX_BODY, create_app
 from .server import allowed_hosts, canonical_host, is_loopback, serve
-from .session import EditSession, PageLimits, edited_path, encode_grid, encode_parts
+from .session import (
+    GRID_BYTES_PER_VOXEL,
+    EditSession,
+    Encoding,
+    GridDelta,
+    PageLimits,
+    edited_path,
+    encode_grid,
+    encode_parts,
+    encode_slab,
+    grid_delta,
+)
 
 __all__ = [
+    "GRID_BYTES_PER_VOXEL",
     "MAX_BODY",
     "EditSession",
+    "Encoding",
+    "GridDelta",
     "PageLimits",
     "allowed_hosts",
     "canonical_host",
@@ -25,6 +39,8 @@ __all__ = [
     "edited_path",
     "encode_grid",
     "encode_parts",
+    "encode_slab",
+    "grid_delta",
     "is_loopback",
     "serve",
 ]

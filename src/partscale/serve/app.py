@@ -7,8 +7,9 @@ request):
 GET  /                      the page
 GET  /assets/NAME           one of the built assets listed when the app was created
 GET  /api/state             JSON header: shape, origin, voxel size, bounds, parts, history...
-GET  /api/grid              binary 3D texture, see :func:`partscale.serve.session.encode_grid`
-GET  /api/parts             binary int16 part indices, C order (z fastest)
+GET  /api/grid              binary 3D textures, see :func:`partscale.serve.session.encode_grid`;
+                            ``?base=N``: only what changed since revision N (see below)
+GET  /api/parts             binary int16 part indices, C order (z fastest); ``?base=N`` too
 GET  /api/schema            the recipe JSON schema
 GET  /api/progress          progress of the apply in flight
 GET  /api/suggest           zone candidates of the current object (``?axis=x|y|z``: one axis)
@@ -23,6 +24,14 @@ POST /api/save              body: {"overwrite": bool, "revision": N}; writes
                             page shows, optional) is the current one
 GET  /api/export/mesh       GLB download; /api/export/texture: the 3D texture file
 ==========================  ==================================================================
+
+Grid and parts deltas: both answers carry ``X-Partscale-Shape: X,Y,Z`` (the object encoded)
+and ``X-Partscale-Revision: R`` (the revision that showed it; the page sends it back as
+``?base=R`` on its next fetch). When the server still holds the base's object and the two differ
+along one axis only, the answer adds ``X-Partscale-Delta: axis,head,tail`` and holds only the
+layers ``head : shape[axis] - tail`` along that axis (the box encoded as the whole grid would
+be); the first ``head`` layers are the base's first, the last ``tail`` the base's last
+(:class:`~partscale.serve.session.GridDelta`). Without that header the body is the whole object.
 
 POST bodies must be JSON (``Content-Type: application/json``): a page on another origin cannot
 send that without a CORS preflight, which this server never grants. Every request must name this
@@ -321,18 +330,28 @@ def create_app(
     async def get_state(request: Request) -> Response:
         return state()
 
-    async def grid(request: Request) -> Response:
-        # the header describes the CSDF that was encoded, not whatever is current by now
-        c, data = await run_in_threadpool(session.encoded, "grid")
-        return Response(
-            data,
-            media_type="application/octet-stream",
-            headers={"X-Partscale-Shape": ",".join(map(str, c.shape)), **_NO_STORE},
-        )
+    def _encoded(kind: str):
+        async def handler(request: Request) -> Response:
+            raw = request.query_params.get("base")
+            base = None
+            if raw is not None:
+                if not (raw.isascii() and raw.isdigit() and len(raw) <= 15):
+                    return _error(f"{kind}.base: expected a revision number, got {raw[:20]!r}")
+                base = int(raw)
+            # the headers describe the CSDF that was encoded, not whatever is current by now
+            e = await run_in_threadpool(session.encoded, kind, base)
+            headers = {
+                "X-Partscale-Shape": ",".join(map(str, e.csdf.shape)),
+                "X-Partscale-Revision": str(e.revision),
+                **_NO_STORE,
+            }
+            if e.delta is not None:
+                headers["X-Partscale-Delta"] = e.delta.header()
+            return Response(e.data, media_type="application/octet-stream", headers=headers)
 
-    async def parts(request: Request) -> Response:
-        data = await run_in_threadpool(session.parts_bytes)
-        return Response(data, media_type="application/octet-stream", headers=_NO_STORE)
+        return handler
+
+    grid, parts = _encoded("grid"), _encoded("parts")
 
     async def schema(request: Request) -> Response:
         return JSONResponse(JSON_SCHEMA)

@@ -13,7 +13,7 @@ from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numba
 import numpy as np
@@ -22,12 +22,17 @@ from ..csdf import CSDF, SUFFIX, load, save
 from ..errors import InputError
 from ..progress import ProgressCallback
 
+T = TypeVar("T")
+
 #: Most undo steps kept, and the most memory they may hold together (the oldest go first; one
 #: step is always kept). A 128³ CSDF is ~20 MiB, a 256³ one ~150 MiB.
 MAX_UNDO = 48
 UNDO_BYTES = 2 << 30
-#: Encoded grids kept (current, previous and next object, grid and parts each).
-CACHED_ENCODINGS = 6
+#: Encodings kept (current, previous and next object, grid and parts each, and the deltas).
+CACHED_ENCODINGS = 8
+#: Revisions whose objects a page may name as the base of a delta (the one it shows is
+#: normally the last but one).
+SHOWN_REVISIONS = 4
 
 
 def edited_path(path: Path) -> Path:
@@ -37,8 +42,11 @@ def edited_path(path: Path) -> Path:
     return path.with_name(f"{stem}.edited{SUFFIX}")
 
 
-#: sRGB byte -> float16 bits of byte / 255 (one rounding, and a gather is faster than arithmetic).
-_BYTE_TO_HALF = (np.arange(256) / 255.0).astype("<f2").view("<u2")
+#: Bytes a voxel takes in :func:`encode_grid`: a float16 distance and three sRGB bytes.
+GRID_BYTES_PER_VOXEL = 5
+#: The grid protocol's version, in the state's ``encoding`` (1: RGBA float16, whole grids; 2:
+#: float16 distance + sRGB bytes, deltas); the page refuses another.
+GRID_FORMAT = 2
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -65,34 +73,155 @@ def _half_bits(f):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _encode(bits, rgb, lut, out):  # pragma: no cover - compiled
-    for n in range(bits.shape[0]):
-        out[n, 0] = lut[rgb[n, 0]]
-        out[n, 1] = lut[rgb[n, 1]]
-        out[n, 2] = lut[rgb[n, 2]]
-        out[n, 3] = _half_bits(np.uint32(bits[n]))
+def _encode_half(sdf, scale, out):  # pragma: no cover - compiled
+    # out (flat, C order of the box) = float16 bits of float32(sdf * scale), in one pass over a
+    # possibly strided box: no scaled copy, no gather
+    one = np.empty(1, np.float32)
+    bits = one.view(np.uint32)
+    n = 0
+    for i in range(sdf.shape[0]):
+        for j in range(sdf.shape[1]):
+            for k in range(sdf.shape[2]):
+                one[0] = sdf[i, j, k] * scale
+                out[n] = _half_bits(bits[0])
+                n += 1
 
 
-def encode_grid(c: CSDF) -> bytes:
-    """The grid as the page's 3D texture: ``(X, Y, Z, 4)`` float16 little-endian, C order.
+def _layers(axis: int, start: int, stop: int) -> tuple[slice, ...]:
+    return tuple(slice(start, stop) if a == axis else slice(None) for a in range(3))
 
-    That is the grid's own order, z fastest: the page uploads it as a ``Z x Y x X`` texture and
-    samples it at ``uvw.zyx``, so no transpose is ever made (it would cost more than the rest).
-    Channels: r, g, b = sRGB / 255 (the stored 8-bit colour, not linearised); a = sdf /
-    voxel_size, the signed distance in voxels (negative inside), which keeps float16's relative
-    precision near the surface whatever the object's units. Bit-identical to numpy's
-    ``astype(float16)``, in one compiled pass (4x faster than the numpy passes on 128³).
+
+def _frozen(a: np.ndarray) -> memoryview:
+    # the array's own bytes, read-only: a copy into ``bytes`` costs as much as the encoding
+    a.flags.writeable = False
+    return a.data
+
+
+def encode_slab(c: CSDF, axis: int, start: int, stop: int) -> memoryview:
+    """Layers ``start:stop`` of ``c`` along ``axis`` as :func:`encode_grid` encodes the grid.
+
+    The box is ``c``'s grid cut to those layers (shape ``S``, its own C order); the bytes are
+    the two planes of :func:`encode_grid` for that box.
     """
-    n = c.sdf.size
-    out = np.empty((n, 4), dtype="<u2")
-    bits = (c.sdf * np.float32(1.0 / c.voxel_size)).reshape(-1).view(np.uint32)
-    _encode(bits, c.rgb.reshape(n, 3), _BYTE_TO_HALF, out)
-    return out.tobytes()
+    box = _layers(axis, start, stop)
+    sdf, rgb = c.sdf[box], c.rgb[box]
+    n = sdf.size
+    out = np.empty(n * GRID_BYTES_PER_VOXEL, dtype=np.uint8)
+    _encode_half(sdf, np.float32(1.0 / c.voxel_size), out[: 2 * n].view("<u2"))
+    out[2 * n :].reshape(rgb.shape)[...] = rgb
+    return _frozen(out)
 
 
-def encode_parts(c: CSDF) -> bytes:
-    """``(X, Y, Z)`` int16 little-endian part indices, C order (z fastest), -1 where none."""
-    return np.ascontiguousarray(c.parts, dtype="<i2").tobytes()
+def encode_grid(c: CSDF) -> memoryview:
+    """The grid for the page's 3D textures (read-only bytes): two planes, each ``(X, Y, Z)``
+    in C order.
+
+    That is the grid's own order, z fastest: the page uploads them as ``Z x Y x X`` textures and
+    samples them at ``uvw.zyx``, so no transpose is ever made (it would cost more than the rest).
+    First ``X * Y * Z`` float16 little-endian: sdf / voxel_size, the signed distance in voxels
+    (negative inside), which keeps float16's relative precision near the surface whatever the
+    object's units; bit-identical to numpy's ``astype(float16)``, in one compiled pass. Then
+    ``X * Y * Z * 3`` bytes: the stored 8-bit sRGB colour (r, g, b), as it is (not linearised).
+    :data:`GRID_BYTES_PER_VOXEL` bytes a voxel in all.
+    """
+    return encode_slab(c, 0, 0, c.shape[0])
+
+
+@dataclass(frozen=True)
+class GridDelta:
+    """How one grid follows from another along one axis: the rest is copied.
+
+    The new grid's first ``head`` layers along ``axis`` are the base's first ``head``, its last
+    ``tail`` are the base's last ``tail`` (shifted when the length changed); only the layers
+    between, ``head : shape[axis] - tail``, are new. The other two axes have the base's length.
+    """
+
+    axis: int
+    head: int
+    tail: int
+
+    def header(self) -> str:
+        """``"axis,head,tail"``, as the ``X-Partscale-Delta`` header says it."""
+        return f"{self.axis},{self.head},{self.tail}"
+
+
+@numba.njit(cache=True, nogil=True)
+def _same_layers(sdf_a, sdf_b, rgb_a, rgb_b, parts_a, parts_b, limit):  # pragma: no cover
+    # how many leading layers (first axis) are equal in all three arrays (sdf as bits), at most
+    # limit; stops at the first difference
+    for i in range(limit):
+        for j in range(sdf_a.shape[1]):
+            for k in range(sdf_a.shape[2]):
+                if (
+                    sdf_a[i, j, k] != sdf_b[i, j, k]
+                    or parts_a[i, j, k] != parts_b[i, j, k]
+                    or rgb_a[i, j, k, 0] != rgb_b[i, j, k, 0]
+                    or rgb_a[i, j, k, 1] != rgb_b[i, j, k, 1]
+                    or rgb_a[i, j, k, 2] != rgb_b[i, j, k, 2]
+                ):
+                    return i
+    return limit
+
+
+def grid_delta(base: CSDF, new: CSDF) -> GridDelta | None:
+    """The layers ``new`` shares with ``base`` at its start and end, or None when it cannot.
+
+    An edit along one axis keeps what lies outside its zone and shifts it: those layers are
+    found by comparing the arrays exactly (distances bit for bit, colours, parts), so whatever
+    the edit re-evaluated is sent again. None when the voxel sizes or two axes differ.
+    """
+    if base.voxel_size != new.voxel_size:
+        return None
+    differ = [a for a in range(3) if base.shape[a] != new.shape[a]]
+    if len(differ) > 1:
+        return None
+    axis = differ[0] if differ else 0
+    limit = min(base.shape[axis], new.shape[axis])
+
+    def arrays(c: CSDF, flip: bool) -> list[np.ndarray]:
+        # bit patterns: -0.0 is not 0.0 to the page
+        out = [np.moveaxis(x, axis, 0) for x in (c.sdf.view(np.uint32), c.rgb, c.parts)]
+        return [x[::-1] for x in out] if flip else out
+
+    def same(flip: bool, most: int) -> int:
+        a, b = arrays(base, flip), arrays(new, flip)
+        return int(_same_layers(a[0], b[0], a[1], b[1], a[2], b[2], most))
+
+    head = same(False, limit)
+    tail = same(True, limit - head)
+    return GridDelta(axis, head, tail)
+
+
+def encode_parts(c: CSDF, axis: int = 0, start: int = 0, stop: int | None = None) -> memoryview:
+    """``(X, Y, Z)`` int16 little-endian part indices (read-only bytes), C order (z fastest),
+    -1 where none.
+
+    With ``axis``, ``start``, ``stop``: only those layers (as :func:`encode_slab`).
+    """
+    box = _layers(axis, start, c.shape[axis] if stop is None else stop)
+    return _frozen(np.array(c.parts[box], dtype="<i2", order="C")).cast("B")
+
+
+@dataclass(frozen=True)
+class Encoding:
+    """What ``GET /api/grid`` or ``/api/parts`` sends: an object's bytes, whole or as a delta.
+
+    Attributes
+    ----------
+    csdf : CSDF
+        The object encoded (describe the bytes from it, not from the session's current one).
+    revision : int
+        The session revision that showed it: what the page names as ``?base=`` next time.
+    data : memoryview
+        Read-only bytes: the whole encoding, or with ``delta`` only its layers ``head : shape[axis] - tail``.
+    delta : GridDelta or None
+        How the rest follows from the base the page named; None for the whole object.
+    """
+
+    csdf: CSDF
+    revision: int
+    data: memoryview
+    delta: GridDelta | None = None
 
 
 def header(c: CSDF) -> dict[str, Any]:
@@ -113,8 +242,9 @@ def header(c: CSDF) -> dict[str, Any]:
         "parts_info": parts_info if isinstance(parts_info, list) else [],
         "history": c.meta.get("history", []),
         "encoding": {
-            "grid": "(X, Y, Z, 4) float16 little-endian, C order (z fastest); "
-            "rgb = sRGB/255, a = sdf/voxel_size",
+            "version": GRID_FORMAT,
+            "grid": "(X, Y, Z) float16 little-endian sdf/voxel_size, then (X, Y, Z, 3) uint8 "
+            "sRGB; C order (z fastest); with X-Partscale-Delta only the changed layers",
             "parts": "(X, Y, Z) int16 little-endian, C order (z fastest); -1 = none",
         },
     }
@@ -181,7 +311,10 @@ class EditSession:
         self.revision = 0
         self.saved_revision = 0
         self.lock = threading.Lock()
-        self._cache: OrderedDict[tuple[int, str], tuple[CSDF, bytes]] = OrderedDict()
+        self._cache: OrderedDict[tuple, tuple] = OrderedDict()
+        # the objects of the last few revisions, so a page may name the one it shows as the
+        # base of a delta (an undo's revision holds an older object: revisions are not objects)
+        self._shown: OrderedDict[int, CSDF] = OrderedDict({0: csdf})
 
     @classmethod
     def open(cls, path: str | Path) -> EditSession:
@@ -211,33 +344,59 @@ class EditSession:
         h.update(own, name=self.path.name, save_as=edited_path(self.path).name)
         return h
 
-    def encoded(self, kind: str) -> tuple[CSDF, bytes]:
-        """``(csdf, bytes)``: the current object and its encoding (``'grid'`` or ``'parts'``).
+    def encoded(self, kind: str, base: int | None = None) -> Encoding:
+        """The current object encoded (``'grid'``: :func:`encode_grid`, or ``'parts'``).
 
-        The CSDF is the one encoded: describe the bytes from it, not from :attr:`current`,
-        which an apply finishing meanwhile may have replaced.
+        ``base``: the revision whose object the page holds; when the session still knows it
+        and the two differ along one axis only (:func:`grid_delta`), only the changed layers
+        are encoded. Otherwise, or for an unknown base, the whole object.
         """
-        # Encoding a 128³ grid takes tens of ms: keep the last few objects' encodings, so a
-        # second fetch, an undo or a redo costs nothing. Keyed by the CSDF object itself (they
-        # are immutable); the entry holds it, so its id cannot be reused while cached.
+        if kind not in ("grid", "parts"):
+            raise InputError(f"encoding: expected 'grid' or 'parts', got {kind!r}")
         with self.lock:
-            c = self.current
-            hit = self._cache.get((id(c), kind))
+            c, rev = self.current, self.revision
+            old = self._shown.get(base) if base is not None else None
+        delta = None if old is None else self._delta(old, c)
+        if delta is None:
+            whole = encode_grid if kind == "grid" else encode_parts
+            return Encoding(c, rev, self._cached((kind, c), whole, c))
+        stop = c.shape[delta.axis] - delta.tail
+        layers = encode_slab if kind == "grid" else encode_parts
+        return Encoding(c, rev, layers(c, delta.axis, delta.head, stop), delta)
+
+    def _delta(self, a: CSDF, b: CSDF) -> GridDelta | None:
+        # grid_delta is symmetric: an undo's delta is its apply's, found once
+        pair = (a, b) if id(a) <= id(b) else (b, a)
+        return self._cached(("delta", *pair), grid_delta, *pair)
+
+    def _cached(self, key: tuple, fn: Callable[..., T], *args: Any) -> T:
+        # Encoding a 256³ grid takes a few hundred ms: keep the last few results, so a second
+        # fetch, an undo or a redo costs nothing. Keyed by the CSDF objects themselves (they
+        # are immutable; the entry holds them, so their ids cannot be reused while cached).
+        ident = tuple(id(k) if isinstance(k, CSDF) else k for k in key)
+        with self.lock:
+            hit = self._cache.get(ident)
             if hit is not None:
-                self._cache.move_to_end((id(c), kind))
-                return hit
-        data = encode_grid(c) if kind == "grid" else encode_parts(c)
+                self._cache.move_to_end(ident)
+                return hit[1]
+        value = fn(*args)
         with self.lock:
-            self._cache[(id(c), kind)] = (c, data)
+            self._cache[ident] = (key, value)
             while len(self._cache) > CACHED_ENCODINGS:
                 self._cache.popitem(last=False)
-        return c, data
+        return value
 
     def grid_bytes(self) -> bytes:
-        return self.encoded("grid")[1]
+        return bytes(self.encoded("grid").data)
 
     def parts_bytes(self) -> bytes:
-        return self.encoded("parts")[1]
+        return bytes(self.encoded("parts").data)
+
+    def _record(self) -> None:
+        # call with the lock held, after the current object or the revision changed
+        self._shown[self.revision] = self.current
+        while len(self._shown) > SHOWN_REVISIONS:
+            self._shown.popitem(last=False)
 
     def _push(self, new: CSDF) -> None:
         self.undo_stack.append(self.current)
@@ -247,6 +406,7 @@ class EditSession:
         self.redo_stack.clear()
         self.current = new
         self.revision += 1
+        self._record()
 
     # -- edits ----------------------------------------------------------------------------
     def apply(
@@ -276,9 +436,12 @@ class EditSession:
             new = apply_recipe(self.current, parsed, progress=progress)
             if limits is not None:
                 limits.check(new.shape, "apply")
+            old = self.current
             self._push(new)
             snap = self._snapshot()
-        self.grid_bytes()  # the page fetches it next: encode while still in the worker thread
+        # the page asks next for what changed since the object it shows: find it while still
+        # in the worker thread
+        self._delta(old, new)
         entries = new.meta.get("history", [])[-len(parsed.edits) :]
         return {**self._describe(snap), "notes": describe_changes(entries, new)}
 
@@ -300,6 +463,7 @@ class EditSession:
             other.append(self.current)
             self.current = source.pop()
             self.revision += 1
+            self._record()
             snap = self._snapshot()
         return self._describe(snap)
 

@@ -556,6 +556,23 @@ def _axis_index(axis: str | int) -> int:
     raise InputError(f"axis: expected one of x, y, z, got {axis!r}")
 
 
+def _tile(
+    axis: str, start: float, period: float, count: int, score: float, reason: str, region
+) -> Candidate:
+    """A tile candidate whose zone is one ``period`` from ``start`` (world units)."""
+    start = float(start)
+    return Candidate(
+        axis=axis,
+        kind="tile",
+        zone=(start, start + float(period)),
+        period=float(period),
+        count=count,
+        score=float(np.clip(score, 0, 1)),
+        reason=reason,
+        region=(float(region[0]), float(region[1])),
+    )
+
+
 def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -> list[Candidate]:
     """Candidates along one axis, best first (see :func:`suggest`)."""
     ax = _axis_index(axis)
@@ -572,20 +589,12 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
         cover = min(1.0, (b - a) * h / extent)
         # more repeats are stronger evidence: 2 -> 0.67, 3 -> 0.75, 8 -> 0.89
         score = (1 - r.err / MATCH) * (0.5 + 0.5 * cover) * (1 - 1 / (r.count + 1))
+        reason = (
+            f"{r.count} repeats of a {period:.4g} period ({100 * period / extent:.1f}% of "
+            f"the extent), cross-sections match to {r.err:.3f}"
+        )
         out.append(
-            Candidate(
-                axis=name,
-                kind="tile",
-                zone=(float(p.world(t)), float(p.world(t) + period)),
-                period=float(period),
-                count=r.count,
-                score=float(np.clip(score, 0, 1)),
-                reason=(
-                    f"{r.count} repeats of a {period:.4g} period ({100 * period / extent:.1f}% of "
-                    f"the extent), cross-sections match to {r.err:.3f}"
-                ),
-                region=(float(p.world(a)), float(p.world(b))),
-            )
+            _tile(name, p.world(t), period, r.count, score, reason, (p.world(a), p.world(b)))
         )
     for br in find_bounded_repeats(p, csdf):
         # a period the full match found already (or a multiple of it, over it) adds nothing
@@ -601,22 +610,13 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
         cover = min(1.0, (b - a) * h / extent)
         score = BOUNDED_WEIGHT * (1 - br.err / MATCH) * (0.5 + 0.5 * cover) * (1 - 1 / (count + 1))
         what = "boards or dividers" if br.kind == 1 else "gaps or grooves"
-        out.append(
-            Candidate(
-                axis=name,
-                kind="tile",
-                zone=(float(p.world(br.start)), float(p.world(br.start)) + period),
-                period=float(period),
-                count=count,
-                score=float(np.clip(score, 0, 1)),
-                reason=(
-                    f"{count} elements between {what}, a {period:.4g} period "
-                    f"({100 * period / extent:.1f}% of the extent), coarse cross-sections match "
-                    f"{'mirrored ' if br.mirrored else ''}to {br.err:.3f}"
-                ),
-                region=(float(p.world(a)), float(p.world(b))),
-            )
+        reason = (
+            f"{count} elements between {what}, a {period:.4g} period "
+            f"({100 * period / extent:.1f}% of the extent), coarse cross-sections match "
+            f"{'mirrored ' if br.mirrored else ''}to {br.err:.3f}"
         )
+        region = (p.world(a), p.world(b))
+        out.append(_tile(name, p.world(br.start), period, count, score, reason, region))
     tiles = [
         (c.period / h, p.index(c.region[0]), p.index(c.region[1]))
         for c in out
@@ -637,21 +637,11 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
         count = len(parts)
         t = float(p.index(parts[(count - 1) // 2][0])) - gap / 2
         score = (0.5 + 0.5 * min(1.0, (b - a) * h / extent)) * (1 - 1 / (count + 1))
-        out.append(
-            Candidate(
-                axis=name,
-                kind="tile",
-                zone=(float(p.world(t)), float(p.world(t)) + pitch),
-                period=float(pitch),
-                count=count,
-                score=float(np.clip(score, 0, 1)),
-                reason=(
-                    f"{count} equal parts of the segmentation at a {pitch:.4g} pitch "
-                    f"({100 * pitch / extent:.1f}% of the extent)"
-                ),
-                region=(float(p.world(a0)), float(p.world(b0))),
-            )
+        reason = (
+            f"{count} equal parts of the segmentation at a {pitch:.4g} pitch "
+            f"({100 * pitch / extent:.1f}% of the extent)"
         )
+        out.append(_tile(name, p.world(t), pitch, count, score, reason, (p.world(a0), p.world(b0))))
     planes = _part_planes(csdf, ax)
     for first, last, drift in constant_slabs(p):
         s, e = float(p.world(first)), float(p.world(last))

@@ -10,6 +10,8 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
    *open sheet* (cloth, a single-sided board). Triangles longer than ``SUBDIVIDE`` voxels are
    also probed towards their corners; where the probes disagree (a board partly buried in
    another) they are split into pieces of ``SUBDIVIDE_MIXED`` voxels classified one by one.
+   Above ``PROBE_RES`` the probes keep a ``PROBE_RES`` grid's scale: a triangle's class is
+   the same at every finer resolution.
 2. Thin pieces. Open sheets, and closed pieces thinner than the grid can hold (shelves, back
    panels: inward ray to the next boundary shorter than ``2 t``), become solids of thickness
    ``2 t``, ``t = sqrt(3)/2`` voxel, so their inside voxels stay 6-connected and marching cubes
@@ -17,8 +19,9 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
 3. Exact unsigned distances to boundary and to sheet pieces within a band of ``BAND_VOXELS``
    voxels (:data:`partscale.csdf.BAND_VOXELS`; numba, slabs along x in parallel, no races).
 4. Sign: a voxel with no surface within one voxel has the sign of all its 6-neighbours, so the
-   6-connected components of such voxels (the far field included; sheets block them as much as
-   boundaries, so a cushion with an open seam still encloses its inside) share one sign, read
+   6-connected components of such voxels (the far field included; sheets and buried faces
+   block them as much as boundaries, so a cushion with an open seam still encloses its inside
+   and a buried face uncovered along a strip leaks nothing) share one sign, read
    from ``w > 1/2`` at a few voxels per component (at all of them when those disagree). The
    voxels left (inside boards a few voxels thick, in narrow gaps) are grouped by steps that
    cross no surface (``dist(p) + dist(q) > h``): enclosed groups take ``w`` at their three
@@ -45,8 +48,13 @@ from ..progress import ProgressCallback, resolve
 from . import _kernels
 from .mesh import ColoredMesh
 
-SUBDIVIDE = 4.0  # triangles longer than this many voxels are also probed near their corners
-SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
+SUBDIVIDE = 4.0  # triangles longer than this many probe voxels are also probed near their corners
+SUBDIVIDE_MIXED = 2.0  # piece size (voxels) where a triangle is partly buried (at intersections)
+PROBE_RES = 128
+"""Finest grid the classification probes follow: at a finer ``--res`` they keep the offsets and
+the spacing of a ``PROBE_RES`` grid, so every triangle gets the class it gets there (a
+property of the mesh, the same at every resolution, at a query count that does not grow with
+the grid); only the pieces at intersection curves are refined down to the finer voxel."""
 SLAB = 2  # x-layers per parallel work item
 RANDOM_CHUNK = 1 << 20  # random draws per chunk when sampling the far field's components
 BYTES_PER_VOXEL = 64  # peak working set of from_mesh per voxel (39-46 measured, temporaries too)
@@ -151,13 +159,19 @@ def _class_of(lo: np.ndarray) -> np.ndarray:
     return out
 
 
-def classify_pieces(wn: _Winding, h: float):
+def probe_size(h: float, res: int) -> float:
+    """Voxel size the classification probes follow at ``--res`` (see :data:`PROBE_RES`)."""
+    return h * max(1.0, res / PROBE_RES)
+
+
+def classify_pieces(wn: _Winding, h: float, probe_h: float | None = None):
     """Distance primitives and their class (0 boundary, 1 buried, 2 open sheet, -1 degenerate).
 
-    Every triangle is classified at its centroid; triangles longer than ``SUBDIVIDE`` voxels
-    also at three points towards their corners, and where those disagree (a board partly
+    Probes lie ``0.05 probe_h`` in front of the surface (``probe_h``: :func:`probe_size`,
+    default ``h``). Every triangle is classified at its centroid; triangles longer than
+    ``SUBDIVIDE`` probe voxels also at three points towards their corners, and where those disagree (a board partly
     buried in another) they are bisected, and the halves probed again, down to pieces of
-    ``SUBDIVIDE_MIXED`` voxels near the curves where pieces intersect (surfaces are exact
+    ``SUBDIVIDE_MIXED`` voxels ``h`` near the curves where pieces intersect (surfaces are exact
     except within about a voxel of those curves). A misclassified sliver is narrower than
     ``SUBDIVIDE`` voxels, too narrow for the sign flood (voxels > 2 voxels from any surface) to
     leak through. Winding-number queries next to the surface are the expensive part of the
@@ -168,7 +182,8 @@ def classify_pieces(wn: _Winding, h: float):
     """
     tris = wn.V[wn.F]
     n_tri = len(tris)
-    eps = 0.05 * h
+    ph = h if probe_h is None else probe_h
+    eps = 0.05 * ph
     e1 = tris[:, 1] - tris[:, 0]
     e2 = tris[:, 2] - tris[:, 0]
     nrm = np.cross(e1, e2)
@@ -179,7 +194,7 @@ def classify_pieces(wn: _Winding, h: float):
     edge = np.stack(
         [np.linalg.norm(tris[:, (i + 1) % 3] - tris[:, i], axis=1) for i in range(3)], 1
     )
-    big = np.nonzero(ok & (edge.max(axis=1) > SUBDIVIDE * h))[0]
+    big = np.nonzero(ok & (edge.max(axis=1) > SUBDIVIDE * ph))[0]
     okid = np.nonzero(ok)[0]
     corner_w = np.array([[4, 1, 1], [1, 4, 1], [1, 1, 4]], np.float64) / 6
     probes = [tris[okid].mean(axis=1) + eps * unit[okid]]
@@ -275,12 +290,13 @@ def _band(tris, origin, h, shape, radius):
 
 
 def _component_signs(wn, d, dist, free, in_sheet, h, origin):
-    """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
+    """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance.
 
-    ``free``: voxels with no surface (boundary or sheet) within one voxel. ``in_sheet``: voxels
+    ``d``: distance to the nearest boundary or buried face. ``free``: voxels with no surface
+    (boundary, buried or sheet) within one voxel. ``in_sheet``: voxels
     inside a thickened sheet or thin piece; they are solid whatever the boundary's sign, so
     those that would need a query of their own (inside thin boards) are set inside directly.
-    ``dist``: distance to the nearest boundary or sheet face (neighbours whose ``dist`` sum
+    ``dist``: distance to the nearest boundary, buried or sheet face (neighbours whose ``dist`` sum
     to more than a voxel have no surface between them). The rest are winding-number
     queries, three per enclosed group of such neighbours where those three agree.
     """
@@ -444,7 +460,7 @@ def from_mesh(
 
     wn = _Winding(V, F)
     report(0.0, "classifying pieces")
-    sub, parent, corner_bary, cls = classify_pieces(wn, h)
+    sub, parent, corner_bary, cls = classify_pieces(wn, h, probe_size(h, res))
     boundary = np.nonzero(cls == 0)[0]
     sheet = np.nonzero(cls == 2)[0]
     if len(boundary) + len(sheet) == 0:
@@ -487,18 +503,30 @@ def from_mesh(
     has = id_s >= 0
     f_s[has] -= offset[sheet[id_s[has]]]
     in_sheet = f_s <= 0
+    # buried faces block the flood and the clear steps too: a face classified buried over its
+    # whole area can be uncovered along a strip its probes missed (a board whose cover ends
+    # short of its edge), a hole in the surface that the flood would leak through once the
+    # strip is wider than its 4 voxels (at 256 on painted_wooden_cabinet, not at 128). Near a
+    # truly buried face both sides are inside, so blocking there changes no sign.
+    d_u = d_b
+    buried = np.nonzero(cls == 1)[0]
+    if len(buried):
+        d2_u, _ = _band(np.ascontiguousarray(sub[buried]), origin, h, shape, 2 * h)
+        d_u = np.minimum(d_b, np.sqrt(d2_u, out=d2_u))
+        del d2_u
     # thickened sheets block the flood as much as boundaries do (a cushion whose cloth has an
     # open seam still encloses its inside); at 2t thick they leave no 6-connected tunnel
-    free = (d_b > h) & ~in_sheet
-    # distance to the nearest boundary or (unthickened) sheet face: steps between voxels
-    # whose distances sum to more than a voxel cross no surface
-    dist = d_b.copy()
-    at = np.flatnonzero(has)  # elsewhere f_s is inf: dist is d_b
+    free = (d_u > h) & ~in_sheet
+    # distance to the nearest boundary, buried or (unthickened) sheet face: steps between
+    # voxels whose distances sum to more than a voxel cross no surface
+    dist = d_u.copy()
+    at = np.flatnonzero(has)  # elsewhere f_s is inf: dist is d_u
     dist.ravel()[at] = np.minimum(
-        d_b.ravel()[at], f_s.ravel()[at] + offset[sheet[id_s.ravel()[at]]]
+        d_u.ravel()[at], f_s.ravel()[at] + offset[sheet[id_s.ravel()[at]]]
     )
     del at
-    sign = _component_signs(wn, d_b, dist, free, in_sheet, h, origin)
+    sign = _component_signs(wn, d_u, dist, free, in_sheet, h, origin)
+    del d_u
     del dist
     del free, in_sheet
 

@@ -10,8 +10,8 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
    *open sheet* (cloth, a single-sided board). Triangles longer than ``SUBDIVIDE`` voxels are
    also probed towards their corners; where the probes disagree (a board partly buried in
    another) they are split into pieces of ``SUBDIVIDE_MIXED`` voxels classified one by one.
-   Above ``PROBE_RES`` the probes keep a ``PROBE_RES`` grid's scale: a triangle's class is
-   the same at every finer resolution.
+   Above ``PROBE_RES`` voxels the classification keeps a ``PROBE_RES`` grid's scale: a
+   piece's class is the same at every finer resolution.
 2. Thin pieces. Open sheets, and closed pieces thinner than the grid can hold (shelves, back
    panels: inward ray to the next boundary shorter than ``2 t``), become solids of thickness
    ``2 t``, ``t = sqrt(3)/2`` voxel, so their inside voxels stay 6-connected and marching cubes
@@ -49,12 +49,12 @@ from . import _kernels
 from .mesh import ColoredMesh
 
 SUBDIVIDE = 4.0  # triangles longer than this many probe voxels are also probed near their corners
-SUBDIVIDE_MIXED = 2.0  # piece size (voxels) where a triangle is partly buried (at intersections)
+SUBDIVIDE_MIXED = 2.0  # piece size (probe voxels) where a triangle is partly buried
 PROBE_RES = 128
-"""Finest grid the classification probes follow: at a finer ``--res`` they keep the offsets and
-the spacing of a ``PROBE_RES`` grid, so every triangle gets the class it gets there (a
-property of the mesh, the same at every resolution, at a query count that does not grow with
-the grid); only the pieces at intersection curves are refined down to the finer voxel."""
+"""Finest grid the classification follows: at a finer ``--res`` its probes keep the offsets
+and the spacing of a ``PROBE_RES`` grid, so every piece gets the class it gets there (a
+property of the mesh, the same at every finer resolution, at a query count that does not grow
+with the grid)."""
 SLAB = 2  # x-layers per parallel work item
 RANDOM_CHUNK = 1 << 20  # random draws per chunk when sampling the far field's components
 BYTES_PER_VOXEL = 64  # peak working set of from_mesh per voxel (39-46 measured, temporaries too)
@@ -164,26 +164,26 @@ def probe_size(h: float, res: int) -> float:
     return h * max(1.0, res / PROBE_RES)
 
 
-def classify_pieces(wn: _Winding, h: float, probe_h: float | None = None):
+def classify_pieces(wn: _Winding, h: float):
     """Distance primitives and their class (0 boundary, 1 buried, 2 open sheet, -1 degenerate).
 
-    Probes lie ``0.05 probe_h`` in front of the surface (``probe_h``: :func:`probe_size`,
-    default ``h``). Every triangle is classified at its centroid; triangles longer than
-    ``SUBDIVIDE`` probe voxels also at three points towards their corners, and where those disagree (a board partly
-    buried in another) they are bisected, and the halves probed again, down to pieces of
-    ``SUBDIVIDE_MIXED`` voxels ``h`` near the curves where pieces intersect (surfaces are exact
-    except within about a voxel of those curves). A misclassified sliver is narrower than
-    ``SUBDIVIDE`` voxels, too narrow for the sign flood (voxels > 2 voxels from any surface) to
-    leak through. Winding-number queries next to the surface are the expensive part of the
-    import, so only as many as needed are made.
+    Lengths are in voxels of size ``h``, the probe voxel (:func:`probe_size`). Probes lie
+    ``0.05 h`` in front of the surface. Every triangle is classified at its centroid;
+    triangles longer than ``SUBDIVIDE`` also at three points towards their corners, and where
+    those disagree (a board partly buried in another) they are bisected, and the halves
+    probed again, down to pieces of ``SUBDIVIDE_MIXED`` near the curves where pieces intersect
+    (surfaces are exact except within about a probe voxel of those curves). A triangle
+    classified buried may still be uncovered along a strip the probes missed; the sign flood
+    is blocked by buried faces too, so such a strip leaks nothing. Winding-number queries next
+    to the surface are the expensive part of the import, so only as many as needed are made,
+    as many at any resolution above ``PROBE_RES`` as at ``PROBE_RES``.
 
     Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
     (barycentrics of each primitive corner in its source triangle) and cls (P,) int8.
     """
     tris = wn.V[wn.F]
     n_tri = len(tris)
-    ph = h if probe_h is None else probe_h
-    eps = 0.05 * ph
+    eps = 0.05 * h
     e1 = tris[:, 1] - tris[:, 0]
     e2 = tris[:, 2] - tris[:, 0]
     nrm = np.cross(e1, e2)
@@ -194,7 +194,7 @@ def classify_pieces(wn: _Winding, h: float, probe_h: float | None = None):
     edge = np.stack(
         [np.linalg.norm(tris[:, (i + 1) % 3] - tris[:, i], axis=1) for i in range(3)], 1
     )
-    big = np.nonzero(ok & (edge.max(axis=1) > SUBDIVIDE * ph))[0]
+    big = np.nonzero(ok & (edge.max(axis=1) > SUBDIVIDE * h))[0]
     okid = np.nonzero(ok)[0]
     corner_w = np.array([[4, 1, 1], [1, 4, 1], [1, 1, 4]], np.float64) / 6
     probes = [tris[okid].mean(axis=1) + eps * unit[okid]]
@@ -460,7 +460,7 @@ def from_mesh(
 
     wn = _Winding(V, F)
     report(0.0, "classifying pieces")
-    sub, parent, corner_bary, cls = classify_pieces(wn, h, probe_size(h, res))
+    sub, parent, corner_bary, cls = classify_pieces(wn, probe_size(h, res))
     boundary = np.nonzero(cls == 0)[0]
     sheet = np.nonzero(cls == 2)[0]
     if len(boundary) + len(sheet) == 0:

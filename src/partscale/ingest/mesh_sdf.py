@@ -500,9 +500,6 @@ def from_mesh(
     del d2_s
 
     report(0.45, "inside/outside")
-    has = id_s >= 0
-    f_s[has] -= offset[sheet[id_s[has]]]
-    in_sheet = f_s <= 0
     # buried faces block the flood and the clear steps too: a face classified buried over its
     # whole area can be uncovered along a strip its probes missed (a board whose cover ends
     # short of its edge), a hole in the surface that the flood would leak through once the
@@ -514,38 +511,25 @@ def from_mesh(
         d2_u, _ = _band(np.ascontiguousarray(sub[buried]), origin, h, shape, 2 * h)
         d_u = np.minimum(d_b, np.sqrt(d2_u, out=d2_u))
         del d2_u
-    # thickened sheets block the flood as much as boundaries do (a cushion whose cloth has an
-    # open seam still encloses its inside); at 2t thick they leave no 6-connected tunnel
-    free = (d_u > h) & ~in_sheet
-    # distance to the nearest boundary, buried or (unthickened) sheet face: steps between
-    # voxels whose distances sum to more than a voxel cross no surface
-    dist = d_u.copy()
-    at = np.flatnonzero(has)  # elsewhere f_s is inf: dist is d_u
-    dist.ravel()[at] = np.minimum(
-        d_u.ravel()[at], f_s.ravel()[at] + offset[sheet[id_s.ravel()[at]]]
-    )
-    del at
+    # f_s becomes the thickened sheets' distance. They block the flood (not ``free``) as much
+    # as boundaries do (a cushion whose cloth has an open seam still encloses its inside); at
+    # 2t thick they leave no 6-connected tunnel. ``dist``: to the nearest boundary, buried or
+    # (unthickened) sheet face: steps between voxels whose distances sum to more than a voxel
+    # cross no surface
+    in_sheet, free, dist = _kernels.sign_inputs(d_u, f_s, id_s, sheet, offset, h)
     sign = _component_signs(wn, d_u, dist, free, in_sheet, h, origin)
     del d_u
     del dist
     del free, in_sheet
 
-    sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
-    del d_b
-    win = np.full(shape, -1, np.int32)  # primitive ids: far fewer than 2**31
-    if len(boundary):
-        win[id_b >= 0] = boundary[id_b[id_b >= 0]]
-    del id_b
-    closer = f_s < sdf
-    sdf[closer] = f_s[closer]
-    win[closer] = sheet[id_s[closer]]
-    del f_s, id_s, closer, has
-
-    # values within 1e-3 voxel of 0 are moved to +-1e-3 voxel: a surface exactly through a voxel
-    # centre (axis-aligned models) would give marching cubes degenerate triangles
+    # sdf = min(signed boundary distance (+-inf beyond the band), thickened sheet distance);
+    # values within 1e-3 voxel of 0 are moved to +-1e-3 voxel: a surface exactly through a
+    # voxel centre (axis-aligned models) would give marching cubes degenerate triangles
+    sdf = np.empty(shape, np.float32)
+    win = np.empty(shape, np.int32)  # primitive ids: far fewer than 2**31
     tiny = np.float32(1e-3 * h)
-    sdf[(sdf >= 0) & (sdf < tiny)] = tiny
-    sdf[(sdf < 0) & (sdf > -tiny)] = -tiny
+    _kernels.compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win)
+    del d_b, id_b, f_s, id_s
     n_bubbles = _fill_bubbles(sdf, sign, h)
 
     report(0.65, "distances beyond the band")

@@ -293,12 +293,12 @@ def _component_signs(wn, d, dist, free, in_sheet, h, origin):
     """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance.
 
     ``d``: distance to the nearest boundary or buried face. ``free``: voxels with no surface
-    (boundary, buried or sheet) within one voxel. ``in_sheet``: voxels
-    inside a thickened sheet or thin piece; they are solid whatever the boundary's sign, so
-    those that would need a query of their own (inside thin boards) are set inside directly.
-    ``dist``: distance to the nearest boundary, buried or sheet face (neighbours whose ``dist`` sum
-    to more than a voxel have no surface between them). The rest are winding-number
-    queries, three per enclosed group of such neighbours where those three agree.
+    (boundary, buried or sheet) within one voxel. ``in_sheet``: voxels inside a thickened
+    sheet or thin piece; they are solid whatever the boundary's sign, so those that would
+    need a query of their own (inside thin boards) are set inside directly. ``dist``: distance
+    to the nearest boundary, buried or sheet face (neighbours whose ``dist`` sum to more than
+    a voxel have no surface between them). The rest are winding-number queries, three per
+    enclosed group of such neighbours where those three agree.
     """
     shape = d.shape
     # flood the voxels > 2 voxels from any surface: a gap narrower than 4 voxels in an open

@@ -16,6 +16,7 @@ from scipy import ndimage
 import partscale
 from partscale import ingest, shapes
 from partscale.color import linear_to_srgb8, srgb_to_linear
+from partscale.evaluate import metrics
 from partscale.surface import to_mesh
 
 
@@ -139,6 +140,36 @@ def test_hollow_box_with_walls_a_few_voxels_thick():
     clear = np.abs(e) > h / 4
     assert np.count_nonzero(e < -h / 4) > 1000  # the walls hold voxels to check
     assert np.array_equal(s[clear] < 0, e[clear] < 0)
+
+
+def _pieces(c) -> int:
+    return metrics.topology(to_mesh(c))[1]
+
+
+@pytest.mark.parametrize("res", [24, 48])
+def test_partly_covered_face_and_one_sided_panel_same_pieces_at_two_resolutions(res):
+    """A closed box whose top face (two big triangles) is covered by a closed plate except a
+    strip 0.12 wide along one edge (2.4 voxels at 24, 4.8 at 48: the probes see the cover
+    only, so the faces are classified buried over that strip too), and apart from it a
+    one-sided panel (an open sheet). At both resolutions: two pieces (box and plate as one
+    solid, the panel thickened), the box's inside inside; the buried faces do not open the
+    box to the air through the strip."""
+    box = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 0.4]])
+    plate = trimesh.creation.box(bounds=[[0, 0, 0.39], [0.88, 1, 0.45]])
+    panel = trimesh.Trimesh(
+        [[0, 1.2, 0], [1, 1.2, 0], [1, 1.2, 0.45], [0, 1.2, 0.45]], [[0, 1, 2], [0, 2, 3]]
+    )
+    c = ingest.from_mesh(
+        ingest.from_trimesh(trimesh.util.concatenate([box, plate, panel])), res=res
+    )
+    assert _pieces(c) == 2
+    p = _centres(c)
+    e = np.minimum(
+        shapes.box_sdf(p, (0, 0, 0), (1, 1, 0.4)), shapes.box_sdf(p, (0, 0, 0.39), (0.88, 1, 0.45))
+    )
+    deep = e < -c.voxel_size
+    assert deep.sum() > 1000
+    assert np.all(c.sdf.ravel()[deep] < 0)
 
 
 # -- colour ----------------------------------------------------------------------------

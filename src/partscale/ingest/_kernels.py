@@ -117,6 +117,70 @@ def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist
 
 
 @nb.njit(cache=True, parallel=True)
+def sign_inputs(d_u, f_s, id_s, sheet, offset, h):
+    """What the sign needs, per voxel, in one pass over the grid.
+
+    d_u : (X, Y, Z) float32 distance to the nearest boundary or buried face (inf: none near);
+    f_s : (X, Y, Z) float32 distance to the nearest sheet primitive ``sheet[id_s]`` (id_s
+    int32, -1: none near), made in place the thickened sheet's distance (less that
+    primitive's ``offset``, float64, rounded to float32). Returns in_sheet (f_s <= 0), free
+    (``d_u > h``, h compared in float32, and not in_sheet) bool, and dist float32: the lesser
+    of ``d_u`` and the unthickened sheet distance.
+    """
+    nx, ny, nz = d_u.shape
+    in_sheet = np.empty((nx, ny, nz), np.bool_)
+    free = np.empty((nx, ny, nz), np.bool_)
+    dist = np.empty((nx, ny, nz), np.float32)
+    hf = np.float32(h)
+    for i in nb.prange(nx):
+        for j in range(ny):
+            for k in range(nz):
+                d = d_u[i, j, k]
+                dd = d
+                f = f_s[i, j, k]
+                s = id_s[i, j, k]
+                if s >= 0:
+                    off = offset[sheet[s]]
+                    f = np.float32(f - off)
+                    f_s[i, j, k] = f
+                    dd = np.float32(min(np.float64(d), np.float64(f) + off))
+                ins = f <= 0
+                in_sheet[i, j, k] = ins
+                free[i, j, k] = d > hf and not ins
+                dist[i, j, k] = dd
+    return in_sheet, free, dist
+
+
+@nb.njit(cache=True, parallel=True)
+def compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win):
+    """``sdf = min(sign * d_b, f_s)`` (float32) and the primitive achieving it (in place).
+
+    sign : (X, Y, Z) int8; d_b, f_s : float32 boundary and thickened sheet distances; id_b,
+    id_s : int32 indices into ``boundary`` and ``sheet`` (primitive ids, -1 none). Values
+    within ``tiny`` of 0 become ``+-tiny``. Writes ``sdf`` float32 and ``win`` int32 (-1 none).
+    """
+    nx, ny, nz = sign.shape
+    for i in nb.prange(nx):
+        for j in range(ny):
+            for k in range(nz):
+                v = np.float32(sign[i, j, k]) * d_b[i, j, k]
+                w = -1
+                b = id_b[i, j, k]
+                if b >= 0:
+                    w = boundary[b]
+                f = f_s[i, j, k]
+                if f < v:
+                    v = f
+                    w = sheet[id_s[i, j, k]]
+                if v >= 0 and v < tiny:
+                    v = tiny
+                elif v < 0 and v > -tiny:
+                    v = -tiny
+                sdf[i, j, k] = v
+                win[i, j, k] = w
+
+
+@nb.njit(cache=True, parallel=True)
 def closest_points(points, tris, tri_ids):
     """Distance and barycentrics of the closest point on ``tris[tri_ids[n]]`` to ``points[n]``.
 

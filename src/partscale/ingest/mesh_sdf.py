@@ -10,6 +10,8 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
    *open sheet* (cloth, a single-sided board). Triangles longer than ``SUBDIVIDE`` voxels are
    also probed towards their corners; where the probes disagree (a board partly buried in
    another) they are split into pieces of ``SUBDIVIDE_MIXED`` voxels classified one by one.
+   Above ``PROBE_RES`` voxels the classification keeps a ``PROBE_RES`` grid's scale: a
+   piece's class is the same at every finer resolution.
 2. Thin pieces. Open sheets, and closed pieces thinner than the grid can hold (shelves, back
    panels: inward ray to the next boundary shorter than ``2 t``), become solids of thickness
    ``2 t``, ``t = sqrt(3)/2`` voxel, so their inside voxels stay 6-connected and marching cubes
@@ -17,8 +19,9 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
 3. Exact unsigned distances to boundary and to sheet pieces within a band of ``BAND_VOXELS``
    voxels (:data:`partscale.csdf.BAND_VOXELS`; numba, slabs along x in parallel, no races).
 4. Sign: a voxel with no surface within one voxel has the sign of all its 6-neighbours, so the
-   6-connected components of such voxels (the far field included; sheets block them as much as
-   boundaries, so a cushion with an open seam still encloses its inside) share one sign, read
+   6-connected components of such voxels (the far field included; sheets and buried faces
+   block them as much as boundaries, so a cushion with an open seam still encloses its inside
+   and a buried face uncovered along a strip leaks nothing) share one sign, read
    from ``w > 1/2`` at a few voxels per component (at all of them when those disagree). The
    voxels left (inside boards a few voxels thick, in narrow gaps) are grouped by steps that
    cross no surface (``dist(p) + dist(q) > h``): enclosed groups take ``w`` at their three
@@ -45,8 +48,13 @@ from ..progress import ProgressCallback, resolve
 from . import _kernels
 from .mesh import ColoredMesh
 
-SUBDIVIDE = 4.0  # triangles longer than this many voxels are also probed near their corners
-SUBDIVIDE_MIXED = 2.0  # piece size where a triangle is partly buried (at intersections)
+SUBDIVIDE = 4.0  # triangles longer than this many probe voxels are also probed near their corners
+SUBDIVIDE_MIXED = 2.0  # piece size (probe voxels) where a triangle is partly buried
+PROBE_RES = 128
+"""Finest grid the classification follows: at a finer ``--res`` its probes keep the offsets
+and the spacing of a ``PROBE_RES`` grid, so every piece gets the class it gets there (a
+property of the mesh, the same at every finer resolution, at a query count that does not grow
+with the grid)."""
 SLAB = 2  # x-layers per parallel work item
 RANDOM_CHUNK = 1 << 20  # random draws per chunk when sampling the far field's components
 BYTES_PER_VOXEL = 64  # peak working set of from_mesh per voxel (39-46 measured, temporaries too)
@@ -151,17 +159,24 @@ def _class_of(lo: np.ndarray) -> np.ndarray:
     return out
 
 
+def probe_size(h: float, res: int) -> float:
+    """Voxel size the classification probes follow at ``--res`` (see :data:`PROBE_RES`)."""
+    return h * max(1.0, res / PROBE_RES)
+
+
 def classify_pieces(wn: _Winding, h: float):
     """Distance primitives and their class (0 boundary, 1 buried, 2 open sheet, -1 degenerate).
 
-    Every triangle is classified at its centroid; triangles longer than ``SUBDIVIDE`` voxels
-    also at three points towards their corners, and where those disagree (a board partly
-    buried in another) they are bisected, and the halves probed again, down to pieces of
-    ``SUBDIVIDE_MIXED`` voxels near the curves where pieces intersect (surfaces are exact
-    except within about a voxel of those curves). A misclassified sliver is narrower than
-    ``SUBDIVIDE`` voxels, too narrow for the sign flood (voxels > 2 voxels from any surface) to
-    leak through. Winding-number queries next to the surface are the expensive part of the
-    import, so only as many as needed are made.
+    Lengths are in voxels of size ``h``, the probe voxel (:func:`probe_size`). Probes lie
+    ``0.05 h`` in front of the surface. Every triangle is classified at its centroid;
+    triangles longer than ``SUBDIVIDE`` also at three points towards their corners, and where
+    those disagree (a board partly buried in another) they are bisected, and the halves
+    probed again, down to pieces of ``SUBDIVIDE_MIXED`` near the curves where pieces intersect
+    (surfaces are exact except within about a probe voxel of those curves). A triangle
+    classified buried may still be uncovered along a strip the probes missed; the sign flood
+    is blocked by buried faces too, so such a strip leaks nothing. Winding-number queries next
+    to the surface are the expensive part of the import, so only as many as needed are made,
+    as many at any resolution above ``PROBE_RES`` as at ``PROBE_RES``.
 
     Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
     (barycentrics of each primitive corner in its source triangle) and cls (P,) int8.
@@ -275,14 +290,15 @@ def _band(tris, origin, h, shape, radius):
 
 
 def _component_signs(wn, d, dist, free, in_sheet, h, origin):
-    """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance ``d``.
+    """(X, Y, Z) int8 sign (+1 outside, -1 inside) of the boundary distance.
 
-    ``free``: voxels with no surface (boundary or sheet) within one voxel. ``in_sheet``: voxels
-    inside a thickened sheet or thin piece; they are solid whatever the boundary's sign, so
-    those that would need a query of their own (inside thin boards) are set inside directly.
-    ``dist``: distance to the nearest boundary or sheet face (neighbours whose ``dist`` sum
-    to more than a voxel have no surface between them). The rest are winding-number
-    queries, three per enclosed group of such neighbours where those three agree.
+    ``d``: distance to the nearest boundary or buried face. ``free``: voxels with no surface
+    (boundary, buried or sheet) within one voxel. ``in_sheet``: voxels inside a thickened
+    sheet or thin piece; they are solid whatever the boundary's sign, so those that would
+    need a query of their own (inside thin boards) are set inside directly. ``dist``: distance
+    to the nearest boundary, buried or sheet face (neighbours whose ``dist`` sum to more than
+    a voxel have no surface between them). The rest are winding-number queries, three per
+    enclosed group of such neighbours where those three agree.
     """
     shape = d.shape
     # flood the voxels > 2 voxels from any surface: a gap narrower than 4 voxels in an open
@@ -444,7 +460,7 @@ def from_mesh(
 
     wn = _Winding(V, F)
     report(0.0, "classifying pieces")
-    sub, parent, corner_bary, cls = classify_pieces(wn, h)
+    sub, parent, corner_bary, cls = classify_pieces(wn, probe_size(h, res))
     boundary = np.nonzero(cls == 0)[0]
     sheet = np.nonzero(cls == 2)[0]
     if len(boundary) + len(sheet) == 0:
@@ -484,40 +500,36 @@ def from_mesh(
     del d2_s
 
     report(0.45, "inside/outside")
-    has = id_s >= 0
-    f_s[has] -= offset[sheet[id_s[has]]]
-    in_sheet = f_s <= 0
-    # thickened sheets block the flood as much as boundaries do (a cushion whose cloth has an
-    # open seam still encloses its inside); at 2t thick they leave no 6-connected tunnel
-    free = (d_b > h) & ~in_sheet
-    # distance to the nearest boundary or (unthickened) sheet face: steps between voxels
-    # whose distances sum to more than a voxel cross no surface
-    dist = d_b.copy()
-    at = np.flatnonzero(has)  # elsewhere f_s is inf: dist is d_b
-    dist.ravel()[at] = np.minimum(
-        d_b.ravel()[at], f_s.ravel()[at] + offset[sheet[id_s.ravel()[at]]]
-    )
-    del at
-    sign = _component_signs(wn, d_b, dist, free, in_sheet, h, origin)
+    # buried faces block the flood and the clear steps too: a face classified buried over its
+    # whole area can be uncovered along a strip its probes missed (a board whose cover ends
+    # short of its edge), a hole in the surface that the flood would leak through once the
+    # strip is wider than its 4 voxels (at 256 on painted_wooden_cabinet, not at 128). Near a
+    # truly buried face both sides are inside, so blocking there changes no sign.
+    d_u = d_b
+    buried = np.nonzero(cls == 1)[0]
+    if len(buried):
+        d2_u, _ = _band(np.ascontiguousarray(sub[buried]), origin, h, shape, 2 * h)
+        d_u = np.minimum(d_b, np.sqrt(d2_u, out=d2_u))
+        del d2_u
+    # f_s becomes the thickened sheets' distance. They block the flood (not ``free``) as much
+    # as boundaries do (a cushion whose cloth has an open seam still encloses its inside); at
+    # 2t thick they leave no 6-connected tunnel. ``dist``: to the nearest boundary, buried or
+    # (unthickened) sheet face: steps between voxels whose distances sum to more than a voxel
+    # cross no surface
+    in_sheet, free, dist = _kernels.sign_inputs(d_u, f_s, id_s, sheet, offset, h)
+    sign = _component_signs(wn, d_u, dist, free, in_sheet, h, origin)
+    del d_u
     del dist
     del free, in_sheet
 
-    sdf = np.multiply(sign, d_b, dtype=np.float32)  # +-inf beyond the band
-    del d_b
-    win = np.full(shape, -1, np.int32)  # primitive ids: far fewer than 2**31
-    if len(boundary):
-        win[id_b >= 0] = boundary[id_b[id_b >= 0]]
-    del id_b
-    closer = f_s < sdf
-    sdf[closer] = f_s[closer]
-    win[closer] = sheet[id_s[closer]]
-    del f_s, id_s, closer, has
-
-    # values within 1e-3 voxel of 0 are moved to +-1e-3 voxel: a surface exactly through a voxel
-    # centre (axis-aligned models) would give marching cubes degenerate triangles
+    # sdf = min(signed boundary distance (+-inf beyond the band), thickened sheet distance);
+    # values within 1e-3 voxel of 0 are moved to +-1e-3 voxel: a surface exactly through a
+    # voxel centre (axis-aligned models) would give marching cubes degenerate triangles
+    sdf = np.empty(shape, np.float32)
+    win = np.empty(shape, np.int32)  # primitive ids: far fewer than 2**31
     tiny = np.float32(1e-3 * h)
-    sdf[(sdf >= 0) & (sdf < tiny)] = tiny
-    sdf[(sdf < 0) & (sdf > -tiny)] = -tiny
+    _kernels.compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win)
+    del d_b, id_b, f_s, id_s
     n_bubbles = _fill_bubbles(sdf, sign, h)
 
     report(0.65, "distances beyond the band")

@@ -84,12 +84,14 @@ def _disk_d2(tri, t, px, py, pz):
 
 
 @numba.njit(cache=True, nogil=True)
-def _propagate(tri, order, shape, best_d2, best_t, npass):
+def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
     """Nearest triangle of every voxel in ``order`` (ascending flat indices of the box).
 
     ``tri`` (F, 17): see :func:`_triangle_table`. ``best_d2`` (float64) / ``best_t`` (int32), flat,
     the box's size, start at inf / -1 and are updated in place: seeds, then ``npass`` raster sweeps alternating direction
     (raster order keeps memory access local; the band is thin, so two sweeps reach every voxel).
+    Only voxels ``first ... last`` (flat indices) are read afterwards: the last sweep stops once
+    it has passed them (what it would do beyond can no longer reach them).
     """
     nx, ny, nz = shape
     syz = ny * nz
@@ -127,6 +129,8 @@ def _propagate(tri, order, shape, best_d2, best_t, npass):
     for p in range(npass):
         for n in range(m):
             f = order[n] if p % 2 == 0 else order[m - 1 - n]
+            if p == npass - 1 and (f > last if p % 2 == 0 else f < first):
+                break
             i = f // syz
             j = (f // nz) % ny
             k = f % nz
@@ -556,9 +560,12 @@ def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
     order = np.flatnonzero((np.abs(sub) <= lim + 0.5 * h) & (reach > 0)).astype(np.int64)
     best_d2 = np.full(sub.size, np.inf)
     best_t = np.full(sub.size, -1, np.int32)
-    _propagate(tri, order, np.array(sub.shape, np.int64), best_d2, best_t, npass)
-    tsub = t_box.reshape(-1) & (best_t >= 0)
-    fsel = np.flatnonzero(tsub)
+    wanted = np.flatnonzero(t_box.reshape(-1))
+    if wanted.size == 0:
+        return None
+    shape = np.array(sub.shape, np.int64)
+    _propagate(tri, order, shape, best_d2, best_t, npass, wanted[0], wanted[-1])
+    fsel = wanted[best_t[wanted] >= 0]
     if fsel.size == 0:
         return None
     idx = np.stack(np.unravel_index(fsel, sub.shape), axis=1).astype(np.int64)

@@ -62,13 +62,36 @@ def _tri_d2(tri, t, px, py, pz):
     return d2, qx, qy, qz
 
 
+@numba.njit(cache=True, inline="always")
+def _disk_d2(tri, t, px, py, pz):
+    """A lower bound of the squared distance from p to triangle ``t`` of ``tri`` (F, 17).
+
+    The triangle lies in the disk of its plane (unit normal ``tri[t, 13:16]``, offset
+    ``tri[t, 16]``) around its centroid ``tri[t, 9:12]`` with radius ``tri[t, 12]``: the distance
+    to that disk. The radius and the result carry margins (1e-9 relative, 1e-12 voxel^2) far
+    above rounding, so a candidate the bound rejects could not have won. Near-degenerate triangles have a zero normal: the bound is then the bounding sphere's.
+    """
+    ex = px - tri[t, 9]
+    ey = py - tri[t, 10]
+    ez = pz - tri[t, 11]
+    c2 = ex * ex + ey * ey + ez * ez
+    h = px * tri[t, 13] + py * tri[t, 14] + pz * tri[t, 15] - tri[t, 16]
+    h2 = h * h
+    lat = np.sqrt(max(c2 - h2, 0.0)) - tri[t, 12]
+    if lat > 0.0:
+        h2 += lat * lat
+    return h2 * (1.0 - 1e-9) - 1e-12
+
+
 @numba.njit(cache=True, nogil=True)
-def _propagate(tri, order, shape, best_d2, best_t, npass):
+def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
     """Nearest triangle of every voxel in ``order`` (ascending flat indices of the box).
 
-    ``tri`` (F, 13): triangle corners, bounding-sphere centre and radius. ``best_d2``/``best_t`` (flat, the box's size) start at
-    inf / -1 and are updated in place: seeds, then ``npass`` raster sweeps alternating direction
+    ``tri`` (F, 17): see :func:`_triangle_table`. ``best_d2`` (float64) / ``best_t`` (int32), flat,
+    the box's size, start at inf / -1 and are updated in place: seeds, then ``npass`` raster sweeps alternating direction
     (raster order keeps memory access local; the band is thin, so two sweeps reach every voxel).
+    Only voxels ``first ... last`` (flat indices) are read afterwards: the last sweep stops once
+    it has passed them (what it would do beyond can no longer reach them).
     """
     nx, ny, nz = shape
     syz = ny * nz
@@ -94,20 +117,30 @@ def _propagate(tri, order, shape, best_d2, best_t, npass):
                     if d2 < best_d2[f]:
                         best_d2[f] = d2
                         best_t[f] = t
-    # stamp[t] == visit: triangle t was already tried for the current voxel
-    stamp = np.zeros(tri.shape[0], np.int64)
-    visit = 0
+    # stamp[t] == clock: triangle t was already tried at the current visit
+    stamp = np.zeros(tri.shape[0], np.int32)
+    # clock of each voxel's last change of best triangle (0: seeds) and of its last visit (-1:
+    # none): a neighbour unchanged since this voxel's last visit offers a triangle this voxel
+    # already tested against a best distance no smaller than its current one (same result)
+    when = np.zeros(best_t.shape[0], np.int32)
+    seen = np.full(best_t.shape[0], -1, np.int32)
+    clock = 0
     m = order.shape[0]
     for p in range(npass):
         for n in range(m):
             f = order[n] if p % 2 == 0 else order[m - 1 - n]
+            if p == npass - 1 and (f > last if p % 2 == 0 else f < first):
+                break
             i = f // syz
             j = (f // nz) % ny
             k = f % nz
             px, py, pz = float(i), float(j), float(k)
-            visit += 1
+            clock += 1
+            last = seen[f]
+            seen[f] = clock
             if best_t[f] >= 0:
-                stamp[best_t[f]] = visit
+                stamp[best_t[f]] = clock
+            changed = False
             for di in range(-1, 2):
                 ii = i + di
                 if ii < 0 or ii >= nx:
@@ -116,27 +149,28 @@ def _propagate(tri, order, shape, best_d2, best_t, npass):
                     jj = j + dj
                     if jj < 0 or jj >= ny:
                         continue
+                    row = ii * syz + jj * nz
                     for dk in range(-1, 2):
                         kk = k + dk
                         if kk < 0 or kk >= nz:
                             continue
-                        t = best_t[ii * syz + jj * nz + kk]
-                        if t < 0:
+                        g = row + kk
+                        if when[g] <= last:
                             continue
-                        if stamp[t] == visit:
+                        t = best_t[g]
+                        if t < 0 or stamp[t] == clock:
                             continue
-                        stamp[t] = visit
-                        # bounding-sphere test first: most candidates are farther than the best
-                        ex = px - tri[t, 9]
-                        ey = py - tri[t, 10]
-                        ez = pz - tri[t, 11]
-                        lb = np.sqrt(ex * ex + ey * ey + ez * ez) - tri[t, 12]
-                        if lb > 0.0 and lb * lb >= best_d2[f]:
+                        stamp[t] = clock
+                        # lower bound first: most candidates are farther than the best
+                        if _disk_d2(tri, t, px, py, pz) >= best_d2[f]:
                             continue
                         d2, _, _, _ = _tri_d2(tri, t, px, py, pz)
                         if d2 < best_d2[f]:
                             best_d2[f] = d2
                             best_t[f] = t
+                            changed = True
+            if changed:
+                when[f] = clock
 
 
 @numba.njit(cache=True, nogil=True)
@@ -343,6 +377,7 @@ def reevaluate_arrays(
     band: float = BAND_VOXELS,
     npass: int = 2,
     row0: int = 0,
+    far: float | None = None,
 ) -> int:
     """Recompute ``sdf``, ``rgb``, ``parts`` in place at ``mask`` voxels within ``band`` voxels.
 
@@ -362,6 +397,9 @@ def reevaluate_arrays(
         Half-width of the band, in voxels.
     row0 : int
         First layer (along axis 0) ``mask`` covers.
+    far : float, optional
+        Recomputed voxels whose distance or part changed and whose new distance exceeds ``far``
+        (outside, beyond the labelled band) get part -1.
 
     Returns
     -------
@@ -409,6 +447,10 @@ def reevaluate_arrays(
     col = _trilinear_rgb(rgb, cp)
     # colours and parts are all read before any is written (no voxel sees another's new colour)
     new_parts = _surface_parts(sdf, parts, cp)
+    if far is not None:
+        old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
+        moved = (new != old) | (new_parts != parts[gi[:, 0], gi[:, 1], gi[:, 2]])
+        new_parts[moved & (new > np.float32(far))] = -1
     sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = new
     rgb[gi[:, 0], gi[:, 1], gi[:, 2]] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
     parts[gi[:, 0], gi[:, 1], gi[:, 2]] = new_parts
@@ -455,6 +497,44 @@ def _surface_parts_kernel(sdf, parts, cp):
     return out
 
 
+@numba.njit(cache=True, nogil=True)
+def _triangle_table(verts, faces):
+    """(F, 17) float64 per triangle ``faces`` (F, 3) of ``verts`` (V, 3): corners a, b, c,
+    centroid, radius of the disk around the centroid holding the triangle (with a 1e-9 relative
+    margin), unit normal and plane offset (zero for near-degenerate triangles, whose normal is
+    unreliable; see :func:`_disk_d2`)."""
+    out = np.zeros((faces.shape[0], 17))
+    for t in range(faces.shape[0]):
+        for c in range(3):
+            for d in range(3):
+                out[t, 3 * c + d] = verts[faces[t, c], d]
+        for d in range(3):
+            out[t, 9 + d] = (out[t, d] + out[t, 3 + d] + out[t, 6 + d]) / 3.0
+        r2 = 0.0
+        long2 = 0.0
+        for c in range(3):
+            e2 = 0.0
+            l2 = 0.0
+            for d in range(3):
+                e2 += (out[t, 3 * c + d] - out[t, 9 + d]) ** 2
+                l2 += (out[t, 3 * c + d] - out[t, 3 * ((c + 1) % 3) + d]) ** 2
+            r2 = max(r2, e2)
+            long2 = max(long2, l2)
+        out[t, 12] = np.sqrt(r2) * (1 + 1e-9)
+        ux, uy, uz = out[t, 3] - out[t, 0], out[t, 4] - out[t, 1], out[t, 5] - out[t, 2]
+        vx, vy, vz = out[t, 6] - out[t, 0], out[t, 7] - out[t, 1], out[t, 8] - out[t, 2]
+        nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        area2 = np.sqrt(nx * nx + ny * ny + nz * nz)
+        # |cross| against the longest edge squared: the normal's rounding error grows as its
+        # inverse
+        if area2 > 1e-6 * long2:
+            out[t, 13] = nx / area2
+            out[t, 14] = ny / area2
+            out[t, 15] = nz / area2
+            out[t, 16] = out[t, 13] * out[t, 9] + out[t, 14] * out[t, 10] + out[t, 15] * out[t, 11]
+    return out
+
+
 def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
     """Distances of the targets ``t_run`` (layers ``a0 ...`` of ``sdf``) to the zero level set.
 
@@ -472,23 +552,20 @@ def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
     verts, faces, _n, _v = measure.marching_cubes(sub, 0.0, allow_degenerate=False)
     if len(faces) == 0:
         return None
-    corners = verts.astype(np.float64)[faces]  # (F, 3, 3)
-    centre = corners.mean(axis=1)
-    radius = np.linalg.norm(corners - centre[:, None, :], axis=2).max(axis=1)
-    # (F, 13): corners a, b, c, bounding-sphere centre and radius
-    tri = np.ascontiguousarray(
-        np.concatenate([corners.reshape(-1, 9), centre, radius[:, None] * (1 + 1e-9)], axis=1)
-    )
+    tri = _triangle_table(verts.astype(np.float64), faces)
     # band voxels near the targets relay nearest triangles (half a voxel of slack beyond the
     # band); a voxel farther than the band from every target cannot be on a target's path
     t_box = t_run[:, box[1], box[2]]
     reach = ndimage.maximum_filter(t_box.view(np.uint8), size=2 * pad - 1, mode="constant")
     order = np.flatnonzero((np.abs(sub) <= lim + 0.5 * h) & (reach > 0)).astype(np.int64)
     best_d2 = np.full(sub.size, np.inf)
-    best_t = np.full(sub.size, -1, np.int64)
-    _propagate(tri, order, np.array(sub.shape, np.int64), best_d2, best_t, npass)
-    tsub = t_box.reshape(-1) & (best_t >= 0)
-    fsel = np.flatnonzero(tsub)
+    best_t = np.full(sub.size, -1, np.int32)
+    wanted = np.flatnonzero(t_box.reshape(-1))
+    if wanted.size == 0:
+        return None
+    shape = np.array(sub.shape, np.int64)
+    _propagate(tri, order, shape, best_d2, best_t, npass, wanted[0], wanted[-1])
+    fsel = wanted[best_t[wanted] >= 0]
     if fsel.size == 0:
         return None
     idx = np.stack(np.unravel_index(fsel, sub.shape), axis=1).astype(np.int64)

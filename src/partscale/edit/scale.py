@@ -124,23 +124,13 @@ def _edit_arrays(
             band=band,
         )
         eff_band = (band + 1.0) * max(1.0, 1.0 / plan.scale)
-        # what re-evaluation may change, as resampled: to tell the voxels it did change
-        # (index tuples, not ravel(): the arrays are views in world order, ravel would copy)
-        # (the mask covers the layers from j0 within reach of the edit, not the whole grid)
-        todo = np.nonzero(mask)
-        todo = (todo[0] + j0, todo[1], todo[2])
-        sdf_was, parts_was = out_sdf[todo], out_parts[todo]
-        reevaluated = reevaluate_arrays(
-            out_sdf, out_rgb, out_parts, h, mask, band=eff_band, row0=j0
-        )
         # parts are labelled up to the band outside the surface (as the segment stage does):
-        # voxels the edit resampled or recomputed lose theirs beyond it; the copied layers
-        # outside the zone keep their labels as they are, like their distances
+        # voxels re-evaluation changed lose theirs beyond it (the only ones the mask could move;
+        # the copied layers outside the zone keep their labels as they are, like their distances)
         far = np.float32(BAND_VOXELS * h)
-        sdf_now = out_sdf[todo]
-        moved = (sdf_now != sdf_was) | (out_parts[todo] != parts_was)
-        drop = moved & (sdf_now > far)
-        out_parts[tuple(t[drop] for t in todo)] = -1
+        reevaluated = reevaluate_arrays(
+            out_sdf, out_rgb, out_parts, h, mask, band=eff_band, row0=j0, far=float(far)
+        )
         # the slab (between START and the new END, seams inside it) is one run of layers: a view
         layers = np.flatnonzero(plan.in_slab | (plan.beta > 0))
         if layers.size:

@@ -10,7 +10,8 @@ from conftest import data_path
 def _legs_around(c, *, below: float, r0: float, r1: float, axis=None) -> tuple[int, np.ndarray]:
     """Legs of a base: the solid voxels of CSDF ``c`` (y up) below height ``below``, at radii
     r0..r1 from the vertical ``axis`` (x, z; default their median), binned by angle in 10
-    degree bins; a leg is a circular run of bins holding at least a quarter of the fullest.
+    degree bins; a leg is a peak of the (lightly smoothed, circular) histogram holding at least
+    0.3 of the fullest bin, with a valley below half of it towards the next peak.
     Returns the number of legs and the histogram."""
     sdf = np.asarray(c.sdf)
     P = c.index_to_world(np.argwhere(sdf <= 0.5 * c.voxel_size))
@@ -20,11 +21,25 @@ def _legs_around(c, *, below: float, r0: float, r1: float, axis=None) -> tuple[i
     r = np.hypot(d[:, 0], d[:, 1])
     a = np.degrees(np.arctan2(d[:, 1], d[:, 0])) % 360
     hist = np.histogram(a[(r > r0) & (r < r1)], bins=36, range=(0, 360))[0]
-    occ = hist >= 0.25 * hist.max()
-    if occ.all():
-        return 0, hist  # a disc, not legs
-    o = np.roll(occ, -int(np.argmin(occ)))  # start in a gap: runs do not wrap
-    return int(np.sum(o[1:] & ~o[:-1]) + o[0]), hist
+    s = (np.roll(hist, 1) + 2 * hist + np.roll(hist, -1)) / 4.0
+    peaks = np.flatnonzero(
+        (s >= np.roll(s, 1)) & (s > np.roll(s, -1)) & (s >= 0.3 * s.max())
+    ).tolist()
+    legs = []
+    for p in peaks:
+        if legs:
+            q = legs[-1]
+            between = s[q : p + 1] if p > q else np.r_[s[q:], s[: p + 1]]
+            if between.min() > 0.5 * min(s[p], s[q]):
+                if s[p] > s[q]:
+                    legs[-1] = p
+                continue
+        legs.append(p)
+    if len(legs) > 1:  # the last and the first peak, across 360 degrees
+        p, q = legs[0], legs[-1]
+        if np.r_[s[q:], s[: p + 1]].min() > 0.5 * min(s[p], s[q]):
+            legs.pop()
+    return len(legs), hist
 
 
 def _star_chair():
@@ -112,7 +127,7 @@ def tum_completions():
         color=root / "TUM_color.png",
         intrinsics=root / "camera_primesense.json",
         box=(0, 255, 245, 480),
-        res=64,
+        res=128,  # at 96 marching cubes leaves one non-manifold edge (not watertight)
         upright=True,
     )
     return out

@@ -33,6 +33,11 @@ larger clusters are walls or the room."""
 JOIN_WITHIN = 0.9
 """Share of a cluster standing within an object's footprint (or of the object within the
 cluster's) that makes it part of the object when isolating automatically."""
+FLOOR_CELL_M = 0.02
+FLOOR_BROAD_M = 0.04
+FLOOR_BROAD_SHARE = 0.6
+"""A floor keeps at least this share of its cells (FLOOR_CELL_M) through an opening by a disc of
+radius FLOOR_BROAD_M (floors seen 0.95-0.99; the TUM yellow chair's star base 0.24)."""
 CLOSURE = 1.5
 """Voxels behind a surface point that the solid extends into space nobody saw (the closure)."""
 NORMAL_NEIGHBOURS = 12
@@ -48,10 +53,10 @@ FREE_GRID_VOXELS = 1.5
 the nearest, at most 0.87 of these away: well inside SYMMETRY_MARGIN)."""
 
 
-def _is_floor(P: np.ndarray, plane, inliers: np.ndarray) -> bool:
-    """A floor reaches beyond what stands on it (a chair's base is no wider than the chair): the
-    test for a plane under a cropped scan, where the object's own flat underside is the other
-    explanation."""
+def _is_floor(P: np.ndarray, plane, inliers: np.ndarray, cropped: bool) -> bool:
+    """A floor is broad (most of it survives an opening by a disc of ``FLOOR_BROAD_M``: the legs
+    of a star base, wider than the seat, do not) and, in a cropped scan, reaches beyond what
+    stands on it (in a full frame the rest is the room, wider than the floor seen)."""
     rest = P[~inliers & (plane.height(P) > 2 * FLOOR_TOL)]
     if len(rest) < 10:
         return True
@@ -59,11 +64,30 @@ def _is_floor(P: np.ndarray, plane, inliers: np.ndarray) -> bool:
     a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
     a /= np.linalg.norm(a)
     b = np.cross(n, a)
+    if _broad(np.stack([P[inliers] @ a, P[inliers] @ b], axis=1)) < FLOOR_BROAD_SHARE:
+        return False
+    if not cropped:
+        return True
 
     def extent(X):
         return max(np.subtract(*np.percentile(X @ d, [98, 2])) for d in (a, b))
 
     return extent(P[inliers]) > 1.3 * extent(rest)
+
+
+def _broad(X: np.ndarray) -> float:
+    """Share of the occupied cells (FLOOR_CELL_M) of 2-D points X (N, 2) that an opening by a
+    disc of radius FLOOR_BROAD_M keeps."""
+    from scipy import ndimage
+
+    idx = np.floor((X - X.min(axis=0)) / FLOOR_CELL_M).astype(np.int64)
+    occ = np.zeros(tuple(idx.max(axis=0) + 1), bool)
+    occ[idx[:, 0], idx[:, 1]] = True
+    occ |= ndimage.binary_closing(occ, np.ones((3, 3), bool))  # the gaps between scan rows
+    r = round(FLOOR_BROAD_M / FLOOR_CELL_M)
+    yy, xx = np.mgrid[-r : r + 1, -r : r + 1]
+    kept = ndimage.binary_opening(occ, yy**2 + xx**2 <= r * r)
+    return float(kept.sum() / max(occ.sum(), 1))
 
 
 def _up_prior(frame: Frame) -> np.ndarray:
@@ -82,16 +106,26 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
         W = frames[0].shape[1]
         u, v = pix % W, pix // W
         inbox = (pix >= 0) & (u >= x0) & (u < x1) & (v >= y0) & (v < y1)
-        sel = above & inbox
-        if not sel.any():
+        if not (above & inbox).any():
             raise InputError(
                 f"--box: expected scan points above the floor in pixels {list(box)}, got none"
             )
-        lab = clusters(P[sel], CLUSTER_CELL)
-        big = np.argmax(np.bincount(lab))
-        out = np.zeros(len(P), bool)
-        out[np.flatnonzero(sel)[lab == big]] = True
-        return out
+        idx = np.flatnonzero(above & inbox)
+        lab = clusters(P[idx], CLUSTER_CELL)
+        counts = np.bincount(lab)
+        # a piece the box cuts (a desk edge behind the chair's back) is something else: only
+        # the box's own sides cut, not the image's border
+        H, W = frames[0].shape
+        u, v = u[idx], v[idx]
+        at_edge = (
+            ((u <= x0) & (x0 > 0))
+            | ((u >= x1 - 1) & (x1 < W))
+            | ((v <= y0) & (y0 > 0))
+            | ((v >= y1 - 1) & (y1 < H))
+        )
+        best = int(np.argmax(counts))
+        cut = np.bincount(lab, at_edge, minlength=len(counts)) >= 3
+        return _join_footprint(P, idx, lab, np.where(cut, 0, counts), best, up)
     if cropped:
         return above
     idx = np.flatnonzero(above)
@@ -122,11 +156,18 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
             "scan: expected an object standing on the floor (at most "
             f"{MAX_OBJECT_EXTENT} m across), got none; pick one with --box"
         )
-    # parts of the same object the sensor separated (a swivel chair's seat above its base, with
-    # the gas-lift column lost along silhouettes; a stool's leg cut off its seat along the
-    # seat's shadow; a table's top above its legs): a cluster joins when nearly all of it stands
-    # within the object's footprint, or nearly all of the object within the cluster's (the
-    # cluster picked may be the leg). A chair half under a desk is neither
+    return _join_footprint(P, idx, lab, counts, best, up)
+
+
+def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
+    """(N,) bool: cluster ``best`` of the points ``P[idx]`` (labels ``lab``) and the clusters
+    standing over its footprint.
+
+    Parts of the same object the sensor separated (a swivel chair's seat above its base, with
+    the gas-lift column lost along silhouettes; a stool's leg cut off its seat along the seat's
+    shadow; a table's top above its legs): a cluster joins when nearly all of it stands within
+    the object's footprint, or nearly all of the object within the cluster's (the cluster picked
+    may be the leg). A chair half under a desk is neither."""
     a = np.cross(up, [1.0, 0, 0] if abs(up[0]) < 0.9 else [0, 1.0, 0])
     a /= np.linalg.norm(a)
     flat = np.stack([P[idx] @ a, P[idx] @ np.cross(up, a)], axis=1)
@@ -241,10 +282,11 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     up = _up_prior(frames[0])
     found = find_floor(P, up, FLOOR_TOL)
     support = None
-    if found is not None and cropped and not _is_floor(P, *found):
-        # a flat underside (a swivel chair's base) in a cropped scan: it gives up, not a floor.
-        # Only there: a sensor frame sees the room, and a large object framed closely (a sofa)
-        # leaves little floor beside it, which would make the floor itself an underside
+    if found is not None and not _is_floor(P, found[0], found[1], cropped):
+        # a flat underside (a swivel chair's base, the legs of a star): it gives up, not a
+        # floor. Whether it reaches beyond what stands on it is asked only of a cropped scan: a
+        # sensor frame sees the room, and a large object framed closely (a sofa) leaves little
+        # floor beside it
         support, found = found[0], None
     if found is not None:
         plane, _ = found
@@ -399,14 +441,21 @@ def complete(
     if rot is not None:
         allp, allc, alln = np.concatenate(surf), np.concatenate(surf_c), np.concatenate(surf_n)
         low = rot.where(allp)
+        from scipy.spatial import cKDTree
+
+        tree = cKDTree(allp)
         step = np.eye(4)
         for _ in range(rot.fold - 1):
             step = _sym4(rot) @ step
             rot_steps.append((step.copy(), rot.where))
-            surf.append(_apply(step, allp[low]))
-            surf_c.append(allc[low])
-            surf_n.append(alln[low] @ step[:3, :3].T)
-            kind.append(np.full(int(low.sum()), fuse_mod.MIRRORED, np.uint8))
+            cp = _apply(step, allp[low])
+            # a turned copy completes what the scan lacks; on surface already there it would
+            # only double it a little off
+            new = tree.query(cp, distance_upper_bound=cell, workers=2)[0] > cell
+            surf.append(cp[new])
+            surf_c.append(allc[low][new])
+            surf_n.append(alln[low][new] @ step[:3, :3].T)
+            kind.append(np.full(int(new.sum()), fuse_mod.MIRRORED, np.uint8))
     S, SC, SK = np.concatenate(surf), np.concatenate(surf_c), np.concatenate(kind)
     SN = np.concatenate(surf_n)
     copy = SK != fuse_mod.OBSERVED

@@ -8,7 +8,8 @@ Everything here works in the *upright* frame: y up, the floor at y = 0.
   that land on the scan, ``violation`` the fraction that land where a camera saw through (free
   space). A plane is accepted when ``violation <= MAX_VIOLATION`` and ``support >= MIN_SUPPORT``.
 - Rotations: 4- and 5-fold about a vertical axis, for the lowest part of the object (the bases of
-  swivel chairs and tables), the axis found by a coarse-to-fine search, accepted by the same rule.
+  swivel chairs and tables), the axis found by a coarse-to-fine search, accepted piece by piece
+  (:func:`rotation_axis`) and applied only in the region of the pieces it holds for.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ VIOLATION_WEIGHT = 4.0
 SAMPLES = 1500
 PAIRS = 60000
 BASE_FRACTION = 0.3
+"""Rotational symmetry is looked for, and applied, below this fraction of the object's height."""
 SLABS = 8
 REFINE_PEAKS = 3
 """Vote peaks whose neighbourhoods the plane search refines (the rest are scored once)."""
@@ -33,9 +35,24 @@ REFINE_SAMPLES = 3000
 REFINE_FACING = 0.8
 """Cosine above which a mirrored point's normal and its counterpart's agree (same surface)."""
 MIN_ROTATION_SUPPORT = 0.5
+"""Share of a base piece's points with a rotated copy on the scan for the rotation to hold."""
+MAX_ROTATION_VIOLATION = 0.25
+"""Share of a base piece's rotated copies allowed where a camera saw through (each is then
+dropped; the TUM chairs' star bases 0.14-0.17 at 5-fold, 0.40 at 4-fold)."""
+MIN_ROTATION_COVER = 0.4
+"""Share of the base's points in the pieces a rotation holds for, for it to be accepted."""
+ROTATION_PIECE = 2.0
+"""Cells: base points closer than about this are one piece."""
+ROTATION_SAMPLES = 4000
+ROTATION_CELLS_ACROSS = 40
+"""The rotation's support tolerance is at most the footprint of what the base carries over
+this (at --res 128 the grid's cell is finer already)."""
+HUB_CELLS = 5.0
+"""Cells from the axis within which a turning base's pieces must reach (their hub)."""
+ROTATION_SLACK_DEG = 4.0
+"""Degrees a rotated copy may turn further to land on the scan (:func:`_copies_scored`)."""
 MIN_COVER = 0.6
 """A symmetry must hold on slabs holding at least this fraction of the points."""
-"""Rotational symmetry is looked for, and applied, below this fraction of the object's height."""
 
 
 @dataclass(frozen=True)
@@ -51,11 +68,15 @@ class Symmetry:
     fold: int = 0
     bands: tuple = ((-np.inf, np.inf),)
     params: dict = field(default_factory=dict)
+    region: Callable[[np.ndarray], np.ndarray] | None = None
 
     def where(self, points: np.ndarray) -> np.ndarray:
-        """(N,) bool: points at heights where this symmetry holds."""
+        """(N,) bool: points at heights where this symmetry holds (and in its region)."""
         y = np.asarray(points)[:, 1]
-        return np.logical_or.reduce([(y >= a) & (y < b) for a, b in self.bands])
+        out = np.logical_or.reduce([(y >= a) & (y < b) for a, b in self.bands])
+        if self.region is not None:
+            out &= self.region(points)
+        return out
 
     def apply(self, points: np.ndarray) -> np.ndarray:
         return np.asarray(points) @ self.A.T + self.b
@@ -324,7 +345,23 @@ def rotation_axis(
     seed: int = 0,
 ) -> Symmetry | None:
     """The best accepted k-fold rotation (k in ``folds``) of the object's base about a vertical
-    axis, or None. Its ``A``/``b`` are the rotation by one step; :func:`copies` gives all."""
+    axis, or None. Its ``A``/``b`` are the rotation by one step (``fold`` steps make the turn).
+
+    points : (N, 3) upright points; free : callable on (M, 3) upright points -> (M,) bool;
+    cell : the support tolerance, world units.
+
+    The base is the points below ``BASE_FRACTION`` of the height, cut into pieces (points within
+    ``ROTATION_PIECE`` cells are one piece: a star base is one piece, scraps of floor or clutter
+    beside it are others). The axis is searched coarse to fine on all of them, then again on the
+    pieces the rotation holds for: a piece holds when at least ``MIN_ROTATION_SUPPORT`` of its
+    points have a copy landing on the scan (a leg seen in part finds the other legs) and at most
+    ``MAX_ROTATION_VIOLATION`` of its copies land where a camera saw through. The rotation is
+    accepted when those pieces hold ``MIN_ROTATION_COVER`` of the base's points and its axis
+    lies under the rest of the object (within the 2-98 percentile box of the points above the
+    base, where there are any), and applies only
+    in their region (``Symmetry.region``: their cells turned through every step, so a copy of a
+    scrap beside the base is never made).
+    """
     rng = np.random.default_rng(seed)
     P = np.asarray(points, np.float64)
     top = P[:, 1].max()
@@ -332,53 +369,164 @@ def rotation_axis(
     base = P[P[:, 1] < below]
     if len(base) < 50:
         return None
+    if len(base) > ROTATION_SAMPLES:
+        base = base[rng.choice(len(base), ROTATION_SAMPLES, replace=False)]
+    from .floor import clusters
+
+    # a base turns under what it carries: the axis lies within the footprint of the rest
+    above = P[P[:, 1] >= below][:, [0, 2]]
+    if len(above) >= 50:
+        foot_lo, foot_hi = np.percentile(above, 2, axis=0), np.percentile(above, 98, axis=0)
+        # a coarse grid's cell would let a 4-fold turn of a five-star land on its legs
+        cell = min(cell, float((foot_hi - foot_lo).max()) / ROTATION_CELLS_ACROSS)
+    else:
+        foot_lo, foot_hi = np.full(2, -np.inf), np.full(2, np.inf)
+    piece = clusters(base, ROTATION_PIECE * cell)
     scorer = _Scorer(base, free, cell)
-    B = base[rng.choice(len(base), min(len(base), 300), replace=False)]
-    lo, hi = B[:, [0, 2]].min(axis=0), B[:, [0, 2]].max(axis=0)
     best = None
     for k in folds:
-        angles = 2 * np.pi * np.arange(1, k) / k
-        step = max(cell, (hi - lo).max() / 10)
-        centre = None
-        for _ in range(3):  # coarse to fine around the best axis so far
-            if centre is None:
-                xs = np.arange(lo[0], hi[0] + step, step)
-                zs = np.arange(lo[1], hi[1] + step, step)
-            else:
-                xs = centre[0] + np.arange(-3, 4) * step
-                zs = centre[1] + np.arange(-3, 4) * step
-            gx, gz = np.meshgrid(xs, zs, indexing="ij")
-            axes = np.stack([gx.ravel(), gz.ravel()], axis=1)
-            mapped = np.stack(
-                [
-                    np.concatenate(
-                        [B @ _rotation(a, cx, cz)[0].T + _rotation(a, cx, cz)[1] for a in angles]
-                    )
-                    for cx, cz in axes
-                ]
+        centre = _rotation_search(base, scorer, cell, k, rng, None, (foot_lo, foot_hi))
+        held = _pieces_held(base, piece, scorer, centre, k)
+        if not held.any():
+            continue
+        # again on what the rotation holds for, from where the first search ended
+        centre = _rotation_search(base[held], scorer, cell, k, rng, centre, (foot_lo, foot_hi))
+        held = _pieces_held(base, piece, scorer, centre, k)
+        if (
+            held.mean() < MIN_ROTATION_COVER
+            or not ((centre >= foot_lo) & (centre <= foot_hi)).all()
+        ):
+            continue
+        # a turning base is one piece whose arms meet at a hub on the axis (four legs of a
+        # table, each a piece of its own, are not)
+        r = np.hypot(base[held, 0] - centre[0], base[held, 2] - centre[1])
+        if r.min() > HUB_CELLS * cell:
+            continue
+        # the axis placed by exact copies (the slack finds it, but copies are made exact)
+        centre = _rotation_search(
+            base[held], scorer, cell, k, rng, centre, (foot_lo, foot_hi), slack=False
+        )
+        # the fold is chosen on exact copies: with the slack a 4-fold turn of a five-star
+        # lands on legs often enough to look as good
+        sup, vio = _copies_on(base[held], scorer, centre, k, slack=False)
+        score = float(held.mean() * (sup.mean() - VIOLATION_WEIGHT * vio.mean()))
+        if best is None or score > best[0]:
+            A, b = _rotation(2 * np.pi / k, *centre)
+            region = _Region.around(base[held], centre, k, ROTATION_PIECE * cell)
+            best = (
+                score,
+                Symmetry(
+                    "rotation",
+                    A,
+                    b,
+                    float(sup.any(axis=0).mean()),
+                    float(vio.mean()),
+                    fold=k,
+                    bands=((-np.inf, float(below)),),
+                    params={
+                        "fold": k,
+                        "axis_x": float(centre[0]),
+                        "axis_z": float(centre[1]),
+                        "cover": float(held.mean()),
+                    },
+                    region=region,
+                ),
             )
-            sup, vio = scorer(mapped)
-            sup, vio = sup.mean(axis=1), vio.mean(axis=1)
-            score = sup - VIOLATION_WEIGHT * vio
-            i = int(np.argmax(score))
-            centre = axes[i]
-            step /= 3
-        assert centre is not None  # set by every pass of the search above
-        if sup[i] >= MIN_ROTATION_SUPPORT and vio[i] <= MAX_VIOLATION:
-            s = float(score[i])
-            if best is None or s > best[0]:
-                A, b = _rotation(2 * np.pi / k, *centre)
-                best = (
-                    s,
-                    Symmetry(
-                        "rotation",
-                        A,
-                        b,
-                        float(sup[i]),
-                        float(vio[i]),
-                        fold=k,
-                        bands=((-np.inf, float(below)),),
-                        params={"fold": k, "axis_x": float(centre[0]), "axis_z": float(centre[1])},
-                    ),
-                )
     return None if best is None else best[1]
+
+
+def _copies_on(X, scorer, centre, k, slack=True) -> tuple[np.ndarray, np.ndarray]:
+    """(k-1, M) bool support and violation of the copies of X (M, 3) by the k-fold rotation
+    about the vertical axis through ``centre`` (x, z)."""
+    sup, vio = _copies_scored(X, scorer, np.asarray(centre)[None], k, slack)
+    return sup[0], vio[0]
+
+
+def _copies_scored(X, scorer, centres, k, slack=True) -> tuple[np.ndarray, np.ndarray]:
+    """(C, k-1, M) bool support and violation of the k-fold copies of X (M, 3) about each axis
+    of ``centres`` (C, 2). A real base is turned by its steps only to within a few degrees (and
+    a long leg a degree off lands beside its neighbour): a copy is supported when one of the
+    steps turned by up to ``ROTATION_SLACK_DEG`` lands on the scan, and seen through when all
+    of them land in free space."""
+    turn = np.array([-1.0, -0.5, 0.0, 0.5, 1.0]) if slack else np.zeros(1)
+    slack = np.radians(ROTATION_SLACK_DEG) * turn
+    angles = (2 * np.pi * np.arange(1, k) / k)[:, None] + slack  # (k-1, J)
+    c, s = np.cos(angles), np.sin(angles)
+    C = np.asarray(centres, np.float64)
+    x = X[:, 0][None, None, None] - C[:, 0, None, None, None]
+    z = X[:, 2][None, None, None] - C[:, 1, None, None, None]
+    c, s = c[None, :, :, None], s[None, :, :, None]
+    # _rotation: x' = c x + s z, z' = -s x + c z about the axis
+    mx = c * x + s * z + C[:, 0, None, None, None]
+    mz = -s * x + c * z + C[:, 1, None, None, None]
+    my = np.broadcast_to(X[:, 1], mx.shape)
+    mapped = np.stack([mx, my, mz], axis=-1)  # (C, k-1, J, M, 3)
+    n, J, M = len(C), len(slack), len(X)
+    sup, vio = scorer(mapped.reshape(n, -1, 3))
+    sup = sup.reshape(n, k - 1, J, M).any(axis=2)
+    vio = vio.reshape(n, k - 1, J, M).all(axis=2)
+    return sup, vio
+
+
+def _pieces_held(base, piece, scorer, centre, k) -> np.ndarray:
+    """(M,) bool: the base points in the pieces the rotation holds for."""
+    sup, vio = _copies_on(base, scorer, centre, k)
+    n = np.bincount(piece).astype(np.float64)
+    found = np.bincount(piece, sup.any(axis=0)) / n
+    seen_through = np.bincount(piece, vio.mean(axis=0)) / n
+    ok = (found >= MIN_ROTATION_SUPPORT) & (seen_through <= MAX_ROTATION_VIOLATION)
+    return ok[piece]
+
+
+def _rotation_search(X, scorer, cell, k, rng, centre, bounds, slack=True) -> np.ndarray:
+    """(2,) the axis (x, z) where k-fold copies of X (M, 3) land best (support minus weighted
+    violation), coarse to fine over X's footprint within ``bounds`` (lo, hi), or around
+    ``centre`` when given."""
+    B = X[rng.choice(len(X), min(len(X), 300), replace=False)]
+    lo = np.maximum(B[:, [0, 2]].min(axis=0), bounds[0])
+    hi = np.minimum(B[:, [0, 2]].max(axis=0), bounds[1])
+    hi = np.maximum(hi, lo)
+    step = max(cell, (hi - lo).max() / 16)
+    if centre is not None:
+        step = max(cell, step / 3)
+    for _ in range(3):
+        if centre is None:
+            xs = np.arange(lo[0], hi[0] + step, step)
+            zs = np.arange(lo[1], hi[1] + step, step)
+        else:
+            xs = centre[0] + np.arange(-3, 4) * step
+            zs = centre[1] + np.arange(-3, 4) * step
+        gx, gz = np.meshgrid(xs, zs, indexing="ij")
+        axes = np.stack([gx.ravel(), gz.ravel()], axis=1)
+        sup, vio = _copies_scored(B, scorer, axes, k, slack)
+        score = sup.mean(axis=(1, 2)) - VIOLATION_WEIGHT * vio.mean(axis=(1, 2))
+        centre = axes[int(np.argmax(score))]
+        step /= 3
+    return centre
+
+
+@dataclass(frozen=True, eq=False)
+class _Region:
+    """Where a rotation holds: occupied cells (size ``cell``) of a boolean grid from ``lo``."""
+
+    lo: np.ndarray
+    cell: float
+    occ: np.ndarray
+
+    @classmethod
+    def around(cls, X: np.ndarray, centre, k: int, cell: float) -> _Region:
+        """The cells of X (M, 3) turned through every step of the k-fold rotation, grown by one."""
+        turned = np.concatenate(
+            [X @ A.T + b for A, b in (_rotation(2 * np.pi * i / k, *centre) for i in range(k))]
+        )
+        lo = turned.min(axis=0) - 2 * cell
+        idx = np.floor((turned - lo) / cell).astype(np.int64)
+        occ = np.zeros(tuple(idx.max(axis=0) + 3), bool)
+        occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
+        return cls(lo, cell, ndimage.binary_dilation(occ, np.ones((3, 3, 3), bool)))
+
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        idx = np.floor((np.asarray(points) - self.lo) / self.cell).astype(np.int64)
+        ok = ((idx >= 0) & (idx < self.occ.shape)).all(axis=1)
+        idx = np.where(ok[:, None], idx, 0)
+        return ok & self.occ[idx[:, 0], idx[:, 1], idx[:, 2]]

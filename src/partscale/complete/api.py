@@ -165,9 +165,9 @@ def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
 
     Parts of the same object the sensor separated (a swivel chair's seat above its base, with
     the gas-lift column lost along silhouettes; a stool's leg cut off its seat along the seat's
-    shadow; a table's top above its legs): a cluster joins when nearly all of it stands within
-    the object's footprint, or nearly all of the object within the cluster's (the cluster picked
-    may be the leg). A chair half under a desk is neither."""
+    shadow; a table's top above its legs; a star base wider than the seat): a cluster joins when
+    its centre stands over the object's footprint, or nearly all of it within the footprint, or
+    nearly all of the object within the cluster's (the cluster picked may be the leg)."""
     a = np.cross(up, [1.0, 0, 0] if abs(up[0]) < 0.9 else [0, 1.0, 0])
     a /= np.linalg.norm(a)
     flat = np.stack([P[idx] @ a, P[idx] @ np.cross(up, a)], axis=1)
@@ -180,12 +180,15 @@ def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
     members = {int(best)}
     for _ in range(3):
         m = np.isin(lab, list(members))
+        lo_m, hi_m = flat[m].min(axis=0) - CLUSTER_CELL, flat[m].max(axis=0) + CLUSTER_CELL
         grew = False
         for c in np.flatnonzero(counts >= 30):
             if c in members:
                 continue
             mc = lab == c
-            if max(within(flat[mc], flat[m]), within(flat[m], flat[mc])) < JOIN_WITHIN:
+            centre = flat[mc].mean(axis=0)
+            over = bool(((centre >= lo_m) & (centre <= hi_m)).all())
+            if not over and max(within(flat[mc], flat[m]), within(flat[m], flat[mc])) < JOIN_WITHIN:
                 continue
             both = P[idx[m | mc]]
             if (both.max(axis=0) - both.min(axis=0)).max() > MAX_OBJECT_EXTENT:

@@ -75,10 +75,14 @@ def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
 
     d = frame.depth.astype(np.float64)
     valid = d > 0
-    w = ndimage.gaussian_filter(valid.astype(np.float64), sigma)
-    s = ndimage.gaussian_filter(d, sigma) / np.maximum(w, 1e-9)
-    spread = ndimage.maximum_filter(np.where(valid, d, 0), 3) - ndimage.minimum_filter(
-        np.where(valid, d, np.inf), 3
+    # the discontinuity test covers every pixel the smoothing reads: a Gaussian reaching past
+    # the edge of a seat would pull its readings centimetres towards the floor behind it, points
+    # hanging in space that the closure turns into solid
+    r = max(1, round(2 * sigma))
+    w = ndimage.gaussian_filter(valid.astype(np.float64), sigma, radius=r)
+    s = ndimage.gaussian_filter(d, sigma, radius=r) / np.maximum(w, 1e-9)
+    spread = ndimage.maximum_filter(np.where(valid, d, 0), 2 * r + 1) - ndimage.minimum_filter(
+        np.where(valid, d, np.inf), 2 * r + 1
     )
     smooth = valid & (spread < 0.03 * np.maximum(d, 1e-3)) & (w > 0.5)
     out = np.where(smooth, s, d).astype(np.float32)

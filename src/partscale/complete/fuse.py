@@ -36,11 +36,11 @@ BETWEEN_CLOSING = 2
 """Voxels: radius of the closing that seals the channels between filled segments."""
 BETWEEN_FACING = 0.5
 """Cosine below which two normals face opposite ways."""
-FILL_SLACK = 1.15
+FILL_SLACK = 1.5
 """A region of the fill is kept where the boundary it adds is at most this times the boundary
 it removes: a part closed cleanly swaps the closure's inner faces for its unseen far faces, about
-as many voxels (0.3-1.1 measured on chairs), while a fill with voids between its segments adds
-about twice as many or more (2-5 on SheenChair's cushions)."""
+as many voxels (0.3-1.4 measured on the Kenney chairs), while a fill with voids between its
+segments adds about twice as many or more (2-5 on SheenChair's cushions)."""
 BACK_SHIFT = 0.4
 """Voxels by which an unobserved boundary of the solid is drawn in (below 0.5: no voxel
 changes side, so no thin sheet loses its voxels)."""

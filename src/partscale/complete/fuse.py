@@ -69,6 +69,7 @@ def fuse(
     height_world: Callable[[np.ndarray], np.ndarray],
     closure: float,
     fill_between: bool = True,
+    contours: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Solid, SDF, colour and provenance on the grid.
 
@@ -84,6 +85,8 @@ def fuse(
     height_world : world points -> height above the floor.
     closure : voxels behind the surface that close it where nothing else does.
     fill_between : fill the solid between opposite surfaces (:func:`_between`).
+    contours : points (M, 3) on occluding contours, grid coordinates, and the normals (M, 3) of
+        the unseen surface beyond them: surfaces a segment between opposite sides may end on.
 
     Returns
     -------
@@ -109,7 +112,7 @@ def fuse(
         free_all = free_world(centres_all @ R.T.astype(np.float32) + t.astype(np.float32)).reshape(
             shape
         )
-        between = _between(points, normals, idx, origin, h, shape, free_all)
+        between = _between(points, normals, idx, origin, h, shape, free_all, contours)
         within |= between
     near = np.flatnonzero(within.ravel())
     centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
@@ -277,18 +280,26 @@ def _edge(solid: np.ndarray) -> np.ndarray:
     return solid & ~ndimage.binary_erosion(solid, border_value=0)
 
 
-def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
+def _between(points, normals, idx, origin, h, shape, free, contours=None) -> np.ndarray:
     """(X, Y, Z) bool: voxels between a surface point and the first surface behind it that
     faces the other way (a leg's front and back, a seat's left and right side), within
     ``BETWEEN_VOXELS``, where no camera saw through any voxel of the segment: the thickness the
     scan measured, instead of a thin closure with the unseen back of its shell inside the
-    object."""
-    # which ways the points in and next to each voxel face: one bit per axis direction
-    axis = np.argmax(np.abs(normals), axis=1)
-    neg = normals[np.arange(len(normals)), axis] < 0
-    bit = (1 << (2 * axis + neg)).astype(np.uint8)
+    object. The unseen surface beyond an occluding contour (``contours``) is a surface too: a
+    table top seen from above ends on the underside its front edge turns into."""
+
+    def facing(nrm):
+        # which ways the points in and next to each voxel face: one bit per axis direction
+        axis = np.argmax(np.abs(nrm), axis=1)
+        neg = nrm[np.arange(len(nrm)), axis] < 0
+        return (1 << (2 * axis + neg)).astype(np.uint8)
+
     bits = np.zeros(shape, np.uint8)
-    np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), bit)
+    np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), facing(normals))
+    if contours is not None and len(contours[0]):
+        ci = np.rint((contours[0] - origin) / h).astype(np.int64)
+        inb = ((ci >= 0) & (ci < np.asarray(shape))).all(axis=1)
+        np.bitwise_or.at(bits, tuple(ci[inb].T), facing(contours[1][inb]))
     # the six bits dilated by a 3x3x3 cube at once: the cube is separable, a shifted OR per axis
     dil = bits
     for ax in range(3):
@@ -326,10 +337,12 @@ def _march(p, n, opposite, bits, free, reach, out):
             c = int(np.rint(p[i, 2] - n[i, 2] * s))
             if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
                 break
-            if free[a, b, c]:
-                break
+            # an opposite surface ends the walk even in a voxel seen free: a surface on a
+            # voxel's far side (an underside reached past an occluding contour) is seen free
             if bits[a, b, c] & opposite[i]:
                 hit = s
+                break
+            if free[a, b, c]:
                 break
         if hit == 0:
             continue

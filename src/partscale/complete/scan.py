@@ -89,6 +89,39 @@ def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
     return Frame(out, frame.color, frame.K, frame.pose, frame.cropped)
 
 
+def contour_normals(frame: Frame, jump: float = 0.03) -> np.ndarray:
+    """(H, W, 3) float64: at each reading on an occluding contour (a 4-neighbour reads more than
+    ``jump`` times its depth farther), the unit normal of the unseen surface just beyond it, in
+    the world; zero elsewhere.
+
+    At an occluding contour the surface turns away from the camera: its normal there is
+    perpendicular to the ray and points across the image towards the far side (a seat's or a
+    table top's front edge seen from above: its underside, facing down)."""
+    d = frame.depth.astype(np.float64)
+    valid = d > 0
+    t = np.zeros((*d.shape, 2))
+    for axis, du in ((1, 0), (0, 1)):
+        for step in (1, -1):
+            nb = np.roll(d, -step, axis=axis)
+            far = valid & (nb > d * (1 + jump))
+            edge = np.zeros_like(far)
+            sl = [slice(None)] * 2
+            sl[axis] = slice(0, -1) if step == 1 else slice(1, None)
+            edge[tuple(sl)] = True
+            t[..., du] += np.where(far & edge, step, 0)
+    on = (t != 0).any(axis=-1)
+    v, u = np.nonzero(on)
+    fx, fy, cx, cy = frame.K[0, 0], frame.K[1, 1], frame.K[0, 2], frame.K[1, 2]
+    ray = np.stack([(u - cx) / fx, (v - cy) / fy, np.ones(len(u))], axis=1)
+    ray /= np.linalg.norm(ray, axis=1, keepdims=True)
+    tc = np.concatenate([t[v, u], np.zeros((len(u), 1))], axis=1)
+    n = tc - np.einsum("ni,ni->n", tc, ray)[:, None] * ray
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    out = np.zeros((*d.shape, 3))
+    out[v, u] = n @ frame.pose[:3, :3].T
+    return out
+
+
 def check_pose(pose, what: str) -> np.ndarray:
     """(4, 4) float64 rigid camera-to-world transform; rotation checked orthonormal."""
     try:

@@ -112,39 +112,3 @@ def test_the_fill_is_kept_where_it_closes_a_part_and_dropped_where_it_leaves_voi
     # ... while the long box has at most 3 % more surface than its thin closure alone
     b = (slice(22, 39), slice(0, 17), slice(2, 67))
     assert area(with_fill, b) <= 1.03 * area(without, b)
-
-
-def test_smoothing_the_depth_does_not_pull_points_across_a_discontinuity():
-    # a seat's edge 1 m away in front of a floor 1.5 m away: every reading near the step keeps its
-    # own depth (a Gaussian reaching past the step would pull them centimetres towards the floor,
-    # points hanging in space behind the edge that the closure then turns into solid)
-    from partscale.complete.scan import Frame, denoise
-
-    d = np.full((40, 40), 1.0, np.float32)
-    d[:, 20:] = 1.5
-    f = denoise(Frame(d, None, np.eye(3), np.eye(4)))
-    assert np.abs(f.depth - d).max() <= 1e-4
-
-
-def test_a_fill_without_voids_is_kept_where_it_adds_a_little_more_boundary():
-    # a lid seen on its top and down 6 of the 10 voxels of its sides, closed 2 voxels thick; the
-    # fill below it is one solid block (no voids) whose unseen bottom and lower sides add 13 %
-    # more boundary than the closure's inner faces it removes: a part closed, kept
-    from partscale.complete import fuse
-
-    shell = np.zeros((40, 20, 40), bool)
-    shell[4:36, 12:14, 4:36] = True
-    for sl in (
-        np.s_[4:36, 8:14, 4:6],
-        np.s_[4:36, 8:14, 34:36],
-        np.s_[4:6, 8:14, 4:36],
-        np.s_[34:36, 8:14, 4:36],
-    ):
-        shell[sl] = True
-    extra = np.zeros_like(shell)
-    extra[4:36, 4:12, 4:36] = True
-    extra &= ~shell
-    added = (fuse._edge(shell | extra) & ~fuse._edge(shell)).sum()
-    removed = (fuse._edge(shell) & ~fuse._edge(shell | extra)).sum()
-    assert removed < added  # the strict rule (less boundary) would drop it
-    assert fuse._fill_regions(shell, extra)[20, 6, 20]

@@ -20,15 +20,7 @@ from . import fuse as fuse_mod
 from . import symmetry as sym_mod
 from .carve import Carver, FreeGrid
 from .floor import clusters, find_floor
-from .scan import (
-    Frame,
-    contour_normals,
-    denoise,
-    frame_from_points,
-    read_frame,
-    read_points,
-    read_views,
-)
+from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
 METHOD = "carve+floor+symmetry+between+closure"
 FLOOR_TOL = 0.015
@@ -187,14 +179,6 @@ def _apply(T: np.ndarray, P: np.ndarray) -> np.ndarray:
     return P @ T[:3, :3].T.astype(dt) + T[:3, 3].astype(dt)
 
 
-def _contour_targets(ob: Observation, world_to_grid: np.ndarray):
-    """The observed contour points (M, 3) and their contour normals (M, 3), grid frame."""
-    if ob.contours is None:
-        return None
-    on = np.flatnonzero(np.abs(ob.contours).sum(axis=1) > 0)
-    return _apply(world_to_grid, ob.points[on]), ob.contours[on] @ world_to_grid[:3, :3].T
-
-
 def _sym4(s: sym_mod.Symmetry) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = s.A, s.b
@@ -205,9 +189,7 @@ def _sym4(s: sym_mod.Symmetry) -> np.ndarray:
 class Observation:
     """What a scan says about one object: its points (N, 3) world and colours (N, 3) uint8,
     ``U`` (4, 4) world -> upright (y up, floor at 0, centred), the floor (Plane, inliers) or None,
-    the (denoised) frames, the points' unit normals (N, 3) world, facing their camera, and
-    ``contours`` (N, 3): the normal of the unseen surface beyond a point on an occluding contour
-    (:func:`contour_normals`), zero elsewhere."""
+    the (denoised) frames, and the points' unit normals (N, 3) world, facing their camera."""
 
     frames: list
     points: np.ndarray
@@ -215,7 +197,6 @@ class Observation:
     U: np.ndarray
     floor: object
     normals: np.ndarray
-    contours: np.ndarray | None = None
 
 
 def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
@@ -245,11 +226,9 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     # sensor noise would roughen every observed surface: smooth the range images (not the
     # frames made from meshes, whose points are kept as given)
     frames = [f if f.cropped else denoise(f) for f in frames]
-    pts, cols, pixs, eyes, cons = [], [], [], [], []
+    pts, cols, pixs, eyes = [], [], [], []
     for i, f in enumerate(frames):
         p, c, q = f.points()
-        # cropped frames are made from meshes: their sheet edges are no occluding contours
-        cons.append(np.zeros_like(p) if f.cropped else contour_normals(f).reshape(-1, 3)[q])
         pts.append(p)
         cols.append(c)
         pixs.append(q if i == 0 else np.full(len(q), -1))
@@ -285,8 +264,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = float((Q @ up).min())
     centre = Q.mean(axis=0)
     U = _upright(up, frames[0].pose[:3, 2], floor_offset, centre)
-    K = np.concatenate(cons)[obj]
-    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), K)
+    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]))
 
 
 @keyword_options
@@ -489,7 +467,6 @@ def complete(
         sym_free,
         height_world,
         closure,
-        contours=_contour_targets(ob, world_to_grid),
     )
     if not (sdf < 0).any():
         raise InputError(f"{source}: expected a solid after completion, got none (all carved)")

@@ -36,11 +36,6 @@ BETWEEN_CLOSING = 2
 """Voxels: radius of the closing that seals the channels between filled segments."""
 BETWEEN_FACING = 0.5
 """Cosine below which two normals face opposite ways."""
-FILL_SLACK = 1.5
-"""A region of the fill is kept where the boundary it adds is at most this times the boundary
-it removes: a part closed cleanly swaps the closure's inner faces for its unseen far faces, about
-as many voxels (0.3-1.4 measured on the Kenney chairs), while a fill with voids between its
-segments adds about twice as many or more (2-5 on SheenChair's cushions)."""
 BACK_SHIFT = 0.4
 """Voxels by which an unobserved boundary of the solid is drawn in (below 0.5: no voxel
 changes side, so no thin sheet loses its voxels)."""
@@ -69,7 +64,6 @@ def fuse(
     height_world: Callable[[np.ndarray], np.ndarray],
     closure: float,
     fill_between: bool = True,
-    contours: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Solid, SDF, colour and provenance on the grid.
 
@@ -85,8 +79,6 @@ def fuse(
     height_world : world points -> height above the floor.
     closure : voxels behind the surface that close it where nothing else does.
     fill_between : fill the solid between opposite surfaces (:func:`_between`).
-    contours : points (M, 3) on occluding contours, grid coordinates, and the normals (M, 3) of
-        the unseen surface beyond them: surfaces a segment between opposite sides may end on.
 
     Returns
     -------
@@ -112,7 +104,7 @@ def fuse(
         free_all = free_world(centres_all @ R.T.astype(np.float32) + t.astype(np.float32)).reshape(
             shape
         )
-        between = _between(points, normals, idx, origin, h, shape, free_all, contours)
+        between = _between(points, normals, idx, origin, h, shape, free_all)
         within |= between
     near = np.flatnonzero(within.ravel())
     centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
@@ -247,8 +239,7 @@ def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:
 
 def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
     """(X, Y, Z) bool: the connected regions of ``extra`` (the fill beyond ``shell``) whose union
-    with ``shell`` adds at most ``FILL_SLACK`` times the boundary voxels (:func:`_edge`) it
-    removes from ``shell``.
+    with ``shell`` has fewer boundary voxels (:func:`_edge`) than ``shell`` alone.
 
     Each region is judged in its own box, one voxel wider than it (the voxels whose side it can
     change) and two wider for the erosion, so the cost follows the fill, not the grid."""
@@ -268,9 +259,8 @@ def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
             for s, a, d in zip(sl, lo, shape, strict=True)
         )
         sh = shell[win]
-        e0 = _edge(sh)[inner]
-        e1 = _edge(sh | (lab[win] == k))[inner]
-        keep[k] = (e1 & ~e0).sum() <= FILL_SLACK * (e0 & ~e1).sum()
+        with_k = sh | (lab[win] == k)
+        keep[k] = _edge(with_k)[inner].sum() < _edge(sh)[inner].sum()
     keep[0] = False
     return keep[lab]
 
@@ -280,26 +270,18 @@ def _edge(solid: np.ndarray) -> np.ndarray:
     return solid & ~ndimage.binary_erosion(solid, border_value=0)
 
 
-def _between(points, normals, idx, origin, h, shape, free, contours=None) -> np.ndarray:
+def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
     """(X, Y, Z) bool: voxels between a surface point and the first surface behind it that
     faces the other way (a leg's front and back, a seat's left and right side), within
     ``BETWEEN_VOXELS``, where no camera saw through any voxel of the segment: the thickness the
     scan measured, instead of a thin closure with the unseen back of its shell inside the
-    object. The unseen surface beyond an occluding contour (``contours``) is a surface too: a
-    table top seen from above ends on the underside its front edge turns into."""
-
-    def facing(nrm):
-        # which ways the points in and next to each voxel face: one bit per axis direction
-        axis = np.argmax(np.abs(nrm), axis=1)
-        neg = nrm[np.arange(len(nrm)), axis] < 0
-        return (1 << (2 * axis + neg)).astype(np.uint8)
-
+    object."""
+    # which ways the points in and next to each voxel face: one bit per axis direction
+    axis = np.argmax(np.abs(normals), axis=1)
+    neg = normals[np.arange(len(normals)), axis] < 0
+    bit = (1 << (2 * axis + neg)).astype(np.uint8)
     bits = np.zeros(shape, np.uint8)
-    np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), facing(normals))
-    if contours is not None and len(contours[0]):
-        ci = np.rint((contours[0] - origin) / h).astype(np.int64)
-        inb = ((ci >= 0) & (ci < np.asarray(shape))).all(axis=1)
-        np.bitwise_or.at(bits, tuple(ci[inb].T), facing(contours[1][inb]))
+    np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), bit)
     # the six bits dilated by a 3x3x3 cube at once: the cube is separable, a shifted OR per axis
     dil = bits
     for ax in range(3):
@@ -337,12 +319,10 @@ def _march(p, n, opposite, bits, free, reach, out):
             c = int(np.rint(p[i, 2] - n[i, 2] * s))
             if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
                 break
-            # an opposite surface ends the walk even in a voxel seen free: a surface on a
-            # voxel's far side (an underside reached past an occluding contour) is seen free
+            if free[a, b, c]:
+                break
             if bits[a, b, c] & opposite[i]:
                 hit = s
-                break
-            if free[a, b, c]:
                 break
         if hit == 0:
             continue

@@ -75,51 +75,14 @@ def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
 
     d = frame.depth.astype(np.float64)
     valid = d > 0
-    # the discontinuity test covers every pixel the smoothing reads: a Gaussian reaching past
-    # the edge of a seat would pull its readings centimetres towards the floor behind it, points
-    # hanging in space that the closure turns into solid
-    r = max(1, round(2 * sigma))
-    w = ndimage.gaussian_filter(valid.astype(np.float64), sigma, radius=r)
-    s = ndimage.gaussian_filter(d, sigma, radius=r) / np.maximum(w, 1e-9)
-    spread = ndimage.maximum_filter(np.where(valid, d, 0), 2 * r + 1) - ndimage.minimum_filter(
-        np.where(valid, d, np.inf), 2 * r + 1
+    w = ndimage.gaussian_filter(valid.astype(np.float64), sigma)
+    s = ndimage.gaussian_filter(d, sigma) / np.maximum(w, 1e-9)
+    spread = ndimage.maximum_filter(np.where(valid, d, 0), 3) - ndimage.minimum_filter(
+        np.where(valid, d, np.inf), 3
     )
     smooth = valid & (spread < 0.03 * np.maximum(d, 1e-3)) & (w > 0.5)
     out = np.where(smooth, s, d).astype(np.float32)
     return Frame(out, frame.color, frame.K, frame.pose, frame.cropped)
-
-
-def contour_normals(frame: Frame, jump: float = 0.03) -> np.ndarray:
-    """(H, W, 3) float64: at each reading on an occluding contour (a 4-neighbour reads more than
-    ``jump`` times its depth farther), the unit normal of the unseen surface just beyond it, in
-    the world; zero elsewhere.
-
-    At an occluding contour the surface turns away from the camera: its normal there is
-    perpendicular to the ray and points across the image towards the far side (a seat's or a
-    table top's front edge seen from above: its underside, facing down)."""
-    d = frame.depth.astype(np.float64)
-    valid = d > 0
-    t = np.zeros((*d.shape, 2))
-    for axis, du in ((1, 0), (0, 1)):
-        for step in (1, -1):
-            nb = np.roll(d, -step, axis=axis)
-            far = valid & (nb > d * (1 + jump))
-            edge = np.zeros_like(far)
-            sl = [slice(None)] * 2
-            sl[axis] = slice(0, -1) if step == 1 else slice(1, None)
-            edge[tuple(sl)] = True
-            t[..., du] += np.where(far & edge, step, 0)
-    on = (t != 0).any(axis=-1)
-    v, u = np.nonzero(on)
-    fx, fy, cx, cy = frame.K[0, 0], frame.K[1, 1], frame.K[0, 2], frame.K[1, 2]
-    ray = np.stack([(u - cx) / fx, (v - cy) / fy, np.ones(len(u))], axis=1)
-    ray /= np.linalg.norm(ray, axis=1, keepdims=True)
-    tc = np.concatenate([t[v, u], np.zeros((len(u), 1))], axis=1)
-    n = tc - np.einsum("ni,ni->n", tc, ray)[:, None] * ray
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-    out = np.zeros((*d.shape, 3))
-    out[v, u] = n @ frame.pose[:3, :3].T
-    return out
 
 
 def check_pose(pose, what: str) -> np.ndarray:

@@ -453,81 +453,35 @@ def paint_labels(labels, value, out):
                     out[i, j, kk] = value[lb]
 
 
-@nb.njit(cache=True)
-def _voronoi(f, n, d, c0, c1, g, out):
-    """One line of Maurer et al.'s exact feature transform, as ``scipy.ndimage`` computes it.
+@nb.njit(cache=True, inline="always")
+def _lower_envelope(feat, perp, n, gpos, gperp, gfeat):
+    """Stack phase of one line of Maurer et al.'s exact feature transform; returns its top.
 
-    f : (n, 3) int64 features along the line (``f[i, 0] < 0``: none) after the passes over the
-    axes before ``d``; (c0, c1): the line's coordinates on those axes. Writes each position's
-    nearest feature into ``out`` (n, 3) and returns False where the line has no feature. The
-    same arithmetic and tie rules as scipy's ``_VoronoiFT`` (exact: integers in doubles), so
-    the transform is the same voxel for voxel.
+    feat : (n,) int32 each position's nearest feature so far (< 0: none), perp : (n,) int64
+    its squared distance across the line (read where ``feat >= 0``). Leaves the features whose
+    parabolas make the lower envelope in ``gpos`` (their positions on the line), ``gperp`` and
+    ``gfeat``; returns the index of the last one (-1: no feature). The test and tie rules of
+    scipy's ``_VoronoiFT`` in exact integers (scipy's doubles hold these integers exactly), so
+    the transform is scipy's voxel for voxel.
     """
     l = -1
     for ii in range(n):
-        if f[ii, 0] < 0:
+        q = feat[ii]
+        if q < 0:
             continue
-        fd = float(f[ii, d])
-        wr = 0.0
-        if d > 0:
-            t = float(f[ii, 0] - c0)
-            wr += t * t
-        if d > 1:
-            t = float(f[ii, 1] - c1)
-            wr += t * t
+        wr = perp[ii]
         while l >= 1:
-            i1 = g[l]
-            i2 = g[l - 1]
-            f1 = float(f[i1, d])
-            a = f1 - f[i2, d]
-            b = fd - f1
+            a = gpos[l] - gpos[l - 1]
+            b = ii - gpos[l]
             c = a + b
-            ur = 0.0
-            vr = 0.0
-            if d > 0:
-                tu = float(f[i2, 0] - c0)
-                tv = float(f[i1, 0] - c0)
-                ur += tu * tu
-                vr += tv * tv
-            if d > 1:
-                tu = float(f[i2, 1] - c1)
-                tv = float(f[i1, 1] - c1)
-                ur += tu * tu
-                vr += tv * tv
-            if c * vr - b * ur - a * wr - a * b * c <= 0.0:
+            if c * gperp[l] - b * gperp[l - 1] - a * wr - a * b * c <= 0:
                 break
             l -= 1
         l += 1
-        g[l] = ii
-    if l < 0:
-        return False
-    maxl = l
-    l = 0
-    for ii in range(n):
-        delta1 = _sq_to(f, g[l], ii, d, c0, c1)
-        while l < maxl:
-            delta2 = _sq_to(f, g[l + 1], ii, d, c0, c1)
-            if delta1 <= delta2:
-                break
-            delta1 = delta2
-            l += 1
-        for a in range(3):
-            out[ii, a] = f[g[l], a]
-    return True
-
-
-@nb.njit(cache=True, inline="always")
-def _sq_to(f, q, ii, d, c0, c1):
-    s = 0.0
-    for a in range(d + 1):
-        if a == d:
-            t = float(f[q, a] - ii)
-        elif a == 0:
-            t = float(f[q, a] - c0)
-        else:
-            t = float(f[q, a] - c1)
-        s += t * t
-    return s
+        gpos[l] = ii
+        gperp[l] = wr
+        gfeat[l] = q
+    return l
 
 
 @nb.njit(cache=True, parallel=True)
@@ -568,41 +522,70 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
                 if lo < 0 or (hi >= 0 and hi - i < i - lo):
                     lo = hi
                 near[i, j, k] = (lo << 16) | j if lo >= 0 else -1
-    for i in nb.prange(nx):  # pass along y, the plane gathered line by line
-        f = np.empty((nz, ny, 3), np.int64)
-        out = np.empty((nz, ny, 3), np.int64)
-        g = np.empty(ny, np.int64)
-        found = np.empty(nz, np.bool_)
-        for j in range(ny):
-            for k in range(nz):
-                q = near[i, j, k]
-                f[k, j, 0] = q >> 16 if q >= 0 else -1
-                f[k, j, 1] = q & 0xFFFF if q >= 0 else 0
-                f[k, j, 2] = k
+    # passes along y and z: a feature's coordinate along the line is its position on it, so
+    # only its squared distance across the line (``perp``) and its code travel
+    for i in nb.prange(nx):  # pass along y, line by line within the plane (in cache)
+        feat = np.empty(ny, np.int32)
+        perp = np.empty(ny, np.int64)
+        gpos = np.empty(ny, np.int64)
+        gperp = np.empty(ny, np.int64)
+        gfeat = np.empty(ny, np.int32)
         for k in range(nz):
-            found[k] = _voronoi(f[k], ny, 1, i, 0, g, out[k])
-        for j in range(ny):
-            for k in range(nz):
-                if found[k]:
-                    near[i, j, k] = (out[k, j, 0] << 16) | out[k, j, 1]
+            for j in range(ny):
+                q = near[i, j, k]
+                feat[j] = q
+                if q >= 0:
+                    t = (q >> 16) - i
+                    perp[j] = t * t
+            top = _lower_envelope(feat, perp, ny, gpos, gperp, gfeat)
+            if top < 0:
+                continue
+            l = 0
+            for j in range(ny):
+                t = gpos[l] - j
+                d1 = gperp[l] + t * t
+                while l < top:
+                    t = gpos[l + 1] - j
+                    d2 = gperp[l + 1] + t * t
+                    if d1 <= d2:
+                        break
+                    d1 = d2
+                    l += 1
+                near[i, j, k] = gfeat[l]
     for i in nb.prange(nx):  # pass along z, then the far field of the line
         px = origin[0] + i * h
-        f = np.empty((nz, 3), np.int64)
-        out = np.empty((nz, 3), np.int64)
-        g = np.empty(nz, np.int64)
+        feat = np.empty(nz, np.int32)
+        perp = np.empty(nz, np.int64)
+        gpos = np.empty(nz, np.int64)
+        gperp = np.empty(nz, np.int64)
+        gfeat = np.empty(nz, np.int32)
         for j in range(ny):
             py = origin[1] + j * h
             for k in range(nz):
                 q = near[i, j, k]
-                f[k, 0] = q >> 16 if q >= 0 else -1
-                f[k, 1] = q & 0xFFFF if q >= 0 else 0
-                f[k, 2] = k
-            if not _voronoi(f, nz, 2, i, j, g, out):
+                feat[k] = q
+                if q >= 0:
+                    ti = (q >> 16) - i
+                    tj = (q & 0xFFFF) - j
+                    perp[k] = ti * ti + tj * tj
+            top = _lower_envelope(feat, perp, nz, gpos, gperp, gfeat)
+            if top < 0:
                 continue
+            l = 0
             for k in range(nz):
+                t = gpos[l] - k
+                d1 = gperp[l] + t * t
+                while l < top:
+                    t = gpos[l + 1] - k
+                    d2 = gperp[l + 1] + t * t
+                    if d1 <= d2:
+                        break
+                    d1 = d2
+                    l += 1
                 if band[i, j, k]:
                     continue
-                si, sj, sk = out[k, 0], out[k, 1], out[k, 2]
+                q = gfeat[l]
+                si, sj, sk = q >> 16, q & 0xFFFF, gpos[l]
                 t = win[si, sj, sk]
                 d2, _u, _v, _w = _closest_bary(px, py, origin[2] + k * h, tris[t])
                 d = np.sqrt(d2)

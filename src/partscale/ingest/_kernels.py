@@ -306,6 +306,66 @@ def clear_components(flat, sign, in_sheet, dist, h):
 
 
 @nb.njit(cache=True)
+def shell_pockets(sdf, lim):
+    """Flat indices (sorted, int64) of the enclosed pockets of the shell ``0 < sdf <= lim``.
+
+    sdf : (X, Y, Z) float32, lim : float32. The shell's 6-connected components (those of
+    ``ndimage.label``) that have no 6-neighbour off the grid or with ``sdf > lim``; found by a
+    union-find over the shell's voxels only (sorted, so each axis's neighbours are met by one
+    merge-like sweep), one pass over the grid to list them.
+    """
+    nx, ny, nz = sdf.shape
+    v = sdf.ravel()
+    m = 0
+    for p in range(v.size):
+        if v[p] > 0 and v[p] <= lim:
+            m += 1
+    idx = np.empty(m, np.int64)
+    m = 0
+    for p in range(v.size):
+        if v[p] > 0 and v[p] <= lim:
+            idx[m] = p
+            m += 1
+    parent = np.arange(m)
+    for off in (1, nz, ny * nz):
+        q = 0
+        for n in range(m):
+            p = idx[n]
+            if off == 1 and p % nz == nz - 1:
+                continue
+            if off == nz and (p // nz) % ny == ny - 1:
+                continue
+            target = p + off
+            while q < m and idx[q] < target:
+                q += 1
+            if q < m and idx[q] == target:
+                ra = _find(parent, n)
+                rb = _find(parent, q)
+                if ra != rb:
+                    parent[ra] = rb
+    open_ = np.zeros(m, np.bool_)
+    for n in range(m):
+        p = idx[n]
+        for a in range(6):
+            g = _step(p, a, ny, nz, nx)
+            if g < 0 or v[g] > lim:
+                open_[_find(parent, n)] = True
+                break
+    keep = np.empty(m, np.bool_)
+    n_fill = 0
+    for n in range(m):
+        keep[n] = not open_[_find(parent, n)]
+        n_fill += keep[n]
+    out = np.empty(n_fill, np.int64)
+    n_fill = 0
+    for n in range(m):
+        if keep[n]:
+            out[n_fill] = idx[n]
+            n_fill += 1
+    return out
+
+
+@nb.njit(cache=True)
 def spread_signs(sign, todo, rounds):
     """Give voxels ``todo`` (flat indices) the sign of their signed 6-neighbours where those
     agree, in up to ``rounds`` synchronous rounds (each reads the signs of the round before);

@@ -391,25 +391,7 @@ def _fill_bubbles(sdf: np.ndarray, sign: np.ndarray, h: float) -> int:
     (nor the grid's border) take the inside sign; their distances to the triangles are kept.
     Real cavities reach deeper than half a voxel and stay.
     """
-    lim = np.float32(0.5 * h)
-    shell = (sdf > 0) & (sdf <= lim)
-    labels, n = ndimage.label(shell)
-    if n == 0:
-        return 0
-    idx = np.flatnonzero(labels)
-    lab = labels.ravel()[idx]
-    del labels, shell
-    open_ = np.zeros(n + 1, bool)
-    coords = np.unravel_index(idx, sdf.shape)
-    for ax in range(3):
-        for step in (-1, 1):
-            c = coords[ax] + step
-            border = (c < 0) | (c >= sdf.shape[ax])
-            open_[lab[border]] = True
-            ok = ~border
-            nb = tuple(c[ok] if a == ax else coords[a][ok] for a in range(3))
-            open_[lab[ok][sdf[nb] > lim]] = True
-    fill = idx[~open_[lab]]
+    fill = _kernels.shell_pockets(sdf, np.float32(0.5 * h))
     sdf.ravel()[fill] *= -1
     sign.ravel()[fill] = -1
     return len(fill)

@@ -40,7 +40,7 @@ def _index_range(tri, a, origin, h, radius, n):
 
 
 @nb.njit(cache=True, parallel=True)
-def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid):
+def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid, root=False):
     """Minimum squared distance to ``tris`` for voxels within ``radius`` of some triangle.
 
     Parameters
@@ -58,6 +58,10 @@ def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist
         Running minimum of the squared distance (initialised to inf by the caller).
     tid : (X, Y, Z) int32, in/out
         Index of the triangle achieving it.
+    root : bool
+        ``dist2`` holds distances instead (float32, unsquared) and gets the minimum with
+        ``sqrt(float32(d2))`` (what ``np.sqrt`` of the squared band would give: both are
+        monotone); ``tid`` is not written (any int32 array).
     """
     nx, ny, nz = dist2.shape
     n_slabs = slab_ptr.shape[0] - 1
@@ -111,7 +115,12 @@ def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist
                     for k in range(k0, k1 + 1):
                         pz = origin[2] + k * h
                         d2, _u, _v, _w = _closest_bary(px, py, pz, tri)
-                        if d2 <= r2 and d2 < dist2[i, j, k]:
+                        if root:
+                            if d2 <= r2:
+                                dr = np.sqrt(np.float32(d2))
+                                if dr < dist2[i, j, k]:
+                                    dist2[i, j, k] = dr
+                        elif d2 <= r2 and d2 < dist2[i, j, k]:
                             dist2[i, j, k] = d2
                             tid[i, j, k] = t
 

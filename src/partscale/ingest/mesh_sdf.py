@@ -490,9 +490,12 @@ def from_mesh(
     d_u = d_b
     buried = np.nonzero(cls == 1)[0]
     if len(buried):
-        d2_u, _ = _band(np.ascontiguousarray(sub[buried]), origin, h, shape, 2 * h)
-        d_u = np.minimum(d_b, np.sqrt(d2_u, out=d2_u))
-        del d2_u
+        # min(d_b, distance to buried faces within 2 voxels), in one copy of d_b
+        d_u = d_b.copy()
+        tris_u = np.ascontiguousarray(sub[buried])
+        ptr, lst = _kernels.slab_lists(tris_u, origin, h, 2 * h, shape[0], SLAB)
+        no_ids = np.empty((1, 1, 1), np.int32)
+        _kernels.band_distance(tris_u, ptr, lst, SLAB, origin, h, 2 * h, d_u, no_ids, True)
     # f_s becomes the thickened sheets' distance. They block the flood (not ``free``) as much
     # as boundaries do (a cushion whose cloth has an open seam still encloses its inside); at
     # 2t thick they leave no 6-connected tunnel. ``dist``: to the nearest boundary, buried or

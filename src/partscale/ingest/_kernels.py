@@ -40,7 +40,9 @@ def _index_range(tri, a, origin, h, radius, n):
 
 
 @nb.njit(cache=True, parallel=True)
-def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid, root=False):
+def band_distance(
+    tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid, root=False, fresh=False
+):
     """Minimum squared distance to ``tris`` for voxels within ``radius`` of some triangle.
 
     Parameters
@@ -55,13 +57,17 @@ def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist
     radius : float
         Band half-width in world units; voxels farther than this from a triangle are skipped.
     dist2 : (X, Y, Z) float32, in/out
-        Running minimum of the squared distance (initialised to inf by the caller).
+        Running minimum of the squared distance (inf to start: set by the caller, or by the
+        kernel with ``fresh``).
     tid : (X, Y, Z) int32, in/out
         Index of the triangle achieving it.
     root : bool
         ``dist2`` holds distances instead (float32, unsquared) and gets the minimum with
         ``sqrt(float32(d2))`` (what ``np.sqrt`` of the squared band would give: both are
         monotone); ``tid`` is not written (any int32 array).
+    fresh : bool
+        ``dist2`` and ``tid`` are uninitialised: each slab first sets its layers to inf and -1
+        (the first touch of the grid's pages, spread over the threads).
     """
     nx, ny, nz = dist2.shape
     n_slabs = slab_ptr.shape[0] - 1
@@ -69,6 +75,9 @@ def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist
     for s in nb.prange(n_slabs):
         xs0 = s * slab_width
         xs1 = min(nx - 1, xs0 + slab_width - 1)
+        if fresh:
+            dist2[xs0 : xs1 + 1] = np.inf
+            tid[xs0 : xs1 + 1] = -1
         for q in range(slab_ptr[s], slab_ptr[s + 1]):
             t = slab_tris[q]
             tri = tris[t]

@@ -281,11 +281,12 @@ def _thickness(tris, start: float) -> np.ndarray:
 
 def _band(tris, origin, h, shape, radius):
     """Squared-distance band (float32, inf outside) and nearest triangle ids (int32, -1)."""
-    dist2 = np.full(tuple(shape), np.inf, np.float32)
-    tid = np.full(tuple(shape), -1, np.int32)
-    if len(tris):
-        ptr, lst = _kernels.slab_lists(tris, origin, h, radius, int(shape[0]), SLAB)
-        _kernels.band_distance(tris, ptr, lst, SLAB, origin, h, radius, dist2, tid)
+    if len(tris) == 0:
+        return np.full(tuple(shape), np.inf, np.float32), np.full(tuple(shape), -1, np.int32)
+    dist2 = np.empty(tuple(shape), np.float32)  # initialised by the kernel, slab by slab
+    tid = np.empty(tuple(shape), np.int32)
+    ptr, lst = _kernels.slab_lists(tris, origin, h, radius, int(shape[0]), SLAB)
+    _kernels.band_distance(tris, ptr, lst, SLAB, origin, h, radius, dist2, tid, False, True)
     return dist2, tid
 
 

@@ -40,7 +40,9 @@ def _index_range(tri, a, origin, h, radius, n):
 
 
 @nb.njit(cache=True, parallel=True)
-def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid):
+def band_distance(
+    tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid, root=False, fresh=False
+):
     """Minimum squared distance to ``tris`` for voxels within ``radius`` of some triangle.
 
     Parameters
@@ -55,9 +57,17 @@ def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist
     radius : float
         Band half-width in world units; voxels farther than this from a triangle are skipped.
     dist2 : (X, Y, Z) float32, in/out
-        Running minimum of the squared distance (initialised to inf by the caller).
+        Running minimum of the squared distance (inf to start: set by the caller, or by the
+        kernel with ``fresh``).
     tid : (X, Y, Z) int32, in/out
         Index of the triangle achieving it.
+    root : bool
+        ``dist2`` holds distances instead (float32, unsquared) and gets the minimum with
+        ``sqrt(float32(d2))`` (what ``np.sqrt`` of the squared band would give: both are
+        monotone); ``tid`` is not written (any int32 array).
+    fresh : bool
+        ``dist2`` and ``tid`` are uninitialised: each slab first sets its layers to inf and -1
+        (the first touch of the grid's pages, spread over the threads).
     """
     nx, ny, nz = dist2.shape
     n_slabs = slab_ptr.shape[0] - 1
@@ -65,6 +75,9 @@ def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist
     for s in nb.prange(n_slabs):
         xs0 = s * slab_width
         xs1 = min(nx - 1, xs0 + slab_width - 1)
+        if fresh:
+            dist2[xs0 : xs1 + 1] = np.inf
+            tid[xs0 : xs1 + 1] = -1
         for q in range(slab_ptr[s], slab_ptr[s + 1]):
             t = slab_tris[q]
             tri = tris[t]
@@ -111,7 +124,12 @@ def band_distance(tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist
                     for k in range(k0, k1 + 1):
                         pz = origin[2] + k * h
                         d2, _u, _v, _w = _closest_bary(px, py, pz, tri)
-                        if d2 <= r2 and d2 < dist2[i, j, k]:
+                        if root:
+                            if d2 <= r2:
+                                dr = np.sqrt(np.float32(d2))
+                                if dr < dist2[i, j, k]:
+                                    dist2[i, j, k] = dr
+                        elif d2 <= r2 and d2 < dist2[i, j, k]:
                             dist2[i, j, k] = d2
                             tid[i, j, k] = t
 
@@ -306,6 +324,66 @@ def clear_components(flat, sign, in_sheet, dist, h):
 
 
 @nb.njit(cache=True)
+def shell_pockets(sdf, lim):
+    """Flat indices (sorted, int64) of the enclosed pockets of the shell ``0 < sdf <= lim``.
+
+    sdf : (X, Y, Z) float32, lim : float32. The shell's 6-connected components (those of
+    ``ndimage.label``) that have no 6-neighbour off the grid or with ``sdf > lim``; found by a
+    union-find over the shell's voxels only (sorted, so each axis's neighbours are met by one
+    merge-like sweep), one pass over the grid to list them.
+    """
+    nx, ny, nz = sdf.shape
+    v = sdf.ravel()
+    m = 0
+    for p in range(v.size):
+        if v[p] > 0 and v[p] <= lim:
+            m += 1
+    idx = np.empty(m, np.int64)
+    m = 0
+    for p in range(v.size):
+        if v[p] > 0 and v[p] <= lim:
+            idx[m] = p
+            m += 1
+    parent = np.arange(m)
+    for off in (1, nz, ny * nz):
+        q = 0
+        for n in range(m):
+            p = idx[n]
+            if off == 1 and p % nz == nz - 1:
+                continue
+            if off == nz and (p // nz) % ny == ny - 1:
+                continue
+            target = p + off
+            while q < m and idx[q] < target:
+                q += 1
+            if q < m and idx[q] == target:
+                ra = _find(parent, n)
+                rb = _find(parent, q)
+                if ra != rb:
+                    parent[ra] = rb
+    open_ = np.zeros(m, np.bool_)
+    for n in range(m):
+        p = idx[n]
+        for a in range(6):
+            g = _step(p, a, ny, nz, nx)
+            if g < 0 or v[g] > lim:
+                open_[_find(parent, n)] = True
+                break
+    keep = np.empty(m, np.bool_)
+    n_fill = 0
+    for n in range(m):
+        keep[n] = not open_[_find(parent, n)]
+        n_fill += keep[n]
+    out = np.empty(n_fill, np.int64)
+    n_fill = 0
+    for n in range(m):
+        if keep[n]:
+            out[n_fill] = idx[n]
+            n_fill += 1
+    return out
+
+
+@nb.njit(cache=True)
 def spread_signs(sign, todo, rounds):
     """Give voxels ``todo`` (flat indices) the sign of their signed 6-neighbours where those
     agree, in up to ``rounds`` synchronous rounds (each reads the signs of the round before);
@@ -453,81 +531,35 @@ def paint_labels(labels, value, out):
                     out[i, j, kk] = value[lb]
 
 
-@nb.njit(cache=True)
-def _voronoi(f, n, d, c0, c1, g, out):
-    """One line of Maurer et al.'s exact feature transform, as ``scipy.ndimage`` computes it.
+@nb.njit(cache=True, inline="always")
+def _lower_envelope(feat, perp, n, gpos, gperp, gfeat):
+    """Stack phase of one line of Maurer et al.'s exact feature transform; returns its top.
 
-    f : (n, 3) int64 features along the line (``f[i, 0] < 0``: none) after the passes over the
-    axes before ``d``; (c0, c1): the line's coordinates on those axes. Writes each position's
-    nearest feature into ``out`` (n, 3) and returns False where the line has no feature. The
-    same arithmetic and tie rules as scipy's ``_VoronoiFT`` (exact: integers in doubles), so
-    the transform is the same voxel for voxel.
+    feat : (n,) int32 each position's nearest feature so far (< 0: none), perp : (n,) int64
+    its squared distance across the line (read where ``feat >= 0``). Leaves the features whose
+    parabolas make the lower envelope in ``gpos`` (their positions on the line), ``gperp`` and
+    ``gfeat``; returns the index of the last one (-1: no feature). The test and tie rules of
+    scipy's ``_VoronoiFT`` in exact integers (scipy's doubles hold these integers exactly), so
+    the transform is scipy's voxel for voxel.
     """
     l = -1
     for ii in range(n):
-        if f[ii, 0] < 0:
+        q = feat[ii]
+        if q < 0:
             continue
-        fd = float(f[ii, d])
-        wr = 0.0
-        if d > 0:
-            t = float(f[ii, 0] - c0)
-            wr += t * t
-        if d > 1:
-            t = float(f[ii, 1] - c1)
-            wr += t * t
+        wr = perp[ii]
         while l >= 1:
-            i1 = g[l]
-            i2 = g[l - 1]
-            f1 = float(f[i1, d])
-            a = f1 - f[i2, d]
-            b = fd - f1
+            a = gpos[l] - gpos[l - 1]
+            b = ii - gpos[l]
             c = a + b
-            ur = 0.0
-            vr = 0.0
-            if d > 0:
-                tu = float(f[i2, 0] - c0)
-                tv = float(f[i1, 0] - c0)
-                ur += tu * tu
-                vr += tv * tv
-            if d > 1:
-                tu = float(f[i2, 1] - c1)
-                tv = float(f[i1, 1] - c1)
-                ur += tu * tu
-                vr += tv * tv
-            if c * vr - b * ur - a * wr - a * b * c <= 0.0:
+            if c * gperp[l] - b * gperp[l - 1] - a * wr - a * b * c <= 0:
                 break
             l -= 1
         l += 1
-        g[l] = ii
-    if l < 0:
-        return False
-    maxl = l
-    l = 0
-    for ii in range(n):
-        delta1 = _sq_to(f, g[l], ii, d, c0, c1)
-        while l < maxl:
-            delta2 = _sq_to(f, g[l + 1], ii, d, c0, c1)
-            if delta1 <= delta2:
-                break
-            delta1 = delta2
-            l += 1
-        for a in range(3):
-            out[ii, a] = f[g[l], a]
-    return True
-
-
-@nb.njit(cache=True, inline="always")
-def _sq_to(f, q, ii, d, c0, c1):
-    s = 0.0
-    for a in range(d + 1):
-        if a == d:
-            t = float(f[q, a] - ii)
-        elif a == 0:
-            t = float(f[q, a] - c0)
-        else:
-            t = float(f[q, a] - c1)
-        s += t * t
-    return s
+        gpos[l] = ii
+        gperp[l] = wr
+        gfeat[l] = q
+    return l
 
 
 @nb.njit(cache=True, parallel=True)
@@ -568,41 +600,70 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
                 if lo < 0 or (hi >= 0 and hi - i < i - lo):
                     lo = hi
                 near[i, j, k] = (lo << 16) | j if lo >= 0 else -1
-    for i in nb.prange(nx):  # pass along y, the plane gathered line by line
-        f = np.empty((nz, ny, 3), np.int64)
-        out = np.empty((nz, ny, 3), np.int64)
-        g = np.empty(ny, np.int64)
-        found = np.empty(nz, np.bool_)
-        for j in range(ny):
-            for k in range(nz):
-                q = near[i, j, k]
-                f[k, j, 0] = q >> 16 if q >= 0 else -1
-                f[k, j, 1] = q & 0xFFFF if q >= 0 else 0
-                f[k, j, 2] = k
+    # passes along y and z: a feature's coordinate along the line is its position on it, so
+    # only its squared distance across the line (``perp``) and its code travel
+    for i in nb.prange(nx):  # pass along y, line by line within the plane (in cache)
+        feat = np.empty(ny, np.int32)
+        perp = np.empty(ny, np.int64)
+        gpos = np.empty(ny, np.int64)
+        gperp = np.empty(ny, np.int64)
+        gfeat = np.empty(ny, np.int32)
         for k in range(nz):
-            found[k] = _voronoi(f[k], ny, 1, i, 0, g, out[k])
-        for j in range(ny):
-            for k in range(nz):
-                if found[k]:
-                    near[i, j, k] = (out[k, j, 0] << 16) | out[k, j, 1]
+            for j in range(ny):
+                q = near[i, j, k]
+                feat[j] = q
+                if q >= 0:
+                    t = (q >> 16) - i
+                    perp[j] = t * t
+            top = _lower_envelope(feat, perp, ny, gpos, gperp, gfeat)
+            if top < 0:
+                continue
+            l = 0
+            for j in range(ny):
+                t = gpos[l] - j
+                d1 = gperp[l] + t * t
+                while l < top:
+                    t = gpos[l + 1] - j
+                    d2 = gperp[l + 1] + t * t
+                    if d1 <= d2:
+                        break
+                    d1 = d2
+                    l += 1
+                near[i, j, k] = gfeat[l]
     for i in nb.prange(nx):  # pass along z, then the far field of the line
         px = origin[0] + i * h
-        f = np.empty((nz, 3), np.int64)
-        out = np.empty((nz, 3), np.int64)
-        g = np.empty(nz, np.int64)
+        feat = np.empty(nz, np.int32)
+        perp = np.empty(nz, np.int64)
+        gpos = np.empty(nz, np.int64)
+        gperp = np.empty(nz, np.int64)
+        gfeat = np.empty(nz, np.int32)
         for j in range(ny):
             py = origin[1] + j * h
             for k in range(nz):
                 q = near[i, j, k]
-                f[k, 0] = q >> 16 if q >= 0 else -1
-                f[k, 1] = q & 0xFFFF if q >= 0 else 0
-                f[k, 2] = k
-            if not _voronoi(f, nz, 2, i, j, g, out):
+                feat[k] = q
+                if q >= 0:
+                    ti = (q >> 16) - i
+                    tj = (q & 0xFFFF) - j
+                    perp[k] = ti * ti + tj * tj
+            top = _lower_envelope(feat, perp, nz, gpos, gperp, gfeat)
+            if top < 0:
                 continue
+            l = 0
             for k in range(nz):
+                t = gpos[l] - k
+                d1 = gperp[l] + t * t
+                while l < top:
+                    t = gpos[l + 1] - k
+                    d2 = gperp[l + 1] + t * t
+                    if d1 <= d2:
+                        break
+                    d1 = d2
+                    l += 1
                 if band[i, j, k]:
                     continue
-                si, sj, sk = out[k, 0], out[k, 1], out[k, 2]
+                q = gfeat[l]
+                si, sj, sk = q >> 16, q & 0xFFFF, gpos[l]
                 t = win[si, sj, sk]
                 d2, _u, _v, _w = _closest_bary(px, py, origin[2] + k * h, tris[t])
                 d = np.sqrt(d2)

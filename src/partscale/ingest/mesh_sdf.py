@@ -281,11 +281,12 @@ def _thickness(tris, start: float) -> np.ndarray:
 
 def _band(tris, origin, h, shape, radius):
     """Squared-distance band (float32, inf outside) and nearest triangle ids (int32, -1)."""
-    dist2 = np.full(tuple(shape), np.inf, np.float32)
-    tid = np.full(tuple(shape), -1, np.int32)
-    if len(tris):
-        ptr, lst = _kernels.slab_lists(tris, origin, h, radius, int(shape[0]), SLAB)
-        _kernels.band_distance(tris, ptr, lst, SLAB, origin, h, radius, dist2, tid)
+    if len(tris) == 0:
+        return np.full(tuple(shape), np.inf, np.float32), np.full(tuple(shape), -1, np.int32)
+    dist2 = np.empty(tuple(shape), np.float32)  # initialised by the kernel, slab by slab
+    tid = np.empty(tuple(shape), np.int32)
+    ptr, lst = _kernels.slab_lists(tris, origin, h, radius, int(shape[0]), SLAB)
+    _kernels.band_distance(tris, ptr, lst, SLAB, origin, h, radius, dist2, tid, False, True)
     return dist2, tid
 
 
@@ -391,25 +392,7 @@ def _fill_bubbles(sdf: np.ndarray, sign: np.ndarray, h: float) -> int:
     (nor the grid's border) take the inside sign; their distances to the triangles are kept.
     Real cavities reach deeper than half a voxel and stay.
     """
-    lim = np.float32(0.5 * h)
-    shell = (sdf > 0) & (sdf <= lim)
-    labels, n = ndimage.label(shell)
-    if n == 0:
-        return 0
-    idx = np.flatnonzero(labels)
-    lab = labels.ravel()[idx]
-    del labels, shell
-    open_ = np.zeros(n + 1, bool)
-    coords = np.unravel_index(idx, sdf.shape)
-    for ax in range(3):
-        for step in (-1, 1):
-            c = coords[ax] + step
-            border = (c < 0) | (c >= sdf.shape[ax])
-            open_[lab[border]] = True
-            ok = ~border
-            nb = tuple(c[ok] if a == ax else coords[a][ok] for a in range(3))
-            open_[lab[ok][sdf[nb] > lim]] = True
-    fill = idx[~open_[lab]]
+    fill = _kernels.shell_pockets(sdf, np.float32(0.5 * h))
     sdf.ravel()[fill] *= -1
     sign.ravel()[fill] = -1
     return len(fill)
@@ -508,9 +491,12 @@ def from_mesh(
     d_u = d_b
     buried = np.nonzero(cls == 1)[0]
     if len(buried):
-        d2_u, _ = _band(np.ascontiguousarray(sub[buried]), origin, h, shape, 2 * h)
-        d_u = np.minimum(d_b, np.sqrt(d2_u, out=d2_u))
-        del d2_u
+        # min(d_b, distance to buried faces within 2 voxels), in one copy of d_b
+        d_u = d_b.copy()
+        tris_u = np.ascontiguousarray(sub[buried])
+        ptr, lst = _kernels.slab_lists(tris_u, origin, h, 2 * h, shape[0], SLAB)
+        no_ids = np.empty((1, 1, 1), np.int32)
+        _kernels.band_distance(tris_u, ptr, lst, SLAB, origin, h, 2 * h, d_u, no_ids, True)
     # f_s becomes the thickened sheets' distance. They block the flood (not ``free``) as much
     # as boundaries do (a cushion whose cloth has an open seam still encloses its inside); at
     # 2t thick they leave no 6-connected tunnel. ``dist``: to the nearest boundary, buried or

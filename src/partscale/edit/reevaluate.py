@@ -145,10 +145,10 @@ def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
                 break
             if narrow:
                 f32 = np.uint32(f)
-                i = np.int64(f32 // syz32)
+                i = np.int64(f32 // syz32)  # type: ignore[assignment]  # numba: int64 either way
                 r32 = f32 - np.uint32(i) * syz32
-                j = np.int64(r32 // nz32)
-                k = np.int64(r32 - np.uint32(j) * nz32)
+                j = np.int64(r32 // nz32)  # type: ignore[assignment]  # numba: int64 either way
+                k = np.int64(r32 - np.uint32(j) * nz32)  # type: ignore[assignment]  # numba: int64 either way
             else:
                 i = f // syz
                 j = (f // nz) % ny

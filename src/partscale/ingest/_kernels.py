@@ -532,6 +532,24 @@ def paint_labels(labels, value, out):
 
 
 @nb.njit(cache=True, inline="always")
+def _envelope_query(gpos, gperp, top, n, pick):
+    """Query phase of :func:`_lower_envelope`'s line: ``pick`` (n,) int64 gets, for each position,
+    the index of the envelope's feature nearest it (the first of equals, as scipy)."""
+    l = 0
+    for ii in range(n):
+        t = gpos[l] - ii
+        d1 = gperp[l] + t * t
+        while l < top:
+            t = gpos[l + 1] - ii
+            d2 = gperp[l + 1] + t * t
+            if d1 <= d2:
+                break
+            d1 = d2
+            l += 1
+        pick[ii] = l
+
+
+@nb.njit(cache=True, inline="always")
 def _lower_envelope(feat, perp, n, gpos, gperp, gfeat):
     """Stack phase of one line of Maurer et al.'s exact feature transform; returns its top.
 
@@ -608,6 +626,7 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
         gpos = np.empty(ny, np.int64)
         gperp = np.empty(ny, np.int64)
         gfeat = np.empty(ny, np.int32)
+        pick = np.empty(ny, np.int64)
         for k in range(nz):
             for j in range(ny):
                 q = near[i, j, k]
@@ -618,18 +637,9 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
             top = _lower_envelope(feat, perp, ny, gpos, gperp, gfeat)
             if top < 0:
                 continue
-            l = 0
+            _envelope_query(gpos, gperp, top, ny, pick)
             for j in range(ny):
-                t = gpos[l] - j
-                d1 = gperp[l] + t * t
-                while l < top:
-                    t = gpos[l + 1] - j
-                    d2 = gperp[l + 1] + t * t
-                    if d1 <= d2:
-                        break
-                    d1 = d2
-                    l += 1
-                near[i, j, k] = gfeat[l]
+                near[i, j, k] = gfeat[pick[j]]
     for i in nb.prange(nx):  # pass along z, then the far field of the line
         px = origin[0] + i * h
         feat = np.empty(nz, np.int32)
@@ -637,6 +647,7 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
         gpos = np.empty(nz, np.int64)
         gperp = np.empty(nz, np.int64)
         gfeat = np.empty(nz, np.int32)
+        pick = np.empty(nz, np.int64)
         for j in range(ny):
             py = origin[1] + j * h
             for k in range(nz):
@@ -649,19 +660,11 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
             top = _lower_envelope(feat, perp, nz, gpos, gperp, gfeat)
             if top < 0:
                 continue
-            l = 0
+            _envelope_query(gpos, gperp, top, nz, pick)
             for k in range(nz):
-                t = gpos[l] - k
-                d1 = gperp[l] + t * t
-                while l < top:
-                    t = gpos[l + 1] - k
-                    d2 = gperp[l + 1] + t * t
-                    if d1 <= d2:
-                        break
-                    d1 = d2
-                    l += 1
                 if band[i, j, k]:
                     continue
+                l = pick[k]
                 q = gfeat[l]
                 si, sj, sk = q >> 16, q & 0xFFFF, gpos[l]
                 t = win[si, sj, sk]

@@ -91,14 +91,13 @@ def _edit_arrays(
     else:
         # the part-aware modes keep elements thinner than the compression or lying at a seam;
         # global stays the plain baseline scaling
-        out_sdf, out_rgb, out_parts = apply_plan(
+        out_sdf, out_rgb, out_parts, slivers = apply_plan(
             src_sdf,
             src_rgb,
             src_parts,
             plan,
             keep_thin=None if mode == "global" else h,
             axis=ax,
-            left_out=slivers,
         )
         if mode == "tile":
             o = float(csdf.origin[ax])

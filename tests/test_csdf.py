@@ -65,6 +65,27 @@ def test_arrays_are_read_only_and_caller_array_untouched():
         c.sdf[0, 0, 0] = 2
 
 
+def test_every_public_update_validates_the_values(ball):
+    # make, replace and with_history have no path that skips the value checks
+    nan = ball.sdf.copy()
+    nan[1, 2, 3] = np.nan
+    far = np.full(ball.shape, 1e30, np.float32)  # beyond 1e9 voxel sizes
+    parts = np.full(ball.shape, -2)
+    for update in (
+        lambda **kw: make(**{"sdf": ball.sdf, **kw}),
+        ball.replace,
+        lambda **kw: ball.with_history({"op": "test"}, **kw),
+    ):
+        with pytest.raises(InputError, match="1 NaN/inf voxel"):
+            update(sdf=nan)
+        with pytest.raises(InputError, match=r"\|values\| <="):
+            update(sdf=far)
+        with pytest.raises(InputError, match=r"got \[-2, -2\]"):
+            update(parts=parts)
+    with pytest.raises(TypeError):
+        make(nan, trusted=True)  # no trusted path in the public constructor
+
+
 def test_save_load_is_exact(tmp_path, ball):
     c = ball.with_history({"op": "test", "n": 1}, parts=np.where(ball.sdf < 0, 3, -1))
     p = save(c, tmp_path / "ball.csdf.npz")

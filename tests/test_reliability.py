@@ -414,3 +414,18 @@ def test_missing_mtl_is_refused_like_a_missing_texture(tmp_path, capsys, monkeyp
     code, lines = run(capsys, monkeypatch, "import", obj, "-o", tmp_path / "t.csdf.npz")
     assert_one_line(code, lines, str(obj), "gone.mtl", "no such file")
     only(tmp_path, "t.obj")
+
+
+def test_every_option_of_every_command_is_explained():
+    # `partscale CMD --help` explains every option and argument
+    import typer
+
+    from partscale.cli import app
+
+    commands = typer.main.get_command(app).commands  # type: ignore[attr-defined]
+    assert {"import", "complete", "info", "segment", "export", "render", "batch"} <= set(commands)
+    for name, command in commands.items():
+        assert command.help, name
+        for param in command.params:
+            text = getattr(param, "help", None)
+            assert text and text.strip(), (name, param.name)

@@ -380,6 +380,35 @@ def test_bands_picture_is_cropped_to_the_object(shape):
     assert runs.max() <= 2 * margin
 
 
+@pytest.mark.parametrize("shape", [(2.0, 0.5, 0.4), (0.4, 2.0, 0.4)])
+def test_band_labels_do_not_overlap(shape, monkeypatch):
+    """Labels of bands starting close together are moved along their band or left out, the
+    best band's staying at its corner: no two overlap."""
+    from PIL import ImageDraw
+
+    drawn = []
+    text = ImageDraw.ImageDraw.text
+
+    def spy(self, xy, label, *args, **kwargs):
+        box = self.textbbox(xy, label, font=kwargs.get("font"), anchor=kwargs.get("anchor"))
+        drawn.append((label, box))
+        return text(self, xy, label, *args, **kwargs)
+
+    monkeypatch.setattr(ImageDraw.ImageDraw, "text", spy)
+    lo, hi = np.zeros(3), np.array(shape)
+    c = shapes.grid(lambda p: shapes.box_sdf(p, lo, hi), [lo, hi], voxel_size=0.02)
+    a = 0 if shape[0] > shape[1] else 1
+    labels = [f"{k + 1} stretch" for k in range(6)]
+    bands = [(a, 0.5 + 0.02 * k, 1.5 - 0.02 * k, labels[k], (0, 158, 115)) for k in range(6)]
+    render.render_bands(c, bands, size=400)
+    boxes = {label: box for label, box in drawn if label in labels}
+    assert "1 stretch" in boxes and len(boxes) >= 2, sorted(boxes)
+    listed = list(boxes.values())
+    for i, p in enumerate(listed):
+        for q in listed[i + 1 :]:
+            assert not (p[0] < q[2] and q[0] < p[2] and p[1] < q[3] and q[1] < p[3]), (p, q)
+
+
 def test_bands_beyond_the_first_few_are_outlined_not_filled():
     """Many overlapping candidates do not wash a light object out: only the first few tint it."""
     lo, hi = np.zeros(3), np.array([2.0, 0.5, 0.4])

@@ -14,10 +14,10 @@ from conftest import assert_bad_input
 
 import partscale
 from partscale import shapes
-from partscale._memory import check_memory
-from partscale._options import keyword_options
 from partscale.csdf import load, make, save
+from partscale.edit import Edit, resolve_edit
 from partscale.errors import InputError, MemoryLimitError
+from partscale.export import resize_grid
 
 
 @pytest.fixture
@@ -63,6 +63,27 @@ def test_arrays_are_read_only_and_caller_array_untouched():
     assert c.sdf[0, 0, 0] == 1
     with pytest.raises(ValueError):
         c.sdf[0, 0, 0] = 2
+
+
+def test_every_public_update_validates_the_values(ball):
+    # make, replace and with_history have no path that skips the value checks
+    nan = ball.sdf.copy()
+    nan[1, 2, 3] = np.nan
+    far = np.full(ball.shape, 1e30, np.float32)  # beyond 1e9 voxel sizes
+    parts = np.full(ball.shape, -2)
+    for update in (
+        lambda **kw: make(**{"sdf": ball.sdf, **kw}),
+        ball.replace,
+        lambda **kw: ball.with_history({"op": "test"}, **kw),
+    ):
+        with pytest.raises(InputError, match="1 NaN/inf voxel"):
+            update(sdf=nan)
+        with pytest.raises(InputError, match=r"\|values\| <="):
+            update(sdf=far)
+        with pytest.raises(InputError, match=r"got \[-2, -2\]"):
+            update(parts=parts)
+    with pytest.raises(TypeError):
+        make(nan, trusted=True)  # no trusted path in the public constructor
 
 
 def test_save_load_is_exact(tmp_path, ball):
@@ -230,30 +251,27 @@ def test_file_system_refusal_is_one_input_error_naming_the_file(
     assert list(tmp_path.iterdir()) == []
 
 
-def test_memory_guard_names_the_need(monkeypatch):
-    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(1 << 30))
-    with pytest.raises(MemoryLimitError, match=r"would need 8\.0 GiB"):
-        check_memory((1024, 1024, 1024), 8, what="test")
-    check_memory((128, 128, 128), 8, what="test")
+def test_memory_guard_names_the_need(monkeypatch, ball):
+    # resampling to 256: 256^3 voxels of 4 + 3 + 2 bytes, 144 MiB
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(100 << 20))
+    with pytest.raises(MemoryLimitError, match=r"256x256x256 grid would need 144\.0 MiB"):
+        resize_grid(ball, 256)
+    assert resize_grid(ball, 64).shape == (64, 64, 64)
 
 
-def test_memory_guard_message_stays_short_for_absurd_requests():
+def test_memory_guard_message_stays_short_for_absurd_requests(ball):
     # a mistyped size (an edit to 1e300 m) must not print hundreds of digits
     with pytest.raises(MemoryLimitError) as err:
-        check_memory((2 * 10**301, 13, 11), 48, what="test")
+        resolve_edit(ball, Edit("x", "20%", "80%", 1e300))
     message = str(err.value)
     assert len(message) < 160, message
-    assert "2.00e+301x13x11 grid" in message and "EiB" in message
+    assert "5.00e+301x32x32 grid" in message and "EiB" in message
 
 
-def test_unknown_option_lists_the_known_ones():
-    @keyword_options
-    def f(x, *, alpha=1, beta=2):
-        return x + alpha + beta
-
-    assert f(1, beta=3) == 5
-    with pytest.raises(TypeError, match="options are: x, alpha, beta"):
-        f(1, gamma=3)
+def test_unknown_option_lists_the_known_ones(ball):
+    assert resize_grid(ball, size=32).shape == (32, 32, 32)
+    with pytest.raises(TypeError, match="options are: csdf, size, progress"):
+        resize_grid(ball, 32, gamma=3)
 
 
 def test_info_cli(tmp_path, ball, cli):

@@ -190,13 +190,21 @@ def test_meta_with_nan_is_refused_by_make():
         partscale.make(np.ones((4, 4, 4), np.float32), meta={"x": float("nan")})
 
 
-def test_parse_json_is_the_servers_reader_too():
-    from partscale._files import parse_json
+def test_hostile_json_is_refused_by_the_server_too(ball_file):
+    # the editor's request bodies go through the same hardened reader as recipes and meta
+    from starlette.testclient import TestClient
 
-    assert parse_json(b'{"a": [1, 2.5]}', what="body") == {"a": [1, 2.5]}
-    for text in HOSTILE_JSON.values():
-        with pytest.raises(partscale.errors.InputError, match=r"^body: expected"):
-            parse_json(text.encode(), what="body")
+    from partscale.serve import create_app
+
+    app = create_app(ball_file, max_body=1 << 20)  # room for the 200 kB nesting
+    with TestClient(app, base_url="http://127.0.0.1") as client:
+        for text in HOSTILE_JSON.values():
+            r = client.post(
+                "/api/apply", content=text.encode(), headers={"content-type": "application/json"}
+            )
+            assert r.status_code == 400, r.text
+            assert r.json()["error"].startswith("request body: expected"), r.json()
+        assert client.get("/api/state").json()["revision"] == 0
 
 
 # -- 6: finite but absurd values ---------------------------------------------------------------
@@ -406,3 +414,18 @@ def test_missing_mtl_is_refused_like_a_missing_texture(tmp_path, capsys, monkeyp
     code, lines = run(capsys, monkeypatch, "import", obj, "-o", tmp_path / "t.csdf.npz")
     assert_one_line(code, lines, str(obj), "gone.mtl", "no such file")
     only(tmp_path, "t.obj")
+
+
+def test_every_option_of_every_command_is_explained():
+    # `partscale CMD --help` explains every option and argument
+    import typer
+
+    from partscale.cli import app
+
+    commands = typer.main.get_command(app).commands  # type: ignore[attr-defined]
+    assert {"import", "complete", "info", "segment", "export", "render", "batch"} <= set(commands)
+    for name, command in commands.items():
+        assert command.help, name
+        for param in command.params:
+            text = getattr(param, "help", None)
+            assert text and text.strip(), (name, param.name)

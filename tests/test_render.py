@@ -193,23 +193,33 @@ def test_parts_without_stored_colours_are_distinct_and_none_is_grey():
     assert (np.ptp(right.astype(int), axis=1) <= 1).all()
 
 
+def bar_px(image: np.ndarray) -> int:
+    """Length in pixels of the scale bar: the longest dark row in the bottom tenth."""
+    dark = (image < 60).all(axis=-1)
+    bottom = dark[int(len(image) * 0.9) :]
+    return int(bottom.sum(axis=1).max())
+
+
+@pytest.mark.parametrize(("width", "bar"), [(1.5, 0.2), (2.0, 0.5)])
+def test_scale_bar_is_the_round_length_below_a_quarter_of_the_image(width, bar):
+    # a quarter of a 256 px image framing `width` metres: 0.457 m (bar 20 cm), 0.610 m (50 cm)
+    c = shapes.sphere((0, 0, 0), 0.3, voxel_size=H)
+    frame = np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]) * width / 2
+    image = render.render(c, view="front", size=256, frame=frame, scale_bar=True)
+    assert abs(bar_px(image) - bar * 256 * 0.82 / width) <= 3
+
+
 def test_scale_bar_is_labelled_and_to_scale():
     assert render.scale_bar_label(0.5, "m") == "50 cm"
     assert render.scale_bar_label(2.0, "m") == "2 m"
     assert render.scale_bar_label(0.005, "m") == "5 mm"
-    assert render._nice_length(0.37) == pytest.approx(0.2)
-    assert render._nice_length(0.6) == pytest.approx(0.5)
     c = shapes.sphere((0, 0, 0), 0.3, voxel_size=H)  # centre on a voxel: 0.6 m across exactly
     size = 256
     image = render.render(c, view="front", size=size, scale_bar=True)
     # worked out by hand: the 0.6 m frame fills the image less 5% margins on each side and the
     # bar's 8% band, 256 * (1 - 0.1 - 0.08) px, so 349.9 px/m; a quarter of the width (64 px) is
     # 0.183 m, the bar the round length below it, 10 cm: 35.0 px (+1 for the end pixel)
-    expected_px = 0.1 * 256 * 0.82 / 0.6
-    dark = (image < 60).all(axis=-1)
-    bottom = dark[int(size * 0.9) :]
-    bar_row = bottom[bottom.sum(axis=1).argmax()]
-    assert abs(bar_row.sum() - expected_px) <= 3
+    assert abs(bar_px(image) - 0.1 * 256 * 0.82 / 0.6) <= 3
     # the (blue) object stays clear of the bar's band: only grey ink there
     band = image[int(size * (1 - render.SCALE_BAR_BAND)) :]
     ink = band[foreground(band)].astype(int)
@@ -368,6 +378,35 @@ def test_bands_picture_is_cropped_to_the_object(shape):
     blank = ~fg.any(axis=1)
     runs = np.diff(np.flatnonzero(np.concatenate([[True], ~blank, [True]]))) - 1
     assert runs.max() <= 2 * margin
+
+
+@pytest.mark.parametrize("shape", [(2.0, 0.5, 0.4), (0.4, 2.0, 0.4)])
+def test_band_labels_do_not_overlap(shape, monkeypatch):
+    """Labels of bands starting close together are moved along their band or left out, the
+    best band's staying at its corner: no two overlap."""
+    from PIL import ImageDraw
+
+    drawn = []
+    text = ImageDraw.ImageDraw.text
+
+    def spy(self, xy, label, *args, **kwargs):
+        box = self.textbbox(xy, label, font=kwargs.get("font"), anchor=kwargs.get("anchor"))
+        drawn.append((label, box))
+        return text(self, xy, label, *args, **kwargs)
+
+    monkeypatch.setattr(ImageDraw.ImageDraw, "text", spy)
+    lo, hi = np.zeros(3), np.array(shape)
+    c = shapes.grid(lambda p: shapes.box_sdf(p, lo, hi), [lo, hi], voxel_size=0.02)
+    a = 0 if shape[0] > shape[1] else 1
+    labels = [f"{k + 1} stretch" for k in range(6)]
+    bands = [(a, 0.5 + 0.02 * k, 1.5 - 0.02 * k, labels[k], (0, 158, 115)) for k in range(6)]
+    render.render_bands(c, bands, size=400)
+    boxes = {label: box for label, box in drawn if label in labels}
+    assert "1 stretch" in boxes and len(boxes) >= 2, sorted(boxes)
+    listed = list(boxes.values())
+    for i, p in enumerate(listed):
+        for q in listed[i + 1 :]:
+            assert not (p[0] < q[2] and q[0] < p[2] and p[1] < q[3] and q[1] < p[3]), (p, q)
 
 
 def test_bands_beyond_the_first_few_are_outlined_not_filled():

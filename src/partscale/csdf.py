@@ -247,9 +247,25 @@ class CSDF:
         return out
 
     # -- functional updates ---------------------------------------------------------------
-    def replace(self, *, trusted: bool = False, **changes: Any) -> CSDF:
-        """Return a new CSDF with some fields replaced (validated through :func:`make`;
-        ``trusted`` as there)."""
+    def replace(self, **changes: Any) -> CSDF:
+        """Return a new CSDF with some fields replaced (validated through :func:`make`)."""
+        return self._replaced(changes, trusted=False)
+
+    def with_history(self, operation: dict[str, Any], **changes: Any) -> CSDF:
+        """Return a new CSDF with ``operation`` appended to ``meta['history']``.
+
+        ``changes['meta']``, when given, replaces the meta (its history is the one extended).
+        The entries already there are shared, not copied: recording an operation costs the same
+        whatever the history's length.
+        """
+        return self._replaced(self._history_changes(operation, changes), trusted=False)
+
+    def _history_changes(self, operation: dict[str, Any], changes: dict[str, Any]) -> dict:
+        meta = dict(changes.pop("meta", self.meta))
+        meta["history"] = History.of(meta.get("history", [])).appended(operation)
+        return {**changes, "meta": meta}
+
+    def _replaced(self, changes: dict[str, Any], *, trusted: bool) -> CSDF:
         fields = {n: getattr(self, n) for n in ("sdf", "rgb", "parts", "origin", "voxel_size")}
         fields["meta"] = self.meta  # make() copies it (the history is shared, not copied)
         unknown = set(changes) - set(fields)
@@ -258,20 +274,7 @@ class CSDF:
                 f"replace() got unknown field(s) {sorted(unknown)}; fields are {_NAMES}"
             )
         fields.update(changes)
-        return make(**fields, trusted=trusted)
-
-    def with_history(
-        self, operation: dict[str, Any], *, trusted: bool = False, **changes: Any
-    ) -> CSDF:
-        """Return a new CSDF with ``operation`` appended to ``meta['history']``.
-
-        ``changes['meta']``, when given, replaces the meta (its history is the one extended).
-        The entries already there are shared, not copied: recording an operation costs the same
-        whatever the history's length. ``trusted`` as in :func:`make`.
-        """
-        meta = dict(changes.pop("meta", self.meta))
-        meta["history"] = History.of(meta.get("history", [])).appended(operation)
-        return self.replace(meta=meta, trusted=trusted, **changes)
+        return _make(**fields, trusted=trusted)
 
     @property
     def n_parts(self) -> int:
@@ -335,8 +338,6 @@ def make(
     origin: Any = (0.0, 0.0, 0.0),
     voxel_size: float = 1.0,
     meta: dict[str, Any] | None = None,
-    *,
-    trusted: bool = False,
 ) -> CSDF:
     """Validate and convert arrays into a :class:`CSDF` (the one public constructor).
 
@@ -356,11 +357,29 @@ def make(
         JSON-serialisable metadata, copied; ``format``/``version``/``history`` are filled in,
         and a given ``history`` must be a list of objects (operations). It is stored as a
         read-only :class:`History` (a History given is shared as it is, not copied).
-    trusted : bool
-        The arrays are a stage's own result from a valid CSDF (finite, ``|sdf|`` within
-        bounds, parts in range): their values are not scanned again, only shapes, dtypes, origin,
-        voxel size and meta are checked. Never for arrays from outside the package.
     """
+    return _make(sdf, rgb, parts, origin, voxel_size, meta, trusted=False)
+
+
+def _with_trusted_history(csdf: CSDF, operation: dict[str, Any], **changes: Any) -> CSDF:
+    """:meth:`CSDF.with_history` for a stage's own arrays made from a valid CSDF (finite,
+    ``|sdf|`` within bounds, parts in range): their values are not scanned again, only shapes,
+    dtypes, origin, voxel size and meta are checked. Never for arrays from outside the package.
+    """
+    return csdf._replaced(csdf._history_changes(operation, changes), trusted=True)
+
+
+def _make(
+    sdf: Any,
+    rgb: Any,
+    parts: Any,
+    origin: Any,
+    voxel_size: Any,
+    meta: dict[str, Any] | None,
+    *,
+    trusted: bool,
+) -> CSDF:
+    """:func:`make`; ``trusted``: see :func:`_with_trusted_history`."""
     sdf = np.asarray(sdf)
     if sdf.ndim != 3 or min(sdf.shape) < 2:
         raise InputError(

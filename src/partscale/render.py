@@ -13,6 +13,7 @@ rendered with the same ``frame`` share one scale.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from dataclasses import dataclass
@@ -404,6 +405,34 @@ def _ticks(lo: float, hi: float) -> np.ndarray:
     return np.arange(math.ceil(lo / step) * step, hi + 1e-9 * span, step)
 
 
+def _label_spots(draw, font, boxes, labels, vertical) -> list[tuple[float, float] | None]:
+    """Where each band's label goes: its box's top-left corner, or, where that would overlap
+    the label of a band before it (a better one), the first free place further along the band
+    (down a vertical band, right along a horizontal one), one label's height or width at a
+    time; None (left out) where the band has no free place."""
+    taken: list[tuple[float, float, float, float]] = []
+    out: list[tuple[float, float] | None] = []
+    for box, label, down in zip(boxes, labels, vertical, strict=True):
+        left, top, right, bottom = draw.textbbox((0, 0), label, font=font)
+        step = (bottom - top + 2) if down else (right - left + 6)
+        spot = None
+        for k in itertools.count():  # ends: each step moves the label further along the band
+            x = box[0] + 3 + (0 if down else k * step)
+            y = box[1] + 2 + (k * step if down else 0)
+            lb = (x + left, y + top, x + right, y + bottom)
+            # the first place is the label's whatever the band's size; later ones stay inside
+            if k and (lb[3] > box[3] if down else lb[2] > box[2]):
+                break
+            if not any(
+                lb[0] < t[2] and t[0] < lb[2] and lb[1] < t[3] and t[1] < lb[3] for t in taken
+            ):
+                spot = (x, y)
+                taken.append(lb)
+                break
+        out.append(spot)
+    return out
+
+
 def render_bands(
     csdf: CSDF,
     bands: list[tuple[int, float, float, str, tuple[int, int, int]]],
@@ -449,19 +478,26 @@ def render_bands(
     shown = [b for b in bands if int(b[0]) in (across, up)]
     if not shown:
         raise InputError(f"bands: expected one along an axis the {view} view shows, got none")
-    # the first band on top: drawn last
-    for rank, (a, lo, hi, label, colour) in reversed(list(enumerate(shown))):
+    boxes = []
+    for a, lo, hi, _, _ in shown:
         p0, p1 = frame[0].copy(), frame[0].copy()
         p0[int(a)], p1[int(a)] = lo, hi
         (u0, v0), (u1, v1) = pixel(p0), pixel(p1)
         if int(a) == across:
-            box = [min(u0, u1), y0, max(u0, u1), y1]
+            boxes.append([min(u0, u1), y0, max(u0, u1), y1])
         else:
-            box = [x0, min(v0, v1), x1, max(v0, v1)]
+            boxes.append([x0, min(v0, v1), x1, max(v0, v1)])
+    spots = _label_spots(
+        draw, font, boxes, [b[3] for b in shown], [int(b[0]) == across for b in shown]
+    )
+    # the first band on top: drawn last; the labels over all bands (a fill would hide them)
+    for rank, (_, _, _, _, colour) in reversed(list(enumerate(shown))):
         rgb = tuple(int(v) for v in colour)
         fill = (*rgb, round(255 * BAND_ALPHA)) if rank < FILLED_BANDS else None
-        draw.rectangle(box, fill=fill, outline=(*rgb, 255), width=2)
-        draw.text((box[0] + 3, box[1] + 2), label, fill=(*rgb, 255), font=font)
+        draw.rectangle(boxes[rank], fill=fill, outline=(*rgb, 255), width=2)
+    for (_, _, _, label, colour), spot in zip(shown, spots, strict=True):
+        if spot is not None:
+            draw.text(spot, label, fill=(*(int(v) for v in colour), 255), font=font)
     ink = (0, 0, 0, 255)
     # axes with ticks in object units along the frame's bottom and left edges
     draw.line([x0, y1, x1, y1], fill=ink, width=1)

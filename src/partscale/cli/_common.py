@@ -22,6 +22,12 @@ Res = Annotated[
     int, typer.Option("--res", help="Voxels along the object's longest side (16 to 16384).")
 ]
 
+#: The CSDF a command reads (``info``, ``export``, ``render``).
+CsdfIn = Annotated[Path, typer.Argument(help="A .csdf.npz file.")]
+
+#: ``-o`` of the commands that write a CSDF (``import``, ``complete``, ``segment``).
+CsdfOut = Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")]
+
 
 @contextlib.contextmanager
 def progress_bar(description: str) -> Iterator[ProgressCallback]:

@@ -29,9 +29,7 @@ def complete(
         Path | None,
         typer.Argument(help="Partial range mesh or point cloud (PLY, camera frame, metres)."),
     ] = None,
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")] = Path(
-        "completed.csdf.npz"
-    ),
+    output: _common.CsdfOut = Path("completed.csdf.npz"),
     res: Annotated[int, typer.Option("--res", help="Voxels along the longest side.")] = 128,
     depth: Annotated[
         Path | None, typer.Option("--depth", help="16-bit depth PNG of an RGB-D frame.")

@@ -9,11 +9,11 @@ import typer
 
 from ..errors import InputError
 from ..progress import ProgressCallback, scaled
-from ._common import check_output, done, progress_bar
+from ._common import CsdfIn, check_output, done, progress_bar
 
 
 def export(
-    path: Annotated[Path, typer.Argument(help="A .csdf.npz file.")],
+    path: CsdfIn,
     mesh: Annotated[
         Path | None,
         typer.Option("--mesh", help="Coloured mesh to write: OUT.glb, OUT.ply or OUT.obj."),

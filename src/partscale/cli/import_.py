@@ -19,7 +19,7 @@ def import_(
             help="Mesh (.glb, .gltf, .obj+.mtl, .ply) or SDF grid (.npy, .npz, AutoSDF .h5)."
         ),
     ],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
+    output: _common.CsdfOut,
     res: _common.Res = 128,
     pad: Annotated[
         int | None,

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from ..csdf import CSDF, load
 from ..thickness import ThinFeatures, thin_features
+from ._common import CsdfIn
 
 
 def summary(c: CSDF, thin: ThinFeatures | None = None) -> dict:
@@ -43,7 +43,7 @@ def summary(c: CSDF, thin: ThinFeatures | None = None) -> dict:
 
 
 def info(
-    path: Annotated[Path, typer.Argument(help="A .csdf.npz file.")],
+    path: CsdfIn,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
 ) -> None:
     """Show shape, voxel size, extent in world units, number of parts, the edit history, and a

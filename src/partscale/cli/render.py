@@ -8,11 +8,11 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError
-from ._common import check_output, done, progress_bar
+from ._common import CsdfIn, check_output, done, progress_bar
 
 
 def render(
-    path: Annotated[Path, typer.Argument(help="A .csdf.npz file.")],
+    path: CsdfIn,
     output: Annotated[Path, typer.Option("-o", "--output", help="Image to write (.png).")],
     view: Annotated[str, typer.Option("--view", help="Camera: front, side, top or iso.")] = "iso",
     size: Annotated[int, typer.Option("--size", help="Image width and height in pixels.")] = 512,

@@ -14,7 +14,7 @@ from . import _common
 
 def segment(
     path: Annotated[Path, typer.Argument(help="Input .csdf.npz file.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")],
+    output: _common.CsdfOut,
     method: Annotated[
         str,
         typer.Option(help="fast (voxel creases, the default) or coacd (the reference, slow)."),

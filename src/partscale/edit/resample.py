@@ -481,9 +481,12 @@ def apply_plan(
     *,
     keep_thin: float | None = None,
     axis: int = 0,
-    left_out: dict[str, int] | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, int]]:
     """Resample axis-first arrays ``(N, A, B)`` by ``plan`` into new ``(N', A, B)`` arrays.
+
+    Returns ``(sdf, rgb, parts, left_out)``: the new arrays, and the voxels of cut slivers left
+    out per zone plane (``{"start": n, "end": n}``, only where ``n > 0``; see below), for the
+    edit's history.
 
     The new arrays are axis-first views of C-ordered arrays in world order with the edit axis
     at ``axis`` (:func:`empty_layers`): moved back, they are the result as it is stored.
@@ -504,8 +507,7 @@ def apply_plan(
     - but where a zone plane cuts an element (a board straddling END or START), the sliver the
       plane cuts off is left out at every internal seam (:func:`cut_slivers`): the element
       stays whole once, beyond the last copy (before the first), and no copy gets a loose
-      fragment of it. ``left_out``, when given, gets the voxels left out per plane
-      (``{"start": n, "end": n}``, only where ``n > 0``), for the edit's history.
+      fragment of it (counted in ``left_out``).
     """
     m = len(plan.xa)
     out_sdf = lerp_layers(sdf, plan.xa, empty_layers((m, *sdf.shape[1:]), sdf.dtype, axis))
@@ -513,6 +515,7 @@ def apply_plan(
     out_parts = crisp_parts(
         parts, sdf, plan.xa, empty_layers((m, *parts.shape[1:]), parts.dtype, axis)
     )
+    left_out: dict[str, int] = {}
     seam = np.flatnonzero(plan.beta > 0)
     thinned = np.zeros((seam.size, *sdf.shape[1:]), bool)
     if keep_thin is not None:
@@ -562,15 +565,14 @@ def apply_plan(
                 c = np.where(drop[..., None], c_other, c)
                 own = out_parts[seam]
                 out_parts[seam] = np.where(drop, crisp_parts(parts, sdf, plan.xb[seam]), own)
-                if left_out is not None:
-                    # a left window's layers read their copy up to END
-                    at_end = (plan.xa[seam] > plan.xb[seam])[:, None, None]
-                    for plane, n in (
-                        ("start", (drop & ~at_end).sum()),
-                        ("end", (drop & at_end).sum()),
-                    ):
-                        if n:
-                            left_out[plane] = int(n)
+                # a left window's layers read their copy up to END
+                at_end = (plan.xa[seam] > plan.xb[seam])[:, None, None]
+                for plane, n in (
+                    ("start", (drop & ~at_end).sum()),
+                    ("end", (drop & at_end).sum()),
+                ):
+                    if n:
+                        left_out[plane] = int(n)
         out_sdf[seam] = blended
         out_rgb[seam] = c
-    return out_sdf, out_rgb, out_parts
+    return out_sdf, out_rgb, out_parts, left_out

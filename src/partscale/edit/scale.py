@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._options import keyword_options
-from ..csdf import BAND_VOXELS, CSDF
+from ..csdf import BAND_VOXELS, CSDF, _with_trusted_history
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from .parts import renumber_copies, update_parts_info
@@ -91,14 +91,13 @@ def _edit_arrays(
     else:
         # the part-aware modes keep elements thinner than the compression or lying at a seam;
         # global stays the plain baseline scaling
-        out_sdf, out_rgb, out_parts = apply_plan(
+        out_sdf, out_rgb, out_parts, slivers = apply_plan(
             src_sdf,
             src_rgb,
             src_parts,
             plan,
             keep_thin=None if mode == "global" else h,
             axis=ax,
-            left_out=slivers,
         )
         if mode == "tile":
             o = float(csdf.origin[ax])
@@ -237,8 +236,8 @@ def _apply_edit(
         entry.update(lo=r.lo, hi=r.hi)
     entry.update(record or {})
     # the arrays are the edit's own, made from a valid CSDF: not scanned again
-    out = csdf.with_history(
-        entry, trusted=True, sdf=done.sdf, rgb=done.rgb, parts=done.parts, meta=meta
+    out = _with_trusted_history(
+        csdf, entry, sdf=done.sdf, rgb=done.rgb, parts=done.parts, meta=meta
     )
     report(1.0, "done")
     return out
@@ -365,9 +364,9 @@ def naive_edit(csdf: CSDF, edit: Edit | dict[str, Any]) -> CSDF:
     edit = _as_edit(edit)
     r = resolve_edit(csdf, edit)
     done = _edit_arrays(csdf, r, naive=True)
-    return csdf.with_history(
+    return _with_trusted_history(
+        csdf,
         _history_entry(csdf, edit, r, done, "naive_scale"),
-        trusted=True,
         sdf=done.sdf,
         rgb=done.rgb,
         parts=done.parts,

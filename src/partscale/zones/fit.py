@@ -1,6 +1,7 @@
 """Fit to size: zones and modes chosen per axis so the object reaches a target extent.
 
-Per axis (see :func:`fit`): where a repeat is found, tile one period with the number of copies
+Per axis (see :func:`fit`): where a repeat is found, tile one period (a whole number of voxels,
+so the copies are exact shifts of its layers) with the number of copies
 that brings the length closest to the target, and absorb the remainder (less than half a period)
 by stretching constant slabs outside that period, so spacing is kept and the length is exact;
 with no repeat, stretch the largest constant slab (a growth beyond doubling it spread over the
@@ -190,7 +191,7 @@ def _stretch_edits(
     return edits, left
 
 
-def voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
+def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
     """A tile candidate's ``(start, period)`` (world) with the period a whole number of voxels.
 
     Every edit moves content by whole voxels, so copies of a period that is not one are
@@ -199,8 +200,8 @@ def voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
     lengths either side of the measured period, the one whose shift carries the repeat onto
     itself best (mean layer distance over the repeat, :meth:`Profile.shifted_distance`); the
     start within :data:`PHASE_VOXELS` of the detector's where :func:`~.suggest.plane_cost` is
-    lowest (:func:`~.suggest.best_phase`), among those whose joins cut off no more solid than
-    the detector's start does (:func:`~.suggest.join_islands`). Copies of a whole-voxel period
+    lowest (:func:`~.suggest.best_phase`), among those whose joins cut off the least solid
+    (:func:`~.suggest.join_islands`). Copies of a whole-voxel period
     are exact shifts of the original's layers.
     """
     assert t.period is not None  # set for a tile
@@ -225,7 +226,7 @@ def voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
         return float(t.zone[0]), float(t.period)
     starts = np.arange(a, b - n + 1e-9, SHIFT_STEP)
     cut = np.array([join_islands(csdf, p.axis, float(x), float(n)) for x in starts])
-    ok = cut <= min(join_islands(csdf, p.axis, t0, float(n)), int(cut.min()))
+    ok = cut <= cut.min()
     # the lowest-cost start among those, nearest the detector's
     runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
     pieces = [(starts[runs[k]], starts[runs[k + 1] - 1]) for k in range(0, len(runs), 2)]
@@ -266,7 +267,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     if tiles:
         t = tiles[0]
         assert t.period is not None and t.count is not None  # set for a tile
-        start, period = voxel_period(csdf, prof, t)
+        start, period = _voxel_period(csdf, prof, t)
         k = int(np.floor(change / period + 0.5))
         k = max(k, 1 - t.count)  # cannot remove more periods than the repeat holds
         if k != 0:

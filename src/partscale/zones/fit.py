@@ -1,6 +1,7 @@
 """Fit to size: zones and modes chosen per axis so the object reaches a target extent.
 
-Per axis (see :func:`fit`): where a repeat is found, tile one period with the number of copies
+Per axis (see :func:`fit`): where a repeat is found, tile one period (a whole number of voxels,
+so the copies are exact shifts of its layers) with the number of copies
 that brings the length closest to the target, and absorb the remainder (less than half a period)
 by stretching constant slabs outside that period, so spacing is kept and the length is exact;
 with no repeat, stretch the largest constant slab (a growth beyond doubling it spread over the
@@ -22,7 +23,16 @@ from ..csdf import CSDF
 from ..edit import Edit, Recipe, parse_size, tile_count
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
-from .suggest import AXES, Candidate, axis_candidates
+from .profile import Profile, profile
+from .suggest import (
+    AXES,
+    SHIFT_STEP,
+    Candidate,
+    axis_candidates,
+    best_phase,
+    join_islands,
+    plane_cost,
+)
 
 #: Largest relative change of the tiled copies accepted instead of stretching a gap inside the
 #: repeat (which would make one spacing uneven).
@@ -42,6 +52,9 @@ CALM_TOL = 0.05
 #: either side, and a seam shows in the sdf's step across five layers centred on the plane
 #: against the trend one layer beyond them (3.5 voxels, rounded up to whole layer pairs).
 CALM_VOXELS = 4
+#: How far (voxels) a tile zone's start may move from the detector's to sit at a whole-voxel
+#: period's best planes.
+PHASE_VOXELS = 1.0
 #: Growth beyond this fraction of the largest slab's length is spread over more slabs.
 MAX_STRETCH = 1.0
 #: Slabs shorter than this fraction of the largest one take no share of a growth.
@@ -178,6 +191,50 @@ def _stretch_edits(
     return edits, left
 
 
+def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
+    """A tile candidate's ``(start, period)`` (world) with the period a whole number of voxels.
+
+    Every edit moves content by whole voxels, so copies of a period that is not one are
+    resampled and the content after them is moved by a rounded length: the copies' spacing and
+    the spacing across the repeat's end drift apart by up to half a voxel. Of the two whole-voxel
+    lengths either side of the measured period, the one whose shift carries the repeat onto
+    itself best (mean layer distance over the repeat, :meth:`Profile.shifted_distance`); the
+    start within :data:`PHASE_VOXELS` of the detector's where :func:`~.suggest.plane_cost` is
+    lowest (:func:`~.suggest.best_phase`), among those whose joins cut off the least solid
+    (:func:`~.suggest.join_islands`). Copies of a whole-voxel period
+    are exact shifts of the original's layers.
+    """
+    assert t.period is not None  # set for a tile
+    h = p.voxel_size
+    period = t.period / h
+    lo, hi = (float(x) for x in p.index(np.array(t.region)))
+    t0 = float(p.index(t.zone[0]))
+    best = None
+    for n in sorted({int(np.floor(period)), int(np.ceil(period))}):
+        i = np.arange(int(np.ceil(lo)), int(np.floor(hi - n)) + 1)
+        if n < 2 or i.size == 0:
+            continue
+        err = float(p.shifted_distance(i, float(n)).mean())
+        if best is None or err < best[0]:
+            best = (err, n)
+    if best is None:
+        return float(t.zone[0]), float(t.period)
+    n = best[1]
+    a = max(lo, t0 - PHASE_VOXELS)
+    b = min(hi, t0 + PHASE_VOXELS + n)
+    if b - a < n:
+        return float(t.zone[0]), float(t.period)
+    starts = np.arange(a, b - n + 1e-9, SHIFT_STEP)
+    cut = np.array([join_islands(csdf, p.axis, float(x), float(n)) for x in starts])
+    ok = cut <= cut.min()
+    # the lowest-cost start among those, nearest the detector's
+    runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
+    pieces = [(starts[runs[k]], starts[runs[k + 1] - 1]) for k in range(0, len(runs), 2)]
+    picks = [best_phase(p, float(n), x0, x1 + n, near=t0) for x0, x1 in pieces]
+    s = picks[int(np.argmin(plane_cost(p, float(n), np.array(picks))))]
+    return float(p.world(s)), n * h
+
+
 def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str]]:
     """Edits (recipe coordinates) bringing the extent along ``axis`` to ``target``, and why."""
     name = AXES[axis]
@@ -189,7 +246,8 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     change = round((target - extent) / h) * h  # whole voxels: every edit moves content by voxels
     if change == 0:
         return [], [f"{name}: kept ({_fmt(extent, units)}, target within half a voxel)"]
-    cands = axis_candidates(csdf, axis)
+    prof = profile(csdf, axis)
+    cands = axis_candidates(csdf, axis, prof=prof)
     tiles = [c for c in cands if c.kind == "tile"]
     slabs = [c for c in cands if c.kind == "stretch"]
     # what cannot shrink: the extent less every slab down to its minimum and the removable periods
@@ -209,11 +267,11 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     if tiles:
         t = tiles[0]
         assert t.period is not None and t.count is not None  # set for a tile
-        period = float(t.period)
+        start, period = _voxel_period(csdf, prof, t)
         k = int(np.floor(change / period + 0.5))
         k = max(k, 1 - t.count)  # cannot remove more periods than the repeat holds
         if k != 0:
-            s = t.zone[0]
+            s = start
             if k > 0:  # one period, 1 + k copies
                 e = s + period
                 grow = round(k * period / h) * h

@@ -259,10 +259,11 @@ def test_fit_puts_the_remainder_in_a_long_span_not_in_a_board(rest):
 
 
 def test_fit_says_when_only_a_thin_slab_can_take_the_remainder():
-    """Boards 8 voxels apart (gaps of 6) beside a 5-voxel panel: no slab is long enough and 3
-    voxels are beyond the copies' tolerance, so a thin one takes them, and the note says so."""
+    """Boards 8 voxels apart (gaps of 6) 8 voxels from a 5-voxel panel: no slab is long enough
+    and 3 voxels are beyond the copies' tolerance, so the panel takes them, and the note says so
+    (the old code said nothing)."""
     panel, pitch, board, n = 0.1, 0.16, 0.04, 5
-    x0 = panel + 0.1
+    x0 = panel + 0.16
     length = x0 + (n - 1) * pitch + board
     boxes = [((0, 0, 0), (panel, 0.5, 0.3)), ((0, 0, 0), (length, 0.04, 0.3))]
     boxes += [((x0 + m * pitch, 0, 0), (x0 + m * pitch + board, 0.5, 0.3)) for m in range(n)]
@@ -273,6 +274,7 @@ def test_fit_says_when_only_a_thin_slab_can_take_the_remainder():
     )
     recipe, why = fit(c, [repr(extent(c, 0) + pitch + 3 * H), "=", "="])
     assert [e.mode for e in recipe.edits] == ["tile", "stretch"], why
+    assert float(recipe.edits[1].end) <= panel, recipe  # the panel: the only slab outside
     thin = [w for w in why if "thin slab" in w]
     assert len(thin) == 1 and "could take it" in thin[0], why
 

@@ -210,7 +210,8 @@ def _remainder_tiers(
     :data:`MIN_SPREAD_VOXELS` long (:func:`_long`) outside the repeat first (or a period long or
     more: no gap between two copies is, so it is a span the repeat's region reaches into), then
     the copies, then long slabs inside the repeat (one spacing uneven), and thin slabs
-    (``thin``: the notes say so) only after all of those.
+    (``thin``: the notes say so) only after all of those; the copies take what is left (a thin
+    slab inside the repeat never does: a feature of one copy and one spacing would change).
     """
     if tiled is None:
         return [
@@ -236,7 +237,6 @@ def _remainder_tiers(
         (None, False),
         ([c for c in near if _long(c, h)], False),
         ([c for c in free if not _long(c, h)], True),
-        ([c for c in near if not _long(c, h)], True),
     ]
 
 

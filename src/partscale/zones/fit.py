@@ -3,7 +3,9 @@
 Per axis (see :func:`fit`): where a repeat is found, tile one period (a whole number of voxels,
 so the copies are exact shifts of its layers) with the number of copies
 that brings the length closest to the target, and absorb the remainder (less than half a period)
-by stretching constant slabs outside that period, so spacing is kept and the length is exact;
+by stretching constant slabs outside that period, so spacing is kept and the length is exact
+(a board or panel keeps its thickness: spans and long uniform runs first, then the copies within
+a tolerance; the notes say when only a thin slab could take it);
 with no repeat, stretch the largest constant slab (a growth beyond doubling it spread over the
 next largest of similar length), planes a few voxels in from the slab's ends, where the surface
 changes least from layer to layer; global scaling only where neither exists. All positions are on the input
@@ -352,9 +354,11 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
         layers = (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0]))
         copies_len = float(edits[0].dest) - float(edits[0].start) if tile_zone else 0.0
         tiled = None if tile_zone is None else (tiles[0].region, tile_zone, period)
+        within = False  # the copies take what is left within COPY_TOLERANCE
         for tier, thin in _remainder_tiers(slabs, h, tiled):
-            if tier is None:  # the copies, within COPY_TOLERANCE: they take what is left
-                if abs(left) <= COPY_TOLERANCE * copies_len:
+            if tier is None:
+                within = abs(left) <= COPY_TOLERANCE * copies_len
+                if within:
                     break
                 continue
             st, left = _stretch_edits(tier, left, h, name, layers)
@@ -382,7 +386,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
                     + (
                         f"of {MIN_SPREAD_VOXELS} voxels or more outside the tiled zone could take "
                         f"{it} (a thinner one is a feature's thickness)"
-                        if abs(left) <= COPY_TOLERANCE * copies_len
+                        if within
                         else f"outside the tiled zone could take {it}"
                     )
                     + f": its {n} copies absorb {_fmt(left, units)} (each {pct:+.1f}%)"

@@ -225,6 +225,60 @@ def test_fit_tiles_a_non_whole_voxel_period_as_exact_copies(pitch, more):
     assert M.spacing_error(c, out, zones_from_history(out, c)) <= 0.01
 
 
+@pytest.mark.parametrize("rest", [1, 4, -3])
+def test_fit_puts_the_remainder_in_a_long_span_not_in_a_board(rest):
+    """A 5-voxel end panel, a 30-voxel empty span, then five 2-voxel boards 13 voxels apart: the
+    remainder after whole periods (``rest`` voxels) goes into the span. Every board and the
+    panel keep their thickness and the boards their pitch, within half a voxel (the old code
+    stretched the panel, the only slab outside the repeat's region, by 1, 4 and -1 voxels)."""
+    panel, span, pitch, board, n = 0.1, 0.6, 0.26, 0.04, 5
+    x0 = panel + span
+    length = x0 + (n - 1) * pitch + board
+    boxes = [((0, 0, 0), (panel, 0.5, 0.3)), ((0, 0, 0), (length, 0.04, 0.3))]
+    boxes += [((x0 + m * pitch, 0, 0), (x0 + m * pitch + board, 0.5, 0.3)) for m in range(n)]
+    c = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boxes),
+        np.array([[0, 0, 0], [length, 0.5, 0.3]]),
+        voxel_size=H,
+    )
+    target = extent(c, 0) + pitch + rest * H
+    recipe, why = fit(c, [repr(target), "=", "="])
+    assert [e.mode for e in recipe.edits] == ["tile", "stretch"], why
+    s = recipe.edits[1]
+    assert panel <= float(s.start) and float(s.end) <= x0, s  # inside the span
+    assert not [w for w in why if "thin slab" in w], why
+    out = apply_recipe(c, recipe)
+    assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
+    line = (int(0.3 / H), int(0.15 / H))
+    (t0, x_0), (t1, x_1) = _runs_along(c.sdf, 0, line), _runs_along(out.sdf, 0, line)
+    assert len(t1) == len(t0) + 1, (t0, t1)
+    # thicknesses: the panel, then one board (all the same); pitches: the original's
+    assert abs(t1[0] - t0[0]) <= 0.5 and np.abs(t1[1:] - t0[1]).max() <= 0.5, (t0, t1)
+    assert np.abs(np.diff(x_1[1:]) - pitch / H).max() <= 0.5, x_1
+    assert abs((x_1[1] - x_1[0]) - (x_0[1] - x_0[0]) - rest) <= 0.5, (x_0, x_1)
+
+
+def test_fit_says_when_only_a_thin_slab_can_take_the_remainder():
+    """Boards 8 voxels apart (gaps of 6) 8 voxels from a 5-voxel panel: no slab is long enough
+    and 3 voxels are beyond the copies' tolerance, so the panel takes them, and the note says so
+    (the old code said nothing)."""
+    panel, pitch, board, n = 0.1, 0.16, 0.04, 5
+    x0 = panel + 0.16
+    length = x0 + (n - 1) * pitch + board
+    boxes = [((0, 0, 0), (panel, 0.5, 0.3)), ((0, 0, 0), (length, 0.04, 0.3))]
+    boxes += [((x0 + m * pitch, 0, 0), (x0 + m * pitch + board, 0.5, 0.3)) for m in range(n)]
+    c = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boxes),
+        np.array([[0, 0, 0], [length, 0.5, 0.3]]),
+        voxel_size=H,
+    )
+    recipe, why = fit(c, [repr(extent(c, 0) + pitch + 3 * H), "=", "="])
+    assert [e.mode for e in recipe.edits] == ["tile", "stretch"], why
+    assert float(recipe.edits[1].end) <= panel, recipe  # the panel: the only slab outside
+    thin = [w for w in why if "thin slab" in w]
+    assert len(thin) == 1 and "could take it" in thin[0], why
+
+
 def test_fit_goes_global_only_as_a_last_resort_and_says_so():
     recipe, why = fit(rod(), ["120%", "=", "="])
     assert [e.mode for e in recipe.edits] == ["global"]

@@ -3,7 +3,9 @@
 Per axis (see :func:`fit`): where a repeat is found, tile one period (a whole number of voxels,
 so the copies are exact shifts of its layers) with the number of copies
 that brings the length closest to the target, and absorb the remainder (less than half a period)
-by stretching constant slabs outside that period, so spacing is kept and the length is exact;
+by stretching constant slabs outside that period, so spacing is kept and the length is exact
+(a board or panel keeps its thickness: spans and long uniform runs first, then the copies within
+a tolerance; the notes say when only a thin slab could take it);
 with no repeat, stretch the largest constant slab (a growth beyond doubling it spread over the
 next largest of similar length), planes a few voxels in from the slab's ends, where the surface
 changes least from layer to layer; global scaling only where neither exists. All positions are on the input
@@ -191,6 +193,67 @@ def _stretch_edits(
     return edits, left
 
 
+def _long(c: Candidate, h: float) -> bool:
+    """Whether a slab is at least :data:`MIN_SPREAD_VOXELS` long: a span or a long uniform run,
+    not a feature's thickness (a board, a panel, a leg's width)."""
+    return round((c.zone[1] - c.zone[0]) / h) >= MIN_SPREAD_VOXELS
+
+
+def _remainder_tiers(
+    slabs: list[Candidate],
+    h: float,
+    tiled: tuple[tuple[float, float], tuple[float, float], float] | None,
+) -> list[tuple[list[Candidate] | None, bool]]:
+    """The slabs that absorb what whole periods (or, with no repeat, nothing) leave, in the order
+    they take it, each ``(slabs, thin)``; ``None``: the tiled copies, within
+    :data:`COPY_TOLERANCE`. ``tiled``: the repeat's region, the tiled zone and the period.
+
+    A feature keeps its thickness while anything else can take the change: slabs at least
+    :data:`MIN_SPREAD_VOXELS` long (:func:`_long`) outside the repeat first (or a period long or
+    more: no gap between two copies is, so it is a span the repeat's region reaches into), then
+    the copies, then long slabs inside the repeat (one spacing uneven), and thin slabs
+    (``thin``: the notes say so) only after all of those; the copies take what is left (a thin
+    slab inside the repeat never does: a feature of one copy and one spacing would change).
+    """
+    if tiled is None:
+        return [
+            ([c for c in slabs if _long(c, h)], False),
+            ([c for c in slabs if not _long(c, h)], True),
+        ]
+    # slabs outside the whole repeat first (a gap inside it would make one spacing uneven), and
+    # no stretch seam within reach of a tile plane: the two blends and the seams' looks
+    # (CALM_VOXELS either side of each) overlap, and the pair shows as one larger step
+    region, tile_zone, period = tiled
+    reach = 2 * CALM_VOXELS * h
+    free = [
+        c
+        for c in slabs
+        if _disjoint(c, tile_zone)
+        and (_disjoint(c, region) or c.zone[1] - c.zone[0] >= period - h / 2)
+        and all(abs(x - y) >= reach for x in c.zone for y in tile_zone)
+    ]
+    # then what does not overlap the tiled zone: one uneven gap is worse than copies a little off
+    near = [c for c in slabs if _disjoint(c, tile_zone) and c not in free]
+    return [
+        ([c for c in free if _long(c, h)], False),
+        (None, False),
+        ([c for c in near if _long(c, h)], False),
+        ([c for c in free if not _long(c, h)], True),
+    ]
+
+
+def _thin_note(tier: list[Candidate], ed: Edit, h: float, tiled: bool) -> str:
+    """The note's tail for a stretch of a thin slab: which feature changes thickness, and why."""
+    a, b = float(ed.start), float(ed.end)
+    c = next(c for c in tier if c.zone[0] - h / 2 <= a and b <= c.zone[1] + h / 2)
+    n = round((c.zone[1] - c.zone[0]) / h)
+    copies = f" nor the copies (within {100 * COPY_TOLERANCE:.0f}%)" if tiled else ""
+    return (
+        f": a thin slab ({n} voxels, a feature's thickness changes), as no slab of "
+        f"{MIN_SPREAD_VOXELS} voxels or more{copies} could take it"
+    )
+
+
 def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
     """A tile candidate's ``(start, period)`` (world) with the period a whole number of voxels.
 
@@ -288,39 +351,45 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
                 f"from the {name} min"
             )
     if abs(left) > h / 2:
-        # slabs outside the whole repeat first (a gap inside it would make one spacing uneven)
-        region = tiles[0].region if tile_zone is not None else None
-        free = [c for c in slabs if _disjoint(c, region)]
-        if tile_zone is not None:
-            # a stretch seam within reach of a tile plane: the two blends and the seams' looks
-            # (CALM_VOXELS either side of each) overlap, and the pair shows as one larger step
-            reach = 2 * CALM_VOXELS * h
-            free = [c for c in free if all(abs(x - y) >= reach for x in c.zone for y in tile_zone)]
-        if not free and tile_zone is not None:
-            # only gaps inside the repeat: one uneven gap is worse than copies a little off
-            copies_len = float(edits[0].dest) - float(edits[0].start)
-            if abs(left) > COPY_TOLERANCE * copies_len:
-                free = [c for c in slabs if _disjoint(c, tile_zone)]
         layers = (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0]))
-        st, rest = _stretch_edits(free, left, h, name, layers)
-        for ed in st:
-            a, b = float(ed.start), float(ed.end)
-            why.append(
-                f"{name}: stretch the constant slab {_fmt(a - lo, units)}..{_fmt(b - lo, units)} "
-                f"from the {name} min by {_fmt(float(ed.dest) - b, units)}"
-                + (" (the remainder after whole periods)" if tile_zone else "")
-            )
-        edits += st
-        if abs(rest) > h / 2:
+        copies_len = float(edits[0].dest) - float(edits[0].start) if tile_zone else 0.0
+        tiled = None if tile_zone is None else (tiles[0].region, tile_zone, period)
+        within = False  # the copies take what is left within COPY_TOLERANCE
+        for tier, thin in _remainder_tiers(slabs, h, tiled):
+            if tier is None:
+                within = abs(left) <= COPY_TOLERANCE * copies_len
+                if within:
+                    break
+                continue
+            st, left = _stretch_edits(tier, left, h, name, layers)
+            for ed in st:
+                a, b = float(ed.start), float(ed.end)
+                why.append(
+                    f"{name}: stretch the constant slab {_fmt(a - lo, units)}..{_fmt(b - lo, units)} "
+                    f"from the {name} min by {_fmt(float(ed.dest) - b, units)}"
+                    + (" (the remainder after whole periods)" if tile_zone else "")
+                    + (_thin_note(tier, ed, h, tile_zone is not None) if thin else "")
+                )
+            edits += st
+            if abs(left) <= h / 2:
+                break
+        if abs(left) > h / 2:
             if tile_zone is not None:  # the copies absorb it: spacing changes a little
                 t0 = edits[0]
-                dest = float(t0.dest) + rest
+                dest = float(t0.dest) + left
                 n = tile_count(float(t0.end) - float(t0.start), dest - float(t0.start))
                 edits[0] = Edit(name, t0.start, t0.end, dest, "tile")
-                pct = 100 * rest / (dest - float(t0.start))
+                pct = 100 * left / (dest - float(t0.start))
+                it = "the rest" if len(edits) > 1 else "it"
                 why.append(
-                    f"{name}: no constant slab outside the tiled zone: its {n} copies absorb "
-                    f"{_fmt(rest, units)} (each {pct:+.1f}%)"
+                    f"{name}: no constant slab "
+                    + (
+                        f"of {MIN_SPREAD_VOXELS} voxels or more outside the tiled zone could take "
+                        f"{it} (a thinner one is a feature's thickness)"
+                        if within
+                        else f"outside the tiled zone could take {it}"
+                    )
+                    + f": its {n} copies absorb {_fmt(left, units)} (each {pct:+.1f}%)"
                 )
             else:
                 edits = [Edit(name, lo, hi, hi + change, "global")]

@@ -405,6 +405,23 @@ def complete(
     Nu0 = QN @ U[:3, :3].T
     if symmetry:
         syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
+    up_from, up_tilt = ob.up_from, 0.0
+    if syms and up_from != "floor":
+        # a mirror plane contains up: where up is not the floor's, the plane tilted across
+        # itself to fit the scan best says how far up is off across it (a base's plane leans
+        # with its legs rising to the hub, the camera with its own tilt)
+        n3, _ = sym_mod.tilted_plane(syms[0], Qu[sub], Nu0[sub], cell)
+        y = np.array([0.0, 1.0, 0.0]) - n3[1] * n3
+        y /= np.linalg.norm(y)
+        up_tilt = float(np.degrees(np.arccos(np.clip(y[1], -1.0, 1.0))))
+        if up_tilt > 0:
+            up_w = Uinv[:3, :3] @ y
+            U = _upright(up_w, frames[0].pose[:3, 2], float((Q @ up_w).min()), Q.mean(axis=0))
+            Uinv = np.linalg.inv(U)
+            Qu = _apply(U, Q)
+            Nu0 = QN @ U[:3, :3].T
+            syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
+            up_from += "+mirror"
     if syms:
         # turn the upright frame so the first mirror plane is x = 0
         p = syms[0].params
@@ -551,7 +568,8 @@ def complete(
         if found is None
         else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
         "up": U[1, :3].round(6).tolist(),
-        "up_from": ob.up_from,
+        "up_from": up_from,
+        "up_tilt_by_mirror_deg": round(up_tilt, 3),
         "symmetries": [
             {
                 "kind": "mirror",
@@ -596,7 +614,8 @@ def complete(
         "back_shift_voxels": fuse_mod.BACK_SHIFT,
         "carve_margin_voxels": CARVE_MARGIN,
         "floor_tol_m": FLOOR_TOL,
-        "up_from": ob.up_from,
+        "up_from": up_from,
+        "max_plane_tilt_deg": sym_mod.MAX_PLANE_TILT_DEG,
         "cluster_cell_m": CLUSTER_CELL,
         "symmetry_min_support": sym_mod.MIN_SUPPORT,
         "symmetry_max_violation": sym_mod.MAX_VIOLATION,

@@ -406,10 +406,10 @@ def complete(
     if symmetry:
         syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
     up_from, up_tilt = ob.up_from, 0.0
-    if syms and up_from != "floor":
-        # a mirror plane contains up: where up is not the floor's, the plane tilted across
-        # itself to fit the scan best says how far up is off across it (a base's plane leans
-        # with its legs rising to the hub, the camera with its own tilt)
+    if syms and up_from in ("base", "camera"):
+        # a mirror plane contains up: where up is no level plane's (a floor, an underside) the
+        # plane tilted across itself to fit the scan best says how far up is off across it (a
+        # base's plane leans with its legs rising to the hub, the camera with its own tilt)
         n3, _ = sym_mod.tilted_plane(syms[0], Qu[sub], Nu0[sub], cell)
         y = np.array([0.0, 1.0, 0.0]) - n3[1] * n3
         y /= np.linalg.norm(y)

@@ -133,7 +133,7 @@ def tum_completions():
     return out
 
 
-@pytest.mark.parametrize("name", ["yellow", "frame_purple"])
+@pytest.mark.parametrize("name", ["yellow", "purple", "frame_purple"])
 def test_real_tum_chairs_complete_with_a_five_legged_base(tum_completions, name):
     # the star bases are seen in part (four legs of five at most): completed, five legs
     # stand around the axis near the floor, and the object is upright on it

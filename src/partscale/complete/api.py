@@ -19,7 +19,7 @@ from ..progress import ProgressCallback, resolve
 from . import fuse as fuse_mod
 from . import symmetry as sym_mod
 from .carve import Carver, FreeGrid
-from .floor import clusters, find_floor
+from .floor import base_plane, clusters, find_floor
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
 METHOD = "carve+floor+symmetry+between+closure"
@@ -233,7 +233,9 @@ def _sym4(s: sym_mod.Symmetry) -> np.ndarray:
 class Observation:
     """What a scan says about one object: its points (N, 3) world and colours (N, 3) uint8,
     ``U`` (4, 4) world -> upright (y up, floor at 0, centred), the floor (Plane, inliers) or None,
-    the (denoised) frames, and the points' unit normals (N, 3) world, facing their camera."""
+    the (denoised) frames, the points' unit normals (N, 3) world, facing their camera, and what
+    gave up: ``"floor"``, ``"underside"`` (a level plane under the object that is no floor),
+    ``"base"`` (:func:`partscale.complete.floor.base_plane`) or ``"camera"`` (its -y axis)."""
 
     frames: list
     points: np.ndarray
@@ -241,6 +243,7 @@ class Observation:
     U: np.ndarray
     floor: object
     normals: np.ndarray
+    up_from: str = "camera"
 
 
 def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
@@ -291,10 +294,19 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         # sensor frame sees the room, and a large object framed closely (a sofa) leaves little
         # floor beside it
         support, found = found[0], None
+    up_from = "camera"
+    if found is None and support is None and cropped:
+        # no floor and no level underside (the floor cut away): the plane of what the sensor
+        # separated below the rest, a swivel chair's star base, before the camera's tilt
+        support = base_plane(P, up, CLUSTER_CELL)
+        up_from = "base" if support is not None else up_from
+    elif support is not None:
+        up_from = "underside"
     if found is not None:
         plane, _ = found
         up, floor_offset = plane.normal, plane.offset
         height = plane.height(P)
+        up_from = "floor"
     else:
         if support is not None:
             up = support.normal
@@ -309,7 +321,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = float((Q @ up).min())
     centre = Q.mean(axis=0)
     U = _upright(up, frames[0].pose[:3, 2], floor_offset, centre)
-    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]))
+    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from)
 
 
 @keyword_options
@@ -393,6 +405,23 @@ def complete(
     Nu0 = QN @ U[:3, :3].T
     if symmetry:
         syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
+    up_from, up_tilt = ob.up_from, 0.0
+    if syms and up_from in ("base", "camera"):
+        # a mirror plane contains up: where up is no level plane's (a floor, an underside) the
+        # plane tilted across itself to fit the scan best says how far up is off across it (a
+        # base's plane leans with its legs rising to the hub, the camera with its own tilt)
+        n3, _ = sym_mod.tilted_plane(syms[0], Qu[sub], Nu0[sub], cell)
+        y = np.array([0.0, 1.0, 0.0]) - n3[1] * n3
+        y /= np.linalg.norm(y)
+        up_tilt = float(np.degrees(np.arccos(np.clip(y[1], -1.0, 1.0))))
+        if up_tilt > 0:
+            up_w = Uinv[:3, :3] @ y
+            U = _upright(up_w, frames[0].pose[:3, 2], float((Q @ up_w).min()), Q.mean(axis=0))
+            Uinv = np.linalg.inv(U)
+            Qu = _apply(U, Q)
+            Nu0 = QN @ U[:3, :3].T
+            syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
+            up_from += "+mirror"
     if syms:
         # turn the upright frame so the first mirror plane is x = 0
         p = syms[0].params
@@ -539,6 +568,8 @@ def complete(
         if found is None
         else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
         "up": U[1, :3].round(6).tolist(),
+        "up_from": up_from,
+        "up_tilt_by_mirror_deg": round(up_tilt, 3),
         "symmetries": [
             {
                 "kind": "mirror",
@@ -583,6 +614,8 @@ def complete(
         "back_shift_voxels": fuse_mod.BACK_SHIFT,
         "carve_margin_voxels": CARVE_MARGIN,
         "floor_tol_m": FLOOR_TOL,
+        "up_from": up_from,
+        "max_plane_tilt_deg": sym_mod.MAX_PLANE_TILT_DEG,
         "cluster_cell_m": CLUSTER_CELL,
         "symmetry_min_support": sym_mod.MIN_SUPPORT,
         "symmetry_max_violation": sym_mod.MAX_VIOLATION,

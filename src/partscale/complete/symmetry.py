@@ -53,6 +53,8 @@ ROTATION_SLACK_DEG = 4.0
 """Degrees a rotated copy may turn further to land on the scan (:func:`_copies_scored`)."""
 MIN_COVER = 0.6
 """A symmetry must hold on slabs holding at least this fraction of the points."""
+MAX_PLANE_TILT_DEG = 10.0
+"""Degrees a vertical mirror plane may tilt across itself to fit the scan (:func:`tilted_plane`)."""
 
 
 @dataclass(frozen=True)
@@ -308,6 +310,61 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
         bands=sym.bands,
         params={**sym.params, "theta": float(t), "offset": float(d)},
     )
+
+
+def tilted_plane(
+    sym: Symmetry, points: np.ndarray, normals: np.ndarray, cell: float
+) -> tuple[np.ndarray, float]:
+    """The mirror plane ``sym`` (vertical) tilted across itself, by up to ``MAX_PLANE_TILT_DEG``,
+    to where the scan's mirrored points lie closest to scan points facing the same way (the
+    cost of :func:`_refine_plane`): a mirror plane contains up, so where up came from weaker
+    evidence than a floor its tilt measures how far up is off across the plane.
+
+    points, normals : (N, 3) upright points and their unit normals; cell : the support
+    tolerance, world units. Returns the tilted plane's unit normal (3,) and offset (its points
+    ``p`` have ``normal @ p == offset``), in the upright frame.
+    """
+    from scipy.spatial import cKDTree
+
+    P, N = np.asarray(points, np.float64), np.asarray(normals, np.float64)
+    w = sym.where(P)
+    X, XN = P[w], N[w]
+    if len(X) > REFINE_SAMPLES:
+        k = np.random.default_rng(1).choice(len(X), REFINE_SAMPLES, replace=False)
+        X, XN = X[k], XN[k]
+    tree = cKDTree(P)
+    t0, d0 = sym.params["theta"], sym.params["offset"]
+    n0 = np.array([np.cos(t0), 0.0, np.sin(t0)])
+    pivot = float(np.median(X[:, 1]))  # tilted about the plane's line at the points' mid-height
+
+    def plane(phi, d):
+        n = np.cos(phi) * n0 + np.sin(phi) * np.array([0.0, 1.0, 0.0])
+        return n, d0 * np.cos(phi) + pivot * np.sin(phi) + d
+
+    def cost(phi, d):
+        n, off = plane(phi, d)
+        A, b = np.eye(3) - 2 * np.outer(n, n), 2 * off * n
+        dist, nn = tree.query(
+            X @ A.T + b, k=REFINE_NEIGHBOURS, distance_upper_bound=cell, workers=2
+        )
+        ok = np.isfinite(dist)
+        facing = np.einsum("nj,nkj->nk", XN @ A.T, N[np.where(ok, nn, 0)]) > REFINE_FACING
+        return float(np.where(ok & facing, dist, cell).min(axis=1).mean())
+
+    phi, d = 0.0, 0.0
+    lim = np.radians(MAX_PLANE_TILT_DEG)
+    for what, steps in (
+        ("t", np.radians(np.linspace(-MAX_PLANE_TILT_DEG, MAX_PLANE_TILT_DEG, 41))),
+        ("d", np.linspace(-1.5, 1.5, 13) * cell),
+        ("t", np.radians(np.linspace(-1.0, 1.0, 9))),
+        ("d", np.linspace(-0.3, 0.3, 7) * cell),
+    ):
+        if what == "t":
+            cands = [(float(np.clip(phi + x, -lim, lim)), d) for x in steps]
+        else:
+            cands = [(phi, d + x) for x in steps]
+        phi, d = min(cands, key=lambda c: cost(*c))
+    return plane(phi, d)
 
 
 def _canonical(theta: float, offset: float) -> tuple[float, float]:

@@ -36,14 +36,20 @@ BETWEEN_CLOSING = 2
 """Voxels: radius of the closing that seals the channels between filled segments."""
 BETWEEN_FACING = 0.5
 """Cosine below which two normals face opposite ways."""
-SLAB_SIDE = 0.3
-"""|Cosine| below which a surface point's normal is perpendicular to another's (a side face of
-the slab the other's face tops)."""
+SLAB_FLAT = 0.9
+"""|Cosine| between a point's normal and the nearest grid axis above which it lies on a flat
+face of a slab (a face along the grid's axes: a seat's top, a leg's side)."""
 SLAB_GAP = 2
 """Voxels of a side face without points (sensor holes, dropped edge pixels) a walk steps over."""
 SLAB_ABOVE = 3
 """Voxels in front of a point where a side face means a junction, not an edge (beyond the two
 voxels the side faces are widened by)."""
+SLAB_AGREE = 0.5
+"""Share of the nearest edge measurements within a voxel of the most common one that makes a
+thickness sure (a flat slab's edges agree; a curved cushion's do not)."""
+SLAB_EDGE_SHARE = 0.05
+"""Share of the points facing one way that must measure at an edge for that way to have a
+thickness (a square face L voxels wide has about 8/L of its points within its edge band)."""
 SLAB_NEIGHBOURS = 32
 """Edge measurements of a face's thickness whose most common value carries it across the face."""
 BACK_SHIFT = 0.4
@@ -115,9 +121,9 @@ def fuse(
             shape
         )
         between = _between(points, normals, idx, origin, h, shape, free_all)
-        slab = _slab(points, normals, idx, origin, h, shape, free_all)
-        within |= between | slab
-        within_closure |= slab
+        sure, unsure = _slab(points, normals, idx, origin, h, shape, free_all)
+        within |= between | sure | unsure
+        within_closure |= sure
     near = np.flatnonzero(within.ravel())
     centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
     world = centres @ R.T.astype(np.float32) + t.astype(np.float32)
@@ -336,8 +342,15 @@ def _slab(points, normals, idx, origin, h, shape, free) -> np.ndarray:
     axis = np.argmax(np.abs(normals), axis=1)
     neg = normals[np.arange(len(normals)), axis] < 0
     cls = (2 * axis + neg).astype(np.int64)
+    # flat faces along the grid's axes only: on a curved surface the dominant axis turns
+    # gradually, and its classes meet at no edge
+    flat = np.abs(normals[np.arange(len(normals)), axis]) >= SLAB_FLAT
     bits = np.zeros(shape, np.uint8)
-    np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), (1 << cls).astype(np.uint8))
+    f = idx[flat]
+    np.bitwise_or.at(bits, (f[:, 0], f[:, 1], f[:, 2]), (1 << cls[flat]).astype(np.uint8))
+    every = np.zeros(shape, np.uint8)
+    every[idx[:, 0], idx[:, 1], idx[:, 2]] = 1
+    every = _dilate_bits(_dilate_bits(every)) > 0
     near = _dilate_bits(bits)
     dil = _dilate_bits(near)
     side = ((1 << np.arange(6))[None, :] * (np.arange(6)[None, :] // 2 != axis[:, None])).sum(1)
@@ -348,13 +361,16 @@ def _slab(points, normals, idx, origin, h, shape, free) -> np.ndarray:
     n_axis = np.zeros((len(points), 3))
     n_axis[np.arange(len(points)), axis] = np.where(neg, -1.0, 1.0)
     depth = np.zeros(len(points), np.int64)
-    _slab_measure(p, n_axis, side.astype(np.uint8), near, dil, int(BETWEEN_VOXELS), depth)
+    _slab_measure(p, n_axis, side.astype(np.uint8), near, dil, every, int(BETWEEN_VOXELS), depth)
     # thickness at every point, from the nearest edge measurements facing its way
     t = np.zeros(len(points))
+    agree = np.zeros(len(points), bool)
     for c in range(6):
         m = cls == c
         e = m & (depth >= 1)
-        if e.sum() == 0:
+        # a box's faces have edges all round (a seat's top: 14 % of its points measure); a
+        # rounded cushion gives a few scattered walks (0.3-2 %), no thickness
+        if e.sum() < SLAB_EDGE_SHARE * m.sum() or e.sum() == 0:
             continue
         k = min(SLAB_NEIGHBOURS, int(e.sum()))
         dist, nn = cKDTree(p[e]).query(p[m], k=k, workers=2)
@@ -363,12 +379,19 @@ def _slab(points, normals, idx, origin, h, shape, free) -> np.ndarray:
         # holes at an edge shorten a few
         votes = np.zeros((int(m.sum()), int(BETWEEN_VOXELS) + 1), np.int32)
         np.add.at(votes, (np.repeat(np.arange(int(m.sum())), k), depth[e][nn].ravel()), 1)
-        mode = np.argmax(votes, axis=1).astype(np.float64)
+        mode = np.argmax(votes, axis=1)
+        cum = np.concatenate([np.zeros((len(votes), 1), np.int32), np.cumsum(votes, 1)], 1)
+        lo_, hi_ = np.maximum(mode - 1, 0), np.minimum(mode + 2, votes.shape[1])
+        share = (cum[np.arange(len(votes)), hi_] - cum[np.arange(len(votes)), lo_]) / k
         far = np.asarray(dist).reshape(int(m.sum()), k)[:, 0] > BETWEEN_VOXELS
         t[m] = np.where(far, 0.0, mode)
-    out = np.zeros(shape, bool)
-    _carry(p, n_axis, t, free, out)
-    return out
+        agree[m] = share >= SLAB_AGREE
+    t[~flat] = 0.0
+    sure = np.zeros(shape, bool)
+    _carry(p[agree], n_axis[agree], t[agree], free, sure)
+    unsure = np.zeros(shape, bool)
+    _carry(p[~agree], n_axis[~agree], t[~agree], free, unsure)
+    return sure, unsure
 
 
 def _dilate_bits(bits: np.ndarray) -> np.ndarray:
@@ -386,7 +409,7 @@ def _dilate_bits(bits: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True, parallel=True)
-def _slab_measure(p, n, side, near, bits, reach, depth):
+def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
     X, Y, Z = bits.shape
     for i in numba.prange(p.shape[0]):
         last = 0
@@ -414,6 +437,10 @@ def _slab_measure(p, n, side, near, bits, reach, depth):
             if bits[a, b, c] & side[i]:
                 last = s
             elif s - last > SLAB_GAP:
+                # where the side face ends but the surface goes on (it rounds into a cushion's
+                # underside, turned off the axes), the walk measured the flat band, not the part
+                if anyb[a, b, c]:
+                    last = 0
                 break
         # the side face's last voxel lies up to two voxels (the widening) past its points
         depth[i] = max(last - 2, 0)

@@ -72,17 +72,20 @@ class Frame:
 
 
 def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
-    """The frame with its depth smoothed: a normalised Gaussian (``sigma`` pixels) over the valid
-    pixels on the same side of any depth discontinuity (within ``DENOISE_JUMP`` of the pixel's
-    own depth), so no reading is pulled across an edge."""
+    """The frame with its depth smoothed: a plane fitted (least squares, Gaussian weights of
+    ``sigma`` pixels) to the valid pixels around each one on the same side of any depth
+    discontinuity (within ``DENOISE_JUMP`` of its own depth), read at the pixel. No reading is
+    pulled across an edge, and none along a slope towards the side its neighbours lie on (at an
+    edge, a weighted mean of one side would be)."""
     d = frame.depth.astype(np.float64)
     valid = d > 0
     r = int(np.ceil(4 * sigma))  # scipy's gaussian_filter reach
     H, W = d.shape
     pad_d = np.pad(d, r)
     tol = DENOISE_JUMP * np.maximum(d, 1e-3)
-    num = np.zeros_like(d)
-    den = np.zeros_like(d)
+    # weighted moments of (1, dx, dy) and of the depth against them
+    m = np.zeros((6, H, W))
+    b = np.zeros((3, H, W))
     for dy in range(-r, r + 1):
         for dx in range(-r, r + 1):
             g = np.exp(-(dx * dx + dy * dy) / (2 * sigma * sigma))
@@ -90,9 +93,18 @@ def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
             # a neighbour across a jump (the floor behind a seat's edge) is another surface:
             # blending it would hang the edge's readings in the space between the two
             w = g * ((nb > 0) & (np.abs(nb - d) < tol))
-            num += w * nb
-            den += w
-    out = np.where(valid, num / np.maximum(den, 1e-12), 0.0).astype(np.float32)
+            m += w * np.array([1.0, dx, dy, dx * dx, dx * dy, dy * dy])[:, None, None]
+            b += w * nb * np.array([1.0, dx, dy])[:, None, None]
+    A = np.stack(
+        [np.stack([m[i] for i in row], -1) for row in ((0, 1, 2), (1, 3, 4), (2, 4, 5))], -2
+    )
+    mean = b[0] / np.maximum(m[0], 1e-12)
+    det = np.linalg.det(A)
+    # a plane needs neighbours spread both ways (not a one-pixel line): else the mean
+    ok = valid & (det > 1e-3 * np.maximum(m[0], 1e-12) ** 3)
+    fit = mean.copy()
+    fit[ok] = np.linalg.solve(A[ok], np.moveaxis(b, 0, -1)[ok][..., None])[:, 0, 0]
+    out = np.where(valid, fit, 0.0).astype(np.float32)
     return Frame(out, frame.color, frame.K, frame.pose, frame.cropped)
 
 

@@ -377,8 +377,10 @@ def _slab(points, normals, idx, origin, h, shape, free) -> np.ndarray:
         nn = nn.reshape(int(m.sum()), k)
         # the most common thickness: legs flush below an edge lengthen a few walks, sensor
         # holes at an edge shorten a few
-        votes = np.zeros((int(m.sum()), int(BETWEEN_VOXELS) + 1), np.int32)
-        np.add.at(votes, (np.repeat(np.arange(int(m.sum())), k), depth[e][nn].ravel()), 1)
+        nb = int(BETWEEN_VOXELS) + 1
+        row = np.repeat(np.arange(int(m.sum())), k)
+        votes = np.bincount(row * nb + depth[e][nn].ravel(), minlength=int(m.sum()) * nb)
+        votes = votes.reshape(int(m.sum()), nb)
         mode = np.argmax(votes, axis=1)
         cum = np.concatenate([np.zeros((len(votes), 1), np.int32), np.cumsum(votes, 1)], 1)
         lo_, hi_ = np.maximum(mode - 1, 0), np.minimum(mode + 2, votes.shape[1])

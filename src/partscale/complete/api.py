@@ -22,7 +22,7 @@ from .carve import Carver, FreeGrid
 from .floor import base_plane, clusters, find_floor
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
-METHOD = "carve+floor+symmetry+between+closure"
+METHOD = "carve+floor+symmetry+between+slab+closure"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
 CLUSTER_CELL = 0.03
@@ -612,6 +612,10 @@ def complete(
         "between_reach_voxels": fuse_mod.BETWEEN_VOXELS,
         "between_closing_voxels": fuse_mod.BETWEEN_CLOSING,
         "back_shift_voxels": fuse_mod.BACK_SHIFT,
+        "slab_flat_cosine": fuse_mod.SLAB_FLAT,
+        "slab_neighbours": fuse_mod.SLAB_NEIGHBOURS,
+        "slab_agree": fuse_mod.SLAB_AGREE,
+        "slab_edge_share": fuse_mod.SLAB_EDGE_SHARE,
         "carve_margin_voxels": CARVE_MARGIN,
         "floor_tol_m": FLOOR_TOL,
         "up_from": up_from,

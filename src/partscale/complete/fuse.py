@@ -36,6 +36,22 @@ BETWEEN_CLOSING = 2
 """Voxels: radius of the closing that seals the channels between filled segments."""
 BETWEEN_FACING = 0.5
 """Cosine below which two normals face opposite ways."""
+SLAB_FLAT = 0.9
+"""|Cosine| between a point's normal and the nearest grid axis above which it lies on a flat
+face of a slab (a face along the grid's axes: a seat's top, a leg's side)."""
+SLAB_GAP = 2
+"""Voxels of a side face without points (sensor holes, dropped edge pixels) a walk steps over."""
+SLAB_ABOVE = 3
+"""Voxels in front of a point where a side face means a junction, not an edge (beyond the two
+voxels the side faces are widened by)."""
+SLAB_AGREE = 0.5
+"""Share of the nearest edge measurements within a voxel of the most common one that makes a
+thickness sure (a flat slab's edges agree; a curved cushion's do not)."""
+SLAB_EDGE_SHARE = 0.05
+"""Share of the points facing one way that must measure at an edge for that way to have a
+thickness (a square face L voxels wide has about 8/L of its points within its edge band)."""
+SLAB_NEIGHBOURS = 32
+"""Edge measurements of a face's thickness whose most common value carries it across the face."""
 BACK_SHIFT = 0.4
 """Voxels by which an unobserved boundary of the solid is drawn in (below 0.5: no voxel
 changes side, so no thin sheet loses its voxels)."""
@@ -105,7 +121,9 @@ def fuse(
             shape
         )
         between = _between(points, normals, idx, origin, h, shape, free_all)
-        within |= between
+        sure, unsure = _slab(points, normals, idx, origin, h, shape, free_all)
+        within |= between | sure | unsure
+        within_closure |= sure
     near = np.flatnonzero(within.ravel())
     centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
     world = centres @ R.T.astype(np.float32) + t.astype(np.float32)
@@ -306,6 +324,143 @@ def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
         out,
     )
     return out
+
+
+def _slab(points, normals, idx, origin, h, shape, free) -> np.ndarray:
+    """(X, Y, Z) bool: each face carried in to the thickness its side faces show.
+
+    Where a face ends at a convex edge, the face perpendicular to it there (a seat's front below
+    its top, a leg's side beside its front) runs in from the edge as far as the part is thick: a
+    walk from an edge point along its face's axis, through voxels within two of points facing
+    sideways (gaps of ``SLAB_GAP`` stepped over), measures it. A point with a side face
+    ``SLAB_ABOVE`` voxels in front of it stands at a junction (a back rising from a seat), one
+    with none next to it inside the face: neither measures. Every point takes the most common
+    of its ``SLAB_NEIGHBOURS`` nearest measurements facing the same way (a leg flush below an
+    edge lengthens a few, holes at an edge shorten a few) and is carried in along its face's
+    axis to that depth through voxels no camera saw through: the thickness of a slab whose
+    underside no camera saw, where the between-fill finds no opposite surface."""
+    axis = np.argmax(np.abs(normals), axis=1)
+    neg = normals[np.arange(len(normals)), axis] < 0
+    cls = (2 * axis + neg).astype(np.int64)
+    # flat faces along the grid's axes only: on a curved surface the dominant axis turns
+    # gradually, and its classes meet at no edge
+    flat = np.abs(normals[np.arange(len(normals)), axis]) >= SLAB_FLAT
+    bits = np.zeros(shape, np.uint8)
+    f = idx[flat]
+    np.bitwise_or.at(bits, (f[:, 0], f[:, 1], f[:, 2]), (1 << cls[flat]).astype(np.uint8))
+    every = np.zeros(shape, np.uint8)
+    every[idx[:, 0], idx[:, 1], idx[:, 2]] = 1
+    every = _dilate_bits(_dilate_bits(every)) > 0
+    near = _dilate_bits(bits)
+    dil = _dilate_bits(near)
+    side = ((1 << np.arange(6))[None, :] * (np.arange(6)[None, :] // 2 != axis[:, None])).sum(1)
+    p = ((points - origin) / h).astype(np.float64)
+    # measured and carried along the face's axis: an edge point's own normal leans off the face
+    # (its neighbours span the edge), would walk off the side face it measures, and carried
+    # far, would drift off the slab (under a table's top)
+    n_axis = np.zeros((len(points), 3))
+    n_axis[np.arange(len(points)), axis] = np.where(neg, -1.0, 1.0)
+    depth = np.zeros(len(points), np.int64)
+    _slab_measure(p, n_axis, side.astype(np.uint8), near, dil, every, int(BETWEEN_VOXELS), depth)
+    # thickness at every point, from the nearest edge measurements facing its way
+    t = np.zeros(len(points))
+    agree = np.zeros(len(points), bool)
+    for c in range(6):
+        m = cls == c
+        e = m & (depth >= 1)
+        # a box's faces have edges all round (a seat's top: 14 % of its points measure); a
+        # rounded cushion gives a few scattered walks (0.3-2 %), no thickness
+        if e.sum() < SLAB_EDGE_SHARE * m.sum() or e.sum() == 0:
+            continue
+        k = min(SLAB_NEIGHBOURS, int(e.sum()))
+        dist, nn = cKDTree(p[e]).query(p[m], k=k, workers=2)
+        nn = nn.reshape(int(m.sum()), k)
+        # the most common thickness: legs flush below an edge lengthen a few walks, sensor
+        # holes at an edge shorten a few
+        nb = int(BETWEEN_VOXELS) + 1
+        row = np.repeat(np.arange(int(m.sum())), k)
+        votes = np.bincount(row * nb + depth[e][nn].ravel(), minlength=int(m.sum()) * nb)
+        votes = votes.reshape(int(m.sum()), nb)
+        mode = np.argmax(votes, axis=1)
+        cum = np.concatenate([np.zeros((len(votes), 1), np.int32), np.cumsum(votes, 1)], 1)
+        lo_, hi_ = np.maximum(mode - 1, 0), np.minimum(mode + 2, votes.shape[1])
+        share = (cum[np.arange(len(votes)), hi_] - cum[np.arange(len(votes)), lo_]) / k
+        far = np.asarray(dist).reshape(int(m.sum()), k)[:, 0] > BETWEEN_VOXELS
+        t[m] = np.where(far, 0.0, mode)
+        agree[m] = share >= SLAB_AGREE
+    t[~flat] = 0.0
+    sure = np.zeros(shape, bool)
+    _carry(p[agree], n_axis[agree], t[agree], free, sure)
+    unsure = np.zeros(shape, bool)
+    _carry(p[~agree], n_axis[~agree], t[~agree], free, unsure)
+    return sure, unsure
+
+
+def _dilate_bits(bits: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) uint8: the OR of each voxel's 3x3x3 neighbourhood (separable: per axis)."""
+    dil = bits
+    for ax in range(3):
+        d = dil.copy()
+        lo = [slice(None)] * 3
+        hi = [slice(None)] * 3
+        lo[ax], hi[ax] = slice(None, -1), slice(1, None)
+        d[tuple(lo)] |= dil[tuple(hi)]
+        d[tuple(hi)] |= dil[tuple(lo)]
+        dil = d
+    return dil
+
+
+@numba.njit(cache=True, parallel=True)
+def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
+    X, Y, Z = bits.shape
+    for i in numba.prange(p.shape[0]):
+        last = 0
+        # a face rising beside the point (a junction, the back above a seat) is no edge
+        a = int(np.rint(p[i, 0] + n[i, 0] * SLAB_ABOVE))
+        b = int(np.rint(p[i, 1] + n[i, 1] * SLAB_ABOVE))
+        c = int(np.rint(p[i, 2] + n[i, 2] * SLAB_ABOVE))
+        if 0 <= a < X and 0 <= b < Y and 0 <= c < Z and bits[a, b, c] & side[i]:
+            depth[i] = 0
+            continue
+        # and a point not next to a side face is no edge either (its walk would only graze it)
+        a = int(np.rint(p[i, 0] - n[i, 0]))
+        b = int(np.rint(p[i, 1] - n[i, 1]))
+        c = int(np.rint(p[i, 2] - n[i, 2]))
+        if not (0 <= a < X and 0 <= b < Y and 0 <= c < Z and near[a, b, c] & side[i]):
+            depth[i] = 0
+            continue
+        for s in range(1, reach + 1):
+            a = int(np.rint(p[i, 0] - n[i, 0] * s))
+            b = int(np.rint(p[i, 1] - n[i, 1] * s))
+            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
+                break
+            # along the side face, not through it: its voxels may be seen free by a hair
+            if bits[a, b, c] & side[i]:
+                last = s
+            elif s - last > SLAB_GAP:
+                # where the side face ends but the surface goes on (it rounds into a cushion's
+                # underside, turned off the axes), the walk measured the flat band, not the part
+                if anyb[a, b, c]:
+                    last = 0
+                break
+        # the side face's last voxel lies up to two voxels (the widening) past its points
+        depth[i] = max(last - 2, 0)
+
+
+@numba.njit(cache=True, parallel=True)
+def _carry(p, n, t, free, out):
+    X, Y, Z = free.shape
+    for i in numba.prange(p.shape[0]):
+        steps = int(2 * t[i])
+        for k in range(1, steps + 1):
+            s = 0.5 * k
+            a = int(np.rint(p[i, 0] - n[i, 0] * s))
+            b = int(np.rint(p[i, 1] - n[i, 1] * s))
+            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z or free[a, b, c]:
+                break
+            out[a, b, c] = True
 
 
 @numba.njit(cache=True, parallel=True)

@@ -326,7 +326,7 @@ def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
     return out
 
 
-def _slab(points, normals, idx, origin, h, shape, free) -> np.ndarray:
+def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.ndarray]:
     """(X, Y, Z) bool: each face carried in to the thickness its side faces show.
 
     Where a face ends at a convex edge, the face perpendicular to it there (a seat's front below

@@ -327,7 +327,7 @@ def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
 
 
 def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.ndarray]:
-    """(X, Y, Z) bool: each face carried in to the thickness its side faces show.
+    """Two (X, Y, Z) bool, sure and unsure: each face carried in to the thickness its side faces show.
 
     Where a face ends at a convex edge, the face perpendicular to it there (a seat's front below
     its top, a leg's side beside its front) runs in from the edge as far as the part is thick: a

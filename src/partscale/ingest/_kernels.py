@@ -677,6 +677,25 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
                     rgb[i, j, k, c] = rgb[si, sj, sk, c]
 
 
+@nb.njit(cache=True, inline="always")
+def _bilinear(texture, u, v, hgt, wid, c):
+    """Bilinear, repeat-wrapped value of channel ``c`` of ``texture`` at ``(u, v)`` (float64;
+    the callers round it to float32). See :func:`bilinear_repeat`."""
+    x = u * wid - 0.5
+    y = (1.0 - v) * hgt - 0.5
+    x0f = np.floor(x)
+    y0f = np.floor(y)
+    fx = np.float32(x - x0f)
+    fy = np.float32(y - y0f)
+    x0 = int(x0f) % wid
+    y0 = int(y0f) % hgt
+    x1 = (x0 + 1) % wid
+    y1 = (y0 + 1) % hgt
+    top = texture[y0, x0, c] * (1 - fx) + texture[y0, x1, c] * fx
+    bot = texture[y1, x0, c] * (1 - fx) + texture[y1, x1, c] * fx
+    return top * (1 - fy) + bot * fy
+
+
 @nb.njit(cache=True, parallel=True)
 def bilinear_repeat(texture, uv):
     """Bilinear, repeat-wrapped lookup of ``texture`` (H, W, C) float32 at ``uv`` (N, 2).
@@ -687,18 +706,46 @@ def bilinear_repeat(texture, uv):
     hgt, wid, nc = texture.shape
     out = np.empty((uv.shape[0], nc), np.float32)
     for n in nb.prange(uv.shape[0]):
-        x = uv[n, 0] * wid - 0.5
-        y = (1.0 - uv[n, 1]) * hgt - 0.5
-        x0f = np.floor(x)
-        y0f = np.floor(y)
-        fx = np.float32(x - x0f)
-        fy = np.float32(y - y0f)
-        x0 = int(x0f) % wid
-        y0 = int(y0f) % hgt
-        x1 = (x0 + 1) % wid
-        y1 = (y0 + 1) % hgt
         for c in range(nc):
-            top = texture[y0, x0, c] * (1 - fx) + texture[y0, x1, c] * fx
-            bot = texture[y1, x0, c] * (1 - fx) + texture[y1, x1, c] * fx
-            out[n, c] = top * (1 - fy) + bot * fy
+            out[n, c] = _bilinear(texture, uv[n, 0], uv[n, 1], hgt, wid, c)
     return out
+
+
+@nb.njit(cache=True, parallel=True)
+def corner_mix(ids, bary, corner):
+    """(N, D) float64 ``sum_c bary[n, c] * corner[ids[n], c]``, summed in the order c = 0, 1, 2
+    (``np.einsum("nc,ncd->nd", bary, corner[ids])`` bit for bit, without the gather).
+
+    ids : (N,) int64; bary : (N, 3) float64; corner : (T, 3, D) float32 or float64.
+    """
+    n = ids.shape[0]
+    nd = corner.shape[2]
+    out = np.empty((n, nd), np.float64)
+    for q in nb.prange(n):
+        t = ids[q]
+        for d in range(nd):
+            acc = 0.0
+            for c in range(3):
+                acc += bary[q, c] * corner[t, c, d]
+            out[q, d] = acc
+    return out
+
+
+@nb.njit(cache=True, parallel=True)
+def shade(mats, m, factor, texture, uv, lin):
+    """``lin[n] *= factor * texture(uv[n])`` (float32) where ``mats[n] == m`` (in place).
+
+    mats : (N,) int32 material per point; factor : (3,) float32; texture : (H, W, 3) float32,
+    or an empty array for none (factor only); uv : (N, 2) float64 (read with a texture);
+    lin : (N, 3) float32 linear colour. The texture is sampled as :func:`bilinear_repeat`.
+    """
+    hgt, wid = texture.shape[0], texture.shape[1]
+    textured = texture.size > 0
+    for n in nb.prange(mats.shape[0]):
+        if mats[n] != m:
+            continue
+        for c in range(3):
+            col = factor[c]
+            if textured:
+                col = col * np.float32(_bilinear(texture, uv[n, 0], uv[n, 1], hgt, wid, c))
+            lin[n, c] *= col

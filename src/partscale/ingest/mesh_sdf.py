@@ -528,7 +528,7 @@ def from_mesh(
 
     report(0.75, "colour from the texture")
     w_b = win.ravel()[band_idx]
-    pbary = np.einsum("nc,ncd->nd", bary, corner_bary[w_b])
+    pbary = _kernels.corner_mix(w_b.astype(np.int64), bary, corner_bary)
     band_rgb = mesh.color_at(parent[w_b], pbary)
     rgb = np.empty((*shape, 3), np.uint8)
     rgb.reshape(-1, 3)[band_idx] = band_rgb

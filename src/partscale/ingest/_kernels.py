@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
+from llvmlite import ir
+from numba.extending import intrinsic
 
 from .._kernels import closest_on_triangle
 
@@ -39,7 +41,7 @@ def _index_range(tri, a, origin, h, radius, n):
     )
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, parallel=True, nogil=True)
 def band_distance(
     tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid, root=False, fresh=False
 ):
@@ -72,6 +74,10 @@ def band_distance(
     nx, ny, nz = dist2.shape
     n_slabs = slab_ptr.shape[0] - 1
     r2 = radius * radius
+    inf = np.inf
+    # far above the rounding of a squared distance at these coordinates (~1e-16 of the
+    # coordinates' magnitude times the radius)
+    tol = 1e-6 * h * h
     for s in nb.prange(n_slabs):
         xs0 = s * slab_width
         xs1 = min(nx - 1, xs0 + slab_width - 1)
@@ -98,10 +104,19 @@ def band_distance(
                 nxv /= nn
                 nyv /= nn
                 nzv /= nn
+            box_lo_x = min(tri[0, 0], tri[1, 0], tri[2, 0])
+            box_hi_x = max(tri[0, 0], tri[1, 0], tri[2, 0])
+            box_lo_y = min(tri[0, 1], tri[1, 1], tri[2, 1])
+            box_hi_y = max(tri[0, 1], tri[1, 1], tri[2, 1])
+            box_lo_z = min(tri[0, 2], tri[1, 2], tri[2, 2])
+            box_hi_z = max(tri[0, 2], tri[1, 2], tri[2, 2])
             for i in range(i_lo, i_hi + 1):
                 px = origin[0] + i * h
+                dx = max(box_lo_x - px, 0.0, px - box_hi_x)
                 for j in range(j_lo, j_hi + 1):
                     py = origin[1] + j * h
+                    dy = max(box_lo_y - py, 0.0, py - box_hi_y)
+                    dxy2 = dx * dx + dy * dy
                     k0 = k_lo
                     k1 = k_hi
                     if planar:
@@ -121,8 +136,32 @@ def band_distance(
                             k0 = k0 + max(0, int(np.ceil(ka)))
                         elif abs(pd0) > radius:
                             continue
+                    # and the run of k whose box distance can be within the radius
+                    rem = r2 * (1.0 + 1e-6) + tol - dxy2
+                    if rem < 0.0:
+                        continue
+                    rz = np.sqrt(rem)
+                    k0 = max(k0, int(np.ceil((box_lo_z - rz - origin[2]) / h)))
+                    k1 = min(k1, int(np.floor((box_hi_z + rz - origin[2]) / h)))
+                    pxy = 0.0
+                    if planar:
+                        pxy = (px - tri[0, 0]) * nxv + (py - tri[0, 1]) * nyv
                     for k in range(k0, k1 + 1):
                         pz = origin[2] + k * h
+                        # a lower bound of the distance (to the box, to the plane): where it
+                        # is surely no less than the running minimum, the exact distance
+                        # cannot replace it (the test below is strict), so it is skipped
+                        cur = dist2[i, j, k]
+                        if root:
+                            cur = cur * cur
+                        if cur < inf:
+                            dz = max(box_lo_z - pz, 0.0, pz - box_hi_z)
+                            lb = dxy2 + dz * dz
+                            if planar:
+                                pd = pxy + (pz - tri[0, 2]) * nzv
+                                lb = max(lb, pd * pd)
+                            if lb > cur * (1.0 + 1e-6) + tol:
+                                continue
                         d2, _u, _v, _w = _closest_bary(px, py, pz, tri)
                         if root:
                             if d2 <= r2:
@@ -731,21 +770,46 @@ def corner_mix(ids, bary, corner):
     return out
 
 
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` with one rounding (LLVM's ``llvm.fma``), float64."""
+    sig = nb.types.float64(nb.types.float64, nb.types.float64, nb.types.float64)
+
+    def codegen(context, builder, signature, args):
+        d = ir.DoubleType()
+        fn = builder.module.declare_intrinsic("llvm.fma", [d], ir.FunctionType(d, [d, d, d]))
+        return builder.call(fn, args)
+
+    return sig, codegen
+
+
 @nb.njit(cache=True, parallel=True)
-def shade(mats, m, factor, texture, uv, lin):
+def shade(mats, m, factor, texture, uv, transform, lin):
     """``lin[n] *= factor * texture(uv[n])`` (float32) where ``mats[n] == m`` (in place).
 
     mats : (N,) int32 material per point; factor : (3,) float32; texture : (H, W, 3) float32,
     or an empty array for none (factor only); uv : (N, 2) float64 (read with a texture);
-    lin : (N, 3) float32 linear colour. The texture is sampled as :func:`bilinear_repeat`.
+    transform : (2, 3) float64 UV affine applied first, or an empty array for none; lin :
+    (N, 3) float32 linear colour. The texture is sampled as :func:`bilinear_repeat`. The
+    affine's row products are ``fma(v, a_r1, u * a_r0) + t_r``: what numpy's ``uv @ A.T + t``
+    gives through BLAS with fused multiply-adds (this machine's OpenBLAS), bit for bit, at a
+    fraction of its cost (its threads are slow on two rows' worth of work).
     """
     hgt, wid = texture.shape[0], texture.shape[1]
     textured = texture.size > 0
+    affine = transform.size > 0
     for n in nb.prange(mats.shape[0]):
         if mats[n] != m:
             continue
+        u = uv[n, 0] if textured else 0.0
+        v = uv[n, 1] if textured else 0.0
+        if textured and affine:
+            u, v = (
+                _fma(v, transform[0, 1], u * transform[0, 0]) + transform[0, 2],
+                _fma(v, transform[1, 1], u * transform[1, 0]) + transform[1, 2],
+            )
         for c in range(3):
             col = factor[c]
             if textured:
-                col = col * np.float32(_bilinear(texture, uv[n, 0], uv[n, 1], hgt, wid, c))
+                col = col * np.float32(_bilinear(texture, u, v, hgt, wid, c))
             lin[n, c] *= col

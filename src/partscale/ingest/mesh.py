@@ -107,25 +107,24 @@ class ColoredMesh:
         tri_ids = np.ascontiguousarray(tri_ids, dtype=np.int64)
         bary = np.ascontiguousarray(bary, dtype=np.float64)
         # numba passes over the points (the import colours millions): each step's arithmetic
-        # is the plain numpy one's (einsum's order, float32 products), bit for bit
+        # is the plain numpy one's (einsum's order, float32 products, the UV affine as BLAS
+        # computes it), bit for bit
         if self.corner_color is not None:
             lin = _kernels.corner_mix(tri_ids, bary, self.corner_color).astype(np.float32)
         else:
             lin = np.ones((len(tri_ids), 3), np.float32)
         mats = self.face_material[tri_ids]
         uv = None if self.uv is None else _kernels.corner_mix(tri_ids, bary, self.uv)
-        no_texture, no_uv = np.zeros((0, 0, 3), np.float32), np.zeros((0, 2))
+        none = np.zeros((0, 0, 3), np.float32)
         for m_id in np.flatnonzero(np.bincount(mats, minlength=len(self.materials))):
             mat = self.materials[m_id]
-            tex = no_texture
+            tex, tf = none, np.zeros((0, 3))
             if mat.texture is not None and uv is not None:
                 tex = np.ascontiguousarray(mat.texture, np.float32)
                 if mat.uv_transform is not None:
-                    # numpy's matmul (BLAS, fused multiply-adds) on exactly these rows, as before
-                    sel = np.flatnonzero(mats == m_id)
-                    uv[sel] = uv[sel] @ mat.uv_transform[:, :2].T + mat.uv_transform[:, 2]
+                    tf = np.ascontiguousarray(mat.uv_transform, np.float64)
             factor = np.ascontiguousarray(mat.factor, np.float32)
-            _kernels.shade(mats, m_id, factor, tex, uv if uv is not None else no_uv, lin)
+            _kernels.shade(mats, m_id, factor, tex, uv if uv is not None else bary, tf, lin)
         return linear_to_srgb8(lin)
 
 

@@ -35,6 +35,7 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -451,11 +452,17 @@ def from_mesh(
     thick = math.sqrt(3) / 2 * h
 
     report(0.15, "exact distances near the surface")
-    # closed pieces thinner than the grid can hold (shelves, back panels) would vanish or get
-    # holes: their faces also join the sheets, offset so that the piece is 2t thick
-    offset = np.zeros(len(sub))
-    offset[sheet] = thick
-    thickness = _thickness(sub[boundary], 0.01 * h)
+    tris_b = np.ascontiguousarray(sub[boundary])
+    # the boundary's band needs only the classes: its numba kernel (no GIL) runs on a thread
+    # of its own while this one casts the thickness rays (serial, embree)
+    with ThreadPoolExecutor(1) as pool:
+        band_b = pool.submit(_band, tris_b, origin, h, shape, BAND_VOXELS * h)
+        # closed pieces thinner than the grid can hold (shelves, back panels) would vanish or
+        # get holes: their faces also join the sheets, offset so that the piece is 2t thick
+        offset = np.zeros(len(sub))
+        offset[sheet] = thick
+        thickness = _thickness(tris_b, 0.01 * h)
+        d2_b, id_b = band_b.result()
     thin = boundary[thickness < 2 * thick]
     offset[thin] = thick - thickness[thickness < 2 * thick] / 2
     n_open = len(np.unique(parent[sheet]))
@@ -472,9 +479,7 @@ def from_mesh(
             "below_one_voxel_triangles": len(np.unique(parent[boundary[thickness < h]])),
         }
     sheet = np.concatenate([sheet, thin])
-    tris_b = np.ascontiguousarray(sub[boundary])
     tris_s = np.ascontiguousarray(sub[sheet])
-    d2_b, id_b = _band(tris_b, origin, h, shape, BAND_VOXELS * h)
     d_b = np.sqrt(d2_b, out=d2_b)
     del d2_b
     report(0.3, "thickening open sheets")

@@ -43,7 +43,18 @@ def _index_range(tri, a, origin, h, radius, n):
 
 @nb.njit(cache=True, parallel=True, nogil=True)
 def band_distance(
-    tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid, root=False, fresh=False
+    tris,
+    slab_ptr,
+    slab_tris,
+    slab_width,
+    origin,
+    h,
+    radius,
+    dist2,
+    tid,
+    root=False,
+    fresh=False,
+    finish_root=False,
 ):
     """Minimum squared distance to ``tris`` for voxels within ``radius`` of some triangle.
 
@@ -70,6 +81,9 @@ def band_distance(
     fresh : bool
         ``dist2`` and ``tid`` are uninitialised: each slab first sets its layers to inf and -1
         (the first touch of the grid's pages, spread over the threads).
+    finish_root : bool
+        Each slab ends with its layers' square roots (float32, as ``np.sqrt``): ``dist2``
+        leaves as distances.
     """
     nx, ny, nz = dist2.shape
     n_slabs = slab_ptr.shape[0] - 1
@@ -171,6 +185,11 @@ def band_distance(
                         elif d2 <= r2 and d2 < dist2[i, j, k]:
                             dist2[i, j, k] = d2
                             tid[i, j, k] = t
+        if finish_root:
+            for i in range(xs0, xs1 + 1):
+                for j in range(ny):
+                    for k in range(nz):
+                        dist2[i, j, k] = np.sqrt(dist2[i, j, k])
 
 
 @nb.njit(cache=True, parallel=True)
@@ -209,12 +228,13 @@ def sign_inputs(d_u, f_s, id_s, sheet, offset, h):
 
 
 @nb.njit(cache=True, parallel=True)
-def compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win):
+def compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win, band_lim, band):
     """``sdf = min(sign * d_b, f_s)`` (float32) and the primitive achieving it (in place).
 
     sign : (X, Y, Z) int8; d_b, f_s : float32 boundary and thickened sheet distances; id_b,
     id_s : int32 indices into ``boundary`` and ``sheet`` (primitive ids, -1 none). Values
-    within ``tiny`` of 0 become ``+-tiny``. Writes ``sdf`` float32 and ``win`` int32 (-1 none).
+    within ``tiny`` of 0 become ``+-tiny``. Writes ``sdf`` float32, ``win`` int32 (-1 none)
+    and ``band`` bool: ``|sdf| <= band_lim`` (float32).
     """
     nx, ny, nz = sign.shape
     for i in nb.prange(nx):
@@ -235,6 +255,7 @@ def compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win):
                     v = -tiny
                 sdf[i, j, k] = v
                 win[i, j, k] = w
+                band[i, j, k] = abs(v) <= band_lim
 
 
 @nb.njit(cache=True, parallel=True)
@@ -254,6 +275,28 @@ def closest_points(points, tris, tri_ids):
         bary[q, 1] = v
         bary[q, 2] = w
     return dist, bary
+
+
+@nb.njit(cache=True, parallel=True)
+def voxel_closest(flat, shape, origin, h, tris, tri_ids):
+    """Barycentrics (N, 3) float64 of the closest point on ``tris[tri_ids[n]]`` to the centre
+    of voxel ``flat[n]`` (flat index, C order, into a grid of ``shape``): what
+    :func:`closest_points` gives at ``origin + unravel(flat) * h``."""
+    n = flat.shape[0]
+    ny, nz = shape[1], shape[2]
+    bary = np.empty((n, 3), np.float64)
+    for q in nb.prange(n):
+        f = flat[q]
+        k = f % nz
+        j = (f // nz) % ny
+        i = f // (ny * nz)
+        _d2, u, v, w = _closest_bary(
+            origin[0] + i * h, origin[1] + j * h, origin[2] + k * h, tris[tri_ids[q]]
+        )
+        bary[q, 0] = u
+        bary[q, 1] = v
+        bary[q, 2] = w
+    return bary
 
 
 def slab_lists(tris: np.ndarray, origin, h: float, radius: float, nx: int, slab_width: int):

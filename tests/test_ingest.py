@@ -263,6 +263,75 @@ def test_textured_colour_follows_uvs():
     assert np.abs(got - px).mean() <= 6
 
 
+def _color_at_numpy(m, tri_ids, bary, encode=linear_to_srgb8):
+    """The plain numpy ``ColoredMesh.color_at`` (before its numba kernels), for comparison."""
+    from partscale.ingest.mesh import sample_texture
+
+    lin = np.ones((len(tri_ids), 3), np.float32)
+    if m.corner_color is not None:
+        lin *= np.einsum("nc,ncj->nj", bary, m.corner_color[tri_ids]).astype(np.float32)
+    mats = m.face_material[tri_ids]
+    uv = None if m.uv is None else np.einsum("nc,ncj->nj", bary, m.uv[tri_ids])
+    for m_id in np.unique(mats):
+        mat = m.materials[m_id]
+        sel = mats == m_id
+        col = np.broadcast_to(mat.factor, (int(sel.sum()), 3)).astype(np.float32)
+        if mat.texture is not None and uv is not None:
+            u = uv[sel]
+            if mat.uv_transform is not None:
+                u = u @ mat.uv_transform[:, :2].T + mat.uv_transform[:, 2]
+            col = col * sample_texture(mat.texture, u)
+        lin[sel] *= col
+    return encode(lin)
+
+
+def test_color_at_is_the_numpy_evaluation_bit_for_bit():
+    """color_at's numba passes give exactly the plain numpy evaluation's colours (textures with
+    and without a UV transform, flat materials, vertex colours) at random points, including
+    UVs far outside [0, 1] (wrapped); the linear float32 values before 8-bit rounding too."""
+    import dataclasses
+
+    from partscale.ingest.mesh import Material
+
+    rng = np.random.default_rng(3)
+    n_f = 500
+    tex_a = rng.random((37, 53, 3)).astype(np.float32)
+    tex_b = rng.random((16, 8, 3)).astype(np.float32)
+    tf = np.array([[2.98858409, -0.26146725, -0.60209115], [0.26146725, 2.98858409, -3.1136]])
+    mats = (
+        Material(rng.random(3).astype(np.float32), tex_a, tf),
+        Material(rng.random(3).astype(np.float32)),
+        Material(rng.random(3).astype(np.float32), tex_b),
+        Material(np.ones(3, np.float32), tex_a, tf[:, [1, 0, 2]]),
+    )
+    base = ingest.ColoredMesh(
+        vertices=rng.random((3 * n_f, 3)),
+        faces=np.arange(3 * n_f).reshape(-1, 3),
+        face_material=rng.integers(0, 3, n_f).astype(np.int32) + (np.arange(n_f) % 7 == 0),
+        materials=mats,
+        uv=(rng.random((n_f, 3, 2)) * 40 - 20).astype(np.float32),
+        source="random",
+    )
+    meshes = [
+        base,
+        dataclasses.replace(base, corner_color=rng.random((n_f, 3, 3)).astype(np.float32)),
+        dataclasses.replace(base, uv=None),
+    ]
+    tri = rng.integers(0, n_f, 20000)
+    bary = rng.random((20000, 3))
+    bary /= bary.sum(axis=1, keepdims=True)
+    bary[:50] = np.eye(3)[rng.integers(0, 3, 50)]
+    for m in meshes:
+        assert np.array_equal(m.color_at(tri, bary), _color_at_numpy(m, tri, bary))
+        # before rounding to 8 bits (where a last-bit difference would hide): the float32
+        # linear colours themselves
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr("partscale.ingest.mesh.linear_to_srgb8", lambda x: x)
+            got = m.color_at(tri, bary)
+        assert got.dtype == np.float32
+        assert np.array_equal(got, _color_at_numpy(m, tri, bary, encode=lambda x: x))
+
+
 def test_voxel_colour_is_nearest_surface_colour():
     """Two touching boxes of different colours: voxels take the colour of their nearest box."""
     a = ingest.from_trimesh(trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]]), color=(255, 0, 0))

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
+from llvmlite import ir
+from numba.extending import intrinsic
 
 from .._kernels import closest_on_triangle
 
@@ -39,9 +41,20 @@ def _index_range(tri, a, origin, h, radius, n):
     )
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, parallel=True, nogil=True)
 def band_distance(
-    tris, slab_ptr, slab_tris, slab_width, origin, h, radius, dist2, tid, root=False, fresh=False
+    tris,
+    slab_ptr,
+    slab_tris,
+    slab_width,
+    origin,
+    h,
+    radius,
+    dist2,
+    tid,
+    root=False,
+    fresh=False,
+    finish_root=False,
 ):
     """Minimum squared distance to ``tris`` for voxels within ``radius`` of some triangle.
 
@@ -68,10 +81,17 @@ def band_distance(
     fresh : bool
         ``dist2`` and ``tid`` are uninitialised: each slab first sets its layers to inf and -1
         (the first touch of the grid's pages, spread over the threads).
+    finish_root : bool
+        Each slab ends with its layers' square roots (float32, as ``np.sqrt``): ``dist2``
+        leaves as distances.
     """
     nx, ny, nz = dist2.shape
     n_slabs = slab_ptr.shape[0] - 1
     r2 = radius * radius
+    inf = np.inf
+    # far above the rounding of a squared distance at these coordinates (~1e-16 of the
+    # coordinates' magnitude times the radius)
+    tol = 1e-6 * h * h
     for s in nb.prange(n_slabs):
         xs0 = s * slab_width
         xs1 = min(nx - 1, xs0 + slab_width - 1)
@@ -98,10 +118,19 @@ def band_distance(
                 nxv /= nn
                 nyv /= nn
                 nzv /= nn
+            box_lo_x = min(tri[0, 0], tri[1, 0], tri[2, 0])
+            box_hi_x = max(tri[0, 0], tri[1, 0], tri[2, 0])
+            box_lo_y = min(tri[0, 1], tri[1, 1], tri[2, 1])
+            box_hi_y = max(tri[0, 1], tri[1, 1], tri[2, 1])
+            box_lo_z = min(tri[0, 2], tri[1, 2], tri[2, 2])
+            box_hi_z = max(tri[0, 2], tri[1, 2], tri[2, 2])
             for i in range(i_lo, i_hi + 1):
                 px = origin[0] + i * h
+                dx = max(box_lo_x - px, 0.0, px - box_hi_x)
                 for j in range(j_lo, j_hi + 1):
                     py = origin[1] + j * h
+                    dy = max(box_lo_y - py, 0.0, py - box_hi_y)
+                    dxy2 = dx * dx + dy * dy
                     k0 = k_lo
                     k1 = k_hi
                     if planar:
@@ -121,8 +150,32 @@ def band_distance(
                             k0 = k0 + max(0, int(np.ceil(ka)))
                         elif abs(pd0) > radius:
                             continue
+                    # and the run of k whose box distance can be within the radius
+                    rem = r2 * (1.0 + 1e-6) + tol - dxy2
+                    if rem < 0.0:
+                        continue
+                    rz = np.sqrt(rem)
+                    k0 = max(k0, int(np.ceil((box_lo_z - rz - origin[2]) / h)))
+                    k1 = min(k1, int(np.floor((box_hi_z + rz - origin[2]) / h)))
+                    pxy = 0.0
+                    if planar:
+                        pxy = (px - tri[0, 0]) * nxv + (py - tri[0, 1]) * nyv
                     for k in range(k0, k1 + 1):
                         pz = origin[2] + k * h
+                        # a lower bound of the distance (to the box, to the plane): where it
+                        # is surely no less than the running minimum, the exact distance
+                        # cannot replace it (the test below is strict), so it is skipped
+                        cur = dist2[i, j, k]
+                        if root:
+                            cur = cur * cur
+                        if cur < inf:
+                            dz = max(box_lo_z - pz, 0.0, pz - box_hi_z)
+                            lb = dxy2 + dz * dz
+                            if planar:
+                                pd = pxy + (pz - tri[0, 2]) * nzv
+                                lb = max(lb, pd * pd)
+                            if lb > cur * (1.0 + 1e-6) + tol:
+                                continue
                         d2, _u, _v, _w = _closest_bary(px, py, pz, tri)
                         if root:
                             if d2 <= r2:
@@ -132,6 +185,11 @@ def band_distance(
                         elif d2 <= r2 and d2 < dist2[i, j, k]:
                             dist2[i, j, k] = d2
                             tid[i, j, k] = t
+        if finish_root:
+            for i in range(xs0, xs1 + 1):
+                for j in range(ny):
+                    for k in range(nz):
+                        dist2[i, j, k] = np.sqrt(dist2[i, j, k])
 
 
 @nb.njit(cache=True, parallel=True)
@@ -170,12 +228,13 @@ def sign_inputs(d_u, f_s, id_s, sheet, offset, h):
 
 
 @nb.njit(cache=True, parallel=True)
-def compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win):
+def compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win, band_lim, band):
     """``sdf = min(sign * d_b, f_s)`` (float32) and the primitive achieving it (in place).
 
     sign : (X, Y, Z) int8; d_b, f_s : float32 boundary and thickened sheet distances; id_b,
     id_s : int32 indices into ``boundary`` and ``sheet`` (primitive ids, -1 none). Values
-    within ``tiny`` of 0 become ``+-tiny``. Writes ``sdf`` float32 and ``win`` int32 (-1 none).
+    within ``tiny`` of 0 become ``+-tiny``. Writes ``sdf`` float32, ``win`` int32 (-1 none)
+    and ``band`` bool: ``|sdf| <= band_lim`` (float32).
     """
     nx, ny, nz = sign.shape
     for i in nb.prange(nx):
@@ -196,6 +255,7 @@ def compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win):
                     v = -tiny
                 sdf[i, j, k] = v
                 win[i, j, k] = w
+                band[i, j, k] = abs(v) <= band_lim
 
 
 @nb.njit(cache=True, parallel=True)
@@ -215,6 +275,28 @@ def closest_points(points, tris, tri_ids):
         bary[q, 1] = v
         bary[q, 2] = w
     return dist, bary
+
+
+@nb.njit(cache=True, parallel=True)
+def voxel_closest(flat, shape, origin, h, tris, tri_ids):
+    """Barycentrics (N, 3) float64 of the closest point on ``tris[tri_ids[n]]`` to the centre
+    of voxel ``flat[n]`` (flat index, C order, into a grid of ``shape``): what
+    :func:`closest_points` gives at ``origin + unravel(flat) * h``."""
+    n = flat.shape[0]
+    ny, nz = shape[1], shape[2]
+    bary = np.empty((n, 3), np.float64)
+    for q in nb.prange(n):
+        f = flat[q]
+        k = f % nz
+        j = (f // nz) % ny
+        i = f // (ny * nz)
+        _d2, u, v, w = _closest_bary(
+            origin[0] + i * h, origin[1] + j * h, origin[2] + k * h, tris[tri_ids[q]]
+        )
+        bary[q, 0] = u
+        bary[q, 1] = v
+        bary[q, 2] = w
+    return bary
 
 
 def slab_lists(tris: np.ndarray, origin, h: float, radius: float, nx: int, slab_width: int):
@@ -677,6 +759,25 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
                     rgb[i, j, k, c] = rgb[si, sj, sk, c]
 
 
+@nb.njit(cache=True, inline="always")
+def _bilinear(texture, u, v, hgt, wid, c):
+    """Bilinear, repeat-wrapped value of channel ``c`` of ``texture`` at ``(u, v)`` (float64;
+    the callers round it to float32). See :func:`bilinear_repeat`."""
+    x = u * wid - 0.5
+    y = (1.0 - v) * hgt - 0.5
+    x0f = np.floor(x)
+    y0f = np.floor(y)
+    fx = np.float32(x - x0f)
+    fy = np.float32(y - y0f)
+    x0 = int(x0f) % wid
+    y0 = int(y0f) % hgt
+    x1 = (x0 + 1) % wid
+    y1 = (y0 + 1) % hgt
+    top = texture[y0, x0, c] * (1 - fx) + texture[y0, x1, c] * fx
+    bot = texture[y1, x0, c] * (1 - fx) + texture[y1, x1, c] * fx
+    return top * (1 - fy) + bot * fy
+
+
 @nb.njit(cache=True, parallel=True)
 def bilinear_repeat(texture, uv):
     """Bilinear, repeat-wrapped lookup of ``texture`` (H, W, C) float32 at ``uv`` (N, 2).
@@ -687,18 +788,71 @@ def bilinear_repeat(texture, uv):
     hgt, wid, nc = texture.shape
     out = np.empty((uv.shape[0], nc), np.float32)
     for n in nb.prange(uv.shape[0]):
-        x = uv[n, 0] * wid - 0.5
-        y = (1.0 - uv[n, 1]) * hgt - 0.5
-        x0f = np.floor(x)
-        y0f = np.floor(y)
-        fx = np.float32(x - x0f)
-        fy = np.float32(y - y0f)
-        x0 = int(x0f) % wid
-        y0 = int(y0f) % hgt
-        x1 = (x0 + 1) % wid
-        y1 = (y0 + 1) % hgt
         for c in range(nc):
-            top = texture[y0, x0, c] * (1 - fx) + texture[y0, x1, c] * fx
-            bot = texture[y1, x0, c] * (1 - fx) + texture[y1, x1, c] * fx
-            out[n, c] = top * (1 - fy) + bot * fy
+            out[n, c] = _bilinear(texture, uv[n, 0], uv[n, 1], hgt, wid, c)
     return out
+
+
+@nb.njit(cache=True, parallel=True)
+def corner_mix(ids, bary, corner):
+    """(N, D) float64 ``sum_c bary[n, c] * corner[ids[n], c]``, summed in the order c = 0, 1, 2
+    (``np.einsum("nc,ncd->nd", bary, corner[ids])`` bit for bit, without the gather).
+
+    ids : (N,) int64; bary : (N, 3) float64; corner : (T, 3, D) float32 or float64.
+    """
+    n = ids.shape[0]
+    nd = corner.shape[2]
+    out = np.empty((n, nd), np.float64)
+    for q in nb.prange(n):
+        t = ids[q]
+        for d in range(nd):
+            acc = 0.0
+            for c in range(3):
+                acc += bary[q, c] * corner[t, c, d]
+            out[q, d] = acc
+    return out
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` with one rounding (LLVM's ``llvm.fma``), float64."""
+    sig = nb.types.float64(nb.types.float64, nb.types.float64, nb.types.float64)
+
+    def codegen(context, builder, signature, args):
+        d = ir.DoubleType()
+        fn = builder.module.declare_intrinsic("llvm.fma", [d], ir.FunctionType(d, [d, d, d]))
+        return builder.call(fn, args)
+
+    return sig, codegen
+
+
+@nb.njit(cache=True, parallel=True)
+def shade(mats, m, factor, texture, uv, transform, lin):
+    """``lin[n] *= factor * texture(uv[n])`` (float32) where ``mats[n] == m`` (in place).
+
+    mats : (N,) int32 material per point; factor : (3,) float32; texture : (H, W, 3) float32,
+    or an empty array for none (factor only); uv : (N, 2) float64 (read with a texture);
+    transform : (2, 3) float64 UV affine applied first, or an empty array for none; lin :
+    (N, 3) float32 linear colour. The texture is sampled as :func:`bilinear_repeat`. The
+    affine's row products are ``fma(v, a_r1, u * a_r0) + t_r``: what numpy's ``uv @ A.T + t``
+    gives through BLAS with fused multiply-adds (this machine's OpenBLAS), bit for bit, at a
+    fraction of its cost (its threads are slow on two rows' worth of work).
+    """
+    hgt, wid = texture.shape[0], texture.shape[1]
+    textured = texture.size > 0
+    affine = transform.size > 0
+    for n in nb.prange(mats.shape[0]):
+        if mats[n] != m:
+            continue
+        u = uv[n, 0] if textured else 0.0
+        v = uv[n, 1] if textured else 0.0
+        if textured and affine:
+            u, v = (
+                _fma(v, transform[0, 1], u * transform[0, 0]) + transform[0, 2],
+                _fma(v, transform[1, 1], u * transform[1, 0]) + transform[1, 2],
+            )
+        for c in range(3):
+            col = factor[c]
+            if textured:
+                col = col * np.float32(_bilinear(texture, u, v, hgt, wid, c))
+            lin[n, c] *= col

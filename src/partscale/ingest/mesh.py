@@ -102,25 +102,29 @@ class ColoredMesh:
         -------
         (N, 3) uint8 sRGB
         """
-        tri_ids = np.asarray(tri_ids, dtype=np.int64)
-        bary = np.asarray(bary, dtype=np.float64)
-        lin = np.ones((len(tri_ids), 3), np.float32)
+        from . import _kernels
+
+        tri_ids = np.ascontiguousarray(tri_ids, dtype=np.int64)
+        bary = np.ascontiguousarray(bary, dtype=np.float64)
+        # numba passes over the points (the import colours millions): each step's arithmetic
+        # is the plain numpy one's (einsum's order, float32 products, the UV affine as BLAS
+        # computes it), bit for bit
         if self.corner_color is not None:
-            lin *= np.einsum("nc,ncj->nj", bary, self.corner_color[tri_ids]).astype(np.float32)
+            lin = _kernels.corner_mix(tri_ids, bary, self.corner_color).astype(np.float32)
+        else:
+            lin = np.ones((len(tri_ids), 3), np.float32)
         mats = self.face_material[tri_ids]
-        uv = None
-        if self.uv is not None:
-            uv = np.einsum("nc,ncj->nj", bary, self.uv[tri_ids])
-        for m_id in np.unique(mats):
+        uv = None if self.uv is None else _kernels.corner_mix(tri_ids, bary, self.uv)
+        none = np.zeros((0, 0, 3), np.float32)
+        for m_id in np.flatnonzero(np.bincount(mats, minlength=len(self.materials))):
             mat = self.materials[m_id]
-            sel = mats == m_id
-            col = np.broadcast_to(mat.factor, (int(sel.sum()), 3)).astype(np.float32)
+            tex, tf = none, np.zeros((0, 3))
             if mat.texture is not None and uv is not None:
-                u = uv[sel]
+                tex = np.ascontiguousarray(mat.texture, np.float32)
                 if mat.uv_transform is not None:
-                    u = u @ mat.uv_transform[:, :2].T + mat.uv_transform[:, 2]
-                col = col * sample_texture(mat.texture, u)
-            lin[sel] *= col
+                    tf = np.ascontiguousarray(mat.uv_transform, np.float64)
+            factor = np.ascontiguousarray(mat.factor, np.float32)
+            _kernels.shade(mats, m_id, factor, tex, uv if uv is not None else bary, tf, lin)
         return linear_to_srgb8(lin)
 
 

@@ -35,6 +35,7 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -280,14 +281,14 @@ def _thickness(tris, start: float) -> np.ndarray:
 
 
 def _band(tris, origin, h, shape, radius):
-    """Squared-distance band (float32, inf outside) and nearest triangle ids (int32, -1)."""
+    """Distance band (float32, inf outside) and nearest triangle ids (int32, -1)."""
     if len(tris) == 0:
         return np.full(tuple(shape), np.inf, np.float32), np.full(tuple(shape), -1, np.int32)
-    dist2 = np.empty(tuple(shape), np.float32)  # initialised by the kernel, slab by slab
+    dist = np.empty(tuple(shape), np.float32)  # initialised by the kernel, slab by slab
     tid = np.empty(tuple(shape), np.int32)
     ptr, lst = _kernels.slab_lists(tris, origin, h, radius, int(shape[0]), SLAB)
-    _kernels.band_distance(tris, ptr, lst, SLAB, origin, h, radius, dist2, tid, False, True)
-    return dist2, tid
+    _kernels.band_distance(tris, ptr, lst, SLAB, origin, h, radius, dist, tid, False, True, True)
+    return dist, tid
 
 
 def _component_signs(wn, d, dist, free, in_sheet, h, origin):
@@ -451,11 +452,17 @@ def from_mesh(
     thick = math.sqrt(3) / 2 * h
 
     report(0.15, "exact distances near the surface")
-    # closed pieces thinner than the grid can hold (shelves, back panels) would vanish or get
-    # holes: their faces also join the sheets, offset so that the piece is 2t thick
-    offset = np.zeros(len(sub))
-    offset[sheet] = thick
-    thickness = _thickness(sub[boundary], 0.01 * h)
+    tris_b = np.ascontiguousarray(sub[boundary])
+    # the boundary's band needs only the classes: its numba kernel (no GIL) runs on a thread
+    # of its own while this one casts the thickness rays (serial, embree)
+    with ThreadPoolExecutor(1) as pool:
+        band_b = pool.submit(_band, tris_b, origin, h, shape, BAND_VOXELS * h)
+        # closed pieces thinner than the grid can hold (shelves, back panels) would vanish or
+        # get holes: their faces also join the sheets, offset so that the piece is 2t thick
+        offset = np.zeros(len(sub))
+        offset[sheet] = thick
+        thickness = _thickness(tris_b, 0.01 * h)
+        d_b, id_b = band_b.result()
     thin = boundary[thickness < 2 * thick]
     offset[thin] = thick - thickness[thickness < 2 * thick] / 2
     n_open = len(np.unique(parent[sheet]))
@@ -472,15 +479,9 @@ def from_mesh(
             "below_one_voxel_triangles": len(np.unique(parent[boundary[thickness < h]])),
         }
     sheet = np.concatenate([sheet, thin])
-    tris_b = np.ascontiguousarray(sub[boundary])
     tris_s = np.ascontiguousarray(sub[sheet])
-    d2_b, id_b = _band(tris_b, origin, h, shape, BAND_VOXELS * h)
-    d_b = np.sqrt(d2_b, out=d2_b)
-    del d2_b
     report(0.3, "thickening open sheets")
-    d2_s, id_s = _band(tris_s, origin, h, shape, (BAND_VOXELS + 1) * h)
-    f_s = np.sqrt(d2_s, out=d2_s)
-    del d2_s
+    f_s, id_s = _band(tris_s, origin, h, shape, (BAND_VOXELS + 1) * h)
 
     report(0.45, "inside/outside")
     # buried faces block the flood and the clear steps too: a face classified buried over its
@@ -514,27 +515,29 @@ def from_mesh(
     sdf = np.empty(shape, np.float32)
     win = np.empty(shape, np.int32)  # primitive ids: far fewer than 2**31
     tiny = np.float32(1e-3 * h)
-    _kernels.compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win)
+    # the band: |sdf| <= BAND_VOXELS h, compared in float32 (as numpy compares a float32 grid
+    # with a Python float); the bubble fill below flips signs only
+    band = np.empty(shape, np.bool_)
+    band_lim = np.float32(BAND_VOXELS * h)
+    _kernels.compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win, band_lim, band)
     del d_b, id_b, f_s, id_s
     n_bubbles = _fill_bubbles(sdf, sign, h)
 
     report(0.65, "distances beyond the band")
-    band = np.abs(sdf) <= BAND_VOXELS * h
-    if not band.any():
-        raise InputError(f"{name}: expected a surface inside the grid, got none")
     band_idx = np.flatnonzero(band)
-    pts = origin + np.stack(np.unravel_index(band_idx, shape), axis=1) * h
-    _, bary = _kernels.closest_points(pts, sub, win.ravel()[band_idx])
+    if len(band_idx) == 0:
+        raise InputError(f"{name}: expected a surface inside the grid, got none")
+    w_b = win.ravel()[band_idx].astype(np.int64)
+    bary = _kernels.voxel_closest(band_idx, np.array(shape), origin, h, sub, w_b)
 
     report(0.75, "colour from the texture")
-    w_b = win.ravel()[band_idx]
-    pbary = np.einsum("nc,ncd->nd", bary, corner_bary[w_b])
+    pbary = _kernels.corner_mix(w_b, bary, corner_bary)
     band_rgb = mesh.color_at(parent[w_b], pbary)
     rgb = np.empty((*shape, 3), np.uint8)
     rgb.reshape(-1, 3)[band_idx] = band_rgb
-    del pts, bary, pbary
+    del bary, pbary
 
-    if not band.all():
+    if len(band_idx) < band.size:
         report(0.8, "distances beyond the band")
         _kernels.far_field(
             band,

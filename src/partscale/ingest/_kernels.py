@@ -847,9 +847,10 @@ def shade(mats, m, factor, texture, uv, transform, lin):
         u = uv[n, 0] if textured else 0.0
         v = uv[n, 1] if textured else 0.0
         if textured and affine:
+            # mypy reads _fma's signature with the typing context numba passes at compile time
             u, v = (
-                _fma(v, transform[0, 1], u * transform[0, 0]) + transform[0, 2],
-                _fma(v, transform[1, 1], u * transform[1, 0]) + transform[1, 2],
+                _fma(v, transform[0, 1], u * transform[0, 0]) + transform[0, 2],  # type: ignore[call-arg]
+                _fma(v, transform[1, 1], u * transform[1, 0]) + transform[1, 2],  # type: ignore[call-arg]
             )
         for c in range(3):
             col = factor[c]

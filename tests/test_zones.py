@@ -327,6 +327,21 @@ def test_tile_to_the_zone_start_removes_it_and_joins_the_sides(bookcase):
         apply_edit(bookcase, Edit("y", start, end, start, "stretch"))
 
 
+def test_a_removed_zone_carries_the_planes_of_the_edits_after_it(bookcase):
+    """In a recipe, a zone removed (tile to its start) moves the planes beyond it by its length:
+    a stretch drawn on the input beyond it applies where it was drawn, and recipe_shape predicts
+    the grid."""
+    from partscale.edit import recipe_shape
+
+    recipe = Recipe(
+        (Edit("y", 0.43, 0.73, 0.43, "tile"), Edit("y", 1.0, 1.1, 1.2, "stretch")),
+    )
+    out = apply_recipe(bookcase, recipe)
+    assert out.shape == recipe_shape(bookcase, recipe)
+    assert abs(extent(out, 1) - (extent(bookcase, 1) - 0.3 + 0.1)) <= H / 2 + 1e-9
+    assert out.meta["history"][-1]["edit"]["zone"] == pytest.approx([0.7, 0.8], abs=1e-9)
+
+
 def test_fit_says_when_only_a_thin_slab_can_take_the_remainder():
     """Boards 8 voxels apart (gaps of 6) 8 voxels from a 5-voxel panel: no slab is long enough
     and 3 voxels are beyond the copies' tolerance, so the panel takes them, and the note says so

@@ -329,7 +329,9 @@ def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
     if not s < e:
         raise InputError(f"zone: expected start < end, got start {s:.6g} >= end {e:.6g}")
     if not d > s:
-        raise InputError(f"to: expected DEST > START {s:.6g}, got {d:.6g}")
+        # a tile to its start (the zone removed) is a CSDF edit only: mesh copies need one
+        why = " (removing a zone, tile to its start, is done on the CSDF)" if d == s else ""
+        raise InputError(f"to: expected DEST > START {s:.6g}, got {d:.6g}{why}")
     tol = 1e-9 * max(abs(lo), abs(hi), hi - lo)
     if s < lo - tol or e > hi + tol:
         raise InputError(

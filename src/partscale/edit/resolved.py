@@ -100,15 +100,19 @@ class ResolvedEdit:
     def seams(self) -> list[tuple[float, float | None]]:
         """Seam planes in the result, each with the original plane it continues (None: a join).
 
-        The zone's two planes, and for ``tile`` the joins between consecutive copies.
+        The zone's two planes, and for ``tile`` the joins between consecutive copies; a removed
+        zone (tile, 0 copies) is one join at START, where the content before START meets the
+        content after END.
         """
         if self.mode == "global":
             return [
                 (float(self.to_result(self.start)), self.start),
                 (float(self.to_result(self.end)), self.end),
             ]
+        if self.mode == "tile" and self.n_copies == 0:
+            return [(self.start, None)]
         out: list[tuple[float, float | None]] = [(self.start, self.start), (self.dest, self.end)]
-        if self.mode == "tile" and self.n_copies:  # 0 copies: START and END meet at one join
+        if self.mode == "tile":
             n = self.n_copies
             step = (self.dest - self.start) / n
             out += [(self.start + m * step, None) for m in range(1, n)]

@@ -164,6 +164,9 @@ def remap_cases() -> list[dict]:
         [z("x", "global", 0.9, 1.2, 1.5)],
         [z("x", "stretch", 0.3, 0.7, 0.9), z("y", "tile", 0.1, 0.3, 0.75, 0.0, 0.78)],
         [z("x", "tile", 0.2, 0.4, 0.8), z("x", "stretch", 0.1, 1.0, 1.3, 0.0, 1.6)],
+        [z("y", "tile", 0.3, 0.6, 0.3)],  # dest == start: 0 copies, the zone removed
+        [z("x", "tile", 0.3, 0.6, 0.36)],  # 20% of its length: still one copy
+        [z("x", "tile", 0.2, 0.5, 0.2), z("x", "stretch", 0.4, 0.6, 0.8, 0.0, 0.9)],
     ]
     cases = []
     for zones in zone_sets:
@@ -244,6 +247,7 @@ def test_typescript_remap_matches_source_coordinate(tmp_path):
 def test_typescript_tile_count_matches_tile_count(tmp_path):
     rng = np.random.default_rng(12)
     pairs = [(0.2, 0.3), (0.2, 0.5), (0.3, 0.45), (0.1, 0.35), (1.0, 0.4), (0.2, 0.1), (0.7, 2.45)]
+    pairs += [(0.2, 0.0), (0.2, 0.06), (1.0, 1e-12)]  # 0 copies only for a zero destination
     pairs += [(float(a), float(b)) for a, b in rng.uniform(0.01, 2.0, size=(200, 2))]
     got = run_page_node(tmp_path, {"tiles": pairs})["tiles"]
     assert got == [tile_count(a, b) for a, b in pairs]
@@ -357,6 +361,11 @@ def zone_rule_cases(lo: float, hi: float, h: float) -> list[list[dict]]:
         [z(v(4), v(8), v(12)), z(v(1), v(3), v(4), "stretch", "y")],
         [z(v(8), v(4), v(10)), z(v(14), v(19), v(21))],  # the first refused: skipped
         [z(v(4), v(8), v(6), "tile"), z(v(0), v(2.5), v(3), "global")],
+        [z(v(4), v(8), v(4), "tile")],  # dest == start: 0 copies, the zone removed
+        [z(v(4), v(8.4), v(4), "tile")],  # removed: the start snaps with the destination
+        [z(v(4), v(8), v(3), "tile")],  # dest below start: refused for tile too
+        [z(v(4), v(8), v(4), "tile"), z(v(10), v(14), v(16))],  # beyond a removed zone
+        [z(v(4), v(8), v(4), "tile"), z(v(5), v(7), v(9))],  # inside a removed zone
     ]
 
 
@@ -397,7 +406,9 @@ def test_typescript_zone_rules_match_apply_recipe(tmp_path):
                 if a == ax:
                     planes = forward_coordinate(planes, **kw)
             s2, e2 = float(planes[0]), float(planes[1])
-            edit = Edit(zone["axis"], s2, e2, e2 + (zone["dest"] - zone["end"]), zone["mode"])
+            # a destination at the start stays there (tile: the zone removed)
+            d2 = s2 if zone["dest"] == zone["start"] else e2 + (zone["dest"] - zone["end"])
+            edit = Edit(zone["axis"], s2, e2, d2, zone["mode"])
             try:
                 out = apply_edit(current, edit)
             except InputError as exc:
@@ -405,10 +416,11 @@ def test_typescript_zone_rules_match_apply_recipe(tmp_path):
                 assert pz["problem"]["rule"] == python_rule(str(exc)), (zones, str(exc))
                 continue
             assert pz["problem"] is None, (zones, pz["problem"])
+            entry = out.meta["history"][-1]
+            s2 = entry["edit"]["zone"][0]  # a removed zone's start snaps with its destination
             assert abs(pz["start"] - s2) <= 1e-9 and abs(pz["end"] - e2) <= 1e-9, zones
             applied = e2 + (out.shape[ax] - current.shape[ax]) * h
             assert abs(pz["dest"] - applied) <= 1e-9, zones
-            entry = out.meta["history"][-1]
             kw = {"mode": zone["mode"], "start": s2, "end": e2, "dest": entry["to_snapped"]}
             if zone["mode"] == "global":
                 kw.update(lo=entry["lo"], hi=entry["hi"])

@@ -8,6 +8,7 @@ import trimesh
 
 from partscale import ingest
 from partscale.edit import Recipe, apply_recipe
+from partscale.errors import InputError
 from partscale.meshedit import apply_recipe_to_scene, load_scene, save_scene
 from partscale.surface import sample_linear
 
@@ -136,6 +137,23 @@ def test_tiled_closed_box_stays_closed_and_exact():
     assert m.is_watertight
     assert m.extents == pytest.approx((1.8, 2.0, 3.0), abs=1e-12)
     assert m.volume == pytest.approx(1.8 * 2.0 * 3.0, rel=1e-12)
+
+
+def test_a_tile_to_its_start_removes_the_zone_from_a_closed_box():
+    """A tile with ``to`` at the zone's start (0 copies) cuts the zone out of the mesh: the box
+    is shorter by the zone's length, closed (one welded join) and exact; stretch refuses it."""
+    box = trimesh.creation.box((1.0, 2.0, 3.0))
+    recipe = Recipe.parse([{"axis": "x", "zone": ["20%", "60%"], "to": "20%", "mode": "tile"}])
+    out, seams = apply_recipe_to_scene(trimesh.Scene(box), recipe)
+    m = out.to_mesh()
+    m.merge_vertices()
+    assert len(seams) == 1 and seams[0].ok and seams[0].position == pytest.approx(-0.3)
+    assert m.is_watertight
+    assert m.extents == pytest.approx((0.6, 2.0, 3.0), abs=1e-12)
+    assert m.volume == pytest.approx(0.6 * 2.0 * 3.0, rel=1e-12)
+    stretch = Recipe.parse([{"axis": "x", "zone": ["20%", "60%"], "to": "20%"}])
+    with pytest.raises(InputError, match="mode tile"):
+        apply_recipe_to_scene(trimesh.Scene(box), stretch)
 
 
 def test_unmatched_seam_is_reported():

@@ -115,6 +115,8 @@ BAD = [
     (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.7", "--mode", "squash"], ["--mode"]),
     (["--axis", "x", "--zone", "0.5", "0.2", "--to", "0.7"], ["START < END"]),
     (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.1"], ["DEST > START"]),
+    (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.2"], ["DEST == START", "mode tile"]),
+    (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.1", "--mode", "tile"], ["DEST > START"]),
     (["--axis", "x", "--zone", "1.5", "1.8", "--to", "2.0"], ["zone", "extent"]),
     (["--axis", "x", "--zone", "0.2", "0.23", "--to", "0.4"], ["two voxels"]),
     (["--axis", "x", "--zone", "abc", "0.5", "--to", "0.7"], ["--zone START", "number"]),

@@ -30,6 +30,13 @@ def test_tile_count_rounds_one_and_a_half_periods_up(start, end, dest):
     assert tile_count(end - start, dest - start) == 2
 
 
+def test_tile_count_is_zero_only_for_a_zero_destination():
+    """0 copies (the zone removed) for ``dest == start`` exactly, never by rounding: a tile to
+    30% of its length, or to a hair above its start, is still one copy."""
+    assert tile_count(0.2, 0.0) == 0
+    assert [tile_count(0.2, t) for t in (0.06, 0.02, 1e-12)] == [1, 1, 1]
+
+
 def test_tile_count_rounds_elsewhere_to_nearest():
     assert [tile_count(0.2, t) for t in (0.05, 0.25, 0.29, 0.31, 0.49, 0.5, 0.69)] == [
         1,

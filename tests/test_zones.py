@@ -258,6 +258,90 @@ def test_fit_puts_the_remainder_in_a_long_span_not_in_a_board(rest):
     assert abs((x_1[1] - x_1[0]) - (x_0[1] - x_0[0]) - rest) <= 0.5, (x_0, x_1)
 
 
+def _boards(n, pitch, side=0.1, gap=0.11, board=0.04):
+    """Two ``side`` end panels and ``n`` separate boards along x, ``pitch`` apart, ``gap`` from
+    the panels: ``n + 2`` pieces (the default gap puts the boards' faces half-way between voxel
+    centres, so each board is sampled ``board / H`` voxels thick)."""
+    length = 2 * side + 2 * gap + (n - 1) * pitch + board
+    x0 = side + gap
+    boxes = [((0, 0, 0), (side, 0.5, 0.3)), ((length - side, 0, 0), (length, 0.5, 0.3))]
+    boxes += [((x0 + m * pitch, 0, 0), (x0 + m * pitch + board, 0.5, 0.3)) for m in range(n)]
+    return shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boxes),
+        np.array([[0, 0, 0], [length, 0.5, 0.3]]),
+        voxel_size=H,
+    )
+
+
+def _pieces(c):
+    from scipy import ndimage
+
+    return ndimage.label(c.sdf <= 0)[1]
+
+
+@pytest.mark.parametrize("fewer", [1, 2])
+def test_fit_shrinks_by_removing_whole_periods(fewer):
+    """Six 2-voxel boards 13 voxels apart, fitted ``fewer`` periods shorter: whole periods are
+    removed (a tile to its start, 0 copies), so every board left keeps its thickness and pitch
+    within half a voxel and ``fewer`` boards are gone (the old code tiled 1 + fewer periods into
+    one copy: boards 1 voxel thick, 4-5 voxels apart)."""
+    n, pitch, board = 6, 0.26, 0.04
+    c = _boards(n, pitch, board=board)
+    target = extent(c, 0) - fewer * pitch
+    recipe, why = fit(c, [repr(target), "=", "="])
+    t = recipe.edits[0]
+    assert t.mode == "tile" and float(t.dest) == float(t.start), (recipe, why)
+    assert any("0 copies" in w for w in why), why
+    out = apply_recipe(c, recipe)
+    assert out.meta["history"][-1]["copies"] == 0
+    assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
+    assert _pieces(out) == _pieces(c) - fewer == n + 2 - fewer
+    line = (int(0.25 / H), int(0.15 / H))
+    assert set(_runs_along(c.sdf, 0, line)[0][1:-1].tolist()) == {board / H}
+    thick, centre = _runs_along(out.sdf, 0, line)
+    assert len(thick) == n + 2 - fewer, thick
+    assert np.abs(thick[1:-1] - board / H).max() <= 0.5, thick
+    assert np.abs(np.diff(centre[1:-1]) - pitch / H).max() <= 0.5, centre
+
+
+def test_tile_to_the_zone_start_removes_it_and_joins_the_sides(bookcase):
+    """A tile with ``to`` at the zone's start makes 0 copies: the zone is cut out, the object is
+    shorter by the zone's length (within half a voxel) and its two sides join with no gap (the
+    bookcase stays one piece), the other boards keep their thickness; stretch refuses it."""
+    start, end = 0.3 + 0.13, 0.6 + 0.13  # one period, planes in gaps between boards
+    out = apply_edit(bookcase, Edit("y", start, end, start, "tile"))
+    assert abs(extent(out, 1) - (extent(bookcase, 1) - (end - start))) <= H / 2 + 1e-9
+    assert _pieces(bookcase) == 1 and _pieces(out) == 1
+    h = out.meta["history"][-1]
+    assert h["copies"] == 0 and h["to_snapped"] == h["edit"]["zone"][0]
+    line = (int(0.4 / H), int(0.15 / H))
+    (t0, x0), (t1, x1) = _runs_along(bookcase.sdf, 1, line), _runs_along(out.sdf, 1, line)
+    # the board at 0.6 is gone; the others keep their thickness, those beyond move by the zone
+    assert len(t1) == len(t0) - 1 and np.abs(t1 - np.delete(t0, 2)).max() <= 0.5, (t0, t1)
+    moved = np.concatenate([x0[:2], x0[3:] - (end - start) / H])
+    assert np.abs(x1 - moved).max() <= 0.5, (x0, x1)
+    from partscale.edit import describe_changes
+
+    assert any("tile 0 copies: zone removed" in w for w in describe_changes([h], out))
+    with pytest.raises(InputError, match="mode tile"):
+        apply_edit(bookcase, Edit("y", start, end, start, "stretch"))
+
+
+def test_a_removed_zone_carries_the_planes_of_the_edits_after_it(bookcase):
+    """In a recipe, a zone removed (tile to its start) moves the planes beyond it by its length:
+    a stretch drawn on the input beyond it applies where it was drawn, and recipe_shape predicts
+    the grid."""
+    from partscale.edit import recipe_shape
+
+    recipe = Recipe(
+        (Edit("y", 0.43, 0.73, 0.43, "tile"), Edit("y", 1.0, 1.1, 1.2, "stretch")),
+    )
+    out = apply_recipe(bookcase, recipe)
+    assert out.shape == recipe_shape(bookcase, recipe)
+    assert abs(extent(out, 1) - (extent(bookcase, 1) - 0.3 + 0.1)) <= H / 2 + 1e-9
+    assert out.meta["history"][-1]["edit"]["zone"] == pytest.approx([0.7, 0.8], abs=1e-9)
+
+
 def test_fit_says_when_only_a_thin_slab_can_take_the_remainder():
     """Boards 8 voxels apart (gaps of 6) 8 voxels from a 5-voxel panel: no slab is long enough
     and 3 voxels are beyond the copies' tolerance, so the panel takes them, and the note says so

@@ -40,8 +40,10 @@ export interface Zone {
 }
 
 /** max(1, round(target / length)), half-way rounding up, as recipe.tile_count: a ratio within
- *  1e-9 below a half counts as the half (0.3 / 0.2 is 1.4999999999999998). */
+ *  1e-9 below a half counts as the half (0.3 / 0.2 is 1.4999999999999998). 0 only for a zero
+ *  target (destination at the start: the zone removed), never by rounding. */
 export function tileCount(length: number, target: number): number {
+  if (target === 0) return 0;
   return Math.max(1, Math.floor(target / length + 0.5 + 1e-9));
 }
 
@@ -59,6 +61,11 @@ export function snapDest(z: Pick<Zone, 'end' | 'dest'>, h: number): number {
   return z.end + roundHalfEven((z.dest - z.end) / h) * h;
 }
 
+/** Whether the zone is removed: tile with the destination at the start (0 copies). */
+export function removesZone(z: Pick<Zone, 'mode' | 'start' | 'dest'>): boolean {
+  return z.mode === 'tile' && z.dest === z.start;
+}
+
 /** Which of resolve_edit's rules a zone breaks (its checks, in its order). */
 export type ZoneRule = 'finite' | 'order' | 'dest' | 'inside' | 'thickness' | 'snapped-dest' | 'vanish';
 
@@ -69,8 +76,9 @@ export interface ZoneProblem {
 
 /**
  * Why apply_recipe would refuse the zone (partscale.edit.scale.resolve_edit), or null: finite
- * positions, start < end, destination beyond start, the zone within the solid's extent (h/2
- * slack), at least two voxels thick, and the snapped destination a voxel beyond the start.
+ * positions, start < end, destination beyond start (tile: or at it, the zone removed), the zone
+ * within the solid's extent (h/2 slack), at least two voxels thick, and the snapped destination a
+ * voxel beyond the start.
  * 'vanish' (global mode shrinking the solid to nothing) is the page's own guard: the rules before
  * it leave that only at exact equality.
  */
@@ -80,13 +88,17 @@ export function zoneProblem(z: Zone, h: number): ZoneProblem | null {
     return { rule: 'finite', message: 'positions must be finite numbers' };
   }
   if (!(s < e)) return { rule: 'order', message: 'start must be below end' };
-  if (!(d > s)) return { rule: 'dest', message: 'destination must be beyond start' };
+  const removed = removesZone(z);
+  if (!(d > s || removed)) {
+    const hint = d === s ? ' (tile with the destination at the start removes the zone)' : '';
+    return { rule: 'dest', message: `destination must be beyond start${hint}` };
+  }
   if (s < z.lo - h / 2 || e > z.hi + h / 2) {
     return { rule: 'inside', message: 'the zone must lie within the object' };
   }
   if (e - s < 2 * h) return { rule: 'thickness', message: 'the zone must be at least two voxels thick' };
   const snapped = snapDest(z, h);
-  if (snapped - s < h) return { rule: 'snapped-dest', message: 'destination must be a voxel beyond start' };
+  if (!removed && snapped - s < h) return { rule: 'snapped-dest', message: 'destination must be a voxel beyond start' };
   if (z.mode === 'global' && !(z.hi - z.lo + snapped - e > 0)) {
     return { rule: 'vanish', message: 'the solid would vanish' };
   }

@@ -6,7 +6,8 @@
 // A zone maps output coordinates y (after the edit) to source coordinates x (before):
 //   y < start            -> x = y                      (rigid before the zone)
 //   start <= y <= dest   -> stretch: linear [start,dest] -> [start,end]
-//                           tile: n = tileCount copies, each a linear map onto [start,end]
+//                           tile: n = tileCount copies, each a linear map onto [start,end];
+//                           n = 0 (dest == start): the zone removed, y >= start -> y - shift
 //   y > dest             -> x = y - (dest - end)       (rigid after the zone, translated)
 //   global               -> x = lo + (y - lo) / f,  f = (hi - lo + dest - end) / (hi - lo)
 
@@ -24,6 +25,7 @@ export function sourceCoordinate(y: number, z: Zone): number {
   if (y < z.start) return y;
   if (y > z.dest) return y - shift;
   const length = z.end - z.start;
+  if (z.mode === 'tile' && tileCount(length, z.dest - z.start) === 0) return y - shift;
   const t = (y - z.start) / (z.dest - z.start);
   if (z.mode === 'stretch') return z.start + t * length;
   const n = tileCount(length, z.dest - z.start);
@@ -48,10 +50,9 @@ export function toSource(zones: readonly Zone[], p: readonly number[]): number[]
 export function forwardCoordinate(x: number, z: Zone): number {
   const shift = z.dest - z.end;
   if (z.mode === 'global') return z.lo + (x - z.lo) * ((z.hi - z.lo + shift) / (z.hi - z.lo));
-  const scale =
-    z.mode === 'stretch'
-      ? (z.dest - z.start) / (z.end - z.start)
-      : (z.dest - z.start) / (tileCount(z.end - z.start, z.dest - z.start) * (z.end - z.start));
+  const n = z.mode === 'stretch' ? 1 : tileCount(z.end - z.start, z.dest - z.start);
+  // 0 copies: planes inside a removed zone collapse onto its start
+  const scale = n === 0 ? 0 : (z.dest - z.start) / (n * (z.end - z.start));
   if (x <= z.start) return x;
   if (x >= z.end) return x + shift;
   return z.start + (x - z.start) * scale;
@@ -63,7 +64,8 @@ export function minJacobian(z: Zone): number {
   const length = z.end - z.start;
   const target = z.dest - z.start;
   const n = z.mode === 'tile' ? tileCount(length, target) : 1;
-  return Math.min(1, target / (n * length));
+  // a removed zone is no slab: the rest are translations
+  return n === 0 ? 1 : Math.min(1, target / (n * length));
 }
 
 /** Uniform packing: a = (start, end, dest, lo), b = (hi, axis, mode, tile count). */
@@ -92,6 +94,7 @@ float sourceCoordinate(float y, vec4 a, vec4 b) {
   }
   if (y < start) return y;
   if (y > dest) return y - shift;
+  if (mode == 1 && b.w < 0.5) return y - shift;  // tile, 0 copies: the zone removed
   float t = (y - start) / (dest - start);
   if (mode == 0) return start + t * (end - start);
   float n = b.w;

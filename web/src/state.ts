@@ -9,6 +9,7 @@ import {
   type Mode,
   RECIPE_VERSION,
   type Recipe,
+  removesZone,
   snapDest,
   type Zone,
   zoneEdit,
@@ -139,10 +140,16 @@ export function resolvedZones(s: AppState): ResolvedZone[] {
     const earlier = applied.filter((e) => e.axis === z.axis);
     const start = carry(z.start, earlier);
     const end = carry(z.end, earlier);
-    const given: Zone = { ...z, start, end, dest: end + (z.dest - z.end), lo: lo[a], hi: hi[a] };
+    // a destination at the start stays there (tile: the zone removed), as apply_recipe carries it
+    const dest = z.dest === z.start ? start : end + (z.dest - z.end);
+    const given: Zone = { ...z, start, end, dest, lo: lo[a], hi: hi[a] };
     const problem = zoneProblem(given, h);
-    // preview what the server will make: the end moves by whole voxels
-    const zone: ResolvedZone = { ...given, dest: snapDest(given, h), problem };
+    // preview what the server will make: the end moves by whole voxels (a removed zone's start
+    // with it)
+    const snapped = snapDest(given, h);
+    const zone: ResolvedZone = removesZone(given)
+      ? { ...given, start: snapped, dest: snapped, problem }
+      : { ...given, dest: snapped, problem };
     if (problem === null) {
       lo[a] = forwardCoordinate(lo[a], zone);
       hi[a] = forwardCoordinate(hi[a], zone);

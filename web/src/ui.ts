@@ -99,6 +99,7 @@ function zoneSummary(z: Zone, units: string): string {
   if (z.mode === 'global') return `whole object ×${fmt((z.hi - z.lo + z.dest - z.end) / (z.hi - z.lo))} (${delta})`;
   if (z.mode === 'tile') {
     const n = tileCount(length, target);
+    if (n === 0) return `tile 0 copies: zone of ${fmt(length)} ${units} removed (${delta})`;
     return `${n} cop${n === 1 ? 'y' : 'ies'} of ${fmt(length)} ${units}, each ×${fmt(target / (n * length))} (${delta})`;
   }
   return `zone ×${fmt(target / length)} (${delta})`;

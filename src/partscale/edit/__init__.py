@@ -37,7 +37,9 @@ Semantics
   flip the side of the copy the layer belongs to against the other copy's field more than a
   voxel away (a thin shelf next to a zone plane stays whole in its copy); copies ``m >= 1`` of parts
   lying wholly inside the zone get new indices after the existing ones (``meta['parts_info']``
-  gains entries with ``copy_of``); parts crossing the zone's planes keep their index.
+  gains entries with ``copy_of``); parts crossing the zone's planes keep their index. A tile to
+  the zone's start (``DEST == START``) makes 0 copies: the zone is cut out (whole voxels, its
+  start snapped from its end) and the layers either side join at START, unblended.
 - global: the whole solid scaled along the axis about its min to the same final length.
 - After each edit, every voxel within ``partscale.csdf.BAND_VOXELS`` voxels of the surface whose
   distance could have changed holds its distance to the edited zero level set *as the grid

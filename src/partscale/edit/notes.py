@@ -25,9 +25,10 @@ def describe_changes(entries: list[Any], out: CSDF) -> list[str]:
     Returns
     -------
     list of str
-        Whole-voxel destinations first, then zone planes that cut an element.
+        Removed zones (tile, 0 copies) first, then whole-voxel destinations, then zone planes
+        that cut an element.
     """
-    return _voxel_snaps(entries, out) + _slivers(entries, out)
+    return _removed(entries, out) + _voxel_snaps(entries, out) + _slivers(entries, out)
 
 
 def _units(out: CSDF) -> str:
@@ -36,6 +37,21 @@ def _units(out: CSDF) -> str:
 
 def _where(i: int, entries: list[Any]) -> str:
     return f"edit {i + 1}: " if len(entries) > 1 else ""
+
+
+def _removed(entries: list[Any], out: CSDF) -> list[str]:
+    """A line per tile edit with 0 copies (``to`` at the zone's start): the zone was cut out."""
+    u = _units(out)
+    lines = []
+    for i, h in enumerate(entries):
+        if not isinstance(h, dict) or h.get("copies") != 0:
+            continue
+        a, b = h["edit"]["zone"]
+        lines.append(
+            f"{_where(i, entries)}tile 0 copies: zone removed ({a:.6g}..{b:.6g}{u} along "
+            f"{h['edit']['axis']}), the content beyond it moved by {a - b:+.6g}{u} to join"
+        )
+    return lines
 
 
 def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:

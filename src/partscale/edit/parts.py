@@ -67,7 +67,7 @@ def update_parts_info(
     ax, s, e, d, mode = r.axis, r.start, r.end, r.dest, r.mode
     shift = d - e
     n_copies = r.n_copies if mode == "tile" else 1
-    period = (d - s) / n_copies
+    period = (d - s) / n_copies if n_copies else 0.0  # 0 copies: the zone collapses onto s
     lo = r.lo
 
     def forward(x: float, copy: int) -> float:
@@ -77,6 +77,8 @@ def update_parts_info(
             return x
         if x > e:
             return x + shift
+        if n_copies == 0:  # a removed zone: what lay in it meets the join
+            return s
         return s + copy * period + (x - s) * scale
 
     n = int(parts.max()) + 1 if parts.size and parts.max() >= 0 else 0

@@ -9,7 +9,8 @@ tile), and its destination keeps its change ``DEST - END``. An EDIT is::
 
     {"axis": "x" | "y" | "z",
      "zone": [START, END],          # the slab to change, START < END
-     "to": DEST,                    # where END goes; DEST > START; DEST < END shrinks
+     "to": DEST,                    # where END goes; DEST > START (tile: DEST == START removes
+                                    # the zone); DEST < END shrinks
      "mode": "stretch" | "tile" | "global"}
 
 Positions are numbers in the object's units (metres for glTF) or strings with a ``%`` suffix:
@@ -253,12 +254,17 @@ class Recipe:
 
 
 def tile_count(length: float, target: float) -> int:
-    """Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``.
+    """Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``,
+    and 0 for ``target == 0`` exactly (the zone removed: DEST == START).
 
     Half-way cases round up (1.5 -> 2) so growing by one and a half periods adds a copy. A ratio
     within ``1e-9`` below a half counts as the half: ``0.3 / 0.2`` is ``1.4999999999999998`` in
-    floating point. The web editor's ``tileCount`` (web/src/remap.ts) is the same expression.
+    floating point. Rounding never gives 0 copies (a tile to 30% of its length is one copy);
+    only a zero destination length does. The web editor's ``tileCount`` (web/src/recipe.ts) is
+    the same expression.
     """
+    if target == 0:
+        return 0
     return max(1, math.floor(target / length + 0.5 + 1e-9))
 
 
@@ -290,6 +296,7 @@ def source_coordinate(
     (N,) float64
         For ``tile``, copy ``m`` of ``n`` maps ``[start + m L'/n, start + (m+1) L'/n]`` onto
         ``[start, end]``; the resampler additionally blends across seams (the map does not).
+        With 0 copies (``dest == start``) the zone is cut out: ``y >= start`` reads ``y - shift``.
     """
     y = np.asarray(y, dtype=np.float64)
     shift = dest - end
@@ -300,6 +307,8 @@ def source_coordinate(
         return lo + (y - lo) / factor
     length, target = end - start, dest - start
     x = np.where(y < start, y, y - shift)
+    if mode == "tile" and tile_count(length, target) == 0:
+        return x
     inside = (y >= start) & (y <= dest)
     t = (y[inside] - start) / target  # 0..1 across the new zone
     if mode == "stretch":
@@ -339,7 +348,9 @@ def forward_coordinate(
     if mode == "stretch":
         scale = (dest - start) / (end - start)
     elif mode == "tile":
-        scale = (dest - start) / (tile_count(end - start, dest - start) * (end - start))
+        n = tile_count(end - start, dest - start)
+        # 0 copies: planes inside a removed zone collapse onto its start
+        scale = (dest - start) / (n * (end - start)) if n else 0.0
     else:
         raise ValueError(f"mode: expected one of {MODES}, got {mode!r}")
     return np.where(x <= start, x, np.where(x >= end, x + shift, start + (x - start) * scale))

@@ -266,7 +266,8 @@ def recompute_mask(
     still the distance: the slab grows (scale >= 1, so the inverse map is 1-Lipschitz and old
     distances are lower bounds) and its nearest surface point lies square to the axis (axial slope
     of the source distance ~ 0), so its distance is carried over unchanged; or, in a tile copy at
-    scale ~1, the ball of its distance lies within its copy (a pure translation).
+    scale ~1, the ball of its distance lies within its copy (a pure translation). A removed zone
+    (tile, 0 copies) is one join at START: only voxels whose ball reaches it are recomputed.
     """
     lim = (band + 1.0) * h * max(1.0, 1.0 / plan.scale)
     none = np.zeros((0, *out_sdf.shape[1:]), np.uint8), 0
@@ -277,6 +278,8 @@ def recompute_mask(
         # unless the ball of its distance reaches an internal seam (or it lies in a blend).
         period = (dest - start) / n_copies
         seams = start + period * np.arange(1, n_copies)
+        if dest == start:  # 0 copies: the two sides meet at START, whose distances may change
+            seams = np.array([start])
         if seams.size == 0:
             return none
         to_seam = np.abs(y[:, None] - seams[None, :]).min(axis=1)

@@ -74,7 +74,8 @@ def make_plan(
     between repeated elements, or through the middle of one, still give the smoothest seams (both
     continuations agree and the blend changes nothing); ``blend=False`` (what
     :func:`~partscale.edit.naive_edit` uses) concatenates the copies without blending, leaving a
-    step in the field at each seam.
+    step in the field at each seam. A tile with 0 copies (``dest == start``) has no slab and no
+    blend: the layers before START and those after END are copied as they were, joined at START.
     """
     y = origin + np.arange(n_out) * h
     x = source_coordinate(y, mode=mode, start=start, end=end, dest=dest, lo=lo, hi=hi)
@@ -82,8 +83,9 @@ def make_plan(
     shift_vox = round((dest - end) / h)
     # Outside the slab the map is a whole-voxel translation: snap to exact integers so those
     # layers are copies (rigidity), immune to rounding in the map.
+    removed = mode == "tile" and tile_count(end - start, dest - start) == 0
     before = y < start
-    after = y > dest
+    after = y >= start if removed else y > dest  # 0 copies: the sides join at START, no slab
     if mode != "global":
         j = np.arange(n_out, dtype=np.float64)
         xa = np.where(before, j, xa)
@@ -98,6 +100,8 @@ def make_plan(
         in_slab = np.ones(n_out, bool)
     elif mode == "stretch":
         scale = target / length
+    elif removed:
+        scale = 1.0  # no slab: both sides are copied as they were
     else:
         n = tile_count(length, target)
         period = target / n

@@ -76,7 +76,7 @@ class ResolvedEdit:
 
     @property
     def n_copies(self) -> int:
-        """Copies of the zone a ``tile`` makes (:func:`~partscale.edit.tile_count`)."""
+        """Copies of the zone a ``tile`` makes (:func:`~partscale.edit.tile_count`; 0: removed)."""
         return tile_count(self.end - self.start, self.dest - self.start)
 
     def shift_voxels(self, voxel_size: float) -> int:
@@ -100,13 +100,17 @@ class ResolvedEdit:
     def seams(self) -> list[tuple[float, float | None]]:
         """Seam planes in the result, each with the original plane it continues (None: a join).
 
-        The zone's two planes, and for ``tile`` the joins between consecutive copies.
+        The zone's two planes, and for ``tile`` the joins between consecutive copies; a removed
+        zone (tile, 0 copies) is one join at START, where the content before START meets the
+        content after END.
         """
         if self.mode == "global":
             return [
                 (float(self.to_result(self.start)), self.start),
                 (float(self.to_result(self.end)), self.end),
             ]
+        if self.mode == "tile" and self.n_copies == 0:
+            return [(self.start, None)]
         out: list[tuple[float, float | None]] = [(self.start, self.start), (self.dest, self.end)]
         if self.mode == "tile":
             n = self.n_copies
@@ -123,8 +127,11 @@ def resolve_edit(csdf: CSDF, edit: Edit) -> ResolvedEdit:
     """Validate ``edit`` against ``csdf`` and resolve it to world units.
 
     ``%`` positions refer to the solid's extent along the axis; ``dest`` is snapped to whole
-    voxels. Raises :class:`InputError` for a zone outside the solid or thinner than two voxels, a
-    destination not beyond the start, or an output grid too large for memory.
+    voxels. A ``tile`` with ``dest`` equal to the start makes 0 copies: the zone is cut out and
+    the sides join (its start snaps to whole voxels from its end, as a destination does, so the
+    content beyond moves by whole voxels). Raises :class:`InputError` for a zone outside the
+    solid or thinner than two voxels, a destination not beyond the start (for stretch and
+    global; before it for tile), or an output grid too large for memory.
     """
     ax = edit.axis_index
     h = csdf.voxel_size
@@ -138,7 +145,14 @@ def resolve_edit(csdf: CSDF, edit: Edit) -> ResolvedEdit:
     name = AXES[ax]
     if not s < e:
         raise InputError(f"zone: expected start < end, got start {_fmt(s)} >= end {_fmt(e)}")
-    if not d > s:
+    # tile to the zone's start: 0 copies, the zone cut out
+    remove = edit.mode == "tile" and d == s
+    if not (d > s or remove):
+        if d == s:
+            raise InputError(
+                f"to: expected DEST > START {_fmt(s)} for {edit.mode}, got DEST == START (to "
+                f"remove the zone use mode tile, whose DEST == START makes 0 copies)"
+            )
         raise InputError(f"to: expected DEST > START {_fmt(s)}, got {_fmt(d)}")
     tol = h / 2
     if s < lo - tol or e > hi + tol:
@@ -152,7 +166,11 @@ def resolve_edit(csdf: CSDF, edit: Edit) -> ResolvedEdit:
         )
     shift = round((d - e) / h)
     d_snap = e + shift * h
-    if d_snap - s < h:
+    if remove:
+        # the zone removed is whole voxels: its start snaps with the destination (under half a
+        # voxel), so DEST == START exactly and everything beyond END moves by whole voxels
+        s = d_snap
+    elif d_snap - s < h:
         raise InputError(
             f"to: expected DEST at least one voxel ({_fmt(h)}) beyond START {_fmt(s)}, "
             f"got {_fmt(d)}"

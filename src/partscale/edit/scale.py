@@ -255,7 +255,8 @@ def _carried(
         if a == ax:
             planes = forward_coordinate(planes, **kw)
     s2, e2 = float(planes[0]), float(planes[1])
-    return (s, en, d), (s2, e2, e2 + (d - en))
+    # a destination at the start stays there exactly (tile: 0 copies, the zone removed)
+    return (s, en, d), (s2, e2, s2 if d == s else e2 + (d - en))
 
 
 @keyword_options
@@ -293,6 +294,8 @@ def apply_recipe(
         out = _apply_edit(out, step, progress=scaled(progress, i / n, (i + 1) / n), record=record)
         h = out.meta["history"][-1]
         kw = {"mode": e.mode, "start": s2, "end": e2, "dest": h["to_snapped"]}
+        if h.get("copies") == 0:  # a removed zone's start snapped with its destination
+            kw["start"] = h["to_snapped"]
         if e.mode == "global":
             kw.update(lo=h["lo"], hi=h["hi"])
         applied.append((ax, kw))
@@ -323,10 +326,17 @@ def recipe_shape(csdf: CSDF, recipe: Recipe | dict[str, Any] | list) -> tuple[in
         shift = round((d2 - e2) / h)
         shape[ax] = max(1, shape[ax] + shift)
         kw: dict[str, Any] = {"mode": e.mode, "start": s2, "end": e2, "dest": e2 + shift * h}
+        if e.mode == "tile" and d2 == s2:  # removed: the start snaps with the destination
+            kw["start"] = kw["dest"]
         lo, hi = extent[ax]
         if e.mode == "global":
             kw.update(lo=lo, hi=hi)
-        if e.mode != "global" and hi - lo > 0 and e2 > s2 and kw["dest"] > s2:
+        if (
+            e.mode != "global"
+            and hi - lo > 0
+            and e2 > s2
+            and (kw["dest"] > s2 or kw["dest"] == kw["start"])
+        ):
             extent[ax] = [float(v) for v in forward_coordinate(np.array([lo, hi]), **kw)]
         elif e.mode == "global" and hi > lo:
             extent[ax] = [lo, hi + shift * h]

@@ -133,6 +133,8 @@ class Zone:
         y0 = np.asarray(y0, dtype=np.float64)
         y1 = np.asarray(y1, dtype=np.float64)
         n = self.n_copies if self.mode == "tile" else 1
+        if n == 0:  # a removed zone: nothing of the result lies in it
+            return np.full(y0.shape, np.nan), np.full(y1.shape, np.nan)
         step = (self.new_end - self.new_start) / n
         scale = step / (self.end - self.start)
         k = np.clip(np.floor((y0 - self.new_start) / step), 0, n - 1)

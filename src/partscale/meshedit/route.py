@@ -240,7 +240,35 @@ def _split_edges(piece: Piece, edges: np.ndarray, t: np.ndarray, axis: int, plan
     return Piece(np.concatenate([V, new_v]), faces, vattrs, fattrs)
 
 
+def _remove(piece, axis, s, e, rot, size):
+    """A tile with 0 copies: the zone's triangles dropped, everything beyond it moved back by
+    its length, END's outline snapped onto START's where they match (one join, a Seam)."""
+    from scipy.spatial import cKDTree
+
+    piece = _cut_planes(piece, axis, (s, e))
+    piece = _conform(piece, axis, s, e, WELD_TOLERANCE * size)
+    centre = piece.vertices[piece.faces, axis].mean(axis=1)
+    piece, _ = subset(piece, ~((centre > s) & (centre < e)))
+    x = piece.vertices[:, axis].copy()
+    _translate(piece, x >= e, axis, s - e, rot)
+    V = piece.vertices
+    V[x == e, axis] = s  # exactly on START
+    lat = [a for a in range(3) if a != axis]
+    ps, pe = np.flatnonzero(x == s), np.flatnonzero(x == e)
+    if len(ps) == 0 or len(pe) == 0:
+        return piece, [Seam("xyz"[axis], s, 0, len(ps) + len(pe))] if len(ps) + len(pe) else []
+    tol = WELD_TOLERANCE * size
+    dist, j = cKDTree(V[ps][:, lat]).query(V[pe][:, lat], distance_upper_bound=tol)
+    matched = np.isfinite(dist)
+    back = cKDTree(V[pe][:, lat]).query(V[ps][:, lat], distance_upper_bound=tol)[0]
+    V[pe[matched]] = V[ps[j[matched]]]
+    unmatched = int((~matched).sum() + (~np.isfinite(back)).sum())
+    return piece, [Seam("xyz"[axis], s, int(matched.sum()), unmatched)]
+
+
 def _tile(piece, axis, s, e, d, rot, size):
+    if d == s:
+        return _remove(piece, axis, s, e, rot, size)
     piece = _cut_planes(piece, axis, (s, e))
     if tile_count(e - s, d - s) > 1:
         piece = _conform(piece, axis, s, e, WELD_TOLERANCE * size)
@@ -328,8 +356,9 @@ def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
     s, e, d = edit.resolve(lo, hi)
     if not s < e:
         raise InputError(f"zone: expected start < end, got start {s:.6g} >= end {e:.6g}")
-    if not d > s:
-        raise InputError(f"to: expected DEST > START {s:.6g}, got {d:.6g}")
+    if not (d > s or (edit.mode == "tile" and d == s)):  # tile to its start: zone removed
+        how = f" for {edit.mode} (to remove the zone use mode tile)" if d == s else ""
+        raise InputError(f"to: expected DEST > START {s:.6g}{how}, got {d:.6g}")
     tol = 1e-9 * max(abs(lo), abs(hi), hi - lo)
     if s < lo - tol or e > hi + tol:
         raise InputError(
@@ -383,7 +412,7 @@ def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh
             if a == ax:
                 planes = forward_coordinate(planes, **kw)
         s, e = float(planes[0]), float(planes[1])
-        d = e + (d0 - e0)
+        d = s if d0 == s0 else e + (d0 - e0)  # a destination at the start stays there
         cur = np.concatenate([p.piece.vertices[np.unique(p.piece.faces)] for p in instances])
         lo, hi = float(cur[:, ax].min()), float(cur[:, ax].max())
         for inst in instances:

@@ -2,7 +2,8 @@
 
 Per axis (see :func:`fit`): where a repeat is found, tile one period (a whole number of voxels,
 so the copies are exact shifts of its layers) with the number of copies
-that brings the length closest to the target, and absorb the remainder (less than half a period)
+that brings the length closest to the target (to shrink, remove whole periods: a zone of them
+tiled to its start, 0 copies, so the rest keep their thickness and spacing), and absorb the remainder (less than half a period)
 by stretching constant slabs outside that period, so spacing is kept and the length is exact
 (a board or panel keeps its thickness: spans and long uniform runs first, then the copies within
 a tolerance; the notes say when only a thin slab could take it);
@@ -338,21 +339,35 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
             if k > 0:  # one period, 1 + k copies
                 e = s + period
                 grow = round(k * period / h) * h
-            else:  # -k + 1 periods, one copy (starting early enough to fit in the repeat)
-                s = max(t.region[0], min(s, t.region[1] - (1 - k) * period))
-                e = s + (1 - k) * period
+            else:  # -k periods removed: 0 copies (tile to the zone's start)
+                # whole periods earlier (the same phase: the same plane cost) until it fits in
+                # the repeat, then clamped there
+                back = max(0, int(np.ceil((s - k * period - t.region[1]) / period - 1e-9)))
+                s = max(t.region[0], s - back * period)
+                e = s - k * period
                 grow = round(k * period / h) * h
-            edits.append(Edit(name, s, e, e + grow, "tile"))
+            edits.append(Edit(name, s, e, e + grow if k > 0 else s, "tile"))
             tile_zone = (s, e)
             left = change - grow
             why.append(
-                f"{name}: tile {abs(k)} {'more' if k > 0 else 'fewer'} period(s) of "
+                (f"{name}: tile {k} more" if k > 0 else f"{name}: remove {-k}") + f" period(s) of "
                 f"{_fmt(period, units)} ({t.reason}), zone {_fmt(s - lo, units)}..{_fmt(e - lo, units)} "
-                f"from the {name} min"
+                f"from the {name} min" + ("" if k > 0 else " (tile to its start: 0 copies)")
             )
     if abs(left) > h / 2:
         layers = (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0]))
         copies_len = float(edits[0].dest) - float(edits[0].start) if tile_zone else 0.0
+        # periods removed (0 copies): the copies left beside them, the longer side, take the
+        # copies' share (a stretch of those whole periods)
+        removed = tile_zone is not None and copies_len == 0
+        rest = None
+        if removed and tile_zone is not None:
+            rest = max(
+                (tiles[0].region[0], tile_zone[0]),
+                (tile_zone[1], tiles[0].region[1]),
+                key=lambda z: z[1] - z[0],
+            )
+            copies_len = rest[1] - rest[0]
         tiled = None if tile_zone is None else (tiles[0].region, tile_zone, period)
         within = False  # the copies take what is left within COPY_TOLERANCE
         for tier, thin in _remainder_tiers(slabs, h, tiled):
@@ -374,7 +389,18 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
             if abs(left) <= h / 2:
                 break
         if abs(left) > h / 2:
-            if tile_zone is not None:  # the copies absorb it: spacing changes a little
+            if rest is not None and rest[1] - rest[0] + min(left, 0.0) >= MIN_SLAB_VOXELS * h:
+                # the copies left beside the removed periods absorb it: their spacing changes a
+                # little (0 copies cannot take a length)
+                a, b = rest
+                edits.append(Edit(name, a, b, b + left, "stretch"))
+                it = "the rest" if len(edits) > 2 else "it"
+                why.append(
+                    f"{name}: no constant slab outside the tiled zone could take {it}: the "
+                    f"copies left {_fmt(a - lo, units)}..{_fmt(b - lo, units)} from the {name} "
+                    f"min absorb {_fmt(left, units)} (each {100 * left / (b - a):+.1f}%)"
+                )
+            elif tile_zone is not None and not removed:  # the copies absorb it: spacing changes
                 t0 = edits[0]
                 dest = float(t0.dest) + left
                 n = tile_count(float(t0.end) - float(t0.start), dest - float(t0.start))

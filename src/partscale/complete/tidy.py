@@ -3,8 +3,10 @@
 Two rules on the sign of the completed SDF (solid where ``sdf < 0``), applied after the fusion:
 
 - Specks: a solid component (6-connected) smaller than ``SPECK_SHARE`` of the largest one is
-  scan noise (flying pixels, a few readings a thin closure turned solid) and becomes outside.
-  The share is of volumes, so it does not change with the resolution.
+  scan noise (flying pixels, a few readings a thin closure turned solid) and becomes outside:
+  free-floating, or a bump touching a part only along an edge or at a corner (26-connected
+  pieces, which keep those bumps joined by the next rule, scored lower on the bench). The
+  share is of volumes, so it does not change with the resolution.
 - Manifold voxels: two solid voxels that touch only along an edge (a 2x2 face whose solid voxels
   are diagonal) or only at a corner (a 2x2x2 cube whose solid, or whose outside, voxels are two
   opposite corners alone) leave marching cubes a choice it makes differently from each side: the
@@ -26,8 +28,8 @@ FILL_VOXELS = 0.1
 
 
 def drop_specks(sdf: np.ndarray, h: float) -> tuple[np.ndarray, int]:
-    """(X, Y, Z) float32 SDF without solid components under ``SPECK_SHARE`` of the largest, and
-    how many were dropped. A dropped voxel takes its distance's magnitude (outside, as near the
+    """(X, Y, Z) float32 SDF without solid (6-connected) components under ``SPECK_SHARE`` of the
+    largest, and how many were dropped. A dropped voxel takes its distance's magnitude (outside, as near the
     surface as it was inside)."""
     lab, n = ndimage.label(sdf < 0)
     if n < 2:

@@ -127,7 +127,7 @@ def tum_completions():
         color=root / "TUM_color.png",
         intrinsics=root / "camera_primesense.json",
         box=(0, 255, 245, 480),
-        res=128,  # at 96 marching cubes leaves one non-manifold edge (not watertight)
+        res=128,
         upright=True,
     )
     return out

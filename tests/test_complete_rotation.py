@@ -127,7 +127,7 @@ def tum_completions():
         color=root / "TUM_color.png",
         intrinsics=root / "camera_primesense.json",
         box=(0, 255, 245, 480),
-        res=128,  # at 96 marching cubes leaves one non-manifold edge (not watertight)
+        res=128,
         upright=True,
     )
     return out
@@ -155,3 +155,35 @@ def test_real_tum_chairs_complete_watertight_and_upright(tum_completions):
         ext = c.index_to_world(np.argwhere(np.asarray(c.sdf) < 0))
         # taller than wide is not asked of a chair; upright is: its top well above the floor
         assert ext[:, 1].max() >= 0.7, name
+
+
+def _star_points(r0: float, legs: int = 5, step: float = 0.003) -> np.ndarray:
+    """(N, 3) upright points: the tops of ``legs`` legs (0.05 wide, 5 cm high) from radius r0
+    to 0.33 m about the y axis, no hub between them, under a seat 0.45 m wide at 0.48 m."""
+    u, v = np.meshgrid(np.arange(r0, 0.33, step), np.arange(-0.025, 0.025, step))
+    pts = []
+    for i in range(legs):
+        a = 2 * np.pi * i / legs
+        x = u * np.cos(a) - v * np.sin(a)
+        z = u * np.sin(a) + v * np.cos(a)
+        pts.append(np.stack([x.ravel(), np.full(x.size, 0.05), z.ravel()], axis=1))
+    s = np.arange(-0.225, 0.225, 0.01)
+    sx, sz = np.meshgrid(s, s)
+    pts.append(np.stack([sx.ravel(), np.full(sx.size, 0.48), sz.ravel()], axis=1))
+    return np.concatenate(pts)
+
+
+@pytest.mark.parametrize("cell", [0.006, 0.011])
+def test_the_hub_test_is_a_length_of_the_base_not_of_the_grid(cell):
+    # the legs seen start 5 cm from the axis (the hub unseen): at a fine grid's cell as at a
+    # coarse one the five-star is found (five cells of the fine one, 3 cm, refused it); legs
+    # that start near their tips (four feet, each a piece of its own) never turn
+    from partscale.complete.symmetry import rotation_axis
+
+    def free(p):
+        return np.zeros(len(p), bool)
+
+    rot = rotation_axis(_star_points(0.05), free, cell)
+    assert rot is not None and rot.fold == 5
+    assert np.hypot(rot.params["axis_x"], rot.params["axis_z"]) <= 2 * cell
+    assert rotation_axis(_star_points(0.26, legs=4), free, cell) is None

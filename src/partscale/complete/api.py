@@ -18,6 +18,7 @@ from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import fuse as fuse_mod
 from . import symmetry as sym_mod
+from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
 from .floor import base_plane, clusters, find_floor
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
@@ -551,6 +552,10 @@ def complete(
     )
     if not (sdf < 0).any():
         raise InputError(f"{source}: expected a solid after completion, got none (all carved)")
+    # made fit to mesh: scan noise's floating specks dropped, diagonal-only contacts filled
+    # (marching cubes would join them by edges of four faces)
+    sdf, n_specks = tidy_mod.drop_specks(sdf, h)
+    sdf, n_filled = tidy_mod.fill_contacts(sdf, h)
     report(0.95, "metadata")
     surface = np.abs(sdf) <= h
     counts = np.bincount(prov[surface], minlength=4).astype(np.float64)
@@ -564,6 +569,8 @@ def complete(
         "views": len(frames),
         "points_observed": len(Q),
         "copies_dropped_in_free_space": n_dropped,
+        "specks_dropped": n_specks,
+        "contact_voxels_filled": n_filled,
         "floor": None
         if found is None
         else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
@@ -617,6 +624,7 @@ def complete(
         "slab_agree": fuse_mod.SLAB_AGREE,
         "slab_edge_share": fuse_mod.SLAB_EDGE_SHARE,
         "carve_margin_voxels": CARVE_MARGIN,
+        "speck_share": tidy_mod.SPECK_SHARE,
         "floor_tol_m": FLOOR_TOL,
         "up_from": up_from,
         "max_plane_tilt_deg": sym_mod.MAX_PLANE_TILT_DEG,

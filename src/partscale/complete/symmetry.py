@@ -47,8 +47,12 @@ ROTATION_SAMPLES = 4000
 ROTATION_CELLS_ACROSS = 40
 """The rotation's support tolerance is at most the footprint of what the base carries over
 this (at --res 128 the grid's cell is finer already)."""
-HUB_CELLS = 5.0
-"""Cells from the axis within which a turning base's pieces must reach (their hub)."""
+HUB_SHARE = 0.25
+"""Share of the radius of a turning base's pieces (their farthest point from the axis) within
+which they must reach the axis (their hub): a length of the base, not of the grid's cells (five
+cells passed the TUM purple chair's two legs at --res 64, reaching 0.18 of their radius, and
+failed them at --res 128, 0.20). A star base's legs start at its hub (0.02-0.20 of their
+radius on the TUM chairs); a table's four legs, each a piece, stand near their radius."""
 ROTATION_SLACK_DEG = 4.0
 """Degrees a rotated copy may turn further to land on the scan (:func:`_copies_scored`)."""
 MIN_COVER = 0.6
@@ -457,7 +461,7 @@ def rotation_axis(
         # a turning base is one piece whose arms meet at a hub on the axis (four legs of a
         # table, each a piece of its own, are not)
         r = np.hypot(base[held, 0] - centre[0], base[held, 2] - centre[1])
-        if r.min() > HUB_CELLS * cell:
+        if r.min() > HUB_SHARE * r.max():
             continue
         # the axis placed by exact copies (the slack finds it, but copies are made exact)
         centre = _rotation_search(

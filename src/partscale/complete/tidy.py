@@ -73,7 +73,7 @@ def _ambiguous(solid: np.ndarray) -> np.ndarray:
     cube = {q: c(*q) for q in corners}
     count = sum(v.astype(np.int8) for v in cube.values())
     for q in corners[:4]:
-        o = tuple(1 - x for x in q)
+        o = (1 - q[0], 1 - q[1], 1 - q[2])
         pair = cube[q] & cube[o]
         # two solid opposite corners, nothing else: fill a neighbour of the first
         nb = (1 - q[0], q[1], q[2])

@@ -300,16 +300,8 @@ def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
     bit = (1 << (2 * axis + neg)).astype(np.uint8)
     bits = np.zeros(shape, np.uint8)
     np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), bit)
-    # the six bits dilated by a 3x3x3 cube at once: the cube is separable, a shifted OR per axis
-    dil = bits
-    for ax in range(3):
-        d = dil.copy()
-        lo = [slice(None)] * 3
-        hi = [slice(None)] * 3
-        lo[ax], hi[ax] = slice(None, -1), slice(1, None)
-        d[tuple(lo)] |= dil[tuple(hi)]
-        d[tuple(hi)] |= dil[tuple(lo)]
-        dil = d
+    # the six bits dilated by a 3x3x3 cube at once
+    dil = _dilate_bits(bits)
     dirs = np.zeros((6, 3))
     dirs[np.arange(6), np.arange(6) // 2] = np.where(np.arange(6) % 2 == 0, 1.0, -1.0)
     opposite = ((normals @ dirs.T < -BETWEEN_FACING) * (1 << np.arange(6))).sum(axis=1)

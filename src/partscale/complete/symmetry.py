@@ -265,12 +265,10 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
     )
 
 
-def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> Symmetry:
-    """The plane moved to where the scan's mirrored points lie closest to scan points facing
-    the same way (the mean distance, capped at ``cell``, so points without a counterpart weigh
-    alike everywhere), searched below the voting grid in offset, then angle, then offset, at the
-    heights where the plane holds. The voting grid alone leaves the plane up to a cell and a
-    degree off, and a copy a voxel off costs about as much as a missing one."""
+def _plane_samples(sym, P: np.ndarray, N: np.ndarray):
+    """The points (M, 3) float64 and normals (M, 3) where ``sym`` holds, at most
+    ``REFINE_SAMPLES`` of them (a fixed-seed sample), and a KD-tree of all points ``P``: what a
+    plane's fit is measured on."""
     from scipy.spatial import cKDTree
 
     w = sym.where(P)
@@ -278,7 +276,16 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
     if len(X) > REFINE_SAMPLES:
         k = np.random.default_rng(1).choice(len(X), REFINE_SAMPLES, replace=False)
         X, XN = X[k], XN[k]
-    tree = cKDTree(P)
+    return X, XN, cKDTree(P)
+
+
+def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> Symmetry:
+    """The plane moved to where the scan's mirrored points lie closest to scan points facing
+    the same way (the mean distance, capped at ``cell``, so points without a counterpart weigh
+    alike everywhere), searched below the voting grid in offset, then angle, then offset, at the
+    heights where the plane holds. The voting grid alone leaves the plane up to a cell and a
+    degree off, and a copy a voxel off costs about as much as a missing one."""
+    X, XN, tree = _plane_samples(sym, P, N)
 
     def cost(t, d):
         A, b = _mirror(t, d)
@@ -328,15 +335,8 @@ def tilted_plane(
     tolerance, world units. Returns the tilted plane's unit normal (3,) and offset (its points
     ``p`` have ``normal @ p == offset``), in the upright frame.
     """
-    from scipy.spatial import cKDTree
-
     P, N = np.asarray(points, np.float64), np.asarray(normals, np.float64)
-    w = sym.where(P)
-    X, XN = P[w], N[w]
-    if len(X) > REFINE_SAMPLES:
-        k = np.random.default_rng(1).choice(len(X), REFINE_SAMPLES, replace=False)
-        X, XN = X[k], XN[k]
-    tree = cKDTree(P)
+    X, XN, tree = _plane_samples(sym, P, N)
     t0, d0 = sym.params["theta"], sym.params["offset"]
     n0 = np.array([np.cos(t0), 0.0, np.sin(t0)])
     pivot = float(np.median(X[:, 1]))  # tilted about the plane's line at the points' mid-height

@@ -225,6 +225,19 @@ def test_fit_tiles_a_non_whole_voxel_period_as_exact_copies(pitch, more):
     assert M.spacing_error(c, out, zones_from_history(out, c)) <= 0.01
 
 
+def _panel_and_boards(panel, x0, pitch, board, n):
+    """A panel ``panel`` thick at x = 0 and ``n`` boards ``board`` thick every ``pitch`` from
+    ``x0``, all 0.5 tall on a 0.04 plinth, 0.3 deep: a shelf whose remainder has a choice."""
+    length = x0 + (n - 1) * pitch + board
+    boxes = [((0, 0, 0), (panel, 0.5, 0.3)), ((0, 0, 0), (length, 0.04, 0.3))]
+    boxes += [((x0 + m * pitch, 0, 0), (x0 + m * pitch + board, 0.5, 0.3)) for m in range(n)]
+    return shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boxes),
+        np.array([[0, 0, 0], [length, 0.5, 0.3]]),
+        voxel_size=H,
+    )
+
+
 @pytest.mark.parametrize("rest", [1, 4, -3])
 def test_fit_puts_the_remainder_in_a_long_span_not_in_a_board(rest):
     """A 5-voxel end panel, a 30-voxel empty span, then five 2-voxel boards 13 voxels apart: the
@@ -233,14 +246,7 @@ def test_fit_puts_the_remainder_in_a_long_span_not_in_a_board(rest):
     stretched the panel, the only slab outside the repeat's region, by 1, 4 and -1 voxels)."""
     panel, span, pitch, board, n = 0.1, 0.6, 0.26, 0.04, 5
     x0 = panel + span
-    length = x0 + (n - 1) * pitch + board
-    boxes = [((0, 0, 0), (panel, 0.5, 0.3)), ((0, 0, 0), (length, 0.04, 0.3))]
-    boxes += [((x0 + m * pitch, 0, 0), (x0 + m * pitch + board, 0.5, 0.3)) for m in range(n)]
-    c = shapes.grid(
-        lambda p: shapes.boxes_sdf(p, boxes),
-        np.array([[0, 0, 0], [length, 0.5, 0.3]]),
-        voxel_size=H,
-    )
+    c = _panel_and_boards(panel, x0, pitch, board, n)
     target = extent(c, 0) + pitch + rest * H
     recipe, why = fit(c, [repr(target), "=", "="])
     assert [e.mode for e in recipe.edits] == ["tile", "stretch"], why
@@ -348,14 +354,7 @@ def test_fit_says_when_only_a_thin_slab_can_take_the_remainder():
     (the old code said nothing)."""
     panel, pitch, board, n = 0.1, 0.16, 0.04, 5
     x0 = panel + 0.16
-    length = x0 + (n - 1) * pitch + board
-    boxes = [((0, 0, 0), (panel, 0.5, 0.3)), ((0, 0, 0), (length, 0.04, 0.3))]
-    boxes += [((x0 + m * pitch, 0, 0), (x0 + m * pitch + board, 0.5, 0.3)) for m in range(n)]
-    c = shapes.grid(
-        lambda p: shapes.boxes_sdf(p, boxes),
-        np.array([[0, 0, 0], [length, 0.5, 0.3]]),
-        voxel_size=H,
-    )
+    c = _panel_and_boards(panel, x0, pitch, board, n)
     recipe, why = fit(c, [repr(extent(c, 0) + pitch + 3 * H), "=", "="])
     assert [e.mode for e in recipe.edits] == ["tile", "stretch"], why
     assert float(recipe.edits[1].end) <= panel, recipe  # the panel: the only slab outside

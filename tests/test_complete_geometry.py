@@ -63,6 +63,17 @@ def test_a_block_seen_on_its_sides_completes_solid_down_to_its_unseen_bottom():
     assert volume <= 1.15 * (0.6 * 0.3 * 0.4)
 
 
+def _fuse_args(P, N, shape, closure):
+    """Positional arguments of ``fuse.fuse`` for observed grey points ``P`` with normals ``N``
+    on a unit grid at the origin: nothing seen free, no symmetry, the support far below."""
+    from partscale.complete import fuse
+
+    never = lambda p: np.zeros(len(p), bool)  # noqa: E731
+    above = lambda p: p[:, 1] + 10.0  # noqa: E731
+    args = (np.eye(4), shape, np.zeros(3), 1.0, P, np.full((len(P), 3), 128, np.uint8))
+    return (*args, np.full(len(P), fuse.OBSERVED, np.uint8), N, never, [], above, closure)
+
+
 def _grid_face(lo, hi, axis, side, rows=None):
     """Points (N, 3) every half voxel on one face of a box, and their normals; ``rows``: keep
     only those whose z lies within half a voxel of a row start ``lo_z + 12 k``."""
@@ -96,10 +107,7 @@ def test_the_fill_is_kept_where_it_closes_a_part_and_dropped_where_it_leaves_voi
     P = np.concatenate([p for p, _ in faces])
     N = np.concatenate([n for _, n in faces])
     shape = (42, 18, 70)
-    never = lambda p: np.zeros(len(p), bool)  # noqa: E731
-    above = lambda p: p[:, 1] + 10.0  # noqa: E731
-    args = (np.eye(4), shape, np.zeros(3), 1.0, P, np.full((len(P), 3), 128, np.uint8))
-    args += (np.full(len(P), fuse.OBSERVED, np.uint8), N, never, [], above, 2.0)
+    args = _fuse_args(P, N, shape, closure=2.0)
     with_fill = fuse.fuse(*args)[0] < 0
     without = fuse.fuse(*args, fill_between=False)[0] < 0
 
@@ -125,10 +133,7 @@ def test_a_slab_seen_on_top_front_and_one_side_completes_to_its_thickness():
     P = np.concatenate([p for p, _ in faces])
     N = np.concatenate([n for _, n in faces])
     shape = (50, 32, 40)
-    never = lambda p: np.zeros(len(p), bool)  # noqa: E731
-    above = lambda p: p[:, 1] + 10.0  # noqa: E731
-    args = (np.eye(4), shape, np.zeros(3), 1.0, P, np.full((len(P), 3), 128, np.uint8))
-    args += (np.full(len(P), fuse.OBSERVED, np.uint8), N, never, [], above, 1.5)
+    args = _fuse_args(P, N, shape, closure=1.5)
     sdf = fuse.fuse(*args)[0]
     thin = fuse.fuse(*args, fill_between=False)[0]
     # under the middle of the top: solid down to a voxel above the underside (y = 20) ...

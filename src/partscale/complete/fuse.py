@@ -402,29 +402,33 @@ def _dilate_bits(bits: np.ndarray) -> np.ndarray:
     return dil
 
 
+@numba.njit(cache=True, inline="always")
+def _voxel_at(p, n, i, s):
+    """The voxel (three ints) holding point ``p[i] - s * n[i]`` (continuous indices)."""
+    return (
+        int(np.rint(p[i, 0] - n[i, 0] * s)),
+        int(np.rint(p[i, 1] - n[i, 1] * s)),
+        int(np.rint(p[i, 2] - n[i, 2] * s)),
+    )
+
+
 @numba.njit(cache=True, parallel=True)
 def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
     X, Y, Z = bits.shape
     for i in numba.prange(p.shape[0]):
         last = 0
         # a face rising beside the point (a junction, the back above a seat) is no edge
-        a = int(np.rint(p[i, 0] + n[i, 0] * SLAB_ABOVE))
-        b = int(np.rint(p[i, 1] + n[i, 1] * SLAB_ABOVE))
-        c = int(np.rint(p[i, 2] + n[i, 2] * SLAB_ABOVE))
+        a, b, c = _voxel_at(p, n, i, -SLAB_ABOVE)
         if 0 <= a < X and 0 <= b < Y and 0 <= c < Z and bits[a, b, c] & side[i]:
             depth[i] = 0
             continue
         # and a point not next to a side face is no edge either (its walk would only graze it)
-        a = int(np.rint(p[i, 0] - n[i, 0]))
-        b = int(np.rint(p[i, 1] - n[i, 1]))
-        c = int(np.rint(p[i, 2] - n[i, 2]))
+        a, b, c = _voxel_at(p, n, i, 1.0)
         if not (0 <= a < X and 0 <= b < Y and 0 <= c < Z and near[a, b, c] & side[i]):
             depth[i] = 0
             continue
         for s in range(1, reach + 1):
-            a = int(np.rint(p[i, 0] - n[i, 0] * s))
-            b = int(np.rint(p[i, 1] - n[i, 1] * s))
-            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            a, b, c = _voxel_at(p, n, i, s)
             if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
                 break
             # along the side face, not through it: its voxels may be seen free by a hair
@@ -447,9 +451,7 @@ def _carry(p, n, t, free, out):
         steps = int(2 * t[i])
         for k in range(1, steps + 1):
             s = 0.5 * k
-            a = int(np.rint(p[i, 0] - n[i, 0] * s))
-            b = int(np.rint(p[i, 1] - n[i, 1] * s))
-            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            a, b, c = _voxel_at(p, n, i, s)
             if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z or free[a, b, c]:
                 break
             out[a, b, c] = True
@@ -461,9 +463,7 @@ def _march(p, n, opposite, bits, free, reach, out):
     for i in numba.prange(p.shape[0]):
         hit = 0
         for s in range(2, reach + 1):
-            a = int(np.rint(p[i, 0] - n[i, 0] * s))
-            b = int(np.rint(p[i, 1] - n[i, 1] * s))
-            c = int(np.rint(p[i, 2] - n[i, 2] * s))
+            a, b, c = _voxel_at(p, n, i, s)
             if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
                 break
             if free[a, b, c]:
@@ -478,18 +478,14 @@ def _march(p, n, opposite, bits, free, reach, out):
         # surfaces, where half a voxel may be seen free
         for k in range(2, 2 * hit - 1):
             t = 0.5 * k
-            a = int(np.rint(p[i, 0] - n[i, 0] * t))
-            b = int(np.rint(p[i, 1] - n[i, 1] * t))
-            c = int(np.rint(p[i, 2] - n[i, 2] * t))
+            a, b, c = _voxel_at(p, n, i, t)
             if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z or free[a, b, c]:
                 ok = False
                 break
         if ok:
             for k in range(2 * hit + 1):
                 t = 0.5 * k
-                a = int(np.rint(p[i, 0] - n[i, 0] * t))
-                b = int(np.rint(p[i, 1] - n[i, 1] * t))
-                c = int(np.rint(p[i, 2] - n[i, 2] * t))
+                a, b, c = _voxel_at(p, n, i, t)
                 out[a, b, c] = True
 
 

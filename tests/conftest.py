@@ -21,6 +21,21 @@ def data_path(rel: str) -> Path:
     return p
 
 
+def complete_tum_frame(box: tuple[int, int, int, int], res: int = 128):
+    """The raw TUM RGB-D frame's object in ``box`` (pixels) completed upright at ``res``."""
+    from partscale.complete import complete_file
+
+    root = data_path("scans/tum_rgbd_frame")
+    return complete_file(
+        depth=root / "TUM_depth.png",
+        color=root / "TUM_color.png",
+        intrinsics=root / "camera_primesense.json",
+        box=box,
+        res=res,
+        upright=True,
+    )
+
+
 @pytest.fixture
 def data():
     return data_path

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import data_path
+from conftest import complete_tum_frame, data_path
 
 
 def _legs_around(c, *, below: float, r0: float, r1: float, axis=None) -> tuple[int, np.ndarray]:
@@ -121,15 +121,7 @@ def tum_completions():
         out[name] = complete_file(
             data_path(f"scans/derived/tum_{name}_office_chair_partial.ply"), res=64, upright=True
         )
-    root = data_path("scans/tum_rgbd_frame")
-    out["frame_purple"] = complete_file(
-        depth=root / "TUM_depth.png",
-        color=root / "TUM_color.png",
-        intrinsics=root / "camera_primesense.json",
-        box=(0, 255, 245, 480),
-        res=128,
-        upright=True,
-    )
+    out["frame_purple"] = complete_tum_frame((0, 255, 245, 480))
     return out
 
 

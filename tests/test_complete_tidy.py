@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import data_path
+from conftest import complete_tum_frame
 from scipy import ndimage
 
 
@@ -86,19 +86,10 @@ def test_raw_frame_yellow_chair_is_watertight_without_specks():
     # at --res 128 the raw frame's yellow chair kept 432 solid pieces (6-connected), 408 of
     # under 10 voxels (flying pixels, bumps touching the chair along an edge), and marching
     # cubes met three diagonal contacts (edges of four faces)
-    from partscale.complete import complete_file
     from partscale.complete.tidy import SPECK_SHARE
     from partscale.surface import to_mesh
 
-    root = data_path("scans/tum_rgbd_frame")
-    c = complete_file(
-        depth=root / "TUM_depth.png",
-        color=root / "TUM_color.png",
-        intrinsics=root / "camera_primesense.json",
-        box=(365, 225, 540, 440),
-        res=128,
-        upright=True,
-    )
+    c = complete_tum_frame((365, 225, 540, 440))
     assert to_mesh(c).is_watertight
     lab, n = ndimage.label(np.asarray(c.sdf) < 0)
     size = np.bincount(lab.ravel())[1:]

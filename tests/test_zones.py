@@ -329,6 +329,11 @@ def test_tile_to_the_zone_start_removes_it_and_joins_the_sides(bookcase):
     from partscale.edit import describe_changes
 
     assert any("tile 0 copies: zone removed" in w for w in describe_changes([h], out))
+    # a start a third of a voxel off the grid: the removed length is snapped, and said so
+    off = start + H / 3
+    out = apply_edit(bookcase, Edit("y", off, end, off, "tile"))
+    said = describe_changes([out.meta["history"][-1]], out)
+    assert any(w.startswith("zone start and destination") for w in said), said
     with pytest.raises(InputError, match="mode tile"):
         apply_edit(bookcase, Edit("y", start, end, start, "stretch"))
 

@@ -64,9 +64,15 @@ def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
         snapped = h.get("to_snapped") if isinstance(h, dict) else None
         if given is None or snapped is None or abs(snapped - given) <= 1e-9 * out.voxel_size:
             continue
+        # a removal (0 copies) snaps its zone's start with its destination: say so in its terms
+        what, why = (
+            ("zone start and destination", "the removed length is")
+            if h.get("copies") == 0
+            else ("destination", "lengths change by")
+        )
         lines.append(
-            f"{_where(i, entries)}destination {given:.6g} -> {snapped:.6g}{u} "
-            f"({snapped - given:+.4g}{u}): lengths change by whole voxels of "
+            f"{_where(i, entries)}{what} {given:.6g} -> {snapped:.6g}{u} "
+            f"({snapped - given:+.4g}{u}): {why} whole voxels of "
             f"{out.voxel_size:.4g}{u} (recorded in the history)"
         )
     return lines

@@ -265,10 +265,11 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
     )
 
 
-def _plane_samples(sym, P: np.ndarray, N: np.ndarray):
-    """The points (M, 3) float64 and normals (M, 3) where ``sym`` holds, at most
-    ``REFINE_SAMPLES`` of them (a fixed-seed sample), and a KD-tree of all points ``P``: what a
-    plane's fit is measured on."""
+def _mirror_fit(sym, P: np.ndarray, N: np.ndarray, cell: float):
+    """``cost(A, b)``: how far a reflection ``x -> A x + b`` carries the points where ``sym``
+    holds (at most ``REFINE_SAMPLES`` of them, a fixed-seed sample; returned too, (M, 3)) from
+    scan points ``P`` whose normals ``N`` face the same way: the mean nearest distance, capped
+    at ``cell`` so points without a counterpart weigh alike everywhere."""
     from scipy.spatial import cKDTree
 
     w = sym.where(P)
@@ -276,7 +277,17 @@ def _plane_samples(sym, P: np.ndarray, N: np.ndarray):
     if len(X) > REFINE_SAMPLES:
         k = np.random.default_rng(1).choice(len(X), REFINE_SAMPLES, replace=False)
         X, XN = X[k], XN[k]
-    return X, XN, cKDTree(P)
+    tree = cKDTree(P)
+
+    def cost(A: np.ndarray, b: np.ndarray) -> float:
+        dist, nn = tree.query(
+            X @ A.T + b, k=REFINE_NEIGHBOURS, distance_upper_bound=cell, workers=2
+        )
+        ok = np.isfinite(dist)
+        facing = np.einsum("nj,nkj->nk", XN @ A.T, N[np.where(ok, nn, 0)]) > REFINE_FACING
+        return float(np.where(ok & facing, dist, cell).min(axis=1).mean())
+
+    return cost, X
 
 
 def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> Symmetry:
@@ -285,17 +296,10 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
     alike everywhere), searched below the voting grid in offset, then angle, then offset, at the
     heights where the plane holds. The voting grid alone leaves the plane up to a cell and a
     degree off, and a copy a voxel off costs about as much as a missing one."""
-    X, XN, tree = _plane_samples(sym, P, N)
+    fit, _ = _mirror_fit(sym, P, N, cell)
 
     def cost(t, d):
-        A, b = _mirror(t, d)
-        dist, nn = tree.query(
-            X @ A.T + b, k=REFINE_NEIGHBOURS, distance_upper_bound=cell, workers=2
-        )
-        ok = np.isfinite(dist)
-        facing = np.einsum("nj,nkj->nk", XN @ A.T, N[np.where(ok, nn, 0)]) > REFINE_FACING
-        dist = np.where(ok & facing, dist, cell)
-        return float(dist.min(axis=1).mean())
+        return fit(*_mirror(t, d))
 
     t, d = sym.params["theta"], sym.params["offset"]
     # coarse to fine: offset (cells), angle (degrees), offset again
@@ -336,7 +340,7 @@ def tilted_plane(
     ``p`` have ``normal @ p == offset``), in the upright frame.
     """
     P, N = np.asarray(points, np.float64), np.asarray(normals, np.float64)
-    X, XN, tree = _plane_samples(sym, P, N)
+    fit, X = _mirror_fit(sym, P, N, cell)
     t0, d0 = sym.params["theta"], sym.params["offset"]
     n0 = np.array([np.cos(t0), 0.0, np.sin(t0)])
     pivot = float(np.median(X[:, 1]))  # tilted about the plane's line at the points' mid-height
@@ -347,13 +351,7 @@ def tilted_plane(
 
     def cost(phi, d):
         n, off = plane(phi, d)
-        A, b = np.eye(3) - 2 * np.outer(n, n), 2 * off * n
-        dist, nn = tree.query(
-            X @ A.T + b, k=REFINE_NEIGHBOURS, distance_upper_bound=cell, workers=2
-        )
-        ok = np.isfinite(dist)
-        facing = np.einsum("nj,nkj->nk", XN @ A.T, N[np.where(ok, nn, 0)]) > REFINE_FACING
-        return float(np.where(ok & facing, dist, cell).min(axis=1).mean())
+        return fit(np.eye(3) - 2 * np.outer(n, n), 2 * off * n)
 
     phi, d = 0.0, 0.0
     lim = np.radians(MAX_PLANE_TILT_DEG)

@@ -20,7 +20,7 @@ from . import fuse as fuse_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
-from .floor import base_plane, clusters, find_floor
+from .floor import base_plane, clusters, find_floor, in_plane_axes
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
 METHOD = "carve+floor+symmetry+between+slab+closure"
@@ -61,10 +61,7 @@ def _is_floor(P: np.ndarray, plane, inliers: np.ndarray, cropped: bool) -> bool:
     rest = P[~inliers & (plane.height(P) > 2 * FLOOR_TOL)]
     if len(rest) < 10:
         return True
-    n = plane.normal
-    a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
-    a /= np.linalg.norm(a)
-    b = np.cross(n, a)
+    a, b = in_plane_axes(plane.normal)
     if _broad(np.stack([P[inliers] @ a, P[inliers] @ b], axis=1)) < FLOOR_BROAD_SHARE:
         return False
     if not cropped:
@@ -169,9 +166,8 @@ def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
     shadow; a table's top above its legs; a star base wider than the seat): a cluster joins when
     its centre stands over the object's footprint, or nearly all of it within the footprint, or
     nearly all of the object within the cluster's (the cluster picked may be the leg)."""
-    a = np.cross(up, [1.0, 0, 0] if abs(up[0]) < 0.9 else [0, 1.0, 0])
-    a /= np.linalg.norm(a)
-    flat = np.stack([P[idx] @ a, P[idx] @ np.cross(up, a)], axis=1)
+    a, b = in_plane_axes(up)
+    flat = np.stack([P[idx] @ a, P[idx] @ b], axis=1)
 
     def within(X, Y):
         # the share of footprint points X inside the box around footprint points Y

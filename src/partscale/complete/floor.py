@@ -110,6 +110,15 @@ def clusters(points: np.ndarray, cell: float) -> np.ndarray:
     return lab[idx[:, 0], idx[:, 1], idx[:, 2]] - 1
 
 
+def in_plane_axes(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two (3,) float64 orthonormal axes across a plane with unit ``normal`` (3,): a point's
+    coordinates seen along the normal are its dot products with them."""
+    n = np.asarray(normal, np.float64)
+    a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
+    a /= np.linalg.norm(a)
+    return a, np.cross(n, a)
+
+
 def base_plane(points: np.ndarray, up_prior: np.ndarray, cell: float) -> Plane | None:
     """The plane of an object's base, or None: "up" where the scan has no floor.
 
@@ -169,9 +178,7 @@ def base_plane(points: np.ndarray, up_prior: np.ndarray, cell: float) -> Plane |
         if n @ prior < np.cos(np.radians(MAX_TILT_DEG)):
             return None
         # a base stands under what it carries
-        a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
-        a /= np.linalg.norm(a)
-        b = np.cross(n, a)
+        a, b = in_plane_axes(n)
         B = P[~base] @ np.stack([a, b], axis=1)
         lo, hi = np.percentile(B, 2, axis=0) - cell, np.percentile(B, 98, axis=0) + cell
         foot = np.array([c @ a, c @ b])

@@ -287,7 +287,9 @@ def _band(tris, origin, h, shape, radius):
     dist = np.empty(tuple(shape), np.float32)  # initialised by the kernel, slab by slab
     tid = np.empty(tuple(shape), np.int32)
     ptr, lst = _kernels.slab_lists(tris, origin, h, radius, int(shape[0]), SLAB)
-    _kernels.band_distance(tris, ptr, lst, SLAB, origin, h, radius, dist, tid, False, True, True)
+    _kernels.band_distance(
+        tris, ptr, lst, SLAB, origin, h, radius, dist, tid, fresh=True, finish_root=True
+    )
     return dist, tid
 
 
@@ -497,7 +499,7 @@ def from_mesh(
         tris_u = np.ascontiguousarray(sub[buried])
         ptr, lst = _kernels.slab_lists(tris_u, origin, h, 2 * h, shape[0], SLAB)
         no_ids = np.empty((1, 1, 1), np.int32)
-        _kernels.band_distance(tris_u, ptr, lst, SLAB, origin, h, 2 * h, d_u, no_ids, True)
+        _kernels.band_distance(tris_u, ptr, lst, SLAB, origin, h, 2 * h, d_u, no_ids, root=True)
     # f_s becomes the thickened sheets' distance. They block the flood (not ``free``) as much
     # as boundaries do (a cushion whose cloth has an open seam still encloses its inside); at
     # 2t thick they leave no 6-connected tunnel. ``dist``: to the nearest boundary, buried or

@@ -276,10 +276,10 @@ def recompute_mask(
         # Copies at scale ~1 are translations of the slab, and the first and last copy continue
         # the content before and after the zone exactly: a voxel's neighbourhood is unchanged
         # unless the ball of its distance reaches an internal seam (or it lies in a blend).
-        period = (dest - start) / n_copies
-        seams = start + period * np.arange(1, n_copies)
         if dest == start:  # 0 copies: the two sides meet at START, whose distances may change
             seams = np.array([start])
+        else:
+            seams = start + (dest - start) / n_copies * np.arange(1, n_copies)
         if seams.size == 0:
             return none
         to_seam = np.abs(y[:, None] - seams[None, :]).min(axis=1)

@@ -62,6 +62,28 @@ def test_blocks_touching_diagonally_are_bridged(contact):
     assert _mesh(out).is_watertight
 
 
+def test_later_rounds_find_what_whole_grid_rounds_find():
+    # later rounds look only around the voxels filled before: on noisy grids (contacts at the
+    # borders, fills that make new contacts, grids two voxels thin) they fill exactly what
+    # whole-grid rounds fill
+    from partscale.complete.tidy import FILL_VOXELS, _ambiguous, fill_contacts
+
+    rng = np.random.default_rng(7)
+    most_rounds = 0
+    for _ in range(60):
+        shape = tuple(int(x) for x in rng.integers(2, 10, 3))
+        solid = rng.random(shape) < rng.uniform(0.2, 0.8)
+        sdf = np.where(solid, -rng.random(shape), rng.random(shape)).astype(np.float32) * 0.01
+        ref, total, rounds = sdf.copy(), 0, 0
+        while (fill := _ambiguous(ref < 0)).any():
+            ref[fill] = np.minimum(ref[fill], np.float32(-FILL_VOXELS * 0.01))
+            total, rounds = total + int(fill.sum()), rounds + 1
+        out, n = fill_contacts(sdf, 0.01)
+        assert n == total and np.array_equal(out, ref), shape
+        most_rounds = max(most_rounds, rounds)
+    assert most_rounds >= 3  # fills that made new contacts were among them
+
+
 def test_specks_are_dropped_and_parts_kept():
     from partscale.complete.tidy import SPECK_SHARE, drop_specks
 

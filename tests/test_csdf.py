@@ -86,6 +86,19 @@ def test_every_public_update_validates_the_values(ball):
         make(nan, trusted=True)  # no trusted path in the public constructor
 
 
+def test_trusted_history_checks_all_but_the_values(ball):
+    # a stage's own arrays: the same CSDF as with_history, shapes and dtypes still checked
+    parts = np.where(ball.sdf < 0, 2, -1).astype(np.int16)
+    a = ball.with_trusted_history({"op": "test"}, parts=parts)
+    b = ball.with_history({"op": "test"}, parts=parts)
+    assert np.array_equal(a.parts, b.parts) and a.meta == b.meta
+    assert ball.meta.get("history", []) == list(a.meta["history"])[:-1]
+    with pytest.raises(InputError, match="rgb: expected shape"):
+        ball.with_trusted_history({"op": "test"}, rgb=np.zeros((2, 2, 2, 3), np.uint8))
+    with pytest.raises(InputError, match="parts: expected integer"):
+        ball.with_trusted_history({"op": "test"}, parts=ball.sdf)
+
+
 def test_save_load_is_exact(tmp_path, ball):
     c = ball.with_history({"op": "test", "n": 1}, parts=np.where(ball.sdf < 0, 3, -1))
     p = save(c, tmp_path / "ball.csdf.npz")

@@ -260,6 +260,19 @@ class CSDF:
         """
         return self._replaced(self._history_changes(operation, changes), trusted=False)
 
+    def with_trusted_history(self, operation: dict[str, Any], **changes: Any) -> CSDF:
+        """:meth:`with_history` for a pipeline stage's own arrays, their values not scanned again.
+
+        For stages (an edit, its baseline) whose new ``sdf``/``rgb``/``parts`` are computed
+        from this CSDF, which :func:`make` already validated, by steps that keep its value
+        invariants: every distance finite with ``|sdf|`` within :data:`SDF_LIMIT_VOXELS` voxel
+        sizes, every part index in ``[-1, 32767]``. Only those whole-grid value scans are
+        skipped (a stage that made the arrays need not pay for them twice); shapes, dtypes,
+        origin, voxel size and meta are still checked. Never for arrays that come from outside
+        the package (files, users, callbacks): those go through :meth:`with_history`.
+        """
+        return self._replaced(self._history_changes(operation, changes), trusted=True)
+
     def _history_changes(self, operation: dict[str, Any], changes: dict[str, Any]) -> dict:
         meta = dict(changes.pop("meta", self.meta))
         meta["history"] = History.of(meta.get("history", [])).appended(operation)
@@ -361,14 +374,6 @@ def make(
     return _make(sdf, rgb, parts, origin, voxel_size, meta, trusted=False)
 
 
-def _with_trusted_history(csdf: CSDF, operation: dict[str, Any], **changes: Any) -> CSDF:
-    """:meth:`CSDF.with_history` for a stage's own arrays made from a valid CSDF (finite,
-    ``|sdf|`` within bounds, parts in range): their values are not scanned again, only shapes,
-    dtypes, origin, voxel size and meta are checked. Never for arrays from outside the package.
-    """
-    return csdf._replaced(csdf._history_changes(operation, changes), trusted=True)
-
-
 def _make(
     sdf: Any,
     rgb: Any,
@@ -379,7 +384,7 @@ def _make(
     *,
     trusted: bool,
 ) -> CSDF:
-    """:func:`make`; ``trusted``: see :func:`_with_trusted_history`."""
+    """:func:`make`; ``trusted``: see :meth:`CSDF.with_trusted_history`."""
     sdf = np.asarray(sdf)
     if sdf.ndim != 3 or min(sdf.shape) < 2:
         raise InputError(

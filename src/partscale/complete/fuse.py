@@ -412,24 +412,30 @@ def _voxel_at(p, n, i, s):
     )
 
 
+@numba.njit(cache=True, inline="always")
+def _in_grid(a, b, c, shape):
+    """Whether voxel ``(a, b, c)`` (ints) lies in a grid of ``shape`` (X, Y, Z): the walks stop
+    at the grid's border."""
+    return 0 <= a < shape[0] and 0 <= b < shape[1] and 0 <= c < shape[2]
+
+
 @numba.njit(cache=True, parallel=True)
 def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
-    X, Y, Z = bits.shape
     for i in numba.prange(p.shape[0]):
         last = 0
         # a face rising beside the point (a junction, the back above a seat) is no edge
         a, b, c = _voxel_at(p, n, i, -SLAB_ABOVE)
-        if 0 <= a < X and 0 <= b < Y and 0 <= c < Z and bits[a, b, c] & side[i]:
+        if _in_grid(a, b, c, bits.shape) and bits[a, b, c] & side[i]:
             depth[i] = 0
             continue
         # and a point not next to a side face is no edge either (its walk would only graze it)
         a, b, c = _voxel_at(p, n, i, 1.0)
-        if not (0 <= a < X and 0 <= b < Y and 0 <= c < Z and near[a, b, c] & side[i]):
+        if not (_in_grid(a, b, c, bits.shape) and near[a, b, c] & side[i]):
             depth[i] = 0
             continue
         for s in range(1, reach + 1):
             a, b, c = _voxel_at(p, n, i, s)
-            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
+            if not _in_grid(a, b, c, bits.shape):
                 break
             # along the side face, not through it: its voxels may be seen free by a hair
             if bits[a, b, c] & side[i]:
@@ -446,25 +452,23 @@ def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
 
 @numba.njit(cache=True, parallel=True)
 def _carry(p, n, t, free, out):
-    X, Y, Z = free.shape
     for i in numba.prange(p.shape[0]):
         steps = int(2 * t[i])
         for k in range(1, steps + 1):
             s = 0.5 * k
             a, b, c = _voxel_at(p, n, i, s)
-            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z or free[a, b, c]:
+            if not _in_grid(a, b, c, free.shape) or free[a, b, c]:
                 break
             out[a, b, c] = True
 
 
 @numba.njit(cache=True, parallel=True)
 def _march(p, n, opposite, bits, free, reach, out):
-    X, Y, Z = bits.shape
     for i in numba.prange(p.shape[0]):
         hit = 0
         for s in range(2, reach + 1):
             a, b, c = _voxel_at(p, n, i, s)
-            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
+            if not _in_grid(a, b, c, bits.shape):
                 break
             if free[a, b, c]:
                 break
@@ -479,7 +483,7 @@ def _march(p, n, opposite, bits, free, reach, out):
         for k in range(2, 2 * hit - 1):
             t = 0.5 * k
             a, b, c = _voxel_at(p, n, i, t)
-            if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z or free[a, b, c]:
+            if not _in_grid(a, b, c, bits.shape) or free[a, b, c]:
                 ok = False
                 break
         if ok:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._options import keyword_options
-from ..csdf import BAND_VOXELS, CSDF, _with_trusted_history
+from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from .parts import renumber_copies, update_parts_info
@@ -236,9 +236,7 @@ def _apply_edit(
         entry.update(lo=r.lo, hi=r.hi)
     entry.update(record or {})
     # the arrays are the edit's own, made from a valid CSDF: not scanned again
-    out = _with_trusted_history(
-        csdf, entry, sdf=done.sdf, rgb=done.rgb, parts=done.parts, meta=meta
-    )
+    out = csdf.with_trusted_history(entry, sdf=done.sdf, rgb=done.rgb, parts=done.parts, meta=meta)
     report(1.0, "done")
     return out
 
@@ -374,8 +372,7 @@ def naive_edit(csdf: CSDF, edit: Edit | dict[str, Any]) -> CSDF:
     edit = _as_edit(edit)
     r = resolve_edit(csdf, edit)
     done = _edit_arrays(csdf, r, naive=True)
-    return _with_trusted_history(
-        csdf,
+    return csdf.with_trusted_history(
         _history_entry(csdf, edit, r, done, "naive_scale"),
         sdf=done.sdf,
         rgb=done.rgb,

@@ -18,6 +18,7 @@ a voxel.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -200,46 +201,24 @@ def _long(c: Candidate, h: float) -> bool:
     return round((c.zone[1] - c.zone[0]) / h) >= MIN_SPREAD_VOXELS
 
 
-def _remainder_tiers(
-    slabs: list[Candidate],
-    h: float,
-    tiled: tuple[tuple[float, float], tuple[float, float], float] | None,
-) -> list[tuple[list[Candidate] | None, bool]]:
-    """The slabs that absorb what whole periods (or, with no repeat, nothing) leave, in the order
-    they take it, each ``(slabs, thin)``; ``None``: the tiled copies, within
-    :data:`COPY_TOLERANCE`. ``tiled``: the repeat's region, the tiled zone and the period.
+def _outside(slabs: list[Candidate], h: float, tiled: _Tiled | None) -> list[Candidate]:
+    """The slabs outside the whole repeat (all of them with no repeat): the first to take a
+    remainder, as a gap inside the repeat would make one spacing uneven.
 
-    A feature keeps its thickness while anything else can take the change: slabs at least
-    :data:`MIN_SPREAD_VOXELS` long (:func:`_long`) outside the repeat first (or a period long or
-    more: no gap between two copies is, so it is a span the repeat's region reaches into), then
-    the copies, then long slabs inside the repeat (one spacing uneven), and thin slabs
-    (``thin``: the notes say so) only after all of those; the copies take what is left (a thin
-    slab inside the repeat never does: a feature of one copy and one spacing would change).
+    A slab the repeat's region reaches into counts as outside when it is a period long or more
+    (no gap between two copies is: it is a span), and none lies within reach of a tile plane:
+    the two blends and the seams' looks (:data:`CALM_VOXELS` either side of each) overlap, and
+    the pair shows as one larger step.
     """
     if tiled is None:
-        return [
-            ([c for c in slabs if _long(c, h)], False),
-            ([c for c in slabs if not _long(c, h)], True),
-        ]
-    # slabs outside the whole repeat first (a gap inside it would make one spacing uneven), and
-    # no stretch seam within reach of a tile plane: the two blends and the seams' looks
-    # (CALM_VOXELS either side of each) overlap, and the pair shows as one larger step
-    region, tile_zone, period = tiled
+        return slabs
     reach = 2 * CALM_VOXELS * h
-    free = [
+    return [
         c
         for c in slabs
-        if _disjoint(c, tile_zone)
-        and (_disjoint(c, region) or c.zone[1] - c.zone[0] >= period - h / 2)
-        and all(abs(x - y) >= reach for x in c.zone for y in tile_zone)
-    ]
-    # then what does not overlap the tiled zone: one uneven gap is worse than copies a little off
-    near = [c for c in slabs if _disjoint(c, tile_zone) and c not in free]
-    return [
-        ([c for c in free if _long(c, h)], False),
-        (None, False),
-        ([c for c in near if _long(c, h)], False),
-        ([c for c in free if not _long(c, h)], True),
+        if _disjoint(c, tiled.zone)
+        and (_disjoint(c, tiled.region) or c.zone[1] - c.zone[0] >= tiled.period - h / 2)
+        and all(abs(x - y) >= reach for x in c.zone for y in tiled.zone)
     ]
 
 
@@ -299,8 +278,182 @@ def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
     return float(p.world(s)), n * h
 
 
+@dataclass(frozen=True)
+class _Axis:
+    """What the remainder's stretches and notes need of one axis: its name (``'x'``...), the
+    object's units, the surface's min along it (notes give positions from it), the voxel size and
+    :func:`layer_change` along it with the world coordinate of its layer 0 (for :func:`_inset`).
+    """
+
+    name: str
+    units: str | None
+    lo: float
+    h: float
+    layers: tuple[np.ndarray, float]
+
+
+@dataclass(frozen=True)
+class _Tiled:
+    """Whole periods tiled (``k > 0`` more) or removed (``-k``) on one axis: the tile edit, the
+    repeat's region, the tiled zone, the (whole-voxel) period, the length it adds (whole voxels,
+    negative for a removal) and the copies that stand after it (world ``(a, b)``): the tiled
+    zone's copies, or, after a removal (0 copies cannot take a length), the longer run of copies
+    left beside the removed periods."""
+
+    edit: Edit
+    k: int
+    region: tuple[float, float]
+    zone: tuple[float, float]
+    period: float
+    grow: float
+    copies: tuple[float, float]
+
+    @property
+    def removed(self) -> bool:
+        """Whether periods were removed (0 copies of a zone of them)."""
+        return self.k < 0
+
+
+def _periods(
+    csdf: CSDF, prof: Profile, t: Candidate, change: float, name: str, units: str | None, lo: float
+) -> tuple[_Tiled, str] | None:
+    """Tile whole periods of the repeat ``t`` (the number of copies that brings the length
+    closest to ``change``), or remove whole periods (a zone of them tiled to its start, 0 copies,
+    so the rest keep their thickness and spacing), and the note; None where no whole period fits
+    the change (less than half a period).
+    """
+    assert t.period is not None and t.count is not None  # set for a tile
+    h = csdf.voxel_size
+    start, period = _voxel_period(csdf, prof, t)
+    k = int(np.floor(change / period + 0.5))
+    k = max(k, 1 - t.count)  # cannot remove more periods than the repeat holds
+    if k == 0:
+        return None
+    s = start
+    grow = round(k * period / h) * h
+    if k > 0:  # one period, 1 + k copies
+        e = s + period
+        edit = Edit(name, s, e, e + grow, "tile")
+        copies = (float(edit.start), float(edit.dest))
+    else:  # -k periods removed: 0 copies (tile to the zone's start)
+        # whole periods earlier (the same phase: the same plane cost) until it fits in the
+        # repeat, then clamped there
+        back = max(0, int(np.ceil((s - k * period - t.region[1]) / period - 1e-9)))
+        s = max(t.region[0], s - back * period)
+        e = s - k * period
+        edit = Edit(name, s, e, s, "tile")
+        copies = max((t.region[0], s), (e, t.region[1]), key=lambda z: z[1] - z[0])
+    note = (
+        (f"{name}: tile {k} more" if k > 0 else f"{name}: remove {-k}") + f" period(s) of "
+        f"{_fmt(period, units)} ({t.reason}), zone {_fmt(s - lo, units)}..{_fmt(e - lo, units)} "
+        f"from the {name} min" + ("" if k > 0 else " (tile to its start: 0 copies)")
+    )
+    return _Tiled(edit, k, t.region, (s, e), period, grow, copies), note
+
+
+def _to_slabs(
+    tier: list[Candidate], left: float, ax: _Axis, tiled: _Tiled | None, thin: bool
+) -> tuple[list[Edit], list[str], float]:
+    """Stretch edits over the slabs ``tier`` taking ``left`` (:func:`_stretch_edits`), a note
+    each, and what is left; ``thin``: the notes say a feature's thickness changes."""
+    st, left = _stretch_edits(tier, left, ax.h, ax.name, ax.layers)
+    notes = []
+    for ed in st:
+        a, b = float(ed.start), float(ed.end)
+        notes.append(
+            f"{ax.name}: stretch the constant slab {_fmt(a - ax.lo, ax.units)}.."
+            f"{_fmt(b - ax.lo, ax.units)} from the {ax.name} min by "
+            f"{_fmt(float(ed.dest) - b, ax.units)}"
+            + (" (the remainder after whole periods)" if tiled else "")
+            + (_thin_note(tier, ed, ax.h, tiled is not None) if thin else "")
+        )
+    return st, notes, left
+
+
+def _to_long_outside(
+    slabs: list[Candidate], left: float, ax: _Axis, tiled: _Tiled | None
+) -> tuple[list[Edit], list[str], float]:
+    """The remainder to slabs at least :data:`MIN_SPREAD_VOXELS` long (:func:`_long`) outside
+    the repeat (:func:`_outside`): the first choice, as a feature keeps its thickness and the
+    copies their spacing."""
+    tier = [c for c in _outside(slabs, ax.h, tiled) if _long(c, ax.h)]
+    return _to_slabs(tier, left, ax, tiled, thin=False)
+
+
+def _copies_within(left: float, tiled: _Tiled) -> bool:
+    """Whether the copies take the remainder (:func:`_to_copies`) before any slab inside the
+    repeat or any thin slab: their length changes within :data:`COPY_TOLERANCE` (one uneven gap
+    is worse than copies a little off)."""
+    a, b = tiled.copies
+    return abs(left) <= COPY_TOLERANCE * (b - a)
+
+
+def _to_long_inside(
+    slabs: list[Candidate], left: float, ax: _Axis, tiled: _Tiled
+) -> tuple[list[Edit], list[str], float]:
+    """The remainder to long slabs (:func:`_long`) inside the repeat's region but off the tiled
+    zone (one spacing gets uneven): after the copies within :data:`COPY_TOLERANCE`."""
+    outside = _outside(slabs, ax.h, tiled)
+    tier = [c for c in slabs if _disjoint(c, tiled.zone) and c not in outside and _long(c, ax.h)]
+    return _to_slabs(tier, left, ax, tiled, thin=False)
+
+
+def _to_thin(
+    slabs: list[Candidate], left: float, ax: _Axis, tiled: _Tiled | None
+) -> tuple[list[Edit], list[str], float]:
+    """The remainder to thin slabs outside the repeat (:func:`_outside`; shorter than
+    :data:`MIN_SPREAD_VOXELS`: a feature's thickness), last of the slabs; the notes say which
+    feature changes (:func:`_thin_note`). A thin slab inside the repeat never takes it: a feature
+    of one copy and one spacing would change."""
+    tier = [c for c in _outside(slabs, ax.h, tiled) if not _long(c, ax.h)]
+    return _to_slabs(tier, left, ax, tiled, thin=True)
+
+
+def _to_copies(
+    edits: list[Edit], left: float, ax: _Axis, tiled: _Tiled, within: bool
+) -> tuple[list[Edit], str] | None:
+    """The copies absorb what no slab took (their spacing changes): the tile edit's copies get
+    ``left`` more length, or, where periods were removed, the copies left beside them are
+    stretched by it (None where that would leave them under :data:`MIN_SLAB_VOXELS`: global
+    scaling is left). ``edits``: the tile edit first, then the stretches made; ``within``: taken
+    within :data:`COPY_TOLERANCE` before the slabs inside the repeat and the thin ones.
+    """
+    it = "the rest" if len(edits) > 1 else "it"
+    if tiled.removed:
+        a, b = tiled.copies
+        if b - a + min(left, 0.0) < MIN_SLAB_VOXELS * ax.h:
+            return None
+        note = (
+            f"{ax.name}: no constant slab outside the tiled zone could take {it}: the "
+            f"copies left {_fmt(a - ax.lo, ax.units)}..{_fmt(b - ax.lo, ax.units)} from the "
+            f"{ax.name} min absorb {_fmt(left, ax.units)} (each {100 * left / (b - a):+.1f}%)"
+        )
+        return [*edits, Edit(ax.name, a, b, b + left, "stretch")], note
+    t0 = edits[0]
+    dest = float(t0.dest) + left
+    n = tile_count(float(t0.end) - float(t0.start), dest - float(t0.start))
+    pct = 100 * left / (dest - float(t0.start))
+    note = (
+        f"{ax.name}: no constant slab "
+        + (
+            f"of {MIN_SPREAD_VOXELS} voxels or more outside the tiled zone could take "
+            f"{it} (a thinner one is a feature's thickness)"
+            if within
+            else f"outside the tiled zone could take {it}"
+        )
+        + f": its {n} copies absorb {_fmt(left, ax.units)} (each {pct:+.1f}%)"
+    )
+    return [Edit(ax.name, t0.start, t0.end, dest, "tile"), *edits[1:]], note
+
+
 def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str]]:
-    """Edits (recipe coordinates) bringing the extent along ``axis`` to ``target``, and why."""
+    """Edits (recipe coordinates) bringing the extent along ``axis`` to ``target``, and why.
+
+    Whole periods first (:func:`_periods`), then what they leave (less than half a period, or
+    the whole change with no repeat) in this order until it is taken: long slabs outside the
+    repeat, the copies within :data:`COPY_TOLERANCE`, long slabs inside the repeat, thin slabs
+    (a note says so), the copies whatever their change, and global scaling as the last resort.
+    """
     name = AXES[axis]
     units = csdf.meta.get("units")
     sb = csdf.surface_bounds()
@@ -327,103 +480,40 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     edits: list[Edit] = []
     why: list[str] = []
     left = change
-    tile_zone = None
-    if tiles:
-        t = tiles[0]
-        assert t.period is not None and t.count is not None  # set for a tile
-        start, period = _voxel_period(csdf, prof, t)
-        k = int(np.floor(change / period + 0.5))
-        k = max(k, 1 - t.count)  # cannot remove more periods than the repeat holds
-        if k != 0:
-            s = start
-            if k > 0:  # one period, 1 + k copies
-                e = s + period
-                grow = round(k * period / h) * h
-            else:  # -k periods removed: 0 copies (tile to the zone's start)
-                # whole periods earlier (the same phase: the same plane cost) until it fits in
-                # the repeat, then clamped there
-                back = max(0, int(np.ceil((s - k * period - t.region[1]) / period - 1e-9)))
-                s = max(t.region[0], s - back * period)
-                e = s - k * period
-                grow = round(k * period / h) * h
-            edits.append(Edit(name, s, e, e + grow if k > 0 else s, "tile"))
-            tile_zone = (s, e)
-            left = change - grow
-            why.append(
-                (f"{name}: tile {k} more" if k > 0 else f"{name}: remove {-k}") + f" period(s) of "
-                f"{_fmt(period, units)} ({t.reason}), zone {_fmt(s - lo, units)}..{_fmt(e - lo, units)} "
-                f"from the {name} min" + ("" if k > 0 else " (tile to its start: 0 copies)")
-            )
-    if abs(left) > h / 2:
-        layers = (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0]))
-        copies_len = float(edits[0].dest) - float(edits[0].start) if tile_zone else 0.0
-        # periods removed (0 copies): the copies left beside them, the longer side, take the
-        # copies' share (a stretch of those whole periods)
-        removed = tile_zone is not None and copies_len == 0
-        rest = None
-        if removed and tile_zone is not None:
-            rest = max(
-                (tiles[0].region[0], tile_zone[0]),
-                (tile_zone[1], tiles[0].region[1]),
-                key=lambda z: z[1] - z[0],
-            )
-            copies_len = rest[1] - rest[0]
-        tiled = None if tile_zone is None else (tiles[0].region, tile_zone, period)
-        within = False  # the copies take what is left within COPY_TOLERANCE
-        for tier, thin in _remainder_tiers(slabs, h, tiled):
-            if tier is None:
-                within = abs(left) <= COPY_TOLERANCE * copies_len
-                if within:
-                    break
-                continue
-            st, left = _stretch_edits(tier, left, h, name, layers)
-            for ed in st:
-                a, b = float(ed.start), float(ed.end)
-                why.append(
-                    f"{name}: stretch the constant slab {_fmt(a - lo, units)}..{_fmt(b - lo, units)} "
-                    f"from the {name} min by {_fmt(float(ed.dest) - b, units)}"
-                    + (" (the remainder after whole periods)" if tile_zone else "")
-                    + (_thin_note(tier, ed, h, tile_zone is not None) if thin else "")
-                )
-            edits += st
-            if abs(left) <= h / 2:
-                break
-        if abs(left) > h / 2:
-            if rest is not None and rest[1] - rest[0] + min(left, 0.0) >= MIN_SLAB_VOXELS * h:
-                # the copies left beside the removed periods absorb it: their spacing changes a
-                # little (0 copies cannot take a length)
-                a, b = rest
-                edits.append(Edit(name, a, b, b + left, "stretch"))
-                it = "the rest" if len(edits) > 2 else "it"
-                why.append(
-                    f"{name}: no constant slab outside the tiled zone could take {it}: the "
-                    f"copies left {_fmt(a - lo, units)}..{_fmt(b - lo, units)} from the {name} "
-                    f"min absorb {_fmt(left, units)} (each {100 * left / (b - a):+.1f}%)"
-                )
-            elif tile_zone is not None and not removed:  # the copies absorb it: spacing changes
-                t0 = edits[0]
-                dest = float(t0.dest) + left
-                n = tile_count(float(t0.end) - float(t0.start), dest - float(t0.start))
-                edits[0] = Edit(name, t0.start, t0.end, dest, "tile")
-                pct = 100 * left / (dest - float(t0.start))
-                it = "the rest" if len(edits) > 1 else "it"
-                why.append(
-                    f"{name}: no constant slab "
-                    + (
-                        f"of {MIN_SPREAD_VOXELS} voxels or more outside the tiled zone could take "
-                        f"{it} (a thinner one is a feature's thickness)"
-                        if within
-                        else f"outside the tiled zone could take {it}"
-                    )
-                    + f": its {n} copies absorb {_fmt(left, units)} (each {pct:+.1f}%)"
-                )
-            else:
-                edits = [Edit(name, lo, hi, hi + change, "global")]
-                why = [
-                    f"{name}: GLOBAL scaling (last resort): no repeated element and no slab of "
-                    f"constant cross-section along {name} could take {_fmt(change, units)}"
-                ]
-    return edits, why
+    tiled = None
+    if tiles and (done := _periods(csdf, prof, tiles[0], change, name, units, lo)) is not None:
+        tiled, note = done
+        edits.append(tiled.edit)
+        why.append(note)
+        left = change - tiled.grow
+    if abs(left) <= h / 2:
+        return edits, why
+    ax = _Axis(name, units, lo, h, (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0])))
+    st, notes, left = _to_long_outside(slabs, left, ax, tiled)
+    edits += st
+    why += notes
+    if abs(left) <= h / 2:
+        return edits, why
+    within = tiled is not None and _copies_within(left, tiled)
+    if tiled is not None and not within:
+        st, notes, left = _to_long_inside(slabs, left, ax, tiled)
+        edits += st
+        why += notes
+        if abs(left) <= h / 2:
+            return edits, why
+    if not within:
+        st, notes, left = _to_thin(slabs, left, ax, tiled)
+        edits += st
+        why += notes
+        if abs(left) <= h / 2:
+            return edits, why
+    taken = None if tiled is None else _to_copies(edits, left, ax, tiled, within)
+    if taken is not None:
+        return taken[0], [*why, taken[1]]
+    return [Edit(name, lo, hi, hi + change, "global")], [
+        f"{name}: GLOBAL scaling (last resort): no repeated element and no slab of "
+        f"constant cross-section along {name} could take {_fmt(change, units)}"
+    ]
 
 
 @keyword_options

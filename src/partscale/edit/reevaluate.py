@@ -30,7 +30,6 @@ import numbers
 
 import numba
 import numpy as np
-from scipy import ndimage
 from skimage import measure
 
 from .._kernels import closest_on_triangle
@@ -444,9 +443,13 @@ def reevaluate_arrays(
     h = float(voxel_size)
     lim = band * h
     mask = np.asarray(mask)
-    # only the layers the mask covers are read: the edit's slab and band, not the whole grid
-    target = (mask > 0) & (np.abs(sdf[row0 : row0 + mask.shape[0]]) <= lim)
-    layers = np.flatnonzero(target.any(axis=(1, 2))) + row0
+    if mask.dtype == bool:
+        mask = mask.view(np.uint8)
+    # only the layers the mask covers are read: the edit's slab and band, not the whole grid;
+    # one pass gives each layer's count of targets and their bounds across it (float32
+    # threshold: the comparison numpy makes of the float32 field with a Python float)
+    count, bounds = _target_layers(sdf, mask, row0, np.float32(lim))
+    layers = np.flatnonzero(count) + row0
     if layers.size == 0:
         return 0
     pad = int(np.ceil(band)) + 2
@@ -457,11 +460,14 @@ def reevaluate_arrays(
     runs = np.split(layers, breaks + 1)
 
     def solve(run: np.ndarray):
-        a0 = max(int(run[0]) - pad, 0)
-        a1 = min(int(run[-1]) + pad + 1, sdf.shape[0])
-        t_run = np.zeros((a1 - a0, *target.shape[1:]), bool)
-        t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] - row0 : run[-1] - row0 + 1]
-        return _solve_box(sdf, t_run, a0, h, lim, pad, npass)
+        # the box around the run's targets that holds every surface point within the band
+        # of them (a run's box holds no other run's targets: runs are > 2 pad layers apart)
+        b = bounds[run - row0]
+        lo = [max(int(run[0]) - pad, 0)] + [max(int(b[:, 2 * a].min()) - pad, 0) for a in (0, 1)]
+        hi = [min(int(run[-1]) + pad + 1, sdf.shape[0])] + [
+            min(int(b[:, 2 * a + 1].max()) + pad + 1, sdf.shape[a + 1]) for a in (0, 1)
+        ]
+        return _solve_box(sdf, mask, row0, lo, hi, h, lim, pad, npass)
 
     # boxes are independent (each reads the unchanged field) and the propagation, their main
     # cost, releases the GIL: they are solved side by side
@@ -570,16 +576,93 @@ def _triangle_table(verts, faces):
     return out
 
 
-def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
-    """Distances of the targets ``t_run`` (layers ``a0 ...`` of ``sdf``) to the zero level set.
+@numba.njit(cache=True, parallel=True)
+def _target_layers(sdf, mask, row0, lim):
+    """Targets of :func:`reevaluate_arrays`: ``mask`` (M, Y, Z) uint8 nonzero where
+    ``|sdf[row0 + m]| <= lim`` (float32).
 
-    Returns ``(gi (N, 3) int64 grid indices, new sdf (N,) float32, closest points (N, 3) float64
-    in continuous grid indices)`` or None.
+    Returns ``(count (M,) int64, bounds (M, 4) int64)``: per layer, its number of targets and
+    their first and last index along axes 1 and 2 (``Y, -1, Z, -1`` where none).
     """
-    # the box around the target voxels that holds every surface point within the band of them
-    nz_ = [np.flatnonzero(t_run.any(axis=tuple(b for b in range(3) if b != ax))) for ax in range(3)]
-    lo = [a0] + [max(int(nz_[ax][0]) - pad, 0) for ax in (1, 2)]
-    hi = [a0 + t_run.shape[0]] + [min(int(nz_[ax][-1]) + pad + 1, sdf.shape[ax]) for ax in (1, 2)]
+    nm, na, nb = mask.shape
+    count = np.zeros(nm, np.int64)
+    bounds = np.empty((nm, 4), np.int64)
+    for m in numba.prange(nm):
+        c, a0, a1, b0, b1 = 0, na, -1, nb, -1
+        for a in range(na):
+            for b in range(nb):
+                if mask[m, a, b] != 0 and abs(sdf[row0 + m, a, b]) <= lim:
+                    c += 1
+                    a0 = min(a0, a)
+                    a1 = a
+                    b0 = min(b0, b)
+                    b1 = max(b1, b)
+        count[m] = c
+        bounds[m, 0], bounds[m, 1], bounds[m, 2], bounds[m, 3] = a0, a1, b0, b1
+    return count, bounds
+
+
+@numba.njit(cache=True, nogil=True)
+def _box_targets(sdf, mask, row0, lim, lo, shape):
+    """(shape) uint8: 1 at the targets (see :func:`_target_layers`) of the box at ``lo``."""
+    out = np.zeros((shape[0], shape[1], shape[2]), np.uint8)
+    for i in range(shape[0]):
+        m = lo[0] + i - row0
+        if m < 0 or m >= mask.shape[0]:
+            continue
+        for j in range(shape[1]):
+            for k in range(shape[2]):
+                if (
+                    mask[m, lo[1] + j, lo[2] + k] != 0
+                    and abs(sdf[lo[0] + i, lo[1] + j, lo[2] + k]) <= lim
+                ):
+                    out[i, j, k] = 1
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _dilate_last(a, r):
+    """(X, Y, Z) uint8: 1 where ``a`` has a nonzero within ``r`` along the last axis (zero
+    beyond the ends)."""
+    nx, ny, nz = a.shape
+    out = np.zeros((nx, ny, nz), np.uint8)
+    for i in range(nx):
+        for j in range(ny):
+            last = -(r + 1)  # the latest nonzero at or before k
+            for k in range(nz + r):
+                if k < nz and a[i, j, k] != 0:
+                    last = k
+                if k - r >= 0 and k - last <= 2 * r:
+                    out[i, j, k - r] = 1
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _relays(sub, t_box, r, lim):
+    """Ascending flat indices of the box's voxels with ``|sub| <= lim`` (float32) within
+    Chebyshev distance ``r`` of a target of ``t_box``."""
+    reach = _dilate_last(t_box, r)
+    reach = _dilate_last(reach.transpose(0, 2, 1), r).transpose(0, 2, 1)
+    reach = _dilate_last(reach.transpose(2, 1, 0), r).transpose(2, 1, 0)
+    nx, ny, nz = sub.shape
+    out = np.empty(sub.size, np.int64)
+    n = 0
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                if reach[i, j, k] != 0 and abs(sub[i, j, k]) <= lim:
+                    out[n] = (i * ny + j) * nz + k
+                    n += 1
+    return out[:n]
+
+
+def _solve_box(sdf, mask, row0, lo, hi, h, lim, pad, npass):
+    """Distances of the targets in box ``lo ... hi - 1`` of ``sdf`` to the zero level set.
+
+    Targets: voxels of ``mask`` (uint8, layers ``row0 ...``) with ``|sdf| <= lim``. Returns
+    ``(gi (N, 3) int64 grid indices, new sdf (N,) float32, closest points (N, 3) float64 in
+    continuous grid indices)`` or None.
+    """
     box = tuple(slice(lo[a], hi[a]) for a in range(3))
     sub = np.array(sdf[box], dtype=np.float32)
     if min(sub.shape) < 2 or not ((sub <= 0).any() and (sub > 0).any()):
@@ -590,9 +673,8 @@ def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
     tri = _triangle_table(verts.astype(np.float64), faces)
     # band voxels near the targets relay nearest triangles (half a voxel of slack beyond the
     # band); a voxel farther than the band from every target cannot be on a target's path
-    t_box = t_run[:, box[1], box[2]]
-    reach = ndimage.maximum_filter(t_box.view(np.uint8), size=2 * pad - 1, mode="constant")
-    order = np.flatnonzero((np.abs(sub) <= lim + 0.5 * h) & (reach > 0)).astype(np.int64)
+    t_box = _box_targets(sdf, mask, row0, np.float32(lim), np.asarray(lo, np.int64), sub.shape)
+    order = _relays(sub, t_box, pad - 1, np.float32(lim + 0.5 * h))
     best_d2 = np.full(sub.size, np.inf)
     best_t = np.full(sub.size, -1, np.int32)
     wanted = np.flatnonzero(t_box.reshape(-1))

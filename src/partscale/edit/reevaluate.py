@@ -443,6 +443,7 @@ def reevaluate_arrays(
     h = float(voxel_size)
     lim = band * h
     mask = np.asarray(mask)
+    capping = mask.dtype == np.uint8
     if mask.dtype == bool:
         mask = mask.view(np.uint8)
     # only the layers the mask covers are read: the edit's slab and band, not the whole grid;
@@ -478,24 +479,42 @@ def reevaluate_arrays(
     gi = np.concatenate([f[0] for f in found])
     new = np.concatenate([f[1] for f in found])
     cp = np.concatenate([f[2] for f in found])
-    if mask.dtype == np.uint8:
-        # code 2: the old value is an upper bound of the distance; keep it where it is smaller
-        old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
-        capped = (mask[gi[:, 0] - row0, gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
-        if capped.any():
-            keep = ~capped
-            gi, new, cp = gi[keep], new[keep], cp[keep]
+    # code 2 (uint8 masks): the old value is an upper bound of the distance, kept where smaller
+    return _commit(
+        sdf, rgb, parts, mask, row0, capping, gi, new, cp, far is not None, np.float32(far or 0.0)
+    )
+
+
+@numba.njit(cache=True)
+def _commit(sdf, rgb, parts, mask, row0, capping, gi, new, cp, use_far, far):
+    """Write the recomputed voxels ``gi`` (N, 3): distance ``new``, colour and part at their
+    closest point ``cp``; see :func:`reevaluate_arrays`. Returns the number written.
+
+    Colours and parts are all read before any is written (no voxel sees another's new colour).
+    """
+    keep = np.ones(gi.shape[0], np.bool_)
+    if capping:
+        for q in range(gi.shape[0]):
+            i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
+            if mask[i - row0, j, k] == 2 and abs(sdf[i, j, k]) <= abs(new[q]):
+                keep[q] = False
+    sel = np.flatnonzero(keep)
+    gi, new, cp = gi[sel], new[sel], cp[sel]
     col = _trilinear_rgb(rgb, cp)
-    # colours and parts are all read before any is written (no voxel sees another's new colour)
-    new_parts = _surface_parts(sdf, parts, cp)
-    if far is not None:
-        old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
-        moved = (new != old) | (new_parts != parts[gi[:, 0], gi[:, 1], gi[:, 2]])
-        new_parts[moved & (new > np.float32(far))] = -1
-    sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = new
-    rgb[gi[:, 0], gi[:, 1], gi[:, 2]] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
-    parts[gi[:, 0], gi[:, 1], gi[:, 2]] = new_parts
-    return len(gi)
+    new_parts = _surface_parts_kernel(sdf, parts, cp)
+    if use_far:
+        for q in range(gi.shape[0]):
+            i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
+            moved = new[q] != sdf[i, j, k] or new_parts[q] != parts[i, j, k]
+            if moved and new[q] > far:
+                new_parts[q] = -1
+    for q in range(gi.shape[0]):
+        i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
+        sdf[i, j, k] = new[q]
+        for c in range(3):
+            rgb[i, j, k, c] = np.uint8(min(max(np.rint(col[q, c]), 0.0), 255.0))
+        parts[i, j, k] = new_parts[q]
+    return gi.shape[0]
 
 
 def _surface_parts(sdf: np.ndarray, parts: np.ndarray, cp: np.ndarray) -> np.ndarray:

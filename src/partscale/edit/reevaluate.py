@@ -204,18 +204,6 @@ def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
                 when[f] = clock
 
 
-@numba.njit(cache=True, nogil=True)
-def _closest_points(tri, idx, which):
-    """(N, 3) closest points on triangles ``tri`` of voxels ``idx`` (N, 3) int."""
-    out = np.empty((idx.shape[0], 3))
-    for n in range(idx.shape[0]):
-        _, qx, qy, qz = _tri_d2(tri, which[n], float(idx[n, 0]), float(idx[n, 1]), float(idx[n, 2]))
-        out[n, 0] = qx
-        out[n, 1] = qy
-        out[n, 2] = qz
-    return out
-
-
 @numba.njit(cache=True)
 def _trilinear_rgb(rgb, pts):
     """(N, 3) float64 trilinear samples of ``rgb`` (X, Y, Z, 3) uint8 at continuous indices."""
@@ -701,17 +689,38 @@ def _solve_box(sdf, mask, row0, lo, hi, h, lim, pad, npass):
         return None
     shape = np.array(sub.shape, np.int64)
     _propagate(tri, order, shape, best_d2, best_t, npass, wanted[0], wanted[-1])
-    fsel = wanted[best_t[wanted] >= 0]
-    if fsel.size == 0:
-        return None
-    idx = np.stack(np.unravel_index(fsel, sub.shape), axis=1).astype(np.int64)
-    old = sub.reshape(-1)[fsel]
-    sign = np.where(old <= 0, -1.0, 1.0)  # sdf <= 0 is inside
-    new = (sign * np.sqrt(best_d2[fsel]) * h).astype(np.float32)
-    # a voxel the surface passes through stays on its side (outside: > 0), never flips
-    new = np.where((sign > 0) & (new <= 0), old, new)
-    cp = _closest_points(tri, idx, best_t[fsel]) + np.asarray(lo, np.float64)
-    return idx + np.asarray(lo), new, cp
+    gi, new, cp = _box_results(sub, tri, best_d2, best_t, wanted, np.asarray(lo, np.int64), h)
+    return (gi, new, cp) if gi.shape[0] else None
+
+
+@numba.njit(cache=True, nogil=True)
+def _box_results(sub, tri, best_d2, best_t, wanted, lo, h):
+    """:func:`_solve_box`'s results at the ``wanted`` voxels (flat indices of the box ``sub``
+    at ``lo``) that found a triangle: grid indices, signed distances, closest points."""
+    ny, nz = sub.shape[1], sub.shape[2]
+    n = 0
+    for f in wanted:
+        if best_t[f] >= 0:
+            n += 1
+    gi = np.empty((n, 3), np.int64)
+    new = np.empty(n, np.float32)
+    cp = np.empty((n, 3))
+    n = 0
+    for f in wanted:
+        t = best_t[f]
+        if t < 0:
+            continue
+        i, j, k = f // (ny * nz), (f // nz) % ny, f % nz
+        old = sub[i, j, k]
+        sign = -1.0 if old <= 0 else 1.0  # sdf <= 0 is inside
+        d = np.float32(sign * np.sqrt(best_d2[f]) * h)
+        # a voxel the surface passes through stays on its side (outside: > 0), never flips
+        new[n] = old if sign > 0 and d <= 0 else d
+        _, qx, qy, qz = _tri_d2(tri, t, float(i), float(j), float(k))
+        gi[n, 0], gi[n, 1], gi[n, 2] = lo[0] + i, lo[1] + j, lo[2] + k
+        cp[n, 0], cp[n, 1], cp[n, 2] = qx + lo[0], qy + lo[1], qz + lo[2]
+        n += 1
+    return gi, new, cp
 
 
 @keyword_options

@@ -606,7 +606,7 @@ def _triangle_table(verts, faces):
     return out
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, nogil=True)
 def _target_layers(sdf, mask, row0, lim):
     """Targets of :func:`reevaluate_arrays`: ``mask`` (M, Y, Z) uint8 nonzero where
     ``|sdf[row0 + m]| <= lim`` (float32).
@@ -617,7 +617,7 @@ def _target_layers(sdf, mask, row0, lim):
     nm, na, nb = mask.shape
     count = np.zeros(nm, np.int64)
     bounds = np.empty((nm, 4), np.int64)
-    for m in numba.prange(nm):
+    for m in range(nm):
         c, a0, a1, b0, b1 = 0, na, -1, nb, -1
         for a in range(na):
             for b in range(nb):

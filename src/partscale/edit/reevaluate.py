@@ -519,7 +519,7 @@ def _commit(sdf, rgb, parts, mask, row0, capping, gi, new, cp, use_far, far):
 def _pieces(runs: list[np.ndarray]) -> list[np.ndarray]:
     """``runs`` (ascending layer indices), those spanning more than :data:`_PIECE_LAYERS`
     layers cut into equal spans of at most that many (empty spans dropped)."""
-    out = []
+    out: list[np.ndarray] = []
     for run in runs:
         span = int(run[-1]) - int(run[0]) + 1
         n = -(-span // _PIECE_LAYERS)

@@ -30,7 +30,6 @@ import numbers
 
 import numba
 import numpy as np
-from scipy import ndimage
 from skimage import measure
 
 from .._kernels import closest_on_triangle
@@ -47,6 +46,15 @@ _LATERAL = 0.05
 #: A slab scaled by less than this relative amount counts as rigid (error <= 1% of |distance|,
 #: 0.04 voxel at the band's edge): tiles of whole periods are copies, not stretches.
 _RIGID = 0.01
+
+#: A cluster of target layers longer than this is re-evaluated in pieces of at most this many
+#: layers (a box each, solved side by side), cut where only the layer count says: the same
+#: pieces, and results, on any machine. A piece's box reaches ``pad`` layers into its
+#: neighbours (every surface point within the band of its targets, and the relays near them);
+#: the sweeps start afresh in each box, so values differ slightly from one box's, no less exact
+#: (see ``test_reevaluate``). Each cut adds ~2 ``pad`` layers of work: on the cabinet shrink
+#: at 128 (104 layers, two pieces) 12 % more voxel visits, each piece on its own core.
+_PIECE_LAYERS = 64
 
 
 @numba.njit(cache=True, inline="always")
@@ -203,18 +211,6 @@ def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
                     changed = True
             if changed:
                 when[f] = clock
-
-
-@numba.njit(cache=True, nogil=True)
-def _closest_points(tri, idx, which):
-    """(N, 3) closest points on triangles ``tri`` of voxels ``idx`` (N, 3) int."""
-    out = np.empty((idx.shape[0], 3))
-    for n in range(idx.shape[0]):
-        _, qx, qy, qz = _tri_d2(tri, which[n], float(idx[n, 0]), float(idx[n, 1]), float(idx[n, 2]))
-        out[n, 0] = qx
-        out[n, 1] = qy
-        out[n, 2] = qz
-    return out
 
 
 @numba.njit(cache=True)
@@ -444,9 +440,14 @@ def reevaluate_arrays(
     h = float(voxel_size)
     lim = band * h
     mask = np.asarray(mask)
-    # only the layers the mask covers are read: the edit's slab and band, not the whole grid
-    target = (mask > 0) & (np.abs(sdf[row0 : row0 + mask.shape[0]]) <= lim)
-    layers = np.flatnonzero(target.any(axis=(1, 2))) + row0
+    capping = mask.dtype == np.uint8
+    if mask.dtype == bool:
+        mask = mask.view(np.uint8)
+    # only the layers the mask covers are read: the edit's slab and band, not the whole grid;
+    # one pass gives each layer's count of targets and their bounds across it (float32
+    # threshold: the comparison numpy makes of the float32 field with a Python float)
+    count, bounds = _target_layers(sdf, mask, row0, np.float32(lim))
+    layers = np.flatnonzero(count) + row0
     if layers.size == 0:
         return 0
     pad = int(np.ceil(band)) + 2
@@ -454,17 +455,22 @@ def reevaluate_arrays(
     # (along axis 0) instead of one box spanning them all. Every box reads the unchanged field;
     # all writes happen at the end, so the result does not depend on the order of the boxes.
     breaks = np.flatnonzero(np.diff(layers) > 2 * pad + 1)
-    runs = np.split(layers, breaks + 1)
+    runs = _pieces(np.split(layers, breaks + 1))
 
     def solve(run: np.ndarray):
-        a0 = max(int(run[0]) - pad, 0)
-        a1 = min(int(run[-1]) + pad + 1, sdf.shape[0])
-        t_run = np.zeros((a1 - a0, *target.shape[1:]), bool)
-        t_run[run[0] - a0 : run[-1] - a0 + 1] = target[run[0] - row0 : run[-1] - row0 + 1]
-        return _solve_box(sdf, t_run, a0, h, lim, pad, npass)
+        # the box around the run's targets that holds every surface point within the band
+        # of them (it holds no other cluster's targets: clusters are > 2 pad layers apart;
+        # a piece's box holds the neighbouring pieces' targets of its ``pad`` outer layers)
+        b = bounds[run - row0]
+        lo = [max(int(run[0]) - pad, 0)] + [max(int(b[:, 2 * a].min()) - pad, 0) for a in (0, 1)]
+        hi = [min(int(run[-1]) + pad + 1, sdf.shape[0])] + [
+            min(int(b[:, 2 * a + 1].max()) + pad + 1, sdf.shape[a + 1]) for a in (0, 1)
+        ]
+        return _solve_box(sdf, mask, row0, lo, hi, (int(run[0]), int(run[-1])), h, lim, pad, npass)
 
     # boxes are independent (each reads the unchanged field) and the propagation, their main
-    # cost, releases the GIL: they are solved side by side
+    # cost, releases the GIL: they are solved side by side (the pieces depend on the layers
+    # only, never on the number of threads, so neither do the results)
     results = thread_map(solve, runs)
     found = [got for got in results if got is not None]
     if not found:
@@ -472,24 +478,54 @@ def reevaluate_arrays(
     gi = np.concatenate([f[0] for f in found])
     new = np.concatenate([f[1] for f in found])
     cp = np.concatenate([f[2] for f in found])
-    if mask.dtype == np.uint8:
-        # code 2: the old value is an upper bound of the distance; keep it where it is smaller
-        old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
-        capped = (mask[gi[:, 0] - row0, gi[:, 1], gi[:, 2]] == 2) & (np.abs(old) <= np.abs(new))
-        if capped.any():
-            keep = ~capped
-            gi, new, cp = gi[keep], new[keep], cp[keep]
+    # code 2 (uint8 masks): the old value is an upper bound of the distance, kept where smaller
+    return _commit(
+        sdf, rgb, parts, mask, row0, capping, gi, new, cp, far is not None, np.float32(far or 0.0)
+    )
+
+
+@numba.njit(cache=True)
+def _commit(sdf, rgb, parts, mask, row0, capping, gi, new, cp, use_far, far):
+    """Write the recomputed voxels ``gi`` (N, 3): distance ``new``, colour and part at their
+    closest point ``cp``; see :func:`reevaluate_arrays`. Returns the number written.
+
+    Colours and parts are all read before any is written (no voxel sees another's new colour).
+    """
+    keep = np.ones(gi.shape[0], np.bool_)
+    if capping:
+        for q in range(gi.shape[0]):
+            i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
+            if mask[i - row0, j, k] == 2 and abs(sdf[i, j, k]) <= abs(new[q]):
+                keep[q] = False
+    sel = np.flatnonzero(keep)
+    gi, new, cp = gi[sel], new[sel], cp[sel]
     col = _trilinear_rgb(rgb, cp)
-    # colours and parts are all read before any is written (no voxel sees another's new colour)
-    new_parts = _surface_parts(sdf, parts, cp)
-    if far is not None:
-        old = sdf[gi[:, 0], gi[:, 1], gi[:, 2]]
-        moved = (new != old) | (new_parts != parts[gi[:, 0], gi[:, 1], gi[:, 2]])
-        new_parts[moved & (new > np.float32(far))] = -1
-    sdf[gi[:, 0], gi[:, 1], gi[:, 2]] = new
-    rgb[gi[:, 0], gi[:, 1], gi[:, 2]] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
-    parts[gi[:, 0], gi[:, 1], gi[:, 2]] = new_parts
-    return len(gi)
+    new_parts = _surface_parts_kernel(sdf, parts, cp)
+    if use_far:
+        for q in range(gi.shape[0]):
+            i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
+            moved = new[q] != sdf[i, j, k] or new_parts[q] != parts[i, j, k]
+            if moved and new[q] > far:
+                new_parts[q] = -1
+    for q in range(gi.shape[0]):
+        i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
+        sdf[i, j, k] = new[q]
+        for c in range(3):
+            rgb[i, j, k, c] = np.uint8(min(max(np.rint(col[q, c]), 0.0), 255.0))
+        parts[i, j, k] = new_parts[q]
+    return gi.shape[0]
+
+
+def _pieces(runs: list[np.ndarray]) -> list[np.ndarray]:
+    """``runs`` (ascending layer indices), those spanning more than :data:`_PIECE_LAYERS`
+    layers cut into equal spans of at most that many (empty spans dropped)."""
+    out: list[np.ndarray] = []
+    for run in runs:
+        span = int(run[-1]) - int(run[0]) + 1
+        n = -(-span // _PIECE_LAYERS)
+        cuts = int(run[0]) + (np.arange(1, n) * span) // n
+        out.extend(p for p in np.split(run, np.searchsorted(run, cuts)) if p.size)
+    return out
 
 
 def _surface_parts(sdf: np.ndarray, parts: np.ndarray, cp: np.ndarray) -> np.ndarray:
@@ -570,16 +606,95 @@ def _triangle_table(verts, faces):
     return out
 
 
-def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
-    """Distances of the targets ``t_run`` (layers ``a0 ...`` of ``sdf``) to the zero level set.
+@numba.njit(cache=True, nogil=True)
+def _target_layers(sdf, mask, row0, lim):
+    """Targets of :func:`reevaluate_arrays`: ``mask`` (M, Y, Z) uint8 nonzero where
+    ``|sdf[row0 + m]| <= lim`` (float32).
 
-    Returns ``(gi (N, 3) int64 grid indices, new sdf (N,) float32, closest points (N, 3) float64
-    in continuous grid indices)`` or None.
+    Returns ``(count (M,) int64, bounds (M, 4) int64)``: per layer, its number of targets and
+    their first and last index along axes 1 and 2 (``Y, -1, Z, -1`` where none).
     """
-    # the box around the target voxels that holds every surface point within the band of them
-    nz_ = [np.flatnonzero(t_run.any(axis=tuple(b for b in range(3) if b != ax))) for ax in range(3)]
-    lo = [a0] + [max(int(nz_[ax][0]) - pad, 0) for ax in (1, 2)]
-    hi = [a0 + t_run.shape[0]] + [min(int(nz_[ax][-1]) + pad + 1, sdf.shape[ax]) for ax in (1, 2)]
+    nm, na, nb = mask.shape
+    count = np.zeros(nm, np.int64)
+    bounds = np.empty((nm, 4), np.int64)
+    for m in range(nm):
+        c, a0, a1, b0, b1 = 0, na, -1, nb, -1
+        for a in range(na):
+            for b in range(nb):
+                if mask[m, a, b] != 0 and abs(sdf[row0 + m, a, b]) <= lim:
+                    c += 1
+                    a0 = min(a0, a)
+                    a1 = a
+                    b0 = min(b0, b)
+                    b1 = max(b1, b)
+        count[m] = c
+        bounds[m, 0], bounds[m, 1], bounds[m, 2], bounds[m, 3] = a0, a1, b0, b1
+    return count, bounds
+
+
+@numba.njit(cache=True, nogil=True)
+def _box_targets(sdf, mask, row0, lim, lo, shape):
+    """(shape) uint8: 1 at the targets (see :func:`_target_layers`) of the box at ``lo``."""
+    out = np.zeros((shape[0], shape[1], shape[2]), np.uint8)
+    for i in range(shape[0]):
+        m = lo[0] + i - row0
+        if m < 0 or m >= mask.shape[0]:
+            continue
+        for j in range(shape[1]):
+            for k in range(shape[2]):
+                if (
+                    mask[m, lo[1] + j, lo[2] + k] != 0
+                    and abs(sdf[lo[0] + i, lo[1] + j, lo[2] + k]) <= lim
+                ):
+                    out[i, j, k] = 1
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _dilate_last(a, r):
+    """(X, Y, Z) uint8: 1 where ``a`` has a nonzero within ``r`` along the last axis (zero
+    beyond the ends)."""
+    nx, ny, nz = a.shape
+    out = np.zeros((nx, ny, nz), np.uint8)
+    for i in range(nx):
+        for j in range(ny):
+            last = -(r + 1)  # the latest nonzero at or before k
+            for k in range(nz + r):
+                if k < nz and a[i, j, k] != 0:
+                    last = k
+                if k - r >= 0 and k - last <= 2 * r:
+                    out[i, j, k - r] = 1
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _relays(sub, t_box, r, lim):
+    """Ascending flat indices of the box's voxels with ``|sub| <= lim`` (float32) within
+    Chebyshev distance ``r`` of a target of ``t_box``."""
+    reach = _dilate_last(t_box, r)
+    reach = _dilate_last(reach.transpose(0, 2, 1), r).transpose(0, 2, 1)
+    reach = _dilate_last(reach.transpose(2, 1, 0), r).transpose(2, 1, 0)
+    nx, ny, nz = sub.shape
+    out = np.empty(sub.size, np.int64)
+    n = 0
+    for i in range(nx):
+        for j in range(ny):
+            for k in range(nz):
+                if reach[i, j, k] != 0 and abs(sub[i, j, k]) <= lim:
+                    out[n] = (i * ny + j) * nz + k
+                    n += 1
+    return out[:n]
+
+
+def _solve_box(sdf, mask, row0, lo, hi, own, h, lim, pad, npass):
+    """Distances of the targets of layers ``own[0] ... own[1]`` in box ``lo ... hi - 1`` of
+    ``sdf`` to the zero level set.
+
+    Targets: voxels of ``mask`` (uint8, layers ``row0 ...``) with ``|sdf| <= lim``; all
+    targets of the box gather relays, only those of the ``own`` layers are solved. Returns
+    ``(gi (N, 3) int64 grid indices, new sdf (N,) float32, closest points (N, 3) float64 in
+    continuous grid indices)`` or None.
+    """
     box = tuple(slice(lo[a], hi[a]) for a in range(3))
     sub = np.array(sdf[box], dtype=np.float32)
     if min(sub.shape) < 2 or not ((sub <= 0).any() and (sub > 0).any()):
@@ -590,27 +705,53 @@ def _solve_box(sdf, t_run, a0, h, lim, pad, npass):
     tri = _triangle_table(verts.astype(np.float64), faces)
     # band voxels near the targets relay nearest triangles (half a voxel of slack beyond the
     # band); a voxel farther than the band from every target cannot be on a target's path
-    t_box = t_run[:, box[1], box[2]]
-    reach = ndimage.maximum_filter(t_box.view(np.uint8), size=2 * pad - 1, mode="constant")
-    order = np.flatnonzero((np.abs(sub) <= lim + 0.5 * h) & (reach > 0)).astype(np.int64)
+    t_box = _box_targets(sdf, mask, row0, np.float32(lim), np.asarray(lo, np.int64), sub.shape)
+    order = _relays(sub, t_box, pad - 1, np.float32(lim + 0.5 * h))
     best_d2 = np.full(sub.size, np.inf)
     best_t = np.full(sub.size, -1, np.int32)
     wanted = np.flatnonzero(t_box.reshape(-1))
+    syz = sub.shape[1] * sub.shape[2]
+    wanted = wanted[
+        np.searchsorted(wanted, (own[0] - lo[0]) * syz) : np.searchsorted(
+            wanted, (own[1] + 1 - lo[0]) * syz
+        )
+    ]
     if wanted.size == 0:
         return None
     shape = np.array(sub.shape, np.int64)
     _propagate(tri, order, shape, best_d2, best_t, npass, wanted[0], wanted[-1])
-    fsel = wanted[best_t[wanted] >= 0]
-    if fsel.size == 0:
-        return None
-    idx = np.stack(np.unravel_index(fsel, sub.shape), axis=1).astype(np.int64)
-    old = sub.reshape(-1)[fsel]
-    sign = np.where(old <= 0, -1.0, 1.0)  # sdf <= 0 is inside
-    new = (sign * np.sqrt(best_d2[fsel]) * h).astype(np.float32)
-    # a voxel the surface passes through stays on its side (outside: > 0), never flips
-    new = np.where((sign > 0) & (new <= 0), old, new)
-    cp = _closest_points(tri, idx, best_t[fsel]) + np.asarray(lo, np.float64)
-    return idx + np.asarray(lo), new, cp
+    gi, new, cp = _box_results(sub, tri, best_d2, best_t, wanted, np.asarray(lo, np.int64), h)
+    return (gi, new, cp) if gi.shape[0] else None
+
+
+@numba.njit(cache=True, nogil=True)
+def _box_results(sub, tri, best_d2, best_t, wanted, lo, h):
+    """:func:`_solve_box`'s results at the ``wanted`` voxels (flat indices of the box ``sub``
+    at ``lo``) that found a triangle: grid indices, signed distances, closest points."""
+    ny, nz = sub.shape[1], sub.shape[2]
+    n = 0
+    for f in wanted:
+        if best_t[f] >= 0:
+            n += 1
+    gi = np.empty((n, 3), np.int64)
+    new = np.empty(n, np.float32)
+    cp = np.empty((n, 3))
+    n = 0
+    for f in wanted:
+        t = best_t[f]
+        if t < 0:
+            continue
+        i, j, k = f // (ny * nz), (f // nz) % ny, f % nz
+        old = sub[i, j, k]
+        sign = -1.0 if old <= 0 else 1.0  # sdf <= 0 is inside
+        d = np.float32(sign * np.sqrt(best_d2[f]) * h)
+        # a voxel the surface passes through stays on its side (outside: > 0), never flips
+        new[n] = old if sign > 0 and d <= 0 else d
+        _, qx, qy, qz = _tri_d2(tri, t, float(i), float(j), float(k))
+        gi[n, 0], gi[n, 1], gi[n, 2] = lo[0] + i, lo[1] + j, lo[2] + k
+        cp[n, 0], cp[n, 1], cp[n, 2] = qx + lo[0], qy + lo[1], qz + lo[2]
+        n += 1
+    return gi, new, cp
 
 
 @keyword_options

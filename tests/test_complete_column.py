@@ -45,6 +45,24 @@ def _chair(hub: bool = True) -> np.ndarray:
     return np.concatenate(parts)
 
 
+def _four_legs() -> np.ndarray:
+    """(N, 3): a chair whose four legs (at +-0.18 m) reach from the floor to its seat, with a
+    cross brace meeting under the seat's centre at 0.12 m."""
+    y = np.arange(0.0, 0.45, 0.01)
+    legs = [
+        np.stack([np.full_like(y, sx), y, np.full_like(y, sz)], 1)
+        for sx in (-0.18, 0.18)
+        for sz in (-0.18, 0.18)
+    ]
+    t = np.arange(-0.18, 0.18, 0.01)
+    brace = [
+        np.stack([t, np.full_like(t, 0.12), t], 1),
+        np.stack([t, np.full_like(t, 0.12), -t], 1),
+    ]
+    seat = _chair()[_chair()[:, 1] > 0.4]
+    return np.concatenate([seat, *legs, *brace])
+
+
 def _never_free(p: np.ndarray) -> np.ndarray:
     return np.zeros(len(p), bool)
 
@@ -71,6 +89,15 @@ def test_no_column_without_a_hub_or_without_a_rotation():
     # four legs of a table, a chair's legs: nothing near the axis below the seat
     assert column_mod.find_column(_chair(hub=False), _rotation(), _never_free, H) is None
     assert column_mod.find_column(_chair(), None, _never_free, H) is None
+    # a hub under the seat, but legs carry the seat: no column
+    assert column_mod.find_column(_four_legs(), _rotation(), _never_free, H) is None
+
+
+def test_no_column_where_the_cameras_saw_through_the_thinnest():
+    def free(p):  # seen through everywhere beyond 1 cm of the axis
+        return np.hypot(p[:, 0], p[:, 2]) > 0.01
+
+    assert column_mod.find_column(_chair(), _rotation(), free, H) is None
 
 
 def test_sure_free_space_needs_readings_around_the_ray():

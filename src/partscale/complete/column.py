@@ -3,11 +3,13 @@
 Sensors rarely read it (a thin black cylinder: the TUM frame's depth is 0 over its pixels), so
 the completion would leave the seat floating above its base. Where a rotation of the base was
 found (:func:`partscale.complete.symmetry.rotation_axis`), the surface has a hub on its axis
-(points within ``HUB_REACH`` of it in the base) and a seat above it on the same axis, with
-nothing between them, a cylinder is guessed along the axis from the hub's top to the seat's
-underside. Its radius is the largest in [``MIN_RADIUS``, ``MAX_RADIUS``] that the free space
-seen *surely* (:func:`sure_free`: the ray and its neighbours all reached a reading beyond) does
-not contradict; the sure free space alone carves it. Free space inferred from missing readings
+(points within ``HUB_REACH`` of it in the base) and a seat above it on the same axis, and the
+seat is carried by nothing else (a stretch of height between them holds no surface anywhere:
+the legs of a four-legged chair span every height), a cylinder is guessed along the axis from
+the hub's top to the seat's underside. Its radius is the largest in [``MIN_RADIUS``,
+``MAX_RADIUS``] that the free space seen *surely* (:func:`sure_free`: the ray and its
+neighbours all reached a reading beyond) does not contradict; where it contradicts even the
+thinnest (``MAX_CONTRADICTED``) there is no column; the sure free space alone carves it. Free space inferred from missing readings
 (the hole filling of a raw frame, the silhouette of a cropped scan) is no evidence here: the
 column's own pixels are such holes.
 """
@@ -31,8 +33,13 @@ HUB_REACH = 0.06
 """Metres from the axis within which surface points make the hub (below) and the seat (above)."""
 MIN_POINTS = 5
 """Surface points within ``HUB_REACH`` of the axis that make a hub, and a seat."""
-MIN_GAP_VOXELS = 2.0
-"""Voxels of height without surface near the axis between hub and seat for a column to be added."""
+MIN_GAP_VOXELS = 3
+"""Voxels of height without surface near the axis between hub and seat, and of height without
+surface anywhere (``EMPTY_SHARE``) between them, for a column to be added."""
+EMPTY_SHARE = 0.001
+"""Share of the surface points a voxel's height may hold and count as empty (flying pixels)."""
+MAX_CONTRADICTED = 0.05
+"""Share of the thinnest column's surface samples that may lie in sure free space."""
 SURE_RAYS = 3
 """Pixels across the block of rays that must all reach beyond a point for it to be surely free."""
 SURE_MARGIN_VOXELS = 1.0
@@ -45,7 +52,7 @@ RADIUS_STEP = 0.0025
 class Column:
     """A vertical cylinder in the upright frame: axis (x, z), heights ``bottom`` to ``top``,
     ``radius``; ``contradicted``: the share of its surface samples surely free at that radius
-    (0 unless even ``MIN_RADIUS`` is contradicted)."""
+    (0 unless even ``MIN_RADIUS`` is, by at most ``MAX_CONTRADICTED``)."""
 
     x: float
     z: float
@@ -110,6 +117,16 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
     bottom, top = float(y[i]), float(y[i + 1])
     if top - bottom < MIN_GAP_VOXELS * h or i + 1 < MIN_POINTS or len(y) - i - 1 < MIN_POINTS:
         return None
+    # a seat carried by its column alone: somewhere between hub and seat a stretch of height
+    # holds no surface anywhere (the legs of a four-legged chair span every height)
+    counts = np.histogram(P[:, 1], bins=np.arange(bottom, top + h, h))[0]
+    empty = counts <= EMPTY_SHARE * len(P)
+    run = best = 0
+    for e in empty:
+        run = run + 1 if e else 0
+        best = max(best, run)
+    if best < MIN_GAP_VOXELS:
+        return None
     # the largest radius whose surface the sure free space leaves alone (the ends excluded:
     # the hub's and the seat's own edges)
     a = np.linspace(0.0, 2 * np.pi, 48, endpoint=False)
@@ -131,6 +148,8 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
         radius = float(r)
         if share == 0.0:
             break
+    if share > MAX_CONTRADICTED:
+        return None  # the cameras saw through where even the thinnest column would stand
     return Column(x, z, bottom, top, radius, share)
 
 

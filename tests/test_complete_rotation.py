@@ -149,6 +149,31 @@ def test_real_tum_chairs_complete_watertight_and_upright(tum_completions):
         assert ext[:, 1].max() >= 0.7, name
 
 
+@pytest.mark.parametrize("name", ["yellow", "purple", "frame_purple"])
+def test_real_tum_chairs_stand_on_a_column_from_hub_to_seat(tum_completions, name):
+    # no scan reads the gas-lift column (the raw frame's depth is 0 over it): the column is
+    # guessed along the base's axis, and seat and base become one solid piece
+    from scipy import ndimage
+
+    from partscale.complete import GUESSED, provenance
+    from partscale.complete.column import MAX_RADIUS, MIN_RADIUS
+
+    c = tum_completions[name]
+    col = c.meta["completion"]["column"]
+    assert col is not None and col["voxels_added"] > 0
+    assert MIN_RADIUS <= col["radius"] <= MAX_RADIUS
+    assert c.meta["history"][0]["column_radius_m"] == [MIN_RADIUS, MAX_RADIUS]
+    lab, _ = ndimage.label(np.asarray(c.sdf) < 0)
+    biggest = lab == np.argmax(np.bincount(lab.ravel())[1:]) + 1
+    y = c.index_to_world(np.argwhere(biggest))[:, 1]
+    assert y.min() <= 0.05 and y.max() >= 0.45, (y.min(), y.max())
+    # its surface is counted as guessed
+    mid = c.index_to_world(np.argwhere(provenance(c) == GUESSED))
+    r = np.hypot(mid[:, 0] - col["axis_x"], mid[:, 2] - col["axis_z"])
+    band = (mid[:, 1] > col["bottom"] + 0.05) & (mid[:, 1] < col["top"] - 0.05)
+    assert (r[band] <= col["radius"] + c.voxel_size).sum() > 0
+
+
 def _star_points(r0: float, legs: int = 5, step: float = 0.003) -> np.ndarray:
     """(N, 3) upright points: the tops of ``legs`` legs (0.05 wide, 5 cm high) from radius r0
     to 0.33 m about the y axis, no hub between them, under a seat 0.45 m wide at 0.48 m."""

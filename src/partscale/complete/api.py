@@ -16,6 +16,7 @@ from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
+from . import column as column_mod
 from . import fuse as fuse_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
@@ -23,7 +24,7 @@ from .carve import Carver, FreeGrid
 from .floor import base_plane, clusters, find_floor, in_plane_axes
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
-METHOD = "carve+floor+symmetry+between+slab+closure"
+METHOD = "carve+floor+symmetry+between+slab+closure+column"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
 CLUSTER_CELL = 0.03
@@ -548,6 +549,19 @@ def complete(
     )
     if not (sdf < 0).any():
         raise InputError(f"{source}: expected a solid after completion, got none (all carved)")
+    # a turning base's column to the seat, which sensors rarely read (thin, black): guessed
+    # where only the sure free space allows it
+    sure_margin = column_mod.SURE_MARGIN_VOXELS * h
+
+    def sure_free_up(pu):
+        return column_mod.sure_free(frames, _apply(Uinv, pu), sure_margin)
+
+    col = column_mod.find_column(S, rot, sure_free_up, h) if symmetry else None
+    n_column = 0
+    if col is not None:
+        sdf, prov, n_column = column_mod.add_column(
+            sdf, prov, col, U @ grid_to_world, origin, h, sure_free_up, fuse_mod.GUESSED
+        )
     # made fit to mesh: scan noise's floating specks dropped, diagonal-only contacts filled
     # (marching cubes would join them by edges of four faces)
     sdf, n_specks = tidy_mod.drop_specks(sdf, h)
@@ -567,6 +581,7 @@ def complete(
         "copies_dropped_in_free_space": n_dropped,
         "specks_dropped": n_specks,
         "contact_voxels_filled": n_filled,
+        "column": None if col is None else {**col.as_dict(), "voxels_added": n_column},
         "floor": None
         if found is None
         else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
@@ -621,6 +636,10 @@ def complete(
         "slab_edge_share": fuse_mod.SLAB_EDGE_SHARE,
         "carve_margin_voxels": CARVE_MARGIN,
         "speck_share": tidy_mod.SPECK_SHARE,
+        "column_radius_m": [column_mod.MIN_RADIUS, column_mod.MAX_RADIUS],
+        "column_hub_reach_m": column_mod.HUB_REACH,
+        "column_sure_rays_px": column_mod.SURE_RAYS,
+        "column_sure_margin_voxels": column_mod.SURE_MARGIN_VOXELS,
         "floor_tol_m": FLOOR_TOL,
         "up_from": up_from,
         "max_plane_tilt_deg": sym_mod.MAX_PLANE_TILT_DEG,

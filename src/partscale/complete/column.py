@@ -1,0 +1,201 @@
+"""A swivel chair's column: the gas lift between a turning base's hub and the seat.
+
+Sensors rarely read it (a thin black cylinder: the TUM frame's depth is 0 over its pixels), so
+the completion would leave the seat floating above its base. Where a rotation of the base was
+found (:func:`partscale.complete.symmetry.rotation_axis`), the surface has a hub on its axis
+(points within ``HUB_REACH`` of it in the base) and a seat above it on the same axis, and the
+seat is carried by nothing else (a stretch of height between them holds no surface anywhere:
+the legs of a four-legged chair span every height), a cylinder is guessed along the axis from
+the hub's top to the seat's underside. Its radius is the largest in [``MIN_RADIUS``,
+``MAX_RADIUS``] that the free space seen *surely* (:func:`sure_free`: the ray and its
+neighbours all reached a reading beyond) does not contradict; where it contradicts even the
+thinnest (``MAX_CONTRADICTED``) there is no column; the sure free space alone carves it. Free space inferred from missing readings
+(the hole filling of a raw frame, the silhouette of a cropped scan) is no evidence here: the
+column's own pixels are such holes.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from .carve import _free_kernel
+from .scan import Frame
+
+MIN_RADIUS = 0.02
+"""Metres: the thinnest column guessed (office chairs' gas lifts are 4-6 cm across)."""
+MAX_RADIUS = 0.03
+"""Metres: the thickest column guessed."""
+HUB_REACH = 0.06
+"""Metres from the axis within which surface points make the hub (below) and the seat (above)."""
+MIN_POINTS = 5
+"""Surface points within ``HUB_REACH`` of the axis that make a hub, and a seat."""
+MIN_GAP_VOXELS = 3
+"""Voxels of height without surface near the axis between hub and seat, and of height without
+surface anywhere (``EMPTY_SHARE``) between them, for a column to be added."""
+EMPTY_SHARE = 0.001
+"""Share of the surface points a voxel's height may hold and count as empty (flying pixels)."""
+MAX_CONTRADICTED = 0.05
+"""Share of the thinnest column's surface samples that may lie in sure free space."""
+SURE_RAYS = 3
+"""Pixels across the block of rays that must all reach beyond a point for it to be surely free."""
+SURE_MARGIN_VOXELS = 1.0
+"""Voxels a point must lie in front of the readings to be surely free."""
+RADIUS_STEP = 0.0025
+"""Metres between the radii tried, from ``MAX_RADIUS`` down."""
+
+
+@dataclass(frozen=True)
+class Column:
+    """A vertical cylinder in the upright frame: axis (x, z), heights ``bottom`` to ``top``,
+    ``radius``; ``contradicted``: the share of its surface samples surely free at that radius
+    (0 unless even ``MIN_RADIUS`` is, by at most ``MAX_CONTRADICTED``)."""
+
+    x: float
+    z: float
+    bottom: float
+    top: float
+    radius: float
+    contradicted: float
+
+    def as_dict(self) -> dict:
+        return {
+            "axis_x": round(self.x, 6),
+            "axis_z": round(self.z, 6),
+            "bottom": round(self.bottom, 6),
+            "top": round(self.top, 6),
+            "radius": round(self.radius, 6),
+            "contradicted": round(self.contradicted, 4),
+        }
+
+
+def sure_free(frames: list[Frame], points: np.ndarray, margin: float) -> np.ndarray:
+    """(N,) bool: world ``points`` (N, 3) that some view surely saw through: its pixel and every
+    pixel of the ``SURE_RAYS`` square around it read a depth beyond the point by ``margin``.
+    Pixels without a reading, and a cropped scan's background, say nothing."""
+    P = np.ascontiguousarray(points, np.float32)
+    out = np.zeros(len(P), bool)
+    no_through = np.zeros((1, 1), bool)
+    for f in frames:
+        valid = f.depth > 0
+        near = ndimage.minimum_filter(np.where(valid, f.depth, np.inf), size=SURE_RAYS)
+        all_valid = ndimage.minimum_filter(valid, size=SURE_RAYS)
+        depth = np.ascontiguousarray(np.where(all_valid, near, 0.0), np.float32)
+        R = np.ascontiguousarray(f.pose[:3, :3], np.float32)
+        t = np.ascontiguousarray(f.pose[:3, 3], np.float32)
+        K = (float(f.K[0, 0]), float(f.K[1, 1]), float(f.K[0, 2]), float(f.K[1, 2]))
+        _free_kernel(P, R, t, *K, depth, no_through, False, float(margin), out)
+    return out
+
+
+def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | None:
+    """The column of a turning base under a seat, or None.
+
+    points : (N, 3) upright surface points (observed and copies); rotation : the base's
+    :class:`~partscale.complete.symmetry.Symmetry` (kind "rotation") or None; free_up : upright
+    points (M, 3) -> (M,) bool, the sure free space (:func:`sure_free`); h : the grid's voxel.
+    """
+    if rotation is None:
+        return None
+    x, z = float(rotation.params["axis_x"]), float(rotation.params["axis_z"])
+    base_top = float(rotation.bands[0][1])
+    P = np.asarray(points, np.float64)
+    near = np.hypot(P[:, 0] - x, P[:, 2] - z) <= HUB_REACH
+    y = np.sort(P[near, 1])
+    if len(y) < 2 * MIN_POINTS:
+        return None
+    # the widest stretch of height without surface near the axis that starts in the base: the
+    # hub below it, the seat above it
+    gaps = np.diff(y)
+    starts_low = y[:-1] < base_top
+    if not starts_low.any():
+        return None
+    i = int(np.argmax(np.where(starts_low, gaps, -np.inf)))
+    bottom, top = float(y[i]), float(y[i + 1])
+    if top - bottom < MIN_GAP_VOXELS * h or i + 1 < MIN_POINTS or len(y) - i - 1 < MIN_POINTS:
+        return None
+    # a seat carried by its column alone: somewhere between hub and seat a stretch of height
+    # holds no surface anywhere (the legs of a four-legged chair span every height)
+    counts = np.histogram(P[:, 1], bins=np.arange(bottom, top + h, h))[0]
+    empty = counts <= EMPTY_SHARE * len(P)
+    run = best = 0
+    for e in empty:
+        run = run + 1 if e else 0
+        best = max(best, run)
+    if best < MIN_GAP_VOXELS:
+        return None
+    # the largest radius whose surface the sure free space leaves alone (the ends excluded:
+    # the hub's and the seat's own edges)
+    a = np.linspace(0.0, 2 * np.pi, 48, endpoint=False)
+    heights = np.arange(bottom + h, top - h + 1e-9, h / 2)
+    if len(heights) == 0:
+        heights = np.array([(bottom + top) / 2])
+    share = 1.0
+    radius = MIN_RADIUS
+    for r in np.arange(MAX_RADIUS, MIN_RADIUS - 1e-9, -RADIUS_STEP):
+        ring = np.stack(
+            [
+                np.broadcast_to(x + r * np.cos(a), (len(heights), len(a))),
+                np.broadcast_to(heights[:, None], (len(heights), len(a))),
+                np.broadcast_to(z + r * np.sin(a), (len(heights), len(a))),
+            ],
+            axis=-1,
+        ).reshape(-1, 3)
+        share = float(free_up(ring).mean())
+        radius = float(r)
+        if share == 0.0:
+            break
+    if share > MAX_CONTRADICTED:
+        return None  # the cameras saw through where even the thinnest column would stand
+    return Column(x, z, bottom, top, radius, share)
+
+
+def add_column(
+    sdf: np.ndarray,
+    prov: np.ndarray,
+    column: Column,
+    grid_to_upright: np.ndarray,
+    origin: np.ndarray,
+    h: float,
+    free_up,
+    guessed: int,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """The SDF (X, Y, Z) float32 (world units, negative inside) and provenance (X, Y, Z) uint8
+    with ``column`` united in (reaching a voxel into the hub and the seat), except where
+    ``free_up`` (upright points -> bool) is true; its new surface marked ``guessed``. Returns
+    them and the number of voxels the column made solid."""
+    A, b = grid_to_upright[:3, :3], grid_to_upright[:3, 3]
+    # the grid's voxels whose centres lie in the column's box, grown by two voxels
+    lo = np.array([column.x - column.radius, column.bottom - h, column.z - column.radius])
+    hi = np.array([column.x + column.radius, column.top + h, column.z + column.radius])
+    corners = np.array(list(itertools.product(*zip(lo, hi, strict=True))))
+    g = (corners - b) @ A  # upright -> grid (A is a rotation)
+    i0 = np.maximum(np.floor((g.min(axis=0) - origin) / h).astype(np.int64) - 2, 0)
+    i1 = np.minimum(np.ceil((g.max(axis=0) - origin) / h).astype(np.int64) + 3, sdf.shape)
+    if (i1 <= i0).any():
+        return sdf, prov, 0
+    sl = tuple(slice(int(s), int(e)) for s, e in zip(i0, i1, strict=True))
+    ijk = np.indices(tuple(i1 - i0)).reshape(3, -1).T + i0
+    up = (origin + ijk * h) @ A.T + b
+    radial = np.hypot(up[:, 0] - column.x, up[:, 2] - column.z) - column.radius
+    axial = np.maximum(column.bottom - h - up[:, 1], up[:, 1] - column.top - h)
+    d = np.maximum(radial, axial).reshape(tuple(i1 - i0)).astype(np.float32)
+    inside = d < 0
+    free = np.zeros(d.shape, bool)
+    free[inside] = free_up(up[inside.ravel()])
+    old = sdf[sl]
+    take = (d < old) & ~free
+    # a surely free voxel next to the column keeps the column's surface outside it
+    new = np.where(take, d, old)
+    sdf = sdf.copy()
+    prov = prov.copy()
+    sdf[sl] = new
+    p = prov[sl]
+    p[take & (np.abs(d) <= h)] = guessed
+    # what the column buried is no longer surface
+    p[take & (d < -h)] = 0
+    prov[sl] = p
+    return sdf, prov, int((take & (d < 0) & (old >= 0)).sum())

@@ -163,3 +163,24 @@ def test_depth_smoothing_moves_no_reading_across_an_edge_or_along_a_slope():
     # the board's last column (its edge) is unbiased within half a sigma; its noise is reduced
     assert abs(err[:, 39].mean()) <= 0.5 * sigma
     assert err[:, 10:30].std() <= 0.6 * sigma
+
+
+def test_a_face_whose_side_face_runs_past_the_reach_takes_no_thickness_from_it():
+    # a long cushion seen on its front and its right end, the end flat only in a band half-way
+    # up (rounded above and below, off the axes): a walk in from the band along the front face
+    # never reaches the front's end, so it measured the cushion's width, not a thickness; it
+    # must not carry the band across the cushion (a sure sheet deep inside a thick part)
+    from partscale.complete import fuse
+
+    lo, hi = (4, 20, 4), (4 + fuse.BETWEEN_VOXELS + 26, 40, 24)
+    front, n_front = _grid_face(lo, hi, 2, 1)
+    end, n_end = _grid_face(lo, hi, 0, 1)
+    # the end's normals turn off the x axis above and below its flat band (y 28-32)
+    tilt = np.clip((np.abs(end[:, 1] - 30) - 2) / 4, 0, 1) * np.radians(60)
+    n_end = np.stack([np.cos(tilt), np.sin(tilt) * np.sign(end[:, 1] - 30), 0 * tilt], axis=1)
+    P, N = np.concatenate([front, end]), np.concatenate([n_front, n_end])
+    shape = (hi[0] + 6, 46, 30)
+    idx = np.rint(P).astype(np.int64)
+    sure, unsure = fuse._slab(P, N, idx, np.zeros(3), 1.0, shape, np.zeros(shape, bool))
+    # nothing carried in from the end beyond the band's own depth at the end (a few voxels)
+    assert not (sure | unsure)[: hi[0] - 8, 26:35, 6:22].any()

@@ -326,7 +326,9 @@ def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.
     walk from an edge point along its face's axis, through voxels within two of points facing
     sideways (gaps of ``SLAB_GAP`` stepped over), measures it. A point with a side face
     ``SLAB_ABOVE`` voxels in front of it stands at a junction (a back rising from a seat), one
-    with none next to it inside the face: neither measures. Every point takes the most common
+    with none next to it inside the face: neither measures, nor does a walk whose side face runs
+    on past ``BETWEEN_VOXELS`` (a seat's front, walked from a rounded end, gives the seat's
+    width: carried in, a sheet across a thick cushion). Every point takes the most common
     of its ``SLAB_NEIGHBOURS`` nearest measurements facing the same way (a leg flush below an
     edge lengthens a few, holes at an edge shorten a few) and is carried in along its face's
     axis to that depth through voxels no camera saw through: the thickness of a slab whose
@@ -427,9 +429,11 @@ def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
         if not (0 <= a < X and 0 <= b < Y and 0 <= c < Z and near[a, b, c] & side[i]):
             depth[i] = 0
             continue
+        ended = False
         for s in range(1, reach + 1):
             a, b, c = _voxel_at(p, n, i, s)
             if a < 0 or b < 0 or c < 0 or a >= X or b >= Y or c >= Z:
+                ended = True  # the grid's edge: nothing can lie beyond it
                 break
             # along the side face, not through it: its voxels may be seen free by a hair
             if bits[a, b, c] & side[i]:
@@ -439,7 +443,12 @@ def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
                 # underside, turned off the axes), the walk measured the flat band, not the part
                 if anyb[a, b, c]:
                     last = 0
+                ended = True
                 break
+        if not ended:
+            # the side face runs on beyond the reach: a walk along a seat's front from its
+            # rounded end measured the seat's width, not a thickness
+            last = 0
         # the side face's last voxel lies up to two voxels (the widening) past its points
         depth[i] = max(last - 2, 0)
 

@@ -20,7 +20,7 @@ from . import fuse as fuse_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
-from .floor import base_plane, clusters, find_floor, in_plane_axes
+from .floor import base_plane, clusters, find_floor, floor_scraps, in_plane_axes
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
 METHOD = "carve+floor+symmetry+between+slab+closure"
@@ -311,6 +311,10 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         height = P @ up
         height = height - height.min() + 3 * FLOOR_TOL  # every point is object
     obj = _isolate(frames, P, pix, height, up, box, cropped)
+    if up_from == "underside":
+        # the level plane under an object that is no floor: scraps of the floor the scan kept
+        # lie in it beside the object (the derived yellow chair's, beside its star base)
+        obj &= ~floor_scraps(P, support, FLOOR_TOL, FLOOR_CELL_M, FLOOR_BROAD_M)
     Q, QC = P[obj], C[obj]
     if len(Q) < 30:
         raise InputError(f"{source}: expected an object of at least 30 points, got {len(Q)}")

@@ -47,6 +47,9 @@ CARVE_MARGIN = 0.5
 """Voxels a point must lie in front of a reading to be free space (absorbs sensor noise)."""
 
 
+MIN_UP_TILT_DEG = 0.5
+"""Degrees below which the mirror plane's tilt does not correct up (the frame and the mirror
+planes are not rebuilt for it; the tilt search's finest step is 0.25 degrees)."""
 SYMMETRY_MARGIN = 3.0
 """Voxels a symmetric copy must lie in front of a reading to contradict the scan."""
 FREE_GRID_VOXELS = 1.5
@@ -415,7 +418,11 @@ def complete(
         y = np.array([0.0, 1.0, 0.0]) - n3[1] * n3
         y /= np.linalg.norm(y)
         up_tilt = float(np.degrees(np.arccos(np.clip(y[1], -1.0, 1.0))))
-        if up_tilt > 0:
+        # the tilt search's finest step is 0.25 degrees: a step or two of it is noise, not
+        # worth the frame and the mirror search rebuilt
+        if up_tilt < MIN_UP_TILT_DEG:
+            up_tilt = 0.0
+        else:
             up_w = Uinv[:3, :3] @ y
             U = _upright(up_w, frames[0].pose[:3, 2], float((Q @ up_w).min()), Q.mean(axis=0))
             Uinv = np.linalg.inv(U)

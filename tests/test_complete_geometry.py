@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 def _box_faces(lo, hi, faces, n_per_face, rng):
@@ -163,3 +164,52 @@ def test_depth_smoothing_moves_no_reading_across_an_edge_or_along_a_slope():
     # the board's last column (its edge) is unbiased within half a sigma; its noise is reduced
     assert abs(err[:, 39].mean()) <= 0.5 * sigma
     assert err[:, 10:30].std() <= 0.6 * sigma
+
+
+def _long_cushion(rounded: bool):
+    """Points (N, 3) and normals of a part 90 voxels long, 20 thick (y 20-40) and 20 deep seen on
+    its front (+z) and right end (+x): a cushion (``rounded``: the vertical edge between them a
+    quarter circle of radius 6, every face turned off the axes above and below a band half-way
+    up) or a flat rim with sharp edges (a stool's seat)."""
+    x_end, z_front, r = 94, 24, 6 if rounded else 0
+    ys = np.arange(20, 40.01, 0.5)
+    fx, fy = np.meshgrid(np.arange(4, x_end - r + 1e-9, 0.5), ys)
+    ez, ey = np.meshgrid(np.arange(4, z_front - r + 1e-9, 0.5), ys)
+    a, ay = np.meshgrid(np.radians(np.arange(0, 90.01, 1.0)), ys)
+    arc_n = np.stack([np.cos(a.ravel()), 0 * a.ravel(), np.sin(a.ravel())], axis=1)
+    P = np.concatenate(
+        [
+            np.stack([fx.ravel(), fy.ravel(), np.full(fx.size, z_front)], axis=1),
+            np.stack([np.full(ez.size, x_end), ey.ravel(), ez.ravel()], axis=1),
+            np.stack([x_end - r + r * arc_n[:, 0], ay.ravel(), z_front - r + r * arc_n[:, 2]], 1),
+        ]
+    )
+    N = np.concatenate(
+        [np.tile([0.0, 0, 1], (fx.size, 1)), np.tile([1.0, 0, 0], (ez.size, 1)), arc_n]
+    )
+    if rounded:
+        g = np.clip((np.abs(P[:, 1] - 30) - 1) / 3, 0, 1) * np.radians(60)
+        N = N * np.cos(g)[:, None]
+        N[:, 1] = np.sin(g) * np.sign(P[:, 1] - 30)
+    return P, N
+
+
+@pytest.mark.parametrize("rounded", [False, True])
+def test_a_width_carries_a_sharp_rim_across_but_not_a_rounded_cushion_end(rounded):
+    # walked in from the end along the front, the side face runs on past the reach: the walk
+    # measured the part's width. A stool's flat rim with sharp edges is carried across by it
+    # (its seat is that rim's thickness); a cushion's rounded end (SheenChair's) is a flat band
+    # whose carry would be a sure sheet deep inside a thicker part, and is not
+    from partscale.complete import fuse
+
+    P, N = _long_cushion(rounded)
+    shape = (100, 46, 30)
+    sure, unsure = fuse._slab(
+        P, N, np.rint(P).astype(np.int64), np.zeros(3), 1.0, shape, np.zeros(shape, bool)
+    )
+    # inside the part, away from its end: under the band, across its depth
+    inner = (sure | unsure)[: 94 - 10, 22:38, 6:22]
+    if rounded:
+        assert not inner.any()
+    else:
+        assert inner.mean() >= 0.5

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import data_path
 
 
 def _boxes(*boxes):
@@ -154,3 +155,52 @@ def test_bench_objects_that_failed_are_scanned_and_isolated_whole(rel, unit, vie
     ext = np.subtract(*np.percentile(ob.points, [99.5, 0.5], axis=0))
     assert (ext >= 0.85 * np.ptp(V, axis=0)).all()
     assert (ext <= 1.05 * np.ptp(V, axis=0) + 0.02).all()
+
+
+def test_floor_scraps_beside_a_base_are_dropped_and_its_legs_and_casters_kept():
+    # a five-star base (legs rising from 3 cm at their tips to 11 cm at the hub, casters below
+    # their tips at the level plane) and two strips of floor the cut left beside it, 0.5-0.8 m
+    # from the hub, every 1 cm (metres, y up)
+    from partscale.complete.floor import Plane, floor_scraps
+
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.03, 0.33, 31)
+    legs = []
+    for k in range(5):
+        a = 2 * np.pi * k / 5
+        for w in (-0.015, 0.0, 0.015):
+            x = t * np.cos(a) - w * np.sin(a)
+            z = t * np.sin(a) + w * np.cos(a)
+            legs.append(np.stack([x, 0.11 - 0.25 * t, z], axis=1))
+        legs.append([[0.34 * np.cos(a), 0.005, 0.34 * np.sin(a)]])  # its caster
+    legs = np.concatenate(legs)
+    u, v = np.meshgrid(np.arange(0.5, 0.8, 0.01), np.arange(0.0, 0.06, 0.01))
+    strips = np.concatenate(
+        [np.stack([u.ravel(), 0 * u.ravel(), v.ravel() + z0], axis=1) for z0 in (0.2, -0.4)]
+    )
+    strips[:, 1] += rng.normal(0, 0.003, len(strips))
+    seat = np.stack(
+        [rng.uniform(-0.25, 0.25, 500), np.full(500, 0.45), rng.uniform(-0.25, 0.25, 500)], 1
+    )
+    P = np.concatenate([legs, strips, seat])
+    scrap = floor_scraps(P, Plane(np.array([0.0, 1.0, 0.0]), 0.0), 0.015, 0.02, 0.04)
+    n_legs = len(legs)
+    assert scrap[n_legs : n_legs + len(strips)].all()
+    assert not scrap[:n_legs].any() and not scrap[n_legs + len(strips) :].any()
+
+
+def test_the_derived_yellow_chair_keeps_no_floor_beside_its_base():
+    # its scan was cut at the floor, but strips of floor beside the base survived the cut
+    # (0.4-0.8 m from the base's centre, within 5 cm of the level plane under it): they are no
+    # part of the chair (they showed as grey scraps beside its completed base)
+    from partscale.complete import api
+    from partscale.complete.scan import frame_from_points, read_points
+
+    P, C = read_points(data_path("scans/derived/tum_yellow_office_chair_partial.ply"))
+    ob = api.observe([frame_from_points(P, C, np.eye(4))])
+    assert ob.up_from == "underside"
+    Q = ob.points @ ob.U[:3, :3].T + ob.U[:3, 3]
+    base = Q[Q[:, 1] < 0.15]
+    r = np.hypot(*(base[:, [0, 2]] - np.median(base[:, [0, 2]], axis=0)).T)
+    # a five-star base's legs reach about 0.33 m from its hub
+    assert r.max() <= 0.5

@@ -21,7 +21,7 @@ from . import fuse as fuse_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
-from .floor import base_plane, clusters, find_floor, in_plane_axes
+from .floor import base_plane, clusters, find_floor, floor_scraps, in_plane_axes
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
 METHOD = "carve+floor+symmetry+between+slab+closure+column"
@@ -48,6 +48,9 @@ CARVE_MARGIN = 0.5
 """Voxels a point must lie in front of a reading to be free space (absorbs sensor noise)."""
 
 
+MIN_UP_TILT_DEG = 0.5
+"""Degrees below which the mirror plane's tilt does not correct up (the frame and the mirror
+planes are not rebuilt for it; the tilt search's finest step is 0.25 degrees)."""
 SYMMETRY_MARGIN = 3.0
 """Voxels a symmetric copy must lie in front of a reading to contradict the scan."""
 FREE_GRID_VOXELS = 1.5
@@ -312,6 +315,10 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         height = P @ up
         height = height - height.min() + 3 * FLOOR_TOL  # every point is object
     obj = _isolate(frames, P, pix, height, up, box, cropped)
+    if up_from == "underside":
+        # the level plane under an object that is no floor: scraps of the floor the scan kept
+        # lie in it beside the object (the derived yellow chair's, beside its star base)
+        obj &= ~floor_scraps(P, support, FLOOR_TOL, FLOOR_CELL_M, FLOOR_BROAD_M)
     Q, QC = P[obj], C[obj]
     if len(Q) < 30:
         raise InputError(f"{source}: expected an object of at least 30 points, got {len(Q)}")
@@ -412,7 +419,11 @@ def complete(
         y = np.array([0.0, 1.0, 0.0]) - n3[1] * n3
         y /= np.linalg.norm(y)
         up_tilt = float(np.degrees(np.arccos(np.clip(y[1], -1.0, 1.0))))
-        if up_tilt > 0:
+        # the tilt search's finest step is 0.25 degrees: a step or two of it is noise, not
+        # worth the frame and the mirror search rebuilt
+        if up_tilt < MIN_UP_TILT_DEG:
+            up_tilt = 0.0
+        else:
             up_w = Uinv[:3, :3] @ y
             U = _upright(up_w, frames[0].pose[:3, 2], float((Q @ up_w).min()), Q.mean(axis=0))
             Uinv = np.linalg.inv(U)

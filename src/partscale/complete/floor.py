@@ -110,6 +110,34 @@ def clusters(points: np.ndarray, cell: float) -> np.ndarray:
     return lab[idx[:, 0], idx[:, 1], idx[:, 2]] - 1
 
 
+def floor_scraps(points: np.ndarray, plane: Plane, tol: float, cell: float, margin: float):
+    """(N,) bool: the pieces of ``points`` (N, 3) that are floor left beside an object.
+
+    A scan cut at the floor keeps scraps of it (strips beside the base the cut missed). The
+    points are cut into pieces (26-connected at ``cell``); a piece is floor when most of its
+    points lie within ``2 * tol`` of ``plane`` (the level plane under the object) and most of
+    those stand outside the footprint of the other pieces' points above that height, grown by
+    ``margin`` (a caster beside its leg's end stays: it stands under the leg)."""
+    P = np.asarray(points, np.float64)
+    low = plane.height(P) <= 2 * tol
+    piece = clusters(P, cell)
+    n = np.bincount(piece).astype(np.float64)
+    flat = np.bincount(piece, low) >= 0.5 * n
+    a, b = in_plane_axes(plane.normal)
+    X = np.stack([P @ a, P @ b], axis=1)
+    lo = X.min(axis=0)
+    idx = np.floor((X - lo) / cell).astype(np.int64)
+    stands = ~low & ~flat[piece]
+    occ = np.zeros(tuple(idx.max(axis=0) + 1), bool)
+    occ[idx[stands, 0], idx[stands, 1]] = True
+    r = max(int(np.ceil(margin / cell)), 0)
+    yy, xx = np.mgrid[-r : r + 1, -r : r + 1]
+    foot = ndimage.binary_dilation(occ, yy**2 + xx**2 <= r * r)
+    outside = low & ~foot[idx[:, 0], idx[:, 1]]
+    scrap = flat & (np.bincount(piece, outside) >= 0.5 * np.bincount(piece, low))
+    return scrap[piece]
+
+
 def in_plane_axes(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two (3,) float64 orthonormal axes across a plane with unit ``normal`` (3,): a point's
     coordinates seen along the normal are its dot products with them."""

@@ -50,6 +50,12 @@ thickness sure (a flat slab's edges agree; a curved cushion's do not)."""
 SLAB_EDGE_SHARE = 0.05
 """Share of the points facing one way that must measure at an edge for that way to have a
 thickness (a square face L voxels wide has about 8/L of its points within its edge band)."""
+SLAB_RING = 2
+SLAB_RING_TURNED = 0.6
+"""A walk that runs past the reach (a width: a stool's rim walked along its front) measures
+only from a sharp edge: of the voxels holding points in the cube ``2 * SLAB_RING + 1`` wide
+around its start, at most this share hold only points turned off the axes (SheenChair's
+rounded cushion ends, three views: 0.64-0.91; the stool's rim, one view: median 0.38)."""
 SLAB_NEIGHBOURS = 32
 """Edge measurements of a face's thickness whose most common value carries it across the face."""
 BACK_SHIFT = 0.4
@@ -326,7 +332,11 @@ def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.
     walk from an edge point along its face's axis, through voxels within two of points facing
     sideways (gaps of ``SLAB_GAP`` stepped over), measures it. A point with a side face
     ``SLAB_ABOVE`` voxels in front of it stands at a junction (a back rising from a seat), one
-    with none next to it inside the face: neither measures. Every point takes the most common
+    with none next to it inside the face: neither measures. A walk whose side face runs on past
+    ``BETWEEN_VOXELS`` measured a width (a seat's front walked from its end): it counts only from
+    a sharp edge (a stool's flat rim), not from a rounded one, where most voxels around the
+    point hold only points turned off the axes (a cushion's end: carried in, its flat band
+    would be a sheet across the thick cushion). Every point takes the most common
     of its ``SLAB_NEIGHBOURS`` nearest measurements facing the same way (a leg flush below an
     edge lengthens a few, holes at an edge shorten a few) and is carried in along its face's
     axis to that depth through voxels no camera saw through: the thickness of a slab whose
@@ -353,7 +363,26 @@ def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.
     n_axis = np.zeros((len(points), 3))
     n_axis[np.arange(len(points)), axis] = np.where(neg, -1.0, 1.0)
     depth = np.zeros(len(points), np.int64)
-    _slab_measure(p, n_axis, side.astype(np.uint8), near, dil, every, int(BETWEEN_VOXELS), depth)
+    wide = np.zeros(len(points), np.bool_)
+    _slab_measure(
+        p, n_axis, side.astype(np.uint8), near, dil, every, int(BETWEEN_VOXELS), depth, wide
+    )
+    # a width is carried (as a thickness) only from a sharp edge: a rounded end's flat band is
+    # ringed by points turned off the axes, a stool's flat rim is not
+    if wide.any():
+        # by voxels, not points: a scan samples a curve as densely as it likes
+        held = np.zeros(shape, np.float32)
+        held[idx[:, 0], idx[:, 1], idx[:, 2]] = 1.0
+        turned = held * (bits == 0)
+        size = 2 * SLAB_RING + 1
+        iw = idx[wide]
+        at = tuple(iw.T)
+        share = ndimage.uniform_filter(turned, size, mode="constant")[at] / np.maximum(
+            ndimage.uniform_filter(held, size, mode="constant")[at], 1e-9
+        )
+        w = np.flatnonzero(wide)
+        wide[w[share <= SLAB_RING_TURNED]] = False
+        depth[wide] = 0
     # thickness at every point, from the nearest edge measurements facing its way
     t = np.zeros(len(points))
     agree = np.zeros(len(points), bool)
@@ -420,7 +449,7 @@ def _in_grid(a, b, c, shape):
 
 
 @numba.njit(cache=True, parallel=True)
-def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
+def _slab_measure(p, n, side, near, bits, anyb, reach, depth, wide):
     for i in numba.prange(p.shape[0]):
         last = 0
         # a face rising beside the point (a junction, the back above a seat) is no edge
@@ -433,9 +462,11 @@ def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
         if not (_in_grid(a, b, c, bits.shape) and near[a, b, c] & side[i]):
             depth[i] = 0
             continue
+        ended = False
         for s in range(1, reach + 1):
             a, b, c = _voxel_at(p, n, i, s)
             if not _in_grid(a, b, c, bits.shape):
+                ended = True  # the grid's edge: nothing can lie beyond it
                 break
             # along the side face, not through it: its voxels may be seen free by a hair
             if bits[a, b, c] & side[i]:
@@ -445,7 +476,12 @@ def _slab_measure(p, n, side, near, bits, anyb, reach, depth):
                 # underside, turned off the axes), the walk measured the flat band, not the part
                 if anyb[a, b, c]:
                     last = 0
+                ended = True
                 break
+        # the side face runs on beyond the reach: the walk measured a width (a seat's front
+        # walked from its end), which is the part's thickness only where the face it carries
+        # spans the part (a stool's flat rim), not where it is a band of a rounded end
+        wide[i] = not ended
         # the side face's last voxel lies up to two voxels (the widening) past its points
         depth[i] = max(last - 2, 0)
 

@@ -322,92 +322,184 @@ def _crisp_into(parts, sdf, i0, i1, w, js, out):
                 out[p, j, q] = p1
 
 
-def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
-    """Put back what linear resampling skipped between consecutive output layers (in place).
-
-    For each pair ``j, j + 1`` with ``pair[j]``, the source layers strictly between ``xa[j]``
-    and ``xa[j + 1]`` are read column by column: where both output samples are outside
-    (``> 0``) but one of those layers is inside, a solid thinner than the compression was
-    skipped; the output layer nearer to its deepest sample (and ``write``-able) takes that
-    sample's distance, colour and part. Skipped gaps (both inside, a layer between outside)
-    likewise take the largest. Columns run in parallel; layers in order, so a pair sees what
-    the one before it wrote.
-    """
-    s3, p3, o3, op3 = (_middle(a) for a in (src, src_parts, out, out_parts))
-    c3, oc3 = _middle(src_rgb), _middle(out_rgb)
-    if (
-        s3 is not None
-        and c3 is not None
-        and oc3 is not None
-        and _alike(s3, p3, o3, op3)
-        and _alike(c3, oc3)
-        and c3.shape[0] == s3.shape[0]
-    ):
-        n_c = src_rgb.shape[-1]
-        c4 = c3.reshape(c3.shape[0], c3.shape[1], -1, n_c)
-        oc4 = oc3.reshape(oc3.shape[0], oc3.shape[1], -1, n_c)
-        _keep_thin_cols(s3, c4, p3, xa, pair, write, o3, oc4, op3)
-        return
-    # any other strides: through contiguous axis-first copies
-    flat = [np.ascontiguousarray(a) for a in (src, src_rgb, src_parts, out, out_rgb, out_parts)]
-    n, m = src.shape[0], out.shape[0]
-    s3, c3, p3, o3, oc3, op3 = (
-        a.reshape(1, a.shape[0], -1, *a.shape[3:]) if a.ndim == 4 else a.reshape(1, a.shape[0], -1)
-        for a in flat
-    )
-    assert s3.shape[1] == n and o3.shape[1] == m
-    _keep_thin_cols(s3, c3, p3, xa, pair, write, o3, oc3, op3)
-    out[...] = o3.reshape(out.shape)
-    out_rgb[...] = oc3.reshape(out_rgb.shape)
-    out_parts[...] = op3.reshape(out_parts.shape)
+#: Columns per parallel task of :func:`_resample_cols` (the task also spans one row of P).
+_COL_BLOCK = 256
 
 
-#: Columns per parallel task of :func:`_keep_thin_cols` (the task also spans one row of P).
-_THIN_BLOCK = 256
+def _views(arrays: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...] | None:
+    """:func:`_middle` views of axis-first (sdf, rgb, parts, out_sdf, out_rgb, out_parts), or
+    None when one is no such view or they disagree across the edit axis."""
+    views = tuple(_middle(a) for a in arrays)
+    s3, c3, p3, o3, oc3, op3 = views
+    if not (_alike(s3, p3, o3, op3) and _alike(c3, oc3)):
+        return None
+    assert s3 is not None and c3 is not None
+    if c3.shape[0] != s3.shape[0]:
+        return None
+    return views
+
+
+def _resample(sdf, rgb, parts, xa, pair, write, seam, out_sdf, out_rgb, out_parts):
+    """Fill the axis-first outputs from axis-first ``sdf`` (float32), ``rgb`` (uint8) and
+    ``parts`` at continuous indices ``xa`` in one pass (:func:`_resample_cols`); returns the
+    resampled sdf of the output layers ``seam`` before :func:`_resample_cols` keeps thin
+    elements ((S, A, B) float32, what the seam blend compares against)."""
+    i0, i1, w = _split(xa, sdf.shape[0])
+    frac = w != 0
+    w32 = w.astype(np.float32)
+    seam_of = np.full(len(xa), -1, np.int64)
+    seam_of[seam] = np.arange(seam.size)
+    arrays = (sdf, rgb, parts, out_sdf, out_rgb, out_parts)
+    views = _views(arrays)
+    direct = views is not None
+    if views is None:
+        # any other strides: through contiguous axis-first copies
+        views = tuple(np.ascontiguousarray(a).reshape(1, a.shape[0], -1) for a in arrays)
+    s3, c3, p3, o3, oc3, op3 = views
+    was = np.empty((seam.size, s3.shape[0], s3.shape[2]), np.float32)
+    _resample_cols(s3, c3, p3, i0, i1, w32, frac, xa, pair, write, seam_of, o3, oc3, op3, was)
+    if not direct:
+        out_sdf[...] = o3.reshape(out_sdf.shape)
+        out_rgb[...] = oc3.reshape(out_rgb.shape)
+        out_parts[...] = op3.reshape(out_parts.shape)
+    return was.reshape(seam.size, *sdf.shape[1:])
 
 
 @nb.njit(cache=True, parallel=True)
-def _keep_thin_cols(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
-    """:func:`_keep_thin` on (P, N, Q) views (rgb (P, N, Q, C)), C-contiguous: columns
-    ``(p, q)`` in parallel blocks, the inner loop over contiguous ``q``."""
+def _resample_cols(
+    src,
+    src_rgb,
+    src_parts,
+    i0,
+    i1,
+    w,
+    frac,
+    xa,
+    pair,
+    write,
+    seam_of,
+    out,
+    out_rgb,
+    out_parts,
+    was,
+):
+    """Resample (P, N, Q) views (rgb (P, N, Q, C)), C-contiguous, into (P, M, Q) ones: columns
+    ``(p, q)`` in parallel blocks, layers in order, the inner loop over contiguous ``q``.
+
+    Output layer ``j`` reads source layers ``i0[j]``, ``i1[j]`` with weight ``w[j]`` (float32):
+    copies where it is 0, else the float32 blend (rgb rounded half to even, clipped to 0..255);
+    parts are ``src_parts[i0[j]]``, or where ``frac[j]`` and the label at ``i1[j]`` differs,
+    that label once ``w[j]`` reaches the boundary (the sdf's linear zero crossing between the
+    two layers when the surface passes between them, else half-way). Layer ``j`` with
+    ``seam_of[j] = k >= 0`` is saved to ``was[k]`` as resampled.
+
+    Then, for each pair ``j - 1, j`` with ``pair[j - 1]`` (once layer ``j`` is resampled, so a
+    pair sees what the one before it wrote, as a pass over the finished layers would), the
+    source layers strictly between ``xa[j - 1]`` and ``xa[j]`` are read column by column: where
+    both output samples are outside (``> 0``) but one of those layers is inside, a solid
+    thinner than the compression was skipped; the output layer nearer to its deepest sample (and
+    ``write``-able) takes that sample's distance, colour and part. Skipped gaps (both inside, a
+    layer between outside) likewise take the largest.
+    """
+    # the loops run over 1-D row views from 0: they vectorise (indexing the 3-D arrays from a
+    # block's first column does not)
     m, nq = out.shape[1], out.shape[2]
     n_src = src.shape[1]
-    nblk = (nq + _THIN_BLOCK - 1) // _THIN_BLOCK
+    n_c = src_rgb.shape[2] // max(nq, 1)
+    nblk = (nq + _COL_BLOCK - 1) // _COL_BLOCK
     for task in nb.prange(src.shape[0] * nblk):
         p = task // nblk
-        qa = (task % nblk) * _THIN_BLOCK
-        qe = min(qa + _THIN_BLOCK, nq)
-        for j in range(m - 1):
-            if not pair[j]:
+        qa = (task % nblk) * _COL_BLOCK
+        qe = min(qa + _COL_BLOCK, nq)
+        nw = qe - qa
+        sign = np.empty(nw, src.dtype)  # per column of a pair, see below
+        best = np.empty(nw, src.dtype)
+        sb = np.empty(nw, np.int64)
+        for j in range(m):
+            a0, a1 = i0[j], i1[j]
+            o = out[p, j, qa:qe]
+            oc = out_rgb[p, j, qa * n_c : qe * n_c]
+            op = out_parts[p, j, qa:qe]
+            s0, c0, p0 = (
+                src[p, a0, qa:qe],
+                src_rgb[p, a0, qa * n_c : qe * n_c],
+                src_parts[p, a0, qa:qe],
+            )
+            s1, c1, p1 = (
+                src[p, a1, qa:qe],
+                src_rgb[p, a1, qa * n_c : qe * n_c],
+                src_parts[p, a1, qa:qe],
+            )
+            if w[j] == 0:
+                for q in range(nw):
+                    o[q] = s0[q]
+                for q in range(nw * n_c):
+                    oc[q] = c0[q]
+            else:
+                w1 = np.float32(w[j])
+                w0 = np.float32(1.0) - w1
+                for q in range(nw):
+                    o[q] = np.float32(s0[q]) * w0 + np.float32(s1[q]) * w1
+                for q in range(nw * n_c):
+                    v = np.float32(c0[q]) * w0 + np.float32(c1[q]) * w1
+                    oc[q] = min(max(np.rint(v), 0.0), 255.0)
+            for q in range(nw):
+                op[q] = p0[q]
+            if frac[j]:
+                wj = w[j]
+                for q in range(nw):
+                    if p0[q] == p1[q]:
+                        continue
+                    # only where the labels differ: float32 is exact enough to place a boundary
+                    a = s0[q]
+                    b = s1[q]
+                    tb = np.float32(0.5)
+                    if (a <= 0) != (b <= 0):
+                        aa, ab = abs(a), abs(b)
+                        tb = aa / max(aa + ab, np.float32(1e-30))
+                    if wj >= tb:
+                        op[q] = p1[q]
+            k = seam_of[j]
+            if k >= 0:
+                wk = was[k, p, qa:qe]
+                for q in range(nw):
+                    wk[q] = o[q]
+            if j == 0 or not pair[j - 1]:
                 continue
-            q0 = max(int(np.floor(xa[j])) + 1, 0)
-            q1 = min(int(np.ceil(xa[j + 1])) - 1, n_src - 1)
-            if q1 < q0:
+            jp = j - 1
+            r0 = max(int(np.floor(xa[jp])) + 1, 0)
+            r1 = min(int(np.ceil(xa[j])) - 1, n_src - 1)
+            if r1 < r0:
                 continue
-            for q in range(qa, qe):
-                v0 = out[p, j, q]
-                v1 = out[p, j + 1, q]
-                solid = v0 > 0  # both outside: look for a skipped solid, else for a skipped gap
-                if solid != (v1 > 0):
+            prev = out[p, jp, qa:qe]
+            for q in range(nw):
+                # both outside: a skipped solid is sought (the least sample, below 0), both
+                # inside: a skipped gap (the largest, above 0); as ``sign * v > sign * best``
+                # (an exact negation), one comparison that vectorises
+                solid = prev[q] > 0
+                sign[q] = 0.0 if solid != (o[q] > 0) else (-1.0 if solid else 1.0)
+                best[q] = 0
+                sb[q] = -1
+            # the deepest sample in source order (the first of equals), column by column
+            for r in range(r0, r1 + 1):
+                row = src[p, r, qa:qe]
+                for q in range(nw):
+                    v = row[q]
+                    better = sign[q] * v > sign[q] * best[q]
+                    best[q] = v if better else best[q]
+                    sb[q] = r if better else sb[q]
+            for q in range(nw):
+                if sb[q] < 0:
                     continue
-                sb = -1
-                best = np.float32(0.0)
-                for s in range(q0, q1 + 1):
-                    v = src[p, s, q]
-                    if (solid and v < best) or (not solid and v > best):
-                        best = v
-                        sb = s
-                if sb < 0:
-                    continue
-                t = j if sb - xa[j] <= xa[j + 1] - sb else j + 1
+                t = jp if sb[q] - xa[jp] <= xa[j] - sb[q] else j
                 if not write[t]:
-                    t = 2 * j + 1 - t
+                    t = 2 * jp + 1 - t
                     if not write[t]:
                         continue
-                out[p, t, q] = best
-                for c in range(src_rgb.shape[3]):
-                    out_rgb[p, t, q, c] = src_rgb[p, sb, q, c]
-                out_parts[p, t, q] = src_parts[p, sb, q]
+                out[p, t, qa + q] = best[q]
+                for c in range(n_c):
+                    out_rgb[p, t, (qa + q) * n_c + c] = src_rgb[p, sb[q], (qa + q) * n_c + c]
+                out_parts[p, t, qa + q] = src_parts[p, sb[q], qa + q]
 
 
 def cut_slivers(
@@ -514,32 +606,19 @@ def apply_plan(
       fragment of it (counted in ``left_out``).
     """
     m = len(plan.xa)
-    out_sdf = lerp_layers(sdf, plan.xa, empty_layers((m, *sdf.shape[1:]), sdf.dtype, axis))
-    out_rgb = lerp_layers(rgb, plan.xa, empty_layers((m, *rgb.shape[1:]), rgb.dtype, axis))
-    out_parts = crisp_parts(
-        parts, sdf, plan.xa, empty_layers((m, *parts.shape[1:]), parts.dtype, axis)
+    out_sdf, out_rgb, out_parts = (
+        empty_layers((m, *a.shape[1:]), a.dtype, axis) for a in (sdf, rgb, parts)
     )
     left_out: dict[str, int] = {}
     seam = np.flatnonzero(plan.beta > 0)
-    thinned = np.zeros((seam.size, *sdf.shape[1:]), bool)
+    # consecutive layers reading one continuous stretch of the source (the dominant samples;
+    # a tile seam's jump from one copy's continuation to the other's is no pair)
+    pair = np.zeros(m, bool)
     if keep_thin is not None:
-        # consecutive layers reading one continuous stretch of the source (the dominant
-        # samples; a tile seam's jump from one copy's continuation to the other's is no pair)
-        pair = (plan.in_slab[:-1] | plan.in_slab[1:]) & (np.diff(plan.xa) > 0)
-        if pair.any():
-            was = out_sdf[seam]
-            _keep_thin(
-                sdf,
-                rgb,
-                parts,
-                plan.xa,
-                np.append(pair, False),
-                plan.in_slab,
-                out_sdf,
-                out_rgb,
-                out_parts,
-            )
-            thinned = out_sdf[seam] != was
+        pair[:-1] = (plan.in_slab[:-1] | plan.in_slab[1:]) & (np.diff(plan.xa) > 0)
+    # one pass writes every output voxel: resampled, and thin elements kept
+    was = _resample(sdf, rgb, parts, plan.xa, pair, plan.in_slab, seam, out_sdf, out_rgb, out_parts)
+    thinned = out_sdf[seam] != was if pair.any() else np.zeros(was.shape, bool)
     if seam.size:
         bt = plan.beta[seam].astype(np.float32)
         b3 = bt[:, None, None]

@@ -137,13 +137,6 @@ def _split(x: np.ndarray, n_src: int) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return i0, i1, w
 
 
-def lerp_float(src: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """float32 (M, ...) linear interpolation of layers of ``src`` (N, ...) at ``x`` (M,)."""
-    i0, i1, w = _split(x, src.shape[0])
-    w32 = w.astype(np.float32).reshape((-1,) + (1,) * (src.ndim - 1))
-    return src[i0].astype(np.float32) * (1 - w32) + src[i1].astype(np.float32) * w32
-
-
 @nb.njit(cache=True, parallel=True)
 def _lerp_into(src, i0, i1, w, out, lo, hi, js):
     """out[:, j] = src[:, i0[j]] (w[j] == 0) or the float32 blend of src[:, i0[j]] and
@@ -326,43 +319,14 @@ def _crisp_into(parts, sdf, i0, i1, w, js, out):
 _COL_BLOCK = 256
 
 
-def _views(arrays: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...] | None:
-    """:func:`_middle` views of axis-first (sdf, rgb, parts, out_sdf, out_rgb, out_parts), or
-    None when one is no such view or they disagree across the edit axis."""
-    views = tuple(_middle(a) for a in arrays)
-    s3, c3, p3, o3, oc3, op3 = views
-    if not (_alike(s3, p3, o3, op3) and _alike(c3, oc3)):
-        return None
-    assert s3 is not None and c3 is not None
-    if c3.shape[0] != s3.shape[0]:
-        return None
-    return views
-
-
-def _resample(sdf, rgb, parts, xa, pair, write, seam, out_sdf, out_rgb, out_parts):
-    """Fill the axis-first outputs from axis-first ``sdf`` (float32), ``rgb`` (uint8) and
-    ``parts`` at continuous indices ``xa`` in one pass (:func:`_resample_cols`); returns the
-    resampled sdf of the output layers ``seam`` before :func:`_resample_cols` keeps thin
-    elements ((S, A, B) float32, what the seam blend compares against)."""
-    i0, i1, w = _split(xa, sdf.shape[0])
-    frac = w != 0
-    w32 = w.astype(np.float32)
-    seam_of = np.full(len(xa), -1, np.int64)
-    seam_of[seam] = np.arange(seam.size)
-    arrays = (sdf, rgb, parts, out_sdf, out_rgb, out_parts)
-    views = _views(arrays)
-    direct = views is not None
-    if views is None:
-        # any other strides: through contiguous axis-first copies
-        views = tuple(np.ascontiguousarray(a).reshape(1, a.shape[0], -1) for a in arrays)
-    s3, c3, p3, o3, oc3, op3 = views
-    was = np.empty((seam.size, s3.shape[0], s3.shape[2]), np.float32)
-    _resample_cols(s3, c3, p3, i0, i1, w32, frac, xa, pair, write, seam_of, o3, oc3, op3, was)
-    if not direct:
-        out_sdf[...] = o3.reshape(out_sdf.shape)
-        out_rgb[...] = oc3.reshape(out_rgb.shape)
-        out_parts[...] = op3.reshape(out_parts.shape)
-    return was.reshape(seam.size, *sdf.shape[1:])
+def _rows(a: np.ndarray, axis: int) -> np.ndarray:
+    """Axis-first ``a`` (N, ...) as (P, N, Q): its array in world order (the edit axis at
+    ``axis``), C-ordered (copied only where it is not), the axes before ``axis`` merged into P
+    and those after it (colour included) into Q. A view of ``a`` when no copy was needed (as for
+    :func:`empty_layers`)."""
+    world = np.ascontiguousarray(np.moveaxis(a, 0, axis))
+    p = int(np.prod(world.shape[:axis], dtype=np.int64))
+    return world.reshape(p, a.shape[0], -1)
 
 
 @nb.njit(cache=True, parallel=True)
@@ -609,6 +573,10 @@ def apply_plan(
     out_sdf, out_rgb, out_parts = (
         empty_layers((m, *a.shape[1:]), a.dtype, axis) for a in (sdf, rgb, parts)
     )
+    # (P, N, Q) views in world order (rgb (P, N, 3Q)), the outputs' written in place
+    s3, c3, p3, o3, oc3, op3 = (
+        _rows(a, axis) for a in (sdf, rgb, parts, out_sdf, out_rgb, out_parts)
+    )
     left_out: dict[str, int] = {}
     seam = np.flatnonzero(plan.beta > 0)
     # consecutive layers reading one continuous stretch of the source (the dominant samples;
@@ -616,46 +584,183 @@ def apply_plan(
     pair = np.zeros(m, bool)
     if keep_thin is not None:
         pair[:-1] = (plan.in_slab[:-1] | plan.in_slab[1:]) & (np.diff(plan.xa) > 0)
+    i0, i1, w = _split(plan.xa, sdf.shape[0])
+    seam_of = np.full(m, -1, np.int64)
+    seam_of[seam] = np.arange(seam.size)
+    was = np.empty((seam.size, s3.shape[0], s3.shape[2]), np.float32)
     # one pass writes every output voxel: resampled, and thin elements kept
-    was = _resample(sdf, rgb, parts, plan.xa, pair, plan.in_slab, seam, out_sdf, out_rgb, out_parts)
-    thinned = out_sdf[seam] != was if pair.any() else np.zeros(was.shape, bool)
-    if seam.size:
-        bt = plan.beta[seam].astype(np.float32)
-        b3 = bt[:, None, None]
-        dominant = lerp_float(sdf, plan.xa[seam])
-        dominant = np.where(thinned, out_sdf[seam], dominant)
-        other = lerp_float(sdf, plan.xb[seam])
-        blended = dominant * (1 - b3) + other * b3
-        b4 = bt[:, None, None, None]
-        c_other = lerp_float(rgb, plan.xb[seam])
-        c = lerp_float(rgb, plan.xa[seam]) * (1 - b4) + c_other * b4
-        c = np.clip(np.rint(c), 0, 255).astype(np.uint8)
-        if keep_thin is not None:
-            far = np.float32(keep_thin)
-            flip = (dominant <= 0) != (blended <= 0)
-            keep = flip & (((dominant <= 0) & (other > far)) | ((dominant > 0) & (other < -far)))
-            drop, hold = cut_slivers(plan, seam, dominant, other, out_sdf)
-            # only where the blend alone would not do it: the sliver keeps its side (kept, or
-            # no flip), the element's continuation flips the own sample
-            drop &= keep | ~flip
-            keep = (keep | (hold & flip)) & ~drop
-            blended = np.where(keep, dominant, blended)
-            c = np.where((keep | thinned)[..., None], out_rgb[seam], c)
-            if drop.any():
-                # a cut sliver is left out: the other copy's sample, colour and part
-                blended = np.where(drop, other, blended)
-                c_other = np.clip(np.rint(c_other), 0, 255).astype(np.uint8)
-                c = np.where(drop[..., None], c_other, c)
-                own = out_parts[seam]
-                out_parts[seam] = np.where(drop, crisp_parts(parts, sdf, plan.xb[seam]), own)
-                # a left window's layers read their copy up to END
-                at_end = (plan.xa[seam] > plan.xb[seam])[:, None, None]
-                for plane, n in (
-                    ("start", (drop & ~at_end).sum()),
-                    ("end", (drop & at_end).sum()),
-                ):
-                    if n:
-                        left_out[plane] = int(n)
-        out_sdf[seam] = blended
-        out_rgb[seam] = c
+    _resample_cols(
+        s3,
+        c3,
+        p3,
+        i0,
+        i1,
+        w.astype(np.float32),
+        w != 0,
+        plan.xa,
+        pair,
+        plan.in_slab,
+        seam_of,
+        o3,
+        oc3,
+        op3,
+        was,
+    )
+    if seam.size == 0:
+        return out_sdf, out_rgb, out_parts, left_out
+    # the seam layers' dominant and other samples (the dominant as kept thin where it was)
+    a0, a1, wa = _split(plan.xa[seam], sdf.shape[0])
+    b0, b1, wb = _split(plan.xb[seam], sdf.shape[0])
+    wa, wb = wa.astype(np.float32), wb.astype(np.float32)
+    kept = bool(pair.any())
+    dominant, other = (np.empty_like(was) for _ in range(2))
+    _seam_samples(s3, o3, seam, a0, a1, wa, b0, b1, wb, was, kept, dominant, other)
+    shape = (seam.size, *sdf.shape[1:])
+    thin = keep_thin is not None
+    if thin:
+        drop, hold = cut_slivers(plan, seam, dominant.reshape(shape), other.reshape(shape), out_sdf)
+        drop, hold = drop.reshape(was.shape), hold.reshape(was.shape)
+    else:
+        drop = hold = np.zeros(was.shape, bool)
+    far = np.float32(keep_thin if thin else 0.0)
+    _seam_blend(
+        c3,
+        o3,
+        oc3,
+        seam,
+        a0,
+        a1,
+        wa,
+        b0,
+        b1,
+        wb,
+        plan.beta[seam].astype(np.float32),
+        dominant,
+        other,
+        was,
+        kept,
+        thin,
+        far,
+        drop,
+        hold,
+    )
+    if drop.any():
+        # a cut sliver is left out: the other copy's part (its sample and colour are in)
+        drop = drop.reshape(shape)
+        own = out_parts[seam]
+        out_parts[seam] = np.where(drop, crisp_parts(parts, sdf, plan.xb[seam]), own)
+        # a left window's layers read their copy up to END
+        at_end = (plan.xa[seam] > plan.xb[seam])[:, None, None]
+        for plane, n in (("start", (drop & ~at_end).sum()), ("end", (drop & at_end).sum())):
+            if n:
+                left_out[plane] = int(n)
     return out_sdf, out_rgb, out_parts, left_out
+
+
+@nb.njit(cache=True, parallel=True)
+def _seam_samples(src, out, seam, a0, a1, wa, b0, b1, wb, was, kept, dominant, other):
+    """For seam layer ``k`` (output layer ``seam[k]``), (P, Q) float32 each: ``other[k]``, the
+    float32 blend of ``src`` layers ``b0[k]``, ``b1[k]`` by ``wb[k]`` (no exact copy at weight
+    0: the arithmetic of the vectorised blend it replaces); ``dominant[k]`` likewise at ``a0``,
+    ``a1``, ``wa``, or the output's value where ``kept`` and :func:`_resample_cols` kept a thin
+    element there (it differs from ``was``). src (P, N, Q), out (P, M, Q); rows in parallel.
+    """
+    ns, nq = seam.shape[0], src.shape[2]
+    for t in nb.prange(ns * src.shape[0]):
+        k = t // src.shape[0]
+        p = t % src.shape[0]
+        o, wk = out[p, seam[k]], was[k, p]
+        d, e = dominant[k, p], other[k, p]
+        sa0, sa1, sb0, sb1 = src[p, a0[k]], src[p, a1[k]], src[p, b0[k]], src[p, b1[k]]
+        w1 = wa[k]
+        w0 = np.float32(1.0) - w1
+        for q in range(nq):
+            d[q] = np.float32(sa0[q]) * w0 + np.float32(sa1[q]) * w1
+        if kept:
+            for q in range(nq):
+                if o[q] != wk[q]:
+                    d[q] = o[q]
+        w1 = wb[k]
+        w0 = np.float32(1.0) - w1
+        for q in range(nq):
+            e[q] = np.float32(sb0[q]) * w0 + np.float32(sb1[q]) * w1
+
+
+@nb.njit(cache=True, parallel=True)
+def _seam_blend(
+    src_rgb,
+    out,
+    out_rgb,
+    seam,
+    a0,
+    a1,
+    wa,
+    b0,
+    b1,
+    wb,
+    beta,
+    dominant,
+    other,
+    was,
+    kept,
+    thin,
+    far,
+    drop,
+    hold,
+):
+    """Blend the seam layers (in place): :func:`apply_plan`'s rule per voxel, float32.
+
+    ``src_rgb`` (P, N, 3Q), ``out`` (P, M, Q), ``out_rgb`` (P, M, 3Q); ``dominant``, ``other``,
+    ``was``, ``drop``, ``hold`` (S, P, Q) per seam layer ``k`` (output layer ``seam[k]``, blend
+    weight ``beta[k]``, rgb read as :func:`_seam_samples` reads the sdf). With ``thin``
+    (``keep_thin`` given, ``far`` its value), ``drop`` is narrowed to where a cut sliver is
+    left out (the other copy's sample and colour). Rows in parallel.
+    """
+    ns, nq = seam.shape[0], out.shape[2]
+    n_c = src_rgb.shape[2] // max(nq, 1)
+    for t in nb.prange(ns * out.shape[0]):
+        k = t // out.shape[0]
+        p = t % out.shape[0]
+        j = seam[k]
+        o, oc, wk = out[p, j], out_rgb[p, j], was[k, p]
+        d, e, dr, hd = dominant[k, p], other[k, p], drop[k, p], hold[k, p]
+        ca0, ca1, cb0, cb1 = (
+            src_rgb[p, a0[k]],
+            src_rgb[p, a1[k]],
+            src_rgb[p, b0[k]],
+            src_rgb[p, b1[k]],
+        )
+        bt = beta[k]
+        b0_ = np.float32(1.0) - bt
+        va = wa[k]
+        va0 = np.float32(1.0) - va
+        vb = wb[k]
+        vb0 = np.float32(1.0) - vb
+        for q in range(nq):
+            dq, eq = d[q], e[q]
+            blended = dq * b0_ + eq * bt
+            keep = False
+            own = kept and o[q] != wk[q]  # a thin element kept: its colour too
+            gone = False
+            if thin:
+                flip = (dq <= 0) != (blended <= 0)
+                keep = flip and ((dq <= 0 and eq > far) or (dq > 0 and eq < -far))
+                # only where the blend alone would not do it: the sliver keeps its side (kept,
+                # or no flip), the element's continuation flips the own sample
+                gone = dr[q] and (keep or not flip)
+                dr[q] = gone
+                keep = (keep or (hd[q] and flip)) and not gone
+            if keep:
+                blended = dq
+            elif gone:
+                blended = eq
+            o[q] = blended
+            for c in range(q * n_c, (q + 1) * n_c):
+                cb = np.float32(cb0[c]) * vb0 + np.float32(cb1[c]) * vb
+                if gone:
+                    v = cb
+                elif keep or own:
+                    continue  # the resampled colour stays
+                else:
+                    v = (np.float32(ca0[c]) * va0 + np.float32(ca1[c]) * va) * b0_ + cb * bt
+                oc[c] = min(max(np.rint(v), np.float32(0.0)), np.float32(255.0))

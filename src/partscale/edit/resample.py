@@ -496,6 +496,7 @@ def cut_slivers(
     """
     drop = np.zeros(dominant.shape, bool)
     hold = np.zeros(dominant.shape, bool)
+    inside, inside_other = dominant <= 0, other <= 0
     # an internal seam's layers: a run reading the left copy (near END, so xa > xb), then,
     # consecutive, a run reading the right copy
     left = plan.xa[seam] > plan.xb[seam]
@@ -508,10 +509,13 @@ def cut_slivers(
             continue
         if j0 < 0 or j1 >= out_sdf.shape[0]:
             continue
-        lw, rw = slice(a0, a1), slice(a1, b1)
+        # this seam's layers only (views): its windows, counted from the left one's first
+        sw = slice(a0, b1)
+        lw, rw = slice(0, a1 - a0), slice(a1 - a0, b1 - a0)
+        seam_drop, seam_hold = drop[sw], hold[sw]
         for solid in (True, False):
-            mine = (dominant <= 0) == solid
-            theirs = (other <= 0) == solid
+            mine = inside[sw] if solid else ~inside[sw]
+            theirs = inside_other[sw] if solid else ~inside_other[sw]
             # per side: its layers from the seam outwards, the copy's continuation past its own
             # plane (the other side's nearest layer), the layer next to the window
             for win, across, run, cont, beyond in (
@@ -519,17 +523,23 @@ def cut_slivers(
                     lw,
                     rw,
                     np.logical_and.accumulate(mine[lw][::-1], axis=0)[::-1],
-                    theirs[a1],
+                    theirs[rw.start],
                     out_sdf[j0],
                 ),
-                (rw, lw, np.logical_and.accumulate(mine[rw], axis=0), theirs[a1 - 1], out_sdf[j1]),
+                (
+                    rw,
+                    lw,
+                    np.logical_and.accumulate(mine[rw], axis=0),
+                    theirs[rw.start - 1],
+                    out_sdf[j1],
+                ),
             ):
                 near, whole = (run[-1], run[0]) if win is lw else (run[0], run[-1])
                 col = near & cont & ~(whole & ((beyond <= 0) == solid))
                 if not col.any():
                     continue
-                drop[win] |= run & col & ~theirs[win]
-                hold[across] |= col & ~mine[across] & theirs[across]
+                seam_drop[win] |= run & col & ~theirs[win]
+                seam_hold[across] |= col & ~mine[across] & theirs[across]
     return drop, hold
 
 

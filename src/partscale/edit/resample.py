@@ -365,105 +365,96 @@ def _resample_cols(
     ``write``-able) takes that sample's distance, colour and part. Skipped gaps (both inside, a
     layer between outside) likewise take the largest.
     """
-    # the loops run over 1-D row views from 0: they vectorise (indexing the 3-D arrays from a
-    # block's first column does not)
+    # indices are unsigned: with no negative index to wrap around, the loops over q vectorise
     m, nq = out.shape[1], out.shape[2]
     n_src = src.shape[1]
-    n_c = src_rgb.shape[2] // max(nq, 1)
+    nc = np.uint64(src_rgb.shape[2] // max(nq, 1))
     nblk = (nq + _COL_BLOCK - 1) // _COL_BLOCK
     for task in nb.prange(src.shape[0] * nblk):
-        p = task // nblk
-        qa = (task % nblk) * _COL_BLOCK
-        qe = min(qa + _COL_BLOCK, nq)
+        p = np.uint64(task // nblk)
+        blk = task % nblk
+        qa = np.uint64(blk * _COL_BLOCK)
+        qe = np.uint64(min(blk * _COL_BLOCK + _COL_BLOCK, nq))
+        ca, ce = qa * nc, qe * nc
         nw = qe - qa
         sign = np.empty(nw, src.dtype)  # per column of a pair, see below
         best = np.empty(nw, src.dtype)
         sb = np.empty(nw, np.int64)
         for j in range(m):
-            a0, a1 = i0[j], i1[j]
-            o = out[p, j, qa:qe]
-            oc = out_rgb[p, j, qa * n_c : qe * n_c]
-            op = out_parts[p, j, qa:qe]
-            s0, c0, p0 = (
-                src[p, a0, qa:qe],
-                src_rgb[p, a0, qa * n_c : qe * n_c],
-                src_parts[p, a0, qa:qe],
-            )
-            s1, c1, p1 = (
-                src[p, a1, qa:qe],
-                src_rgb[p, a1, qa * n_c : qe * n_c],
-                src_parts[p, a1, qa:qe],
-            )
+            ju = np.uint64(j)
+            a0, a1 = np.uint64(i0[j]), np.uint64(i1[j])
             if w[j] == 0:
-                for q in range(nw):
-                    o[q] = s0[q]
-                for q in range(nw * n_c):
-                    oc[q] = c0[q]
+                for q in range(qa, qe):
+                    out[p, ju, q] = src[p, a0, q]
+                for q in range(ca, ce):
+                    out_rgb[p, ju, q] = src_rgb[p, a0, q]
             else:
                 w1 = np.float32(w[j])
                 w0 = np.float32(1.0) - w1
-                for q in range(nw):
-                    o[q] = np.float32(s0[q]) * w0 + np.float32(s1[q]) * w1
-                for q in range(nw * n_c):
-                    v = np.float32(c0[q]) * w0 + np.float32(c1[q]) * w1
-                    oc[q] = min(max(np.rint(v), 0.0), 255.0)
-            for q in range(nw):
-                op[q] = p0[q]
+                for q in range(qa, qe):
+                    out[p, ju, q] = np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
+                for q in range(ca, ce):
+                    v = np.float32(src_rgb[p, a0, q]) * w0 + np.float32(src_rgb[p, a1, q]) * w1
+                    out_rgb[p, ju, q] = min(max(np.rint(v), 0.0), 255.0)
+            for q in range(qa, qe):
+                out_parts[p, ju, q] = src_parts[p, a0, q]
             if frac[j]:
                 wj = w[j]
-                for q in range(nw):
-                    if p0[q] == p1[q]:
+                for q in range(qa, qe):
+                    label = src_parts[p, a1, q]
+                    if out_parts[p, ju, q] == label:
                         continue
                     # only where the labels differ: float32 is exact enough to place a boundary
-                    a = s0[q]
-                    b = s1[q]
+                    a = src[p, a0, q]
+                    b = src[p, a1, q]
                     tb = np.float32(0.5)
                     if (a <= 0) != (b <= 0):
                         aa, ab = abs(a), abs(b)
                         tb = aa / max(aa + ab, np.float32(1e-30))
                     if wj >= tb:
-                        op[q] = p1[q]
-            k = seam_of[j]
-            if k >= 0:
-                wk = was[k, p, qa:qe]
-                for q in range(nw):
-                    wk[q] = o[q]
+                        out_parts[p, ju, q] = label
+            if seam_of[j] >= 0:
+                k = np.uint64(seam_of[j])
+                for q in range(qa, qe):
+                    was[k, p, q] = out[p, ju, q]
             if j == 0 or not pair[j - 1]:
                 continue
             jp = j - 1
+            jpu = np.uint64(jp)
             r0 = max(int(np.floor(xa[jp])) + 1, 0)
             r1 = min(int(np.ceil(xa[j])) - 1, n_src - 1)
             if r1 < r0:
                 continue
-            prev = out[p, jp, qa:qe]
-            for q in range(nw):
+            for q in range(qa, qe):
                 # both outside: a skipped solid is sought (the least sample, below 0), both
                 # inside: a skipped gap (the largest, above 0); as ``sign * v > sign * best``
                 # (an exact negation), one comparison that vectorises
-                solid = prev[q] > 0
-                sign[q] = 0.0 if solid != (o[q] > 0) else (-1.0 if solid else 1.0)
-                best[q] = 0
-                sb[q] = -1
+                solid = out[p, jpu, q] > 0
+                sign[q - qa] = 0.0 if solid != (out[p, ju, q] > 0) else (-1.0 if solid else 1.0)
+                best[q - qa] = 0
+                sb[q - qa] = -1
             # the deepest sample in source order (the first of equals), column by column
             for r in range(r0, r1 + 1):
-                row = src[p, r, qa:qe]
-                for q in range(nw):
-                    v = row[q]
-                    better = sign[q] * v > sign[q] * best[q]
-                    best[q] = v if better else best[q]
-                    sb[q] = r if better else sb[q]
-            for q in range(nw):
-                if sb[q] < 0:
+                ru = np.uint64(r)
+                for q in range(qa, qe):
+                    v = src[p, ru, q]
+                    better = sign[q - qa] * v > sign[q - qa] * best[q - qa]
+                    best[q - qa] = v if better else best[q - qa]
+                    sb[q - qa] = r if better else sb[q - qa]
+            for q in range(qa, qe):
+                r = sb[q - qa]
+                if r < 0:
                     continue
-                t = jp if sb[q] - xa[jp] <= xa[j] - sb[q] else j
+                t = jp if r - xa[jp] <= xa[j] - r else j
                 if not write[t]:
                     t = 2 * jp + 1 - t
                     if not write[t]:
                         continue
-                out[p, t, qa + q] = best[q]
-                for c in range(n_c):
-                    out_rgb[p, t, (qa + q) * n_c + c] = src_rgb[p, sb[q], (qa + q) * n_c + c]
-                out_parts[p, t, qa + q] = src_parts[p, sb[q], qa + q]
+                tu, ru = np.uint64(t), np.uint64(r)
+                out[p, tu, q] = best[q - qa]
+                for c in range(q * nc, (q + 1) * nc):
+                    out_rgb[p, tu, c] = src_rgb[p, ru, c]
+                out_parts[p, tu, q] = src_parts[p, ru, q]
 
 
 def cut_slivers(

@@ -315,6 +315,10 @@ def _crisp_into(parts, sdf, i0, i1, w, js, out):
                 out[p, j, q] = p1
 
 
+#: Rows (in world order, across the edit axis) shorter than this get their rigid runs as block
+#: copies before :func:`_resample_cols` (:func:`apply_plan`).
+_SHORT_ROW = 32
+
 #: Columns per parallel task of :func:`_resample_cols` (the task also spans one row of P).
 _COL_BLOCK = 256
 
@@ -338,6 +342,7 @@ def _resample_cols(
     i1,
     w,
     frac,
+    done,
     xa,
     pair,
     write,
@@ -347,8 +352,9 @@ def _resample_cols(
     out_parts,
     was,
 ):
-    """Resample (P, N, Q) views (rgb (P, N, Q, C)), C-contiguous, into (P, M, Q) ones: columns
+    """Resample (P, N, Q) views (rgb (P, N, CQ)), C-contiguous, into (P, M, Q) ones: columns
     ``(p, q)`` in parallel blocks, layers in order, the inner loop over contiguous ``q``.
+    Layers with ``done[j]`` are already written (block copies) and only read here.
 
     Output layer ``j`` reads source layers ``i0[j]``, ``i1[j]`` with weight ``w[j]`` (float32):
     copies where it is 0, else the float32 blend (rgb rounded half to even, clipped to 0..255);
@@ -382,37 +388,40 @@ def _resample_cols(
         sb = np.empty(nw, np.int64)
         for j in range(m):
             ju = np.uint64(j)
-            a0, a1 = np.uint64(i0[j]), np.uint64(i1[j])
-            if w[j] == 0:
+            if not done[j]:
+                a0, a1 = np.uint64(i0[j]), np.uint64(i1[j])
+                if w[j] == 0:
+                    for q in range(qa, qe):
+                        out[p, ju, q] = src[p, a0, q]
+                    for q in range(ca, ce):
+                        out_rgb[p, ju, q] = src_rgb[p, a0, q]
+                else:
+                    w1 = np.float32(w[j])
+                    w0 = np.float32(1.0) - w1
+                    for q in range(qa, qe):
+                        out[p, ju, q] = (
+                            np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
+                        )
+                    for q in range(ca, ce):
+                        v = np.float32(src_rgb[p, a0, q]) * w0 + np.float32(src_rgb[p, a1, q]) * w1
+                        out_rgb[p, ju, q] = min(max(np.rint(v), 0.0), 255.0)
                 for q in range(qa, qe):
-                    out[p, ju, q] = src[p, a0, q]
-                for q in range(ca, ce):
-                    out_rgb[p, ju, q] = src_rgb[p, a0, q]
-            else:
-                w1 = np.float32(w[j])
-                w0 = np.float32(1.0) - w1
-                for q in range(qa, qe):
-                    out[p, ju, q] = np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
-                for q in range(ca, ce):
-                    v = np.float32(src_rgb[p, a0, q]) * w0 + np.float32(src_rgb[p, a1, q]) * w1
-                    out_rgb[p, ju, q] = min(max(np.rint(v), 0.0), 255.0)
-            for q in range(qa, qe):
-                out_parts[p, ju, q] = src_parts[p, a0, q]
-            if frac[j]:
-                wj = w[j]
-                for q in range(qa, qe):
-                    label = src_parts[p, a1, q]
-                    if out_parts[p, ju, q] == label:
-                        continue
-                    # only where the labels differ: float32 is exact enough to place a boundary
-                    a = src[p, a0, q]
-                    b = src[p, a1, q]
-                    tb = np.float32(0.5)
-                    if (a <= 0) != (b <= 0):
-                        aa, ab = abs(a), abs(b)
-                        tb = aa / max(aa + ab, np.float32(1e-30))
-                    if wj >= tb:
-                        out_parts[p, ju, q] = label
+                    out_parts[p, ju, q] = src_parts[p, a0, q]
+                if frac[j]:
+                    wj = w[j]
+                    for q in range(qa, qe):
+                        label = src_parts[p, a1, q]
+                        if out_parts[p, ju, q] == label:
+                            continue
+                        # only where the labels differ: float32 is exact enough to place a boundary
+                        a = src[p, a0, q]
+                        b = src[p, a1, q]
+                        tb = np.float32(0.5)
+                        if (a <= 0) != (b <= 0):
+                            aa, ab = abs(a), abs(b)
+                            tb = aa / max(aa + ab, np.float32(1e-30))
+                        if wj >= tb:
+                            out_parts[p, ju, q] = label
             if seam_of[j] >= 0:
                 k = np.uint64(seam_of[j])
                 for q in range(qa, qe):
@@ -589,7 +598,15 @@ def apply_plan(
     seam_of = np.full(m, -1, np.int64)
     seam_of[seam] = np.arange(seam.size)
     was = np.empty((seam.size, s3.shape[0], s3.shape[2]), np.float32)
-    # one pass writes every output voxel: resampled, and thin elements kept
+    done = np.zeros(m, bool)
+    if s3.shape[2] < _SHORT_ROW:
+        # rows across the axis too short for the kernel's inner loops (the edit axis last in
+        # world order): the rigid runs as block copies, contiguous along the axis
+        for a, o in ((sdf, out_sdf), (rgb, out_rgb), (parts, out_parts)):
+            left = _copy_runs(a, i0, w, o)
+        done[:] = True
+        done[left] = False
+    # one pass writes every output voxel (but block copies): resampled, thin elements kept
     _resample_cols(
         s3,
         c3,
@@ -598,6 +615,7 @@ def apply_plan(
         i1,
         w.astype(np.float32),
         w != 0,
+        done,
         plan.xa,
         pair,
         plan.in_slab,

@@ -10,11 +10,12 @@ import copy as _copy
 import math
 from typing import Any
 
+import numba as nb
 import numpy as np
 
 from ..color import palette_colour
 from ..errors import InputError
-from .resample import Plan
+from .resample import Plan, _rows
 from .resolved import ResolvedEdit
 
 
@@ -44,6 +45,36 @@ def _inside_counts(sdf: np.ndarray, parts: np.ndarray) -> np.ndarray:
     """(P,) int64: inside voxels (``sdf <= 0``) of each part index ``p >= 0`` in the block."""
     labels = parts[(sdf <= 0) & (parts >= 0)]
     return np.bincount(labels.astype(np.int64)) if labels.size else np.zeros(0, np.int64)
+
+
+def unlabel_far(
+    sdf: np.ndarray, parts: np.ndarray, far: np.float32, layers: slice, axis: int
+) -> None:
+    """Part -1 (in place) where ``sdf > far`` in the output ``layers`` (a slice along axis 0).
+
+    ``sdf``, ``parts`` (N, A, B) are axis-first; as views of C-ordered arrays in world order
+    (the edit axis at ``axis``, what :func:`~partscale.edit.resample.empty_layers` makes) one
+    parallel pass does it, else numpy.
+    """
+    s3, p3 = _rows(sdf, axis), _rows(parts, axis)
+    if not np.may_share_memory(p3, parts):  # a copy: write through numpy instead
+        np.copyto(parts[layers], np.int16(-1), where=sdf[layers] > far)
+        return
+    j0, j1, _ = layers.indices(sdf.shape[0])
+    _unlabel_rows(s3, p3, np.float32(far), j0, max(j1, j0))
+
+
+@nb.njit(cache=True, parallel=True)
+def _unlabel_rows(sdf, parts, far, j0, j1):
+    """parts[p, j, q] = -1 where sdf[p, j, q] > far, layers ``j0 <= j < j1`` of (P, N, Q)
+    views; rows in parallel (unsigned indices: the inner loop vectorises)."""
+    nj = j1 - j0
+    for t in nb.prange(sdf.shape[0] * nj):
+        p = np.uint64(t // nj)
+        j = np.uint64(j0 + t % nj)
+        for q in range(np.uint64(0), np.uint64(sdf.shape[2])):
+            if sdf[p, j, q] > far:
+                parts[p, j, q] = -1
 
 
 def update_parts_info(

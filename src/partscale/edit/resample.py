@@ -137,13 +137,6 @@ def _split(x: np.ndarray, n_src: int) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return i0, i1, w
 
 
-def lerp_float(src: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """float32 (M, ...) linear interpolation of layers of ``src`` (N, ...) at ``x`` (M,)."""
-    i0, i1, w = _split(x, src.shape[0])
-    w32 = w.astype(np.float32).reshape((-1,) + (1,) * (src.ndim - 1))
-    return src[i0].astype(np.float32) * (1 - w32) + src[i1].astype(np.float32) * w32
-
-
 @nb.njit(cache=True, parallel=True)
 def _lerp_into(src, i0, i1, w, out, lo, hi, js):
     """out[:, j] = src[:, i0[j]] (w[j] == 0) or the float32 blend of src[:, i0[j]] and
@@ -322,92 +315,155 @@ def _crisp_into(parts, sdf, i0, i1, w, js, out):
                 out[p, j, q] = p1
 
 
-def _keep_thin(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
-    """Put back what linear resampling skipped between consecutive output layers (in place).
+#: Rows (in world order, across the edit axis) shorter than this get their rigid runs as block
+#: copies before :func:`_resample_cols` (:func:`apply_plan`).
+_SHORT_ROW = 32
 
-    For each pair ``j, j + 1`` with ``pair[j]``, the source layers strictly between ``xa[j]``
-    and ``xa[j + 1]`` are read column by column: where both output samples are outside
-    (``> 0``) but one of those layers is inside, a solid thinner than the compression was
-    skipped; the output layer nearer to its deepest sample (and ``write``-able) takes that
-    sample's distance, colour and part. Skipped gaps (both inside, a layer between outside)
-    likewise take the largest. Columns run in parallel; layers in order, so a pair sees what
-    the one before it wrote.
-    """
-    s3, p3, o3, op3 = (_middle(a) for a in (src, src_parts, out, out_parts))
-    c3, oc3 = _middle(src_rgb), _middle(out_rgb)
-    if (
-        s3 is not None
-        and c3 is not None
-        and oc3 is not None
-        and _alike(s3, p3, o3, op3)
-        and _alike(c3, oc3)
-        and c3.shape[0] == s3.shape[0]
-    ):
-        n_c = src_rgb.shape[-1]
-        c4 = c3.reshape(c3.shape[0], c3.shape[1], -1, n_c)
-        oc4 = oc3.reshape(oc3.shape[0], oc3.shape[1], -1, n_c)
-        _keep_thin_cols(s3, c4, p3, xa, pair, write, o3, oc4, op3)
-        return
-    # any other strides: through contiguous axis-first copies
-    flat = [np.ascontiguousarray(a) for a in (src, src_rgb, src_parts, out, out_rgb, out_parts)]
-    n, m = src.shape[0], out.shape[0]
-    s3, c3, p3, o3, oc3, op3 = (
-        a.reshape(1, a.shape[0], -1, *a.shape[3:]) if a.ndim == 4 else a.reshape(1, a.shape[0], -1)
-        for a in flat
-    )
-    assert s3.shape[1] == n and o3.shape[1] == m
-    _keep_thin_cols(s3, c3, p3, xa, pair, write, o3, oc3, op3)
-    out[...] = o3.reshape(out.shape)
-    out_rgb[...] = oc3.reshape(out_rgb.shape)
-    out_parts[...] = op3.reshape(out_parts.shape)
+#: Columns per parallel task of :func:`_resample_cols` (the task also spans one row of P).
+_COL_BLOCK = 256
 
 
-#: Columns per parallel task of :func:`_keep_thin_cols` (the task also spans one row of P).
-_THIN_BLOCK = 256
+def _rows(a: np.ndarray, axis: int) -> np.ndarray:
+    """Axis-first ``a`` (N, ...) as (P, N, Q): its array in world order (the edit axis at
+    ``axis``), C-ordered (copied only where it is not), the axes before ``axis`` merged into P
+    and those after it (colour included) into Q. A view of ``a`` when no copy was needed (as for
+    :func:`empty_layers`)."""
+    world = np.ascontiguousarray(np.moveaxis(a, 0, axis))
+    p = int(np.prod(world.shape[:axis], dtype=np.int64))
+    return world.reshape(p, a.shape[0], -1)
 
 
 @nb.njit(cache=True, parallel=True)
-def _keep_thin_cols(src, src_rgb, src_parts, xa, pair, write, out, out_rgb, out_parts):
-    """:func:`_keep_thin` on (P, N, Q) views (rgb (P, N, Q, C)), C-contiguous: columns
-    ``(p, q)`` in parallel blocks, the inner loop over contiguous ``q``."""
+def _resample_cols(
+    src,
+    src_rgb,
+    src_parts,
+    i0,
+    i1,
+    w,
+    frac,
+    done,
+    xa,
+    pair,
+    write,
+    seam_of,
+    out,
+    out_rgb,
+    out_parts,
+    was,
+):
+    """Resample (P, N, Q) views (rgb (P, N, CQ)), C-contiguous, into (P, M, Q) ones: columns
+    ``(p, q)`` in parallel blocks, layers in order, the inner loop over contiguous ``q``.
+    Layers with ``done[j]`` are already written (block copies) and only read here.
+
+    Output layer ``j`` reads source layers ``i0[j]``, ``i1[j]`` with weight ``w[j]`` (float32):
+    copies where it is 0, else the float32 blend (rgb rounded half to even, clipped to 0..255);
+    parts are ``src_parts[i0[j]]``, or where ``frac[j]`` and the label at ``i1[j]`` differs,
+    that label once ``w[j]`` reaches the boundary (the sdf's linear zero crossing between the
+    two layers when the surface passes between them, else half-way). Layer ``j`` with
+    ``seam_of[j] = k >= 0`` is saved to ``was[k]`` as resampled.
+
+    Then, for each pair ``j - 1, j`` with ``pair[j - 1]`` (once layer ``j`` is resampled, so a
+    pair sees what the one before it wrote, as a pass over the finished layers would), the
+    source layers strictly between ``xa[j - 1]`` and ``xa[j]`` are read column by column: where
+    both output samples are outside (``> 0``) but one of those layers is inside, a solid
+    thinner than the compression was skipped; the output layer nearer to its deepest sample (and
+    ``write``-able) takes that sample's distance, colour and part. Skipped gaps (both inside, a
+    layer between outside) likewise take the largest.
+    """
+    # indices are unsigned: with no negative index to wrap around, the loops over q vectorise
     m, nq = out.shape[1], out.shape[2]
     n_src = src.shape[1]
-    nblk = (nq + _THIN_BLOCK - 1) // _THIN_BLOCK
+    nc = np.uint64(src_rgb.shape[2] // max(nq, 1))
+    nblk = (nq + _COL_BLOCK - 1) // _COL_BLOCK
     for task in nb.prange(src.shape[0] * nblk):
-        p = task // nblk
-        qa = (task % nblk) * _THIN_BLOCK
-        qe = min(qa + _THIN_BLOCK, nq)
-        for j in range(m - 1):
-            if not pair[j]:
+        p = np.uint64(task // nblk)
+        blk = task % nblk
+        qa = np.uint64(blk * _COL_BLOCK)
+        qe = np.uint64(min(blk * _COL_BLOCK + _COL_BLOCK, nq))
+        ca, ce = qa * nc, qe * nc
+        nw = qe - qa
+        sign = np.empty(nw, src.dtype)  # per column of a pair, see below
+        best = np.empty(nw, src.dtype)
+        sb = np.empty(nw, np.int64)
+        for j in range(m):
+            ju = np.uint64(j)
+            if not done[j]:
+                a0, a1 = np.uint64(i0[j]), np.uint64(i1[j])
+                if w[j] == 0:
+                    for q in range(qa, qe):
+                        out[p, ju, q] = src[p, a0, q]
+                    for q in range(ca, ce):
+                        out_rgb[p, ju, q] = src_rgb[p, a0, q]
+                else:
+                    w1 = np.float32(w[j])
+                    w0 = np.float32(1.0) - w1
+                    for q in range(qa, qe):
+                        out[p, ju, q] = (
+                            np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
+                        )
+                    for q in range(ca, ce):
+                        v = np.float32(src_rgb[p, a0, q]) * w0 + np.float32(src_rgb[p, a1, q]) * w1
+                        out_rgb[p, ju, q] = min(max(np.rint(v), 0.0), 255.0)
+                for q in range(qa, qe):
+                    out_parts[p, ju, q] = src_parts[p, a0, q]
+                if frac[j]:
+                    wj = w[j]
+                    for q in range(qa, qe):
+                        label = src_parts[p, a1, q]
+                        if out_parts[p, ju, q] == label:
+                            continue
+                        # only where the labels differ: float32 is exact enough to place a boundary
+                        a = src[p, a0, q]
+                        b = src[p, a1, q]
+                        tb = np.float32(0.5)
+                        if (a <= 0) != (b <= 0):
+                            aa, ab = abs(a), abs(b)
+                            tb = aa / max(aa + ab, np.float32(1e-30))
+                        if wj >= tb:
+                            out_parts[p, ju, q] = label
+            if seam_of[j] >= 0:
+                k = np.uint64(seam_of[j])
+                for q in range(qa, qe):
+                    was[k, p, q] = out[p, ju, q]
+            if j == 0 or not pair[j - 1]:
                 continue
-            q0 = max(int(np.floor(xa[j])) + 1, 0)
-            q1 = min(int(np.ceil(xa[j + 1])) - 1, n_src - 1)
-            if q1 < q0:
+            jp = j - 1
+            jpu = np.uint64(jp)
+            r0 = max(int(np.floor(xa[jp])) + 1, 0)
+            r1 = min(int(np.ceil(xa[j])) - 1, n_src - 1)
+            if r1 < r0:
                 continue
             for q in range(qa, qe):
-                v0 = out[p, j, q]
-                v1 = out[p, j + 1, q]
-                solid = v0 > 0  # both outside: look for a skipped solid, else for a skipped gap
-                if solid != (v1 > 0):
+                # both outside: a skipped solid is sought (the least sample, below 0), both
+                # inside: a skipped gap (the largest, above 0); as ``sign * v > sign * best``
+                # (an exact negation), one comparison that vectorises
+                solid = out[p, jpu, q] > 0
+                sign[q - qa] = 0.0 if solid != (out[p, ju, q] > 0) else (-1.0 if solid else 1.0)
+                best[q - qa] = 0
+                sb[q - qa] = -1
+            # the deepest sample in source order (the first of equals), column by column
+            for r in range(r0, r1 + 1):
+                ru = np.uint64(r)
+                for q in range(qa, qe):
+                    v = src[p, ru, q]
+                    better = sign[q - qa] * v > sign[q - qa] * best[q - qa]
+                    best[q - qa] = v if better else best[q - qa]
+                    sb[q - qa] = r if better else sb[q - qa]
+            for q in range(qa, qe):
+                r = sb[q - qa]
+                if r < 0:
                     continue
-                sb = -1
-                best = np.float32(0.0)
-                for s in range(q0, q1 + 1):
-                    v = src[p, s, q]
-                    if (solid and v < best) or (not solid and v > best):
-                        best = v
-                        sb = s
-                if sb < 0:
-                    continue
-                t = j if sb - xa[j] <= xa[j + 1] - sb else j + 1
+                t = jp if r - xa[jp] <= xa[j] - r else j
                 if not write[t]:
-                    t = 2 * j + 1 - t
+                    t = 2 * jp + 1 - t
                     if not write[t]:
                         continue
-                out[p, t, q] = best
-                for c in range(src_rgb.shape[3]):
-                    out_rgb[p, t, q, c] = src_rgb[p, sb, q, c]
-                out_parts[p, t, q] = src_parts[p, sb, q]
+                tu, ru = np.uint64(t), np.uint64(r)
+                out[p, tu, q] = best[q - qa]
+                for c in range(q * nc, (q + 1) * nc):
+                    out_rgb[p, tu, c] = src_rgb[p, ru, c]
+                out_parts[p, tu, q] = src_parts[p, ru, q]
 
 
 def cut_slivers(
@@ -440,6 +496,7 @@ def cut_slivers(
     """
     drop = np.zeros(dominant.shape, bool)
     hold = np.zeros(dominant.shape, bool)
+    inside, inside_other = dominant <= 0, other <= 0
     # an internal seam's layers: a run reading the left copy (near END, so xa > xb), then,
     # consecutive, a run reading the right copy
     left = plan.xa[seam] > plan.xb[seam]
@@ -452,10 +509,13 @@ def cut_slivers(
             continue
         if j0 < 0 or j1 >= out_sdf.shape[0]:
             continue
-        lw, rw = slice(a0, a1), slice(a1, b1)
+        # this seam's layers only (views): its windows, counted from the left one's first
+        sw = slice(a0, b1)
+        lw, rw = slice(0, a1 - a0), slice(a1 - a0, b1 - a0)
+        seam_drop, seam_hold = drop[sw], hold[sw]
         for solid in (True, False):
-            mine = (dominant <= 0) == solid
-            theirs = (other <= 0) == solid
+            mine = inside[sw] if solid else ~inside[sw]
+            theirs = inside_other[sw] if solid else ~inside_other[sw]
             # per side: its layers from the seam outwards, the copy's continuation past its own
             # plane (the other side's nearest layer), the layer next to the window
             for win, across, run, cont, beyond in (
@@ -463,17 +523,23 @@ def cut_slivers(
                     lw,
                     rw,
                     np.logical_and.accumulate(mine[lw][::-1], axis=0)[::-1],
-                    theirs[a1],
+                    theirs[rw.start],
                     out_sdf[j0],
                 ),
-                (rw, lw, np.logical_and.accumulate(mine[rw], axis=0), theirs[a1 - 1], out_sdf[j1]),
+                (
+                    rw,
+                    lw,
+                    np.logical_and.accumulate(mine[rw], axis=0),
+                    theirs[rw.start - 1],
+                    out_sdf[j1],
+                ),
             ):
                 near, whole = (run[-1], run[0]) if win is lw else (run[0], run[-1])
                 col = near & cont & ~(whole & ((beyond <= 0) == solid))
                 if not col.any():
                     continue
-                drop[win] |= run & col & ~theirs[win]
-                hold[across] |= col & ~mine[across] & theirs[across]
+                seam_drop[win] |= run & col & ~theirs[win]
+                seam_hold[across] |= col & ~mine[across] & theirs[across]
     return drop, hold
 
 
@@ -514,69 +580,206 @@ def apply_plan(
       fragment of it (counted in ``left_out``).
     """
     m = len(plan.xa)
-    out_sdf = lerp_layers(sdf, plan.xa, empty_layers((m, *sdf.shape[1:]), sdf.dtype, axis))
-    out_rgb = lerp_layers(rgb, plan.xa, empty_layers((m, *rgb.shape[1:]), rgb.dtype, axis))
-    out_parts = crisp_parts(
-        parts, sdf, plan.xa, empty_layers((m, *parts.shape[1:]), parts.dtype, axis)
+    out_sdf, out_rgb, out_parts = (
+        empty_layers((m, *a.shape[1:]), a.dtype, axis) for a in (sdf, rgb, parts)
+    )
+    # (P, N, Q) views in world order (rgb (P, N, 3Q)), the outputs' written in place
+    s3, c3, p3, o3, oc3, op3 = (
+        _rows(a, axis) for a in (sdf, rgb, parts, out_sdf, out_rgb, out_parts)
     )
     left_out: dict[str, int] = {}
     seam = np.flatnonzero(plan.beta > 0)
-    thinned = np.zeros((seam.size, *sdf.shape[1:]), bool)
+    # consecutive layers reading one continuous stretch of the source (the dominant samples;
+    # a tile seam's jump from one copy's continuation to the other's is no pair)
+    pair = np.zeros(m, bool)
     if keep_thin is not None:
-        # consecutive layers reading one continuous stretch of the source (the dominant
-        # samples; a tile seam's jump from one copy's continuation to the other's is no pair)
-        pair = (plan.in_slab[:-1] | plan.in_slab[1:]) & (np.diff(plan.xa) > 0)
-        if pair.any():
-            was = out_sdf[seam]
-            _keep_thin(
-                sdf,
-                rgb,
-                parts,
-                plan.xa,
-                np.append(pair, False),
-                plan.in_slab,
-                out_sdf,
-                out_rgb,
-                out_parts,
-            )
-            thinned = out_sdf[seam] != was
-    if seam.size:
-        bt = plan.beta[seam].astype(np.float32)
-        b3 = bt[:, None, None]
-        dominant = lerp_float(sdf, plan.xa[seam])
-        dominant = np.where(thinned, out_sdf[seam], dominant)
-        other = lerp_float(sdf, plan.xb[seam])
-        blended = dominant * (1 - b3) + other * b3
-        b4 = bt[:, None, None, None]
-        c_other = lerp_float(rgb, plan.xb[seam])
-        c = lerp_float(rgb, plan.xa[seam]) * (1 - b4) + c_other * b4
-        c = np.clip(np.rint(c), 0, 255).astype(np.uint8)
-        if keep_thin is not None:
-            far = np.float32(keep_thin)
-            flip = (dominant <= 0) != (blended <= 0)
-            keep = flip & (((dominant <= 0) & (other > far)) | ((dominant > 0) & (other < -far)))
-            drop, hold = cut_slivers(plan, seam, dominant, other, out_sdf)
-            # only where the blend alone would not do it: the sliver keeps its side (kept, or
-            # no flip), the element's continuation flips the own sample
-            drop &= keep | ~flip
-            keep = (keep | (hold & flip)) & ~drop
-            blended = np.where(keep, dominant, blended)
-            c = np.where((keep | thinned)[..., None], out_rgb[seam], c)
-            if drop.any():
-                # a cut sliver is left out: the other copy's sample, colour and part
-                blended = np.where(drop, other, blended)
-                c_other = np.clip(np.rint(c_other), 0, 255).astype(np.uint8)
-                c = np.where(drop[..., None], c_other, c)
-                own = out_parts[seam]
-                out_parts[seam] = np.where(drop, crisp_parts(parts, sdf, plan.xb[seam]), own)
-                # a left window's layers read their copy up to END
-                at_end = (plan.xa[seam] > plan.xb[seam])[:, None, None]
-                for plane, n in (
-                    ("start", (drop & ~at_end).sum()),
-                    ("end", (drop & at_end).sum()),
-                ):
-                    if n:
-                        left_out[plane] = int(n)
-        out_sdf[seam] = blended
-        out_rgb[seam] = c
+        pair[:-1] = (plan.in_slab[:-1] | plan.in_slab[1:]) & (np.diff(plan.xa) > 0)
+    i0, i1, w = _split(plan.xa, sdf.shape[0])
+    seam_of = np.full(m, -1, np.int64)
+    seam_of[seam] = np.arange(seam.size)
+    was = np.empty((seam.size, s3.shape[0], s3.shape[2]), np.float32)
+    done = np.zeros(m, bool)
+    if s3.shape[2] < _SHORT_ROW:
+        # rows across the axis too short for the kernel's inner loops (the edit axis last in
+        # world order): the rigid runs as block copies, contiguous along the axis
+        for a, o in ((sdf, out_sdf), (rgb, out_rgb), (parts, out_parts)):
+            left = _copy_runs(a, i0, w, o)
+        done[:] = True
+        done[left] = False
+    # one pass writes every output voxel (but block copies): resampled, thin elements kept
+    _resample_cols(
+        s3,
+        c3,
+        p3,
+        i0,
+        i1,
+        w.astype(np.float32),
+        w != 0,
+        done,
+        plan.xa,
+        pair,
+        plan.in_slab,
+        seam_of,
+        o3,
+        oc3,
+        op3,
+        was,
+    )
+    if seam.size == 0:
+        return out_sdf, out_rgb, out_parts, left_out
+    # the seam layers' dominant and other samples (the dominant as kept thin where it was)
+    a0, a1, wa = _split(plan.xa[seam], sdf.shape[0])
+    b0, b1, wb = _split(plan.xb[seam], sdf.shape[0])
+    wa, wb = wa.astype(np.float32), wb.astype(np.float32)
+    kept = bool(pair.any())
+    dominant, other = (np.empty_like(was) for _ in range(2))
+    _seam_samples(s3, o3, seam, a0, a1, wa, b0, b1, wb, was, kept, dominant, other)
+    shape = (seam.size, *sdf.shape[1:])
+    thin = keep_thin is not None
+    if thin:
+        drop, hold = cut_slivers(plan, seam, dominant.reshape(shape), other.reshape(shape), out_sdf)
+        drop, hold = drop.reshape(was.shape), hold.reshape(was.shape)
+    else:
+        drop = hold = np.zeros(was.shape, bool)
+    far = np.float32(keep_thin if thin else 0.0)
+    _seam_blend(
+        c3,
+        o3,
+        oc3,
+        seam,
+        a0,
+        a1,
+        wa,
+        b0,
+        b1,
+        wb,
+        plan.beta[seam].astype(np.float32),
+        dominant,
+        other,
+        was,
+        kept,
+        thin,
+        far,
+        drop,
+        hold,
+    )
+    if drop.any():
+        # a cut sliver is left out: the other copy's part (its sample and colour are in)
+        drop = drop.reshape(shape)
+        own = out_parts[seam]
+        out_parts[seam] = np.where(drop, crisp_parts(parts, sdf, plan.xb[seam]), own)
+        # a left window's layers read their copy up to END
+        at_end = (plan.xa[seam] > plan.xb[seam])[:, None, None]
+        for plane, n in (("start", (drop & ~at_end).sum()), ("end", (drop & at_end).sum())):
+            if n:
+                left_out[plane] = int(n)
     return out_sdf, out_rgb, out_parts, left_out
+
+
+@nb.njit(cache=True, parallel=True)
+def _seam_samples(src, out, seam, a0, a1, wa, b0, b1, wb, was, kept, dominant, other):
+    """For seam layer ``k`` (output layer ``seam[k]``), (P, Q) float32 each: ``other[k]``, the
+    float32 blend of ``src`` layers ``b0[k]``, ``b1[k]`` by ``wb[k]`` (no exact copy at weight
+    0: the arithmetic of the vectorised blend it replaces); ``dominant[k]`` likewise at ``a0``,
+    ``a1``, ``wa``, or the output's value where ``kept`` and :func:`_resample_cols` kept a thin
+    element there (it differs from ``was``). src (P, N, Q), out (P, M, Q); rows in parallel.
+    """
+    ns, nq = seam.shape[0], src.shape[2]
+    for t in nb.prange(ns * src.shape[0]):
+        k = t // src.shape[0]
+        p = t % src.shape[0]
+        o, wk = out[p, seam[k]], was[k, p]
+        d, e = dominant[k, p], other[k, p]
+        sa0, sa1, sb0, sb1 = src[p, a0[k]], src[p, a1[k]], src[p, b0[k]], src[p, b1[k]]
+        w1 = wa[k]
+        w0 = np.float32(1.0) - w1
+        for q in range(nq):
+            d[q] = np.float32(sa0[q]) * w0 + np.float32(sa1[q]) * w1
+        if kept:
+            for q in range(nq):
+                if o[q] != wk[q]:
+                    d[q] = o[q]
+        w1 = wb[k]
+        w0 = np.float32(1.0) - w1
+        for q in range(nq):
+            e[q] = np.float32(sb0[q]) * w0 + np.float32(sb1[q]) * w1
+
+
+@nb.njit(cache=True, parallel=True)
+def _seam_blend(
+    src_rgb,
+    out,
+    out_rgb,
+    seam,
+    a0,
+    a1,
+    wa,
+    b0,
+    b1,
+    wb,
+    beta,
+    dominant,
+    other,
+    was,
+    kept,
+    thin,
+    far,
+    drop,
+    hold,
+):
+    """Blend the seam layers (in place): :func:`apply_plan`'s rule per voxel, float32.
+
+    ``src_rgb`` (P, N, 3Q), ``out`` (P, M, Q), ``out_rgb`` (P, M, 3Q); ``dominant``, ``other``,
+    ``was``, ``drop``, ``hold`` (S, P, Q) per seam layer ``k`` (output layer ``seam[k]``, blend
+    weight ``beta[k]``, rgb read as :func:`_seam_samples` reads the sdf). With ``thin``
+    (``keep_thin`` given, ``far`` its value), ``drop`` is narrowed to where a cut sliver is
+    left out (the other copy's sample and colour). Rows in parallel.
+    """
+    ns, nq = seam.shape[0], out.shape[2]
+    n_c = src_rgb.shape[2] // max(nq, 1)
+    for t in nb.prange(ns * out.shape[0]):
+        k = t // out.shape[0]
+        p = t % out.shape[0]
+        j = seam[k]
+        o, oc, wk = out[p, j], out_rgb[p, j], was[k, p]
+        d, e, dr, hd = dominant[k, p], other[k, p], drop[k, p], hold[k, p]
+        ca0, ca1, cb0, cb1 = (
+            src_rgb[p, a0[k]],
+            src_rgb[p, a1[k]],
+            src_rgb[p, b0[k]],
+            src_rgb[p, b1[k]],
+        )
+        bt = beta[k]
+        b0_ = np.float32(1.0) - bt
+        va = wa[k]
+        va0 = np.float32(1.0) - va
+        vb = wb[k]
+        vb0 = np.float32(1.0) - vb
+        for q in range(nq):
+            dq, eq = d[q], e[q]
+            blended = dq * b0_ + eq * bt
+            keep = False
+            own = kept and o[q] != wk[q]  # a thin element kept: its colour too
+            gone = False
+            if thin:
+                flip = (dq <= 0) != (blended <= 0)
+                keep = flip and ((dq <= 0 and eq > far) or (dq > 0 and eq < -far))
+                # only where the blend alone would not do it: the sliver keeps its side (kept,
+                # or no flip), the element's continuation flips the own sample
+                gone = dr[q] and (keep or not flip)
+                dr[q] = gone
+                keep = (keep or (hd[q] and flip)) and not gone
+            if keep:
+                blended = dq
+            elif gone:
+                blended = eq
+            o[q] = blended
+            for c in range(q * n_c, (q + 1) * n_c):
+                cb = np.float32(cb0[c]) * vb0 + np.float32(cb1[c]) * vb
+                if gone:
+                    v = cb
+                elif keep or own:
+                    continue  # the resampled colour stays
+                else:
+                    v = (np.float32(ca0[c]) * va0 + np.float32(ca1[c]) * va) * b0_ + cb * bt
+                oc[c] = min(max(np.rint(v), np.float32(0.0)), np.float32(255.0))

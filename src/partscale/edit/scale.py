@@ -19,7 +19,7 @@ from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
-from .parts import renumber_copies, update_parts_info
+from .parts import renumber_copies, unlabel_far, update_parts_info
 from .recipe import AXES, Edit, Recipe, forward_coordinate, source_coordinate, tile_count
 from .reevaluate import recompute_mask, reevaluate_arrays
 from .resample import Plan, apply_plan, empty_layers, lerp_layers, make_plan
@@ -134,7 +134,7 @@ def _edit_arrays(
         layers = np.flatnonzero(plan.in_slab | (plan.beta > 0))
         if layers.size:
             slab = slice(int(layers[0]), int(layers[-1]) + 1)
-            np.copyto(out_parts[slab], np.int16(-1), where=out_sdf[slab] > far)
+            unlabel_far(out_sdf, out_parts, far, slab, ax)
     sdf, rgb, parts = (np.moveaxis(a, 0, ax) for a in (out_sdf, out_rgb, out_parts))
     # written in world order and nothing else holds them: read-only, the CSDF takes them as
     # they are instead of copying (no full copy beyond the output)

@@ -315,7 +315,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         height = P @ up
         height = height - height.min() + 3 * FLOOR_TOL  # every point is object
     obj = _isolate(frames, P, pix, height, up, box, cropped)
-    if up_from == "underside":
+    if up_from == "underside" and support is not None:
         # the level plane under an object that is no floor: scraps of the floor the scan kept
         # lie in it beside the object (the derived yellow chair's, beside its star base)
         obj &= ~floor_scraps(P, support, FLOOR_TOL, FLOOR_CELL_M, FLOOR_BROAD_M)

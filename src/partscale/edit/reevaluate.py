@@ -210,7 +210,7 @@ def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
                 ts = best_t[g]
                 if ts < 0:
                     continue
-                t = np.uint32(ts)
+                t = np.uint32(ts)  # type: ignore[assignment]  # numba: unsigned index
                 if stamp[t] == clock:
                     continue
                 stamp[t] = clock

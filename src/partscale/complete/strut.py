@@ -7,9 +7,9 @@ is not the largest (specks are gone by then: :func:`partscale.complete.tidy.drop
 joined to it by the shortest path through space that no view saw *surely* free
 (:func:`partscale.complete.column.sure_free`: free space inferred from missing readings or a
 cropped scan's silhouette is no evidence against a thin bar), when that path spans at most
-``MAX_GAP_SHARE`` of the object's size in outside space; the path, thickened to a strut of radius ``RADIUS``, is guessed
-surface. A piece that only a longer path, or only one through surely free space, would reach
-stays apart.
+``MAX_GAP_SHARE`` of the object's size in outside space; the path, thickened to a strut of
+radius ``RADIUS``, is guessed surface. A piece that only a longer path, or only one through
+surely free space, would reach stays apart.
 """
 
 from __future__ import annotations
@@ -85,6 +85,8 @@ def add_struts(
     while todo:
         left = []
         for p in todo:
+            if joined[boxes[p - 1]][lab[boxes[p - 1]] == p].any():
+                continue  # joined already, through a strut to another piece
             s = _strut(sdf, prov, lab == p, joined, boxes[p - 1], step)
             if s is None:
                 left.append(p)
@@ -93,7 +95,7 @@ def add_struts(
             joined = ndimage.binary_propagation(joined, mask=sdf < 0)
         if len(left) == len(todo):
             break
-        todo = [p for p in left if not joined[boxes[p - 1]][lab[boxes[p - 1]] == p].any()]
+        todo = left
     return sdf, prov, struts
 
 

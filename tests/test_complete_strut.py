@@ -26,11 +26,11 @@ def _two_blocks(gap: int):
     return sdf, prov, np.zeros(3)
 
 
-def _struts(sdf, prov, origin, sure_free, max_gap=0.1):
+def _struts(sdf, prov, origin, sure_free, max_gap=0.1, mirror=None):
     from partscale.complete import GUESSED
     from partscale.complete.strut import add_struts
 
-    return add_struts(sdf, prov, origin, H, sure_free, GUESSED, max_gap, RADIUS)
+    return add_struts(sdf, prov, origin, H, sure_free, GUESSED, max_gap, RADIUS, mirror)
 
 
 def _pieces(sdf) -> int:
@@ -94,6 +94,46 @@ def test_a_strut_goes_around_what_the_camera_saw_through():
     added = (out < 0) & ~(sdf < 0)
     assert not (added & core).any()
     assert struts[0].gap > 0.06  # longer than straight down
+
+
+def _mirror_x(p):
+    # the plane x = 19.5 voxels, holding everywhere
+    return np.c_[39 * H - p[:, 0], p[:, 1], p[:, 2]], np.ones(len(p), bool)
+
+
+def _armrests():
+    from edt import edt
+
+    solid = np.zeros((40, 30, 40), bool)
+    solid[5:35, 3:10, 5:35] = True  # the seat
+    solid[5:9, 15:19, 10:30] = True  # two armrests above it, mirror images across x
+    solid[31:35, 15:19, 10:30] = True
+    e_out = edt(np.ascontiguousarray(~solid)) - 0.5
+    e_in = edt(np.ascontiguousarray(solid)) - 0.5
+    sdf = (np.where(solid, -e_in, e_out) * H).astype(np.float32)
+    return sdf, np.where(np.abs(sdf) <= H, 1, 0).astype(np.uint8), np.zeros(3)
+
+
+def test_a_strut_beside_the_mirror_plane_gets_its_image_where_nothing_was_seen_through():
+    sdf, prov, origin = _armrests()
+    assert _pieces(sdf) == 3
+    out, _, struts = _struts(sdf, prov, origin, _nothing_free, mirror=_mirror_x)
+    assert _pieces(out) == 1
+    assert len(struts) == 1 and struts[0].mirrored_voxels == struts[0].voxels > 0
+    added = (out < 0) & ~(sdf < 0)
+    assert (added == added[::-1]).all()  # two bars, mirror images
+
+    def free_right(p):
+        # seen through under the right armrest: its image is not drawn, it gets its own strut
+        # around what was seen
+        x, y, z = (p / H).T
+        return (x > 25) & (y > 10.5) & (y < 14.5) & (z > 8) & (z < 32)
+
+    out, _, struts = _struts(sdf, prov, origin, free_right, mirror=_mirror_x)
+    assert _pieces(out) == 1 and len(struts) == 2
+    assert all(s.mirrored_voxels == 0 for s in struts)
+    added = (out < 0) & ~(sdf < 0)
+    assert not (added[26:, 11:15, 9:32]).any()
 
 
 @pytest.mark.slow

@@ -580,6 +580,14 @@ def complete(
     # a part the scan left apart (a chair's back on a bar nobody saw, a leg's end): joined by a
     # thin strut where the sure free space leaves a short path
     grid_to_up = U @ grid_to_world
+    mirror_grid = None
+    if syms:
+        # the first mirror plane (x = 0 upright), where it holds: a strut beside it gets its image
+        M = np.linalg.inv(grid_to_up) @ _sym4(syms[0]) @ grid_to_up
+
+        def mirror_grid(pg):
+            return _apply(M, pg), syms[0].where(_apply(grid_to_up, pg))
+
     sdf, prov, struts = strut_mod.add_struts(
         sdf,
         prov,
@@ -588,6 +596,7 @@ def complete(
         lambda pg: sure_free_up(_apply(grid_to_up, pg)),
         fuse_mod.GUESSED,
         strut_mod.MAX_GAP_SHARE * float((hi - lo).max()),
+        mirror=mirror_grid,
     )
     sdf, n_filled = tidy_mod.fill_contacts(sdf, h)
     report(0.95, "metadata")

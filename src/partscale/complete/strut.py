@@ -34,13 +34,14 @@ moving diagonally stays 6-connected)."""
 class Strut:
     """A strut from a piece (of ``piece_voxels`` solid voxels) to the object: ``start`` and
     ``end`` (3,) its path's ends in the grid's frame (world units), ``gap`` the outside space it
-    spans and ``voxels`` the voxels it made solid."""
+    spans and ``voxels`` the voxels it made solid (``mirrored_voxels``: its mirror image's)."""
 
     piece_voxels: int
     start: np.ndarray
     end: np.ndarray
     gap: float
     voxels: int
+    mirrored_voxels: int = 0
 
     def as_dict(self) -> dict:
         return {
@@ -49,6 +50,7 @@ class Strut:
             "end": np.round(self.end, 6).tolist(),
             "gap": round(self.gap, 6),
             "voxels_added": self.voxels,
+            "mirrored_voxels_added": self.mirrored_voxels,
         }
 
 
@@ -61,12 +63,16 @@ def add_struts(
     guessed: int,
     max_gap: float,
     radius: float = RADIUS,
+    mirror=None,
 ) -> tuple[np.ndarray, np.ndarray, list[Strut]]:
     """The SDF (X, Y, Z) float32 (world units, negative inside) and provenance (X, Y, Z) uint8
     with every solid piece (6-connected) apart from the largest joined to it by a strut where
     one spanning at most ``max_gap`` (world units) avoids the sure free space; the struts' surface marked
     ``guessed``. ``sure_free``: points (N, 3) in the grid's frame -> (N,) bool; ``origin``
-    (3,) the grid's first voxel centre. Returns them and the struts made."""
+    (3,) the grid's first voxel centre; ``mirror``, optional: points (N, 3) in the grid's frame
+    -> their images in the object's mirror plane (N, 3) and (N,) bool where the plane holds;
+    each strut's image is drawn too where it runs from solid to solid through no sure free space
+    (a chair's back on two bars, not one beside the plane). Returns them and the struts made."""
     solid = sdf < 0
     lab, n = ndimage.label(solid)
     if n < 2:
@@ -75,7 +81,8 @@ def add_struts(
     size[0] = 0
     main = int(np.argmax(size))
     joined = lab == main
-    step = _Step(origin, h, max(float(radius), MIN_RADIUS_VOXELS * h), max_gap, sure_free, guessed)
+    r = max(float(radius), MIN_RADIUS_VOXELS * h)
+    step = _Step(origin, h, r, max_gap, sure_free, guessed, mirror)
     boxes = ndimage.find_objects(lab)
     todo = [int(i) for i in np.argsort(-size) if size[i] > 0 and i != main]
     sdf, prov = sdf.copy(), prov.copy()
@@ -107,13 +114,14 @@ class _Step:
     max_gap: float
     sure_free: object
     guessed: int
+    mirror: object
 
 
 def _strut(sdf, prov, piece, joined, box, step: _Step) -> Strut | None:
     """Adds one piece's strut to ``sdf`` and ``prov`` in place; the :class:`Strut` or None."""
     from skimage.graph import MCP_Geometric
 
-    origin, h, r, max_gap = step.origin, step.h, step.radius, step.max_gap
+    origin, h, max_gap = step.origin, step.h, step.max_gap
     reach = int(np.ceil(max_gap / h)) + 2
     shape = np.array(sdf.shape)
     i0 = np.maximum([b.start - reach for b in box], 0)
@@ -140,16 +148,62 @@ def _strut(sdf, prov, piece, joined, box, step: _Step) -> Strut | None:
     gap = (float(at.flat[k]) - 1.0) * h
     if not np.isfinite(at.flat[k]) or gap > max_gap:
         return None
-    path = np.array(mcp.traceback(np.unravel_index(k, at.shape)))
-    on = np.zeros(solid.shape, bool)
-    on[tuple(path.T)] = True
+    path = np.array(mcp.traceback(np.unravel_index(k, at.shape))) + i0
+    added = _draw(sdf, prov, path, step)
+    mirrored = 0
+    if step.mirror is not None:
+        mirrored = _mirrored(sdf, prov, path, joined, step)
+    ends = origin + path[[0, -1]] * h
+    return Strut(int(piece.sum()), ends[0], ends[1], gap, added, mirrored)
+
+
+def _draw(sdf, prov, path, step: _Step) -> int:
+    """Unites the strut along ``path`` (K, 3) voxel indices into ``sdf`` and ``prov`` in place
+    (carved by the sure free space); the voxels it made solid."""
+    h, r = step.h, step.radius
+    m = int(np.ceil(r / h)) + 1
+    i0 = np.maximum(path.min(axis=0) - m, 0)
+    i1 = np.minimum(path.max(axis=0) + m + 1, sdf.shape)
+    sl = tuple(slice(int(a), int(b)) for a, b in zip(i0, i1, strict=True))
+    on = np.zeros(tuple(i1 - i0), bool)
+    on[tuple((path - i0).T)] = True
     d = (ndimage.distance_transform_edt(~on) * h - r).astype(np.float32)
-    old = sdf[sl]
-    take = (d < old) & ~free
+    old = sdf[sl].copy()
+    take = d < old
+    ask = take & (old >= 0)
+    free = np.zeros(take.shape, bool)
+    free[ask] = step.sure_free(step.origin + (np.argwhere(ask) + i0) * h)
+    take &= ~free
     sdf[sl] = np.where(take, d, old)
     p = prov[sl]
     p[take & (np.abs(d) <= h)] = step.guessed
     p[take & (d < -h)] = 0  # buried by the strut: no longer surface
     prov[sl] = p
-    ends = origin + (path[[0, -1]] + i0) * h
-    return Strut(int(piece.sum()), ends[0], ends[1], gap, int((take & (d < 0) & ~solid).sum()))
+    return int((take & (d < 0) & (old >= 0)).sum())
+
+
+def _mirrored(sdf, prov, path, joined, step: _Step) -> int:
+    """The strut's image in the object's mirror plane, drawn where the plane holds, the image
+    runs from a piece still apart (not ``joined`` before this strut: the piece itself or its
+    image) to the solid and crosses no sure free space; the voxels it made solid."""
+    pts, holds = step.mirror(step.origin + path * step.h)
+    if not holds.all():
+        return 0
+    j = np.rint((pts - step.origin) / step.h).astype(np.int64)
+    if ((j < 0) | (j >= sdf.shape)).any():
+        return 0
+    solid = sdf < 0
+    out = ~solid[tuple(j.T)]
+    if not out.any():
+        return 0  # a strut in the plane, or its image already there
+
+    # both ends in the solid (the piece's and the object's images are there: no dangling bar),
+    # the first in a piece still apart (no second bar to a piece joined already)
+    def around(v):
+        return tuple(slice(max(int(e) - 1, 0), int(e) + 2) for e in v)
+
+    if not (solid[around(j[0])] & ~joined[around(j[0])]).any() or not solid[around(j[-1])].any():
+        return 0
+    if step.sure_free(step.origin + j[out] * step.h).any():
+        return 0
+    return _draw(sdf, prov, j, step)

@@ -67,12 +67,13 @@ def add_struts(
 ) -> tuple[np.ndarray, np.ndarray, list[Strut]]:
     """The SDF (X, Y, Z) float32 (world units, negative inside) and provenance (X, Y, Z) uint8
     with every solid piece (6-connected) apart from the largest joined to it by a strut where
-    one spanning at most ``max_gap`` (world units) avoids the sure free space; the struts' surface marked
-    ``guessed``. ``sure_free``: points (N, 3) in the grid's frame -> (N,) bool; ``origin``
-    (3,) the grid's first voxel centre; ``mirror``, optional: points (N, 3) in the grid's frame
-    -> their images in the object's mirror plane (N, 3) and (N,) bool where the plane holds;
-    each strut's image is drawn too where it runs from solid to solid through no sure free space
-    (a chair's back on two bars, not one beside the plane). Returns them and the struts made."""
+    one spanning at most ``max_gap`` (world units) avoids the sure free space; the struts'
+    surface marked ``guessed``. ``sure_free``: points (N, 3) in the grid's frame -> (N,) bool;
+    ``origin`` (3,) the grid's first voxel centre; ``mirror``, optional: points (N, 3) in the
+    grid's frame -> their images in the object's mirror plane (N, 3) and (N,) bool where the
+    plane holds; each strut's image is drawn too where it runs from a piece still apart to the
+    solid through no sure free space (two armrests, each on a bar). Returns them and the struts
+    made."""
     solid = sdf < 0
     lab, n = ndimage.label(solid)
     if n < 2:

@@ -14,6 +14,7 @@ surely free space, would reach stays apart.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,9 +114,9 @@ class _Step:
     h: float
     radius: float
     max_gap: float
-    sure_free: object
+    sure_free: Callable[[np.ndarray], np.ndarray]
     guessed: int
-    mirror: object
+    mirror: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None
 
 
 def _strut(sdf, prov, piece, joined, box, step: _Step) -> Strut | None:
@@ -153,7 +154,7 @@ def _strut(sdf, prov, piece, joined, box, step: _Step) -> Strut | None:
     added = _draw(sdf, prov, path, step)
     mirrored = 0
     if step.mirror is not None:
-        mirrored = _mirrored(sdf, prov, path, joined, step)
+        mirrored = _mirrored(sdf, prov, path, joined, step, step.mirror)
     ends = origin + path[[0, -1]] * h
     return Strut(int(piece.sum()), ends[0], ends[1], gap, added, mirrored)
 
@@ -183,11 +184,11 @@ def _draw(sdf, prov, path, step: _Step) -> int:
     return int((take & (d < 0) & (old >= 0)).sum())
 
 
-def _mirrored(sdf, prov, path, joined, step: _Step) -> int:
+def _mirrored(sdf, prov, path, joined, step: _Step, mirror) -> int:
     """The strut's image in the object's mirror plane, drawn where the plane holds, the image
     runs from a piece still apart (not ``joined`` before this strut: the piece itself or its
     image) to the solid and crosses no sure free space; the voxels it made solid."""
-    pts, holds = step.mirror(step.origin + path * step.h)
+    pts, holds = mirror(step.origin + path * step.h)
     if not holds.all():
         return 0
     j = np.rint((pts - step.origin) / step.h).astype(np.int64)

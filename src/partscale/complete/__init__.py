@@ -6,8 +6,10 @@ Public API: :func:`complete` (frames -> CSDF), :func:`complete_file` (files -> C
 :class:`Frame`, the virtual scanner :func:`virtual_scan` and the scores :func:`chamfer_fscore`.
 
 Modules: ``scan`` (frames and readers), ``floor`` (RANSAC floor, clusters), ``carve`` (free
-space), ``symmetry`` (mirror planes, rotations), ``fuse`` (the solid, distances, colours), ``tidy`` (specks, manifold voxels),
-``api`` (orchestration), ``virtual`` (virtual scans of complete meshes), ``metrics``.
+space), ``symmetry`` (mirror planes, rotations), ``fuse`` (the solid, distances, colours),
+``column`` (a turning base's guessed column), ``strut`` (pieces left apart joined by guessed
+struts), ``tidy`` (specks, manifold voxels), ``api`` (orchestration), ``virtual`` (virtual scans
+of complete meshes), ``metrics``.
 """
 
 from __future__ import annotations

@@ -18,13 +18,14 @@ from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import column as column_mod
 from . import fuse as fuse_mod
+from . import strut as strut_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
 from .floor import base_plane, clusters, find_floor, floor_scraps, in_plane_axes
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
-METHOD = "carve+floor+symmetry+between+slab+closure+column"
+METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
 CLUSTER_CELL = 0.03
@@ -576,6 +577,27 @@ def complete(
     # made fit to mesh: scan noise's floating specks dropped, diagonal-only contacts filled
     # (marching cubes would join them by edges of four faces)
     sdf, n_specks = tidy_mod.drop_specks(sdf, h)
+    # a part the scan left apart (a chair's back on a bar nobody saw, a leg's end): joined by a
+    # thin strut where the sure free space leaves a short path
+    grid_to_up = U @ grid_to_world
+    mirror_grid = None
+    if syms:
+        # the first mirror plane (x = 0 upright), where it holds: a strut beside it gets its image
+        M = np.linalg.inv(grid_to_up) @ _sym4(syms[0]) @ grid_to_up
+
+        def mirror_grid(pg):
+            return _apply(M, pg), syms[0].where(_apply(grid_to_up, pg))
+
+    sdf, prov, struts = strut_mod.add_struts(
+        sdf,
+        prov,
+        origin,
+        h,
+        lambda pg: sure_free_up(_apply(grid_to_up, pg)),
+        fuse_mod.GUESSED,
+        strut_mod.MAX_GAP_SHARE * float((hi - lo).max()),
+        mirror=mirror_grid,
+    )
     sdf, n_filled = tidy_mod.fill_contacts(sdf, h)
     report(0.95, "metadata")
     surface = np.abs(sdf) <= h
@@ -593,6 +615,7 @@ def complete(
         "specks_dropped": n_specks,
         "contact_voxels_filled": n_filled,
         "column": None if col is None else {**col.as_dict(), "voxels_added": n_column},
+        "struts": [st.as_dict() for st in struts],
         "floor": None
         if found is None
         else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
@@ -651,6 +674,9 @@ def complete(
         "column_hub_reach_m": column_mod.HUB_REACH,
         "column_sure_rays_px": column_mod.SURE_RAYS,
         "column_sure_margin_voxels": column_mod.SURE_MARGIN_VOXELS,
+        "strut_radius_m": strut_mod.RADIUS,
+        "strut_min_radius_voxels": strut_mod.MIN_RADIUS_VOXELS,
+        "strut_max_gap_share": strut_mod.MAX_GAP_SHARE,
         "floor_tol_m": FLOOR_TOL,
         "up_from": up_from,
         "max_plane_tilt_deg": sym_mod.MAX_PLANE_TILT_DEG,

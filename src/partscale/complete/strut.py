@@ -1,0 +1,211 @@
+"""Struts: solid pieces the completion left apart from the object, joined to it.
+
+A real object is one rigid piece, but a scan often misses what holds a part on: the thin grey
+bar behind a swivel chair's seat that carries its back, a leg's end cut off by a shadow. After
+the fusion such a part is a solid piece of its own, floating beside the rest. Each piece that
+is not the largest (specks are gone by then: :func:`partscale.complete.tidy.drop_specks`) is
+joined to it by the shortest path through space that no view saw *surely* free
+(:func:`partscale.complete.column.sure_free`: free space inferred from missing readings or a
+cropped scan's silhouette is no evidence against a thin bar), when that path spans at most
+``MAX_GAP_SHARE`` of the object's size in outside space; the path, thickened to a strut of
+radius ``RADIUS``, is guessed surface. A piece that only a longer path, or only one through
+surely free space, would reach stays apart.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+MAX_GAP_SHARE = 0.2
+"""Share of the object's longest side that a strut may span through outside space (its path's
+length between the two solids): the TUM chairs' backs hang 14-15 cm above their seats (0.16-0.18
+of the chair's height) on a bar no scan reads."""
+RADIUS = 0.012
+"""Metres: the strut's radius (a chair back's bar, a leg's end, 2-3 cm across)."""
+MIN_RADIUS_VOXELS = 1.2
+"""The strut's radius in voxels at least, so that a path's face neighbours are solid (a path
+moving diagonally stays 6-connected)."""
+
+
+@dataclass(frozen=True)
+class Strut:
+    """A strut from a piece (of ``piece_voxels`` solid voxels) to the object: ``start`` and
+    ``end`` (3,) its path's ends in the grid's frame (world units), ``gap`` the outside space it
+    spans and ``voxels`` the voxels it made solid (``mirrored_voxels``: its mirror image's)."""
+
+    piece_voxels: int
+    start: np.ndarray
+    end: np.ndarray
+    gap: float
+    voxels: int
+    mirrored_voxels: int = 0
+
+    def as_dict(self) -> dict:
+        return {
+            "piece_voxels": self.piece_voxels,
+            "start": np.round(self.start, 6).tolist(),
+            "end": np.round(self.end, 6).tolist(),
+            "gap": round(self.gap, 6),
+            "voxels_added": self.voxels,
+            "mirrored_voxels_added": self.mirrored_voxels,
+        }
+
+
+def add_struts(
+    sdf: np.ndarray,
+    prov: np.ndarray,
+    origin: np.ndarray,
+    h: float,
+    sure_free,
+    guessed: int,
+    max_gap: float,
+    radius: float = RADIUS,
+    mirror=None,
+) -> tuple[np.ndarray, np.ndarray, list[Strut]]:
+    """The SDF (X, Y, Z) float32 (world units, negative inside) and provenance (X, Y, Z) uint8
+    with every solid piece (6-connected) apart from the largest joined to it by a strut where
+    one spanning at most ``max_gap`` (world units) avoids the sure free space; the struts'
+    surface marked ``guessed``. ``sure_free``: points (N, 3) in the grid's frame -> (N,) bool;
+    ``origin`` (3,) the grid's first voxel centre; ``mirror``, optional: points (N, 3) in the
+    grid's frame -> their images in the object's mirror plane (N, 3) and (N,) bool where the
+    plane holds; each strut's image is drawn too where it runs from a piece still apart to the
+    solid through no sure free space (two armrests, each on a bar). Returns them and the struts
+    made."""
+    solid = sdf < 0
+    lab, n = ndimage.label(solid)
+    if n < 2:
+        return sdf, prov, []
+    size = np.bincount(lab.ravel())
+    size[0] = 0
+    main = int(np.argmax(size))
+    joined = lab == main
+    r = max(float(radius), MIN_RADIUS_VOXELS * h)
+    step = _Step(origin, h, r, max_gap, sure_free, guessed, mirror)
+    boxes = ndimage.find_objects(lab)
+    todo = [int(i) for i in np.argsort(-size) if size[i] > 0 and i != main]
+    sdf, prov = sdf.copy(), prov.copy()
+    struts: list[Strut] = []
+    # a piece may reach the object only through another one joined before it: repeat while any
+    # piece joins (a handful of pieces, each searched in its own box)
+    while todo:
+        left = []
+        for p in todo:
+            if joined[boxes[p - 1]][lab[boxes[p - 1]] == p].any():
+                continue  # joined already, through a strut to another piece
+            s = _strut(sdf, prov, lab == p, joined, boxes[p - 1], step)
+            if s is None:
+                left.append(p)
+                continue
+            struts.append(s)
+            joined = ndimage.binary_propagation(joined, mask=sdf < 0)
+        if len(left) == len(todo):
+            break
+        todo = left
+    return sdf, prov, struts
+
+
+@dataclass(frozen=True)
+class _Step:
+    origin: np.ndarray
+    h: float
+    radius: float
+    max_gap: float
+    sure_free: Callable[[np.ndarray], np.ndarray]
+    guessed: int
+    mirror: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None
+
+
+def _strut(sdf, prov, piece, joined, box, step: _Step) -> Strut | None:
+    """Adds one piece's strut to ``sdf`` and ``prov`` in place; the :class:`Strut` or None."""
+    from skimage.graph import MCP_Geometric
+
+    origin, h, max_gap = step.origin, step.h, step.max_gap
+    reach = int(np.ceil(max_gap / h)) + 2
+    shape = np.array(sdf.shape)
+    i0 = np.maximum([b.start - reach for b in box], 0)
+    i1 = np.minimum([b.stop + reach for b in box], shape)
+    sl = tuple(slice(int(a), int(b)) for a, b in zip(i0, i1, strict=True))
+    target = joined[sl]
+    if not target.any():
+        return None
+    src = piece[sl]
+    solid = sdf[sl] < 0
+    # only outside voxels within the reach of the piece are asked (the rest stay passable: a
+    # path through them is longer than the bound anyway)
+    ask = ~solid & (ndimage.distance_transform_edt(~src) <= reach)
+    idx = np.argwhere(ask)
+    free = np.zeros(solid.shape, bool)
+    free[ask] = step.sure_free(origin + (idx + i0) * h)
+    cost = np.where(free, np.inf, 1.0)
+    mcp = MCP_Geometric(cost, fully_connected=True)
+    costs, _ = mcp.find_costs(np.argwhere(src))
+    at = np.where(target & np.isfinite(costs), costs, np.inf)
+    k = int(np.argmin(at))
+    # a step costs its length in voxels; the first step out of the piece and the last into the
+    # object span one voxel of outside space between them
+    gap = (float(at.flat[k]) - 1.0) * h
+    if not np.isfinite(at.flat[k]) or gap > max_gap:
+        return None
+    path = np.array(mcp.traceback(np.unravel_index(k, at.shape))) + i0
+    added = _draw(sdf, prov, path, step)
+    mirrored = 0
+    if step.mirror is not None:
+        mirrored = _mirrored(sdf, prov, path, joined, step, step.mirror)
+    ends = origin + path[[0, -1]] * h
+    return Strut(int(piece.sum()), ends[0], ends[1], gap, added, mirrored)
+
+
+def _draw(sdf, prov, path, step: _Step) -> int:
+    """Unites the strut along ``path`` (K, 3) voxel indices into ``sdf`` and ``prov`` in place
+    (carved by the sure free space); the voxels it made solid."""
+    h, r = step.h, step.radius
+    m = int(np.ceil(r / h)) + 1
+    i0 = np.maximum(path.min(axis=0) - m, 0)
+    i1 = np.minimum(path.max(axis=0) + m + 1, sdf.shape)
+    sl = tuple(slice(int(a), int(b)) for a, b in zip(i0, i1, strict=True))
+    on = np.zeros(tuple(i1 - i0), bool)
+    on[tuple((path - i0).T)] = True
+    d = (ndimage.distance_transform_edt(~on) * h - r).astype(np.float32)
+    old = sdf[sl].copy()
+    take = d < old
+    ask = take & (old >= 0)
+    free = np.zeros(take.shape, bool)
+    free[ask] = step.sure_free(step.origin + (np.argwhere(ask) + i0) * h)
+    take &= ~free
+    sdf[sl] = np.where(take, d, old)
+    p = prov[sl]
+    p[take & (np.abs(d) <= h)] = step.guessed
+    p[take & (d < -h)] = 0  # buried by the strut: no longer surface
+    prov[sl] = p
+    return int((take & (d < 0) & (old >= 0)).sum())
+
+
+def _mirrored(sdf, prov, path, joined, step: _Step, mirror) -> int:
+    """The strut's image in the object's mirror plane, drawn where the plane holds, the image
+    runs from a piece still apart (not ``joined`` before this strut: the piece itself or its
+    image) to the solid and crosses no sure free space; the voxels it made solid."""
+    pts, holds = mirror(step.origin + path * step.h)
+    if not holds.all():
+        return 0
+    j = np.rint((pts - step.origin) / step.h).astype(np.int64)
+    if ((j < 0) | (j >= sdf.shape)).any():
+        return 0
+    solid = sdf < 0
+    out = ~solid[tuple(j.T)]
+    if not out.any():
+        return 0  # a strut in the plane, or its image already there
+
+    # both ends in the solid (the piece's and the object's images are there: no dangling bar),
+    # the first in a piece still apart (no second bar to a piece joined already)
+    def around(v):
+        return tuple(slice(max(int(e) - 1, 0), int(e) + 2) for e in v)
+
+    if not (solid[around(j[0])] & ~joined[around(j[0])]).any() or not solid[around(j[-1])].any():
+        return 0
+    if step.sure_free(step.origin + j[out] * step.h).any():
+        return 0
+    return _draw(sdf, prov, j, step)

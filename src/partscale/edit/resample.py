@@ -284,6 +284,19 @@ def crisp_parts(
     return out
 
 
+@nb.njit(cache=True, inline="always")
+def _label_switch(a, b):
+    """float32 blend weight from sample ``a`` towards ``b`` (float32 distances) at which the
+    second sample's part takes over: where the surface crosses between them, else halfway.
+
+    Asked only where the two labels differ: float32 is exact enough to place a boundary.
+    """
+    if (a <= 0) != (b <= 0):
+        aa, ab = abs(a), abs(b)
+        return aa / max(aa + ab, np.float32(1e-30))
+    return np.float32(0.5)
+
+
 @nb.njit(cache=True, parallel=True)
 def _crisp_into(parts, sdf, i0, i1, w, js, out):
     """For output layers ``js`` (holding ``parts[:, i0[j]]``): take ``parts[:, i1[j]]`` where it
@@ -304,14 +317,7 @@ def _crisp_into(parts, sdf, i0, i1, w, js, out):
             p1 = parts[p, a1, q]
             if p0 == p1:
                 continue
-            # only where the labels differ: float32 is exact enough to place a boundary
-            a = sdf[p, a0, q]
-            b = sdf[p, a1, q]
-            tb = np.float32(0.5)
-            if (a <= 0) != (b <= 0):
-                aa, ab = abs(a), abs(b)
-                tb = aa / max(aa + ab, np.float32(1e-30))
-            if wj >= tb:
+            if wj >= _label_switch(sdf[p, a0, q], sdf[p, a1, q]):
                 out[p, j, q] = p1
 
 
@@ -413,14 +419,7 @@ def _resample_cols(
                         label = src_parts[p, a1, q]
                         if out_parts[p, ju, q] == label:
                             continue
-                        # only where the labels differ: float32 is exact enough to place a boundary
-                        a = src[p, a0, q]
-                        b = src[p, a1, q]
-                        tb = np.float32(0.5)
-                        if (a <= 0) != (b <= 0):
-                            aa, ab = abs(a), abs(b)
-                            tb = aa / max(aa + ab, np.float32(1e-30))
-                        if wj >= tb:
+                        if wj >= _label_switch(src[p, a0, q], src[p, a1, q]):
                             out_parts[p, ju, q] = label
             if seam_of[j] >= 0:
                 k = np.uint64(seam_of[j])

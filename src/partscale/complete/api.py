@@ -599,6 +599,8 @@ def complete(
         mirror=mirror_grid,
     )
     sdf, n_filled = tidy_mod.fill_contacts(sdf, h)
+    # beyond the band, distances to what the steps since the fusion added
+    sdf = fuse_mod.bound_far(sdf, h)
     report(0.95, "metadata")
     surface = np.abs(sdf) <= h
     counts = np.bincount(prov[surface], minlength=4).astype(np.float64)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from ..csdf import BAND_VOXELS
 from .carve import _free_kernel
 from .scan import Frame
 
@@ -168,13 +169,15 @@ def add_column(
     ``free_up`` (upright points -> bool) is true; its new surface marked ``guessed``. Returns
     them and the number of voxels the column made solid."""
     A, b = grid_to_upright[:3, :3], grid_to_upright[:3, 3]
-    # the grid's voxels whose centres lie in the column's box, grown by two voxels
+    # the grid's voxels whose centres lie in the column's box, grown by the band (and a voxel):
+    # every voxel whose distance the column can change within the band is rewritten
     lo = np.array([column.x - column.radius, column.bottom - h, column.z - column.radius])
     hi = np.array([column.x + column.radius, column.top + h, column.z + column.radius])
     corners = np.array(list(itertools.product(*zip(lo, hi, strict=True))))
     g = (corners - b) @ A  # upright -> grid (A is a rotation)
-    i0 = np.maximum(np.floor((g.min(axis=0) - origin) / h).astype(np.int64) - 2, 0)
-    i1 = np.minimum(np.ceil((g.max(axis=0) - origin) / h).astype(np.int64) + 3, sdf.shape)
+    grow = BAND_VOXELS + 1
+    i0 = np.maximum(np.floor((g.min(axis=0) - origin) / h).astype(np.int64) - grow, 0)
+    i1 = np.minimum(np.ceil((g.max(axis=0) - origin) / h).astype(np.int64) + grow + 1, sdf.shape)
     if (i1 <= i0).any():
         return sdf, prov, 0
     sl = tuple(slice(int(s), int(e)) for s, e in zip(i0, i1, strict=True))

@@ -72,6 +72,25 @@ def _edt(mask: np.ndarray) -> np.ndarray:
     return edt.edt(np.ascontiguousarray(mask), parallel=2).astype(np.float32)
 
 
+def bound_far(sdf: np.ndarray, h: float) -> np.ndarray:
+    """(X, Y, Z) float32 ``sdf`` with every value beyond the band no larger in magnitude than
+    the final solid's voxel distance (as :func:`fuse` gives it), in place.
+
+    Steps after the fusion (a column, struts, filled contacts) rewrite the band around what they
+    add; beyond it the fused values still measure to the old solid and may overstate the
+    distance many times over (a sphere tracer then steps through a strut). Values are only ever
+    lowered, so nothing already right moves.
+    """
+    solid = sdf < 0
+    far = np.abs(sdf) > BAND_VOXELS * h
+    e_out = (_edt(~solid) - 0.5) * h
+    e_in = (_edt(solid) - 0.5 - BACK_SHIFT) * h
+    lim = np.where(solid, -np.maximum(e_in, 0.0), np.maximum(e_out, 0.0)).astype(np.float32)
+    sdf[far & solid] = np.maximum(sdf[far & solid], lim[far & solid])
+    sdf[far & ~solid] = np.minimum(sdf[far & ~solid], lim[far & ~solid])
+    return sdf
+
+
 def fuse(
     grid_to_world: np.ndarray,
     shape: tuple[int, ...],

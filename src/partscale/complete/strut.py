@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from ..csdf import BAND_VOXELS
+
 MAX_GAP_SHARE = 0.2
 """Share of the object's longest side that a strut may span through outside space (its path's
 length between the two solids): the TUM chairs' backs hang 14-15 cm above their seats (0.16-0.18
@@ -163,7 +165,8 @@ def _draw(sdf, prov, path, step: _Step) -> int:
     """Unites the strut along ``path`` (K, 3) voxel indices into ``sdf`` and ``prov`` in place
     (carved by the sure free space); the voxels it made solid."""
     h, r = step.h, step.radius
-    m = int(np.ceil(r / h)) + 1
+    # every voxel whose distance the strut can change within the band is rewritten
+    m = int(np.ceil(r / h)) + BAND_VOXELS + 1
     i0 = np.maximum(path.min(axis=0) - m, 0)
     i1 = np.minimum(path.max(axis=0) + m + 1, sdf.shape)
     sl = tuple(slice(int(a), int(b)) for a, b in zip(i0, i1, strict=True))

@@ -589,3 +589,17 @@ def test_a_recipe_holds_at_most_max_edits():
 def test_recipe_shape_predicts_the_grid_the_recipe_makes(box, edits):
     predicted = recipe_shape(box, {"edits": edits})
     assert predicted == apply_recipe(box, {"edits": edits}).shape
+
+
+def test_a_destination_off_the_grid_by_rounding_alone_is_not_reported_as_snapped(box):
+    # a destination given in percent is resolved on the float32 grid: it lands within float32
+    # rounding of whole voxels, and "0.937002 -> 0.937002 m (+5.8e-11 m)" would tell the user
+    # nothing; a third of a voxel is a snap and is said
+    from partscale.edit import Edit, describe_changes
+
+    whole = 0.6 + 10 * H  # the zone's end (0.6) moved by whole voxels
+    quiet = apply_edit(box, Edit("x", 0.4, 0.6, whole + 6e-8 * whole))
+    assert describe_changes(quiet.meta["history"][-1:], quiet) == []
+    snapped = apply_edit(box, Edit("x", 0.4, 0.6, whole + H / 3))
+    said = describe_changes(snapped.meta["history"][-1:], snapped)
+    assert len(said) == 1 and said[0].startswith("destination"), said

@@ -11,6 +11,11 @@ from typing import Any
 
 from ..csdf import CSDF
 
+#: A destination moved by less than this share of a voxel, or by float32 rounding of its own
+#: size, is not reported: positions resolved on the float32 grid (a percentage) land within
+#: float32 rounding of whole voxels though nothing was snapped ("0.937002 -> 0.937002 m").
+SNAP_QUIET_VOXELS = 1e-4
+
 
 def describe_changes(entries: list[Any], out: CSDF) -> list[str]:
     """One line per change the edit stage made to the edits of ``entries`` (history dicts).
@@ -62,7 +67,11 @@ def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
     for i, h in enumerate(entries):
         given = h.get("edit", {}).get("to") if isinstance(h, dict) else None
         snapped = h.get("to_snapped") if isinstance(h, dict) else None
-        if given is None or snapped is None or abs(snapped - given) <= 1e-9 * out.voxel_size:
+        if (
+            given is None
+            or snapped is None
+            or abs(snapped - given) <= max(SNAP_QUIET_VOXELS * out.voxel_size, 1e-6 * abs(given))
+        ):
             continue
         # a removal (0 copies) snaps its zone's start with its destination: say so in its terms
         what, why = (

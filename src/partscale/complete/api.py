@@ -563,10 +563,10 @@ def complete(
         raise InputError(f"{source}: expected a solid after completion, got none (all carved)")
     # a turning base's column to the seat, which sensors rarely read (thin, black): guessed
     # where only the sure free space allows it
-    sure_margin = column_mod.SURE_MARGIN_VOXELS * h
+    sure = column_mod.sure_carver(frames, column_mod.SURE_MARGIN_VOXELS * h)
 
     def sure_free_up(pu):
-        return column_mod.sure_free(frames, _apply(Uinv, pu), sure_margin)
+        return sure.free(_apply(Uinv, pu))
 
     col = column_mod.find_column(S, rot, sure_free_up, h) if symmetry else None
     n_column = 0

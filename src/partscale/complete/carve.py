@@ -49,23 +49,35 @@ class Carver:
     frames : list of Frame
     margin : float
         World units a point must lie in front of a reading to count as free (sensor noise).
+    sure_rays : int
+        0 (default): free space as the scan tells it, holes and a cropped scan's background
+        included. Above 0, only what was *surely* seen through: a point's pixel and every pixel
+        of the ``sure_rays`` square around it read a depth beyond it; pixels without a reading
+        and the background say nothing (what a guess in unseen space may be carved by).
     """
 
-    def __init__(self, frames: list[Frame], margin: float):
+    def __init__(self, frames: list[Frame], margin: float, *, sure_rays: int = 0):
         self.frames = frames
         self.margin = float(margin)
-        self._through = [~silhouette(f) if f.cropped else None for f in frames]
-        # a pixel without a reading carves up to its farthest neighbouring reading: sensors
-        # drop pixels along silhouettes (mixed depths) and in blotches on surfaces, and in
-        # both cases the ray passed at least that far (the near side of the edge would have
-        # returned); without this every silhouette keeps a rim of unknown space
+        sure = sure_rays > 0
+        self._through = [~silhouette(f) if f.cropped and not sure else None for f in frames]
         self._depth = []
         for f in frames:
             d = f.depth
-            if not f.cropped:
+            valid = d > 0
+            if sure:
+                # the nearest reading of the block, where the whole block has readings
+                near = ndimage.minimum_filter(np.where(valid, d, np.inf), size=sure_rays)
+                d = np.where(ndimage.minimum_filter(valid, size=sure_rays), near, 0.0)
+            elif not f.cropped:
+                # a pixel without a reading carves up to its farthest neighbouring reading:
+                # sensors drop pixels along silhouettes (mixed depths) and in blotches on
+                # surfaces, and in both cases the ray passed at least that far (the near side
+                # of the edge would have returned); without this every silhouette keeps a rim
+                # of unknown space
                 fill = ndimage.maximum_filter(d, 2 * HOLE_REACH + 1)
-                d = np.where(d > 0, d, fill)
-            self._depth.append(d)
+                d = np.where(valid, d, fill)
+            self._depth.append(np.ascontiguousarray(d, np.float32))
 
     def free(self, points: np.ndarray, margin: float | None = None) -> np.ndarray:
         """(N,) bool: ``points`` (N, 3) world positions that some view saw through (by more
@@ -86,9 +98,7 @@ class Carver:
             K = (float(f.K[0, 0]), float(f.K[1, 1]), float(f.K[0, 2]), float(f.K[1, 2]))
             has = through is not None
             thr = through if has else np.zeros((1, 1), bool)
-            _free_kernel(
-                P, R, t, *K, np.ascontiguousarray(depth, np.float32), thr, has, margin, out
-            )
+            _free_kernel(P, R, t, *K, depth, thr, has, margin, out)
         return out
 
 

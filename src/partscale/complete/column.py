@@ -20,10 +20,9 @@ import itertools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
 from ..csdf import BAND_VOXELS
-from .carve import _free_kernel
+from .carve import Carver
 from .scan import Frame
 
 MIN_RADIUS = 0.02
@@ -73,23 +72,17 @@ class Column:
         }
 
 
+def sure_carver(frames: list[Frame], margin: float) -> Carver:
+    """The :class:`~partscale.complete.carve.Carver` of the space ``frames`` surely saw through
+    by ``margin``: a point's pixel and every pixel of the ``SURE_RAYS`` square around it read a
+    depth beyond it. Pixels without a reading, and a cropped scan's background, say nothing."""
+    return Carver(frames, margin, sure_rays=SURE_RAYS)
+
+
 def sure_free(frames: list[Frame], points: np.ndarray, margin: float) -> np.ndarray:
-    """(N,) bool: world ``points`` (N, 3) that some view surely saw through: its pixel and every
-    pixel of the ``SURE_RAYS`` square around it read a depth beyond the point by ``margin``.
-    Pixels without a reading, and a cropped scan's background, say nothing."""
-    P = np.ascontiguousarray(points, np.float32)
-    out = np.zeros(len(P), bool)
-    no_through = np.zeros((1, 1), bool)
-    for f in frames:
-        valid = f.depth > 0
-        near = ndimage.minimum_filter(np.where(valid, f.depth, np.inf), size=SURE_RAYS)
-        all_valid = ndimage.minimum_filter(valid, size=SURE_RAYS)
-        depth = np.ascontiguousarray(np.where(all_valid, near, 0.0), np.float32)
-        R = np.ascontiguousarray(f.pose[:3, :3], np.float32)
-        t = np.ascontiguousarray(f.pose[:3, 3], np.float32)
-        K = (float(f.K[0, 0]), float(f.K[1, 1]), float(f.K[0, 2]), float(f.K[1, 2]))
-        _free_kernel(P, R, t, *K, depth, no_through, False, float(margin), out)
-    return out
+    """(N,) bool: world ``points`` (N, 3) that some view surely saw through (:func:`sure_carver`;
+    build that once for many queries)."""
+    return sure_carver(frames, margin).free(points)
 
 
 def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | None:

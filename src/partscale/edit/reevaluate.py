@@ -563,7 +563,8 @@ def _pieces(runs: list[np.ndarray]) -> list[np.ndarray]:
     return out
 
 
-def _surface_parts(sdf: np.ndarray, parts: np.ndarray, cp: np.ndarray) -> np.ndarray:
+@numba.njit(cache=True, nogil=True)
+def _surface_parts_kernel(sdf, parts, cp):
     """(N,) int16 part of surface points ``cp`` (N, 3) (continuous indices): the label of the
     nearest inside (``sdf <= 0``) corner of the cell holding the point.
 
@@ -572,11 +573,6 @@ def _surface_parts(sdf: np.ndarray, parts: np.ndarray, cp: np.ndarray) -> np.nda
     can be an outside one labelled with another part. Points whose cell has no inside corner
     (none after marching cubes, kept for safety) take the nearest corner.
     """
-    return _surface_parts_kernel(sdf, parts, np.ascontiguousarray(cp, np.float64))
-
-
-@numba.njit(cache=True, nogil=True)
-def _surface_parts_kernel(sdf, parts, cp):
     nx, ny, nz = sdf.shape
     out = np.empty(cp.shape[0], parts.dtype)
     for n in range(cp.shape[0]):

@@ -204,3 +204,19 @@ def test_the_hub_test_is_a_length_of_the_base_not_of_the_grid(cell):
     assert rot is not None and rot.fold == 5
     assert np.hypot(rot.params["axis_x"], rot.params["axis_z"]) <= 2 * cell
     assert rotation_axis(_star_points(0.26, legs=4), free, cell) is None
+
+
+@pytest.mark.parametrize("name", ["yellow", "purple"])
+def test_real_tum_completions_segment_into_a_few_parts(tum_completions, name):
+    # a completed scan keeps the sensor's noise as relief over its surface; segment measures it
+    # and keeps bumpy boards whole: seat, back, column, the base's legs (a dozen parts at
+    # most), where the clean-geometry tolerance alone cuts it into several times as many
+    from partscale.segment import segment
+    from partscale.segment.relief import CLEAN_RELIEF
+
+    c = tum_completions[name]
+    s = segment(c, cache=False)
+    entry = s.meta["history"][-1]
+    assert entry["relief"] > CLEAN_RELIEF and entry["noise_added"] > 0
+    assert s.n_parts <= 12, s.n_parts
+    assert segment(c, cache=False, noise=0).n_parts >= 3 * s.n_parts

@@ -451,20 +451,27 @@ def _poison(entry, how):
         entry.write_bytes(bytes(b))
     else:
         with np.load(entry) as z:
-            parts, info = z["parts"], str(z["info"])
+            parts, info, rough = z["parts"], str(z["info"]), str(z["rough"])
         if how == "info-not-facts":
             info = "[1, 2]"
+        elif how == "rough-not-facts":
+            rough = '{"relief": 0.1}'
         elif how == "all-zero":
             parts = np.zeros_like(parts)
         elif how == "float-parts":
             parts = parts.astype(np.float32)
         # a consistent checksum: only the content checks can catch these
-        check = hashlib.sha256(np.ascontiguousarray(parts).tobytes() + info.encode()).hexdigest()
-        np.savez_compressed(entry, parts=parts, info=np.array(info), check=np.array(check))
+        check = hashlib.sha256(
+            np.ascontiguousarray(parts).tobytes() + info.encode() + rough.encode()
+        ).hexdigest()
+        np.savez_compressed(
+            entry, parts=parts, info=np.array(info), rough=np.array(rough), check=np.array(check)
+        )
 
 
 @pytest.mark.parametrize(
-    "how", ["truncated", "bit-flipped", "info-not-facts", "all-zero", "float-parts"]
+    "how",
+    ["truncated", "bit-flipped", "info-not-facts", "rough-not-facts", "all-zero", "float-parts"],
 )
 def test_damaged_cache_entry_is_discarded_and_recomputed(boxes, tmp_path, how):
     fresh = segment(boxes, method="fast", cache_dir=tmp_path)
@@ -506,3 +513,96 @@ def test_segment_help_says_where_the_cache_is(cli):
     proc = cli("segment", "--help")
     text = " ".join(proc.stdout.split())
     assert "~/.cache/partscale/segment" in text and "1 GiB" in text
+
+
+# --- rough surfaces: a completed scan's relief ------------------------------------------------
+
+HN = 0.01  # the rough table's voxel size: 87 x 57 x 64 voxels
+
+
+def _relief_of(c):
+    from partscale.segment import surface_relief
+
+    m = to_mesh(c)
+    return surface_relief(m.vertices, m.vertex_normals, c.voxel_size)
+
+
+def _roughened(c, rms_voxels: float, seed: int = 0):
+    """``c`` with scan-like relief: a random field correlated over about a voxel added to its
+    distances (the surface moves by it), as the sensor's noise leaves on a completed scan."""
+    f = ndimage.gaussian_filter(np.random.default_rng(seed).standard_normal(c.shape), 0.8)
+    f *= rms_voxels / f.std()
+    return c.replace(sdf=(np.asarray(c.sdf) + f * c.voxel_size).astype(np.float32))
+
+
+@pytest.fixture(scope="module")
+def fine_table():
+    parts = [((0.0, 0.0, 0.5), (0.8, 0.5, 0.56))]
+    for x in (0.0, 0.72):
+        for y in (0.0, 0.42):
+            parts.append(((x, y, 0.0), (x + 0.08, y + 0.08, 0.53)))
+    return shapes.grid(
+        lambda p: np.min([shapes.box_sdf(p, lo, hi) for lo, hi in parts], axis=0),
+        ((0, 0, 0), (0.8, 0.5, 0.56)),
+        voxel_size=HN,
+    )
+
+
+def test_relief_tells_noise_from_shape():
+    from partscale.segment.relief import CLEAN_RELIEF
+
+    h = 0.01
+    # clean shapes of every kind measure under the clean level: flat faces, a ball, a tube
+    # 1.5 voxels in radius, a board one voxel thick (its two faces are apart)
+    clean = {
+        "box": shapes.box((0, 0, 0), (0.4, 0.3, 0.2), voxel_size=h),
+        "ball": shapes.sphere((0, 0, 0), 0.12, voxel_size=h),
+        "tube": shapes.grid(
+            lambda p: np.maximum(np.hypot(p[:, 0], p[:, 1]) - 0.015, np.abs(p[:, 2]) - 0.2),
+            ((-0.02, -0.02, -0.2), (0.02, 0.02, 0.2)),
+            voxel_size=h,
+        ),
+        "board": shapes.box((0, 0, 0), (0.4, 0.3, 0.01), voxel_size=h),
+    }
+    for name, c in clean.items():
+        assert _relief_of(c) <= 0.8 * CLEAN_RELIEF, name
+    # the same box with a completed scan's relief (0.8 voxel RMS of displacement)
+    assert _relief_of(_roughened(clean["box"], 0.8)) >= 2 * CLEAN_RELIEF
+
+
+def test_rough_surface_keeps_boards_whole(fine_table):
+    clean = segment(fine_table, cache=False)
+    entry = clean.meta["history"][-1]
+    assert clean.n_parts == 5 and entry["noise_added"] == 0 and entry["specks"] == 0
+    rough = _roughened(fine_table, 0.8)
+    s = segment(rough, cache=False)
+    entry = s.meta["history"][-1]
+    assert entry["noise_added"] > 0 and entry["relief"] > 0.2
+    assert s.meta["segmentation"]["noise_added"] == entry["noise_added"]
+    # taken as smooth, the relief shatters it; measured, the top and the legs stay whole
+    shattered = segment(rough, cache=False, noise=0)
+    assert shattered.meta["history"][-1]["noise_added"] == 0
+    assert shattered.n_parts >= 50
+    assert s.n_parts <= 8
+    top = inside_labels(s, ((0.1, 0.1, 0.51), (0.7, 0.4, 0.55)))
+    assert (top == top[0]).all()
+    for x in (0.0, 0.72):
+        for y in (0.0, 0.42):
+            leg = inside_labels(s, ((x + 0.01, y + 0.01, 0.0), (x + 0.07, y + 0.07, 0.45)))
+            assert np.bincount(leg).max() >= 0.7 * len(leg), (x, y)
+            assert not np.isin(leg, top[:1]).any()  # no leg is part of the top
+
+
+def test_rough_surface_note_and_noise_option(cli, fine_table, tmp_path):
+    src = tmp_path / "rough.csdf.npz"
+    partscale.save(_roughened(fine_table, 0.8), src)
+    out = tmp_path / "parts.csdf.npz"
+    proc = cli("segment", str(src), "-o", str(out), "--no-cache")
+    assert proc.returncode == 0, proc.stderr
+    assert "the surface is rough" in proc.stderr and "--noise 0" in proc.stderr
+    proc = cli("segment", str(src), "-o", str(out), "--no-cache", "--noise", "0")
+    assert proc.returncode == 0 and "the surface is rough" not in proc.stderr
+    assert partscale.load(out).meta["history"][-1]["noise"] == 0
+    assert_bad_input(
+        cli("segment", str(src), "-o", str(out), "--noise", "lots"), "--noise", "auto", "lots"
+    )

@@ -26,6 +26,14 @@ def segment(
         int | None, typer.Option("--max-parts", help="At most this many parts.")
     ] = None,
     seed: Annotated[int, typer.Option(help="Random seed (same seed, same parts).")] = 0,
+    noise: Annotated[
+        str,
+        typer.Option(
+            help="The surface's relief RMS in voxels, or auto: measured. A rough surface (a "
+            "completed scan's) widens the concavity tolerances by its peak-to-valley and joins "
+            "specks of relief to their neighbours; 0 segments it as if smooth.",
+        ),
+    ] = "auto",
     no_cache: Annotated[
         bool,
         typer.Option(
@@ -38,7 +46,7 @@ def segment(
     ] = False,
 ) -> None:
     """Split the object into nearly convex parts; every voxel gets its part's index."""
-    from ..segment import check_method
+    from ..segment import check_method, describe_noise
     from ..segment import segment as run
 
     # options are checked before the (possibly long) work, and before anything is written
@@ -47,6 +55,7 @@ def segment(
         raise InputError(f"--threshold: expected a number in (0, 1], got {threshold}")
     if max_parts is not None and max_parts < 1:
         raise InputError(f"--max-parts: expected an integer >= 1, got {max_parts}")
+    relief = _noise(noise)
     _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     c = load(path)
     with _common.progress_bar(f"segment ({method})") as bar:
@@ -56,8 +65,24 @@ def segment(
             threshold=threshold,
             max_parts=max_parts,
             seed=seed,
+            noise=relief,
             cache=not no_cache,
             progress=bar,
         )
+    for line in describe_noise(out.meta["history"][-1]):
+        _common.stderr.print(line, highlight=False, soft_wrap=True)
     save(out, output)
     _common.done(f"wrote {output}: {out.n_parts} parts ({method})")
+
+
+def _noise(text: str) -> float | None:
+    """``--noise``: None for auto (measured), else a number of voxels >= 0."""
+    if text.strip().lower() == "auto":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value >= 0 and value < float("inf")):
+        raise InputError(f"--noise: expected auto or a number >= 0 (voxels), got {text!r}")
+    return value

@@ -4,11 +4,22 @@
 CoACD on the marching-cubes surface is the reference method it is measured against. Results are cached by grid content and parameters, so each object is
 segmented once, never per edit. :func:`absorb_slivers`: the step that joins pieces below a
 minimum size to their neighbour (the fast method's, usable on any label grid).
+:func:`surface_relief`: how rough the surface is (a completed scan's noise), which widens the
+tolerances so a bumpy board stays one part.
 """
 
-from .api import DEFAULT_METHOD, METHODS, cache_key, check_method, default_cache_dir, segment
+from .api import (
+    DEFAULT_METHOD,
+    METHODS,
+    cache_key,
+    check_method,
+    default_cache_dir,
+    describe_noise,
+    segment,
+)
 from .concavity import concavity, hull_concavity, part_concavities
 from .fast import absorb_slivers
+from .relief import surface_relief
 
 __all__ = [
     "DEFAULT_METHOD",
@@ -18,7 +29,9 @@ __all__ = [
     "check_method",
     "concavity",
     "default_cache_dir",
+    "describe_noise",
     "hull_concavity",
     "part_concavities",
     "segment",
+    "surface_relief",
 ]

@@ -19,9 +19,10 @@ from ..csdf import CSDF
 from ..errors import InputError, PartscaleWarning, one_line
 from ..progress import ProgressCallback, resolve, scaled
 from ..surface import to_mesh
-from . import coacd_method, fast
+from . import coacd_method, fast, relief
 from .labels import (
     faces_from_voxels,
+    join_specks,
     make_connected,
     merge_across_junctions,
     merge_convex,
@@ -34,7 +35,7 @@ METHODS = ("coacd", "fast")
 DEFAULT_METHOD = "fast"
 """The fast method: it matched CoACD's quality within the 5 s target on every benchmark object
 (figures in :mod:`partscale.segment.fast`)."""
-CACHE_VERSION = 7
+CACHE_VERSION = 8
 CACHE_MAX_BYTES = 1 << 30
 """Default size cap of the segment cache; the least recently used entries go first."""
 """Bump when a change to the code changes results, so old cache entries are not reused."""
@@ -74,8 +75,14 @@ def check_method(method: str, *, what: str = "method") -> str:
 
 
 def _check_options(
-    method: Any, threshold: Any, max_parts: Any, seed: Any, merge_tolerance: Any, extra: dict
-) -> tuple[str, float, int | None, int, float, dict]:
+    method: Any,
+    threshold: Any,
+    max_parts: Any,
+    seed: Any,
+    merge_tolerance: Any,
+    noise: Any,
+    extra: dict,
+) -> tuple[str, float, int | None, int, float, float | None, dict]:
     check_method(method)
     try:
         thr = float(threshold)
@@ -94,6 +101,15 @@ def _check_options(
     tol = float(merge_tolerance)
     if not (np.isfinite(tol) and tol >= 0):
         raise InputError(f"merge_tolerance: expected a number >= 0 (voxels), got {tol}")
+    if noise is not None:
+        try:
+            noise = float(noise)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"noise: expected a number >= 0 (voxels) or None, got {noise!r}"
+            ) from None
+        if not (np.isfinite(noise) and noise >= 0):
+            raise InputError(f"noise: expected a number >= 0 (voxels) or None, got {noise}")
     known = _METHOD_PARAMS[method]
     unknown = sorted(set(extra) - set(known))
     if unknown:
@@ -102,7 +118,7 @@ def _check_options(
             f"{method!r}; its options are: {', '.join(known)}"
         )
     check = coacd_method.check_params if method == "coacd" else fast.check_params
-    return method, thr, max_parts, int(seed), tol, check(extra)
+    return method, thr, max_parts, int(seed), tol, noise, check(extra)
 
 
 def segment(
@@ -113,6 +129,7 @@ def segment(
     max_parts: int | None = None,
     seed: int = 0,
     merge_tolerance: float = 2.0,
+    noise: float | None = None,
     cache: bool = True,
     cache_dir: str | os.PathLike | None = None,
     progress: ProgressCallback | None = None,
@@ -146,6 +163,14 @@ def segment(
         Random seed of the method; the same seed gives the same parts.
     merge_tolerance : float
         Touching parts whose union has at most this concavity (voxels) become one; 0 disables.
+    noise : float, optional
+        The surface's relief RMS in voxels (:func:`partscale.segment.relief.surface_relief`);
+        None measures it. A rough surface (a completed scan's) adds its peak-to-valley to every
+        concavity a hull measures, so beyond clean geometry's relief the tolerances grow by
+        :func:`~partscale.segment.relief.noise_tolerance`, and parts with fewer than the
+        method's ``min_voxels`` inside voxels (specks of relief, not parts) join the neighbour
+        they touch most. 0 treats the surface as clean. Recorded in the history entry
+        (``relief``, ``noise_added``, ``specks``).
     cache : bool
         Reuse (and store) the result for the same grid and parameters. Entries carry a
         checksum; a damaged or inconsistent entry is discarded and recomputed (with a
@@ -167,8 +192,8 @@ def segment(
         ``hull_volume``, sRGB ``color``), ``meta['segmentation']`` ({method, params, key})
         and a history entry.
     """
-    method, thr, max_parts, seed, tol, params = _check_options(
-        method, threshold, max_parts, seed, merge_tolerance, method_params
+    method, thr, max_parts, seed, tol, noise, params = _check_options(
+        method, threshold, max_parts, seed, merge_tolerance, noise, method_params
     )
     if not (csdf.sdf <= 0).any() or not (csdf.sdf > 0).any():
         raise InputError(
@@ -182,6 +207,7 @@ def segment(
         "max_parts": max_parts,
         "seed": seed,
         "merge_tolerance": tol,
+        "noise": noise,
         **params,
     }
     key = cache_key(csdf, method, all_params)
@@ -189,17 +215,35 @@ def segment(
     entry = folder / f"{key}.npz"
     cached = _read_cache(entry, csdf) if cache else None
     if cached is not None:
-        labels, info = cached
+        labels, info, rough = cached
         report(1.0, "cached")
     else:
-        labels, info = _compute(csdf, method, thr, max_parts, seed, tol, params, report)
+        labels, info, rough = _compute(
+            csdf, method, thr, max_parts, seed, tol, noise, params, report
+        )
         if cache:
-            _write_cache(entry, csdf, labels, info)
+            _write_cache(entry, csdf, labels, info, rough)
     meta = dict(csdf.meta)
     meta["parts_info"] = info
-    meta["segmentation"] = {"method": method, "params": all_params, "key": key}
-    op = {"op": "segment", "method": method, **all_params, "parts": len(info)}
+    meta["segmentation"] = {"method": method, "params": all_params, "key": key, **rough}
+    op = {"op": "segment", "method": method, **all_params, **rough, "parts": len(info)}
     return csdf.with_history(op, parts=labels.astype(np.int16), meta=meta)
+
+
+def describe_noise(entry: dict) -> list[str]:
+    """What :func:`segment` changed for a rough surface, from its history entry: one line, or none
+    when the surface was taken as clean."""
+    added = float(entry.get("noise_added") or 0.0)
+    if added <= 0:
+        return []
+    specks = int(entry.get("specks") or 0)
+    joined = f"; {specks} specks of relief joined to the part they touch most" if specks else ""
+    given = "given" if entry.get("noise") is not None else "measured"
+    return [
+        f"the surface is rough ({given} relief {float(entry['relief']):.2f} voxel RMS, a "
+        f"scan's noise): concavity tolerances raised by {added:.1f} voxels{joined} "
+        "(--noise 0 segments it as if smooth)"
+    ]
 
 
 def _compute(
@@ -209,29 +253,44 @@ def _compute(
     max_parts: int | None,
     seed: int,
     tol: float,
+    noise: float | None,
     params: dict,
     report: Callable[[float, str], None],
-) -> tuple[np.ndarray, list[dict]]:
+) -> tuple[np.ndarray, list[dict], dict]:
     report(0.0, "marching cubes")
     mesh = to_mesh(csdf)
+    if noise is None:
+        noise = relief.surface_relief(mesh.vertices, mesh.vertex_normals, csdf.voxel_size)
+    added = relief.noise_tolerance(noise)
     if method == "coacd":
         p = dict(params)
         if max_parts is not None:
             p["max_convex_hull"] = max_parts
+        # CoACD reads its threshold on the mesh scaled to [-1, 1]: half the largest extent
+        extent = float(np.ptp(mesh.vertices, axis=0).max()) / csdf.voxel_size
         hulls = coacd_method.run(
-            mesh, threshold=thr, seed=seed, params=p, progress=scaled(report, 0.02, 0.85)
+            mesh,
+            threshold=min(thr + added / (0.5 * extent), 1.0),
+            seed=seed,
+            params=p,
+            progress=scaled(report, 0.02, 0.85),
         )
         report(0.85, "labelling the surface")
         faces = coacd_method.face_labels(mesh, hulls)
-        merge_tol = tol
+        merge_tol = tol + added
         atoms = None
     else:
         atoms = fast.atoms(
-            csdf, threshold=thr, params=params, floor=tol, progress=scaled(report, 0.0, 0.5)
+            csdf,
+            threshold=thr,
+            params=params,
+            floor=tol,
+            noise=added,
+            progress=scaled(report, 0.0, 0.5),
         )
         report(0.5, "labelling the surface")
         faces = faces_from_voxels(csdf, mesh, atoms)
-        merge_tol = max(tol, fast.tolerance(csdf, thr, params))
+        merge_tol = max(tol, fast.tolerance(csdf, thr, params)) + added
     report(0.88, "labelling voxels")
     # the fast method cuts the grid itself: inside voxels keep their piece exactly (the
     # nearest surface point would let a piece bleed across a crease into its neighbour)
@@ -246,24 +305,31 @@ def _compute(
             csdf,
             mesh,
             labels,
-            tolerance=max(group_tol, merge_tol),
+            tolerance=max(group_tol + added, merge_tol),
             thickness=params["thin"],
             min_group=params["min_group"],
         )
+    specks = 0
+    if added > 0:
+        least = int(params["min_voxels"] if atoms is not None else fast.PARAMS["min_voxels"])
+        labels, specks = join_specks(csdf, labels, least)
     report(0.97, "part facts")
     info = parts_info(csdf, mesh, labels)
     report(1.0, f"{len(info)} parts")
-    return labels, info
+    rough = {"relief": round(float(noise), 4), "noise_added": round(added, 3), "specks": specks}
+    return labels, info, rough
 
 
-def _entry_checksum(parts: np.ndarray, info_text: str) -> str:
+def _entry_checksum(parts: np.ndarray, info_text: str, rough_text: str) -> str:
     h = hashlib.sha256(np.ascontiguousarray(parts).tobytes())
     h.update(info_text.encode())
+    h.update(rough_text.encode())
     return h.hexdigest()
 
 
-def _read_cache(entry: Path, csdf: CSDF) -> tuple[np.ndarray, list[dict]] | None:
-    """The cached labels and part facts (bboxes moved to this grid's origin), or None.
+def _read_cache(entry: Path, csdf: CSDF) -> tuple[np.ndarray, list[dict], dict] | None:
+    """The cached labels, part facts (bboxes moved to this grid's origin) and relief facts, or
+    None.
 
     An entry that cannot be read, whose checksum does not match its content, or whose labels
     and part facts disagree (poisoned or from another grid) is removed, with a
@@ -273,13 +339,17 @@ def _read_cache(entry: Path, csdf: CSDF) -> tuple[np.ndarray, list[dict]] | None
         return None
     try:
         with open(entry, "rb") as fh, np.load(fh, allow_pickle=False) as z:
-            if sorted(z.files) == ["info", "parts"]:  # an older partscale's entry, unchecked:
-                return None  # recomputed and overwritten silently
+            if "rough" not in z.files:  # an older partscale's entry: recomputed and overwritten
+                return None
             labels, info_text, check = z["parts"], str(z["info"]), str(z["check"])
-        if check != _entry_checksum(labels, info_text):
+            rough_text = str(z["rough"])
+        if check != _entry_checksum(labels, info_text, rough_text):
             raise ValueError("its checksum does not match its content")
         info = parse_json(info_text, what="part facts")
+        rough = parse_json(rough_text, what="relief facts")
         _check_entry(labels, info, csdf)
+        if not isinstance(rough, dict) or set(rough) != {"relief", "noise_added", "specks"}:
+            raise ValueError("its relief facts are not {relief, noise_added, specks}")
     except Exception as exc:  # zip, zlib, npy header, JSON, shapes: all mean "damaged"
         entry.unlink(missing_ok=True)
         warnings.warn(
@@ -292,7 +362,7 @@ def _read_cache(entry: Path, csdf: CSDF) -> tuple[np.ndarray, list[dict]] | None
         os.utime(entry)  # eviction removes the least recently used entries first
     for d in info:
         d["bbox"] = (np.asarray(d["bbox"]) + csdf.origin).tolist()
-    return labels, info
+    return labels, info, rough
 
 
 def _check_entry(labels: np.ndarray, info: Any, csdf: CSDF) -> None:
@@ -311,19 +381,25 @@ def _check_entry(labels: np.ndarray, info: Any, csdf: CSDF) -> None:
             raise ValueError(f"part {p}'s facts disagree with its labels")
 
 
-def _write_cache(entry: Path, csdf: CSDF, labels: np.ndarray, info: list[dict]) -> None:
+def _write_cache(
+    entry: Path, csdf: CSDF, labels: np.ndarray, info: list[dict], rough: dict
+) -> None:
     # bboxes are stored relative to the origin: the key does not include it
     rel = [
         {**d, "bbox": (np.asarray(d["bbox"]) - csdf.origin).tolist()}
         for d in json.loads(json.dumps(info))
     ]
     parts = labels.astype(np.int16)
-    text = json.dumps(rel)
+    text, rough_text = json.dumps(rel), json.dumps(rough, sort_keys=True)
     try:
         entry.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(entry, suffix=".npz") as tmp:
             np.savez_compressed(
-                tmp, parts=parts, info=np.array(text), check=np.array(_entry_checksum(parts, text))
+                tmp,
+                parts=parts,
+                info=np.array(text),
+                rough=np.array(rough_text),
+                check=np.array(_entry_checksum(parts, text, rough_text)),
             )
     except (OSError, InputError):  # atomic_path reports a refused folder as InputError
         return  # a read-only or full cache folder must not fail the segmentation

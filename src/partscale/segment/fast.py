@@ -226,20 +226,26 @@ def _plane_pieces(mask: np.ndarray, min_size: int = 0) -> list[tuple[np.ndarray,
     return pieces
 
 
-def absorb_slivers(lab: np.ndarray, n: int, min_size: int) -> np.ndarray:
+def absorb_slivers(
+    lab: np.ndarray, n: int, min_size: int, *, size: np.ndarray | None = None
+) -> np.ndarray:
     """(X, Y, Z) int labels ``1..n`` (0: none) with each piece smaller than ``min_size`` voxels
     joined to the touching piece it shares the most voxels of contact with, in place.
 
     A plane across a curved shell leaves slivers at its rim; as parts of their own they would
-    only be merged back later, at a far higher cost. A sliver touching no piece stays. Returns
-    ``lab`` (changed) for chaining.
+    only be merged back later, at a far higher cost. A sliver touching no piece stays. ``size``
+    ((n + 1,) int, optional): each label's size if not its voxel count (e.g. inside voxels
+    only); a joined piece adds its size to its new one. Returns ``lab`` (changed) for chaining.
     """
     if n < 2 or min_size <= 1:
         return lab
-    size = np.bincount(lab.ravel(), minlength=n + 1)
-    small = [c for c in np.argsort(size[1:], kind="stable") + 1 if 0 < size[c] < min_size]
+    count = np.bincount(lab.ravel(), minlength=n + 1)
+    present = count > 0
+    size = count if size is None else np.array(size, np.int64)
+    order = np.argsort(size[1:], kind="stable") + 1
+    small = [c for c in order if present[c] and size[c] < min_size]
     for c in small:
-        if size[c] == 0 or size[c] >= min_size:
+        if not present[c] or size[c] >= min_size:
             continue
         sl = ndimage.find_objects((lab == c).astype(np.int8))[0]
         grown = tuple(slice(max(x.start - 1, 0), x.stop + 1) for x in sl)
@@ -253,7 +259,7 @@ def absorb_slivers(lab: np.ndarray, n: int, min_size: int) -> np.ndarray:
         best = int(np.argmax(counts))
         lab[grown][here] = best
         size[best] += size[c]
-        size[c] = 0
+        present[c] = False
     return lab
 
 
@@ -309,15 +315,18 @@ def atoms(
     threshold: float,
     params: dict,
     floor: float = 2.0,
+    noise: float = 0.0,
     progress: ProgressCallback | None = None,
 ) -> np.ndarray:
     """(X, Y, Z) int32: inside voxels cut into pieces at concave creases, -1 outside.
 
     Pieces are not yet merged: see the module's description. ``floor`` (voxels) is the least
-    tolerance: below it, concavity measured on voxels is sampling noise.
+    tolerance: below it, concavity measured on voxels is sampling noise. ``noise`` (voxels) is
+    added to the tolerance: the concavity a rough surface's relief adds
+    (:func:`partscale.segment.relief.noise_tolerance`).
     """
     report = resolve(progress)
-    tau = max(tolerance(csdf, threshold, params), floor)
+    tau = max(tolerance(csdf, threshold, params), floor) + noise
     inside = csdf.sdf <= 0
     comp, _ = ndimage.label(inside, structure=_FULL)
     roots = [

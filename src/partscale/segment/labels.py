@@ -25,6 +25,7 @@ from .concavity import (
     union_concavity,
     vertex_voxels,
 )
+from .fast import absorb_slivers
 
 _FULL = np.ones((3, 3, 3), bool)  # 26-connectivity
 
@@ -125,6 +126,46 @@ def make_connected(labels: np.ndarray, *, min_voxels: int = 32) -> np.ndarray:
                 out[grown][region] = next_label
                 next_label += 1
     return renumber(out)
+
+
+def join_specks(csdf: CSDF, labels: np.ndarray, min_inside: int) -> tuple[np.ndarray, int]:
+    """Parts with fewer than ``min_inside`` inside voxels joined to the part they touch most, or
+    the nearest one when they touch none.
+
+    On a rough surface such a part is a bump of relief the cuts isolated, or a crumb of the band
+    the relief cut off (a few outside voxels at its edge), not something a user can act on.
+
+    Returns
+    -------
+    (X, Y, Z) int32 labels, renumbered; the number of parts joined.
+    """
+    n = int(labels.max()) + 1
+    lab = np.asarray(labels, np.int32) + 1  # absorb_slivers' convention: 0 is none
+    inside = np.bincount(lab[csdf.sdf <= 0], minlength=n + 1)
+    lab = absorb_slivers(lab, n, min_inside, size=inside)
+    # what is left is touching nothing: the nearest voxel of a part that is no speck, looked
+    # for in the speck's box grown by the band (a crumb lies within it of the surface)
+    count = np.bincount(lab.ravel(), minlength=n + 1)
+    inside = np.bincount(lab[csdf.sdf <= 0], minlength=n + 1)
+    speck = (count > 0) & (inside < min_inside)
+    speck[0] = False
+    if speck.sum() < (count[1:] > 0).sum():  # else there is nothing to join them to
+        for c, sl in enumerate(ndimage.find_objects(lab), start=1):
+            if sl is None or not speck[c]:
+                continue
+            grown = tuple(
+                slice(max(x.start - 2 * BAND_VOXELS, 0), min(x.stop + 2 * BAND_VOXELS, dim))
+                for x, dim in zip(sl, lab.shape, strict=True)
+            )
+            box = lab[grown]
+            other = (box > 0) & ~speck[box]
+            if not other.any():
+                continue
+            _d, near = ndimage.distance_transform_edt(~other, return_indices=True)
+            here = box == c
+            box[here] = box[tuple(ix[here] for ix in near)]
+    out = renumber(lab - 1)
+    return out, n - (int(out.max()) + 1)
 
 
 def renumber(labels: np.ndarray) -> np.ndarray:

@@ -54,8 +54,7 @@ def boxes():
     )
 
 
-@pytest.fixture(scope="module")
-def table():
+def table_grid(voxel_size: float):
     """A tabletop on four legs (legs meet the top at z = 0.5)."""
     parts = [((0.0, 0.0, 0.5), (0.8, 0.5, 0.56))]
     for x in (0.0, 0.72):
@@ -64,8 +63,13 @@ def table():
     return shapes.grid(
         lambda p: np.min([shapes.box_sdf(p, lo, hi) for lo, hi in parts], axis=0),
         ((0, 0, 0), (0.8, 0.5, 0.56)),
-        voxel_size=H,
+        voxel_size=voxel_size,
     )
+
+
+@pytest.fixture(scope="module")
+def table():
+    return table_grid(H)
 
 
 @pytest.fixture(scope="module")
@@ -537,15 +541,7 @@ def _roughened(c, rms_voxels: float, seed: int = 0):
 
 @pytest.fixture(scope="module")
 def fine_table():
-    parts = [((0.0, 0.0, 0.5), (0.8, 0.5, 0.56))]
-    for x in (0.0, 0.72):
-        for y in (0.0, 0.42):
-            parts.append(((x, y, 0.0), (x + 0.08, y + 0.08, 0.53)))
-    return shapes.grid(
-        lambda p: np.min([shapes.box_sdf(p, lo, hi) for lo, hi in parts], axis=0),
-        ((0, 0, 0), (0.8, 0.5, 0.56)),
-        voxel_size=HN,
-    )
+    return table_grid(HN)
 
 
 def test_relief_tells_noise_from_shape():

@@ -60,7 +60,9 @@ def test_info_warns_about_thin_features(tmp_path, cli):
     thick = save(slabs(4.0), tmp_path / "thick.csdf.npz")
     out = cli("info", thin, check=True).stdout
     assert "warning:     thin features" in out and "--res " in out, out
-    assert "warning" not in cli("info", thick, check=True).stdout
+    clean = cli("info", thick, check=True).stdout
+    assert "warning" not in clean
+    assert "relief:" in clean and "(smooth)" in clean  # a clean grid is no scan
     s = json.loads(cli("info", thin, "--json", check=True).stdout)["thin_features"]
     assert s["below_one_voxel"]["solid"] > 0 and s["needed_resolution"] > s["resolution"]
 

@@ -15,6 +15,7 @@ from ._common import CsdfIn
 def summary(c: CSDF, thin: ThinFeatures | None = None) -> dict:
     """A JSON-serialisable summary of a CSDF (what ``info --json`` prints); ``thin``: its thin
     features when already measured."""
+
     try:
         sb = c.surface_bounds()
         solid = {"min": sb[0].tolist(), "max": sb[1].tolist(), "size": (sb[1] - sb[0]).tolist()}
@@ -39,6 +40,21 @@ def summary(c: CSDF, thin: ThinFeatures | None = None) -> dict:
         if isinstance(c.meta.get("completion"), dict)
         else None,
         "thin_features": (thin or thin_features(c)).to_json(),
+        "relief": _relief(c),
+    }
+
+
+def _relief(c: CSDF) -> dict | None:
+    """The surface's relief (voxels RMS) and what it adds to segment's tolerances; None without
+    a surface."""
+    from ..segment import noise_tolerance, relief_of
+
+    if not ((c.sdf <= 0).any() and (c.sdf > 0).any()):
+        return None
+    r = relief_of(c)
+    return {
+        "rms_voxels": round(r, 4),
+        "segment_tolerance_added_voxels": round(noise_tolerance(r), 3),
     }
 
 
@@ -73,6 +89,15 @@ def info(
             f"completion:  surface {k['observed']:.0%} observed, {k['mirrored']:.0%} mirrored, "
             f"{k['guessed']:.0%} guessed"
         )
+    if s["relief"]:
+        r = s["relief"]
+        added = r["segment_tolerance_added_voxels"]
+        rough = (
+            f"rough, a scan's noise: segment widens its concavity tolerances by {added:.1f} voxels"
+            if added > 0
+            else "smooth"
+        )
+        typer.echo(f"relief:      {r['rms_voxels']:.2f} voxel RMS ({rough})")
     warning = thin.message(c.voxel_size, units)
     if warning:
         typer.echo(f"warning:     thin features: {warning}")

@@ -19,7 +19,7 @@ from .api import (
 )
 from .concavity import concavity, hull_concavity, part_concavities
 from .fast import absorb_slivers
-from .relief import surface_relief
+from .relief import noise_tolerance, relief_of, surface_relief
 
 __all__ = [
     "DEFAULT_METHOD",
@@ -31,7 +31,9 @@ __all__ = [
     "default_cache_dir",
     "describe_noise",
     "hull_concavity",
+    "noise_tolerance",
     "part_concavities",
+    "relief_of",
     "segment",
     "surface_relief",
 ]

@@ -23,6 +23,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..csdf import CSDF
+
 RADIUS = 3.0
 """Neighbourhood radius (voxels) of one fit: bumps up to about twice this across are relief."""
 CLEAN_RELIEF = 0.15
@@ -86,6 +88,14 @@ def surface_relief(vertices: np.ndarray, normals: np.ndarray, voxel_size: float)
         return 0.0
     rms = np.sqrt((resid[enough] ** 2).sum(axis=1) / count[enough])
     return float(np.median(rms))
+
+
+def relief_of(csdf: CSDF) -> float:
+    """:func:`surface_relief` of the object's surface (its marching cubes), in voxels."""
+    from ..surface import to_mesh
+
+    mesh = to_mesh(csdf)
+    return surface_relief(mesh.vertices, mesh.vertex_normals, csdf.voxel_size)
 
 
 def noise_tolerance(relief: float) -> float:

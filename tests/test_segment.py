@@ -589,9 +589,9 @@ def test_rough_surface_keeps_boards_whole(fine_table):
             assert not np.isin(leg, top[:1]).any()  # no leg is part of the top
 
 
-def test_rough_surface_note_and_noise_option(cli, fine_table, tmp_path):
+def test_rough_surface_note_and_noise_option(cli, tmp_path):
     src = tmp_path / "rough.csdf.npz"
-    partscale.save(_roughened(fine_table, 0.8), src)
+    partscale.save(_roughened(shapes.box((0, 0, 0), (0.4, 0.3, 0.2), voxel_size=HN), 0.8), src)
     out = tmp_path / "parts.csdf.npz"
     proc = cli("segment", str(src), "-o", str(out), "--no-cache")
     assert proc.returncode == 0, proc.stderr

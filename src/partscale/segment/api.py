@@ -36,9 +36,9 @@ DEFAULT_METHOD = "fast"
 """The fast method: it matched CoACD's quality within the 5 s target on every benchmark object
 (figures in :mod:`partscale.segment.fast`)."""
 CACHE_VERSION = 8
+"""Bump when a change to the code changes results, so old cache entries are not reused."""
 CACHE_MAX_BYTES = 1 << 30
 """Default size cap of the segment cache; the least recently used entries go first."""
-"""Bump when a change to the code changes results, so old cache entries are not reused."""
 
 _METHOD_PARAMS: dict[str, dict[str, Any]] = {
     "coacd": coacd_method.PARAMS,
@@ -189,7 +189,7 @@ def segment(
     CSDF
         With ``parts`` (X, Y, Z) int16 filled, ``meta['parts_info']`` (per part: ``index``,
         ``voxels`` labelled, world ``bbox`` [[min], [max]] of its boundary, world
-        ``hull_volume``, sRGB ``color``), ``meta['segmentation']`` ({method, params, key})
+        ``hull_volume``, sRGB ``color``), ``meta['segmentation']`` ({method, params, key, relief, noise_added, specks})
         and a history entry.
     """
     method, thr, max_parts, seed, tol, noise, params = _check_options(

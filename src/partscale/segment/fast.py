@@ -26,7 +26,9 @@ every shelf); three merges then join pieces back:
 The tolerance is CoACD's threshold read in voxels, ``threshold * scale * L`` for the object's
 largest extent ``L`` in voxels (CoACD normalises the mesh to [-1, 1], so ``scale`` = 0.5 is its
 own reading); ``scale`` = 0.3 (2.1 voxels at 128) cuts and merges finer than CoACD, whose parts
-on these objects measure 0.8-3.3 voxels.
+on these objects measure 0.8-3.3 voxels. On a rough surface (a completed scan's) every
+tolerance grows by the relief's peak-to-valley (:mod:`partscale.segment.relief`); on clean
+geometry by nothing.
 
 Pieces are cut, and merge costs computed, in forked worker processes (one per core; threads
 gained only 1.3x here, the hull and sampling code holds the GIL between compiled calls); results

@@ -42,4 +42,20 @@ for spec in "frame_yellow 365,225,540,440" "frame_purple 0,255,245,480"; do
         "$F/TUM_color.png" "$2" "$OUT/$1_scan.png"
     row "$1" "$OUT/$1_scan.png" "$OUT/$1.csdf.npz"
 done
+
+# docs/complete_tum_parts.png: the four completions segmented at the defaults (the scan's relief
+# measured, see the README's segment section), each rendered --parts --view iso --size 320
+for name in yellow frame_yellow purple frame_purple; do
+    ps segment "$OUT/$name.csdf.npz" -o "$OUT/${name}_parts.csdf.npz" --no-cache
+    ps render "$OUT/${name}_parts.csdf.npz" -o "$OUT/${name}_parts.png" --view iso --size 320 --parts
+done
+.venv/bin/python - "$OUT" <<'EOF'
+import sys
+from PIL import Image
+names = ["yellow", "frame_yellow", "purple", "frame_purple"]
+row = Image.new("RGB", (320 * len(names), 320), "white")
+for i, n in enumerate(names):
+    row.paste(Image.open(f"{sys.argv[1]}/{n}_parts.png").convert("RGB"), (320 * i, 0))
+row.save("docs/complete_tum_parts.png")
+EOF
 rm -r "$OUT"

@@ -237,7 +237,12 @@ def describe_noise(entry: dict) -> list[str]:
     if added <= 0:
         return []
     specks = int(entry.get("specks") or 0)
-    joined = f"; {specks} specks of relief joined to the part they touch most" if specks else ""
+    joined = (
+        f"; {specks} speck{'s' if specks != 1 else ''} of relief joined to the part "
+        f"{'they touch' if specks != 1 else 'it touches'} most"
+        if specks
+        else ""
+    )
     given = "given" if entry.get("noise") is not None else "measured"
     return [
         f"the surface is rough ({given} relief {float(entry['relief']):.2f} voxel RMS, a "

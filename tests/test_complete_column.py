@@ -110,10 +110,10 @@ def test_sure_free_space_needs_readings_around_the_ray():
     in_hole = np.array([[0.0, 0.0, 1.0]])
     beside = np.array([[0.1, 0.1, 1.0]])  # pixel (42, 42): readings all around
     assert Carver([frame], 0.01).free(in_hole)[0]
-    assert not column_mod.sure_free([frame], in_hole, 0.01)[0]
-    assert column_mod.sure_free([frame], beside, 0.01)[0]
+    assert not column_mod.sure_carver([frame], 0.01).free(in_hole)[0]
+    assert column_mod.sure_carver([frame], 0.01).free(beside)[0]
     # a point behind the wall is not free either way
-    assert not column_mod.sure_free([frame], beside * 3, 0.01)[0]
+    assert not column_mod.sure_carver([frame], 0.01).free(beside * 3)[0]
 
 
 def test_the_column_joins_base_and_seat_and_is_guessed_surface():

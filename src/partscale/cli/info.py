@@ -15,7 +15,6 @@ from ._common import CsdfIn
 def summary(c: CSDF, thin: ThinFeatures | None = None) -> dict:
     """A JSON-serialisable summary of a CSDF (what ``info --json`` prints); ``thin``: its thin
     features when already measured."""
-
     try:
         sb = c.surface_bounds()
         solid = {"min": sb[0].tolist(), "max": sb[1].tolist(), "size": (sb[1] - sb[0]).tolist()}

@@ -7,7 +7,7 @@ found (:func:`partscale.complete.symmetry.rotation_axis`), the surface has a hub
 seat is carried by nothing else (a stretch of height between them holds no surface anywhere:
 the legs of a four-legged chair span every height), a cylinder is guessed along the axis from
 the hub's top to the seat's underside. Its radius is the largest in [``MIN_RADIUS``,
-``MAX_RADIUS``] that the free space seen *surely* (:func:`sure_free`: the ray and its
+``MAX_RADIUS``] that the free space seen *surely* (:func:`sure_carver`: the ray and its
 neighbours all reached a reading beyond) does not contradict; where it contradicts even the
 thinnest (``MAX_CONTRADICTED``) there is no column; the sure free space alone carves it. Free space inferred from missing readings
 (the hole filling of a raw frame, the silhouette of a cropped scan) is no evidence here: the
@@ -77,12 +77,6 @@ def sure_carver(frames: list[Frame], margin: float) -> Carver:
     by ``margin``: a point's pixel and every pixel of the ``SURE_RAYS`` square around it read a
     depth beyond it. Pixels without a reading, and a cropped scan's background, say nothing."""
     return Carver(frames, margin, sure_rays=SURE_RAYS)
-
-
-def sure_free(frames: list[Frame], points: np.ndarray, margin: float) -> np.ndarray:
-    """(N,) bool: world ``points`` (N, 3) that some view surely saw through (:func:`sure_carver`;
-    build that once for many queries)."""
-    return sure_carver(frames, margin).free(points)
 
 
 def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | None:

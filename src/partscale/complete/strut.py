@@ -5,7 +5,7 @@ bar behind a swivel chair's seat that carries its back, a leg's end cut off by a
 the fusion such a part is a solid piece of its own, floating beside the rest. Each piece that
 is not the largest (specks are gone by then: :func:`partscale.complete.tidy.drop_specks`) is
 joined to it by the shortest path through space that no view saw *surely* free
-(:func:`partscale.complete.column.sure_free`: free space inferred from missing readings or a
+(:func:`partscale.complete.column.sure_carver`: free space inferred from missing readings or a
 cropped scan's silhouette is no evidence against a thin bar), when that path spans at most
 ``MAX_GAP_SHARE`` of the object's size in outside space; the path, thickened to a strut of
 radius ``RADIUS``, is guessed surface. A piece that only a longer path, or only one through

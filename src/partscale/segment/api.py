@@ -243,11 +243,15 @@ def describe_noise(entry: dict) -> list[str]:
         if specks
         else ""
     )
-    given = "given" if entry.get("noise") is not None else "measured"
+    relief = float(entry["relief"])
+    why = (
+        f"relief {relief:.2f} voxel RMS, as given"
+        if entry.get("noise") is not None
+        else f"measured relief {relief:.2f} voxel RMS, a scan's noise"
+    )
     return [
-        f"the surface is rough ({given} relief {float(entry['relief']):.2f} voxel RMS, a "
-        f"scan's noise): concavity tolerances raised by {added:.1f} voxels{joined} "
-        "(--noise 0 segments it as if smooth)"
+        f"the surface is rough ({why}): concavity tolerances raised by {added:.1f} "
+        f"voxels{joined} (--noise 0 segments it as if smooth)"
     ]
 
 

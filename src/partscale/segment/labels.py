@@ -141,12 +141,12 @@ def join_specks(csdf: CSDF, labels: np.ndarray, min_inside: int) -> tuple[np.nda
     """
     n = int(labels.max()) + 1
     lab = np.asarray(labels, np.int32) + 1  # absorb_slivers' convention: 0 is none
-    inside = np.bincount(lab[csdf.sdf <= 0], minlength=n + 1)
-    lab = absorb_slivers(lab, n, min_inside, size=inside)
+    solid = csdf.sdf <= 0
+    lab = absorb_slivers(lab, n, min_inside, size=np.bincount(lab[solid], minlength=n + 1))
     # what is left is touching nothing: the nearest voxel of a part that is no speck, looked
     # for in the speck's box grown by the band (a crumb lies within it of the surface)
     count = np.bincount(lab.ravel(), minlength=n + 1)
-    inside = np.bincount(lab[csdf.sdf <= 0], minlength=n + 1)
+    inside = np.bincount(lab[solid], minlength=n + 1)
     speck = (count > 0) & (inside < min_inside)
     speck[0] = False
     if speck.sum() < (count[1:] > 0).sum():  # else there is nothing to join them to

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..csdf import CSDF
+from ..surface import to_mesh
 
 RADIUS = 3.0
 """Neighbourhood radius (voxels) of one fit: bumps up to about twice this across are relief."""
@@ -92,8 +93,6 @@ def surface_relief(vertices: np.ndarray, normals: np.ndarray, voxel_size: float)
 
 def relief_of(csdf: CSDF) -> float:
     """:func:`surface_relief` of the object's surface (its marching cubes), in voxels."""
-    from ..surface import to_mesh
-
     mesh = to_mesh(csdf)
     return surface_relief(mesh.vertices, mesh.vertex_normals, csdf.voxel_size)
 

@@ -84,7 +84,8 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
 
     points : (N, 3) upright surface points (observed and copies); rotation : the base's
     :class:`~partscale.complete.symmetry.Symmetry` (kind "rotation") or None; free_up : upright
-    points (M, 3) -> (M,) bool, the sure free space (:func:`sure_free`); h : the grid's voxel.
+    points (M, 3) -> (M,) bool, the sure free space (a :func:`sure_carver`'s ``free``); h : the
+    grid's voxel.
     """
     if rotation is None:
         return None

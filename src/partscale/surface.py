@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import numpy as np
 import trimesh
-from scipy import ndimage
 from skimage import measure
 
 from .csdf import CSDF
@@ -28,17 +27,25 @@ def sample_linear(volume: np.ndarray, index: np.ndarray) -> np.ndarray:
     (N,) or (N, C) float64
     """
     vol = np.asarray(volume)
-    if vol.ndim == 3:
-        return ndimage.map_coordinates(vol.astype(np.float64), index.T, order=1, mode="nearest")
-    return np.stack(
-        [
-            ndimage.map_coordinates(
-                vol[..., c].astype(np.float64), index.T, order=1, mode="nearest"
-            )
-            for c in range(vol.shape[-1])
-        ],
-        axis=-1,
-    )
+    idx = np.asarray(index, np.float64).reshape(-1, 3)
+    # the 8 corners around each sample, gathered: the cost follows the samples (a surface's
+    # vertices), not the grid (no whole-grid conversion to float)
+    top = np.array(vol.shape[:3], np.float64) - 1.0
+    x = np.clip(idx, 0.0, top)
+    i0 = np.floor(x).astype(np.intp)
+    t = x - i0
+    i1 = np.minimum(i0 + 1, top.astype(np.intp))
+    out = np.zeros((len(idx), *vol.shape[3:]), np.float64)
+    for corner in range(8):
+        pick = [(corner >> a) & 1 for a in range(3)]
+        w = np.ones(len(idx))
+        ijk = []
+        for a in range(3):
+            w = w * (t[:, a] if pick[a] else 1.0 - t[:, a])
+            ijk.append(i1[:, a] if pick[a] else i0[:, a])
+        v = vol[ijk[0], ijk[1], ijk[2]]
+        out += (w[:, None] * v) if vol.ndim == 4 else w * v
+    return out
 
 
 def sample_nearest(volume: np.ndarray, index: np.ndarray) -> np.ndarray:
@@ -73,10 +80,12 @@ def to_mesh(csdf: CSDF, *, level: float = 0.0) -> trimesh.Trimesh:
     world = csdf.index_to_world(index)
     rgb = np.clip(np.rint(sample_linear(csdf.rgb, index)), 0, 255).astype(np.uint8)
     rgba = np.concatenate([rgb, np.full((len(rgb), 1), 255, np.uint8)], axis=1)
-    # skimage orients faces so normals point toward increasing values (outside, since sdf < 0
-    # inside): keep that winding, trimesh then reports positive volume.
-    mesh = trimesh.Trimesh(world, faces[:, ::-1], vertex_colors=rgba, process=False)
-    if mesh.volume < 0:
-        mesh.invert()
+    # wound so the enclosed volume is positive (faces outward, as trimesh expects): the signed
+    # volume alone, not trimesh's mass properties (inertia too), which cost as much as the
+    # marching cubes
+    a, b, c = (world[faces[:, i]] for i in range(3))
+    if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
+        faces = faces[:, ::-1]
+    mesh = trimesh.Trimesh(world, faces, vertex_colors=rgba, process=False)
     mesh.vertex_attributes["parts"] = sample_nearest(csdf.parts, index).astype(np.int16)
     return mesh

@@ -219,10 +219,10 @@ def _thin_pass(s, h, limit, thickness, counts):
                 if not t < lim:
                     continue
                 rim = False
-                for a in range(max(i - 1, 0), min(i + 2, nx)):
-                    for b in range(max(j - 1, 0), min(j + 2, ny)):
-                        for c in range(max(k - 1, 0), min(k + 2, nz)):
-                            w = s[a, b, c]
+                for ra in range(i - 1 if i > 0 else 0, i + 2 if i + 2 < nx else nx):
+                    for rb in range(max(j - 1, 0), min(j + 2, ny)):
+                        for rc in range(max(k - 1, 0), min(k + 2, nz)):
+                            w = s[ra, rb, rc]
                             if inside:
                                 if w <= 0 and -w >= deep:
                                     rim = True

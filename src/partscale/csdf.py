@@ -26,6 +26,7 @@ from __future__ import annotations
 import copy
 import os
 import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,6 +51,12 @@ SDF_LIMIT_VOXELS = 1e9
 distances leave float32 and vertices leave float64 precision (all values are finite but absurd)."""
 _NAMES = ("sdf", "rgb", "parts", "origin", "voxel_size", "meta")
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)  # the earliest a zip can say
+_DEFLATE_SAMPLE = 1 << 18
+"""Bytes of each of up to four spread samples of an array deflated to judge it (:func:`save`)."""
+_DEFLATE_GAIN = 0.8
+"""An array is deflated when its samples shrink below this share of their size. Exact float
+distances do not (SheenChair's sdf at 256: to 90 % in 1.6 s, 0.3 s more to read): they are
+stored; colours (11 %) and parts (0.1 %) are deflated."""
 
 
 def _read_only(self, *args: Any, **kwargs: Any) -> Any:
@@ -463,7 +470,9 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
     """Write ``csdf`` to a ``.csdf.npz`` file atomically (a temporary file, then a rename).
 
     The zip members carry a fixed time, so the same CSDF always gives the same bytes (numpy's
-    ``savez`` stamps the current time). Returns the path written.
+    ``savez`` stamps the current time). With ``compress``, each array is deflated where that
+    pays (colours, parts) and stored where it does not (the distances); any zip reader, and
+    ``np.load``, reads both. Returns the path written.
     """
     path = Path(path)
     arrays = {
@@ -474,14 +483,27 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
         "voxel_size": np.asarray(np.float64(csdf.voxel_size)),
         "meta": np.array(dumps_json(csdf.meta)),
     }
-    method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
-    with atomic_path(path, suffix=".npz") as tmp, zipfile.ZipFile(tmp, "w", method) as zf:
+    with atomic_path(path, suffix=".npz") as tmp, zipfile.ZipFile(tmp, "w") as zf:
         for name, a in arrays.items():
             info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_TIME)
-            info.compress_type = method
+            deflate = compress and _deflates(a)
+            info.compress_type = zipfile.ZIP_DEFLATED if deflate else zipfile.ZIP_STORED
             with zf.open(info, "w", force_zip64=True) as f:  # as savez: sizes unknown up front
                 np.lib.format.write_array(f, a, allow_pickle=False)
     return path
+
+
+def _deflates(a: np.ndarray) -> bool:
+    """Whether deflate shrinks ``a`` (any array) below ``_DEFLATE_GAIN`` of its bytes, judged on
+    up to four samples spread over it (a few ms: the data alone decides, so the bytes written
+    stay the same for the same CSDF)."""
+    b = np.ascontiguousarray(a).reshape(-1).view(np.uint8)
+    n = len(b)
+    if n <= 4 * _DEFLATE_SAMPLE:
+        return len(zlib.compress(b.tobytes(), 1)) < _DEFLATE_GAIN * max(n, 1)
+    starts = np.linspace(0, n - _DEFLATE_SAMPLE, 4).astype(np.int64)
+    packed = sum(len(zlib.compress(b[s : s + _DEFLATE_SAMPLE].tobytes(), 1)) for s in starts)
+    return packed < _DEFLATE_GAIN * 4 * _DEFLATE_SAMPLE
 
 
 def load(path: str | os.PathLike) -> CSDF:

@@ -155,22 +155,19 @@ def _thin_pass(s, h, limit, thickness, counts):
             for k in range(nz):
                 v = s[i, j, k]
                 inside = v <= 0
-                # surface voxels: a face neighbour on the other side
-                surf = False
-                for ax in range(3):
-                    for d in (-1, 1):
-                        a, b, c = i, j, k
-                        if ax == 0:
-                            a += d
-                        elif ax == 1:
-                            b += d
-                        else:
-                            c += d
-                        if 0 <= a < nx and 0 <= b < ny and 0 <= c < nz:
-                            if (s[a, b, c] <= 0) != inside:
-                                surf = True
-                if surf:
-                    counts[i, 4] += 1
+                # surface voxels: a face neighbour on the other side. Every run of one or two
+                # ends at one, so the rest (most of the grid) stop here
+                surf = (
+                    (i > 0 and (s[i - 1, j, k] <= 0) != inside)
+                    or (i < nx - 1 and (s[i + 1, j, k] <= 0) != inside)
+                    or (j > 0 and (s[i, j - 1, k] <= 0) != inside)
+                    or (j < ny - 1 and (s[i, j + 1, k] <= 0) != inside)
+                    or (k > 0 and (s[i, j, k - 1] <= 0) != inside)
+                    or (k < nz - 1 and (s[i, j, k + 1] <= 0) != inside)
+                )
+                if not surf:
+                    continue
+                counts[i, 4] += 1
                 if not abs(v) > on_surface:
                     continue
                 t = inf

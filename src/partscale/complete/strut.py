@@ -98,7 +98,7 @@ def add_struts(
         for p in todo:
             if joined[boxes[p - 1]][lab[boxes[p - 1]] == p].any():
                 continue  # joined already, through a strut to another piece
-            s = _strut(sdf, prov, lab == p, joined, boxes[p - 1], step)
+            s = _strut(sdf, prov, lab, p, int(size[p]), joined, boxes[p - 1], step)
             if s is None:
                 left.append(p)
                 continue
@@ -121,8 +121,9 @@ class _Step:
     mirror: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None
 
 
-def _strut(sdf, prov, piece, joined, box, step: _Step) -> Strut | None:
-    """Adds one piece's strut to ``sdf`` and ``prov`` in place; the :class:`Strut` or None."""
+def _strut(sdf, prov, lab, p, n, joined, box, step: _Step) -> Strut | None:
+    """Adds the strut of piece ``p`` of ``lab`` (``n`` voxels, bounding ``box``) to ``sdf``
+    and ``prov`` in place; the :class:`Strut` or None. Only the box grown by the reach is read."""
     from skimage.graph import MCP_Geometric
 
     origin, h, max_gap = step.origin, step.h, step.max_gap
@@ -134,13 +135,15 @@ def _strut(sdf, prov, piece, joined, box, step: _Step) -> Strut | None:
     target = joined[sl]
     if not target.any():
         return None
-    src = piece[sl]
+    src = lab[sl] == p
     solid = sdf[sl] < 0
-    # only outside voxels within the reach of the piece are asked (the rest stay passable: a
-    # path through them is longer than the bound anyway)
-    ask = ~solid & (ndimage.distance_transform_edt(~src) <= reach)
+    # only voxels within the reach of the piece are passable (a path's cost is its length, so
+    # one that leaves the reach is longer than the bound: the search stays in the ball), and of
+    # them the outside ones are asked
+    near = ndimage.distance_transform_edt(~src) <= reach
+    ask = ~solid & near
     idx = np.argwhere(ask)
-    free = np.zeros(solid.shape, bool)
+    free = ~near
     free[ask] = step.sure_free(origin + (idx + i0) * h)
     cost = np.where(free, np.inf, 1.0)
     mcp = MCP_Geometric(cost, fully_connected=True)
@@ -158,7 +161,7 @@ def _strut(sdf, prov, piece, joined, box, step: _Step) -> Strut | None:
     if step.mirror is not None:
         mirrored = _mirrored(sdf, prov, path, joined, step, step.mirror)
     ends = origin + path[[0, -1]] * h
-    return Strut(int(piece.sum()), ends[0], ends[1], gap, added, mirrored)
+    return Strut(n, ends[0], ends[1], gap, added, mirrored)
 
 
 def _draw(sdf, prov, path, step: _Step) -> int:

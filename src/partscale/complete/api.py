@@ -401,7 +401,7 @@ def complete(
         # of candidate points skip a transform by the identity
         if U is U0:
             return free_grid(p)
-        return free_grid(_apply(U0 @ Uinv, p))
+        return free_grid(p, frame=U0 @ Uinv)
 
     report(0.15, "symmetries")
     syms: list[sym_mod.Symmetry] = []

@@ -134,19 +134,47 @@ class FreeGrid:
         # is no contradiction; outside the table counts as free
         self.table = ndimage.binary_erosion(table, np.ones((3, 3, 3), bool), border_value=1)
 
-    def __call__(self, points: np.ndarray) -> np.ndarray:
-        """(N,) bool: ``points`` (N, 3) in the grid's frame that some view saw through."""
-        P = np.asarray(points)
-        idx = np.rint((P - self.lo) / self.cell).astype(np.int64)
-        inside = ((idx >= 0) & (idx < self.shape)).all(axis=1)
-        out = np.zeros(len(P), bool)
-        i = idx[inside]
-        out[inside] = self.table[i[:, 0], i[:, 1], i[:, 2]]
-        if not inside.all():
-            far = P[~inside]
+    def __call__(self, points: np.ndarray, frame: np.ndarray | None = None) -> np.ndarray:
+        """(N,) bool: ``points`` (N, 3) that some view saw through; in the grid's frame, or in
+        another whose (4, 4) map into the grid's frame is ``frame`` (applied on the fly)."""
+        P = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
+        M = np.eye(4) if frame is None else np.asarray(frame, np.float64)
+        out = np.empty(len(P), bool)
+        off = np.empty(len(P), bool)
+        lookup(P, M[:3, :3].copy(), M[:3, 3].copy(), self.lo, self.cell, self.table, True, out, off)
+        if off.any():
+            far = P[off] @ M[:3, :3].T + M[:3, 3]
             world = far @ self.to_world[:3, :3].T + self.to_world[:3, 3]
-            out[~inside] = self.carver.free(world, self.margin)
+            out[off] = self.carver.free(world, self.margin)
         return out
+
+
+@numba.njit(cache=True, parallel=True)
+def lookup(P, A, b, lo, cell, table, nearest, out, off):
+    """``out[i]``: ``table`` (X, Y, Z) bool at the grid point nearest to (``nearest``) or the
+    cell holding ``A @ P[i] + b``, grid points at ``lo + index * cell``; where that lies off the
+    table, ``out[i]`` is False and ``off[i]`` True. P (N, 3) float64, A (3, 3), b (3,).
+
+    One pass without temporaries: the symmetry searches look up millions of mapped points."""
+    nx, ny, nz = table.shape
+    for i in numba.prange(P.shape[0]):
+        q = np.empty(3)
+        for r in range(3):
+            # the identity adds exact zeros: the point itself, bit for bit
+            q[r] = P[i, 0] * A[r, 0] + P[i, 1] * A[r, 1] + P[i, 2] * A[r, 2] + b[r]
+        a = (q[0] - lo[0]) / cell
+        c = (q[1] - lo[1]) / cell
+        d = (q[2] - lo[2]) / cell
+        if nearest:
+            a, c, d = np.rint(a), np.rint(c), np.rint(d)
+        else:
+            a, c, d = np.floor(a), np.floor(c), np.floor(d)
+        if 0 <= a < nx and 0 <= c < ny and 0 <= d < nz:
+            out[i] = table[int(a), int(c), int(d)]
+            off[i] = False
+        else:
+            out[i] = False
+            off[i] = True
 
 
 @numba.njit(cache=True, parallel=True)

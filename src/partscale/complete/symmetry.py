@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
+from .carve import lookup
+
 MIN_SUPPORT = 0.3
 MAX_VIOLATION = 0.06
 VIOLATION_WEIGHT = 4.0
@@ -116,11 +118,10 @@ class _Scorer:
     def __call__(self, mapped: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """mapped (K, M, 3) -> support (K, M) bool, violation (K, M) bool."""
         K, M, _ = mapped.shape
-        flat = mapped.reshape(-1, 3)
-        idx = np.floor((flat - self.lo) / self.cell).astype(np.int64)
-        ok = ((idx >= 0) & (idx < self.shape)).all(axis=1)
-        idx = np.where(ok[:, None], idx, 0)
-        sup = ok & self.occ[idx[:, 0], idx[:, 1], idx[:, 2]]
+        flat = np.ascontiguousarray(mapped, np.float64).reshape(-1, 3)
+        sup = np.empty(len(flat), bool)
+        off = np.empty(len(flat), bool)
+        lookup(flat, np.eye(3), np.zeros(3), self.lo, self.cell, self.occ, False, sup, off)
         vio = self.free(flat)
         return sup.reshape(K, M), vio.reshape(K, M)
 

@@ -108,6 +108,17 @@ def test_glb_colour_gradient_is_linearised_per_vertex(tmp_path):
     assert np.ptp(attrs["COLOR_0"][:, 0]) > 0.8
 
 
+def test_mesh_without_attributes_is_the_same_surface(box, sphere):
+    """The geometry alone (relief, shape measures) is the surface export writes, wound
+    outward; it carries no colours or parts."""
+    for c in (box, sphere):
+        full, bare = to_mesh(c), to_mesh(c, attributes=False)
+        assert np.array_equal(full.vertices, bare.vertices)
+        assert np.array_equal(full.faces, bare.faces)
+        assert bare.volume > 0 and "parts" not in bare.vertex_attributes
+        assert bare.visual.kind is None
+
+
 def test_glb_passes_khronos_validator(sphere, tmp_path):
     report = gltf_validator_report(export.export_mesh(sphere, tmp_path / "s.glb"))
     assert report["issues"]["numErrors"] == 0, report["issues"]["messages"]

@@ -56,12 +56,13 @@ def sample_nearest(volume: np.ndarray, index: np.ndarray) -> np.ndarray:
     return volume[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
 
 
-def to_mesh(csdf: CSDF, *, level: float = 0.0) -> trimesh.Trimesh:
+def to_mesh(csdf: CSDF, *, level: float = 0.0, attributes: bool = True) -> trimesh.Trimesh:
     """Marching cubes of ``csdf.sdf`` at ``level``, in world units, faces outward.
 
     The grid is padded by one outside voxel so the mesh is closed even where the solid touches
-    the border. Vertex colours (sRGB uint8 RGBA, trimesh's convention) are trilinear samples of
-    ``rgb``; ``mesh.vertex_attributes['parts']`` holds the nearest voxel's part index.
+    the border. With ``attributes``, vertex colours (sRGB uint8 RGBA, trimesh's convention) are
+    trilinear samples of ``rgb`` and ``mesh.vertex_attributes['parts']`` holds the nearest
+    voxel's part index; without, the mesh is the geometry alone (for measures of its shape).
 
     Returns
     -------
@@ -78,14 +79,16 @@ def to_mesh(csdf: CSDF, *, level: float = 0.0) -> trimesh.Trimesh:
     )
     index = verts - 1.0
     world = csdf.index_to_world(index)
-    rgb = np.clip(np.rint(sample_linear(csdf.rgb, index)), 0, 255).astype(np.uint8)
-    rgba = np.concatenate([rgb, np.full((len(rgb), 1), 255, np.uint8)], axis=1)
     # wound so the enclosed volume is positive (faces outward, as trimesh expects): the signed
     # volume alone, not trimesh's mass properties (inertia too), which cost as much as the
     # marching cubes
     a, b, c = (world[faces[:, i]] for i in range(3))
     if np.einsum("ij,ij->", a, np.cross(b, c)) < 0:
         faces = faces[:, ::-1]
+    if not attributes:
+        return trimesh.Trimesh(world, faces, process=False)
+    rgb = np.clip(np.rint(sample_linear(csdf.rgb, index)), 0, 255).astype(np.uint8)
+    rgba = np.concatenate([rgb, np.full((len(rgb), 1), 255, np.uint8)], axis=1)
     mesh = trimesh.Trimesh(world, faces, vertex_colors=rgba, process=False)
     mesh.vertex_attributes["parts"] = sample_nearest(csdf.parts, index).astype(np.int16)
     return mesh

@@ -93,7 +93,7 @@ def surface_relief(vertices: np.ndarray, normals: np.ndarray, voxel_size: float)
 
 def relief_of(csdf: CSDF) -> float:
     """:func:`surface_relief` of the object's surface (its marching cubes), in voxels."""
-    mesh = to_mesh(csdf)
+    mesh = to_mesh(csdf, attributes=False)
     return surface_relief(mesh.vertices, mesh.vertex_normals, csdf.voxel_size)
 
 

@@ -521,14 +521,14 @@ def cut_slivers(
                 (
                     lw,
                     rw,
-                    np.logical_and.accumulate(mine[lw][::-1], axis=0)[::-1],
+                    _run(mine[lw][::-1])[::-1],
                     theirs[rw.start],
                     out_sdf[j0],
                 ),
                 (
                     rw,
                     lw,
-                    np.logical_and.accumulate(mine[rw], axis=0),
+                    _run(mine[rw]),
                     theirs[rw.start - 1],
                     out_sdf[j1],
                 ),
@@ -540,6 +540,15 @@ def cut_slivers(
                 seam_drop[win] |= run & col & ~theirs[win]
                 seam_hold[across] |= col & ~mine[across] & theirs[across]
     return drop, hold
+
+
+def _run(m: np.ndarray) -> np.ndarray:
+    """(L, A, B) bool: where ``m`` (L, A, B) bool holds on every layer from the first to this
+    one (``np.logical_and.accumulate`` along the layers, which numpy runs 3-6x slower than one
+    search for each column's first miss)."""
+    miss = ~m
+    first = np.where(miss.any(axis=0), miss.argmax(axis=0), len(m))
+    return np.arange(len(m))[:, None, None] < first
 
 
 def apply_plan(

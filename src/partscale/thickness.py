@@ -237,8 +237,9 @@ def _thin_pass(s, h, limit, thickness, counts):
 def thin_features(csdf: CSDF, *, limit: float = THIN_VOXELS) -> ThinFeatures:
     """Solids and gaps thinner than ``limit`` voxels in ``csdf`` (see the module docstring).
 
-    One parallel numba sweep over the grid (its 26 neighbours read per voxel), and one float32
-    array the size of the grid for the thicknesses whose median is reported.
+    One parallel numba sweep over the grid: six face neighbours read per voxel, the runs and the
+    26 neighbours only at the surface; and one float32 array the size of the grid for the
+    thicknesses whose median is reported.
     """
     s = np.ascontiguousarray(csdf.sdf, np.float32)
     h = np.float32(csdf.voxel_size)

@@ -1,12 +1,13 @@
-"""Numba geometry kernels shared by the stages (import and re-evaluation).
+"""Numba geometry kernels shared by the stages (import, re-evaluation, meshing).
 
-Coordinates are whatever the caller uses (world units or continuous voxel indices); nothing here
-knows about grids.
+Coordinates are whatever the caller uses (world units or continuous voxel indices); only
+:func:`trilinear` reads a grid, at continuous voxel indices.
 """
 
 from __future__ import annotations
 
 import numba as nb
+import numpy as np
 
 
 @nb.njit(cache=True, inline="always")
@@ -63,3 +64,31 @@ def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     qz = az + v * abz + w * acz
     dx, dy, dz = px - qx, py - qy, pz - qz
     return dx * dx + dy * dy + dz * dz, u, v, w
+
+
+@nb.njit(cache=True, nogil=True)
+def trilinear(volume, pts):
+    """(N, C) float64 trilinear samples of ``volume`` (X, Y, Z, C), any numeric dtype, at
+    continuous voxel indices ``pts`` (N, 3) (voxel centres at integers), clamped to the grid."""
+    nx, ny, nz, nc = volume.shape
+    out = np.zeros((pts.shape[0], nc))
+    for n in range(pts.shape[0]):
+        x = min(max(pts[n, 0], 0.0), nx - 1.0)
+        y = min(max(pts[n, 1], 0.0), ny - 1.0)
+        z = min(max(pts[n, 2], 0.0), nz - 1.0)
+        i0 = min(int(x), nx - 2) if nx > 1 else 0
+        j0 = min(int(y), ny - 2) if ny > 1 else 0
+        k0 = min(int(z), nz - 2) if nz > 1 else 0
+        fx, fy, fz = x - i0, y - j0, z - k0
+        for di in range(2):
+            wx = fx if di else 1.0 - fx
+            for dj in range(2):
+                wy = fy if dj else 1.0 - fy
+                for dk in range(2):
+                    # a zero weight's corner may lie beyond a one-voxel-thin grid
+                    w = wx * wy * (fz if dk else 1.0 - fz)
+                    if w == 0.0:
+                        continue
+                    for c in range(nc):
+                        out[n, c] += w * volume[i0 + di, j0 + dj, k0 + dk, c]
+    return out

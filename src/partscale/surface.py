@@ -9,6 +9,7 @@ import numpy as np
 import trimesh
 from skimage import measure
 
+from ._kernels import trilinear
 from .csdf import CSDF
 from .errors import InputError
 
@@ -27,25 +28,11 @@ def sample_linear(volume: np.ndarray, index: np.ndarray) -> np.ndarray:
     (N,) or (N, C) float64
     """
     vol = np.asarray(volume)
-    idx = np.asarray(index, np.float64).reshape(-1, 3)
-    # the 8 corners around each sample, gathered: the cost follows the samples (a surface's
-    # vertices), not the grid (no whole-grid conversion to float)
-    top = np.array(vol.shape[:3], np.float64) - 1.0
-    x = np.clip(idx, 0.0, top)
-    i0 = np.floor(x).astype(np.intp)
-    t = x - i0
-    i1 = np.minimum(i0 + 1, top.astype(np.intp))
-    out = np.zeros((len(idx), *vol.shape[3:]), np.float64)
-    for corner in range(8):
-        pick = [(corner >> a) & 1 for a in range(3)]
-        w = np.ones(len(idx))
-        ijk = []
-        for a in range(3):
-            w = w * (t[:, a] if pick[a] else 1.0 - t[:, a])
-            ijk.append(i1[:, a] if pick[a] else i0[:, a])
-        v = vol[ijk[0], ijk[1], ijk[2]]
-        out += (w[:, None] * v) if vol.ndim == 4 else w * v
-    return out
+    idx = np.ascontiguousarray(index, np.float64).reshape(-1, 3)
+    # the 8 corners around each sample: the cost follows the samples (a surface's vertices)
+    if vol.ndim == 3:
+        return trilinear(vol[..., None], idx)[:, 0]
+    return trilinear(vol, idx)
 
 
 def sample_nearest(volume: np.ndarray, index: np.ndarray) -> np.ndarray:

@@ -158,13 +158,11 @@ def lookup(P, A, b, lo, cell, table, nearest, out, off):
     One pass without temporaries: the symmetry searches look up millions of mapped points."""
     nx, ny, nz = table.shape
     for i in numba.prange(P.shape[0]):
-        q = np.empty(3)
-        for r in range(3):
-            # the identity adds exact zeros: the point itself, bit for bit
-            q[r] = P[i, 0] * A[r, 0] + P[i, 1] * A[r, 1] + P[i, 2] * A[r, 2] + b[r]
-        a = (q[0] - lo[0]) / cell
-        c = (q[1] - lo[1]) / cell
-        d = (q[2] - lo[2]) / cell
+        x, y, z = P[i, 0], P[i, 1], P[i, 2]
+        # the identity adds exact zeros: the point itself, bit for bit
+        a = (x * A[0, 0] + y * A[0, 1] + z * A[0, 2] + b[0] - lo[0]) / cell
+        c = (x * A[1, 0] + y * A[1, 1] + z * A[1, 2] + b[1] - lo[1]) / cell
+        d = (x * A[2, 0] + y * A[2, 1] + z * A[2, 2] + b[2] - lo[2]) / cell
         if nearest:
             a, c, d = np.rint(a), np.rint(c), np.rint(d)
         else:

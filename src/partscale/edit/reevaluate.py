@@ -32,7 +32,7 @@ import numba
 import numpy as np
 from skimage import measure
 
-from .._kernels import closest_on_triangle
+from .._kernels import closest_on_triangle, trilinear
 from .._options import keyword_options
 from .._workers import thread_map
 from ..csdf import BAND_VOXELS, CSDF
@@ -246,32 +246,6 @@ def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
                 best_d2[fu] = bd
                 best_t[fu] = bt
                 when[fu] = clock
-
-
-@numba.njit(cache=True)
-def _trilinear_rgb(rgb, pts):
-    """(N, 3) float64 trilinear samples of ``rgb`` (X, Y, Z, 3) uint8 at continuous indices."""
-    nx, ny, nz = rgb.shape[0], rgb.shape[1], rgb.shape[2]
-    out = np.zeros((pts.shape[0], 3))
-    for n in range(pts.shape[0]):
-        x = min(max(pts[n, 0], 0.0), nx - 1.0)
-        y = min(max(pts[n, 1], 0.0), ny - 1.0)
-        z = min(max(pts[n, 2], 0.0), nz - 1.0)
-        i0 = min(int(x), nx - 2) if nx > 1 else 0
-        j0 = min(int(y), ny - 2) if ny > 1 else 0
-        k0 = min(int(z), nz - 2) if nz > 1 else 0
-        fx, fy, fz = x - i0, y - j0, z - k0
-        for di in range(2):
-            wx = fx if di else 1.0 - fx
-            for dj in range(2):
-                wy = fy if dj else 1.0 - fy
-                for dk in range(2):
-                    w = wx * wy * (fz if dk else 1.0 - fz)
-                    if w == 0.0:
-                        continue
-                    for c in range(3):
-                        out[n, c] += w * rgb[i0 + di, j0 + dj, k0 + dk, c]
-    return out
 
 
 def recompute_mask(
@@ -534,7 +508,7 @@ def _commit(sdf, rgb, parts, mask, row0, capping, gi, new, cp, use_far, far):
                 keep[q] = False
     sel = np.flatnonzero(keep)
     gi, new, cp = gi[sel], new[sel], cp[sel]
-    col = _trilinear_rgb(rgb, cp)
+    col = trilinear(rgb, cp)
     new_parts = _surface_parts_kernel(sdf, parts, cp)
     if use_far:
         for q in range(gi.shape[0]):

@@ -26,13 +26,13 @@ def _rotation(x: float = 0.0, z: float = 0.0, base_top: float = 0.15) -> Symmetr
     )
 
 
-def _chair(hub: bool = True) -> np.ndarray:
-    """(N, 3) upright surface points: five legs 0.1-0.3 m from the y axis at 0.05 m, a hub's
-    top (radius 0.05 m at 0.12 m) when ``hub``, and a seat 0.4 m across at 0.45 m."""
+def _chair(hub: bool = True, inner: float = 0.1) -> np.ndarray:
+    """(N, 3) upright surface points: five legs ``inner``-0.3 m from the y axis at 0.05 m, a
+    hub's top (radius 0.05 m at 0.12 m) when ``hub``, and a seat 0.4 m across at 0.45 m."""
     g = np.arange(-0.2, 0.2, 0.01)
     sx, sz = np.meshgrid(g, g)
     seat = np.stack([sx.ravel(), np.full(sx.size, 0.45), sz.ravel()], axis=1)
-    r = np.arange(0.1, 0.3, 0.01)
+    r = np.arange(inner, 0.3, 0.01)
     legs = [
         np.stack([r * np.cos(a), np.full_like(r, 0.05), r * np.sin(a)], 1)
         for a in 2 * np.pi * np.arange(5) / 5
@@ -91,6 +91,44 @@ def test_no_column_without_a_hub_or_without_a_rotation():
     assert column_mod.find_column(_chair(), None, _never_free, H) is None
     # a hub under the seat, but legs carry the seat: no column
     assert column_mod.find_column(_four_legs(), _rotation(), _never_free, H) is None
+
+
+def test_an_unseen_hub_is_guessed_out_to_the_legs_inner_ends():
+    # the legs' copies start 7 cm from the axis (beyond HUB_REACH), within a quarter of the
+    # base's radius (the turn's own hub test), and nothing is nearer: a hub joins their ends
+    # to the column; legs starting at a third of it (a table's feet) still get none
+    col = column_mod.find_column(_chair(hub=False, inner=0.07), _rotation(), _never_free, H)
+    assert col is not None
+    assert 0.07 < col.hub_radius <= 0.07 + H + 1e-9
+    assert col.hub_bottom == pytest.approx(0.05)
+    assert col.bottom == pytest.approx(0.05) and col.top == pytest.approx(0.45)
+    # a seen hub needs none
+    assert column_mod.find_column(_chair(), _rotation(), _never_free, H).hub_radius == 0.0
+    # surface rising 9 cm beside the axis is not a hub (a disc no taller than wide)
+    y = np.arange(0.05, 0.145, 0.005)
+    pillar = np.stack([np.full_like(y, 0.075), y, np.zeros_like(y)], axis=1)
+    chair = np.concatenate([_chair(hub=False, inner=0.07), pillar])
+    assert column_mod.find_column(chair, _rotation(), _never_free, H) is None
+
+
+def test_a_guessed_hub_joins_the_legs_to_the_column():
+    from scipy import ndimage
+
+    origin = np.array([-0.195, 0.0, -0.195])
+    sdf = np.ones((40, 60, 40), np.float32)
+    x, z = np.meshgrid(*(origin[0] + np.arange(40) * H,) * 2, indexing="ij")
+    ring = (np.hypot(x, z) >= 0.06) & (np.hypot(x, z) <= 0.19)
+    sdf[:, 4:7][ring[:, None, :].repeat(3, axis=1)] = -1.0  # the legs' ends, y 0.04-0.06
+    sdf[:, 45:50] = -1.0  # the seat, y 0.45-0.49
+    prov = np.zeros(sdf.shape, np.uint8)
+    plain = column_mod.Column(0.0, 0.0, 0.065, 0.445, 0.02, 0.0)
+    hubbed = column_mod.Column(0.0, 0.0, 0.065, 0.445, 0.02, 0.0, 0.07, 0.045)
+    out, _, _ = column_mod.add_column(sdf, prov, plain, np.eye(4), origin, H, _never_free, 3)
+    assert ndimage.label(out < 0)[1] == 2  # the column's foot meets nothing inside the ring
+    out, p, _ = column_mod.add_column(sdf, prov, hubbed, np.eye(4), origin, H, _never_free, 3)
+    assert ndimage.label(out < 0)[1] == 1
+    assert (out[18:22, 4:7, 18:22] < 0).all()  # solid under the column's foot
+    assert (p == 3).any()
 
 
 def test_no_column_where_the_cameras_saw_through_the_thinnest():

@@ -12,6 +12,12 @@ neighbours all reached a reading beyond) does not contradict; where it contradic
 thinnest (``MAX_CONTRADICTED``) there is no column; the sure free space alone carves it. Free space inferred from missing readings
 (the hole filling of a raw frame, the silhouette of a cropped scan) is no evidence here: the
 column's own pixels are such holes.
+
+Where no surface of the base comes within ``HUB_REACH`` of the axis (the hub unseen, and the
+legs' turned copies starting farther out), the hub is guessed too: a disc about the axis
+reaching a voxel past the legs' inner ends, from their lowest point to the column's foot,
+when those ends lie within the turn's own hub test (``symmetry.HUB_SHARE`` of the base's
+radius) and the disc is no taller than its radius.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import numpy as np
 from ..csdf import BAND_VOXELS
 from .carve import Carver
 from .scan import Frame
+from .symmetry import HUB_SHARE
 
 MIN_RADIUS = 0.02
 """Metres: the thinnest column guessed (office chairs' gas lifts are 4-6 cm across)."""
@@ -52,7 +59,8 @@ RADIUS_STEP = 0.0025
 class Column:
     """A vertical cylinder in the upright frame: axis (x, z), heights ``bottom`` to ``top``,
     ``radius``; ``contradicted``: the share of its surface samples surely free at that radius
-    (0 unless even ``MIN_RADIUS`` is, by at most ``MAX_CONTRADICTED``)."""
+    (0 unless even ``MIN_RADIUS`` is, by at most ``MAX_CONTRADICTED``); ``hub_radius``: the
+    guessed hub's, a disc from ``hub_bottom`` to ``bottom`` (0: the hub was seen or copied)."""
 
     x: float
     z: float
@@ -60,6 +68,8 @@ class Column:
     top: float
     radius: float
     contradicted: float
+    hub_radius: float = 0.0
+    hub_bottom: float = 0.0
 
     def as_dict(self) -> dict:
         return {
@@ -69,6 +79,8 @@ class Column:
             "top": round(self.top, 6),
             "radius": round(self.radius, 6),
             "contradicted": round(self.contradicted, 4),
+            "hub_radius": round(self.hub_radius, 6),
+            "hub_bottom": round(self.hub_bottom, 6),
         }
 
 
@@ -92,7 +104,20 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
     x, z = float(rotation.params["axis_x"]), float(rotation.params["axis_z"])
     base_top = float(rotation.bands[0][1])
     P = np.asarray(points, np.float64)
-    near = np.hypot(P[:, 0] - x, P[:, 2] - z) <= HUB_REACH
+    r = np.hypot(P[:, 0] - x, P[:, 2] - z)
+    low = P[:, 1] < base_top
+    reach, hub_radius = HUB_REACH, 0.0
+    if (low & (r <= HUB_REACH)).sum() < MIN_POINTS:
+        # no hub seen or copied: one is guessed out to the legs' inner ends, if they start
+        # where the turn's hub test put them (a quarter of the base's radius)
+        rl = np.sort(r[low])
+        if len(rl) < MIN_POINTS:
+            return None
+        inner = float(rl[MIN_POINTS - 1])
+        if inner > HUB_SHARE * float(np.percentile(rl, 98)):
+            return None
+        reach = hub_radius = inner + h
+    near = r <= reach
     y = np.sort(P[near, 1])
     if len(y) < 2 * MIN_POINTS:
         return None
@@ -139,7 +164,12 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
             break
     if share > MAX_CONTRADICTED:
         return None  # the cameras saw through where even the thinnest column would stand
-    return Column(x, z, bottom, top, radius, share)
+    hub_bottom = float(P[near & low, 1].min()) if hub_radius else 0.0
+    if hub_radius and bottom - hub_bottom > hub_radius:
+        # a hub is a squat disc where the legs meet: surface that high so near the axis is
+        # something else (a column seen off the axis), not the legs' inner ends
+        return None
+    return Column(x, z, bottom, top, radius, share, hub_radius, hub_bottom)
 
 
 def add_column(
@@ -153,14 +183,17 @@ def add_column(
     guessed: int,
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """The SDF (X, Y, Z) float32 (world units, negative inside) and provenance (X, Y, Z) uint8
-    with ``column`` united in (reaching a voxel into the hub and the seat), except where
+    with ``column`` (and its guessed hub) united in (reaching a voxel into the hub and the
+    seat), except where
     ``free_up`` (upright points -> bool) is true; its new surface marked ``guessed``. Returns
     them and the number of voxels the column made solid."""
     A, b = grid_to_upright[:3, :3], grid_to_upright[:3, 3]
     # the grid's voxels whose centres lie in the column's box, grown by the band (and a voxel):
     # every voxel whose distance the column can change within the band is rewritten
-    lo = np.array([column.x - column.radius, column.bottom - h, column.z - column.radius])
-    hi = np.array([column.x + column.radius, column.top + h, column.z + column.radius])
+    wide = max(column.radius, column.hub_radius)
+    foot = min(column.bottom, column.hub_bottom) if column.hub_radius else column.bottom
+    lo = np.array([column.x - wide, foot - h, column.z - wide])
+    hi = np.array([column.x + wide, column.top + h, column.z + wide])
     corners = np.array(list(itertools.product(*zip(lo, hi, strict=True))))
     g = (corners - b) @ A  # upright -> grid (A is a rotation)
     grow = BAND_VOXELS + 1
@@ -171,9 +204,18 @@ def add_column(
     sl = tuple(slice(int(s), int(e)) for s, e in zip(i0, i1, strict=True))
     ijk = np.indices(tuple(i1 - i0)).reshape(3, -1).T + i0
     up = (origin + ijk * h) @ A.T + b
-    radial = np.hypot(up[:, 0] - column.x, up[:, 2] - column.z) - column.radius
-    axial = np.maximum(column.bottom - h - up[:, 1], up[:, 1] - column.top - h)
-    d = np.maximum(radial, axial).reshape(tuple(i1 - i0)).astype(np.float32)
+    r = np.hypot(up[:, 0] - column.x, up[:, 2] - column.z)
+    d = np.maximum(
+        r - column.radius, np.maximum(column.bottom - h - up[:, 1], up[:, 1] - column.top - h)
+    )
+    if column.hub_radius:
+        # a voxel into the legs below and the column above, as the column reaches into both
+        hub = np.maximum(
+            r - column.hub_radius,
+            np.maximum(column.hub_bottom - h - up[:, 1], up[:, 1] - column.bottom - h),
+        )
+        d = np.minimum(d, hub)
+    d = d.reshape(tuple(i1 - i0)).astype(np.float32)
     inside = d < 0
     free = np.zeros(d.shape, bool)
     free[inside] = free_up(up[inside.ravel()])

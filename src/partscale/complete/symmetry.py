@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 from .carve import lookup
 
@@ -55,6 +56,24 @@ which they must reach the axis (their hub): a length of the base, not of the gri
 cells passed the TUM purple chair's two legs at --res 64, reaching 0.18 of their radius, and
 failed them at --res 128, 0.20). A star base's legs start at its hub (0.02-0.20 of their
 radius on the TUM chairs); a table's four legs, each a piece, stand near their radius."""
+ARM_REACH = 6.0
+"""Cells: the neighbourhood whose spread in plan gives a base point's direction (a leg is a few
+cells wide and many long)."""
+ARM_LINEARITY = 0.8
+"""1 - minor/major variance of that neighbourhood above which the point lies on an arm."""
+ARM_SAMPLES = 400
+"""Arm points drawn to vote for the hub."""
+ARM_TOLERANCE = 2.0
+"""Cells from an arm's line within which an axis counts as on it."""
+ARM_GAP_DEG = 15.0
+"""Degrees about the hub without arm points that separate two arms."""
+ARM_MIN_POINTS = 5
+"""Arm points (of ``ARM_SAMPLES``) that make an arm."""
+ARM_FOLD_DEG = 10.0
+"""Degrees by which the angle between two arms may miss a multiple of a fold's step."""
+ARM_PARALLEL = 0.87
+"""Arms whose lines meet must differ in direction: the mean resultant length of the voters'
+doubled angles stays below this (two arms 30 degrees apart; parallel runners give 1)."""
 ROTATION_SLACK_DEG = 4.0
 """Degrees a rotated copy may turn further to land on the scan (:func:`_copies_scored`)."""
 MIN_COVER = 0.6
@@ -443,33 +462,22 @@ def rotation_axis(
         foot_lo, foot_hi = np.full(2, -np.inf), np.full(2, np.inf)
     piece = clusters(base, ROTATION_PIECE * cell)
     scorer = _Scorer(base, free, cell)
-    best = None
+    bounds = (foot_lo, foot_hi)
+    found = []
     for k in folds:
-        centre = _rotation_search(base, scorer, cell, k, rng, None, (foot_lo, foot_hi))
-        held = _pieces_held(base, piece, scorer, centre, k)
-        if not held.any():
-            continue
-        # again on what the rotation holds for, from where the first search ended
-        centre = _rotation_search(base[held], scorer, cell, k, rng, centre, (foot_lo, foot_hi))
-        held = _pieces_held(base, piece, scorer, centre, k)
-        if (
-            held.mean() < MIN_ROTATION_COVER
-            or not ((centre >= foot_lo) & (centre <= foot_hi)).all()
-        ):
-            continue
-        # a turning base is one piece whose arms meet at a hub on the axis (four legs of a
-        # table, each a piece of its own, are not)
-        r = np.hypot(base[held, 0] - centre[0], base[held, 2] - centre[1])
-        if r.min() > HUB_SHARE * r.max():
-            continue
-        # the axis placed by exact copies (the slack finds it, but copies are made exact)
-        centre = _rotation_search(
-            base[held], scorer, cell, k, rng, centre, (foot_lo, foot_hi), slack=False
-        )
-        # the fold is chosen on exact copies: with the slack a 4-fold turn of a five-star
-        # lands on legs often enough to look as good
-        sup, vio = _copies_on(base[held], scorer, centre, k, slack=False)
-        score = float(held.mean() * (sup.mean() - VIOLATION_WEIGHT * vio.mean()))
+        turn = _turn(base, piece, scorer, cell, k, rng, bounds)
+        if turn is not None:
+            found.append((k, *turn))
+    # a star's legs point at its hub, and the angles between them give its fold, however few
+    # are seen and wherever the copies land: two straight legs map onto each other about any
+    # point of their bisector, where a fold of the wrong count can land better (its own
+    # generator, so bases without arms are unchanged)
+    arms = _Arms.of(base, cell, np.random.default_rng(seed + 1)) if len(found) > 1 else None
+    fold = arms.fold(tuple(f[0] for f in found)) if arms is not None else None
+    if fold is not None:
+        found = [f for f in found if f[0] == fold]
+    best = None
+    for k, score, centre, held, sup, vio in found:
         if best is None or score > best[0]:
             A, b = _rotation(2 * np.pi / k, *centre)
             region = _Region.around(base[held], centre, k, ROTATION_PIECE * cell)
@@ -493,6 +501,132 @@ def rotation_axis(
                 ),
             )
     return None if best is None else best[1]
+
+
+def _turn(base, piece, scorer, cell, k, rng, bounds):
+    """(score, centre (2,), held (M,) bool, support, violation) of the k-fold turn of the base
+    points (M, 3) about the axis the search places within ``bounds`` (lo, hi), or None where
+    the rotation is refused."""
+    foot_lo, foot_hi = bounds
+    centre = _rotation_search(base, scorer, cell, k, rng, None, bounds)
+    held = _pieces_held(base, piece, scorer, centre, k)
+    if not held.any():
+        return None
+    # again on what the rotation holds for, from where the first search ended
+    centre = _rotation_search(base[held], scorer, cell, k, rng, centre, bounds)
+    held = _pieces_held(base, piece, scorer, centre, k)
+    if held.mean() < MIN_ROTATION_COVER or not ((centre >= foot_lo) & (centre <= foot_hi)).all():
+        return None
+    # a turning base is one piece whose arms meet at a hub on the axis (four legs of a
+    # table, each a piece of its own, are not)
+    r = np.hypot(base[held, 0] - centre[0], base[held, 2] - centre[1])
+    if r.min() > HUB_SHARE * r.max():
+        return None
+    # the axis placed by exact copies (the slack finds it, but copies are made exact)
+    centre = _rotation_search(base[held], scorer, cell, k, rng, centre, bounds, slack=False)
+    # the fold is chosen on exact copies: with the slack a 4-fold turn of a five-star
+    # lands on legs often enough to look as good
+    sup, vio = _copies_on(base[held], scorer, centre, k, slack=False)
+    return float(held.mean() * (sup.mean() - VIOLATION_WEIGHT * vio.mean())), centre, held, sup, vio
+
+
+@dataclass(frozen=True, eq=False)
+class _Arms:
+    """The base's arms seen from above: points (M, 2) (x, z) on elongated stretches and their
+    directions (M, 2), and the hub (2,) where most of their lines meet."""
+
+    X: np.ndarray
+    d: np.ndarray
+    cell: float
+    hub: np.ndarray
+    votes: int
+
+    @classmethod
+    def of(cls, base: np.ndarray, cell: float, rng) -> _Arms | None:
+        """The arms of the base points (N, 3), or None where they do not meet from at least two
+        directions (no elongated stretches, or parallel ones)."""
+        X = base[:, [0, 2]]
+        pairs = cKDTree(X).query_pairs(ARM_REACH * cell, output_type="ndarray")
+        # each point's neighbourhood covariance in plan, summed over the pairs (and itself)
+        i = np.concatenate([pairs[:, 0], pairs[:, 1], np.arange(len(X))])
+        j = np.concatenate([pairs[:, 1], pairs[:, 0], np.arange(len(X))])
+        n = np.bincount(i, minlength=len(X)).astype(np.float64)
+        Y = X[j] - X[i]  # offsets keep the sums well conditioned
+        mx = np.bincount(i, Y[:, 0], len(X)) / n
+        mz = np.bincount(i, Y[:, 1], len(X)) / n
+        a = np.bincount(i, Y[:, 0] ** 2, len(X)) / n - mx * mx
+        b = np.bincount(i, Y[:, 0] * Y[:, 1], len(X)) / n - mx * mz
+        c = np.bincount(i, Y[:, 1] ** 2, len(X)) / n - mz * mz
+        half = np.sqrt(np.maximum(((a - c) / 2) ** 2 + b * b, 0.0))
+        major, minor = (a + c) / 2 + half, (a + c) / 2 - half
+        on = (n >= 6) & (1.0 - minor / np.maximum(major, 1e-300) >= ARM_LINEARITY)
+        if on.sum() < 20:  # a few stray points are no arm
+            return None
+        theta = 0.5 * np.arctan2(2 * b[on], a[on] - c[on])
+        d = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+        X = X[on]
+        if len(X) > ARM_SAMPLES:
+            keep = rng.choice(len(X), ARM_SAMPLES, replace=False)
+            X, d = X[keep], d[keep]
+        arms = cls(X, d, cell, np.zeros(2), 0)
+        # the hub: coarse over the base's footprint, then finer around the best
+        lo, hi = X.min(axis=0), X.max(axis=0)
+        axes = np.stack(
+            np.meshgrid(*(np.arange(lo[q], hi[q] + cell, cell) for q in (0, 1)), indexing="ij"),
+            axis=-1,
+        ).reshape(-1, 2)
+        hub = axes[int(np.argmax(arms._votes(axes).sum(axis=1)))]
+        fine = np.arange(-4, 5) * cell / 4
+        axes = hub + np.stack(np.meshgrid(fine, fine, indexing="ij"), axis=-1).reshape(-1, 2)
+        v = arms._votes(axes)
+        best = int(np.argmax(v.sum(axis=1)))
+        # the voters must point along at least two directions (doubled angles: a line's
+        # direction has no sign)
+        dd = d[v[best]]
+        if len(dd) == 0:
+            return None
+        twice = np.exp(2j * np.arctan2(dd[:, 1], dd[:, 0]))
+        if abs(twice.mean()) > ARM_PARALLEL:
+            return None
+        return cls(X, d, cell, axes[best], int(v[best].sum()))
+
+    def _votes(self, axes: np.ndarray) -> np.ndarray:
+        """(C, M) bool: the arm points whose line passes within ``ARM_TOLERANCE`` cells of each
+        axis (C, 2), from beyond their own neighbourhood."""
+        v = axes[:, None, :] - self.X[None]
+        along = np.abs(v[..., 0] * self.d[:, 0] + v[..., 1] * self.d[:, 1])
+        across = np.abs(v[..., 1] * self.d[:, 0] - v[..., 0] * self.d[:, 1])
+        return (across <= ARM_TOLERANCE * self.cell) & (along >= 2 * ARM_REACH * self.cell)
+
+    def fold(self, folds: tuple[int, ...]) -> int | None:
+        """The fold in ``folds`` whose step the angles between the arms about the hub are
+        multiples of, within ``ARM_FOLD_DEG`` (each arm counts once, however much of it is
+        seen), where exactly one fold fits; else None."""
+        v = self.X - self.hub
+        far = np.hypot(v[:, 0], v[:, 1]) >= ARM_REACH * self.cell
+        phi = np.sort(np.degrees(np.arctan2(v[far, 1], v[far, 0])))
+        if len(phi) < 2:
+            return None
+        # arms: runs of angles without a gap wider than ARM_GAP_DEG, round the circle
+        gaps = np.diff(np.append(phi, phi[0] + 360.0))
+        cuts = np.flatnonzero(gaps > ARM_GAP_DEG)
+        if len(cuts) < 2:
+            return None  # one arm (or a ring of points): no angle between arms
+        start = (cuts + 1) % len(phi)
+        ends = np.append(cuts[1:], cuts[0] + len(phi))
+        unwrapped = np.concatenate([phi, phi + 360.0])
+        arm = [unwrapped[i : j + 1] for i, j in zip(start, ends, strict=True)]
+        arm = [np.mean(a) for a in arm if len(a) >= ARM_MIN_POINTS]
+        if len(arm) < 2:
+            return None
+        between = (np.array(arm)[:, None] - np.array(arm)[None])[np.triu_indices(len(arm), 1)]
+        fits = []
+        for k in folds:
+            step = 360.0 / k
+            off = np.abs(between - step * np.round(between / step))
+            if off.max() <= ARM_FOLD_DEG:
+                fits.append(k)
+        return fits[0] if len(fits) == 1 else None
 
 
 def _copies_on(X, scorer, centre, k, slack=True) -> tuple[np.ndarray, np.ndarray]:

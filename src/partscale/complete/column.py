@@ -104,20 +104,20 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
     x, z = float(rotation.params["axis_x"]), float(rotation.params["axis_z"])
     base_top = float(rotation.bands[0][1])
     P = np.asarray(points, np.float64)
-    r = np.hypot(P[:, 0] - x, P[:, 2] - z)
+    off_axis = np.hypot(P[:, 0] - x, P[:, 2] - z)
     low = P[:, 1] < base_top
     reach, hub_radius = HUB_REACH, 0.0
-    if (low & (r <= HUB_REACH)).sum() < MIN_POINTS:
+    if (low & (off_axis <= HUB_REACH)).sum() < MIN_POINTS:
         # no hub seen or copied: one is guessed out to the legs' inner ends, if they start
         # where the turn's hub test put them (a quarter of the base's radius)
-        rl = np.sort(r[low])
+        rl = np.sort(off_axis[low])
         if len(rl) < MIN_POINTS:
             return None
         inner = float(rl[MIN_POINTS - 1])
         if inner > HUB_SHARE * float(np.percentile(rl, 98)):
             return None
         reach = hub_radius = inner + h
-    near = r <= reach
+    near = off_axis <= reach
     y = np.sort(P[near, 1])
     if len(y) < 2 * MIN_POINTS:
         return None

@@ -54,6 +54,10 @@ MIN_UP_TILT_DEG = 0.5
 planes are not rebuilt for it; the tilt search's finest step is 0.25 degrees)."""
 SYMMETRY_MARGIN = 3.0
 """Voxels a symmetric copy must lie in front of a reading to contradict the scan."""
+SYMMETRY_RES = 128
+"""Voxels across the object below which the symmetry tests' voxel stops shrinking: a finer grid
+does not make the sensor's points more exact (at --res 256 the TUM purple chair's legs no longer
+landed on each other within half its cells, and its base found no turn)."""
 FREE_GRID_VOXELS = 1.5
 """Voxels between the points where the symmetry search tabulates the free space (a query reads
 the nearest, at most 0.87 of these away: well inside SYMMETRY_MARGIN)."""
@@ -394,7 +398,8 @@ def complete(
     # once in the first upright frame around the object (copies land within about its size)
     U0 = U
     lo0, hi0 = Qu.min(axis=0) - 0.25 * ext, Qu.max(axis=0) + 0.25 * ext
-    free_grid = FreeGrid(carver, Uinv, lo0, hi0, FREE_GRID_VOXELS * h0, SYMMETRY_MARGIN * h0)
+    hs = max(h0, float(ext.max()) / SYMMETRY_RES)
+    free_grid = FreeGrid(carver, Uinv, lo0, hi0, FREE_GRID_VOXELS * hs, SYMMETRY_MARGIN * hs)
 
     def free_up(p):
         # until the frame turns (the mirror search) the upright frame is the table's: millions
@@ -407,7 +412,7 @@ def complete(
     syms: list[sym_mod.Symmetry] = []
     rng = np.random.default_rng(0)
     sub = rng.choice(len(Qu), min(len(Qu), 20000), replace=False)
-    cell = 1.5 * h0
+    cell = 1.5 * hs
     Nu0 = QN @ U[:3, :3].T
     if symmetry:
         syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
@@ -685,6 +690,9 @@ def complete(
         "cluster_cell_m": CLUSTER_CELL,
         "symmetry_min_support": sym_mod.MIN_SUPPORT,
         "symmetry_max_violation": sym_mod.MAX_VIOLATION,
+        # the voxel the symmetry tests measured in: the grid's, never finer than SYMMETRY_RES's
+        "symmetry_voxel_m": round(hs, 6),
+        "symmetry_res": SYMMETRY_RES,
     }
     meta = {"source": source, "units": "m", "history": [history], "completion": completion}
     report(1.0, "done")

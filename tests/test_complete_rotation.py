@@ -287,3 +287,28 @@ def test_the_symmetry_tolerance_follows_the_scan_not_a_finer_grid():
     entry = c.meta["history"][0]
     # recorded: about the 128 grid's voxel (the object's observed extent over 128), not 256's
     assert entry["symmetry_res"] == 128 and entry["symmetry_voxel_m"] > 1.5 * c.voxel_size
+
+
+@pytest.mark.parametrize(
+    ("angles", "fold"),
+    [
+        ((0, 72), 5),
+        ((10, 82, 154), 5),
+        ((0, 144), 5),
+        ((179, -109), 5),  # two legs 72 degrees apart across +-180
+        ((0, 90), 4),
+        ((0, 90, 180), 4),
+        ((0, 110), None),  # neither fold's step
+        ((175, -103), None),  # 82 degrees: within 10 of both steps
+        ((30,), None),  # one leg: no angle between legs
+    ],
+)
+def test_the_legs_angles_about_the_hub_give_one_fold_or_none(angles, fold):
+    from partscale.complete.symmetry import _Arms
+
+    r = np.linspace(0.1, 0.3, 30)
+    X = np.concatenate(
+        [np.stack([r * np.cos(np.radians(a)), r * np.sin(np.radians(a))], 1) for a in angles]
+    )
+    d = X / np.linalg.norm(X, axis=1)[:, None]
+    assert _Arms(X, d, 0.01, np.zeros(2), len(X)).fold((5, 4)) == fold

@@ -612,7 +612,8 @@ class _Arms:
         cuts = np.flatnonzero(gaps > ARM_GAP_DEG)
         if len(cuts) < 2:
             return None  # one arm (or a ring of points): no angle between arms
-        start = (cuts + 1) % len(phi)
+        # arm i runs from after cut i to cut i + 1; the last wraps past 180 degrees
+        start = cuts + 1
         ends = np.append(cuts[1:], cuts[0] + len(phi))
         unwrapped = np.concatenate([phi, phi + 360.0])
         arm = [unwrapped[i : j + 1] for i, j in zip(start, ends, strict=True)]

@@ -311,4 +311,4 @@ def test_the_legs_angles_about_the_hub_give_one_fold_or_none(angles, fold):
         [np.stack([r * np.cos(np.radians(a)), r * np.sin(np.radians(a))], 1) for a in angles]
     )
     d = X / np.linalg.norm(X, axis=1)[:, None]
-    assert _Arms(X, d, 0.01, np.zeros(2), len(X)).fold((5, 4)) == fold
+    assert _Arms(X, d, 0.01, np.zeros(2)).fold((5, 4)) == fold

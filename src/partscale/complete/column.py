@@ -184,9 +184,8 @@ def add_column(
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """The SDF (X, Y, Z) float32 (world units, negative inside) and provenance (X, Y, Z) uint8
     with ``column`` (and its guessed hub) united in (reaching a voxel into the hub and the
-    seat), except where
-    ``free_up`` (upright points -> bool) is true; its new surface marked ``guessed``. Returns
-    them and the number of voxels the column made solid."""
+    seat), except where ``free_up`` (upright points -> bool) is true; its new surface marked
+    ``guessed``. Returns them and the number of voxels the column made solid."""
     A, b = grid_to_upright[:3, :3], grid_to_upright[:3, 3]
     # the grid's voxels whose centres lie in the column's box, grown by the band (and a voxel):
     # every voxel whose distance the column can change within the band is rewritten
@@ -205,16 +204,14 @@ def add_column(
     ijk = np.indices(tuple(i1 - i0)).reshape(3, -1).T + i0
     up = (origin + ijk * h) @ A.T + b
     r = np.hypot(up[:, 0] - column.x, up[:, 2] - column.z)
-    d = np.maximum(
-        r - column.radius, np.maximum(column.bottom - h - up[:, 1], up[:, 1] - column.top - h)
-    )
+    y = up[:, 1]
+    # each reaches a voxel beyond its ends: the column into the hub and the seat, the guessed
+    # hub into the legs below and the column above
+    d = _cylinder(r, y, column.radius, column.bottom - h, column.top + h)
     if column.hub_radius:
-        # a voxel into the legs below and the column above, as the column reaches into both
-        hub = np.maximum(
-            r - column.hub_radius,
-            np.maximum(column.hub_bottom - h - up[:, 1], up[:, 1] - column.bottom - h),
+        d = np.minimum(
+            d, _cylinder(r, y, column.hub_radius, column.hub_bottom - h, column.bottom + h)
         )
-        d = np.minimum(d, hub)
     d = d.reshape(tuple(i1 - i0)).astype(np.float32)
     inside = d < 0
     free = np.zeros(d.shape, bool)
@@ -232,3 +229,9 @@ def add_column(
     p[take & (d < -h)] = 0
     prov[sl] = p
     return sdf, prov, int((take & (d < 0) & (old >= 0)).sum())
+
+
+def _cylinder(r: np.ndarray, y: np.ndarray, radius: float, lo: float, hi: float) -> np.ndarray:
+    """(N,) signed distance bound (negative inside) of the vertical cylinder of ``radius``
+    from height ``lo`` to ``hi``, at points ``r`` (N,) off its axis and at heights ``y`` (N,)."""
+    return np.maximum(r - radius, np.maximum(lo - y, y - hi))

@@ -539,7 +539,6 @@ class _Arms:
     d: np.ndarray
     cell: float
     hub: np.ndarray
-    votes: int
 
     @classmethod
     def of(cls, base: np.ndarray, cell: float, rng) -> _Arms | None:
@@ -568,17 +567,16 @@ class _Arms:
         if len(X) > ARM_SAMPLES:
             keep = rng.choice(len(X), ARM_SAMPLES, replace=False)
             X, d = X[keep], d[keep]
-        arms = cls(X, d, cell, np.zeros(2), 0)
         # the hub: coarse over the base's footprint, then finer around the best
         lo, hi = X.min(axis=0), X.max(axis=0)
         axes = np.stack(
             np.meshgrid(*(np.arange(lo[q], hi[q] + cell, cell) for q in (0, 1)), indexing="ij"),
             axis=-1,
         ).reshape(-1, 2)
-        hub = axes[int(np.argmax(arms._votes(axes).sum(axis=1)))]
+        hub = axes[int(np.argmax(_arm_votes(axes, X, d, cell).sum(axis=1)))]
         fine = np.arange(-4, 5) * cell / 4
         axes = hub + np.stack(np.meshgrid(fine, fine, indexing="ij"), axis=-1).reshape(-1, 2)
-        v = arms._votes(axes)
+        v = _arm_votes(axes, X, d, cell)
         best = int(np.argmax(v.sum(axis=1)))
         # the voters must point along at least two directions (doubled angles: a line's
         # direction has no sign)
@@ -588,15 +586,7 @@ class _Arms:
         twice = np.exp(2j * np.arctan2(dd[:, 1], dd[:, 0]))
         if abs(twice.mean()) > ARM_PARALLEL:
             return None
-        return cls(X, d, cell, axes[best], int(v[best].sum()))
-
-    def _votes(self, axes: np.ndarray) -> np.ndarray:
-        """(C, M) bool: the arm points whose line passes within ``ARM_TOLERANCE`` cells of each
-        axis (C, 2), from beyond their own neighbourhood."""
-        v = axes[:, None, :] - self.X[None]
-        along = np.abs(v[..., 0] * self.d[:, 0] + v[..., 1] * self.d[:, 1])
-        across = np.abs(v[..., 1] * self.d[:, 0] - v[..., 0] * self.d[:, 1])
-        return (across <= ARM_TOLERANCE * self.cell) & (along >= 2 * ARM_REACH * self.cell)
+        return cls(X, d, cell, axes[best])
 
     def fold(self, folds: tuple[int, ...]) -> int | None:
         """The fold in ``folds`` whose step the angles between the arms about the hub are
@@ -628,6 +618,15 @@ class _Arms:
             if off.max() <= ARM_FOLD_DEG:
                 fits.append(k)
         return fits[0] if len(fits) == 1 else None
+
+
+def _arm_votes(axes: np.ndarray, X: np.ndarray, d: np.ndarray, cell: float) -> np.ndarray:
+    """(C, M) bool: the arm points X (M, 2) of direction d (M, 2) whose line passes within
+    ``ARM_TOLERANCE`` cells of each axis (C, 2), from beyond their own neighbourhood."""
+    v = axes[:, None, :] - X[None]
+    along = np.abs(v[..., 0] * d[:, 0] + v[..., 1] * d[:, 1])
+    across = np.abs(v[..., 1] * d[:, 0] - v[..., 0] * d[:, 1])
+    return (across <= ARM_TOLERANCE * cell) & (along >= 2 * ARM_REACH * cell)
 
 
 def _copies_on(X, scorer, centre, k, slack=True) -> tuple[np.ndarray, np.ndarray]:

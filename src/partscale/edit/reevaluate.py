@@ -704,7 +704,7 @@ def _solve_box(sdf, mask, row0, lo, hi, own, h, lim, pad, npass):
     sub = np.array(sdf[box], dtype=np.float32)
     if min(sub.shape) < 2 or not ((sub <= 0).any() and (sub > 0).any()):
         return None
-    verts, faces, _n, _v = measure.marching_cubes(sub, 0.0, allow_degenerate=False)
+    verts, faces, _n, _v = measure.marching_cubes(sub, 0.0, allow_degenerate=True)
     if len(faces) == 0:
         return None
     tri = _triangle_table(verts.astype(np.float64), faces)

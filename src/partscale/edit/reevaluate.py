@@ -475,30 +475,45 @@ def reevaluate_arrays(
         hi = [min(int(run[-1]) + pad + 1, sdf.shape[0])] + [
             min(int(b[:, 2 * a + 1].max()) + pad + 1, sdf.shape[a + 1]) for a in (0, 1)
         ]
-        return _solve_box(sdf, mask, row0, lo, hi, (int(run[0]), int(run[-1])), h, lim, pad, npass)
+        got = _solve_box(sdf, mask, row0, lo, hi, (int(run[0]), int(run[-1])), h, lim, pad, npass)
+        if got is None:
+            return None
+        gi, new, cp = got
+        # code 2 (uint8 masks): the old value is an upper bound of the distance, kept where
+        # smaller; colours and parts are read here, from the unchanged arrays, in this thread
+        return _box_values(
+            sdf, rgb, parts, mask, row0, capping, gi, new, cp, far is not None, far32
+        )
 
-    # boxes are independent (each reads the unchanged field) and the propagation, their main
-    # cost, releases the GIL: they are solved side by side (the pieces depend on the layers
-    # only, never on the number of threads, so neither do the results)
-    results = thread_map(solve, runs)
-    found = [got for got in results if got is not None]
+    far32 = np.float32(far or 0.0)
+    # boxes are independent (each reads the unchanged field; all writes come after) and their
+    # kernels, marching cubes aside, release the GIL: they are solved side by side (the pieces
+    # depend on the layers only, never on the number of threads, so neither do the results)
+    found = [got for got in thread_map(solve, runs) if got is not None]
     if not found:
         return 0
-    gi = np.concatenate([f[0] for f in found])
-    new = np.concatenate([f[1] for f in found])
-    cp = np.concatenate([f[2] for f in found])
-    # code 2 (uint8 masks): the old value is an upper bound of the distance, kept where smaller
-    return _commit(
-        sdf, rgb, parts, mask, row0, capping, gi, new, cp, far is not None, np.float32(far or 0.0)
-    )
+    for gi, new, col, new_parts in found:
+        _write(sdf, rgb, parts, gi, new, col, new_parts)
+    return sum(f[0].shape[0] for f in found)
 
 
-@numba.njit(cache=True)
-def _commit(sdf, rgb, parts, mask, row0, capping, gi, new, cp, use_far, far):
-    """Write the recomputed voxels ``gi`` (N, 3): distance ``new``, colour and part at their
-    closest point ``cp``; see :func:`reevaluate_arrays`. Returns the number written.
+@numba.njit(cache=True, nogil=True)
+def _write(sdf, rgb, parts, gi, new, col, new_parts):
+    """Write distances ``new``, colours ``col`` (N, 3) uint8 and parts at voxels ``gi`` (N, 3)."""
+    for q in range(gi.shape[0]):
+        i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
+        sdf[i, j, k] = new[q]
+        for c in range(3):
+            rgb[i, j, k, c] = col[q, c]
+        parts[i, j, k] = new_parts[q]
 
-    Colours and parts are all read before any is written (no voxel sees another's new colour).
+
+@numba.njit(cache=True, nogil=True)
+def _box_values(sdf, rgb, parts, mask, row0, capping, gi, new, cp, use_far, far):
+    """What the recomputed voxels ``gi`` (N, 3) of one box take: ``(gi, distance, colour (uint8),
+    part)`` at their closest point ``cp``, less the code-2 voxels that keep their value; see
+    :func:`reevaluate_arrays`. Reads the arrays only (every box's values come before any write:
+    no voxel sees another's new colour).
     """
     keep = np.ones(gi.shape[0], np.bool_)
     if capping:
@@ -516,13 +531,11 @@ def _commit(sdf, rgb, parts, mask, row0, capping, gi, new, cp, use_far, far):
             moved = new[q] != sdf[i, j, k] or new_parts[q] != parts[i, j, k]
             if moved and new[q] > far:
                 new_parts[q] = -1
+    col8 = np.empty((gi.shape[0], 3), np.uint8)
     for q in range(gi.shape[0]):
-        i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
-        sdf[i, j, k] = new[q]
         for c in range(3):
-            rgb[i, j, k, c] = np.uint8(min(max(np.rint(col[q, c]), 0.0), 255.0))
-        parts[i, j, k] = new_parts[q]
-    return gi.shape[0]
+            col8[q, c] = np.uint8(min(max(np.rint(col[q, c]), 0.0), 255.0))
+    return gi, new, col8, new_parts
 
 
 def _pieces(runs: list[np.ndarray]) -> list[np.ndarray]:

@@ -1,5 +1,6 @@
 """Re-evaluation of a long run of target layers in pieces: the same on any machine, and as exact as
-one box against exact distances to the marching-cubes surface."""
+one box against exact distances to the marching-cubes surface; faces on the grid nodes
+(degenerate triangles) re-evaluate to the exact distances."""
 
 from __future__ import annotations
 
@@ -84,3 +85,21 @@ def test_pieces_are_as_exact_as_one_box(stretched, monkeypatch):
     assert stats["pieces"][0] <= 0.05, stats
     # the pieces did change some values (else this test would compare a thing with itself)
     assert not np.array_equal(split.sdf, one.sdf)
+
+
+def test_faces_on_the_grid_nodes_are_exact():
+    """A box whose faces lie on grid nodes: the field is 0 there and marching cubes makes
+    degenerate triangles (kept: they are points and segments of the surface). Distances scaled
+    by 1.7, as a naive stretch scales them, come back to the box's exact distances (float32
+    rounding only) across the band."""
+    h = 0.125
+    box = shapes.box((0.0, 0.0, 0.0), (2.0, 1.5, 1.0), voxel_size=h)
+    sdf = np.array(box.sdf, np.float32)
+    v, f, _, _ = measure.marching_cubes(sdf, 0.0, allow_degenerate=True)
+    area = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+    assert (area == 0).sum() >= 100  # the case this test is about
+    out = reevaluate(box.replace(sdf=sdf * np.float32(1.7)))
+    # the voxels still within the band after scaling (beyond it reevaluate leaves values be)
+    band = np.abs(sdf) * 1.7 <= 3 * h
+    err = np.abs(out.sdf[band].astype(np.float64) - sdf[band]) / h
+    assert err.max() <= 1e-5, err.max()

@@ -466,6 +466,8 @@ def reevaluate_arrays(
     breaks = np.flatnonzero(np.diff(layers) > 2 * pad + 1)
     runs = _pieces(np.split(layers, breaks + 1))
 
+    far32 = np.float32(far or 0.0)
+
     def solve(run: np.ndarray):
         # the box around the run's targets that holds every surface point within the band
         # of them (it holds no other cluster's targets: clusters are > 2 pad layers apart;
@@ -485,7 +487,6 @@ def reevaluate_arrays(
             sdf, rgb, parts, mask, row0, capping, gi, new, cp, far is not None, far32
         )
 
-    far32 = np.float32(far or 0.0)
     # boxes are independent (each reads the unchanged field; all writes come after) and their
     # kernels, marching cubes aside, release the GIL: they are solved side by side (the pieces
     # depend on the layers only, never on the number of threads, so neither do the results)

@@ -117,6 +117,8 @@ BAD = [
     (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.1"], ["DEST > START"]),
     (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.2"], ["DEST == START", "mode tile"]),
     (["--axis", "x", "--zone", "0.2", "0.5", "--to", "0.1", "--mode", "tile"], ["DEST > START"]),
+    # positions are echoed as typed, with the world value they resolved to
+    (["--axis", "x", "--zone", "10%", "90%", "--to", "-5%"], ["START 10% (", "got -5% ("]),
     (["--axis", "x", "--zone", "1.5", "1.8", "--to", "2.0"], ["zone", "extent"]),
     (["--axis", "x", "--zone", "0.2", "0.23", "--to", "0.4"], ["two voxels"]),
     (["--axis", "x", "--zone", "abc", "0.5", "--to", "0.7"], ["--zone START", "number"]),

@@ -123,7 +123,13 @@ def _fmt(v: float) -> str:
     return f"{v:.6g}"
 
 
-def resolve_edit(csdf: CSDF, edit: Edit) -> ResolvedEdit:
+def _shown(given: object, world: float, units: str | None) -> str:
+    """A position as the user gave it, with its world value when that differs (``10% (0.2 m)``)."""
+    w = f"{world:.6g}" + (f" {units}" if units else "")
+    return f"{given} ({w})" if isinstance(given, str) else w
+
+
+def resolve_edit(csdf: CSDF, edit: Edit, *, given: Edit | None = None) -> ResolvedEdit:
     """Validate ``edit`` against ``csdf`` and resolve it to world units.
 
     ``%`` positions refer to the solid's extent along the axis; ``dest`` is snapped to whole
@@ -131,34 +137,44 @@ def resolve_edit(csdf: CSDF, edit: Edit) -> ResolvedEdit:
     the sides join (its start snaps to whole voxels from its end, as a destination does, so the
     content beyond moves by whole voxels). Raises :class:`InputError` for a zone outside the
     solid or thinner than two voxels, a destination not beyond the start (for stretch and
-    global; before it for tile), or an output grid too large for memory.
+    global; before it for tile), or an output grid too large for memory. ``given``: the edit as
+    the user wrote it (a recipe step before its planes were carried to world units), whose
+    positions the messages echo beside the world values.
     """
     ax = edit.axis_index
     h = csdf.voxel_size
     sb = csdf.surface_bounds()
     lo, hi = float(sb[0, ax]), float(sb[1, ax])
     s, e, d = edit.resolve(lo, hi)
+    units = csdf.meta.get("units")
+
+    def shown(which: str, world: float) -> str:
+        return _shown(getattr(given or edit, which), world, units)
+
     if not all(map(math.isfinite, (s, e, d, (d - e) / h))):
         raise InputError(
             f"zone, to: expected finite positions, got zone [{_fmt(s)}, {_fmt(e)}], to {_fmt(d)}"
         )
     name = AXES[ax]
     if not s < e:
-        raise InputError(f"zone: expected start < end, got start {_fmt(s)} >= end {_fmt(e)}")
+        raise InputError(
+            f"zone: expected start < end, got start {shown('start', s)} >= end {shown('end', e)}"
+        )
     # tile to the zone's start: 0 copies, the zone cut out
     remove = edit.mode == "tile" and d == s
     if not (d > s or remove):
         if d == s:
             raise InputError(
-                f"to: expected DEST > START {_fmt(s)} for {edit.mode}, got DEST == START (to "
+                f"to: expected DEST > START {shown('start', s)} for {edit.mode}, got DEST == "
+                f"START (to "
                 f"remove the zone use mode tile, whose DEST == START makes 0 copies)"
             )
-        raise InputError(f"to: expected DEST > START {_fmt(s)}, got {_fmt(d)}")
+        raise InputError(f"to: expected DEST > START {shown('start', s)}, got {shown('dest', d)}")
     tol = h / 2
     if s < lo - tol or e > hi + tol:
         raise InputError(
             f"zone: expected inside the solid's extent [{_fmt(lo)}, {_fmt(hi)}] along {name}, "
-            f"got [{_fmt(s)}, {_fmt(e)}]"
+            f"got [{shown('start', s)}, {shown('end', e)}]"
         )
     if e - s < 2 * h:
         raise InputError(
@@ -172,8 +188,8 @@ def resolve_edit(csdf: CSDF, edit: Edit) -> ResolvedEdit:
         s = d_snap
     elif d_snap - s < h:
         raise InputError(
-            f"to: expected DEST at least one voxel ({_fmt(h)}) beyond START {_fmt(s)}, "
-            f"got {_fmt(d)}"
+            f"to: expected DEST at least one voxel ({_fmt(h)}) beyond START {shown('start', s)}, "
+            f"got {shown('dest', d)}"
         )
     shape = list(csdf.shape)
     shape[ax] += shift

@@ -218,10 +218,11 @@ def _apply_edit(
     *,
     progress: ProgressCallback | None = None,
     record: dict[str, Any] | None = None,
+    given: Edit | None = None,
 ) -> CSDF:
     report = resolve(progress)
     edit = _as_edit(edit)
-    r = resolve_edit(csdf, edit)
+    r = resolve_edit(csdf, edit, given=given)
     report(0.05, f"{edit.mode} along {edit.axis}")
     done = _edit_arrays(csdf, r)
     report(0.9, "recording")
@@ -289,7 +290,9 @@ def apply_recipe(
             "input": {"zone": [s, en], "to": d},
             "recipe_step": i,
         }
-        out = _apply_edit(out, step, progress=scaled(progress, i / n, (i + 1) / n), record=record)
+        out = _apply_edit(
+            out, step, progress=scaled(progress, i / n, (i + 1) / n), record=record, given=e
+        )
         h = out.meta["history"][-1]
         kw = {"mode": e.mode, "start": s2, "end": e2, "dest": h["to_snapped"]}
         if h.get("copies") == 0:  # a removed zone's start snapped with its destination

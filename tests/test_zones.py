@@ -264,6 +264,52 @@ def test_fit_puts_the_remainder_in_a_long_span_not_in_a_board(rest):
     assert abs((x_1[1] - x_1[0]) - (x_0[1] - x_0[0]) - rest) <= 0.5, (x_0, x_1)
 
 
+def _sideboard(bays=(0.6, 0.44, 0.52), board=0.04):
+    """A sideboard along x: ``bays`` (inner widths) between dividers ``board`` thick, a top and a
+    bottom board, 0.5 tall, 0.3 deep, each bay with a shelf at its own height (so no bay's
+    cross-section matches another's: no repeat)."""
+    xs = np.concatenate([[0.0], np.cumsum(np.array(bays) + board)])
+    length = float(xs[-1] + board)
+    boxes = [((0, 0, 0), (length, board, 0.3)), ((0, 0.5 - board, 0), (length, 0.5, 0.3))]
+    boxes += [((x, 0, 0), (x + board, 0.5, 0.3)) for x in xs]
+    boxes += [
+        ((x + board, y, 0), (x + board + w, y + board, 0.3))
+        for x, w, y in zip(xs, bays, (0.14, 0.24, 0.34), strict=False)
+    ]
+    return shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boxes),
+        np.array([[0, 0, 0], [length, 0.5, 0.3]]),
+        voxel_size=H,
+    )
+
+
+@pytest.mark.parametrize("shrink", [0.1, 0.6])
+def test_fit_shrinks_comparable_bays_alike_not_one_to_a_sliver(shrink):
+    """Three unequal bays (30, 22, 26 voxels inside): a shrink the largest bay takes within half
+    its length goes to it alone (fewest seams); a larger one (0.6 m, which the largest alone
+    could only give by keeping 2 voxels of its 30) narrows every bay by the same fraction, within
+    1.5 voxels of each bay's share, and every divider keeps its thickness (the old rule crushed
+    the largest bay to 2 voxels and the next to 16)."""
+    bays = np.array([0.6, 0.44, 0.52])
+    c = _sideboard(tuple(bays))
+    target = extent(c, 0) - shrink
+    recipe, why = fit(c, [repr(target), "=", "="])
+    assert {e.mode for e in recipe.edits} == {"stretch"}, why
+    out = apply_recipe(c, recipe)
+    assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
+    line = (int(0.45 / H), int(0.15 / H))  # above the shelves
+    (t0, x0), (t1, x1) = _runs_along(c.sdf, 0, line), _runs_along(out.sdf, 0, line)
+    assert len(t1) == len(t0) == len(bays) + 1, (t0, t1)
+    assert np.abs(t1 - t0).max() <= 0.5, (t0, t1)  # the dividers
+    inner0, inner1 = np.diff(x0) - t0[1:], np.diff(x1) - t1[1:]
+    if shrink <= 0.5 * bays.max():
+        assert len(recipe.edits) == 1, why
+        assert np.abs((inner0 - inner1)[1:]).max() <= 0.5, (inner0, inner1)
+    else:
+        share = shrink / H * inner0 / inner0.sum()
+        assert np.abs((inner0 - inner1) - share).max() <= 1.5, (inner0, inner1, share)
+
+
 def _boards(n, pitch, side=0.1, gap=0.11, board=0.04):
     """Two ``side`` end panels and ``n`` separate boards along x, ``pitch`` apart, ``gap`` from
     the panels: ``n + 2`` pieces (the default gap puts the boards' faces half-way between voxel

@@ -61,7 +61,10 @@ CALM_VOXELS = 4
 PHASE_VOXELS = 1.0
 #: Growth beyond this fraction of the largest slab's length is spread over more slabs.
 MAX_STRETCH = 1.0
-#: Slabs shorter than this fraction of the largest one take no share of a growth.
+#: A shrink beyond this fraction of the largest slab's length is spread over every slab of
+#: comparable length (:data:`SPREAD_FRACTION`), each the same fraction of its length.
+MAX_SHRINK = 0.5
+#: Slabs shorter than this fraction of the largest one take no share of a growth (or shrink).
 SPREAD_FRACTION = 0.5
 #: ...nor slabs shorter than this many voxels.
 MIN_SPREAD_VOXELS = 10
@@ -142,11 +145,14 @@ def _stretch_edits(
     double (:data:`MAX_STRETCH`), the next largest of those at least :data:`SPREAD_FRACTION` of
     its length and :data:`MIN_SPREAD_VOXELS` long, in proportion to their length: no slab is
     stretched out of shape to absorb it alone, and no thin slab (a leg's width) is stretched at
-    all. Shrinking takes the largest slabs, as many as can give it up, each in proportion to
-    what it can give down to :data:`MIN_SLAB_VOXELS`. Planes: the calm insets of :func:`_inset`
-    (with ``layers``), else the plain ones, else the slabs' ends; shrinking, the first of those
-    needing the fewest slabs. ``layers``: :func:`layer_change` and the
-    world coordinate of its layer 0, for :func:`_inset`.
+    all. Shrinking mirrors that: where the largest slab alone would lose more than
+    :data:`MAX_SHRINK` of its length, every slab of those sizes gives up the same fraction of
+    its length (a sideboard's three bays narrow alike; none is crushed to a sliver), as far as
+    each can down to :data:`MIN_SLAB_VOXELS`. Where they cannot, or the shrink is smaller, the
+    largest slabs take it, as many as can give it up, each in proportion to what it can give.
+    Planes: the calm insets of :func:`_inset` (with ``layers``), else the plain ones, else the
+    slabs' ends; shrinking, the first of those needing the fewest slabs. ``layers``:
+    :func:`layer_change` and the world coordinate of its layer 0, for :func:`_inset`.
     """
     if not slabs or change == 0:
         return [], change
@@ -154,12 +160,30 @@ def _stretch_edits(
     if layers is not None:
         options.insert(0, [_inset(c, h, *layers) for c in slabs])
     options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
+    even = False  # shrinking: every comparable slab by the same fraction of its length
     if change < 0:
         # shrinking: the planes that need the fewest slabs (each slab adds two seams, which
         # calmer planes do not pay for), the calmest among those; the slabs' full length last
+        def rooms(zones: list[tuple[float, float]]) -> list[float]:
+            return [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
+
         best = None
         for zones in options:
-            room = [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
+            big = zones[0][1] - zones[0][0]
+            if -change <= MAX_SHRINK * big:
+                continue
+            # sorted largest first: the comparable slabs are a prefix
+            n = sum(z[1] - z[0] >= max(MIN_SPREAD_VOXELS * h, SPREAD_FRACTION * big) for z in zones)
+            room = rooms(zones)
+            lengths = [z[1] - z[0] for z in zones[:n]]
+            # each gives the same fraction, within its room
+            give = [min(r, -change * w / sum(lengths)) for r, w in zip(room, lengths, strict=False)]
+            if n > 1 and -change <= sum(give) + h / 2:
+                best = (zones, room, n)
+                even = True
+                break
+        for zones in [] if even else options:
+            room = rooms(zones)
             n = 1
             while n < len(zones) and -change > sum(room[:n]) + h / 2:
                 n += 1
@@ -167,7 +191,7 @@ def _stretch_edits(
                 best = (zones, room, n)
         if best is None:
             zones = options[-1]
-            room = [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
+            room = rooms(zones)
             n = len(zones)
         else:
             zones, room, n = best
@@ -182,7 +206,7 @@ def _stretch_edits(
         ):
             n += 1
     chosen = zones[:n]
-    weights = [z[1] - z[0] for z in chosen] if change > 0 else room[:n]
+    weights = [z[1] - z[0] for z in chosen] if change > 0 or even else room[:n]
     total = sum(weights)
     edits, left = [], change
     for i, ((a, b), w) in enumerate(zip(chosen, weights, strict=True)):

@@ -593,7 +593,7 @@ def _triangle_table(verts, faces):
     centroid, radius of the disk around the centroid holding the triangle (with a 1e-9 relative
     margin), unit normal and plane offset (zero for near-degenerate triangles, whose normal is
     unreliable; see :func:`_disk_d2`)."""
-    out = np.zeros((faces.shape[0], 17))
+    out = np.empty((faces.shape[0], 17))  # every entry written below (one pass over memory)
     for t in range(faces.shape[0]):
         for c in range(3):
             for d in range(3):
@@ -622,6 +622,9 @@ def _triangle_table(verts, faces):
             out[t, 14] = ny / area2
             out[t, 15] = nz / area2
             out[t, 16] = out[t, 13] * out[t, 9] + out[t, 14] * out[t, 10] + out[t, 15] * out[t, 11]
+        else:
+            for d in range(13, 17):
+                out[t, d] = 0.0
     return out
 
 

@@ -8,13 +8,25 @@ from typing import Annotated
 import typer
 
 from ..csdf import CSDF, load
+from ..progress import ProgressCallback, resolve, scaled
 from ..thickness import ThinFeatures, thin_features
+from . import _common
 from ._common import CsdfIn
 
 
-def summary(c: CSDF, thin: ThinFeatures | None = None) -> dict:
+def summary(
+    c: CSDF, thin: ThinFeatures | None = None, progress: ProgressCallback | None = None
+) -> dict:
     """A JSON-serialisable summary of a CSDF (what ``info --json`` prints); ``thin``: its thin
-    features when already measured."""
+    features when already measured. The measures take seconds at 256 voxels and more:
+    ``progress`` hears of each."""
+    report = resolve(progress)
+    if thin is None:
+        report(0.0, "thin features")
+        thin = thin_features(c)
+    report(0.5, "surface relief")
+    relief = _relief(c)
+    report(1.0, "done")
     try:
         sb = c.surface_bounds()
         solid = {"min": sb[0].tolist(), "max": sb[1].tolist(), "size": (sb[1] - sb[0]).tolist()}
@@ -38,8 +50,8 @@ def summary(c: CSDF, thin: ThinFeatures | None = None) -> dict:
         }
         if isinstance(c.meta.get("completion"), dict)
         else None,
-        "thin_features": (thin or thin_features(c)).to_json(),
-        "relief": _relief(c),
+        "thin_features": thin.to_json(),
+        "relief": relief,
     }
 
 
@@ -64,8 +76,10 @@ def info(
     """Show shape, voxel size, extent in world units, number of parts, the edit history, and a
     warning when features thinner than ~1.5 voxels need a finer resolution."""
     c = load(path)
-    thin = thin_features(c)
-    s = summary(c, thin)
+    with _common.progress_bar("info") as bar:
+        bar(0.0, "thin features")
+        thin = thin_features(c)
+        s = summary(c, thin, progress=scaled(bar, 0.2, 1.0))
     if as_json:
         typer.echo(json.dumps(s, indent=2))
         return

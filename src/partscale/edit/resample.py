@@ -410,7 +410,9 @@ def _resample_cols(
                         )
                     for q in range(ca, ce):
                         v = np.float32(src_rgb[p, a0, q]) * w0 + np.float32(src_rgb[p, a1, q]) * w1
-                        out_rgb[p, ju, q] = min(max(np.rint(v), 0.0), 255.0)
+                        # float32 bounds: float64 ones cost a conversion per value and keep
+                        # the loop from vectorising (same results, ~2x faster alone)
+                        out_rgb[p, ju, q] = min(max(np.rint(v), np.float32(0.0)), np.float32(255.0))
                 for q in range(qa, qe):
                     out_parts[p, ju, q] = src_parts[p, a0, q]
                 if frac[j]:

@@ -159,29 +159,37 @@ def _stretch_edits(
     options = [[_inset(c, h) for c in slabs], [c.zone for c in slabs]]
     if layers is not None:
         options.insert(0, [_inset(c, h, *layers) for c in slabs])
-    options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
-    even = False  # shrinking: every comparable slab by the same fraction of its length
-    if change < 0:
-        # shrinking: the planes that need the fewest slabs (each slab adds two seams, which
-        # calmer planes do not pay for), the calmest among those; the slabs' full length last
-        def rooms(zones: list[tuple[float, float]]) -> list[float]:
-            return [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
 
-        best = None
-        for zones in options:
-            big = zones[0][1] - zones[0][0]
-            if -change <= MAX_SHRINK * big:
-                continue
-            # sorted largest first: the comparable slabs are a prefix
-            n = sum(z[1] - z[0] >= max(MIN_SPREAD_VOXELS * h, SPREAD_FRACTION * big) for z in zones)
-            room = rooms(zones)
-            lengths = [z[1] - z[0] for z in zones[:n]]
-            # each gives the same fraction, within its room
-            give = [min(r, -change * w / sum(lengths)) for r, w in zip(room, lengths, strict=False)]
-            if n > 1 and -change <= sum(give) + h / 2:
-                best = (zones, room, n)
-                even = True
-                break
+    def rooms(zones: list[tuple[float, float]]) -> list[float]:
+        return [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
+
+    even: list[float] = []  # the chosen zones' slab lengths where each gives the same fraction
+    best = None
+    if change < 0:
+        # a shrink the largest slab could give only by losing more than MAX_SHRINK of its
+        # length: every slab of comparable length gives the same fraction of its (full) length,
+        # through the first planes where each has the room
+        full = [c.zone[1] - c.zone[0] for c in slabs]
+        peer = [
+            i
+            for i, f in enumerate(full)
+            if f >= max(MIN_SPREAD_VOXELS * h, SPREAD_FRACTION * max(full))
+        ]
+        peer.sort(key=lambda i: -full[i])
+        if len(peer) > 1 and -change > MAX_SHRINK * max(full):
+            total = sum(full[i] for i in peer)
+            for zones in options:
+                ps = [zones[i] for i in peer]
+                give = [
+                    min(r, -change * full[i] / total) for r, i in zip(rooms(ps), peer, strict=True)
+                ]
+                if -change <= sum(give) + h / 2:
+                    best, even = (ps, rooms(ps), len(ps)), [full[i] for i in peer]
+                    break
+    options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
+    if change < 0:
+        # else the planes that need the fewest slabs (each slab adds two seams, which calmer
+        # planes do not pay for), the calmest among those; the slabs' full length last
         for zones in [] if even else options:
             room = rooms(zones)
             n = 1
@@ -206,7 +214,7 @@ def _stretch_edits(
         ):
             n += 1
     chosen = zones[:n]
-    weights = [z[1] - z[0] for z in chosen] if change > 0 or even else room[:n]
+    weights = even or ([z[1] - z[0] for z in chosen] if change > 0 else room[:n])
     total = sum(weights)
     edits, left = [], change
     for i, ((a, b), w) in enumerate(zip(chosen, weights, strict=True)):

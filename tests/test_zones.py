@@ -284,12 +284,12 @@ def _sideboard(bays=(0.6, 0.44, 0.52), board=0.04):
 
 
 @pytest.mark.parametrize("shrink", [0.1, 0.6])
-def test_fit_shrinks_comparable_bays_alike_not_one_to_a_sliver(shrink):
+def test_fit_shrinks_comparable_bays_alike(shrink):
     """Three unequal bays (30, 22, 26 voxels inside): a shrink the largest bay takes within half
-    its length goes to it alone (fewest seams); a larger one (0.6 m, which the largest alone
-    could only give by keeping 2 voxels of its 30) narrows every bay by the same fraction, within
-    1.5 voxels of each bay's share, and every divider keeps its thickness (the old rule crushed
-    the largest bay to 2 voxels and the next to 16)."""
+    its length goes to it alone (fewest seams); a larger one (0.6 m, as much as the largest bay
+    holds) narrows every bay by the same fraction, within
+    1.5 voxels of each bay's share, and every divider keeps its thickness (the old rule took it
+    from the two larger bays only: 29.5, 22.5, 26 voxels became 12.5, 22.5, 13)."""
     bays = np.array([0.6, 0.44, 0.52])
     c = _sideboard(tuple(bays))
     target = extent(c, 0) - shrink

@@ -555,6 +555,11 @@ def test_cli_fit_writes_the_recipe(cli, shelf_file, tmp_path):
         (["fit", "{shelf}", "-o", "{out}", "--size", "-2m", "=", "="], ["size x", "positive"]),
         (["fit", "{shelf}", "-o", "{out}", "--size", "3ft", "=", "="], ["unit"]),
         (["fit", "{shelf}", "-o", "{out}", "--size", "=", "5cm", "="], ["rigid"]),
+        # refused with the memory it would need, before its choices are printed
+        (
+            ["fit", "{shelf}", "-o", "{out}", "--size", "1000000m", "=", "="],
+            ["fit to 1000000m x = x =", "would need"],
+        ),
         (
             [
                 "scale",

@@ -66,7 +66,7 @@ from .recipe import (
 )
 from .reevaluate import reevaluate
 from .resample import SEAM_VOXELS
-from .resolved import ResolvedEdit, resolve_edit
+from .resolved import BYTES_PER_VOXEL, ResolvedEdit, resolve_edit
 from .scale import (
     apply_edit,
     apply_recipe,
@@ -79,6 +79,7 @@ from .units import SUFFIXES, parse_length, parse_size
 
 __all__ = [
     "AXES",
+    "BYTES_PER_VOXEL",
     "JSON_SCHEMA",
     "MAX_EDITS",
     "MODES",

@@ -193,5 +193,5 @@ def resolve_edit(csdf: CSDF, edit: Edit, *, given: Edit | None = None) -> Resolv
         )
     shape = list(csdf.shape)
     shape[ax] += shift
-    check_memory(tuple(shape), BYTES_PER_VOXEL, what=f"scale along {name} to {_fmt(d)}")
+    check_memory(tuple(shape), BYTES_PER_VOXEL, what=f"scale along {name} to {shown('dest', d)}")
     return ResolvedEdit(ax, s, e, d_snap, lo, hi, edit.mode, given_dest=d)

@@ -148,7 +148,8 @@ def _stretch_edits(
     all. Shrinking mirrors that: where the largest slab alone would lose more than
     :data:`MAX_SHRINK` of its length, every slab of those sizes gives up the same fraction of
     its length (a sideboard's three bays narrow alike; none is crushed to a sliver), as far as
-    each can down to :data:`MIN_SLAB_VOXELS`. Where they cannot, or the shrink is smaller, the
+    each can down to :data:`MIN_SLAB_VOXELS` (lengths here: the slabs' own, not their planes',
+    which calm insets may move far in). Where they cannot, or the shrink is smaller, the
     largest slabs take it, as many as can give it up, each in proportion to what it can give.
     Planes: the calm insets of :func:`_inset` (with ``layers``), else the plain ones, else the
     slabs' ends; shrinking, the first of those needing the fewest slabs. ``layers``:

@@ -123,3 +123,31 @@ def test_reevaluate_takes_numpy_band_and_integer_mask(box):
     out = reevaluate(box, mask, band=np.float32(2.0))
     want = reevaluate(box, mask.astype(bool), band=2.0)
     assert np.array_equal(out.sdf, want.sdf)
+
+
+def test_recipe_refusals_echo_positions_only_where_they_still_mean_them(box):
+    """A refused recipe step echoes the user's ``%`` with its world value; after an edit on the
+    same axis that ``%`` of the input lies elsewhere, so only the world value is given."""
+    from partscale.edit import apply_recipe
+
+    bad = {"axis": "x", "zone": ["50%", "90%"], "to": "-5%"}
+    with pytest.raises(InputError, match=r"DEST > START 50% \(.*\), got -5% \("):
+        apply_recipe(box, {"edits": [bad]})
+    grow = {"axis": "x", "zone": ["20%", "40%"], "to": "60%"}
+    with pytest.raises(InputError, match="DEST > START") as err:
+        apply_recipe(box, {"edits": [grow, bad]})
+    assert "%" not in str(err.value), err.value
+
+
+def test_a_recipe_too_large_is_refused_before_its_first_edit(box, monkeypatch):
+    """Two edits whose first result fits but whose last would not: refused up front, naming the
+    recipe and what it would need (a refusal at the second edit would name that edit)."""
+    from partscale.edit import apply_recipe, recipe_shape
+    from partscale.errors import MemoryLimitError
+
+    edits = [{"axis": a, "zone": ["30%", "60%"], "to": "200%"} for a in "xy"]
+    first, last = (np.prod(recipe_shape(box, {"edits": edits[:k]})) for k in (1, 2))
+    assert last > 1.5 * first  # the case this test is about
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(int(64 * (first + last) / 2)))
+    with pytest.raises(MemoryLimitError, match=r"a recipe of 2 edits: .* would need"):
+        apply_recipe(box, {"edits": edits})

@@ -274,7 +274,7 @@ def _sideboard(bays=(0.6, 0.44, 0.52), board=0.04):
     boxes += [((x, 0, 0), (x + board, 0.5, 0.3)) for x in xs]
     boxes += [
         ((x + board, y, 0), (x + board + w, y + board, 0.3))
-        for x, w, y in zip(xs, bays, (0.14, 0.24, 0.34), strict=False)
+        for x, w, y in zip(xs[:-1], bays, (0.14, 0.24, 0.34), strict=True)
     ]
     return shapes.grid(
         lambda p: shapes.boxes_sdf(p, boxes),
@@ -287,9 +287,9 @@ def _sideboard(bays=(0.6, 0.44, 0.52), board=0.04):
 def test_fit_shrinks_comparable_bays_alike(shrink):
     """Three unequal bays (30, 22, 26 voxels inside): a shrink the largest bay takes within half
     its length goes to it alone (fewest seams); a larger one (0.6 m, as much as the largest bay
-    holds) narrows every bay by the same fraction, within
-    1.5 voxels of each bay's share, and every divider keeps its thickness (the old rule took it
-    from the two larger bays only: 29.5, 22.5, 26 voxels became 12.5, 22.5, 13)."""
+    holds) narrows every bay by the same fraction, within 1.5 voxels of each bay's share, and
+    every divider keeps its thickness (the old rule took it from the two larger bays only: 29.5,
+    22.5, 26 voxels became 12.5, 22.5, 13)."""
     bays = np.array([0.6, 0.44, 0.52])
     c = _sideboard(tuple(bays))
     target = extent(c, 0) - shrink

@@ -56,10 +56,9 @@ def fit(
     recipe, why = fit_zones(c, list(size))
     if not mesh_route:
         # a size too large for memory is refused before the choices are printed
-        from .._memory import check_memory
-        from ..edit import BYTES_PER_VOXEL, recipe_shape
+        from ..edit import check_recipe_memory
 
-        check_memory(recipe_shape(c, recipe), BYTES_PER_VOXEL, what=f"fit to {' x '.join(size)}")
+        check_recipe_memory(c, recipe, what=f"fit to {' x '.join(size)}")
     for line in why:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     if mesh_route:

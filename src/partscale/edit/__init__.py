@@ -10,6 +10,8 @@ Public API
 - :func:`reevaluate` ``(csdf, mask=None, *, band=partscale.csdf.BAND_VOXELS) -> CSDF``:
   re-evaluated distances (to the grid's marching-cubes surface) near the surface, on its own.
 - :func:`recipe_from_history` ``(csdf, *, after=None) -> Recipe``: the replayable recipe.
+- :func:`check_recipe_memory` ``(csdf, recipe, what=...)``: refuse a recipe whose result would not
+  fit in memory, before any work.
 - :func:`recipe_shape` ``(csdf, recipe) -> (X, Y, Z)``: the grid shape a recipe gives, predicted
   without computing it (the editor refuses an apply its page could not show, before computing).
 - :data:`MAX_EDITS`: most edits one recipe may hold.
@@ -66,10 +68,11 @@ from .recipe import (
 )
 from .reevaluate import reevaluate
 from .resample import SEAM_VOXELS
-from .resolved import BYTES_PER_VOXEL, ResolvedEdit, resolve_edit
+from .resolved import ResolvedEdit, resolve_edit
 from .scale import (
     apply_edit,
     apply_recipe,
+    check_recipe_memory,
     naive_edit,
     recipe_from_history,
     recipe_shape,
@@ -79,7 +82,6 @@ from .units import SUFFIXES, parse_length, parse_size
 
 __all__ = [
     "AXES",
-    "BYTES_PER_VOXEL",
     "JSON_SCHEMA",
     "MAX_EDITS",
     "MODES",
@@ -90,6 +92,7 @@ __all__ = [
     "ResolvedEdit",
     "apply_edit",
     "apply_recipe",
+    "check_recipe_memory",
     "describe_changes",
     "forward_coordinate",
     "naive_edit",

@@ -166,8 +166,7 @@ def resolve_edit(csdf: CSDF, edit: Edit, *, given: Edit | None = None) -> Resolv
         if d == s:
             raise InputError(
                 f"to: expected DEST > START {shown('start', s)} for {edit.mode}, got DEST == "
-                f"START (to "
-                f"remove the zone use mode tile, whose DEST == START makes 0 copies)"
+                "START (to remove the zone use mode tile, whose DEST == START makes 0 copies)"
             )
         raise InputError(f"to: expected DEST > START {shown('start', s)}, got {shown('dest', d)}")
     tol = h / 2

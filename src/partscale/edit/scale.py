@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._memory import check_memory
 from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
@@ -23,7 +24,7 @@ from .parts import renumber_copies, unlabel_far, update_parts_info
 from .recipe import AXES, Edit, Recipe, forward_coordinate, source_coordinate, tile_count
 from .reevaluate import recompute_mask, reevaluate_arrays
 from .resample import Plan, apply_plan, empty_layers, lerp_layers, make_plan
-from .resolved import ResolvedEdit, resolve_edit
+from .resolved import BYTES_PER_VOXEL, ResolvedEdit, resolve_edit
 
 
 def _as_edit(edit: Edit | dict[str, Any]) -> Edit:
@@ -277,6 +278,10 @@ def apply_recipe(
     if not isinstance(recipe, Recipe):
         recipe = Recipe.parse(recipe, units=csdf.meta.get("units"))
     n = len(recipe.edits)
+    if n > 1:
+        # refused before its first edits are computed (a single edit's own check, which names
+        # it, comes before any work anyway)
+        check_recipe_memory(csdf, recipe, what=f"a recipe of {n} edits")
     bounds = csdf.surface_bounds() if n else None
     applied: list[tuple[int, dict[str, Any]]] = []  # (axis, forward-map arguments)
     out = csdf
@@ -290,8 +295,11 @@ def apply_recipe(
             "input": {"zone": [s, en], "to": d},
             "recipe_step": i,
         }
+        # the user's text is echoed in messages only where nothing carried its positions (after
+        # an edit on the same axis, 10% of the input is elsewhere on this object)
+        given = None if any(a == ax for a, _ in applied) else e
         out = _apply_edit(
-            out, step, progress=scaled(progress, i / n, (i + 1) / n), record=record, given=e
+            out, step, progress=scaled(progress, i / n, (i + 1) / n), record=record, given=given
         )
         h = out.meta["history"][-1]
         kw = {"mode": e.mode, "start": s2, "end": e2, "dest": h["to_snapped"]}
@@ -301,6 +309,13 @@ def apply_recipe(
             kw.update(lo=h["lo"], hi=h["hi"])
         applied.append((ax, kw))
     return out
+
+
+def check_recipe_memory(csdf: CSDF, recipe: Recipe | dict[str, Any] | list, *, what: str) -> None:
+    """Refuse (:class:`~partscale.errors.MemoryLimitError`) a recipe whose result
+    (:func:`recipe_shape`) would not fit in memory, saying what it would need; ``what`` names
+    the request in the message."""
+    check_memory(recipe_shape(csdf, recipe), BYTES_PER_VOXEL, what=what)
 
 
 def recipe_shape(csdf: CSDF, recipe: Recipe | dict[str, Any] | list) -> tuple[int, int, int]:
@@ -458,6 +473,7 @@ def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
 __all__ = [
     "apply_edit",
     "apply_recipe",
+    "check_recipe_memory",
     "naive_edit",
     "recipe_from_history",
     "recipe_shape",

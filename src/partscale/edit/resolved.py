@@ -125,7 +125,7 @@ def _fmt(v: float) -> str:
 
 def _shown(given: object, world: float, units: str | None) -> str:
     """A position as the user gave it, with its world value when that differs (``10% (0.2 m)``)."""
-    w = f"{world:.6g}" + (f" {units}" if units else "")
+    w = _fmt(world) + (f" {units}" if units else "")
     return f"{given} ({w})" if isinstance(given, str) else w
 
 

@@ -310,6 +310,52 @@ def test_fit_shrinks_comparable_bays_alike(shrink):
         assert np.abs((inner0 - inner1) - share).max() <= 1.5, (inner0, inner1, share)
 
 
+def _cabinet(knob: bool = True, crown: bool = False, h: float = 0.01):
+    """A cabinet 0.8 x 0.6 x 0.3 m: with ``knob`` a ball 3.5 cm across on its front at x 0.62
+    (a few voxels of a 30 x 60 voxel cross-section); with ``crown`` a cushion-like top raised
+    1.5 cm at most, gently, over x 0.1 to 0.7."""
+
+    def sdf(p):
+        d = shapes.box_sdf(p, (0, 0, 0), (0.8, 0.6, 0.3))
+        if knob:
+            d = np.minimum(d, shapes.sphere_sdf(p, (0.62, 0.45, 0.315), 0.035))
+        if crown:  # a flat ellipsoid; its scaled-sphere distance is exact across the top
+            r = np.array([0.3, 0.015, 0.14])
+            q = (p - (0.4, 0.6, 0.15)) / r
+            d = np.minimum(d, (np.linalg.norm(q, axis=-1) - 1) * r.min())
+        return d
+
+    return shapes.grid(sdf, np.array([[0, 0, 0], [0.8, 0.62, 0.35]]), voxel_size=h)
+
+
+def test_a_knob_ends_the_constant_slab_and_fit_keeps_it_round():
+    """A knob is a few voxels of the cross-section, which the whole-section test cannot see: no
+    stretch candidate crosses it, the door either side of it is a candidate, and fitting the
+    cabinet to 60 % of its width leaves the knob as wide as it was (within a voxel; the slab
+    through it squashed it from 7 to 4 voxels)."""
+    c = _cabinet()
+    h = c.voxel_size
+    stretch = [x for x in suggest(c, "x") if x.kind == "stretch"]
+    assert all(x.zone[1] <= 0.585 + h / 2 or x.zone[0] >= 0.655 - h / 2 for x in stretch), [
+        x.zone for x in stretch
+    ]
+    assert any(x.zone[0] <= 0.05 and x.zone[1] >= 0.5 for x in stretch), [x.zone for x in stretch]
+    target = 0.6 * extent(c, 0)
+    out = apply_recipe(c, fit(c, [repr(target), "=", "="])[0])
+    assert abs(extent(out, 0) - target) <= h / 2 + 1e-9
+    line = (round((0.45 - c.origin[1]) / h), round((0.33 - c.origin[2]) / h))  # through the ball
+    (w0, _), (w1, _) = _runs_along(c.sdf, 0, line), _runs_along(out.sdf, 0, line)
+    assert len(w0) == len(w1) == 1 and abs(w1[0] - w0[0]) <= 1, (w0, w1)
+
+
+def test_a_gentle_crown_along_the_whole_slab_stays_in_it():
+    """A cushion's crown rises and falls along the slab too, but gently and over most of it:
+    no knob. The slab is not cut around it (stretching it keeps its look)."""
+    c = _cabinet(knob=False, crown=True)
+    stretch = [x for x in suggest(c, "x") if x.kind == "stretch"]
+    assert any(x.zone[0] <= 0.15 and x.zone[1] >= 0.65 for x in stretch), [x.zone for x in stretch]
+
+
 def _boards(n, pitch, side=0.1, gap=0.11, board=0.04):
     """Two ``side`` end panels and ``n`` separate boards along x, ``pitch`` apart, ``gap`` from
     the panels: ``n + 2`` pieces (the default gap puts the boards' faces half-way between voxel
@@ -801,3 +847,30 @@ def test_snapped_naive_zone_on_the_mirrored_drawers_runs_boundary_to_boundary(re
     for plane in (float(snapped.start), float(snapped.end)):
         assert np.abs(ends - p.index(plane)).min() <= 1.0, (plane, p.world(ends))
     assert moves
+
+
+def _front_protrusions(c):
+    """(y index, x start, x width) in voxels of each piece standing in front (+z) of every
+    front face that at least 1 % of the (x, y) columns reach: handles and knobs."""
+    from scipy import ndimage
+
+    solid = c.sdf <= 0
+    has = solid.any(axis=2)
+    front = solid.shape[2] - 1 - np.argmax(solid[:, :, ::-1], axis=2)
+    count = np.bincount(front[has], minlength=solid.shape[2])
+    face = int(np.flatnonzero(count >= 0.01 * has.sum())[-1])
+    lab, _ = ndimage.label(solid[:, :, face + 1 :], structure=np.ones((3, 3, 3)))
+    return sorted((b[1].start, b[0].start, b[0].stop - b[0].start) for b in ndimage.find_objects(lab))
+
+
+@pytest.mark.slow
+def test_fit_keeps_the_cabinets_handle_and_knob_whole(real):
+    """painted_wooden_cabinet fitted to 80 % of its width: its left drawer's cup handle and the
+    door's knob keep their width within a voxel (the constant slab through the handle
+    squashed it from 13 voxels to 2)."""
+    c = real(PLAIN["cabinet"])
+    out = apply_recipe(c, fit(c, ["80%", "=", "="])[0])
+    before, after = _front_protrusions(c), _front_protrusions(out)
+    assert len(before) >= 2 and len(after) == len(before), (before, after)
+    for (y0, _, w0), (y1, _, w1) in zip(before, after, strict=True):
+        assert y1 == y0 and abs(w1 - w0) <= 1, (before, after)

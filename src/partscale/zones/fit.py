@@ -132,6 +132,27 @@ def _inset(
     return out[0], out[1]
 
 
+def _fill(need: float, weights: list[float], rooms: list[float]) -> list[float]:
+    """Shares of ``need`` in proportion to ``weights``, none above its room: what a full slab
+    cannot give goes to the others, again in proportion (sums to less than ``need`` only where
+    every room is used)."""
+    give = [0.0] * len(weights)
+    free = [i for i, r in enumerate(rooms) if r > 0]
+    left = need
+    while free and left > 1e-12:
+        total = sum(weights[i] for i in free)
+        full = [i for i in free if left * weights[i] / total >= rooms[i] - give[i]]
+        if not full:
+            for i in free:
+                give[i] += left * weights[i] / total
+            break
+        for i in full:
+            left -= rooms[i] - give[i]
+            give[i] = rooms[i]
+        free = [i for i in free if i not in full]
+    return give
+
+
 def _stretch_edits(
     slabs: list[Candidate],
     change: float,
@@ -149,7 +170,9 @@ def _stretch_edits(
     :data:`MAX_SHRINK` of its length, every slab of those sizes gives up the same fraction of
     its length (a sideboard's three bays narrow alike; none is crushed to a sliver), as far as
     each can down to :data:`MIN_SLAB_VOXELS` (lengths here: the slabs' own, not their planes',
-    which calm insets may move far in). Where they cannot, or the shrink is smaller, the
+    which calm insets may move far in), through the calmest planes where they have the room
+    together: one whose planes leave it too little gives what it can, the others the rest in
+    the same proportion (:func:`_fill`). Where they cannot, or the shrink is smaller, the
     largest slabs take it, as many as can give it up, each in proportion to what it can give.
     Planes: the calm insets of :func:`_inset` (with ``layers``), else the plain ones, else the
     slabs' ends; shrinking, the first of those needing the fewest slabs. ``layers``:
@@ -164,12 +187,12 @@ def _stretch_edits(
     def rooms(zones: list[tuple[float, float]]) -> list[float]:
         return [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
 
-    even: list[float] = []  # the chosen zones' slab lengths where each gives the same fraction
+    even: list[float] = []  # each chosen zone's share where the shrink is spread (_fill)
     best = None
     if change < 0:
         # a shrink the largest slab could give only by losing more than MAX_SHRINK of its
         # length: every slab of comparable length gives the same fraction of its (full) length,
-        # through the first planes where each has the room
+        # through the first planes where together they have the room
         full = [c.zone[1] - c.zone[0] for c in slabs]
         peer = [
             i
@@ -178,14 +201,11 @@ def _stretch_edits(
         ]
         peer.sort(key=lambda i: -full[i])
         if len(peer) > 1 and -change > MAX_SHRINK * max(full):
-            total = sum(full[i] for i in peer)
             for zones in options:
                 ps = [zones[i] for i in peer]
-                give = [
-                    min(r, -change * full[i] / total) for r, i in zip(rooms(ps), peer, strict=True)
-                ]
+                give = _fill(-change, [full[i] for i in peer], rooms(ps))
                 if -change <= sum(give) + h / 2:
-                    best, even = (ps, rooms(ps), len(ps)), [full[i] for i in peer]
+                    best, even = (ps, rooms(ps), len(ps)), give
                     break
     options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
     if change < 0:

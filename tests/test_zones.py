@@ -860,7 +860,9 @@ def _front_protrusions(c):
     count = np.bincount(front[has], minlength=solid.shape[2])
     face = int(np.flatnonzero(count >= 0.01 * has.sum())[-1])
     lab, _ = ndimage.label(solid[:, :, face + 1 :], structure=np.ones((3, 3, 3)))
-    return sorted((b[1].start, b[0].start, b[0].stop - b[0].start) for b in ndimage.find_objects(lab))
+    return sorted(
+        (b[1].start, b[0].start, b[0].stop - b[0].start) for b in ndimage.find_objects(lab)
+    )
 
 
 @pytest.mark.slow

@@ -159,6 +159,7 @@ def _stretch_edits(
     h: float,
     axis: str,
     layers: tuple[np.ndarray, float] | None = None,
+    spread_voxels: int = MIN_SPREAD_VOXELS,
 ) -> tuple[list[Edit], float]:
     """Stretch edits absorbing ``change`` (whole voxels) over ``slabs``, and what is left.
 
@@ -177,6 +178,8 @@ def _stretch_edits(
     Planes: the calm insets of :func:`_inset` (with ``layers``), else the plain ones, else the
     slabs' ends; shrinking, the first of those needing the fewest slabs. ``layers``:
     :func:`layer_change` and the world coordinate of its layer 0, for :func:`_inset`.
+    ``spread_voxels``: the shortest slab that takes a share (0 among thin slabs, where each is a
+    feature's thickness: two door panels either side of their knobs grow alike, not one).
     """
     if not slabs or change == 0:
         return [], change
@@ -197,7 +200,7 @@ def _stretch_edits(
         peer = [
             i
             for i, f in enumerate(full)
-            if f >= max(MIN_SPREAD_VOXELS * h, SPREAD_FRACTION * max(full))
+            if f >= max(spread_voxels * h, SPREAD_FRACTION * max(full))
         ]
         peer.sort(key=lambda i: -full[i])
         if len(peer) > 1 and -change > MAX_SHRINK * max(full):
@@ -231,7 +234,7 @@ def _stretch_edits(
         while (
             n < len(zones)
             and change > MAX_STRETCH * sum(z[1] - z[0] for z in zones[:n])
-            and zones[n][1] - zones[n][0] >= max(MIN_SPREAD_VOXELS * h, SPREAD_FRACTION * big)
+            and zones[n][1] - zones[n][0] >= max(spread_voxels * h, SPREAD_FRACTION * big)
         ):
             n += 1
     chosen = zones[:n]
@@ -409,7 +412,8 @@ def _to_slabs(
 ) -> tuple[list[Edit], list[str], float]:
     """Stretch edits over the slabs ``tier`` taking ``left`` (:func:`_stretch_edits`), a note
     each, and what is left; ``thin``: the notes say a feature's thickness changes."""
-    st, left = _stretch_edits(tier, left, ax.h, ax.name, ax.layers)
+    spread = 0 if thin else MIN_SPREAD_VOXELS
+    st, left = _stretch_edits(tier, left, ax.h, ax.name, ax.layers, spread)
     notes = []
     for ed in st:
         a, b = float(ed.start), float(ed.end)

@@ -459,16 +459,21 @@ def test_fit_says_when_only_a_thin_slab_can_take_the_remainder():
     assert len(thin) == 1 and "could take it" in thin[0], why
 
 
-def test_fit_grows_two_comparable_thin_slabs_alike():
-    """Two low panels 9 voxels wide (of different heights: no repeat; their constant slabs are
-    7) between three 3-voxel posts: no slab is 10 voxels long, so thin slabs take a growth of
-    10 voxels, and the two panels share it (5 each, within a voxel) while the posts keep their
-    width (one panel took all 10 before)."""
+def _frame():
+    """Three 3-voxel posts 0.5 tall and two low panels 9 voxels wide between them, of different
+    heights (no repeat; their constant slabs are 7 voxels)."""
     boxes = [((x, 0, 0), (x + 0.06, 0.5, 0.3)) for x in (0.0, 0.24, 0.48)]
     boxes += [((0.06, 0, 0), (0.24, 0.3, 0.3)), ((0.3, 0, 0), (0.48, 0.2, 0.3))]
-    c = shapes.grid(
+    return shapes.grid(
         lambda p: shapes.boxes_sdf(p, boxes), np.array([[0, 0, 0], [0.54, 0.5, 0.3]]), voxel_size=H
     )
+
+
+def test_fit_grows_two_comparable_thin_slabs_alike():
+    """The frame (:func:`_frame`): no slab is 10 voxels long, so thin slabs take a growth of
+    10 voxels, and the two panels share it (5 each, within a voxel) while the posts keep their
+    width (one panel took all 10 before)."""
+    c = _frame()
     recipe, why = fit(c, [repr(extent(c, 0) + 10 * H), "=", "="])
     out = apply_recipe(c, recipe)
     line = (int(0.4 / H), int(0.15 / H))  # above the panels: through the three posts
@@ -476,6 +481,15 @@ def test_fit_grows_two_comparable_thin_slabs_alike():
     assert len(t1) == len(t0) == 3 and np.abs(t1 - t0).max() <= 0.5, (t0, t1)
     grown = np.diff(x1) - np.diff(x0)  # each panel's growth, voxels
     assert np.abs(grown - 5).max() <= 1, (grown, why)
+
+
+def test_fit_scales_globally_rather_than_more_than_double_thin_slabs():
+    """The same frame 30 voxels longer: each 7-voxel panel slab would grow by 15, a lump (a
+    spiral staircase's steps came out so): global scaling, and the note says why."""
+    c = _frame()
+    recipe, why = fit(c, [repr(extent(c, 0) + 30 * H), "=", "="])
+    assert [e.mode for e in recipe.edits] == ["global"], why
+    assert "thin slabs would more than double" in why[0], why
 
 
 def test_fit_goes_global_only_as_a_last_resort_and_says_so():

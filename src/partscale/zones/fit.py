@@ -461,9 +461,18 @@ def _to_thin(
     """The remainder to thin slabs outside the repeat (:func:`_outside`; shorter than
     :data:`MIN_SPREAD_VOXELS`: a feature's thickness), last of the slabs; the notes say which
     feature changes (:func:`_thin_note`). A thin slab inside the repeat never takes it: a feature
-    of one copy and one spacing would change."""
+    of one copy and one spacing would change. Nor do thin slabs take a growth that would more
+    than double one of them (:data:`MAX_STRETCH`): nothing is taken then."""
     tier = [c for c in _outside(slabs, ax.h, tiled) if not _long(c, ax.h)]
-    return _to_slabs(tier, left, ax, tiled, thin=True)
+    st, notes, rest = _to_slabs(tier, left, ax, tiled, thin=True)
+    if any(
+        float(e.dest) - float(e.end) > MAX_STRETCH * (float(e.end) - float(e.start)) + ax.h / 2
+        for e in st
+    ):
+        # a growth that more than doubles a feature's thickness (a stair's tread, a ring of a
+        # post) makes a lump of it: the copies or global scaling do better
+        return [], [], left
+    return st, notes, rest
 
 
 def _to_copies(
@@ -567,9 +576,14 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     taken = None if tiled is None else _to_copies(edits, left, ax, tiled, within)
     if taken is not None:
         return taken[0], [*why, taken[1]]
+    thin = (
+        " (thin slabs would more than double)"
+        if change > 0 and any(not _long(c, h) for c in slabs)
+        else ""
+    )
     return [Edit(name, lo, hi, hi + change, "global")], [
         f"{name}: GLOBAL scaling (last resort): no repeated element and no slab of "
-        f"constant cross-section along {name} could take {_fmt(change, units)}"
+        f"constant cross-section along {name} could take {_fmt(change, units)}{thin}"
     ]
 
 

@@ -276,6 +276,22 @@ def test_apply_says_what_the_edit_changed_like_the_cli(tmp_path):
     assert set(s["history"][-1]["slivers_left_out"]) == {"end"}
 
 
+def test_apply_names_the_knob_its_stretch_zone_held(tmp_path):
+    """A stretch zone across a cabinet's knob: Apply's notes name it, as ``scale`` does."""
+    h = 0.02
+
+    def sdf(p):
+        box = shapes.box_sdf(p, (0, 0, 0), (0.8, 0.6, 0.3))
+        return np.minimum(box, shapes.sphere_sdf(p, (0.62, 0.45, 0.32), 0.05))
+
+    path = tmp_path / "cabinet.csdf.npz"
+    partscale.save(shapes.grid(sdf, np.array([[0, 0, 0], [0.8, 0.6, 0.37]]), voxel_size=h), path)
+    edit = {"axis": "x", "zone": [0.05, 0.75], "to": 0.9, "mode": "stretch"}
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        s = post(client, "/api/apply", {"edits": [edit]}).json()
+    assert any("holds 1 local feature" in n for n in s["notes"]), s["notes"]
+
+
 def test_zones_in_sequence_and_percent_positions(client):
     session = client.app.state.session
     original = session.current

@@ -348,6 +348,35 @@ def test_a_knob_ends_the_constant_slab_and_fit_keeps_it_round():
     assert len(w0) == len(w1) == 1 and abs(w1[0] - w0[0]) <= 1, (w0, w1)
 
 
+def test_local_features_name_the_knob_a_stretch_zone_holds():
+    """local_features: the knob's span (within a voxel) for a zone across it, nothing for a zone
+    beside it; feature_notes says so for a stretch across it only."""
+    from partscale.zones import feature_notes, local_features
+
+    c = _cabinet()
+    h = c.voxel_size
+    (got,) = local_features(c, 0, (0.05, 0.75))
+    assert abs(got[0] - 0.585) <= h and abs(got[1] - 0.655) <= h, got
+    assert local_features(c, 0, (0.05, 0.5)) == []
+    across = Edit("x", 0.05, 0.75, 0.9, "stretch")
+    (line,) = feature_notes(c, Recipe((across,)))
+    assert "1 local feature" in line and "--snap" in line, line
+    beside = Edit("x", 0.05, 0.5, 0.6, "stretch")
+    assert feature_notes(c, Recipe((beside, Edit("x", 0.05, 0.75, 0.9, "tile")))) == []
+
+
+def test_cli_scale_says_when_its_stretch_zone_holds_a_knob(cli, tmp_path):
+    src, out = tmp_path / "c.csdf.npz", tmp_path / "o.csdf.npz"
+    save(_cabinet(), src)
+    args = ("scale", src, "-o", out, "--axis", "x", "--zone", "5cm", "75cm", "--to", "90cm")
+    proc = cli(*args)
+    assert proc.returncode == 0, proc.stderr
+    assert "holds 1 local feature" in proc.stderr, proc.stderr
+    proc = cli(*args, "--snap")
+    assert proc.returncode == 0, proc.stderr
+    assert "snap: moved" in proc.stderr and "local feature" not in proc.stderr, proc.stderr
+
+
 def test_a_gentle_crown_along_the_whole_slab_stays_in_it():
     """A cushion's crown rises and falls along the slab too, but gently and over most of it:
     no knob. The slab is not cut around it (stretching it keeps its look)."""

@@ -125,8 +125,9 @@ def scale(
         out = apply_recipe(c, rec, progress=bar)
     entries = out.meta.get("history", [])[-len(rec.edits) :]
     from ..edit import describe_changes
+    from ..zones import feature_notes
 
-    for line in describe_changes(entries, out):
+    for line in describe_changes(entries, out) + feature_notes(c, rec):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     if recipe is None and snap:
         from ..zones import record_snap

@@ -424,9 +424,11 @@ class EditSession:
         kept, so the session never holds an object the page cannot show. Returns the state
         (:meth:`state`) of the revision this apply made, whatever lands after it, with
         ``notes``: what the edit stage changed from what was asked
-        (:func:`~partscale.edit.describe_changes`; whole-voxel destinations, cut slivers).
+        (:func:`~partscale.edit.describe_changes`; whole-voxel destinations, cut slivers) and
+        the knobs or handles a stretch zone held (:func:`~partscale.zones.feature_notes`).
         """
         from ..edit import Recipe, apply_recipe, describe_changes, recipe_shape
+        from ..zones import feature_notes
 
         units = self.current.meta.get("units")  # for positions with a unit ("30cm")
         parsed = recipe if isinstance(recipe, Recipe) else Recipe.parse(recipe, units=units)
@@ -443,7 +445,8 @@ class EditSession:
         # in the worker thread
         self._delta(old, new)
         entries = new.meta.get("history", [])[-len(parsed.edits) :]
-        return {**self._describe(snap), "notes": describe_changes(entries, new)}
+        notes = describe_changes(entries, new) + feature_notes(old, parsed)
+        return {**self._describe(snap), "notes": notes}
 
     def undo(self) -> dict[str, Any] | None:
         """Restore the object before the last apply exactly (the same arrays); None if none.

@@ -13,12 +13,16 @@ Public API
 - :func:`parse_size`, :func:`parse_length`: ``=``, ``2.1``, ``210cm``, ``2100mm``, ``+20cm``,
   ``-5cm``, ``120%`` (re-exported from :mod:`partscale.edit`, their one home, beside
   :func:`partscale.edit.parse_position`).
+- :func:`local_features` ``(csdf, axis, zone) -> [(start, end), ...]``: the knobs, handles
+  and keyholes a stretch of ``zone`` would stretch out of shape (what cuts constant slabs);
+  :func:`feature_notes` ``(csdf, recipe)``: a line per stretch edit that holds one.
 - :func:`profile`, :class:`Profile`: the per-layer cross-sections all of it is built on;
   :func:`find_bounded_repeats` ``(profile) -> list[BoundedRepeat]``: the elements repeated
   between boards or gaps that the weaker of the two tile detectors finds (layer indices).
 """
 
 from ..edit import parse_length, parse_size
+from .features import feature_notes, local_features
 from .fit import fit, fit_axis
 from .profile import Profile, profile
 from .snap import Move, describe_moves, record_snap, snap
@@ -32,9 +36,11 @@ __all__ = [
     "Profile",
     "axis_candidates",
     "describe_moves",
+    "feature_notes",
     "find_bounded_repeats",
     "fit",
     "fit_axis",
+    "local_features",
     "parse_length",
     "parse_size",
     "profile",

@@ -54,6 +54,7 @@ from ..csdf import CSDF
 from ..edit import SEAM_VOXELS
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
+from .features import _feature_spans
 from .profile import Profile, profile
 
 AXES = ("x", "y", "z")
@@ -77,9 +78,6 @@ STEP = 0.02
 DRIFT = 0.06
 #: Shortest constant slab reported, voxels.
 MIN_SLAB = 3
-#: Fewest voxels (at 128 voxels along the longest side) of a local feature a slab is split
-#: around: a cabinet's knob or a keyhole is 36 to 60, the wear of worn wood at most about 25.
-FEATURE_VOXELS = 27
 #: A boundary between elements changes the cross-section area by this share of the largest one.
 PROMINENCE = 0.05
 #: Copies of one element, voxelised at different phases, differ in width and spacing this much.
@@ -511,86 +509,12 @@ def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[tuple[int, int,
 
 
 def _split_features(csdf: CSDF, axis: int, first: int, last: int) -> list[tuple[int, int]]:
-    """The runs of layers ``first..last`` (inclusive) that hold no local feature.
-
-    A whole-section comparison cannot see a knob, a handle or a keyhole: a few voxels of a
-    cross-section of thousands, which stretching would squash or smear. Here each voxel is
-    compared with its own column along the axis. A voxel is in a bump when its occupancy is
-    more than half a voxel above the lowest before it and the lowest after it within the run
-    (a protrusion) or below the highest on both sides (a dip, a hole). A feature is a connected
-    (26-neighbour) set of bump voxels that is
-
-    - at least :func:`_feature_voxels` voxels (smaller sets are the noise of worn or scanned
-      surfaces),
-    - local: it spans at most half the run (a cushion's crown or a bowed board spans the run,
-      and stretching it along the run keeps its look), and
-    - sharp-edged: somewhere its occupancy changes by more than half a voxel from one layer to
-      the next (a surface steeper than about 27 degrees to the axis: a knob's or a handle's
-      flank, not a gentle bulge).
-
-    The layers a feature spans are cut out of the run. A column that changes once (a splayed
-    leg, an apron's curve, a bevel) is drift, which the whole-section test bounds.
-    """
-    h = np.float32(csdf.voxel_size)
-    vmin = _feature_voxels(csdf)
-    run = np.moveaxis(csdf.sdf, axis, 0)[first : last + 1]
-    # only a column whose occupancy changes by more than half a voxel along the run can hold
-    # a bump: most columns of a slab never do, so the rest of the work is on those alone
-    occ_lo = np.clip(0.5 - run.max(axis=0) / h, 0.0, 1.0)
-    occ_hi = np.clip(0.5 - run.min(axis=0) / h, 0.0, 1.0)
-    cols = np.nonzero(occ_hi - occ_lo > 0.5)
-    if cols[0].size == 0:
-        return [(first, last)]
-    occ = np.clip(0.5 - run[:, cols[0], cols[1]] / h, 0.0, 1.0)  # (L, K)
-    jump = np.abs(np.diff(occ, axis=0))
-    sharp = np.maximum(jump[:-1], jump[1:]) > 0.5  # (L - 2, K): at the inner layers
-    # the run's two end layers may hold the edge of the next section (a side panel starting):
-    # against them, a groove running the whole run would look like a dip, so they are no
-    # reference
-    inner = occ[1:-1]
-    bump = (
-        inner
-        - np.maximum(
-            np.minimum.accumulate(inner, axis=0), np.minimum.accumulate(inner[::-1], axis=0)[::-1]
-        )
-        > 0.5
-    )
-    bump |= (
-        np.minimum(
-            np.maximum.accumulate(inner, axis=0), np.maximum.accumulate(inner[::-1], axis=0)[::-1]
-        )
-        - inner
-        > 0.5
-    )
-    if np.count_nonzero(bump & sharp) == 0 or np.count_nonzero(bump) < vmin:
-        return [(first, last)]
-    # label in the box of the columns that hold bumps, scattered back to their places
-    hit = bump.any(axis=0)
-    j, k = cols[0][hit], cols[1][hit]
-    ja, ka = j.min(), k.min()
-    box_shape = (len(inner), j.max() - ja + 1, k.max() - ka + 1)
-    grid = np.zeros(box_shape, dtype=bool)
-    grid[:, j - ja, k - ka] = bump[:, hit]
-    edge = np.zeros(box_shape, dtype=bool)
-    edge[:, j - ja, k - ka] = sharp[:, hit]
-    lab, n = ndimage.label(grid, structure=np.ones((3, 3, 3)))
-    size = np.bincount(lab.ravel())
-    has_sharp = np.bincount(lab[edge], minlength=n + 1) > 0
+    """The runs of layers ``first..last`` (inclusive) that hold no local feature
+    (:func:`_feature_spans`), at least :data:`MIN_SLAB` long."""
     keep = np.ones(last - first + 1, dtype=bool)
-    for k_, box in enumerate(ndimage.find_objects(lab), start=1):
-        span = box[0].stop - box[0].start
-        if size[k_] >= vmin and has_sharp[k_] and 2 * span <= len(inner):
-            keep[box[0].start + 1 : box[0].stop + 1] = False  # +1: inner layer 0 is layer 1
+    for a, b in _feature_spans(csdf, axis, first, last):
+        keep[a - first : b - first + 1] = False
     return [(first + int(r0), first + int(r1)) for r0, r1 in _runs(keep) if r1 - r0 + 1 >= MIN_SLAB]
-
-
-def _feature_voxels(csdf: CSDF) -> int:
-    """Fewest voxels of a local feature :func:`_split_features` cuts around.
-
-    :data:`FEATURE_VOXELS` at 128 voxels along the longest side, scaled with the voxel volume so
-    that a feature is the same share of the object at every resolution.
-    """
-    return max(8, round(FEATURE_VOXELS * (max(csdf.shape) / 128) ** 3))
 
 
 def _part_planes(csdf: CSDF, axis: int) -> np.ndarray:

@@ -160,10 +160,13 @@ def resolve_edit(csdf: CSDF, edit: Edit, *, given: Edit | None = None) -> Resolv
         raise InputError(
             f"zone: expected start < end, got start {shown('start', s)} >= end {shown('end', e)}"
         )
-    # tile to the zone's start: 0 copies, the zone cut out
-    remove = edit.mode == "tile" and d == s
+    # tile to the zone's start: 0 copies, the zone cut out. "At the start" within a millionth
+    # of a voxel: a recipe read back from a history (or any float round trip) may put DEST an
+    # ulp before START
+    same = abs(d - s) <= 1e-6 * h
+    remove = edit.mode == "tile" and same
     if not (d > s or remove):
-        if d == s:
+        if same:
             raise InputError(
                 f"to: expected DEST > START {shown('start', s)} for {edit.mode}, got DEST == "
                 "START (to remove the zone use mode tile, whose DEST == START makes 0 copies)"

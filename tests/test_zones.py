@@ -528,6 +528,40 @@ def test_fit_scales_globally_rather_than_more_than_double_thin_slabs():
     assert "thin slabs would more than double" in why[0], why
 
 
+def _splayed_stool():
+    """A 4 cm top on two legs 5 cm thick splayed 10 cm over their 62 cm (capsules): their
+    section drifts a sixth of a voxel a layer, so constant slabs are 3 voxels long."""
+
+    def capsule(p, a, b, r):
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        t = np.clip((p - a) @ (b - a) / ((b - a) @ (b - a)), 0, 1)
+        return np.linalg.norm(p - a - t[:, None] * (b - a), axis=1) - r
+
+    def sdf(p):
+        d = shapes.box_sdf(p, (0, 0.6, 0), (0.5, 0.64, 0.2))
+        d = np.minimum(d, capsule(p, (0.04, 0.0, 0.1), (0.14, 0.62, 0.1), 0.025))
+        return np.minimum(d, capsule(p, (0.46, 0.0, 0.1), (0.36, 0.62, 0.1), 0.025))
+
+    return shapes.grid(sdf, np.array([[0, -0.03, 0], [0.5, 0.64, 0.2]]), voxel_size=0.01)
+
+
+def test_fit_shrinks_a_splayed_leg_run_whole():
+    """The stool to 70 % of its height: the legs' drift-split slabs (3 voxels each, a voxel of
+    room apiece) shrink as one run, one stretch, with the top as thick as before; the old rule
+    counted only the pieces' rooms and refused ("expected at least 53.0 cm")."""
+    c = _splayed_stool()
+    h = c.voxel_size
+    target = 0.7 * extent(c, 1)
+    recipe, why = fit(c, ["=", repr(target), "="])
+    assert [e.mode for e in recipe.edits] == ["stretch"], why
+    out = apply_recipe(c, recipe)
+    assert abs(extent(out, 1) - target) <= h / 2 + 1e-9
+    line = (round((0.25 - c.origin[0]) / h), round((0.1 - c.origin[2]) / h))  # through the top
+    (t0, _), (t1, _) = _runs_along(c.sdf, 1, line), _runs_along(out.sdf, 1, line)
+    assert len(t0) == len(t1) == 1 and abs(t1[0] - t0[0]) <= 0.5, (t0, t1)
+    assert _pieces(out) == 1
+
+
 def test_fit_goes_global_only_as_a_last_resort_and_says_so():
     recipe, why = fit(rod(), ["120%", "=", "="])
     assert [e.mode for e in recipe.edits] == ["global"]

@@ -18,7 +18,7 @@ a voxel.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -31,6 +31,7 @@ from .profile import Profile, profile
 from .suggest import (
     AXES,
     SHIFT_STEP,
+    STEP,
     Candidate,
     axis_candidates,
     best_phase,
@@ -249,6 +250,36 @@ def _stretch_edits(
             edits.append(Edit(axis, a, b, b + share, "stretch"))
             left -= share
     return edits, left
+
+
+def _drift_chains(slabs: list[Candidate], p: Profile) -> list[Candidate]:
+    """``slabs`` with each chain of neighbouring layers whose step is calm (a calm run split
+    where its section drifted: a splayed leg's length) joined into one slab.
+
+    Shrinking the whole run at once keeps a drifting section straight (a splayed leg steeper
+    along its whole length); each piece on its own would bend it at every plane between them
+    (the stool at 60 % of its height: seven slabs, seam shape 2.85; one chain, 0.61). Slabs
+    apart, or next to each other across a step in the section (a rung, a board's face), stay
+    apart. Growth keeps the pieces: it goes to the fewest slabs anyway, and a grown chain
+    draws the runs a vertical line cuts through a splayed leg out with it.
+    """
+    out: list[Candidate] = []
+    for c in sorted(slabs, key=lambda c: c.zone[0]):
+        end = round(float(p.index(out[-1].zone[1]))) if out else -2
+        first = round(float(p.index(c.zone[0])))
+        if first == end + 1 and p.distance(np.array(end), np.array(first)) < STEP:
+            prev = out[-1]
+            zone = (prev.zone[0], c.zone[1])
+            out[-1] = replace(
+                prev,
+                zone=zone,
+                region=zone,
+                score=max(prev.score, c.score),
+                reason=f"{prev.reason}; drifting on: {c.reason}",
+            )
+        else:
+            out.append(c)
+    return out
 
 
 def _long(c: Candidate, h: float) -> bool:
@@ -533,8 +564,10 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     cands = axis_candidates(csdf, axis, prof=prof)
     tiles = [c for c in cands if c.kind == "tile"]
     slabs = [c for c in cands if c.kind == "stretch"]
+    # a shrink is spread over many slabs: a drifting run shrinks whole, not at each piece
+    chains = _drift_chains(slabs, prof)
     # what cannot shrink: the extent less every slab down to its minimum and the removable periods
-    shrinkable = sum(max(0.0, c.zone[1] - c.zone[0] - MIN_SLAB_VOXELS * h) for c in slabs)
+    shrinkable = sum(max(0.0, c.zone[1] - c.zone[0] - MIN_SLAB_VOXELS * h) for c in chains)
     if tiles:
         assert tiles[0].count is not None and tiles[0].period is not None  # set for a tile
         shrinkable = max(shrinkable, (tiles[0].count - 1) * tiles[0].period)
@@ -555,6 +588,8 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     if abs(left) <= h / 2:
         return edits, why
     ax = _Axis(name, units, lo, h, (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0])))
+    if left < 0:
+        slabs = chains
     st, notes, left = _to_long_outside(slabs, left, ax, tiled)
     edits += st
     why += notes

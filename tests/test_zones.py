@@ -340,6 +340,9 @@ def test_a_knob_ends_the_constant_slab_and_fit_keeps_it_round():
         x.zone for x in stretch
     ]
     assert any(x.zone[0] <= 0.05 and x.zone[1] >= 0.5 for x in stretch), [x.zone for x in stretch]
+    assert all("next to a local feature" in x.reason for x in stretch if x.zone[1] >= 0.5), [
+        x.reason for x in stretch
+    ]
     target = 0.6 * extent(c, 0)
     out = apply_recipe(c, fit(c, [repr(target), "=", "="])[0])
     assert abs(extent(out, 0) - target) <= h / 2 + 1e-9

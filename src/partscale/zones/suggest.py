@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 from scipy import ndimage
@@ -480,8 +480,18 @@ def best_phase(p: Profile, period: float, lo: float, hi: float, near: float | No
     return float((starts[best[0]] + starts[best[1]]) / 2)
 
 
-def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[tuple[int, int, float]]:
-    """``(first, last, drift)`` layer runs of constant, non-empty cross-section (see module).
+class Slab(NamedTuple):
+    """A constant slab: layers ``first..last`` (inclusive), the largest distance of a layer from
+    the first (``drift``), and whether a local feature bounds it (``at_feature``)."""
+
+    first: int
+    last: int
+    drift: float
+    at_feature: bool = False
+
+
+def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[Slab]:
+    """Layer runs of constant, non-empty cross-section (see module).
 
     ``csdf``: the object ``p`` was taken from; each calm run is then also cut around its local
     features (:func:`_split_features`) before it is split where it drifts.
@@ -491,10 +501,15 @@ def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[tuple[int, int,
     step = p.distance(idx, idx + 1)
     calm = (step < STEP) & (p.area[idx] > 0) & (p.area[idx + 1] > 0)
     runs = [(int(idx[a]), int(idx[b]) + 1) for a, b in _runs(calm)]
+    cut: set[int] = set()
     if csdf is not None:
-        runs = [
-            r for a, b in runs if b - a + 1 >= MIN_SLAB for r in _split_features(csdf, p.axis, a, b)
-        ]
+        pieces = []
+        for a, b in runs:
+            if b - a + 1 >= MIN_SLAB:
+                kept, spans = _split_features(csdf, p.axis, a, b)
+                pieces += kept
+                cut.update(x for lo, hi in spans for x in (lo, hi))
+        runs = pieces
     out = []
     for first, last in runs:
         # split where the drift from the slab's start exceeds DRIFT (a slowly changing section)
@@ -503,18 +518,23 @@ def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[tuple[int, int,
             over = np.flatnonzero(drift >= DRIFT)
             end = int(over[0] - 1 + first) if over.size else last
             if end - first + 1 >= MIN_SLAB:
-                out.append((first, end, float(drift[: end - first + 1].max())))
+                beside = first - 1 in cut or end + 1 in cut
+                out.append(Slab(first, end, float(drift[: end - first + 1].max()), beside))
             first = end + 1
     return out
 
 
-def _split_features(csdf: CSDF, axis: int, first: int, last: int) -> list[tuple[int, int]]:
-    """The runs of layers ``first..last`` (inclusive) that hold no local feature
-    (:func:`_feature_spans`), at least :data:`MIN_SLAB` long."""
+def _split_features(
+    csdf: CSDF, axis: int, first: int, last: int
+) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """The runs of layers ``first..last`` (inclusive) that hold no local feature, at least
+    :data:`MIN_SLAB` long, and the features' spans (:func:`_feature_spans`)."""
+    spans = _feature_spans(csdf, axis, first, last)
     keep = np.ones(last - first + 1, dtype=bool)
-    for a, b in _feature_spans(csdf, axis, first, last):
+    for a, b in spans:
         keep[a - first : b - first + 1] = False
-    return [(first + int(r0), first + int(r1)) for r0, r1 in _runs(keep) if r1 - r0 + 1 >= MIN_SLAB]
+    runs = [(first + int(r0), first + int(r1)) for r0, r1 in _runs(keep) if r1 - r0 + 1 >= MIN_SLAB]
+    return runs, spans
 
 
 def _part_planes(csdf: CSDF, axis: int) -> np.ndarray:
@@ -662,7 +682,7 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
         )
         out.append(_tile(name, p.world(t), pitch, count, score, reason, (p.world(a0), p.world(b0))))
     planes = _part_planes(csdf, ax)
-    for first, last, drift in constant_slabs(p, csdf):
+    for first, last, drift, at_feature in constant_slabs(p, csdf):
         s, e = float(p.world(first)), float(p.world(last))
         why = ""
         if planes.size:
@@ -690,6 +710,7 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
                 reason=(
                     f"constant cross-section over {e - s:.4g} ({100 * length:.1f}% of the extent), "
                     f"drift {drift:.3f}{why}"
+                    + (", next to a local feature (a knob, a handle)" if at_feature else "")
                 ),
                 region=(s, e),
             )

@@ -4,8 +4,8 @@ A knob, a handle or a keyhole is a few voxels of a cross-section of thousands: t
 distance between layers (:mod:`.profile`) barely moves across it, so a "constant" slab may hold
 one, and stretching the slab squashes it into an oval or stretches it into a bar. Here each
 voxel is compared with its own column along the axis instead (:func:`_feature_spans`); constant
-slabs are cut around what is found (:func:`_split_features`), and a user's stretch zone that
-holds one is named (:func:`local_features`, :func:`feature_notes`).
+slabs are cut around what is found (:func:`.suggest.constant_slabs`), and a user's stretch zone
+that holds one is named (:func:`local_features`, :func:`feature_notes`).
 """
 
 from __future__ import annotations
@@ -89,9 +89,9 @@ def _feature_spans(csdf: CSDF, axis: int, first: int, last: int) -> list[tuple[i
     size = np.bincount(lab.ravel())
     has_sharp = np.bincount(lab[edge], minlength=n + 1) > 0
     out = []
-    for k_, box in enumerate(ndimage.find_objects(lab), start=1):
+    for label, box in enumerate(ndimage.find_objects(lab), start=1):
         span = box[0].stop - box[0].start
-        if size[k_] >= vmin and has_sharp[k_] and 2 * span <= len(inner):
+        if size[label] >= vmin and has_sharp[label] and 2 * span <= len(inner):
             # inner layer 0 is layer first + 1
             out.append((first + 1 + box[0].start, first + box[0].stop))
     return sorted(out)

@@ -684,6 +684,14 @@ def test_cli_scale_snap_by_and_copies(cli, shelf_file, tmp_path):
     assert "snap: moved" in proc.stderr
     entry = load(out).meta["history"][-1]
     assert entry["snapped"] and entry["copies"] == 2
+    # a zone a third of a period wide: --copies +1 is still one more period once it snaps (the
+    # growth it meant, a third of a period, rounded to none before)
+    args = ("scale", shelf_file, "-o", out, "--axis", "y", "--zone", "40%", "48%")
+    proc = cli(*args, "--copies", "+1", "--snap")
+    assert proc.returncode == 0, proc.stderr
+    grown = load(out)
+    assert grown.meta["history"][-1]["copies"] == 2
+    assert abs(extent(grown, 1) - (extent(load(shelf_file), 1) + 0.3)) <= H / 2 + 1e-9
     proc = cli(
         "scale", shelf_file, "-o", out, "--axis", "x", "--zone", "20cm", "60cm", "--by", "+10cm"
     )

@@ -113,7 +113,8 @@ def scale(
             from ..zones import describe_moves
             from ..zones import snap as snap_edit
 
-            edit, moves = snap_edit(c, edit)
+            total = None if copies is None else _copies_total(copies)
+            edit, moves = snap_edit(c, edit, copies=total)
             _common.stderr.print(
                 describe_moves(moves, c.meta.get("units")), highlight=False, soft_wrap=True
             )
@@ -179,6 +180,11 @@ def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
     s, e, _ = Edit(axis, start, end, end, mode).resolve(float(sb[0, ax]), float(sb[1, ax]))
     if by is not None:
         return Edit(axis, start, end, e + parse_length(by, units=units, what="--by"), mode)
+    return Edit(axis, start, end, s + _copies_total(copies) * (e - s), mode)
+
+
+def _copies_total(copies: str) -> int:
+    """The number of copies in all that ``--copies`` asks for (``+N``: N more than the one)."""
     text = copies.strip()
     try:
         n = int(text)
@@ -189,7 +195,7 @@ def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
     total = 1 + n if text.startswith(("+", "-")) else n
     if total < 1:
         raise InputError(f"--copies: expected at least one copy in all, got {copies!r}")
-    return Edit(axis, start, end, s + total * (e - s), mode)
+    return total
 
 
 AXES_INDEX = {"x": 0, "y": 1, "z": 2}

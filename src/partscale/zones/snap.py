@@ -77,11 +77,16 @@ def snap(
     mode: str | None = None,
     *,
     candidates: Sequence[Candidate] | None = None,
+    copies: int | None = None,
 ) -> tuple[Edit, list[Move]]:
     """Snap ``edit``'s planes for ``mode`` (default: the edit's own).
 
     Parameters
     ----------
+    copies : int, optional
+        Tile: the number of copies in all the user asked for (``scale --copies``), kept when
+        the zone snaps to one period: the destination is that many periods from the snapped
+        start. None: the growth the edit asks for (``dest - end``) is kept, in whole periods.
     candidates : sequence of Candidate, optional
         ``csdf``'s candidates as :func:`~partscale.zones.suggest` or
         :func:`~partscale.zones.axis_candidates` returned them (those of other axes are
@@ -137,7 +142,8 @@ def snap(
             t = best_phase(p, period / h, lo, hi, near=float(p.index(s)))
             s2 = float(p.world(t))
         e2 = s2 + period
-        copies = tile_count(period, period + (d - e))
+        if copies is None:
+            copies = tile_count(period, period + (d - e))
         d2 = s2 + copies * period
     else:
         a, b = best.zone

@@ -106,8 +106,14 @@ def test_a_zone_plane_cutting_a_board_is_said_and_recorded(cli, tmp_path):
     assert proc.returncode == 0, proc.stderr
     said = " ".join(proc.stderr.split())
     assert "END plane (" in said and "cuts an element" in said and "left out" in said, proc.stderr
-    assert "START plane" not in said
-    assert set(load(out).meta["history"][-1]["slivers_left_out"]) == {"end"}
+    assert "START plane" not in said and "--snap puts the planes in gaps" in said
+    entry = load(out).meta["history"][-1]
+    assert set(entry["slivers_left_out"]) == {"end"}
+    # after a snap (where no phase of the period misses every element) no --snap hint
+    from partscale.edit import describe_changes
+
+    (line,) = [w for w in describe_changes([{**entry, "snapped": []}], load(out)) if "cuts" in w]
+    assert "--snap" not in line, line
 
 
 BAD = [

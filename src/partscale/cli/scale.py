@@ -124,16 +124,16 @@ def scale(
     assert c is not None  # loaded unless mesh_route
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
+    if recipe is None and snap:
+        from ..zones import record_snap
+
+        out = record_snap(out, moves)
     entries = out.meta.get("history", [])[-len(rec.edits) :]
     from ..edit import describe_changes
     from ..zones import feature_notes
 
     for line in describe_changes(entries, out) + feature_notes(c, rec):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
-    if recipe is None and snap:
-        from ..zones import record_snap
-
-        out = record_snap(out, moves)
     save(out, output)
     _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")
 

@@ -100,10 +100,12 @@ def _slivers(entries: list[Any], out: CSDF) -> list[str]:
         planes = " and ".join(
             f"{p.upper()} plane ({zone[p == 'end']:.6g}{u})" for p in sorted(cut, reverse=True)
         )
+        # after a snap, no plane of the period avoids every element: no hint then
+        hint = "" if "snapped" in h else "; --snap puts the planes in gaps"
         lines.append(
             f"{_where(i, entries)}the zone's {planes} cut{'s' if len(cut) == 1 else ''} an "
             f"element: the sliver cut off ({sum(cut.values())} voxels) is left out at the inner "
             f"tile seams, the element stays whole once, beside the copies (recorded in the "
-            f"history; --snap puts the planes in gaps)"
+            f"history{hint})"
         )
     return lines

@@ -550,6 +550,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     the whole change with no repeat) in this order until it is taken: long slabs outside the
     repeat, the copies within :data:`COPY_TOLERANCE`, long slabs inside the repeat, thin slabs
     (a note says so), the copies whatever their change, and global scaling as the last resort.
+    A shrink takes each chain of drift-split slabs as one (:func:`_drift_chains`).
     """
     name = AXES[axis]
     units = csdf.meta.get("units")

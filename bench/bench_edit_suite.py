@@ -22,7 +22,7 @@ from pathlib import Path
 
 from _timing import timed_cpu
 
-from partscale import ingest
+from partscale import ingest, reuse_freed_memory
 from partscale.edit import Edit, apply_edit, apply_recipe, naive_edit
 from partscale.evaluate import load_suite
 from partscale.segment import segment
@@ -47,6 +47,8 @@ def main() -> None:
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--only", default="", help="run only entries whose name contains this")
     args = ap.parse_args()
+    # as the CLI does (partscale.cli.main): freed grids' pages are reused, not faulted in anew
+    print(f"freed memory reused (glibc): {'yes' if reuse_freed_memory() else 'no'}")
     suite = load_suite(ROOT / "eval" / "suite.json")
     jobs = [(e.name, e.path, e.edit, e.recipe) for e in suite.entries]
     jobs.append((*RADIATOR, RADIATOR_EDIT, None))

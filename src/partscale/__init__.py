@@ -7,10 +7,13 @@ The pipeline, one module per stage::
 
 The CSDF type and its file live in :mod:`partscale.csdf`; :mod:`partscale.thickness` measures
 the features thinner than the grid holds well (``partscale info`` warns about them).
+:func:`reuse_freed_memory` lets a process reuse freed grids' pages (the CLI calls it; so
+should an application that edits large grids in a loop).
 """
 
+from ._memory import reuse_freed_memory
 from .csdf import CSDF, load, make, save
 from .errors import InputError, PartscaleError
 
 __version__ = "0.1.0"
-__all__ = ["CSDF", "InputError", "PartscaleError", "load", "make", "save"]
+__all__ = ["CSDF", "InputError", "PartscaleError", "load", "make", "reuse_freed_memory", "save"]

@@ -133,6 +133,8 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=0)
     ap.add_argument("--res", type=int, nargs="+", default=[128], help="resolutions, in turn")
     args = ap.parse_args()
+    # as the CLI does (the editor runs under it): freed grids' pages are reused
+    print(f"freed memory reused (glibc): {'yes' if partscale.reuse_freed_memory() else 'no'}")
     for res in args.res:
         run(res, args.repeat, args.frames)
 

@@ -557,6 +557,7 @@ def test_fit_shrinks_a_splayed_leg_run_whole():
     target = 0.7 * extent(c, 1)
     recipe, why = fit(c, ["=", repr(target), "="])
     assert [e.mode for e in recipe.edits] == ["stretch"], why
+    assert "the drifting run of slabs" in why[1], why
     out = apply_recipe(c, recipe)
     assert abs(extent(out, 1) - target) <= h / 2 + 1e-9
     line = (round((0.25 - c.origin[0]) / h), round((0.1 - c.origin[2]) / h))  # through the top

@@ -252,6 +252,10 @@ def _stretch_edits(
     return edits, left
 
 
+#: How a chain's reason joins its slabs' (and how its note knows it is one).
+DRIFTING = "; drifting on: "
+
+
 def _drift_chains(slabs: list[Candidate], p: Profile) -> list[Candidate]:
     """``slabs`` with each chain of neighbouring layers whose step is calm (a calm run split
     where its section drifted: a splayed leg's length) joined into one slab.
@@ -275,7 +279,7 @@ def _drift_chains(slabs: list[Candidate], p: Profile) -> list[Candidate]:
                 zone=zone,
                 region=zone,
                 score=max(prev.score, c.score),
-                reason=f"{prev.reason}; drifting on: {c.reason}",
+                reason=f"{prev.reason}{DRIFTING}{c.reason}",
             )
         else:
             out.append(c)
@@ -448,8 +452,11 @@ def _to_slabs(
     notes = []
     for ed in st:
         a, b = float(ed.start), float(ed.end)
+        # the slab the planes lie in: a chain of drift-split slabs (_drift_chains) is named so
+        home = next(c for c in tier if c.zone[0] - ax.h / 2 <= a and b <= c.zone[1] + ax.h / 2)
+        what = "the drifting run of slabs" if DRIFTING in home.reason else "the constant slab"
         notes.append(
-            f"{ax.name}: stretch the constant slab {_fmt(a - ax.lo, ax.units)}.."
+            f"{ax.name}: stretch {what} {_fmt(a - ax.lo, ax.units)}.."
             f"{_fmt(b - ax.lo, ax.units)} from the {ax.name} min by "
             f"{_fmt(float(ed.dest) - b, ax.units)}"
             + (" (the remainder after whole periods)" if tiled else "")

@@ -84,15 +84,15 @@ def reuse_freed_memory(limit: int = REUSE_BYTES) -> bool:
     and maps fresh pages for the next: the kernel then faults in and zeroes every page of each
     new grid. At 256³ that is most of an edit's time (the bookcase tile: about 100 ms of page
     faults in 200). Serving such blocks from the heap and not trimming it lets the next edit
-    reuse the pages. Called once by the applications (the CLI, batch workers, benchmarks), not
-    on import: the process keeps its peak heap. Returns whether glibc accepted it.
+    reuse the pages. Called once by the applications (the CLI and the benchmarks; batch workers
+    not yet), not on import: the process keeps its peak heap. Returns whether glibc accepted it.
     """
     import ctypes
-    import ctypes.util
 
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or None)
-        mallopt = libc.mallopt
+        # the process's own symbols: libc is loaded already (ctypes.util.find_library would
+        # run ldconfig, 30 ms at every start of the CLI)
+        mallopt = ctypes.CDLL(None).mallopt
     except (OSError, AttributeError, TypeError):
         return False  # not glibc (macOS, musl): nothing to tune
     mallopt.argtypes = [ctypes.c_int, ctypes.c_int]

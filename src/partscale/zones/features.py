@@ -88,13 +88,21 @@ def _feature_spans(csdf: CSDF, axis: int, first: int, last: int) -> list[tuple[i
     lab, n = ndimage.label(grid, structure=np.ones((3, 3, 3)))
     size = np.bincount(lab.ravel())
     has_sharp = np.bincount(lab[edge], minlength=n + 1) > 0
-    out = []
-    for label, box in enumerate(ndimage.find_objects(lab), start=1):
-        span = box[0].stop - box[0].start
-        if size[label] >= vmin and has_sharp[label] and 2 * span <= len(inner):
-            # inner layer 0 is layer first + 1
-            out.append((first + 1 + box[0].start, first + box[0].stop))
-    return sorted(out)
+    spans = sorted(
+        (first + 1 + box[0].start, first + box[0].stop)  # inner layer 0 is layer first + 1
+        for label, box in enumerate(ndimage.find_objects(lab), start=1)
+        if size[label] >= vmin
+        and has_sharp[label]
+        and 2 * (box[0].stop - box[0].start) <= len(inner)
+    )
+    # features side by side across the section (a pair of knobs) share layers: one span each
+    out: list[tuple[int, int]] = []
+    for a, b in spans:
+        if out and a <= out[-1][1] + 1:
+            out[-1] = (out[-1][0], max(out[-1][1], b))
+        else:
+            out.append((a, b))
+    return out
 
 
 def local_features(csdf: CSDF, axis: int, zone: tuple[float, float]) -> list[tuple[float, float]]:

@@ -252,10 +252,6 @@ def _stretch_edits(
     return edits, left
 
 
-#: How a chain's reason joins its slabs' (and how its note knows it is one).
-DRIFTING = "; drifting on: "
-
-
 def _drift_chains(slabs: list[Candidate], p: Profile) -> list[Candidate]:
     """``slabs`` with each chain of neighbouring layers whose step is calm (a calm run split
     where its section drifted: a splayed leg's length) joined into one slab.
@@ -279,7 +275,7 @@ def _drift_chains(slabs: list[Candidate], p: Profile) -> list[Candidate]:
                 zone=zone,
                 region=zone,
                 score=max(prev.score, c.score),
-                reason=f"{prev.reason}{DRIFTING}{c.reason}",
+                reason=f"{prev.reason}; drifting on: {c.reason}",
             )
         else:
             out.append(c)
@@ -313,10 +309,9 @@ def _outside(slabs: list[Candidate], h: float, tiled: _Tiled | None) -> list[Can
     ]
 
 
-def _thin_note(tier: list[Candidate], ed: Edit, h: float, tiled: bool) -> str:
-    """The note's tail for a stretch of a thin slab: which feature changes thickness, and why."""
-    a, b = float(ed.start), float(ed.end)
-    c = next(c for c in tier if c.zone[0] - h / 2 <= a and b <= c.zone[1] + h / 2)
+def _thin_note(c: Candidate, h: float, tiled: bool) -> str:
+    """The note's tail for a stretch of the thin slab ``c``: which feature changes thickness,
+    and why."""
     n = round((c.zone[1] - c.zone[0]) / h)
     copies = f" nor the copies (within {100 * COPY_TOLERANCE:.0f}%)" if tiled else ""
     return (
@@ -372,8 +367,9 @@ def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
 @dataclass(frozen=True)
 class _Axis:
     """What the remainder's stretches and notes need of one axis: its name (``'x'``...), the
-    object's units, the surface's min along it (notes give positions from it), the voxel size and
-    :func:`layer_change` along it with the world coordinate of its layer 0 (for :func:`_inset`).
+    object's units, the surface's min along it (notes give positions from it), the voxel size,
+    :func:`layer_change` along it with the world coordinate of its layer 0 (for :func:`_inset`)
+    and the zones of the slabs joined by :func:`_drift_chains` (notes name them).
     """
 
     name: str
@@ -381,6 +377,7 @@ class _Axis:
     lo: float
     h: float
     layers: tuple[np.ndarray, float]
+    chained: frozenset[tuple[float, float]] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -454,13 +451,13 @@ def _to_slabs(
         a, b = float(ed.start), float(ed.end)
         # the slab the planes lie in: a chain of drift-split slabs (_drift_chains) is named so
         home = next(c for c in tier if c.zone[0] - ax.h / 2 <= a and b <= c.zone[1] + ax.h / 2)
-        what = "the drifting run of slabs" if DRIFTING in home.reason else "the constant slab"
+        what = "the drifting run of slabs" if home.zone in ax.chained else "the constant slab"
         notes.append(
             f"{ax.name}: stretch {what} {_fmt(a - ax.lo, ax.units)}.."
             f"{_fmt(b - ax.lo, ax.units)} from the {ax.name} min by "
             f"{_fmt(float(ed.dest) - b, ax.units)}"
             + (" (the remainder after whole periods)" if tiled else "")
-            + (_thin_note(tier, ed, ax.h, tiled is not None) if thin else "")
+            + (_thin_note(home, ax.h, tiled is not None) if thin else "")
         )
     return st, notes, left
 
@@ -595,7 +592,8 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
         left = change - tiled.grow
     if abs(left) <= h / 2:
         return edits, why
-    ax = _Axis(name, units, lo, h, (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0])))
+    layers = (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0]))
+    ax = _Axis(name, units, lo, h, layers, frozenset(c.zone for c in chains if c not in slabs))
     if left < 0:
         slabs = chains
     st, notes, left = _to_long_outside(slabs, left, ax, tiled)

@@ -66,29 +66,37 @@ def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     return dx * dx + dy * dy + dz * dz, u, v, w
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def trilinear_at(volume, x, y, z, out):
+    """Trilinear sample of ``volume`` (X, Y, Z, C), any numeric dtype, at the continuous voxel
+    index ``(x, y, z)`` (voxel centres at integers), clamped to the grid, added to ``out``
+    (C,) float64 (zeroed by the caller)."""
+    nx, ny, nz, nc = volume.shape
+    x = min(max(x, 0.0), nx - 1.0)
+    y = min(max(y, 0.0), ny - 1.0)
+    z = min(max(z, 0.0), nz - 1.0)
+    i0 = min(int(x), nx - 2) if nx > 1 else 0
+    j0 = min(int(y), ny - 2) if ny > 1 else 0
+    k0 = min(int(z), nz - 2) if nz > 1 else 0
+    fx, fy, fz = x - i0, y - j0, z - k0
+    for di in range(2):
+        wx = fx if di else 1.0 - fx
+        for dj in range(2):
+            wy = fy if dj else 1.0 - fy
+            for dk in range(2):
+                # a zero weight's corner may lie beyond a one-voxel-thin grid
+                w = wx * wy * (fz if dk else 1.0 - fz)
+                if w == 0.0:
+                    continue
+                for c in range(nc):
+                    out[c] += w * volume[i0 + di, j0 + dj, k0 + dk, c]
+
+
 @nb.njit(cache=True, nogil=True)
 def trilinear(volume, pts):
     """(N, C) float64 trilinear samples of ``volume`` (X, Y, Z, C), any numeric dtype, at
     continuous voxel indices ``pts`` (N, 3) (voxel centres at integers), clamped to the grid."""
-    nx, ny, nz, nc = volume.shape
-    out = np.zeros((pts.shape[0], nc))
+    out = np.zeros((pts.shape[0], volume.shape[3]))
     for n in range(pts.shape[0]):
-        x = min(max(pts[n, 0], 0.0), nx - 1.0)
-        y = min(max(pts[n, 1], 0.0), ny - 1.0)
-        z = min(max(pts[n, 2], 0.0), nz - 1.0)
-        i0 = min(int(x), nx - 2) if nx > 1 else 0
-        j0 = min(int(y), ny - 2) if ny > 1 else 0
-        k0 = min(int(z), nz - 2) if nz > 1 else 0
-        fx, fy, fz = x - i0, y - j0, z - k0
-        for di in range(2):
-            wx = fx if di else 1.0 - fx
-            for dj in range(2):
-                wy = fy if dj else 1.0 - fy
-                for dk in range(2):
-                    # a zero weight's corner may lie beyond a one-voxel-thin grid
-                    w = wx * wy * (fz if dk else 1.0 - fz)
-                    if w == 0.0:
-                        continue
-                    for c in range(nc):
-                        out[n, c] += w * volume[i0 + di, j0 + dj, k0 + dk, c]
+        trilinear_at(volume, pts[n, 0], pts[n, 1], pts[n, 2], out[n])
     return out

@@ -7,7 +7,8 @@ piecewise-linear surface through its zero crossings; at sharp edges and corners 
 voxel from the true object's, see :mod:`partscale.edit`):
 
 1. the zero level set near those voxels is extracted with sub-voxel precision (marching cubes of
-   the field in a box around them: vertices are the linear zero crossings along grid edges);
+   the field in a box around them, :mod:`partscale._marching`: vertices are the linear zero
+   crossings along grid edges, written straight into the triangle table, without the GIL);
 2. every voxel of the band in that box gets its nearest triangle by *closest-triangle propagation*
    (a numba kernel): triangles seed the eight corners of their cell, then voxels, in order of
    increasing |sdf|, test the nearest triangles of their 26 neighbours (exact point-triangle
@@ -30,9 +31,9 @@ import numbers
 
 import numba
 import numpy as np
-from skimage import measure
 
-from .._kernels import closest_on_triangle, trilinear
+from .._kernels import closest_on_triangle, trilinear_at
+from .._marching import march
 from .._options import keyword_options
 from .._workers import thread_map
 from ..csdf import BAND_VOXELS, CSDF
@@ -95,7 +96,7 @@ def _disk_d2(tri, t, px, py, pz):
 def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
     """Nearest triangle of every voxel in ``order`` (ascending flat indices of the box).
 
-    ``tri`` (F, 17): see :func:`_triangle_table`. ``best_d2`` (float64) / ``best_t`` (int32), flat,
+    ``tri`` (F, 17): see :func:`_complete_table`. ``best_d2`` (float64) / ``best_t`` (int32), flat,
     the box's size, start at inf / -1 and are updated in place: seeds, then ``npass`` raster sweeps alternating direction
     (raster order keeps memory access local; the band is thin, so two sweeps reach every voxel).
     Only voxels ``first ... last`` (flat indices) are read afterwards: the last sweep stops once
@@ -480,15 +481,29 @@ def reevaluate_arrays(
         got = _solve_box(sdf, mask, row0, lo, hi, (int(run[0]), int(run[-1])), h, lim, pad, npass)
         if got is None:
             return None
-        gi, new, cp = got
-        # code 2 (uint8 masks): the old value is an upper bound of the distance, kept where
-        # smaller; colours and parts are read here, from the unchanged arrays, in this thread
-        return _box_values(
-            sdf, rgb, parts, mask, row0, capping, gi, new, cp, far is not None, far32
+        sub, tri, best_d2, best_t, wanted = got
+        # colours and parts are read here, from the unchanged arrays, in this thread
+        out = _box_values(
+            sdf,
+            rgb,
+            parts,
+            mask,
+            row0,
+            capping,
+            sub,
+            tri,
+            best_d2,
+            best_t,
+            wanted,
+            np.asarray(lo, np.int64),
+            h,
+            far is not None,
+            far32,
         )
+        return out if out[0].shape[0] else None
 
     # boxes are independent (each reads the unchanged field; all writes come after) and their
-    # kernels, marching cubes aside, release the GIL: they are solved side by side (the pieces
+    # kernels release the GIL: they are solved side by side (the pieces
     # depend on the layers only, never on the number of threads, so neither do the results)
     found = [got for got in thread_map(solve, runs) if got is not None]
     if not found:
@@ -510,33 +525,52 @@ def _write(sdf, rgb, parts, gi, new, col, new_parts):
 
 
 @numba.njit(cache=True, nogil=True)
-def _box_values(sdf, rgb, parts, mask, row0, capping, gi, new, cp, use_far, far):
-    """What the recomputed voxels ``gi`` (N, 3) of one box take: ``(gi, distance, colour (uint8),
-    part)`` at their closest point ``cp``, less the code-2 voxels that keep their value; see
+def _box_values(
+    sdf, rgb, parts, mask, row0, capping, sub, tri, best_d2, best_t, wanted, lo, h, use_far, far
+):
+    """What the ``wanted`` voxels (flat indices of the box ``sub`` at ``lo``) that found a
+    triangle take: ``(gi (N, 3) int64, distance (N,) float32, colour (N, 3) uint8, part (N,))``,
+    colour and part at their closest point, less the code-2 voxels that keep their value; see
     :func:`reevaluate_arrays`. Reads the arrays only (every box's values come before any write:
     no voxel sees another's new colour).
     """
-    keep = np.ones(gi.shape[0], np.bool_)
-    if capping:
-        for q in range(gi.shape[0]):
-            i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
-            if mask[i - row0, j, k] == 2 and abs(sdf[i, j, k]) <= abs(new[q]):
-                keep[q] = False
-    sel = np.flatnonzero(keep)
-    gi, new, cp = gi[sel], new[sel], cp[sel]
-    col = trilinear(rgb, cp)
-    new_parts = _surface_parts_kernel(sdf, parts, cp)
-    if use_far:
-        for q in range(gi.shape[0]):
-            i, j, k = gi[q, 0], gi[q, 1], gi[q, 2]
-            moved = new[q] != sdf[i, j, k] or new_parts[q] != parts[i, j, k]
-            if moved and new[q] > far:
-                new_parts[q] = -1
-    col8 = np.empty((gi.shape[0], 3), np.uint8)
-    for q in range(gi.shape[0]):
+    ny, nz = sub.shape[1], sub.shape[2]
+    m = wanted.shape[0]
+    gi = np.empty((m, 3), np.int64)
+    new = np.empty(m, np.float32)
+    col8 = np.empty((m, 3), np.uint8)
+    new_parts = np.empty(m, parts.dtype)
+    col = np.empty(3)
+    n = 0
+    for f in wanted:
+        t = best_t[f]
+        if t < 0:
+            continue
+        i, j, k = f // (ny * nz), (f // nz) % ny, f % nz
+        old = sub[i, j, k]
+        sign = -1.0 if old <= 0 else 1.0  # sdf <= 0 is inside
+        d = np.float32(sign * np.sqrt(best_d2[f]) * h)
+        # a voxel the surface passes through stays on its side (outside: > 0), never flips
+        d = old if sign > 0 and d <= 0 else d
+        gx, gy, gz = lo[0] + i, lo[1] + j, lo[2] + k
+        # code 2 (uint8 masks): the old value is an upper bound of the distance, kept where
+        # smaller
+        if capping and mask[gx - row0, gy, gz] == 2 and abs(old) <= abs(d):
+            continue
+        _, qx, qy, qz = _tri_d2(tri, t, float(i), float(j), float(k))
+        qx, qy, qz = qx + lo[0], qy + lo[1], qz + lo[2]
+        col[:] = 0.0
+        trilinear_at(rgb, qx, qy, qz, col)
+        part = _surface_part(sdf, parts, qx, qy, qz)
+        if use_far and d > far and (d != old or part != parts[gx, gy, gz]):
+            part = -1
+        gi[n, 0], gi[n, 1], gi[n, 2] = gx, gy, gz
+        new[n] = d
         for c in range(3):
-            col8[q, c] = np.uint8(min(max(np.rint(col[q, c]), 0.0), 255.0))
-    return gi, new, col8, new_parts
+            col8[n, c] = np.uint8(min(max(np.rint(col[c]), 0.0), 255.0))
+        new_parts[n] = part
+        n += 1
+    return gi[:n], new[:n], col8[:n], new_parts[:n]
 
 
 def _pieces(runs: list[np.ndarray]) -> list[np.ndarray]:
@@ -551,53 +585,45 @@ def _pieces(runs: list[np.ndarray]) -> list[np.ndarray]:
     return out
 
 
-@numba.njit(cache=True, nogil=True)
-def _surface_parts_kernel(sdf, parts, cp):
-    """(N,) int16 part of surface points ``cp`` (N, 3) (continuous indices): the label of the
-    nearest inside (``sdf <= 0``) corner of the cell holding the point.
+@numba.njit(cache=True, nogil=True, inline="always")
+def _surface_part(sdf, parts, x, y, z):
+    """Part of the surface point ``(x, y, z)`` (continuous indices): the label of the nearest
+    inside (``sdf <= 0``) corner of the cell holding the point.
 
     The solid carries the parts; an outside corner's label is only its nearest part, and where a
     node lies exactly on the surface (``sdf == 0``, e.g. grid-aligned faces) the nearest corner
-    can be an outside one labelled with another part. Points whose cell has no inside corner
-    (none after marching cubes, kept for safety) take the nearest corner.
+    can be an outside one labelled with another part. A point whose cell has no inside corner
+    (none after marching cubes, kept for safety) takes the nearest corner.
     """
     nx, ny, nz = sdf.shape
-    out = np.empty(cp.shape[0], parts.dtype)
-    for n in range(cp.shape[0]):
-        x, y, z = cp[n, 0], cp[n, 1], cp[n, 2]
-        bx = min(max(int(np.floor(x)), 0), max(nx - 2, 0))
-        by = min(max(int(np.floor(y)), 0), max(ny - 2, 0))
-        bz = min(max(int(np.floor(z)), 0), max(nz - 2, 0))
-        # fallback: the nearest corner whatever its side
-        ix = min(max(int(np.rint(x)), 0), nx - 1)
-        iy = min(max(int(np.rint(y)), 0), ny - 1)
-        iz = min(max(int(np.rint(z)), 0), nz - 1)
-        best = np.inf
-        for dx in range(2):
-            qx = min(bx + dx, nx - 1)
-            for dy in range(2):
-                qy = min(by + dy, ny - 1)
-                for dz in range(2):
-                    qz = min(bz + dz, nz - 1)
-                    d2 = (qx - x) ** 2 + (qy - y) ** 2 + (qz - z) ** 2
-                    if sdf[qx, qy, qz] <= 0 and d2 < best:
-                        best = d2
-                        ix, iy, iz = qx, qy, qz
-        out[n] = parts[ix, iy, iz]
-    return out
+    bx = min(max(int(np.floor(x)), 0), max(nx - 2, 0))
+    by = min(max(int(np.floor(y)), 0), max(ny - 2, 0))
+    bz = min(max(int(np.floor(z)), 0), max(nz - 2, 0))
+    # fallback: the nearest corner whatever its side
+    ix = min(max(int(np.rint(x)), 0), nx - 1)
+    iy = min(max(int(np.rint(y)), 0), ny - 1)
+    iz = min(max(int(np.rint(z)), 0), nz - 1)
+    best = np.inf
+    for dx in range(2):
+        qx = min(bx + dx, nx - 1)
+        for dy in range(2):
+            qy = min(by + dy, ny - 1)
+            for dz in range(2):
+                qz = min(bz + dz, nz - 1)
+                d2 = (qx - x) ** 2 + (qy - y) ** 2 + (qz - z) ** 2
+                if sdf[qx, qy, qz] <= 0 and d2 < best:
+                    best = d2
+                    ix, iy, iz = qx, qy, qz
+    return parts[ix, iy, iz]
 
 
 @numba.njit(cache=True, nogil=True)
-def _triangle_table(verts, faces):
-    """(F, 17) float64 per triangle ``faces`` (F, 3) of ``verts`` (V, 3): corners a, b, c,
-    centroid, radius of the disk around the centroid holding the triangle (with a 1e-9 relative
-    margin), unit normal and plane offset (zero for near-degenerate triangles, whose normal is
-    unreliable; see :func:`_disk_d2`)."""
-    out = np.empty((faces.shape[0], 17))  # every entry written below (one pass over memory)
-    for t in range(faces.shape[0]):
-        for c in range(3):
-            for d in range(3):
-                out[t, 3 * c + d] = verts[faces[t, c], d]
+def _complete_table(out):
+    """Fill columns 9-16 of ``out`` (F, 17) float64 from each triangle's corners a, b, c
+    (columns 0-8): centroid, radius of the disk around the centroid holding the triangle (with
+    a 1e-9 relative margin), unit normal and plane offset (zero for near-degenerate triangles,
+    whose normal is unreliable; see :func:`_disk_d2`)."""
+    for t in range(out.shape[0]):
         for d in range(3):
             out[t, 9 + d] = (out[t, d] + out[t, 3 + d] + out[t, 6 + d]) / 3.0
         r2 = 0.0
@@ -709,22 +735,23 @@ def _relays(sub, t_box, r, lim):
 
 
 def _solve_box(sdf, mask, row0, lo, hi, own, h, lim, pad, npass):
-    """Distances of the targets of layers ``own[0] ... own[1]`` in box ``lo ... hi - 1`` of
-    ``sdf`` to the zero level set.
+    """Nearest triangles of the targets of layers ``own[0] ... own[1]`` in box ``lo ... hi - 1``
+    of ``sdf``: the zero level set's.
 
     Targets: voxels of ``mask`` (uint8, layers ``row0 ...``) with ``|sdf| <= lim``; all
     targets of the box gather relays, only those of the ``own`` layers are solved. Returns
-    ``(gi (N, 3) int64 grid indices, new sdf (N,) float32, closest points (N, 3) float64 in
-    continuous grid indices)`` or None.
+    ``(sub, tri, best_d2, best_t, wanted)`` (the box's field, its triangle table, squared
+    distances and triangles per flat index, the solved targets' flat indices; see
+    :func:`_box_values`) or None.
     """
     box = tuple(slice(lo[a], hi[a]) for a in range(3))
     sub = np.array(sdf[box], dtype=np.float32)
     if min(sub.shape) < 2 or not ((sub <= 0).any() and (sub > 0).any()):
         return None
-    verts, faces, _n, _v = measure.marching_cubes(sub, 0.0, allow_degenerate=True)
-    if len(faces) == 0:
+    tri = march(sub, width=17)
+    if tri.shape[0] == 0:
         return None
-    tri = _triangle_table(verts.astype(np.float64), faces)
+    _complete_table(tri)
     # band voxels near the targets relay nearest triangles (half a voxel of slack beyond the
     # band); a voxel farther than the band from every target cannot be on a target's path
     t_box = _box_targets(sdf, mask, row0, np.float32(lim), np.asarray(lo, np.int64), sub.shape)
@@ -742,38 +769,7 @@ def _solve_box(sdf, mask, row0, lo, hi, own, h, lim, pad, npass):
         return None
     shape = np.array(sub.shape, np.int64)
     _propagate(tri, order, shape, best_d2, best_t, npass, wanted[0], wanted[-1])
-    gi, new, cp = _box_results(sub, tri, best_d2, best_t, wanted, np.asarray(lo, np.int64), h)
-    return (gi, new, cp) if gi.shape[0] else None
-
-
-@numba.njit(cache=True, nogil=True)
-def _box_results(sub, tri, best_d2, best_t, wanted, lo, h):
-    """:func:`_solve_box`'s results at the ``wanted`` voxels (flat indices of the box ``sub``
-    at ``lo``) that found a triangle: grid indices, signed distances, closest points."""
-    ny, nz = sub.shape[1], sub.shape[2]
-    n = 0
-    for f in wanted:
-        if best_t[f] >= 0:
-            n += 1
-    gi = np.empty((n, 3), np.int64)
-    new = np.empty(n, np.float32)
-    cp = np.empty((n, 3))
-    n = 0
-    for f in wanted:
-        t = best_t[f]
-        if t < 0:
-            continue
-        i, j, k = f // (ny * nz), (f // nz) % ny, f % nz
-        old = sub[i, j, k]
-        sign = -1.0 if old <= 0 else 1.0  # sdf <= 0 is inside
-        d = np.float32(sign * np.sqrt(best_d2[f]) * h)
-        # a voxel the surface passes through stays on its side (outside: > 0), never flips
-        new[n] = old if sign > 0 and d <= 0 else d
-        _, qx, qy, qz = _tri_d2(tri, t, float(i), float(j), float(k))
-        gi[n, 0], gi[n, 1], gi[n, 2] = lo[0] + i, lo[1] + j, lo[2] + k
-        cp[n, 0], cp[n, 1], cp[n, 2] = qx + lo[0], qy + lo[1], qz + lo[2]
-        n += 1
-    return gi, new, cp
+    return sub, tri, best_d2, best_t, wanted
 
 
 @keyword_options

@@ -206,7 +206,8 @@ def _propagate(tri, order, shape, best_d2, best_t, npass, first, last):
             nc = 0
             for o in range(count):
                 g = near[o]
-                if when[g] <= prev:
+                # (a first visit, prev < 0, takes every neighbour: no need to read when)
+                if prev >= 0 and when[g] <= prev:
                     continue
                 ts = best_t[g]
                 if ts < 0:

@@ -529,6 +529,27 @@ def test_inner_parts_are_those_inside_only_between_the_planes(i_start, i_end):
     assert 0 < len(want) < 9  # the case tells inner parts from others
 
 
+@pytest.mark.parametrize("view", ["c-order", "axis-first", "strided"])
+def test_part_counts_are_bincounts(view):
+    """The edit's single-pass part count against numpy's bincount, on the views the edit passes
+    (axis-first transposes, slices), all voxels and inside ones only; -1 is no part."""
+    from partscale.edit.parts import part_counts
+
+    rng = np.random.default_rng(3)
+    parts = rng.integers(-1, 40, size=(9, 11, 13)).astype(np.int16)
+    parts[parts == 39] = 3000  # a sparse high index
+    sdf = rng.normal(size=parts.shape).astype(np.float32)
+    if view == "axis-first":
+        parts, sdf = parts.transpose(2, 0, 1), sdf.transpose(2, 0, 1)
+    elif view == "strided":
+        parts, sdf = parts[1::2, :, 2:], sdf[1::2, :, 2:]
+    want = np.bincount(parts[parts >= 0].ravel())
+    assert part_counts(parts).tolist() == want.tolist()
+    inside = np.bincount(parts[(parts >= 0) & (sdf <= 0)].ravel())
+    assert part_counts(parts, sdf).tolist() == inside.tolist()
+    assert part_counts(np.full((3, 2, 2), -1, np.int16)).size == 0
+
+
 def test_progress_is_reported_and_monotone(ball):
     seen = []
     apply_recipe(

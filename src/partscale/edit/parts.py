@@ -43,8 +43,47 @@ def inner_parts(sdf: np.ndarray, parts: np.ndarray, i_start: float, i_end: float
 
 def _inside_counts(sdf: np.ndarray, parts: np.ndarray) -> np.ndarray:
     """(P,) int64: inside voxels (``sdf <= 0``) of each part index ``p >= 0`` in the block."""
-    labels = parts[(sdf <= 0) & (parts >= 0)]
-    return np.bincount(labels.astype(np.int64)) if labels.size else np.zeros(0, np.int64)
+    return part_counts(parts, sdf)
+
+
+def part_counts(parts: np.ndarray, sdf: np.ndarray | None = None) -> np.ndarray:
+    """(P,) int64 voxels of each part index ``p >= 0`` (P: the largest found + 1), only those
+    inside (``sdf <= 0``) when ``sdf`` is given; ``parts`` int16, ``sdf`` float32 of its shape.
+
+    One pass in memory order (any view: the count does not depend on the order), in parallel.
+    """
+    # axes by decreasing stride: the inner loop walks memory (axis-first views are transposed)
+    order = np.argsort([-abs(x) for x in parts.strides], kind="stable")
+    p = parts.transpose(order)
+    if p.size == 0:
+        return np.zeros(0, np.int64)
+    if sdf is None:
+        return _count_labels(p, p, False, nb.get_num_threads())
+    return _count_labels(p, sdf.transpose(order), True, nb.get_num_threads())
+
+
+@nb.njit(cache=True, parallel=True)
+def _count_labels(parts, sdf, inside_only, chunks):
+    """:func:`part_counts` over ``chunks`` spans of axis 0 side by side (integer sums: the
+    same counts whatever the number of chunks)."""
+    n0 = parts.shape[0]
+    chunks = max(1, min(chunks, n0))
+    hist = np.zeros((chunks, 32768), np.int64)  # every int16 label >= 0
+    for c in nb.prange(chunks):
+        for i in range(c * n0 // chunks, (c + 1) * n0 // chunks):
+            for j in range(parts.shape[1]):
+                for k in range(parts.shape[2]):
+                    q = parts[i, j, k]
+                    if q >= 0 and (not inside_only or sdf[i, j, k] <= 0):
+                        hist[c, q] += 1
+    total = np.zeros(32768, np.int64)
+    top = -1
+    for q in range(32768):
+        for c in range(chunks):
+            total[q] += hist[c, q]
+        if total[q]:
+            top = q
+    return total[: top + 1]
 
 
 def unlabel_far(
@@ -112,8 +151,8 @@ def update_parts_info(
             return s
         return s + copy * period + (x - s) * scale
 
-    n = int(parts.max()) + 1 if parts.size and parts.max() >= 0 else 0
-    counts = np.bincount(parts[parts >= 0].ravel(), minlength=n)
+    counts = part_counts(parts)
+    n = counts.size
     by_index = {int(x.get("index", -1)): x for x in info if isinstance(x, dict)}
     # entries are changed by replacing their keys, never in place: shallow copies keep the
     # originals' facts for the copies made from them
@@ -164,7 +203,7 @@ def renumber_copies(
     n_copies = int(plan.copy.max()) + 1
     if inner.size == 0 or n_copies < 2:
         return {}
-    base = int(src_parts.max()) + 1
+    base = part_counts(src_parts).size  # the largest index + 1
     q = inner.size
     if base + (n_copies - 1) * q - 1 > np.iinfo(np.int16).max:
         raise InputError(
@@ -181,6 +220,15 @@ def renumber_copies(
         lut[inner + 1] = new
         for p, nw in zip(inner.tolist(), new.tolist(), strict=True):
             copy_of[nw] = (p, m)
-        block = out_parts[layers]
-        out_parts[layers] = lut[block.astype(np.int64) + 1].astype(np.int16)
+        _relabel(out_parts, layers, lut)
     return copy_of
+
+
+@nb.njit(cache=True, parallel=True)
+def _relabel(parts, layers, lut):
+    """``parts[j] = lut[parts[j] + 1]`` in place for the ``layers`` j of ``parts`` (N, A, B)."""
+    for t in nb.prange(layers.size):
+        j = layers[t]
+        for a in range(parts.shape[1]):
+            for b in range(parts.shape[2]):
+                parts[j, a, b] = lut[parts[j, a, b] + 1]

@@ -509,8 +509,8 @@ def reevaluate_arrays(
     found = [got for got in thread_map(solve, runs) if got is not None]
     if not found:
         return 0
-    for gi, new, col, new_parts in found:
-        _write(sdf, rgb, parts, gi, new, col, new_parts)
+    # each box writes its own layers' voxels (no two boxes share one): side by side too
+    thread_map(lambda got: _write(sdf, rgb, parts, *got), found)
     return sum(f[0].shape[0] for f in found)
 
 
@@ -747,9 +747,9 @@ def _solve_box(sdf, mask, row0, lo, hi, own, h, lim, pad, npass):
     """
     box = tuple(slice(lo[a], hi[a]) for a in range(3))
     sub = np.array(sdf[box], dtype=np.float32)
-    if min(sub.shape) < 2 or not ((sub <= 0).any() and (sub > 0).any()):
+    if min(sub.shape) < 2:
         return None
-    tri = march(sub, width=17)
+    tri = march(sub, width=17)  # none where the box holds no sign change
     if tri.shape[0] == 0:
         return None
     _complete_table(tri)

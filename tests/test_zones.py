@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 
@@ -529,6 +530,49 @@ def test_fit_scales_globally_rather_than_more_than_double_thin_slabs():
     recipe, why = fit(c, [repr(extent(c, 0) + 30 * H), "=", "="])
     assert [e.mode for e in recipe.edits] == ["global"], why
     assert "thin slabs would more than double" in why[0], why
+
+
+def _flight(treads=(8, 9, 7, 9, 8, 9), landing=14, rise=6):
+    """A solid flight of stairs along x, 10 voxels deep (sizes in voxels): ``treads`` (7 to 9:
+    under MIN_SPREAD_VOXELS, uneven as hand-built steps, so no repeat is found) rising ``rise``
+    each, then a ``landing`` at the top."""
+    xs = H * np.array([0, *np.cumsum(treads), sum(treads) + landing])
+    boxes = [
+        ((a, 0, 0), (b, (i + 1) * rise * H, 10 * H))
+        for i, (a, b) in enumerate(itertools.pairwise(xs))
+    ]
+    return shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boxes),
+        np.array([[0, 0, 0], [xs[-1], (len(treads) + 1) * rise * H, 10 * H]]),
+        voxel_size=H,
+    )
+
+
+def test_fit_deepens_every_tread_of_a_flight_alike():
+    """A flight 30 % longer: the landing alone would more than double, so the treads and the
+    landing share the growth, each the same fraction of its slab (before, the landing took it
+    all: kenney/stairs 130 % got a tread 1.5 m deep). Every level grows by less than three
+    quarters of its depth and at least four grow; the steps keep their number; the first tread,
+    a thin slab at the object's end (as a leg would be), keeps its depth."""
+    c = _flight()
+    target = 1.3 * extent(c, 0)
+    recipe, why = fit(c, [repr(target), "=", "="])
+    assert {e.mode for e in recipe.edits} == {"stretch"}, why
+    out = apply_recipe(c, recipe)
+    assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
+
+    def depths(csdf):  # voxels along x of each level of the top, first tread to landing
+        top = (csdf.sdf[:, :, csdf.shape[2] // 2] <= 0).sum(axis=1)
+        levels = top[top > 0]
+        cuts = np.flatnonzero(np.diff(levels) != 0) + 1
+        return np.diff(np.concatenate([[0], cuts, [levels.size]]))
+
+    d0, d1 = depths(c), depths(out)
+    assert len(d1) == len(d0) == 7, (d0, d1)
+    grown = d1 - d0
+    assert abs(grown[0]) <= 1, (d0, d1)
+    assert (grown <= 0.75 * d0).all(), (d0, d1)
+    assert (grown >= 2).sum() >= 4, (d0, d1)
 
 
 def _splayed_stool():

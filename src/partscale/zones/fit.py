@@ -7,8 +7,9 @@ tiled to its start, 0 copies, so the rest keep their thickness and spacing), and
 by stretching constant slabs outside that period, so spacing is kept and the length is exact
 (a board or panel keeps its thickness: spans and long uniform runs first, then the copies within
 a tolerance; the notes say when only a thin slab could take it);
-with no repeat, stretch the largest constant slab (a growth beyond doubling it spread over the
-next largest of similar length), planes a few voxels in from the slab's ends, where the surface
+with no repeat, stretch the largest constant slab (a growth beyond doubling it shared by every
+constant slab of similar length, each the same fraction), planes a few voxels in from the slab's
+ends, where the surface
 changes least from layer to layer; global scaling only where neither exists. All positions are on the input
 object (recipe coordinates), so the tile and the stretch on one axis are drawn on the original.
 Every change is snapped to whole voxels up front, so the result's extent is the target to half
@@ -161,6 +162,7 @@ def _stretch_edits(
     axis: str,
     layers: tuple[np.ndarray, float] | None = None,
     spread_voxels: int = MIN_SPREAD_VOXELS,
+    even_growth: bool = False,
 ) -> tuple[list[Edit], float]:
     """Stretch edits absorbing ``change`` (whole voxels) over ``slabs``, and what is left.
 
@@ -181,6 +183,8 @@ def _stretch_edits(
     :func:`layer_change` and the world coordinate of its layer 0, for :func:`_inset`.
     ``spread_voxels``: the shortest slab that takes a share (0 among thin slabs, where each is a
     feature's thickness: two door panels either side of their knobs grow alike, not one).
+    ``even_growth``: a growth the largest slab could take only by more than doubling goes to
+    every slab of comparable length, each the same fraction of its length, as a shrink does.
     """
     if not slabs or change == 0:
         return [], change
@@ -211,6 +215,19 @@ def _stretch_edits(
                 if -change <= sum(give) + h / 2:
                     best, even = (ps, rooms(ps), len(ps)), give
                     break
+    if change > 0 and even_growth:
+        # a growth the largest slab could take only by more than doubling: every slab of
+        # comparable length grows by the same fraction of its (full) length (a flight's treads
+        # all deepen), not the fewest slabs each doubled
+        full = [c.zone[1] - c.zone[0] for c in slabs]
+        peer = [
+            i
+            for i, f in enumerate(full)
+            if f >= max(spread_voxels * h, SPREAD_FRACTION * max(full))
+        ]
+        if len(peer) > 1 and change > MAX_STRETCH * max(full):
+            even = [full[i] for i in peer]
+            best = ([options[0][i] for i in peer], [], len(peer))
     options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
     if change < 0:
         # else the planes that need the fewest slabs (each slab adds two seams, which calmer
@@ -228,6 +245,9 @@ def _stretch_edits(
             n = len(zones)
         else:
             zones, room, n = best
+    elif even:
+        assert best is not None  # set with even
+        zones, _, n = best
     else:
         zones = options[0]
         big = zones[0][1] - zones[0][0]
@@ -367,7 +387,8 @@ def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
 @dataclass(frozen=True)
 class _Axis:
     """What the remainder's stretches and notes need of one axis: its name (``'x'``...), the
-    object's units, the surface's min along it (notes give positions from it), the voxel size,
+    object's units, the surface's min and max along it (notes give positions from the min), the
+    voxel size,
     :func:`layer_change` along it with the world coordinate of its layer 0 (for :func:`_inset`)
     and the zones of the slabs joined by :func:`_drift_chains` (notes name them).
     """
@@ -375,6 +396,7 @@ class _Axis:
     name: str
     units: str | None
     lo: float
+    hi: float
     h: float
     layers: tuple[np.ndarray, float]
     chained: frozenset[tuple[float, float]] = frozenset()
@@ -440,12 +462,21 @@ def _periods(
 
 
 def _to_slabs(
-    tier: list[Candidate], left: float, ax: _Axis, tiled: _Tiled | None, thin: bool
+    tier: list[Candidate],
+    left: float,
+    ax: _Axis,
+    tiled: _Tiled | None,
+    thin: bool,
+    spread: int | None = None,
+    even_growth: bool = False,
 ) -> tuple[list[Edit], list[str], float]:
     """Stretch edits over the slabs ``tier`` taking ``left`` (:func:`_stretch_edits`), a note
-    each, and what is left; ``thin``: the notes say a feature's thickness changes."""
-    spread = 0 if thin else MIN_SPREAD_VOXELS
-    st, left = _stretch_edits(tier, left, ax.h, ax.name, ax.layers, spread)
+    each, and what is left; ``thin``: the notes say a feature's thickness changes.
+    ``spread``: the shortest slab taking a share (default: 0 when ``thin``, else
+    :data:`MIN_SPREAD_VOXELS`); ``even_growth``: see :func:`_stretch_edits`."""
+    if spread is None:
+        spread = 0 if thin else MIN_SPREAD_VOXELS
+    st, left = _stretch_edits(tier, left, ax.h, ax.name, ax.layers, spread, even_growth)
     notes = []
     for ed in st:
         a, b = float(ed.start), float(ed.end)
@@ -468,7 +499,27 @@ def _to_long_outside(
     """The remainder to slabs at least :data:`MIN_SPREAD_VOXELS` long (:func:`_long`) outside
     the repeat (:func:`_outside`): the first choice, as a feature keeps its thickness and the
     copies their spacing."""
-    tier = [c for c in _outside(slabs, ax.h, tiled) if _long(c, ax.h)]
+    outside = _outside(slabs, ax.h, tiled)
+    tier = [c for c in outside if _long(c, ax.h)]
+    big = max((c.zone[1] - c.zone[0] for c in tier), default=0.0)
+    if tier and left > MAX_STRETCH * big:
+        # The largest would more than double: constant slabs of comparable length share the
+        # growth, each the same fraction, whatever their voxel count (a flight's treads at 128
+        # are under MIN_SPREAD_VOXELS). Not a thin slab at either end of the object (its outer
+        # part: a leg, a side panel), nor the pieces of a drifting run (a splayed leg: every
+        # plane through it bends it; growth goes to the fewest of those).
+        ends = (ax.lo + 2 * ax.h, ax.hi - 2 * ax.h)  # a slab's zone starts past the end's layer
+        peers = [
+            c
+            for c in outside
+            if c.zone[1] - c.zone[0] >= SPREAD_FRACTION * big
+            and (_long(c, ax.h) or ends[0] < c.zone[0] < c.zone[1] < ends[1])
+            and not any(
+                a - ax.h / 2 <= c.zone[0] and c.zone[1] <= b + ax.h / 2 for a, b in ax.chained
+            )
+        ]
+        if len(peers) > 1:
+            return _to_slabs(peers, left, ax, tiled, thin=False, spread=0, even_growth=True)
     return _to_slabs(tier, left, ax, tiled, thin=False)
 
 
@@ -593,7 +644,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     if abs(left) <= h / 2:
         return edits, why
     layers = (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0]))
-    ax = _Axis(name, units, lo, h, layers, frozenset(c.zone for c in chains if c not in slabs))
+    ax = _Axis(name, units, lo, hi, h, layers, frozenset(c.zone for c in chains if c not in slabs))
     if left < 0:
         slabs = chains
     st, notes, left = _to_long_outside(slabs, left, ax, tiled)

@@ -9,8 +9,8 @@ by stretching constant slabs outside that period, so spacing is kept and the len
 a tolerance; the notes say when only a thin slab could take it);
 with no repeat, stretch the largest constant slab (a growth beyond doubling it shared by every
 constant slab of similar length, each the same fraction), planes a few voxels in from the slab's
-ends, where the surface
-changes least from layer to layer; global scaling only where neither exists. All positions are on the input
+ends, where the surface changes least from layer to layer; global scaling only where neither
+exists. All positions are on the input
 object (recipe coordinates), so the tile and the stretch on one axis are drawn on the original.
 Every change is snapped to whole voxels up front, so the result's extent is the target to half
 a voxel.
@@ -388,8 +388,7 @@ def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
 class _Axis:
     """What the remainder's stretches and notes need of one axis: its name (``'x'``...), the
     object's units, the surface's min and max along it (notes give positions from the min), the
-    voxel size,
-    :func:`layer_change` along it with the world coordinate of its layer 0 (for :func:`_inset`)
+    voxel size, :func:`layer_change` along it with the world coordinate of its layer 0 (for :func:`_inset`)
     and the zones of the slabs joined by :func:`_drift_chains` (notes name them).
     """
 

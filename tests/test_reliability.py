@@ -446,6 +446,38 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - f0)
 """
 
 
+_RELEASE = """
+import os, sys
+import numpy as np
+from partscale._memory import release_freed_memory, reuse_freed_memory
+def resident():
+    with open("/proc/self/statm") as fh:
+        return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+assert reuse_freed_memory()
+a = np.ones(100 << 20, np.uint8)
+del a
+kept = resident()
+assert release_freed_memory()
+print(kept - resident())
+"""
+
+
+@pytest.mark.skipif(
+    "CS_GNU_LIBC_VERSION" not in getattr(os, "confstr_names", {}),
+    reason="release_freed_memory calls glibc's malloc_trim only",
+)
+def test_a_batch_job_hands_its_freed_pages_back():
+    """A batch job reuses freed grids' pages and releases them when it ends (so the next job's
+    measured peak is its own): after reuse_freed_memory a freed 100 MB array stays resident,
+    and release_freed_memory returns at least 90 MB of it to the system."""
+    import subprocess
+
+    proc = subprocess.run(
+        [sys.executable, "-c", _RELEASE], capture_output=True, text=True, check=True
+    )
+    assert int(proc.stdout) >= 90 << 20, proc.stdout
+
+
 @pytest.mark.skipif(
     "CS_GNU_LIBC_VERSION" not in getattr(os, "confstr_names", {}),
     reason="reuse_freed_memory tunes glibc's malloc only",

@@ -84,8 +84,9 @@ def reuse_freed_memory(limit: int = REUSE_BYTES) -> bool:
     and maps fresh pages for the next: the kernel then faults in and zeroes every page of each
     new grid. At 256³ that is most of an edit's time (the bookcase tile: about 100 ms of page
     faults in 200). Serving such blocks from the heap and not trimming it lets the next edit
-    reuse the pages. Called once by the applications (the CLI and the benchmarks; batch workers
-    not yet), not on import: the process keeps its peak heap. Returns whether glibc accepted it.
+    reuse the pages. Called by the applications (the CLI, the benchmarks, and each batch job,
+    which then releases them with :func:`release_freed_memory`), not on import: the process
+    keeps its peak heap. Returns whether glibc accepted it.
     """
     import ctypes
 
@@ -98,3 +99,22 @@ def reuse_freed_memory(limit: int = REUSE_BYTES) -> bool:
     mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
     ok = mallopt(_M_MMAP_THRESHOLD, int(limit)) and mallopt(_M_TRIM_THRESHOLD, int(limit))
     return bool(ok)
+
+
+def release_freed_memory() -> bool:
+    """Hand the heap's free pages back to the system (glibc's ``malloc_trim``; glibc only).
+
+    The counterpart of :func:`reuse_freed_memory` for a process that runs one job after
+    another (a batch worker): pages freed within a job are reused by it, and released at its
+    end, so the next job's resident memory (and its measured peak) starts from what is really
+    in use. Returns whether glibc did it.
+    """
+    import ctypes
+
+    try:
+        trim = ctypes.CDLL(None).malloc_trim
+    except (OSError, AttributeError, TypeError):
+        return False
+    trim.argtypes = [ctypes.c_size_t]
+    trim(0)
+    return True

@@ -18,7 +18,7 @@ import traceback
 from pathlib import Path
 from typing import Any
 
-from .. import __version__
+from .. import __version__, release_freed_memory, reuse_freed_memory
 from ..csdf import SUFFIX as CSDF_SUFFIX
 from ..errors import InputError, one_line
 
@@ -254,6 +254,10 @@ def execute(task: dict[str, Any]) -> dict[str, Any]:
     Returns ``{"name", "ok", "outputs", "error", "seconds", "peak_memory"}``; ``error`` is one
     line (an :class:`InputError`'s message, else the exception's type and message).
     """
+    # within the job, freed grids' pages serve the next grid (at 256³ an edit's output is
+    # otherwise faulted in and zeroed anew); they are released when it ends (below), so the
+    # next job's peak is its own
+    reuse_freed_memory()
     _reset_peak()
     t0 = time.perf_counter()
     out: dict[str, Any] = {"name": task["name"], "ok": True, "outputs": [], "error": ""}
@@ -269,4 +273,5 @@ def execute(task: dict[str, Any]) -> dict[str, Any]:
         out.update(ok=False, error=f"{type(exc).__name__}: {one_line(exc)}{at}")
     out["seconds"] = time.perf_counter() - t0
     out["peak_memory"] = peak_memory()
+    release_freed_memory()
     return out

@@ -558,6 +558,7 @@ def test_fit_deepens_every_tread_of_a_flight_alike():
     target = 1.3 * extent(c, 0)
     recipe, why = fit(c, [repr(target), "=", "="])
     assert {e.mode for e in recipe.edits} == {"stretch"}, why
+    assert why[0].startswith(f"x: {len(recipe.edits)} constant slabs of comparable length"), why
     out = apply_recipe(c, recipe)
     assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
 

@@ -518,7 +518,17 @@ def _to_long_outside(
             )
         ]
         if len(peers) > 1:
-            return _to_slabs(peers, left, ax, tiled, thin=False, spread=0, even_growth=True)
+            st, notes, rest = _to_slabs(
+                peers, left, ax, tiled, thin=False, spread=0, even_growth=True
+            )
+            if len(st) > 1:
+                notes.insert(
+                    0,
+                    f"{ax.name}: {len(st)} constant slabs of comparable length share the growth, "
+                    f"each the same fraction of its length (the largest alone would more than "
+                    f"double)",
+                )
+            return st, notes, rest
     return _to_slabs(tier, left, ax, tiled, thin=False)
 
 

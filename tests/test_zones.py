@@ -362,6 +362,10 @@ def test_local_features_name_the_knob_a_stretch_zone_holds():
     (got,) = local_features(c, 0, (0.05, 0.75))
     assert abs(got[0] - 0.585) <= h and abs(got[1] - 0.655) <= h, got
     assert local_features(c, 0, (0.05, 0.5)) == []
+    # the axis by name as every zones function takes it; a wrong one is the user's error
+    assert local_features(c, "X", (0.05, 0.75)) == [got]
+    with pytest.raises(InputError, match="axis: expected one of x, y, z, got 'w'"):
+        local_features(c, "w", (0.05, 0.75))
     across = Edit("x", 0.05, 0.75, 0.9, "stretch")
     (line,) = feature_notes(c, Recipe((across,)))
     assert "1 local feature" in line and "--snap" in line, line

@@ -90,13 +90,9 @@ def reuse_freed_memory(limit: int = REUSE_BYTES) -> bool:
     """
     import ctypes
 
-    try:
-        # the process's own symbols: libc is loaded already (ctypes.util.find_library would
-        # run ldconfig, 30 ms at every start of the CLI)
-        mallopt = ctypes.CDLL(None).mallopt
-    except (OSError, AttributeError, TypeError):
+    mallopt = _glibc("mallopt", ctypes.c_int, ctypes.c_int)
+    if mallopt is None:
         return False  # not glibc (macOS, musl): nothing to tune
-    mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
     ok = mallopt(_M_MMAP_THRESHOLD, int(limit)) and mallopt(_M_TRIM_THRESHOLD, int(limit))
     return bool(ok)
 
@@ -111,10 +107,22 @@ def release_freed_memory() -> bool:
     """
     import ctypes
 
-    try:
-        trim = ctypes.CDLL(None).malloc_trim
-    except (OSError, AttributeError, TypeError):
+    trim = _glibc("malloc_trim", ctypes.c_size_t)
+    if trim is None:
         return False
-    trim.argtypes = [ctypes.c_size_t]
     trim(0)
     return True
+
+
+def _glibc(name: str, *argtypes):
+    """glibc's function ``name`` with its argument types, or None where there is none (macOS,
+    musl). Read from the process's own symbols: libc is loaded already (ctypes.util.find_library
+    would run ldconfig, 30 ms at every start of the CLI)."""
+    import ctypes
+
+    try:
+        fn = getattr(ctypes.CDLL(None), name)
+    except (OSError, AttributeError, TypeError):
+        return None
+    fn.argtypes = list(argtypes)
+    return fn

@@ -121,7 +121,7 @@ def _one_line_warnings() -> Iterator[None]:
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point of the console script: one line and exit 2 for every user error."""
-    from .._memory import reuse_freed_memory
+    from .. import reuse_freed_memory
 
     # every edit allocates whole new grids: at 256 and beyond, reusing the pages of the last
     # one instead of faulting in fresh ones halves the time (see reuse_freed_memory)

@@ -31,19 +31,14 @@ def inner_parts(sdf: np.ndarray, parts: np.ndarray, i_start: float, i_end: float
     hi = min(n, math.ceil(i_end)) if math.isfinite(i_end) else n
     if lo >= hi:
         return np.zeros(0, np.int64)
-    within = _inside_counts(sdf[lo:hi], parts[lo:hi])
+    within = part_counts(parts[lo:hi], sdf[lo:hi])
     if not within.any():
         return np.zeros(0, np.int64)
     keep = within > 0
     for side in (slice(0, lo), slice(hi, n)):
-        out = _inside_counts(sdf[side], parts[side])[: keep.size]
+        out = part_counts(parts[side], sdf[side])[: keep.size]
         keep[: out.size] &= out == 0
     return np.flatnonzero(keep)
-
-
-def _inside_counts(sdf: np.ndarray, parts: np.ndarray) -> np.ndarray:
-    """(P,) int64: inside voxels (``sdf <= 0``) of each part index ``p >= 0`` in the block."""
-    return part_counts(parts, sdf)
 
 
 def part_counts(parts: np.ndarray, sdf: np.ndarray | None = None) -> np.ndarray:

@@ -15,6 +15,7 @@ from scipy import ndimage
 
 from ..csdf import CSDF
 from ..edit import Recipe
+from .profile import _axis_index
 
 #: Fewest voxels (at 128 voxels along the longest side) of a local feature a slab is split
 #: around: a cabinet's knob or a keyhole is 36 to 60, the wear of worn wood at most about 25.
@@ -105,11 +106,14 @@ def _feature_spans(csdf: CSDF, axis: int, first: int, last: int) -> list[tuple[i
     return out
 
 
-def local_features(csdf: CSDF, axis: int, zone: tuple[float, float]) -> list[tuple[float, float]]:
-    """World ``(start, end)`` spans along ``axis`` (0, 1, 2) of the local features (a knob, a handle, a
-    keyhole: :func:`_feature_spans`) between the planes of ``zone`` (world units): what
-    stretching that zone would stretch out of shape. Empty for a zone of constant section."""
-    ax = int(axis)
+def local_features(
+    csdf: CSDF, axis: str | int, zone: tuple[float, float]
+) -> list[tuple[float, float]]:
+    """World ``(start, end)`` spans along ``axis`` (x, y, z or 0, 1, 2) of the local features (a
+    knob, a handle, a keyhole: :func:`_feature_spans`) between the planes of ``zone`` (world
+    units): what stretching that zone would stretch out of shape. Empty for a zone of constant
+    section."""
+    ax = _axis_index(axis)
     h = csdf.voxel_size
     o = float(csdf.origin[ax])
     first = max(int(np.ceil((zone[0] - o) / h - 1e-6)), 0)

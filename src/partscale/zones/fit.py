@@ -195,39 +195,30 @@ def _stretch_edits(
     def rooms(zones: list[tuple[float, float]]) -> list[float]:
         return [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
 
-    even: list[float] = []  # each chosen zone's share where the shrink is spread (_fill)
+    even: list[float] = []  # each chosen zone's share where the change is spread evenly
     best = None
-    if change < 0:
+    # slabs of comparable length (largest first): those an even spread goes to
+    full = [c.zone[1] - c.zone[0] for c in slabs]
+    peer = sorted(
+        (i for i, f in enumerate(full) if f >= max(spread_voxels * h, SPREAD_FRACTION * max(full))),
+        key=lambda i: -full[i],
+    )
+    if change < 0 and len(peer) > 1 and -change > MAX_SHRINK * max(full):
         # a shrink the largest slab could give only by losing more than MAX_SHRINK of its
         # length: every slab of comparable length gives the same fraction of its (full) length,
         # through the first planes where together they have the room
-        full = [c.zone[1] - c.zone[0] for c in slabs]
-        peer = [
-            i
-            for i, f in enumerate(full)
-            if f >= max(spread_voxels * h, SPREAD_FRACTION * max(full))
-        ]
-        peer.sort(key=lambda i: -full[i])
-        if len(peer) > 1 and -change > MAX_SHRINK * max(full):
-            for zones in options:
-                ps = [zones[i] for i in peer]
-                give = _fill(-change, [full[i] for i in peer], rooms(ps))
-                if -change <= sum(give) + h / 2:
-                    best, even = (ps, rooms(ps), len(ps)), give
-                    break
-    if change > 0 and even_growth:
+        for zones in options:
+            ps = [zones[i] for i in peer]
+            give = _fill(-change, [full[i] for i in peer], rooms(ps))
+            if -change <= sum(give) + h / 2:
+                best, even = (ps, rooms(ps), len(ps)), give
+                break
+    if change > 0 and even_growth and len(peer) > 1 and change > MAX_STRETCH * max(full):
         # a growth the largest slab could take only by more than doubling: every slab of
         # comparable length grows by the same fraction of its (full) length (a flight's treads
         # all deepen), not the fewest slabs each doubled
-        full = [c.zone[1] - c.zone[0] for c in slabs]
-        peer = [
-            i
-            for i, f in enumerate(full)
-            if f >= max(spread_voxels * h, SPREAD_FRACTION * max(full))
-        ]
-        if len(peer) > 1 and change > MAX_STRETCH * max(full):
-            even = [full[i] for i in peer]
-            best = ([options[0][i] for i in peer], [], len(peer))
+        even = [full[i] for i in peer]
+        best = ([options[0][i] for i in peer], [], len(peer))
     options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
     if change < 0:
         # else the planes that need the fewest slabs (each slab adds two seams, which calmer

@@ -15,6 +15,8 @@ from typing import overload
 import numpy as np
 
 from ..csdf import CSDF
+from ..edit import AXES
+from ..errors import InputError
 
 #: In-plane downsampling of the cross-sections (voxels per cell): tolerates sub-voxel lateral
 #: wobble between repeats (worn or hand-modelled copies) and keeps the Gram matrix small.
@@ -117,11 +119,21 @@ class Profile:
         return self.coords[0] + np.asarray(i, dtype=np.float64) * self.voxel_size
 
 
-def profile(csdf: CSDF, axis: int) -> Profile:
-    """The cross-section :class:`Profile` of ``csdf``'s solid along ``axis`` (0, 1, 2).
+def _axis_index(axis: str | int) -> int:
+    """``'x'``, ``'y'``, ``'z'`` (any case) or 0, 1, 2 as 0, 1, 2; else an InputError."""
+    if isinstance(axis, str) and axis.lower() in AXES:
+        return AXES.index(axis.lower())
+    if isinstance(axis, int | np.integer) and not isinstance(axis, bool) and 0 <= axis < 3:
+        return int(axis)
+    raise InputError(f"axis: expected one of x, y, z, got {axis!r}")
+
+
+def profile(csdf: CSDF, axis: str | int) -> Profile:
+    """The cross-section :class:`Profile` of ``csdf``'s solid along ``axis`` (x, y, z or 0, 1, 2).
 
     Cost: one pass over the grid and two (N, N) Gram matrices of the downsampled layers.
     """
+    axis = _axis_index(axis)
     h = csdf.voxel_size
     occ = np.clip(0.5 - csdf.sdf / np.float32(h), 0.0, 1.0)
     occ = np.moveaxis(occ, axis, 0)

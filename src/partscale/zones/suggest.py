@@ -51,13 +51,10 @@ from scipy.signal import find_peaks
 
 from .._options import keyword_options
 from ..csdf import CSDF
-from ..edit import SEAM_VOXELS
-from ..errors import InputError
+from ..edit import AXES, SEAM_VOXELS
 from ..progress import ProgressCallback, resolve
 from .features import _feature_spans
-from .profile import Profile, profile
-
-AXES = ("x", "y", "z")
+from .profile import Profile, _axis_index, profile
 
 #: Two layers match when their soft Jaccard distance is below this.
 MATCH = 0.15
@@ -585,14 +582,6 @@ def _part_repeats(csdf: CSDF, axis: int) -> list[tuple[float, list[tuple[float, 
             size = float(np.median(key[group, axis]))
             out.append((float(step.mean()), [(float(a), float(a) + size) for a in lo]))
     return out
-
-
-def _axis_index(axis: str | int) -> int:
-    if isinstance(axis, str) and axis.lower() in AXES:
-        return AXES.index(axis.lower())
-    if isinstance(axis, int | np.integer) and not isinstance(axis, bool) and 0 <= axis < 3:
-        return int(axis)
-    raise InputError(f"axis: expected one of x, y, z, got {axis!r}")
 
 
 def _tile(

@@ -182,59 +182,107 @@ def _key(v, i, j, k, val, ambiguous, faces):
     return key
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _signs(r00, r01, r10, r11, k):
+    """Corner bits 0, 2, 4, 6 (``dk = 0``) of the cell at ``k`` between rows ``r00 ... r11`` (the
+    rows at ``(di, dj)``): the corners whose value is > 0."""
+    return (
+        np.uint32(r00[k] > 0)
+        | (np.uint32(r01[k] > 0) << 2)
+        | (np.uint32(r10[k] > 0) << 4)
+        | (np.uint32(r11[k] > 0) << 6)
+    )
+
+
 @numba.njit(cache=True, nogil=True)
 def _march(v, table, means, ambiguous, edges, faces, width):
     """(F, ``width``) float64: columns 0-8 the corners (a, b, c) of every triangle of the zero
     level set of ``v`` (X, Y, Z) float32; the other columns uninitialised."""
     nx, ny, nz = v.shape
-    val = np.empty(8)
-    # first pass: the count, so the output is allocated once (growing it faulted in pages
-    # that two threads then waited on each other for)
-    n = 0
+    if min(nx, ny, nz) < 2:
+        return np.empty((0, width))
+    # The cells the surface crosses (corners on both sides), in raster order: counted per row of
+    # cells, then listed, the rows without any skipped. Along a row a cell's corners at k + 1
+    # are the next cell's at k, so each corner's side is read once, and without branches (the
+    # count vectorises); ~10 % of a box's cells are listed.
+    rows = np.zeros((nx - 1, ny - 1), np.int64)
     for i in range(nx - 1):
         for j in range(ny - 1):
+            r00, r01, r10, r11 = v[i, j], v[i, j + 1], v[i + 1, j], v[i + 1, j + 1]
+            lo = _signs(r00, r01, r10, r11, 0)
+            c = 0
             for k in range(nz - 1):
-                n += table[_key(v, i, j, k, val, ambiguous, faces), 0]
+                hi = _signs(r00, r01, r10, r11, k + 1)
+                config = lo | (hi << 1)
+                lo = hi
+                c += (config != 0) & (config != 255)
+            rows[i, j] = c
+    # one spare row: each cell is written, then kept by advancing the count
+    cells = np.empty((rows.sum() + 1, 3), np.int32)
+    nc = 0
+    for i in range(nx - 1):
+        for j in range(ny - 1):
+            if rows[i, j] == 0:
+                continue
+            r00, r01, r10, r11 = v[i, j], v[i, j + 1], v[i + 1, j], v[i + 1, j + 1]
+            lo = _signs(r00, r01, r10, r11, 0)
+            for k in range(nz - 1):
+                hi = _signs(r00, r01, r10, r11, k + 1)
+                config = lo | (hi << 1)
+                lo = hi
+                cells[nc, 0] = i
+                cells[nc, 1] = j
+                cells[nc, 2] = k
+                nc += (config != 0) & (config != 255)
+    # their keys and triangle count, so the output is allocated once (growing it faulted in
+    # pages that two threads then waited on each other for)
+    val = np.empty(8)
+    keys = np.empty(nc, np.int64)
+    n = 0
+    for q in range(nc):
+        keys[q] = _key(v, cells[q, 0], cells[q, 1], cells[q, 2], val, ambiguous, faces)
+        n += table[keys[q], 0]
     out = np.empty((n, width))
     px = np.empty(16)
     py = np.empty(16)
     pz = np.empty(16)
     n = 0
-    for i in range(nx - 1):
-        for j in range(ny - 1):
-            for k in range(nz - 1):
-                key = _key(v, i, j, k, val, ambiguous, faces)
-                nt = table[key, 0]
-                if nt == 0:
-                    continue
-                for e in range(12):
-                    c0, c1 = edges[e, 0], edges[e, 1]
-                    a, b = val[c0], val[c1]
-                    if (a > 0) == (b > 0):
-                        continue
-                    t = a / (a - b)
-                    px[e] = i + (c0 >> 2) + t * ((c1 >> 2) - (c0 >> 2))
-                    py[e] = j + ((c0 >> 1) & 1) + t * (((c1 >> 1) & 1) - ((c0 >> 1) & 1))
-                    pz[e] = k + (c0 & 1) + t * ((c1 & 1) - (c0 & 1))
-                for q in range(4):
-                    mask = means[key, q]
-                    if mask == 0:
-                        break
-                    sx, sy, sz, m = 0.0, 0.0, 0.0, 0
-                    for e in range(12):
-                        if (mask >> e) & 1:
-                            sx += px[e]
-                            sy += py[e]
-                            sz += pz[e]
-                            m += 1
-                    px[12 + q], py[12 + q], pz[12 + q] = sx / m, sy / m, sz / m
-                for t_ in range(nt):
-                    for q in range(3):
-                        e = table[key, 1 + 3 * t_ + q]
-                        out[n, 3 * q] = px[e]
-                        out[n, 3 * q + 1] = py[e]
-                        out[n, 3 * q + 2] = pz[e]
-                    n += 1
+    for q in range(nc):
+        i, j, k = cells[q, 0], cells[q, 1], cells[q, 2]
+        key = keys[q]
+        nt = table[key, 0]
+        if nt == 0:
+            continue
+        for c in range(8):
+            val[c] = v[i + (c >> 2), j + ((c >> 1) & 1), k + (c & 1)]
+        for e in range(12):
+            c0, c1 = edges[e, 0], edges[e, 1]
+            a, b = val[c0], val[c1]
+            if (a > 0) == (b > 0):
+                continue
+            t = a / (a - b)
+            px[e] = i + (c0 >> 2) + t * ((c1 >> 2) - (c0 >> 2))
+            py[e] = j + ((c0 >> 1) & 1) + t * (((c1 >> 1) & 1) - ((c0 >> 1) & 1))
+            pz[e] = k + (c0 & 1) + t * ((c1 & 1) - (c0 & 1))
+        for m_ in range(4):
+            mask = means[key, m_]
+            if mask == 0:
+                break
+            sx, sy, sz, m = 0.0, 0.0, 0.0, 0
+            for e in range(12):
+                if (mask >> e) & 1:
+                    sx += px[e]
+                    sy += py[e]
+                    sz += pz[e]
+                    m += 1
+            px[12 + m_], py[12 + m_], pz[12 + m_] = sx / m, sy / m, sz / m
+        for t_ in range(nt):
+            for c in range(3):
+                e = table[key, 1 + 3 * t_ + c]
+                out[n, 3 * c] = px[e]
+                out[n, 3 * c + 1] = py[e]
+                out[n, 3 * c + 2] = pz[e]
+            n += 1
     return out
 
 

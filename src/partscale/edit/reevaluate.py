@@ -32,7 +32,7 @@ import numbers
 import numba
 import numpy as np
 
-from .._kernels import closest_on_triangle, trilinear_at
+from .._kernels import closest_on_triangle
 from .._marching import march
 from .._options import keyword_options
 from .._workers import thread_map
@@ -549,6 +549,7 @@ def _box_values(
     no voxel sees another's new colour).
     """
     ny, nz = sub.shape[1], sub.shape[2]
+    syz, nzu = np.uint64(ny * nz), np.uint64(nz)
     m = wanted.shape[0]
     gi = np.empty((m, 3), np.int64)
     new = np.empty(m, np.float32)
@@ -560,7 +561,10 @@ def _box_values(
         t = best_t[f]
         if t < 0:
             continue
-        i, j, k = f // (ny * nz), (f // nz) % ny, f % nz
+        # unsigned division: numba's signed one also corrects the rounding of negatives
+        fu = np.uint64(f)
+        r = fu % syz
+        i, j, k = np.int64(fu // syz), np.int64(r // nzu), np.int64(r % nzu)
         old = sub[i, j, k]
         sign = -1.0 if old <= 0 else 1.0  # sdf <= 0 is inside
         d = np.float32(sign * np.sqrt(best_d2[f]) * h)
@@ -573,9 +577,7 @@ def _box_values(
             continue
         _, qx, qy, qz = _tri_d2(tri, t, float(i), float(j), float(k))
         qx, qy, qz = qx + lo[0], qy + lo[1], qz + lo[2]
-        col[:] = 0.0
-        trilinear_at(rgb, qx, qy, qz, col)
-        part = _surface_part(sdf, parts, qx, qy, qz)
+        part = _colour_and_part(sdf, rgb, parts, qx, qy, qz, col)
         if use_far and d > far and (d != old or part != parts[gx, gy, gz]):
             part = -1
         gi[n, 0], gi[n, 1], gi[n, 2] = gx, gy, gz
@@ -600,35 +602,47 @@ def _pieces(runs: list[np.ndarray]) -> list[np.ndarray]:
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _surface_part(sdf, parts, x, y, z):
-    """Part of the surface point ``(x, y, z)`` (continuous indices): the label of the nearest
-    inside (``sdf <= 0``) corner of the cell holding the point.
+def _colour_and_part(sdf, rgb, parts, x, y, z, col):
+    """Colour and part of the surface point ``(x, y, z)`` (continuous indices, within the grid;
+    every axis of 2 voxels or more), from the 8 corners of its cell in one pass.
 
-    The solid carries the parts; an outside corner's label is only its nearest part, and where a
-    node lies exactly on the surface (``sdf == 0``, e.g. grid-aligned faces) the nearest corner
-    can be an outside one labelled with another part. A point whose cell has no inside corner
-    (none after marching cubes, kept for safety) takes the nearest corner.
+    ``col`` (3,) float64 receives the trilinear colour of ``rgb`` (as
+    :func:`~partscale._kernels.trilinear_at`). The part is the label of the nearest inside
+    (``sdf <= 0``) corner: the solid carries the parts; an outside corner's label is only its
+    nearest part, and where a node lies exactly on the surface (``sdf == 0``, e.g. grid-aligned
+    faces) the nearest corner can be an outside one labelled with another part. A point whose
+    cell has no inside corner (none after marching cubes, kept for safety) takes the nearest
+    corner.
     """
     nx, ny, nz = sdf.shape
-    bx = min(max(int(np.floor(x)), 0), max(nx - 2, 0))
-    by = min(max(int(np.floor(y)), 0), max(ny - 2, 0))
-    bz = min(max(int(np.floor(z)), 0), max(nz - 2, 0))
+    cx = min(max(x, 0.0), nx - 1.0)
+    cy = min(max(y, 0.0), ny - 1.0)
+    cz = min(max(z, 0.0), nz - 1.0)
+    i0, j0, k0 = min(int(cx), nx - 2), min(int(cy), ny - 2), min(int(cz), nz - 2)
+    fx, fy, fz = cx - i0, cy - j0, cz - k0
     # fallback: the nearest corner whatever its side
-    ix = min(max(int(np.rint(x)), 0), nx - 1)
-    iy = min(max(int(np.rint(y)), 0), ny - 1)
-    iz = min(max(int(np.rint(z)), 0), nz - 1)
+    pi = min(max(int(np.rint(x)), 0), nx - 1)
+    pj = min(max(int(np.rint(y)), 0), ny - 1)
+    pk = min(max(int(np.rint(z)), 0), nz - 1)
     best = np.inf
-    for dx in range(2):
-        qx = min(bx + dx, nx - 1)
-        for dy in range(2):
-            qy = min(by + dy, ny - 1)
-            for dz in range(2):
-                qz = min(bz + dz, nz - 1)
-                d2 = (qx - x) ** 2 + (qy - y) ** 2 + (qz - z) ** 2
-                if sdf[qx, qy, qz] <= 0 and d2 < best:
+    col[0] = col[1] = col[2] = 0.0
+    for di in range(2):
+        wx = fx if di else 1.0 - fx
+        ex = (i0 + di - x) ** 2
+        for dj in range(2):
+            wxy = wx * (fy if dj else 1.0 - fy)
+            exy = ex + (j0 + dj - y) ** 2
+            for dk in range(2):
+                qi, qj, qk = i0 + di, j0 + dj, k0 + dk
+                w = wxy * (fz if dk else 1.0 - fz)
+                if w != 0.0:
+                    for c in range(3):
+                        col[c] += w * rgb[qi, qj, qk, c]
+                d2 = exy + (qk - z) ** 2
+                if sdf[qi, qj, qk] <= 0 and d2 < best:
                     best = d2
-                    ix, iy, iz = qx, qy, qz
-    return parts[ix, iy, iz]
+                    pi, pj, pk = qi, qj, qk
+    return parts[pi, pj, pk]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -53,7 +53,7 @@ Semantics
   voxel (near the edges and corners of an axis-aligned box sampled off the grid).
 """
 
-from .notes import describe_changes
+from .notes import describe_changes, edit_label, unit_suffix
 from .recipe import (
     AXES,
     JSON_SCHEMA,
@@ -94,6 +94,7 @@ __all__ = [
     "apply_recipe",
     "check_recipe_memory",
     "describe_changes",
+    "edit_label",
     "forward_coordinate",
     "naive_edit",
     "parse_length",
@@ -106,4 +107,5 @@ __all__ = [
     "scale",
     "source_coordinate",
     "tile_count",
+    "unit_suffix",
 ]

@@ -36,12 +36,23 @@ def describe_changes(entries: list[Any], out: CSDF) -> list[str]:
     return _removed(entries, out) + _voxel_snaps(entries, out) + _slivers(entries, out)
 
 
+def unit_suffix(units: str | None) -> str:
+    """What follows a length in a message: ``" m"``, or nothing for an object without units."""
+    return f" {units}" if units else ""
+
+
+def edit_label(i: int, n: int) -> str:
+    """What starts a message about edit ``i`` (from 0) of ``n``: ``"edit 2: "``, or nothing when
+    the recipe has one edit."""
+    return f"edit {i + 1}: " if n > 1 else ""
+
+
 def _units(out: CSDF) -> str:
-    return f" {out.meta.get('units')}" if out.meta.get("units") else ""
+    return unit_suffix(out.meta.get("units"))
 
 
 def _where(i: int, entries: list[Any]) -> str:
-    return f"edit {i + 1}: " if len(entries) > 1 else ""
+    return edit_label(i, len(entries))
 
 
 def _removed(entries: list[Any], out: CSDF) -> list[str]:

@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 from .._memory import check_memory
 from ..csdf import CSDF
 from ..errors import InputError
+from .notes import unit_suffix
 from .recipe import AXES, Edit, tile_count
 
 #: Peak working bytes per output voxel of an edit (output arrays, float temporaries, masks).
@@ -125,7 +126,7 @@ def _fmt(v: float) -> str:
 
 def _shown(given: object, world: float, units: str | None) -> str:
     """A position as the user gave it, with its world value when that differs (``10% (0.2 m)``)."""
-    w = _fmt(world) + (f" {units}" if units else "")
+    w = _fmt(world) + unit_suffix(units)
     return f"{given} ({w})" if isinstance(given, str) else w
 
 

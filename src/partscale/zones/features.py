@@ -14,7 +14,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..csdf import CSDF
-from ..edit import Recipe
+from ..edit import Recipe, edit_label, unit_suffix
 from .profile import _axis_index
 
 #: Fewest voxels (at 128 voxels along the longest side) of a local feature a slab is split
@@ -138,7 +138,7 @@ def feature_notes(csdf: CSDF, recipe: Recipe) -> list[str]:
     ``csdf``, the recipe's input (recipe coordinates)."""
     sb = csdf.surface_bounds()
     units = csdf.meta.get("units")
-    u = f" {units}" if units else ""
+    u = unit_suffix(units)
     lines = []
     for i, e in enumerate(recipe.edits):
         if e.mode != "stretch":
@@ -150,7 +150,7 @@ def feature_notes(csdf: CSDF, recipe: Recipe) -> list[str]:
             continue
         where = ", ".join(f"{a:.4g}..{b:.4g}" for a, b in found)
         lines.append(
-            f"{f'edit {i + 1}: ' if len(recipe.edits) > 1 else ''}the stretch zone "
+            f"{edit_label(i, len(recipe.edits))}the stretch zone "
             f"{s:.4g}..{en:.4g}{u} along {e.axis} holds {len(found)} local feature"
             f"{'s' if len(found) > 1 else ''} (a knob, a handle) at {where}{u}, stretched out "
             f"of shape with it; --snap (the editor's snapping) moves the zone into a constant slab"

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..csdf import CSDF
-from ..edit import Edit, tile_count
+from ..edit import Edit, tile_count, unit_suffix
 from ..errors import InputError
 from .profile import profile
 from .suggest import AXES, BOUND_TOL, Candidate, axis_candidates, best_phase
@@ -163,7 +163,7 @@ def describe_moves(moves: list[Move], units: str | None) -> str:
     """One line: what snapping moved and by how much (or that nothing moved)."""
     if not moves:
         return "snap: the planes were already at a good position"
-    u = f" {units}" if units else ""
+    u = unit_suffix(units)
     parts = [f"{m.plane} {m.before:.4g} -> {m.after:.4g} ({m.by:+.4g}{u})" for m in moves]
     return "snap: moved " + ", ".join(parts)
 

@@ -536,6 +536,14 @@ def test_fit_scales_globally_rather_than_more_than_double_thin_slabs():
     assert "thin slabs would more than double" in why[0], why
 
 
+def _depths(csdf):
+    """Voxels along x of each level of a :func:`_flight`, first tread to landing."""
+    top = (csdf.sdf[:, :, csdf.shape[2] // 2] <= 0).sum(axis=1)
+    levels = top[top > 0]
+    cuts = np.flatnonzero(np.diff(levels) != 0) + 1
+    return np.diff(np.concatenate([[0], cuts, [levels.size]]))
+
+
 def _flight(treads=(8, 9, 7, 9, 8, 9), landing=14, rise=6):
     """A solid flight of stairs along x, 10 voxels deep (sizes in voxels): ``treads`` (7 to 9:
     under MIN_SPREAD_VOXELS, uneven as hand-built steps, so no repeat is found) rising ``rise``
@@ -565,19 +573,36 @@ def test_fit_deepens_every_tread_of_a_flight_alike():
     assert why[0].startswith(f"x: {len(recipe.edits)} constant slabs of comparable length"), why
     out = apply_recipe(c, recipe)
     assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
-
-    def depths(csdf):  # voxels along x of each level of the top, first tread to landing
-        top = (csdf.sdf[:, :, csdf.shape[2] // 2] <= 0).sum(axis=1)
-        levels = top[top > 0]
-        cuts = np.flatnonzero(np.diff(levels) != 0) + 1
-        return np.diff(np.concatenate([[0], cuts, [levels.size]]))
-
-    d0, d1 = depths(c), depths(out)
+    d0, d1 = _depths(c), _depths(out)
     assert len(d1) == len(d0) == 7, (d0, d1)
     grown = d1 - d0
     assert abs(grown[0]) <= 1, (d0, d1)
     assert (grown <= 0.75 * d0).all(), (d0, d1)
     assert (grown >= 2).sum() >= 4, (d0, d1)
+
+
+def test_fit_deepens_every_thin_tread_alike_with_no_long_slab():
+    """A flight whose landing is a tread's depth has no long slab: the treads (thin slabs) share
+    a 30 % growth, each the same fraction, instead of the fewest of them each doubled (before:
+    three of seven levels deepened by 6 voxels, the rest not at all; kenney/stairs 130 % along
+    its height raised four risers of ten). The treads at the object's ends keep their depth."""
+    c = _flight(landing=8)
+    target = 1.3 * extent(c, 0)
+    recipe, why = fit(c, [repr(target), "=", "="])
+    assert {e.mode for e in recipe.edits} == {"stretch"}, why
+    assert why[0].startswith(f"x: {len(recipe.edits)} thin constant slabs of comparable"), why
+    out = apply_recipe(c, recipe)
+    assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
+
+    d0, d1 = _depths(c), _depths(out)
+    assert len(d1) == len(d0) == 7, (d0, d1)
+    grown = d1 - d0
+    assert abs(grown[0]) <= 1 and abs(grown[-1]) <= 1, (d0, d1)
+    # the five inner treads grow, each by a like share of its depth (its slab's fraction,
+    # rounded to whole voxels), at most 3/4 of it
+    share = grown[1:-1] / d0[1:-1]
+    assert (grown[1:-1] >= 2).all() and (share <= 0.75).all(), (d0, d1)
+    assert share.max() <= 1.5 * share.min(), (d0, d1)
 
 
 def _splayed_stool():

@@ -491,36 +491,49 @@ def _to_long_outside(
     copies their spacing."""
     outside = _outside(slabs, ax.h, tiled)
     tier = [c for c in outside if _long(c, ax.h)]
+    shared = _even_growth(tier, outside, left, ax, tiled, thin=False)
+    return shared or _to_slabs(tier, left, ax, tiled, thin=False)
+
+
+def _even_growth(
+    tier: list[Candidate],
+    slabs: list[Candidate],
+    left: float,
+    ax: _Axis,
+    tiled: _Tiled | None,
+    thin: bool,
+) -> tuple[list[Edit], list[str], float] | None:
+    """Where the largest slab of ``tier`` would more than double taking ``left``: the slabs of
+    ``slabs`` of comparable length share the growth, each the same fraction of its length
+    (:func:`_to_slabs`), with a note first; else None.
+
+    Comparable: at least :data:`SPREAD_FRACTION` of that largest, whatever their voxel count (a
+    flight's treads at 128 are under :data:`MIN_SPREAD_VOXELS`). Not a thin slab at either end
+    of the object (its outer part: a leg, a side panel), nor the pieces of a drifting run (a
+    splayed leg: every plane through it bends it; growth goes to the fewest of those).
+    """
     big = max((c.zone[1] - c.zone[0] for c in tier), default=0.0)
-    if tier and left > MAX_STRETCH * big:
-        # The largest would more than double: constant slabs of comparable length share the
-        # growth, each the same fraction, whatever their voxel count (a flight's treads at 128
-        # are under MIN_SPREAD_VOXELS). Not a thin slab at either end of the object (its outer
-        # part: a leg, a side panel), nor the pieces of a drifting run (a splayed leg: every
-        # plane through it bends it; growth goes to the fewest of those).
-        ends = (ax.lo + 2 * ax.h, ax.hi - 2 * ax.h)  # a slab's zone starts past the end's layer
-        peers = [
-            c
-            for c in outside
-            if c.zone[1] - c.zone[0] >= SPREAD_FRACTION * big
-            and (_long(c, ax.h) or ends[0] < c.zone[0] < c.zone[1] < ends[1])
-            and not any(
-                a - ax.h / 2 <= c.zone[0] and c.zone[1] <= b + ax.h / 2 for a, b in ax.chained
-            )
-        ]
-        if len(peers) > 1:
-            st, notes, rest = _to_slabs(
-                peers, left, ax, tiled, thin=False, spread=0, even_growth=True
-            )
-            if len(st) > 1:
-                notes.insert(
-                    0,
-                    f"{ax.name}: {len(st)} constant slabs of comparable length share the growth, "
-                    f"each the same fraction of its length (the largest alone would more than "
-                    f"double)",
-                )
-            return st, notes, rest
-    return _to_slabs(tier, left, ax, tiled, thin=False)
+    if not tier or left <= MAX_STRETCH * big:
+        return None
+    ends = (ax.lo + 2 * ax.h, ax.hi - 2 * ax.h)  # a slab's zone starts past the end's layer
+    peers = [
+        c
+        for c in slabs
+        if c.zone[1] - c.zone[0] >= SPREAD_FRACTION * big
+        and (_long(c, ax.h) or ends[0] < c.zone[0] < c.zone[1] < ends[1])
+        and not any(a - ax.h / 2 <= c.zone[0] and c.zone[1] <= b + ax.h / 2 for a, b in ax.chained)
+    ]
+    if len(peers) < 2:
+        return None
+    st, notes, rest = _to_slabs(peers, left, ax, tiled, thin=thin, spread=0, even_growth=True)
+    if len(st) > 1:
+        notes.insert(
+            0,
+            f"{ax.name}: {len(st)} {'thin ' if thin else ''}constant slabs of comparable length "
+            f"share the growth, each the same fraction of its length (the largest alone would "
+            f"more than double)",
+        )
+    return st, notes, rest
 
 
 def _copies_within(left: float, tiled: _Tiled) -> bool:
@@ -547,16 +560,26 @@ def _to_thin(
     """The remainder to thin slabs outside the repeat (:func:`_outside`; shorter than
     :data:`MIN_SPREAD_VOXELS`: a feature's thickness), last of the slabs; the notes say which
     feature changes (:func:`_thin_note`). A thin slab inside the repeat never takes it: a feature
-    of one copy and one spacing would change. Nor do thin slabs take a growth that would more
-    than double one of them (:data:`MAX_STRETCH`): nothing is taken then."""
+    of one copy and one spacing would change. A growth the largest would take only by more than
+    doubling is shared by those of comparable length, each the same fraction (:func:`_even_growth`:
+    a flight's treads all deepen), else it goes to the fewest. Nor do thin slabs take a growth
+    that would more than double one of them (:data:`MAX_STRETCH`): nothing is taken then."""
     tier = [c for c in _outside(slabs, ax.h, tiled) if not _long(c, ax.h)]
-    st, notes, rest = _to_slabs(tier, left, ax, tiled, thin=True)
-    if any(
-        float(e.dest) - float(e.end) > MAX_STRETCH * (float(e.end) - float(e.start)) + ax.h / 2
-        for e in st
-    ):
+
+    def doubles(st: list[Edit]) -> bool:
         # a growth that more than doubles a feature's thickness (a stair's tread, a ring of a
         # post) makes a lump of it: the copies or global scaling do better
+        return any(
+            float(e.dest) - float(e.end) > MAX_STRETCH * (float(e.end) - float(e.start)) + ax.h / 2
+            for e in st
+        )
+
+    # a flight of thin treads with no long slab: all of them deepen alike where they can
+    shared = _even_growth(tier, tier, left, ax, tiled, thin=True)
+    if shared is not None and not doubles(shared[0]):
+        return shared
+    st, notes, rest = _to_slabs(tier, left, ax, tiled, thin=True)
+    if doubles(st):
         return [], [], left
     return st, notes, rest
 

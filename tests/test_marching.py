@@ -69,6 +69,21 @@ def test_extra_columns_and_empty_field():
     assert _marching.march(np.ones((4, 4, 4), np.float32)).shape == (0, 9)
 
 
+def test_smallest_volumes():
+    """One cell with one corner inside: one triangle, at the linear crossings of its three edges
+    (value 0 at a quarter of the way from -1 to 3); a volume thinner than two samples along an
+    axis has no cell, whatever its signs."""
+    v = np.full((2, 2, 2), 3.0, np.float32)
+    v[0, 0, 0] = -1.0
+    tri = _marching.march(v)
+    assert tri.shape == (1, 9)
+    got = sorted(map(tuple, np.round(tri.reshape(3, 3), 6).tolist()))
+    assert got == [(0.0, 0.0, 0.25), (0.0, 0.25, 0.0), (0.25, 0.0, 0.0)]
+    rng = np.random.default_rng(0)
+    for shape in [(1, 6, 5), (6, 1, 5), (6, 5, 1), (6, 5, 0)]:
+        assert _marching.march(rng.normal(size=shape).astype(np.float32)).shape == (0, 9)
+
+
 def test_releases_the_gil():
     """The boxes of one edit are solved side by side: the kernel must not hold the GIL."""
     assert _marching._march.targetoptions["nogil"] is True

@@ -1,6 +1,7 @@
 """Re-evaluation of a long run of target layers in pieces: the same on any machine, and as exact as
 one box against exact distances to the marching-cubes surface; faces on the grid nodes
-(degenerate triangles) re-evaluate to the exact distances."""
+(degenerate triangles) re-evaluate to the exact distances; colours and parts come from the
+nearest surface point."""
 
 from __future__ import annotations
 
@@ -103,3 +104,38 @@ def test_faces_on_the_grid_nodes_are_exact():
     band = np.abs(sdf) * 1.7 <= 3 * h
     err = np.abs(out.sdf[band].astype(np.float64) - sdf[band]) / h
     assert err.max() <= 1e-5, err.max()
+
+
+def test_colours_and_parts_come_from_the_nearest_surface_point():
+    """Above a box's top face (at 5.3 voxels, between two layers), every re-evaluated voxel takes
+    the colour of the face, trilinear in a red ramp along z (60 + 12 per voxel: 123.6 there,
+    where the voxels' own ramp reads 132 and 144), and the part of the solid just below it (the
+    left and right halves are parts 1 and 2)."""
+    h = 0.1
+    lo, hi = (0.0, 0.0, 0.0), (1.2, 0.8, 0.53)
+    c = shapes.grid(
+        lambda p: shapes.box_sdf(p, lo, hi),
+        (lo, hi),
+        voxel_size=h,
+        color=lambda p: np.stack(
+            [np.rint(60 + 12 * p[:, 2] / h), np.full(len(p), 90), np.full(len(p), 30)], axis=1
+        ),
+    )
+    x, y, z = (c.origin[a] + np.arange(c.shape[a]) * h for a in range(3))
+    X, Y, Z = np.meshgrid(x, y, z, indexing="ij")
+    parts = np.where(X < 0.6, 1, 2).astype(np.int16)
+    sdf = np.array(c.sdf, np.float32)
+    out = reevaluate(c.replace(sdf=sdf * np.float32(1.5), parts=parts))
+    above = (
+        (Z > hi[2])
+        & (sdf * 1.5 <= 3 * h)  # still within the band after scaling
+        & (X > lo[0] + h / 2)
+        & (X < hi[0] - h / 2)
+        & (Y > lo[1] + h / 2)
+        & (Y < hi[1] - h / 2)
+    )
+    assert above.sum() >= 2 * 11 * 7
+    red = out.rgb[..., 0][above].astype(int)
+    assert np.abs(red - 123.6).max() <= 1, np.unique(red)
+    assert (out.rgb[..., 1:][above] == (90, 30)).all()
+    assert (out.parts[above] == parts[above]).all()

@@ -449,7 +449,7 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - f0)
 _RELEASE = """
 import os, sys
 import numpy as np
-from partscale._memory import release_freed_memory, reuse_freed_memory
+from partscale import release_freed_memory, reuse_freed_memory
 def resident():
     with open("/proc/self/statm") as fh:
         return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")

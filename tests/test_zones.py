@@ -560,25 +560,30 @@ def _flight(treads=(8, 9, 7, 9, 8, 9), landing=14, rise=6):
     )
 
 
+def _fit_flight(c, note):
+    """Fit the flight ``c`` 30 % longer: stretches only, the first note starting ``note``, the
+    length exact; the depths of its 7 levels before and what each grew by."""
+    target = 1.3 * extent(c, 0)
+    recipe, why = fit(c, [repr(target), "=", "="])
+    assert {e.mode for e in recipe.edits} == {"stretch"}, why
+    assert why[0].startswith(f"x: {len(recipe.edits)} {note}"), why
+    out = apply_recipe(c, recipe)
+    assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
+    d0, d1 = _depths(c), _depths(out)
+    assert len(d1) == len(d0) == 7, (d0, d1)
+    return d0, d1 - d0
+
+
 def test_fit_deepens_every_tread_of_a_flight_alike():
     """A flight 30 % longer: the landing alone would more than double, so the treads and the
     landing share the growth, each the same fraction of its slab (before, the landing took it
     all: kenney/stairs 130 % got a tread 1.5 m deep). Every level grows by less than three
     quarters of its depth and at least four grow; the steps keep their number; the first tread,
     a thin slab at the object's end (as a leg would be), keeps its depth."""
-    c = _flight()
-    target = 1.3 * extent(c, 0)
-    recipe, why = fit(c, [repr(target), "=", "="])
-    assert {e.mode for e in recipe.edits} == {"stretch"}, why
-    assert why[0].startswith(f"x: {len(recipe.edits)} constant slabs of comparable length"), why
-    out = apply_recipe(c, recipe)
-    assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
-    d0, d1 = _depths(c), _depths(out)
-    assert len(d1) == len(d0) == 7, (d0, d1)
-    grown = d1 - d0
-    assert abs(grown[0]) <= 1, (d0, d1)
-    assert (grown <= 0.75 * d0).all(), (d0, d1)
-    assert (grown >= 2).sum() >= 4, (d0, d1)
+    d0, grown = _fit_flight(_flight(), "constant slabs of comparable length")
+    assert abs(grown[0]) <= 1, (d0, grown)
+    assert (grown <= 0.75 * d0).all(), (d0, grown)
+    assert (grown >= 2).sum() >= 4, (d0, grown)
 
 
 def test_fit_deepens_every_thin_tread_alike_with_no_long_slab():
@@ -586,23 +591,13 @@ def test_fit_deepens_every_thin_tread_alike_with_no_long_slab():
     a 30 % growth, each the same fraction, instead of the fewest of them each doubled (before:
     three of seven levels deepened by 6 voxels, the rest not at all; kenney/stairs 130 % along
     its height raised four risers of ten). The treads at the object's ends keep their depth."""
-    c = _flight(landing=8)
-    target = 1.3 * extent(c, 0)
-    recipe, why = fit(c, [repr(target), "=", "="])
-    assert {e.mode for e in recipe.edits} == {"stretch"}, why
-    assert why[0].startswith(f"x: {len(recipe.edits)} thin constant slabs of comparable"), why
-    out = apply_recipe(c, recipe)
-    assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
-
-    d0, d1 = _depths(c), _depths(out)
-    assert len(d1) == len(d0) == 7, (d0, d1)
-    grown = d1 - d0
-    assert abs(grown[0]) <= 1 and abs(grown[-1]) <= 1, (d0, d1)
+    d0, grown = _fit_flight(_flight(landing=8), "thin constant slabs of comparable length")
+    assert abs(grown[0]) <= 1 and abs(grown[-1]) <= 1, (d0, grown)
     # the five inner treads grow, each by a like share of its depth (its slab's fraction,
     # rounded to whole voxels), at most 3/4 of it
     share = grown[1:-1] / d0[1:-1]
-    assert (grown[1:-1] >= 2).all() and (share <= 0.75).all(), (d0, d1)
-    assert share.max() <= 1.5 * share.min(), (d0, d1)
+    assert (grown[1:-1] >= 2).all() and (share <= 0.75).all(), (d0, grown)
+    assert share.max() <= 1.5 * share.min(), (d0, grown)
 
 
 def _splayed_stool():

@@ -47,24 +47,16 @@ def edit_label(i: int, n: int) -> str:
     return f"edit {i + 1}: " if n > 1 else ""
 
 
-def _units(out: CSDF) -> str:
-    return unit_suffix(out.meta.get("units"))
-
-
-def _where(i: int, entries: list[Any]) -> str:
-    return edit_label(i, len(entries))
-
-
 def _removed(entries: list[Any], out: CSDF) -> list[str]:
     """A line per tile edit with 0 copies (``to`` at the zone's start): the zone was cut out."""
-    u = _units(out)
+    u = unit_suffix(out.meta.get("units"))
     lines = []
     for i, h in enumerate(entries):
         if not isinstance(h, dict) or h.get("copies") != 0:
             continue
         a, b = h["edit"]["zone"]
         lines.append(
-            f"{_where(i, entries)}tile 0 copies: zone removed ({a:.6g}..{b:.6g}{u} along "
+            f"{edit_label(i, len(entries))}tile 0 copies: zone removed ({a:.6g}..{b:.6g}{u} along "
             f"{h['edit']['axis']}), the content beyond it moved by {a - b:+.6g}{u} to join"
         )
     return lines
@@ -73,7 +65,7 @@ def _removed(entries: list[Any], out: CSDF) -> list[str]:
 def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
     """A line per edit whose destination moved to whole voxels (the history keeps both:
     ``edit.to`` as given and ``to_snapped``), saying by how much."""
-    u = _units(out)
+    u = unit_suffix(out.meta.get("units"))
     lines = []
     for i, h in enumerate(entries):
         given = h.get("edit", {}).get("to") if isinstance(h, dict) else None
@@ -91,7 +83,7 @@ def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
             else ("destination", "lengths change by")
         )
         lines.append(
-            f"{_where(i, entries)}{what} {given:.6g} -> {snapped:.6g}{u} "
+            f"{edit_label(i, len(entries))}{what} {given:.6g} -> {snapped:.6g}{u} "
             f"({snapped - given:+.4g}{u}): {why} whole voxels of "
             f"{out.voxel_size:.4g}{u} (recorded in the history)"
         )
@@ -101,7 +93,7 @@ def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
 def _slivers(entries: list[Any], out: CSDF) -> list[str]:
     """A line per tile edit whose zone plane cut an element: the sliver it cut off was left out
     at the inner seams (history: ``slivers_left_out``, voxels per plane)."""
-    u = _units(out)
+    u = unit_suffix(out.meta.get("units"))
     lines = []
     for i, h in enumerate(entries):
         cut = h.get("slivers_left_out") if isinstance(h, dict) else None
@@ -114,7 +106,7 @@ def _slivers(entries: list[Any], out: CSDF) -> list[str]:
         # after a snap, no plane of the period avoids every element: no hint then
         hint = "" if "snapped" in h else "; --snap puts the planes in gaps"
         lines.append(
-            f"{_where(i, entries)}the zone's {planes} cut{'s' if len(cut) == 1 else ''} an "
+            f"{edit_label(i, len(entries))}the zone's {planes} cut{'s' if len(cut) == 1 else ''} an "
             f"element: the sliver cut off ({sum(cut.values())} voxels) is left out at the inner "
             f"tile seams, the element stays whole once, beside the copies (recorded in the "
             f"history{hint})"

@@ -10,9 +10,9 @@ voxel from the true object's, see :mod:`partscale.edit`):
    the field in a box around them, :mod:`partscale._marching`: vertices are the linear zero
    crossings along grid edges, written straight into the triangle table, without the GIL);
 2. every voxel of the band in that box gets its nearest triangle by *closest-triangle propagation*
-   (a numba kernel): triangles seed the eight corners of their cell, then voxels, in order of
-   increasing |sdf|, test the nearest triangles of their 26 neighbours (exact point-triangle
-   distances), twice;
+   (a numba kernel): triangles seed the eight corners of their cell, then two raster sweeps, one
+   forward and one back, let each voxel test the nearest triangles of its 26 neighbours (exact
+   point-triangle distances, after a lower bound);
 3. the chosen voxels take that distance with the sign of the field (the surface is not moved:
    linear zero crossings of the old and new values coincide where the surface is locally flat),
    the colour at their nearest surface point (trilinear in ``rgb``) and that point's part (the
@@ -606,8 +606,10 @@ def _colour_and_part(sdf, rgb, parts, x, y, z, col):
     """Colour and part of the surface point ``(x, y, z)`` (continuous indices, within the grid;
     every axis of 2 voxels or more), from the 8 corners of its cell in one pass.
 
-    ``col`` (3,) float64 receives the trilinear colour of ``rgb`` (as
-    :func:`~partscale._kernels.trilinear_at`). The part is the label of the nearest inside
+    ``col`` (3,) float64 receives the trilinear colour of ``rgb``: the weights of
+    :func:`~partscale._kernels.trilinear_at`, computed here in the same pass over the corners as
+    the part (calling it besides cost 3 ms of a box's 17 on the cabinet shrink at 128). The part
+    is the label of the nearest inside
     (``sdf <= 0``) corner: the solid carries the parts; an outside corner's label is only its
     nearest part, and where a node lies exactly on the surface (``sdf == 0``, e.g. grid-aligned
     faces) the nearest corner can be an outside one labelled with another part. A point whose

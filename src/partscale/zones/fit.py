@@ -183,8 +183,8 @@ def _stretch_edits(
     :func:`layer_change` and the world coordinate of its layer 0, for :func:`_inset`.
     ``spread_voxels``: the shortest slab that takes a share (0 among thin slabs, where each is a
     feature's thickness: two door panels either side of their knobs grow alike, not one).
-    ``even_growth``: a growth the largest slab could take only by more than doubling goes to
-    every slab of comparable length, each the same fraction of its length, as a shrink does.
+    ``even_growth``: a growth goes to every one of ``slabs`` (the caller chose them:
+    :func:`_even_growth`), each the same fraction of its length, largest first.
     """
     if not slabs or change == 0:
         return [], change
@@ -213,12 +213,12 @@ def _stretch_edits(
             if -change <= sum(give) + h / 2:
                 best, even = (ps, rooms(ps), len(ps)), give
                 break
-    if change > 0 and even_growth and len(peer) > 1 and change > MAX_STRETCH * max(full):
-        # a growth the largest slab could take only by more than doubling: every slab of
-        # comparable length grows by the same fraction of its (full) length (a flight's treads
-        # all deepen), not the fewest slabs each doubled
-        even = [full[i] for i in peer]
-        best = ([options[0][i] for i in peer], [], len(peer))
+    if change > 0 and even_growth:
+        # every slab grows by the same fraction of its (full) length (a flight's treads all
+        # deepen), not the fewest slabs each doubled
+        order = sorted(range(len(slabs)), key=lambda i: -full[i])
+        even = [full[i] for i in order]
+        best = ([options[0][i] for i in order], [], len(order))
     options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
     if change < 0:
         # else the planes that need the fewest slabs (each slab adds two seams, which calmer

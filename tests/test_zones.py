@@ -562,7 +562,7 @@ def _flight(treads=(8, 9, 7, 9, 8, 9), landing=14, rise=6):
 
 def _fit_flight(c, note):
     """Fit the flight ``c`` 30 % longer: stretches only, the first note starting ``note``, the
-    length exact; the depths of its 7 levels before and what each grew by."""
+    length exact; the depths of its 7 levels before, what each grew by, and the notes."""
     target = 1.3 * extent(c, 0)
     recipe, why = fit(c, [repr(target), "=", "="])
     assert {e.mode for e in recipe.edits} == {"stretch"}, why
@@ -571,7 +571,7 @@ def _fit_flight(c, note):
     assert abs(extent(out, 0) - target) <= H / 2 + 1e-9
     d0, d1 = _depths(c), _depths(out)
     assert len(d1) == len(d0) == 7, (d0, d1)
-    return d0, d1 - d0
+    return d0, d1 - d0, why
 
 
 def test_fit_deepens_every_tread_of_a_flight_alike():
@@ -580,7 +580,7 @@ def test_fit_deepens_every_tread_of_a_flight_alike():
     all: kenney/stairs 130 % got a tread 1.5 m deep). Every level grows by less than three
     quarters of its depth and at least four grow; the steps keep their number; the first tread,
     a thin slab at the object's end (as a leg would be), keeps its depth."""
-    d0, grown = _fit_flight(_flight(), "constant slabs of comparable length")
+    d0, grown, _ = _fit_flight(_flight(), "constant slabs of comparable length")
     assert abs(grown[0]) <= 1, (d0, grown)
     assert (grown <= 0.75 * d0).all(), (d0, grown)
     assert (grown >= 2).sum() >= 4, (d0, grown)
@@ -590,8 +590,12 @@ def test_fit_deepens_every_thin_tread_alike_with_no_long_slab():
     """A flight whose landing is a tread's depth has no long slab: the treads (thin slabs) share
     a 30 % growth, each the same fraction, instead of the fewest of them each doubled (before:
     three of seven levels deepened by 6 voxels, the rest not at all; kenney/stairs 130 % along
-    its height raised four risers of ten). The treads at the object's ends keep their depth."""
-    d0, grown = _fit_flight(_flight(landing=8), "thin constant slabs of comparable length")
+    its height raised four risers of ten). The treads at the object's ends keep their depth.
+    Why thin slabs take it is said once, in the first note, not once per tread."""
+    d0, grown, why = _fit_flight(_flight(landing=8), "thin constant slabs of comparable length")
+    assert [w for w in why if "could take it" in w] == why[:1], why
+    stretches = [w for w in why if "stretch" in w]
+    assert len(stretches) >= 5 and all(w.endswith(" voxels)") for w in stretches), why
     assert abs(grown[0]) <= 1 and abs(grown[-1]) <= 1, (d0, grown)
     # the five inner treads grow, each by a like share of its depth (its slab's fraction,
     # rounded to whole voxels), at most 3/4 of it

@@ -320,15 +320,20 @@ def _outside(slabs: list[Candidate], h: float, tiled: _Tiled | None) -> list[Can
     ]
 
 
-def _thin_note(c: Candidate, h: float, tiled: bool) -> str:
-    """The note's tail for a stretch of the thin slab ``c``: which feature changes thickness,
-    and why."""
-    n = round((c.zone[1] - c.zone[0]) / h)
+def _thin_reason(tiled: bool) -> str:
+    """Why a thin slab takes a growth: nothing longer could."""
     copies = f" nor the copies (within {100 * COPY_TOLERANCE:.0f}%)" if tiled else ""
-    return (
-        f": a thin slab ({n} voxels, a feature's thickness changes), as no slab of "
-        f"{MIN_SPREAD_VOXELS} voxels or more{copies} could take it"
-    )
+    return f"no slab of {MIN_SPREAD_VOXELS} voxels or more{copies} could take it"
+
+
+def _thin_note(c: Candidate, h: float, tiled: bool, alone: bool = True) -> str:
+    """The note's tail for a stretch of the thin slab ``c``: which feature changes thickness,
+    and, ``alone`` (the only thin slab stretched), why; several share one note of the reason
+    (:func:`_to_slabs`)."""
+    n = round((c.zone[1] - c.zone[0]) / h)
+    if not alone:
+        return f" (a thin slab, {n} voxels)"
+    return f": a thin slab ({n} voxels, a feature's thickness changes), as {_thin_reason(tiled)}"
 
 
 def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
@@ -478,7 +483,13 @@ def _to_slabs(
             f"{_fmt(b - ax.lo, ax.units)} from the {ax.name} min by "
             f"{_fmt(float(ed.dest) - b, ax.units)}"
             + (" (the remainder after whole periods)" if tiled else "")
-            + (_thin_note(home, ax.h, tiled is not None) if thin else "")
+            + (_thin_note(home, ax.h, tiled is not None, alone=len(st) == 1) if thin else "")
+        )
+    if thin and len(st) > 1 and not even_growth:  # (an even growth's own first note says it)
+        notes.insert(
+            0,
+            f"{ax.name}: {len(st)} thin slabs take it, as {_thin_reason(tiled is not None)}: "
+            f"a feature's thickness changes in each",
         )
     return st, notes, left
 
@@ -531,7 +542,12 @@ def _even_growth(
             0,
             f"{ax.name}: {len(st)} {'thin ' if thin else ''}constant slabs of comparable length "
             f"share the growth, each the same fraction of its length (the largest alone would "
-            f"more than double)",
+            f"more than double"
+            + (
+                f"; {_thin_reason(tiled is not None)}: a feature's thickness changes in each)"
+                if thin
+                else ")"
+            ),
         )
     return st, notes, rest
 

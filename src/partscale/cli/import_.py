@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from ..csdf import SUFFIX, save
+from ..orient import SQUARE_DEGREES
 from ..thickness import thin_features
 from . import _common
 
@@ -51,6 +52,14 @@ def import_(
         str | None,
         typer.Option("--units", help="The mesh's length unit, converted to metres: mm, cm, m, in."),
     ] = None,
+    square: Annotated[
+        bool,
+        typer.Option(
+            "--square",
+            help="Turn the mesh about up so its walls run along x and z (zones are planes "
+            "square to the axes).",
+        ),
+    ] = False,
 ) -> None:
     """Import a coloured mesh or an SDF grid as a coloured SDF (.csdf.npz).
 
@@ -70,10 +79,29 @@ def import_(
             up=up,
             scale=scale,
             units=units,
+            square=square,
             progress=progress,
         )
     save(c, output)
     _common.done(f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m")
+    placed = c.meta["history"][0]
+    if "turned_deg" in placed:
+        turn = placed["turned_deg"]
+        _common.stderr.print(
+            f"--square: turned {turn:+.2f}° about up: the walls now run along x and z"
+            if turn
+            else "--square: not turned (the walls run within "
+            f"{SQUARE_DEGREES}° of x and z, or no direction holds most of them)",
+            highlight=False,
+            soft_wrap=True,
+        )
+    elif "off_square_deg" in placed:
+        typer.echo(
+            f"warning: the walls run {placed['off_square_deg']:+.2f}° off x and z about up: "
+            "zones are planes square to x, y, z, so suggest and fit find few; --square turns "
+            "the mesh square",
+            err=True,
+        )
     thin = thin_features(c)
     below = thin.imported.get("below_one_voxel_triangles", 0)
     if thin.below_one_solid or thin.below_one_gap or below:

@@ -113,6 +113,7 @@ def load(
     up: str = "y",
     scale: float | None = None,
     units: str | None = None,
+    square: bool = False,
     progress: ProgressCallback | None = None,
 ) -> CSDF:
     """Import any supported file as a CSDF.
@@ -139,13 +140,19 @@ def load(
     units : str, optional
         The mesh's length unit, one of :data:`UNITS` (``'cm'`` for an armchair 190 units wide):
         converted to metres.
+    square : bool
+        Turn the mesh about up so that its walls run along x and z
+        (:func:`partscale.orient.square_turn`; zones are planes square to the axes). Meshes
+        only.
     progress : callable(fraction, message), optional
 
     Returns
     -------
     CSDF
         ``meta['source']`` is the file; ``meta['history'][0]`` records the import parameters
-        (with ``up``, ``units`` and ``scale`` where given).
+        (with ``up``, ``units`` and ``scale`` where given) and, for a mesh, the turn about up
+        that would square it: ``turned_deg`` where ``square`` made it (0.0 where none was
+        needed or found), else ``off_square_deg`` where one was found.
     """
     path = Path(path)
     report = resolve(progress)
@@ -163,11 +170,14 @@ def load(
         report(0.0, "reading mesh")
         mesh = load_mesh(path)
         mesh, placed = _place(mesh, up=up, scale=scale, units=units, name=str(path))
+        mesh, found = _square(mesh, square)
+        placed.update(found)
         out = from_mesh(mesh, res=res, pad=pad, progress=scaled(progress, 0.05, 1.0))
     else:
-        if up != "y" or scale is not None or units is not None:
+        if up != "y" or scale is not None or units is not None or square:
             raise InputError(
-                f"{path}: expected --up, --scale and --units only for meshes, got an SDF grid"
+                f"{path}: expected --up, --scale, --units and --square only for meshes, got an "
+                "SDF grid"
             )
         placed = {}
         args = GRID_READERS[kind](path)
@@ -226,6 +236,22 @@ def _place(mesh: ColoredMesh, *, up: str, scale, units, name: str):
     if units is not None:
         placed["units"] = str(units).lower()
     return dataclasses.replace(mesh, vertices=vertices), placed
+
+
+def _square(mesh: ColoredMesh, square: bool) -> tuple[ColoredMesh, dict]:
+    """``mesh`` turned square about up where ``square`` (and a turn is found), and what was
+    found or done (for the history)."""
+    import dataclasses
+
+    from ..orient import square_turn, turn_about_up
+
+    turn = square_turn(mesh.vertices[mesh.faces])
+    if not square:
+        return mesh, {} if turn is None else {"off_square_deg": round(turn, 2)}
+    if turn is None:
+        return mesh, {"turned_deg": 0.0}
+    turned = dataclasses.replace(mesh, vertices=turn_about_up(mesh.vertices, turn))
+    return turned, {"turned_deg": round(turn, 2)}
 
 
 def _read_colors(path: Path):

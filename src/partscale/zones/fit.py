@@ -767,4 +767,21 @@ def fit(
     report(1.0, "done")
     if not edits:
         raise InputError("size: expected a change on some axis, got the current size")
-    return Recipe(tuple(edits)), why
+    return Recipe(tuple(edits)), why + _off_square(csdf, edits)
+
+
+def _off_square(csdf: CSDF, edits: list[Edit]) -> list[str]:
+    """A note where x or z changes and the object's walls run off x and z
+    (:func:`partscale.orient.csdf_turn`): its slabs along them are not constant (fit falls back
+    to thin slabs or global scaling), and the cure."""
+    if not any(e.axis in ("x", "z") for e in edits):
+        return []
+    from ..orient import csdf_turn
+
+    turn = csdf_turn(csdf)
+    if turn is None:
+        return []
+    return [
+        f"the object's walls run {turn:+.1f}° off x and z about up, so no slab along x or z is "
+        "constant: import the mesh with --square to turn it square"
+    ]

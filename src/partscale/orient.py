@@ -1,0 +1,121 @@
+"""Which way an object faces about its up axis: the turn that squares its faces to x and z.
+
+Every zone is a slab between two planes square to x, y or z. An object turned about up (a
+photogrammetry mesh, a model placed at an angle) has no slab of constant cross-section along
+x or z, so suggest and fit find nothing and fall back to global scaling. :func:`square_turn`
+finds the turn that squares it, or says there is none to make; ``partscale import --square``
+applies it to a mesh.
+
+Up is +y (partscale's convention); a turn by ``angle`` degrees maps ``(x, z)`` to
+``(x cos a + z sin a, -x sin a + z cos a)`` (right-handed about +y, as :func:`turn_about_up`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._marching import march
+from .csdf import CSDF
+
+#: Turns smaller than this (degrees) are left undone: the object is square.
+SQUARE_DEGREES = 0.5
+
+#: Of the area of the walls (faces within ~17 degrees of vertical), at least this fraction must
+#: run within :data:`_SPREAD_DEGREES` of one direction (or square to it) for that direction to
+#: count as the object's.
+MIN_SHARE = 0.5
+
+#: The footprint's bounding rectangle, turned square, must be at least this much smaller than
+#: as it stands: faces that run diagonally on an object that is square (a chair's crossed leg
+#: frames, a star base) would make it larger.
+MIN_SHRINK = 0.01
+
+_SPREAD_DEGREES = 2.0
+_WALL = 0.3  # |n_y| below this: a wall, whose horizontal direction counts
+_BIN = 0.25  # degrees of the 4-fold angle histogram
+
+
+def turn_about_up(points: np.ndarray, angle: float) -> np.ndarray:
+    """(N, 3) float64: ``points`` (N, 3) turned by ``angle`` degrees about +y (see the module)."""
+    a = np.radians(angle)
+    c, s = np.cos(a), np.sin(a)
+    rot = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return np.asarray(points, np.float64) @ rot.T
+
+
+def square_turn(triangles: np.ndarray) -> float | None:
+    """Degrees to turn a surface about +y so that its walls run along x and z, or None.
+
+    The walls' direction is the 4-fold mode of their normals' horizontal angle, weighted by area
+    (a wall and the one square to it vote alike). It counts only where at least
+    :data:`MIN_SHARE` of the wall area runs within 2 degrees of it, and where turning by it
+    shrinks the footprint's bounding rectangle (the xz extent of the corners) by at least
+    :data:`MIN_SHRINK`: a square object whose leg frames run diagonally has a strong mode at 45
+    degrees and no smaller footprint there.
+
+    Parameters
+    ----------
+    triangles : (T, 9) or (T, 3, 3) float
+        Corners a, b, c of each triangle (x, y, z each, y up; any uniform scale: grid indices
+        will do).
+
+    Returns
+    -------
+    float or None
+        The turn in (-45, 45] degrees (:func:`turn_about_up` with it squares the surface); None
+        where it is under :data:`SQUARE_DEGREES` (already square) or no direction counts.
+    """
+    t = np.asarray(triangles, np.float64).reshape(-1, 9)
+    n = np.cross(t[:, 3:6] - t[:, 0:3], t[:, 6:9] - t[:, 0:3])
+    # |n| is twice the area: the weights are areas
+    return _turn(n, np.linalg.norm(n, axis=1), t.reshape(-1, 3))
+
+
+def csdf_turn(csdf: CSDF) -> float | None:
+    """:func:`square_turn` of the zero level set of ``csdf`` (its marching-cubes triangles, in
+    grid indices: the voxels are cubes).
+
+    A wall off the grid's axes becomes a staircase of facets whose normals spread: at 128
+    voxels most of a turned bookcase's wall area still lies within the 2 degrees that count, at
+    64 (panels a voxel thick) it does not, and no turn is found. (The field's gradient does
+    worse: across a panel a voxel thick its central differences meet both faces.)
+    """
+    return square_turn(march(np.asarray(csdf.sdf, np.float32)))
+
+
+def _turn(n: np.ndarray, weight: np.ndarray, points: np.ndarray) -> float | None:
+    """:func:`square_turn` from normals ``n`` (N, 3) (any length), their ``weight`` (N,) and
+    the surface's ``points`` (M, 3) (its footprint)."""
+    norm = np.linalg.norm(n, axis=1)
+    wall = (norm > 0) & (np.abs(n[:, 1]) < _WALL * norm)
+    if not wall.any():
+        return None
+    # weighted by the horizontal part, angle times four: square directions coincide
+    w = weight[wall] * np.hypot(n[wall, 0], n[wall, 2]) / norm[wall]
+    a4 = np.degrees(4.0 * np.arctan2(n[wall, 2], n[wall, 0])) % 360.0
+    nbins = round(360.0 / _BIN)
+    hist = np.bincount(np.minimum((a4 / _BIN).astype(np.int64), nbins - 1), w, nbins)
+    # the mode of the histogram summed over the spread (circularly): the densest direction
+    half = round(4.0 * _SPREAD_DEGREES / _BIN)
+    window = np.convolve(np.concatenate([hist[-half:], hist, hist[:half]]), np.ones(2 * half + 1))
+    dense = window[2 * half : 2 * half + nbins]
+    peak = (int(dense.argmax()) + 0.5) * _BIN
+    off = (a4 - peak + 180.0) % 360.0 - 180.0
+    near = np.abs(off) <= 4.0 * _SPREAD_DEGREES
+    if w[near].sum() < MIN_SHARE * w.sum():
+        return None
+    mode4 = peak + float(np.average(off[near], weights=w[near]))
+    # the walls' direction modulo 90 degrees, in (-45, 45]: turning by it squares them
+    angle = ((mode4 + 180.0) % 360.0 - 180.0) / 4.0
+    if angle <= -45.0:
+        angle += 90.0
+    if abs(angle) < SQUARE_DEGREES:
+        return None
+
+    def footprint(points: np.ndarray) -> float:
+        span = points[:, [0, 2]].max(axis=0) - points[:, [0, 2]].min(axis=0)
+        return float(span[0] * span[1])
+
+    if footprint(turn_about_up(points, angle)) > (1.0 - MIN_SHRINK) * footprint(points):
+        return None
+    return angle

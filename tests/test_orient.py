@@ -1,0 +1,150 @@
+"""Objects turned about up: the turn that squares their walls (analytic and real), ``import
+--square`` applying it, the warning without it, and fit saying why its slabs are not constant."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from conftest import assert_bad_input, data_path
+
+from partscale import ingest
+from partscale.orient import SQUARE_DEGREES, csdf_turn, square_turn, turn_about_up
+from partscale.zones import fit
+
+
+def _boxes(boxes) -> trimesh.Trimesh:
+    """Boxes ``(centre, extents)`` as one triangle mesh (y up)."""
+    parts = []
+    for centre, extents in boxes:
+        b = trimesh.creation.box(extents=extents)
+        b.apply_translation(centre)
+        parts.append(b)
+    return trimesh.util.concatenate(parts)
+
+
+def _cabinet() -> trimesh.Trimesh:
+    """Two sides, a top, a bottom, a back and a shelf: walls along x and z."""
+    return _boxes(
+        [
+            ((-0.58, 0.5, 0.0), (0.04, 1.0, 0.4)),
+            ((0.58, 0.5, 0.0), (0.04, 1.0, 0.4)),
+            ((0.0, 0.98, 0.0), (1.2, 0.04, 0.4)),
+            ((0.0, 0.02, 0.0), (1.2, 0.04, 0.4)),
+            ((0.0, 0.5, -0.19), (1.2, 1.0, 0.02)),
+            ((0.0, 0.5, 0.0), (1.12, 0.03, 0.38)),
+        ]
+    )
+
+
+def _turned(mesh: trimesh.Trimesh, angle: float) -> np.ndarray:
+    """(T, 3, 3) triangles of ``mesh`` turned by ``angle`` degrees about up."""
+    return turn_about_up(mesh.vertices, angle)[mesh.faces]
+
+
+def _mod90(a: float) -> float:
+    """``a`` degrees modulo 90, in [-45, 45)."""
+    return (a + 45.0) % 90.0 - 45.0
+
+
+@pytest.mark.parametrize("angle", [-38.0, -7.5, 3.0, 29.0, 44.5])
+def test_the_turn_undoes_a_turn(angle):
+    """A cabinet turned by ANGLE: the turn found takes it back (modulo 90 degrees) within 0.01
+    degree, and the object it gives is square (no turn found)."""
+    cab = _cabinet()
+    got = square_turn(_turned(cab, angle))
+    assert got is not None and abs(_mod90(got + angle)) <= 0.01, got
+    back = turn_about_up(cab.vertices, angle + got)[cab.faces]
+    assert square_turn(back) is None
+
+
+def test_square_round_and_crossed_objects_are_left_as_they_are():
+    """No turn for: the square cabinet, one turned by less than SQUARE_DEGREES, a round drum
+    (no direction holds half its walls), and a square top on two panels crossed diagonally
+    (their walls agree on 45 degrees, but turning by it would widen the footprint: the object is
+    square, its frame is not)."""
+    cab = _cabinet()
+    assert square_turn(cab.vertices[cab.faces]) is None
+    assert square_turn(_turned(cab, 0.8 * SQUARE_DEGREES)) is None
+    drum = trimesh.creation.cylinder(radius=0.4, height=0.5, sections=64)
+    drum.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))
+    assert square_turn(_turned(drum, 10.0)) is None
+    crossed = [((0.0, 0.72, 0.0), (0.8, 0.04, 0.8))]
+    for a in (45.0, -45.0):
+        panel = trimesh.creation.box(extents=(1.0, 0.7, 0.03))
+        panel.apply_transform(trimesh.transformations.rotation_matrix(np.radians(a), [0, 1, 0]))
+        panel.apply_translation((0.0, 0.35, 0.0))
+        crossed.append(panel)
+    table = trimesh.util.concatenate([_boxes(crossed[:1]), *crossed[1:]])
+    assert square_turn(table.vertices[table.faces]) is None
+
+
+@pytest.fixture(scope="module")
+def turned_bookcase(tmp_path_factory):
+    """kenney/bookcaseOpen.glb turned 17 degrees about up, as a .glb."""
+    scene = trimesh.load(data_path("kenney/bookcaseOpen.glb"))
+    scene.apply_transform(trimesh.transformations.rotation_matrix(np.radians(17.0), [0, 1, 0]))
+    path = tmp_path_factory.mktemp("turned") / "bookcase17.glb"
+    scene.export(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def turned_imports(turned_bookcase):
+    """The turned bookcase imported at 128 as it is and with ``square``."""
+    return {sq: ingest.load(turned_bookcase, res=128, square=sq) for sq in (False, True)}
+
+
+def test_import_square_turns_a_real_mesh_back(turned_imports):
+    """The bookcase turned 17 degrees: import finds the turn (-17, within 0.1 degree) and, with
+    square, makes it, recorded in the history; the squared import measures what the original
+    does within a voxel on every axis. The original itself is square (nothing recorded)."""
+    h0 = ingest.load(data_path("kenney/bookcaseOpen.glb"), res=128)
+    assert not {"off_square_deg", "turned_deg"} & set(h0.meta["history"][0])
+    off, sq = turned_imports[False], turned_imports[True]
+    assert abs(off.meta["history"][0]["off_square_deg"] + 17.0) <= 0.1
+    first = sq.meta["history"][0]
+    assert abs(first["turned_deg"] + 17.0) <= 0.1 and "off_square_deg" not in first
+    ext = [np.diff(c.surface_bounds(), axis=0)[0] for c in (h0, sq)]
+    assert np.abs(ext[1] - ext[0]).max() <= h0.voxel_size, ext
+
+
+def test_the_turn_of_an_imported_object(turned_imports):
+    """The same found on the CSDFs (marching cubes, at 128): the turned one's within 0.1
+    degree, none for the squared one."""
+    got = csdf_turn(turned_imports[False])
+    assert got is not None and abs(_mod90(got + 17.0)) <= 0.1, got
+    assert csdf_turn(turned_imports[True]) is None
+
+
+def test_a_chair_with_diagonal_leg_frames_is_square():
+    """sweethome3d/chair2 faces front; its leg frames run at 45 degrees: no warning."""
+    c = ingest.load(data_path("sweethome3d/chair2.obj"), res=64)
+    assert "off_square_deg" not in c.meta["history"][0]
+
+
+def test_fit_says_when_the_walls_run_off_the_axes(turned_imports):
+    """Fit 30 % wider along x: on the turned bookcase a note says its walls run 17 degrees off
+    x and z and names --square; on the squared one it does not."""
+    for square, c in turned_imports.items():
+        _, why = fit(c, ["130%", "=", "="])
+        said = [w for w in why if "--square" in w]
+        assert len(said) == (0 if square else 1), why
+        if not square:
+            assert "-17.0° off x and z" in said[0], said
+
+
+def test_cli_import_square(tmp_path, cli, turned_bookcase):
+    """--square says what it turned on stderr; without it, a warning names --square; an SDF
+    grid with --square is refused in one line (exit 2, no file)."""
+    out = tmp_path / "sq.csdf.npz"
+    proc = cli("import", turned_bookcase, "-o", out, "--res", "48", "--square", check=True)
+    assert "--square: turned -17.0" in proc.stderr, proc.stderr
+    proc = cli("import", turned_bookcase, "-o", tmp_path / "off.csdf.npz", "--res", "48")
+    assert "warning: the walls run -17.0" in proc.stderr and "--square" in proc.stderr
+    grid = tmp_path / "ball.npy"
+    ax = np.linspace(-1.0, 1.0, 24)
+    np.save(grid, (np.linalg.norm(np.stack(np.meshgrid(ax, ax, ax)), axis=0) - 0.6))
+    bad = tmp_path / "bad.csdf.npz"
+    assert_bad_input(cli("import", grid, "-o", bad, "--square"), "--square", "SDF grid")
+    assert not bad.exists()

@@ -148,3 +148,17 @@ def test_cli_import_square(tmp_path, cli, turned_bookcase):
     bad = tmp_path / "bad.csdf.npz"
     assert_bad_input(cli("import", grid, "-o", bad, "--square"), "--square", "SDF grid")
     assert not bad.exists()
+
+
+def test_cli_suggest_warns_of_walls_off_the_axes(tmp_path, cli, turned_imports):
+    """suggest on the turned bookcase warns on stderr and names --square; on the squared one it
+    does not."""
+    from partscale.csdf import save
+
+    for square, c in turned_imports.items():
+        path = tmp_path / f"b{int(square)}.csdf.npz"
+        save(c, path)
+        proc = cli("suggest", path, check=True)
+        assert ("--square" in proc.stderr) == (not square), proc.stderr
+        if not square:
+            assert "warning: the walls run -17.0° off x and z" in proc.stderr, proc.stderr

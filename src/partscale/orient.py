@@ -35,6 +35,16 @@ _WALL = 0.3  # |n_y| below this: a wall, whose horizontal direction counts
 _BIN = 0.25  # degrees of the 4-fold angle histogram
 
 
+def off_square_message(turn: float) -> str:
+    """What import, suggest and fit say of an object whose walls run ``turn`` degrees off x and
+    z (:func:`square_turn`)."""
+    return (
+        f"the walls run {turn:+.1f}° off x and z about up: zones are planes square to x, y, z, "
+        "so along x and z suggest and fit find little; import the mesh with --square to turn it "
+        "square"
+    )
+
+
 def turn_about_up(points: np.ndarray, angle: float) -> np.ndarray:
     """(N, 3) float64: ``points`` (N, 3) turned by ``angle`` degrees about +y (see the module)."""
     a = np.radians(angle)

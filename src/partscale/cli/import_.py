@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ..csdf import SUFFIX, save
-from ..orient import SQUARE_DEGREES
+from ..orient import SQUARE_DEGREES, off_square_message
 from ..thickness import thin_features
 from . import _common
 
@@ -96,12 +96,7 @@ def import_(
             soft_wrap=True,
         )
     elif "off_square_deg" in placed:
-        typer.echo(
-            f"warning: the walls run {placed['off_square_deg']:+.2f}° off x and z about up: "
-            "zones are planes square to x, y, z, so suggest and fit find few; --square turns "
-            "the mesh square",
-            err=True,
-        )
+        typer.echo(f"warning: {off_square_message(placed['off_square_deg'])}", err=True)
     thin = thin_features(c)
     below = thin.imported.get("below_one_voxel_triangles", 0)
     if thin.below_one_solid or thin.below_one_gap or below:

@@ -26,6 +26,7 @@ def suggest(
     """Suggest zones: one period of a repeated element (tile) and slabs of constant cross-section
     (stretch), ranked best first, with zone planes in object units."""
     from ..csdf import load
+    from ..orient import csdf_turn, off_square_message
     from ..zones import AXES
     from ..zones import suggest as suggest_zones
 
@@ -36,11 +37,16 @@ def suggest(
     c = load(src)
     ax = axis.lower() if axis is not None else None
     cands = suggest_zones(c, ax)
+    # an object turned about up has no constant slab along x or z: say so, with the cure
+    turn = csdf_turn(c) if ax in (None, "x", "z") else None
     if ax is not None and not cands:
         raise InputError(
             f"--axis {ax}: expected a zone candidate, got none (no repeated element and no slab "
-            "of constant cross-section along it)"
+            "of constant cross-section along it"
+            + (f"; {off_square_message(turn)})" if turn is not None else ")")
         )
+    if turn is not None:
+        typer.echo(f"warning: {off_square_message(turn)}", err=True)
     units = c.meta.get("units") or ""
     if as_json:
         typer.echo(json.dumps([x.to_json() for x in cands], indent=2))

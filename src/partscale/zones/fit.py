@@ -776,12 +776,7 @@ def _off_square(csdf: CSDF, edits: list[Edit]) -> list[str]:
     to thin slabs or global scaling), and the cure."""
     if not any(e.axis in ("x", "z") for e in edits):
         return []
-    from ..orient import csdf_turn
+    from ..orient import csdf_turn, off_square_message
 
     turn = csdf_turn(csdf)
-    if turn is None:
-        return []
-    return [
-        f"the object's walls run {turn:+.1f}° off x and z about up, so no slab along x or z is "
-        "constant: import the mesh with --square to turn it square"
-    ]
+    return [] if turn is None else [off_square_message(turn)]

@@ -162,3 +162,19 @@ def test_cli_suggest_warns_of_walls_off_the_axes(tmp_path, cli, turned_imports):
         assert ("--square" in proc.stderr) == (not square), proc.stderr
         if not square:
             assert "warning: the walls run -17.0° off x and z" in proc.stderr, proc.stderr
+
+
+def test_batch_square_per_object(tmp_path, cli, turned_bookcase):
+    """A manifest's square column turns one object and not the other (their histories say
+    which); a value that is not a yes or no is refused in one line before any work."""
+    from partscale.csdf import load
+
+    m = tmp_path / "m.csv"
+    m.write_text(f"path,name,square\n{turned_bookcase},a,true\n{turned_bookcase},b,\n")
+    cli("batch", m, "-o", tmp_path / "o", "--res", "32", "--workers", "1", check=True)
+    a, b = (load(tmp_path / "o" / n / f"{n}.csdf.npz").meta["history"][0] for n in "ab")
+    assert abs(a["turned_deg"] + 17.0) <= 0.1 and "off_square_deg" not in a, a
+    assert abs(b["off_square_deg"] + 17.0) <= 0.1 and "turned_deg" not in b, b
+    m.write_text(f"path,name,square\n{turned_bookcase},a,maybe\n")
+    assert_bad_input(cli("batch", m, "-o", tmp_path / "bad"), "square: expected true or false")
+    assert not (tmp_path / "bad").exists()

@@ -91,6 +91,7 @@ def run(
     outdir: str | os.PathLike,
     *,
     res: int = 128,
+    square: bool = False,
     segment: str | None = None,
     recipe: str | os.PathLike | dict | None = None,
     fit: Sequence[str] | None = None,
@@ -118,8 +119,9 @@ def run(
     outdir : path
         Output folder (created). Rerunning into it skips objects done with the same input
         (content hash of all its files) and options (hash of the spec).
-    res, segment, recipe, fit, export, render
-        The pipeline per object, overridable per object in a manifest: import at ``res``,
+    res, square, segment, recipe, fit, export, render
+        The pipeline per object, overridable per object in a manifest: import at ``res`` (a
+        mesh turned square about up with ``square``, see :func:`partscale.ingest.load`),
         segment with method ``segment`` (None: no segmentation), then the recipe (a JSON file
         or dict) or ``fit`` (3 sizes, needs :mod:`partscale.zones`), then write each format of
         ``export`` (``csdf``, ``glb``, ``ply``, ``obj``, ``raw``, ``png``, ``nrrd``) and, with
@@ -173,6 +175,7 @@ def run(
         raise InputError(f"{outdir}: expected an output folder, got a file")
     batch_opts = {
         "res": res,
+        "square": square or None,
         "segment": segment,
         "recipe": recipe,
         "fit": fit,

@@ -39,6 +39,7 @@ THREAD_VARIABLES = (
     "PYTHON_CPU_COUNT",  # Python >= 3.13's os.cpu_count(); older ones get patched in the worker
 )
 _OFF = ("", "0", "false", "no", "none", "off")
+_ON = ("1", "true", "yes", "on")
 
 
 def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -> dict[str, Any]:
@@ -56,6 +57,12 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
         with contextlib.suppress(ValueError):
             res = int(res.strip())
     res = check_res(res, f"{where}: res")  # import's own bounds, checked before any work
+    square = merged.get("square", False)
+    if isinstance(square, str):
+        word = square.strip().lower()
+        square = False if word in _OFF else True if word in _ON else square
+    if not isinstance(square, bool):
+        raise InputError(f"{where}: square: expected true or false, got {square!r}")
 
     seg = merged.get("segment")
     if isinstance(seg, bool):
@@ -112,6 +119,7 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
     return {
         "version": __version__,
         "res": res,
+        "square": square,
         "segment": seg,
         "recipe": recipe,
         "fit": fit,
@@ -160,9 +168,11 @@ def run_job(
     folder = outdir / name
     folder.mkdir(parents=True, exist_ok=True)
     if path.name.lower().endswith(CSDF_SUFFIX):
+        if spec["square"]:
+            raise InputError(f"{path}: expected a mesh for square, got a CSDF")
         c = load_csdf(path)
     else:
-        c = load(path, res=spec["res"])
+        c = load(path, res=spec["res"], square=spec["square"])
     if spec["segment"]:
         from ..segment import segment
 

@@ -91,12 +91,16 @@ def batch(
         typer.Argument(
             metavar="INPUTS...",
             help="Files, folders (searched recursively by extension) or manifests (.csv with a "
-            "'path' column, .jsonl with a 'path' key; other columns: name, res, segment, recipe, "
-            "fit, export, render).",
+            "'path' column, .jsonl with a 'path' key; other columns: name, res, square, segment, "
+            "recipe, fit, export, render).",
         ),
     ],
     output: Annotated[Path, typer.Option("-o", "--output", help="Output folder OUTDIR.")],
     res: _common.Res = 128,
+    square: Annotated[
+        bool,
+        typer.Option("--square", help="Turn each mesh about up so its walls run along x and z."),
+    ] = False,
     segment: Annotated[
         str | None,
         typer.Option(
@@ -162,6 +166,7 @@ def batch(
             inputs,
             output,
             res=res,
+            square=square,
             segment=segment,
             recipe=recipe,
             fit=list(fit) if fit else None,

@@ -150,9 +150,11 @@ def test_cli_import_square(tmp_path, cli, turned_bookcase):
     assert not bad.exists()
 
 
-def test_cli_suggest_warns_of_walls_off_the_axes(tmp_path, cli, turned_imports):
-    """suggest on the turned bookcase warns on stderr and names --square; on the squared one it
-    does not."""
+def test_cli_suggest_and_info_warn_of_walls_off_the_axes(tmp_path, cli, turned_imports):
+    """suggest and info on the turned bookcase warn and name --square (info --json gives the
+    turn); on the squared one neither does."""
+    import json
+
     from partscale.csdf import save
 
     for square, c in turned_imports.items():
@@ -160,8 +162,14 @@ def test_cli_suggest_warns_of_walls_off_the_axes(tmp_path, cli, turned_imports):
         save(c, path)
         proc = cli("suggest", path, check=True)
         assert ("--square" in proc.stderr) == (not square), proc.stderr
-        if not square:
+        text = cli("info", path, check=True).stdout
+        assert ("--square" in text) == (not square), text
+        got = json.loads(cli("info", path, "--json", check=True).stdout)["off_square_deg"]
+        if square:
+            assert got is None
+        else:
             assert "warning: the walls run -17.0° off x and z" in proc.stderr, proc.stderr
+            assert abs(got + 17.0) <= 0.1, got
 
 
 def test_batch_square_per_object(tmp_path, cli, turned_bookcase):

@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from ..csdf import CSDF, load
+from ..orient import csdf_turn, off_square_message
 from ..progress import ProgressCallback, resolve, scaled
 from ..thickness import ThinFeatures, thin_features
 from . import _common
@@ -26,6 +27,8 @@ def summary(
         thin = thin_features(c)
     report(0.5, "surface relief")
     relief = _relief(c)
+    report(0.9, "walls")
+    turn = csdf_turn(c)
     report(1.0, "done")
     try:
         sb = c.surface_bounds()
@@ -52,6 +55,8 @@ def summary(
         else None,
         "thin_features": thin.to_json(),
         "relief": relief,
+        # the turn about up that would square the walls (None: square, or no clear direction)
+        "off_square_deg": None if turn is None else round(turn, 2),
     }
 
 
@@ -114,6 +119,8 @@ def info(
     warning = thin.message(c.voxel_size, units)
     if warning:
         typer.echo(f"warning:     thin features: {warning}")
+    if s["off_square_deg"] is not None:
+        typer.echo(f"warning:     {off_square_message(s['off_square_deg'])}")
     typer.echo(f"history:     {len(s['history'])} operation(s)")
     for i, op in enumerate(s["history"]):
         typer.echo(f"  {i + 1}. {json.dumps(op)}")

@@ -125,13 +125,20 @@ def test_a_chair_with_diagonal_leg_frames_is_square():
 
 def test_fit_says_when_the_walls_run_off_the_axes(turned_imports):
     """Fit 30 % wider along x: on the turned bookcase a note says its walls run 17 degrees off
-    x and z and names --square; on the squared one it does not."""
+    x and z and names --square; on the squared one it does not; where the object did not come
+    from a mesh the note says to turn its source."""
     for square, c in turned_imports.items():
         _, why = fit(c, ["130%", "=", "="])
         said = [w for w in why if "--square" in w]
         assert len(said) == (0 if square else 1), why
         if not square:
             assert "-17.0° off x and z" in said[0], said
+    # not from a mesh (a completed scan, a grid): the cure is to turn the source, not --square
+    off = turned_imports[False]
+    scan = off.replace(meta={**off.meta, "history": [{"op": "complete"}]})
+    _, why = fit(scan, ["130%", "=", "="])
+    said = [w for w in why if "off x and z" in w]
+    assert len(said) == 1 and "turn its source" in said[0] and "--square" not in said[0], why
 
 
 def test_cli_import_square(tmp_path, cli, turned_bookcase):

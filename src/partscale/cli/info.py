@@ -120,7 +120,7 @@ def info(
     if warning:
         typer.echo(f"warning:     thin features: {warning}")
     if s["off_square_deg"] is not None:
-        typer.echo(f"warning:     {off_square_message(s['off_square_deg'])}")
+        typer.echo(f"warning:     {off_square_message(s['off_square_deg'], c)}")
     typer.echo(f"history:     {len(s['history'])} operation(s)")
     for i, op in enumerate(s["history"]):
         typer.echo(f"  {i + 1}. {json.dumps(op)}")

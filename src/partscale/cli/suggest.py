@@ -43,10 +43,10 @@ def suggest(
         raise InputError(
             f"--axis {ax}: expected a zone candidate, got none (no repeated element and no slab "
             "of constant cross-section along it"
-            + (f"; {off_square_message(turn)})" if turn is not None else ")")
+            + (f"; {off_square_message(turn, c)})" if turn is not None else ")")
         )
     if turn is not None:
-        typer.echo(f"warning: {off_square_message(turn)}", err=True)
+        typer.echo(f"warning: {off_square_message(turn, c)}", err=True)
     units = c.meta.get("units") or ""
     if as_json:
         typer.echo(json.dumps([x.to_json() for x in cands], indent=2))

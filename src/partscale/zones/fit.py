@@ -779,4 +779,4 @@ def _off_square(csdf: CSDF, edits: list[Edit]) -> list[str]:
     from ..orient import csdf_turn, off_square_message
 
     turn = csdf_turn(csdf)
-    return [] if turn is None else [off_square_message(turn)]
+    return [] if turn is None else [off_square_message(turn, csdf)]

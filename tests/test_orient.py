@@ -181,7 +181,8 @@ def test_cli_suggest_and_info_warn_of_walls_off_the_axes(tmp_path, cli, turned_i
 
 def test_batch_square_per_object(tmp_path, cli, turned_bookcase):
     """A manifest's square column turns one object and not the other (their histories say
-    which); a value that is not a yes or no is refused in one line before any work."""
+    which); a value that is not a yes or no is refused in one line before any work; a CSDF
+    with square fails in one line."""
     from partscale.csdf import load
 
     m = tmp_path / "m.csv"
@@ -193,3 +194,17 @@ def test_batch_square_per_object(tmp_path, cli, turned_bookcase):
     m.write_text(f"path,name,square\n{turned_bookcase},a,maybe\n")
     assert_bad_input(cli("batch", m, "-o", tmp_path / "bad"), "square: expected true or false")
     assert not (tmp_path / "bad").exists()
+    # a CSDF cannot be turned: that object fails with one line, and leaves no folder
+    m.write_text(f"path,name,square\n{tmp_path / 'o' / 'a' / 'a.csdf.npz'},c,yes\n")
+    proc = cli("batch", m, "-o", tmp_path / "o2", "--workers", "1")
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
+    (line,) = [ln for ln in proc.stderr.splitlines() if ln.startswith("failed: ")]
+    assert "expected a mesh for square, got a CSDF" in line, line
+    assert not (tmp_path / "o2" / "c").exists()
+
+
+def test_load_refuses_a_square_that_is_no_bool(turned_bookcase):
+    from partscale.errors import InputError
+
+    with pytest.raises(InputError, match="expected square True or False, got 'yes'"):
+        ingest.load(turned_bookcase, res=32, square="yes")

@@ -166,10 +166,11 @@ def run_job(
 
     path, outdir = Path(path), Path(outdir)
     folder = outdir / name
+    is_csdf = path.name.lower().endswith(CSDF_SUFFIX)
+    if is_csdf and spec["square"]:
+        raise InputError(f"{path}: expected a mesh for square, got a CSDF")
     folder.mkdir(parents=True, exist_ok=True)
-    if path.name.lower().endswith(CSDF_SUFFIX):
-        if spec["square"]:
-            raise InputError(f"{path}: expected a mesh for square, got a CSDF")
+    if is_csdf:
         c = load_csdf(path)
     else:
         c = load(path, res=spec["res"], square=spec["square"])

@@ -158,6 +158,8 @@ def load(
     report = resolve(progress)
     kind = sniff(path)
     res = check_res(res, str(path))
+    if not isinstance(square, bool):
+        raise InputError(f"{path}: expected square True or False, got {square!r}")
     if pad is not None:
         check_pad(pad, str(path))
     if kind == "mesh":

@@ -2,9 +2,9 @@
 
 Every zone is a slab between two planes square to x, y or z. An object turned about up (a
 photogrammetry mesh, a model placed at an angle) has no slab of constant cross-section along
-x or z, so suggest and fit find nothing and fall back to global scaling. :func:`square_turn`
-finds the turn that squares it, or says there is none to make; ``partscale import --square``
-applies it to a mesh.
+x or z: suggest finds little, and fit falls back to thin slabs or global scaling.
+:func:`square_turn` finds the turn that squares it, or says there is none to make;
+``partscale import --square`` applies it to a mesh.
 
 Up is +y (partscale's convention); a turn by ``angle`` degrees maps ``(x, z)`` to
 ``(x cos a + z sin a, -x sin a + z cos a)`` (right-handed about +y, as :func:`turn_about_up`).

@@ -208,3 +208,18 @@ def test_load_refuses_a_square_that_is_no_bool(turned_bookcase):
 
     with pytest.raises(InputError, match="expected square True or False, got 'yes'"):
         ingest.load(turned_bookcase, res=32, square="yes")
+
+
+def test_mesh_route_warns_of_walls_off_the_axes(tmp_path, cli, turned_bookcase):
+    """scale IN.glb -o OUT.glb along x: the turned bookcase gets a warning with the mesh route's
+    cure; the original gets none; an edit along y alone does not ask."""
+    args = ("--axis", "x", "--zone", "40%", "60%", "--to", "120%")
+    proc = cli("scale", turned_bookcase, "-o", tmp_path / "a.glb", *args, check=True)
+    assert "walls run -17.0° off x and z" in proc.stderr, proc.stderr
+    assert "turn the mesh first" in proc.stderr, proc.stderr
+    original = data_path("kenney/bookcaseOpen.glb")
+    proc = cli("scale", original, "-o", tmp_path / "b.glb", *args, check=True)
+    assert "off x and z" not in proc.stderr, proc.stderr
+    tall = ("--axis", "y", "--zone", "40%", "60%", "--to", "120%")
+    proc = cli("scale", turned_bookcase, "-o", tmp_path / "c.glb", *tall, check=True)
+    assert "off x and z" not in proc.stderr, proc.stderr

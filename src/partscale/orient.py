@@ -35,17 +35,19 @@ _WALL = 0.3  # |n_y| below this: a wall, whose horizontal direction counts
 _BIN = 0.25  # degrees of the 4-fold angle histogram
 
 
-def off_square_message(turn: float, csdf: CSDF | None = None) -> str:
-    """What import, info, suggest and fit say of an object whose walls run ``turn`` degrees off
-    x and z (:func:`square_turn`), with the cure: ``--square`` where the object is (or, given
-    ``csdf``, was imported from) a mesh, else turning the source (a grid or a scan)."""
+def off_square_message(turn: float, csdf: CSDF | None = None, *, mesh_route: bool = False) -> str:
+    """What import, info, suggest, fit and the mesh route say of an object whose walls run
+    ``turn`` degrees off x and z (:func:`square_turn`), with the cure: ``--square`` where the
+    object is (or, given ``csdf``, was imported from) a mesh, else turning the source (a grid or
+    a scan); the mesh route edits the file as it stands, so there both."""
     first = (csdf.meta.get("history") or [{}])[0] if csdf is not None else {}
     from_mesh = csdf is None or (first.get("op") == "import" and first.get("format") == "mesh")
-    cure = (
-        "import the mesh with --square to turn it square"
-        if from_mesh
-        else "turn its source so its walls run along x and z before import"
-    )
+    if mesh_route:
+        cure = "turn the mesh first, or import it with --square and edit the CSDF"
+    elif from_mesh:
+        cure = "import the mesh with --square to turn it square"
+    else:
+        cure = "turn its source so its walls run along x and z before import"
     return (
         f"the walls run {turn:+.1f}° off x and z about up: zones are planes square to x, y, z, "
         f"so along x and z suggest and fit find little; {cure}"

@@ -159,6 +159,11 @@ def _scale_mesh(src: Path, output: Path, rec) -> None:
     for seam in result.seams:
         if not seam.ok:
             typer.echo(f"warning: {seam.message()}", err=True)
+    if result.off_square_deg is not None:
+        from ..orient import off_square_message
+
+        msg = off_square_message(result.off_square_deg, mesh_route=True)
+        typer.echo(f"warning: {msg}", err=True)
     _common.done(
         f"wrote {', '.join(map(str, result.written))} (mesh route: {result.faces_in} -> "
         f"{result.faces_out} triangles)"

@@ -25,6 +25,7 @@ import numpy as np
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError
 from ..ingest import check_mesh_file
+from ..orient import square_turn
 from .cut import Piece, concatenate, cut, subset
 
 if TYPE_CHECKING:
@@ -543,6 +544,9 @@ class MeshEditResult:
     faces_in: int
     faces_out: int
     seams: list[Seam]
+    #: the turn about up that would square the source's walls where the recipe changes x or z
+    #: (:func:`partscale.orient.square_turn`); None where it is square or x and z are unchanged
+    off_square_deg: float | None = None
 
 
 def _face_count(scene) -> int:
@@ -563,8 +567,9 @@ def edit_mesh_file(
         )
     scene = load_scene(src)
     out, seams = apply_recipe_to_scene(scene, recipe)
+    turn = square_turn(scene.triangles) if any(e.axis in ("x", "z") for e in recipe.edits) else None
     written = save_scene(out, dst)
-    return MeshEditResult(written, _face_count(scene), _face_count(out), seams)
+    return MeshEditResult(written, _face_count(scene), _face_count(out), seams, turn)
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,9 @@ MIN_SHARE = 0.5
 #: frames, a star base) would make it larger.
 MIN_SHRINK = 0.01
 
+#: The axes the walls are squared to (up is y): edits along them are what a turn spoils.
+WALL_AXES = ("x", "z")
+
 _SPREAD_DEGREES = 2.0
 _WALL = 0.3  # |n_y| below this: a wall, whose horizontal direction counts
 _BIN = 0.25  # degrees of the 4-fold angle histogram
@@ -86,31 +89,13 @@ def square_turn(triangles: np.ndarray) -> float | None:
     """
     t = np.asarray(triangles, np.float64).reshape(-1, 9)
     n = np.cross(t[:, 3:6] - t[:, 0:3], t[:, 6:9] - t[:, 0:3])
-    # |n| is twice the area: the weights are areas
-    return _turn(n, np.linalg.norm(n, axis=1), t.reshape(-1, 3))
-
-
-def csdf_turn(csdf: CSDF) -> float | None:
-    """:func:`square_turn` of the zero level set of ``csdf`` (its marching-cubes triangles, in
-    grid indices: the voxels are cubes).
-
-    A wall off the grid's axes becomes a staircase of facets whose normals spread: at 128
-    voxels most of a turned bookcase's wall area still lies within the 2 degrees that count, at
-    64 (panels a voxel thick) it does not, and no turn is found. (The field's gradient does
-    worse: across a panel a voxel thick its central differences meet both faces.)
-    """
-    return square_turn(march(np.asarray(csdf.sdf, np.float32)))
-
-
-def _turn(n: np.ndarray, weight: np.ndarray, points: np.ndarray) -> float | None:
-    """:func:`square_turn` from normals ``n`` (N, 3) (any length), their ``weight`` (N,) and
-    the surface's ``points`` (M, 3) (its footprint)."""
     norm = np.linalg.norm(n, axis=1)
     wall = (norm > 0) & (np.abs(n[:, 1]) < _WALL * norm)
     if not wall.any():
         return None
-    # weighted by the horizontal part, angle times four: square directions coincide
-    w = weight[wall] * np.hypot(n[wall, 0], n[wall, 2]) / norm[wall]
+    # weighted by area (|n| is twice it) times the horizontal part of the unit normal: the
+    # horizontal part of n; angle times four: square directions coincide
+    w = np.hypot(n[wall, 0], n[wall, 2])
     a4 = np.degrees(4.0 * np.arctan2(n[wall, 2], n[wall, 0])) % 360.0
     nbins = round(360.0 / _BIN)
     hist = np.bincount(np.minimum((a4 / _BIN).astype(np.int64), nbins - 1), w, nbins)
@@ -135,6 +120,19 @@ def _turn(n: np.ndarray, weight: np.ndarray, points: np.ndarray) -> float | None
         span = points[:, [0, 2]].max(axis=0) - points[:, [0, 2]].min(axis=0)
         return float(span[0] * span[1])
 
-    if footprint(turn_about_up(points, angle)) > (1.0 - MIN_SHRINK) * footprint(points):
+    corners = t.reshape(-1, 3)
+    if footprint(turn_about_up(corners, angle)) > (1.0 - MIN_SHRINK) * footprint(corners):
         return None
     return angle
+
+
+def csdf_turn(csdf: CSDF) -> float | None:
+    """:func:`square_turn` of the zero level set of ``csdf`` (its marching-cubes triangles, in
+    grid indices: the voxels are cubes).
+
+    A wall off the grid's axes becomes a staircase of facets whose normals spread: at 128
+    voxels most of a turned bookcase's wall area still lies within the 2 degrees that count, at
+    64 (panels a voxel thick) it does not, and no turn is found. (The field's gradient does
+    worse: across a panel a voxel thick its central differences meet both faces.)
+    """
+    return square_turn(march(np.asarray(csdf.sdf, np.float32)))

@@ -26,7 +26,7 @@ def suggest(
     """Suggest zones: one period of a repeated element (tile) and slabs of constant cross-section
     (stretch), ranked best first, with zone planes in object units."""
     from ..csdf import load
-    from ..orient import csdf_turn, off_square_message
+    from ..orient import WALL_AXES, csdf_turn, off_square_message
     from ..zones import AXES
     from ..zones import suggest as suggest_zones
 
@@ -38,7 +38,7 @@ def suggest(
     ax = axis.lower() if axis is not None else None
     cands = suggest_zones(c, ax)
     # an object turned about up has no constant slab along x or z: say so, with the cure
-    turn = csdf_turn(c) if ax in (None, "x", "z") else None
+    turn = csdf_turn(c) if ax is None or ax in WALL_AXES else None
     if ax is not None and not cands:
         raise InputError(
             f"--axis {ax}: expected a zone candidate, got none (no repeated element and no slab "

@@ -25,7 +25,7 @@ import numpy as np
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError
 from ..ingest import check_mesh_file
-from ..orient import square_turn
+from ..orient import WALL_AXES, square_turn
 from .cut import Piece, concatenate, cut, subset
 
 if TYPE_CHECKING:
@@ -566,8 +566,9 @@ def edit_mesh_file(
             f"{dst.suffix or 'no suffix'}"
         )
     scene = load_scene(src)
+    # the source's walls, before the recipe touches the scene
+    turn = square_turn(scene.triangles) if any(e.axis in WALL_AXES for e in recipe.edits) else None
     out, seams = apply_recipe_to_scene(scene, recipe)
-    turn = square_turn(scene.triangles) if any(e.axis in ("x", "z") for e in recipe.edits) else None
     written = save_scene(out, dst)
     return MeshEditResult(written, _face_count(scene), _face_count(out), seams, turn)
 

@@ -320,10 +320,12 @@ def _outside(slabs: list[Candidate], h: float, tiled: _Tiled | None) -> list[Can
     ]
 
 
-def _thin_reason(tiled: bool) -> str:
-    """Why a thin slab takes a growth: nothing longer could."""
+def _thin_reason(tiled: bool, each: bool = False) -> str:
+    """Why a thin slab takes a growth: nothing longer could; ``each``: for several of them,
+    with what that changes."""
     copies = f" nor the copies (within {100 * COPY_TOLERANCE:.0f}%)" if tiled else ""
-    return f"no slab of {MIN_SPREAD_VOXELS} voxels or more{copies} could take it"
+    why = f"no slab of {MIN_SPREAD_VOXELS} voxels or more{copies} could take it"
+    return f"{why}: a feature's thickness changes in each" if each else why
 
 
 def _thin_note(c: Candidate, h: float, tiled: bool, alone: bool = True) -> str:
@@ -488,8 +490,8 @@ def _to_slabs(
     if thin and len(st) > 1 and not even_growth:  # (an even growth's own first note says it)
         notes.insert(
             0,
-            f"{ax.name}: {len(st)} thin slabs take it, as {_thin_reason(tiled is not None)}: "
-            f"a feature's thickness changes in each",
+            f"{ax.name}: {len(st)} thin slabs take it, as "
+            f"{_thin_reason(tiled is not None, each=True)}",
         )
     return st, notes, left
 
@@ -543,11 +545,7 @@ def _even_growth(
             f"{ax.name}: {len(st)} {'thin ' if thin else ''}constant slabs of comparable length "
             f"share the growth, each the same fraction of its length (the largest alone would "
             f"more than double"
-            + (
-                f"; {_thin_reason(tiled is not None)}: a feature's thickness changes in each)"
-                if thin
-                else ")"
-            ),
+            + (f"; {_thin_reason(tiled is not None, each=True)})" if thin else ")"),
         )
     return st, notes, rest
 
@@ -774,9 +772,10 @@ def _off_square(csdf: CSDF, edits: list[Edit]) -> list[str]:
     """A note where x or z changes and the object's walls run off x and z
     (:func:`partscale.orient.csdf_turn`): its slabs along them are not constant (fit falls back
     to thin slabs or global scaling), and the cure."""
-    if not any(e.axis in ("x", "z") for e in edits):
+    from ..orient import WALL_AXES, csdf_turn, off_square_message
+
+    if not any(e.axis in WALL_AXES for e in edits):
         return []
-    from ..orient import csdf_turn, off_square_message
 
     turn = csdf_turn(csdf)
     return [] if turn is None else [off_square_message(turn, csdf)]

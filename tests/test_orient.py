@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 import trimesh
@@ -40,6 +42,18 @@ def _cabinet() -> trimesh.Trimesh:
 def _turned(mesh: trimesh.Trimesh, angle: float) -> np.ndarray:
     """(T, 3, 3) triangles of ``mesh`` turned by ``angle`` degrees about up."""
     return turn_about_up(mesh.vertices, angle)[mesh.faces]
+
+
+#: How far a turn read from a CSDF at 128 voxels may be off (its distances, a grid's): on 12
+#: objects turned 12 and 31 degrees all came within 0.25 degree. From a mesh it is exact.
+GRID_DEGREES = 0.3
+
+
+def _said_turn(text: str) -> float:
+    """The turn a warning or note names ("the walls run -16.8° off x and z")."""
+    m = re.search(r"walls run ([+-][0-9]+[.][0-9])° off x and z", text)
+    assert m is not None, text
+    return float(m.group(1))
 
 
 def _mod90(a: float) -> float:
@@ -110,10 +124,10 @@ def test_import_square_turns_a_real_mesh_back(turned_imports):
 
 
 def test_the_turn_of_an_imported_object(turned_imports):
-    """The same found on the CSDFs (marching cubes, at 128): the turned one's within 0.1
-    degree, none for the squared one."""
+    """The same found on the CSDFs (their distances, at 128): the turned one's within
+    GRID_DEGREES, none for the squared one."""
     got = csdf_turn(turned_imports[False])
-    assert got is not None and abs(_mod90(got + 17.0)) <= 0.1, got
+    assert got is not None and abs(_mod90(got + 17.0)) <= GRID_DEGREES, got
     assert csdf_turn(turned_imports[True]) is None
 
 
@@ -132,7 +146,7 @@ def test_fit_says_when_the_walls_run_off_the_axes(turned_imports):
         said = [w for w in why if "--square" in w]
         assert len(said) == (0 if square else 1), why
         if not square:
-            assert "-17.0° off x and z" in said[0], said
+            assert abs(_said_turn(said[0]) + 17.0) <= GRID_DEGREES, said
     # not from a mesh (a completed scan, a grid): the cure is to turn the source, not --square
     off = turned_imports[False]
     scan = off.replace(meta={**off.meta, "history": [{"op": "complete"}]})
@@ -175,8 +189,9 @@ def test_cli_suggest_and_info_warn_of_walls_off_the_axes(tmp_path, cli, turned_i
         if square:
             assert got is None
         else:
-            assert "warning: the walls run -17.0° off x and z" in proc.stderr, proc.stderr
-            assert abs(got + 17.0) <= 0.1, got
+            assert "warning: the walls run" in proc.stderr, proc.stderr
+            assert abs(_said_turn(proc.stderr) + 17.0) <= GRID_DEGREES, proc.stderr
+            assert abs(got + 17.0) <= GRID_DEGREES, got
 
 
 def test_batch_square_per_object(tmp_path, cli, turned_bookcase):
@@ -223,3 +238,14 @@ def test_mesh_route_warns_of_walls_off_the_axes(tmp_path, cli, turned_bookcase):
     tall = ("--axis", "y", "--zone", "40%", "60%", "--to", "120%")
     proc = cli("scale", turned_bookcase, "-o", tmp_path / "c.glb", *tall, check=True)
     assert "off x and z" not in proc.stderr, proc.stderr
+
+
+def test_the_turn_of_a_tv_unit_from_its_distances(tmp_path):
+    """sweethome3d/tvUnit turned 12 degrees and imported at 128: its CSDF gives the turn within
+    GRID_DEGREES (marching cubes' facets, a staircase on its thin panels, gave none)."""
+    scene = trimesh.load(data_path("sweethome3d/tvUnit.obj"), force="scene")
+    scene.apply_transform(trimesh.transformations.rotation_matrix(np.radians(12.0), [0, 1, 0]))
+    path = tmp_path / "tv12.glb"
+    scene.export(path)
+    got = csdf_turn(ingest.load(path, res=128))
+    assert got is not None and abs(got + 12.0) <= GRID_DEGREES, got

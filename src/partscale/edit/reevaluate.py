@@ -58,6 +58,12 @@ _RIGID = 0.01
 _PIECE_LAYERS = 64
 
 
+#: A squared distance (voxels^2) below which a seeded voxel is final (see :func:`_sweep`); the
+#: margin is far above rounding and far below any distance from a grid node to a triangle
+#: outside its eight cells (>= 1)
+_DONE_D2 = 1.0 - 1e-9
+
+
 @numba.njit(cache=True, inline="always")
 def _tri_d2(tri, t, px, py, pz):
     """Squared distance from p to triangle ``t`` of ``tri`` (T, 9) and the closest point's
@@ -191,6 +197,12 @@ def _sweep(tri, order, shape, npass, first, last, best_d2, best_t, best_vw):
             f = order[n] if p % 2 == 0 else order[m - 1 - n]
             if p == npass - 1 and (f > last if p % 2 == 0 else f < first):
                 break
+            # A voxel the seeds put nearer than one voxel to a triangle is done: every triangle
+            # with a point that near lies in one of the eight cells around it, whose triangles
+            # all seeded it; no neighbour can offer a nearer one (a third of the cabinet
+            # shrink's relays at 128; the sweeps took 18 % longer visiting them)
+            if best_d2[f] < _DONE_D2:
+                continue
             if narrow:
                 f32 = np.uint32(f)
                 i = np.int64(f32 // syz32)  # type: ignore[assignment]  # numba: int64 either way

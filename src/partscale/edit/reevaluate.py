@@ -12,7 +12,8 @@ voxel from the true object's, see :mod:`partscale.edit`):
 2. every voxel of the band in that box gets its nearest triangle by *closest-triangle propagation*
    (a numba kernel): triangles seed the eight corners of their cell, then two raster sweeps, one
    forward and one back, let each voxel test the nearest triangles of its 18 face and edge
-   neighbours (exact point-triangle distances, after a lower bound);
+   neighbours (exact point-triangle distances, after a lower bound); a voxel the seeds put
+   within one voxel of a triangle is already exact and is not visited;
 3. the chosen voxels take that distance with the sign of the field (the surface is not moved:
    linear zero crossings of the old and new values coincide where the surface is locally flat),
    the colour at their nearest surface point (trilinear in ``rgb``) and that point's part (the
@@ -106,7 +107,8 @@ def _propagate(tri, order, shape, npass, first, last):
     where none; kept so the colour's lookup need not find the point again: 2 ms of a box's
     15 on the cabinet shrink at 128). Seeds,
     then ``npass`` raster sweeps alternating direction (raster order keeps memory access local;
-    the band is thin, so two sweeps reach every voxel). Only voxels ``first ... last`` (flat
+    the band is thin, so two sweeps reach every voxel) over the voxels the seeds left more than
+    a voxel from any triangle (the others are exact). Only voxels ``first ... last`` (flat
     indices) are read afterwards: the last sweep stops once it has passed them (what it would
     do beyond can no longer reach them).
     """

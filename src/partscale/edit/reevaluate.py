@@ -103,7 +103,7 @@ def _propagate(tri, order, shape, npass, first, last):
 
     ``tri`` (F, 17): see :func:`_complete_table`. Returns ``(best_d2, best_t, best_vw)``, flat,
     the box's size: float64 squared distances (voxels^2), int32 triangles (inf / -1 where none)
-    and (size, 2) float64 barycentrics ``v, w`` of the closest point on the triangle (undefined
+    and (size, 2) float32 barycentrics ``v, w`` of the closest point on the triangle (undefined
     where none; kept so the colour's lookup need not find the point again: 2 ms of a box's
     15 on the cabinet shrink at 128). Seeds,
     then ``npass`` raster sweeps alternating direction (raster order keeps memory access local;
@@ -115,7 +115,7 @@ def _propagate(tri, order, shape, npass, first, last):
     size = shape[0] * shape[1] * shape[2]
     best_d2 = np.full(size, np.inf)
     best_t = np.full(size, -1, np.int32)
-    best_vw = np.empty((size, 2))
+    best_vw = np.empty((size, 2), np.float32)
     # (the sweeps in a kernel of their own: compiled with the arrays as locals they ran 6 %
     # slower)
     _sweep(tri, order, shape, npass, first, last, best_d2, best_t, best_vw)

@@ -11,6 +11,7 @@ import trimesh
 from conftest import assert_bad_input, data_path
 
 from partscale import ingest
+from partscale.csdf import save
 from partscale.orient import SQUARE_DEGREES, csdf_turn, square_turn, turn_about_up
 from partscale.zones import fit
 
@@ -231,13 +232,71 @@ def test_mesh_route_warns_of_walls_off_the_axes(tmp_path, cli, turned_bookcase):
     args = ("--axis", "x", "--zone", "40%", "60%", "--to", "120%")
     proc = cli("scale", turned_bookcase, "-o", tmp_path / "a.glb", *args, check=True)
     assert "walls run -17.0° off x and z" in proc.stderr, proc.stderr
-    assert "turn the mesh first" in proc.stderr, proc.stderr
+    assert "edit it with --square" in proc.stderr, proc.stderr
     original = data_path("kenney/bookcaseOpen.glb")
     proc = cli("scale", original, "-o", tmp_path / "b.glb", *args, check=True)
     assert "off x and z" not in proc.stderr, proc.stderr
     tall = ("--axis", "y", "--zone", "40%", "60%", "--to", "120%")
     proc = cli("scale", turned_bookcase, "-o", tmp_path / "c.glb", *tall, check=True)
     assert "off x and z" not in proc.stderr, proc.stderr
+
+
+def _squared_extent(path) -> tuple[float, np.ndarray]:
+    """(turn found, (3,) extent of the mesh file turned square by it)."""
+    tri = trimesh.load(path, force="scene").triangles
+    turn = square_turn(tri)
+    return turn, np.ptp(turn_about_up(tri.reshape(-1, 3), turn or 0.0), axis=0)
+
+
+def test_mesh_route_square_edits_along_the_walls(tmp_path, cli, turned_bookcase):
+    """scale --square on the turned bookcase: its own width grows as the unturned bookcase's
+    does under the same edit (within 0.1 mm), height and depth stay, and the output keeps the
+    source's turn (-17 degrees, within 0.01). Without --square the same edit along x is not
+    along its width (the turned bookcase is deeper afterwards)."""
+    args = ("--axis", "x", "--zone", "30%", "70%", "--to", "130%")
+    sq = tmp_path / "sq.glb"
+    proc = cli("scale", turned_bookcase, "-o", sq, *args, "--square", check=True)
+    assert "--square: turned -17.00° about up for the edit" in proc.stderr, proc.stderr
+    assert "off x and z" not in proc.stderr, proc.stderr
+    plain = tmp_path / "plain.glb"
+    cli("scale", data_path("kenney/bookcaseOpen.glb"), "-o", plain, *args, check=True)
+    turn_in, ext_in = _squared_extent(turned_bookcase)
+    turn_out, ext_out = _squared_extent(sq)
+    _, ext_plain = _squared_extent(plain)
+    assert abs(turn_out - turn_in) <= 0.01, (turn_in, turn_out)
+    assert np.abs(ext_out - ext_plain).max() <= 1e-4, (ext_out, ext_plain)
+    assert np.abs(ext_out[1:] - ext_in[1:]).max() <= 1e-4 and ext_out[0] > 1.5 * ext_in[0]
+    skew = tmp_path / "skew.glb"
+    cli("scale", turned_bookcase, "-o", skew, *args, check=True)
+    assert _squared_extent(skew)[1][2] > ext_in[2] + 0.05
+
+
+def test_fit_square_on_the_mesh_route(tmp_path, cli, turned_bookcase):
+    """fit --square on the turned bookcase: 130 % of its own width (within 1 %, the CSDF's
+    voxel), its height and depth kept, the source's turn kept."""
+    out = tmp_path / "fit.glb"
+    proc = cli("fit", turned_bookcase, "-o", out, "--size", "130%", "=", "=", "--square")
+    assert proc.returncode == 0, proc.stderr
+    assert "--square: turned -17.00°" in proc.stderr, proc.stderr
+    turn_in, ext_in = _squared_extent(turned_bookcase)
+    turn_out, ext_out = _squared_extent(out)
+    assert abs(turn_out - turn_in) <= 0.01, (turn_in, turn_out)
+    assert abs(ext_out[0] / ext_in[0] - 1.3) <= 0.013, ext_out / ext_in
+    assert np.abs(ext_out[1:] - ext_in[1:]).max() <= 1e-4, (ext_out, ext_in)
+
+
+def test_square_is_the_mesh_routes(tmp_path, cli, turned_imports):
+    """scale and fit refuse --square for a CSDF (squared, or not, at import) in one line."""
+    c = tmp_path / "in.csdf.npz"
+    save(turned_imports[False], c)
+    for cmd, args in (
+        ("scale", ("--axis", "x", "--zone", "30%", "70%", "--to", "130%")),
+        ("fit", ("--size", "130%", "=", "=")),
+    ):
+        bad = tmp_path / f"{cmd}.csdf.npz"
+        proc = cli(cmd, c, "-o", bad, *args, "--square")
+        assert_bad_input(proc, "--square", "mesh IN", "import --square")
+        assert not bad.exists()
 
 
 def test_the_turn_of_a_tv_unit_from_its_distances(tmp_path):

@@ -4,7 +4,8 @@ Every zone is a slab between two planes square to x, y or z. An object turned ab
 photogrammetry mesh, a model placed at an angle) has no slab of constant cross-section along
 x or z: suggest finds little, and fit falls back to thin slabs or global scaling.
 :func:`square_turn` finds the turn that squares it, or says there is none to make;
-``partscale import --square`` applies it to a mesh.
+``partscale import --square`` applies it to a mesh, and ``partscale scale IN.glb -o OUT.glb
+--square`` edits a mesh turned square and turns the result back.
 
 Up is +y (partscale's convention); a turn by ``angle`` degrees maps ``(x, z)`` to
 ``(x cos a + z sin a, -x sin a + z cos a)`` (right-handed about +y, as :func:`turn_about_up`).
@@ -45,7 +46,7 @@ def off_square_message(turn: float, csdf: CSDF | None = None, *, mesh_route: boo
     first = (csdf.meta.get("history") or [{}])[0] if csdf is not None else {}
     from_mesh = csdf is None or (first.get("op") == "import" and first.get("format") == "mesh")
     if mesh_route:
-        cure = "turn the mesh first, or import it with --square and edit the CSDF"
+        cure = "edit it with --square (turned square for the edit, then back)"
     elif from_mesh:
         cure = "import the mesh with --square to turn it square"
     else:
@@ -56,12 +57,16 @@ def off_square_message(turn: float, csdf: CSDF | None = None, *, mesh_route: boo
     )
 
 
-def turn_about_up(points: np.ndarray, angle: float) -> np.ndarray:
-    """(N, 3) float64: ``points`` (N, 3) turned by ``angle`` degrees about +y (see the module)."""
+def turn_matrix(angle: float) -> np.ndarray:
+    """(3, 3) float64: the rotation by ``angle`` degrees about +y (see the module)."""
     a = np.radians(angle)
     c, s = np.cos(a), np.sin(a)
-    rot = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-    return np.asarray(points, np.float64) @ rot.T
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def turn_about_up(points: np.ndarray, angle: float) -> np.ndarray:
+    """(N, 3) float64: ``points`` (N, 3) turned by ``angle`` degrees about +y (see the module)."""
+    return np.asarray(points, np.float64) @ turn_matrix(angle).T
 
 
 def square_turn(triangles: np.ndarray) -> float | None:

@@ -10,6 +10,7 @@ import typer
 
 from ..csdf import SUFFIX, load, save
 from . import _common
+from .scale import SQUARE_OPTION
 
 
 def fit(
@@ -34,23 +35,26 @@ def fit(
     recipe_out: Annotated[
         Path | None, typer.Option("--recipe-out", help="Write the recipe applied (JSON).")
     ] = None,
+    square: Annotated[bool, SQUARE_OPTION] = False,
 ) -> None:
     """Resize to a target size: tile whole periods of repeated elements, absorb the rest in a
     slab of constant cross-section, global scaling only as a last resort; says what it chose."""
     from ..edit import apply_recipe, describe_changes
     from ..zones import fit as fit_zones
-    from .scale import _MESH_IN, _MESH_OUT
+    from .scale import _MESH_IN, _MESH_OUT, check_square
 
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
+    check_square(square, mesh_route, src)
     if recipe_out is not None:
         _common.check_output(recipe_out, suffixes=(".json",), what="a recipe JSON file")
     if mesh_route:
-        # zones are found on the mesh's CSDF; the recipe is then applied to the mesh itself
+        # zones are found on the mesh's CSDF (turned as the mesh route will turn it); the recipe
+        # is then applied to the mesh itself
         from ..ingest import load as import_file
 
-        c = import_file(src)
+        c = import_file(src, square=square)
     else:
         c = load(src)
     recipe, why = fit_zones(c, list(size))
@@ -64,7 +68,7 @@ def fit(
     if mesh_route:
         from .scale import _scale_mesh
 
-        _scale_mesh(src, output, recipe)
+        _scale_mesh(src, output, recipe, square=square)
         _write_recipe(recipe, recipe_out)
         return
     with _common.progress_bar("fit") as bar:

@@ -15,6 +15,12 @@ from . import _common
 _MESH_IN = (".glb", ".gltf", ".obj", ".ply")
 _MESH_OUT = (".glb", ".obj", ".ply")
 
+SQUARE_OPTION = typer.Option(
+    "--square",
+    help="Mesh route: edit the mesh turned about up so its walls run along x and z (zones are "
+    "planes square to them; positions refer to the turned mesh), then turn it back.",
+)
+
 
 def scale(
     src: Annotated[
@@ -63,6 +69,7 @@ def scale(
         Path | None,
         typer.Option("--recipe", help="A recipe JSON file (instead of --axis/--zone/--to)."),
     ] = None,
+    square: Annotated[bool, SQUARE_OPTION] = False,
 ) -> None:
     """Resize a zone between two planes: stretch it, tile it, or scale the whole object."""
     # The edit stage pulls in numba, scipy and scikit-image: load it only when a command runs.
@@ -71,6 +78,7 @@ def scale(
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
+    check_square(square, mesh_route, src)
     dest_given = [(n, v) for n, v in (("--to", to), ("--by", by), ("--copies", copies)) if v]
     if recipe is not None:
         given = [
@@ -107,7 +115,7 @@ def scale(
             raise InputError(f"--mode: expected one of {', '.join(MODES)}, got {mode!r}")
         if copies is not None and mode.lower() != "tile":
             raise InputError(f"--copies: expected --mode tile, got --mode {mode}")
-        c = _object(src, mesh_route, snap)
+        c = _object(src, mesh_route, snap, square)
         edit = _edit(c, axis.lower(), zone, mode.lower(), to=to, by=by, copies=copies)
         if snap:
             from ..zones import describe_moves
@@ -120,7 +128,7 @@ def scale(
             )
         rec = Recipe((edit,))
     if mesh_route:
-        return _scale_mesh(src, output, rec)
+        return _scale_mesh(src, output, rec, square=square)
     assert c is not None  # loaded unless mesh_route
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
@@ -138,27 +146,49 @@ def scale(
     _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")
 
 
-def _object(src: Path, mesh_route: bool, snap: bool):
+def check_square(square: bool, mesh_route: bool, src: Path) -> None:
+    """--square is the mesh route's: a CSDF was squared (or not) when it was imported."""
+    if square and not mesh_route:
+        raise InputError(
+            "--square: expected a mesh IN and a mesh output (the mesh route; a CSDF is squared "
+            f"at import: partscale import --square), got {src.name}"
+        )
+
+
+def _object(src: Path, mesh_route: bool, snap: bool, square: bool = False):
     """What the options resolve against: the CSDF, or for the mesh route the mesh's frame (its
-    CSDF at the default resolution where --snap needs zones)."""
+    CSDF at the default resolution where --snap needs zones), turned square with ``square``."""
     if not mesh_route:
         return load(src)
     if snap:
         from ..ingest import load as import_file
 
-        return import_file(src)
+        return import_file(src, square=square)
     from ..meshedit import mesh_frame
 
-    return mesh_frame(src)
+    return mesh_frame(src, square=square)
 
 
-def _scale_mesh(src: Path, output: Path, rec) -> None:
+def _scale_mesh(src: Path, output: Path, rec, *, square: bool = False) -> None:
     from ..meshedit import edit_mesh_file
 
-    result = edit_mesh_file(src, output, rec)
+    result = edit_mesh_file(src, output, rec, square=square)
     for seam in result.seams:
         if not seam.ok:
             typer.echo(f"warning: {seam.message()}", err=True)
+    if result.turned_deg is not None:
+        from ..orient import SQUARE_DEGREES
+
+        turn = result.turned_deg
+        _common.stderr.print(
+            f"--square: turned {turn:+.2f}° about up for the edit (the walls along x and z; "
+            "positions refer to the turned mesh), then turned back"
+            if turn
+            else "--square: not turned (the walls run within "
+            f"{SQUARE_DEGREES}° of x and z, or no direction holds most of them)",
+            highlight=False,
+            soft_wrap=True,
+        )
     if result.off_square_deg is not None:
         from ..orient import off_square_message
 

@@ -25,7 +25,7 @@ import numpy as np
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError
 from ..ingest import check_mesh_file
-from ..orient import WALL_AXES, square_turn
+from ..orient import WALL_AXES, square_turn, turn_matrix
 from .cut import Piece, concatenate, cut, subset
 
 if TYPE_CHECKING:
@@ -545,8 +545,12 @@ class MeshEditResult:
     faces_out: int
     seams: list[Seam]
     #: the turn about up that would square the source's walls where the recipe changes x or z
-    #: (:func:`partscale.orient.square_turn`); None where it is square or x and z are unchanged
+    #: (:func:`partscale.orient.square_turn`); None where it is square or x and z are unchanged,
+    #: and with ``square`` (which makes it)
     off_square_deg: float | None = None
+    #: with ``square``: the turn made for the edit (and undone after it); 0.0 where none was
+    #: needed or found
+    turned_deg: float | None = None
 
 
 def _face_count(scene) -> int:
@@ -555,22 +559,46 @@ def _face_count(scene) -> int:
     )
 
 
+def _turn_scene(scene: trimesh.Scene, angle: float) -> None:
+    """Turn every node of ``scene`` by ``angle`` degrees about +y, about the origin, in place
+    (the nodes' transforms; no vertex is touched)."""
+    m = np.eye(4)
+    m[:3, :3] = turn_matrix(angle)
+    scene.apply_transform(m)
+
+
 def edit_mesh_file(
-    src: str | os.PathLike, dst: str | os.PathLike, recipe: Recipe
+    src: str | os.PathLike, dst: str | os.PathLike, recipe: Recipe, *, square: bool = False
 ) -> MeshEditResult:
-    """Apply ``recipe`` to the mesh file ``src`` and write the edited mesh to ``dst``."""
+    """Apply ``recipe`` to the mesh file ``src`` and write the edited mesh to ``dst``.
+
+    With ``square`` the scene is turned about up (about the origin) so that its walls run
+    along x and z (:func:`partscale.orient.square_turn`), edited there (the recipe's positions
+    refer to the turned mesh: give them in ``%`` of its extent), and turned back: the output
+    keeps the source's orientation in its scene.
+    """
     dst = Path(dst)
     if dst.suffix.lower() not in OUTPUT_SUFFIXES:
         raise InputError(
             f"{dst}: expected an output mesh ({', '.join(OUTPUT_SUFFIXES)}), got "
             f"{dst.suffix or 'no suffix'}"
         )
+    if not isinstance(square, bool):
+        raise InputError(f"square: expected True or False, got {square!r}")
     scene = load_scene(src)
     # the source's walls, before the recipe touches the scene
-    turn = square_turn(scene.triangles) if any(e.axis in WALL_AXES for e in recipe.edits) else None
+    wanted = square or any(e.axis in WALL_AXES for e in recipe.edits)
+    turn = square_turn(scene.triangles) if wanted else None
+    if square and turn is not None:
+        _turn_scene(scene, turn)
     out, seams = apply_recipe_to_scene(scene, recipe)
+    if square and turn is not None:
+        _turn_scene(out, -turn)
     written = save_scene(out, dst)
-    return MeshEditResult(written, _face_count(scene), _face_count(out), seams, turn)
+    faces = _face_count(scene), _face_count(out)
+    if square:
+        return MeshEditResult(written, *faces, seams, turned_deg=round(turn or 0.0, 2))
+    return MeshEditResult(written, *faces, seams, off_square_deg=turn)
 
 
 @dataclass(frozen=True)
@@ -585,7 +613,12 @@ class MeshFrame:
         return self.bounds
 
 
-def mesh_frame(path: str | os.PathLike) -> MeshFrame:
-    """The world bounding box of a mesh file's triangles (all nodes placed), units metres."""
+def mesh_frame(path: str | os.PathLike, *, square: bool = False) -> MeshFrame:
+    """The world bounding box of a mesh file's triangles (all nodes placed), units metres; with
+    ``square``, of the mesh turned square as :func:`edit_mesh_file` edits it."""
     scene = load_scene(path)
+    if square:
+        turn = square_turn(scene.triangles)
+        if turn is not None:
+            _turn_scene(scene, turn)
     return MeshFrame(np.asarray(scene.bounds, np.float64), {"units": "m"})

@@ -251,8 +251,8 @@ def _squared_extent(path) -> tuple[float, np.ndarray]:
 def test_mesh_route_square_edits_along_the_walls(tmp_path, cli, turned_bookcase):
     """scale --square on the turned bookcase: its own width grows as the unturned bookcase's
     does under the same edit (within 0.1 mm), height and depth stay, and the output keeps the
-    source's turn (-17 degrees, within 0.01). Without --square the same edit along x is not
-    along its width (the turned bookcase is deeper afterwards)."""
+    source's turn (-17 degrees, within 0.01) and its nodes' transforms exactly. Without --square
+    the same edit along x is not along its width (the turned bookcase is deeper afterwards)."""
     args = ("--axis", "x", "--zone", "30%", "70%", "--to", "130%")
     sq = tmp_path / "sq.glb"
     proc = cli("scale", turned_bookcase, "-o", sq, *args, "--square", check=True)
@@ -269,6 +269,10 @@ def test_mesh_route_square_edits_along_the_walls(tmp_path, cli, turned_bookcase)
     skew = tmp_path / "skew.glb"
     cli("scale", turned_bookcase, "-o", skew, *args, check=True)
     assert _squared_extent(skew)[1][2] > ext_in[2] + 0.05
+    # the nodes' transforms come back exactly as they were
+    a, b = (trimesh.load(p, force="scene", process=False) for p in (turned_bookcase, sq))
+    for node in a.graph.nodes_geometry:
+        assert np.array_equal(a.graph[node][0], b.graph[node][0]), node
 
 
 def test_fit_square_on_the_mesh_route(tmp_path, cli, turned_bookcase):

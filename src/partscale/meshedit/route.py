@@ -559,12 +559,24 @@ def _face_count(scene) -> int:
     )
 
 
-def _turn_scene(scene: trimesh.Scene, angle: float) -> None:
+def _turn_scene(scene: trimesh.Scene, angle: float) -> dict:
     """Turn every node of ``scene`` by ``angle`` degrees about +y, about the origin, in place
-    (the nodes' transforms; no vertex is touched)."""
+    (the transforms of the base frame's children; no vertex is touched). Returns those
+    transforms as they were, for :func:`_restore_turn`."""
+    base = scene.graph.base_frame
+    saved = {c: scene.graph[c][0].copy() for c in scene.graph.transforms.children[base]}
     m = np.eye(4)
     m[:3, :3] = turn_matrix(angle)
     scene.apply_transform(m)
+    return saved
+
+
+def _restore_turn(scene: trimesh.Scene, saved: dict) -> None:
+    """Put back the transforms :func:`_turn_scene` changed, exactly (not turned back: a turn
+    and its inverse leave the last bits of a matrix changed)."""
+    base = scene.graph.base_frame
+    for child, matrix in saved.items():
+        scene.graph.update(frame_from=base, frame_to=child, matrix=matrix)
 
 
 def edit_mesh_file(
@@ -589,11 +601,10 @@ def edit_mesh_file(
     # the source's walls, before the recipe touches the scene
     wanted = square or any(e.axis in WALL_AXES for e in recipe.edits)
     turn = square_turn(scene.triangles) if wanted else None
-    if square and turn is not None:
-        _turn_scene(scene, turn)
+    saved = _turn_scene(scene, turn) if square and turn is not None else None
     out, seams = apply_recipe_to_scene(scene, recipe)
-    if square and turn is not None:
-        _turn_scene(out, -turn)
+    if saved is not None:
+        _restore_turn(out, saved)
     written = save_scene(out, dst)
     faces = _face_count(scene), _face_count(out)
     if square:

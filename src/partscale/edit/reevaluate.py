@@ -124,7 +124,8 @@ def _propagate(tri, order, shape, npass, first, last):
 
 @numba.njit(cache=True, nogil=True)
 def _sweep(tri, order, shape, npass, first, last, best_d2, best_t, best_vw):
-    """The work of :func:`_propagate`, in ``best_d2`` and ``best_t`` (inf / -1 on entry)."""
+    """The work of :func:`_propagate`, in ``best_d2``, ``best_t`` (inf / -1 on entry) and
+    ``best_vw``."""
     nx, ny, nz = shape
     syz = ny * nz
     # seeds: the eight corners of the cell each triangle lies in

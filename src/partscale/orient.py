@@ -57,6 +57,22 @@ def off_square_message(turn: float, csdf: CSDF | None = None, *, mesh_route: boo
     )
 
 
+def square_note(turn: float, *, edit: bool = False) -> str:
+    """What ``--square`` says it did: turned by ``turn`` degrees (0.0: none needed, or no
+    direction found); ``edit``: the mesh route's, turned for the edit and back after it."""
+    if not turn:
+        return (
+            f"--square: not turned (the walls run within {SQUARE_DEGREES}° of x and z, or no "
+            "direction holds most of them)"
+        )
+    if edit:
+        return (
+            f"--square: turned {turn:+.2f}° about up for the edit (the walls along x and z; "
+            "positions refer to the turned mesh), then turned back"
+        )
+    return f"--square: turned {turn:+.2f}° about up: the walls now run along x and z"
+
+
 def turn_matrix(angle: float) -> np.ndarray:
     """(3, 3) float64: the rotation by ``angle`` degrees about +y (see the module)."""
     a = np.radians(angle)

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from ..csdf import SUFFIX, save
-from ..orient import SQUARE_DEGREES, off_square_message
+from ..orient import off_square_message, square_note
 from ..thickness import thin_features
 from . import _common
 
@@ -86,15 +86,7 @@ def import_(
     _common.done(f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m")
     placed = c.meta["history"][0]
     if "turned_deg" in placed:
-        turn = placed["turned_deg"]
-        _common.stderr.print(
-            f"--square: turned {turn:+.2f}° about up: the walls now run along x and z"
-            if turn
-            else "--square: not turned (the walls run within "
-            f"{SQUARE_DEGREES}° of x and z, or no direction holds most of them)",
-            highlight=False,
-            soft_wrap=True,
-        )
+        _common.stderr.print(square_note(placed["turned_deg"]), highlight=False, soft_wrap=True)
     elif "off_square_deg" in placed:
         typer.echo(f"warning: {off_square_message(placed['off_square_deg'])}", err=True)
     thin = thin_features(c)

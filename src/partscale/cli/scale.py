@@ -177,18 +177,10 @@ def _scale_mesh(src: Path, output: Path, rec, *, square: bool = False) -> None:
         if not seam.ok:
             typer.echo(f"warning: {seam.message()}", err=True)
     if result.turned_deg is not None:
-        from ..orient import SQUARE_DEGREES
+        from ..orient import square_note
 
-        turn = result.turned_deg
-        _common.stderr.print(
-            f"--square: turned {turn:+.2f}° about up for the edit (the walls along x and z; "
-            "positions refer to the turned mesh), then turned back"
-            if turn
-            else "--square: not turned (the walls run within "
-            f"{SQUARE_DEGREES}° of x and z, or no direction holds most of them)",
-            highlight=False,
-            soft_wrap=True,
-        )
+        note = square_note(result.turned_deg, edit=True)
+        _common.stderr.print(note, highlight=False, soft_wrap=True)
     if result.off_square_deg is not None:
         from ..orient import off_square_message
 

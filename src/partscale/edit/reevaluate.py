@@ -522,6 +522,7 @@ def reevaluate_arrays(
     runs = _pieces(np.split(layers, breaks + 1))
 
     far32 = np.float32(far or 0.0)
+    use_far = far is not None
 
     def solve(run: np.ndarray):
         # the box around the run's targets that holds every surface point within the band
@@ -535,26 +536,10 @@ def reevaluate_arrays(
         got = _solve_box(sdf, mask, row0, lo, hi, (int(run[0]), int(run[-1])), h, lim, pad, npass)
         if got is None:
             return None
-        sub, tri, best_d2, best_t, best_vw, wanted = got
+        lo_a = np.asarray(lo, np.int64)
         # colours and parts are read here, from the unchanged arrays, in this thread
-        out = _box_values(
-            sdf,
-            rgb,
-            parts,
-            mask,
-            row0,
-            capping,
-            sub,
-            tri,
-            best_d2,
-            best_t,
-            best_vw,
-            wanted,
-            np.asarray(lo, np.int64),
-            h,
-            far is not None,
-            far32,
-        )
+        args = (sdf, rgb, parts, mask, row0, capping, *got, lo_a, h, use_far, far32)
+        out = _box_values(*args)
         return out if out[0].shape[0] else None
 
     # boxes are independent (each reads the unchanged field; all writes come after) and their

@@ -289,8 +289,9 @@ def test_fit_square_on_the_mesh_route(tmp_path, cli, turned_bookcase):
     assert np.abs(ext_out[1:] - ext_in[1:]).max() <= 1e-4, (ext_out, ext_in)
 
 
-def test_square_is_the_mesh_routes(tmp_path, cli, turned_imports):
-    """scale and fit refuse --square for a CSDF (squared, or not, at import) in one line."""
+def test_square_is_the_mesh_routes(tmp_path, cli, turned_imports, turned_bookcase):
+    """scale and fit refuse --square for a CSDF (squared, or not, at import) in one line, and
+    for a mesh written as a CSDF (not the mesh route), naming both files."""
     c = tmp_path / "in.csdf.npz"
     save(turned_imports[False], c)
     for cmd, args in (
@@ -300,6 +301,9 @@ def test_square_is_the_mesh_routes(tmp_path, cli, turned_imports):
         bad = tmp_path / f"{cmd}.csdf.npz"
         proc = cli(cmd, c, "-o", bad, *args, "--square")
         assert_bad_input(proc, "--square", "mesh IN", "import --square")
+        assert not bad.exists()
+        proc = cli(cmd, turned_bookcase, "-o", bad, *args, "--square")
+        assert_bad_input(proc, "--square", f"{turned_bookcase.name} -> {bad.name}")
         assert not bad.exists()
 
 

@@ -46,7 +46,7 @@ def fit(
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
-    check_square(square, mesh_route, src)
+    check_square(square, mesh_route, src, output)
     if recipe_out is not None:
         _common.check_output(recipe_out, suffixes=(".json",), what="a recipe JSON file")
     if mesh_route:

@@ -78,7 +78,7 @@ def scale(
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
-    check_square(square, mesh_route, src)
+    check_square(square, mesh_route, src, output)
     dest_given = [(n, v) for n, v in (("--to", to), ("--by", by), ("--copies", copies)) if v]
     if recipe is not None:
         given = [
@@ -146,12 +146,12 @@ def scale(
     _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")
 
 
-def check_square(square: bool, mesh_route: bool, src: Path) -> None:
+def check_square(square: bool, mesh_route: bool, src: Path, output: Path) -> None:
     """--square is the mesh route's: a CSDF was squared (or not) when it was imported."""
     if square and not mesh_route:
         raise InputError(
             "--square: expected a mesh IN and a mesh output (the mesh route; a CSDF is squared "
-            f"at import: partscale import --square), got {src.name}"
+            f"at import: partscale import --square), got {src.name} -> {output.name}"
         )
 
 

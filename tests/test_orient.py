@@ -12,6 +12,7 @@ from conftest import assert_bad_input, data_path
 
 from partscale import ingest
 from partscale.csdf import save
+from partscale.errors import InputError
 from partscale.orient import SQUARE_DEGREES, csdf_turn, square_turn, turn_about_up
 from partscale.zones import fit
 
@@ -142,8 +143,11 @@ def test_fit_says_when_the_walls_run_off_the_axes(turned_imports):
     """Fit 30 % wider along x: on the turned bookcase a note says its walls run 17 degrees off
     x and z and names --square; on the squared one it does not; where the object did not come
     from a mesh the note says to turn its source."""
+    # on the turned one only thin slabs could take it: refused, naming --square as the cure
+    with pytest.raises(InputError, match=r"part-aware.*--square"):
+        fit(turned_imports[False], ["130%", "=", "="])
     for square, c in turned_imports.items():
-        _, why = fit(c, ["130%", "=", "="])
+        _, why = fit(c, ["130%", "=", "="], allow_deform=True)
         said = [w for w in why if "--square" in w]
         assert len(said) == (0 if square else 1), why
         if not square:
@@ -151,7 +155,7 @@ def test_fit_says_when_the_walls_run_off_the_axes(turned_imports):
     # not from a mesh (a completed scan, a grid): the cure is to turn the source, not --square
     off = turned_imports[False]
     scan = off.replace(meta={**off.meta, "history": [{"op": "complete"}]})
-    _, why = fit(scan, ["130%", "=", "="])
+    _, why = fit(scan, ["130%", "=", "="], allow_deform=True)
     said = [w for w in why if "off x and z" in w]
     assert len(said) == 1 and "turn its source" in said[0] and "--square" not in said[0], why
 

@@ -491,12 +491,16 @@ def test_a_removed_zone_carries_the_planes_of_the_edits_after_it(bookcase):
 
 def test_fit_says_when_only_a_thin_slab_can_take_the_remainder():
     """Boards 8 voxels apart (gaps of 6) 8 voxels from a 5-voxel panel: no slab is long enough
-    and 3 voxels are beyond the copies' tolerance, so the panel takes them, and the note says so
-    (the old code said nothing)."""
+    and 3 voxels are beyond the copies' tolerance; with allow_deform the panel takes them, and
+    the note says so (the old code said nothing); without, the copies do."""
     panel, pitch, board, n = 0.1, 0.16, 0.04, 5
     x0 = panel + 0.16
     c = _panel_and_boards(panel, x0, pitch, board, n)
+    # no thin slab is stretched unless asked: the copies absorb the 3 voxels instead
     recipe, why = fit(c, [repr(extent(c, 0) + pitch + 3 * H), "=", "="])
+    assert [e.mode for e in recipe.edits] == ["tile"], why
+    assert not any("thin slab" in w for w in why), why
+    recipe, why = fit(c, [repr(extent(c, 0) + pitch + 3 * H), "=", "="], allow_deform=True)
     assert [e.mode for e in recipe.edits] == ["tile", "stretch"], why
     assert float(recipe.edits[1].end) <= panel, recipe  # the panel: the only slab outside
     thin = [w for w in why if "thin slab" in w]
@@ -518,7 +522,7 @@ def test_fit_grows_two_comparable_thin_slabs_alike():
     10 voxels, and the two panels share it (5 each, within a voxel) while the posts keep their
     width (one panel took all 10 before)."""
     c = _frame()
-    recipe, why = fit(c, [repr(extent(c, 0) + 10 * H), "=", "="])
+    recipe, why = fit(c, [repr(extent(c, 0) + 10 * H), "=", "="], allow_deform=True)
     out = apply_recipe(c, recipe)
     line = (int(0.4 / H), int(0.15 / H))  # above the panels: through the three posts
     (t0, x0), (t1, x1) = _runs_along(c.sdf, 0, line), _runs_along(out.sdf, 0, line)
@@ -531,7 +535,9 @@ def test_fit_scales_globally_rather_than_more_than_double_thin_slabs():
     """The same frame 30 voxels longer: each 7-voxel panel slab would grow by 15, a lump (a
     spiral staircase's steps came out so): global scaling, and the note says why."""
     c = _frame()
-    recipe, why = fit(c, [repr(extent(c, 0) + 30 * H), "=", "="])
+    with pytest.raises(InputError, match="size x: expected a part-aware way"):
+        fit(c, [repr(extent(c, 0) + 30 * H), "=", "="])
+    recipe, why = fit(c, [repr(extent(c, 0) + 30 * H), "=", "="], allow_deform=True)
     assert [e.mode for e in recipe.edits] == ["global"], why
     assert "thin slabs would more than double" in why[0], why
 
@@ -564,7 +570,7 @@ def _fit_flight(c, note):
     """Fit the flight ``c`` 30 % longer: stretches only, the first note starting ``note``, the
     length exact; the depths of its 7 levels before, what each grew by, and the notes."""
     target = 1.3 * extent(c, 0)
-    recipe, why = fit(c, [repr(target), "=", "="])
+    recipe, why = fit(c, [repr(target), "=", "="], allow_deform=True)
     assert {e.mode for e in recipe.edits} == {"stretch"}, why
     assert why[0].startswith(f"x: {len(recipe.edits)} {note}"), why
     out = apply_recipe(c, recipe)
@@ -640,7 +646,9 @@ def test_fit_shrinks_a_splayed_leg_run_whole():
 
 
 def test_fit_goes_global_only_as_a_last_resort_and_says_so():
-    recipe, why = fit(rod(), ["120%", "=", "="])
+    with pytest.raises(InputError, match="global scaling along x"):
+        fit(rod(), ["120%", "=", "="])
+    recipe, why = fit(rod(), ["120%", "=", "="], allow_deform=True)
     assert [e.mode for e in recipe.edits] == ["global"]
     assert "GLOBAL" in why[0] and "last resort" in why[0]
 
@@ -730,8 +738,12 @@ def test_cli_suggest_json_and_png(cli, shelf_file, tmp_path):
     png = tmp_path / "s.png"
     proc = cli("suggest", shelf_file, "--json", "--png", png)
     assert proc.returncode == 0, proc.stderr
-    got = json.loads(proc.stdout)
+    doc = json.loads(proc.stdout)
+    got = doc["candidates"]
     assert [g["score"] for g in got] == sorted((g["score"] for g in got), reverse=True)
+    # the shelves' compartments are elements along y, one group
+    els = doc["elements"]["y"]
+    assert els["groups"] and els["groups"][0]["count"] >= 3
     tiles = [g for g in got if g["kind"] == "tile"]
     assert [g["axis"] for g in tiles] == ["y"]
     assert {"axis", "kind", "zone", "period", "count", "score"} <= set(tiles[0])

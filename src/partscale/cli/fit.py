@@ -26,19 +26,41 @@ def fit(
         ),
     ],
     size: Annotated[
-        tuple[str, str, str],
+        tuple[str, str, str] | None,
         typer.Option(
             "--size",
-            help="X Y Z target extents: = (unchanged), 2.1 / 210cm / 2100mm, +20cm / -5cm, or 120%.",
+            metavar="X Y Z",
+            help="Target extents: = (unchanged), 2.1 / 210cm / 2100mm, +20cm / -5cm, or 120%.",
         ),
-    ],
+    ] = None,
+    add: Annotated[
+        tuple[str, int] | None,
+        typer.Option(
+            "--add",
+            metavar="AXIS N",
+            help="Add N elements (seats, doors, shelf rows, steps) along AXIS; -N removes N.",
+        ),
+    ] = None,
+    allow_deform: Annotated[
+        bool,
+        typer.Option(
+            "--allow-deform",
+            help="Where no zone reaches the size part-aware, stretch thin slabs or scale "
+            "globally instead of refusing.",
+        ),
+    ] = False,
     recipe_out: Annotated[
         Path | None, typer.Option("--recipe-out", help="Write the recipe applied (JSON).")
     ] = None,
     square: Annotated[bool, SQUARE_OPTION] = False,
 ) -> None:
-    """Resize to a target size: tile whole periods of repeated elements, absorb the rest in a
-    slab of constant cross-section, global scaling only as a last resort; says what it chose."""
+    """Resize to a target size or by whole elements: tile whole periods or elements (seats,
+    doors, shelf rows), absorb the rest in a slab of constant cross-section; says what it chose,
+    and refuses (exit 2) where only a deformation would reach the size.
+
+    Examples: partscale fit sofa.csdf.npz -o wider.csdf.npz --size 145% = =;
+    partscale fit sofa.csdf.npz -o three_seats.csdf.npz --add x 1
+    """
     from ..edit import apply_recipe, describe_changes
     from ..zones import fit as fit_zones
     from .scale import _MESH_IN, _MESH_OUT, check_square
@@ -57,12 +79,22 @@ def fit(
         c = import_file(src, square=square)
     else:
         c = load(src)
-    recipe, why = fit_zones(c, list(size))
+    if size is None and add is None:
+        from ..errors import InputError
+
+        raise InputError("fit: expected --size X Y Z or --add AXIS N, got neither")
+    recipe, why = fit_zones(
+        c,
+        list(size) if size is not None else None,
+        add=None if add is None else {add[0]: add[1]},
+        allow_deform=allow_deform,
+    )
     if not mesh_route:
         # a size too large for memory is refused before the choices are printed
         from ..edit import check_recipe_memory
 
-        check_recipe_memory(c, recipe, what=f"fit to {' x '.join(size)}")
+        what = f"fit to {' x '.join(size)}" if size is not None else f"fit --add {add}"
+        check_recipe_memory(c, recipe, what=what)
     for line in why:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     if mesh_route:

@@ -44,7 +44,7 @@ def scale(
         typer.Option(
             "--zone",
             help="START END of the zone: object units, with a unit (30cm, 300mm, 0.3m) or % of "
-            "the extent.",
+            "the extent. Omitted with --copies: whole elements (seats, doors, shelf rows).",
         ),
     ] = None,
     to: Annotated[str | None, typer.Option("--to", help="DEST: where END goes.")] = None,
@@ -54,7 +54,11 @@ def scale(
     ] = None,
     copies: Annotated[
         str | None,
-        typer.Option("--copies", help="Instead of --to (tile): +N more copies, or N in all."),
+        typer.Option(
+            "--copies",
+            help="Instead of --to (tile): +N more copies, or N in all; with no --zone, +N / -N "
+            "elements (or N in all) of the repeat found along --axis.",
+        ),
     ] = None,
     snap: Annotated[
         bool,
@@ -93,6 +97,9 @@ def scale(
         c = None if mesh_route else load(src)
         # positions with a unit ("30cm") in the object's units: a mesh route's are metres
         rec = Recipe.load(recipe, units="m" if c is None else c.meta.get("units"))
+    elif zone is None and copies is not None and axis is not None:
+        rec = _element_recipe(src, mesh_route, axis, copies, mode, snap, square, dest_given)
+        c = None if mesh_route else load(src)
     else:
         missing = [n for n, v in (("--axis", axis), ("--zone", zone)) if v is None]
         if not dest_given:
@@ -208,6 +215,46 @@ def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
     if by is not None:
         return Edit(axis, start, end, e + parse_length(by, units=units, what="--by"), mode)
     return Edit(axis, start, end, s + _copies_total(copies) * (e - s), mode)
+
+
+def _element_recipe(src: Path, mesh_route: bool, axis: str, copies: str, mode, snap, square, given):
+    """``--copies`` with no ``--zone``: whole elements added or removed along ``axis``
+    (:func:`partscale.zones.elements.find_elements`); the choice is printed."""
+    from ..edit import AXES, Recipe
+    from ..zones import add_axis, find_elements
+
+    if axis.lower() not in AXES:
+        raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
+    others = [n for n, v in given if n != "--copies"]
+    if others or snap or (mode is not None and mode.lower() != "tile"):
+        extra = ", ".join(
+            [
+                *others,
+                *(["--snap"] if snap else []),
+                *([f"--mode {mode}"] if mode and mode.lower() != "tile" else []),
+            ]
+        )
+        raise InputError(
+            f"--copies with no --zone: expected it alone (whole elements), got {extra}"
+        )
+    c = _object(src, mesh_route, True, square)
+    ax = AXES.index(axis.lower())
+    text = copies.strip()
+    try:
+        n = int(text)
+    except ValueError:
+        raise InputError(
+            f"--copies: expected +N or -N (elements more or fewer), or N in all, got {copies!r}"
+        ) from None
+    if not text.startswith(("+", "-")):  # N in all
+        g = find_elements(c, ax).best
+        n -= 0 if g is None else len(g.members)
+        if n == 0:
+            raise InputError(f"--copies {text}: expected a change, got the current count ({text})")
+    edits, notes = add_axis(c, ax, n)
+    for line in notes:
+        _common.stderr.print(line, highlight=False, soft_wrap=True)
+    return Recipe(tuple(edits))
 
 
 def _copies_total(copies: str) -> int:

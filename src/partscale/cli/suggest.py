@@ -16,7 +16,12 @@ def suggest(
     src: Annotated[Path, typer.Argument(metavar="IN", help="Input .csdf.npz file.")],
     axis: Annotated[str | None, typer.Option("--axis", help="x, y or z (default: all).")] = None,
     as_json: Annotated[
-        bool, typer.Option("--json", help="Print a JSON list, best first, instead of text.")
+        bool,
+        typer.Option(
+            "--json",
+            help="Print JSON instead of text: the candidates best first, and per axis the "
+            "elements, separators and repeat groups.",
+        ),
     ] = False,
     png: Annotated[
         Path | None,
@@ -24,10 +29,14 @@ def suggest(
     ] = None,
 ) -> None:
     """Suggest zones: one period of a repeated element (tile) and slabs of constant cross-section
-    (stretch), ranked best first, with zone planes in object units."""
+    (stretch), ranked best first, with zone planes in object units; and the elements along each
+    axis (seats, doors, shelf rows) that fit --add counts.
+
+    Example: partscale suggest sofa.csdf.npz --axis x
+    """
     from ..csdf import load
     from ..orient import WALL_AXES, csdf_turn, off_square_message
-    from ..zones import AXES
+    from ..zones import AXES, find_elements
     from ..zones import suggest as suggest_zones
 
     if axis is not None and axis.lower() not in ("x", "y", "z"):
@@ -48,9 +57,16 @@ def suggest(
     if turn is not None:
         typer.echo(f"warning: {off_square_message(turn, c)}", err=True)
     units = c.meta.get("units") or ""
+    found = {a: find_elements(c, a) for a in ([ax] if ax else list(AXES))}
     if as_json:
-        typer.echo(json.dumps([x.to_json() for x in cands], indent=2))
+        doc = {
+            "candidates": [x.to_json() for x in cands],
+            "elements": {a: f.to_json() for a, f in found.items()},
+        }
+        typer.echo(json.dumps(doc, indent=2))
     else:
+        for f in found.values():
+            typer.echo(_elements_line(f, units))
         for a in [ax] if ax else list(AXES):
             mine = [x for x in cands if x.axis == a]
             if not mine:
@@ -68,6 +84,23 @@ def suggest(
 
         save_png(_figure(c, cands, ax), png)
         _common.done(f"wrote {png}")
+
+
+def _elements_line(found, units: str) -> str:
+    """One line on the elements along an axis: the best group's, positions from the axis min."""
+    from ..zones import element_phrase
+
+    g = found.best
+    if g is None:
+        return f"{found.axis}: no repeated element (fit --add {found.axis} N has nothing to count)"
+    spans = ", ".join(
+        f"{found.elements[i].start - found.lo:.3g}..{found.elements[i].end - found.lo:.3g}"
+        for i in g.members
+    )
+    return (
+        f"{found.axis}: {element_phrase(found)} at {spans} {units} from the {found.axis} min "
+        f"(fit --add {found.axis} 1 adds one)"
+    )
 
 
 #: Band colours (sRGB) per kind, and the most bands drawn (the best, numbered by rank).

@@ -8,8 +8,14 @@ Public API
 - :func:`snap` ``(csdf, edit, mode=None, *, candidates=None) -> (Edit, list[Move])``: a user's
   planes moved to the nearest good position for the mode (``candidates``: those a caller found
   already, as the editor's server does); :func:`describe_moves`, :func:`record_snap`.
-- :func:`fit` ``(csdf, size) -> (Recipe, list[str])``: the recipe reaching a target extent
-  (tile whole periods, absorb the rest in a constant slab, global only as a last resort).
+- :func:`fit` ``(csdf, size, *, add=None, allow_deform=False) -> (Recipe, list[str])``: the
+  recipe reaching a target extent (tile whole periods or whole elements, absorb the rest in a
+  constant slab; refused where only a deformation would reach it, unless ``allow_deform``), or
+  adding/removing whole elements (``add={'x': 1}``: :func:`add_axis`).
+- :func:`find_elements` ``(csdf, axis) -> AxisElements``: the object along an axis as elements
+  (seats, doors, compartments, steps) and separators, with the groups that repeat (alike up to
+  a mirror, a small length change or a colour change); :func:`count_zone`: the zone of whole
+  elements a count edit tiles.
 - :func:`parse_size`, :func:`parse_length`: ``=``, ``2.1``, ``210cm``, ``2100mm``, ``+20cm``,
   ``-5cm``, ``120%`` (re-exported from :mod:`partscale.edit`, their one home, beside
   :func:`partscale.edit.parse_position`).
@@ -22,22 +28,41 @@ Public API
 """
 
 from ..edit import parse_length, parse_size
+from .elements import (
+    AxisElements,
+    CountZone,
+    Element,
+    Group,
+    Separator,
+    count_zone,
+    element_phrase,
+    find_elements,
+)
 from .features import feature_notes, local_features
-from .fit import fit, fit_axis
+from .fit import add_axis, fit, fit_axis
 from .profile import Profile, profile
 from .snap import Move, describe_moves, record_snap, snap
 from .suggest import AXES, BoundedRepeat, Candidate, axis_candidates, find_bounded_repeats, suggest
 
 __all__ = [
     "AXES",
+    "AxisElements",
     "BoundedRepeat",
     "Candidate",
+    "CountZone",
+    "Element",
+    "Group",
     "Move",
     "Profile",
+    "Separator",
+    "add_axis",
     "axis_candidates",
+    "count_zone",
     "describe_moves",
+    "element_phrase",
     "feature_notes",
     "find_bounded_repeats",
+    "find_elements",
     "fit",
     "fit_axis",
     "local_features",

@@ -18,7 +18,7 @@ a voxel.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -28,6 +28,7 @@ from ..csdf import CSDF
 from ..edit import Edit, Recipe, parse_size, tile_count
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
+from .elements import AxisElements, count_zone, element_phrase, find_elements
 from .profile import Profile, profile
 from .suggest import (
     AXES,
@@ -40,6 +41,14 @@ from .suggest import (
     plane_cost,
 )
 
+#: A count zone whose planes' cross-sections differ by more than this gets a note.
+MATCH_SEAM = 0.15
+#: A curved outline: beyond a slab the outline shrinks by more than this many voxels ...
+CURVE_VOXELS = 1.5
+#: ... and never by more than this many from one layer to the next (no step: a leg, a board),
+#: looking at least this many voxels beyond it.
+CURVE_STEP = 3
+CURVE_REACH = 8
 #: Largest relative change of the tiled copies accepted instead of stretching a gap inside the
 #: repeat (which would make one spacing uneven).
 COPY_TOLERANCE = 0.05
@@ -293,6 +302,48 @@ def _drift_chains(slabs: list[Candidate], p: Profile) -> list[Candidate]:
     return out
 
 
+def outline_extents(csdf: CSDF, axis: int) -> np.ndarray:
+    """(2, N) float64: the solid's extent (voxels) along each of the two other axes, per layer
+    along ``axis`` (0 where a layer holds no solid)."""
+    inside = np.moveaxis(np.asarray(csdf.sdf < 0), axis, 0)
+    out = np.zeros((2, inside.shape[0]))
+    for k, other in enumerate((2, 1)):  # extent along the first, then the second other axis
+        hit = np.asarray(inside.any(axis=other))  # (N, M)
+        any_ = hit.any(axis=1)
+        first = np.argmax(hit, axis=1)
+        last = hit.shape[1] - 1 - np.argmax(hit[:, ::-1], axis=1)
+        out[k] = np.where(any_, last - first + 1, 0)
+    return out
+
+
+def on_curve(extents: np.ndarray, first: float, zone: tuple[float, float], h: float) -> bool:
+    """Whether the slab ``zone`` (world units; ``first``: the world coordinate of layer 0)
+    sits on a round or curved outline: on both sides the outline across the axis
+    (:func:`outline_extents`) keeps shrinking without a step, by more than
+    :data:`CURVE_VOXELS` within the slab's own length beyond it (at least :data:`CURVE_REACH`) (a round top's middle, not
+    the span between a table's legs, which ends at a step). Stretching such a slab flattens
+    the curve where it lies (a round top becomes a stadium)."""
+    n = extents.shape[1]
+    a = round((zone[0] - first) / h)
+    b = round((zone[1] - first) / h)
+    reach = max(b - a, CURVE_REACH)
+    for e in extents:
+        sides = []
+        for i, step in ((a, -1), (b, 1)):
+            j = i + step * np.arange(reach + 1)
+            j = j[(j >= 0) & (j < n)]
+            run = e[j]
+            if run.size < 2 or run[0] == 0:
+                sides.append(False)
+                continue
+            d = np.diff(run)
+            smooth = np.abs(d).max() <= CURVE_STEP
+            sides.append(bool(smooth and run[0] - run.min() > CURVE_VOXELS and (d <= 0).all()))
+        if all(sides):
+            return True
+    return False
+
+
 def _long(c: Candidate, h: float) -> bool:
     """Whether a slab is at least :data:`MIN_SPREAD_VOXELS` long: a span or a long uniform run,
     not a feature's thickness (a board, a panel, a leg's width)."""
@@ -456,6 +507,85 @@ def _periods(
         f"from the {name} min" + ("" if k > 0 else " (tile to its start: 0 copies)")
     )
     return _Tiled(edit, k, t.region, (s, e), period, grow, copies), note
+
+
+def _element_periods(
+    csdf: CSDF,
+    prof: Profile,
+    found: AxisElements,
+    change: float,
+    ax_name: str,
+    units: str | None,
+    lo: float,
+) -> tuple[_Tiled, str] | None:
+    """Whole elements of the axis's repeat group added (``k > 0``: a zone of one element and
+    its separator tiled to ``1 + k`` copies) or removed (a zone of ``-k`` of them tiled to its
+    start), ``k`` the whole number of typical elements nearest ``change``, and the note; None
+    where no whole element fits the change (less than half of one) or nothing repeats."""
+    g = found.best
+    if g is None:
+        return None
+    first = count_zone(csdf, found, 1, prof=prof)
+    k = int(np.floor(change / first.length + 0.5))
+    k = max(k, 1 - len(g.members))  # one element stays
+    if k == 0:
+        return None
+    z = first if k > 0 else count_zone(csdf, found, -k, prof=prof)
+    region = (found.elements[g.members[0]].start, found.elements[g.members[-1]].end)
+    if k > 0:
+        edit = Edit(ax_name, z.start, z.end, z.start + (1 + k) * z.length, "tile")
+        grow = k * z.length
+        copies = (z.start, z.start + (1 + k) * z.length)
+    else:
+        edit = Edit(ax_name, z.start, z.end, z.start, "tile")
+        grow = -z.length
+        copies = max((region[0], z.start), (z.end, region[1]), key=lambda r: r[1] - r[0])
+    note = (
+        (f"{ax_name}: add {k} element(s)" if k > 0 else f"{ax_name}: remove {-k} element(s)")
+        + f" ({element_phrase(found)}), zone {_fmt(z.start - lo, units)}..{_fmt(z.end - lo, units)}"
+        f" from the {ax_name} min"
+        + (f" tiled to {1 + k} copies" if k > 0 else " (tile to its start: 0 copies)")
+    )
+    return _Tiled(edit, k, region, (z.start, z.end), first.length, grow, copies), note
+
+
+def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit], list[str]]:
+    """Edits (recipe coordinates) adding ``n`` elements (removing ``-n``) of the repeat group
+    along ``axis`` (:func:`~partscale.zones.elements.find_elements`), and the note: a zone of
+    whole elements and their separators (:func:`~partscale.zones.elements.count_zone`) tiled
+    to ``1 + n`` copies, or to its start.
+
+    Raises
+    ------
+    InputError
+        ``n`` is 0, nothing repeats along the axis, or ``-n`` is not below the group's count.
+    """
+    name = AXES[axis]
+    if n == 0:
+        raise InputError(f"add {name}: expected a number of elements other than 0, got 0")
+    found = find_elements(csdf, axis)
+    if found.best is None:
+        raise InputError(
+            f"add {name}: expected repeated elements along {name} (seats, doors, shelf rows, "
+            f"drawers), found none; resize by length instead (a size, or a zone by hand)"
+        )
+    z = count_zone(csdf, found, 1 if n > 0 else -n)
+    units = csdf.meta.get("units")
+    lo = found.lo
+    where = f"zone {_fmt(z.start - lo, units)}..{_fmt(z.end - lo, units)} from the {name} min"
+    if n > 0:
+        edit = Edit(name, z.start, z.end, z.start + (1 + n) * z.length, "tile")
+        note = (
+            f"{name}: add {n} element(s) ({element_phrase(found)}), {where} tiled to {1 + n} copies"
+        )
+    else:
+        edit = Edit(name, z.start, z.end, z.start, "tile")
+        note = f"{name}: remove {-n} element(s) ({element_phrase(found)}), {where} cut out"
+    if z.seam > MATCH_SEAM:
+        note += (
+            f"; its planes' cross-sections differ by {z.seam:.2f}, the copies' joins are blended"
+        )
+    return [edit], [note]
 
 
 def _to_slabs(
@@ -635,13 +765,19 @@ def _to_copies(
     return [Edit(ax.name, t0.start, t0.end, dest, "tile"), *edits[1:]], note
 
 
-def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str]]:
+def fit_axis(
+    csdf: CSDF, axis: int, target: float, *, allow_deform: bool = False
+) -> tuple[list[Edit], list[str]]:
     """Edits (recipe coordinates) bringing the extent along ``axis`` to ``target``, and why.
 
-    Whole periods first (:func:`_periods`), then what they leave (less than half a period, or
-    the whole change with no repeat) in this order until it is taken: long slabs outside the
-    repeat, the copies within :data:`COPY_TOLERANCE`, long slabs inside the repeat, thin slabs
-    (a note says so), the copies whatever their change, and global scaling as the last resort.
+    Whole periods first (:func:`_periods`; with no equal period, whole elements of a repeat
+    group: :func:`_element_periods`), then what they leave (less than half a period, or the
+    whole change with no repeat) in this order until it is taken: long slabs outside the
+    repeat, the copies within :data:`COPY_TOLERANCE`, long slabs inside the repeat, the copies
+    whatever their change. Slabs on a round or curved outline (:func:`on_curve`) take nothing.
+    What is left then is refused (:class:`~partscale.errors.InputError`, naming the
+    alternatives) unless ``allow_deform``: then thin slabs take it (a feature's thickness
+    changes; a note says so) and global scaling is the last resort.
     A shrink takes each chain of drift-split slabs as one (:func:`_drift_chains`).
     """
     name = AXES[axis]
@@ -673,17 +809,31 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     why: list[str] = []
     left = change
     tiled = None
-    if tiles and (done := _periods(csdf, prof, tiles[0], change, name, units, lo)) is not None:
+    done = _periods(csdf, prof, tiles[0], change, name, units, lo) if tiles else None
+    if done is None and not tiles:
+        # no equal period: whole elements of a repeat that need not be equal (mirrored doors,
+        # cushions of unequal width, compartments of unequal height)
+        done = _element_periods(
+            csdf, prof, find_elements(csdf, axis, prof=prof), change, name, units, lo
+        )
+    if done is not None:
         tiled, note = done
         edits.append(tiled.edit)
         why.append(note)
         left = change - tiled.grow
     if abs(left) <= h / 2:
         return edits, why
-    layers = (layer_change(csdf, axis), float(csdf.axis_coords(axis)[0]))
+    first = float(csdf.axis_coords(axis)[0])
+    layers = (layer_change(csdf, axis), first)
     ax = _Axis(name, units, lo, hi, h, layers, frozenset(c.zone for c in chains if c not in slabs))
     if left < 0:
         slabs = chains
+    curved: list[Candidate] = []
+    if not allow_deform and left > 0:
+        # growth on a round outline flattens it where it goes (a round top becomes a stadium)
+        ext = outline_extents(csdf, axis)
+        curved = [c for c in slabs if on_curve(ext, first, c.zone, h)]
+        slabs = [c for c in slabs if c not in curved or not _long(c, h)]
     st, notes, left = _to_long_outside(slabs, left, ax, tiled)
     edits += st
     why += notes
@@ -696,7 +846,7 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
         why += notes
         if abs(left) <= h / 2:
             return edits, why
-    if not within:
+    if not within and allow_deform:
         st, notes, left = _to_thin(slabs, left, ax, tiled)
         edits += st
         why += notes
@@ -705,6 +855,8 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     taken = None if tiled is None else _to_copies(edits, left, ax, tiled, within)
     if taken is not None:
         return taken[0], [*why, taken[1]]
+    if not allow_deform:
+        raise InputError(_refusal(name, target, left, units, slabs, curved, h, tiled is not None))
     thin = (
         " (thin slabs would more than double)"
         if change > 0 and any(not _long(c, h) for c in slabs)
@@ -716,11 +868,43 @@ def fit_axis(csdf: CSDF, axis: int, target: float) -> tuple[list[Edit], list[str
     ]
 
 
+def _refusal(
+    name: str,
+    target: float,
+    left: float,
+    units: str | None,
+    slabs: list[Candidate],
+    curved: list[Candidate],
+    h: float,
+    tiled: bool,
+) -> str:
+    """The one line refusing a fit that only a deformation would reach, with the alternatives."""
+    if curved:
+        why = "the outline is round or curved there (stretching flattens it)"
+    elif any(not _long(c, h) for c in slabs):
+        why = (
+            f"only slabs thinner than {MIN_SPREAD_VOXELS} voxels could take it (a feature's "
+            "thickness would change)"
+        )
+    else:
+        why = "no slab of constant cross-section could take it"
+    after = " after whole elements" if tiled else ""
+    return (
+        f"size {name}: expected a part-aware way to reach {_fmt(target, units)}, got none: "
+        f"{_fmt(abs(left), units)} to {'grow' if left > 0 else 'shrink'}{after} and {why}; "
+        f"alternatives: allow_deform (CLI --allow-deform: thin slabs, else global scaling along "
+        f"{name}), scale --mode global along {name}, a zone of your own (scale --zone), or "
+        f"whole elements (fit --add)"
+    )
+
+
 @keyword_options
 def fit(
     csdf: CSDF,
-    size: Sequence[str | float],
+    size: Sequence[str | float] | None = None,
     *,
+    add: Mapping[str, int] | None = None,
+    allow_deform: bool = False,
     progress: ProgressCallback | None = None,
 ) -> tuple[Recipe, list[str]]:
     """The recipe that resizes ``csdf`` to ``size`` along x, y, z, and why it was chosen.
@@ -728,10 +912,17 @@ def fit(
     Parameters
     ----------
     csdf : CSDF
-    size : 3 specs
+    size : 3 specs, optional
         Per axis: ``'='`` (unchanged), an absolute length (``2.1``, ``'210cm'``,
         ``'2100mm'``; bare numbers in object units), a change (``'+20cm'``, ``'-5cm'``) or a
-        percentage of the current extent (``'120%'``).
+        percentage of the current extent (``'120%'``). Default: unchanged.
+    add : mapping of axis to int, optional
+        Elements to add (``{'x': 1}``: one more seat) or remove (``{'x': -1}``) on an axis
+        (:func:`add_axis`); that axis's size must then be ``'='``.
+    allow_deform : bool
+        Where no zone reaches a size without deforming what should keep its shape (a round
+        outline, only thin slabs), stretch thin slabs or scale globally (with a note) instead
+        of refusing.
 
     Returns
     -------
@@ -743,10 +934,20 @@ def fit(
     Raises
     ------
     InputError
-        A size that is not positive, unknown units, or a target below what the rigid parts
-        alone measure.
+        A size that is not positive, unknown units, a target below what the rigid parts
+        alone measure, a target only a deformation reaches (unless ``allow_deform``), an axis
+        given both a size and a count, or a count no repeat group allows.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.zones import fit
+    >>> recipe, why = fit(shapes.table(), ["150%", "=", "="])  # doctest: +SKIP
     """
     report = resolve(progress)
+    add = _check_add(add)
+    if size is None:
+        size = ["="] * 3
     if isinstance(size, str) or len(size) != 3:
         raise InputError(f"size: expected three values (x y z), got {size!r}")
     units = csdf.meta.get("units")
@@ -759,13 +960,47 @@ def fit(
     why: list[str] = []
     for a, t in enumerate(targets):
         report(a / 3, f"axis {AXES[a]}")
-        e, w = fit_axis(csdf, a, t)
+        if AXES[a] in add:
+            if abs(t - float(sb[1, a] - sb[0, a])) > csdf.voxel_size / 2:
+                raise InputError(
+                    f"add {AXES[a]}: expected the size along {AXES[a]} unchanged (=), as the "
+                    f"count decides it, got size {AXES[a]} {size[a]}"
+                )
+            e, w = add_axis(csdf, a, add[AXES[a]])
+        else:
+            try:
+                e, w = fit_axis(csdf, a, t, allow_deform=allow_deform)
+            except InputError as exc:
+                # a refusal on an object whose walls run off the axes names that cure too
+                turn = _off_square(csdf, [Edit(AXES[a], 0.0, 1.0, 1.0)])
+                if not turn or "part-aware" not in str(exc):
+                    raise
+                raise InputError(f"{exc}; {turn[0]}") from None
         edits += e
         why += w
     report(1.0, "done")
     if not edits:
         raise InputError("size: expected a change on some axis, got the current size")
     return Recipe(tuple(edits)), why + _off_square(csdf, edits)
+
+
+def _check_add(add: Mapping[str, int] | None) -> dict[str, int]:
+    """``add`` validated: axis names to non-zero whole numbers."""
+    if add is None:
+        return {}
+    if not isinstance(add, Mapping):
+        raise InputError(f"add: expected a mapping of axis to a count, got {add!r}")
+    out = {}
+    for k, v in add.items():
+        name = str(k).lower()
+        if name not in AXES:
+            raise InputError(f"add: expected an axis x, y or z, got {k!r}")
+        if isinstance(v, bool) or not isinstance(v, int | np.integer):
+            raise InputError(f"add {name}: expected a whole number of elements, got {v!r}")
+        if v == 0:
+            raise InputError(f"add {name}: expected a number of elements other than 0, got 0")
+        out[name] = int(v)
+    return out
 
 
 def _off_square(csdf: CSDF, edits: list[Edit]) -> list[str]:

@@ -14,7 +14,18 @@ from .metrics import METRICS
 if TYPE_CHECKING:
     from .suite import SuiteResult
 
-COLUMNS = ("object", "kind", "voxels", "mode", *METRICS, "copies", "time_s", "error")
+COLUMNS = (
+    "object",
+    "kind",
+    "voxels",
+    "mode",
+    *METRICS,
+    "elements",
+    "elements_expected",
+    "copies",
+    "time_s",
+    "error",
+)
 
 #: metric -> (what it measures with its unit, tie tolerance, failure threshold). Lower is better
 #: for all; ``pieces`` is judged by its change from the original.
@@ -28,6 +39,7 @@ CRITERIA: dict[str, tuple[str, float, float]] = {
     "seam_color": ("seam colour jump (sRGB levels)", 2.0, 20.0),
     "seam_shape": ("seam shape jump (vox)", 0.1, 0.5),
     "pieces": ("pieces beyond the expected count", 0.0, 0.5),
+    "elements": ("elements off the count asked for", 0.0, 0.5),
 }
 SHORT = {
     "length_err": "length",
@@ -39,6 +51,7 @@ SHORT = {
     "seam_color": "seam colour",
     "seam_shape": "seam shape",
     "pieces": "pieces",
+    "elements": "elements",
 }
 
 
@@ -81,6 +94,8 @@ def metric_score(metric: str, row: dict[str, Any], original: dict[str, Any]) -> 
     """
     if row.get("error"):
         return math.nan
+    if metric == "elements":  # the designer's count, where the entry states one
+        return abs(_num(row.get("elements")) - _num(row.get("elements_expected")))
     if metric == "pieces":
         expected = row.get("pieces_expected", original.get("pieces"))
         extra = _num(row.get("pieces")) - _num(expected)

@@ -11,7 +11,13 @@ A suite file is JSON::
          "edit": {"axis": "x", "zone": ["20%", "80%"], "to": "105%"},
          "kind": "solid" | "repeating",   # what the paper expects: optional
          "view": "iso" | "front" | "side" | "top",  # optional, default iso
+         "elements": {"axis": "x", "count": 3},   # what the designer asked: optional
          "note": "..."}, ...]}
+
+``elements`` states the intent in the designer's unit: the count of the repeated element (seats,
+doors, shelf rows: :func:`partscale.zones.find_elements`' best group) along ``axis`` after the
+edit. Every result is then counted too (column ``elements``); a result off that count fails its
+entry (a sofa made wider with two fat seats, where a third was asked for).
 
 An entry may hold ``"recipe": {"edits": [...]}`` (the recipe schema of :mod:`partscale.edit`,
 several zones and axes, each edit with its mode) instead of ``"edit"``: it runs as given, one
@@ -88,6 +94,7 @@ class Entry:
     note: str = ""
     error: str | None = None
     recipe: Recipe | None = None
+    elements: tuple[str, int] | None = None
 
     def describe(self) -> str:
         if self.recipe is not None:
@@ -150,12 +157,13 @@ def _entry(obj: Any, i: int) -> Entry:
             f"'.', control characters or {CONTACT_SHEET}), got {name!r}",
         )
     try:
-        unknown = set(obj) - {"name", "path", "edit", "recipe", "kind", "view", "note"}
+        unknown = set(obj) - {"name", "path", "edit", "recipe", "kind", "view", "note", "elements"}
         if unknown:
             raise InputError(
                 f"unknown key(s) {sorted(unknown)}; keys are name, path, edit, recipe, kind, "
-                "view, note"
+                "view, note, elements"
             )
+        elements = _elements(obj.get("elements"))
         path = obj.get("path")
         if not isinstance(path, str) or not path:
             raise InputError(f"path: expected a file path, got {path!r}")
@@ -173,14 +181,48 @@ def _entry(obj: Any, i: int) -> Entry:
                 recipe = Recipe.parse(obj["recipe"])
             except InputError as exc:
                 raise InputError(f"recipe: {exc}") from None
-            return Entry(name, path, None, kind, view, str(obj.get("note", "")), recipe=recipe)
+            return Entry(
+                name,
+                path,
+                None,
+                kind,
+                view,
+                str(obj.get("note", "")),
+                recipe=recipe,
+                elements=elements,
+            )
         edit_obj = obj.get("edit")
         if isinstance(edit_obj, dict) and "mode" in edit_obj:
             raise InputError("edit.mode: expected none (the suite runs every mode), got one")
         edit = Edit.parse(edit_obj, where="edit")
-        return Entry(name, path, edit, kind, view, str(obj.get("note", "")))
+        return Entry(name, path, edit, kind, view, str(obj.get("note", "")), elements=elements)
     except InputError as exc:
         return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")
+
+
+def _elements(obj: Any) -> tuple[str, int] | None:
+    """An entry's ``elements`` key: ``{"axis": "x", "count": N}`` (N >= 1), or None."""
+    if obj is None:
+        return None
+    if (
+        not isinstance(obj, dict)
+        or set(obj) != {"axis", "count"}
+        or obj["axis"] not in ("x", "y", "z")
+        or not isinstance(obj["count"], int)
+        or isinstance(obj["count"], bool)
+        or obj["count"] < 1
+    ):
+        raise InputError(f'elements: expected {{"axis": "x|y|z", "count": N >= 1}}, got {obj!r}')
+    return obj["axis"], obj["count"]
+
+
+def count_elements(c: CSDF, axis: str) -> int:
+    """The elements of the repeat group a designer counts along ``axis`` (1 where none repeats:
+    the whole row is one element)."""
+    from ..zones import find_elements
+
+    g = find_elements(c, axis).best
+    return 1 if g is None else len(g.members)
 
 
 def parse_suite(obj: Any, *, source: Path | None = None) -> Suite:
@@ -384,7 +426,7 @@ def _run_entry(
             m = metrics.evaluate(ref, b, geo)
             result.timings["edit"] += dt
             result.timings["metrics"] += time.perf_counter() - t0 - dt
-            row = {**base, "mode": mode, **m, "time_s": dt}
+            row = {**base, "mode": mode, **m, "time_s": dt, **_counted(b, entry)}
             if geo.mode == "tile":
                 row["copies"] = geo.n_copies
             results[mode] = b
@@ -404,7 +446,7 @@ def _run_entry(
             m = metrics.evaluate(ref, b, zones)
             result.timings["edit"] += dt
             result.timings["metrics"] += time.perf_counter() - t0 - dt
-            row = {**base, "mode": mode, **m, "time_s": dt}
+            row = {**base, "mode": mode, **m, "time_s": dt, **_counted(b, entry)}
             copies = [z.n_copies for z in zones.zones if z.mode == "tile"]
             if copies:
                 row["copies"] = "+".join(map(str, copies))
@@ -427,6 +469,14 @@ def _run_entry(
     except Exception as exc:  # a bug in a stage must not stop the rest of the suite
         result.error = f"{name}: figure failed: {type(exc).__name__}: {exc}"
     return result
+
+
+def _counted(c: CSDF, entry: Entry) -> dict[str, Any]:
+    """``elements`` (counted on ``c``) and ``elements_expected`` where the entry states them."""
+    if entry.elements is None:
+        return {}
+    axis, want = entry.elements
+    return {"elements": count_elements(c, axis), "elements_expected": want}
 
 
 def _figure(

@@ -426,3 +426,19 @@ def test_real_one_more_row_or_drawer(rel, axis):
     # the other axes are untouched
     for other in {0, 1, 2} - {ax}:
         assert abs(_extent(out, other) - _extent(c, other)) <= c.voxel_size / 2
+
+
+def test_real_round_table_is_refused_not_made_wavy(cli, tmp_path):
+    """kenney/tableRound (an octagonal top on a pedestal) 20 % wider and deeper: refused in one
+    line naming what it would need and the alternatives, nothing written; with --allow-deform
+    written, and the notes say what was deformed."""
+    src = data_path("kenney/tableRound.glb")
+    c = tmp_path / "round.csdf.npz"
+    cli("import", src, "-o", c, "--res", "96", check=True)
+    out = tmp_path / "wide.csdf.npz"
+    proc = cli("fit", c, "-o", out, "--size", "120%", "=", "120%")
+    assert_bad_input(proc, "round or curved", "to grow", "--allow-deform")
+    assert not out.exists()
+    proc = cli("fit", c, "-o", out, "--size", "120%", "=", "120%", "--allow-deform")
+    assert proc.returncode == 0, proc.stderr
+    assert out.exists() and ("thin slab" in proc.stderr or "GLOBAL" in proc.stderr), proc.stderr

@@ -41,6 +41,9 @@ from .suggest import (
     plane_cost,
 )
 
+#: fit --size takes whole elements (of a group that need not be equal) where the change is
+#: within this share of one element of a whole number of them.
+ELEMENT_TOLERANCE = 0.25
 #: A count zone whose planes' cross-sections differ by more than this gets a note.
 MATCH_SEAM = 0.15
 #: A curved outline: beyond a slab the outline shrinks by more than this many voxels ...
@@ -49,6 +52,8 @@ CURVE_VOXELS = 1.5
 #: looking at least this many voxels beyond it.
 CURVE_STEP = 3
 CURVE_REACH = 8
+#: Levels (voxel rows across the axis) that must show the curve: a rim, not a speck.
+CURVE_LEVELS = 3
 #: Largest relative change of the tiled copies accepted instead of stretching a gap inside the
 #: repeat (which would make one spacing uneven).
 COPY_TOLERANCE = 0.05
@@ -303,45 +308,49 @@ def _drift_chains(slabs: list[Candidate], p: Profile) -> list[Candidate]:
 
 
 def outline_extents(csdf: CSDF, axis: int) -> np.ndarray:
-    """(2, N) float64: the solid's extent (voxels) along each of the two other axes, per layer
-    along ``axis`` (0 where a layer holds no solid)."""
-    inside = np.moveaxis(np.asarray(csdf.sdf < 0), axis, 0)
-    out = np.zeros((2, inside.shape[0]))
-    for k, other in enumerate((2, 1)):  # extent along the first, then the second other axis
-        hit = np.asarray(inside.any(axis=other))  # (N, M)
-        any_ = hit.any(axis=1)
-        first = np.argmax(hit, axis=1)
-        last = hit.shape[1] - 1 - np.argmax(hit[:, ::-1], axis=1)
-        out[k] = np.where(any_, last - first + 1, 0)
-    return out
+    """(L, N) int64: the solid's extent (voxels, first to last solid voxel) along one of the two
+    other axes, per level of the third (L rows: the levels of both), per layer along ``axis``;
+    0 where a level of a layer holds no solid. A round column shows as a chord in the levels it
+    spans, however large the top above it."""
+    inside = np.moveaxis(np.asarray(csdf.sdf < 0), axis, 0)  # (N, U, V)
+    rows = []
+    for across in (1, 2):  # extent along U per level of V, then along V per level of U
+        hit = np.moveaxis(inside, across, -1)  # (N, levels, M)
+        any_ = hit.any(axis=-1)
+        first = np.argmax(hit, axis=-1)
+        last = hit.shape[-1] - 1 - np.argmax(hit[..., ::-1], axis=-1)
+        rows.append(np.where(any_, last - first + 1, 0).T)  # (levels, N)
+    return np.concatenate(rows, axis=0)
 
 
 def on_curve(extents: np.ndarray, first: float, zone: tuple[float, float], h: float) -> bool:
     """Whether the slab ``zone`` (world units; ``first``: the world coordinate of layer 0)
-    sits on a round or curved outline: on both sides the outline across the axis
-    (:func:`outline_extents`) keeps shrinking without a step, by more than
-    :data:`CURVE_VOXELS` within the slab's own length beyond it (at least :data:`CURVE_REACH`) (a round top's middle, not
-    the span between a table's legs, which ends at a step). Stretching such a slab flattens
-    the curve where it lies (a round top becomes a stadium)."""
+    sits on a round or curved outline: in at least :data:`CURVE_LEVELS` levels
+    (:func:`outline_extents`) the outline across the axis keeps shrinking on both sides without
+    a step, by more than :data:`CURVE_VOXELS` within the slab's own length beyond it (at least
+    :data:`CURVE_REACH`): a round top's middle, a round column or foot in the slab, not the span
+    between a table's legs, which ends at a step. Stretching such a slab flattens the curve
+    where it lies (a round top becomes a stadium, a round foot an oval)."""
     n = extents.shape[1]
     a = round((zone[0] - first) / h)
     b = round((zone[1] - first) / h)
     reach = max(b - a, CURVE_REACH)
-    for e in extents:
-        sides = []
-        for i, step in ((a, -1), (b, 1)):
-            j = i + step * np.arange(reach + 1)
-            j = j[(j >= 0) & (j < n)]
-            run = e[j]
-            if run.size < 2 or run[0] == 0:
-                sides.append(False)
-                continue
-            d = np.diff(run)
-            smooth = np.abs(d).max() <= CURVE_STEP
-            sides.append(bool(smooth and run[0] - run.min() > CURVE_VOXELS and (d <= 0).all()))
-        if all(sides):
-            return True
-    return False
+    both = np.ones(extents.shape[0], dtype=bool)
+    for i, step in ((a, -1), (b, 1)):
+        j = i + step * np.arange(reach + 1)
+        j = j[(j >= 0) & (j < n)]
+        if j.size < 2:
+            return False
+        run = extents[:, j].astype(np.float64)  # (L, K): from the slab's end outwards
+        d = np.diff(run, axis=1)
+        curved = (
+            (run > 0).all(axis=1)  # the outline goes on (where it ends, the object does)
+            & (np.abs(d).max(axis=1) <= CURVE_STEP)
+            & (d <= 0).all(axis=1)
+            & (run[:, 0] - run.min(axis=1) > CURVE_VOXELS)
+        )
+        both &= curved
+    return int(np.count_nonzero(both)) >= CURVE_LEVELS
 
 
 def _long(c: Candidate, h: float) -> bool:
@@ -521,14 +530,17 @@ def _element_periods(
     """Whole elements of the axis's repeat group added (``k > 0``: a zone of one element and
     its separator tiled to ``1 + k`` copies) or removed (a zone of ``-k`` of them tiled to its
     start), ``k`` the whole number of typical elements nearest ``change``, and the note; None
-    where no whole element fits the change (less than half of one) or nothing repeats."""
+    where the change is not within :data:`ELEMENT_TOLERANCE` of a whole number of elements
+    (other than 0) or nothing repeats."""
     g = found.best
     if g is None:
         return None
     first = count_zone(csdf, found, 1, prof=prof)
     k = int(np.floor(change / first.length + 0.5))
     k = max(k, 1 - len(g.members))  # one element stays
-    if k == 0:
+    # whole elements only where the target is near a whole number of them (a table 30 %
+    # deeper is a deeper top, not a third bay of legs)
+    if k == 0 or abs(change - k * first.length) > ELEMENT_TOLERANCE * first.length:
         return None
     z = first if k > 0 else count_zone(csdf, found, -k, prof=prof)
     region = (found.elements[g.members[0]].start, found.elements[g.members[-1]].end)

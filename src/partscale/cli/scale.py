@@ -74,16 +74,76 @@ def scale(
         typer.Option("--recipe", help="A recipe JSON file (instead of --axis/--zone/--to)."),
     ] = None,
     square: Annotated[bool, SQUARE_OPTION] = False,
+    radial: Annotated[
+        bool,
+        typer.Option(
+            "--radial",
+            help="A radial zone about the vertical (y) axis: --zone R0 R1 are radii (% of the "
+            "outline's radius, or lengths), --to / --by the new outer radius.",
+        ),
+    ] = False,
+    center: Annotated[
+        tuple[str, str] | None,
+        typer.Option(
+            "--center", metavar="X Z", help="With --radial: the axis' position (default: found)."
+        ),
+    ] = None,
+    sides: Annotated[
+        int | None,
+        typer.Option(
+            "--sides",
+            metavar="N",
+            help="With --radial: 0 for a round outline, N for a regular N-gon (default: found).",
+        ),
+    ] = None,
+    span: Annotated[
+        tuple[str, str] | None,
+        typer.Option(
+            "--span",
+            metavar="LO HI",
+            help="With --radial: only the levels between LO and HI along y (a lamp's base).",
+        ),
+    ] = None,
+    normal: Annotated[
+        tuple[float, float, float] | None,
+        typer.Option(
+            "--normal",
+            metavar="NX NY NZ",
+            help="An oblique zone square to this direction: --zone S0 S1 and --to along it "
+            "(lengths from the origin, or % of the extent along it).",
+        ),
+    ] = None,
 ) -> None:
-    """Resize a zone between two planes: stretch it, tile it, or scale the whole object."""
+    """Resize a zone between two planes: stretch it, tile it, or scale the whole object; or a
+    radial zone (an annulus about the vertical) or an oblique one (planes square to any
+    direction).
+
+    Examples: partscale scale table.csdf.npz -o long.csdf.npz --axis x --zone 35% 65% --to 105%;
+    partscale scale round.csdf.npz -o wide.csdf.npz --radial --zone 20% 90% --by +20cm
+    """
     # The edit stage pulls in numba, scipy and scikit-image: load it only when a command runs.
-    from ..edit import AXES, MODES, Recipe, apply_recipe
+    from ..edit import AXES, MODES, Recipe
 
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     check_square(square, mesh_route, src, output)
     dest_given = [(n, v) for n, v in (("--to", to), ("--by", by), ("--copies", copies)) if v]
+    warp_opts = [
+        n for n, v in (("--center", center), ("--sides", sides), ("--span", span)) if v is not None
+    ]
+    if radial or normal is not None:
+        if mesh_route:
+            raise InputError(
+                f"{'--radial' if radial else '--normal'}: expected a CSDF (the mesh route cuts at "
+                "planes across x, y or z only; import the mesh first), got a mesh"
+            )
+        rec, c = _warp_recipe(
+            src, radial, normal, axis, zone, to, by, copies, mode, snap, recipe, center, sides, span
+        )
+        return _apply_and_save(c, rec, output)
+    if warp_opts:
+        raise InputError(f"{', '.join(warp_opts)}: expected with --radial, got it without")
     if recipe is not None:
         given = [
             n
@@ -137,20 +197,126 @@ def scale(
     if mesh_route:
         return _scale_mesh(src, output, rec, square=square)
     assert c is not None  # loaded unless mesh_route
+    _apply_and_save(c, rec, output, moves if recipe is None and snap else None)
+
+
+def _apply_and_save(c, rec, output: Path, moves=None) -> None:
+    """Apply ``rec`` to ``c`` with a progress bar, say what changed, write ``output``."""
+    from ..edit import apply_recipe, describe_changes
+    from ..zones import feature_notes
+
     with _common.progress_bar("scale") as bar:
         out = apply_recipe(c, rec, progress=bar)
-    if recipe is None and snap:
+    if moves is not None:
         from ..zones import record_snap
 
         out = record_snap(out, moves)
     entries = out.meta.get("history", [])[-len(rec.edits) :]
-    from ..edit import describe_changes
-    from ..zones import feature_notes
-
     for line in describe_changes(entries, out) + feature_notes(c, rec):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     save(out, output)
     _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")
+
+
+def _warp_recipe(
+    src, radial, normal, axis, zone, to, by, copies, mode, snap, recipe, center, sides, span
+):
+    """The one-edit recipe of ``--radial`` or ``--normal`` (a :class:`RadialZone` about the
+    vertical, or an :class:`ObliqueZone`), and the CSDF it applies to."""
+    from ..edit import ObliqueZone, Recipe, parse_length
+
+    name = "--radial" if radial else "--normal"
+    clash = [
+        n
+        for n, v in (
+            ("--axis", axis),
+            ("--copies", copies),
+            ("--recipe", recipe),
+            ("--snap", snap or None),
+            ("--normal" if radial else "--radial", normal if radial else (radial or None)),
+        )
+        if v is not None
+    ]
+    if mode is not None and mode.lower() != "stretch":
+        clash.append(f"--mode {mode}")
+    if clash:
+        raise InputError(
+            f"{name}: expected --zone and --to or --by with it, got {', '.join(clash)}"
+        )
+    if normal is not None and (center is not None or sides is not None or span is not None):
+        raise InputError("--normal: expected no --center, --sides or --span (those are --radial's)")
+    if zone is None or (to is None) == (by is None):
+        raise InputError(f"{name}: expected --zone START END and one of --to or --by")
+    c = load(src)
+    units = c.meta.get("units")
+    if radial:
+        return _radial_recipe(c, zone, to, by, center, sides, span), c
+    import numpy as np
+
+    n = np.asarray(normal, dtype=np.float64)
+    if not np.isfinite(n).all() or np.linalg.norm(n) < 1e-9:
+        raise InputError(f"--normal: expected a non-zero direction NX NY NZ, got {list(normal)}")
+    n = n / np.linalg.norm(n)
+    # the solid's extent along the normal: what % refers to
+    inside = np.argwhere(c.sdf < 0)
+    proj = (c.origin + inside * c.voxel_size) @ n
+    lo, hi = float(proj.min()), float(proj.max())
+    s0, s1 = (
+        _along(v, lo, hi, units, f"--zone {w}") for v, w in zip(zone, ("START", "END"), strict=True)
+    )
+    dest = (
+        _along(to, lo, hi, units, "--to")
+        if to is not None
+        else s1 + parse_length(by, units=units, what="--by")
+    )
+    return Recipe((ObliqueZone((float(n[0]), float(n[1]), float(n[2])), s0, s1, dest),)), c
+
+
+def _along(value: str, lo: float, hi: float, units, what: str) -> float:
+    """A position given as a length (object units, or with a unit) or % of ``lo..hi``."""
+    from ..edit import parse_position
+
+    p = parse_position(value, what, units)
+    if isinstance(p, str):  # a percentage
+        return lo + float(p.rstrip("%")) / 100 * (hi - lo)
+    return p
+
+
+def _radial_recipe(c, zone, to, by, center, sides, span):
+    """``--radial``: the zone's frame found (or given), radii as % of its outline or lengths."""
+    from ..edit import Recipe, parse_length, radial_extent
+    from ..zones import find_radial
+
+    units = c.meta.get("units")
+    frame = find_radial(c, "y")
+    if frame is None and (center is None or sides is None):
+        raise InputError(
+            "--radial: expected a round or regular-polygon outline seen from above, found none; "
+            "give --center X Z and --sides N (0: round)"
+        )
+    cx, cz = frame.center if frame is not None else (0.0, 0.0)
+    if center is not None:
+        cx, cz = (_along(v, 0.0, 0.0, units, "--center") for v in center)
+    k = frame.sides if sides is None and frame is not None else int(sides or 0)
+    phase = frame.phase if frame is not None and k == frame.sides else 0.0
+    from ..edit import RadialZone
+
+    probe = RadialZone("y", (cx, cz), 0.0, 1.0, 2.0, k, phase)
+    rmax = radial_extent(c, probe)
+    r0, r1 = (
+        _along(v, 0.0, rmax, units, f"--zone {w}") for v, w in zip(zone, ("R0", "R1"), strict=True)
+    )
+    dest = (
+        _along(to, 0.0, rmax, units, "--to")
+        if to is not None
+        else r1 + parse_length(by, units=units, what="--by")
+    )
+    lim = None
+    if span is not None:
+        sb = c.surface_bounds()
+        y0, y1 = (_along(v, float(sb[0, 1]), float(sb[1, 1]), units, "--span") for v in span)
+        lim = (y0, y1)
+    return Recipe((RadialZone("y", (cx, cz), r0, r1, dest, k, phase, lim),))
 
 
 def check_square(square: bool, mesh_route: bool, src: Path, output: Path) -> None:

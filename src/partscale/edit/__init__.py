@@ -15,6 +15,10 @@ Public API
 - :func:`recipe_shape` ``(csdf, recipe) -> (X, Y, Z)``: the grid shape a recipe gives, predicted
   without computing it (the editor refuses an apply its page could not show, before computing).
 - :data:`MAX_EDITS`: most edits one recipe may hold.
+- :class:`RadialZone`, :class:`ObliqueZone`, :func:`apply_radial`, :func:`apply_oblique`: zones
+  that are not slabs across an axis (an annulus about an axis; a slab between two planes
+  square to any direction), resampled and re-evaluated (:mod:`partscale.edit.warp`); recipes
+  hold them too (``{"radial": {...}, "zone": [R0, R1], "to": R}``, ``{"normal": [...], ...}``).
 - :func:`resolve_edit` ``(csdf, edit) -> ResolvedEdit``: an edit validated on an object, in world
   units and snapped to whole voxels, as :func:`apply_edit` performs it (:class:`ResolvedEdit`
   also maps coordinates across the edit and lists its seams).
@@ -60,8 +64,11 @@ from .recipe import (
     MAX_EDITS,
     MODES,
     Edit,
+    ObliqueZone,
+    RadialZone,
     Recipe,
     forward_coordinate,
+    parse_edit,
     parse_position,
     source_coordinate,
     tile_count,
@@ -79,6 +86,7 @@ from .scale import (
     scale,
 )
 from .units import SUFFIXES, parse_length, parse_size
+from .warp import apply_oblique, apply_radial, apply_warp, gauge, radial_extent
 
 __all__ = [
     "AXES",
@@ -88,18 +96,26 @@ __all__ = [
     "SEAM_VOXELS",
     "SUFFIXES",
     "Edit",
+    "ObliqueZone",
+    "RadialZone",
     "Recipe",
     "ResolvedEdit",
     "apply_edit",
+    "apply_oblique",
+    "apply_radial",
     "apply_recipe",
+    "apply_warp",
     "check_recipe_memory",
     "describe_changes",
     "edit_label",
     "forward_coordinate",
+    "gauge",
     "naive_edit",
+    "parse_edit",
     "parse_length",
     "parse_position",
     "parse_size",
+    "radial_extent",
     "recipe_from_history",
     "recipe_shape",
     "reevaluate",

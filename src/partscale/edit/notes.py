@@ -33,7 +33,37 @@ def describe_changes(entries: list[Any], out: CSDF) -> list[str]:
         Removed zones (tile, 0 copies) first, then whole-voxel destinations, then zone planes
         that cut an element.
     """
-    return _removed(entries, out) + _voxel_snaps(entries, out) + _slivers(entries, out)
+    return (
+        _warps(entries, out)
+        + _removed(entries, out)
+        + _voxel_snaps(entries, out)
+        + _slivers(entries, out)
+    )
+
+
+def _warps(entries: list[Any], out: CSDF) -> list[str]:
+    """A line per radial or oblique zone: what grew, and by how much."""
+    u = unit_suffix(out.meta.get("units"))
+    lines = []
+    for i, h in enumerate(entries):
+        if not isinstance(h, dict) or h.get("op") not in ("radial", "oblique"):
+            continue
+        (a, b), to = h["zone"], h["to"]
+        if h["op"] == "radial":
+            spec = h["radial"]
+            shape = "round" if not spec.get("sides") else f"{spec['sides']}-sided"
+            what = (
+                f"radial zone {a:.4g}..{b:.4g}{u} ({shape}) about the {spec['axis']} axis "
+                f"through {spec['center'][0]:.4g}, {spec['center'][1]:.4g}{u}"
+            )
+        else:
+            nx, ny, nz = h["normal"]
+            what = f"oblique zone {a:.4g}..{b:.4g}{u} along ({nx:.3g}, {ny:.3g}, {nz:.3g})"
+        lines.append(
+            f"{edit_label(i, len(entries))}{what}: its outer end moved by {to - b:+.4g}{u}, "
+            f"{h.get('reevaluated_voxels', 0)} voxels re-evaluated"
+        )
+    return lines
 
 
 def unit_suffix(units: str | None) -> str:

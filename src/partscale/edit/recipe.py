@@ -13,6 +13,15 @@ tile), and its destination keeps its change ``DEST - END``. An EDIT is::
                                     # the zone); DEST < END shrinks
      "mode": "stretch" | "tile" | "global"}
 
+or a zone that is not a slab across an axis (:mod:`partscale.edit.warp`)::
+
+    {"radial": {"axis": "y", "center": [X, Z], "sides": 0, "phase": 0},
+     "zone": [R0, R1], "to": R}        # the annulus R0..R1 about the axis becomes R0..R
+    {"normal": [NX, NY, NZ], "zone": [S0, S1], "to": S}   # the slab S0 <= p . n <= S1
+
+Their positions are lengths (numbers or with a unit, no ``%``) on the object they apply to; a
+recipe holding one holds no zone across an axis it moves content along.
+
 Positions are numbers in the object's units (metres for glTF) or strings with a ``%`` suffix:
 percent of the object's extent along that axis, measured on the solid's bounding box
 (``"0%"`` = its min, ``"100%"`` = its max) of the recipe's input; or lengths with a unit
@@ -72,24 +81,90 @@ JSON_SCHEMA: dict[str, Any] = {
             "minItems": 1,
             "maxItems": MAX_EDITS,
             "items": {
-                "type": "object",
-                "required": ["axis", "zone", "to"],
-                "additionalProperties": False,
-                "properties": {
-                    "axis": {"enum": list(AXES)},
-                    "zone": {
-                        "type": "array",
-                        "minItems": 2,
-                        "maxItems": 2,
-                        "items": {"$ref": "#/$defs/position"},
+                "oneOf": [
+                    {
+                        "type": "object",
+                        "required": ["axis", "zone", "to"],
+                        "additionalProperties": False,
+                        "properties": {
+                            "axis": {"enum": list(AXES)},
+                            "zone": {"$ref": "#/$defs/zone"},
+                            "to": {"$ref": "#/$defs/position"},
+                            "mode": {"enum": list(MODES), "default": "stretch"},
+                        },
                     },
-                    "to": {"$ref": "#/$defs/position"},
-                    "mode": {"enum": list(MODES), "default": "stretch"},
-                },
+                    {
+                        "description": "a radial zone: the annulus R0..R1 about the axis "
+                        "through center becomes R0..to",
+                        "type": "object",
+                        "required": ["radial", "zone", "to"],
+                        "additionalProperties": False,
+                        "properties": {
+                            "radial": {
+                                "type": "object",
+                                "required": ["center"],
+                                "additionalProperties": False,
+                                "properties": {
+                                    "axis": {"enum": list(AXES), "default": "y"},
+                                    "center": {
+                                        "type": "array",
+                                        "minItems": 2,
+                                        "maxItems": 2,
+                                        "items": {"$ref": "#/$defs/length"},
+                                    },
+                                    "sides": {"type": "integer", "default": 0},
+                                    "phase": {"type": "number", "default": 0},
+                                    "span": {"$ref": "#/$defs/lengths"},
+                                },
+                            },
+                            "zone": {"$ref": "#/$defs/lengths"},
+                            "to": {"$ref": "#/$defs/length"},
+                        },
+                    },
+                    {
+                        "description": "an oblique zone: the slab between the planes "
+                        "p . normal = START and = END becomes START..to",
+                        "type": "object",
+                        "required": ["normal", "zone", "to"],
+                        "additionalProperties": False,
+                        "properties": {
+                            "normal": {
+                                "type": "array",
+                                "minItems": 3,
+                                "maxItems": 3,
+                                "items": {"type": "number"},
+                            },
+                            "zone": {"$ref": "#/$defs/lengths"},
+                            "to": {"$ref": "#/$defs/length"},
+                            "mode": {"const": "stretch"},
+                        },
+                    },
+                ]
             },
         },
     },
     "$defs": {
+        "zone": {
+            "type": "array",
+            "minItems": 2,
+            "maxItems": 2,
+            "items": {"$ref": "#/$defs/position"},
+        },
+        "lengths": {
+            "type": "array",
+            "minItems": 2,
+            "maxItems": 2,
+            "items": {"$ref": "#/$defs/length"},
+        },
+        "length": {
+            "oneOf": [
+                {"type": "number"},
+                {
+                    "type": "string",
+                    "pattern": r"^\s*[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?\s*(mm|cm|m)\s*$",
+                },
+            ]
+        },
         "position": {
             "oneOf": [
                 {"type": "number"},
@@ -99,7 +174,7 @@ JSON_SCHEMA: dict[str, Any] = {
                     "pattern": r"^\s*[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?\s*(mm|cm|m)\s*$",
                 },
             ]
-        }
+        },
     },
 }
 
@@ -204,11 +279,181 @@ class Edit:
         return world(self.start), world(self.end), world(self.dest)
 
 
+def _keys(obj: Any, allowed: set[str], required: set[str], where: str) -> None:
+    if not isinstance(obj, dict):
+        raise InputError(f"{where}: expected an object, got {shown(obj)}")
+    unknown = set(obj) - allowed
+    if unknown:
+        raise InputError(
+            f"{where}: unknown key(s) {shown(sorted(unknown))}; keys are {', '.join(sorted(allowed))}"
+        )
+    missing = required - set(obj)
+    if missing:
+        raise InputError(
+            f"{where}: expected key(s) {', '.join(sorted(missing))}, got {shown(sorted(obj))}"
+        )
+
+
+def _pair(zone: Any, where: str) -> tuple[Any, Any]:
+    if not isinstance(zone, list | tuple | np.ndarray) or np.ndim(zone) != 1 or len(zone) != 2:
+        raise InputError(f"{where}.zone: expected [START, END], got {shown(zone)}")
+    return zone[0], zone[1]
+
+
+def _number(v: Any, what: str, units: str | None) -> float:
+    """A finite number, or a length with a unit in object units (no %)."""
+    p = parse_position(v, what, units)
+    if isinstance(p, str):
+        raise InputError(f"{what}: expected a number or a length (30cm), got {shown(v)}")
+    return p
+
+
+@dataclass(frozen=True)
+class RadialZone:
+    """An annulus about a line parallel to ``axis`` through ``center`` (world units).
+
+    Attributes
+    ----------
+    axis : {'x', 'y', 'z'}
+        The axis the annulus turns about (``'y'``: a table's vertical).
+    center : (float, float)
+        The line's position on the two other axes, in order (for ``'y'``: x, z).
+    r0, r1 : float
+        The annulus' radii before the edit, ``0 <= r0 < r1``.
+    to : float
+        ``r1`` after the edit, ``> r0``.
+    sides : int
+        0 for round; 3 or more: the gauge of a regular polygon (see module).
+    phase : float
+        Degrees: the direction of the first face normal, from the first other axis toward the
+        second.
+    span : (float, float) or None
+        Positions along ``axis`` between which the zone applies (None: everywhere).
+    """
+
+    axis: str
+    center: tuple[float, float]
+    r0: float
+    r1: float
+    to: float
+    sides: int = 0
+    phase: float = 0.0
+    span: tuple[float, float] | None = None
+
+    @classmethod
+    def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> RadialZone:
+        """Validate a JSON-like radial edit ``{"radial": {"axis", "center", "sides", "phase"},
+        "zone": [R0, R1], "to": R1'}`` (radii: numbers or lengths with a unit)."""
+        _keys(obj, {"radial", "zone", "to"}, {"radial", "zone", "to"}, where)
+        spec = obj["radial"]
+        if not isinstance(spec, dict):
+            raise InputError(f"{where}.radial: expected an object, got {shown(spec)}")
+        unknown = set(spec) - {"axis", "center", "sides", "phase", "span"}
+        if unknown or "center" not in spec:
+            raise InputError(
+                f"{where}.radial: expected keys center (and axis, sides, phase), got "
+                f"{shown(sorted(spec))}"
+            )
+        axis = str(spec.get("axis", "y")).lower()
+        if axis not in AXES:
+            raise InputError(
+                f"{where}.radial.axis: expected one of x, y, z, got {shown(spec['axis'])}"
+            )
+        center = spec["center"]
+        if not isinstance(center, list | tuple) or len(center) != 2:
+            raise InputError(f"{where}.radial.center: expected [A, B], got {shown(center)}")
+        sides = spec.get("sides", 0)
+        if isinstance(sides, bool) or not isinstance(sides, int):
+            raise InputError(f"{where}.radial.sides: expected a whole number, got {shown(sides)}")
+        zone = _pair(obj["zone"], where)
+        vals = [_number(v, f"{where}.radial.center", units) for v in center]
+        span = spec.get("span")
+        if span is not None:
+            a, b = _pair(span, f"{where}.radial.span")
+            span = (
+                _number(a, f"{where}.radial.span", units),
+                _number(b, f"{where}.radial.span", units),
+            )
+        return cls(
+            axis,
+            (vals[0], vals[1]),
+            _number(zone[0], f"{where}.zone[0]", units),
+            _number(zone[1], f"{where}.zone[1]", units),
+            _number(obj["to"], f"{where}.to", units),
+            sides,
+            _number(spec.get("phase", 0.0), f"{where}.radial.phase", None),
+            span,
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        spec: dict[str, Any] = {
+            "axis": self.axis,
+            "center": [self.center[0], self.center[1]],
+            "sides": self.sides,
+            "phase": self.phase,
+        }
+        if self.span is not None:
+            spec["span"] = [self.span[0], self.span[1]]
+        return {"radial": spec, "zone": [self.r0, self.r1], "to": self.to}
+
+    @property
+    def shift(self) -> float:
+        return self.to - self.r1
+
+
+@dataclass(frozen=True)
+class ObliqueZone:
+    """The slab between two planes square to the unit vector ``normal``.
+
+    Attributes
+    ----------
+    normal : (float, float, float)
+        Unit vector (world axes).
+    s0, s1 : float
+        The planes ``p . normal = s0`` and ``= s1`` (world units), ``s0 < s1``.
+    to : float
+        Where the plane ``s1`` goes, ``> s0``.
+    """
+
+    normal: tuple[float, float, float]
+    s0: float
+    s1: float
+    to: float
+
+    @classmethod
+    def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> ObliqueZone:
+        """Validate a JSON-like oblique edit ``{"normal": [NX, NY, NZ], "zone": [S0, S1],
+        "to": S1'}`` (positions along the normal: numbers or lengths with a unit)."""
+        _keys(obj, {"normal", "zone", "to", "mode"}, {"normal", "zone", "to"}, where)
+        if obj.get("mode", "stretch") != "stretch":
+            raise InputError(
+                f"{where}.mode: expected stretch (oblique zones), got {shown(obj['mode'])}"
+            )
+        n = obj["normal"]
+        if not isinstance(n, list | tuple) or len(n) != 3:
+            raise InputError(f"{where}.normal: expected [NX, NY, NZ], got {shown(n)}")
+        zone = _pair(obj["zone"], where)
+        nv = [_number(v, f"{where}.normal", None) for v in n]
+        return cls(
+            (nv[0], nv[1], nv[2]),
+            _number(zone[0], f"{where}.zone[0]", units),
+            _number(zone[1], f"{where}.zone[1]", units),
+            _number(obj["to"], f"{where}.to", units),
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        return {"normal": list(self.normal), "zone": [self.s0, self.s1], "to": self.to}
+
+    @property
+    def shift(self) -> float:
+        return self.to - self.s1
+
+
 @dataclass(frozen=True)
 class Recipe:
     """An ordered list of :class:`Edit`; serialises to the JSON schema above."""
 
-    edits: tuple[Edit, ...] = field(default_factory=tuple)
+    edits: tuple[Edit | RadialZone | ObliqueZone, ...] = field(default_factory=tuple)
 
     @classmethod
     def parse(cls, obj: Any, *, units: str | None = None) -> Recipe:
@@ -233,7 +478,7 @@ class Recipe:
         if len(edits) > MAX_EDITS:
             raise InputError(f"recipe: expected at most {MAX_EDITS} edits, got {len(edits)}")
         return cls(
-            tuple(Edit.parse(e, where=f"edits[{i}]", units=units) for i, e in enumerate(edits))
+            tuple(parse_edit(e, where=f"edits[{i}]", units=units) for i, e in enumerate(edits))
         )
 
     @classmethod
@@ -248,6 +493,18 @@ class Recipe:
 
     def to_json(self) -> dict[str, Any]:
         return {"version": RECIPE_VERSION, "edits": [e.to_json() for e in self.edits]}
+
+
+def parse_edit(
+    obj: Any, *, where: str = "edit", units: str | None = None
+) -> Edit | RadialZone | ObliqueZone:
+    """One recipe edit of any kind: a radial zone (``"radial"`` key), an oblique one
+    (``"normal"``) or a zone between planes across an axis (:class:`Edit`)."""
+    if isinstance(obj, dict) and "radial" in obj:
+        return RadialZone.parse(obj, where=where, units=units)
+    if isinstance(obj, dict) and "normal" in obj:
+        return ObliqueZone.parse(obj, where=where, units=units)
+    return Edit.parse(obj, where=where, units=units)
 
 
 # -- the 1D maps: output coordinate -> source coordinate --------------------------------------

@@ -21,10 +21,20 @@ from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
 from .parts import renumber_copies, unlabel_far, update_parts_info
-from .recipe import AXES, Edit, Recipe, forward_coordinate, source_coordinate, tile_count
+from .recipe import (
+    AXES,
+    Edit,
+    ObliqueZone,
+    RadialZone,
+    Recipe,
+    forward_coordinate,
+    source_coordinate,
+    tile_count,
+)
 from .reevaluate import recompute_mask, reevaluate_arrays
 from .resample import Plan, apply_plan, empty_layers, lerp_layers, make_plan
 from .resolved import BYTES_PER_VOXEL, ResolvedEdit, resolve_edit
+from .warp import apply_warp, moved_axes, warp_grid
 
 
 def _as_edit(edit: Edit | dict[str, Any]) -> Edit:
@@ -282,10 +292,16 @@ def apply_recipe(
         # refused before its first edits are computed (a single edit's own check, which names
         # it, comes before any work anyway)
         check_recipe_memory(csdf, recipe, what=f"a recipe of {n} edits")
+    check_mixed(recipe)
     bounds = csdf.surface_bounds() if n else None
     applied: list[tuple[int, dict[str, Any]]] = []  # (axis, forward-map arguments)
     out = csdf
     for i, e in enumerate(recipe.edits):
+        if not isinstance(e, Edit):  # a radial or oblique zone: positions as given
+            report = scaled(progress, i / n, (i + 1) / n)
+            report(0.0, "radial zone" if isinstance(e, RadialZone) else "oblique zone")
+            out = apply_warp(out, e, record={"given": e.to_json(), "recipe_step": i})
+            continue
         ax = e.axis_index
         assert bounds is not None  # computed whenever there are edits
         (s, en, d), (s2, e2, d2) = _carried(e, bounds, applied)
@@ -311,6 +327,21 @@ def apply_recipe(
     return out
 
 
+def check_mixed(recipe: Recipe) -> None:
+    """Refuse (one line) a recipe holding a radial or oblique zone and a zone across an axis that
+    zone moves content along: the one's positions could not be carried through the other."""
+    warps = [(i, e) for i, e in enumerate(recipe.edits) if not isinstance(e, Edit)]
+    for i, w in warps:
+        for j, e in enumerate(recipe.edits):
+            if isinstance(e, Edit) and e.axis_index in moved_axes(w):
+                kind = "radial" if isinstance(w, RadialZone) else "oblique"
+                raise InputError(
+                    f"edits[{j}]: expected no zone along {e.axis} in a recipe with the {kind} "
+                    f"zone edits[{i}] (it moves content along {e.axis}), got one; apply them "
+                    "as two recipes"
+                )
+
+
 def check_recipe_memory(csdf: CSDF, recipe: Recipe | dict[str, Any] | list, *, what: str) -> None:
     """Refuse (:class:`~partscale.errors.MemoryLimitError`) a recipe whose result
     (:func:`recipe_shape`) would not fit in memory, saying what it would need; ``what`` names
@@ -334,7 +365,12 @@ def recipe_shape(csdf: CSDF, recipe: Recipe | dict[str, Any] | list) -> tuple[in
     bounds = csdf.surface_bounds()
     extent = [[float(bounds[0, a]), float(bounds[1, a])] for a in range(3)]
     applied: list[tuple[int, dict[str, Any]]] = []
+    origin = np.asarray(csdf.origin, dtype=np.float64)
     for e in recipe.edits:
+        if not isinstance(e, Edit):
+            origin, grown = warp_grid(origin, tuple(shape), h, e)
+            shape = list(grown)
+            continue
         ax = e.axis_index
         (_, _, d), (s2, e2, d2) = _carried(e, bounds, applied)
         if not np.isfinite((d2 - e2) / h):
@@ -434,13 +470,21 @@ def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
     hist = csdf.meta.get("history", [])
     if after is not None:
         hist = hist[len(after.meta.get("history", [])) :]
-    entries = [h for h in hist if isinstance(h, dict) and h.get("op") == "scale"]
+    entries = [
+        h for h in hist if isinstance(h, dict) and h.get("op") in ("scale", "radial", "oblique")
+    ]
     if not entries:
         raise InputError("history: expected at least one scale edit, got none")
-    edits: list[Edit] = []
+    edits: list[Edit | RadialZone | ObliqueZone] = []
     earlier: list[tuple[int, dict[str, Any]]] = []  # all edits before the current run
     run: list[tuple[int, dict[str, Any]]] = []  # edits of the current run
     for h in entries:
+        if h["op"] == "radial":
+            edits.append(RadialZone.parse({k: h[k] for k in ("radial", "zone", "to")}))
+            continue
+        if h["op"] == "oblique":
+            edits.append(ObliqueZone.parse({k: h[k] for k in ("normal", "zone", "to")}))
+            continue
         applied = Edit.parse(h["edit"])
         ax = applied.axis_index
         if h.get("recipe_step", 0) == 0:

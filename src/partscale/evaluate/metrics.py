@@ -229,7 +229,8 @@ def zones_from_history(edited: CSDF, original: CSDF) -> Zones:
     hist = edited.meta.get("history", [])[len(original.meta.get("history", [])) :]
     applied = [h for h in hist if isinstance(h, dict) and h.get("op") == "scale"]
     resolved = []
-    for e, h in zip(recipe.edits, applied, strict=True):
+    planar = [e for e in recipe.edits if isinstance(e, Edit)]
+    for e, h in zip(planar, applied, strict=True):
         s, en, _ = e.resolve(0.0, 1.0)
         # the shift the stage performed (snapped on the object it applied to)
         shift = float(h["to_snapped"]) - float(h["edit"]["zone"][1])

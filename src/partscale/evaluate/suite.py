@@ -100,6 +100,8 @@ class Entry:
         if self.recipe is not None:
             return "; ".join(
                 f"{e.axis}: zone [{e.start}, {e.end}] to {e.dest} {e.mode}"
+                if isinstance(e, Edit)
+                else str(e.to_json())
                 for e in self.recipe.edits
             )
         if self.edit is None:

@@ -369,6 +369,21 @@ def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
     return s, e, d
 
 
+def _planar(recipe: Recipe) -> list[Edit]:
+    """The recipe's zones across an axis; a radial or oblique zone is refused (one line): the
+    mesh route cuts triangles at planes square to an axis only."""
+    out = []
+    for i, e in enumerate(recipe.edits):
+        if not isinstance(e, Edit):
+            kind = "radial" if "radial" in e.to_json() else "oblique"
+            raise InputError(
+                f"edits[{i}]: expected a zone across x, y or z on the mesh route, got a {kind} "
+                "zone (import the mesh and edit its CSDF: partscale import, then scale)"
+            )
+        out.append(e)
+    return out
+
+
 def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh.Scene, list[Seam]]:
     """Apply ``recipe`` to a trimesh Scene's meshes; returns the edited copy and its tile seams.
 
@@ -403,7 +418,7 @@ def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh
     bounds = np.stack([allv.min(axis=0), allv.max(axis=0)])
     size = float(np.ptp(allv, axis=0).max())
     applied: list[tuple[int, dict]] = []  # (axis, forward-map arguments), as apply_recipe
-    for edit in recipe.edits:
+    for edit in _planar(recipe):
         ax = edit.axis_index
         # positions refer to the recipe's input: planes carried through earlier same-axis edits
         lo0, hi0 = float(bounds[0, ax]), float(bounds[1, ax])
@@ -599,7 +614,7 @@ def edit_mesh_file(
         raise InputError(f"square: expected True or False, got {square!r}")
     scene = load_scene(src)
     # the source's walls, before the recipe touches the scene
-    wanted = square or any(e.axis in WALL_AXES for e in recipe.edits)
+    wanted = square or any(e.axis in WALL_AXES for e in _planar(recipe))
     turn = square_turn(scene.triangles) if wanted else None
     saved = _turn_scene(scene, turn) if square and turn is not None else None
     out, seams = apply_recipe_to_scene(scene, recipe)

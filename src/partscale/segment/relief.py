@@ -70,11 +70,16 @@ def surface_relief(vertices: np.ndarray, normals: np.ndarray, voxel_size: float)
     found = np.isfinite(dist)
     nb = np.where(found, nb, 0)
     n = N[idx]
-    use = found & (np.einsum("skj,sj->sk", N[nb], n) > _SAME_SIDE)
+    # a vertex whose faces cancel has no normal (length 0): it is no sample
+    use = (
+        found
+        & (np.einsum("skj,sj->sk", N[nb], n) > _SAME_SIDE)
+        & (np.linalg.norm(n, axis=1) > 0.5)[:, None]
+    )
     # a tangent frame (a, b, n) per sample: the fit is a height field over (a, b)
     helper = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
     a = np.cross(n, helper)
-    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    a /= np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-12)
     b = np.cross(n, a)
     rel = V[nb] - V[idx][:, None]
     u, v, h = (np.einsum("skj,sj->sk", rel, e) for e in (a, b, n))

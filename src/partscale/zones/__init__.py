@@ -12,6 +12,10 @@ Public API
   recipe reaching a target extent (tile whole periods or whole elements, absorb the rest in a
   constant slab; refused where only a deformation would reach it, unless ``allow_deform``), or
   adding/removing whole elements (``add={'x': 1}``: :func:`add_axis`).
+- :func:`find_radial` ``(csdf, axis='y') -> RadialFrame | None``: a round or regular-polygon
+  outline in plan (centre, sides, phase); :func:`radial_zones`: its annuli of constant radial
+  section (what a radial zone grows; ``fit`` uses it where x and z grow alike and planes
+  across them cannot).
 - :func:`find_elements` ``(csdf, axis) -> AxisElements``: the object along an axis as elements
   (seats, doors, compartments, steps) and separators, with the groups that repeat (alike up to
   a mirror, a small length change or a colour change); :func:`count_zone`: the zone of whole
@@ -41,6 +45,7 @@ from .elements import (
 from .features import feature_notes, local_features
 from .fit import add_axis, fit, fit_axis
 from .profile import Profile, profile
+from .radial import RadialFrame, find_radial, radial_zones
 from .snap import Move, describe_moves, record_snap, snap
 from .suggest import AXES, BoundedRepeat, Candidate, axis_candidates, find_bounded_repeats, suggest
 
@@ -54,6 +59,7 @@ __all__ = [
     "Group",
     "Move",
     "Profile",
+    "RadialFrame",
     "Separator",
     "add_axis",
     "axis_candidates",
@@ -63,12 +69,14 @@ __all__ = [
     "feature_notes",
     "find_bounded_repeats",
     "find_elements",
+    "find_radial",
     "fit",
     "fit_axis",
     "local_features",
     "parse_length",
     "parse_size",
     "profile",
+    "radial_zones",
     "record_snap",
     "snap",
     "suggest",

@@ -14,7 +14,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..csdf import CSDF
-from ..edit import Recipe, edit_label, unit_suffix
+from ..edit import Edit, Recipe, edit_label, unit_suffix
 from .profile import _axis_index
 
 #: Fewest voxels (at 128 voxels along the longest side) of a local feature a slab is split
@@ -141,7 +141,7 @@ def feature_notes(csdf: CSDF, recipe: Recipe) -> list[str]:
     u = unit_suffix(units)
     lines = []
     for i, e in enumerate(recipe.edits):
-        if e.mode != "stretch":
+        if not isinstance(e, Edit) or e.mode != "stretch":
             continue
         ax = e.axis_index
         s, en, _ = e.resolve(float(sb[0, ax]), float(sb[1, ax]))

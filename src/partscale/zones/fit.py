@@ -25,11 +25,12 @@ import numpy as np
 
 from .._options import keyword_options
 from ..csdf import CSDF
-from ..edit import Edit, Recipe, parse_size, tile_count
+from ..edit import Edit, RadialZone, Recipe, parse_size, tile_count
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from .elements import AxisElements, count_zone, element_phrase, find_elements
 from .profile import Profile, profile
+from .radial import find_radial, radial_zones
 from .suggest import (
     AXES,
     SHIFT_STEP,
@@ -968,10 +969,16 @@ def fit(
         parse_size(v, extent=float(sb[1, a] - sb[0, a]), units=units, what=f"size {AXES[a]}")
         for a, v in enumerate(size)
     ]
-    edits: list[Edit] = []
+    edits: list[Edit | RadialZone] = []
     why: list[str] = []
+    radial = _radial_fit(csdf, targets, add, allow_deform)
+    if radial is not None:
+        edits.append(radial[0])
+        why.append(radial[1])
     for a, t in enumerate(targets):
         report(a / 3, f"axis {AXES[a]}")
+        if radial is not None and a != 1:
+            continue  # x and z: the radial zone
         if AXES[a] in add:
             if abs(t - float(sb[1, a] - sb[0, a])) > csdf.voxel_size / 2:
                 raise InputError(
@@ -993,7 +1000,47 @@ def fit(
     report(1.0, "done")
     if not edits:
         raise InputError("size: expected a change on some axis, got the current size")
-    return Recipe(tuple(edits)), why + _off_square(csdf, edits)
+    planar = [e for e in edits if isinstance(e, Edit)]
+    return Recipe(tuple(edits)), why + _off_square(csdf, planar)
+
+
+def _radial_fit(
+    csdf: CSDF, targets: list[float], add: dict[str, int], allow_deform: bool
+) -> tuple[RadialZone, str] | None:
+    """Where x and z grow (or shrink) by the same factor and a zone across x or z cannot take
+    it part-aware (a round or polygonal outline in plan), the radial zone that can: the
+    longest annulus of constant radial section (:func:`~partscale.zones.radial.radial_zones`)
+    about the vertical, grown so the outline scales by the factor; else None."""
+    sb = csdf.surface_bounds()
+    ext = sb[1] - sb[0]
+    h = csdf.voxel_size
+    fx, fz = targets[0] / ext[0], targets[2] / ext[2]
+    if "x" in add or "z" in add or abs(fx - 1) * ext[0] <= h / 2:
+        return None
+    if abs(fx - fz) * max(ext[0], ext[2]) > h:  # not the same factor, within a voxel
+        return None
+    try:
+        for a in (0, 2):
+            fit_axis(csdf, a, targets[a], allow_deform=allow_deform)
+        return None  # planes across x and z take it
+    except InputError:
+        pass
+    frame = find_radial(csdf, "y")
+    zones = [] if frame is None else radial_zones(csdf, frame)
+    if frame is None or not zones:
+        return None
+    r0, r1 = zones[0]
+    grow = (fx - 1) * frame.radius
+    if r1 + grow <= r0 + h:
+        return None
+    units = csdf.meta.get("units")
+    shape = "round" if frame.sides == 0 else f"a regular {frame.sides}-sided polygon"
+    note = (
+        f"x, z: radial zone {_fmt(r0, units)}..{_fmt(r1, units)} from the vertical axis through "
+        f"the centre (the outline in plan is {shape}) grows by {_fmt(grow, units)}: what lies "
+        f"inside it (a column, a foot) and outside it (a rim) keeps its size"
+    )
+    return frame.zone(r0, r1, r1 + grow), note
 
 
 def _check_add(add: Mapping[str, int] | None) -> dict[str, int]:

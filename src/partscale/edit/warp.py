@@ -1,0 +1,300 @@
+"""Zones that are not slabs across an axis: radial (an annulus about an axis) and oblique planes.
+
+Both are *warps*: a map from every output point to the source point it shows, applied to the
+CSDF by resampling (sdf and colour trilinear, parts nearest), then re-evaluated wherever the map
+is not a shift by whole voxels, so that every stored distance near the surface is again the
+distance to the edited surface (:func:`partscale.edit.reevaluate`).
+
+Radial zone (:class:`RadialZone`), about a line parallel to ``axis`` through ``center``: the
+annulus ``r0 <= r <= r1`` becomes ``r0 <= r <= to``; inside ``r0`` nothing moves, outside ``r1``
+everything moves outward by ``to - r1`` along its own radius. With ``span`` only the levels
+between its two positions along the axis move (a lamp's base grows, its shade above does not;
+what crosses the span's ends must lie inside ``r0``). ``r`` is the *gauge* radius of a
+regular polygon of ``sides`` sides (its faces at ``phase`` degrees and every ``360 / sides``):
+the largest of the point's projections on the face normals over ``cos(180 / sides)``, so the
+circles of equal ``r`` are the polygon's own outline scaled and a polygonal top keeps straight
+sides; ``sides = 0`` is the plain (round) radius. A round table's top grows, its column and
+foot keep their size.
+
+Oblique zone (:class:`ObliqueZone`): the slab between the planes ``p . n = s0`` and
+``p . n = s1`` (``n`` any unit vector) becomes ``s0 .. to``; what lies beyond ``s1`` moves by
+``(to - s1) n``. The grid grows to hold the moved content (its voxel size never changes).
+
+Conventions: world units, ``(i, j, k) = (x, y, z)``, voxel centres at ``origin + index *
+voxel_size``, sdf negative inside, sRGB colours.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from .._memory import check_memory
+from ..csdf import BAND_VOXELS, CSDF
+from ..errors import InputError
+from .recipe import AXES, ObliqueZone, RadialZone
+from .reevaluate import reevaluate_arrays
+from .resolved import BYTES_PER_VOXEL
+
+#: Voxels beyond the band resampled trilinearly (the rest take their nearest source value: they
+#: only keep the sign far from the surface).
+RESAMPLE_MARGIN = 2.0
+
+
+def gauge(d: np.ndarray, sides: int, phase: float) -> np.ndarray:
+    """(...,) float64: the gauge radius of offsets ``d`` (..., 2): Euclidean for ``sides == 0``,
+    else that of the regular ``sides``-gon whose face normals lie at ``phase`` degrees and every
+    ``360 / sides`` (its circumradius is 1 on its outline)."""
+    if sides == 0:
+        return np.hypot(d[..., 0], d[..., 1])
+    a = np.deg2rad(phase) + 2 * np.pi * np.arange(sides) / sides
+    normals = np.stack([np.cos(a), np.sin(a)], axis=1)  # (K, 2)
+    return (d @ normals.T).max(axis=-1) / math.cos(math.pi / sides)
+
+
+def _radial_source(r: np.ndarray, zone: RadialZone) -> np.ndarray:
+    """Source gauge radius of output radius ``r`` (the radial map, see module)."""
+    r0, r1, to = zone.r0, zone.r1, zone.to
+    inside = r0 + (r - r0) * (r1 - r0) / (to - r0)
+    return np.where(r <= r0, r, np.where(r <= to, inside, r - (to - r1)))
+
+
+def check_radial(csdf: CSDF, zone: RadialZone) -> None:
+    """Refuse (:class:`InputError`, one line) a radial zone that cannot apply to ``csdf``."""
+    if zone.axis not in AXES:
+        raise InputError(f"radial axis: expected one of x, y, z, got {zone.axis!r}")
+    vals = (zone.r0, zone.r1, zone.to, *zone.center, zone.phase)
+    if not all(math.isfinite(v) for v in vals):
+        raise InputError(f"radial zone: expected finite numbers, got {zone.to_json()}")
+    if not 0 <= zone.r0 < zone.r1:
+        raise InputError(
+            f"radial zone: expected radii 0 <= R0 < R1, got {zone.r0:.4g} {zone.r1:.4g}"
+        )
+    if zone.to <= zone.r0:
+        raise InputError(
+            f"radial to: expected a radius beyond R0 ({zone.r0:.4g}), got {zone.to:.4g}"
+        )
+    if zone.sides != 0 and not 3 <= zone.sides <= 64:
+        raise InputError(f"radial sides: expected 0 (round) or 3..64, got {zone.sides}")
+    if zone.span is not None and not (
+        all(math.isfinite(v) for v in zone.span) and zone.span[0] < zone.span[1]
+    ):
+        raise InputError(f"radial span: expected two finite levels LO < HI, got {list(zone.span)}")
+    rmax = radial_extent(csdf, zone)
+    if zone.r0 >= rmax:
+        raise InputError(
+            f"radial zone: expected R0 inside the object (its outline reaches {rmax:.4g} from "
+            f"the centre), got {zone.r0:.4g}"
+        )
+
+
+def radial_extent(csdf: CSDF, zone: RadialZone) -> float:
+    """The largest gauge radius of the solid about ``zone``'s axis (world units)."""
+    ax = AXES.index(zone.axis)
+    others = [a for a in range(3) if a != ax]
+    inside = np.asarray(csdf.sdf < 0)
+    foot = inside.any(axis=ax)  # (U, V) in the order of the two other axes
+    iu, iv = np.nonzero(foot)
+    if iu.size == 0:
+        raise InputError("radial zone: expected a solid, got an empty grid")
+    h = csdf.voxel_size
+    d = np.stack(
+        [
+            csdf.origin[others[0]] + iu * h - zone.center[0],
+            csdf.origin[others[1]] + iv * h - zone.center[1],
+        ],
+        axis=1,
+    )
+    return float(gauge(d, zone.sides, zone.phase).max())
+
+
+def _resample(
+    csdf: CSDF, origin: np.ndarray, shape: tuple[int, ...], src_of
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The output arrays on the grid ``origin``/``shape``: sdf (X, Y, Z) float32, rgb
+    (X, Y, Z, 3) uint8, parts (X, Y, Z) int16, each voxel showing the source point
+    ``src_of(points)`` maps it to, and ``moved`` (X, Y, Z) bool: the voxels that show another
+    place than their own shifted by whole voxels (the surface there may have changed)."""
+    h = csdf.voxel_size
+    check_memory(shape, BYTES_PER_VOXEL, what="the warped grid")
+    axes = [origin[a] + np.arange(shape[a]) * h for a in range(3)]
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    src = src_of(pts)
+    idx = (src - csdf.origin) / h  # continuous source indices
+    off = (src - pts) / h
+    moved = np.abs(off - np.round(off)).max(axis=1) > 1e-6
+    n = np.clip(np.rint(idx).astype(np.int64), 0, np.array(csdf.shape) - 1)
+    sdf = csdf.sdf[n[:, 0], n[:, 1], n[:, 2]].astype(np.float32)
+    rgb = csdf.rgb[n[:, 0], n[:, 1], n[:, 2]]
+    parts = csdf.parts[n[:, 0], n[:, 1], n[:, 2]]
+    # trilinear near the surface where the map is no whole-voxel shift; farther out the
+    # nearest value keeps the sign (re-evaluation covers the band)
+    near = moved & (np.abs(sdf) <= (BAND_VOXELS + RESAMPLE_MARGIN) * h)
+    q = idx[near].T
+    sdf[near] = ndimage.map_coordinates(csdf.sdf, q, order=1, mode="nearest")
+    for c in range(3):
+        rgb[near, c] = np.clip(
+            np.rint(ndimage.map_coordinates(csdf.rgb[..., c], q, order=1, mode="nearest")), 0, 255
+        ).astype(np.uint8)
+    return sdf.reshape(shape), rgb.reshape((*shape, 3)), parts.reshape(shape), moved.reshape(shape)
+
+
+def _finish(
+    csdf: CSDF,
+    origin: np.ndarray,
+    arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    entry: dict[str, Any],
+) -> CSDF:
+    """Re-evaluate the voxels near the surface within the band of a moved one, and the new
+    CSDF with its history entry."""
+    sdf, rgb, parts, moved = arrays
+    h = csdf.voxel_size
+    band = BAND_VOXELS + 1.0
+    r = math.ceil(band) + 1
+    near = np.abs(sdf) <= band * h
+    # a voxel's nearest surface point is within the band: only moved voxels that near count
+    mask = near & ndimage.binary_dilation(moved & near, iterations=r)
+    n = reevaluate_arrays(sdf, rgb, parts, h, mask, band=band)
+    entry = {**entry, "reevaluated_voxels": int(n)}
+    return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
+
+
+def moved_axes(zone: RadialZone | ObliqueZone) -> set[int]:
+    """The world axes along which ``zone`` moves content (planar edits on them and this zone
+    do not mix in one recipe: their positions could not be carried through it)."""
+    if isinstance(zone, RadialZone):
+        return {a for a in range(3) if a != AXES.index(zone.axis)}
+    return {a for a in range(3) if abs(zone.normal[a]) > 1e-9}
+
+
+def warp_grid(
+    origin: np.ndarray, shape: tuple[int, ...], h: float, zone: RadialZone | ObliqueZone
+) -> tuple[np.ndarray, tuple[int, ...]]:
+    """Origin and shape of the grid ``zone`` gives from the grid ``origin``/``shape``/``h``
+    without computing anything."""
+    origin = np.asarray(origin, dtype=np.float64)
+    lo = origin - h / 2
+    hi = origin + (np.asarray(shape) - 0.5) * h
+    if isinstance(zone, RadialZone):
+        shift = zone.shift
+        grow = np.zeros(3)
+        others = [a for a in range(3) if a != AXES.index(zone.axis)]
+        grow[others] = max(shift, 0.0) / (math.cos(math.pi / zone.sides) if zone.sides else 1.0)
+        a, b = lo + h / 2 - grow, hi - h / 2 + grow
+    else:
+        n = np.asarray(zone.normal, dtype=np.float64)
+        n = n / max(float(np.linalg.norm(n)), 1e-300)
+        move = n * zone.shift
+        a, b = np.minimum(lo, lo + move) + h / 2, np.maximum(hi, hi + move) - h / 2
+    i0 = np.floor((a - origin) / h + 1e-9).astype(np.int64)
+    i1 = np.ceil((b - origin) / h - 1e-9).astype(np.int64)
+    return origin + i0 * h, tuple(int(v) for v in (i1 - i0 + 1))
+
+
+def apply_warp(
+    csdf: CSDF, zone: RadialZone | ObliqueZone, *, record: dict[str, Any] | None = None
+) -> CSDF:
+    """:func:`apply_radial` or :func:`apply_oblique`, by the kind of ``zone``; ``record``:
+    more keys for its history entry (a recipe's step)."""
+    if isinstance(zone, RadialZone):
+        return apply_radial(csdf, zone, record=record)
+    return apply_oblique(csdf, zone, record=record)
+
+
+def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None = None) -> CSDF:
+    """The annulus of ``zone`` stretched (see module); ``meta['history']`` gains
+    ``{"op": "radial", ...}`` (:meth:`RadialZone.to_json`).
+
+    Parameters
+    ----------
+    csdf : CSDF
+    zone : RadialZone
+        Radii in world units. Everything beyond ``r0`` is resampled, so ``to`` is kept as given
+        (no snapping to whole voxels).
+
+    Returns
+    -------
+    CSDF
+        A grid grown to hold the outline moved by ``to - r1`` on each side across the axis;
+        inside ``r0`` (and outside ``span``) the voxels are the input's own.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.edit import RadialZone, apply_radial
+    >>> disc = shapes.box((-0.5, 0, -0.5), (0.5, 0.05, 0.5), voxel_size=0.05)
+    >>> out = apply_radial(disc, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5, sides=4))
+    >>> round(float(out.surface_bounds()[1, 0]), 2)
+    0.6
+    """
+    check_radial(csdf, zone)
+    h = csdf.voxel_size
+    ax = AXES.index(zone.axis)
+    others = [a for a in range(3) if a != ax]
+    origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
+    c = np.array(zone.center, dtype=np.float64)
+
+    def src_of(p: np.ndarray) -> np.ndarray:
+        d = p[:, others] - c
+        r = gauge(d, zone.sides, zone.phase)
+        k = np.where(r > 0, _radial_source(r, zone) / np.maximum(r, 1e-300), 1.0)
+        if zone.span is not None:  # only the levels along the axis the zone spans move
+            k = np.where((p[:, ax] >= zone.span[0]) & (p[:, ax] <= zone.span[1]), k, 1.0)
+        out = p.copy()
+        out[:, others] = c + d * k[:, None]
+        return out
+
+    entry = {"op": "radial", **zone.to_json(), **(record or {})}
+    return _finish(csdf, origin, _resample(csdf, origin, shape, src_of), entry)
+
+
+def check_oblique(csdf: CSDF, zone: ObliqueZone) -> np.ndarray:
+    """``zone``'s normal as a unit (3,) float64, or :class:`InputError` (one line)."""
+    n = np.asarray(zone.normal, dtype=np.float64)
+    if n.shape != (3,) or not np.isfinite(n).all() or np.linalg.norm(n) < 1e-9:
+        raise InputError(f"normal: expected a non-zero vector nx ny nz, got {list(zone.normal)}")
+    n = n / np.linalg.norm(n)
+    if not all(math.isfinite(v) for v in (zone.s0, zone.s1, zone.to)):
+        raise InputError(f"oblique zone: expected finite positions, got {zone.to_json()}")
+    if not zone.s0 < zone.s1:
+        raise InputError(f"oblique zone: expected START < END, got {zone.s0:.4g} {zone.s1:.4g}")
+    if zone.to <= zone.s0:
+        raise InputError(
+            f"oblique to: expected a position beyond START ({zone.s0:.4g}), got {zone.to:.4g}"
+        )
+    return n
+
+
+def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | None = None) -> CSDF:
+    """The slab of ``zone`` stretched along its normal (see module); ``meta['history']`` gains
+    ``{"op": "oblique", ...}`` (:meth:`ObliqueZone.to_json`, the normal made unit).
+
+    The shift ``to - s1`` is kept as given (an oblique shift is not a whole number of voxels
+    along every axis); everything beyond the zone is resampled and re-evaluated.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.edit import ObliqueZone, apply_oblique
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.1, 0.1), voxel_size=0.05)
+    >>> out = apply_oblique(bar, ObliqueZone((1.0, 0.0, 0.0), 0.3, 0.6, 0.8))
+    >>> round(float(out.surface_bounds()[1, 0]), 2)
+    1.2
+    """
+    n = check_oblique(csdf, zone)
+    h = csdf.voxel_size
+    s0, s1, to = zone.s0, zone.s1, zone.to
+    length, target = s1 - s0, to - s0
+    origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
+
+    def src_of(p: np.ndarray) -> np.ndarray:
+        s = p @ n
+        back = np.where(s <= s0, 0.0, np.where(s <= to, (s - s0) * (1 - length / target), to - s1))
+        return p - back[:, None] * n
+
+    unit = ObliqueZone((float(n[0]), float(n[1]), float(n[2])), s0, s1, to)
+    entry = {"op": "oblique", **unit.to_json(), **(record or {})}
+    return _finish(csdf, origin, _resample(csdf, origin, shape, src_of), entry)

@@ -1,0 +1,242 @@
+"""Zones beyond slabs across an axis: radial (an annulus about the vertical) and oblique planes.
+
+Analytic objects are judged against the analytic shape the edit should give (true distances in
+the band, radii, thicknesses); real ones against measurements of their own grid before.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import assert_bad_input, data_path
+
+from partscale import shapes
+from partscale.csdf import BAND_VOXELS, load, save
+from partscale.edit import (
+    ObliqueZone,
+    RadialZone,
+    Recipe,
+    apply_oblique,
+    apply_radial,
+    apply_recipe,
+    recipe_from_history,
+)
+from partscale.errors import InputError
+from partscale.ingest import load as import_file
+from partscale.zones import find_radial, fit
+
+H = 0.01
+
+
+def _cyl(p, r, y0, y1):
+    q = np.stack(
+        [np.hypot(p[:, 0], p[:, 2]) - r, np.abs(p[:, 1] - (y0 + y1) / 2) - (y1 - y0) / 2], 1
+    )
+    return np.minimum(q.max(1), 0) + np.linalg.norm(np.maximum(q, 0), axis=1)
+
+
+def round_table_sdf(top_r=0.5):
+    """A disc top (0.04 thick) on a column (r 0.06) on a round foot (r 0.25), about y."""
+
+    def sdf(p):
+        d = np.minimum(_cyl(p, top_r, 0.7, 0.74), _cyl(p, 0.06, 0.05, 0.7))
+        return np.minimum(d, _cyl(p, 0.25, 0.0, 0.05))
+
+    return sdf
+
+
+def round_table(top_r=0.5):
+    b = np.array([[-top_r, 0, -top_r], [top_r, 0.74, top_r]])
+    return shapes.grid(round_table_sdf(top_r), b, voxel_size=H, source="round table")
+
+
+def _extent(c, ax):
+    sb = c.surface_bounds()
+    return float(sb[1, ax] - sb[0, ax])
+
+
+def _radius_at(c, y):
+    """The solid's largest distance from the y axis at height ``y`` (voxel centres inside)."""
+    j = round((y - c.origin[1]) / c.voxel_size)
+    inside = np.argwhere(c.sdf[:, j, :] < 0)
+    xz = c.origin[[0, 2]] + inside * c.voxel_size
+    return float(np.hypot(xz[:, 0], xz[:, 1]).max())
+
+
+def test_round_table_grows_its_top_only():
+    """fit 125 % in x and z: a radial zone; the top's radius 1.25 x within a voxel, the
+    column's and the foot's within half a voxel, the top as thick; every distance within the
+    band true to the analytic result within half a voxel."""
+    c = round_table()
+    recipe, why = fit(c, ["125%", "=", "125%"])
+    assert isinstance(recipe.edits[0], RadialZone), why
+    assert "radial zone" in why[0] and "round" in why[0], why
+    out = apply_recipe(c, recipe)
+    assert abs(_extent(out, 0) - 1.25) <= H and abs(_extent(out, 2) - 1.25) <= H
+    for y, r in ((0.3, 0.06), (0.025, 0.25)):
+        assert abs(_radius_at(out, y) - _radius_at(c, y)) <= H / 2, (y, r)
+    assert abs(_extent(out, 1) - 0.74) <= H / 2
+    # true distances in the band, against the analytic table with a 0.625 top
+    truth = round_table_sdf(0.625)
+    pts = np.argwhere(np.abs(out.sdf) <= BAND_VOXELS * H)
+    world = out.origin + pts * H
+    err = np.abs(out.sdf[tuple(pts.T)] - truth(world)) / H
+    assert np.percentile(err, 99) <= 0.5 and err.mean() <= 0.1, (err.mean(), np.percentile(err, 99))
+
+
+def test_radial_history_replays():
+    c = round_table()
+    zone = RadialZone("y", (0.0, 0.0), 0.1, 0.45, 0.6)
+    out = apply_radial(c, zone)
+    again = apply_recipe(c, recipe_from_history(out, after=c))
+    assert np.array_equal(again.sdf, out.sdf) and np.array_equal(again.rgb, out.rgb)
+    assert Recipe.parse(Recipe((zone,)).to_json()) == Recipe((zone,))
+
+
+def test_polygonal_top_stays_regular():
+    """kenney/tableRound (a hexagonal top on a pedestal) 20 % wider and deeper: a radial zone
+    with the polygon's gauge; the pedestal's radius within half a voxel, the top as thick, and
+    the top's outline a regular polygon: every face as far from the centre as the others,
+    within a voxel."""
+    c = import_file(data_path("kenney/tableRound.glb"), res=128)
+    frame = find_radial(c)
+    assert frame is not None and frame.sides >= 5
+    recipe, why = fit(c, ["120%", "=", "120%"])
+    assert isinstance(recipe.edits[0], RadialZone), why
+    out = apply_recipe(c, recipe)
+    h = c.voxel_size
+    for ax in (0, 2):
+        assert abs(_extent(out, ax) - 1.2 * _extent(c, ax)) <= h
+    # the pedestal at a quarter of the height: its largest radius unchanged
+    y = c.surface_bounds()[0, 1] + 0.25 * _extent(c, 1)
+    assert abs(_radius_at(out, y) - _radius_at(c, y)) <= h / 2
+    assert abs(_extent(out, 1) - _extent(c, 1)) <= h / 2
+    # each face's distance from the centre (support along its normal) alike, within a voxel
+    top = np.argwhere((out.sdf < 0).any(axis=1))
+    xz = out.origin[[0, 2]] + top * h - np.array(frame.center)
+    a = np.deg2rad(frame.phase) + 2 * np.pi * np.arange(frame.sides) / frame.sides
+    support = (xz @ np.stack([np.cos(a), np.sin(a)])).max(axis=0)
+    assert np.ptp(support) <= h, support
+
+
+def test_lamp_base_grows_its_pole_does_not(cli, tmp_path):
+    """kenney/lampRoundFloor: a radial zone over the base's height only (--span): the base's
+    radius grows by the shift, the pole's and the shade's stay."""
+    src = tmp_path / "lamp.csdf.npz"
+    cli("import", data_path("kenney/lampRoundFloor.glb"), "-o", src, "--res", "128", check=True)
+    c = load(src)
+    sb = c.surface_bounds()
+    y0, height = float(sb[0, 1]), _extent(c, 1)
+    base_top = y0 + 0.03 * height
+    out = tmp_path / "wide.csdf.npz"
+    proc = cli(
+        "scale",
+        src,
+        "-o",
+        out,
+        "--radial",
+        "--zone",
+        "30%",
+        "90%",
+        "--by",
+        "+5cm",
+        "--span",
+        repr(y0 - 0.01),
+        repr(base_top),
+    )
+    assert proc.returncode == 0, proc.stderr
+    o = load(out)
+    h = c.voxel_size
+    yb = y0 + 0.01
+    assert abs(_radius_at(o, yb) - _radius_at(c, yb) - 0.05) <= h
+    for share in (0.5, 0.95):  # the pole, the shade
+        y = y0 + share * height
+        assert abs(_radius_at(o, y) - _radius_at(c, y)) <= h / 2, share
+
+
+def test_oblique_stretch_keeps_a_turned_bar_thick():
+    """A bar 0.1 thick turned 30 degrees about z, stretched along its own length by 0.2 with
+    --normal along it: its thickness unchanged within half a voxel, its length 0.2 longer, the
+    part before the zone where it was."""
+    t = np.deg2rad(30)
+    u = np.array([np.cos(t), np.sin(t), 0.0])  # along the bar
+    w = np.array([-np.sin(t), np.cos(t), 0.0])  # across it
+
+    def bar(length):
+        def sdf(p):
+            q = np.stack([p @ u - length / 2, p @ w, p[:, 2] - 0.05], axis=1)
+            d = np.abs(q) - np.array([length / 2, 0.05, 0.05])
+            return np.minimum(d.max(1), 0) + np.linalg.norm(np.maximum(d, 0), axis=1)
+
+        return sdf
+
+    c = shapes.grid(bar(0.8), np.array([[-0.1, -0.1, 0], [0.8, 0.5, 0.1]]), voxel_size=H)
+    out = apply_oblique(c, ObliqueZone(tuple(u), 0.3, 0.5, 0.7))
+    truth = bar(1.0)
+    pts = np.argwhere(np.abs(out.sdf) <= BAND_VOXELS * H)
+    err = np.abs(out.sdf[tuple(pts.T)] - truth(out.origin + pts * H)) / H
+    assert np.percentile(err, 99) <= 0.5, np.percentile(err, 99)
+    inside = out.origin + np.argwhere(out.sdf < 0) * H
+    thick = np.ptp(inside @ w)
+    assert abs(thick - 0.1) <= H / 2 + H, thick  # voxel centres: within a voxel of 0.1
+    assert abs(np.ptp(inside @ u) - np.ptp((c.origin + np.argwhere(c.sdf < 0) * H) @ u) - 0.2) <= H
+
+
+def test_bad_warps(cli, tmp_path):
+    c = round_table()
+    with pytest.raises(InputError, match="inside the object"):
+        apply_radial(c, RadialZone("y", (0.0, 0.0), 0.8, 0.9, 1.0))
+    with pytest.raises(InputError, match="non-zero"):
+        apply_oblique(c, ObliqueZone((0.0, 0.0, 0.0), 0.1, 0.2, 0.3))
+    mixed = {
+        "edits": [
+            {"radial": {"center": [0, 0]}, "zone": [0.1, 0.4], "to": 0.5},
+            {"axis": "x", "zone": [0.1, 0.2], "to": 0.3},
+        ]
+    }
+    with pytest.raises(InputError, match="no zone along x"):
+        apply_recipe(c, mixed)
+    src = tmp_path / "t.csdf.npz"
+    save(c, src)
+    out = tmp_path / "o.csdf.npz"
+    assert_bad_input(
+        cli(
+            "scale",
+            src,
+            "-o",
+            out,
+            "--radial",
+            "--axis",
+            "x",
+            "--zone",
+            "10%",
+            "90%",
+            "--by",
+            "5cm",
+        ),
+        "--axis",
+    )
+    assert_bad_input(
+        cli(
+            "scale",
+            src,
+            "-o",
+            out,
+            "--normal",
+            "0",
+            "0",
+            "0",
+            "--zone",
+            "0.1",
+            "0.2",
+            "--to",
+            "0.3",
+        ),
+        "non-zero",
+    )
+    assert_bad_input(
+        cli("scale", src, "-o", out, "--radial", "--zone", "120%", "130%", "--to", "140%"),
+        "inside the object",
+    )
+    assert_bad_input(cli("scale", src, "-o", out, "--center", "0", "0"), "--center")
+    assert not out.exists()

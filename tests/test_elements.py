@@ -290,8 +290,22 @@ def test_bad_counts():
 # -- refusals -------------------------------------------------------------------------------------
 
 
+def oval_table():
+    """An elliptical top (0.6 x 0.4 half-axes, not a polygon: no radial zone fits it) on a
+    column on a round foot."""
+
+    def sdf(p):
+        q = np.hypot(p[:, 0] / 0.6, p[:, 2] / 0.4) - 1.0  # a bound of the ellipse's distance
+        top = np.maximum(q * 0.4, np.abs(p[:, 1] - 0.72) - 0.02)
+        col = np.maximum(np.hypot(p[:, 0], p[:, 2]) - 0.06, np.abs(p[:, 1] - 0.375) - 0.325)
+        return np.minimum(top, col)
+
+    bounds = np.array([[-0.6, 0.05, -0.4], [0.6, 0.74, 0.4]])
+    return shapes.grid(sdf, bounds, voxel_size=H, source="oval table")
+
+
 def test_round_top_is_refused_then_allowed():
-    c = round_table()
+    c = oval_table()
     with pytest.raises(InputError, match=r"round or curved.*alternatives"):
         fit(c, ["120%", "=", "120%"])
     recipe, _ = fit(c, ["120%", "=", "120%"], allow_deform=True)
@@ -335,7 +349,7 @@ def test_cli_fit_add_bad_input(cli, sofa_file, tmp_path):
 
 def test_cli_refuses_a_round_top(cli, tmp_path):
     src = tmp_path / "round.csdf.npz"
-    save(round_table(), src)
+    save(oval_table(), src)
     out = tmp_path / "o.csdf.npz"
     assert_bad_input(
         cli("fit", src, "-o", out, "--size", "120%", "=", "120%"),
@@ -429,16 +443,17 @@ def test_real_one_more_row_or_drawer(rel, axis):
 
 
 def test_real_round_table_is_refused_not_made_wavy(cli, tmp_path):
-    """kenney/tableRound (an octagonal top on a pedestal) 20 % wider and deeper: refused in one
-    line naming what it would need and the alternatives, nothing written; with --allow-deform
-    written, and the notes say what was deformed."""
+    """kenney/tableRound (a hexagonal top on a pedestal) 20 % wider only (x alone: no radial
+    zone grows one axis): refused in one line naming what it would need and the alternatives,
+    nothing written; with --allow-deform written, and the notes say what was deformed. (x and
+    z alike take a radial zone: tests/test_warp.py.)"""
     src = data_path("kenney/tableRound.glb")
     c = tmp_path / "round.csdf.npz"
     cli("import", src, "-o", c, "--res", "96", check=True)
     out = tmp_path / "wide.csdf.npz"
-    proc = cli("fit", c, "-o", out, "--size", "120%", "=", "120%")
+    proc = cli("fit", c, "-o", out, "--size", "120%", "=", "=")
     assert_bad_input(proc, "round or curved", "to grow", "--allow-deform")
     assert not out.exists()
-    proc = cli("fit", c, "-o", out, "--size", "120%", "=", "120%", "--allow-deform")
+    proc = cli("fit", c, "-o", out, "--size", "120%", "=", "=", "--allow-deform")
     assert proc.returncode == 0, proc.stderr
     assert out.exists() and ("thin slab" in proc.stderr or "GLOBAL" in proc.stderr), proc.stderr

@@ -240,3 +240,149 @@ def test_bad_warps(cli, tmp_path):
     )
     assert_bad_input(cli("scale", src, "-o", out, "--center", "0", "0"), "--center")
     assert not out.exists()
+
+
+# -- steps: repetition by a diagonal shift ---------------------------------------------------------
+
+
+def flight(n=6, going=0.2, rise=0.15, width=0.6, solid=True):
+    """A straight flight along x: ``n`` steps ``going`` deep and ``rise`` high; solid (each step
+    a box down to the floor) or open (treads 4 cm thick on two stringers 4 cm wide)."""
+    if solid:
+        boxes = [((going * i, 0, 0), (going * (i + 1), rise * (i + 1), width)) for i in range(n)]
+        sdf = lambda p: shapes.boxes_sdf(p, boxes)  # noqa: E731
+    else:
+        treads = [
+            (
+                (going * i, rise * (i + 1) - 0.04, 0.04),
+                (going * (i + 1), rise * (i + 1), width - 0.04),
+            )
+            for i in range(n)
+        ]
+        slope = rise / going
+
+        def stringer(p, z0):
+            # a slab 4 cm thick along the diagonal, 4 cm wide in z, over the flight's length
+            u = (p[:, 0] * going + p[:, 1] * rise) / np.hypot(going, rise)
+            v = (p[:, 1] - slope * p[:, 0]) * going / np.hypot(going, rise)
+            q = np.stack(
+                [
+                    np.abs(u - n * np.hypot(going, rise) / 2) - n * np.hypot(going, rise) / 2,
+                    np.abs(v - 0.02) - 0.04,
+                    np.abs(p[:, 2] - z0 - 0.02) - 0.02,
+                ],
+                1,
+            )
+            return np.minimum(q.max(1), 0) + np.linalg.norm(np.maximum(q, 0), axis=1)
+
+        def sdf(p):
+            d = shapes.boxes_sdf(p, treads)
+            return np.minimum(d, np.minimum(stringer(p, 0.0), stringer(p, width - 0.04)))
+
+    bounds = np.array([[0, 0, 0], [going * n, rise * n + 0.05, width]])
+    return shapes.grid(sdf, bounds, voxel_size=H, source="flight")
+
+
+def _tread_heights(c):
+    """Heights (voxels) of the top surface along x at mid-width: one value per column."""
+    inside = c.sdf[:, :, c.shape[2] // 2] < 0
+    return np.where(inside.any(1), inside.shape[1] - 1 - np.argmax(inside[:, ::-1], 1), -1)
+
+
+def _pieces(c):
+    """Connected pieces of the solid (face-connected voxels inside) of at least 8 voxels."""
+    from scipy import ndimage
+
+    lab, _ = ndimage.label(c.sdf < 0)
+    return int((np.bincount(lab.ravel())[1:] >= 8).sum())
+
+
+def _largest(c):
+    """Voxels of the largest connected piece of the solid."""
+    from scipy import ndimage
+
+    lab, _ = ndimage.label(c.sdf < 0)
+    return int(np.bincount(lab.ravel())[1:].max())
+
+
+def _risers(c):
+    """Rises (voxels) between consecutive treads along the flight (a level a single column
+    wide is no tread: the sheet where two of the analytic steps' boxes touch)."""
+    top = _tread_heights(c)
+    top = top[top >= 0]
+    starts = np.concatenate([[True], np.diff(top) != 0])
+    runs = np.diff(np.concatenate([np.flatnonzero(starts), [len(top)]]))
+    levels = top[starts][runs > 1]
+    return np.diff(levels)
+
+
+@pytest.mark.parametrize("solid", [True, False])
+def test_flight_step_found_and_one_more_added(solid):
+    """A flight's step found to a quarter voxel; +1 step: the total rise grows by one rise
+    within half a voxel, every riser equal within a voxel, no new piece; -1 removes one."""
+    from partscale.zones import find_screws
+
+    c = flight(solid=solid)
+    (s,) = find_screws(c)[:1]
+    assert abs(s.going - 0.2) <= H / 4 and abs(s.rise - 0.15) <= H / 4, s
+    assert s.axis == "x"
+    for n in (1, -1):
+        recipe, why = fit(c, None, add={"y": n})
+        out = apply_recipe(c, recipe)
+        assert abs(_extent(out, 1) - _extent(c, 1) - n * 0.15) <= H / 2, why
+        r = _risers(out)
+        assert len(r) == len(_risers(c)) + n and np.ptp(r) <= 1, r
+        assert _pieces(out) <= _pieces(c)
+
+
+@pytest.mark.parametrize(
+    "rel",
+    ["kenney/stairsOpenSingle.glb", "kenney/stairs.glb", "sweethome3d/staircase.obj"],
+)
+def test_real_flights_step_and_one_more(rel):
+    """The step found on real flights matches the mesh's own treads (going and rise from its
+    upward faces' heights and starts) within half a voxel; +1 step: the total rise grows by one
+    rise within half a voxel, the flight one piece."""
+    import trimesh
+
+    from partscale.zones import find_screws
+
+    path = data_path(rel)
+    c = import_file(path, res=128)
+    h = c.voxel_size
+    (s,) = find_screws(c)[:1]
+    # the mesh's treads: upward faces grouped by height
+    m = trimesh.load(path, force="mesh")
+    up = m.face_normals[:, 1] > 0.99
+    ys = np.round(m.triangles_center[up][:, 1] / (h / 4)) * (h / 4)
+    levels = np.unique(ys)
+    area = np.array([m.area_faces[up][ys == y].sum() for y in levels])
+    treads = levels[area > 0.5 * area.max()]  # the treads: the largest upward faces
+    rise = float(np.median(np.diff(treads)))
+    scale = _extent(c, 1) / float(np.ptp(m.vertices[:, 1]))  # the import's units
+    assert abs(s.rise - rise * scale) <= h / 2, (s.rise, rise * scale)
+    recipe, why = fit(c, None, add={"y": 1})
+    out = apply_recipe(c, recipe)
+    assert abs(_extent(out, 1) - _extent(c, 1) - s.rise) <= h / 2 + 1e-9, why
+    # at most the new tread is a piece of its own (open treads are); the stringers run on: the
+    # largest piece (they and what joins them) is no smaller: not split at the cut
+    assert _pieces(out) <= _pieces(c) + 1, (_pieces(c), _pieces(out))
+    assert _largest(out) >= _largest(c)
+
+
+@pytest.mark.slow
+def test_no_false_steps_on_tables_chairs_cabinets():
+    from partscale.zones import find_screws
+
+    for rel in [
+        "kenney/table.glb",
+        "kenney/chair.glb",
+        "kenney/bookcaseOpen.glb",
+        "kenney/sideTableDrawers.glb",
+        "sweethome3d/bookcase.obj",
+        "sweethome3d/railing.obj",
+        "sweethome3d/dresser.obj",
+        "polyhaven/painted_wooden_cabinet/painted_wooden_cabinet_1k.gltf",
+    ]:
+        c = import_file(data_path(rel), res=96)
+        assert find_screws(c) == [], rel

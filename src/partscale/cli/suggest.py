@@ -36,7 +36,7 @@ def suggest(
     """
     from ..csdf import load
     from ..orient import WALL_AXES, csdf_turn, off_square_message
-    from ..zones import AXES, find_elements
+    from ..zones import AXES, find_elements, find_radial, find_screws
     from ..zones import suggest as suggest_zones
 
     if axis is not None and axis.lower() not in ("x", "y", "z"):
@@ -58,15 +58,40 @@ def suggest(
         typer.echo(f"warning: {off_square_message(turn, c)}", err=True)
     units = c.meta.get("units") or ""
     found = {a: find_elements(c, a) for a in ([ax] if ax else list(AXES))}
+    steps = find_screws(c) if ax is None or ax in ("x", "y", "z") else []
+    steps = [sc for sc in steps if ax is None or abs(sc.step[AXES.index(ax)]) > 0]
+    frame = find_radial(c, "y") if ax is None else None
     if as_json:
         doc = {
             "candidates": [x.to_json() for x in cands],
             "elements": {a: f.to_json() for a, f in found.items()},
+            "steps": [sc.to_json() for sc in steps],
         }
+        if frame is not None:
+            doc["radial"] = {
+                "center": list(frame.center),
+                "sides": frame.sides,
+                "phase": frame.phase,
+                "radius": frame.radius,
+            }
         typer.echo(json.dumps(doc, indent=2))
     else:
+        stepped = {AXES[k] for sc in steps for k in range(3) if abs(sc.step[k]) > 0}
         for f in found.values():
-            typer.echo(_elements_line(f, units))
+            if f.best is not None or f.axis not in stepped:
+                typer.echo(_elements_line(f, units))
+        for sc in steps:
+            typer.echo(
+                f"steps: a flight along {sc.axis}, {sc.count} steps of {sc.going:.4g} going and "
+                f"{sc.rise:.4g} rise {units} ({100 * sc.support:.0f}% of the surface repeats; "
+                "fit --add y 1 adds one)"
+            )
+        if frame is not None:
+            shape = "round" if frame.sides == 0 else f"a regular {frame.sides}-sided polygon"
+            typer.echo(
+                f"plan: {shape} about the vertical through {frame.center[0]:.4g}, "
+                f"{frame.center[1]:.4g} {units} (scale --radial grows it)"
+            )
         for a in [ax] if ax else list(AXES):
             mine = [x for x in cands if x.axis == a]
             if not mine:

@@ -67,6 +67,7 @@ from .recipe import (
     ObliqueZone,
     RadialZone,
     Recipe,
+    ScrewZone,
     forward_coordinate,
     parse_edit,
     parse_position,
@@ -86,7 +87,7 @@ from .scale import (
     scale,
 )
 from .units import SUFFIXES, parse_length, parse_size
-from .warp import apply_oblique, apply_radial, apply_warp, gauge, radial_extent
+from .warp import apply_oblique, apply_radial, apply_screw, apply_warp, gauge, radial_extent
 
 __all__ = [
     "AXES",
@@ -100,10 +101,12 @@ __all__ = [
     "RadialZone",
     "Recipe",
     "ResolvedEdit",
+    "ScrewZone",
     "apply_edit",
     "apply_oblique",
     "apply_radial",
     "apply_recipe",
+    "apply_screw",
     "apply_warp",
     "check_recipe_memory",
     "describe_changes",

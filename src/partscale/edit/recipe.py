@@ -122,6 +122,31 @@ JSON_SCHEMA: dict[str, Any] = {
                         },
                     },
                     {
+                        "description": "steps of a diagonal repetition: what lies beyond the "
+                        "plane cut across axis moves by copies times step",
+                        "type": "object",
+                        "required": ["screw", "copies"],
+                        "additionalProperties": False,
+                        "properties": {
+                            "screw": {
+                                "type": "object",
+                                "required": ["axis", "step", "cut"],
+                                "additionalProperties": False,
+                                "properties": {
+                                    "axis": {"enum": list(AXES)},
+                                    "step": {
+                                        "type": "array",
+                                        "minItems": 3,
+                                        "maxItems": 3,
+                                        "items": {"$ref": "#/$defs/length"},
+                                    },
+                                    "cut": {"$ref": "#/$defs/length"},
+                                },
+                            },
+                            "copies": {"type": "integer"},
+                        },
+                    },
+                    {
                         "description": "an oblique zone: the slab between the planes "
                         "p . normal = START and = END becomes START..to",
                         "type": "object",
@@ -450,10 +475,70 @@ class ObliqueZone:
 
 
 @dataclass(frozen=True)
+class ScrewZone:
+    """``copies`` more steps of a repetition by a diagonal shift (a straight flight): what lies
+    beyond the plane ``cut`` across ``axis`` moves by ``copies`` times ``step``
+    (:func:`partscale.edit.apply_screw`); ``copies < 0`` removes steps.
+
+    Attributes
+    ----------
+    axis : {'x', 'y', 'z'}
+        The axis the cut plane lies across (the flight's horizontal direction).
+    step : (float, float, float)
+        The shift carrying one step onto the next (world units).
+    cut : float
+        The cut plane's position along ``axis`` (world units).
+    copies : int
+        Steps added (negative: removed), not 0.
+    """
+
+    axis: str
+    step: tuple[float, float, float]
+    cut: float
+    copies: int
+
+    @classmethod
+    def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> ScrewZone:
+        """Validate ``{"screw": {"axis", "step": [X, Y, Z], "cut": C}, "copies": N}``."""
+        _keys(obj, {"screw", "copies"}, {"screw", "copies"}, where)
+        spec = obj["screw"]
+        if not isinstance(spec, dict) or set(spec) != {"axis", "step", "cut"}:
+            raise InputError(f"{where}.screw: expected keys axis, step, cut, got {shown(spec)}")
+        axis = str(spec["axis"]).lower()
+        if axis not in AXES:
+            raise InputError(
+                f"{where}.screw.axis: expected one of x, y, z, got {shown(spec['axis'])}"
+            )
+        step = spec["step"]
+        if not isinstance(step, list | tuple) or len(step) != 3:
+            raise InputError(f"{where}.screw.step: expected [X, Y, Z], got {shown(step)}")
+        n = obj["copies"]
+        if isinstance(n, str):
+            try:
+                n = int(n)
+            except ValueError:
+                n = None
+        if isinstance(n, bool) or not isinstance(n, int) or n == 0:
+            raise InputError(
+                f"{where}.copies: expected a whole number other than 0 (+1, -2), got {shown(obj['copies'])}"
+            )
+        sv = [_number(v, f"{where}.screw.step", units) for v in step]
+        return cls(
+            axis, (sv[0], sv[1], sv[2]), _number(spec["cut"], f"{where}.screw.cut", units), n
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "screw": {"axis": self.axis, "step": list(self.step), "cut": self.cut},
+            "copies": self.copies,
+        }
+
+
+@dataclass(frozen=True)
 class Recipe:
     """An ordered list of :class:`Edit`; serialises to the JSON schema above."""
 
-    edits: tuple[Edit | RadialZone | ObliqueZone, ...] = field(default_factory=tuple)
+    edits: tuple[Edit | RadialZone | ObliqueZone | ScrewZone, ...] = field(default_factory=tuple)
 
     @classmethod
     def parse(cls, obj: Any, *, units: str | None = None) -> Recipe:
@@ -497,13 +582,15 @@ class Recipe:
 
 def parse_edit(
     obj: Any, *, where: str = "edit", units: str | None = None
-) -> Edit | RadialZone | ObliqueZone:
+) -> Edit | RadialZone | ObliqueZone | ScrewZone:
     """One recipe edit of any kind: a radial zone (``"radial"`` key), an oblique one
     (``"normal"``) or a zone between planes across an axis (:class:`Edit`)."""
     if isinstance(obj, dict) and "radial" in obj:
         return RadialZone.parse(obj, where=where, units=units)
     if isinstance(obj, dict) and "normal" in obj:
         return ObliqueZone.parse(obj, where=where, units=units)
+    if isinstance(obj, dict) and "screw" in obj:
+        return ScrewZone.parse(obj, where=where, units=units)
     return Edit.parse(obj, where=where, units=units)
 
 

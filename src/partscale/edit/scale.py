@@ -27,6 +27,7 @@ from .recipe import (
     ObliqueZone,
     RadialZone,
     Recipe,
+    ScrewZone,
     forward_coordinate,
     source_coordinate,
     tile_count,
@@ -299,7 +300,7 @@ def apply_recipe(
     for i, e in enumerate(recipe.edits):
         if not isinstance(e, Edit):  # a radial or oblique zone: positions as given
             report = scaled(progress, i / n, (i + 1) / n)
-            report(0.0, "radial zone" if isinstance(e, RadialZone) else "oblique zone")
+            report(0.0, type(e).__name__)
             out = apply_warp(out, e, record={"given": e.to_json(), "recipe_step": i})
             continue
         ax = e.axis_index
@@ -334,7 +335,7 @@ def check_mixed(recipe: Recipe) -> None:
     for i, w in warps:
         for j, e in enumerate(recipe.edits):
             if isinstance(e, Edit) and e.axis_index in moved_axes(w):
-                kind = "radial" if isinstance(w, RadialZone) else "oblique"
+                kind = {RadialZone: "radial", ScrewZone: "step"}.get(type(w), "oblique")
                 raise InputError(
                     f"edits[{j}]: expected no zone along {e.axis} in a recipe with the {kind} "
                     f"zone edits[{i}] (it moves content along {e.axis}), got one; apply them "
@@ -471,11 +472,13 @@ def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
     if after is not None:
         hist = hist[len(after.meta.get("history", [])) :]
     entries = [
-        h for h in hist if isinstance(h, dict) and h.get("op") in ("scale", "radial", "oblique")
+        h
+        for h in hist
+        if isinstance(h, dict) and h.get("op") in ("scale", "radial", "oblique", "screw")
     ]
     if not entries:
         raise InputError("history: expected at least one scale edit, got none")
-    edits: list[Edit | RadialZone | ObliqueZone] = []
+    edits: list[Edit | RadialZone | ObliqueZone | ScrewZone] = []
     earlier: list[tuple[int, dict[str, Any]]] = []  # all edits before the current run
     run: list[tuple[int, dict[str, Any]]] = []  # edits of the current run
     for h in entries:
@@ -484,6 +487,9 @@ def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
             continue
         if h["op"] == "oblique":
             edits.append(ObliqueZone.parse({k: h[k] for k in ("normal", "zone", "to")}))
+            continue
+        if h["op"] == "screw":
+            edits.append(ScrewZone.parse({k: h[k] for k in ("screw", "copies")}))
             continue
         applied = Edit.parse(h["edit"])
         ax = applied.axis_index

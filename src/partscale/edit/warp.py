@@ -35,7 +35,7 @@ from scipy import ndimage
 from .._memory import check_memory
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
-from .recipe import AXES, ObliqueZone, RadialZone
+from .recipe import AXES, ObliqueZone, RadialZone, ScrewZone
 from .reevaluate import reevaluate_arrays
 from .resolved import BYTES_PER_VOXEL
 
@@ -162,23 +162,31 @@ def _finish(
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
 
 
-def moved_axes(zone: RadialZone | ObliqueZone) -> set[int]:
+def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone) -> set[int]:
     """The world axes along which ``zone`` moves content (planar edits on them and this zone
     do not mix in one recipe: their positions could not be carried through it)."""
     if isinstance(zone, RadialZone):
         return {a for a in range(3) if a != AXES.index(zone.axis)}
+    if isinstance(zone, ScrewZone):
+        return {a for a in range(3) if abs(zone.step[a]) > 1e-9} | {AXES.index(zone.axis)}
     return {a for a in range(3) if abs(zone.normal[a]) > 1e-9}
 
 
 def warp_grid(
-    origin: np.ndarray, shape: tuple[int, ...], h: float, zone: RadialZone | ObliqueZone
+    origin: np.ndarray,
+    shape: tuple[int, ...],
+    h: float,
+    zone: RadialZone | ObliqueZone | ScrewZone,
 ) -> tuple[np.ndarray, tuple[int, ...]]:
     """Origin and shape of the grid ``zone`` gives from the grid ``origin``/``shape``/``h``
     without computing anything."""
     origin = np.asarray(origin, dtype=np.float64)
     lo = origin - h / 2
     hi = origin + (np.asarray(shape) - 0.5) * h
-    if isinstance(zone, RadialZone):
+    if isinstance(zone, ScrewZone):
+        move = _screw_shift(zone, h) * h
+        a, b = np.minimum(lo, lo + move) + h / 2, np.maximum(hi, hi + move) - h / 2
+    elif isinstance(zone, RadialZone):
         shift = zone.shift
         grow = np.zeros(3)
         others = [a for a in range(3) if a != AXES.index(zone.axis)]
@@ -195,13 +203,136 @@ def warp_grid(
 
 
 def apply_warp(
-    csdf: CSDF, zone: RadialZone | ObliqueZone, *, record: dict[str, Any] | None = None
+    csdf: CSDF, zone: RadialZone | ObliqueZone | ScrewZone, *, record: dict[str, Any] | None = None
 ) -> CSDF:
-    """:func:`apply_radial` or :func:`apply_oblique`, by the kind of ``zone``; ``record``:
-    more keys for its history entry (a recipe's step)."""
+    """:func:`apply_radial`, :func:`apply_oblique` or :func:`apply_screw`, by the kind of
+    ``zone``; ``record``: more keys for its history entry (a recipe's step)."""
     if isinstance(zone, RadialZone):
         return apply_radial(csdf, zone, record=record)
+    if isinstance(zone, ScrewZone):
+        return apply_screw(csdf, zone, record=record)
     return apply_oblique(csdf, zone, record=record)
+
+
+#: Voxels either side of a screw's cut plane over which the two sides are blended.
+CUT_BLEND = 2.0
+
+
+def _screw_shift(zone: ScrewZone, h: float) -> np.ndarray:
+    """(3,) int64: the zone's whole shift, ``copies`` steps, each step snapped to whole
+    voxels (so everything beyond the cut is an exact copy)."""
+    return np.rint(np.asarray(zone.step) / h).astype(np.int64) * zone.copies
+
+
+def _ground(csdf, zone, unit, shift, off, placed, far, after) -> None:
+    """A flight standing on the floor beyond the cut (a solid flight, a stringer down to the
+    floor) stays on it: lifted, its lowest ``shift`` voxels up are filled from the side shifted
+    along the flight only; lowered, what went below the floor is cut off at it (in ``after``,
+    in place). An open flight that does not reach the floor there is left as it is (filling
+    would add treads at the old heights)."""
+    a = AXES.index(zone.axis)
+    up = 1
+    rise = int(shift[up])
+    if rise == 0:
+        return
+    solid = np.argwhere(csdf.sdf < 0)
+    floor = int(solid[:, up].min())
+    cut_i = (zone.cut - csdf.origin[a]) / csdf.voxel_size
+    beyond = solid[(solid[:, a] - cut_i) * np.sign(unit[a]) > 0]
+    if beyond.size == 0 or beyond[:, up].min() > floor + 1:
+        return
+    h = np.float32(csdf.voxel_size)
+    if rise < 0:  # lowered: what went below the floor is cut off there
+        rows = int(off[up] + floor)
+        sl = [slice(None)] * 3
+        sl[up] = slice(0, rows)
+        below = np.arange(rows, dtype=np.float32)
+        shape = [1, 1, 1]
+        shape[up] = -1
+        plane = ((rows - 0.5 - below) * h).reshape(shape)  # distance below the floor face
+        after[0][tuple(sl)] = np.maximum(after[0][tuple(sl)], plane)
+        return
+    flat = shift.copy()
+    flat[up] = 0
+    sl = [slice(None)] * 3
+    sl[up] = slice(int(off[up] + floor), int(off[up] + floor + rise + 1))
+    box = tuple(sl)
+    base = placed(csdf.sdf, off + flat, far)[box]
+    lifted = after[0][box]
+    take = base < lifted
+    lifted[take] = base[take]
+    rgb = placed(csdf.rgb, off + flat, 0)[box]
+    parts = placed(csdf.parts, off + flat, -1)[box]
+    after[1][box][take] = rgb[take]
+    after[2][box][take] = parts[take]
+
+
+def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = None) -> CSDF:
+    """``zone.copies`` steps added (or removed) along a diagonal repetition (see
+    :class:`~partscale.edit.ScrewZone`): what lies beyond the cut moves by that many steps,
+    each step snapped to whole voxels; the two sides are blended over :data:`CUT_BLEND`
+    voxels either side of the cut and re-evaluated there. ``meta['history']`` gains
+    ``{"op": "screw", ...}`` with the snapped step.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import shapes
+    >>> from partscale.edit import ScrewZone, apply_screw
+    >>> steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.2 * (i + 1), 0.4)) for i in range(4)]
+    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), np.array([[0, 0, 0], [0.8, 0.8, 0.4]]), voxel_size=0.05)
+    >>> out = apply_screw(flight, ScrewZone("x", (0.2, 0.2, 0.0), 0.5, 1))
+    >>> [round(float(v), 2) for v in out.surface_bounds()[1, :2]]
+    [1.0, 1.0]
+    """
+    h = csdf.voxel_size
+    a = AXES.index(zone.axis)
+    if zone.copies == 0 or not all(math.isfinite(v) for v in (*zone.step, zone.cut)):
+        raise InputError(
+            f"screw: expected finite values and copies other than 0, got {zone.to_json()}"
+        )
+    unit = np.rint(np.asarray(zone.step) / h).astype(np.int64)
+    if unit[a] == 0:
+        raise InputError(
+            f"screw step: expected a shift along {zone.axis} of at least a voxel, got {zone.step[a]:.4g}"
+        )
+    shift = unit * zone.copies
+    origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
+    check_memory(shape, BYTES_PER_VOXEL, what=f"{zone.copies:+d} steps")
+    far = np.float32(max(float(csdf.sdf.max()), h))
+    off = np.rint((csdf.origin - origin) / h).astype(np.int64)
+
+    def placed(arr: np.ndarray, at: np.ndarray, fill) -> np.ndarray:
+        out = np.full((*shape, *arr.shape[3:]), fill, dtype=arr.dtype)
+        sl = tuple(slice(int(at[k]), int(at[k]) + arr.shape[k]) for k in range(3))
+        out[sl] = arr
+        return out
+
+    before = [placed(x, off, f) for x, f in ((csdf.sdf, far), (csdf.rgb, 0), (csdf.parts, -1))]
+    after = [
+        placed(x, off + shift, f) for x, f in ((csdf.sdf, far), (csdf.rgb, 0), (csdf.parts, -1))
+    ]
+    _ground(csdf, zone, unit, shift, off, placed, far, after)
+    # the side of the cut each output layer along the axis lies on, blended near it
+    x = origin[a] + np.arange(shape[a]) * h
+    direction = 1.0 if unit[a] > 0 else -1.0
+    beyond = (x - zone.cut) * direction / h
+    w = np.clip(beyond / (2 * CUT_BLEND) + 0.5, 0.0, 1.0).astype(np.float32)
+    shp = [1, 1, 1]
+    shp[a] = -1
+    wb = w.reshape(shp)
+    sdf = ((1 - wb) * before[0] + wb * after[0]).astype(np.float32)
+    side = wb >= 0.5
+    rgb = np.where(side[..., None], after[1], before[1])
+    parts = np.where(side, after[2], before[2])
+    # re-evaluated within the blend and the band of it
+    reach = CUT_BLEND + BAND_VOXELS + 1
+    near_cut = (np.abs(beyond) <= reach).reshape(shp)
+    mask = np.broadcast_to(near_cut, shape) & (np.abs(sdf) <= (BAND_VOXELS + 1) * h)
+    n = reevaluate_arrays(sdf, rgb, parts, h, np.ascontiguousarray(mask), band=BAND_VOXELS + 1.0)
+    snapped = ScrewZone(zone.axis, tuple(float(v * h) for v in unit), zone.cut, zone.copies)  # type: ignore[arg-type]
+    entry = {"op": "screw", **snapped.to_json(), "reevaluated_voxels": int(n), **(record or {})}
+    return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
 
 
 def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None = None) -> CSDF:

@@ -16,6 +16,8 @@ Public API
   outline in plan (centre, sides, phase); :func:`radial_zones`: its annuli of constant radial
   section (what a radial zone grows; ``fit`` uses it where x and z grow alike and planes
   across them cannot).
+- :func:`find_screws` ``(csdf) -> list[Screw]``: repetition by a diagonal shift (a flight's
+  steps: going and rise), with a cut across a tread; ``fit --add y 1`` adds a step along it.
 - :func:`find_elements` ``(csdf, axis) -> AxisElements``: the object along an axis as elements
   (seats, doors, compartments, steps) and separators, with the groups that repeat (alike up to
   a mirror, a small length change or a colour change); :func:`count_zone`: the zone of whole
@@ -46,6 +48,7 @@ from .features import feature_notes, local_features
 from .fit import add_axis, fit, fit_axis
 from .profile import Profile, profile
 from .radial import RadialFrame, find_radial, radial_zones
+from .screw import Screw, find_screws
 from .snap import Move, describe_moves, record_snap, snap
 from .suggest import AXES, BoundedRepeat, Candidate, axis_candidates, find_bounded_repeats, suggest
 
@@ -60,6 +63,7 @@ __all__ = [
     "Move",
     "Profile",
     "RadialFrame",
+    "Screw",
     "Separator",
     "add_axis",
     "axis_candidates",
@@ -70,6 +74,7 @@ __all__ = [
     "find_bounded_repeats",
     "find_elements",
     "find_radial",
+    "find_screws",
     "fit",
     "fit_axis",
     "local_features",

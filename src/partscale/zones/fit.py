@@ -25,12 +25,13 @@ import numpy as np
 
 from .._options import keyword_options
 from ..csdf import CSDF
-from ..edit import Edit, RadialZone, Recipe, parse_size, tile_count
+from ..edit import Edit, RadialZone, Recipe, ScrewZone, parse_size, tile_count
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from .elements import AxisElements, count_zone, element_phrase, find_elements
 from .profile import Profile, profile
 from .radial import find_radial, radial_zones
+from .screw import find_screws
 from .suggest import (
     AXES,
     SHIFT_STEP,
@@ -562,11 +563,37 @@ def _element_periods(
     return _Tiled(edit, k, region, (z.start, z.end), first.length, grow, copies), note
 
 
-def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit], list[str]]:
+def _add_steps(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], list[str]] | None:
+    """``n`` more (or ``-n`` fewer) steps of a flight that repeats diagonally
+    (:func:`~partscale.zones.screw.find_screws`) with a part along ``axis``, and the note;
+    None where there is none."""
+    name = AXES[axis]
+    for sc in find_screws(csdf):
+        if abs(sc.step[axis]) < csdf.voxel_size / 2:
+            continue
+        if n < 0 and -n >= sc.count:
+            raise InputError(
+                f"add {name}: expected to remove at most {sc.count - 1} of the flight's "
+                f"{sc.count} steps, got {-n}"
+            )
+        units = csdf.meta.get("units")
+        verb = f"add {n}" if n > 0 else f"remove {-n}"
+        note = (
+            f"{name}: {verb} step(s) of the flight along {sc.axis} (each {_fmt(sc.going, units)} "
+            f"going, {_fmt(sc.rise, units)} rise; {sc.count} steps, {100 * sc.support:.0f}% of "
+            f"the surface repeats), cut across {sc.axis} at {_fmt(sc.cut, units)}: what lies "
+            "beyond moves by the step(s)"
+        )
+        return [sc.zone(n)], [note]
+    return None
+
+
+def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], list[str]]:
     """Edits (recipe coordinates) adding ``n`` elements (removing ``-n``) of the repeat group
     along ``axis`` (:func:`~partscale.zones.elements.find_elements`), and the note: a zone of
     whole elements and their separators (:func:`~partscale.zones.elements.count_zone`) tiled
-    to ``1 + n`` copies, or to its start.
+    to ``1 + n`` copies, or to its start. With no such group, steps of a flight that repeats
+    diagonally with a part along ``axis`` (:func:`_add_steps`: one more step up).
 
     Raises
     ------
@@ -578,9 +605,12 @@ def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit], list[str]]:
         raise InputError(f"add {name}: expected a number of elements other than 0, got 0")
     found = find_elements(csdf, axis)
     if found.best is None:
+        steps = _add_steps(csdf, axis, n)
+        if steps is not None:
+            return steps
         raise InputError(
             f"add {name}: expected repeated elements along {name} (seats, doors, shelf rows, "
-            f"drawers), found none; resize by length instead (a size, or a zone by hand)"
+            f"drawers, steps), found none; resize by length instead (a size, or a zone by hand)"
         )
     z = count_zone(csdf, found, 1 if n > 0 else -n)
     units = csdf.meta.get("units")
@@ -969,16 +999,26 @@ def fit(
         parse_size(v, extent=float(sb[1, a] - sb[0, a]), units=units, what=f"size {AXES[a]}")
         for a, v in enumerate(size)
     ]
-    edits: list[Edit | RadialZone] = []
+    edits: list[Edit | RadialZone | ScrewZone] = []
     why: list[str] = []
     radial = _radial_fit(csdf, targets, add, allow_deform)
     if radial is not None:
         edits.append(radial[0])
         why.append(radial[1])
-    for a, t in enumerate(targets):
-        report(a / 3, f"axis {AXES[a]}")
+    moved: set[int] = set()  # axes a count edit's diagonal steps move too
+    # counts first: the steps of a flight move along two axes
+    for k, a in enumerate(sorted(range(3), key=lambda a: AXES[a] not in add)):
+        t = targets[a]
+        report(k / 3, f"axis {AXES[a]}")
         if radial is not None and a != 1:
             continue  # x and z: the radial zone
+        if a in moved:
+            if abs(t - float(sb[1, a] - sb[0, a])) > csdf.voxel_size / 2:
+                raise InputError(
+                    f"size {AXES[a]}: expected = (the steps added move along {AXES[a]} too), "
+                    f"got {size[a]}"
+                )
+            continue
         if AXES[a] in add:
             if abs(t - float(sb[1, a] - sb[0, a])) > csdf.voxel_size / 2:
                 raise InputError(
@@ -986,9 +1026,17 @@ def fit(
                     f"count decides it, got size {AXES[a]} {size[a]}"
                 )
             e, w = add_axis(csdf, a, add[AXES[a]])
+            moved |= {
+                b
+                for z in e
+                if isinstance(z, ScrewZone)
+                for b in range(3)
+                if b != a and abs(z.step[b]) > 0
+            }
         else:
             try:
-                e, w = fit_axis(csdf, a, t, allow_deform=allow_deform)
+                planar, w = fit_axis(csdf, a, t, allow_deform=allow_deform)
+                e = list(planar)
             except InputError as exc:
                 # a refusal on an object whose walls run off the axes names that cure too
                 turn = _off_square(csdf, [Edit(AXES[a], 0.0, 1.0, 1.0)])

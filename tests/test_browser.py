@@ -304,6 +304,15 @@ def test_typescript_splice_rebuilds_the_grid_from_the_changed_layers(tmp_path):
     assert run_page_node(tmp_path, {"splice": cases})["splice"] == want
 
 
+def test_typescript_sizes_are_metres_only_for_objects_in_metres(tmp_path):
+    """ui.ts formatLength: an object in metres in m from a metre up, cm below (to the mm); in any
+    other units the number and the unit's name, nothing converted."""
+    cases = [[2.08, "m"], [1.0, "m"], [0.8, "m"], [0.0347, "m"], [2.08, "mm"], [80, "in"]]
+    cases += [[0.5, "voxels"]]
+    got = run_page_node(tmp_path, {"lengths": cases})["lengths"]
+    assert got == ["2.080 m", "1.000 m", "80.0 cm", "3.5 cm", "2.08 mm", "80 in", "0.5 voxels"]
+
+
 def python_rule(message: str) -> str:
     rules = [rule for words, rule in PYTHON_RULES.items() if words in message]
     assert len(rules) == 1, f"no rule for {message!r}"
@@ -481,7 +490,19 @@ def test_editor_end_to_end(tmp_path):
         assert r["views"]["parts"] > 0.02 * total
         assert r["views"]["slice"] > 0.02 * total
         assert r["views"]["colour"] <= 0.01 * total
-        assert float(r["percent"]) == pytest.approx(35.0)  # the default zone starts at 35 %
+        # the page starts with the best suggestion as its zone (not a fixed 35-65 % slab): on
+        # this table the slab between the legs along x, cutting no leg
+        best = zones_mod.suggest(session.current)[0]
+        assert best.axis == "x" and best.kind == "stretch"
+        assert r["zone0"]["axis"] == "x" and r["zone0"]["mode"] == "stretch"
+        assert [r["zone0"]["start"], r["zone0"]["end"]] == pytest.approx(list(best.zone), abs=1e-9)
+        assert r["zone0"]["dest"] == pytest.approx(best.zone[1], abs=1e-9)  # no change yet
+        for leg_lo, leg_hi in LEGS:  # no plane through a leg
+            assert not any(leg_lo[0] < plane < leg_hi[0] for plane in best.zone), best
+        lo0, hi0 = r["state0"]["solid_bounds"][0][0], r["state0"]["solid_bounds"][1][0]
+        assert float(r["percent"]) == pytest.approx(
+            100 * (best.zone[0] - lo0) / (hi0 - lo0), abs=1e-3
+        )
 
         # -- the shader's remap is recipe.source_coordinate (float32 on the GPU: 1e-4 units)
         for case, got in zip(cases, r["remap"], strict=True):
@@ -640,3 +661,176 @@ def edited_path_of(path: Path) -> Path:
     from partscale.serve import edited_path
 
     return edited_path(path)
+
+
+# -- elements: counts, sizes in metres, refusals -----------------------------------------------
+SOFA_H = 0.02
+CUSHIONS = (0.55, 0.6, 0.55)
+ARM, SEAT_GAP, SEAT_TOP = 0.15, 0.04, 0.4
+
+
+def sofa(widths=CUSHIONS, h: float = SOFA_H) -> partscale.CSDF:
+    """Two armrests, a base, a back and a seat cushion per width, SEAT_GAP (two voxels) apart;
+    x along the seat, y up, the back at z max; in metres."""
+    width = 2 * ARM + sum(widths) + SEAT_GAP * (len(widths) - 1)
+    boxes = [
+        ((0, 0, 0), (ARM, 0.6, 0.8)),
+        ((width - ARM, 0, 0), (width, 0.6, 0.8)),
+        ((ARM, 0, 0), (width - ARM, 0.2, 0.65)),
+        ((ARM, 0, 0.65), (width - ARM, 0.8, 0.8)),
+    ]
+    x = ARM
+    for w in widths:
+        boxes.append(((x, 0.2, 0), (x + w, SEAT_TOP, 0.65)))
+        x += w + SEAT_GAP
+    bounds = np.array([[0, 0, 0], [width, 0.8, 0.8]])
+    return shapes.grid(lambda p: shapes.boxes_sdf(p, boxes), bounds, voxel_size=h, source="sofa")
+
+
+def cushions(c: partscale.CSDF) -> int:
+    """Seat cushions counted off the grid: runs along x, between the armrests, where the column
+    at the seat's middle depth is solid up to the cushions' top (the gaps between them dip to
+    the base, 20 cm lower)."""
+    k = round((0.3 - c.origin[2]) / c.voxel_size)
+    j = round((SEAT_TOP - 0.05 - c.origin[1]) / c.voxel_size)
+    x = c.axis_coords(0)
+    lo, hi = c.surface_bounds()[:, 0]
+    seat = (c.sdf[:, j, k] < 0) & (x > lo + ARM + c.voxel_size) & (x < hi - ARM - c.voxel_size)
+    return int(np.count_nonzero(np.diff(np.concatenate([[0], seat.astype(int)])) == 1))
+
+
+def metres(text: str) -> float:
+    """A length as the page shows it in an object in metres ('2.080 m', '80.0 cm', '→ 2.680 m')."""
+    m = re.fullmatch(r"(?:→ )?(-?[0-9.]+) (m|cm)", text.strip())
+    assert m, f"expected a length in m or cm, got {text!r}"
+    return float(m[1]) * (1.0 if m[2] == "m" else 0.01)
+
+
+@pytest.mark.browser
+def test_editor_adds_an_element_and_shows_sizes_in_metres(tmp_path):
+    """+1 along the sofa's seat: previewed live (nothing applied), the target size beside the
+    size; Apply gives the server's object one more cushion and the page's size grows by one
+    cushion and its gap; Undo restores both. The y axis has no repeat: its buttons are off and
+    say why. The page starts with the best suggestion as its zone."""
+    node, chromium = find_tools()
+    path = tmp_path / "sofa.csdf.npz"
+    c0 = sofa()
+    partscale.save(c0, path)
+    assert cushions(c0) == 3
+    with Server(path) as server:
+        session = server.app.state.session
+        original = session.current
+        r = run_page(node, chromium, server.url, tmp_path, count={"axis": "x", "other": "y"})
+    assert r["errors"] == [], r["errors"]
+    c = r["count"]
+    sb = original.surface_bounds()
+    extent = sb[1] - sb[0]
+
+    # sizes in metres per axis (the object's units are metres), no target before a change
+    for a, axis in enumerate("xyz"):
+        assert abs(metres(c["sizes0"][axis]["extent"]) - extent[a]) <= 0.0005, c["sizes0"]
+        assert c["sizes0"][axis]["target"] == ""
+    assert c["sizes0"]["y"]["extent"] == "80.0 cm"  # below a metre: centimetres
+
+    # the first zone is the top-ranked suggestion, on its axis
+    best = c["suggestions"][0]
+    assert [c["zone0"]["axis"], c["zone0"]["mode"]] == [best["axis"], best["kind"]]
+    assert [c["zone0"]["start"], c["zone0"]["end"]] == best["zone"]
+
+    # the buttons: on where the axis repeats, off with the reason where it does not
+    assert not c["buttons"]["x-plus"]["disabled"] and not c["buttons"]["x-minus"]["disabled"]
+    assert "3 alike elements" in c["buttons"]["x-plus"]["title"]
+    for k in ("y-plus", "y-minus"):
+        assert c["buttons"][k]["disabled"], c["buttons"]
+        assert "no repeated element along y" in c["buttons"][k]["title"], c["buttons"][k]
+
+    # +1: the recipe fit --add x 1 makes, previewed, nothing applied
+    recipe, why = zones_mod.fit(original, add={"x": 1})
+    assert [Edit.parse(e) for e in c["recipe"]["edits"]] == list(recipe.edits)
+    assert c["why"] == why and c["status"].startswith("x: add 1 element"), c["status"]
+    assert c["revisionPreview"] == 0
+    assert c["previewDiff"] > 0.01 * CANVAS[0] * CANVAS[1]  # the preview shows it
+    (edit,) = recipe.edits
+    element = edit.end - edit.start  # one cushion and its gap, whole voxels
+    assert 0.55 + SEAT_GAP - SOFA_H <= element <= 0.6 + SEAT_GAP + SOFA_H, element
+    target = c["preview"]["sizes"]["target"]
+    assert abs(target[0] - (extent[0] + element)) <= 1e-9 and target[1:] == pytest.approx(
+        extent[1:]
+    )
+    assert abs(metres(c["preview"]["text"]["x"]["target"]) - (extent[0] + element)) <= 0.0005
+    assert c["preview"]["text"]["y"]["target"] == ""  # unchanged axes show no target
+
+    # Apply: one more cushion on the server, the page's size grew by one element
+    applied = c["applied"]
+    lo, hi = np.array(applied["solid_bounds"])
+    assert abs((hi[0] - lo[0]) - (extent[0] + element)) <= 0.25 * SOFA_H
+    grew = metres(c["appliedText"]["x"]["extent"]) - metres(c["sizes0"]["x"]["extent"])
+    assert abs(grew - element) <= 0.001, c["appliedText"]
+    assert c["appliedText"]["x"]["target"] == ""  # nothing previewed now
+    assert c["appliedVsPreview"] <= 0.03 * CANVAS[0] * CANVAS[1]  # the preview showed it
+
+    # Undo: the very object, and the page's size is the first one again
+    assert session.current is original
+    assert c["undone"]["solid_bounds"] == r["state0"]["solid_bounds"]
+    assert c["undoneText"]["x"]["extent"] == c["sizes0"]["x"]["extent"]
+
+    # -1, previewed: one element shorter
+    minus, _ = zones_mod.fit(original, add={"x": -1})
+    assert [Edit.parse(e) for e in c["minus"]["recipe"]["edits"]] == list(minus.edits)
+    assert abs(c["minus"]["sizes"]["target"][0] - (extent[0] - element)) <= 1e-9
+    assert c["minus"]["revision"] == c["undone"]["revision"]
+    # the redo stack still holds what Apply made: one cushion more, counted off the grid
+    (made,) = session.redo_stack
+    assert cushions(made) == 4
+
+
+@pytest.mark.browser
+def test_editor_shows_a_refused_fit_and_previews_it_allowed_to_deform(tmp_path):
+    """A round top 20 % wider and deeper: refused, the one-line reason in the status line;
+    ticking 'allow deform' fits again and previews the deforming recipe (more zones than a
+    part-aware fit makes); nothing is applied."""
+    node, chromium = find_tools()
+    h = 0.01
+    path = tmp_path / "round.csdf.npz"
+    c0 = round_table(h)
+    partscale.save(c0, path)
+    size = ["120%", "=", "120%"]
+    with pytest.raises(InputError) as refused:
+        zones_mod.fit(c0, size)
+    allowed, why = zones_mod.fit(c0, size, allow_deform=True)
+    with Server(path) as server:
+        r = run_page(node, chromium, server.url, tmp_path, refusal={"size": size})
+        assert server.app.state.session.revision == 0
+    assert r["errors"] == [] or all("400" in e for e in r["errors"]), r["errors"]
+    f = r["refusal"]
+    assert f["status"] == f"fitting failed: {refused.value}", f["status"]
+    assert "alternatives" in f["status"] and f["statusIsError"]
+    assert f["panel"] == str(refused.value)  # and in the fit panel
+    assert f["zones"] == f["zone0"] and f["why"] == []  # the refused fit previews nothing
+    a = f["allowed"]
+    assert a["why"] == why and a["revision"] == 0 and a["panel"] is None
+    assert [Edit.parse(e) for e in a["recipe"]["edits"]] == list(allowed.edits)
+    assert len(allowed.edits) > 6  # more zones than the shader used to hold
+    sb = c0.surface_bounds()
+    ext = sb[1] - sb[0]
+    want = [1.2 * ext[0], ext[1], 1.2 * ext[2]]
+    assert a["sizes"]["target"] == pytest.approx(want, abs=0.5 * h + 1e-9)
+    assert abs(metres(a["text"]["x"]["target"]) - want[0]) <= 0.5 * h + 0.0005
+
+
+def round_table(h: float) -> partscale.CSDF:
+    """A disc top (radius 0.5) on a column on a round foot, y up, voxel size h: no zone keeps
+    the round top round when it grows along x or z."""
+
+    def cyl(p, r, y0, y1):
+        q = np.stack(
+            [np.hypot(p[:, 0], p[:, 2]) - r, np.abs(p[:, 1] - (y0 + y1) / 2) - (y1 - y0) / 2], 1
+        )
+        return np.minimum(q.max(1), 0) + np.linalg.norm(np.maximum(q, 0), axis=1)
+
+    def sdf(p):
+        top = cyl(p, 0.5, 0.7, 0.74)
+        return np.minimum(np.minimum(top, cyl(p, 0.06, 0.05, 0.7)), cyl(p, 0.25, 0, 0.05))
+
+    bounds = np.array([[-0.5, 0, -0.5], [0.5, 0.74, 0.5]])
+    return shapes.grid(sdf, bounds, voxel_size=h, source="round table")

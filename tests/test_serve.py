@@ -949,10 +949,166 @@ def test_snap_uses_the_candidates_the_server_found_for_suggest(tmp_path, monkeyp
     assert abs((zone[1] - zone[0]) - 0.6) <= H  # twice the boards' pitch
 
 
+def sofa_file(tmp_path: Path, widths=(0.55, 0.6, 0.55), gap=0.04) -> Path:
+    """Two armrests, a base, a back and a seat cushion per width, ``gap`` (two voxels) apart
+    along x, saved: a repeat group of ``len(widths)`` elements along x, none along y or z."""
+    arm = 0.15
+    width = 2 * arm + sum(widths) + gap * (len(widths) - 1)
+    boxes = [
+        ((0, 0, 0), (arm, 0.6, 0.8)),
+        ((width - arm, 0, 0), (width, 0.6, 0.8)),
+        ((arm, 0, 0), (width - arm, 0.2, 0.65)),
+        ((arm, 0, 0.65), (width - arm, 0.8, 0.8)),
+    ]
+    x = arm
+    for w in widths:
+        boxes.append(((x, 0.2, 0), (x + w, 0.4, 0.65)))
+        x += w + gap
+    bounds = np.array([[0, 0, 0], [width, 0.8, 0.8]], float)
+    path = tmp_path / "sofa.csdf.npz"
+    partscale.save(shapes.grid(lambda p: shapes.boxes_sdf(p, boxes), bounds, voxel_size=H), path)
+    return path
+
+
+def round_table_file(tmp_path: Path, h: float = 0.01) -> Path:
+    """A disc top (radius 0.5) on a column on a round foot, y up, saved: growing it along x and
+    z deforms the round top whatever zone takes it."""
+
+    def cyl(p, r, y0, y1):
+        q = np.stack(
+            [np.hypot(p[:, 0], p[:, 2]) - r, np.abs(p[:, 1] - (y0 + y1) / 2) - (y1 - y0) / 2], 1
+        )
+        return np.minimum(q.max(1), 0) + np.linalg.norm(np.maximum(q, 0), axis=1)
+
+    def sdf(p):
+        top = cyl(p, 0.5, 0.7, 0.74)
+        return np.minimum(np.minimum(top, cyl(p, 0.06, 0.05, 0.7)), cyl(p, 0.25, 0, 0.05))
+
+    path = tmp_path / "round.csdf.npz"
+    bounds = np.array([[-0.5, 0, -0.5], [0.5, 0.74, 0.5]])
+    partscale.save(shapes.grid(sdf, bounds, voxel_size=h), path)
+    return path
+
+
+def test_elements_are_find_elements_per_axis_found_once_per_object(tmp_path, monkeypatch):
+    """/api/elements: zones.find_elements of the current object on each axis (with its summary),
+    found once per object and axis, found again after an apply."""
+    from partscale import zones
+
+    path = sofa_file(tmp_path)
+    c = partscale.load(path)
+    calls = []
+    real = zones.find_elements
+    monkeypatch.setattr(zones, "find_elements", lambda c, ax, **kw: calls.append(ax) or real(c, ax))
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        r = client.get("/api/elements")
+        assert r.status_code == 200, r.text
+        got = r.json()["axes"]
+        want = [real(c, ax) for ax in "xyz"]
+        assert got == json.loads(
+            json.dumps([{**f.to_json(), "summary": zones.element_phrase(f)} for f in want])
+        )
+        x = got[0]
+        assert x["axis"] == "x" and x["groups"][0]["count"] == 3
+        assert x["summary"].startswith("3 alike elements")
+        assert got[1]["groups"] == [] and got[1]["summary"] == "no repeated element"
+        # one axis; and every axis is found once per object
+        one = client.get("/api/elements?axis=x").json()["axes"]
+        assert one == [x]
+        assert calls == ["x", "y", "z"]
+        # after an apply (one cushion fewer), the elements of the new object
+        recipe = post(client, "/api/add", {"axis": "x", "n": -1}).json()["recipe"]
+        post(client, "/api/apply", recipe)
+        after = client.get("/api/elements?axis=x").json()["axes"][0]
+        assert after["groups"][0]["count"] == 2
+        assert calls == ["x", "y", "z", "x"]
+
+
+@pytest.mark.parametrize("n", [1, -1])
+def test_add_is_fit_add_on_the_current_object_not_applied(tmp_path, n):
+    """/api/add: the recipe and notes of ``fit --add x N``, nothing applied; applied, the sofa is
+    one cushion (and its gap) longer or shorter; undo restores it exactly."""
+    from partscale import zones
+
+    path = sofa_file(tmp_path)
+    c = partscale.load(path)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        original = client.app.state.session.current
+        r = post(client, "/api/add", {"axis": "x", "n": n})
+        assert r.status_code == 200, r.text
+        recipe, why = zones.fit(c, add={"x": n})
+        assert r.json() == {"recipe": recipe.to_json(), "why": why}
+        assert why[0].startswith(f"x: {'add' if n > 0 else 'remove'} 1 element")
+        assert client.get("/api/state").json()["revision"] == 0
+        state = post(client, "/api/apply", r.json()["recipe"]).json()
+        lo, hi = np.array(state["solid_bounds"])
+        sb = c.surface_bounds()
+        grew = (hi[0] - lo[0]) - (sb[1, 0] - sb[0, 0])
+        # one cushion (0.55 or 0.6 m) and its 4 cm gap, in whole voxels
+        assert 0.55 + 0.04 - H <= n * grew <= 0.6 + 0.04 + H, grew
+        np.testing.assert_allclose(hi[1:] - lo[1:], sb[1, 1:] - sb[0, 1:], atol=H / 2)
+        post(client, "/api/undo")
+        assert client.app.state.session.current is original  # the very object again
+        np.testing.assert_array_equal(original.sdf, c.sdf)
+
+
+def test_a_fit_only_a_deformation_reaches_is_refused_unless_allowed(tmp_path):
+    """/api/fit on a round top 20 % wider and deeper: 400 with fit's one line naming the
+    alternatives; with allow_deform the deforming recipe (not applied)."""
+    from partscale import zones
+    from partscale.errors import InputError
+
+    path = round_table_file(tmp_path)
+    c = partscale.load(path)
+    size = ["120%", "=", "120%"]
+    with pytest.raises(InputError) as refused:
+        zones.fit(c, size)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        for body in ({"size": size}, {"size": size, "allow_deform": False}):
+            r = post(client, "/api/fit", body)
+            assert r.status_code == 400, r.text
+            assert r.json() == {"error": str(refused.value)}
+            assert "\n" not in r.json()["error"] and "alternatives" in r.json()["error"]
+        r = post(client, "/api/fit", {"size": size, "allow_deform": True})
+        assert r.status_code == 200, r.text
+        recipe, why = zones.fit(c, size, allow_deform=True)
+        assert r.json() == {"recipe": recipe.to_json(), "why": why}
+        assert client.get("/api/state").json()["revision"] == 0
+
+
+@pytest.mark.parametrize(
+    "body, words",
+    [
+        ({"axis": "y", "n": 1}, "found none"),  # no repeat along y
+        ({"axis": "x", "n": 0}, "add.n: expected a whole number of elements other than 0"),
+        ({"axis": "x", "n": 1.5}, "add.n: expected a whole number"),
+        ({"axis": "x", "n": 1.0}, "add.n: expected a whole number"),
+        ({"axis": "x", "n": "1"}, "add.n: expected a whole number"),
+        ({"axis": "x", "n": True}, "add.n: expected a whole number"),
+        ({"axis": "x", "n": 101}, "at most 100"),
+        ({"axis": "x", "n": -3}, "at most 2 of its 3"),  # one element stays
+        ({"axis": "w", "n": 1}, "add.axis: expected x, y or z"),
+        ({"axis": "x"}, "add: expected"),
+        ({"axis": "x", "n": 1, "size": "="}, "add: expected"),
+        (["x", 1], "add: expected"),
+    ],
+)
+def test_add_refuses_bad_input_with_one_line(tmp_path, body, words):
+    with TestClient(create_app(sofa_file(tmp_path)), base_url="http://127.0.0.1") as client:
+        r = post(client, "/api/add", body)
+        assert r.status_code == 400, r.text
+        message = r.json()["error"]
+        assert words in message and "\n" not in message, message
+        assert client.get("/api/state").json()["revision"] == 0
+
+
 @pytest.mark.parametrize(
     "url, body, words",
     [
         ("/api/suggest?axis=w", None, "suggest.axis: expected x, y or z"),
+        ("/api/elements?axis=w", None, "elements.axis: expected x, y or z"),
+        ("/api/fit", {"size": ["=", "+10cm", "="], "allow_deform": "yes"}, "fit.allow_deform"),
+        ("/api/fit", {"size": ["=", "+10cm", "="], "deform": True}, "fit: expected"),
         ("/api/snap", {"axis": "x", "zone": [0.3, 0.6], "to": 0.7, "mode": "tile"}, "found none"),
         ("/api/snap", {"axis": "q", "zone": [0.3, 0.6], "to": 0.7}, "axis"),
         ("/api/fit", {"size": ["=", "0", "="]}, "positive length"),

@@ -6,7 +6,10 @@
 //         benchmark: n frames (only load + benchmark when set), features: {snapZone, fitSize}
 //         (suggestion click, snap toggle, fit preview/apply/undo),
 //         limits: true (only load, an apply beyond the GPU's 3D texture size, and a page of
-//         another name, evil.example, resolved to this server: DNS rebinding) }
+//         another name, evil.example, resolved to this server: DNS rebinding),
+//         count: {axis, other} (only load, then +1 element along axis: preview, apply, undo;
+//         then -1 previewed; other: an axis with no repeat, its buttons read),
+//         refusal: {size} (only load, a fit refused, then allowed to deform: previewed) }
 import { createRequire } from 'node:module';
 import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
@@ -77,7 +80,92 @@ try {
   result.state0 = await page.evaluate(() => window.__partscale.state());
   result.zone0 = await page.evaluate(() => window.__partscale.zones()[0]);
 
-  if (args.limits) {
+  const text = (sel) => page.textContent(sel);
+  const sizesText = async () => {
+    const out = {};
+    for (const a of ['x', 'y', 'z']) out[a] = { extent: await text(`#extent-${a}`), target: await text(`#target-${a}`) };
+    return out;
+  };
+  const revisionAbove = (r) =>
+    page.waitForFunction((rr) => window.__partscale.state()?.revision > rr, r, { timeout: 60000 });
+
+  if (args.count) {
+    // one element more along an axis: previewed (nothing applied), applied, undone; one fewer
+    const { axis, other } = args.count;
+    const c = {};
+    c.suggestions = await page.evaluate(() => window.__partscale.suggestions());
+    c.zone0 = await page.evaluate(() => window.__partscale.zoneInputs()[0]);
+    c.elements = await page.evaluate(() => window.__partscale.elements());
+    c.sizes0 = await sizesText();
+    c.buttons = await page.evaluate((axes) =>
+      Object.fromEntries(axes.flatMap((a) => ['plus', 'minus'].map((k) => {
+        const b = document.querySelector(`#count-${a}-${k}`);
+        return [`${a}-${k}`, { disabled: b.disabled, title: b.title }];
+      }))), [axis, other]);
+    const initial = await shot('count-initial.png');
+    await page.click(`#count-${axis}-plus`);
+    await page.waitForFunction(() => window.__partscale.fitWhy().length > 0, null, { timeout: 60000 });
+    await idle();
+    c.recipe = await page.evaluate(() => window.__partscale.recipe());
+    c.why = await page.evaluate(() => window.__partscale.fitWhy());
+    c.status = await text('#status');
+    c.preview = { sizes: await page.evaluate(() => window.__partscale.sizes()), text: await sizesText() };
+    c.revisionPreview = (await page.evaluate(() => window.__partscale.state())).revision;
+    const preview = await shot('count-preview.png');
+    c.previewDiff = diffPixels(initial, preview).count;
+    await page.screenshot({ path: join(args.out, 'count-page-preview.png') });
+    await page.click('#apply');
+    await revisionAbove(c.revisionPreview);
+    await idle();
+    c.applied = await page.evaluate(() => window.__partscale.state());
+    c.appliedText = await sizesText();
+    c.appliedVsPreview = diffPixels(preview, await shot('count-applied.png')).count;
+    await page.screenshot({ path: join(args.out, 'count-page-applied.png') });
+    await page.click('#undo');
+    await revisionAbove(c.applied.revision);
+    await idle();
+    c.undone = await page.evaluate(() => window.__partscale.state());
+    c.undoneText = await sizesText();
+    // one fewer: previewed only
+    await page.click(`#count-${axis}-minus`);
+    await page.waitForFunction(() => window.__partscale.fitWhy().length > 0, null, { timeout: 60000 });
+    await idle();
+    c.minus = {
+      recipe: await page.evaluate(() => window.__partscale.recipe()),
+      sizes: await page.evaluate(() => window.__partscale.sizes()),
+      text: await sizesText(),
+      revision: (await page.evaluate(() => window.__partscale.state())).revision,
+    };
+    result.count = c;
+  } else if (args.refusal) {
+    // a fit only a deformation reaches: refused in the status line; allowed: previewed
+    const f = {};
+    f.zone0 = await page.evaluate(() => window.__partscale.zoneInputs());
+    for (const [i, axis] of ['x', 'y', 'z'].entries()) await page.fill(`#size-${axis}`, args.refusal.size[i]);
+    await page.click('#size-preview');
+    await page.waitForFunction(() => document.querySelector('#status').textContent.includes('failed'), null, { timeout: 60000 });
+    await idle();
+    f.status = await text('#status');
+    f.statusIsError = await page.evaluate(() => document.querySelector('#status').classList.contains('error'));
+    f.zones = await page.evaluate(() => window.__partscale.zoneInputs());
+    f.why = await page.evaluate(() => window.__partscale.fitWhy());
+    f.panel = await page.evaluate(() => document.querySelector('#size-refused')?.textContent ?? null);
+    await page.screenshot({ path: join(args.out, 'refusal-page.png') });
+    await page.check('#allow-deform');
+    await page.waitForFunction(() => window.__partscale.fitWhy().length > 0, null, { timeout: 60000 });
+    await idle();
+    f.allowed = {
+      status: await text('#status'),
+      why: await page.evaluate(() => window.__partscale.fitWhy()),
+      recipe: await page.evaluate(() => window.__partscale.recipe()),
+      sizes: await page.evaluate(() => window.__partscale.sizes()),
+      text: await sizesText(),
+      revision: (await page.evaluate(() => window.__partscale.state())).revision,
+      panel: await page.evaluate(() => document.querySelector('#size-refused')?.textContent ?? null),
+    };
+    await page.screenshot({ path: join(args.out, 'refusal-allowed-page.png') });
+    result.refusal = f;
+  } else if (args.limits) {
     // an apply whose result this GPU could not show: refused by the server before computing
     result.maxTexture = await page.evaluate(() =>
       document.createElement('canvas').getContext('webgl2').getParameter(WebGL2RenderingContext.MAX_3D_TEXTURE_SIZE));

@@ -10,6 +10,7 @@
 //            would send, and (when the case has points) the preview's map of the points back to
 //            the loaded object (remap.ts toSource through the valid zones)
 //   palette: color.ts paletteColour of 0..N-1
+//   lengths: ui.ts formatLength of [[value, units]], as the page shows sizes
 //   splice:  grid.ts spliceLayers on [{base, baseShape, shape, channels, delta, body}] (Uint16
 //            values), the spliced array
 import { createRequire } from 'node:module';
@@ -46,6 +47,10 @@ if (cases.rules) {
 if (cases.palette) {
   const color = await load('color.ts');
   out.palette = Array.from({ length: cases.palette }, (_, i) => color.paletteColour(i));
+}
+if (cases.lengths) {
+  const ui = await load('ui.ts');
+  out.lengths = cases.lengths.map(([v, units]) => ui.formatLength(v, units));
 }
 if (cases.splice) {
   const grid = await load('grid.ts');

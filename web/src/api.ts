@@ -124,10 +124,46 @@ export interface Snapped {
   message: string;
 }
 
-/** What POST /api/fit answers: the recipe reaching the size (not applied) and why. */
+/** What POST /api/fit and /api/add answer: the recipe (not applied) and why. */
 export interface Fitted {
   recipe: { version: 1; edits: Snapped['edit'][] };
   why: string[];
+}
+
+/** One element along an axis (partscale.zones.Element.to_json): world units along the axis. */
+export interface Element {
+  start: number;
+  end: number;
+  length: number;
+  /** Index into AxisElements.groups, or null. */
+  group: number | null;
+  mirrored: boolean;
+}
+
+/** Elements that repeat (partscale.zones.Group.to_json): indices into AxisElements.elements. */
+export interface ElementGroup {
+  members: number[];
+  separators: number[];
+  count: number;
+  err: number;
+  mirrored: boolean;
+  typical: number;
+}
+
+/** The object along one axis as elements and separators (partscale.zones.AxisElements.to_json),
+ *  with summary: a few words on its best repeat group ('no repeated element' where none). */
+export interface AxisElements {
+  axis: Axis;
+  elements: Element[];
+  separators: { start: number; end: number; kind: string }[];
+  /** Best first: the first is the group a count edit (POST /api/add) adds to or removes from. */
+  groups: ElementGroup[];
+  summary: string;
+}
+
+/** The elements of the current object along x, y and z (GET /api/elements). */
+export async function elements(): Promise<AxisElements[]> {
+  return (await check(await fetch('/api/elements', { cache: 'no-store' }))).json().then((b) => b.axes);
 }
 
 /** POST bodies and answers by route. */
@@ -138,7 +174,10 @@ export interface PostBodies {
   /** revision: the one the page shows; the server refuses to save another. */
   '/api/save': { overwrite: boolean; revision: number };
   '/api/snap': Edit;
-  '/api/fit': { size: [string, string, string] };
+  /** allow_deform: where only a deformation reaches the size, take it (else refused, 400). */
+  '/api/fit': { size: [string, string, string]; allow_deform: boolean };
+  /** n elements more along the axis (n < 0: fewer), as `partscale fit --add AXIS N`. */
+  '/api/add': { axis: Axis; n: number };
 }
 
 interface PostAnswers {
@@ -148,6 +187,7 @@ interface PostAnswers {
   '/api/save': ServerState;
   '/api/snap': Snapped;
   '/api/fit': Fitted;
+  '/api/add': Fitted;
 }
 
 async function post<P extends keyof PostBodies>(path: P, body: PostBodies[P]): Promise<PostAnswers[P]> {
@@ -169,5 +209,9 @@ export const save = (overwrite: boolean, revision: number): Promise<ServerState>
   post('/api/save', { overwrite, revision });
 /** The edit moved to the nearest good position for its mode (`partscale scale --snap`). */
 export const snap = (edit: Edit): Promise<Snapped> => post('/api/snap', edit);
-/** The recipe that resizes the object to size (x, y, z), previewed, not applied. */
-export const fit = (size: [string, string, string]): Promise<Fitted> => post('/api/fit', { size });
+/** The recipe that resizes the object to size (x, y, z), previewed, not applied; refused (ApiError,
+ *  one line naming the alternatives) where only a deformation would reach it, unless allowDeform. */
+export const fit = (size: [string, string, string], allowDeform = false): Promise<Fitted> =>
+  post('/api/fit', { size, allow_deform: allowDeform });
+/** The recipe adding n whole elements along the axis (n < 0: removing them), not applied. */
+export const addElements = (axis: Axis, n: number): Promise<Fitted> => post('/api/add', { axis, n });

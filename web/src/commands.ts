@@ -4,16 +4,21 @@ import * as api from './api';
 import { ApiError } from './api';
 import { type Parts, partsFrom, type Volume, volumeFrom } from './grid';
 import type { Scene } from './scene';
-import { zoneEdit } from './recipe';
+import { type Axis, zoneEdit } from './recipe';
+import { MAX_ZONES } from './remap';
 import { recipe, type Store, type ZoneInput } from './state';
 
 export interface Commands {
   /** Fetch the object (state, grid, parts) and show it (see the 'loaded' action); its zone
-   *  suggestions follow (the 'suggested' action) without being waited for. */
+   *  suggestions and its elements follow (the 'suggested' and 'found-elements' actions) without
+   *  being waited for. */
   load(how?: 'first' | 'applied' | 'undone' | 'redone'): Promise<void>;
   /** Ask the server for the fit panel's sizes and preview the recipe as the zones; whether it
    *  could. */
   previewFit(): Promise<boolean>;
+  /** Ask the server for the recipe adding n whole elements along the axis (n < 0: removing
+   *  them) and preview it as the zones (Apply makes it); whether it could. */
+  previewCount(axis: Axis, n: number): Promise<boolean>;
   /** The active zone snapped for its mode by the server (null when that fails, said in the
    *  status); its planes are set unless the zone changed meanwhile. */
   snapActive(): Promise<ZoneInput | null>;
@@ -54,9 +59,13 @@ export function createCommands(store: Store, scene: Scene): Commands {
     store.dispatch({ type: 'loaded', server: s, how });
     status(`${s.name}: ${s.history.length} operation(s) in history`);
     // not awaited: the object is shown and usable now; its zone candidates (seconds at 256³)
-    // fill the panel when they come
+    // and elements fill the panel when they come
     void suggestFor(s);
+    void elementsFor(s);
   }
+
+  /** Whether s is still the object shown (another may have been loaded meanwhile). */
+  const shown = (s: api.ServerState) => store.get().server === s || store.get().server?.revision === s.revision;
 
   async function suggestFor(s: api.ServerState) {
     let found: api.Candidate[] = [];
@@ -66,9 +75,17 @@ export function createCommands(store: Store, scene: Scene): Commands {
       status(`suggestions failed: ${e instanceof Error ? e.message : String(e)}`, true);
     }
     // drop them if another object was loaded meanwhile
-    if (store.get().server === s || store.get().server?.revision === s.revision) {
-      store.dispatch({ type: 'suggested', suggestions: found });
+    if (shown(s)) store.dispatch({ type: 'suggested', suggestions: found });
+  }
+
+  async function elementsFor(s: api.ServerState) {
+    let found: api.AxisElements[] = [];
+    try {
+      found = await api.elements();
+    } catch (e) {
+      status(`finding elements failed: ${e instanceof Error ? e.message : String(e)}`, true);
     }
+    if (shown(s)) store.dispatch({ type: 'found-elements', elements: found });
   }
 
   /** Run fn as the one request in flight (none starts while busy); failures go to the status. */
@@ -147,19 +164,53 @@ export function createCommands(store: Store, scene: Scene): Commands {
     scene.requestRender();
   };
 
+  /** Preview a recipe the server chose (fit, count edit) as the zones; the zones it previews. */
+  function previewRecipe(what: string, fitted: api.Fitted): ZoneInput[] {
+    const zones: ZoneInput[] = fitted.recipe.edits.map((e) => ({
+      axis: e.axis,
+      mode: e.mode,
+      start: e.zone[0],
+      end: e.zone[1],
+      dest: e.to,
+    }));
+    if (zones.length > MAX_ZONES) {
+      throw new ApiError(
+        `${what}: expected at most ${MAX_ZONES} zones (what this page previews), got ${zones.length}; ` +
+          'run it with partscale on the command line',
+      );
+    }
+    store.dispatch({ type: 'set-zones', zones, why: fitted.why });
+    return zones;
+  }
+
   const previewFit = async () => {
     let ok = false;
     await run('fitting', async () => {
-      const fitted = await api.fit([...store.get().fit.size] as [string, string, string]);
-      const zones: ZoneInput[] = fitted.recipe.edits.map((e) => ({
-        axis: e.axis,
-        mode: e.mode,
-        start: e.zone[0],
-        end: e.zone[1],
-        dest: e.to,
-      }));
-      store.dispatch({ type: 'set-zones', zones, why: fitted.why });
+      const { size, allowDeform } = store.get().fit;
+      let fitted: api.Fitted;
+      try {
+        fitted = await api.fit([...size] as [string, string, string], allowDeform);
+      } catch (e) {
+        // the fit panel says it too (a refusal names the alternatives: allow deform is one)
+        if (e instanceof ApiError) store.dispatch({ type: 'fit-refused', message: e.message });
+        throw e;
+      }
+      const zones = previewRecipe('fit', fitted);
       status(`fit: ${zones.length} zone(s) previewed; Apply to make it`);
+      ok = true;
+    });
+    return ok;
+  };
+
+  const previewCount = async (axis: Axis, n: number) => {
+    let ok = false;
+    const what = `${n > 0 ? 'add' : 'remove'} ${Math.abs(n)} element${Math.abs(n) === 1 ? '' : 's'} along ${axis}`;
+    await run(what, async () => {
+      const fitted = await api.addElements(axis, n);
+      previewRecipe(what, fitted);
+      // the count edit's own line first (the other axes are only 'kept')
+      const note = fitted.why.find((w) => w.startsWith(`${axis}:`)) ?? what;
+      status(`${note}; previewed, Apply to make it`);
       ok = true;
     });
     return ok;
@@ -199,5 +250,5 @@ export function createCommands(store: Store, scene: Scene): Commands {
     }
   }
 
-  return { load, apply, undo, redo, save, fit, previewFit, snapActive };
+  return { load, apply, undo, redo, save, fit, previewFit, previewCount, snapActive };
 }

@@ -2,9 +2,19 @@
 import type { Zone } from './recipe';
 import { toSource } from './remap';
 import type { Scene } from './scene';
-import { type AppState, type PlaneName, type ResolvedZone, recipe, resolvedZones, type Store, type ZoneInput } from './state';
+import {
+  type AppState,
+  extents,
+  type PlaneName,
+  type ResolvedZone,
+  recipe,
+  resolvedZones,
+  type Store,
+  targetExtents,
+  type ZoneInput,
+} from './state';
 import type { Recipe } from './recipe';
-import type { Candidate, ServerState } from './api';
+import type { AxisElements, Candidate, ServerState } from './api';
 
 export interface Hooks {
   /** The object is loaded. */
@@ -13,7 +23,7 @@ export interface Hooks {
   readonly frameTimeMs: number;
   readonly lastFrameMs: number;
   readonly frames: number;
-  /** Loaded with its suggestions, nothing in flight, and the last change has been drawn. */
+  /** Loaded with its suggestions and elements, nothing in flight, and the last change drawn. */
   readonly idle: boolean;
   state(): ServerState | null;
   /** The zones as applied (each in the frame the earlier ones leave). */
@@ -21,6 +31,11 @@ export interface Hooks {
   /** The zones as the user set them, on the loaded object (what the recipe sends). */
   zoneInputs(): readonly ZoneInput[];
   suggestions(): readonly Candidate[] | null;
+  /** The object's elements along x, y, z (null: not fetched yet). */
+  elements(): readonly AxisElements[] | null;
+  /** The solid's size per axis (object units) and the size the previewed zones make (null: no
+   *  change previewed). */
+  sizes(): { extent: number[]; target: number[] | null };
   fitWhy(): readonly string[];
   recipe(): Recipe;
   handleScreen(name: PlaneName): { x: number; y: number };
@@ -51,12 +66,15 @@ export function exposeHooks(store: Store, scene: Scene): Hooks {
       return scene.perf.frames;
     },
     get idle() {
-      return hooks.ready && !get().busy && !scene.renderQueued && get().suggestions !== null;
+      const s = get();
+      return hooks.ready && !s.busy && !scene.renderQueued && s.suggestions !== null && s.elements !== null;
     },
     state: () => get().server,
     zones: () => resolvedZones(get()),
     zoneInputs: () => get().zones,
     suggestions: () => get().suggestions,
+    elements: () => get().elements,
+    sizes: () => ({ extent: extents(get()), target: targetExtents(get()) }),
     fitWhy: () => get().fit.why,
     recipe: () => recipe(get()),
     handleScreen: scene.handleScreen,

@@ -13,8 +13,9 @@
 
 import { AXES, MODES, tileCount, type Zone } from './recipe';
 
-/** Zones the shader holds: fit's recipe has at most two per axis (tile and stretch). */
-export const MAX_ZONES = 6;
+/** Zones the shader holds: fit's recipe has a tile and a stretch per axis, or, where it is allowed
+ *  to deform, a few thin slabs per axis (a round top: four along x and four along z). */
+export const MAX_ZONES = 16;
 
 export function sourceCoordinate(y: number, z: Zone): number {
   const shift = z.dest - z.end;
@@ -103,10 +104,11 @@ float sourceCoordinate(float y, vec4 a, vec4 b) {
   return start + (u - k) * (end - start);
 }
 
-// Zones apply in order, so the output point goes back through the last zone first.
+// Zones apply in order, so the output point goes back through the last zone first. The loop runs
+// over the zones set only (GLSL ES 3.00 loops may end at a uniform): a frame costs what its zones
+// cost, however many the shader could hold.
 vec3 toSource(vec3 p) {
-  for (int i = MAX_ZONES - 1; i >= 0; --i) {
-    if (i >= uZoneCount) continue;
+  for (int i = min(uZoneCount, MAX_ZONES) - 1; i >= 0; --i) {
     int axis = int(uZoneB[i].y + 0.5);
     p[axis] = sourceCoordinate(p[axis], uZoneA[i], uZoneB[i]);
   }

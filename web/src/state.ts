@@ -1,7 +1,7 @@
 // The editor's one state object and its transitions. Handlers dispatch named actions; the scene
 // and the panel subscribe and draw what the state says. Everything else the page shows (resolved
 // zones, the recipe, the output box) is derived from the state by the pure functions below.
-import type { Candidate, ServerState } from './api';
+import type { AxisElements, Candidate, ServerState } from './api';
 import { forwardCoordinate, MAX_ZONES, sourceCoordinate } from './remap';
 import {
   AXES,
@@ -55,11 +55,23 @@ export interface AppState {
   readonly status: { readonly message: string; readonly error: boolean };
   /** Zone candidates of the loaded object (GET /api/suggest), best first; null: not fetched. */
   readonly suggestions: readonly Candidate[] | null;
+  /** The loaded object's elements along x, y, z (GET /api/elements); null: not fetched. */
+  readonly elements: readonly AxisElements[] | null;
+  /** The zones are the page's first one, untouched: the best suggestion replaces it when the
+   *  suggestions come. */
+  readonly initialZone: boolean;
   /** Snap the planes while dragging (POST /api/snap), as `partscale scale --snap`. */
   readonly snap: boolean;
-  /** The fit panel: one size per axis ('=', '2.1', '210cm', '+20cm', '120%'), and why fit chose
-   *  the zones it previews (empty: no fit previewed). */
-  readonly fit: { readonly size: readonly [string, string, string]; readonly why: readonly string[] };
+  /** The fit panel: one size per axis ('=', '2.1', '210cm', '+20cm', '120%'), why fit (or a
+   *  count edit) chose the zones it previews (empty: none previewed), whether a size only a
+   *  deformation reaches is taken (thin slabs, global scaling) rather than refused, and why the
+   *  last fit was refused ('' when it was not). */
+  readonly fit: {
+    readonly size: readonly [string, string, string];
+    readonly why: readonly string[];
+    readonly allowDeform: boolean;
+    readonly refused: string;
+  };
   /** The zones of each apply, last last: undo brings them back (and redo those it undid). */
   readonly appliedZones: readonly (readonly ZoneInput[])[];
   readonly redoZones: readonly (readonly ZoneInput[])[];
@@ -70,10 +82,13 @@ export type Action =
   // their ends (the object already has the change); 'undone': the zones of the undone apply
   | { type: 'loaded'; server: ServerState; how?: 'first' | 'applied' | 'undone' | 'redone' }
   | { type: 'suggested'; suggestions: readonly Candidate[] }
+  | { type: 'found-elements'; elements: readonly AxisElements[] }
   | { type: 'use-candidate'; candidate: Candidate } // the active zone takes its axis, zone and mode
   | { type: 'set-zones'; zones: readonly ZoneInput[]; why?: readonly string[] } // e.g. a fit
   | { type: 'set-snap'; snap: boolean }
   | { type: 'set-fit-size'; axis: number; value: string }
+  | { type: 'set-allow-deform'; allowDeform: boolean }
+  | { type: 'fit-refused'; message: string }
   | { type: 'saved'; server: ServerState }
   // the server's history moved but the page still shows the object it had (its load failed)
   | { type: 'history'; can_undo: boolean; can_redo: boolean }
@@ -99,8 +114,10 @@ export const initialState: AppState = {
   overwrite: false,
   status: { message: '', error: false },
   suggestions: null,
+  elements: null,
+  initialZone: false,
   snap: false,
-  fit: { size: ['=', '=', '='], why: [] },
+  fit: { size: ['=', '=', '='], why: [], allowDeform: false, refused: '' },
   appliedZones: [],
   redoZones: [],
 };
@@ -116,16 +133,54 @@ export function solidBounds(s: AppState): [number[], number[]] {
   return s.server.solid_bounds ?? s.server.grid_bounds;
 }
 
-/** The default zone: 35 % to 65 % of the solid's extent [lo, hi], destination at its end. */
+/** The fallback zone: 35 % to 65 % of the solid's extent [lo, hi], destination at its end. */
 function zoneAt(axis: Axis, mode: Mode, lo: number, hi: number): ZoneInput {
   const len = hi - lo;
   return { axis, mode, start: lo + 0.35 * len, end: lo + 0.65 * len, dest: lo + 0.65 * len };
 }
 
+/** A candidate as a zone with no change yet: its axis, planes and kind, destination at its end. */
+function candidateZone(c: Candidate): ZoneInput {
+  return { axis: c.axis, mode: c.kind, start: c.zone[0], end: c.zone[1], dest: c.zone[1] };
+}
+
+/** The zone a new, reset or re-axed zone starts as: the best suggestion along the axis (its
+ *  kind, destination at its end), or, where there is none (or none yet), 35 % to 65 % of the
+ *  solid's extent in the given mode. */
 export function defaultZone(s: AppState, axis: Axis = 'x', mode: Mode = 'stretch'): ZoneInput {
+  const best = s.suggestions?.find((c) => c.axis === axis);
+  if (best) return candidateZone(best);
   const [smin, smax] = solidBounds(s);
   const a = AXES.indexOf(axis);
   return zoneAt(axis, mode, smin[a], smax[a]);
+}
+
+/** The page's first zone once the suggestions are in: the top-ranked one on its axis, else the
+ *  fallback along x. */
+export function startZone(s: AppState): ZoneInput {
+  const best = s.suggestions?.[0];
+  return best ? candidateZone(best) : defaultZone(s, 'x');
+}
+
+/** The loaded solid's size along x, y, z (object units). */
+export function extents(s: AppState): [number, number, number] {
+  const [lo, hi] = solidBounds(s);
+  return [0, 1, 2].map((a) => hi[a] - lo[a]) as [number, number, number];
+}
+
+/** The solid's size along x, y, z once the valid zones apply (what a preview shows, in whole
+ *  voxels as the server makes it); null where nothing would change. */
+export function targetExtents(s: AppState): [number, number, number] | null {
+  if (!s.server || isNoop(s)) return null;
+  const [smin, smax] = solidBounds(s);
+  const lo = [...smin];
+  const hi = [...smax];
+  for (const z of validZones(s)) {
+    const a = AXES.indexOf(z.axis);
+    lo[a] = forwardCoordinate(lo[a], z);
+    hi[a] = forwardCoordinate(hi[a], z);
+  }
+  return [0, 1, 2].map((a) => hi[a] - lo[a]) as [number, number, number];
 }
 
 /** The zones as apply_recipe applies them (see ResolvedZone), in order. */
@@ -248,13 +303,28 @@ function patchActive(s: AppState, patch: Partial<ZoneInput>): AppState {
 }
 
 export function reduce(s: AppState, action: Action): AppState {
+  const next = transition(s, action);
+  // a zone changed by anything but a load is no longer the page's untouched first one
+  return next.initialZone && next.zones !== s.zones && action.type !== 'loaded'
+    ? { ...next, initialZone: false }
+    : next;
+}
+
+function transition(s: AppState, action: Action): AppState {
   switch (action.type) {
     case 'loaded': {
-      const next: AppState = { ...s, server: action.server, suggestions: null, fit: { ...s.fit, why: [] } };
+      const next: AppState = {
+        ...s,
+        server: action.server,
+        suggestions: null,
+        elements: null,
+        fit: { ...s.fit, why: [], refused: '' },
+      };
       const how = s.zones.length ? action.how ?? 'applied' : 'first';
       if (how === 'first') {
+        // the fallback until the suggestions come (the 'suggested' action)
         const zones = [defaultZone(next, s.zones[0]?.axis ?? 'x')];
-        return { ...next, zones, active: 0, appliedZones: [], redoZones: [] };
+        return { ...next, zones, active: 0, appliedZones: [], redoZones: [], initialZone: true };
       }
       const last = <T>(xs: readonly T[]) => xs[xs.length - 1];
       if (how === 'undone') {
@@ -271,8 +341,12 @@ export function reduce(s: AppState, action: Action): AppState {
       const redoZones = how === 'applied' ? [] : s.redoZones.slice(0, -1);
       return { ...next, zones, active: Math.min(s.active, zones.length - 1), appliedZones, redoZones };
     }
-    case 'suggested':
-      return { ...s, suggestions: action.suggestions };
+    case 'suggested': {
+      const next = { ...s, suggestions: action.suggestions };
+      return s.initialZone ? { ...next, zones: [startZone(next)], active: 0, initialZone: false } : next;
+    }
+    case 'found-elements':
+      return { ...s, elements: action.elements };
     case 'use-candidate': {
       const c = action.candidate;
       const z = s.zones[s.active];
@@ -284,14 +358,18 @@ export function reduce(s: AppState, action: Action): AppState {
     }
     case 'set-zones':
       if (!action.zones.length || action.zones.length > MAX_ZONES) return s;
-      return { ...s, zones: action.zones, active: 0, fit: { ...s.fit, why: action.why ?? [] } };
+      return { ...s, zones: action.zones, active: 0, fit: { ...s.fit, why: action.why ?? [], refused: '' } };
     case 'set-snap':
       return { ...s, snap: action.snap };
     case 'set-fit-size': {
       const size = [...s.fit.size] as [string, string, string];
       size[action.axis] = action.value;
-      return { ...s, fit: { ...s.fit, size } };
+      return { ...s, fit: { ...s.fit, size, refused: '' } };
     }
+    case 'set-allow-deform':
+      return { ...s, fit: { ...s.fit, allowDeform: action.allowDeform, refused: '' } };
+    case 'fit-refused':
+      return { ...s, fit: { ...s.fit, refused: action.message } };
     case 'saved':
       return { ...s, server: s.server ? { ...s.server, ...action.server } : action.server };
     case 'history':

@@ -7,14 +7,17 @@ import { MAX_ZONES } from './remap';
 import {
   type AppState,
   canApply,
+  extents,
   firstProblem,
   isNoop,
   PLANES,
   resolvedZones,
   solidBounds,
   type Store,
+  targetExtents,
   type Units,
   type ViewMode,
+  voxel,
 } from './state';
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
@@ -30,6 +33,13 @@ function extent(s: AppState, axis: Axis): [number, number] {
   return [lo[a], hi[a]];
 }
 
+/** A length for people: in an object in metres, metres from 1 m up and centimetres below (to the
+ *  millimetre); in other units, the number and the unit's name (nothing converted). */
+export function formatLength(v: number, units: string): string {
+  if (units !== 'm') return `${fmt(v)} ${units}`.trim();
+  return Math.abs(v) >= 1 ? `${v.toFixed(3)} m` : `${(100 * v).toFixed(1)} cm`;
+}
+
 function toDisplay(v: number, [lo, hi]: [number, number], units: Units): number {
   return units === '%' ? ((v - lo) / (hi - lo)) * 100 : v;
 }
@@ -43,28 +53,40 @@ function candidateLabel(c: Candidate, units: string): string {
   return c.kind === 'tile' ? `tile ${span}, period ${fmt(c.period ?? 0)} ×${c.count}` : `stretch ${span}`;
 }
 
-/** Per axis, a ruler over the solid's extent with one clickable band per candidate. */
+/** A "−1" or "+1" button: n whole elements along the axis (POST /api/add), previewed. */
+function countButton(axis: Axis, n: number): HTMLButtonElement {
+  const b = document.createElement('button');
+  b.id = `count-${axis}-${n > 0 ? 'plus' : 'minus'}`;
+  b.className = 'count';
+  b.dataset.axis = axis;
+  b.dataset.n = String(n);
+  b.textContent = n > 0 ? `+${n}` : `−${-n}`;
+  return b;
+}
+
+/** Per axis, a ruler over the solid's extent with one clickable band per candidate, and the
+ *  count buttons (one element fewer or more). */
 function renderSuggestions(s: AppState) {
   const box = $('suggestions');
   box.innerHTML = '';
-  if (s.suggestions === null) {
-    box.textContent = s.server ? 'looking…' : '';
-    return;
-  }
-  if (!s.suggestions.length) {
-    box.textContent = 'no zone found on any axis';
-    return;
-  }
-  const units = s.server?.units ?? '';
+  if (!s.server) return;
+  const units = s.server.units;
   for (const axis of AXES) {
-    const found = s.suggestions.filter((c) => c.axis === axis);
-    const ruler = document.createElement('div');
-    ruler.className = 'ruler';
+    const row = document.createElement('div');
+    row.className = 'axis-row';
     const name = document.createElement('span');
     name.className = 'ruler-axis';
     name.textContent = axis;
-    ruler.appendChild(name);
-    if (!found.length) ruler.appendChild(document.createTextNode(' none'));
+    const ruler = document.createElement('div');
+    ruler.className = 'ruler';
+    row.append(name, ruler, countButton(axis, -1), countButton(axis, 1));
+    box.appendChild(row);
+    if (s.suggestions === null) {
+      ruler.textContent = 'looking…';
+      continue;
+    }
+    const found = s.suggestions.filter((c) => c.axis === axis);
+    if (!found.length) ruler.textContent = 'no zone found';
     const [lo, hi] = extent(s, axis);
     found.forEach((c, i) => {
       const band = document.createElement('button');
@@ -78,8 +100,37 @@ function renderSuggestions(s: AppState) {
       band.textContent = c.kind;
       ruler.appendChild(band);
     });
-    box.appendChild(ruler);
   }
+}
+
+/** The count buttons: enabled where the axis has a repeat group, the tooltip says why not. */
+function markCountButtons(s: AppState) {
+  document.querySelectorAll<HTMLButtonElement>('#suggestions .count').forEach((b) => {
+    const axis = b.dataset.axis as Axis;
+    const n = Number(b.dataset.n);
+    const found = s.elements?.find((e) => e.axis === axis);
+    const group = found?.groups[0];
+    const more = n > 0 ? `${n} more` : `${-n} fewer`;
+    if (s.elements === null) b.title = `${more} along ${axis}: looking for elements…`;
+    else if (!group) {
+      b.title =
+        `${more} along ${axis}: no repeated element along ${axis} (a seat, a door, a shelf row, ` +
+        'a drawer); resize by length instead (a zone, or a size below)';
+    } else b.title = `${more} element${Math.abs(n) === 1 ? '' : 's'} along ${axis} (${found.summary}): previewed, Apply makes it`;
+    b.disabled = s.busy || !group;
+  });
+}
+
+/** The solid's size per axis and, while zones preview a change, the size they make. */
+function renderSizes(s: AppState) {
+  const units = s.server?.units ?? '';
+  const now = extents(s);
+  const target = targetExtents(s);
+  AXES.forEach((axis, a) => {
+    $(`extent-${axis}`).textContent = s.server ? formatLength(now[a], units) : '';
+    const changed = target !== null && Math.abs(target[a] - now[a]) > voxel(s) / 4;
+    $(`target-${axis}`).textContent = changed ? `→ ${formatLength(target[a], units)}` : '';
+  });
 }
 
 /** The band of the active zone's own candidate, if it is one. */
@@ -124,13 +175,23 @@ function render(s: AppState) {
     drawn.server = s.server;
   }
   markActiveBand(s);
+  markCountButtons(s);
+  renderSizes(s);
   ($('snap') as HTMLInputElement).checked = s.snap;
+  ($('allow-deform') as HTMLInputElement).checked = s.fit.allowDeform;
   AXES.forEach((axis, i) => {
     const input = $(`size-${axis}`) as HTMLInputElement;
     if (document.activeElement !== input) input.value = s.fit.size[i];
   });
   const why = $('size-why');
   why.innerHTML = '';
+  if (s.fit.refused) {
+    const li = document.createElement('li');
+    li.className = 'error';
+    li.id = 'size-refused';
+    li.textContent = s.fit.refused;
+    why.appendChild(li);
+  }
   for (const line of s.fit.why) {
     const li = document.createElement('li');
     li.textContent = line;
@@ -224,6 +285,11 @@ export function bindPanel(store: Store, commands: Commands): void {
     if (on) void commands.snapActive();
   });
   $('suggestions').addEventListener('click', (e) => {
+    const count = (e.target as HTMLElement).closest<HTMLButtonElement>('.count');
+    if (count) {
+      if (!count.disabled) void commands.previewCount(count.dataset.axis as Axis, Number(count.dataset.n));
+      return;
+    }
     const band = (e.target as HTMLElement).closest<HTMLButtonElement>('.band');
     const s = store.get();
     const c = band && s.suggestions?.filter((k) => k.axis === band.dataset.axis)[Number(band.dataset.index)];
@@ -238,6 +304,11 @@ export function bindPanel(store: Store, commands: Commands): void {
     );
   });
   $('size-preview').addEventListener('click', () => void commands.previewFit());
+  $('allow-deform').addEventListener('change', (e) => {
+    dispatch({ type: 'set-allow-deform', allowDeform: (e.target as HTMLInputElement).checked });
+    // a size asked: fit it again, allowed to deform or not
+    if (store.get().fit.size.some((v) => v !== '=')) void commands.previewFit();
+  });
   $('size-apply').addEventListener('click', async () => {
     if (await commands.previewFit()) await commands.apply();
   });

@@ -6,7 +6,8 @@ shipped, built, in ``static/`` so users need no Node (rebuild with ``npx vite bu
 ``tests/test_serve.py`` checks ``static/build.json`` against a hash of the sources).
 
 For scripts, the page exposes ``window.__partscale``: ``frameTimeMs`` (smoothed, GPU-synchronised),
-``lastFrameMs``, ``frames``, ``idle``, ``state()``, ``zones()``, ``recipe()``,
+``lastFrameMs``, ``frames``, ``idle``, ``state()``, ``zones()``, ``recipe()``, ``elements()``,
+``sizes()`` (the solid's size per axis and the size the previewed zones make),
 ``benchmark(n)`` (n orbiting frames; mean and median ms), ``evalRemap(zones, points)`` (the shader's
 own GLSL map) and ``handleScreen(name)``. ``?canvas=WxH`` fixes the canvas size.
 """

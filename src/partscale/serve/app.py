@@ -13,8 +13,15 @@ GET  /api/parts             binary int16 part indices, C order (z fastest); ``?b
 GET  /api/schema            the recipe JSON schema
 GET  /api/progress          progress of the apply in flight
 GET  /api/suggest           zone candidates of the current object (``?axis=x|y|z``: one axis)
+GET  /api/elements          the current object's elements per axis, ``{"axes": [...]}`` (each
+                            :meth:`~partscale.zones.AxisElements.to_json` with ``summary``, a
+                            few words on its repeat group); ``?axis=x|y|z``: one axis
 POST /api/snap              body: one recipe edit; the edit snapped for its mode and the moves
-POST /api/fit               body: {"size": [X, Y, Z]}; the fitted recipe and why (not applied)
+POST /api/fit               body: {"size": [X, Y, Z], "allow_deform": false}; the fitted recipe
+                            and why (not applied); a size only a deformation reaches is refused
+                            (400, one line naming the alternatives) unless allow_deform
+POST /api/add               body: {"axis": "x", "n": 1}; the recipe adding n whole elements (n
+                            < 0: removing them) and why (not applied), as ``fit --add``
 POST /api/apply             body: recipe JSON, optionally with ``limits`` (what the page can
                             show, see :class:`~partscale.serve.session.PageLimits`; a result
                             beyond them is refused before computing); returns the new state
@@ -70,6 +77,8 @@ STATIC = Path(__file__).parent / "static"
 #: Largest request body accepted (a recipe is a few hundred bytes).
 MAX_BODY = 64 * 1024
 LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "[::1]"]
+#: Most elements one /api/add adds or removes (the page asks for one; its GPU limits the rest).
+MAX_ADD = 100
 
 _MEDIA = {
     ".html": "text/html; charset=utf-8",
@@ -277,6 +286,130 @@ def _asset_table() -> dict[str, tuple[bytes, str]]:
     return table
 
 
+class _FoundPerAxis:
+    """``fn(csdf, axis)`` kept for the last few (object, axis) pairs: what a zones function found
+    on the editor's object (seconds at 256³) is found once per object and axis. The object is
+    held with its entry, so its id is not reused while the entry is."""
+
+    def __init__(self, fn: Callable[[Any, str], Any], keep: int = 9):
+        self.fn, self.keep = fn, keep
+        self.found: dict[tuple[int, str], tuple[Any, Any]] = {}
+        self.lock = threading.Lock()  # the routes asking run in worker threads
+
+    def __call__(self, c: Any, ax: str) -> Any:
+        with self.lock:
+            hit = self.found.get((id(c), ax))
+        if hit is None:
+            hit = (c, self.fn(c, ax))
+            with self.lock:
+                self.found[(id(c), ax)] = hit
+                while len(self.found) > self.keep:
+                    del self.found[next(iter(self.found))]
+        return hit[1]
+
+
+def _zone_routes(session: EditSession) -> list[Route]:
+    """The routes over :mod:`partscale.zones` on the session's current object (thin layers):
+    ``/api/suggest``, ``/api/snap``, ``/api/elements``, ``/api/fit`` and ``/api/add``."""
+    # what suggest and find_elements found, per object and axis
+    candidates = _FoundPerAxis(lambda c, ax: zones.suggest(c, ax))
+    found_elements = _FoundPerAxis(lambda c, ax: zones.find_elements(c, ax))
+
+    def _suggest(axes: list[str]) -> list[dict]:
+        c = session.current
+        out = [k.to_json() for ax in axes for k in candidates(c, ax)]
+        return sorted(out, key=lambda k: -k["score"])
+
+    async def suggest(request: Request) -> Response:
+        axis = request.query_params.get("axis")
+        if axis is not None and axis not in ("x", "y", "z"):
+            return _error(f"suggest.axis: expected x, y or z, got {axis[:20]!r}")
+        found = await _run("suggest", _suggest, [axis] if axis else ["x", "y", "z"])
+        return JSONResponse({"candidates": found}, headers=_NO_STORE)
+
+    def _snap(body: Any) -> dict[str, Any]:
+        c = session.current
+        edit = Edit.parse(body)
+        # the candidates /api/suggest found (or finds now, for both): computed once per object
+        cands = None if edit.mode == "global" else candidates(c, edit.axis)
+        edit, moves = zones.snap(c, edit, candidates=cands)
+        return {
+            "edit": edit.to_json(),
+            "moves": [m.to_json() for m in moves],
+            "message": zones.describe_moves(moves, c.meta.get("units")),
+        }
+
+    async def snap(request: Request) -> Response:
+        body = await _json_body(request)
+        return JSONResponse(await _run("snap", _snap, body), headers=_NO_STORE)
+
+    def _elements(axes: list[str]) -> list[dict]:
+        c = session.current
+        out = []
+        for ax in axes:
+            found_ax = found_elements(c, ax)
+            out.append({**found_ax.to_json(), "summary": zones.element_phrase(found_ax)})
+        return out
+
+    async def elements(request: Request) -> Response:
+        axis = request.query_params.get("axis")
+        if axis is not None and axis not in ("x", "y", "z"):
+            return _error(f"elements.axis: expected x, y or z, got {axis[:20]!r}")
+        found_axes = await _run("elements", _elements, [axis] if axis else ["x", "y", "z"])
+        return JSONResponse({"axes": found_axes}, headers=_NO_STORE)
+
+    def _fit(size: Any, allow_deform: bool) -> dict[str, Any]:
+        recipe, why = zones.fit(session.current, size, allow_deform=allow_deform)
+        return {"recipe": recipe.to_json(), "why": why}
+
+    async def fit(request: Request) -> Response:
+        body = await _json_body(request)
+        keys = set(body) if isinstance(body, dict) else set()
+        size = body.get("size") if "size" in keys and keys <= {"size", "allow_deform"} else None
+        if not (
+            isinstance(size, list)
+            and len(size) == 3
+            and all(isinstance(v, str | int | float) and not isinstance(v, bool) for v in size)
+        ):
+            return _error(
+                'fit: expected {"size": [X, Y, Z], "allow_deform": false} (each "=", 2.1, '
+                f'"210cm", "+20cm", "120%"), got {str(body)[:80]!r}'
+            )
+        allow = body.get("allow_deform", False)
+        if not isinstance(allow, bool):
+            return _error(f"fit.allow_deform: expected true or false, got {str(allow)[:40]!r}")
+        return JSONResponse(await _run("fit", _fit, size, allow), headers=_NO_STORE)
+
+    def _add(axis: str, n: int) -> dict[str, Any]:
+        recipe, why = zones.fit(session.current, add={axis: n})
+        return {"recipe": recipe.to_json(), "why": why}
+
+    async def add(request: Request) -> Response:
+        body = await _json_body(request)
+        if not isinstance(body, dict) or set(body) != {"axis", "n"}:
+            return _error(
+                f'add: expected {{"axis": "x", "n": 1}} (n elements more, or -n fewer), got '
+                f"{str(body)[:80]!r}"
+            )
+        axis, n = body["axis"], body["n"]
+        if axis not in ("x", "y", "z"):
+            return _error(f"add.axis: expected x, y or z, got {str(axis)[:20]!r}")
+        if isinstance(n, bool) or not isinstance(n, int) or n == 0 or abs(n) > MAX_ADD:
+            return _error(
+                f"add.n: expected a whole number of elements other than 0, at most {MAX_ADD} "
+                f"either way, got {str(n)[:20]!r}"
+            )
+        return JSONResponse(await _run("add", _add, axis, n), headers=_NO_STORE)
+
+    return [
+        Route("/api/suggest", suggest),
+        Route("/api/snap", snap, methods=["POST"]),
+        Route("/api/elements", elements),
+        Route("/api/fit", fit, methods=["POST"]),
+        Route("/api/add", add, methods=["POST"]),
+    ]
+
+
 def create_app(
     path: str | Path,
     *,
@@ -421,68 +554,6 @@ def create_app(
         written = await _run("save", lambda: session.save(overwrite=overwrite, revision=revision))
         return state(saved=written.name)
 
-    # suggestions of the current object: one entry per (object, axis), the last few kept; the
-    # object is held with them so its id is not reused while they are
-    suggested: dict[tuple[int, str], tuple[Any, list[zones.Candidate]]] = {}
-    suggested_lock = threading.Lock()  # /api/suggest and /api/snap run in worker threads
-
-    def _candidates(c: Any, ax: str) -> list[zones.Candidate]:
-        with suggested_lock:
-            hit = suggested.get((id(c), ax))
-        if hit is None:
-            hit = (c, zones.suggest(c, ax))
-            with suggested_lock:
-                suggested[(id(c), ax)] = hit
-                while len(suggested) > 9:
-                    del suggested[next(iter(suggested))]
-        return hit[1]
-
-    def _suggest(axes: list[str]) -> list[dict]:
-        c = session.current
-        out = [k.to_json() for ax in axes for k in _candidates(c, ax)]
-        return sorted(out, key=lambda k: -k["score"])
-
-    async def suggest(request: Request) -> Response:
-        axis = request.query_params.get("axis")
-        if axis is not None and axis not in ("x", "y", "z"):
-            return _error(f"suggest.axis: expected x, y or z, got {axis[:20]!r}")
-        found = await _run("suggest", _suggest, [axis] if axis else ["x", "y", "z"])
-        return JSONResponse({"candidates": found}, headers=_NO_STORE)
-
-    def _snap(body: Any) -> dict[str, Any]:
-        c = session.current
-        edit = Edit.parse(body)
-        # the candidates /api/suggest found (or finds now, for both): computed once per object
-        cands = None if edit.mode == "global" else _candidates(c, edit.axis)
-        edit, moves = zones.snap(c, edit, candidates=cands)
-        return {
-            "edit": edit.to_json(),
-            "moves": [m.to_json() for m in moves],
-            "message": zones.describe_moves(moves, c.meta.get("units")),
-        }
-
-    async def snap(request: Request) -> Response:
-        body = await _json_body(request)
-        return JSONResponse(await _run("snap", _snap, body), headers=_NO_STORE)
-
-    def _fit(size: Any) -> dict[str, Any]:
-        recipe, why = zones.fit(session.current, size)
-        return {"recipe": recipe.to_json(), "why": why}
-
-    async def fit(request: Request) -> Response:
-        body = await _json_body(request)
-        size = body.get("size") if isinstance(body, dict) and set(body) == {"size"} else None
-        if not (
-            isinstance(size, list)
-            and len(size) == 3
-            and all(isinstance(v, str | int | float) and not isinstance(v, bool) for v in size)
-        ):
-            return _error(
-                'fit: expected {"size": [X, Y, Z]} (each "=", 2.1, "210cm", "+20cm", "120%"), '
-                f"got {str(body)[:80]!r}"
-            )
-        return JSONResponse(await _run("fit", _fit, size), headers=_NO_STORE)
-
     def _export(kind: str):
         async def handler(request: Request) -> Response:
             data, name, media = await _run("export", session.export, kind)
@@ -503,9 +574,7 @@ def create_app(
         Route("/api/parts", parts),
         Route("/api/schema", schema),
         Route("/api/progress", progress),
-        Route("/api/suggest", suggest),
-        Route("/api/snap", snap, methods=["POST"]),
-        Route("/api/fit", fit, methods=["POST"]),
+        *_zone_routes(session),
         Route("/api/apply", apply, methods=["POST"]),
         Route("/api/undo", undo, methods=["POST"]),
         Route("/api/redo", redo, methods=["POST"]),

@@ -786,15 +786,15 @@ def test_editor_adds_an_element_and_shows_sizes_in_metres(tmp_path):
 
 @pytest.mark.browser
 def test_editor_shows_a_refused_fit_and_previews_it_allowed_to_deform(tmp_path):
-    """A round top 20 % wider and deeper: refused, the one-line reason in the status line;
-    ticking 'allow deform' fits again and previews the deforming recipe (more zones than a
-    part-aware fit makes); nothing is applied."""
+    """A round top 20 % wider (x alone: a radial zone grows x and z alike): refused, the
+    one-line reason in the status line; ticking 'allow deform' fits again and previews the
+    deforming recipe; nothing is applied."""
     node, chromium = find_tools()
     h = 0.01
     path = tmp_path / "round.csdf.npz"
     c0 = round_table(h)
     partscale.save(c0, path)
-    size = ["120%", "=", "120%"]
+    size = ["120%", "=", "="]
     with pytest.raises(InputError) as refused:
         zones_mod.fit(c0, size)
     allowed, why = zones_mod.fit(c0, size, allow_deform=True)
@@ -810,10 +810,10 @@ def test_editor_shows_a_refused_fit_and_previews_it_allowed_to_deform(tmp_path):
     a = f["allowed"]
     assert a["why"] == why and a["revision"] == 0 and a["panel"] is None
     assert [Edit.parse(e) for e in a["recipe"]["edits"]] == list(allowed.edits)
-    assert len(allowed.edits) > 6  # more zones than the shader used to hold
+    assert len(allowed.edits) >= 2  # thin slabs, several zones previewed at once
     sb = c0.surface_bounds()
     ext = sb[1] - sb[0]
-    want = [1.2 * ext[0], ext[1], 1.2 * ext[2]]
+    want = [1.2 * ext[0], ext[1], ext[2]]
     assert a["sizes"]["target"] == pytest.approx(want, abs=0.5 * h + 1e-9)
     assert abs(metres(a["text"]["x"]["target"]) - want[0]) <= 0.5 * h + 0.0005
 

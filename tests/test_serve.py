@@ -1053,14 +1053,15 @@ def test_add_is_fit_add_on_the_current_object_not_applied(tmp_path, n):
 
 
 def test_a_fit_only_a_deformation_reaches_is_refused_unless_allowed(tmp_path):
-    """/api/fit on a round top 20 % wider and deeper: 400 with fit's one line naming the
-    alternatives; with allow_deform the deforming recipe (not applied)."""
+    """/api/fit on a round top 20 % wider (x alone: a radial zone grows x and z alike): 400
+    with fit's one line naming the alternatives; with allow_deform the deforming recipe (not
+    applied)."""
     from partscale import zones
     from partscale.errors import InputError
 
     path = round_table_file(tmp_path)
     c = partscale.load(path)
-    size = ["120%", "=", "120%"]
+    size = ["120%", "=", "="]
     with pytest.raises(InputError) as refused:
         zones.fit(c, size)
     with TestClient(create_app(path), base_url="http://127.0.0.1") as client:

@@ -22,7 +22,7 @@ from scipy import ndimage
 
 from ..csdf import BAND_VOXELS, CSDF
 from ..edit import Recipe, edit_label, unit_suffix
-from .profile import _axis_index
+from .profile import _axis_index, profile
 
 #: Voxels along the longest side at which the sizes below are given; they scale with it, so a
 #: feature is the same share of the object at every resolution.
@@ -34,9 +34,11 @@ FEATURE_VOXELS = 2
 #: A colour motif differs from its column on both sides by more than this in some sRGB channel
 #: (of 255).
 COLOUR_CONTRAST = 40.0
-#: A colour motif is at least this many voxels (at 128) across in every direction (along the
-#: axis, across the face and through the voxels within a voxel of it): no line of a texture.
-MOTIF_ACROSS = 2
+#: Least slope (voxels per voxel) of the distances across the axis at a column along one face;
+#: a unit slope is one face nearest (0.71 where two at right angles are as near).
+SINGLE_FACE = 0.9
+#: Layers a calm run is extended by either side to find its features (:func:`axis_features`).
+EXTEND = 3
 #: The share of a run's surface voxels whose detail is its finish: the strongest this share of
 #: the surface reaches (its wear, grain or noise), which a feature must exceed ...
 NOISE_SHARE = 0.02
@@ -85,19 +87,33 @@ def _noise(values: np.ndarray, n_surface: int) -> float:
     return float(np.partition(values.ravel(), values.size - k)[values.size - k])
 
 
+@dataclass(frozen=True)
+class _Run:
+    """What the two detectors share of layers ``first..last`` along an axis: the distances
+    (L, A, B, voxel units, the axis first), the section's solid extent across the axis (two
+    ``(lo, hi)`` index ranges: no feature spans it both ways) and the least voxels of a
+    feature."""
+
+    first: int
+    s: np.ndarray
+    section: tuple[tuple[int, int], tuple[int, int]]
+    vmin: int
+
+
 def _components(
+    run: _Run,
     bump: np.ndarray,
     sharp: np.ndarray,
     peak: np.ndarray,
     threshold: float,
     cols: tuple[np.ndarray, np.ndarray],
-    first: int,
-    vmin: int,
     kind: Literal["shape", "colour"],
+    offset: int,
 ) -> list[Feature]:
-    """The features among the connected (26-neighbour) sets of ``bump`` voxels (L, K: inner
-    layers by columns ``cols``): at least ``vmin`` voxels, local (at most half the ``L`` layers
-    long), holding a ``sharp`` voxel and one whose ``peak`` exceeds ``threshold``."""
+    """The features among the connected (26-neighbour) sets of ``bump`` voxels (L, K: the run's
+    layers from ``offset`` by columns ``cols``): at least ``run.vmin`` voxels, local (at most
+    half as long as the run inside its end layers, and short of the section's extent one way across), holding a ``sharp`` voxel
+    and one whose ``peak`` exceeds ``threshold``."""
     hit = bump.any(axis=0)
     if not hit.any():
         return []
@@ -120,76 +136,118 @@ def _components(
     has_sharp = np.bincount(at, weights=scatter(sharp)[inside], minlength=n + 1) > 0
     top = np.zeros(n + 1)
     np.maximum.at(top, at, scatter(peak)[inside])
+    wide = [(hi - lo + 1) / 2 for lo, hi in run.section]
     out = []
     for label, box in enumerate(ndimage.find_objects(lab), start=1):
-        if box is None:
-            continue
-        length = box[0].stop - box[0].start
-        if (
-            size[label] >= vmin
-            and has_sharp[label]
-            and top[label] > threshold
-            and 2 * length <= bump.shape[0]
+        if box is None or not (
+            size[label] >= run.vmin and has_sharp[label] and top[label] > threshold
         ):
+            continue
+        across = (
+            (ja + box[1].start, ja + box[1].stop - 1),
+            (ka + box[2].start, ka + box[2].stop - 1),
+        )
+        # a board or a band around the object spans the section both ways: structure
+        spans = all(hi - lo + 1 >= w for (lo, hi), w in zip(across, wide, strict=True))
+        narrow = kind == "colour" and _face_width(run, lab[box] == label, box, (ja, ka)) < 2
+        if 2 * (box[0].stop - box[0].start) <= len(run.s) - 2 and not (spans or narrow):
             out.append(
                 Feature(
-                    first + 1 + box[0].start,  # inner layer 0 is layer first + 1
-                    first + box[0].stop,
+                    run.first + offset + box[0].start,
+                    run.first + offset + box[0].stop - 1,
                     kind,
-                    (
-                        (ja + box[1].start, ja + box[1].stop - 1),
-                        (ka + box[2].start, ka + box[2].stop - 1),
-                    ),
+                    across,
                     int(size[label]),
                 )
             )
     return out
 
 
-def _shape_features(
-    csdf: CSDF, axis: int, first: int, last: int, height: float, vmin: int
-) -> list[Feature]:
-    """The shape features of layers ``first..last`` (see :func:`run_features`)."""
-    h = np.float32(csdf.voxel_size)
-    run = np.moveaxis(csdf.sdf, axis, 0)[first : last + 1]
+def _face_width(run: _Run, mask: np.ndarray, box: tuple[slice, ...], at: tuple[int, int]) -> int:
+    """Width (voxels) across the axis along its face of the colour motif whose voxels are
+    ``mask`` in ``box`` (inner layers, then columns from ``at``): its extent across the axis
+    in the direction its face runs (the other direction across is the face's normal, through
+    the voxels within a voxel of it)."""
+    l, a, b = np.nonzero(mask)
+    layer = l + box[0].start + 1  # (colour: inner layer 0 is the run's layer 1)
+    a = a + box[1].start + at[0]
+    b = b + box[2].start + at[1]
+    s = run.s
+    grad = [
+        np.abs(s[layer, np.minimum(a + 1, s.shape[1] - 1), b] - s[layer, np.maximum(a - 1, 0), b]),
+        np.abs(s[layer, a, np.minimum(b + 1, s.shape[2] - 1)] - s[layer, a, np.maximum(b - 1, 0)]),
+    ]
+    along = b if grad[0].sum() > grad[1].sum() else a  # the normal is the steeper direction
+    return int(along.max() - along.min()) + 1
+
+
+def _shape_features(run: _Run, height: float) -> list[Feature]:
+    """The shape features of ``run`` (see :func:`run_features`)."""
     # only a column whose occupancy changes by more than half a voxel along the run can hold
     # a bump: most columns of a slab never do, so the rest of the work is on those alone
-    occ_lo = np.clip(0.5 - run.max(axis=0) / h, 0.0, 1.0)
-    occ_hi = np.clip(0.5 - run.min(axis=0) / h, 0.0, 1.0)
+    occ_lo = np.clip(0.5 - run.s.max(axis=0), 0.0, 1.0)
+    occ_hi = np.clip(0.5 - run.s.min(axis=0), 0.0, 1.0)
     cols = np.nonzero(occ_hi - occ_lo > 0.5)
     if cols[0].size == 0:
         return []
-    s = np.clip(run[:, cols[0], cols[1]] / h, -BAND_VOXELS, BAND_VOXELS)  # (L, K) voxels
+    s = np.clip(run.s[:, cols[0], cols[1]], -BAND_VOXELS, BAND_VOXELS)  # (L, K)
     occ = np.clip(0.5 - s, 0.0, 1.0)
-    jump = np.abs(np.diff(occ, axis=0))
-    sharp = np.maximum(jump[:-1], jump[1:]) > 0.5  # (L - 2, K): at the inner layers
+    steep = np.abs(np.diff(occ, axis=0)) > 0.5
+    sharp = np.zeros(occ.shape, dtype=bool)
+    sharp[:-1] |= steep
+    sharp[1:] |= steep
     # the run's two end layers may hold the edge of the next section (a side panel starting):
     # against them, a groove running the whole run would look like a dip, so they are no
-    # reference
-    bump = _envelope_excess(occ[1:-1]) > 0.5
+    # reference; its first and last layers are compared with the run inside them instead
+    bump = _excess(occ) > 0.5
     if not bump.any():
         return []
     # how far the surface moved there (unclipped distances: a bump a voxel or more high)
-    moved = _envelope_excess(-s[1:-1])
+    moved = _excess(-s)
     # the run's surface voxels: its cross-sections barely change, so its middle layer's times
-    # its inner layers
-    n_surface = (len(run) - 2) * int(np.count_nonzero(np.abs(run[len(run) // 2]) <= h))
-    noise = _noise(moved[np.abs(s[1:-1]) <= 1.0], n_surface)
+    # its layers
+    mid = run.s[len(run.s) // 2]
+    n_surface = len(run.s) * int(np.count_nonzero(np.abs(mid) <= 1.0))
+    noise = _noise(moved[np.abs(s) <= 1.0], n_surface)
     threshold = max(height, NOISE_MARGIN * noise)
-    return _components(bump, sharp, moved, threshold, cols, first, vmin, "shape")
+    return _components(run, bump, sharp, moved, threshold, cols, "shape", 0)
 
 
-def _colour_features(csdf: CSDF, axis: int, first: int, last: int, vmin: int) -> list[Feature]:
-    """The colour motifs of layers ``first..last`` (see :func:`run_features`)."""
-    h = np.float32(csdf.voxel_size)
-    run = np.moveaxis(csdf.sdf, axis, 0)[first : last + 1]
-    # columns along a face: within a voxel of the surface at every inner layer
-    mid = np.nonzero(np.abs(run[len(run) // 2]) <= h)
-    face = (np.abs(run[1:-1, mid[0], mid[1]]) <= h).all(axis=0)
+def _excess(x: np.ndarray) -> np.ndarray:
+    """(L, K) the bumps and dips of the columns ``x`` (L, K: a run's layers by columns): inside
+    the run, :func:`_envelope_excess` of its layers but the two end ones; in the first and last
+    :data:`EXTEND` layers, at least how far each value is from the column's value just inside
+    them (a knob's flank that the run begins or ends with, whose other side lies beyond it)."""
+    out = np.zeros_like(x)
+    out[1:-1] = _envelope_excess(x[1:-1])
+    e = EXTEND
+    if len(x) > 2 * e + 1:
+        out[:e] = np.maximum(out[:e], np.abs(x[:e] - x[e]))
+        out[-e:] = np.maximum(out[-e:], np.abs(x[-e:] - x[-e - 1]))
+    return out
+
+
+def _colour_features(run: _Run, rgb_grid: np.ndarray) -> list[Feature]:
+    """The colour motifs of ``run`` (see :func:`run_features`); ``rgb_grid`` (L, A, B, 3):
+    its colours."""
+    # columns along a face: within a voxel of the surface at every inner layer, with such a
+    # column either side along one direction across (at an edge, the colour of the nearest of
+    # two faces flickers)
+    mid = np.nonzero(np.abs(run.s[len(run.s) // 2]) <= 1.0)
+    on = (np.abs(run.s[1:-1, mid[0], mid[1]]) <= 1.0).all(axis=0)
+    grid = np.zeros(np.pad(run.s[0], 1).shape, dtype=bool)
+    grid[mid[0][on] + 1, mid[1][on] + 1] = True
+    strip = (grid[:-2, 1:-1] & grid[2:, 1:-1]) | (grid[1:-1, :-2] & grid[1:-1, 2:])
+    # ... and one face nearest: where two are (a corner), the distances' slope across the axis
+    # drops below 1 (its central differences straddle the kink)
+    middle = run.s[len(run.s) // 2]
+    one = np.pad((np.hypot(*np.gradient(middle)) >= SINGLE_FACE) | (middle < 0), 1)
+    one = one[1:-1, 1:-1] & one[:-2, 1:-1] & one[2:, 1:-1] & one[1:-1, :-2] & one[1:-1, 2:]
+    face = on & strip[mid] & one[mid]
     if not face.any():
         return []
-    n_face = (len(run) - 2) * int(np.count_nonzero(face))
-    rgb = np.moveaxis(csdf.rgb, axis, 0)[first : last + 1][:, mid[0][face], mid[1][face]]
+    n_face = (len(run.s) - 2) * int(np.count_nonzero(face))
+    rgb = rgb_grid[:, mid[0][face], mid[1][face]]
     # only a column whose colour spans more than the least threshold's share of the noise can
     # reach it (the rest stay below it, and below what sets the noise's level there)
     span = (rgb.max(axis=0).astype(np.int16) - rgb.min(axis=0)).max(axis=1)
@@ -206,24 +264,24 @@ def _colour_features(csdf: CSDF, axis: int, first: int, last: int, vmin: int) ->
         return []
     jump = np.abs(np.diff(rgb, axis=0)).max(axis=2) > threshold
     sharp = jump[:-1] | jump[1:]
-    return _components(bump, sharp, dev, threshold, cols, first, vmin, "colour")
+    return _components(run, bump, sharp, dev, threshold, cols, "colour", 1)
 
 
-def run_features(csdf: CSDF, axis: int, first: int, last: int) -> list[Feature]:
-    """The local features of layers ``first..last`` (inclusive) along ``axis`` (0, 1, 2), a
-    run whose whole cross-sections barely change (see the module docstring for the rule), in
-    order of their first layer.
+def run_features(csdf: CSDF, axis: int, first: int, last: int, *, reach: int = 0) -> list[Feature]:
+    """The local features of layers ``first..last`` (inclusive) along ``axis`` (0, 1, 2), in
+    order of their first layer (see the module docstring for the rule and its figures).
 
     Each voxel is compared with its own column along the axis, inside the run. In shape, a
     voxel is in a bump when its occupancy stands more than half a voxel above the lowest
     before it and the lowest after it (a protrusion) or below the highest on both sides (a
     dip, a hole); in colour, a voxel within a voxel of a face is in a motif when some channel
-    stands more than the colour threshold above or below its column on both sides in the same
-    way. A feature is a connected (26-neighbour) set of such voxels that is
+    stands above or below its column on both sides in the same way by more than the colour
+    threshold. A feature is a connected (26-neighbour) set of such voxels that is
 
     - at least :data:`FEATURE_VOXELS` voxels (at 128),
     - local: it spans at most half the run (a cushion's crown or a bowed board spans the run,
-      and stretching it along the run keeps its look),
+      and stretching it along the run keeps its look) and not the solid's whole section both
+      ways across the axis (a board, a band around the object: structure, not hardware),
     - sharp-edged: somewhere its occupancy changes by more than half a voxel (its colour by
       more than the threshold) from one layer to the next (a surface steeper than about 27
       degrees to the axis: a knob's or a handle's flank, not a gentle bulge), and
@@ -233,28 +291,63 @@ def run_features(csdf: CSDF, axis: int, first: int, last: int) -> list[Feature]:
       reach (the finish of a worn, grained or scanned surface).
 
     A column that changes once (a splayed leg, an apron's curve, a bevel, one colour meeting
-    another) is drift, which the whole-section test bounds.
+    another) is drift, which the whole-section test bounds. The run's two end layers are no
+    reference: a feature in them is not found. ``reach``: colour motifs are sought over that
+    many more layers either side (see :func:`axis_features`).
     """
     if last - first < 2:
         return []
+    n = csdf.shape[axis]
     scale = max(csdf.shape) / REFERENCE_VOXELS
     vmin = max(2, round(FEATURE_VOXELS * scale**3))
-    found = _shape_features(csdf, axis, first, last, FEATURE_HEIGHT * scale, vmin)
-    across = max(2, round(MOTIF_ACROSS * scale))
-    found += [
-        f
-        for f in _colour_features(csdf, axis, first, last, vmin)
-        if min(f.last - f.first, *(b - a for a, b in f.across)) + 1 >= across
-    ]
+    found = []
+    for kind, a, b in (
+        ("shape", first, last),
+        ("colour", max(0, first - reach), min(n - 1, last + reach)),
+    ):
+        s = np.moveaxis(csdf.sdf, axis, 0)[a : b + 1] / np.float32(csdf.voxel_size)
+        solid = (s.min(axis=0) <= 0).nonzero()
+        if solid[0].size == 0:
+            return []
+        section = (
+            (int(solid[0].min()), int(solid[0].max())),
+            (int(solid[1].min()), int(solid[1].max())),
+        )
+        run = _Run(a, s, section, vmin)
+        if kind == "shape":
+            found += _shape_features(run, FEATURE_HEIGHT * scale)
+        else:
+            found += _colour_features(run, np.moveaxis(csdf.rgb, axis, 0)[a : b + 1])
     return sorted(found, key=lambda f: (f.first, f.last))
 
 
-def _feature_spans(csdf: CSDF, axis: int, first: int, last: int) -> list[tuple[int, int]]:
-    """``(a, b)`` layer spans (inclusive, within ``first..last``) of the local features of the
-    layers ``first..last`` (:func:`run_features`); features side by side across the section
-    (a pair of knobs) share one span."""
+def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Feature]:
+    """The local features along ``axis`` (0, 1, 2) of the runs of layers ``runs`` (inclusive
+    ``(first, last)``: the calm runs of :func:`.suggest.calm_runs`), in order of their first
+    layer.
+
+    Colour motifs are sought over each run extended by :data:`EXTEND` layers either side: one in
+    its end layer, or just past it (a hinge or a handle at a door's edge, which itself ends the
+    run), has a reference beyond it then; columns along a face there are still a face. Shapes are
+    not: beyond the run, the columns cross the structure that ended it (a leg, a board), whose
+    rise from a column would stand out as a bump. One found from two runs is kept once.
+    """
+    found: list[Feature] = []
+    for a, b in runs:
+        for f in run_features(csdf, axis, a, b, reach=EXTEND):
+            same = [i for i, g in enumerate(found) if _alike(f, g) and _overlaps(f, g)]
+            if not same:
+                found.append(f)
+            elif f.voxels > found[same[0]].voxels:  # the fuller view of it
+                found[same[0]] = f
+    return sorted(found, key=lambda f: (f.first, f.last))
+
+
+def feature_spans(features: list[Feature]) -> list[tuple[int, int]]:
+    """``(first, last)`` layer spans of ``features``, those that share layers (a pair of knobs
+    side by side) joined into one, in order."""
     out: list[tuple[int, int]] = []
-    for f in run_features(csdf, axis, first, last):
+    for f in sorted(features, key=lambda f: f.first):
         if out and f.first <= out[-1][1] + 1:
             out[-1] = (out[-1][0], max(out[-1][1], f.last))
         else:
@@ -262,13 +355,80 @@ def _feature_spans(csdf: CSDF, axis: int, first: int, last: int) -> list[tuple[i
     return out
 
 
+def _overlaps(f: Feature, g: Feature) -> bool:
+    """Whether ``f`` and ``g`` share layers and, within a voxel, a place across the axis."""
+    return (
+        f.first <= g.last
+        and g.first <= f.last
+        and all(
+            a[0] <= b[1] + 1 and b[0] <= a[1] + 1 for a, b in zip(f.across, g.across, strict=True)
+        )
+    )
+
+
+def _alike(f: Feature, g: Feature) -> bool:
+    """Whether ``g`` could be a copy of ``f`` along the axis: the same kind, as long within a
+    voxel (a quarter for a long one) and at the same place across the axis within a voxel."""
+    lf, lg = f.last - f.first, g.last - g.first
+    return (
+        f.kind == g.kind
+        and abs(lf - lg) <= max(1.0, 0.25 * max(lf, lg))
+        and all(
+            abs(a[0] - b[0]) <= 1 and abs(a[1] - b[1]) <= 1
+            for a, b in zip(f.across, g.across, strict=True)
+        )
+    )
+
+
+def cut_features(features: list[Feature], plane: float) -> list[Feature]:
+    """The features a plane at continuous layer index ``plane`` passes through (each occupies
+    half a layer past its first and last)."""
+    return [f for f in features if f.first - 0.5 < plane < f.last + 0.5]
+
+
+def whole_copies(
+    features: list[Feature], start: float, period: float, lo: float, hi: float
+) -> bool:
+    """Whether tiling the zone ``[start, start + period]`` (continuous layer indices) of a
+    repeat over ``[lo, hi]`` copies whole elements.
+
+    Neither plane may pass through a local feature (the copies would join a knob's halves to
+    whatever the other plane cuts), and each feature inside the zone must have one alike
+    (:func:`_alike`: a translated or a mirrored copy) in the period before or after it within
+    the repeat: a handle on one door of two, inside a zone of one pane, is no part of the
+    period, and tiling it would double it.
+    """
+    end = start + period
+    if cut_features(features, start) or cut_features(features, end):
+        return False
+    for f in features:
+        if not (start <= f.first and f.last <= end):
+            continue
+        near = [
+            (max(lo, start - period), start),
+            (end, min(hi, end + period)),
+        ]
+        if not any(
+            g is not f and _alike(f, g) and any(a <= g.first and g.last <= b for a, b in near)
+            for g in features
+        ):
+            return False
+    return True
+
+
 def local_features(
     csdf: CSDF, axis: str | int, zone: tuple[float, float]
 ) -> list[tuple[float, float]]:
     """World ``(start, end)`` spans along ``axis`` (x, y, z or 0, 1, 2) of the local features (a
-    knob, a handle, a keyhole: :func:`_feature_spans`) between the planes of ``zone`` (world
-    units): what stretching that zone would stretch out of shape. Empty for a zone of constant
-    section."""
+    knob, a handle, a hinge, a keyhole, a colour motif: :func:`run_features`) between the
+    planes of ``zone`` (world units), even in part: what stretching that zone would stretch out
+    of shape. Empty for a zone of constant section.
+
+    Those of the axis's calm runs (:func:`axis_features`, where the slabs :mod:`.suggest`
+    offers are cut) and those of the zone's own layers.
+    """
+    from .suggest import calm_runs  # (suggest builds on this module)
+
     ax = _axis_index(axis)
     h = csdf.voxel_size
     o = float(csdf.origin[ax])
@@ -276,7 +436,11 @@ def local_features(
     last = min(int(np.floor((zone[1] - o) / h + 1e-6)), csdf.shape[ax] - 1)
     if last - first < 2:
         return []
-    return [(o + a * h, o + b * h) for a, b in _feature_spans(csdf, ax, first, last)]
+    found = axis_features(csdf, ax, calm_runs(profile(csdf, ax))) + run_features(
+        csdf, ax, first, last
+    )
+    inside = [f for f in found if f.first <= last and first <= f.last]
+    return [(o + a * h, o + b * h) for a, b in feature_spans(inside)]
 
 
 def feature_notes(csdf: CSDF, recipe: Recipe) -> list[str]:
@@ -299,7 +463,7 @@ def feature_notes(csdf: CSDF, recipe: Recipe) -> list[str]:
         lines.append(
             f"{edit_label(i, len(recipe.edits))}the stretch zone "
             f"{s:.4g}..{en:.4g}{u} along {e.axis} holds {len(found)} local feature"
-            f"{'s' if len(found) > 1 else ''} (a knob, a handle) at {where}{u}, stretched out "
+            f"{'s' if len(found) > 1 else ''} (a knob, a handle, a motif) at {where}{u}, stretched out "
             f"of shape with it; --snap (the editor's snapping) moves the zone into a constant slab"
         )
     return lines

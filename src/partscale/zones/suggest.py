@@ -53,7 +53,7 @@ from .._options import keyword_options
 from ..csdf import CSDF
 from ..edit import AXES, SEAM_VOXELS
 from ..progress import ProgressCallback, resolve
-from .features import _feature_spans
+from .features import Feature, axis_features, feature_spans
 from .profile import Profile, _axis_index, profile
 
 #: Two layers match when their soft Jaccard distance is below this.
@@ -487,26 +487,33 @@ class Slab(NamedTuple):
     at_feature: bool = False
 
 
-def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[Slab]:
-    """Layer runs of constant, non-empty cross-section (see module).
-
-    ``csdf``: the object ``p`` was taken from; each calm run is then also cut around its local
-    features (:func:`_split_features`) before it is split where it drifts.
-    """
+def calm_runs(p: Profile) -> list[tuple[int, int]]:
+    """``(first, last)`` (inclusive) of the maximal runs of at least :data:`MIN_SLAB` non-empty
+    layers whose neighbour-to-neighbour distance stays below :data:`STEP`: where constant slabs
+    and local features are found."""
     i0, i1 = _solid_layers(p)
     idx = np.arange(i0, i1)
     step = p.distance(idx, idx + 1)
     calm = (step < STEP) & (p.area[idx] > 0) & (p.area[idx + 1] > 0)
     runs = [(int(idx[a]), int(idx[b]) + 1) for a, b in _runs(calm)]
-    cut: set[int] = set()
+    return [(a, b) for a, b in runs if b - a + 1 >= MIN_SLAB]
+
+
+def constant_slabs(
+    p: Profile, csdf: CSDF | None = None, features: list[Feature] | None = None
+) -> list[Slab]:
+    """Layer runs of constant, non-empty cross-section (see module).
+
+    ``csdf``: the object ``p`` was taken from; each calm run is then also cut around its local
+    features (``features``, default :func:`~.features.axis_features` of the calm runs) before
+    it is split where it drifts.
+    """
+    runs = calm_runs(p)
+    feats: list[Feature] = []
     if csdf is not None:
-        pieces = []
-        for a, b in runs:
-            if b - a + 1 >= MIN_SLAB:
-                kept, spans = _split_features(csdf, p.axis, a, b)
-                pieces += kept
-                cut.update(x for lo, hi in spans for x in (lo, hi))
-        runs = pieces
+        feats = axis_features(csdf, p.axis, runs) if features is None else features
+        runs = [piece for a, b in runs for piece in _beside_features(a, b, feats)]
+    spans = feature_spans(feats)
     out = []
     for first, last in runs:
         # split where the drift from the slab's start exceeds DRIFT (a slowly changing section)
@@ -515,23 +522,20 @@ def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[Slab]:
             over = np.flatnonzero(drift >= DRIFT)
             end = int(over[0] - 1 + first) if over.size else last
             if end - first + 1 >= MIN_SLAB:
-                beside = first - 1 in cut or end + 1 in cut
+                beside = any(first - 2 <= b < first or end < a <= end + 2 for a, b in spans)
                 out.append(Slab(first, end, float(drift[: end - first + 1].max()), beside))
             first = end + 1
     return out
 
 
-def _split_features(
-    csdf: CSDF, axis: int, first: int, last: int
-) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
-    """The runs of layers ``first..last`` (inclusive) that hold no local feature, at least
-    :data:`MIN_SLAB` long, and the features' spans (:func:`_feature_spans`)."""
-    spans = _feature_spans(csdf, axis, first, last)
+def _beside_features(first: int, last: int, features: list[Feature]) -> list[tuple[int, int]]:
+    """The runs of layers ``first..last`` (inclusive) that hold no part of ``features``, at
+    least :data:`MIN_SLAB` long."""
     keep = np.ones(last - first + 1, dtype=bool)
-    for a, b in spans:
-        keep[a - first : b - first + 1] = False
-    runs = [(first + int(r0), first + int(r1)) for r0, r1 in _runs(keep) if r1 - r0 + 1 >= MIN_SLAB]
-    return runs, spans
+    for a, b in feature_spans(features):
+        if a <= last and first <= b:
+            keep[max(a, first) - first : min(b, last) - first + 1] = False
+    return [(first + int(r0), first + int(r1)) for r0, r1 in _runs(keep) if r1 - r0 + 1 >= MIN_SLAB]
 
 
 def _part_planes(csdf: CSDF, axis: int) -> np.ndarray:

@@ -14,7 +14,7 @@ RULE
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -60,6 +60,10 @@ class Feature:
         Its extent across the axis: inclusive index ranges along the other two axes, in order.
     voxels : int
         How many voxels it holds.
+    calm : bool
+        Whether it lies at least in part in a calm run (:func:`axis_features`): not wholly in
+        the layers past one, where the section changes (a board, a door's edge) and a colour
+        found may be that structure's own.
     """
 
     first: int
@@ -67,6 +71,7 @@ class Feature:
     kind: Literal["shape", "colour"]
     across: tuple[tuple[int, int], tuple[int, int]]
     voxels: int
+    calm: bool = True
 
 
 def _envelope_excess(x: np.ndarray) -> np.ndarray:
@@ -187,7 +192,8 @@ def _shape_features(run: _Run, height: float) -> list[Feature]:
     # a bump: most columns of a slab never do, so the rest of the work is on those alone
     occ_lo = np.clip(0.5 - run.s.max(axis=0), 0.0, 1.0)
     occ_hi = np.clip(0.5 - run.s.min(axis=0), 0.0, 1.0)
-    cols = np.nonzero(occ_hi - occ_lo > 0.5)
+    j, k = np.nonzero(occ_hi - occ_lo > 0.5)
+    cols = (j, k)
     if cols[0].size == 0:
         return []
     s = np.clip(run.s[:, cols[0], cols[1]], -BAND_VOXELS, BAND_VOXELS)  # (L, K)
@@ -335,11 +341,13 @@ def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Fe
     found: list[Feature] = []
     for a, b in runs:
         for f in run_features(csdf, axis, a, b, reach=EXTEND):
+            f = replace(f, calm=f.first <= b and a <= f.last)
             same = [i for i, g in enumerate(found) if _alike(f, g) and _overlaps(f, g)]
             if not same:
                 found.append(f)
-            elif f.voxels > found[same[0]].voxels:  # the fuller view of it
-                found[same[0]] = f
+            else:  # the fuller view of it, calm if found so once
+                g = found[same[0]]
+                found[same[0]] = replace(max(f, g, key=lambda x: x.voxels), calm=f.calm or g.calm)
     return sorted(found, key=lambda f: (f.first, f.last))
 
 
@@ -393,27 +401,23 @@ def whole_copies(
     repeat over ``[lo, hi]`` copies whole elements.
 
     Neither plane may pass through a local feature (the copies would join a knob's halves to
-    whatever the other plane cuts), and each feature inside the zone must have one alike
-    (:func:`_alike`: a translated or a mirrored copy) in the period before or after it within
-    the repeat: a handle on one door of two, inside a zone of one pane, is no part of the
-    period, and tiling it would double it.
+    whatever the other plane cuts), and each feature of a calm run inside the zone must have
+    one alike (:func:`_alike`: a translated or a mirrored copy) in the period before or after
+    it within the repeat: a handle on one door of two, inside a zone of one pane, is no part
+    of the period, and tiling it would double it.
     """
     end = start + period
     if cut_features(features, start) or cut_features(features, end):
         return False
-    for f in features:
-        if not (start <= f.first and f.last <= end):
-            continue
-        near = [
-            (max(lo, start - period), start),
-            (end, min(hi, end + period)),
-        ]
-        if not any(
+    near = [(max(lo, start - period) - 1, start), (end, min(hi, end + period) + 1)]
+    return all(
+        any(
             g is not f and _alike(f, g) and any(a <= g.first and g.last <= b for a, b in near)
             for g in features
-        ):
-            return False
-    return True
+        )
+        for f in features
+        if f.calm and start <= f.first and f.last <= end
+    )
 
 
 def local_features(

@@ -42,7 +42,7 @@ repeat in itself, read from the segmentation's part boxes alone.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -53,7 +53,7 @@ from .._options import keyword_options
 from ..csdf import CSDF
 from ..edit import AXES, SEAM_VOXELS
 from ..progress import ProgressCallback, resolve
-from .features import Feature, axis_features, feature_spans
+from .features import Feature, axis_features, feature_spans, whole_copies
 from .profile import Profile, _axis_index, profile
 
 #: Two layers match when their soft Jaccard distance is below this.
@@ -468,13 +468,79 @@ def best_phase(p: Profile, period: float, lo: float, hi: float, near: float | No
     starts = np.arange(lo, hi - period + 1e-9, SHIFT_STEP)
     if starts.size == 0:
         return lo
+    return _best_of(p, period, starts, (lo + hi - period) / 2 if near is None else near)
+
+
+def whole_phase(
+    p: Profile,
+    period: float,
+    lo: float,
+    hi: float,
+    features: list[Feature],
+    near: float | None = None,
+) -> float | None:
+    """:func:`best_phase` among the starts whose zone copies whole elements
+    (:func:`~.features.whole_copies` of the axis's local ``features``); None where none does."""
+    starts = np.arange(lo, hi - period + 1e-9, SHIFT_STEP)
+    starts = starts[[whole_copies(features, x, period, lo, hi) for x in starts]]
+    if starts.size == 0:
+        return None
+    return _best_of(p, period, starts, (lo + hi - period) / 2 if near is None else near)
+
+
+def _best_of(p: Profile, period: float, starts: np.ndarray, near: float) -> float:
+    """The middle of the run of lowest-cost ``starts`` (ascending) nearest ``near``."""
     cost = plane_cost(p, period, starts)
     good = cost <= cost.min() + 0.03
-    runs = _runs(good)
+    runs = _split_at_gaps(good, starts)
     mids = (starts[runs[:, 0]] + starts[runs[:, 1]]) / 2
-    target = (lo + hi - period) / 2 if near is None else near
-    best = runs[np.argmin(np.abs(mids - target))]
+    best = runs[np.argmin(np.abs(mids - near))]
     return float((starts[best[0]] + starts[best[1]]) / 2)
+
+
+def _split_at_gaps(good: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """(R, 2) ``[first, last]`` indices of the runs of ``good`` starts that follow each other
+    one :data:`SHIFT_STEP` apart."""
+    apart = np.concatenate([[True], np.diff(starts) > SHIFT_STEP * 1.5])
+    edges = np.flatnonzero(apart)
+    out = []
+    for a, b in zip(edges, [*edges[1:], len(starts)], strict=True):
+        out += [[a + r0, a + r1] for r0, r1 in _runs(good[a:b])]
+    return np.asarray(out, dtype=np.int64).reshape(-1, 2)
+
+
+def _whole(c: Candidate, p: Profile, features: list[Feature], free: bool) -> Candidate | None:
+    """The tile candidate ``c`` with its zone moved, where it would not copy whole elements
+    (:func:`~.features.whole_copies`), by whole periods inside its region (the nearest such
+    zone: another element like it), else, with ``free`` (a full cross-section match, whose
+    phase is chosen by :func:`best_phase`), to the best phase that does; None where none does
+    (a period through a handle or a mullion is no period)."""
+    assert c.period is not None and c.count is not None  # a tile candidate has both
+    if not features:
+        return c
+    period = c.period / p.voxel_size
+    lo, hi = (float(x) for x in p.index(np.array(c.region)))
+    t = float(p.index(c.zone[0]))
+    k = np.arange(-c.count - 1, c.count + 2)
+    k = k[np.argsort(np.abs(k), kind="stable")]
+    slack = BOUND_TOL
+    for x in t + k * period:
+        if (
+            lo - slack <= x
+            and x + period <= hi + slack
+            and whole_copies(features, x, period, lo, hi)
+        ):
+            return _moved(c, p, x)
+    if free and (x := whole_phase(p, period, lo, hi, features, near=t)) is not None:
+        return _moved(c, p, x)
+    return None
+
+
+def _moved(c: Candidate, p: Profile, start: float) -> Candidate:
+    """``c`` with its zone starting at layer index ``start``."""
+    s = float(p.world(start))
+    assert c.period is not None  # a tile candidate has one
+    return replace(c, zone=(s, s + c.period))
 
 
 class Slab(NamedTuple):
@@ -605,10 +671,19 @@ def _tile(
     )
 
 
-def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -> list[Candidate]:
-    """Candidates along one axis, best first (see :func:`suggest`)."""
+def axis_candidates(
+    csdf: CSDF,
+    axis: str | int,
+    *,
+    prof: Profile | None = None,
+    features: list[Feature] | None = None,
+) -> list[Candidate]:
+    """Candidates along one axis, best first (see :func:`suggest`). ``features``: the axis's
+    local features (:func:`~.features.axis_features` of :func:`calm_runs`) where the caller
+    has them."""
     ax = _axis_index(axis)
     p = prof if prof is not None else profile(csdf, ax)
+    feats = axis_features(csdf, ax, calm_runs(p)) if features is None else features
     h = p.voxel_size
     extent = max(p.hi - p.lo, h)
     name = AXES[ax]
@@ -674,8 +749,12 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
             f"({100 * pitch / extent:.1f}% of the extent)"
         )
         out.append(_tile(name, p.world(t), pitch, count, score, reason, (p.world(a0), p.world(b0))))
+    # a period is only real where its copies repeat whole elements
+    out = [
+        w for c in out if (w := _whole(c, p, feats, free="repeats of a" in c.reason)) is not None
+    ]
     planes = _part_planes(csdf, ax)
-    for first, last, drift, at_feature in constant_slabs(p, csdf):
+    for first, last, drift, at_feature in constant_slabs(p, csdf, feats):
         s, e = float(p.world(first)), float(p.world(last))
         why = ""
         if planes.size:

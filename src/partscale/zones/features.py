@@ -204,32 +204,42 @@ def _shape_features(run: _Run, height: float) -> list[Feature]:
     sharp[1:] |= steep
     # the run's two end layers may hold the edge of the next section (a side panel starting):
     # against them, a groove running the whole run would look like a dip, so they are no
-    # reference; its first and last layers are compared with the run inside them instead
-    bump = _excess(occ) > 0.5
+    # reference; the layers next to them are also compared with the run's inside alone (a
+    # knob's flank that the run begins or ends with, whose other side lies past it)
+    inside, flank = _inside(occ), _flanks(occ)
+    bump = (inside > 0.5) | (flank > 0.5)
     if not bump.any():
         return []
-    # how far the surface moved there (unclipped distances: a bump a voxel or more high)
-    moved = _excess(-s)
-    # the run's surface voxels: its cross-sections barely change, so its middle layer's times
-    # its layers
-    mid = run.s[len(run.s) // 2]
-    n_surface = len(run.s) * int(np.count_nonzero(np.abs(mid) <= 1.0))
-    noise = _noise(moved[np.abs(s) <= 1.0], n_surface)
-    threshold = max(height, NOISE_MARGIN * noise)
-    return _components(run, bump, sharp, moved, threshold, cols, "shape", 0)
+    # how far the surface moved there (unclipped distances: a bump a voxel or more high),
+    # against the noise of each test: an envelope's, and one value's against another
+    surface = np.abs(s) <= 1.0
+    n_layer = int(np.count_nonzero(np.abs(run.s[len(run.s) // 2]) <= 1.0))
+    score = np.zeros(s.shape)
+    for moved, rows in ((_inside(-s), len(s) - 2), (_flanks(-s), 2 * (EXTEND - 1))):
+        # the run's surface voxels: its cross-sections barely change, so its middle layer's
+        # times its layers
+        noise = _noise(moved[surface & (moved > 0)], rows * n_layer)
+        score = np.maximum(score, moved / max(height, NOISE_MARGIN * noise))
+    return _components(run, bump, sharp, score, 1.0, cols, "shape", 0)
 
 
-def _excess(x: np.ndarray) -> np.ndarray:
-    """(L, K) the bumps and dips of the columns ``x`` (L, K: a run's layers by columns): inside
-    the run, :func:`_envelope_excess` of its layers but the two end ones; in the first and last
-    :data:`EXTEND` layers, at least how far each value is from the column's value just inside
-    them (a knob's flank that the run begins or ends with, whose other side lies beyond it)."""
+def _inside(x: np.ndarray) -> np.ndarray:
+    """(L, K) :func:`_envelope_excess` of the columns ``x`` (L, K: a run's layers by columns)
+    but their two end values (0 there)."""
     out = np.zeros_like(x)
     out[1:-1] = _envelope_excess(x[1:-1])
+    return out
+
+
+def _flanks(x: np.ndarray) -> np.ndarray:
+    """(L, K) how far each value of the columns ``x`` (L, K) next to their end values, within
+    :data:`EXTEND` of them, stands from the value just inside those (0 elsewhere, and where the
+    run is too short to have an inside)."""
+    out = np.zeros_like(x)
     e = EXTEND
     if len(x) > 2 * e + 1:
-        out[:e] = np.maximum(out[:e], np.abs(x[:e] - x[e]))
-        out[-e:] = np.maximum(out[-e:], np.abs(x[-e:] - x[-e - 1]))
+        out[1:e] = np.abs(x[1:e] - x[e])
+        out[-e:-1] = np.abs(x[-e:-1] - x[-e - 1])
     return out
 
 

@@ -224,13 +224,13 @@ def _shape_features(run: _Run, height: float) -> list[Feature]:
     # a bump: most columns of a slab never do, so the rest of the work is on those alone
     occ_lo = np.clip(0.5 - run.s.max(axis=0), 0.0, 1.0)
     occ_hi = np.clip(0.5 - run.s.min(axis=0), 0.0, 1.0)
-    j, k = np.nonzero(occ_hi - occ_lo > 0.5)
+    j, k = np.nonzero(occ_hi - occ_lo >= 0.5)
     cols = (j, k)
     if cols[0].size == 0:
         return []
     s = np.clip(run.s[:, cols[0], cols[1]], -BAND_VOXELS, BAND_VOXELS)  # (L, K)
     occ = np.clip(0.5 - s, 0.0, 1.0)
-    steep = np.abs(np.diff(occ, axis=0)) > 0.5
+    steep = np.abs(np.diff(occ, axis=0)) >= 0.5
     sharp = np.zeros(occ.shape, dtype=bool)
     sharp[:-1] |= steep
     sharp[1:] |= steep
@@ -239,7 +239,7 @@ def _shape_features(run: _Run, height: float) -> list[Feature]:
     # reference; the layers next to them are also compared with the run's inside alone (a
     # knob's flank that the run begins or ends with, whose other side lies past it)
     inside, flank = _inside(occ), _flanks(occ)
-    bump = (inside > 0.5) | (flank > 0.5)
+    bump = (inside >= 0.5) | (flank >= 0.5)
     if not bump.any():
         return []
     # how far the surface moved there (unclipped distances: a bump a voxel or more high),

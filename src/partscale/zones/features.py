@@ -126,13 +126,16 @@ def _noise(values: np.ndarray, n_surface: int) -> float:
 
 @dataclass(frozen=True)
 class _Run:
-    """What the two detectors share of layers ``first..last`` along an axis: the distances
-    (L, A, B, voxel units, the axis first), the section's solid extent across the axis (two
+    """What the two detectors share of layers ``first..`` along an axis: their distances ``d``
+    (L, A, B, world units, the axis first: a view of the grid), the voxel size ``h``, their
+    least distance per column ``low`` (A, B), the section's solid extent across the axis (two
     ``(lo, hi)`` index ranges: no feature spans it both ways) and the least voxels of a
     feature."""
 
     first: int
-    s: np.ndarray
+    d: np.ndarray
+    h: np.float32
+    low: np.ndarray
     section: tuple[tuple[int, int], tuple[int, int]]
     vmin: int
 
@@ -149,86 +152,77 @@ def _components(
 ) -> list[Feature]:
     """The features among the connected (26-neighbour) sets of ``bump`` voxels (L, K: the run's
     layers from ``offset`` by columns ``cols``): at least ``run.vmin`` voxels, local (at most
-    half as long as the run inside its end layers, and short of the section's extent one way across), holding a ``sharp`` voxel
-    and one whose ``peak`` exceeds ``threshold``."""
+    half as long as the run inside its end layers, and short of the section's extent one way
+    across), holding a ``sharp`` voxel and one whose ``peak`` exceeds ``threshold``; a colour
+    motif at least two voxels wide along its face (:func:`_face_width`)."""
     hit = bump.any(axis=0)
     if not hit.any():
         return []
     # label in the box of the columns that hold bumps, scattered back to their places
     j, k = cols[0][hit], cols[1][hit]
     ja, ka = int(j.min()), int(k.min())
-    shape = (bump.shape[0], int(j.max()) - ja + 1, int(k.max()) - ka + 1)
-
-    def scatter(a: np.ndarray) -> np.ndarray:
-        g = np.zeros(shape, dtype=a.dtype)
-        g[:, j - ja, k - ka] = a[:, hit]
-        return g
-
-    lab, n = ndimage.label(scatter(bump), structure=np.ones((3, 3, 3)))
-    if n == 0:
-        return []
-    inside = lab > 0
-    at = lab[inside]
-    size = np.bincount(at, minlength=n + 1)
-    has_sharp = np.bincount(at, weights=scatter(sharp)[inside], minlength=n + 1) > 0
-    top = np.zeros(n + 1)
-    np.maximum.at(top, at, scatter(peak)[inside])
+    grid = np.zeros((bump.shape[0], int(j.max()) - ja + 1, int(k.max()) - ka + 1), dtype=bool)
+    grid[:, j - ja, k - ka] = bump[:, hit]
+    lab, n = ndimage.label(grid, structure=np.ones((3, 3, 3)))
+    # each component's voxels: (layer, column in the bump columns), grouped by label
+    li, ci = np.nonzero(bump[:, hit])
+    at = lab[li, j[ci] - ja, k[ci] - ka]
+    order = np.argsort(at, kind="stable")
+    li, ci, at = li[order], ci[order], at[order]
+    bounds = np.searchsorted(at, np.arange(1, n + 2))
     wide = [(hi - lo + 1) / 2 for lo, hi in run.section]
     out = []
-    for label, box in enumerate(ndimage.find_objects(lab), start=1):
-        if box is None or not (
-            size[label] >= run.vmin and has_sharp[label] and top[label] > threshold
-        ):
+    for label in range(1, n + 1):
+        sel = slice(bounds[label - 1], bounds[label])
+        ls, cs = li[sel], ci[sel]
+        if ls.size < run.vmin or not sharp[:, hit][ls, cs].any():
             continue
-        across = (
-            (ja + box[1].start, ja + box[1].stop - 1),
-            (ka + box[2].start, ka + box[2].stop - 1),
-        )
+        if peak[:, hit][ls, cs].max() <= threshold:
+            continue
+        a, b = j[cs], k[cs]
+        across = ((int(a.min()), int(a.max())), (int(b.min()), int(b.max())))
         # a board or a band around the object spans the section both ways: structure
         spans = all(hi - lo + 1 >= w for (lo, hi), w in zip(across, wide, strict=True))
-        narrow = kind == "colour" and _face_width(run, lab[box] == label, box, (ja, ka)) < 2
-        if 2 * (box[0].stop - box[0].start) <= len(run.s) - 2 and not (spans or narrow):
+        narrow = kind == "colour" and _face_width(run, ls + offset, a, b) < 2
+        short = 2 * (int(ls.max()) - int(ls.min()) + 1) <= len(run.d) - 2
+        if short and not (spans or narrow):
             out.append(
                 Feature(
-                    run.first + offset + box[0].start,
-                    run.first + offset + box[0].stop - 1,
+                    run.first + offset + int(ls.min()),
+                    run.first + offset + int(ls.max()),
                     kind,
                     across,
-                    int(size[label]),
+                    int(ls.size),
                 )
             )
     return out
 
 
-def _face_width(run: _Run, mask: np.ndarray, box: tuple[slice, ...], at: tuple[int, int]) -> int:
-    """Width (voxels) across the axis along its face of the colour motif whose voxels are
-    ``mask`` in ``box`` (inner layers, then columns from ``at``): its extent across the axis
-    in the direction its face runs (the other direction across is the face's normal, through
-    the voxels within a voxel of it)."""
-    l, a, b = np.nonzero(mask)
-    layer = l + box[0].start + 1  # (colour: inner layer 0 is the run's layer 1)
-    a = a + box[1].start + at[0]
-    b = b + box[2].start + at[1]
-    s = run.s
+def _face_width(run: _Run, layer: np.ndarray, a: np.ndarray, b: np.ndarray) -> int:
+    """Width (voxels) across the axis along its face of the colour motif whose voxels are at
+    ``(layer, a, b)`` in ``run``: its extent across the axis in the direction its face runs
+    (the other direction across is the face's normal, through the voxels within a voxel of
+    it)."""
+    d = run.d
     grad = [
-        np.abs(s[layer, np.minimum(a + 1, s.shape[1] - 1), b] - s[layer, np.maximum(a - 1, 0), b]),
-        np.abs(s[layer, a, np.minimum(b + 1, s.shape[2] - 1)] - s[layer, a, np.maximum(b - 1, 0)]),
+        np.abs(d[layer, np.minimum(a + 1, d.shape[1] - 1), b] - d[layer, np.maximum(a - 1, 0), b]),
+        np.abs(d[layer, a, np.minimum(b + 1, d.shape[2] - 1)] - d[layer, a, np.maximum(b - 1, 0)]),
     ]
     along = b if grad[0].sum() > grad[1].sum() else a  # the normal is the steeper direction
     return int(along.max() - along.min()) + 1
 
 
-def _shape_features(run: _Run, height: float) -> list[Feature]:
-    """The shape features of ``run`` (see :func:`run_features`)."""
-    # only a column whose occupancy changes by more than half a voxel along the run can hold
-    # a bump: most columns of a slab never do, so the rest of the work is on those alone
-    occ_lo = np.clip(0.5 - run.s.max(axis=0), 0.0, 1.0)
-    occ_hi = np.clip(0.5 - run.s.min(axis=0), 0.0, 1.0)
-    j, k = np.nonzero(occ_hi - occ_lo >= 0.5)
+def _shape_features(run: _Run, high: np.ndarray, height: float) -> list[Feature]:
+    """The shape features of ``run`` (see :func:`run_features`); ``high`` (A, B): its greatest
+    distance per column."""
+    # only a column whose occupancy changes by half a voxel or more along the run can hold a
+    # bump: most columns of a slab never do, so the rest of the work is on those alone
+    occ_hi = np.clip(0.5 - run.low / run.h, 0.0, 1.0)
+    j, k = np.nonzero(occ_hi - np.clip(0.5 - high / run.h, 0.0, 1.0) >= 0.5)
     cols = (j, k)
-    if cols[0].size == 0:
+    if j.size == 0:
         return []
-    s = np.clip(run.s[:, cols[0], cols[1]], -BAND_VOXELS, BAND_VOXELS)  # (L, K)
+    s = np.clip(run.d[:, j, k] / run.h, -BAND_VOXELS, BAND_VOXELS)  # (L, K) voxels
     occ = np.clip(0.5 - s, 0.0, 1.0)
     steep = np.abs(np.diff(occ, axis=0)) >= 0.5
     sharp = np.zeros(occ.shape, dtype=bool)
@@ -245,7 +239,7 @@ def _shape_features(run: _Run, height: float) -> list[Feature]:
     # how far the surface moved there (unclipped distances: a bump a voxel or more high),
     # against the noise of each test: an envelope's, and one value's against another
     surface = np.abs(s) <= 1.0
-    n_layer = int(np.count_nonzero(np.abs(run.s[len(run.s) // 2]) <= 1.0))
+    n_layer = int(np.count_nonzero(np.abs(run.d[len(run.d) // 2]) <= run.h))
     score = np.zeros(s.shape)
     for moved, rows in ((_inside(-s), len(s) - 2), (_flanks(-s), 2 * (EXTEND - 1))):
         # the run's surface voxels: its cross-sections barely change, so its middle layer's
@@ -281,20 +275,20 @@ def _colour_features(run: _Run, rgb_grid: np.ndarray) -> list[Feature]:
     # columns along a face: within a voxel of the surface at every inner layer, with such a
     # column either side along one direction across (at an edge, the colour of the nearest of
     # two faces flickers)
-    mid = np.nonzero(np.abs(run.s[len(run.s) // 2]) <= 1.0)
-    on = (np.abs(run.s[1:-1, mid[0], mid[1]]) <= 1.0).all(axis=0)
-    grid = np.zeros(np.pad(run.s[0], 1).shape, dtype=bool)
+    middle = run.d[len(run.d) // 2] / run.h
+    mid = np.nonzero(np.abs(middle) <= 1.0)
+    on = (np.abs(run.d[1:-1, mid[0], mid[1]]) <= run.h).all(axis=0)
+    grid = np.zeros((middle.shape[0] + 2, middle.shape[1] + 2), dtype=bool)
     grid[mid[0][on] + 1, mid[1][on] + 1] = True
     strip = (grid[:-2, 1:-1] & grid[2:, 1:-1]) | (grid[1:-1, :-2] & grid[1:-1, 2:])
     # ... and one face nearest: where two are (a corner), the distances' slope across the axis
     # drops below 1 (its central differences straddle the kink)
-    middle = run.s[len(run.s) // 2]
     one = np.pad((np.hypot(*np.gradient(middle)) >= SINGLE_FACE) | (middle < 0), 1)
     one = one[1:-1, 1:-1] & one[:-2, 1:-1] & one[2:, 1:-1] & one[1:-1, :-2] & one[1:-1, 2:]
     face = on & strip[mid] & one[mid]
     if not face.any():
         return []
-    n_face = (len(run.s) - 2) * int(np.count_nonzero(face))
+    n_face = (len(run.d) - 2) * int(np.count_nonzero(face))
     rgb = rgb_grid[:, mid[0][face], mid[1][face]]
     # only a column whose colour spans more than the least threshold's share of the noise can
     # reach it (the rest stay below it, and below what sets the noise's level there)
@@ -313,6 +307,15 @@ def _colour_features(run: _Run, rgb_grid: np.ndarray) -> list[Feature]:
     jump = np.abs(np.diff(rgb, axis=0)).max(axis=2) > threshold
     sharp = jump[:-1] | jump[1:]
     return _components(run, bump, sharp, dev, threshold, cols, "colour", 1)
+
+
+def _section(low: np.ndarray) -> tuple[tuple[int, int], tuple[int, int]] | None:
+    """The solid's extent across the axis (index ranges) of columns whose least distance is
+    ``low`` (A, B); None for no solid."""
+    a, b = np.nonzero(low <= 0)
+    if a.size == 0:
+        return None
+    return ((int(a.min()), int(a.max())), (int(b.min()), int(b.max())))
 
 
 def run_features(csdf: CSDF, axis: int, first: int, last: int, *, reach: int = 0) -> list[Feature]:
@@ -346,27 +349,25 @@ def run_features(csdf: CSDF, axis: int, first: int, last: int, *, reach: int = 0
     if last - first < 2:
         return []
     n = csdf.shape[axis]
+    h = np.float32(csdf.voxel_size)
     sb = csdf.surface_bounds()
     scale = float((sb[1] - sb[0]).max()) / csdf.voxel_size / REFERENCE_VOXELS
     vmin = max(2, round(FEATURE_VOXELS * scale**3))
-    found = []
-    for kind, a, b in (
-        ("shape", first, last),
-        ("colour", max(0, first - reach), min(n - 1, last + reach)),
-    ):
-        s = np.moveaxis(csdf.sdf, axis, 0)[a : b + 1] / np.float32(csdf.voxel_size)
-        solid = (s.min(axis=0) <= 0).nonzero()
-        if solid[0].size == 0:
-            return []
-        section = (
-            (int(solid[0].min()), int(solid[0].max())),
-            (int(solid[1].min()), int(solid[1].max())),
-        )
-        run = _Run(a, s, section, vmin)
-        if kind == "shape":
-            found += _shape_features(run, FEATURE_HEIGHT * scale)
-        else:
-            found += _colour_features(run, np.moveaxis(csdf.rgb, axis, 0)[a : b + 1])
+    a, b = max(0, first - reach), min(n - 1, last + reach)
+    # one copy of the layers, the axis first (a layer of the grid along y or z is strided)
+    window = np.ascontiguousarray(np.moveaxis(csdf.sdf, axis, 0)[a : b + 1])
+    d = window[first - a : last - a + 1]
+    low, high = d.min(axis=0), d.max(axis=0)
+    section = _section(low)
+    if section is None:
+        return []
+    found = _shape_features(_Run(first, d, h, low, section, vmin), high, FEATURE_HEIGHT * scale)
+    if (a, b) != (first, last):
+        low = np.minimum(low, window.min(axis=0))
+        section = _section(low)
+        assert section is not None  # (it holds the run's solid)
+    run = _Run(a, window, h, low, section, vmin)
+    found += _colour_features(run, np.moveaxis(csdf.rgb, axis, 0)[a : b + 1])
     return sorted(found, key=lambda f: (f.first, f.last))
 
 

@@ -3,10 +3,13 @@
 - ``tile``: the zone becomes one whole period of the repeat it lies in (the tile candidate whose
   repeat overlaps it most), with its planes at the best phase nearest the given start (in a gap,
   or where the cross-sections at both planes match; for elements found between boundaries, the
-  candidate's own boundary-to-boundary zone moved by whole periods); the destination keeps the given growth
+  candidate's own boundary-to-boundary zone moved by whole periods) among those that copy whole
+  elements where one does (no plane through a knob or a handle, none doubled:
+  :func:`~partscale.zones.features.whole_copies`); the destination keeps the given growth
   rounded to whole periods, so every copy is a copy.
 - ``stretch``: the planes move inside the constant slab that overlaps the zone most (or the
   nearest one); where less than two voxels of the zone would remain, the zone becomes the slab.
+  Slabs are cut around local features, so a snapped zone lies beside them.
   The destination keeps the given change ``DEST - END``.
 - ``global``: nothing moves.
 """

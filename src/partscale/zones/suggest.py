@@ -31,12 +31,18 @@ one element onto the next; the zone runs from one element's start to the next's 
 and one interior boundary). Such a candidate scores :data:`BOUNDED_WEIGHT` of a full match.
 
 Constant slabs: maximal runs of layers whose neighbour-to-neighbour distance stays below
-:data:`STEP` and whose ends differ by less than :data:`DRIFT`, cut around local features (a knob,
-a handle: :func:`_split_features`) that the whole-section distance cannot see; stretching them
-resamples equal layers, so nothing is distorted. Where the CSDF is segmented, a slab's planes are moved to the
+:data:`STEP` (:func:`calm_runs`) and whose ends differ by less than :data:`DRIFT`, cut around
+the local features (a knob, a handle, a colour motif: :func:`~.features.axis_features`) that the
+whole-section distance cannot see; stretching them resamples equal layers, so nothing is
+distorted. Where the CSDF is segmented, a slab's planes are moved to the
 nearest plane between parts (a part's bounding box end) within a voxel, and its reason names them;
 a row of at least :data:`MIN_COUNT` equal parts at a constant pitch (:func:`_part_repeats`) is a
 repeat in itself, read from the segmentation's part boxes alone.
+
+A period is only real where its copies repeat whole elements: every tile candidate's zone copies
+whole elements (:func:`~.features.whole_copies`: no plane through a local feature, none in the
+zone that the periods beside it lack, as a handle on one door of two), moved by whole periods,
+or for a full match to the best phase, where it would not; else it is dropped (:func:`_whole`).
 """
 
 from __future__ import annotations

@@ -18,15 +18,15 @@ their longest side; sizes below scale with the grid):
   knob two voxels across moves it by 1.07-2.0 voxels (cube, cylinder and sphere knobs at twelve
   random sub-voxel offsets each: the sphere's worst case 1.07), while what is not a feature
   stays below one voxel: the wear of worn wood at most 0.98 (polyhaven's worn bookshelf, whose
-  wear is sub-voxel: its occupancy peaks at 0.66), and on 17 clean catalogue objects the other
-  bumps in constant slabs (seams, grooves, faceting) at most 0.89. The 27-voxel floor this
-  replaces missed every knob under about three voxels across.
+  wear is sub-voxel: its occupancy peaks at 0.66), and on the Kenney, Sweet Home 3D and Khronos
+  objects the other bumps in constant slabs (seams, grooves, faceting) 0.53-0.89 (one of 0.95
+  along a drawer's handle). The 27-voxel floor this replaces missed every knob under about
+  three voxels across (27 voxels).
 - **Colour.** On columns along one face (within a voxel of the surface throughout, one face
   nearest: at edges and corners the colour of the nearest of two faces flickers), a motif
   stands more than :data:`COLOUR_CONTRAST` (40 of 255) out of its column on both sides in some
   sRGB channel, at least two voxels wide along its face: a hinge or a handle of another colour,
-  a printed dot, a keyhole. Flat-coloured models (Kenney, Sweet Home 3D) have no colour
-  deviation at 98 % of their face voxels; hardware and trims are the rest.
+  a printed dot, a keyhole.
 - **Noise.** The threshold follows the surface's own noise: a feature must also exceed
   :data:`NOISE_MARGIN` (2) times what the run's strongest :data:`NOISE_SHARE` (2 %) of surface
   voxels reach (their wear, grain or scanner noise), in shape and in colour alike. The object's
@@ -36,11 +36,13 @@ their longest side; sizes below scale with the grid):
   2-voxel knob, its distances given smooth noise of 0.1-0.6 voxel RMS (relief 0.04-0.22), three
   seeds each: with the margin at 1 its constant runs held up to 15 noise features, at 1.5 up to
   4, at 2 none in the 15 copies, the knob found to 0.2 voxel of noise (beyond, the noise merges
-  with it, as a scan does). Textured models' strongest 2 % of face voxels reach 44-132 levels of
-  colour (painted_wooden_cabinet's worn paint, a sofa's and a bookshelf's wood grain), so their
-  wear does not cut slabs and their hardware still does. Worn or scanned surfaces are not cut
-  into crumbs: the worn bookshelf has no feature on any axis (its slabs are those of the
-  27-voxel floor), the calm runs of four completed TUM scans (relief 0.29-0.35) none in shape.
+  with it, as a scan does). In colour, the strongest 2 % of a calm run's face voxels change not
+  at all on 32 of 46 flat-coloured catalogue models (Kenney, Sweet Home 3D, Khronos), by up to
+  87 levels on the rest (trims, a sink's basin), and by 43-141 on the seven textured Poly Haven
+  models (worn paint, wood grain): their wear does not cut slabs, their hardware still does.
+  Worn or scanned surfaces are not cut into crumbs: the worn bookshelf has no feature on any
+  axis (its slabs are those of the 27-voxel floor), the calm runs of four completed TUM scans
+  (relief 0.29-0.35) none in shape.
 """
 
 from __future__ import annotations

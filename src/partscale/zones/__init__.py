@@ -25,9 +25,12 @@ Public API
 - :func:`parse_size`, :func:`parse_length`: ``=``, ``2.1``, ``210cm``, ``2100mm``, ``+20cm``,
   ``-5cm``, ``120%`` (re-exported from :mod:`partscale.edit`, their one home, beside
   :func:`partscale.edit.parse_position`).
-- :func:`local_features` ``(csdf, axis, zone) -> [(start, end), ...]``: the knobs, handles
-  and keyholes a stretch of ``zone`` would stretch out of shape (what cuts constant slabs);
-  :func:`feature_notes` ``(csdf, recipe)``: a line per stretch edit that holds one.
+- :func:`local_features` ``(csdf, axis, zone) -> [(start, end), ...]``: the knobs, handles,
+  hinges, keyholes and colour motifs a stretch of ``zone`` would stretch out of shape;
+  :func:`feature_notes` ``(csdf, recipe)``: a line per stretch edit that holds one;
+  :func:`axis_features` ``(csdf, axis, calm_runs(profile))`` -> list[Feature]: those of an
+  axis's calm runs, which constant slabs are cut around; :func:`whole_copies`: whether a tile
+  zone copies whole elements (no plane through a feature, none doubled).
 - :func:`profile`, :class:`Profile`: the per-layer cross-sections all of it is built on;
   :func:`find_bounded_repeats` ``(profile) -> list[BoundedRepeat]``: the elements repeated
   between boards or gaps that the weaker of the two tile detectors finds (layer indices).
@@ -44,13 +47,21 @@ from .elements import (
     element_phrase,
     find_elements,
 )
-from .features import feature_notes, local_features
+from .features import Feature, axis_features, feature_notes, local_features, whole_copies
 from .fit import add_axis, fit, fit_axis
 from .profile import Profile, profile
 from .radial import RadialFrame, find_radial, radial_zones
 from .screw import Screw, find_screws
 from .snap import Move, describe_moves, record_snap, snap
-from .suggest import AXES, BoundedRepeat, Candidate, axis_candidates, find_bounded_repeats, suggest
+from .suggest import (
+    AXES,
+    BoundedRepeat,
+    Candidate,
+    axis_candidates,
+    calm_runs,
+    find_bounded_repeats,
+    suggest,
+)
 
 __all__ = [
     "AXES",
@@ -59,6 +70,7 @@ __all__ = [
     "Candidate",
     "CountZone",
     "Element",
+    "Feature",
     "Group",
     "Move",
     "Profile",
@@ -67,6 +79,8 @@ __all__ = [
     "Separator",
     "add_axis",
     "axis_candidates",
+    "axis_features",
+    "calm_runs",
     "count_zone",
     "describe_moves",
     "element_phrase",
@@ -85,4 +99,5 @@ __all__ = [
     "record_snap",
     "snap",
     "suggest",
+    "whole_copies",
 ]

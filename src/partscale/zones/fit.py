@@ -29,6 +29,7 @@ from ..edit import Edit, RadialZone, Recipe, ScrewZone, parse_size, tile_count
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from .elements import AxisElements, count_zone, element_phrase, find_elements
+from .features import Feature, axis_features, feature_spans, whole_copies
 from .profile import Profile, profile
 from .radial import find_radial, radial_zones
 from .screw import find_screws
@@ -39,6 +40,7 @@ from .suggest import (
     Candidate,
     axis_candidates,
     best_phase,
+    calm_runs,
     join_islands,
     plane_cost,
 )
@@ -400,7 +402,9 @@ def _thin_note(c: Candidate, h: float, tiled: bool, alone: bool = True) -> str:
     return f": a thin slab ({n} voxels, a feature's thickness changes), as {_thin_reason(tiled)}"
 
 
-def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
+def _voxel_period(
+    csdf: CSDF, p: Profile, t: Candidate, features: list[Feature]
+) -> tuple[float, float]:
     """A tile candidate's ``(start, period)`` (world) with the period a whole number of voxels.
 
     Every edit moves content by whole voxels, so copies of a period that is not one are
@@ -410,7 +414,8 @@ def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
     itself best (mean layer distance over the repeat, :meth:`Profile.shifted_distance`); the
     start within :data:`PHASE_VOXELS` of the detector's where :func:`~.suggest.plane_cost` is
     lowest (:func:`~.suggest.best_phase`), among those whose joins cut off the least solid
-    (:func:`~.suggest.join_islands`). Copies of a whole-voxel period
+    (:func:`~.suggest.join_islands`), of those that copy whole elements (the axis's local
+    ``features``: :func:`~.features.whole_copies`) where any does. Copies of a whole-voxel period
     are exact shifts of the original's layers.
     """
     assert t.period is not None  # set for a tile
@@ -434,6 +439,9 @@ def _voxel_period(csdf: CSDF, p: Profile, t: Candidate) -> tuple[float, float]:
     if b - a < n:
         return float(t.zone[0]), float(t.period)
     starts = np.arange(a, b - n + 1e-9, SHIFT_STEP)
+    whole = np.array([whole_copies(features, float(x), float(n), lo, hi) for x in starts])
+    if whole.any():  # (the detector's start copies whole elements: so do some near it)
+        starts = starts[whole]
     cut = np.array([join_islands(csdf, p.axis, float(x), float(n)) for x in starts])
     ok = cut <= cut.min()
     # the lowest-cost start among those, nearest the detector's
@@ -484,16 +492,23 @@ class _Tiled:
 
 
 def _periods(
-    csdf: CSDF, prof: Profile, t: Candidate, change: float, name: str, units: str | None, lo: float
+    csdf: CSDF,
+    prof: Profile,
+    t: Candidate,
+    change: float,
+    ax: tuple[str, str | None, float],
+    features: list[Feature],
 ) -> tuple[_Tiled, str] | None:
     """Tile whole periods of the repeat ``t`` (the number of copies that brings the length
     closest to ``change``), or remove whole periods (a zone of them tiled to its start, 0 copies,
     so the rest keep their thickness and spacing), and the note; None where no whole period fits
-    the change (less than half a period).
+    the change (less than half a period). ``ax``: the axis's name, the object's units and the
+    surface's min along it; ``features``: the axis's local features.
     """
     assert t.period is not None and t.count is not None  # set for a tile
+    name, units, lo = ax
     h = csdf.voxel_size
-    start, period = _voxel_period(csdf, prof, t)
+    start, period = _voxel_period(csdf, prof, t, features)
     k = int(np.floor(change / period + 0.5))
     k = max(k, 1 - t.count)  # cannot remove more periods than the repeat holds
     if k == 0:
@@ -821,8 +836,76 @@ def fit_axis(
     What is left then is refused (:class:`~partscale.errors.InputError`, naming the
     alternatives) unless ``allow_deform``: then thin slabs take it (a feature's thickness
     changes; a note says so) and global scaling is the last resort.
-    A shrink takes each chain of drift-split slabs as one (:func:`_drift_chains`).
+    A shrink takes each chain of drift-split slabs as one (:func:`_drift_chains`). The slabs are
+    cut around the axis's local features (knobs, handles, motifs); a note says where the
+    stretches lie beside them (:func:`_feature_note`).
     """
+    name = AXES[axis]
+    units = csdf.meta.get("units")
+    sb = csdf.surface_bounds()
+    lo, hi = float(sb[0, axis]), float(sb[1, axis])
+    h = csdf.voxel_size
+    change = round((target - (hi - lo)) / h) * h  # whole voxels: every edit moves content by voxels
+    if change == 0:
+        return [], [f"{name}: kept ({_fmt(hi - lo, units)}, target within half a voxel)"]
+    prof = profile(csdf, axis)
+    feats = axis_features(csdf, axis, calm_runs(prof))
+    edits, why = _fit_axis(csdf, axis, target, prof, feats, allow_deform)
+    return edits, why + _feature_note(edits, feats, prof, (name, units, lo))
+
+
+def _feature_note(
+    edits: list[Edit], features: list[Feature], p: Profile, ax: tuple[str, str | None, float]
+) -> list[str]:
+    """A line where ``edits`` stretch along an axis (``ax``: its name, the object's units, the
+    surface's min along it) with local ``features`` (on its profile ``p``): where the stretched
+    zones lie and the features they keep clear of (positions from the axis's min, as the other
+    notes give them); and a line for those a stretched zone holds all the same (the copies
+    absorbing a remainder, global scaling: stretched out of shape)."""
+    name, units, lo = ax
+    zones = [(float(e.start), float(e.end)) for e in edits if e.mode in ("stretch", "global")]
+    if not zones or not features:
+        return []
+    h = p.voxel_size
+
+    def where(xs: list[tuple[float, float]]) -> str:
+        shown = ", ".join(f"{_fmt(a - lo, units)}..{_fmt(b - lo, units)}" for a, b in xs[:6])
+        return shown + (f" and {len(xs) - 6} more" if len(xs) > 6 else "")
+
+    # a feature's extent: half a layer past its first and last
+    spans = [
+        (float(p.world(a)) - h / 2, float(p.world(b)) + h / 2) for a, b in feature_spans(features)
+    ]
+    held = [x for x in spans if any(x[0] < z1 and z0 < x[1] for z0, z1 in zones)]
+    clear = [x for x in spans if x not in held]
+    what = "local feature{} (knobs, handles, hinges, colour motifs)"
+    lines = []
+    if clear:
+        lines.append(
+            f"{name}: stretched zone{'s' if len(zones) > 1 else ''} {where(zones)} from the "
+            f"{name} min placed to keep clear of {len(clear)} "
+            f"{what.format('s' if len(clear) > 1 else '')} at {where(clear)}, which keep "
+            f"their shape"
+        )
+    if held:
+        lines.append(
+            f"{name}: {len(held)} {what.format('s' if len(held) > 1 else '')} at "
+            f"{where(held)} from the {name} min lie in a stretched zone, stretched out of "
+            f"shape with it"
+        )
+    return lines
+
+
+def _fit_axis(
+    csdf: CSDF,
+    axis: int,
+    target: float,
+    prof: Profile,
+    feats: list[Feature],
+    allow_deform: bool = False,
+) -> tuple[list[Edit], list[str]]:
+    """:func:`fit_axis` on the axis's profile ``prof`` and local features ``feats``, but the
+    features' note."""
     name = AXES[axis]
     units = csdf.meta.get("units")
     sb = csdf.surface_bounds()
@@ -830,10 +913,7 @@ def fit_axis(
     extent = hi - lo
     h = csdf.voxel_size
     change = round((target - extent) / h) * h  # whole voxels: every edit moves content by voxels
-    if change == 0:
-        return [], [f"{name}: kept ({_fmt(extent, units)}, target within half a voxel)"]
-    prof = profile(csdf, axis)
-    cands = axis_candidates(csdf, axis, prof=prof)
+    cands = axis_candidates(csdf, axis, prof=prof, features=feats)
     tiles = [c for c in cands if c.kind == "tile"]
     slabs = [c for c in cands if c.kind == "stretch"]
     # a shrink is spread over many slabs: a drifting run shrinks whole, not at each piece
@@ -852,7 +932,7 @@ def fit_axis(
     why: list[str] = []
     left = change
     tiled = None
-    done = _periods(csdf, prof, tiles[0], change, name, units, lo) if tiles else None
+    done = _periods(csdf, prof, tiles[0], change, (name, units, lo), feats) if tiles else None
     if done is None and not tiles:
         # no equal period: whole elements of a repeat that need not be equal (mirrored doors,
         # cushions of unequal width, compartments of unequal height)

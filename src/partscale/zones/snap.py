@@ -3,10 +3,13 @@
 - ``tile``: the zone becomes one whole period of the repeat it lies in (the tile candidate whose
   repeat overlaps it most), with its planes at the best phase nearest the given start (in a gap,
   or where the cross-sections at both planes match; for elements found between boundaries, the
-  candidate's own boundary-to-boundary zone moved by whole periods); the destination keeps the given growth
+  candidate's own boundary-to-boundary zone moved by whole periods) among those that copy whole
+  elements where one does (no plane through a knob or a handle, none doubled:
+  :func:`~partscale.zones.features.whole_copies`); the destination keeps the given growth
   rounded to whole periods, so every copy is a copy.
 - ``stretch``: the planes move inside the constant slab that overlaps the zone most (or the
   nearest one); where less than two voxels of the zone would remain, the zone becomes the slab.
+  Slabs are cut around local features, so a snapped zone lies beside them.
   The destination keeps the given change ``DEST - END``.
 - ``global``: nothing moves.
 """
@@ -21,8 +24,17 @@ import numpy as np
 from ..csdf import CSDF
 from ..edit import Edit, tile_count, unit_suffix
 from ..errors import InputError
-from .profile import profile
-from .suggest import AXES, BOUND_TOL, Candidate, axis_candidates, best_phase
+from .features import Feature, axis_features, whole_copies
+from .profile import Profile, profile
+from .suggest import (
+    AXES,
+    BOUND_TOL,
+    Candidate,
+    axis_candidates,
+    best_phase,
+    calm_runs,
+    whole_phase,
+)
 
 
 @dataclass(frozen=True)
@@ -51,22 +63,27 @@ def _from_boundaries(c: Candidate) -> bool:
     return c.kind == "tile" and "elements between" in c.reason
 
 
-def _boundary_start(c: Candidate, near: float, h: float) -> float:
+def _boundary_start(c: Candidate, near: float, p: Profile, features: list[Feature]) -> float:
     """Start (world) of ``c``'s zone moved by whole periods, inside its region, nearest ``near``.
 
     A bounded repeat's elements need not match layer for layer (mirrored drawers), so a phase
     off the boundaries cuts an element and joins its halves the wrong way round; its own zone,
     one element and one boundary, is the only phase that copies whole elements. A moved zone
     stays within the elements' span to :data:`~partscale.zones.suggest.BOUND_TOL` voxels (the
-    elements' own spacing tolerance; ``h``: the voxel size): further out it copies what lies
-    past the last element (an end board, air).
+    elements' own spacing tolerance), further out it copies what lies past the last element
+    (an end board, air), and copies whole elements of the axis's local ``features`` (on
+    ``c``'s profile ``p``: :func:`~partscale.zones.features.whole_copies`) where one does.
     """
     assert c.period is not None  # a tile candidate has a period
     period = float(c.period)
+    h = p.voxel_size
     k = np.arange(-(c.count or 1), (c.count or 1) + 1)
     starts = c.zone[0] + k * period
     slack = BOUND_TOL * h
     ok = (starts >= c.region[0] - slack) & (starts + period <= c.region[1] + slack)
+    lo, hi = (float(v) for v in p.index(np.array(c.region)))
+    whole = ok & [whole_copies(features, float(p.index(x)), period / h, lo, hi) for x in starts]
+    ok = whole if whole.any() else ok
     starts = starts[ok] if ok.any() else np.array([c.zone[0]])
     return float(starts[np.argmin(np.abs(starts - near))])
 
@@ -132,15 +149,19 @@ def snap(
     if kind == "tile":
         assert best.period is not None  # a tile candidate has a period
         period = float(best.period)
+        p = p if p is not None else profile(csdf, ax)
+        feats = axis_features(csdf, ax, calm_runs(p))
         if _from_boundaries(best):
             # elements between boundaries (mirrored drawers): only the candidate's own
             # boundary-to-boundary zone, moved by whole periods, keeps every element whole
-            s2 = _boundary_start(best, s, h)
+            s2 = _boundary_start(best, s, p, feats)
         else:
-            p = p if p is not None else profile(csdf, ax)
             lo, hi = (float(v) for v in p.index(np.array(best.region)))
-            t = best_phase(p, period / h, lo, hi, near=float(p.index(s)))
-            s2 = float(p.world(t))
+            # the best phase whose copies repeat whole elements (none cut or doubles a knob),
+            # where one does
+            near = float(p.index(s))
+            t = whole_phase(p, period / h, lo, hi, feats, near=near)
+            s2 = float(p.world(best_phase(p, period / h, lo, hi, near=near) if t is None else t))
         e2 = s2 + period
         if copies is None:
             copies = tile_count(period, period + (d - e))

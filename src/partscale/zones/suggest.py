@@ -31,18 +31,24 @@ one element onto the next; the zone runs from one element's start to the next's 
 and one interior boundary). Such a candidate scores :data:`BOUNDED_WEIGHT` of a full match.
 
 Constant slabs: maximal runs of layers whose neighbour-to-neighbour distance stays below
-:data:`STEP` and whose ends differ by less than :data:`DRIFT`, cut around local features (a knob,
-a handle: :func:`_split_features`) that the whole-section distance cannot see; stretching them
-resamples equal layers, so nothing is distorted. Where the CSDF is segmented, a slab's planes are moved to the
+:data:`STEP` (:func:`calm_runs`) and whose ends differ by less than :data:`DRIFT`, cut around
+the local features (a knob, a handle, a colour motif: :func:`~.features.axis_features`) that the
+whole-section distance cannot see; stretching them resamples equal layers, so nothing is
+distorted. Where the CSDF is segmented, a slab's planes are moved to the
 nearest plane between parts (a part's bounding box end) within a voxel, and its reason names them;
 a row of at least :data:`MIN_COUNT` equal parts at a constant pitch (:func:`_part_repeats`) is a
 repeat in itself, read from the segmentation's part boxes alone.
+
+A period is only real where its copies repeat whole elements: every tile candidate's zone copies
+whole elements (:func:`~.features.whole_copies`: no plane through a local feature, none in the
+zone that the periods beside it lack, as a handle on one door of two), moved by whole periods,
+or for a full match to the best phase, where it would not; else it is dropped (:func:`_whole`).
 """
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -53,7 +59,7 @@ from .._options import keyword_options
 from ..csdf import CSDF
 from ..edit import AXES, SEAM_VOXELS
 from ..progress import ProgressCallback, resolve
-from .features import _feature_spans
+from .features import Feature, axis_features, feature_spans, whole_copies
 from .profile import Profile, _axis_index, profile
 
 #: Two layers match when their soft Jaccard distance is below this.
@@ -468,13 +474,79 @@ def best_phase(p: Profile, period: float, lo: float, hi: float, near: float | No
     starts = np.arange(lo, hi - period + 1e-9, SHIFT_STEP)
     if starts.size == 0:
         return lo
+    return _best_of(p, period, starts, (lo + hi - period) / 2 if near is None else near)
+
+
+def whole_phase(
+    p: Profile,
+    period: float,
+    lo: float,
+    hi: float,
+    features: list[Feature],
+    near: float | None = None,
+) -> float | None:
+    """:func:`best_phase` among the starts whose zone copies whole elements
+    (:func:`~.features.whole_copies` of the axis's local ``features``); None where none does."""
+    starts = np.arange(lo, hi - period + 1e-9, SHIFT_STEP)
+    starts = starts[[whole_copies(features, x, period, lo, hi) for x in starts]]
+    if starts.size == 0:
+        return None
+    return _best_of(p, period, starts, (lo + hi - period) / 2 if near is None else near)
+
+
+def _best_of(p: Profile, period: float, starts: np.ndarray, near: float) -> float:
+    """The middle of the run of lowest-cost ``starts`` (ascending) nearest ``near``."""
     cost = plane_cost(p, period, starts)
     good = cost <= cost.min() + 0.03
-    runs = _runs(good)
+    runs = _split_at_gaps(good, starts)
     mids = (starts[runs[:, 0]] + starts[runs[:, 1]]) / 2
-    target = (lo + hi - period) / 2 if near is None else near
-    best = runs[np.argmin(np.abs(mids - target))]
+    best = runs[np.argmin(np.abs(mids - near))]
     return float((starts[best[0]] + starts[best[1]]) / 2)
+
+
+def _split_at_gaps(good: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """(R, 2) ``[first, last]`` indices of the runs of ``good`` starts that follow each other
+    one :data:`SHIFT_STEP` apart."""
+    apart = np.concatenate([[True], np.diff(starts) > SHIFT_STEP * 1.5])
+    edges = np.flatnonzero(apart)
+    out = []
+    for a, b in zip(edges, [*edges[1:], len(starts)], strict=True):
+        out += [[a + r0, a + r1] for r0, r1 in _runs(good[a:b])]
+    return np.asarray(out, dtype=np.int64).reshape(-1, 2)
+
+
+def _whole(c: Candidate, p: Profile, features: list[Feature], free: bool) -> Candidate | None:
+    """The tile candidate ``c`` with its zone moved, where it would not copy whole elements
+    (:func:`~.features.whole_copies`), by whole periods inside its region (the nearest such
+    zone: another element like it), else, with ``free`` (a full cross-section match, whose
+    phase is chosen by :func:`best_phase`), to the best phase that does; None where none does
+    (a period through a handle or a mullion is no period)."""
+    assert c.period is not None and c.count is not None  # a tile candidate has both
+    if not features:
+        return c
+    period = c.period / p.voxel_size
+    lo, hi = (float(x) for x in p.index(np.array(c.region)))
+    t = float(p.index(c.zone[0]))
+    k = np.arange(-c.count - 1, c.count + 2)
+    k = k[np.argsort(np.abs(k), kind="stable")]
+    slack = BOUND_TOL
+    for x in t + k * period:
+        if (
+            lo - slack <= x
+            and x + period <= hi + slack
+            and whole_copies(features, x, period, lo, hi)
+        ):
+            return _moved(c, p, x)
+    if free and (x := whole_phase(p, period, lo, hi, features, near=t)) is not None:
+        return _moved(c, p, x)
+    return None
+
+
+def _moved(c: Candidate, p: Profile, start: float) -> Candidate:
+    """``c`` with its zone starting at layer index ``start``."""
+    s = float(p.world(start))
+    assert c.period is not None  # a tile candidate has one
+    return replace(c, zone=(s, s + c.period))
 
 
 class Slab(NamedTuple):
@@ -487,26 +559,33 @@ class Slab(NamedTuple):
     at_feature: bool = False
 
 
-def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[Slab]:
-    """Layer runs of constant, non-empty cross-section (see module).
-
-    ``csdf``: the object ``p`` was taken from; each calm run is then also cut around its local
-    features (:func:`_split_features`) before it is split where it drifts.
-    """
+def calm_runs(p: Profile) -> list[tuple[int, int]]:
+    """``(first, last)`` (inclusive) of the maximal runs of at least :data:`MIN_SLAB` non-empty
+    layers whose neighbour-to-neighbour distance stays below :data:`STEP`: where constant slabs
+    and local features are found."""
     i0, i1 = _solid_layers(p)
     idx = np.arange(i0, i1)
     step = p.distance(idx, idx + 1)
     calm = (step < STEP) & (p.area[idx] > 0) & (p.area[idx + 1] > 0)
     runs = [(int(idx[a]), int(idx[b]) + 1) for a, b in _runs(calm)]
-    cut: set[int] = set()
+    return [(a, b) for a, b in runs if b - a + 1 >= MIN_SLAB]
+
+
+def constant_slabs(
+    p: Profile, csdf: CSDF | None = None, features: list[Feature] | None = None
+) -> list[Slab]:
+    """Layer runs of constant, non-empty cross-section (see module).
+
+    ``csdf``: the object ``p`` was taken from; each calm run is then also cut around its local
+    features (``features``, default :func:`~.features.axis_features` of the calm runs) before
+    it is split where it drifts.
+    """
+    runs = calm_runs(p)
+    feats: list[Feature] = []
     if csdf is not None:
-        pieces = []
-        for a, b in runs:
-            if b - a + 1 >= MIN_SLAB:
-                kept, spans = _split_features(csdf, p.axis, a, b)
-                pieces += kept
-                cut.update(x for lo, hi in spans for x in (lo, hi))
-        runs = pieces
+        feats = axis_features(csdf, p.axis, runs) if features is None else features
+        runs = [piece for a, b in runs for piece in _beside_features(a, b, feats)]
+    spans = feature_spans(feats)
     out = []
     for first, last in runs:
         # split where the drift from the slab's start exceeds DRIFT (a slowly changing section)
@@ -515,23 +594,20 @@ def constant_slabs(p: Profile, csdf: CSDF | None = None) -> list[Slab]:
             over = np.flatnonzero(drift >= DRIFT)
             end = int(over[0] - 1 + first) if over.size else last
             if end - first + 1 >= MIN_SLAB:
-                beside = first - 1 in cut or end + 1 in cut
+                beside = any(first - 2 <= b < first or end < a <= end + 2 for a, b in spans)
                 out.append(Slab(first, end, float(drift[: end - first + 1].max()), beside))
             first = end + 1
     return out
 
 
-def _split_features(
-    csdf: CSDF, axis: int, first: int, last: int
-) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
-    """The runs of layers ``first..last`` (inclusive) that hold no local feature, at least
-    :data:`MIN_SLAB` long, and the features' spans (:func:`_feature_spans`)."""
-    spans = _feature_spans(csdf, axis, first, last)
+def _beside_features(first: int, last: int, features: list[Feature]) -> list[tuple[int, int]]:
+    """The runs of layers ``first..last`` (inclusive) that hold no part of ``features``, at
+    least :data:`MIN_SLAB` long."""
     keep = np.ones(last - first + 1, dtype=bool)
-    for a, b in spans:
-        keep[a - first : b - first + 1] = False
-    runs = [(first + int(r0), first + int(r1)) for r0, r1 in _runs(keep) if r1 - r0 + 1 >= MIN_SLAB]
-    return runs, spans
+    for a, b in feature_spans(features):
+        if a <= last and first <= b:
+            keep[max(a, first) - first : min(b, last) - first + 1] = False
+    return [(first + int(r0), first + int(r1)) for r0, r1 in _runs(keep) if r1 - r0 + 1 >= MIN_SLAB]
 
 
 def _part_planes(csdf: CSDF, axis: int) -> np.ndarray:
@@ -601,10 +677,19 @@ def _tile(
     )
 
 
-def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -> list[Candidate]:
-    """Candidates along one axis, best first (see :func:`suggest`)."""
+def axis_candidates(
+    csdf: CSDF,
+    axis: str | int,
+    *,
+    prof: Profile | None = None,
+    features: list[Feature] | None = None,
+) -> list[Candidate]:
+    """Candidates along one axis, best first (see :func:`suggest`). ``features``: the axis's
+    local features (:func:`~.features.axis_features` of :func:`calm_runs`) where the caller
+    has them."""
     ax = _axis_index(axis)
     p = prof if prof is not None else profile(csdf, ax)
+    feats = axis_features(csdf, ax, calm_runs(p)) if features is None else features
     h = p.voxel_size
     extent = max(p.hi - p.lo, h)
     name = AXES[ax]
@@ -670,8 +755,12 @@ def axis_candidates(csdf: CSDF, axis: str | int, *, prof: Profile | None = None)
             f"({100 * pitch / extent:.1f}% of the extent)"
         )
         out.append(_tile(name, p.world(t), pitch, count, score, reason, (p.world(a0), p.world(b0))))
+    # a period is only real where its copies repeat whole elements
+    out = [
+        w for c in out if (w := _whole(c, p, feats, free="repeats of a" in c.reason)) is not None
+    ]
     planes = _part_planes(csdf, ax)
-    for first, last, drift, at_feature in constant_slabs(p, csdf):
+    for first, last, drift, at_feature in constant_slabs(p, csdf, feats):
         s, e = float(p.world(first)), float(p.world(last))
         why = ""
         if planes.size:

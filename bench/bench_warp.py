@@ -1,0 +1,73 @@
+"""Zones beyond planes across an axis, timed beside a planar edit of the same object in the run.
+
+For each object (imported at ``--res``, 128 by default): a radial zone grown by 20 % of the
+outline's radius (:func:`partscale.edit.apply_radial`, about its found frame), an oblique zone
+stretched along a diagonal (:func:`partscale.edit.apply_oblique`), and, as the baseline, a
+stretch across x over the same share of the object (:func:`partscale.edit.apply_edit`); and
+for flights, finding their steps (:func:`partscale.zones.find_screws`) and adding one
+(:func:`partscale.edit.apply_screw`). Targets: a radial or oblique edit within 2x the planar
+edit's time; finding steps <= 5 s per object at 128 on 2 cores. Best of ``--repeat``.
+
+Run: ``PYTHONPATH=src .venv/bin/python bench/bench_warp.py [--res 128] [--repeat 3]``
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+from _timing import timed
+
+from partscale.edit import Edit, ObliqueZone, apply_edit, apply_oblique, apply_radial, apply_screw
+from partscale.ingest import load
+from partscale.zones import find_radial, find_screws
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT.parent / "shared" / "data"
+ROUND = ["kenney/tableRound.glb", "kenney/lampRoundFloor.glb", "sweethome3d/stool.obj"]
+FLIGHTS = ["kenney/stairsOpenSingle.glb", "kenney/stairs.glb", "sweethome3d/staircase.obj"]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--res", type=int, default=128)
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    if not DATA.is_dir():
+        raise SystemExit(f"needs the test objects in {DATA}")
+    print(f"{'object':32s} {'planar s':>9s} {'radial s':>9s} {'oblique s':>10s}  ratio")
+    for rel in ROUND:
+        c = load(DATA / rel, res=args.res)
+        frame = find_radial(c)
+        sb = c.surface_bounds()
+        lo, hi = float(sb[0, 0]), float(sb[1, 0])
+        planar = Edit("x", lo + 0.3 * (hi - lo), lo + 0.7 * (hi - lo), lo + 0.9 * (hi - lo))
+        t_plane, _ = timed(lambda c=c, e=planar: apply_edit(c, e), args.repeat)
+        t_rad = float("nan")
+        if frame is not None:
+            zone = frame.zone(0.3 * frame.radius, 0.9 * frame.radius, 1.1 * frame.radius)
+            t_rad, _ = timed(lambda c=c, z=zone: apply_radial(c, z), args.repeat)
+        n = np.array([1.0, 0.0, 1.0]) / np.sqrt(2)
+        pts = c.origin + np.argwhere(c.sdf < 0) * c.voxel_size
+        s = pts @ n
+        s0, s1 = float(np.quantile(s, 0.3)), float(np.quantile(s, 0.7))
+        ob = ObliqueZone((float(n[0]), float(n[1]), float(n[2])), s0, s1, s1 + 0.5 * (s1 - s0))
+        t_obl, _ = timed(lambda c=c, z=ob: apply_oblique(c, z), args.repeat)
+        ratio = max(t_rad, t_obl) / t_plane
+        print(f"{rel:32s} {t_plane:9.3f} {t_rad:9.3f} {t_obl:10.3f}  {ratio:.1f}x")
+    print(f"\n{'flight':32s} {'find steps s':>12s} {'+1 step s':>10s}  step (going, rise)")
+    for rel in FLIGHTS:
+        c = load(DATA / rel, res=args.res)
+        t_find, found = timed(lambda c=c: find_screws(c), 1)
+        if not found:
+            print(f"{rel:32s} {t_find:12.2f} {'-':>10s}  none found")
+            continue
+        s = found[0]
+        one_more = s.zone(1)
+        t_add, _ = timed(lambda c=c, z=one_more: apply_screw(c, z), args.repeat)
+        print(f"{rel:32s} {t_find:12.2f} {t_add:10.3f}  ({s.going:.3f}, {s.rise:.3f})")
+
+
+if __name__ == "__main__":
+    main()

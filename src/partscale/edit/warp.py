@@ -367,19 +367,83 @@ def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None 
     others = [a for a in range(3) if a != ax]
     origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
     c = np.array(zone.center, dtype=np.float64)
-
-    def src_of(p: np.ndarray) -> np.ndarray:
-        d = p[:, others] - c
-        r = gauge(d, zone.sides, zone.phase)
-        k = np.where(r > 0, _radial_source(r, zone) / np.maximum(r, 1e-300), 1.0)
-        if zone.span is not None:  # only the levels along the axis the zone spans move
-            k = np.where((p[:, ax] >= zone.span[0]) & (p[:, ax] <= zone.span[1]), k, 1.0)
-        out = p.copy()
-        out[:, others] = c + d * k[:, None]
-        return out
-
+    # the map moves points across the axis only, the same at every level: it is computed once
+    # for the grid's cross-section (U, V) and the levels are gathered through it
+    uu = origin[others[0]] + np.arange(shape[others[0]]) * h
+    vv = origin[others[1]] + np.arange(shape[others[1]]) * h
+    d = np.stack(np.meshgrid(uu - c[0], vv - c[1], indexing="ij"), axis=-1)  # (U, V, 2)
+    r = gauge(d, zone.sides, zone.phase)
+    k = np.where(r > 0, _radial_source(r, zone) / np.maximum(r, 1e-300), 1.0)
+    src = c + d * k[..., None]  # (U, V, 2) world
+    iu = (src[..., 0] - csdf.origin[others[0]]) / h
+    iv = (src[..., 1] - csdf.origin[others[1]]) / h
+    # levels: the output's along the axis are the source's (the grid does not grow along it)
+    levels = csdf.origin[ax] + np.arange(shape[ax]) * h
+    inside = np.ones(shape[ax], dtype=bool)
+    if zone.span is not None:  # only the levels the zone spans move
+        inside = (levels >= zone.span[0]) & (levels <= zone.span[1])
+    arrays = _gather_levels(csdf, ax, others, iu, iv, inside, origin)
     entry = {"op": "radial", **zone.to_json(), **(record or {})}
-    return _finish(csdf, origin, _resample(csdf, origin, shape, src_of), entry)
+    return _finish(csdf, origin, arrays, entry)
+
+
+def _gather_levels(
+    csdf: CSDF,
+    ax: int,
+    others: list[int],
+    iu: np.ndarray,
+    iv: np.ndarray,
+    inside: np.ndarray,
+    origin: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The output arrays of a map across ``ax`` that is the same at every level: output column
+    ``(u, v)`` shows the source at continuous indices ``(iu, iv)`` (U, V) on the levels where
+    ``inside`` (L,) holds, and its own place on the others; sdf and colour bilinear, parts
+    nearest; and the (X, Y, Z) bool of voxels whose source is not their own place shifted by
+    whole voxels."""
+    h = csdf.voxel_size
+    src = np.moveaxis(csdf.sdf, (others[0], ax, others[1]), (0, 1, 2))  # (Us, L, Vs)
+    rgb = np.moveaxis(csdf.rgb, (others[0], ax, others[1]), (0, 1, 2))
+    parts = np.moveaxis(csdf.parts, (others[0], ax, others[1]), (0, 1, 2))
+    # the output's own place in source indices (whole voxels: the grid grew by whole voxels)
+    ou = np.rint((origin[others[0]] - csdf.origin[others[0]]) / h).astype(np.int64)
+    ov = np.rint((origin[others[1]] - csdf.origin[others[1]]) / h).astype(np.int64)
+    own_u = (np.arange(iu.shape[0]) + ou)[:, None] + 0 * iv.astype(np.int64)
+    own_v = (np.arange(iu.shape[1]) + ov)[None, :] + 0 * iu.astype(np.int64)
+    mapped = (np.abs(iu - own_u) > 1e-6) | (np.abs(iv - own_v) > 1e-6)
+    nu, nv = src.shape[0], src.shape[2]
+    u0 = np.floor(iu).astype(np.int64)
+    v0 = np.floor(iv).astype(np.int64)
+    fu = (iu - u0).astype(np.float32)[:, None, :]
+    fv = (iv - v0).astype(np.float32)[:, None, :]
+    lv = np.arange(src.shape[1])[None, :, None]
+
+    def at(a: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return a[np.clip(u, 0, nu - 1)[:, None, :], lv, np.clip(v, 0, nv - 1)[:, None, :]]
+
+    corners = [(u0, v0, (1 - fu) * (1 - fv)), (u0 + 1, v0, fu * (1 - fv))]
+    corners += [(u0, v0 + 1, (1 - fu) * fv), (u0 + 1, v0 + 1, fu * fv)]
+    out_sdf = sum(w * at(src, u, v) for u, v, w in corners).astype(np.float32)
+    out_rgb = np.clip(
+        np.rint(sum(w[..., None] * at(rgb, u, v).astype(np.float32) for u, v, w in corners)),
+        0,
+        255,
+    ).astype(np.uint8)
+    out_parts = at(parts, np.rint(iu).astype(np.int64), np.rint(iv).astype(np.int64))
+    # levels the zone does not span: the column's own place
+    own = ~inside
+    if own.any():
+        out_sdf[:, own, :] = at(src, own_u, own_v)[:, own, :]
+        out_rgb[:, own, :] = at(rgb, own_u, own_v)[:, own, :]
+        out_parts[:, own, :] = at(parts, own_u, own_v)[:, own, :]
+    moved = mapped[:, None, :] & inside[None, :, None]
+    back = (0, 1, 2), (others[0], ax, others[1])
+    return (
+        np.ascontiguousarray(np.moveaxis(out_sdf, *back)),
+        np.ascontiguousarray(np.moveaxis(out_rgb, *back)),
+        np.ascontiguousarray(np.moveaxis(out_parts, *back)),
+        np.ascontiguousarray(np.moveaxis(np.broadcast_to(moved, out_sdf.shape), *back)),
+    )
 
 
 def check_oblique(csdf: CSDF, zone: ObliqueZone) -> np.ndarray:

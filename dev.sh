@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # partscale's two commands:
-#   ./dev.sh setup   create .venv (Python 3.11), install partscale, run the demo on the table the
+#   ./dev.sh setup   create .venv (Python 3.11), install partscale, compile its kernels ahead
+#                    (python -m partscale.warmup), run the demo on the table the
 #                    package ships (partscale.data.table(); PARTSCALE_DEMO_OBJECT: another object)
 #   ./dev.sh test    lint, format check, type checks (mypy, the page's tsc) and the whole test suite (installs
 #                    what it needs first, the optional Ray extra included)
@@ -33,6 +34,7 @@ ensure_venv() {
     say "installing partscale and its dependencies into .venv"
     "$PY" -m pip install -q --upgrade pip
     "$PY" -m pip install -q -e ".[test]"
+    "$PY" -m partscale.warmup
     touch "$stamp"
   fi
 }

@@ -143,8 +143,22 @@ def main(argv: list[str] | None = None) -> None:
     # every edit allocates whole new grids: at 256 and beyond, reusing the pages of the last
     # one instead of faulting in fresh ones halves the time (see reuse_freed_memory)
     reuse_freed_memory()
+    _announce_first_compile(list(sys.argv[1:] if argv is None else argv))
     with _terminate_cleanly() as seen, _one_line_warnings():
         _main(argv, seen)
+
+
+def _announce_first_compile(argv: list[str]) -> None:
+    """On a terminal (as the progress bars), one line when a first compile starts."""
+    if not _common.stderr.is_terminal:
+        return
+    from .. import _jit
+
+    words = [a for a in argv if not a.startswith("-")]
+    note = _jit.first_compile_note(words[0] if words else None)
+    _jit.on_first_compile(
+        lambda: _common.stderr.print(f"partscale: note: {note}", highlight=False, soft_wrap=True)
+    )
 
 
 def _main(argv: list[str] | None, seen: dict) -> None:

@@ -89,7 +89,7 @@ def batch(
     inputs: Annotated[
         list[Path],
         typer.Argument(
-            metavar="INPUTS...",
+            metavar="INPUTS",
             help="Files, folders (searched recursively by extension) or manifests (.csv with a "
             "'path' column, .jsonl with a 'path' key; other columns: name, res, square, segment, "
             "recipe, size, export, render).",
@@ -107,7 +107,7 @@ def batch(
     res: _common.Res = 128,
     square: Annotated[
         bool,
-        typer.Option("--square", help=_common.SQUARE_HELP + "; each mesh."),
+        typer.Option("--square", help=_common.SQUARE_HELP + ": each mesh of the batch."),
     ] = False,
     segment: Annotated[
         str | None,

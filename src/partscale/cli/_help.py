@@ -143,9 +143,9 @@ class Group(TyperGroup):
         return _no_metavar(super().get_help_option(ctx))
 
 
-def command(app: typer.Typer, name: str, fn, *, hidden: bool = False) -> None:
+def command(app: typer.Typer, name: str, fn) -> None:
     """Register ``fn`` as subcommand ``name`` with its examples."""
-    app.command(name, cls=Command, epilog=epilog(name), hidden=hidden)(fn)
+    app.command(name, cls=Command, epilog=epilog(name))(fn)
 
 
 _OPTION = re.compile(r"^(--[a-z][a-z-]*)(=.*)?$")
@@ -162,6 +162,8 @@ def accept_deprecated(argv: list[str]) -> list[str]:
     out = list(argv)
     start = argv.index(command) + 1
     for i in range(start, len(out)):
+        if out[i] == "--":  # the rest are arguments, whatever they look like
+            break
         m = _OPTION.match(out[i])
         if m is None or m[1] not in table:
             continue
@@ -180,8 +182,8 @@ def in_cli_terms(exc: BaseException, argv: list[str]) -> str:
     The library names a parameter as its function takes it (``res``, ``world_size``); the
     subcommand being run spells it as an option (``--res``, ``--world-size``). Translated:
     labels before the message's ``expected`` (``rank: expected ...``, ``a.glb: iso: ...``) that
-    name an option of the subcommand, and within the rest, the parameters the error lists
-    (:attr:`partscale.errors.InputError.params`) as whole words.
+    name an option of the subcommand, and the parameters the error lists
+    (:attr:`partscale.errors.InputError.params`) as whole words outside file paths.
     """
     message = str(exc)
     flags = _flags(argv)
@@ -189,10 +191,12 @@ def in_cli_terms(exc: BaseException, argv: list[str]) -> str:
         return message
     head, sep, tail = message.partition("expected")
     head = ": ".join(flags.get(label, label) for label in head.split(": "))
+    message = head + sep + tail
     for name in getattr(exc, "params", ()):
         if name in flags:
-            tail = re.sub(rf"(?<![\w./-]){re.escape(name)}(?![\w/-]|\.\w)", flags[name], tail)
-    return head + sep + tail
+            word = rf"(?<![\w./-]){re.escape(name)}(?![\w/-]|\.\w)"
+            message = re.sub(word, flags[name], message)
+    return message
 
 
 def _flags(argv: list[str]) -> dict[str, str]:

@@ -528,7 +528,7 @@ def complete(
         shape[1] -= cut
     from .._memory import check_memory
 
-    check_memory(tuple(int(s) for s in shape), 40, what=f"{source} at res {res}")
+    check_memory(tuple(int(s) for s in shape), 40, what=f"{source} at res {res}", params=("res",))
     carver.margin = CARVE_MARGIN * h
 
     sym_free: list[Callable[[np.ndarray], np.ndarray]] = []

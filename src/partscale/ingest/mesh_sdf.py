@@ -447,7 +447,9 @@ def from_mesh(
     if not (hi - lo).max() > 0:
         raise InputError(f"{name}: expected a mesh with non-zero extent, got a point")
     origin, h, shape = grid_for_bounds(lo, hi, res, pad)
-    check_memory(tuple(int(s) for s in shape), BYTES_PER_VOXEL, what=f"{name} at res {res}")
+    check_memory(
+        tuple(int(s) for s in shape), BYTES_PER_VOXEL, what=f"{name} at res {res}", params=("res",)
+    )
     shape = tuple(int(s) for s in shape)
 
     wn = _Winding(V, F)

@@ -15,23 +15,20 @@ from .scale import SQUARE_OPTION
 
 def fit(
     src: Annotated[
-        Path, typer.Argument(metavar="IN", help="Input .csdf.npz file, or a mesh (mesh route).")
+        Path, typer.Argument(metavar="IN", help="A .csdf.npz file, or a mesh (mesh route).")
     ],
     output: Annotated[
         Path,
         typer.Option(
             "-o",
             "--output",
-            help="Output .csdf.npz file, or a mesh (.glb, .obj, .ply) for a mesh IN.",
+            metavar="OUT",
+            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply) for a mesh IN.",
         ),
     ],
     size: Annotated[
         tuple[str, str, str] | None,
-        typer.Option(
-            "--size",
-            metavar="X Y Z",
-            help="Target extents: = (unchanged), 2.1 / 210cm / 2100mm, +20cm / -5cm, or 120%.",
-        ),
+        typer.Option("--size", metavar="X Y Z", help=_common.SIZE_HELP),
     ] = None,
     add: Annotated[
         tuple[str, int] | None,
@@ -50,16 +47,14 @@ def fit(
         ),
     ] = False,
     recipe_out: Annotated[
-        Path | None, typer.Option("--recipe-out", help="Write the recipe applied (JSON).")
+        Path | None,
+        typer.Option("--recipe-out", metavar="FILE", help="Write the recipe applied (JSON)."),
     ] = None,
     square: Annotated[bool, SQUARE_OPTION] = False,
 ) -> None:
     """Resize to a target size or by whole elements: tile whole periods or elements (seats,
     doors, shelf rows), absorb the rest in a slab of constant cross-section; says what it chose,
     and refuses (exit 2) where only a deformation would reach the size.
-
-    Examples: partscale fit sofa.csdf.npz -o wider.csdf.npz --size 145% = =;
-    partscale fit sofa.csdf.npz -o three_seats.csdf.npz --add x 1
     """
     from ..edit import apply_recipe, describe_changes
     from ..zones import fit as fit_zones

@@ -215,6 +215,38 @@ def test_fit_brings_each_object_to_its_size(tmp_path, cli):
     assert np.all(np.abs(grown[1:]) <= 1e-6), grown  # "=" keeps the other axes (float noise)
 
 
+def test_a_size_only_a_deformation_reaches_fails_that_object_unless_allowed(tmp_path, cli):
+    """kenney/tableRound 20 % wider along x alone: fit refuses it (a round top would flatten):
+    the object fails with fit's one line in status.csv; with --allow-deform, or a manifest's
+    allow_deform column, it is written."""
+    table = data_path("kenney/tableRound.glb")
+    out = tmp_path / "o"
+    proc = cli("batch", table, "-o", out, "--res", "48", "--size", "120%", "=", "=")
+    assert proc.returncode == 1, proc.stderr
+    with (out / "status.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert rows[0]["state"] == "failed" and "round or curved" in rows[0]["error"], rows
+    cli(
+        "batch",
+        table,
+        "-o",
+        tmp_path / "a",
+        "--res",
+        "48",
+        "--size",
+        "120%",
+        "=",
+        "=",
+        "--allow-deform",
+        check=True,
+    )
+    assert list((tmp_path / "a").glob("*/*.csdf.npz"))
+    m = tmp_path / "m.csv"
+    m.write_text(f"path,size,allow_deform\n{table},120% = =,yes\n")
+    cli("batch", m, "-o", tmp_path / "m", "--res", "48", check=True)
+    assert list((tmp_path / "m").glob("*/*.csdf.npz"))
+
+
 def test_engine_ray_without_ray_says_how_to_install(tmp_path):
     fake = tmp_path / "fake"
     fake.mkdir()

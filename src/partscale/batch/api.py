@@ -95,6 +95,7 @@ def run(
     segment: str | None = None,
     recipe: str | os.PathLike | dict | None = None,
     fit: Sequence[str] | None = None,
+    allow_deform: bool = False,
     export: Sequence[str] | str = ("csdf",),
     render: str | None = None,
     engine: str = "local",
@@ -119,11 +120,12 @@ def run(
     outdir : path
         Output folder (created). Rerunning into it skips objects done with the same input
         (content hash of all its files) and options (hash of the spec).
-    res, square, segment, recipe, fit, export, render
+    res, square, segment, recipe, fit, allow_deform, export, render
         The pipeline per object, overridable per object in a manifest: import at ``res`` (a
         mesh turned square about up with ``square``, see :func:`partscale.ingest.load`),
         segment with method ``segment`` (None: no segmentation), then the recipe (a JSON file
-        or dict) or ``fit`` (3 sizes, needs :mod:`partscale.zones`), then write each format of
+        or dict) or ``fit`` (3 sizes, :func:`partscale.zones.fit`; refused where only a
+        deformation reaches them unless ``allow_deform``), then write each format of
         ``export`` (``csdf``, ``glb``, ``ply``, ``obj``, ``raw``, ``png``, ``nrrd``) and, with
         ``render`` (a view), a 512² PNG.
     engine : {"local", "ray"}
@@ -181,6 +183,7 @@ def run(
         "segment": segment,
         "recipe": recipe,
         "fit": fit,
+        "allow_deform": allow_deform or None,
         "export": export,
         "render": render,
     }

@@ -26,7 +26,7 @@ from ..errors import InputError
 INPUT_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".npy", ".npz", ".h5", ".hdf5")
 """Suffixes a folder is searched for (lower case); ``.csdf.npz`` files are read as CSDFs."""
 MANIFEST_SUFFIXES = (".csv", ".jsonl")
-OPTION_KEYS = ("res", "square", "segment", "recipe", "size", "export", "render")
+OPTION_KEYS = ("res", "square", "segment", "recipe", "size", "allow_deform", "export", "render")
 """Per-object options a manifest row may set (columns or keys besides ``path`` and ``name``),
 named as ``partscale batch``'s options."""
 OLD_KEYS = {"fit": "size"}

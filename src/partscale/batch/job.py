@@ -57,12 +57,8 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
         with contextlib.suppress(ValueError):
             res = int(res.strip())
     res = check_res(res, f"{where}: res")  # import's own bounds, checked before any work
-    square = merged.get("square", False)
-    if isinstance(square, str):
-        word = square.strip().lower()
-        square = False if word in _OFF else True if word in _ON else square
-    if not isinstance(square, bool):
-        raise InputError(f"{where}: square: expected true or false, got {square!r}")
+    square = _yes_no(merged, "square", where)
+    allow_deform = _yes_no(merged, "allow_deform", where)
 
     seg = merged.get("segment")
     if isinstance(seg, bool):
@@ -126,9 +122,21 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
         "segment": seg,
         "recipe": recipe,
         "fit": fit,
+        "allow_deform": allow_deform,
         "export": formats,
         "render": render,
     }
+
+
+def _yes_no(merged: dict[str, Any], key: str, where: str) -> bool:
+    """A yes/no option (``True``, ``"yes"``, ``"0"``...) of the merged options; default no."""
+    value = merged.get(key, False)
+    if isinstance(value, str):
+        word = value.strip().lower()
+        value = False if word in _OFF else True if word in _ON else value
+    if not isinstance(value, bool):
+        raise InputError(f"{where}: {key}: expected true or false, got {value!r}")
+    return value
 
 
 def _recipe_json(recipe: Any) -> Any:
@@ -184,7 +192,7 @@ def run_job(
     if spec["recipe"]:
         c = apply_recipe(c, spec["recipe"])  # parsed with the object's units
     if spec["fit"]:
-        c = _fit(c, spec["fit"])
+        c = _fit(c, spec["fit"], spec.get("allow_deform", False))
     written: list[Path] = []
     for fmt in spec["export"]:
         if fmt == "csdf":
@@ -205,12 +213,13 @@ def run_job(
     return [Path(p).resolve().relative_to(outdir.resolve()).as_posix() for p in written]
 
 
-def _fit(c, size):
-    # partscale.zones.fit gives the recipe that brings the object to ``size``
+def _fit(c, size, allow_deform=False):
+    # partscale.zones.fit gives the recipe that brings the object to ``size`` (refused, this
+    # object failing in one line, where only a deformation would, unless ``allow_deform``)
     from ..edit import apply_recipe
     from ..zones import fit
 
-    recipe, _why = fit(c, size)
+    recipe, _why = fit(c, size, allow_deform=allow_deform)
     return apply_recipe(c, recipe) if recipe.edits else c
 
 

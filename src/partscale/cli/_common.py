@@ -23,6 +23,12 @@ RES_HELP = "Voxels along the object's longest side, 16 to 16384."
 Res = Annotated[int, typer.Option("--res", metavar="N", help=RES_HELP)]
 
 #: ``--size`` of ``fit`` and ``batch``: the target extents.
+#: ``--allow-deform`` of the commands that fit (``fit``, ``batch``): one help text.
+ALLOW_DEFORM_HELP = (
+    "Where no zone reaches the size part-aware, stretch thin slabs or scale globally instead "
+    "of refusing"
+)
+
 SIZE_HELP = (
     "Target extents along x, y and z: = (unchanged), 2.1 (object units), 210cm / 2100mm / 80in, "
     "+20cm / -5cm (change), or 120% (of the current extent)."

@@ -92,7 +92,7 @@ def batch(
             metavar="INPUTS",
             help="Files, folders (searched recursively by extension) or manifests (.csv with a "
             "'path' column, .jsonl with a 'path' key; other columns: name, res, square, segment, "
-            "recipe, size, export, render).",
+            "recipe, size, allow_deform, export, render).",
         ),
     ],
     output: Annotated[
@@ -125,6 +125,10 @@ def batch(
         tuple[str, str, str] | None,
         typer.Option("--size", metavar="X Y Z", help=_common.SIZE_HELP),
     ] = None,
+    allow_deform: Annotated[
+        bool,
+        typer.Option("--allow-deform", help=_common.ALLOW_DEFORM_HELP + ": each object's."),
+    ] = False,
     export: Annotated[
         str,
         typer.Option(
@@ -197,6 +201,7 @@ def batch(
             segment=segment,
             recipe=recipe,
             fit=list(size) if size else None,
+            allow_deform=allow_deform,
             export=export,
             render=render,
             engine=engine.lower(),

@@ -40,11 +40,7 @@ def fit(
     ] = None,
     allow_deform: Annotated[
         bool,
-        typer.Option(
-            "--allow-deform",
-            help="Where no zone reaches the size part-aware, stretch thin slabs or scale "
-            "globally instead of refusing.",
-        ),
+        typer.Option("--allow-deform", help=_common.ALLOW_DEFORM_HELP + "."),
     ] = False,
     recipe_out: Annotated[
         Path | None,

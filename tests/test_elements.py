@@ -457,3 +457,25 @@ def test_real_round_table_is_refused_not_made_wavy(cli, tmp_path):
     proc = cli("fit", c, "-o", out, "--size", "120%", "=", "=", "--allow-deform")
     assert proc.returncode == 0, proc.stderr
     assert out.exists() and ("thin slab" in proc.stderr or "GLOBAL" in proc.stderr), proc.stderr
+
+
+def test_recipe_holds_a_count(cli, sofa_file, tmp_path):
+    """A recipe may say "one more seat" ({"axis": "x", "copies": "+1"}): resolved on the object
+    into the same zone edit fit --add makes; apply_recipe alone refuses it unresolved."""
+    import json
+
+    from partscale.edit import Recipe
+    from partscale.zones import resolve_counts
+
+    c = load(sofa_file)
+    counted = Recipe.parse({"edits": [{"axis": "x", "copies": "+1"}]})
+    resolved, notes = resolve_counts(c, counted)
+    assert resolved == fit(c, None, add={"x": 1})[0] and notes
+    with pytest.raises(InputError, match="unresolved"):
+        apply_recipe(c, counted)
+    rec = tmp_path / "r.json"
+    rec.write_text(json.dumps(counted.to_json()))
+    out = tmp_path / "o.csdf.npz"
+    proc = cli("scale", sofa_file, "-o", out, "--recipe", rec)
+    assert proc.returncode == 0, proc.stderr
+    assert seat_crowns(load(out), rise=3) == 3

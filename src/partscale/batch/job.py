@@ -190,7 +190,12 @@ def run_job(
 
         c = segment(c, method=spec["segment"], cache=False)
     if spec["recipe"]:
-        c = apply_recipe(c, spec["recipe"])  # parsed with the object's units
+        # parsed with the object's units; counts ("copies": "+1") made zone edits on it
+        from ..edit import Recipe
+        from ..zones import resolve_counts
+
+        recipe, _ = resolve_counts(c, Recipe.parse(spec["recipe"], units=c.meta.get("units")))
+        c = apply_recipe(c, recipe)
     if spec["fit"]:
         c = _fit(c, spec["fit"], spec.get("allow_deform", False))
     written: list[Path] = []

@@ -180,6 +180,7 @@ def scale(
         c = None if mesh_route else load(src)
         # positions with a unit ("30cm") in the object's units: a mesh route's are metres
         rec = Recipe.load(recipe, units="m" if c is None else c.meta.get("units"))
+        rec = _resolved_counts(src, c, rec, square)
     elif zone is None and copies is not None and axis is not None:
         rec = _element_recipe(src, mesh_route, axis, copies, mode, snap, square, dest_given)
         c = None if mesh_route else load(src)
@@ -221,6 +222,23 @@ def scale(
         return _scale_mesh(src, output, rec, square=square)
     assert c is not None  # loaded unless mesh_route
     _apply_and_save(c, rec, output, moves if recipe is None and snap else None)
+
+
+def _resolved_counts(src: Path, c, rec, square: bool):
+    """``rec`` with its counts (``{"axis": "x", "copies": "+1"}``) made zone edits on the
+    object (:func:`partscale.zones.resolve_counts`; for the mesh route on its CSDF), what they
+    became printed."""
+    from ..edit import CountEdit
+
+    if not any(isinstance(e, CountEdit) for e in rec.edits):
+        return rec
+    from ..zones import resolve_counts
+
+    obj = c if c is not None else _object(src, True, True, square)
+    rec, notes = resolve_counts(obj, rec)
+    for line in notes:
+        _common.stderr.print(line, highlight=False, soft_wrap=True)
+    return rec
 
 
 def _apply_and_save(c, rec, output: Path, moves=None) -> None:

@@ -20,7 +20,12 @@ or a zone that is not a slab across an axis (:mod:`partscale.edit.warp`)::
     {"normal": [NX, NY, NZ], "zone": [S0, S1], "to": S}   # the slab S0 <= p . n <= S1
 
 Their positions are lengths (numbers or with a unit, no ``%``) on the object they apply to; a
-recipe holding one holds no zone across an axis it moves content along.
+recipe holding one holds no zone across an axis it moves content along. And a count::
+
+    {"axis": "x", "copies": "+1"}     # one more element (seat, door, shelf row, step)
+
+resolved on the object into the zone edits that make it (:func:`partscale.zones.resolve_counts`)
+before the recipe applies.
 
 Positions are numbers in the object's units (metres for glTF) or strings with a ``%`` suffix:
 percent of the object's extent along that axis, measured on the solid's bounding box
@@ -119,6 +124,22 @@ JSON_SCHEMA: dict[str, Any] = {
                             },
                             "zone": {"$ref": "#/$defs/lengths"},
                             "to": {"$ref": "#/$defs/length"},
+                        },
+                    },
+                    {
+                        "description": "whole elements more or fewer along an axis (one more "
+                        "seat); resolved on the object into zone edits before it applies",
+                        "type": "object",
+                        "required": ["axis", "copies"],
+                        "additionalProperties": False,
+                        "properties": {
+                            "axis": {"enum": list(AXES)},
+                            "copies": {
+                                "oneOf": [
+                                    {"type": "integer"},
+                                    {"type": "string", "pattern": r"^\s*[-+]?[0-9]+\s*$"},
+                                ]
+                            },
                         },
                     },
                     {
@@ -535,10 +556,45 @@ class ScrewZone:
 
 
 @dataclass(frozen=True)
+class CountEdit:
+    """``copies`` whole elements more (fewer, where negative) along ``axis``: the designer's
+    "one more seat" in a recipe, ``{"axis": "x", "copies": "+1"}`` (no zone: the object's own
+    repeat gives it). Resolved on the object into the zone edits that make it
+    (:func:`partscale.zones.resolve_counts`) before the recipe applies."""
+
+    axis: str
+    copies: int
+
+    @classmethod
+    def parse(cls, obj: Any, *, where: str = "edit") -> CountEdit:
+        """Validate ``{"axis": "x", "copies": "+1"}`` (an int, or a string with its sign)."""
+        _keys(obj, {"axis", "copies"}, {"axis", "copies"}, where)
+        axis = str(obj["axis"]).lower()
+        if axis not in AXES:
+            raise InputError(f"{where}.axis: expected one of x, y, z, got {shown(obj['axis'])}")
+        n = obj["copies"]
+        if isinstance(n, str):
+            try:
+                n = int(n.strip())
+            except ValueError:
+                n = None
+        if isinstance(n, bool) or not isinstance(n, int) or n == 0:
+            raise InputError(
+                f"{where}.copies: expected +N or -N elements (not 0), got {shown(obj['copies'])}"
+            )
+        return cls(axis, n)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"axis": self.axis, "copies": f"{self.copies:+d}"}
+
+
+@dataclass(frozen=True)
 class Recipe:
     """An ordered list of :class:`Edit`; serialises to the JSON schema above."""
 
-    edits: tuple[Edit | RadialZone | ObliqueZone | ScrewZone, ...] = field(default_factory=tuple)
+    edits: tuple[Edit | RadialZone | ObliqueZone | ScrewZone | CountEdit, ...] = field(
+        default_factory=tuple
+    )
 
     @classmethod
     def parse(cls, obj: Any, *, units: str | None = None) -> Recipe:
@@ -582,7 +638,7 @@ class Recipe:
 
 def parse_edit(
     obj: Any, *, where: str = "edit", units: str | None = None
-) -> Edit | RadialZone | ObliqueZone | ScrewZone:
+) -> Edit | RadialZone | ObliqueZone | ScrewZone | CountEdit:
     """One recipe edit of any kind: a radial zone (``"radial"`` key), an oblique one
     (``"normal"``) or a zone between planes across an axis (:class:`Edit`)."""
     if isinstance(obj, dict) and "radial" in obj:
@@ -591,6 +647,8 @@ def parse_edit(
         return ObliqueZone.parse(obj, where=where, units=units)
     if isinstance(obj, dict) and "screw" in obj:
         return ScrewZone.parse(obj, where=where, units=units)
+    if isinstance(obj, dict) and "copies" in obj and "zone" not in obj:
+        return CountEdit.parse(obj, where=where)
     return Edit.parse(obj, where=where, units=units)
 
 

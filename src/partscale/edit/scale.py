@@ -23,6 +23,7 @@ from ..progress import ProgressCallback, resolve, scaled
 from .parts import renumber_copies, unlabel_far, update_parts_info
 from .recipe import (
     AXES,
+    CountEdit,
     Edit,
     ObliqueZone,
     RadialZone,
@@ -294,11 +295,19 @@ def apply_recipe(
         # it, comes before any work anyway)
         check_recipe_memory(csdf, recipe, what=f"a recipe of {n} edits")
     check_mixed(recipe)
+    for i, e in enumerate(recipe.edits):
+        if isinstance(e, CountEdit):
+            raise InputError(
+                f"edits[{i}]: expected zone edits, got a count ({e.copies:+d} along {e.axis}) "
+                "unresolved; resolve it on the object first (partscale.zones.resolve_counts)"
+            )
     bounds = csdf.surface_bounds() if n else None
     applied: list[tuple[int, dict[str, Any]]] = []  # (axis, forward-map arguments)
     out = csdf
     for i, e in enumerate(recipe.edits):
-        if not isinstance(e, Edit):  # a radial or oblique zone: positions as given
+        if isinstance(e, CountEdit):  # refused above
+            continue
+        if not isinstance(e, Edit):  # a radial or oblique zone, steps: positions as given
             report = scaled(progress, i / n, (i + 1) / n)
             report(0.0, type(e).__name__)
             out = apply_warp(out, e, record={"given": e.to_json(), "recipe_step": i})
@@ -331,7 +340,7 @@ def apply_recipe(
 def check_mixed(recipe: Recipe) -> None:
     """Refuse (one line) a recipe holding a radial or oblique zone and a zone across an axis that
     zone moves content along: the one's positions could not be carried through the other."""
-    warps = [(i, e) for i, e in enumerate(recipe.edits) if not isinstance(e, Edit)]
+    warps = [(i, e) for i, e in enumerate(recipe.edits) if not isinstance(e, Edit | CountEdit)]
     for i, w in warps:
         for j, e in enumerate(recipe.edits):
             if isinstance(e, Edit) and e.axis_index in moved_axes(w):
@@ -368,6 +377,11 @@ def recipe_shape(csdf: CSDF, recipe: Recipe | dict[str, Any] | list) -> tuple[in
     applied: list[tuple[int, dict[str, Any]]] = []
     origin = np.asarray(csdf.origin, dtype=np.float64)
     for e in recipe.edits:
+        if isinstance(e, CountEdit):
+            raise InputError(
+                f"recipe: expected zone edits, got a count ({e.copies:+d} along {e.axis}) "
+                "unresolved (partscale.zones.resolve_counts)"
+            )
         if not isinstance(e, Edit):
             origin, grown = warp_grid(origin, tuple(shape), h, e)
             shape = list(grown)

@@ -428,11 +428,12 @@ class EditSession:
         the knobs or handles a stretch zone held (:func:`~partscale.zones.feature_notes`).
         """
         from ..edit import Recipe, apply_recipe, describe_changes, recipe_shape
-        from ..zones import feature_notes
+        from ..zones import feature_notes, resolve_counts
 
         units = self.current.meta.get("units")  # for positions with a unit ("30cm")
         parsed = recipe if isinstance(recipe, Recipe) else Recipe.parse(recipe, units=units)
         with self.lock:
+            parsed, _ = resolve_counts(self.current, parsed)  # "copies": "+1" on this object
             if limits is not None:
                 limits.check(recipe_shape(self.current, parsed), "apply")
             new = apply_recipe(self.current, parsed, progress=progress)

@@ -48,7 +48,7 @@ from .elements import (
     find_elements,
 )
 from .features import Feature, axis_features, feature_notes, local_features, whole_copies
-from .fit import add_axis, fit, fit_axis
+from .fit import add_axis, fit, fit_axis, resolve_counts
 from .profile import Profile, profile
 from .radial import RadialFrame, find_radial, radial_zones
 from .screw import Screw, find_screws
@@ -97,6 +97,7 @@ __all__ = [
     "profile",
     "radial_zones",
     "record_snap",
+    "resolve_counts",
     "snap",
     "suggest",
     "whole_copies",

@@ -25,7 +25,16 @@ import numpy as np
 
 from .._options import keyword_options
 from ..csdf import CSDF
-from ..edit import Edit, RadialZone, Recipe, ScrewZone, parse_size, tile_count
+from ..edit import (
+    CountEdit,
+    Edit,
+    ObliqueZone,
+    RadialZone,
+    Recipe,
+    ScrewZone,
+    parse_size,
+    tile_count,
+)
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from .elements import AxisElements, count_zone, element_phrase, find_elements
@@ -1130,6 +1139,36 @@ def fit(
         raise InputError("size: expected a change on some axis, got the current size")
     planar = [e for e in edits if isinstance(e, Edit)]
     return Recipe(tuple(edits)), why + _off_square(csdf, planar)
+
+
+def resolve_counts(csdf: CSDF, recipe: Recipe) -> tuple[Recipe, list[str]]:
+    """``recipe`` with each count (:class:`~partscale.edit.CountEdit`: ``{"axis": "x",
+    "copies": "+1"}``) replaced by the zone edits that make it on ``csdf`` (:func:`add_axis`:
+    whole elements, or a flight's steps), and a note per count; other edits as they are.
+
+    Raises
+    ------
+    InputError
+        A count no repeat along its axis allows (as :func:`add_axis`).
+
+    Examples
+    --------
+    >>> from partscale.edit import Recipe
+    >>> from partscale.zones import resolve_counts
+    >>> r = Recipe.parse({"edits": [{"axis": "x", "copies": "+1"}]})
+    >>> r.edits[0].copies
+    1
+    """
+    out: list[Edit | RadialZone | ScrewZone | ObliqueZone | CountEdit] = []
+    notes: list[str] = []
+    for e in recipe.edits:
+        if isinstance(e, CountEdit):
+            made, why = add_axis(csdf, AXES.index(e.axis), e.copies)
+            out += made
+            notes += why
+        else:
+            out.append(e)
+    return Recipe(tuple(out)), notes
 
 
 def _radial_fit(

@@ -22,6 +22,8 @@ COLUMNS = (
     *METRICS,
     "elements",
     "elements_expected",
+    "element_change",
+    "feature_shape",
     "copies",
     "time_s",
     "error",
@@ -40,6 +42,8 @@ CRITERIA: dict[str, tuple[str, float, float]] = {
     "seam_shape": ("seam shape jump (vox)", 0.1, 0.5),
     "pieces": ("pieces beyond the expected count", 0.0, 0.5),
     "elements": ("elements off the count asked for", 0.0, 0.5),
+    "element_change": ("length change of the elements (rel.)", 0.02, 0.10),
+    "feature_shape": ("length change of knobs, handles, motifs (rel.)", 0.02, 0.10),
 }
 SHORT = {
     "length_err": "length",
@@ -52,6 +56,8 @@ SHORT = {
     "seam_shape": "seam shape",
     "pieces": "pieces",
     "elements": "elements",
+    "element_change": "element length",
+    "feature_shape": "hardware",
 }
 
 

@@ -12,12 +12,16 @@ A suite file is JSON::
          "kind": "solid" | "repeating",   # what the paper expects: optional
          "view": "iso" | "front" | "side" | "top",  # optional, default iso
          "elements": {"axis": "x", "count": 3},   # what the designer asked: optional
+         "hardware": true,                # its knobs and handles judged too: optional
          "note": "..."}, ...]}
 
 ``elements`` states the intent in the designer's unit: the count of the repeated element (seats,
 doors, shelf rows: :func:`partscale.zones.find_elements`' best group) along ``axis`` after the
 edit. Every result is then counted too (column ``elements``); a result off that count fails its
-entry (a sofa made wider with two fat seats, where a third was asked for).
+entry (a sofa made wider with two fat seats, where a third was asked for), and so does one whose
+elements changed length (``element_change``: a seat stretched, an element cut). ``"hardware":
+true`` (with ``elements``) also judges the local features along that axis (``feature_shape``:
+a knob or handle drawn out, or lost).
 
 An entry may hold ``"recipe": {"edits": [...]}`` (the recipe schema of :mod:`partscale.edit`,
 several zones and axes, each edit with its mode) instead of ``"edit"``: it runs as given, one
@@ -95,6 +99,7 @@ class Entry:
     error: str | None = None
     recipe: Recipe | None = None
     elements: tuple[str, int] | None = None
+    hardware: bool = False
 
     def describe(self) -> str:
         if self.recipe is not None:
@@ -159,13 +164,19 @@ def _entry(obj: Any, i: int) -> Entry:
             f"'.', control characters or {CONTACT_SHEET}), got {name!r}",
         )
     try:
-        unknown = set(obj) - {"name", "path", "edit", "recipe", "kind", "view", "note", "elements"}
+        keys = {"name", "path", "edit", "recipe", "kind", "view", "note", "elements", "hardware"}
+        unknown = set(obj) - keys
         if unknown:
             raise InputError(
                 f"unknown key(s) {sorted(unknown)}; keys are name, path, edit, recipe, kind, "
-                "view, note, elements"
+                "view, note, elements, hardware"
             )
         elements = _elements(obj.get("elements"))
+        hardware = obj.get("hardware", False)
+        if not isinstance(hardware, bool):
+            raise InputError(f"hardware: expected true or false, got {hardware!r}")
+        if hardware and elements is None:
+            raise InputError("hardware: expected it with elements (the axis it is judged along)")
         path = obj.get("path")
         if not isinstance(path, str) or not path:
             raise InputError(f"path: expected a file path, got {path!r}")
@@ -197,7 +208,16 @@ def _entry(obj: Any, i: int) -> Entry:
         if isinstance(edit_obj, dict) and "mode" in edit_obj:
             raise InputError("edit.mode: expected none (the suite runs every mode), got one")
         edit = Edit.parse(edit_obj, where="edit")
-        return Entry(name, path, edit, kind, view, str(obj.get("note", "")), elements=elements)
+        return Entry(
+            name,
+            path,
+            edit,
+            kind,
+            view,
+            str(obj.get("note", "")),
+            elements=elements,
+            hardware=hardware,
+        )
     except InputError as exc:
         return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")
 
@@ -428,7 +448,7 @@ def _run_entry(
             m = metrics.evaluate(ref, b, geo)
             result.timings["edit"] += dt
             result.timings["metrics"] += time.perf_counter() - t0 - dt
-            row = {**base, "mode": mode, **m, "time_s": dt, **_counted(b, entry)}
+            row = {**base, "mode": mode, **m, "time_s": dt, **_counted(b, entry, original)}
             if geo.mode == "tile":
                 row["copies"] = geo.n_copies
             results[mode] = b
@@ -448,7 +468,7 @@ def _run_entry(
             m = metrics.evaluate(ref, b, zones)
             result.timings["edit"] += dt
             result.timings["metrics"] += time.perf_counter() - t0 - dt
-            row = {**base, "mode": mode, **m, "time_s": dt, **_counted(b, entry)}
+            row = {**base, "mode": mode, **m, "time_s": dt, **_counted(b, entry, original)}
             copies = [z.n_copies for z in zones.zones if z.mode == "tile"]
             if copies:
                 row["copies"] = "+".join(map(str, copies))
@@ -473,12 +493,69 @@ def _run_entry(
     return result
 
 
-def _counted(c: CSDF, entry: Entry) -> dict[str, Any]:
-    """``elements`` (counted on ``c``) and ``elements_expected`` where the entry states them."""
+def _counted(c: CSDF, entry: Entry, original: CSDF | None = None) -> dict[str, Any]:
+    """Where the entry states what the designer asked (``elements``): the count on ``c``
+    (``elements``, beside ``elements_expected``), the largest relative length change of its
+    elements against the original's nearest (``element_change``: a seat stretched fat, an
+    element cut) and of its local features along the axis (``feature_shape``: a knob drawn
+    out, :func:`feature_change`)."""
     if entry.elements is None:
         return {}
     axis, want = entry.elements
-    return {"elements": count_elements(c, axis), "elements_expected": want}
+    out: dict[str, Any] = {"elements": count_elements(c, axis), "elements_expected": want}
+    if original is not None:
+        out["element_change"] = element_change(original, c, axis)
+        if entry.hardware:
+            out["feature_shape"] = feature_change(original, c, axis)
+    return out
+
+
+def element_change(a: CSDF, b: CSDF, axis: str) -> float:
+    """Largest relative length change of ``b``'s elements along ``axis`` (its best repeat
+    group's) against the nearest in length of ``a``'s; 0 where either has no repeat."""
+    from ..zones import find_elements
+
+    def lengths(c: CSDF) -> list[float]:
+        f = find_elements(c, axis)
+        return [] if f.best is None else [f.elements[i].length for i in f.best.members]
+
+    la, lb = lengths(a), lengths(b)
+    if not la or not lb:
+        return 0.0
+    return float(max(min(abs(x / y - 1) for y in la) for x in lb))
+
+
+def feature_change(a: CSDF, b: CSDF, axis: str) -> float:
+    """Largest relative change, beyond a layer, of a local feature's length along ``axis`` (knobs, handles,
+    motifs: :func:`partscale.zones.axis_features`) from ``a`` to ``b``: each of ``a``'s matched
+    to the features of ``b`` whose extent across the axis overlaps its own by half (IoU; a
+    one-axis edit keeps it), the one of nearest length; one with no match counts as changed by
+    1 (gone, or merged into another); 0 where ``a`` has none."""
+    from ..zones import axis_features, calm_runs, profile
+
+    ax = AXES_INDEX[axis]
+
+    def feats(c: CSDF):
+        return axis_features(c, ax, calm_runs(profile(c, ax)))
+
+    def iou(f, g) -> float:  # of their extents across the axis (inclusive index ranges)
+        inter = union = 1
+        for (a0, a1), (b0, b1) in zip(f.across, g.across, strict=True):
+            inter *= max(0, min(a1, b1) - max(a0, b0) + 1)
+            union *= max(a1, b1) - min(a0, b0) + 1
+        return inter / union
+
+    fa, fb = feats(a), feats(b)
+    worst = 0.0
+    for f in fa:
+        la = f.last - f.first + 1
+        same = [g.last - g.first + 1 for g in fb if iou(f, g) >= 0.5]
+        # beyond a layer of quantisation (a 2-layer knob read as 3 is not drawn out)
+        worst = max(worst, min((max(0, abs(lb - la) - 1) / la for lb in same), default=1.0))
+    return float(worst)
+
+
+AXES_INDEX = {"x": 0, "y": 1, "z": 2}
 
 
 def _figure(

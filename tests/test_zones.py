@@ -1013,12 +1013,16 @@ def test_fit_reaches_each_suite_length_no_worse_than_the_hand_zone(real):
         b = apply_recipe(a, fit_recipe(a, Entry(o["name"], o["path"], edit)))
         got = M.evaluate(ref, b, zones_from_history(b, a))
         # no tile leaves a loose sliver where a zone plane cuts an element (the drawers' END
-        # plane cuts a thin rail: 21 pieces for 20 when the seams kept its sliver)
-        for mode, r in (("tile", hand["tile"]), ("fit", got)):
+        # plane cuts a thin rail: 21 pieces for 20 when the seams kept its sliver); an entry
+        # judging hardware draws its hand zone through the handles on purpose: fit only there
+        checked = [("fit", got)] if o.get("hardware") else [("tile", hand["tile"]), ("fit", got)]
+        for mode, r in checked:
             assert r["pieces"] == r["pieces_expected"], (o["name"], mode, r["pieces"])
         sb = b.surface_bounds()
         assert abs(sb[1, geo.axis] - sb[0, geo.axis] - geo.target_length) <= 0.5 * a.voxel_size
-        if o["name"] == "cabinet-narrower":
+        if o["name"] == "cabinet-narrower" or o.get("hardware"):
+            # the cabinet's hand stretch fails prop. in and spacing; the dresser's is drawn
+            # through its handles: fit keeps them and trades a little seam, under the threshold
             assert failures_of(got, orig) == [], failures_of(got, orig)
             continue
         rows = [{**got, "mode": "fit"}, {**hand[best], "mode": best}]

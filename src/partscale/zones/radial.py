@@ -75,7 +75,12 @@ def _outline(csdf: CSDF, axis: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     offsets (P, 2)."""
     foot = np.asarray(csdf.sdf < 0).any(axis=axis)
     iu, iv = np.nonzero(foot)
-    center = np.array([(iu.min() + iu.max()) / 2, (iv.min() + iv.max()) / 2], dtype=np.float64)
+    # the middle of the surface's own bounds (interpolated to the zero crossing: a surface
+    # through voxel centres does not shift it by half a voxel), in voxel indices
+    others = [a for a in range(3) if a != axis]
+    sb = csdf.surface_bounds()
+    center = (sb[0, others] + sb[1, others]) / 2
+    center = (center - csdf.origin[others]) / csdf.voxel_size
     d = np.stack([iu, iv], axis=1) - center
     ang = np.arctan2(d[:, 1], d[:, 0])
     r = np.hypot(d[:, 0], d[:, 1]) + 0.5  # to the pixel's outer edge

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # partscale's two commands:
-#   ./dev.sh setup   create .venv (Python 3.11), install partscale, run the demo on a real object
+#   ./dev.sh setup   create .venv (Python 3.11), install partscale, compile its kernels ahead
+#                    (python -m partscale.warmup), run the demo on the table the
+#                    package ships (partscale.data.table(); PARTSCALE_DEMO_OBJECT: another object)
 #   ./dev.sh test    lint, format check, type checks (mypy, the page's tsc) and the whole test suite (installs
 #                    what it needs first, the optional Ray extra included)
 # Optional heavy parts (Node tools for glTF validation and browser tests, Debian's chromium) are
@@ -32,6 +34,7 @@ ensure_venv() {
     say "installing partscale and its dependencies into .venv"
     "$PY" -m pip install -q --upgrade pip
     "$PY" -m pip install -q -e ".[test]"
+    "$PY" -m partscale.warmup
     touch "$stamp"
   fi
 }
@@ -70,22 +73,26 @@ ensure_chromium() {
 }
 
 demo() {
-  local out=$ROOT/out/demo
-  local obj=${PARTSCALE_DEMO_OBJECT:-$ROOT/../shared/data/kenney/table.glb}
+  # the demo's steps, with the installed partscale (PARTSCALE_PYTHON: the Python it is installed in,
+  # default .venv's); on the table shipped in the package unless PARTSCALE_DEMO_OBJECT names another
+  local py=${PARTSCALE_PYTHON:-$PY}
+  local out=${PARTSCALE_DEMO_OUT:-$ROOT/out/demo}
+  local obj=${PARTSCALE_DEMO_OBJECT:-}
+  if [ -z "$obj" ]; then obj=$("$py" -m partscale.data table); fi
   mkdir -p "$out"
   if [ ! -f "$obj" ]; then echo "demo object $obj not found (set PARTSCALE_DEMO_OBJECT)" >&2; exit 2; fi
-  local ps=$VENV/bin/partscale
+  run() { "$py" -m partscale "$@"; }
   say "demo: import $obj"
-  "$ps" import "$obj" -o "$out/table.csdf.npz" --res 128
+  run import "$obj" -o "$out/table.csdf.npz" --res 128
   say "demo: split it into nearly convex parts (top, legs, rails)"
-  "$ps" segment "$out/table.csdf.npz" -o "$out/table.csdf.npz"
-  "$ps" info "$out/table.csdf.npz"
+  run segment "$out/table.csdf.npz" -o "$out/table.csdf.npz"
+  run info "$out/table.csdf.npz"
   say "demo: make it 40% longer by stretching the zone between its legs (parts carried through)"
-  "$ps" scale "$out/table.csdf.npz" -o "$out/table_longer.csdf.npz" --axis x --zone 35% 65% --to 105% --mode stretch
-  "$ps" render "$out/table.csdf.npz" -o "$out/table.png" --view iso
-  "$ps" render "$out/table.csdf.npz" -o "$out/table_parts.png" --view iso --parts
-  "$ps" render "$out/table_longer.csdf.npz" -o "$out/table_longer.png" --view iso
-  "$ps" export "$out/table_longer.csdf.npz" --mesh "$out/table_longer.glb"
+  run scale "$out/table.csdf.npz" -o "$out/table_longer.csdf.npz" --axis x --zone 35% 65% --to 105% --mode stretch
+  run render "$out/table.csdf.npz" -o "$out/table.png" --view iso
+  run render "$out/table.csdf.npz" -o "$out/table_parts.png" --view iso --parts
+  run render "$out/table_longer.csdf.npz" -o "$out/table_longer.png" --view iso
+  run export "$out/table_longer.csdf.npz" --mesh "$out/table_longer.glb"
   say "demo done: see $out (table.png, table_parts.png, table_longer.png, table_longer.glb)"
 }
 
@@ -118,7 +125,11 @@ case "${1:-}" in
     ensure_venv
     demo
     ;;
+  demo-steps)
+    # the demo alone, without installing anything (tests run it with their own Python)
+    demo
+    ;;
   *)
-    echo "usage: ./dev.sh setup | test [pytest args] | demo" >&2; exit 2
+    echo "usage: ./dev.sh setup | test [pytest args] | demo | demo-steps" >&2; exit 2
     ;;
 esac

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's pictures of real TUM scans completed (docs/complete_tum_*.png): each row is
 # the scan | the completion | the completion coloured by kind (observed blue, mirrored and
-# rotated copies amber, guessed red), all rendered --view iso --size 320.
+# rotated copies amber, guessed red), all rendered --view iso --pixels 320.
 # A derived range mesh's scan panel is `partscale import SCAN --up=-y`; the raw frame's is
 # the colour image cropped to the --box (it has no mesh to import).
 # Run from the repository root: bash docs/complete_tum.sh [../shared/data]
@@ -11,8 +11,8 @@ OUT=$(mktemp -d)
 ps() { PYTHONPATH=src .venv/bin/python -m partscale "$@"; }
 
 row() { # name, scan panel png, completion
-    ps render "$3" -o "$OUT/$1_done.png" --view iso --size 320
-    ps render "$3" -o "$OUT/$1_kind.png" --view iso --size 320 --completion
+    ps render "$3" -o "$OUT/$1_done.png" --view iso --pixels 320
+    ps render "$3" -o "$OUT/$1_kind.png" --view iso --pixels 320 --completion
     .venv/bin/python - "$2" "$OUT/$1_done.png" "$OUT/$1_kind.png" "docs/complete_tum_$1.png" <<'EOF'
 import sys
 from PIL import Image
@@ -28,7 +28,7 @@ EOF
 for name in yellow purple; do
     scan=$DATA/derived/tum_${name}_office_chair_partial.ply
     ps import "$scan" -o "$OUT/$name.scan.csdf.npz" --up=-y
-    ps render "$OUT/$name.scan.csdf.npz" -o "$OUT/${name}_scan.png" --view iso --size 320
+    ps render "$OUT/$name.scan.csdf.npz" -o "$OUT/${name}_scan.png" --view iso --pixels 320
     ps complete "$scan" -o "$OUT/$name.csdf.npz" --upright
     row "$name" "$OUT/${name}_scan.png" "$OUT/$name.csdf.npz"
 done
@@ -44,10 +44,10 @@ for spec in "frame_yellow 365,225,540,440" "frame_purple 0,255,245,480"; do
 done
 
 # docs/complete_tum_parts.png: the four completions segmented at the defaults (the scan's relief
-# measured, see the README's segment section), each rendered --parts --view iso --size 320
+# measured, see the README's segment section), each rendered --parts --view iso --pixels 320
 for name in yellow frame_yellow purple frame_purple; do
     ps segment "$OUT/$name.csdf.npz" -o "$OUT/${name}_parts.csdf.npz" --no-cache
-    ps render "$OUT/${name}_parts.csdf.npz" -o "$OUT/${name}_parts.png" --view iso --size 320 --parts
+    ps render "$OUT/${name}_parts.csdf.npz" -o "$OUT/${name}_parts.png" --view iso --pixels 320 --parts
 done
 .venv/bin/python - "$OUT" <<'EOF'
 import sys

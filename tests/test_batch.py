@@ -70,8 +70,8 @@ def _stable(rows: dict[str, dict[str, str]]) -> dict[str, dict[str, str]]:
 
 
 def test_discover_all_formats_assets_as_one_input():
-    if not DATA.is_dir():
-        pytest.skip(f"{DATA} not found (set PARTSCALE_DATA)")
+    for folder in ("kenney", "sweethome3d", "polyhaven", "khronos", "scans"):
+        data_path(folder)  # skips, with the reason, where the test objects are absent
     items = discover([DATA])
     names = [it.name for it in items]
     assert len(names) == len(set(names))
@@ -166,16 +166,15 @@ def test_manifests_csv_and_jsonl(tmp_path):
 
 
 def test_shards_partition_exactly():
-    if not DATA.is_dir():
-        pytest.skip(f"{DATA} not found (set PARTSCALE_DATA)")
+    data_path("kenney")  # skips, with the reason, where the test objects are absent
     items = discover([DATA])
     for w in (1, 2, 3, 7, len(items) + 3):
         shards = [shard(items, r, w) for r in range(w)]
         paths = [it.path for s in shards for it in s]
         assert len(paths) == len(items) and set(paths) == {it.path for it in items}
-    with pytest.raises(InputError, match="--rank"):
+    with pytest.raises(InputError, match="rank"):
         shard(items, 3, 3)
-    with pytest.raises(InputError, match="--world-size"):
+    with pytest.raises(InputError, match="world_size"):
         shard(items, 0, 0)
 
 
@@ -184,7 +183,7 @@ def test_cli_refuses_bad_options_with_one_line(tmp_path, cli):
     assert_bad_input(cli("batch", table, "-o", tmp_path / "o", "--engine", "spark"), "--engine")
     assert_bad_input(cli("batch", tmp_path / "nothing", "-o", tmp_path / "o"), "no such path")
     assert_bad_input(cli("batch", table, "-o", tmp_path / "o", "--export", "stl"), "export")
-    assert_bad_input(cli("batch", table, "-o", tmp_path / "o", "--fit", "210cm", "="), "--fit")
+    assert_bad_input(cli("batch", table, "-o", tmp_path / "o", "--size", "210cm", "="), "--size")
     # import's bounds, both of them, before any object is read
     for res in ("8", "16385"):
         bad = cli("batch", table, "-o", tmp_path / "o", "--res", res)
@@ -204,7 +203,9 @@ def test_manifest_res_is_refused_before_work(tmp_path, cli, res):
 
 def test_fit_brings_each_object_to_its_size(tmp_path, cli):
     table = data_path("kenney/table.glb")
-    cli("batch", table, "-o", tmp_path / "o", "--res", "48", "--fit", "+20cm", "=", "=", check=True)
+    cli(
+        "batch", table, "-o", tmp_path / "o", "--res", "48", "--size", "+20cm", "=", "=", check=True
+    )
     (out,) = (tmp_path / "o").glob("*/*.csdf.npz")
     before = partscale.ingest.load(table, res=48).surface_bounds()
     after = partscale.load(out).surface_bounds()

@@ -151,7 +151,7 @@ def test_render_completion_and_info(chair_runs, tmp_path):
 
     relief = json.loads(run_cli("info", p, "--json", check=True).stdout)["relief"]
     assert relief["rms_voxels"] > 0.15 and relief["segment_tolerance_added_voxels"] > 0
-    run_cli("render", p, "-o", tmp_path / "k.png", "--completion", "--size", "64", check=True)
+    run_cli("render", p, "-o", tmp_path / "k.png", "--completion", "--pixels", "64", check=True)
     img = np.asarray(Image.open(tmp_path / "k.png"))[..., :3].reshape(-1, 3)
     blue = (np.abs(img.astype(int) - (70, 150, 230)).sum(axis=1) < 60).mean()
     assert blue > 0.01

@@ -135,7 +135,7 @@ def test_run_suite_only_and_unknown_name(tmp_path):
     suite = S.parse_suite(
         {"data": str(DATA), "objects": [{"name": "t", "path": "kenney/table.glb", "edit": EDIT}]}
     )
-    with pytest.raises(InputError, match="--only"):
+    with pytest.raises(InputError, match="only"):
         S.run_suite(suite, tmp_path / "o", only="nope")
 
 
@@ -289,7 +289,7 @@ def test_unknown_segment_method_is_refused_before_any_object(cli, tmp_path):
     from partscale.segment import METHODS
 
     suite = S.parse_suite({"objects": [{"name": "a", "path": "none.glb", "edit": EDIT}]})
-    with pytest.raises(InputError, match="--segment: expected one of " + ", ".join(METHODS)):
+    with pytest.raises(InputError, match="segment: expected one of " + ", ".join(METHODS)):
         S.run_suite(suite, tmp_path / "o", segment="bogus")
     assert not (tmp_path / "o").exists()
     good = tmp_path / "good.json"

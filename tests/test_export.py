@@ -294,7 +294,7 @@ def test_cli_export_writes_every_output(cli, box_file, tmp_path):
         out / "b.png",
         "--texture",
         out / "b.nrrd",
-        "--size",
+        "--grid",
         "32",
     )
     assert proc.returncode == 0, proc.stderr
@@ -312,7 +312,7 @@ def _listing(folder: Path) -> list[str]:
     [
         (["--mesh", "{out}/b.stl"], ["b.stl", "expected a mesh file", ".glb"]),
         (["--texture", "{out}/b.jpg"], ["b.jpg", "expected a 3d texture", ".png"]),
-        (["--mesh", "{out}/b.glb", "--size", "100"], ["size", "32, 64, 128, 256", "100"]),
+        (["--mesh", "{out}/b.glb", "--grid", "100"], ["--grid", "32, 64, 128, 256", "100"]),
         ([], ["expected at least one output"]),
     ],
 )

@@ -190,8 +190,8 @@ def _cases(folder: Path) -> list[tuple[str, list[str]]]:
                         "--to",
                         "60%",
                     ],
-                    ["export", good, "--texture", out / "o.raw", "--size", v],
-                    ["render", good, "-o", out / "o.png", "--size", v],
+                    ["export", good, "--texture", out / "o.raw", "--grid", v],
+                    ["render", good, "-o", out / "o.png", "--pixels", v],
                 ]
             )
             f = None

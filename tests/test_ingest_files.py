@@ -288,7 +288,7 @@ def _ball_volume(n=20) -> np.ndarray:
             "grid voxel_size: expected a finite number > 0, got nan",
         ),
         ({"voxel_size": np.array([0.1, 0.2])}, "grid voxel_size: expected one number"),
-        ({"iso": np.array([0.0, 1.0])}, "--iso: expected one finite number"),
+        ({"iso": np.array([0.0, 1.0])}, "iso: expected one finite number"),
     ],
 )
 def test_npz_grid_origin_voxel_size_and_iso_are_checked(tmp_path, extra, fragment):

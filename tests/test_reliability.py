@@ -340,17 +340,17 @@ def test_eval_into_an_impossible_folder(tmp_path, capsys, monkeypatch):
     assert_one_line(code, lines, str(blocker / "sub"))
 
 
-@pytest.mark.parametrize("what", ["csdf", "--colors", "--recipe"])
+@pytest.mark.parametrize("what", ["csdf", "--color", "--recipe"])
 def test_a_directory_is_called_a_directory(what, ball_file, tmp_path, capsys, monkeypatch):
     d = tmp_path / "dir"
     d.mkdir()
     out = tmp_path / "o.csdf.npz"
     args = {
         "csdf": ["info", d],
-        "--colors": ["import", tmp_path / "g.npy", "-o", out, "--colors", d],
+        "--color": ["import", tmp_path / "g.npy", "-o", out, "--color", d],
         "--recipe": ["scale", ball_file, "-o", out, "--recipe", d],
     }[what]
-    if what == "--colors":
+    if what == "--color":
         np.save(tmp_path / "g.npy", np.asarray(partscale.load(ball_file).sdf))
     code, lines = run(capsys, monkeypatch, *args)
     assert_one_line(code, lines, str(d), "a directory")

@@ -250,7 +250,7 @@ def sphere_file(sphere, tmp_path):
 
 def test_cli_render_writes_a_png_of_the_asked_size(cli, sphere_file, tmp_path):
     out = tmp_path / "s.png"
-    proc = cli("render", sphere_file, "-o", out, "--view", "top", "--size", "96")
+    proc = cli("render", sphere_file, "-o", out, "--view", "top", "--pixels", "96")
     assert proc.returncode == 0, proc.stderr
     with Image.open(out) as im:
         assert im.format == "PNG" and im.size == (96, 96) and im.mode == "RGB"
@@ -262,7 +262,7 @@ def test_cli_render_writes_a_png_of_the_asked_size(cli, sphere_file, tmp_path):
     [
         (["--view", "back"], ["--view", "front, side, top, iso", "back"]),
         (["--parts"], ["--parts", "segmented"]),
-        (["--size", "4"], ["size", "4"]),
+        (["--pixels", "4"], ["--pixels", "4"]),
     ],
 )
 def test_cli_render_bad_options(cli, sphere_file, tmp_path, args, fragments):
@@ -322,7 +322,7 @@ def test_cli_render_parts_uses_part_colours(cli, tmp_path):
     info = [{"index": 0, "color": [20, 200, 40]}, {"index": 1, "color": [200, 20, 160]}]
     path = partscale.save(two_part_boxes(info), tmp_path / "two.csdf.npz")
     out = tmp_path / "parts.png"
-    proc = cli("render", path, "-o", out, "--parts", "--view", "front", "--size", "120")
+    proc = cli("render", path, "-o", out, "--parts", "--view", "front", "--pixels", "120")
     assert proc.returncode == 0, proc.stderr
     image = np.asarray(Image.open(out).convert("RGB"))
     chroma = chromaticity(image[foreground(image)])
@@ -428,3 +428,83 @@ def test_bands_beyond_the_first_few_are_outlined_not_filled():
     band = slice(x0 + int(0.3 / 2 * (x1 - x0)), x0 + int(0.4 / 2 * (x1 - x0)))
     middle = slice(rows[0] + len(rows) // 4, rows[0] + len(rows) // 2)
     assert np.abs(one[middle, band].astype(int) - many[middle, band].astype(int)).max() <= 2
+
+
+# -- meshes: what the mesh route writes can be looked at --------------------------------------
+
+
+def _png(path):
+    with Image.open(path) as im:
+        return np.asarray(im.convert("RGB")).astype(np.int64)
+
+
+def _compare(a, b):
+    """(silhouette IoU, mean |difference| over pixels both draw, (3,) mean colour difference)."""
+    fa, fb = foreground(a), foreground(b)
+    both = fa & fb
+    iou = both.sum() / (fa | fb).sum()
+    return iou, np.abs(a[both] - b[both]).mean(), a[fa].mean(0) - b[fb].mean(0)
+
+
+def test_render_draws_each_mesh_the_mesh_route_writes_in_its_colours(cli, tmp_path):
+    """The shipped table made 20 inches longer by the mesh route, written as GLB, OBJ and PLY:
+    ``render`` draws each, the three pictures alike (glTF's linear colour factor reaches the
+    OBJ's Kd and the PLY's vertex colours as the same display colour), and like the CSDF
+    route's picture of the same edit."""
+    from partscale import data
+
+    edit = ("--axis", "x", "--zone", "35%", "65%", "--by", "20in")
+    pics = {}
+    for fmt in ("glb", "obj", "ply"):
+        mesh = tmp_path / f"longer.{fmt}"
+        cli("scale", data.table(), "-o", mesh, *edit, check=True)
+        pics[fmt] = tmp_path / f"{fmt}.png"
+        proc = cli("render", mesh, "-o", pics[fmt], "--pixels", "160", check=True)
+        assert "160 x 160" in proc.stderr
+    csdf = tmp_path / "t.csdf.npz"
+    cli("import", data.table(), "-o", csdf, check=True)
+    cli("scale", csdf, "-o", tmp_path / "l.csdf.npz", *edit, check=True)
+    cli(
+        "render",
+        tmp_path / "l.csdf.npz",
+        "-o",
+        tmp_path / "csdf.png",
+        "--pixels",
+        "160",
+        check=True,
+    )
+    glb = _png(pics["glb"])
+    assert foreground(glb).mean() > 0.15  # the table, not an empty picture
+    for fmt in ("obj", "ply"):
+        iou, diff, mean = _compare(_png(pics[fmt]), glb)
+        assert iou >= 0.99 and diff <= 2 and np.abs(mean).max() <= 2, (fmt, iou, diff, mean)
+    iou, diff, mean = _compare(_png(tmp_path / "csdf.png"), glb)
+    assert iou >= 0.95 and np.abs(mean).max() <= 3, (iou, diff, mean)
+
+
+def test_render_draws_a_textured_mesh_route_output_with_its_texture(cli, tmp_path, data):
+    """A textured glTF (Poly Haven stool) through the mesh route: the OBJ keeps the texture (its
+    picture matches the GLB's texel for texel, near enough); the PLY, which has no textures,
+    carries it as vertex colours (the same mean colour)."""
+    src = data("polyhaven/painted_wooden_stool/painted_wooden_stool_1k.gltf")
+    edit = ("--axis", "y", "--zone", "30%", "60%", "--by", "10cm")
+    pics = {}
+    for fmt in ("glb", "obj", "ply"):
+        cli("scale", src, "-o", tmp_path / f"s.{fmt}", *edit, check=True)
+        pics[fmt] = _png_of(cli, tmp_path / f"s.{fmt}", tmp_path / f"{fmt}.png")
+    iou, diff, mean = _compare(pics["obj"], pics["glb"])
+    assert iou >= 0.99 and diff <= 3 and np.abs(mean).max() <= 2, (iou, diff, mean)
+    iou, diff, mean = _compare(pics["ply"], pics["glb"])
+    assert iou >= 0.99 and np.abs(mean).max() <= 12, (iou, diff, mean)
+
+
+def _png_of(cli, mesh, out):
+    cli("render", mesh, "-o", out, "--pixels", "200", check=True)
+    return _png(out)
+
+
+def test_render_refuses_a_file_that_is_neither_csdf_nor_mesh(cli, tmp_path):
+    bad = tmp_path / "notes.txt"
+    bad.write_text("hello")
+    assert_bad_input(cli("render", bad, "-o", tmp_path / "x.png"), "notes.txt", ".csdf.npz", ".glb")
+    assert not (tmp_path / "x.png").exists()

@@ -12,6 +12,8 @@ should an application that edits large grids in a loop); :func:`release_freed_me
 them back (each batch job does both).
 """
 
+# first: a writable place for numba's compiled kernels, before any module with one is imported
+from . import _jit  # noqa: F401
 from ._memory import release_freed_memory, reuse_freed_memory
 from .csdf import CSDF, load, make, save
 from .errors import InputError, PartscaleError

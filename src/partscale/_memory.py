@@ -39,7 +39,9 @@ def _format_shape(shape: tuple[int, ...]) -> str:
     return "x".join(str(s) if s < 10**7 else f"{float(s):.2e}" for s in shape)
 
 
-def check_memory(shape: tuple[int, ...], bytes_per_voxel: float, *, what: str) -> None:
+def check_memory(
+    shape: tuple[int, ...], bytes_per_voxel: float, *, what: str, params: tuple[str, ...] = ()
+) -> None:
     """Refuse a grid whose working set would not fit, saying how much it would need.
 
     Parameters
@@ -49,21 +51,24 @@ def check_memory(shape: tuple[int, ...], bytes_per_voxel: float, *, what: str) -
     bytes_per_voxel : float
         Peak working bytes per voxel of the operation (all temporaries counted).
     what : str
-        The request, for the message (e.g. ``"import at --res 2048"``).
+        The request, for the message (e.g. ``"chair.glb at res 2048"``).
+    params : tuple of str
+        The parameters ``what`` names (:attr:`partscale.errors.InputError.params`).
     """
     n = 1
     for s in shape:
         n *= int(s)
-    check_bytes(n * bytes_per_voxel, what=f"{what}: a {_format_shape(shape)} grid")
+    check_bytes(n * bytes_per_voxel, what=f"{what}: a {_format_shape(shape)} grid", params=params)
 
 
-def check_bytes(need: float, *, what: str) -> None:
+def check_bytes(need: float, *, what: str, params: tuple[str, ...] = ()) -> None:
     """Refuse a request of ``need`` bytes that would not fit; ``what`` starts the message."""
     have = available_memory()
     if need > have:
         raise MemoryLimitError(
             f"{what} would need {format_bytes(need)} of memory, only {format_bytes(have)} is "
-            "available"
+            "available",
+            params=params,
         )
 
 

@@ -17,8 +17,17 @@ class InputError(PartscaleError, ValueError):
     Parameters
     ----------
     message : str
-        One line: what is wrong, expected vs got.
+        One line: what is wrong, expected vs got. Parameters are named as the function takes
+        them (``res``, ``world_size``), not as the command line spells them.
+    params : tuple of str
+        The parameters the message names within its text (``"expected res in [16, 16384]"``),
+        so that the command line can say its own spelling (``--res``). One named at the head of
+        the message (``"rank: expected ..."``) need not be listed.
     """
+
+    def __init__(self, message: str = "", *, params: tuple[str, ...] = ()) -> None:
+        super().__init__(message)
+        self.params = tuple(params)
 
 
 class MemoryLimitError(InputError):

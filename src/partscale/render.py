@@ -310,9 +310,7 @@ def render(
     if view not in VIEWS:
         raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
     if parts and csdf.n_parts == 0:
-        raise InputError(
-            "render --parts: expected a segmented CSDF (run partscale segment), got no parts"
-        )
+        raise InputError("parts: expected a segmented CSDF (segment it first), got no parts")
     bg = np.asarray(background, dtype=np.int64).reshape(-1)
     if bg.shape != (3,) or bg.min() < 0 or bg.max() > 255:
         raise InputError(f"background: expected 3 integers in [0, 255], got {background!r}")

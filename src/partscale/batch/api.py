@@ -63,7 +63,7 @@ def parse_memory(value: str | int | None) -> int | None:
         except ValueError:
             n = -1
     if not n > 0:
-        raise InputError(f"--memory: expected a size such as 4GiB or 500MiB, got {value!r}")
+        raise InputError(f"memory: expected a size such as 4GiB or 500MiB, got {value!r}")
     return int(n)
 
 
@@ -154,22 +154,24 @@ def run(
     """
     t0 = time.perf_counter()
     if engine not in ENGINES:
-        raise InputError(f"--engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
+        raise InputError(f"engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
     if engine == "ray":
         from .ray_engine import require_ray
 
         require_ray()
     elif address is not None:
-        raise InputError(f"--address: expected only with --engine ray, got it with {engine}")
+        raise InputError(
+            f"address: expected only with engine ray, got it with {engine}", params=("engine",)
+        )
     cores = os.cpu_count() or 1
     if workers is not None and (
         isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
     ):
-        raise InputError(f"--workers: expected an integer >= 1, got {workers!r}")
+        raise InputError(f"workers: expected an integer >= 1, got {workers!r}")
     if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
-        raise InputError(f"--timeout: expected seconds > 0, got {timeout!r}")
+        raise InputError(f"timeout: expected seconds > 0, got {timeout!r}")
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
-        raise InputError(f"--retries: expected an integer >= 0, got {retries!r}")
+        raise InputError(f"retries: expected an integer >= 0, got {retries!r}")
     outdir = Path(outdir)
     if outdir.exists() and not outdir.is_dir():
         raise InputError(f"{outdir}: expected an output folder, got a file")

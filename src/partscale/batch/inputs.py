@@ -26,8 +26,11 @@ from ..errors import InputError
 INPUT_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".npy", ".npz", ".h5", ".hdf5")
 """Suffixes a folder is searched for (lower case); ``.csdf.npz`` files are read as CSDFs."""
 MANIFEST_SUFFIXES = (".csv", ".jsonl")
-OPTION_KEYS = ("res", "square", "segment", "recipe", "fit", "export", "render")
-"""Per-object options a manifest row may set (columns or keys besides ``path`` and ``name``)."""
+OPTION_KEYS = ("res", "square", "segment", "recipe", "size", "export", "render")
+"""Per-object options a manifest row may set (columns or keys besides ``path`` and ``name``),
+named as ``partscale batch``'s options."""
+OLD_KEYS = {"fit": "size"}
+"""Old manifest keys still read, with a note, for one release: old -> new."""
 
 
 @dataclass(frozen=True)
@@ -215,6 +218,7 @@ def read_manifest(path: Path) -> list[Input]:
                 raise InputError(f"{path}:{i}: expected a JSON object, got {type(obj).__name__}")
             rows.append((i, obj))
     out = []
+    rows = _renamed(rows, path)
     for lineno, row in rows:
         where = f"{path}:{lineno}"
         unknown = sorted(set(row) - {"path", "name", *OPTION_KEYS})
@@ -227,6 +231,8 @@ def read_manifest(path: Path) -> list[Input]:
         f = Path(row["path"])
         f = f if f.is_absolute() else path.parent / f
         opts = {k: row[k] for k in OPTION_KEYS if k in row}
+        if "size" in opts:
+            opts["fit"] = opts.pop("size")  # the fit step's target (the job's key)
         if "recipe" in opts and not Path(opts["recipe"]).is_absolute():
             opts["recipe"] = str(path.parent / opts["recipe"])
         name = row.get("name", "")
@@ -235,6 +241,34 @@ def read_manifest(path: Path) -> list[Input]:
         out.append(_make(f, opts, name))
     if not out:
         raise InputError(f"{path}: expected at least one row, got none")
+    return out
+
+
+def _renamed(rows: list[tuple[int, dict]], path: Path) -> list[tuple[int, dict]]:
+    """Rows with old keys (:data:`OLD_KEYS`) under their new names; one note per manifest."""
+    import warnings
+
+    from ..errors import PartscaleWarning
+
+    out, seen = [], set()
+    for lineno, row in rows:
+        for old, new in OLD_KEYS.items():
+            if old not in row:
+                continue
+            if new in row:
+                raise InputError(
+                    f"{path}:{lineno}: expected {new} ({old} is its old name), got both"
+                )
+            row = {(new if k == old else k): v for k, v in row.items()}
+            seen.add(old)
+        out.append((lineno, row))
+    for old in sorted(seen):
+        warnings.warn(
+            f"{path}: manifest key {old!r} is now {OLD_KEYS[old]!r}; the old name goes in the "
+            "next release",
+            PartscaleWarning,
+            stacklevel=3,
+        )
     return out
 
 
@@ -286,7 +320,7 @@ def shard(items: Sequence[Input], rank: int, world_size: int) -> list[Input]:
     names were assigned before sharding, so they agree across shards.
     """
     if isinstance(world_size, bool) or not isinstance(world_size, int) or world_size < 1:
-        raise InputError(f"--world-size: expected an integer >= 1, got {world_size!r}")
+        raise InputError(f"world_size: expected an integer >= 1, got {world_size!r}")
     if isinstance(rank, bool) or not isinstance(rank, int) or not 0 <= rank < world_size:
-        raise InputError(f"--rank: expected an integer in [0, {world_size - 1}], got {rank!r}")
+        raise InputError(f"rank: expected an integer in [0, {world_size - 1}], got {rank!r}")
     return list(items[rank::world_size])

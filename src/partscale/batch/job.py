@@ -81,13 +81,13 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
     if isinstance(fit, str) and fit.strip().lower() in _OFF:
         fit = None
     if recipe is not None and fit is not None:
-        raise InputError(f"{where}: expected a recipe or a fit, got both")
+        raise InputError(f"{where}: expected a recipe or a size (fit), got both")
     if recipe is not None:
         recipe = _recipe_json(recipe)
     if fit is not None:
         size = fit.split() if isinstance(fit, str) else list(fit)
         if len(size) != 3:
-            raise InputError(f"{where}: fit: expected 3 sizes (X Y Z), got {fit!r}")
+            raise InputError(f"{where}: size: expected 3 sizes (X Y Z), got {fit!r}")
         fit = [str(s) for s in size]
 
     export = merged.get("export", DEFAULT_EXPORT)
@@ -115,7 +115,10 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
         if render not in VIEWS:
             raise InputError(f"{where}: render: expected one of {', '.join(VIEWS)}, got {render!r}")
     if not formats and render is None:
-        raise InputError(f"{where}: expected at least one output (--export or --render), got none")
+        raise InputError(
+            f"{where}: expected at least one output (export or render), got none",
+            params=("export", "render"),
+        )
     return {
         "version": __version__,
         "res": res,

@@ -30,7 +30,7 @@ def require_ray():
         import ray
     except ImportError:
         raise InputError(
-            f"--engine ray: expected Ray installed ({INSTALL_HINT}), got no module named ray"
+            f"engine ray: expected Ray installed ({INSTALL_HINT}), got no module named ray"
         ) from None
     return ray
 

@@ -19,7 +19,7 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError, PartscaleWarning, one_line
-from . import _common
+from . import _common, _help
 from .batch import batch, optional_values
 from .complete import complete
 from .editor import editor
@@ -36,11 +36,22 @@ from .suggest import suggest
 app = typer.Typer(
     name="partscale",
     help="Part-aware resizing of completed 3D objects as coloured signed distance fields.",
+    cls=_help.Group,
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},
+    epilog='Try it: partscale import "$(python -m partscale.data table)" -o table.csdf.npz '
+    "(the table shipped with partscale); each command's --help ends with examples.",
 )
+
+
+def _version(value: bool) -> None:
+    if value:
+        from .. import __version__
+
+        typer.echo(f"partscale {__version__}")
+        raise typer.Exit()
 
 
 @app.callback()
@@ -48,25 +59,31 @@ def _root(
     verbose: Annotated[
         bool, typer.Option("-v", "--verbose", help="Show tracebacks on errors.")
     ] = False,
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", help="Print the version and exit.", callback=_version, is_eager=True
+        ),
+    ] = False,
 ) -> None:
     _common.state["verbose"] = verbose
 
 
 # In pipeline order, which is the order `partscale --help` lists them.
-app.command("import")(import_)
-app.command("complete")(complete)
-app.command("info")(info)
-app.command("segment")(segment)
-app.command("suggest")(suggest)
-app.command("scale")(scale)
-app.command("fit")(fit)
-app.command("export")(export)
-app.command("render")(render)
-app.command("editor")(editor)
+_help.command(app, "import", import_)
+_help.command(app, "complete", complete)
+_help.command(app, "info", info)
+_help.command(app, "segment", segment)
+_help.command(app, "suggest", suggest)
+_help.command(app, "scale", scale)
+_help.command(app, "fit", fit)
+_help.command(app, "export", export)
+_help.command(app, "render", render)
+_help.command(app, "editor", editor)
 # the editor's first name, kept working; hidden since `edit` reads as the resizing stage
-app.command("edit", hidden=True)(editor)
-app.command("eval")(eval_suite)
-app.command("batch")(batch)
+app.command("edit", hidden=True, cls=_help.Command, epilog=_help.epilog("editor"))(editor)
+_help.command(app, "eval", eval_suite)
+_help.command(app, "batch", batch)
 
 
 def _click_modules() -> list:
@@ -126,8 +143,22 @@ def main(argv: list[str] | None = None) -> None:
     # every edit allocates whole new grids: at 256 and beyond, reusing the pages of the last
     # one instead of faulting in fresh ones halves the time (see reuse_freed_memory)
     reuse_freed_memory()
+    _announce_first_compile(list(sys.argv[1:] if argv is None else argv))
     with _terminate_cleanly() as seen, _one_line_warnings():
         _main(argv, seen)
+
+
+def _announce_first_compile(argv: list[str]) -> None:
+    """On a terminal (as the progress bars), one line when a first compile starts."""
+    if not _common.stderr.is_terminal:
+        return
+    from .. import _jit
+
+    words = [a for a in argv if not a.startswith("-")]
+    note = _jit.first_compile_note(words[0] if words else None)
+    _jit.on_first_compile(
+        lambda: _common.stderr.print(f"partscale: note: {note}", highlight=False, soft_wrap=True)
+    )
 
 
 def _main(argv: list[str] | None, seen: dict) -> None:
@@ -135,14 +166,15 @@ def _main(argv: list[str] | None, seen: dict) -> None:
     usage_errors = tuple(m.ClickException for m in mods)
     exits = tuple(m.Exit for m in mods if hasattr(m, "Exit"))
     aborts = tuple(m.Abort for m in mods if hasattr(m, "Abort"))
+    args = _help.accept_deprecated(list(sys.argv[1:] if argv is None else argv))
+    args = optional_values(args)
     try:
         # Outside standalone mode click returns a command's exit code instead of exiting.
-        args = optional_values(list(sys.argv[1:] if argv is None else argv))
         code = app(args=args, standalone_mode=False)
     except InputError as exc:
         if _common.is_verbose():
             raise
-        _common.error_line(str(exc))
+        _common.error_line(_help.in_cli_terms(exc, args))
         sys.exit(2)
     except OSError as exc:  # the system refused a file the command did not guard itself
         if _common.is_verbose():

@@ -17,16 +17,27 @@ from ..progress import ProgressCallback
 stderr = Console(stderr=True)
 state = {"verbose": False}
 
-#: ``--res`` of the commands that import (``import``, ``batch``): one declaration, one help text.
-Res = Annotated[
-    int, typer.Option("--res", help="Voxels along the object's longest side (16 to 16384).")
-]
+#: ``--res`` of the commands that import (``import``, ``complete``, ``batch``, ``eval``): one
+#: declaration, one help text.
+RES_HELP = "Voxels along the object's longest side, 16 to 16384."
+Res = Annotated[int, typer.Option("--res", metavar="N", help=RES_HELP)]
 
-#: The CSDF a command reads (``info``, ``export``, ``render``).
-CsdfIn = Annotated[Path, typer.Argument(help="A .csdf.npz file.")]
+#: ``--size`` of ``fit`` and ``batch``: the target extents.
+SIZE_HELP = (
+    "Target extents along x, y and z: = (unchanged), 2.1 (object units), 210cm / 2100mm / 80in, "
+    "+20cm / -5cm (change), or 120% (of the current extent)."
+)
+
+#: ``--square`` of ``import``, ``scale``, ``fit`` and ``batch``: what it means (each adds how).
+SQUARE_HELP = "Turn the mesh about up so its walls run along x and z"
+
+#: The CSDF a command reads (``info``, ``segment``, ``export``, ``render``, ``editor``).
+CsdfIn = Annotated[Path, typer.Argument(metavar="IN", help="A .csdf.npz file.")]
 
 #: ``-o`` of the commands that write a CSDF (``import``, ``complete``, ``segment``).
-CsdfOut = Annotated[Path, typer.Option("-o", "--output", help="Output .csdf.npz file.")]
+CsdfOut = Annotated[
+    Path, typer.Option("-o", "--output", metavar="OUT", help="Where to write: a .csdf.npz file.")
+]
 
 
 @contextlib.contextmanager

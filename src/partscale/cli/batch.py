@@ -89,37 +89,47 @@ def batch(
     inputs: Annotated[
         list[Path],
         typer.Argument(
-            metavar="INPUTS...",
+            metavar="INPUTS",
             help="Files, folders (searched recursively by extension) or manifests (.csv with a "
             "'path' column, .jsonl with a 'path' key; other columns: name, res, square, segment, "
-            "recipe, fit, export, render).",
+            "recipe, size, export, render).",
         ),
     ],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output folder OUTDIR.")],
+    output: Annotated[
+        Path,
+        typer.Option(
+            "-o",
+            "--output",
+            metavar="DIR",
+            help="Where to write: a folder, one subfolder per object and status.csv.",
+        ),
+    ],
     res: _common.Res = 128,
     square: Annotated[
         bool,
-        typer.Option("--square", help="Turn each mesh about up so its walls run along x and z."),
+        typer.Option("--square", help=_common.SQUARE_HELP + ": each mesh of the batch."),
     ] = False,
     segment: Annotated[
         str | None,
         typer.Option(
             "--segment",
             metavar="[METHOD]",
-            help="Segment into parts: fast (alone: --segment) or coacd.",
+            help="Segment each object first: fast (--segment alone) or coacd.",
         ),
     ] = None,
     recipe: Annotated[
-        Path | None, typer.Option("--recipe", help="Apply this recipe JSON to every object.")
+        Path | None,
+        typer.Option("--recipe", metavar="FILE", help="A recipe JSON to apply: to every object."),
     ] = None,
-    fit: Annotated[
+    size: Annotated[
         tuple[str, str, str] | None,
-        typer.Option("--fit", help="Fit to sizes X Y Z (210cm, +20cm, 120%, =).", metavar="X Y Z"),
+        typer.Option("--size", metavar="X Y Z", help=_common.SIZE_HELP),
     ] = None,
     export: Annotated[
         str,
         typer.Option(
             "--export",
+            metavar="FORMATS",
             help="Outputs per object, comma-separated: csdf, glb, ply, obj, raw, png, nrrd "
             "('none' for a render only).",
         ),
@@ -129,31 +139,48 @@ def batch(
         typer.Option(
             "--render",
             metavar="[VIEW]",
-            help="Also render a 512x512 PNG: iso (alone: --render), front, side or top.",
+            help="Also render a 512x512 PNG: iso (--render alone), front, side or top.",
         ),
     ] = None,
-    engine: Annotated[str, typer.Option("--engine", help="local (process pool) or ray.")] = "local",
+    engine: Annotated[
+        str, typer.Option("--engine", metavar="ENGINE", help="local (process pool) or ray.")
+    ] = "local",
     address: Annotated[
         str | None,
-        typer.Option("--address", help="Ray cluster to join (default: a local instance)."),
+        typer.Option(
+            "--address",
+            metavar="ADDRESS",
+            help="Ray cluster to join.",
+            show_default="a local instance",
+        ),
     ] = None,
     workers: Annotated[
-        int | None, typer.Option("--workers", help="Objects at once (default: the cores).")
+        int | None,
+        typer.Option("--workers", metavar="N", help="Objects at once.", show_default="the cores"),
     ] = None,
     timeout: Annotated[
-        float | None, typer.Option("--timeout", help="Seconds one object may take.")
+        float | None,
+        typer.Option("--timeout", metavar="SECONDS", help="Seconds one object may take."),
     ] = None,
     memory: Annotated[
         str | None,
         typer.Option(
-            "--memory", help="Memory one worker may use, e.g. 4GiB (default: shared out)."
+            "--memory",
+            metavar="SIZE",
+            help="Memory one worker may use, e.g. 4GiB.",
+            show_default="the machine's, shared out",
         ),
     ] = None,
     retries: Annotated[
-        int, typer.Option("--retries", help="Ray: retries of a task whose worker died.")
+        int,
+        typer.Option("--retries", metavar="N", help="Ray: retries of a task whose worker died."),
     ] = 1,
-    rank: Annotated[int, typer.Option("--rank", help="This shard's index (Slurm arrays).")] = 0,
-    world_size: Annotated[int, typer.Option("--world-size", help="Number of shards.")] = 1,
+    rank: Annotated[
+        int, typer.Option("--rank", metavar="N", help="This shard's index (Slurm arrays).")
+    ] = 0,
+    world_size: Annotated[
+        int, typer.Option("--world-size", metavar="N", help="Number of shards.")
+    ] = 1,
     retry_failed: Annotated[
         bool, typer.Option("--retry-failed", help="Rerun objects that failed before.")
     ] = False,
@@ -169,7 +196,7 @@ def batch(
             square=square,
             segment=segment,
             recipe=recipe,
-            fit=list(fit) if fit else None,
+            fit=list(size) if size else None,
             export=export,
             render=render,
             engine=engine.lower(),

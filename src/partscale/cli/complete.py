@@ -27,34 +27,58 @@ def _numbers(text: str | None, n: int, what: str) -> list[float] | None:
 def complete(
     scan: Annotated[
         Path | None,
-        typer.Argument(help="Partial range mesh or point cloud (PLY, camera frame, metres)."),
+        typer.Argument(
+            metavar="SCAN",
+            help="Partial range mesh or point cloud (PLY, camera frame, metres).",
+        ),
     ] = None,
     output: _common.CsdfOut = Path("completed.csdf.npz"),
-    res: Annotated[int, typer.Option("--res", help="Voxels along the longest side.")] = 128,
+    res: _common.Res = 128,
     depth: Annotated[
-        Path | None, typer.Option("--depth", help="16-bit depth PNG of an RGB-D frame.")
+        Path | None,
+        typer.Option("--depth", metavar="FILE", help="16-bit depth PNG of an RGB-D frame."),
     ] = None,
-    color: Annotated[Path | None, typer.Option("--color", help="Its colour image.")] = None,
+    color: Annotated[
+        Path | None,
+        typer.Option("--color", metavar="FILE", help="Colour: the image of the --depth frame."),
+    ] = None,
     intrinsics: Annotated[
-        Path | None, typer.Option("--intrinsics", help="Intrinsics JSON (Open3D or fx/fy/cx/cy).")
+        Path | None,
+        typer.Option(
+            "--intrinsics", metavar="FILE", help="Intrinsics JSON (Open3D or fx/fy/cx/cy)."
+        ),
     ] = None,
     depth_scale: Annotated[
-        float, typer.Option("--depth-scale", help="Depth units per metre (TUM: 5000).")
+        float,
+        typer.Option("--depth-scale", metavar="UNITS", help="Depth units per metre (TUM: 5000)."),
     ] = 5000.0,
     views: Annotated[
         Path | None,
-        typer.Option("--views", help="JSON list of registered views (depth+pose or points+pose)."),
+        typer.Option(
+            "--views",
+            metavar="FILE",
+            help="JSON list of registered views (depth+pose or points+pose).",
+        ),
     ] = None,
     camera: Annotated[
         str | None,
-        typer.Option("--camera", help="Camera-to-world pose: 16 numbers, row major."),
+        typer.Option(
+            "--camera", metavar="POSE", help="Camera-to-world pose: 16 numbers, row major."
+        ),
     ] = None,
     box: Annotated[
         str | None,
-        typer.Option("--box", help="Pixel box x0,y0,x1,y1 of the object in the (first) frame."),
+        typer.Option(
+            "--box",
+            metavar="X0,Y0,X1,Y1",
+            help="Pixel box of the object in the (first) frame.",
+        ),
     ] = None,
     upright: Annotated[
-        bool, typer.Option("--upright", help="Write it floor down, y up (default: input frame).")
+        bool,
+        typer.Option(
+            "--upright", help="Write it floor down, y up (without it: in the scan's frame)."
+        ),
     ] = False,
     no_symmetry: Annotated[
         bool, typer.Option("--no-symmetry", help="Do not look for mirror planes or rotations.")

@@ -10,8 +10,10 @@ import typer
 
 
 def editor(
-    path: Annotated[Path, typer.Argument(help="The .csdf.npz file to edit.")],
-    port: Annotated[int, typer.Option("--port", help="Port (0 = any free one).")] = 0,
+    path: Annotated[Path, typer.Argument(metavar="IN", help="A .csdf.npz file.")],
+    port: Annotated[
+        int, typer.Option("--port", metavar="N", help="Port to serve on (0: any free one).")
+    ] = 0,
     no_browser: Annotated[
         bool, typer.Option("--no-browser", help="Only print the URL; do not open a browser.")
     ] = False,
@@ -19,7 +21,8 @@ def editor(
         str,
         typer.Option(
             "--host",
-            help="Interface to bind. Default loopback; anything else is reachable by others.",
+            metavar="HOST",
+            help="Interface to bind: anything but loopback is reachable by others.",
         ),
     ] = "127.0.0.1",
 ) -> None:

@@ -8,55 +8,71 @@ from typing import Annotated
 
 import typer
 
+from . import _common
 from ._common import done, error_line, progress_bar
 
 
 def eval_suite(
     suite: Annotated[
-        Path | None, typer.Argument(help="Suite JSON file (e.g. eval/suite.json).")
+        Path | None,
+        typer.Argument(metavar="SUITE", help="Suite JSON file (e.g. eval/suite.json)."),
     ] = None,
     out: Annotated[
-        Path | None, typer.Option("-o", "--out", help="Output folder (created; suite only).")
+        Path | None,
+        typer.Option(
+            "-o", "--output", metavar="DIR", help="Where to write: a folder (created; suite only)."
+        ),
     ] = None,
     original: Annotated[
         Path | None,
-        typer.Option("--original", help="Score one edit: the original .csdf.npz."),
+        typer.Option("--original", metavar="FILE", help="Score one edit: the original .csdf.npz."),
     ] = None,
     edited: Annotated[
         Path | None,
         typer.Option(
             "--edited",
+            metavar="FILE",
             help="The edited .csdf.npz (its zones read from its history; several edits, "
             "several zones).",
         ),
     ] = None,
     recipe: Annotated[
         Path | None,
-        typer.Option("--recipe", help="A recipe JSON applied to --original, then scored."),
+        typer.Option(
+            "--recipe",
+            metavar="FILE",
+            help="A recipe JSON to apply: to --original, then scored.",
+        ),
     ] = None,
     as_json: Annotated[
-        bool, typer.Option("--json", help="With --original: print JSON instead of a table.")
+        bool,
+        typer.Option("--json", help="Print JSON instead of text (for scripts); with --original."),
     ] = False,
     res: Annotated[
         int | None,
         typer.Option(
-            "--res",
-            help="Import resolution, voxels along the longest side (default: the suite's, 128).",
+            "--res", metavar="N", help=_common.RES_HELP, show_default="the suite's, else 128"
         ),
     ] = None,
-    only: Annotated[str | None, typer.Option("--only", help="Run only this object.")] = None,
+    only: Annotated[
+        str | None, typer.Option("--only", metavar="NAME", help="Run only this object.")
+    ] = None,
     segment: Annotated[
         str | None,
         typer.Option(
             "--segment",
-            help="Segment each object first with this method (fast or coacd; cached) and add a "
-            "row coloured by part to the figures. Off by default.",
+            metavar="METHOD",
+            help="Segment each object first: fast or coacd (cached); the figures gain a row "
+            "coloured by part.",
         ),
     ] = None,
     data: Annotated[
         Path | None,
         typer.Option(
-            "--data", help="Folder of the test objects (default: PARTSCALE_DATA or ../shared/data)."
+            "--data",
+            metavar="DIR",
+            help="Folder of the suite's objects.",
+            show_default="$PARTSCALE_DATA, else the suite's data key",
         ),
     ] = None,
 ) -> None:

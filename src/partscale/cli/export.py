@@ -11,17 +11,23 @@ from ..errors import InputError
 from ..progress import ProgressCallback, scaled
 from ._common import CsdfIn, check_output, done, progress_bar
 
+#: the default budget: decimate while the surface stays within a tenth of a voxel
+DEFAULT_ERROR = 0.1
+
 
 def export(
     path: CsdfIn,
     mesh: Annotated[
         Path | None,
-        typer.Option("--mesh", help="Coloured mesh to write: OUT.glb, OUT.ply or OUT.obj."),
+        typer.Option(
+            "--mesh", metavar="FILE", help="Coloured mesh to write: OUT.glb, OUT.ply or OUT.obj."
+        ),
     ] = None,
     texture: Annotated[
         list[Path] | None,
         typer.Option(
             "--texture",
+            metavar="FILE",
             help="3D texture to write (repeatable): OUT.raw (half float + JSON sidecar), "
             "OUT.png (Unity flipbook + JSON sidecar) or OUT.nrrd (SDF for ParaView/Slicer).",
         ),
@@ -30,32 +36,37 @@ def export(
         int | None,
         typer.Option(
             "--faces",
-            help="Triangle budget: decimate the mesh to at most N triangles (meshoptimizer). "
-            "Default: --error 0.1.",
+            metavar="N",
+            help="Triangle budget: decimate the mesh to at most N triangles (meshoptimizer); "
+            "instead of --error.",
         ),
     ] = None,
     error: Annotated[
         float | None,
         typer.Option(
             "--error",
-            help="Or decimate as far as the surface stays within E voxels of the full one "
-            "(default 0.1; 0 keeps full resolution).",
+            metavar="VOXELS",
+            help="Decimate the mesh as far as its surface stays within this distance of the "
+            "full one; 0 keeps full resolution.",
+            show_default=f"{DEFAULT_ERROR}",
         ),
     ] = None,
     atlas: Annotated[
         int | None,
         typer.Option(
             "--atlas",
-            help="Unwrap (xatlas) and bake the colour into a SIZE x SIZE base-colour texture: "
-            "256, 512, 1024, 2048 or 4096 (GLB embeds it; OBJ writes NAME.mtl + NAME.png).",
+            metavar="TEXELS",
+            help="Unwrap (xatlas) and bake the colour into a square base-colour texture this "
+            "many texels wide: 256, 512, 1024, 2048 or 4096 (GLB embeds it; OBJ writes NAME.mtl "
+            "+ NAME.png).",
         ),
     ] = None,
-    size: Annotated[
+    grid: Annotated[
         int | None,
         typer.Option(
-            "--size",
-            help="Resize the grid first to this many voxels along the longest side: "
-            "32, 64, 128 or 256.",
+            "--grid",
+            metavar="N",
+            help="Resample the grid first to N voxels along its longest side: 32, 64, 128 or 256.",
         ),
     ] = None,
 ) -> None:
@@ -77,7 +88,7 @@ def export(
     for p in outputs:
         if not p.parent.is_dir():
             raise InputError(f"{p}: expected an existing output folder, got none at {p.parent}")
-    export_mod.check_size(size)
+    export_mod.check_size(grid, what="--grid")
     if faces is not None and error is not None:
         raise InputError("export: expected --faces or --error, got both")
     if faces is None and error is None:
@@ -94,15 +105,15 @@ def export(
     c = load(path)
     written: list[Path] = []
     with progress_bar("export") as bar:
-        n = len(outputs) + (size is not None)
+        n = len(outputs) + (grid is not None)
         steps = iter(range(n))
 
         def part() -> ProgressCallback:
             i = next(steps)
             return scaled(bar, i / n, (i + 1) / n)
 
-        if size is not None:
-            c = export_mod.resize_grid(c, size, progress=part())
+        if grid is not None:
+            c = export_mod.resize_grid(c, grid, progress=part())
         if mesh is not None:
             export_mod.export_mesh(c, mesh, faces=faces, error=error, atlas=atlas, progress=part())
             written.append(mesh)
@@ -113,10 +124,6 @@ def export(
         done(_mesh_summary(mesh, faces, error))
     sizes = ", ".join(f"{p} ({_kb(p)})" for p in written)
     done(f"wrote {sizes} ({' x '.join(map(str, c.shape))} voxels)")
-
-
-#: the default budget: decimate while the surface stays within a tenth of a voxel
-DEFAULT_ERROR = 0.1
 
 
 def _kb(p: Path) -> str:

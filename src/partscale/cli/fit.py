@@ -15,23 +15,20 @@ from .scale import SQUARE_OPTION
 
 def fit(
     src: Annotated[
-        Path, typer.Argument(metavar="IN", help="Input .csdf.npz file, or a mesh (mesh route).")
+        Path, typer.Argument(metavar="IN", help="A .csdf.npz file, or a mesh (mesh route).")
     ],
     output: Annotated[
         Path,
         typer.Option(
             "-o",
             "--output",
-            help="Output .csdf.npz file, or a mesh (.glb, .obj, .ply) for a mesh IN.",
+            metavar="OUT",
+            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply) for a mesh IN.",
         ),
     ],
     size: Annotated[
         tuple[str, str, str] | None,
-        typer.Option(
-            "--size",
-            metavar="X Y Z",
-            help="Target extents: = (unchanged), 2.1 / 210cm / 2100mm, +20cm / -5cm, or 120%.",
-        ),
+        typer.Option("--size", metavar="X Y Z", help=_common.SIZE_HELP),
     ] = None,
     add: Annotated[
         tuple[str, int] | None,
@@ -50,7 +47,8 @@ def fit(
         ),
     ] = False,
     recipe_out: Annotated[
-        Path | None, typer.Option("--recipe-out", help="Write the recipe applied (JSON).")
+        Path | None,
+        typer.Option("--recipe-out", metavar="FILE", help="Write the recipe applied (JSON)."),
     ] = None,
     square: Annotated[bool, SQUARE_OPTION] = False,
 ) -> None:

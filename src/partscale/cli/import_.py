@@ -17,7 +17,8 @@ def import_(
     input: Annotated[
         Path,
         typer.Argument(
-            help="Mesh (.glb, .gltf, .obj+.mtl, .ply) or SDF grid (.npy, .npz, AutoSDF .h5)."
+            metavar="IN",
+            help="Mesh (.glb, .gltf, .obj+.mtl, .ply) or SDF grid (.npy, .npz, AutoSDF .h5).",
         ),
     ],
     output: _common.CsdfOut,
@@ -26,38 +27,55 @@ def import_(
         int | None,
         typer.Option(
             "--pad",
-            help="Empty voxels around the object, >= 3 (default 5: the exact band of 3 + 2).",
+            metavar="N",
+            help="Empty voxels around the object, >= 3 (the band of exact distances).",
+            show_default="5",
         ),
     ] = None,
     iso: Annotated[
         float | None,
-        typer.Option("--iso", help="Surface level of an SDF grid (default 0; AutoSDF 0.02)."),
+        typer.Option(
+            "--iso",
+            metavar="LEVEL",
+            help="Surface level of an SDF grid.",
+            show_default="0; AutoSDF .h5: 0.02",
+        ),
     ] = None,
-    colors: Annotated[
+    color: Annotated[
         Path | None,
         typer.Option(
-            "--colors",
-            help="Colour volume (X, Y, Z, 3) .npy for an SDF grid, sRGB: integers 0..255, or "
-            "floats in [0, 1] (max <= 1.001) or 0..255 (max > 2); other ranges are refused.",
+            "--color",
+            metavar="FILE",
+            help="Colour: for an SDF grid, an (X, Y, Z, 3) .npy volume, sRGB: integers 0..255, "
+            "or floats in [0, 1] (max <= 1.001) or 0..255 (max > 2); other ranges are refused.",
         ),
     ] = None,
     up: Annotated[
         str,
-        typer.Option("--up", help="The mesh's up axis: y (glTF), z (CAD, Blender), -y, -z, x, -x."),
+        typer.Option(
+            "--up",
+            metavar="AXIS",
+            help="The mesh's up axis: y (glTF), z (CAD, Blender), -y, -z, x, -x.",
+        ),
     ] = "y",
     scale: Annotated[
-        float | None, typer.Option("--scale", help="Multiply the mesh's coordinates by this.")
+        float | None,
+        typer.Option("--scale", metavar="FACTOR", help="Multiply the mesh's coordinates by this."),
     ] = None,
     units: Annotated[
         str | None,
-        typer.Option("--units", help="The mesh's length unit, converted to metres: mm, cm, m, in."),
+        typer.Option(
+            "--units",
+            metavar="UNIT",
+            help="The mesh's length unit, converted to metres: mm, cm, m or in.",
+            show_default="the file's own (glTF: m)",
+        ),
     ] = None,
     square: Annotated[
         bool,
         typer.Option(
             "--square",
-            help="Turn the mesh about up so its walls run along x and z (zones are planes "
-            "square to the axes).",
+            help=_common.SQUARE_HELP + ": zones are planes square to the axes.",
         ),
     ] = False,
 ) -> None:
@@ -75,7 +93,7 @@ def import_(
             res=res,
             pad=pad,
             iso=iso,
-            colors=colors,
+            colors=color,
             up=up,
             scale=scale,
             units=units,

@@ -76,7 +76,9 @@ def _relief(c: CSDF) -> dict | None:
 
 def info(
     path: CsdfIn,
-    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
+    as_json: Annotated[
+        bool, typer.Option("--json", help="Print JSON instead of text (for scripts).")
+    ] = False,
 ) -> None:
     """Show shape, voxel size, extent in world units, number of parts, the edit history, and a
     warning when features thinner than ~1.5 voxels need a finer resolution."""

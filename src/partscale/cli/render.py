@@ -8,14 +8,33 @@ from typing import Annotated
 import typer
 
 from ..errors import InputError
-from ._common import CsdfIn, check_output, done, progress_bar
+from . import _common
+from ._common import check_output, done, progress_bar
+
+MESH_RES = 256
+"""Voxels along a mesh's longest side when it is imported to be drawn: finer than the default
+import (128), so thin boards and small details show."""
 
 
 def render(
-    path: CsdfIn,
-    output: Annotated[Path, typer.Option("-o", "--output", help="Image to write (.png).")],
-    view: Annotated[str, typer.Option("--view", help="Camera: front, side, top or iso.")] = "iso",
-    size: Annotated[int, typer.Option("--size", help="Image width and height in pixels.")] = 512,
+    path: Annotated[
+        Path,
+        typer.Argument(
+            metavar="IN",
+            help="A .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) with its colours or "
+            "textures.",
+        ),
+    ],
+    output: Annotated[
+        Path,
+        typer.Option("-o", "--output", metavar="OUT", help="Where to write: a .png image."),
+    ],
+    view: Annotated[
+        str, typer.Option("--view", metavar="VIEW", help="Camera: front, side, top or iso.")
+    ] = "iso",
+    pixels: Annotated[
+        int, typer.Option("--pixels", metavar="N", help="Image width and height in pixels.")
+    ] = 512,
     parts: Annotated[
         bool, typer.Option("--parts", help="Colour by part (needs a segmented CSDF).")
     ] = False,
@@ -29,27 +48,65 @@ def render(
     scale_bar: Annotated[
         bool, typer.Option("--scale-bar", help="Draw a labelled scale bar.")
     ] = False,
+    res: Annotated[
+        int,
+        typer.Option(
+            "--res",
+            metavar="N",
+            help=_common.RES_HELP + " A mesh IN is imported at this resolution first.",
+        ),
+    ] = MESH_RES,
 ) -> None:
-    """Render a CSDF to a PNG (sphere tracing of the SDF, its colours, simple shading)."""
+    """Render a CSDF or a mesh to a PNG (sphere tracing of the SDF, its colours, simple shading).
+
+    A mesh (what the mesh route writes, or any other) is imported first, as partscale import
+    does, so its picture is drawn exactly as a CSDF's.
+    """
     # heavy modules (numba, trimesh, scikit-image) load only when this command runs
     from .. import render as render_mod
-    from ..csdf import load
 
     check_output(output, suffixes=(".png",), what="an image file")
     if view not in render_mod.VIEWS:
         raise InputError(f"--view: expected one of {', '.join(render_mod.VIEWS)}, got {view!r}")
+    if not render_mod.MIN_SIZE <= pixels <= render_mod.MAX_SIZE:
+        raise InputError(
+            f"--pixels: expected an integer in [{render_mod.MIN_SIZE}, {render_mod.MAX_SIZE}], "
+            f"got {pixels}"
+        )
     if not output.parent.is_dir():
         raise InputError(
             f"{output}: expected an existing output folder, got none at {output.parent}"
         )
-    c = load(path)
+    c = _object(path, res)
+    if parts and c.n_parts == 0:
+        raise InputError(
+            f"--parts: expected a segmented CSDF (partscale segment), got no parts in {path.name}"
+        )
     if completion:
         from ..complete import completion_colors
 
         c = c.replace(rgb=completion_colors(c))
     with progress_bar("render") as bar:
         image = render_mod.render(
-            c, view=view, size=size, parts=parts, scale_bar=scale_bar, progress=bar
+            c, view=view, size=pixels, parts=parts, scale_bar=scale_bar, progress=bar
         )
         render_mod.save_png(image, output)
-    done(f"wrote {output} ({size} x {size}, {view} view)")
+    done(f"wrote {output} ({pixels} x {pixels}, {view} view)")
+
+
+def _object(path: Path, res: int):
+    """The CSDF to draw: ``path`` itself, or a mesh imported at ``res``."""
+    from ..csdf import SUFFIX, load
+
+    if path.name.lower().endswith(SUFFIX):
+        return load(path)
+    from ..ingest import MESH_SUFFIXES
+    from ..ingest import load as import_file
+
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise InputError(
+            f"{path}: expected a {SUFFIX} file or a mesh ({', '.join(MESH_SUFFIXES)}), got "
+            f"{path.suffix or 'no suffix'}"
+        )
+    with progress_bar(f"import {path.name}") as bar:
+        return import_file(path, res=res, progress=bar)

@@ -17,8 +17,8 @@ _MESH_OUT = (".glb", ".obj", ".ply")
 
 SQUARE_OPTION = typer.Option(
     "--square",
-    help="Mesh route: edit the mesh turned about up so its walls run along x and z (zones are "
-    "planes square to them; positions refer to the turned mesh), then turn it back.",
+    help=_common.SQUARE_HELP + ": the mesh route edits it turned so (zones are planes square to "
+    "the walls; positions refer to the turned mesh), then turns it back.",
 )
 
 
@@ -27,7 +27,7 @@ def scale(
         Path,
         typer.Argument(
             metavar="IN",
-            help="Input .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) for the mesh route.",
+            help="A .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) for the mesh route.",
         ),
     ],
     output: Annotated[
@@ -35,27 +35,43 @@ def scale(
         typer.Option(
             "-o",
             "--output",
-            help="Output .csdf.npz file, or a mesh (.glb, .obj, .ply) when IN is one: the edit is applied to the source mesh itself.",
+            metavar="OUT",
+            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply) when IN is one "
+            "(the edit is applied to the source mesh itself).",
         ),
     ],
-    axis: Annotated[str | None, typer.Option("--axis", help="x, y or z.")] = None,
+    axis: Annotated[
+        str | None, typer.Option("--axis", metavar="AXIS", help="The axis: x, y or z.")
+    ] = None,
     zone: Annotated[
         tuple[str, str] | None,
         typer.Option(
             "--zone",
-            help="START END of the zone: object units, with a unit (30cm, 300mm, 0.3m) or % of "
-            "the extent. Omitted with --copies: whole elements (seats, doors, shelf rows).",
+            metavar="START END",
+            help="The zone's planes: object units, with a unit (30cm, 300mm, 0.3m, 12in) or % "
+            "of the extent (0% at its min). Omitted with --copies: whole elements (seats, doors, "
+            "shelf rows).",
         ),
     ] = None,
-    to: Annotated[str | None, typer.Option("--to", help="DEST: where END goes.")] = None,
+    to: Annotated[
+        str | None,
+        typer.Option(
+            "--to", metavar="DEST", help="Where END goes: a position, as START and END are."
+        ),
+    ] = None,
     by: Annotated[
         str | None,
-        typer.Option("--by", help="Instead of --to: the change in length, e.g. +20cm or -5cm."),
+        typer.Option(
+            "--by",
+            metavar="LENGTH",
+            help="Instead of --to: the change in length, e.g. +20cm, -5cm or 8in (no %).",
+        ),
     ] = None,
     copies: Annotated[
         str | None,
         typer.Option(
             "--copies",
+            metavar="N",
             help="Instead of --to (tile): +N more copies, or N in all; with no --zone, +N / -N "
             "elements (or N in all) of the repeat found along --axis.",
         ),
@@ -67,11 +83,21 @@ def scale(
         ),
     ] = False,
     mode: Annotated[
-        str | None, typer.Option("--mode", help="stretch, tile or global (default stretch).")
+        str | None,
+        typer.Option(
+            "--mode",
+            metavar="MODE",
+            help="stretch, tile or global.",
+            show_default="stretch; tile with --copies",
+        ),
     ] = None,
     recipe: Annotated[
         Path | None,
-        typer.Option("--recipe", help="A recipe JSON file (instead of --axis/--zone/--to)."),
+        typer.Option(
+            "--recipe",
+            metavar="FILE",
+            help="A recipe JSON to apply: instead of --axis, --zone and --to.",
+        ),
     ] = None,
     square: Annotated[bool, SQUARE_OPTION] = False,
     radial: Annotated[
@@ -85,7 +111,10 @@ def scale(
     center: Annotated[
         tuple[str, str] | None,
         typer.Option(
-            "--center", metavar="X Z", help="With --radial: the axis' position (default: found)."
+            "--center",
+            metavar="X Z",
+            help="With --radial: the axis' position.",
+            show_default="found",
         ),
     ] = None,
     sides: Annotated[
@@ -93,7 +122,8 @@ def scale(
         typer.Option(
             "--sides",
             metavar="N",
-            help="With --radial: 0 for a round outline, N for a regular N-gon (default: found).",
+            help="With --radial: 0 for a round outline, N for a regular N-gon.",
+            show_default="found",
         ),
     ] = None,
     span: Annotated[

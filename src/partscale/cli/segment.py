@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -13,22 +12,35 @@ from . import _common
 
 
 def segment(
-    path: Annotated[Path, typer.Argument(help="Input .csdf.npz file.")],
+    path: _common.CsdfIn,
     output: _common.CsdfOut,
     method: Annotated[
         str,
-        typer.Option(help="fast (voxel creases, the default) or coacd (the reference, slow)."),
+        typer.Option(
+            "--method",
+            metavar="METHOD",
+            help="How to segment: fast (voxel creases) or coacd (the reference, slow).",
+        ),
     ] = "fast",  # segment.DEFAULT_METHOD (importing it here would slow every command's start)
     threshold: Annotated[
-        float, typer.Option(help="Concavity allowed in a part, relative to size, in (0, 1].")
+        float,
+        typer.Option(
+            "--threshold",
+            metavar="FRACTION",
+            help="Concavity allowed in a part, relative to size, in (0, 1].",
+        ),
     ] = 0.05,
     max_parts: Annotated[
-        int | None, typer.Option("--max-parts", help="At most this many parts.")
+        int | None, typer.Option("--max-parts", metavar="N", help="At most this many parts.")
     ] = None,
-    seed: Annotated[int, typer.Option(help="Random seed (same seed, same parts).")] = 0,
+    seed: Annotated[
+        int, typer.Option("--seed", metavar="N", help="Random seed (same seed, same parts).")
+    ] = 0,
     noise: Annotated[
         str,
         typer.Option(
+            "--noise",
+            metavar="VOXELS",
             help="The surface's relief RMS in voxels, or auto: measured. A rough surface (a "
             "completed scan's) widens the concavity tolerances by its peak-to-valley and joins "
             "specks of relief to their neighbours; 0 segments it as if smooth.",
@@ -38,8 +50,8 @@ def segment(
         bool,
         typer.Option(
             "--no-cache",
-            help="Neither read nor store the cache. The cache lives in $PARTSCALE_CACHE/segment "
-            "(default ~/.cache/partscale/segment), holds at most 1 GiB (PARTSCALE_CACHE_MAX "
+            help="Neither read nor store the cache. The cache lives in $PARTSCALE_CACHE/segment, "
+            "else ~/.cache/partscale/segment, and holds at most 1 GiB (PARTSCALE_CACHE_MAX "
             "bytes; least recently used entries go first); a damaged entry is discarded and "
             "recomputed.",
         ),

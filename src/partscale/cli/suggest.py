@@ -13,19 +13,24 @@ from . import _common
 
 
 def suggest(
-    src: Annotated[Path, typer.Argument(metavar="IN", help="Input .csdf.npz file.")],
-    axis: Annotated[str | None, typer.Option("--axis", help="x, y or z (default: all).")] = None,
+    src: Annotated[Path, typer.Argument(metavar="IN", help="A .csdf.npz file.")],
+    axis: Annotated[
+        str | None,
+        typer.Option("--axis", metavar="AXIS", help="The axis: x, y or z.", show_default="all"),
+    ] = None,
     as_json: Annotated[
         bool,
         typer.Option(
             "--json",
-            help="Print JSON instead of text: the candidates best first, and per axis the "
-            "elements, separators and repeat groups.",
+            help="Print JSON instead of text (for scripts): the candidates best first, and per "
+            "axis the elements, separators and repeat groups.",
         ),
     ] = False,
     png: Annotated[
         Path | None,
-        typer.Option("--png", help="Also draw the object with the candidate bands (.png)."),
+        typer.Option(
+            "--png", metavar="FILE", help="Also draw the object with the candidate bands (.png)."
+        ),
     ] = None,
 ) -> None:
     """Suggest zones: one period of a repeated element (tile) and slabs of constant cross-section

@@ -115,7 +115,7 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
         inbox = (pix >= 0) & (u >= x0) & (u < x1) & (v >= y0) & (v < y1)
         if not (above & inbox).any():
             raise InputError(
-                f"--box: expected scan points above the floor in pixels {list(box)}, got none"
+                f"box: expected scan points above the floor in pixels {list(box)}, got none"
             )
         idx = np.flatnonzero(above & inbox)
         lab = clusters(P[idx], CLUSTER_CELL)
@@ -161,7 +161,8 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
     if best < 0:
         raise InputError(
             "scan: expected an object standing on the floor (at most "
-            f"{MAX_OBJECT_EXTENT} m across), got none; pick one with --box"
+            f"{MAX_OBJECT_EXTENT} m across), got none; pick one with box",
+            params=("box",),
         )
     return _join_footprint(P, idx, lab, counts, best, up)
 
@@ -381,9 +382,7 @@ def complete(
     if box is not None:
         box = tuple(int(b) for b in box)
         if len(box) != 4 or box[2] <= box[0] or box[3] <= box[1]:
-            raise InputError(
-                f"--box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}"
-            )
+            raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")
     ob = observe(frames, box=box, source=source)
     frames, Q, QC, U, found = ob.frames, ob.points, ob.colors, ob.U, ob.floor
@@ -529,7 +528,7 @@ def complete(
         shape[1] -= cut
     from .._memory import check_memory
 
-    check_memory(tuple(int(s) for s in shape), 40, what=f"{source} at --res {res}")
+    check_memory(tuple(int(s) for s in shape), 40, what=f"{source} at res {res}", params=("res",))
     carver.margin = CARVE_MARGIN * h
 
     sym_free: list[Callable[[np.ndarray], np.ndarray]] = []
@@ -709,13 +708,11 @@ def provenance(csdf: CSDF) -> np.ndarray:
     3 guessed. Raises :class:`InputError` for a CSDF that is not an unedited completion."""
     comp = csdf.meta.get("completion")
     if not isinstance(comp, dict) or "provenance" not in comp:
-        raise InputError(
-            "render --completion: expected a CSDF made by partscale complete, got none"
-        )
+        raise InputError("completion colours: expected a CSDF made by the completion, got none")
     p = comp["provenance"]
     if list(p.get("shape", [])) != list(csdf.shape):
         raise InputError(
-            f"render --completion: expected the grid the completion wrote {p.get('shape')}, got "
+            f"completion colours: expected the grid the completion wrote {p.get('shape')}, got "
             f"{list(csdf.shape)} (edited since)"
         )
     raw = zlib.decompress(base64.b64decode(p["data"]))
@@ -751,18 +748,20 @@ def complete_file(
     given = [x is not None for x in (scan, depth, views)]
     if sum(given) != 1:
         raise InputError(
-            f"complete: expected exactly one of a scan file, --depth or --views, got {sum(given)}"
+            f"complete: expected exactly one of a scan file, depth or views, got {sum(given)}",
+            params=("depth", "views"),
         )
     if scan is not None:
         if intrinsics is not None or color is not None:
             raise InputError(
-                f"{scan}: expected --color/--intrinsics only with --depth, got them with a mesh"
+                f"{scan}: expected color and intrinsics only with depth, got them with a mesh",
+                params=("color", "intrinsics", "depth"),
             )
         P, C = read_points(scan)
         pose = np.eye(4) if camera is None else camera
         from .scan import check_pose
 
-        pose = check_pose(pose, "--camera")
+        pose = check_pose(pose, "camera")
         world = P @ pose[:3, :3].T + pose[:3, 3]
         frames = [frame_from_points(world, C, pose)]
         source = str(scan)

@@ -180,14 +180,16 @@ def read_frame(
     depth = Path(depth)
     if intrinsics is None:
         raise InputError(
-            f"{depth}: expected camera intrinsics (--intrinsics K.json) with a depth image, got none"
+            f"{depth}: expected camera intrinsics (intrinsics, a K.json) with a depth image, got "
+            "none",
+            params=("intrinsics",),
         )
     K = read_intrinsics(intrinsics) if not isinstance(intrinsics, np.ndarray) else intrinsics
     d = _read_image(depth, "depth")
     if d.ndim != 2 or d.dtype.kind not in "iuf":
         raise InputError(f"{depth}: expected a single-channel depth image, got shape {d.shape}")
     if not depth_scale > 0:
-        raise InputError(f"--depth-scale: expected a number > 0, got {depth_scale}")
+        raise InputError(f"depth_scale: expected a number > 0, got {depth_scale}")
     z = (d.astype(np.float64) / depth_scale).astype(np.float32)
     z[~np.isfinite(z) | (z < 0)] = 0
     rgb = None
@@ -257,7 +259,7 @@ def frame_from_points(points, colors, pose=None) -> Frame:
     """
     from scipy.spatial import cKDTree
 
-    pose = np.eye(4) if pose is None else check_pose(pose, "--camera")
+    pose = np.eye(4) if pose is None else check_pose(pose, "camera")
     P = np.asarray(points, np.float64)
     cam = (P - pose[:3, 3]) @ pose[:3, :3]
     front = cam[:, 2] > 1e-6

@@ -1,10 +1,12 @@
-"""Lengths and positions a designer types: ``2.1``, ``210cm``, ``2100mm``, ``+20cm``, ``120%``, ``=``.
+"""Lengths and positions a designer types: ``2.1``, ``210cm``, ``2100mm``, ``8in``, ``+20cm``,
+``120%``, ``=``.
 
 The one home of the unit table (:data:`SUFFIXES`): recipe positions
-(:func:`partscale.edit.parse_position`), ``scale``'s options and ``fit``'s sizes all read lengths
-here. Bare numbers are in the object's units (``meta['units']``; metres for glTF). ``m``, ``cm`` and
-``mm`` suffixes need an object in metres: where its units are anything else (an SDF grid, an OBJ
-of unknown scale), a suffixed length is refused rather than guessed.
+(:func:`partscale.edit.parse_position`), ``scale``'s options, ``fit``'s sizes and the importer's
+``units`` (:func:`partscale.ingest.load`) all read it. Bare numbers are in the object's units
+(``meta['units']``; metres for glTF). Lengths with a unit need an object in metres: where its
+units are anything else (an SDF grid, an OBJ of unknown scale), a suffixed length is refused
+rather than guessed.
 """
 
 from __future__ import annotations
@@ -14,8 +16,8 @@ import re
 
 from ..errors import InputError
 
-#: Metres per unit suffix.
-SUFFIXES = {"mm": 0.001, "cm": 0.01, "m": 1.0}
+#: Metres per unit suffix: the units a length may carry and a mesh may be imported from.
+SUFFIXES = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254}
 
 _NUMBER = r"[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
 _LENGTH = re.compile(rf"^(?P<sign>[-+]?)(?P<num>{_NUMBER})\s*(?P<unit>[a-zA-Z%]*)$")
@@ -27,8 +29,8 @@ def _split(spec: str, what: str) -> tuple[str, float, str]:
         raise InputError(f"{what}: expected a finite number, got {spec!r}")
     if m is None:
         raise InputError(
-            f"{what}: expected a number with an optional unit or % (2.1, 210cm, 2100mm, +20cm, "
-            f"120%), got {spec!r}"
+            f"{what}: expected a number with an optional unit or % (2.1, 210cm, 2100mm, 8in, "
+            f"+20cm, 120%), got {spec!r}"
         )
     value = float(m["num"])
     if not math.isfinite(value):

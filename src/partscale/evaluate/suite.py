@@ -347,7 +347,7 @@ def _check_segment(method: str) -> None:
     """Refuse an unknown method once, before any object is imported."""
     from ..segment import check_method
 
-    check_method(method, what="--segment")
+    check_method(method, what="segment")
 
 
 def _segment(c: CSDF, method: str, progress: ProgressCallback) -> CSDF:
@@ -592,7 +592,7 @@ def run_suite(
         entries = [e for e in entries if e.name == only]
         if not entries:
             names = ", ".join(e.name for e in suite.entries)
-            raise InputError(f"--only: expected one of {names}, got {only!r}")
+            raise InputError(f"only: expected one of {names}, got {only!r}")
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out}: expected an output folder, got a file")

@@ -24,7 +24,7 @@ def check_atlas(size: int | None) -> int | None:
         return None
     if isinstance(size, bool) or not isinstance(size, int | np.integer) or size not in ATLAS_SIZES:
         raise InputError(
-            f"--atlas: expected one of {', '.join(map(str, ATLAS_SIZES))} texels, got {size!r}"
+            f"atlas: expected one of {', '.join(map(str, ATLAS_SIZES))} texels, got {size!r}"
         )
     return int(size)
 

@@ -21,11 +21,12 @@ PRESET_SIZES = (32, 64, 128, 256)
 
 
 @overload
-def check_size(size: int) -> int: ...
+def check_size(size: int, what: str = ...) -> int: ...
 @overload
-def check_size(size: None) -> None: ...
-def check_size(size: int | None) -> int | None:
-    """Validate a preset texture/mesh size (voxels along the grid's longest side)."""
+def check_size(size: None, what: str = ...) -> None: ...
+def check_size(size: int | None, what: str = "size") -> int | None:
+    """Validate a preset texture/mesh size (voxels along the grid's longest side); ``what``
+    names it in the message."""
     if size is None:
         return None
     if (
@@ -33,7 +34,9 @@ def check_size(size: int | None) -> int | None:
         or not isinstance(size, (int, np.integer))
         or size not in PRESET_SIZES
     ):
-        raise InputError(f"size: expected one of {', '.join(map(str, PRESET_SIZES))}, got {size!r}")
+        raise InputError(
+            f"{what}: expected one of {', '.join(map(str, PRESET_SIZES))}, got {size!r}"
+        )
     return int(size)
 
 

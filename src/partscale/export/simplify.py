@@ -17,15 +17,15 @@ from ..errors import InputError
 def check_budget(faces: int | None, error: float | None) -> None:
     """Validate ``faces`` (>= 4 triangles) and ``error`` (> 0 voxels); at most one of them."""
     if faces is not None and error is not None:
-        raise InputError("export: expected --faces or --error, got both")
+        raise InputError("export: expected faces or error, got both", params=("faces", "error"))
     if faces is not None and (
         isinstance(faces, bool) or not isinstance(faces, int | np.integer) or faces < 4
     ):
-        raise InputError(f"--faces: expected a whole number of triangles >= 4, got {faces!r}")
+        raise InputError(f"faces: expected a whole number of triangles >= 4, got {faces!r}")
     if error is not None and not (
         isinstance(error, int | float) and np.isfinite(error) and error > 0
     ):
-        raise InputError(f"--error: expected a distance in voxels > 0, got {error!r}")
+        raise InputError(f"error: expected a distance in voxels > 0, got {error!r}")
 
 
 def simplify(mesh, *, voxel_size: float, faces: int | None = None, error: float | None = None):

@@ -90,7 +90,7 @@ def export_mesh(
     atlas = check_atlas(atlas)
     if atlas is not None and suffix == ".ply":
         raise InputError(
-            f"{path}: expected .glb or .obj with --atlas (PLY has no textures), got .ply"
+            f"{path}: expected .glb or .obj with an atlas (PLY has no textures), got .ply"
         )
     report = resolve(progress)
     report(0.0, "marching cubes")

@@ -120,7 +120,7 @@ def from_grid(
     """
     report = resolve(progress)
     v = _check_volume(sdf_volume, source)
-    iso = check_number(iso, f"{source}: --iso")
+    iso = check_number(iso, f"{source}: iso")
     origin = check_origin(origin, f"{source}: grid origin")
     voxel_size = check_voxel_size(voxel_size, f"{source}: grid voxel_size")
     col = _check_colors(colors, v.shape, source)

@@ -138,8 +138,8 @@ def load(
     scale : float, optional
         Multiply the mesh's coordinates by this (> 0), after ``units``.
     units : str, optional
-        The mesh's length unit, one of :data:`UNITS` (``'cm'`` for an armchair 190 units wide):
-        converted to metres.
+        The mesh's length unit, one of :data:`partscale.edit.SUFFIXES` (mm, cm, m, in; ``'cm'``
+        for an armchair 190 units wide): converted to metres.
     square : bool
         Turn the mesh about up so that its walls run along x and z
         (:func:`partscale.orient.square_turn`; zones are planes square to the axes). Meshes
@@ -165,7 +165,8 @@ def load(
     if kind == "mesh":
         if iso is not None:
             raise InputError(
-                f"{path}: expected no --iso for a mesh (it is for SDF grids), got {iso}"
+                f"{path}: expected no iso for a mesh (it is for SDF grids), got {iso}",
+                params=("iso",),
             )
         if colors is not None:
             raise InputError(f"{path}: expected no colour volume for a mesh, got {colors}")
@@ -178,8 +179,8 @@ def load(
     else:
         if up != "y" or scale is not None or units is not None or square:
             raise InputError(
-                f"{path}: expected --up, --scale, --units and --square only for meshes, got an "
-                "SDF grid"
+                f"{path}: expected up, scale, units and square only for meshes, got an SDF grid",
+                params=("up", "scale", "units", "square"),
             )
         placed = {}
         args = GRID_READERS[kind](path)
@@ -204,8 +205,6 @@ UP_AXES: dict[str, tuple[tuple[int, int, int], ...]] = {
     "x": ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
     "-x": ((0, 1, 0), (-1, 0, 0), (0, 0, 1)),
 }
-#: metres per unit (``--units``)
-UNITS = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254}
 
 
 def _place(mesh: ColoredMesh, *, up: str, scale, units, name: str):
@@ -215,15 +214,24 @@ def _place(mesh: ColoredMesh, *, up: str, scale, units, name: str):
 
     import numpy as np
 
+    # the unit table's one home: the lengths a designer types take the same units
+    from ..edit import SUFFIXES as UNITS
+
     key = str(up).lower()
     if key not in UP_AXES:
-        raise InputError(f"{name}: expected --up one of {', '.join(UP_AXES)}, got {up!r}")
+        raise InputError(
+            f"{name}: expected up one of {', '.join(UP_AXES)}, got {up!r}", params=("up",)
+        )
     if units is not None and str(units).lower() not in UNITS:
-        raise InputError(f"{name}: expected --units one of {', '.join(UNITS)}, got {units!r}")
+        raise InputError(
+            f"{name}: expected units one of {', '.join(UNITS)}, got {units!r}", params=("units",)
+        )
     if scale is not None and not (
         isinstance(scale, int | float) and math.isfinite(scale) and scale > 0
     ):
-        raise InputError(f"{name}: expected --scale a finite number > 0, got {scale!r}")
+        raise InputError(
+            f"{name}: expected scale a finite number > 0, got {scale!r}", params=("scale",)
+        )
     factor = (UNITS[str(units).lower()] if units is not None else 1.0) * (
         1.0 if scale is None else float(scale)
     )

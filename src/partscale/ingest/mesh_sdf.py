@@ -72,10 +72,12 @@ def check_res(res: int | float, what: str) -> int:
     if isinstance(res, float) and math.isfinite(res) and res.is_integer():
         res = int(res)
     if isinstance(res, bool) or not isinstance(res, int | np.integer):
-        raise InputError(f"{what}: expected an integer --res, got {shown(res)}")
+        raise InputError(f"{what}: expected an integer res, got {shown(res)}", params=("res",))
     res = int(res)
     if not MIN_RES <= res <= MAX_RES:
-        raise InputError(f"{what}: expected --res in [{MIN_RES}, {MAX_RES}], got {shown(res, 24)}")
+        raise InputError(
+            f"{what}: expected res in [{MIN_RES}, {MAX_RES}], got {shown(res, 24)}", params=("res",)
+        )
     return res
 
 
@@ -84,12 +86,13 @@ def check_pad(pad: int | None, what: str) -> int:
     if pad is None:
         return BAND_VOXELS + 2
     if isinstance(pad, bool) or not isinstance(pad, int | np.integer):
-        raise InputError(f"{what}: expected an integer --pad, got {shown(pad)}")
+        raise InputError(f"{what}: expected an integer pad, got {shown(pad)}", params=("pad",))
     pad = int(pad)
     if not BAND_VOXELS <= pad <= MAX_PAD:
         raise InputError(
-            f"{what}: expected --pad in [{BAND_VOXELS}, {MAX_PAD}] (at least the exact band), "
-            f"got {shown(pad, 24)}"
+            f"{what}: expected pad in [{BAND_VOXELS}, {MAX_PAD}] (at least the exact band), "
+            f"got {shown(pad, 24)}",
+            params=("pad",),
         )
     return pad
 
@@ -444,7 +447,9 @@ def from_mesh(
     if not (hi - lo).max() > 0:
         raise InputError(f"{name}: expected a mesh with non-zero extent, got a point")
     origin, h, shape = grid_for_bounds(lo, hi, res, pad)
-    check_memory(tuple(int(s) for s in shape), BYTES_PER_VOXEL, what=f"{name} at --res {res}")
+    check_memory(
+        tuple(int(s) for s in shape), BYTES_PER_VOXEL, what=f"{name} at res {res}", params=("res",)
+    )
     shape = tuple(int(s) for s in shape)
 
     wn = _Winding(V, F)

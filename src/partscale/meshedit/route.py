@@ -541,14 +541,62 @@ def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
         )
     if suffix == ".obj":
         # the scene itself, not one concatenated mesh: one usemtl group per material
-        return save_obj(scene, path)
+        return save_obj(display_colours(scene, ".obj"), path)
     if suffix == ".glb":
         data = scene.export(file_type="glb")
     else:
-        data = scene.to_mesh().export(file_type="ply", encoding="binary")
+        data = display_colours(scene, ".ply").to_mesh().export(file_type="ply", encoding="binary")
     with atomic_path(path) as tmp:
         Path(tmp).write_bytes(data)
     return [path]
+
+
+def display_colours(scene: trimesh.Scene, suffix: str) -> trimesh.Scene:
+    """A copy of ``scene`` whose colours OBJ or PLY can carry as display (sRGB) values.
+
+    glTF's base colour factors are linear light; an MTL's ``Kd`` and a PLY's vertex colours are
+    display values (what :func:`partscale.ingest.load` reads, and most tools). For ``.obj`` each
+    glTF (PBR) material becomes a simple one: ``Kd`` the factor in sRGB, its base colour
+    texture kept. For ``.ply``, which has no materials, every mesh gets vertex colours: its
+    texture sampled at each vertex's UV times its factor (in linear light), or its material's
+    colour, in sRGB. Meshes with vertex colours are kept as they are.
+    """
+    from trimesh.visual import ColorVisuals, TextureVisuals
+    from trimesh.visual.color import uv_to_color
+    from trimesh.visual.material import PBRMaterial, SimpleMaterial
+
+    from ..color import linear_to_srgb8, srgb8_to_linear
+
+    out = scene.copy()
+    for g in out.geometry.values():
+        vis = getattr(g, "visual", None)
+        if not isinstance(vis, TextureVisuals):
+            continue
+        mat = vis.material
+        if isinstance(mat, PBRMaterial):
+            factor = np.asarray(
+                mat.baseColorFactor if mat.baseColorFactor is not None else [255] * 4, np.float64
+            )[:3]
+            lin = factor / 255.0  # glTF factors are linear
+            if suffix == ".obj":
+                kd = linear_to_srgb8(lin[None])[0]
+                simple = SimpleMaterial(
+                    image=mat.baseColorTexture, diffuse=[*kd, 255], name=mat.name
+                )
+                g.visual = TextureVisuals(uv=vis.uv, material=simple)
+                continue
+            n = len(g.vertices)
+            if mat.baseColorTexture is not None and vis.uv is not None:
+                texel = uv_to_color(vis.uv, mat.baseColorTexture)[:, :3]
+                lin = srgb8_to_linear(texel) * lin
+            rgb = linear_to_srgb8(np.broadcast_to(lin, (n, 3)).astype(np.float64))
+        elif suffix == ".ply":
+            rgb = vis.to_color().vertex_colors[:, :3]  # a simple material: display values
+        else:
+            continue
+        alpha = np.full((len(rgb), 1), 255, np.uint8)
+        g.visual = ColorVisuals(g, vertex_colors=np.hstack([rgb, alpha]))
+    return out
 
 
 @dataclass(frozen=True)

@@ -122,6 +122,6 @@ def import_coacd():
     except ImportError as exc:
         raise InputError(
             f"method 'coacd': expected the coacd package (pip install coacd), got {exc}; "
-            "or use --method fast"
+            "or use the fast method"
         ) from None
     return coacd

@@ -130,7 +130,7 @@ def serve(
 
     say = announce or (lambda m: print(m, file=sys.stderr, flush=True))
     if not (0 <= port <= 65535):
-        raise InputError(f"--port: expected 0..65535, got {port}")
+        raise InputError(f"port: expected 0..65535, got {port}")
     loopback = is_loopback(host)
     hosts = allowed_hosts(host)
     app = create_app(path, allowed_hosts=hosts)
@@ -139,9 +139,9 @@ def serve(
         port = _free_port(bind) if port == 0 else _check_port(bind, port)
     except OSError as exc:
         what = (
-            "--host: expected an address of this machine"
+            "host: expected an address of this machine"
             if port == 0
-            else "--port: expected a free port"
+            else "port: expected a free port"
         )
         raise InputError(f"{what}, got {host}:{port} ({exc.strerror or exc})") from None
     if not loopback:

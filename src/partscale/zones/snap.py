@@ -139,7 +139,7 @@ def snap(
     if not cands:
         what = "repeated element" if kind == "tile" else "slab of constant cross-section"
         raise InputError(
-            f"--snap: expected a {what} along {AXES[ax]} to snap a {mode} zone to, found none"
+            f"snap: expected a {what} along {AXES[ax]} to snap a {mode} zone to, found none"
         )
     zone = (s, e)
     best = max(cands, key=lambda c: (_overlap(zone, c), c.score))

@@ -177,8 +177,19 @@ class CSDF:
         JSON-serialisable: ``units``, ``source``, ``history`` (a read-only :class:`History` of
         operations), ``parts_info``...
 
+    Notes
+    -----
     Construct through :func:`make` (which validates and converts) unless the arrays are already
-    known to be right.
+    known to be right. A CSDF is immutable: every operation returns a new one.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> c = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
+    >>> c.shape
+    (17, 12, 12)
+    >>> c.surface_bounds().round(2).tolist()
+    [[0.0, 0.0, 0.0], [1.0, 0.5, 0.5]]
     """
 
     sdf: np.ndarray

@@ -205,12 +205,32 @@ JSON_SCHEMA: dict[str, Any] = {
 
 
 def parse_position(value: Any, what: str, units: str | None = None) -> Position:
-    """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`.
+    """Parse a position: a finite number (object units) or a string (a number, ``'NN%'``, a length).
 
     Numbers are any real number (Python or numpy scalars) but not booleans; strings hold a
     number, a percentage, or a length with a unit (``'30cm'``, ``'300mm'``, ``'0.3m'``: converted
     to object units, so only where ``units`` is ``'m'``; see :mod:`.units`). Non-finite values
     (``inf``, ``nan``, ``'1e400%'``) are refused.
+
+    Parameters
+    ----------
+    value : float or str
+        The position as given.
+    what : str
+        Its name in the :class:`InputError`.
+    units : str, optional
+        The object's units.
+
+    Returns
+    -------
+    float or str
+        A number in object units, or the ``'NN%'`` string (resolved on an object later).
+
+    Examples
+    --------
+    >>> from partscale.edit import parse_position
+    >>> parse_position("30%", "zone"), parse_position("30cm", "zone", units="m"), parse_position(0.3, "zone")
+    ('30%', 0.3, 0.3)
     """
     if isinstance(value, bool | np.bool_):
         raise InputError(
@@ -238,7 +258,25 @@ def parse_position(value: Any, what: str, units: str | None = None) -> Position:
 
 @dataclass(frozen=True)
 class Edit:
-    """One zone edit. Positions are floats (object units) or ``'NN%'`` strings."""
+    """One zone edit between two planes across an axis.
+
+    Parameters
+    ----------
+    axis : {'x', 'y', 'z'}
+        The axis the zone lies along.
+    start, end : float or str
+        The zone's planes: object units, or ``'NN%'`` of the solid's extent along the axis.
+    dest : float or str
+        Where ``end`` goes, in the same terms.
+    mode : {'stretch', 'tile', 'global'}
+        How the zone changes (see :mod:`partscale.edit`).
+
+    Examples
+    --------
+    >>> from partscale.edit import Edit
+    >>> Edit("x", "30%", "60%", "80%", "tile").to_json()
+    {'axis': 'x', 'zone': ['30%', '60%'], 'to': '80%', 'mode': 'tile'}
+    """
 
     axis: str
     start: Position
@@ -337,7 +375,7 @@ def _number(v: Any, what: str, units: str | None) -> float:
 class RadialZone:
     """An annulus about a line parallel to ``axis`` through ``center`` (world units).
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
         The axis the annulus turns about (``'y'``: a table's vertical).
@@ -354,6 +392,12 @@ class RadialZone:
         second.
     span : (float, float) or None
         Positions along ``axis`` between which the zone applies (None: everywhere).
+
+    Examples
+    --------
+    >>> from partscale.edit import RadialZone
+    >>> RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5).to_json()
+    {'radial': {'axis': 'y', 'center': [0.0, 0.0], 'sides': 0, 'phase': 0.0}, 'zone': [0.1, 0.4], 'to': 0.5}
     """
 
     axis: str
@@ -430,7 +474,7 @@ class RadialZone:
 class ObliqueZone:
     """The slab between two planes square to the unit vector ``normal``.
 
-    Attributes
+    Parameters
     ----------
     normal : (float, float, float)
         Unit vector (world axes).
@@ -438,6 +482,12 @@ class ObliqueZone:
         The planes ``p . normal = s0`` and ``= s1`` (world units), ``s0 < s1``.
     to : float
         Where the plane ``s1`` goes, ``> s0``.
+
+    Examples
+    --------
+    >>> from partscale.edit import ObliqueZone
+    >>> ObliqueZone((1.0, 0.0, 0.0), 0.3, 0.6, 0.8).to_json()
+    {'normal': [1.0, 0.0, 0.0], 'zone': [0.3, 0.6], 'to': 0.8}
     """
 
     normal: tuple[float, float, float]
@@ -480,7 +530,7 @@ class ScrewZone:
     beyond the plane ``cut`` across ``axis`` moves by ``copies`` times ``step``
     (:func:`partscale.edit.apply_screw`); ``copies < 0`` removes steps.
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
         The axis the cut plane lies across (the flight's horizontal direction).
@@ -490,6 +540,12 @@ class ScrewZone:
         The cut plane's position along ``axis`` (world units).
     copies : int
         Steps added (negative: removed), not 0.
+
+    Examples
+    --------
+    >>> from partscale.edit import ScrewZone
+    >>> ScrewZone("x", (0.2, 0.2, 0.0), 0.5, 1).to_json()
+    {'screw': {'axis': 'x', 'step': [0.2, 0.2, 0.0], 'cut': 0.5}, 'copies': 1}
     """
 
     axis: str
@@ -536,7 +592,22 @@ class ScrewZone:
 
 @dataclass(frozen=True)
 class Recipe:
-    """An ordered list of :class:`Edit`; serialises to the JSON schema above."""
+    """An ordered list of edits; serialises to the JSON schema :data:`JSON_SCHEMA`.
+
+    All positions refer to the recipe's input object as given (see the module).
+
+    Parameters
+    ----------
+    edits : tuple of Edit, RadialZone, ObliqueZone or ScrewZone
+        The edits, applied in order.
+
+    Examples
+    --------
+    >>> from partscale.edit import Recipe
+    >>> recipe = Recipe.parse({"version": 1, "edits": [{"axis": "x", "zone": ["30%", "60%"], "to": "80%"}]})
+    >>> recipe.to_json()
+    {'version': 1, 'edits': [{'axis': 'x', 'zone': ['30%', '60%'], 'to': '80%', 'mode': 'stretch'}]}
+    """
 
     edits: tuple[Edit | RadialZone | ObliqueZone | ScrewZone, ...] = field(default_factory=tuple)
 
@@ -583,8 +654,31 @@ class Recipe:
 def parse_edit(
     obj: Any, *, where: str = "edit", units: str | None = None
 ) -> Edit | RadialZone | ObliqueZone | ScrewZone:
-    """One recipe edit of any kind: a radial zone (``"radial"`` key), an oblique one
-    (``"normal"``) or a zone between planes across an axis (:class:`Edit`)."""
+    """Parse one recipe edit of any kind.
+
+    A radial zone has a ``"radial"`` key, an oblique one ``"normal"``, steps ``"screw"``; anything
+    else is a zone between planes across an axis (:class:`Edit`).
+
+    Parameters
+    ----------
+    obj : dict or Edit
+        The edit in its JSON form (an edit object is returned as it is).
+    where : str
+        Where it is, for messages (``"edits[2]"``).
+    units : str, optional
+        The object's units; lengths with a unit (``'30cm'``) are taken only where it is ``'m'``.
+
+    Returns
+    -------
+    Edit, RadialZone, ObliqueZone or ScrewZone
+        The edit.
+
+    Examples
+    --------
+    >>> from partscale.edit import parse_edit
+    >>> parse_edit({"axis": "x", "zone": ["30%", "60%"], "to": 0.8})
+    Edit(axis='x', start='30%', end='60%', dest=0.8, mode='stretch')
+    """
     if isinstance(obj, dict) and "radial" in obj:
         return RadialZone.parse(obj, where=where, units=units)
     if isinstance(obj, dict) and "normal" in obj:
@@ -606,6 +700,24 @@ def tile_count(length: float, target: float) -> int:
     floating point. Rounding never gives 0 copies (a tile to 30% of its length is one copy);
     only a zero destination length does. The web editor's ``tileCount`` (web/src/recipe.ts) is
     the same expression.
+
+    Parameters
+    ----------
+    length : float
+        The zone's length.
+    target : float
+        Its length after the edit.
+
+    Returns
+    -------
+    int
+        The number of copies.
+
+    Examples
+    --------
+    >>> from partscale.edit import tile_count
+    >>> tile_count(0.2, 0.5), tile_count(0.2, 0.3), tile_count(0.2, 0.0)
+    (3, 2, 0)
     """
     if target == 0:
         return 0
@@ -641,6 +753,13 @@ def source_coordinate(
         For ``tile``, copy ``m`` of ``n`` maps ``[start + m L'/n, start + (m+1) L'/n]`` onto
         ``[start, end]``; the resampler additionally blends across seams (the map does not).
         With 0 copies (``dest == start``) the zone is cut out: ``y >= start`` reads ``y - shift``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import source_coordinate
+    >>> source_coordinate(np.array([0.2, 0.5, 1.1]), mode="stretch", start=0.3, end=0.6, dest=0.8)
+    array([0.2 , 0.42, 0.9 ])
     """
     y = np.asarray(y, dtype=np.float64)
     shift = dest - end
@@ -682,6 +801,29 @@ def forward_coordinate(
     The inverse of :func:`source_coordinate` outside the zone; inside it, a plane follows the
     stretch (``stretch``), the first copy (``tile``) or the scaling about ``lo`` (``global``).
     Recipes use it to carry positions given on their input through their earlier edits.
+
+    Parameters
+    ----------
+    x : (N,) float64
+        Coordinates before the edit.
+    mode : {'stretch', 'tile', 'global'}
+        The edit's mode.
+    start, end, dest : float
+        World zone ``[start, end]`` and the new position of ``end``.
+    lo, hi : float, optional
+        The solid's extent along the axis before the edit (``global`` only).
+
+    Returns
+    -------
+    (N,) float64
+        The coordinates after the edit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import forward_coordinate
+    >>> forward_coordinate(np.array([0.2, 0.5, 0.9]), mode="stretch", start=0.3, end=0.6, dest=0.8)
+    array([0.2       , 0.63333333, 1.1       ])
     """
     x = np.asarray(x, dtype=np.float64)
     shift = dest - end

@@ -895,6 +895,15 @@ def reevaluate(
         Same grid; recomputed voxels hold the distance to the (unmoved) zero level set's
         piecewise-linear surface (see the module docstring), with the field's sign, and the
         colour and part of their nearest surface point.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import naive_edit, reevaluate
+    >>> stretched = naive_edit(bar, {"axis": "x", "zone": [0.3, 0.6], "to": 0.8})
+    >>> reevaluate(stretched).shape == stretched.shape
+    True
     """
     if (
         isinstance(band, bool | np.bool_)

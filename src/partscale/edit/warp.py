@@ -45,9 +45,32 @@ RESAMPLE_MARGIN = 2.0
 
 
 def gauge(d: np.ndarray, sides: int, phase: float) -> np.ndarray:
-    """(...,) float64: the gauge radius of offsets ``d`` (..., 2): Euclidean for ``sides == 0``,
-    else that of the regular ``sides``-gon whose face normals lie at ``phase`` degrees and every
-    ``360 / sides`` (its circumradius is 1 on its outline)."""
+    """The gauge radius of 2D offsets: Euclidean, or that of a regular polygon.
+
+    Parameters
+    ----------
+    d : (..., 2) float
+        Offsets from the axis, on the two other axes in order.
+    sides : int
+        0 for round; else the regular ``sides``-gon whose face normals lie at ``phase`` degrees and
+        every ``360 / sides`` (its circumradius is 1 on its outline).
+    phase : float
+        Degrees.
+
+    Returns
+    -------
+    (...,) float64
+        The gauge radius of each offset.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import gauge
+    >>> gauge(np.array([[1.0, 0.0], [0.0, 1.0]]), 0, 0.0)
+    array([1., 1.])
+    >>> gauge(np.array([[1.0, 0.0], [0.6, 0.6]]), 4, 0.0).round(3)  # a square's corner is farther
+    array([1.414, 0.849])
+    """
     if sides == 0:
         return np.hypot(d[..., 0], d[..., 1])
     a = np.deg2rad(phase) + 2 * np.pi * np.arange(sides) / sides
@@ -92,7 +115,28 @@ def check_radial(csdf: CSDF, zone: RadialZone) -> None:
 
 
 def radial_extent(csdf: CSDF, zone: RadialZone) -> float:
-    """The largest gauge radius of the solid about ``zone``'s axis (world units)."""
+    """The largest gauge radius of the solid about ``zone``'s axis (world units).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    zone : RadialZone
+        Its axis, centre, sides and phase are used (not its radii).
+
+    Returns
+    -------
+    float
+        What ``100%`` of a radial zone's radii refers to.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.edit import RadialZone, radial_extent
+    >>> disc = shapes.box((-0.5, 0, -0.5), (0.5, 0.05, 0.5), voxel_size=0.05)
+    >>> 0.5 < radial_extent(disc, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5)) < 0.75
+    True
+    """
     ax = AXES.index(zone.axis)
     others = [a for a in range(3) if a != ax]
     inside = np.asarray(csdf.sdf < 0)
@@ -205,8 +249,34 @@ def warp_grid(
 def apply_warp(
     csdf: CSDF, zone: RadialZone | ObliqueZone | ScrewZone, *, record: dict[str, Any] | None = None
 ) -> CSDF:
-    """:func:`apply_radial`, :func:`apply_oblique` or :func:`apply_screw`, by the kind of
-    ``zone``; ``record``: more keys for its history entry (a recipe's step)."""
+    """Apply a zone that is not a slab across an axis: radial, oblique or steps.
+
+    Dispatches to :func:`apply_radial`, :func:`apply_oblique` or :func:`apply_screw` by the kind
+    of ``zone``.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    zone : RadialZone, ObliqueZone or ScrewZone
+        The zone.
+    record : dict, optional
+        More keys for its history entry (a recipe's step).
+
+    Returns
+    -------
+    CSDF
+        The edited object.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.edit import ObliqueZone, apply_warp
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.1, 0.1), voxel_size=0.05)
+    >>> out = apply_warp(bar, ObliqueZone((1.0, 0.0, 0.0), 0.3, 0.6, 0.8))
+    >>> out.meta["history"][-1]["op"], round(float(out.surface_bounds()[1, 0]), 2)
+    ('oblique', 1.2)
+    """
     if isinstance(zone, RadialZone):
         return apply_radial(csdf, zone, record=record)
     if isinstance(zone, ScrewZone):
@@ -273,6 +343,20 @@ def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = 
     each step snapped to whole voxels; the two sides are blended over :data:`CUT_BLEND`
     voxels either side of the cut and re-evaluated there. ``meta['history']`` gains
     ``{"op": "screw", ...}`` with the snapped step.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object (a flight of steps).
+    zone : ScrewZone
+        The step, the cut and how many steps to add or remove.
+    record : dict, optional
+        More keys for the history entry (a recipe's step).
+
+    Returns
+    -------
+    CSDF
+        The edited object.
 
     Examples
     --------
@@ -405,6 +489,20 @@ def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | Non
 
     The shift ``to - s1`` is kept as given (an oblique shift is not a whole number of voxels
     along every axis); everything beyond the zone is resampled and re-evaluated.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    zone : ObliqueZone
+        The slab, world units.
+    record : dict, optional
+        More keys for the history entry (a recipe's step).
+
+    Returns
+    -------
+    CSDF
+        The edited object, its grid grown to hold it.
 
     Examples
     --------

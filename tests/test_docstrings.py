@@ -10,7 +10,6 @@ from __future__ import annotations
 import doctest
 import importlib
 import inspect
-import os
 import re
 from types import ModuleType
 
@@ -162,8 +161,8 @@ def test_the_rule_catches_a_bare_docstring():
 
 def test_doctests_were_found():
     """The examples are collected (a finder that finds nothing would pass every run)."""
-    assert len(DOCTESTS) >= 50, len(DOCTESTS)
-    assert os.path.basename(DOCTESTS[0].filename).endswith(".py")
+    assert len(DOCTESTS) >= 100, len(DOCTESTS)
+    assert all(t.name.startswith("partscale") and t.examples for t in DOCTESTS)
 
 
 @pytest.mark.xfail(
@@ -181,3 +180,16 @@ def test_a_radial_edit_grows_a_centred_slab_alike_on_both_sides():
     lo, hi = out.surface_bounds()
     # one-sided: the growth along +x within a voxel of the growth along -x
     assert abs((hi[0] - 0.5) - (-0.5 - lo[0])) <= 0.5 * slab.voxel_size
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="found while writing find_radial's example: the axis of a sphere centred on the "
+    "origin is found half a voxel off it on both other axes (-0.0125 at 0.025 voxels)",
+)
+def test_find_radial_finds_a_centred_sphere_about_its_centre():
+    from partscale import shapes, zones
+
+    ball = shapes.sphere((0, 0, 0), 0.5, voxel_size=0.025)
+    frame = zones.find_radial(ball)
+    assert max(abs(c) for c in frame.center) <= 0.25 * ball.voxel_size

@@ -105,9 +105,25 @@ MAX_GROUPS = 3
 
 @dataclass(frozen=True)
 class Separator:
-    """What lies between two elements: ``start``, ``end`` (world units along the axis) and
-    ``kind``: ``'edge'`` (seen to change: a groove, a face, a painted line), ``'board'`` (the
-    cross-section's area peaks: a shelf, a divider) or ``'gap'`` (it dips)."""
+    """What lies between two elements along an axis.
+
+    Parameters
+    ----------
+    start, end : float
+        World positions along the axis.
+    kind : {'edge', 'board', 'gap'}
+        ``'edge'`` (seen to change: a groove, a face, a painted line), ``'board'`` (the
+        cross-section's area peaks: a shelf, a divider) or ``'gap'`` (it dips).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.find_elements(bookcase, "y").separators[0].kind
+    'edge'
+    """
 
     start: float
     end: float
@@ -119,9 +135,26 @@ class Separator:
 
 @dataclass(frozen=True)
 class Element:
-    """One element: ``start``, ``end`` (world units along the axis), the ``group`` it belongs to
-    (an index into :attr:`AxisElements.groups`, or None) and whether it is ``mirrored`` relative
-    to its group's first element."""
+    """One element along an axis: a seat cushion, a door, a compartment between shelves.
+
+    Parameters
+    ----------
+    start, end : float
+        World positions along the axis.
+    group : int or None
+        The repeat group it belongs to (an index into :attr:`AxisElements.groups`), or None.
+    mirrored : bool
+        Whether it matches its group's first element only mirrored.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.find_elements(bookcase, "y").elements[0].group
+    0
+    """
 
     start: float
     end: float
@@ -144,11 +177,30 @@ class Element:
 
 @dataclass(frozen=True)
 class Group:
-    """Elements that repeat: indices into :attr:`AxisElements.elements` in order along the axis,
-    the separators between them (indices into :attr:`AxisElements.separators`, one fewer), the
-    mean distance between neighbours' cross-sections (``err``, 0..:data:`MATCH`), whether any
-    pair matches only mirrored, and ``typical``: the member a count edit copies or removes first
-    (the one of median length, nearest the middle of the group)."""
+    """Elements that repeat along an axis.
+
+    Parameters
+    ----------
+    members : tuple of int
+        Indices into :attr:`AxisElements.elements`, in order along the axis.
+    separators : tuple of int
+        The separators between them (indices into :attr:`AxisElements.separators`, one fewer).
+    err : float
+        Mean distance between neighbours' cross-sections (0..:data:`MATCH`).
+    mirrored : bool
+        Whether any pair matches only mirrored.
+    typical : int
+        The member a count edit copies or removes first (median length, nearest the middle).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.find_elements(bookcase, "y").groups[0]
+    Group(members=(0, 1, 2), separators=(0, 1), err=0.0, mirrored=False, typical=1)
+    """
 
     members: tuple[int, ...]
     separators: tuple[int, ...]
@@ -171,9 +223,10 @@ class Group:
 class AxisElements:
     """The elements of an object along one axis (:func:`find_elements`).
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
+        The axis.
     elements : tuple of Element
         Ordered along the axis; each group's members, then the spans between the separators
         of the best group's row that belong to no group.
@@ -184,6 +237,17 @@ class AxisElements:
     lo, hi : float
         The solid's extent along the axis (world units).
     voxel_size : float
+        The object's voxel size.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> found = zones.find_elements(bookcase, "y")
+    >>> len(found.elements), found.best.members
+    (3, (0, 1, 2))
     """
 
     axis: str
@@ -504,7 +568,9 @@ def find_elements(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -
     Parameters
     ----------
     csdf : CSDF
+        The object.
     axis : {'x', 'y', 'z'} or {0, 1, 2}
+        The axis.
     prof : Profile, optional
         The axis's :func:`~partscale.zones.profile` if the caller has it.
 
@@ -516,11 +582,13 @@ def find_elements(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -
 
     Examples
     --------
-    >>> from partscale import shapes
-    >>> from partscale.zones import find_elements
-    >>> c = shapes.shelf_unit(shelves=4)  # doctest: +SKIP
-    >>> find_elements(c, "y").best is not None  # doctest: +SKIP
-    True
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> found = zones.find_elements(bookcase, "y")
+    >>> found.best is not None, zones.element_phrase(found)
+    (True, '3 alike elements, 0.26 long')
     """
     ax = _axis_index(axis)
     p = prof if prof is not None else profile(csdf, ax)
@@ -570,7 +638,7 @@ def _describe(p: Profile, chains: list[_Chain]) -> AxisElements:
 class CountZone:
     """A zone of whole elements with their separators, for a count edit (:func:`count_zone`).
 
-    Attributes
+    Parameters
     ----------
     start, end : float
         World positions of the zone's planes along the axis; ``end - start`` is a whole number
@@ -580,6 +648,16 @@ class CountZone:
     seam : float
         Soft Jaccard distance between the cross-sections at the two planes (0: they match, so
         copies join seamlessly; at most :data:`~partscale.zones.suggest.MATCH` where possible).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> z = zones.count_zone(bookcase, zones.find_elements(bookcase, "y"), 1)
+    >>> round(z.start, 3), round(z.end, 3), z.members, z.seam
+    (0.624, 0.924, (1,), 0.0)
     """
 
     start: float
@@ -647,10 +725,36 @@ def count_zone(
     ``m``. Among the zones of least cost (:func:`_anchors`, within 0.03 of the lowest), those
     whose copies' joins cut off the least solid (:func:`~partscale.zones.suggest.join_islands`).
 
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    found : AxisElements
+        Its elements along the axis (:func:`find_elements`).
+    m : int
+        Whole elements the zone holds.
+    prof : Profile, optional
+        The axis's :func:`~partscale.zones.profile` if the caller has it.
+
+    Returns
+    -------
+    CountZone
+        The zone, world units.
+
     Raises
     ------
     InputError
         No repeat group along the axis, or ``m`` not below its element count (one stays).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zone = zones.count_zone(bookcase, zones.find_elements(bookcase, "y"), 1)
+    >>> zone.members
+    (1,)
     """
     from ..errors import InputError
 
@@ -702,7 +806,27 @@ def count_zone(
 
 
 def element_phrase(found: AxisElements) -> str:
-    """A few words on the best group: ``'2 alike elements, mirrored, 0.84..0.85 m long'``."""
+    """A few words on the best group: ``'2 alike elements, mirrored, 0.84..0.85 m long'``.
+
+    Parameters
+    ----------
+    found : AxisElements
+        The elements along an axis.
+
+    Returns
+    -------
+    str
+        The phrase (``'no repeated element'`` where nothing repeats).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.element_phrase(zones.find_elements(bookcase, "y"))
+    '3 alike elements, 0.26 long'
+    """
     g = found.best
     if g is None:
         return "no repeated element"

@@ -84,7 +84,7 @@ NOISE_MARGIN = 2.0
 class Feature:
     """A local feature of a run of layers along an axis (:func:`run_features`).
 
-    Attributes
+    Parameters
     ----------
     first, last : int
         Its layers along the axis (inclusive).
@@ -98,6 +98,14 @@ class Feature:
         Whether it lies at least in part in a calm run (:func:`axis_features`): not wholly in
         the layers past one, where the section changes (a board, a door's edge) and a colour
         found may be that structure's own.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> zones.axis_features(door, 0, [(4, 82)])[0].kind
+    'shape'
     """
 
     first: int
@@ -383,6 +391,28 @@ def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Fe
     run), has a reference beyond it then; columns along a face there are still a face. Shapes are
     not: beyond the run, the columns cross the structure that ended it (a leg, a board), whose
     rise from a column would stand out as a bump. One found from two runs is kept once.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : int
+        0, 1 or 2.
+    runs : list of (int, int)
+        Runs of layers, inclusive ``(first, last)``.
+
+    Returns
+    -------
+    list of Feature
+        In order of their first layer.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> [(f.first, f.last, f.kind) for f in zones.axis_features(door, 0, [(4, 82)])]
+    [(65, 71, 'shape')]
     """
     found: list[Feature] = []
     for a, b in runs:
@@ -451,6 +481,31 @@ def whole_copies(
     one alike (:func:`_alike`: a translated or a mirrored copy) in the period before or after
     it within the repeat: a handle on one door of two, inside a zone of one pane, is no part
     of the period, and tiling it would double it.
+
+    Parameters
+    ----------
+    features : list of Feature
+        The axis's local features (:func:`axis_features`).
+    start : float
+        The zone's first plane (continuous layer index).
+    period : float
+        The zone's length, layers.
+    lo, hi : float
+        The repeat's extent, layers.
+
+    Returns
+    -------
+    bool
+        True where the copies would be whole elements.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> knob = zones.axis_features(door, 0, [(4, 82)])
+    >>> zones.whole_copies(knob, 10.0, 20.0, 4.0, 82.0), zones.whole_copies(knob, 60.0, 10.0, 4.0, 82.0)
+    (True, False)
     """
     end = start + period
     if cut_features(features, start) or cut_features(features, end):
@@ -476,6 +531,30 @@ def local_features(
 
     Those of the axis's calm runs (:func:`axis_features`, where the slabs :mod:`.suggest`
     offers are cut) and those of the zone's own layers.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : {'x', 'y', 'z'} or {0, 1, 2}
+        The axis.
+    zone : (float, float)
+        The zone's planes, world units.
+
+    Returns
+    -------
+    list of (float, float)
+        World extents of the features along the axis.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> [(round(a, 3), round(b, 3)) for a, b in zones.local_features(door, "x", (0.5, 0.75))]
+    [(0.615, 0.685)]
+    >>> zones.local_features(door, "x", (0.1, 0.4))
+    []
     """
     from .suggest import calm_runs  # (suggest builds on this module)
 
@@ -495,9 +574,32 @@ def local_features(
 
 
 def feature_notes(csdf: CSDF, recipe: Recipe) -> list[str]:
-    """One line per stretch edit of ``recipe`` whose zone holds a local feature
-    (:func:`local_features`): it is stretched with the zone, out of shape. Zones are read on
-    ``csdf``, the recipe's input (recipe coordinates)."""
+    """One line per stretch edit of ``recipe`` whose zone holds a local feature (:func:`local_features`).
+
+    Such a feature is stretched with the zone, out of shape. Zones are read on ``csdf``, the
+    recipe's input (recipe coordinates).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The recipe's input.
+    recipe : Recipe
+        The edits.
+
+    Returns
+    -------
+    list of str
+        The notes.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> from partscale.edit import Edit, Recipe
+    >>> print(zones.feature_notes(door, Recipe((Edit("x", 0.5, 0.75, 0.9),)))[0][:66])
+    the stretch zone 0.5..0.75 m along x holds 1 local feature (a knob
+    """
     sb = csdf.surface_bounds()
     units = csdf.meta.get("units")
     u = unit_suffix(units)

@@ -610,10 +610,34 @@ def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], lis
     to ``1 + n`` copies, or to its start. With no such group, steps of a flight that repeats
     diagonally with a part along ``axis`` (:func:`_add_steps`: one more step up).
 
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : int
+        0, 1 or 2.
+    n : int
+        Elements to add (negative: remove).
+
+    Returns
+    -------
+    (list of Edit or ScrewZone, list of str)
+        The edits and one line saying what they do.
+
     Raises
     ------
     InputError
         ``n`` is 0, nothing repeats along the axis, or ``-n`` is not below the group's count.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> edits, why = zones.add_axis(bookcase, 1, 1)
+    >>> edits[0].mode, why[0].split(",")[0]
+    ('tile', 'y: add 1 element(s) (3 alike elements')
     """
     name = AXES[axis]
     if n == 0:
@@ -839,6 +863,32 @@ def fit_axis(
     A shrink takes each chain of drift-split slabs as one (:func:`_drift_chains`). The slabs are
     cut around the axis's local features (knobs, handles, motifs); a note says where the
     stretches lie beside them (:func:`_feature_note`).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : int
+        0, 1 or 2.
+    target : float
+        The extent wanted along the axis (object units).
+    allow_deform : bool
+        Let thin slabs or global scaling take what nothing else can, instead of refusing.
+
+    Returns
+    -------
+    (list of Edit, list of str)
+        The edits (recipe coordinates) and one line per choice.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> edits, why = zones.fit_axis(bookcase, 1, 1.5)  # 30 cm taller: one more shelf row
+    >>> [(e.mode, round(e.dest - e.end, 3)) for e in edits]
+    [('tile', 0.3)]
     """
     name = AXES[axis]
     units = csdf.meta.get("units")
@@ -1035,6 +1085,7 @@ def fit(
     Parameters
     ----------
     csdf : CSDF
+        The object.
     size : 3 specs, optional
         Per axis: ``'='`` (unchanged), an absolute length (``2.1``, ``'210cm'``,
         ``'2100mm'``; bare numbers in object units), a change (``'+20cm'``, ``'-5cm'``) or a
@@ -1063,9 +1114,12 @@ def fit(
 
     Examples
     --------
-    >>> from partscale import shapes
-    >>> from partscale.zones import fit
-    >>> recipe, why = fit(shapes.table(), ["150%", "=", "="])  # doctest: +SKIP
+    >>> from partscale import data, edit, ingest, zones
+    >>> table = ingest.load(data.table(), res=64)
+    >>> recipe, why = zones.fit(table, ["3m", "=", "120%"])
+    >>> longer = edit.apply_recipe(table, recipe)
+    >>> round(float(longer.surface_bounds()[1, 0] - longer.surface_bounds()[0, 0]), 1)
+    3.0
     """
     report = resolve(progress)
     add = _check_add(add)

@@ -64,7 +64,7 @@ TIED = 0.02
 class Screw:
     """A repetition by a diagonal shift (see module).
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'z'}
         The horizontal axis the flight runs along.
@@ -76,6 +76,15 @@ class Screw:
         Steps the repeat covers (the solid's extent along ``axis`` over the going, rounded).
     cut : float
         Where along ``axis`` a count edit cuts (world units): across a tread.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.15 * (i + 1), 0.8)) for i in range(6)]
+    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), [(0, 0, 0), (1.2, 0.9, 0.8)], voxel_size=0.02)
+    >>> s = zones.find_screws(flight)[0]
+    >>> s.axis, s.count, round(s.going, 2), round(s.rise, 2)
+    ('x', 6, 0.2, 0.15)
     """
 
     axis: str
@@ -172,16 +181,24 @@ class _Scorer:
 
 
 def find_screws(csdf: CSDF) -> list[Screw]:
-    """The diagonal repetitions of ``csdf`` (see module), best supported first.
+    """The diagonal repetitions of ``csdf`` (see module): flights of steps.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+
+    Returns
+    -------
+    list of Screw
+        Best supported first; empty where nothing repeats diagonally.
 
     Examples
     --------
-    >>> from partscale import shapes
-    >>> from partscale.zones import find_screws
-    >>> import numpy as np
+    >>> from partscale import shapes, zones
     >>> steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.15 * (i + 1), 0.8)) for i in range(6)]
-    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), np.array([[0, 0, 0], [1.2, 0.9, 0.8]]), voxel_size=0.02)
-    >>> s = find_screws(flight)[0]
+    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), [(0, 0, 0), (1.2, 0.9, 0.8)], voxel_size=0.02)
+    >>> s = zones.find_screws(flight)[0]
     >>> round(s.going, 2), round(s.rise, 2)
     (0.2, 0.15)
     """

@@ -95,10 +95,12 @@ BOUNDED_WEIGHT = 0.5
 class Candidate:
     """A suggested zone.
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
+        The axis.
     kind : {'tile', 'stretch'}
+        Repeat one period, or stretch a slab of constant cross-section.
     zone : (float, float)
         World ``(start, end)`` along the axis; for ``tile`` exactly one period long.
     period : float or None
@@ -111,6 +113,16 @@ class Candidate:
         One line: what was found.
     region : (float, float)
         World extent of the repeat (tile) or the slab (stretch).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> best = zones.suggest(bookcase, "y")[0]
+    >>> best.kind, best.period, best.count
+    ('tile', 0.295, 4)
     """
 
     axis: str
@@ -237,7 +249,7 @@ def _overlap(a: _Repeat, b: _Repeat) -> float:
 class BoundedRepeat:
     """Elements repeated between boundaries along a profile's axis (:func:`find_bounded_repeats`).
 
-    Attributes
+    Parameters
     ----------
     period : float
         The shift carrying one element onto the next, in voxels.
@@ -251,6 +263,13 @@ class BoundedRepeat:
         The boundaries: ``1`` boards or dividers, ``-1`` gaps or grooves.
     start : float
         The zone's start (layer index): one element and one interior boundary from there.
+
+    Examples
+    --------
+    >>> from partscale.zones import BoundedRepeat
+    >>> drawers = BoundedRepeat(period=30.0, elements=((2, 30), (32, 60)), err=0.01, mirrored=False, kind=-1, start=1.0)
+    >>> len(drawers.elements), drawers.kind  # two elements between grooves
+    (2, -1)
     """
 
     period: float
@@ -290,9 +309,30 @@ def _element_distance(p: Profile, e: tuple[float, float], f: tuple[float, float]
 
 
 def find_bounded_repeats(p: Profile, csdf: CSDF | None = None) -> list[BoundedRepeat]:
-    """Every bounded repeat of ``p`` (see module docstring), best first. ``csdf``: the object
-    ``p`` is the profile of, to keep the zone's planes off thin features (see
-    :func:`join_islands`)."""
+    """Every bounded repeat of a profile (see module docstring), best first.
+
+    Parameters
+    ----------
+    p : Profile
+        The cross-sections along an axis.
+    csdf : CSDF, optional
+        The object ``p`` is the profile of, to keep the zone's planes off thin features (see
+        :func:`join_islands`).
+
+    Returns
+    -------
+    list of BoundedRepeat
+        Elements repeated between boundaries (drawers between dividers, doors between grooves).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.find_bounded_repeats(zones.profile(bookcase, "y"), bookcase)  # shelves: a plain repeat
+    []
+    """
     i0, i1 = _solid_layers(p)
     n_solid = i1 - i0 + 1
     found: list[tuple[int, list[tuple[float, float]]]] = []
@@ -560,9 +600,30 @@ class Slab(NamedTuple):
 
 
 def calm_runs(p: Profile) -> list[tuple[int, int]]:
-    """``(first, last)`` (inclusive) of the maximal runs of at least :data:`MIN_SLAB` non-empty
-    layers whose neighbour-to-neighbour distance stays below :data:`STEP`: where constant slabs
-    and local features are found."""
+    """The maximal runs of calm layers of a profile: where constant slabs and local features are found.
+
+    A run is at least :data:`MIN_SLAB` non-empty layers whose neighbour-to-neighbour distance stays
+    below :data:`STEP`.
+
+    Parameters
+    ----------
+    p : Profile
+        The cross-sections along an axis.
+
+    Returns
+    -------
+    list of (int, int)
+        ``(first, last)`` layer indices (inclusive) of each run, in order.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.calm_runs(zones.profile(bookcase, "y"))[:3]
+    [(5, 17), (20, 32), (34, 46)]
+    """
     i0, i1 = _solid_layers(p)
     idx = np.arange(i0, i1)
     step = p.distance(idx, idx + 1)
@@ -684,9 +745,34 @@ def axis_candidates(
     prof: Profile | None = None,
     features: list[Feature] | None = None,
 ) -> list[Candidate]:
-    """Candidates along one axis, best first (see :func:`suggest`). ``features``: the axis's
-    local features (:func:`~.features.axis_features` of :func:`calm_runs`) where the caller
-    has them."""
+    """Zone candidates along one axis, best first (see :func:`suggest`).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : {'x', 'y', 'z'} or {0, 1, 2}
+        The axis.
+    prof : Profile, optional
+        The axis's :func:`~partscale.zones.profile` if the caller has it.
+    features : list of Feature, optional
+        The axis's local features (:func:`~.features.axis_features` of :func:`calm_runs`) where
+        the caller has them.
+
+    Returns
+    -------
+    list of Candidate
+        Best first; none where the axis has neither a repeat nor a constant slab.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> [c.kind for c in zones.axis_candidates(bookcase, "y")][:2]
+    ['tile', 'stretch']
+    """
     ax = _axis_index(axis)
     p = prof if prof is not None else profile(csdf, ax)
     feats = axis_features(csdf, ax, calm_runs(p)) if features is None else features
@@ -806,14 +892,25 @@ def suggest(
     Parameters
     ----------
     csdf : CSDF
+        The object.
     axis : {'x', 'y', 'z'} or None
         One axis, or all three.
+    progress : callable(fraction, message), optional
+        Called as the work goes on.
 
     Returns
     -------
     list of Candidate
         ``tile`` (one period of a repeated element, planes in the gaps) and ``stretch`` (a slab
         of constant cross-section); an axis without either gives none.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest, zones
+    >>> table = ingest.load(data.table(), res=64)
+    >>> best = zones.suggest(table, "x")[0]
+    >>> best.kind, best.axis
+    ('stretch', 'x')
     """
     report = resolve(progress)
     axes = [_axis_index(axis)] if axis is not None else [0, 1, 2]

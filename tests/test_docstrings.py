@@ -129,6 +129,8 @@ def missing_sections(obj) -> list[str]:
     if not doc:
         return ["a docstring"]
     missing = []
+    if "\n" in doc.split("\n\n", 1)[0]:
+        missing.append("one-line summary")
     if _params(obj) and not (_section(doc, "Parameters") or _section(doc, "Attributes")):
         missing.append("Parameters")
     if _returns_something(obj) and not (_section(doc, "Returns") or _section(doc, "Yields")):
@@ -140,8 +142,9 @@ def missing_sections(obj) -> list[str]:
 
 @pytest.mark.parametrize("package", COVERED)
 def test_public_names_have_parameters_returns_and_an_example(package):
-    """Every public function and class of the covered packages documents its parameters, what it
-    returns and how to call it (a class's Parameters may be its Attributes)."""
+    """Every public function and class of the covered packages says what it is in one line, then
+    documents its parameters, what it returns and how to call it (a class's Parameters may be
+    its Attributes)."""
     problems = [
         f"{name}: no {', '.join(miss)}"
         for name, obj in public_callables(package)
@@ -154,9 +157,15 @@ def test_the_rule_catches_a_bare_docstring():
     """The check above, on a function documented the way most were: caught."""
 
     def resize(csdf, factor: float) -> object:
-        """The object scaled by ``factor``."""
+        """The object scaled by ``factor``,
+        about its centre."""
 
-    assert missing_sections(resize) == ["Parameters", "Returns", "Examples with >>>"]
+    assert missing_sections(resize) == [
+        "one-line summary",
+        "Parameters",
+        "Returns",
+        "Examples with >>>",
+    ]
 
 
 def test_doctests_were_found():

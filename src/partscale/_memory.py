@@ -147,9 +147,10 @@ def release_freed_memory() -> bool:
 
 
 def _glibc(name: str, *argtypes):
-    """glibc's function ``name`` with its argument types, or None where there is none (macOS,
+    """Glibc's function ``name`` with its argument types, or None where there is none (macOS,
     musl). Read from the process's own symbols: libc is loaded already (ctypes.util.find_library
-    would run ldconfig, 30 ms at every start of the CLI)."""
+    would run ldconfig, 30 ms at every start of the CLI).
+    """
     import ctypes
 
     try:

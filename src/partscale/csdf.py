@@ -621,7 +621,8 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
 def _deflates(a: np.ndarray) -> bool:
     """Whether deflate shrinks ``a`` (any array) below ``_DEFLATE_GAIN`` of its bytes, judged on
     up to four samples spread over it (a few ms: the data alone decides, so the bytes written
-    stay the same for the same CSDF)."""
+    stay the same for the same CSDF).
+    """
     b = np.ascontiguousarray(a).reshape(-1).view(np.uint8)
     n = len(b)
     if n <= 4 * _DEFLATE_SAMPLE:

@@ -60,7 +60,8 @@ class MemoryLimitError(InputError):
 
 class PartscaleWarning(UserWarning):
     """A note for the user about something partscale did on its own (e.g. a damaged cache
-    entry discarded); the CLI prints it as one line."""
+    entry discarded); the CLI prints it as one line.
+    """
 
 
 def one_line(exc: BaseException) -> str:

@@ -189,7 +189,8 @@ def _trace(sdf, origins, d, eps, max_steps, graze, hits):
     """March every ray ``origins[r] + t d`` through ``sdf`` (voxel units); hits[r] = point or nan.
 
     Steps are the SDF value, at least ``eps`` for ``max_steps`` steps and at least ``graze``
-    after (see :data:`GRAZE_STEP`)."""
+    after (see :data:`GRAZE_STEP`).
+    """
     n = origins.shape[0]
     hi = np.array([sdf.shape[0] - 1.0, sdf.shape[1] - 1.0, sdf.shape[2] - 1.0])
     for r in numba.prange(n):
@@ -332,7 +333,8 @@ def _draw_scale_bar(
     image: np.ndarray, cam: Camera, units: str, background, *, max_px: float | None = None
 ) -> np.ndarray:
     """``image`` with a scale bar at its bottom left, at most ``max_px`` (default a quarter of
-    the camera's image) long; sized by the camera's image, placed by ``image``'s height."""
+    the camera's image) long; sized by the camera's image, placed by ``image``'s height.
+    """
     from PIL import Image, ImageDraw, ImageFont
 
     size = cam.size
@@ -525,7 +527,8 @@ def _label_spots(draw, font, boxes, labels, vertical) -> list[tuple[float, float
     """Where each band's label goes: its box's top-left corner, or, where that would overlap
     the label of a band before it (a better one), the first free place further along the band
     (down a vertical band, right along a horizontal one), one label's height or width at a
-    time; None (left out) where the band has no free place."""
+    time; None (left out) where the band has no free place.
+    """
     taken: list[tuple[float, float, float, float]] = []
     out: list[tuple[float, float] | None] = []
     for box, label, down in zip(boxes, labels, vertical, strict=True):

@@ -138,7 +138,8 @@ def _removed(entries: list[Any], out: CSDF) -> list[str]:
 
 def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
     """A line per edit whose destination moved to whole voxels (the history keeps both:
-    ``edit.to`` as given and ``to_snapped``), saying by how much."""
+    ``edit.to`` as given and ``to_snapped``), saying by how much.
+    """
     u = unit_suffix(out.meta.get("units"))
     lines = []
     for i, h in enumerate(entries):
@@ -166,7 +167,8 @@ def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
 
 def _slivers(entries: list[Any], out: CSDF) -> list[str]:
     """A line per tile edit whose zone plane cut an element: the sliver it cut off was left out
-    at the inner seams (history: ``slivers_left_out``, voxels per plane)."""
+    at the inner seams (history: ``slivers_left_out``, voxels per plane).
+    """
     u = unit_suffix(out.meta.get("units"))
     lines = []
     for i, h in enumerate(entries):

@@ -287,7 +287,8 @@ class Edit:
     @classmethod
     def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> Edit:
         """Validate a JSON-like edit (see module docstring); ``units``: the object's
-        (``meta['units']``), for lengths with a unit (:func:`parse_position`)."""
+        (``meta['units']``), for lengths with a unit (:func:`parse_position`).
+        """
         if not isinstance(obj, dict):
             raise InputError(
                 f"{where}: expected an object with axis, zone, to, mode; got {shown(obj)}"
@@ -320,6 +321,7 @@ class Edit:
         )
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "axis": self.axis,
             "zone": [self.start, self.end],
@@ -329,6 +331,7 @@ class Edit:
 
     @property
     def axis_index(self) -> int:
+        """The axis as 0, 1 or 2."""
         return AXES.index(self.axis)
 
     def resolve(self, lo: float, hi: float) -> tuple[float, float, float]:
@@ -412,7 +415,8 @@ class RadialZone:
     @classmethod
     def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> RadialZone:
         """Validate a JSON-like radial edit ``{"radial": {"axis", "center", "sides", "phase"},
-        "zone": [R0, R1], "to": R1'}`` (radii: numbers or lengths with a unit)."""
+        "zone": [R0, R1], "to": R1'}`` (radii: numbers or lengths with a unit).
+        """
         _keys(obj, {"radial", "zone", "to"}, {"radial", "zone", "to"}, where)
         spec = obj["radial"]
         if not isinstance(spec, dict):
@@ -455,6 +459,7 @@ class RadialZone:
         )
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         spec: dict[str, Any] = {
             "axis": self.axis,
             "center": [self.center[0], self.center[1]],
@@ -467,6 +472,7 @@ class RadialZone:
 
     @property
     def shift(self) -> float:
+        """How far the outer radius moves: ``to - r1``."""
         return self.to - self.r1
 
 
@@ -498,7 +504,8 @@ class ObliqueZone:
     @classmethod
     def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> ObliqueZone:
         """Validate a JSON-like oblique edit ``{"normal": [NX, NY, NZ], "zone": [S0, S1],
-        "to": S1'}`` (positions along the normal: numbers or lengths with a unit)."""
+        "to": S1'}`` (positions along the normal: numbers or lengths with a unit).
+        """
         _keys(obj, {"normal", "zone", "to", "mode"}, {"normal", "zone", "to"}, where)
         if obj.get("mode", "stretch") != "stretch":
             raise InputError(
@@ -517,16 +524,20 @@ class ObliqueZone:
         )
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {"normal": list(self.normal), "zone": [self.s0, self.s1], "to": self.to}
 
     @property
     def shift(self) -> float:
+        """How far the plane ``s1`` moves: ``to - s1``."""
         return self.to - self.s1
 
 
 @dataclass(frozen=True)
 class ScrewZone:
-    """``copies`` more steps of a repetition by a diagonal shift (a straight flight): what lies
+    """Steps added to (or removed from) a flight that repeats by a diagonal shift.
+
+    ``copies`` more steps of a repetition by a diagonal shift (a straight flight): what lies
     beyond the plane ``cut`` across ``axis`` moves by ``copies`` times ``step``
     (:func:`partscale.edit.apply_screw`); ``copies < 0`` removes steps.
 
@@ -584,6 +595,7 @@ class ScrewZone:
         )
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "screw": {"axis": self.axis, "step": list(self.step), "cut": self.cut},
             "copies": self.copies,
@@ -614,7 +626,8 @@ class Recipe:
     @classmethod
     def parse(cls, obj: Any, *, units: str | None = None) -> Recipe:
         """Validate a JSON-like recipe (see module docstring); ``units``: the object's
-        (``meta['units']``) where positions with a unit (``'30cm'``) are to be converted."""
+        (``meta['units']``) where positions with a unit (``'30cm'``) are to be converted.
+        """
         if isinstance(obj, list):
             obj = {"edits": obj}
         if not isinstance(obj, dict) or "edits" not in obj:
@@ -648,6 +661,7 @@ class Recipe:
             raise InputError(f"{path}: {exc}") from None
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {"version": RECIPE_VERSION, "edits": [e.to_json() for e in self.edits]}
 
 
@@ -692,7 +706,9 @@ def parse_edit(
 
 
 def tile_count(length: float, target: float) -> int:
-    """Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``,
+    """Number of copies for tiling a slab of ``length`` to ``target``.
+
+    Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``,
     and 0 for ``target == 0`` exactly (the zone removed: DEST == START).
 
     Half-way cases round up (1.5 -> 2) so growing by one and a half periods adds a copy. A ratio

@@ -68,6 +68,7 @@ class ResolvedEdit:
 
     @property
     def axis_name(self) -> str:
+        """The axis as ``'x'``, ``'y'`` or ``'z'``."""
         return AXES[self.axis]
 
     @property

@@ -267,7 +267,8 @@ def _carried(
     e: Edit, bounds: np.ndarray, applied: list[tuple[int, dict[str, Any]]]
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """``e``'s (start, end, dest) on the recipe's input, and carried through the ``applied``
-    edits before it on the same axis (recipe coordinates); the destination keeps its change."""
+    edits before it on the same axis (recipe coordinates); the destination keeps its change.
+    """
     ax = e.axis_index
     s, en, d = e.resolve(float(bounds[0, ax]), float(bounds[1, ax]))
     planes = np.array([s, en], dtype=np.float64)
@@ -366,7 +367,8 @@ def apply_recipe(
 
 def check_mixed(recipe: Recipe) -> None:
     """Refuse (one line) a recipe holding a radial or oblique zone and a zone across an axis that
-    zone moves content along: the one's positions could not be carried through the other."""
+    zone moves content along: the one's positions could not be carried through the other.
+    """
     warps = [(i, e) for i, e in enumerate(recipe.edits) if not isinstance(e, Edit)]
     for i, w in warps:
         for j, e in enumerate(recipe.edits):
@@ -380,7 +382,9 @@ def check_mixed(recipe: Recipe) -> None:
 
 
 def check_recipe_memory(csdf: CSDF, recipe: Recipe | dict[str, Any] | list, *, what: str) -> None:
-    """Refuse (:class:`~partscale.errors.MemoryLimitError`) a recipe whose result
+    """Refuse a recipe whose result would not fit in memory, before any work.
+
+    Refuse (:class:`~partscale.errors.MemoryLimitError`) a recipe whose result
     (:func:`recipe_shape`) would not fit in memory, saying what it would need; ``what`` names
     the request in the message.
 

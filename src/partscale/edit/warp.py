@@ -161,7 +161,8 @@ def _resample(
     """The output arrays on the grid ``origin``/``shape``: sdf (X, Y, Z) float32, rgb
     (X, Y, Z, 3) uint8, parts (X, Y, Z) int16, each voxel showing the source point
     ``src_of(points)`` maps it to, and ``moved`` (X, Y, Z) bool: the voxels that show another
-    place than their own shifted by whole voxels (the surface there may have changed)."""
+    place than their own shifted by whole voxels (the surface there may have changed).
+    """
     h = csdf.voxel_size
     check_memory(shape, BYTES_PER_VOXEL, what="the warped grid")
     axes = [origin[a] + np.arange(shape[a]) * h for a in range(3)]
@@ -193,7 +194,8 @@ def _finish(
     entry: dict[str, Any],
 ) -> CSDF:
     """Re-evaluate the voxels near the surface within the band of a moved one, and the new
-    CSDF with its history entry."""
+    CSDF with its history entry.
+    """
     sdf, rgb, parts, moved = arrays
     h = csdf.voxel_size
     band = BAND_VOXELS + 1.0
@@ -208,7 +210,8 @@ def _finish(
 
 def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone) -> set[int]:
     """The world axes along which ``zone`` moves content (planar edits on them and this zone
-    do not mix in one recipe: their positions could not be carried through it)."""
+    do not mix in one recipe: their positions could not be carried through it).
+    """
     if isinstance(zone, RadialZone):
         return {a for a in range(3) if a != AXES.index(zone.axis)}
     if isinstance(zone, ScrewZone):
@@ -223,7 +226,8 @@ def warp_grid(
     zone: RadialZone | ObliqueZone | ScrewZone,
 ) -> tuple[np.ndarray, tuple[int, ...]]:
     """Origin and shape of the grid ``zone`` gives from the grid ``origin``/``shape``/``h``
-    without computing anything."""
+    without computing anything.
+    """
     origin = np.asarray(origin, dtype=np.float64)
     lo = origin - h / 2
     hi = origin + (np.asarray(shape) - 0.5) * h
@@ -290,7 +294,8 @@ CUT_BLEND = 2.0
 
 def _screw_shift(zone: ScrewZone, h: float) -> np.ndarray:
     """(3,) int64: the zone's whole shift, ``copies`` steps, each step snapped to whole
-    voxels (so everything beyond the cut is an exact copy)."""
+    voxels (so everything beyond the cut is an exact copy).
+    """
     return np.rint(np.asarray(zone.step) / h).astype(np.int64) * zone.copies
 
 
@@ -299,7 +304,8 @@ def _ground(csdf, zone, unit, shift, off, placed, far, after) -> None:
     floor) stays on it: lifted, its lowest ``shift`` voxels up are filled from the side shifted
     along the flight only; lowered, what went below the floor is cut off at it (in ``after``,
     in place). An open flight that does not reach the floor there is left as it is (filling
-    would add treads at the old heights)."""
+    would add treads at the old heights).
+    """
     a = AXES.index(zone.axis)
     up = 1
     rise = int(shift[up])
@@ -338,7 +344,9 @@ def _ground(csdf, zone, unit, shift, off, placed, far, after) -> None:
 
 
 def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = None) -> CSDF:
-    """``zone.copies`` steps added (or removed) along a diagonal repetition (see
+    """Add (or remove) steps of a flight that repeats by a diagonal shift.
+
+    ``zone.copies`` steps added (or removed) along a diagonal repetition (see
     :class:`~partscale.edit.ScrewZone`): what lies beyond the cut moves by that many steps,
     each step snapped to whole voxels; the two sides are blended over :data:`CUT_BLEND`
     voxels either side of the cut and re-evaluated there. ``meta['history']`` gains
@@ -420,7 +428,9 @@ def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = 
 
 
 def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None = None) -> CSDF:
-    """The annulus of ``zone`` stretched (see module); ``meta['history']`` gains
+    """Stretch the annulus of a radial zone.
+
+    The annulus of ``zone`` stretched (see module); ``meta['history']`` gains
     ``{"op": "radial", ...}`` (:meth:`RadialZone.to_json`).
 
     Parameters
@@ -484,7 +494,9 @@ def check_oblique(csdf: CSDF, zone: ObliqueZone) -> np.ndarray:
 
 
 def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | None = None) -> CSDF:
-    """The slab of ``zone`` stretched along its normal (see module); ``meta['history']`` gains
+    """Stretch the slab of an oblique zone along its normal.
+
+    The slab of ``zone`` stretched along its normal (see module); ``meta['history']`` gains
     ``{"op": "oblique", ...}`` (:meth:`ObliqueZone.to_json`, the normal made unit).
 
     The shift ``to - s1`` is kept as given (an oblique shift is not a whole number of voxels

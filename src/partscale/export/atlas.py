@@ -81,7 +81,7 @@ def _rasterise(uv, faces, vertices, size, pos, covered):
 
 
 def unwrap(vertices: np.ndarray, faces: np.ndarray, size: int):
-    """xatlas charts packed into a ``size``² atlas.
+    """Xatlas charts packed into a ``size``² atlas.
 
     Parameters
     ----------
@@ -193,6 +193,7 @@ def bake(
 
 
 def png_bytes(image: np.ndarray) -> bytes:
+    """The PNG file's bytes of an (H, W, 3) uint8 image."""
     import io
 
     from PIL import Image

@@ -296,7 +296,8 @@ def _place(mesh: ColoredMesh, *, up: str, scale, units, name: str):
 
 def _square(mesh: ColoredMesh, square: bool) -> tuple[ColoredMesh, dict]:
     """``mesh`` turned square about up where ``square`` (and a turn is found), and what was
-    found or done (for the history)."""
+    found or done (for the history).
+    """
     import dataclasses
 
     from ..orient import square_turn, turn_about_up

@@ -105,10 +105,11 @@ class ColoredMesh:
 
     @property
     def n_faces(self) -> int:
+        """Number of triangles."""
         return len(self.faces)
 
     def color_at(self, tri_ids: np.ndarray, bary: np.ndarray) -> np.ndarray:
-        """sRGB colour at surface points given as triangle + barycentric coordinates.
+        """SRGB colour at surface points given as triangle + barycentric coordinates.
 
         Parameters
         ----------
@@ -303,7 +304,8 @@ def material_of(
     materials: dict[str, Material],
 ) -> Material:
     """The :class:`Material` of a trimesh visual: ``materials[name]`` when the reader made it,
-    else from trimesh's material (factors linear when ``linear_colors``, else display sRGB)."""
+    else from trimesh's material (factors linear when ``linear_colors``, else display sRGB).
+    """
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
     mat = getattr(visual, "material", None)

@@ -130,6 +130,7 @@ class Separator:
     kind: str
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {"start": self.start, "end": self.end, "kind": self.kind}
 
 
@@ -163,9 +164,11 @@ class Element:
 
     @property
     def length(self) -> float:
+        """``end - start``, world units."""
         return self.end - self.start
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "start": self.start,
             "end": self.end,
@@ -209,6 +212,7 @@ class Group:
     typical: int
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "members": list(self.members),
             "separators": list(self.separators),
@@ -264,6 +268,7 @@ class AxisElements:
         return self.groups[0] if self.groups else None
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "axis": self.axis,
             "elements": [e.to_json() for e in self.elements],
@@ -279,7 +284,8 @@ def _views(s: np.ndarray, rgb: np.ndarray) -> list[tuple[np.ndarray, np.ndarray,
     """Depth images of the solid ``s`` ((N, U, V) float32 sdf in voxels, the axis first) seen
     from its four sides square to the axis: per view ``depth`` (N, W) float32 (voxels from the
     grid's side to the first zero crossing, linear between samples; NaN where no surface),
-    ``colour`` (N, W, 3) int16 (sRGB of the first inside sample) and ``present`` (N, W) bool."""
+    ``colour`` (N, W, 3) int16 (sRGB of the first inside sample) and ``present`` (N, W) bool.
+    """
     out = []
     for ax in (1, 2):
         for flip in (False, True):
@@ -302,7 +308,8 @@ def _views(s: np.ndarray, rgb: np.ndarray) -> list[tuple[np.ndarray, np.ndarray,
 
 def edge_score(csdf: CSDF, axis: int) -> np.ndarray:
     """(N - 1,) float64: for each layer pair ``(i, i + 1)`` along ``axis``, the largest share
-    over the four side views of the visible pixels that change there (see module, step 1)."""
+    over the four side views of the visible pixels that change there (see module, step 1).
+    """
     h = np.float32(csdf.voxel_size)
     s = np.moveaxis(csdf.sdf, axis, 0) / h
     rgb = np.moveaxis(csdf.rgb, axis, 0)
@@ -330,7 +337,8 @@ def edge_score(csdf: CSDF, axis: int) -> np.ndarray:
 class _Cand:
     """A separator candidate in layer indices: the layers ``lo..hi`` it covers (continuous: an
     edge between layers i and i + 1 lies at i + 0.5), where the elements beside it end, and its
-    ``strength``: the largest edge score in it (an area boundary alone: :data:`EDGE_SCORE`)."""
+    ``strength``: the largest edge score in it (an area boundary alone: :data:`EDGE_SCORE`).
+    """
 
     lo: float
     hi: float
@@ -382,7 +390,8 @@ def _candidates(csdf: CSDF, p: Profile) -> list[_Cand]:
 
 def _samples(e: tuple[float, float]) -> np.ndarray:
     """(SAMPLES,) layer positions spread over element ``e`` (layer indices), a layer in from
-    each end (the separator's face is blended into the layer next to it)."""
+    each end (the separator's face is blended into the layer next to it).
+    """
     a, b = e[0] + 1.0, e[1] - 1.0
     return a + (np.arange(SAMPLES) + 0.5) / SAMPLES * (b - a)
 
@@ -404,7 +413,8 @@ def _unit(p: Profile, e: tuple[float, float]) -> bool:
     """Whether element ``e`` begins and ends alike (module, step 2): some pair of layers at
     :data:`UNIT_ENDS` of its length in from either end matches (a door's two edges, a cushion's
     two rounded ends, a compartment), so half of a symmetric piece (from a side panel to the
-    middle handle) is no element."""
+    middle handle) is no element.
+    """
     t = np.asarray(UNIT_ENDS)
     le = e[1] - e[0]
     d = _layer_distance(p, e[0] + t * le, e[1] - t * le)
@@ -515,7 +525,8 @@ def _strength(cands: list[_Cand], lo: float, hi: float) -> float:
 
 def _best_chains(p: Profile, cands: list[_Cand], chains: list[_Chain]) -> list[_Chain]:
     """Chains best first (most of the solid covered, most elements, best matched), each
-    overlapping none before it; at most :data:`MAX_GROUPS`."""
+    overlapping none before it; at most :data:`MAX_GROUPS`.
+    """
     i0, i1 = _solid_layers(p)
     solid = max(i1 - i0, 1)
 
@@ -667,6 +678,7 @@ class CountZone:
 
     @property
     def length(self) -> float:
+        """``end - start``, world units."""
         return self.end - self.start
 
 
@@ -680,7 +692,8 @@ def _anchors(
     shifted alike by ``t`` (quarter voxels). ``inside``: the planes may also go up to halfway
     into the elements (else at most a voxel in: a plane through an element's middle joins the
     halves of two elements, mirrored ones back to front). Cost: the seam (distance between the
-    planes' cross-sections) plus their cross-section area (low in gaps)."""
+    planes' cross-sections) plus their cross-section area (low in gaps).
+    """
     el = [(p.index(found.elements[i].start), p.index(found.elements[i].end)) for i in g.members]
     sep = [
         (p.index(found.separators[i].start), p.index(found.separators[i].end)) for i in g.separators
@@ -718,7 +731,9 @@ def _anchors(
 def count_zone(
     csdf: CSDF, found: AxisElements, m: int, *, prof: Profile | None = None
 ) -> CountZone:
-    """The zone holding ``m`` whole elements of :attr:`AxisElements.best` and ``m`` separators,
+    """The zone of ``m`` whole elements and ``m`` separators that a count edit tiles or cuts out.
+
+    The zone holding ``m`` whole elements of :attr:`AxisElements.best` and ``m`` separators,
     around its typical member, whose planes' cross-sections match best.
 
     Tiled to ``1 + n`` copies it adds ``n`` elements; tiled to its start (0 copies) it removes

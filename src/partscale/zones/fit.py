@@ -155,7 +155,8 @@ def _inset(
 def _fill(need: float, weights: list[float], rooms: list[float]) -> list[float]:
     """Shares of ``need`` in proportion to ``weights``, none above its room: what a full slab
     cannot give goes to the others, again in proportion (sums to less than ``need`` only where
-    every room is used)."""
+    every room is used).
+    """
     give = [0.0] * len(weights)
     free = [i for i, r in enumerate(rooms) if r > 0]
     left = need
@@ -315,7 +316,8 @@ def outline_extents(csdf: CSDF, axis: int) -> np.ndarray:
     """(L, N) int64: the solid's extent (voxels, first to last solid voxel) along one of the two
     other axes, per level of the third (L rows: the levels of both), per layer along ``axis``;
     0 where a level of a layer holds no solid. A round column shows as a chord in the levels it
-    spans, however large the top above it."""
+    spans, however large the top above it.
+    """
     inside = np.moveaxis(np.asarray(csdf.sdf < 0), axis, 0)  # (N, U, V)
     rows = []
     for across in (1, 2):  # extent along U per level of V, then along V per level of U
@@ -334,7 +336,8 @@ def on_curve(extents: np.ndarray, first: float, zone: tuple[float, float], h: fl
     a step, by more than :data:`CURVE_VOXELS` within the slab's own length beyond it (at least
     :data:`CURVE_REACH`): a round top's middle, a round column or foot in the slab, not the span
     between a table's legs, which ends at a step. Stretching such a slab flattens the curve
-    where it lies (a round top becomes a stadium, a round foot an oval)."""
+    where it lies (a round top becomes a stadium, a round foot an oval).
+    """
     n = extents.shape[1]
     a = round((zone[0] - first) / h)
     b = round((zone[1] - first) / h)
@@ -359,7 +362,8 @@ def on_curve(extents: np.ndarray, first: float, zone: tuple[float, float], h: fl
 
 def _long(c: Candidate, h: float) -> bool:
     """Whether a slab is at least :data:`MIN_SPREAD_VOXELS` long: a span or a long uniform run,
-    not a feature's thickness (a board, a panel, a leg's width)."""
+    not a feature's thickness (a board, a panel, a leg's width).
+    """
     return round((c.zone[1] - c.zone[0]) / h) >= MIN_SPREAD_VOXELS
 
 
@@ -386,7 +390,8 @@ def _outside(slabs: list[Candidate], h: float, tiled: _Tiled | None) -> list[Can
 
 def _thin_reason(tiled: bool, each: bool = False) -> str:
     """Why a thin slab takes a growth: nothing longer could; ``each``: for several of them,
-    with what that changes."""
+    with what that changes.
+    """
     copies = f" nor the copies (within {100 * COPY_TOLERANCE:.0f}%)" if tiled else ""
     why = f"no slab of {MIN_SPREAD_VOXELS} voxels or more{copies} could take it"
     return f"{why}: a feature's thickness changes in each" if each else why
@@ -395,7 +400,8 @@ def _thin_reason(tiled: bool, each: bool = False) -> str:
 def _thin_note(c: Candidate, h: float, tiled: bool, alone: bool = True) -> str:
     """The note's tail for a stretch of the thin slab ``c``: which feature changes thickness,
     and, ``alone`` (the only thin slab stretched), why; several share one note of the reason
-    (:func:`_to_slabs`)."""
+    (:func:`_to_slabs`).
+    """
     n = round((c.zone[1] - c.zone[0]) / h)
     if not alone:
         return f" (a thin slab, {n} voxels)"
@@ -475,7 +481,8 @@ class _Tiled:
     repeat's region, the tiled zone, the (whole-voxel) period, the length it adds (whole voxels,
     negative for a removal) and the copies that stand after it (world ``(a, b)``): the tiled
     zone's copies, or, after a removal (0 copies cannot take a length), the longer run of copies
-    left beside the removed periods."""
+    left beside the removed periods.
+    """
 
     edit: Edit
     k: int
@@ -548,7 +555,8 @@ def _element_periods(
     its separator tiled to ``1 + k`` copies) or removed (a zone of ``-k`` of them tiled to its
     start), ``k`` the whole number of typical elements nearest ``change``, and the note; None
     where the change is not within :data:`ELEMENT_TOLERANCE` of a whole number of elements
-    (other than 0) or nothing repeats."""
+    (other than 0) or nothing repeats.
+    """
     g = found.best
     if g is None:
         return None
@@ -581,7 +589,8 @@ def _element_periods(
 def _add_steps(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], list[str]] | None:
     """``n`` more (or ``-n`` fewer) steps of a flight that repeats diagonally
     (:func:`~partscale.zones.screw.find_screws`) with a part along ``axis``, and the note;
-    None where there is none."""
+    None where there is none.
+    """
     name = AXES[axis]
     for sc in find_screws(csdf):
         if abs(sc.step[axis]) < csdf.voxel_size / 2:
@@ -604,7 +613,9 @@ def _add_steps(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], l
 
 
 def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], list[str]]:
-    """Edits (recipe coordinates) adding ``n`` elements (removing ``-n``) of the repeat group
+    """Edits adding ``n`` elements of the repeat group along ``axis`` (``-n``: removing).
+
+    Edits (recipe coordinates) adding ``n`` elements (removing ``-n``) of the repeat group
     along ``axis`` (:func:`~partscale.zones.elements.find_elements`), and the note: a zone of
     whole elements and their separators (:func:`~partscale.zones.elements.count_zone`) tiled
     to ``1 + n`` copies, or to its start. With no such group, steps of a flight that repeats
@@ -682,7 +693,8 @@ def _to_slabs(
     """Stretch edits over the slabs ``tier`` taking ``left`` (:func:`_stretch_edits`), a note
     each, and what is left; ``thin``: the notes say a feature's thickness changes.
     ``spread``: the shortest slab taking a share (default: 0 when ``thin``, else
-    :data:`MIN_SPREAD_VOXELS`); ``even_growth``: see :func:`_stretch_edits`."""
+    :data:`MIN_SPREAD_VOXELS`); ``even_growth``: see :func:`_stretch_edits`.
+    """
     if spread is None:
         spread = 0 if thin else MIN_SPREAD_VOXELS
     st, left = _stretch_edits(tier, left, ax.h, ax.name, ax.layers, spread, even_growth)
@@ -713,7 +725,8 @@ def _to_long_outside(
 ) -> tuple[list[Edit], list[str], float]:
     """The remainder to slabs at least :data:`MIN_SPREAD_VOXELS` long (:func:`_long`) outside
     the repeat (:func:`_outside`): the first choice, as a feature keeps its thickness and the
-    copies their spacing."""
+    copies their spacing.
+    """
     outside = _outside(slabs, ax.h, tiled)
     tier = [c for c in outside if _long(c, ax.h)]
     shared = _even_growth(tier, outside, left, ax, tiled, thin=False)
@@ -765,7 +778,8 @@ def _even_growth(
 def _copies_within(left: float, tiled: _Tiled) -> bool:
     """Whether the copies take the remainder (:func:`_to_copies`) before any slab inside the
     repeat or any thin slab: their length changes within :data:`COPY_TOLERANCE` (one uneven gap
-    is worse than copies a little off)."""
+    is worse than copies a little off).
+    """
     a, b = tiled.copies
     return abs(left) <= COPY_TOLERANCE * (b - a)
 
@@ -774,7 +788,8 @@ def _to_long_inside(
     slabs: list[Candidate], left: float, ax: _Axis, tiled: _Tiled
 ) -> tuple[list[Edit], list[str], float]:
     """The remainder to long slabs (:func:`_long`) inside the repeat's region but off the tiled
-    zone (one spacing gets uneven): after the copies within :data:`COPY_TOLERANCE`."""
+    zone (one spacing gets uneven): after the copies within :data:`COPY_TOLERANCE`.
+    """
     outside = _outside(slabs, ax.h, tiled)
     tier = [c for c in slabs if _disjoint(c, tiled.zone) and c not in outside and _long(c, ax.h)]
     return _to_slabs(tier, left, ax, tiled, thin=False)
@@ -789,7 +804,8 @@ def _to_thin(
     of one copy and one spacing would change. A growth the largest would take only by more than
     doubling is shared by those of comparable length, each the same fraction (:func:`_even_growth`:
     a flight's treads all deepen), else it goes to the fewest. Nor do thin slabs take a growth
-    that would more than double one of them (:data:`MAX_STRETCH`): nothing is taken then."""
+    that would more than double one of them (:data:`MAX_STRETCH`): nothing is taken then.
+    """
     tier = [c for c in _outside(slabs, ax.h, tiled) if not _long(c, ax.h)]
 
     def doubles(st: list[Edit]) -> bool:
@@ -911,7 +927,8 @@ def _feature_note(
     surface's min along it) with local ``features`` (on its profile ``p``): where the stretched
     zones lie and the features they keep clear of (positions from the axis's min, as the other
     notes give them); and a line for those a stretched zone holds all the same (the copies
-    absorbing a remainder, global scaling: stretched out of shape)."""
+    absorbing a remainder, global scaling: stretched out of shape).
+    """
     name, units, lo = ax
     zones = [(float(e.start), float(e.end)) for e in edits if e.mode in ("stretch", "global")]
     if not zones or not features:
@@ -955,7 +972,8 @@ def _fit_axis(
     allow_deform: bool = False,
 ) -> tuple[list[Edit], list[str]]:
     """:func:`fit_axis` on the axis's profile ``prof`` and local features ``feats``, but the
-    features' note."""
+    features' note.
+    """
     name = AXES[axis]
     units = csdf.meta.get("units")
     sb = csdf.surface_bounds()
@@ -1192,7 +1210,8 @@ def _radial_fit(
     """Where x and z grow (or shrink) by the same factor and a zone across x or z cannot take
     it part-aware (a round or polygonal outline in plan), the radial zone that can: the
     longest annulus of constant radial section (:func:`~partscale.zones.radial.radial_zones`)
-    about the vertical, grown so the outline scales by the factor; else None."""
+    about the vertical, grown so the outline scales by the factor; else None.
+    """
     sb = csdf.surface_bounds()
     ext = sb[1] - sb[0]
     h = csdf.voxel_size
@@ -1247,7 +1266,8 @@ def _check_add(add: Mapping[str, int] | None) -> dict[str, int]:
 def _off_square(csdf: CSDF, edits: list[Edit]) -> list[str]:
     """A note where x or z changes and the object's walls run off x and z
     (:func:`partscale.orient.csdf_turn`): its slabs along them are not constant (fit falls back
-    to thin slabs or global scaling), and the cure."""
+    to thin slabs or global scaling), and the cure.
+    """
     from ..orient import WALL_AXES, csdf_turn, off_square_message
 
     if not any(e.axis in WALL_AXES for e in edits):

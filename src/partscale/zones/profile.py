@@ -70,6 +70,7 @@ class Profile:
 
     @property
     def n(self) -> int:
+        """Number of layers."""
         return len(self.coords)
 
     def distance(self, i: np.ndarray, j: np.ndarray, *, coarse: bool = False) -> np.ndarray:

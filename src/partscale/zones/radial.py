@@ -75,13 +75,15 @@ class RadialFrame:
     def zone(
         self, r0: float, r1: float, to: float, span: tuple[float, float] | None = None
     ) -> RadialZone:
+        """The radial zone ``r0..r1`` to ``to`` about this frame (``span``: heights it applies between)."""
         return RadialZone(self.axis, self.center, r0, r1, to, self.sides, self.phase, span)
 
 
 def _outline(csdf: CSDF, axis: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The footprint's centre (2,) and its outline radius (N,) at N angles from -180 degrees
     (voxels; NaN where no footprint pixel lies in that direction), and the footprint's pixel
-    offsets (P, 2)."""
+    offsets (P, 2).
+    """
     foot = np.asarray(csdf.sdf < 0).any(axis=axis)
     iu, iv = np.nonzero(foot)
     center = np.array([(iu.min() + iu.max()) / 2, (iv.min() + iv.max()) / 2], dtype=np.float64)

@@ -66,9 +66,11 @@ class Move:
 
     @property
     def by(self) -> float:
+        """How far the plane moved: ``after - before``."""
         return self.after - self.before
 
     def to_json(self) -> dict:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {"plane": self.plane, "from": self.before, "to": self.after}
 
 
@@ -78,7 +80,8 @@ def _overlap(zone: tuple[float, float], c: Candidate) -> float:
 
 def _from_boundaries(c: Candidate) -> bool:
     """Whether a tile candidate came from the boundary detector (elements between boards or
-    gaps, :func:`~partscale.zones.suggest.find_bounded_repeats`), whose reason says so."""
+    gaps, :func:`~partscale.zones.suggest.find_bounded_repeats`), whose reason says so.
+    """
     return c.kind == "tile" and "elements between" in c.reason
 
 

@@ -135,6 +135,7 @@ class Candidate:
     region: tuple[float, float]
 
     def to_json(self) -> dict:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         d = {
             "axis": self.axis,
             "kind": self.kind,
@@ -283,7 +284,8 @@ class BoundedRepeat:
 def _boundaries(p: Profile) -> list[tuple[int, float, float, float]]:
     """``(kind, lo, hi, cut)`` of every boundary inside the solid: ``kind`` +1 for a local
     maximum of the area (a board: faces ``lo``..``hi`` at half prominence, where elements end),
-    -1 for a minimum (a gap or groove: elements meet at its deepest point ``cut``)."""
+    -1 for a minimum (a gap or groove: elements meet at its deepest point ``cut``).
+    """
     a = p.area / max(float(p.area.max()), 1e-9)
     i0, i1 = _solid_layers(p)
     out = []
@@ -493,7 +495,8 @@ def join_islands(csdf: CSDF, axis: int, start: float, period: float) -> int:
 
 def plane_cost(p: Profile, period: float, starts: np.ndarray) -> np.ndarray:
     """(K,) cost of a tile zone ``[t, t + period]`` (layer indices ``starts``): low in gaps and
-    where the two planes' cross-sections match."""
+    where the two planes' cross-sections match.
+    """
     amax = max(float(p.area.max()), 1e-9)
     area = np.interp(starts, np.arange(p.n), p.area) / amax
     area2 = np.interp(starts + period, np.arange(p.n), p.area) / amax
@@ -526,7 +529,8 @@ def whole_phase(
     near: float | None = None,
 ) -> float | None:
     """:func:`best_phase` among the starts whose zone copies whole elements
-    (:func:`~.features.whole_copies` of the axis's local ``features``); None where none does."""
+    (:func:`~.features.whole_copies` of the axis's local ``features``); None where none does.
+    """
     starts = np.arange(lo, hi - period + 1e-9, SHIFT_STEP)
     starts = starts[[whole_copies(features, x, period, lo, hi) for x in starts]]
     if starts.size == 0:
@@ -546,7 +550,8 @@ def _best_of(p: Profile, period: float, starts: np.ndarray, near: float) -> floa
 
 def _split_at_gaps(good: np.ndarray, starts: np.ndarray) -> np.ndarray:
     """(R, 2) ``[first, last]`` indices of the runs of ``good`` starts that follow each other
-    one :data:`SHIFT_STEP` apart."""
+    one :data:`SHIFT_STEP` apart.
+    """
     apart = np.concatenate([[True], np.diff(starts) > SHIFT_STEP * 1.5])
     edges = np.flatnonzero(apart)
     out = []
@@ -560,7 +565,8 @@ def _whole(c: Candidate, p: Profile, features: list[Feature], free: bool) -> Can
     (:func:`~.features.whole_copies`), by whole periods inside its region (the nearest such
     zone: another element like it), else, with ``free`` (a full cross-section match, whose
     phase is chosen by :func:`best_phase`), to the best phase that does; None where none does
-    (a period through a handle or a mullion is no period)."""
+    (a period through a handle or a mullion is no period).
+    """
     assert c.period is not None and c.count is not None  # a tile candidate has both
     if not features:
         return c
@@ -591,7 +597,8 @@ def _moved(c: Candidate, p: Profile, start: float) -> Candidate:
 
 class Slab(NamedTuple):
     """A constant slab: layers ``first..last`` (inclusive), the largest distance of a layer from
-    the first (``drift``), and whether a local feature bounds it (``at_feature``)."""
+    the first (``drift``), and whether a local feature bounds it (``at_feature``).
+    """
 
     first: int
     last: int
@@ -663,7 +670,8 @@ def constant_slabs(
 
 def _beside_features(first: int, last: int, features: list[Feature]) -> list[tuple[int, int]]:
     """The runs of layers ``first..last`` (inclusive) that hold no part of ``features``, at
-    least :data:`MIN_SLAB` long."""
+    least :data:`MIN_SLAB` long.
+    """
     keep = np.ones(last - first + 1, dtype=bool)
     for a, b in feature_spans(features):
         if a <= last and first <= b:

@@ -3,8 +3,9 @@
 #   ./dev.sh setup   create .venv (Python 3.11), install partscale, compile its kernels ahead
 #                    (python -m partscale.warmup), run the demo on the table the
 #                    package ships (partscale.data.table(); PARTSCALE_DEMO_OBJECT: another object)
-#   ./dev.sh test    lint, format check, type checks (mypy, the page's tsc) and the whole test suite (installs
-#                    what it needs first, the optional Ray extra included)
+#   ./dev.sh test    lint, format check, type checks (mypy, the page's tsc), the documentation site
+#                    (mkdocs build --strict), the package build and the whole test suite (installs
+#                    what it needs first, the optional Ray and docs extras included)
 # Optional heavy parts (Node tools for glTF validation and browser tests, Debian's chromium) are
 # installed when possible; tests that need them skip with a printed reason otherwise.
 set -euo pipefail
@@ -46,6 +47,39 @@ ensure_ray() {
     say "installing the optional Ray extra (partscale[ray]) for the batch engine test"
     if "$PY" -m pip install -q -e ".[test,ray]"; then touch "$stamp"
     else echo "note: could not install ray; the batch's Ray engine test will be skipped" >&2; fi
+  fi
+}
+
+ensure_docs() {
+  # the [docs] extra: MkDocs, Material, mkdocstrings and `build`, for the site and package checks
+  local stamp=$VENV/.partscale-docs-installed
+  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
+    say "installing the documentation tools (partscale[docs])"
+    if "$PY" -m pip install -q -e ".[test,docs]"; then touch "$stamp"
+    else echo "note: could not install the documentation tools; the site and package builds will be skipped" >&2; fi
+  fi
+}
+
+check_docs() {
+  # the documentation site in strict mode (broken links, missing references and docstring
+  # warnings fail it) and the package build (sdist and wheel), each skipped with the reason when
+  # its tool is missing
+  if [ -x "$VENV/bin/mkdocs" ]; then
+    say "mkdocs build --strict (the documentation site)"
+    local site; site=$(mktemp -d)
+    NO_MKDOCS_2_WARNING=1 "$VENV/bin/mkdocs" build --strict --quiet --site-dir "$site"
+    rm -rf "$site"
+  else
+    echo "note: mkdocs not installed; the documentation site build is skipped" >&2
+  fi
+  if "$PY" -c 'import build' 2>/dev/null; then
+    say "python -m build (sdist and wheel)"
+    local dist; dist=$(mktemp -d)
+    "$PY" -m build --outdir "$dist" . >"$dist/build.log" 2>&1 || { cat "$dist/build.log" >&2; exit 1; }
+    ls "$dist"/*.whl "$dist"/*.tar.gz >&2
+    rm -rf "$dist"
+  else
+    echo "note: build not installed; the package build is skipped" >&2
   fi
 }
 
@@ -104,6 +138,7 @@ case "${1:-}" in
   test)
     ensure_venv
     ensure_ray
+    ensure_docs
     ensure_node_tools
     ensure_chromium
     say "ruff"
@@ -117,6 +152,7 @@ case "${1:-}" in
     else
       echo "note: web/node_modules not installed; the page's type check (tsc --noEmit) is skipped" >&2
     fi
+    check_docs
     say "pytest"
     shift
     "$PY" -m pytest "$@"

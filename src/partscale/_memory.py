@@ -91,7 +91,23 @@ def reuse_freed_memory(limit: int = REUSE_BYTES) -> bool:
     faults in 200). Serving such blocks from the heap and not trimming it lets the next edit
     reuse the pages. Called by the applications (the CLI, the benchmarks, and each batch job,
     which then releases them with :func:`release_freed_memory`), not on import: the process
-    keeps its peak heap. Returns whether glibc accepted it.
+    keeps its peak heap.
+
+    Parameters
+    ----------
+    limit : int
+        Freed blocks up to this many bytes stay in the heap for reuse.
+
+    Returns
+    -------
+    bool
+        Whether glibc accepted it (False elsewhere: nothing to tune).
+
+    Examples
+    --------
+    >>> from partscale import reuse_freed_memory
+    >>> isinstance(reuse_freed_memory(), bool)  # True with glibc
+    True
     """
     import ctypes
 
@@ -108,7 +124,18 @@ def release_freed_memory() -> bool:
     The counterpart of :func:`reuse_freed_memory` for a process that runs one job after
     another (a batch worker): pages freed within a job are reused by it, and released at its
     end, so the next job's resident memory (and its measured peak) starts from what is really
-    in use. Returns whether glibc did it.
+    in use.
+
+    Returns
+    -------
+    bool
+        Whether glibc did it (False elsewhere).
+
+    Examples
+    --------
+    >>> from partscale import release_freed_memory
+    >>> isinstance(release_freed_memory(), bool)
+    True
     """
     import ctypes
 
@@ -120,9 +147,10 @@ def release_freed_memory() -> bool:
 
 
 def _glibc(name: str, *argtypes):
-    """glibc's function ``name`` with its argument types, or None where there is none (macOS,
+    """Glibc's function ``name`` with its argument types, or None where there is none (macOS,
     musl). Read from the process's own symbols: libc is loaded already (ctypes.util.find_library
-    would run ldconfig, 30 ms at every start of the CLI)."""
+    would run ldconfig, 30 ms at every start of the CLI).
+    """
     import ctypes
 
     try:

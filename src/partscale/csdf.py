@@ -116,6 +116,22 @@ class History(_FrozenList):
     Compares, indexes and serialises like the list of dicts it holds; changing it (or an entry)
     raises ``TypeError``. :meth:`appended` makes a new history sharing every entry, so neither
     copying a CSDF's meta nor recording an operation copies the entries already there.
+
+    Parameters
+    ----------
+    entries : iterable of dict
+        The operations (use :meth:`of`, which checks them).
+
+    Examples
+    --------
+    >>> from partscale.csdf import History
+    >>> h = History.of([{"op": "import"}]).appended({"op": "scale", "axis": "x"})
+    >>> [e["op"] for e in h]
+    ['import', 'scale']
+    >>> h[0]["op"] = "changed"
+    Traceback (most recent call last):
+    ...
+    TypeError: ...
     """
 
     __slots__ = ()
@@ -177,8 +193,19 @@ class CSDF:
         JSON-serialisable: ``units``, ``source``, ``history`` (a read-only :class:`History` of
         operations), ``parts_info``...
 
+    Notes
+    -----
     Construct through :func:`make` (which validates and converts) unless the arrays are already
-    known to be right.
+    known to be right. A CSDF is immutable: every operation returns a new one.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> c = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
+    >>> c.shape
+    (17, 12, 12)
+    >>> c.surface_bounds().round(2).tolist()
+    [[0.0, 0.0, 0.0], [1.0, 0.5, 0.5]]
     """
 
     sdf: np.ndarray
@@ -319,9 +346,29 @@ def _real_array(x: Any) -> np.ndarray | None:
 
 
 def check_origin(x: Any, what: str) -> np.ndarray:
-    """(3,) float64 of a grid origin: three finite real numbers.
+    """Check a grid origin: three finite real numbers.
 
-    ``what`` names it in the :class:`InputError` (``"origin"``, ``"<file>: grid origin"``).
+    Parameters
+    ----------
+    x : array_like
+        The origin as given.
+    what : str
+        Its name in the :class:`InputError` (``"origin"``, ``"<file>: grid origin"``).
+
+    Returns
+    -------
+    (3,) float64
+        The origin.
+
+    Examples
+    --------
+    >>> from partscale.csdf import check_origin
+    >>> check_origin([0, 1, 2], "origin")
+    array([0., 1., 2.])
+    >>> check_origin([0, 1], "origin")
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: origin: expected 3 finite numbers, got [0, 1]
     """
     a = _real_array(x)
     if a is None or a.shape != (3,) or not np.isfinite(a).all():
@@ -330,7 +377,26 @@ def check_origin(x: Any, what: str) -> np.ndarray:
 
 
 def check_number(x: Any, what: str) -> float:
-    """One finite real number (a scalar or a size-1 array) as float; ``what`` names it."""
+    """Check one finite real number (a scalar or a size-1 array).
+
+    Parameters
+    ----------
+    x : scalar or array_like of size 1
+        The number as given.
+    what : str
+        Its name in the :class:`InputError`.
+
+    Returns
+    -------
+    float
+        The number.
+
+    Examples
+    --------
+    >>> from partscale.csdf import check_number
+    >>> check_number([2.5], "iso")
+    2.5
+    """
     a = _real_array(x)
     if a is None or a.size != 1 or not np.isfinite(a).all():
         raise InputError(f"{what}: expected one finite number, got {shown(x)}")
@@ -338,7 +404,30 @@ def check_number(x: Any, what: str) -> float:
 
 
 def check_voxel_size(x: Any, what: str) -> float:
-    """Voxel edge length as float: one finite real number > 0; ``what`` names it."""
+    """Check a voxel edge length: one finite real number > 0 in :data:`VOXEL_SIZE_RANGE`.
+
+    Parameters
+    ----------
+    x : scalar or array_like of size 1
+        The voxel size as given.
+    what : str
+        Its name in the :class:`InputError`.
+
+    Returns
+    -------
+    float
+        The voxel size.
+
+    Examples
+    --------
+    >>> from partscale.csdf import check_voxel_size
+    >>> check_voxel_size(0.01, "voxel_size")
+    0.01
+    >>> check_voxel_size(0, "voxel_size")
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: voxel_size: expected a finite number > 0, got 0.0
+    """
     a = _real_array(x)
     if a is None or a.size != 1:
         raise InputError(f"{what}: expected one number, got {shown(x)}")
@@ -377,6 +466,20 @@ def make(
         JSON-serialisable metadata, copied; ``format``/``version``/``history`` are filled in,
         and a given ``history`` must be a list of objects (operations). It is stored as a
         read-only :class:`History` (a History given is shared as it is, not copied).
+
+    Returns
+    -------
+    CSDF
+        The arrays, converted (float32, uint8, int16) and made read-only.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import make
+    >>> x, y, z = np.mgrid[-1:1:21j, -1:1:21j, -1:1:21j]
+    >>> ball = make(np.sqrt(x**2 + y**2 + z**2) - 0.5, origin=(-1, -1, -1), voxel_size=0.1)
+    >>> ball.shape, ball.sdf.dtype, ball.rgb[0, 0, 0].tolist()
+    ((21, 21, 21), dtype('float32'), [128, 128, 128])
     """
     return _make(sdf, rgb, parts, origin, voxel_size, meta, trusted=False)
 
@@ -470,9 +573,31 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
     """Write ``csdf`` to a ``.csdf.npz`` file atomically (a temporary file, then a rename).
 
     The zip members carry a fixed time, so the same CSDF always gives the same bytes (numpy's
-    ``savez`` stamps the current time). With ``compress``, each array is deflated where that
-    pays (colours, parts) and stored where it does not (the distances); any zip reader, and
-    ``np.load``, reads both. Returns the path written.
+    ``savez`` stamps the current time). Any zip reader, and ``np.load``, reads the file.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        What to write.
+    path : str or os.PathLike
+        The file (``.csdf.npz`` by convention).
+    compress : bool
+        Deflate each array where that pays (colours, parts), store it where it does not (the
+        distances).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Examples
+    --------
+    >>> from partscale import load, save, shapes
+    >>> box = shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.1)
+    >>> save(box, "box.csdf.npz")
+    PosixPath('box.csdf.npz')
+    >>> load("box.csdf.npz").shape == box.shape
+    True
     """
     path = Path(path)
     arrays = {
@@ -496,7 +621,8 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
 def _deflates(a: np.ndarray) -> bool:
     """Whether deflate shrinks ``a`` (any array) below ``_DEFLATE_GAIN`` of its bytes, judged on
     up to four samples spread over it (a few ms: the data alone decides, so the bytes written
-    stay the same for the same CSDF)."""
+    stay the same for the same CSDF).
+    """
     b = np.ascontiguousarray(a).reshape(-1).view(np.uint8)
     n = len(b)
     if n <= 4 * _DEFLATE_SAMPLE:
@@ -509,10 +635,31 @@ def _deflates(a: np.ndarray) -> bool:
 def load(path: str | os.PathLike) -> CSDF:
     """Read and validate a ``.csdf.npz`` file.
 
-    Raises :class:`InputError` naming the file and the problem: missing file, not an npz,
-    truncated or damaged data, missing or extra arrays, wrong shapes or dtypes, non-finite
-    values, meta that is not a JSON object, wrong format or version (reported before anything
-    else :func:`make` checks: origin, voxel size, history).
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, as :func:`save` writes it.
+
+    Returns
+    -------
+    CSDF
+        Its arrays (read-only) and meta.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the problem: missing file, not an npz, truncated or damaged data,
+        missing or extra arrays, wrong shapes or dtypes, non-finite values, meta that is not a
+        JSON object, wrong format or version (reported before anything else :func:`make`
+        checks: origin, voxel size, history).
+
+    Examples
+    --------
+    >>> from partscale import load, save, shapes
+    >>> _ = save(shapes.sphere((0, 0, 0), 0.5, voxel_size=0.1), "ball.csdf.npz")
+    >>> ball = load("ball.csdf.npz")
+    >>> ball.meta["source"], ball.voxel_size
+    ('sphere', 0.1)
     """
     path = check_input_file(path, what="an existing .csdf.npz file")
     try:

@@ -8,7 +8,22 @@ from __future__ import annotations
 
 
 class PartscaleError(Exception):
-    """Base class of every error partscale raises on purpose."""
+    """Base class of every error partscale raises on purpose.
+
+    Parameters
+    ----------
+    *args : object
+        As :class:`Exception` takes them: the message first.
+
+    Examples
+    --------
+    >>> from partscale import PartscaleError, load
+    >>> try:
+    ...     load("no such file.csdf.npz")
+    ... except PartscaleError as exc:
+    ...     print(type(exc).__name__)
+    InputError
+    """
 
 
 class InputError(PartscaleError, ValueError):
@@ -23,6 +38,15 @@ class InputError(PartscaleError, ValueError):
         The parameters the message names within its text (``"expected res in [16, 16384]"``),
         so that the command line can say its own spelling (``--res``). One named at the head of
         the message (``"rank: expected ..."``) need not be listed.
+
+    Examples
+    --------
+    >>> from partscale import InputError, load
+    >>> try:
+    ...     load("missing.csdf.npz")
+    ... except InputError as exc:
+    ...     print(exc)
+    missing.csdf.npz: expected an existing .csdf.npz file, got no such file
     """
 
     def __init__(self, message: str = "", *, params: tuple[str, ...] = ()) -> None:
@@ -36,7 +60,8 @@ class MemoryLimitError(InputError):
 
 class PartscaleWarning(UserWarning):
     """A note for the user about something partscale did on its own (e.g. a damaged cache
-    entry discarded); the CLI prints it as one line."""
+    entry discarded); the CLI prints it as one line.
+    """
 
 
 def one_line(exc: BaseException) -> str:

@@ -58,9 +58,29 @@ _VIEW_AXES = {
 
 @dataclass(frozen=True)
 class Camera:
-    """An orthographic camera: world point ``centre`` at the image centre, ``scale`` pixels per
-    world unit, unit vectors ``right``, ``up`` and ``back`` (towards the viewer); ``centre``
-    appears ``shift`` pixels above the image centre."""
+    """An orthographic camera, as :func:`camera` fits it to a box.
+
+    Parameters
+    ----------
+    centre : (3,) float64
+        World point at the image centre.
+    right, up, back : (3,) float64
+        Unit vectors of the image's x, its y and towards the viewer.
+    scale : float
+        Pixels per world unit.
+    size : int
+        Image width and height in pixels.
+    shift : float
+        Pixels ``centre`` appears above the image centre.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.render import camera
+    >>> cam = camera("front", shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.05).surface_bounds(), 64)
+    >>> cam.right.tolist(), cam.pixel_rays().shape
+    ([1.0, 0.0, 0.0], (4096, 3))
+    """
 
     centre: np.ndarray
     right: np.ndarray
@@ -72,7 +92,13 @@ class Camera:
     shift: float = 0.0
 
     def pixel_rays(self) -> np.ndarray:
-        """(size * size, 3) float64 world points of the pixel centres on the camera plane."""
+        """World points of the pixel centres on the camera plane, row by row from the top.
+
+        Returns
+        -------
+        (size * size, 3) float64
+            One point per pixel; rays leave them along ``-back``.
+        """
         s = self.size
         u = (np.arange(s) + 0.5 - s / 2) / self.scale
         v = (s / 2 - self.shift - (np.arange(s) + 0.5)) / self.scale
@@ -84,11 +110,34 @@ class Camera:
 
 
 def camera(view: str, frame: np.ndarray, size: int, *, reserve_bottom: float = 0.0) -> Camera:
-    """Fit an orthographic camera for ``view`` to the world box ``frame`` (2, 3).
+    """Fit an orthographic camera for ``view`` to a world box.
 
     The frame's projection is centred in the image and its larger extent spans
-    ``size * (1 - 2 * MARGIN)`` pixels; ``reserve_bottom`` (a fraction of ``size``) keeps a band
-    at the bottom free (for the scale bar), shrinking and lifting the fit accordingly.
+    ``size * (1 - 2 * MARGIN)`` pixels.
+
+    Parameters
+    ----------
+    view : {"front", "side", "top", "iso"}
+        Where the camera looks from.
+    frame : (2, 3) array_like of float
+        World box (min and max corner) to fit.
+    size : int
+        Image width and height in pixels.
+    reserve_bottom : float
+        A band at the bottom kept free (a fraction of ``size``, for the scale bar), shrinking and
+        lifting the fit accordingly.
+
+    Returns
+    -------
+    Camera
+        The camera.
+
+    Examples
+    --------
+    >>> from partscale.render import camera
+    >>> cam = camera("top", [[0, 0, 0], [2, 1, 1]], 100)
+    >>> cam.up.tolist(), round(cam.scale, 1)
+    ([0.0, 0.0, -1.0], 45.0)
     """
     if view not in _VIEW_AXES:
         raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
@@ -140,7 +189,8 @@ def _trace(sdf, origins, d, eps, max_steps, graze, hits):
     """March every ray ``origins[r] + t d`` through ``sdf`` (voxel units); hits[r] = point or nan.
 
     Steps are the SDF value, at least ``eps`` for ``max_steps`` steps and at least ``graze``
-    after (see :data:`GRAZE_STEP`)."""
+    after (see :data:`GRAZE_STEP`).
+    """
     n = origins.shape[0]
     hi = np.array([sdf.shape[0] - 1.0, sdf.shape[1] - 1.0, sdf.shape[2] - 1.0])
     for r in numba.prange(n):
@@ -202,8 +252,28 @@ def _colours(rgb, pts, out):
 
 
 def part_colors(csdf: CSDF) -> np.ndarray:
-    """(P, 3) uint8 sRGB display colour of each part: ``meta['parts_info'][i]['color']`` when
-    stored, else the colour segmentation would store (:func:`partscale.color.palette_colour`)."""
+    """Display colour of each part of a segmented CSDF.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        A segmented object (``csdf.n_parts`` parts; none gives an empty table).
+
+    Returns
+    -------
+    (P, 3) uint8
+        sRGB colour of part ``i`` in row ``i``: ``meta['parts_info'][i]['color']`` when stored,
+        else the colour segmentation would store (:func:`partscale.color.palette_colour`).
+
+    Examples
+    --------
+    >>> from partscale import data, ingest, segment
+    >>> from partscale.render import part_colors
+    >>> table = segment.segment(ingest.load(data.table(), res=64))
+    >>> colours = part_colors(table)
+    >>> colours.shape == (table.n_parts, 3), colours.dtype
+    (True, dtype('uint8'))
+    """
     n = csdf.n_parts
     info = csdf.meta.get("parts_info")
     out = np.empty((n, 3), np.uint8)
@@ -231,7 +301,26 @@ def _nice_length(max_length: float) -> float:
 
 
 def scale_bar_label(length: float, units: str) -> str:
-    """A short label for a bar ``length`` long, e.g. ``50 cm`` for 0.5 m."""
+    """A short label for a scale bar ``length`` long.
+
+    Parameters
+    ----------
+    length : float
+        The bar's length in ``units``.
+    units : str
+        The object's units; metres are shown in m, cm or mm, whichever reads as a whole number.
+
+    Returns
+    -------
+    str
+        The label.
+
+    Examples
+    --------
+    >>> from partscale.render import scale_bar_label
+    >>> scale_bar_label(0.5, "m"), scale_bar_label(2.0, "m"), scale_bar_label(5, "in")
+    ('50 cm', '2 m', '5 in')
+    """
     if units == "m":
         for factor, name in ((1.0, "m"), (100.0, "cm"), (1000.0, "mm")):
             if length * factor >= 1 - 1e-9:
@@ -244,7 +333,8 @@ def _draw_scale_bar(
     image: np.ndarray, cam: Camera, units: str, background, *, max_px: float | None = None
 ) -> np.ndarray:
     """``image`` with a scale bar at its bottom left, at most ``max_px`` (default a quarter of
-    the camera's image) long; sized by the camera's image, placed by ``image``'s height."""
+    the camera's image) long; sized by the camera's image, placed by ``image``'s height.
+    """
     from PIL import Image, ImageDraw, ImageFont
 
     size = cam.size
@@ -299,6 +389,16 @@ def render(
     -------
     (size, size, 3) uint8
         sRGB image, row 0 at the top.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> from partscale.render import render, save_png
+    >>> image = render(ingest.load(data.table(), res=64), view="iso", size=256)
+    >>> image.shape, image.dtype
+    ((256, 256, 3), dtype('uint8'))
+    >>> save_png(image, "table.png")
+    PosixPath('table.png')
     """
     report = resolve(progress)
     if (
@@ -368,7 +468,27 @@ def render(
 
 
 def save_png(image: np.ndarray, path: str | os.PathLike) -> Path:
-    """Write an (H, W, 3) or (H, W, 4) uint8 image as PNG, atomically. Returns the path."""
+    """Write an image as PNG, atomically.
+
+    Parameters
+    ----------
+    image : (H, W, 3) or (H, W, 4) uint8
+        sRGB(A) pixels, row 0 at the top, as :func:`render` returns them.
+    path : str or os.PathLike
+        A file ending in ``.png``.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.render import render, save_png
+    >>> save_png(render(shapes.sphere((0, 0, 0), 1.0, voxel_size=0.1), size=64), "ball.png")
+    PosixPath('ball.png')
+    """
     from PIL import Image
 
     path = Path(path)
@@ -407,7 +527,8 @@ def _label_spots(draw, font, boxes, labels, vertical) -> list[tuple[float, float
     """Where each band's label goes: its box's top-left corner, or, where that would overlap
     the label of a band before it (a better one), the first free place further along the band
     (down a vertical band, right along a horizontal one), one label's height or width at a
-    time; None (left out) where the band has no free place."""
+    time; None (left out) where the band has no free place.
+    """
     taken: list[tuple[float, float, float, float]] = []
     out: list[tuple[float, float] | None] = []
     for box, label, down in zip(boxes, labels, vertical, strict=True):
@@ -438,14 +559,39 @@ def render_bands(
     view: str = "front",
     size: int = 640,
 ) -> np.ndarray:
-    """(H, W, 3) uint8: ``csdf`` rendered from ``view`` with translucent bands, axes with
-    ticks in object units along the frame's bottom and left edges, and a scale bar.
+    """Render ``csdf`` with translucent zone bands, axes with ticks in object units and a scale bar.
 
-    ``bands``: ``(axis, lo, hi, label, colour)`` tuples (axis 0-2, world ``lo``/``hi`` along it,
-    a short label, sRGB colour), the first drawn on top and only the first :data:`FILLED_BANDS`
-    filled (the rest outlined); those along an axis the view does not show are skipped (:class:`~partscale.errors.InputError` when none is left). The object's
-    larger side spans ``size`` less :data:`MARGIN`; the picture is cropped to the object, its
-    bands and axes with a margin of :data:`BAND_MARGIN` of ``size``, the scale bar below it.
+    The object's larger side spans ``size`` less :data:`MARGIN`; the picture is cropped to the
+    object, its bands and axes with a margin of :data:`BAND_MARGIN` of ``size``, the scale bar
+    below it (what ``partscale suggest --png`` draws).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    bands : list of (axis, lo, hi, label, colour)
+        Axis 0-2, world ``lo`` and ``hi`` along it, a short label and an sRGB colour; the first
+        is drawn on top and only the first :data:`FILLED_BANDS` are filled (the rest outlined).
+        Bands along an axis the view does not show are skipped
+        (:class:`~partscale.errors.InputError` when none is left).
+    view : {"front", "side", "top", "iso"}
+        Where the camera looks from.
+    size : int
+        Pixels the object's frame is fitted to.
+
+    Returns
+    -------
+    (H, W, 3) uint8
+        sRGB image, cropped.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.render import render_bands
+    >>> bar = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.05)
+    >>> image = render_bands(bar, [(0, 0.2, 0.6, "stretch", (255, 0, 0))], size=128)
+    >>> image.ndim, image.dtype
+    (3, dtype('uint8'))
     """
     from PIL import Image, ImageDraw, ImageFont
 

@@ -24,10 +24,20 @@ def box_sdf(points: np.ndarray, lo: ArrayLike, hi: ArrayLike) -> np.ndarray:
     ----------
     points : (..., 3) float
         World points.
+    lo, hi : (3,) array_like of float
+        The box's min and max corner.
 
     Returns
     -------
     (...,) float64
+        Distance to the box's surface, negative inside.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.shapes import box_sdf
+    >>> box_sdf(np.array([[0.5, 0.5, 0.5], [2, 0.5, 0.5]]), (0, 0, 0), (1, 1, 1))
+    array([-0.5,  1. ])
     """
     p = np.asarray(points, dtype=np.float64)
     c = (np.asarray(lo, float) + np.asarray(hi, float)) / 2
@@ -39,13 +49,58 @@ def box_sdf(points: np.ndarray, lo: ArrayLike, hi: ArrayLike) -> np.ndarray:
 
 
 def sphere_sdf(points: np.ndarray, center: ArrayLike, radius: float) -> np.ndarray:
-    """Exact signed distance to a sphere. ``points`` (..., 3) -> (...,) float64."""
+    """Exact signed distance to a sphere.
+
+    Parameters
+    ----------
+    points : (..., 3) float
+        World points.
+    center : (3,) array_like of float
+        The sphere's centre.
+    radius : float
+        Its radius.
+
+    Returns
+    -------
+    (...,) float64
+        Distance to the sphere, negative inside.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.shapes import sphere_sdf
+    >>> sphere_sdf(np.array([[0, 0, 0], [2, 0, 0]]), (0, 0, 0), 1.0)
+    array([-1.,  1.])
+    """
     p = np.asarray(points, dtype=np.float64)
     return np.linalg.norm(p - np.asarray(center, float), axis=-1) - radius
 
 
 def boxes_sdf(points: np.ndarray, boxes: Sequence[tuple[ArrayLike, ArrayLike]]):
-    """Exact signed distance to a union of *disjoint* boxes (min of their SDFs)."""
+    """Signed distance to a union of boxes: the least of their distances.
+
+    Exact outside the union and for disjoint boxes; inside boxes that overlap it is the distance
+    to the nearest box's own surface.
+
+    Parameters
+    ----------
+    points : (..., 3) float
+        World points.
+    boxes : sequence of (lo, hi)
+        Each box's min and max corner.
+
+    Returns
+    -------
+    (...,) float64
+        Distance, negative inside.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.shapes import boxes_sdf
+    >>> boxes_sdf(np.array([[1.5, 0.5, 0.5]]), [((0, 0, 0), (1, 1, 1)), ((2, 0, 0), (3, 1, 1))])
+    array([0.5])
+    """
     return np.min([box_sdf(points, lo, hi) for lo, hi in boxes], axis=0)
 
 
@@ -63,13 +118,33 @@ def grid(
     Parameters
     ----------
     sdf_function : callable (N, 3) float64 -> (N,) float64
-    bounds : (2, 3) float
+        The signed distance (negative inside) at world points.
+    bounds : (2, 3) array_like of float
         World box the shape lies in.
     voxel_size : float
+        Voxel edge length, world units.
     margin : int
         Empty voxels between the bounds and the grid border.
     color : (3,) uint8 or callable (N, 3) points -> (N, 3) uint8
         sRGB colour, constant or a function of position.
+    source : str
+        What ``meta['source']`` says.
+
+    Returns
+    -------
+    CSDF
+        The sampled object.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> ball = shapes.grid(
+    ...     lambda p: shapes.sphere_sdf(p, (0, 0, 0), 0.5),
+    ...     [(-0.5, -0.5, -0.5), (0.5, 0.5, 0.5)],
+    ...     voxel_size=0.1,
+    ... )
+    >>> ball.shape, ball.meta["source"]
+    ((17, 17, 17), 'analytic')
     """
     b = np.asarray(bounds, dtype=np.float64)
     origin = b[0] - margin * voxel_size
@@ -85,7 +160,31 @@ def grid(
 
 
 def box(lo, hi, *, voxel_size: float, margin: int = 3, color=(200, 120, 60)) -> CSDF:
-    """A CSDF of the box ``[lo, hi]`` (exact SDF at every voxel)."""
+    """A CSDF of the box ``[lo, hi]`` (exact SDF at every voxel).
+
+    Parameters
+    ----------
+    lo, hi : (3,) array_like of float
+        The box's min and max corner, world units.
+    voxel_size : float
+        Voxel edge length.
+    margin : int
+        Empty voxels around it.
+    color : (3,) int
+        sRGB colour.
+
+    Returns
+    -------
+    CSDF
+        The box.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> b = shapes.box((0, 0, 0), (1, 0.5, 0.25), voxel_size=0.05)
+    >>> b.shape, round(float(b.sdf.min()), 3)
+    ((27, 17, 12), -0.1)
+    """
     return grid(
         lambda p: box_sdf(p, lo, hi),
         (lo, hi),
@@ -97,7 +196,33 @@ def box(lo, hi, *, voxel_size: float, margin: int = 3, color=(200, 120, 60)) -> 
 
 
 def sphere(center, radius, *, voxel_size: float, margin: int = 3, color=(60, 120, 200)) -> CSDF:
-    """A CSDF of a sphere (exact SDF at every voxel)."""
+    """A CSDF of a sphere (exact SDF at every voxel).
+
+    Parameters
+    ----------
+    center : (3,) array_like of float
+        The sphere's centre.
+    radius : float
+        Its radius.
+    voxel_size : float
+        Voxel edge length.
+    margin : int
+        Empty voxels around it.
+    color : (3,) int
+        sRGB colour.
+
+    Returns
+    -------
+    CSDF
+        The sphere.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> ball = shapes.sphere((0, 0, 0), 1.0, voxel_size=0.1)
+    >>> ball.shape, ball.rgb[10, 10, 10].tolist()
+    ((27, 27, 27), [60, 120, 200])
+    """
     c = np.asarray(center, float)
     return grid(
         lambda p: sphere_sdf(p, c, radius),
@@ -120,10 +245,39 @@ def bars(
     voxel_size: float,
     margin: int = 3,
 ) -> tuple[CSDF, list[tuple[np.ndarray, np.ndarray]]]:
-    """A row of ``n`` identical disjoint bars spaced along ``axis``; returns the CSDF and the boxes.
+    """A row of ``n`` identical disjoint bars spaced along ``axis``.
 
     Bar ``m`` spans ``[m * (width + gap), m * (width + gap) + width]`` along ``axis``; the other
-    two axes span ``[0, height]`` and ``[0, depth]``. Colours alternate so seams are visible.
+    two axes span ``[0, height]`` and ``[0, depth]``.
+
+    Parameters
+    ----------
+    n : int
+        Number of bars.
+    width, gap : float
+        Each bar's width and the gap between two, along ``axis``.
+    height, depth : float
+        The bars' extent along the other two axes (in order).
+    axis : int
+        0, 1 or 2.
+    voxel_size : float
+        Voxel edge length.
+    margin : int
+        Empty voxels around them.
+
+    Returns
+    -------
+    CSDF
+        The bars.
+    list of (lo, hi)
+        Each bar's box, for analytic checks.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> row, boxes = shapes.bars(3, width=0.1, gap=0.2, height=0.5, depth=0.3, voxel_size=0.02)
+    >>> row.shape, len(boxes), boxes[1][0].round(2).tolist()
+    ((42, 32, 22), 3, [0.3, 0.0, 0.0])
     """
     boxes = []
     others = [a for a in range(3) if a != axis]

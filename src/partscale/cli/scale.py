@@ -111,7 +111,10 @@ def scale(
     center: Annotated[
         tuple[str, str] | None,
         typer.Option(
-            "--center", metavar="X Z", help="With --radial: the axis' position; found when omitted."
+            "--center",
+            metavar="X Z",
+            help="With --radial: the axis' position.",
+            show_default="found",
         ),
     ] = None,
     sides: Annotated[
@@ -119,7 +122,8 @@ def scale(
         typer.Option(
             "--sides",
             metavar="N",
-            help="With --radial: 0 for a round outline, N for a regular N-gon; found when omitted.",
+            help="With --radial: 0 for a round outline, N for a regular N-gon.",
+            show_default="found",
         ),
     ] = None,
     span: Annotated[

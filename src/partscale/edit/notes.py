@@ -32,6 +32,15 @@ def describe_changes(entries: list[Any], out: CSDF) -> list[str]:
     list of str
         Removed zones (tile, 0 copies) first, then whole-voxel destinations, then zone planes
         that cut an element.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import apply_edit, describe_changes
+    >>> out = apply_edit(bar, {"axis": "x", "zone": [0.3, 0.6], "to": 0.83})
+    >>> describe_changes(out.meta["history"][-1:], out)
+    ['destination 0.83 -> 0.85 m (+0.02 m): lengths change by whole voxels of 0.05 m (recorded in the history)']
     """
     return (
         _warps(entries, out)
@@ -67,13 +76,48 @@ def _warps(entries: list[Any], out: CSDF) -> list[str]:
 
 
 def unit_suffix(units: str | None) -> str:
-    """What follows a length in a message: ``" m"``, or nothing for an object without units."""
+    """What follows a length in a message.
+
+    Parameters
+    ----------
+    units : str or None
+        The object's units.
+
+    Returns
+    -------
+    str
+        ``" m"`` (a space, then the units), or nothing for an object without units.
+
+    Examples
+    --------
+    >>> from partscale.edit import unit_suffix
+    >>> unit_suffix("m"), unit_suffix(None)
+    (' m', '')
+    """
     return f" {units}" if units else ""
 
 
 def edit_label(i: int, n: int) -> str:
-    """What starts a message about edit ``i`` (from 0) of ``n``: ``"edit 2: "``, or nothing when
-    the recipe has one edit."""
+    """What starts a message about edit ``i`` (from 0) of ``n``.
+
+    Parameters
+    ----------
+    i : int
+        The edit's place in its recipe, from 0.
+    n : int
+        The number of edits in the recipe.
+
+    Returns
+    -------
+    str
+        ``"edit 2: "``, or nothing when the recipe has one edit.
+
+    Examples
+    --------
+    >>> from partscale.edit import edit_label
+    >>> edit_label(1, 3), edit_label(0, 1)
+    ('edit 2: ', '')
+    """
     return f"edit {i + 1}: " if n > 1 else ""
 
 
@@ -94,7 +138,8 @@ def _removed(entries: list[Any], out: CSDF) -> list[str]:
 
 def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
     """A line per edit whose destination moved to whole voxels (the history keeps both:
-    ``edit.to`` as given and ``to_snapped``), saying by how much."""
+    ``edit.to`` as given and ``to_snapped``), saying by how much.
+    """
     u = unit_suffix(out.meta.get("units"))
     lines = []
     for i, h in enumerate(entries):
@@ -122,7 +167,8 @@ def _voxel_snaps(entries: list[Any], out: CSDF) -> list[str]:
 
 def _slivers(entries: list[Any], out: CSDF) -> list[str]:
     """A line per tile edit whose zone plane cut an element: the sliver it cut off was left out
-    at the inner seams (history: ``slivers_left_out``, voxels per plane)."""
+    at the inner seams (history: ``slivers_left_out``, voxels per plane).
+    """
     u = unit_suffix(out.meta.get("units"))
     lines = []
     for i, h in enumerate(entries):

@@ -60,7 +60,8 @@ def part_counts(parts: np.ndarray, sdf: np.ndarray | None = None) -> np.ndarray:
 @nb.njit(cache=True, parallel=True)
 def _count_labels(parts, sdf, inside_only, chunks):
     """:func:`part_counts` over ``chunks`` spans of axis 0 side by side (integer sums: the
-    same counts whatever the number of chunks)."""
+    same counts whatever the number of chunks).
+    """
     n0 = parts.shape[0]
     chunks = max(1, min(chunks, n0))
     hist = np.zeros((chunks, 32768), np.int64)  # every int16 label >= 0
@@ -101,7 +102,8 @@ def unlabel_far(
 @nb.njit(cache=True, parallel=True)
 def _unlabel_rows(sdf, parts, far, j0, j1):
     """parts[p, j, q] = -1 where sdf[p, j, q] > far, layers ``j0 <= j < j1`` of (P, N, Q)
-    views; rows in parallel (unsigned indices: the inner loop vectorises)."""
+    views; rows in parallel (unsigned indices: the inner loop vectorises).
+    """
     nj = j1 - j0
     for t in nb.prange(sdf.shape[0] * nj):
         p = np.uint64(t // nj)

@@ -226,12 +226,32 @@ JSON_SCHEMA: dict[str, Any] = {
 
 
 def parse_position(value: Any, what: str, units: str | None = None) -> Position:
-    """A position: a finite number (object units) or a string ``'NN%'``; else :class:`InputError`.
+    """Parse a position: a finite number (object units) or a string (a number, ``'NN%'``, a length).
 
     Numbers are any real number (Python or numpy scalars) but not booleans; strings hold a
     number, a percentage, or a length with a unit (``'30cm'``, ``'300mm'``, ``'0.3m'``: converted
     to object units, so only where ``units`` is ``'m'``; see :mod:`.units`). Non-finite values
     (``inf``, ``nan``, ``'1e400%'``) are refused.
+
+    Parameters
+    ----------
+    value : float or str
+        The position as given.
+    what : str
+        Its name in the :class:`InputError`.
+    units : str, optional
+        The object's units.
+
+    Returns
+    -------
+    float or str
+        A number in object units, or the ``'NN%'`` string (resolved on an object later).
+
+    Examples
+    --------
+    >>> from partscale.edit import parse_position
+    >>> parse_position("30%", "zone"), parse_position("30cm", "zone", units="m"), parse_position(0.3, "zone")
+    ('30%', 0.3, 0.3)
     """
     if isinstance(value, bool | np.bool_):
         raise InputError(
@@ -259,7 +279,25 @@ def parse_position(value: Any, what: str, units: str | None = None) -> Position:
 
 @dataclass(frozen=True)
 class Edit:
-    """One zone edit. Positions are floats (object units) or ``'NN%'`` strings."""
+    """One zone edit between two planes across an axis.
+
+    Parameters
+    ----------
+    axis : {'x', 'y', 'z'}
+        The axis the zone lies along.
+    start, end : float or str
+        The zone's planes: object units, or ``'NN%'`` of the solid's extent along the axis.
+    dest : float or str
+        Where ``end`` goes, in the same terms.
+    mode : {'stretch', 'tile', 'global'}
+        How the zone changes (see :mod:`partscale.edit`).
+
+    Examples
+    --------
+    >>> from partscale.edit import Edit
+    >>> Edit("x", "30%", "60%", "80%", "tile").to_json()
+    {'axis': 'x', 'zone': ['30%', '60%'], 'to': '80%', 'mode': 'tile'}
+    """
 
     axis: str
     start: Position
@@ -270,7 +308,8 @@ class Edit:
     @classmethod
     def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> Edit:
         """Validate a JSON-like edit (see module docstring); ``units``: the object's
-        (``meta['units']``), for lengths with a unit (:func:`parse_position`)."""
+        (``meta['units']``), for lengths with a unit (:func:`parse_position`).
+        """
         if not isinstance(obj, dict):
             raise InputError(
                 f"{where}: expected an object with axis, zone, to, mode; got {shown(obj)}"
@@ -303,6 +342,7 @@ class Edit:
         )
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "axis": self.axis,
             "zone": [self.start, self.end],
@@ -312,6 +352,7 @@ class Edit:
 
     @property
     def axis_index(self) -> int:
+        """The axis as 0, 1 or 2."""
         return AXES.index(self.axis)
 
     def resolve(self, lo: float, hi: float) -> tuple[float, float, float]:
@@ -358,7 +399,7 @@ def _number(v: Any, what: str, units: str | None) -> float:
 class RadialZone:
     """An annulus about a line parallel to ``axis`` through ``center`` (world units).
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
         The axis the annulus turns about (``'y'``: a table's vertical).
@@ -375,6 +416,12 @@ class RadialZone:
         second.
     span : (float, float) or None
         Positions along ``axis`` between which the zone applies (None: everywhere).
+
+    Examples
+    --------
+    >>> from partscale.edit import RadialZone
+    >>> RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5).to_json()
+    {'radial': {'axis': 'y', 'center': [0.0, 0.0], 'sides': 0, 'phase': 0.0}, 'zone': [0.1, 0.4], 'to': 0.5}
     """
 
     axis: str
@@ -389,7 +436,8 @@ class RadialZone:
     @classmethod
     def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> RadialZone:
         """Validate a JSON-like radial edit ``{"radial": {"axis", "center", "sides", "phase"},
-        "zone": [R0, R1], "to": R1'}`` (radii: numbers or lengths with a unit)."""
+        "zone": [R0, R1], "to": R1'}`` (radii: numbers or lengths with a unit).
+        """
         _keys(obj, {"radial", "zone", "to"}, {"radial", "zone", "to"}, where)
         spec = obj["radial"]
         if not isinstance(spec, dict):
@@ -432,6 +480,7 @@ class RadialZone:
         )
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         spec: dict[str, Any] = {
             "axis": self.axis,
             "center": [self.center[0], self.center[1]],
@@ -444,6 +493,7 @@ class RadialZone:
 
     @property
     def shift(self) -> float:
+        """How far the outer radius moves: ``to - r1``."""
         return self.to - self.r1
 
 
@@ -451,7 +501,7 @@ class RadialZone:
 class ObliqueZone:
     """The slab between two planes square to the unit vector ``normal``.
 
-    Attributes
+    Parameters
     ----------
     normal : (float, float, float)
         Unit vector (world axes).
@@ -459,6 +509,12 @@ class ObliqueZone:
         The planes ``p . normal = s0`` and ``= s1`` (world units), ``s0 < s1``.
     to : float
         Where the plane ``s1`` goes, ``> s0``.
+
+    Examples
+    --------
+    >>> from partscale.edit import ObliqueZone
+    >>> ObliqueZone((1.0, 0.0, 0.0), 0.3, 0.6, 0.8).to_json()
+    {'normal': [1.0, 0.0, 0.0], 'zone': [0.3, 0.6], 'to': 0.8}
     """
 
     normal: tuple[float, float, float]
@@ -469,7 +525,8 @@ class ObliqueZone:
     @classmethod
     def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> ObliqueZone:
         """Validate a JSON-like oblique edit ``{"normal": [NX, NY, NZ], "zone": [S0, S1],
-        "to": S1'}`` (positions along the normal: numbers or lengths with a unit)."""
+        "to": S1'}`` (positions along the normal: numbers or lengths with a unit).
+        """
         _keys(obj, {"normal", "zone", "to", "mode"}, {"normal", "zone", "to"}, where)
         if obj.get("mode", "stretch") != "stretch":
             raise InputError(
@@ -488,20 +545,24 @@ class ObliqueZone:
         )
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {"normal": list(self.normal), "zone": [self.s0, self.s1], "to": self.to}
 
     @property
     def shift(self) -> float:
+        """How far the plane ``s1`` moves: ``to - s1``."""
         return self.to - self.s1
 
 
 @dataclass(frozen=True)
 class ScrewZone:
-    """``copies`` more steps of a repetition by a diagonal shift (a straight flight): what lies
+    """Steps added to (or removed from) a flight that repeats by a diagonal shift.
+
+    ``copies`` more steps of a repetition by a diagonal shift (a straight flight): what lies
     beyond the plane ``cut`` across ``axis`` moves by ``copies`` times ``step``
     (:func:`partscale.edit.apply_screw`); ``copies < 0`` removes steps.
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
         The axis the cut plane lies across (the flight's horizontal direction).
@@ -511,6 +572,12 @@ class ScrewZone:
         The cut plane's position along ``axis`` (world units).
     copies : int
         Steps added (negative: removed), not 0.
+
+    Examples
+    --------
+    >>> from partscale.edit import ScrewZone
+    >>> ScrewZone("x", (0.2, 0.2, 0.0), 0.5, 1).to_json()
+    {'screw': {'axis': 'x', 'step': [0.2, 0.2, 0.0], 'cut': 0.5}, 'copies': 1}
     """
 
     axis: str
@@ -549,6 +616,7 @@ class ScrewZone:
         )
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "screw": {"axis": self.axis, "step": list(self.step), "cut": self.cut},
             "copies": self.copies,
@@ -590,7 +658,22 @@ class CountEdit:
 
 @dataclass(frozen=True)
 class Recipe:
-    """An ordered list of :class:`Edit`; serialises to the JSON schema above."""
+    """An ordered list of edits; serialises to the JSON schema :data:`JSON_SCHEMA`.
+
+    All positions refer to the recipe's input object as given (see the module).
+
+    Parameters
+    ----------
+    edits : tuple of Edit, RadialZone, ObliqueZone or ScrewZone
+        The edits, applied in order.
+
+    Examples
+    --------
+    >>> from partscale.edit import Recipe
+    >>> recipe = Recipe.parse({"version": 1, "edits": [{"axis": "x", "zone": ["30%", "60%"], "to": "80%"}]})
+    >>> recipe.to_json()
+    {'version': 1, 'edits': [{'axis': 'x', 'zone': ['30%', '60%'], 'to': '80%', 'mode': 'stretch'}]}
+    """
 
     edits: tuple[Edit | RadialZone | ObliqueZone | ScrewZone | CountEdit, ...] = field(
         default_factory=tuple
@@ -599,7 +682,8 @@ class Recipe:
     @classmethod
     def parse(cls, obj: Any, *, units: str | None = None) -> Recipe:
         """Validate a JSON-like recipe (see module docstring); ``units``: the object's
-        (``meta['units']``) where positions with a unit (``'30cm'``) are to be converted."""
+        (``meta['units']``) where positions with a unit (``'30cm'``) are to be converted.
+        """
         if isinstance(obj, list):
             obj = {"edits": obj}
         if not isinstance(obj, dict) or "edits" not in obj:
@@ -633,14 +717,39 @@ class Recipe:
             raise InputError(f"{path}: {exc}") from None
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {"version": RECIPE_VERSION, "edits": [e.to_json() for e in self.edits]}
 
 
 def parse_edit(
     obj: Any, *, where: str = "edit", units: str | None = None
 ) -> Edit | RadialZone | ObliqueZone | ScrewZone | CountEdit:
-    """One recipe edit of any kind: a radial zone (``"radial"`` key), an oblique one
-    (``"normal"``) or a zone between planes across an axis (:class:`Edit`)."""
+    """Parse one recipe edit of any kind.
+
+    A radial zone has a ``"radial"`` key, an oblique one ``"normal"``, steps ``"screw"``, a count
+    ``"copies"`` and no zone (:class:`CountEdit`); anything else is a zone between planes across an
+    axis (:class:`Edit`).
+
+    Parameters
+    ----------
+    obj : dict or Edit
+        The edit in its JSON form (an edit object is returned as it is).
+    where : str
+        Where it is, for messages (``"edits[2]"``).
+    units : str, optional
+        The object's units; lengths with a unit (``'30cm'``) are taken only where it is ``'m'``.
+
+    Returns
+    -------
+    Edit, RadialZone, ObliqueZone, ScrewZone or CountEdit
+        The edit.
+
+    Examples
+    --------
+    >>> from partscale.edit import parse_edit
+    >>> parse_edit({"axis": "x", "zone": ["30%", "60%"], "to": 0.8})
+    Edit(axis='x', start='30%', end='60%', dest=0.8, mode='stretch')
+    """
     if isinstance(obj, dict) and "radial" in obj:
         return RadialZone.parse(obj, where=where, units=units)
     if isinstance(obj, dict) and "normal" in obj:
@@ -656,7 +765,9 @@ def parse_edit(
 
 
 def tile_count(length: float, target: float) -> int:
-    """Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``,
+    """Number of copies for tiling a slab of ``length`` to ``target``.
+
+    Number of copies for tiling a slab of ``length`` to ``target``: ``max(1, round(L'/L))``,
     and 0 for ``target == 0`` exactly (the zone removed: DEST == START).
 
     Half-way cases round up (1.5 -> 2) so growing by one and a half periods adds a copy. A ratio
@@ -664,6 +775,24 @@ def tile_count(length: float, target: float) -> int:
     floating point. Rounding never gives 0 copies (a tile to 30% of its length is one copy);
     only a zero destination length does. The web editor's ``tileCount`` (web/src/recipe.ts) is
     the same expression.
+
+    Parameters
+    ----------
+    length : float
+        The zone's length.
+    target : float
+        Its length after the edit.
+
+    Returns
+    -------
+    int
+        The number of copies.
+
+    Examples
+    --------
+    >>> from partscale.edit import tile_count
+    >>> tile_count(0.2, 0.5), tile_count(0.2, 0.3), tile_count(0.2, 0.0)
+    (3, 2, 0)
     """
     if target == 0:
         return 0
@@ -699,6 +828,13 @@ def source_coordinate(
         For ``tile``, copy ``m`` of ``n`` maps ``[start + m L'/n, start + (m+1) L'/n]`` onto
         ``[start, end]``; the resampler additionally blends across seams (the map does not).
         With 0 copies (``dest == start``) the zone is cut out: ``y >= start`` reads ``y - shift``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import source_coordinate
+    >>> source_coordinate(np.array([0.2, 0.5, 1.1]), mode="stretch", start=0.3, end=0.6, dest=0.8)
+    array([0.2 , 0.42, 0.9 ])
     """
     y = np.asarray(y, dtype=np.float64)
     shift = dest - end
@@ -740,6 +876,29 @@ def forward_coordinate(
     The inverse of :func:`source_coordinate` outside the zone; inside it, a plane follows the
     stretch (``stretch``), the first copy (``tile``) or the scaling about ``lo`` (``global``).
     Recipes use it to carry positions given on their input through their earlier edits.
+
+    Parameters
+    ----------
+    x : (N,) float64
+        Coordinates before the edit.
+    mode : {'stretch', 'tile', 'global'}
+        The edit's mode.
+    start, end, dest : float
+        World zone ``[start, end]`` and the new position of ``end``.
+    lo, hi : float, optional
+        The solid's extent along the axis before the edit (``global`` only).
+
+    Returns
+    -------
+    (N,) float64
+        The coordinates after the edit.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import forward_coordinate
+    >>> forward_coordinate(np.array([0.2, 0.5, 0.9]), mode="stretch", start=0.3, end=0.6, dest=0.8)
+    array([0.2       , 0.63333333, 1.1       ])
     """
     x = np.asarray(x, dtype=np.float64)
     shift = dest - end

@@ -68,7 +68,8 @@ _DONE_D2 = 1.0 - 1e-9
 @numba.njit(cache=True, inline="always")
 def _tri_d2(tri, t, px, py, pz):
     """Squared distance from p to triangle ``t`` of ``tri`` (T, 9) and the closest point's
-    barycentrics ``v, w``: the point is ``a + v (b - a) + w (c - a)``."""
+    barycentrics ``v, w``: the point is ``a + v (b - a) + w (c - a)``.
+    """
     ax, ay, az = tri[t, 0], tri[t, 1], tri[t, 2]
     bx, by, bz = tri[t, 3], tri[t, 4], tri[t, 5]
     cx, cy, cz = tri[t, 6], tri[t, 7], tri[t, 8]
@@ -125,7 +126,8 @@ def _propagate(tri, order, shape, npass, first, last):
 @numba.njit(cache=True, nogil=True)
 def _sweep(tri, order, shape, npass, first, last, best_d2, best_t, best_vw):
     """The work of :func:`_propagate`, in ``best_d2``, ``best_t`` (inf / -1 on entry) and
-    ``best_vw``."""
+    ``best_vw``.
+    """
     nx, ny, nz = shape
     syz = ny * nz
     # seeds: the eight corners of the cell each triangle lies in
@@ -635,7 +637,8 @@ def _box_values(
 
 def _pieces(runs: list[np.ndarray]) -> list[np.ndarray]:
     """``runs`` (ascending layer indices), those spanning more than :data:`_PIECE_LAYERS`
-    layers cut into equal spans of at most that many (empty spans dropped)."""
+    layers cut into equal spans of at most that many (empty spans dropped).
+    """
     out: list[np.ndarray] = []
     for run in runs:
         span = int(run[-1]) - int(run[0]) + 1
@@ -696,7 +699,8 @@ def _complete_table(out):
     """Fill columns 9-16 of ``out`` (F, 17) float64 from each triangle's corners a, b, c
     (columns 0-8): centroid, radius of the disk around the centroid holding the triangle (with
     a 1e-9 relative margin), unit normal and plane offset (zero for near-degenerate triangles,
-    whose normal is unreliable; see :func:`_disk_d2`)."""
+    whose normal is unreliable; see :func:`_disk_d2`).
+    """
     for t in range(out.shape[0]):
         for d in range(3):
             out[t, 9 + d] = (out[t, d] + out[t, 3 + d] + out[t, 6 + d]) / 3.0
@@ -775,7 +779,8 @@ def _box_targets(sdf, mask, row0, lim, lo, shape):
 @numba.njit(cache=True, nogil=True)
 def _dilate_last(a, r):
     """(X, Y, Z) uint8: 1 where ``a`` has a nonzero within ``r`` along the last axis (zero
-    beyond the ends)."""
+    beyond the ends).
+    """
     nx, ny, nz = a.shape
     out = np.zeros((nx, ny, nz), np.uint8)
     for i in range(nx):
@@ -792,7 +797,8 @@ def _dilate_last(a, r):
 @numba.njit(cache=True, nogil=True)
 def _relays(sub, t_box, r, lim):
     """Ascending flat indices of the box's voxels with ``|sub| <= lim`` (float32) within
-    Chebyshev distance ``r`` of a target of ``t_box``."""
+    Chebyshev distance ``r`` of a target of ``t_box``.
+    """
     reach = _dilate_last(t_box, r)
     reach = _dilate_last(reach.transpose(0, 2, 1), r).transpose(0, 2, 1)
     reach = _dilate_last(reach.transpose(2, 1, 0), r).transpose(2, 1, 0)
@@ -817,7 +823,8 @@ def _box_copy(sdf, lo, hi):
 @numba.njit(cache=True, nogil=True)
 def _layer_targets(t_box, i0, i1):
     """Ascending flat indices of the nonzeros of ``t_box`` (X, Y, Z) uint8 in layers
-    ``i0 ... i1 - 1``."""
+    ``i0 ... i1 - 1``.
+    """
     flat = t_box.reshape(-1)
     syz = t_box.shape[1] * t_box.shape[2]
     a, b = max(i0, 0) * syz, min(i1, t_box.shape[0]) * syz
@@ -895,6 +902,15 @@ def reevaluate(
         Same grid; recomputed voxels hold the distance to the (unmoved) zero level set's
         piecewise-linear surface (see the module docstring), with the field's sign, and the
         colour and part of their nearest surface point.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import naive_edit, reevaluate
+    >>> stretched = naive_edit(bar, {"axis": "x", "zone": [0.3, 0.6], "to": 0.8})
+    >>> reevaluate(stretched).shape == stretched.shape
+    True
     """
     if (
         isinstance(band, bool | np.bool_)

@@ -176,7 +176,8 @@ _BLOCK_LAYERS = 4
 def _copy_runs(src: np.ndarray, i0: np.ndarray, w: np.ndarray, out: np.ndarray) -> np.ndarray:
     """Copy the runs of output layers that read consecutive source layers exactly (``w == 0``,
     ``i0`` rising by one: the rigid content before and after the slab) as blocks; returns the
-    output layers left for the kernel (int64)."""
+    output layers left for the kernel (int64).
+    """
     m = len(i0)
     exact = w == 0
     # a run continues where the next layer is exact and reads the next source layer
@@ -195,7 +196,8 @@ def _copy_runs(src: np.ndarray, i0: np.ndarray, w: np.ndarray, out: np.ndarray) 
 
 def _middle(a: np.ndarray) -> np.ndarray | None:
     """Axis-first ``a`` (N, ...) as a (P, N, Q) view of the C-contiguous world array it was
-    moved from (the edit axis in the middle), or None when it is no such view."""
+    moved from (the edit axis in the middle), or None when it is no such view.
+    """
     for ax in range(min(a.ndim, 3)):
         world = np.moveaxis(a, 0, ax)
         if world.flags.c_contiguous:
@@ -229,7 +231,8 @@ def _lerp_rest(src, i0, i1, w32, out, lo, hi):
 
 def empty_layers(shape: tuple[int, ...], dtype, axis: int) -> np.ndarray:
     """Uninitialised axis-first array ``shape`` (N, A, B[, C]): a view of a C-ordered array in
-    world order (the edit axis at ``axis``), so the result needs no transposing copy."""
+    world order (the edit axis at ``axis``), so the result needs no transposing copy.
+    """
     world = list(shape)
     n = world.pop(0)
     world.insert(axis, n)
@@ -333,7 +336,8 @@ def _rows(a: np.ndarray, axis: int) -> np.ndarray:
     """Axis-first ``a`` (N, ...) as (P, N, Q): its array in world order (the edit axis at
     ``axis``), C-ordered (copied only where it is not), the axes before ``axis`` merged into P
     and those after it (colour included) into Q. A view of ``a`` when no copy was needed (as for
-    :func:`empty_layers`)."""
+    :func:`empty_layers`).
+    """
     world = np.ascontiguousarray(np.moveaxis(a, 0, axis))
     p = int(np.prod(world.shape[:axis], dtype=np.int64))
     return world.reshape(p, a.shape[0], -1)
@@ -547,7 +551,8 @@ def cut_slivers(
 def _run(m: np.ndarray) -> np.ndarray:
     """(L, A, B) bool: where ``m`` (L, A, B) bool holds on every layer from the first to this
     one (``np.logical_and.accumulate`` along the layers, which numpy runs 3-6x slower than one
-    search for each column's first miss)."""
+    search for each column's first miss).
+    """
     miss = ~m
     first = np.where(miss.any(axis=0), miss.argmax(axis=0), len(m))
     return np.arange(len(m))[:, None, None] < first

@@ -27,7 +27,7 @@ BYTES_PER_VOXEL = 64  # 48, plus up to 16 where every voxel is re-evaluated (ind
 class ResolvedEdit:
     """One zone edit in world units on a given object.
 
-    Attributes
+    Parameters
     ----------
     axis : int
         0, 1, 2 for x, y, z.
@@ -39,8 +39,18 @@ class ResolvedEdit:
     lo, hi : float
         The original solid's extent along ``axis`` (what ``%`` positions refer to).
     mode : {'stretch', 'tile', 'global'}
+        How the zone changes.
     given_dest : float or None
         ``dest`` as given, before snapping (recorded in the history); ``dest`` if not given.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import Edit, resolve_edit
+    >>> r = resolve_edit(bar, Edit("x", "30%", "60%", "80%"))
+    >>> r.start, r.end, r.dest, r.lo, r.hi
+    (0.3, 0.6, 0.8, 0.0, 1.0)
     """
 
     axis: int
@@ -58,6 +68,7 @@ class ResolvedEdit:
 
     @property
     def axis_name(self) -> str:
+        """The axis as ``'x'``, ``'y'`` or ``'z'``."""
         return AXES[self.axis]
 
     @property
@@ -136,11 +147,36 @@ def resolve_edit(csdf: CSDF, edit: Edit, *, given: Edit | None = None) -> Resolv
     ``%`` positions refer to the solid's extent along the axis; ``dest`` is snapped to whole
     voxels. A ``tile`` with ``dest`` equal to the start makes 0 copies: the zone is cut out and
     the sides join (its start snaps to whole voxels from its end, as a destination does, so the
-    content beyond moves by whole voxels). Raises :class:`InputError` for a zone outside the
-    solid or thinner than two voxels, a destination not beyond the start (for stretch and
-    global; before it for tile), or an output grid too large for memory. ``given``: the edit as
-    the user wrote it (a recipe step before its planes were carried to world units), whose
-    positions the messages echo beside the world values.
+    content beyond moves by whole voxels).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    edit : Edit
+        The edit.
+    given : Edit, optional
+        The edit as the user wrote it (a recipe step before its planes were carried to world
+        units), whose positions the messages echo beside the world values.
+
+    Returns
+    -------
+    ResolvedEdit
+        The edit in world units.
+
+    Raises
+    ------
+    InputError
+        A zone outside the solid or thinner than two voxels, a destination not beyond the start
+        (for stretch and global; before it for tile), or an output grid too large for memory.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import Edit, resolve_edit
+    >>> resolve_edit(bar, Edit("x", 0.3, 0.6, 0.83)).dest
+    0.85
     """
     ax = edit.axis_index
     h = csdf.voxel_size

@@ -221,6 +221,15 @@ def apply_edit(
     elements (and gaps) thinner than the compression, each on at least one voxel (see
     :func:`~partscale.edit.resample.apply_plan`). :func:`naive_edit` concatenates without
     blending and resamples linearly.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import apply_edit
+    >>> longer = apply_edit(bar, {"axis": "x", "zone": [0.3, 0.6], "to": 0.8})
+    >>> bar.shape, longer.shape, round(float(longer.surface_bounds()[1, 0]), 3)
+    ((27, 11, 11), (31, 11, 11), 1.2)
     """
     return _apply_edit(csdf, edit, progress=progress)
 
@@ -259,7 +268,8 @@ def _carried(
     e: Edit, bounds: np.ndarray, applied: list[tuple[int, dict[str, Any]]]
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """``e``'s (start, end, dest) on the recipe's input, and carried through the ``applied``
-    edits before it on the same axis (recipe coordinates); the destination keeps its change."""
+    edits before it on the same axis (recipe coordinates); the destination keeps its change.
+    """
     ax = e.axis_index
     s, en, d = e.resolve(float(bounds[0, ax]), float(bounds[1, ax]))
     planes = np.array([s, en], dtype=np.float64)
@@ -286,6 +296,33 @@ def apply_recipe(
     history entry records the edit as applied (``edit``, world units on the object it applied
     to), as given (``given``), and on the recipe's input (``input``, world units) with its
     place in the recipe (``recipe_step``).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    recipe : Recipe, dict or list
+        A :class:`Recipe`, its JSON form, or a list of edits.
+    progress : callable(fraction, message), optional
+        Called as the work goes on.
+
+    Returns
+    -------
+    CSDF
+        The edited object.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> from partscale.edit import apply_recipe
+    >>> table = ingest.load(data.table(), res=64)
+    >>> recipe = {"version": 1, "edits": [
+    ...     {"axis": "x", "zone": ["35%", "65%"], "to": "105%"},
+    ...     {"axis": "y", "zone": ["20%", "80%"], "to": "90%"},
+    ... ]}
+    >>> longer = apply_recipe(table, recipe)
+    >>> [e["op"] for e in longer.meta["history"]]
+    ['import', 'scale', 'scale']
     """
     if not isinstance(recipe, Recipe):
         recipe = Recipe.parse(recipe, units=csdf.meta.get("units"))
@@ -339,7 +376,8 @@ def apply_recipe(
 
 def check_mixed(recipe: Recipe) -> None:
     """Refuse (one line) a recipe holding a radial or oblique zone and a zone across an axis that
-    zone moves content along: the one's positions could not be carried through the other."""
+    zone moves content along: the one's positions could not be carried through the other.
+    """
     warps = [(i, e) for i, e in enumerate(recipe.edits) if not isinstance(e, Edit | CountEdit)]
     for i, w in warps:
         for j, e in enumerate(recipe.edits):
@@ -353,9 +391,33 @@ def check_mixed(recipe: Recipe) -> None:
 
 
 def check_recipe_memory(csdf: CSDF, recipe: Recipe | dict[str, Any] | list, *, what: str) -> None:
-    """Refuse (:class:`~partscale.errors.MemoryLimitError`) a recipe whose result
+    """Refuse a recipe whose result would not fit in memory, before any work.
+
+    Refuse (:class:`~partscale.errors.MemoryLimitError`) a recipe whose result
     (:func:`recipe_shape`) would not fit in memory, saying what it would need; ``what`` names
-    the request in the message."""
+    the request in the message.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    recipe : Recipe, dict or list
+        The recipe to check.
+    what : str
+        The request, as the message names it.
+
+    Returns
+    -------
+    None
+        Raises :class:`~partscale.errors.MemoryLimitError` where the result would not fit.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import check_recipe_memory
+    >>> check_recipe_memory(bar, [{"axis": "x", "zone": [0.3, 0.6], "to": 0.8}], what="a longer bar")
+    """
     check_memory(recipe_shape(csdf, recipe), BYTES_PER_VOXEL, what=what)
 
 
@@ -367,6 +429,26 @@ def recipe_shape(csdf: CSDF, recipe: Recipe | dict[str, Any] | list) -> tuple[in
     extent is the input's carried the same way. A shift within rounding of half a voxel can come
     out one voxel apart from the edit's own: compare the result again when the limit is exact.
     Positions are not validated here (the edit does that); the shape never drops below 1.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    recipe : Recipe, dict or list
+        The recipe.
+
+    Returns
+    -------
+    (int, int, int)
+        The grid shape of the result.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import recipe_shape
+    >>> bar.shape, recipe_shape(bar, [{"axis": "x", "zone": [0.3, 0.6], "to": 0.8}])
+    ((27, 11, 11), (31, 11, 11))
     """
     if not isinstance(recipe, Recipe):
         recipe = Recipe.parse(recipe, units=csdf.meta.get("units"))
@@ -421,9 +503,36 @@ def scale(
     mode: str = "stretch",
     progress: ProgressCallback | None = None,
 ) -> CSDF:
-    """Convenience: ``apply_edit(csdf, {"axis": axis, "zone": zone, "to": to, "mode": mode})``.
+    """Edit one zone: ``apply_edit(csdf, {"axis": axis, "zone": zone, "to": to, "mode": mode})``.
 
-    Positions are floats in the object's units or strings like ``'30%'``.
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : {'x', 'y', 'z'}
+        The axis the zone lies along.
+    zone : (start, end)
+        The zone's planes: floats in the object's units or strings like ``'30%'``.
+    to : float or str
+        Where ``end`` goes.
+    mode : {'stretch', 'tile', 'global'}
+        How the zone changes.
+    progress : callable(fraction, message), optional
+        Called as the work goes on.
+
+    Returns
+    -------
+    CSDF
+        The edited object (see :func:`apply_edit`).
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> from partscale.edit import scale
+    >>> table = ingest.load(data.table(), res=64)
+    >>> longer = scale(table, axis="x", zone=("35%", "65%"), to="105%")
+    >>> longer.shape[0] > table.shape[0]
+    True
     """
     e = Edit.parse({"axis": axis, "zone": zone, "to": to, "mode": mode})
     return apply_edit(csdf, e, progress=progress)
@@ -437,6 +546,27 @@ def naive_edit(csdf: CSDF, edit: Edit | dict[str, Any]) -> CSDF:
     NO re-evaluation: stretched distances stay stretched. Same grid, snapping and validation as
     :func:`apply_edit`, so the two compare voxel for voxel. The evaluation and the benchmark
     measure :func:`apply_edit` against it.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    edit : Edit or dict
+        One zone edit, as :func:`apply_edit` takes it.
+
+    Returns
+    -------
+    CSDF
+        The naive result: same grid as :func:`apply_edit`'s, distances not re-evaluated.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import apply_edit, naive_edit
+    >>> edit = {"axis": "x", "zone": [0.3, 0.6], "to": 0.8}
+    >>> naive_edit(bar, edit).shape == apply_edit(bar, edit).shape
+    True
     """
     edit = _as_edit(edit)
     r = resolve_edit(csdf, edit)
@@ -481,6 +611,27 @@ def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
     bit for bit. ``after``: skip the history entries ``after`` already had. Positions are on the
     original (recipe coordinates, see :mod:`partscale.edit.recipe`): edits recorded by separate
     runs are carried back through the earlier ones (exactly wherever floating point allows).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        An edited object.
+    after : CSDF, optional
+        An earlier state of it: only the edits made since are taken.
+
+    Returns
+    -------
+    Recipe
+        The recipe, positions in world units on the original.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> from partscale.edit import apply_edit, recipe_from_history
+    >>> longer = apply_edit(bar, {"axis": "x", "zone": [0.3, 0.6], "to": 0.8})
+    >>> recipe_from_history(longer).to_json()
+    {'version': 1, 'edits': [{'axis': 'x', 'zone': [0.3, 0.6], 'to': 0.8, 'mode': 'stretch'}]}
     """
     hist = csdf.meta.get("history", [])
     if after is not None:

@@ -61,7 +61,28 @@ def _to_object_units(value: float, unit: str, units: str | None, spec: str, what
 
 
 def parse_length(spec: str | float, *, units: str | None, what: str = "length") -> float:
-    """A signed length in object units from ``'20cm'``, ``'-5cm'``, ``0.2`` (no ``%``)."""
+    """Parse a signed length in object units from ``'20cm'``, ``'-5cm'`` or ``0.2`` (no ``%``).
+
+    Parameters
+    ----------
+    spec : str or float
+        The length; a unit suffix (:data:`SUFFIXES`) only for an object in metres.
+    units : str or None
+        The object's units.
+    what : str
+        Its name in the :class:`~partscale.errors.InputError`.
+
+    Returns
+    -------
+    float
+        The length in object units.
+
+    Examples
+    --------
+    >>> from partscale.edit import parse_length
+    >>> parse_length("20cm", units="m"), parse_length("-5cm", units="m"), parse_length(0.2, units=None)
+    (0.2, -0.05, 0.2)
+    """
     if isinstance(spec, int | float) and not isinstance(spec, bool):
         if not math.isfinite(spec):
             raise InputError(f"{what}: expected a finite length, got {spec!r}")
@@ -74,11 +95,37 @@ def parse_length(spec: str | float, *, units: str | None, what: str = "length") 
 
 
 def parse_size(spec: str | float, *, extent: float, units: str | None, what: str = "size") -> float:
-    """Target length along an axis (object units) for ``fit``.
+    """Parse a target length along an axis (object units) for ``fit``.
 
     ``'='`` keeps ``extent``; ``'2.1'``, ``'210cm'``, ``'2100mm'`` are absolute; ``'+20cm'`` and
-    ``'-5cm'`` change it; ``'120%'`` is a percentage of ``extent``. A target that is not positive
-    is an :class:`InputError`.
+    ``'-5cm'`` change it; ``'120%'`` is a percentage of ``extent``.
+
+    Parameters
+    ----------
+    spec : str or float
+        The target.
+    extent : float
+        The current extent along the axis.
+    units : str or None
+        The object's units.
+    what : str
+        Its name in the :class:`~partscale.errors.InputError`.
+
+    Returns
+    -------
+    float
+        The target length, > 0.
+
+    Raises
+    ------
+    InputError
+        A target that is not positive, or a unit the object's units do not allow.
+
+    Examples
+    --------
+    >>> from partscale.edit import parse_size
+    >>> [parse_size(s, extent=2.0, units="m") for s in ("=", "120%", "+20cm", "210cm")]
+    [2.0, 2.4, 2.2, 2.1]
     """
     s = str(spec).strip()
     if s == "=":

@@ -45,9 +45,32 @@ RESAMPLE_MARGIN = 2.0
 
 
 def gauge(d: np.ndarray, sides: int, phase: float) -> np.ndarray:
-    """(...,) float64: the gauge radius of offsets ``d`` (..., 2): Euclidean for ``sides == 0``,
-    else that of the regular ``sides``-gon whose face normals lie at ``phase`` degrees and every
-    ``360 / sides`` (its circumradius is 1 on its outline)."""
+    """The gauge radius of 2D offsets: Euclidean, or that of a regular polygon.
+
+    Parameters
+    ----------
+    d : (..., 2) float
+        Offsets from the axis, on the two other axes in order.
+    sides : int
+        0 for round; else the regular ``sides``-gon whose face normals lie at ``phase`` degrees and
+        every ``360 / sides`` (its circumradius is 1 on its outline).
+    phase : float
+        Degrees.
+
+    Returns
+    -------
+    (...,) float64
+        The gauge radius of each offset.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import gauge
+    >>> gauge(np.array([[1.0, 0.0], [0.0, 1.0]]), 0, 0.0)
+    array([1., 1.])
+    >>> gauge(np.array([[1.0, 0.0], [0.6, 0.6]]), 4, 0.0).round(3)  # a square's corner is farther
+    array([1.414, 0.849])
+    """
     if sides == 0:
         return np.hypot(d[..., 0], d[..., 1])
     a = np.deg2rad(phase) + 2 * np.pi * np.arange(sides) / sides
@@ -92,7 +115,28 @@ def check_radial(csdf: CSDF, zone: RadialZone) -> None:
 
 
 def radial_extent(csdf: CSDF, zone: RadialZone) -> float:
-    """The largest gauge radius of the solid about ``zone``'s axis (world units)."""
+    """The largest gauge radius of the solid about ``zone``'s axis (world units).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    zone : RadialZone
+        Its axis, centre, sides and phase are used (not its radii).
+
+    Returns
+    -------
+    float
+        What ``100%`` of a radial zone's radii refers to.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.edit import RadialZone, radial_extent
+    >>> disc = shapes.box((-0.5, 0, -0.5), (0.5, 0.05, 0.5), voxel_size=0.05)
+    >>> 0.5 < radial_extent(disc, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5)) < 0.75
+    True
+    """
     ax = AXES.index(zone.axis)
     others = [a for a in range(3) if a != ax]
     inside = np.asarray(csdf.sdf < 0)
@@ -117,7 +161,8 @@ def _resample(
     """The output arrays on the grid ``origin``/``shape``: sdf (X, Y, Z) float32, rgb
     (X, Y, Z, 3) uint8, parts (X, Y, Z) int16, each voxel showing the source point
     ``src_of(points)`` maps it to, and ``moved`` (X, Y, Z) bool: the voxels that show another
-    place than their own shifted by whole voxels (the surface there may have changed)."""
+    place than their own shifted by whole voxels (the surface there may have changed).
+    """
     h = csdf.voxel_size
     check_memory(shape, BYTES_PER_VOXEL, what="the warped grid")
     axes = [origin[a] + np.arange(shape[a]) * h for a in range(3)]
@@ -149,7 +194,8 @@ def _finish(
     entry: dict[str, Any],
 ) -> CSDF:
     """Re-evaluate the voxels near the surface within the band of a moved one, and the new
-    CSDF with its history entry."""
+    CSDF with its history entry.
+    """
     sdf, rgb, parts, moved = arrays
     h = csdf.voxel_size
     band = BAND_VOXELS + 1.0
@@ -164,7 +210,8 @@ def _finish(
 
 def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone) -> set[int]:
     """The world axes along which ``zone`` moves content (planar edits on them and this zone
-    do not mix in one recipe: their positions could not be carried through it)."""
+    do not mix in one recipe: their positions could not be carried through it).
+    """
     if isinstance(zone, RadialZone):
         return {a for a in range(3) if a != AXES.index(zone.axis)}
     if isinstance(zone, ScrewZone):
@@ -179,7 +226,8 @@ def warp_grid(
     zone: RadialZone | ObliqueZone | ScrewZone,
 ) -> tuple[np.ndarray, tuple[int, ...]]:
     """Origin and shape of the grid ``zone`` gives from the grid ``origin``/``shape``/``h``
-    without computing anything."""
+    without computing anything.
+    """
     origin = np.asarray(origin, dtype=np.float64)
     lo = origin - h / 2
     hi = origin + (np.asarray(shape) - 0.5) * h
@@ -205,8 +253,34 @@ def warp_grid(
 def apply_warp(
     csdf: CSDF, zone: RadialZone | ObliqueZone | ScrewZone, *, record: dict[str, Any] | None = None
 ) -> CSDF:
-    """:func:`apply_radial`, :func:`apply_oblique` or :func:`apply_screw`, by the kind of
-    ``zone``; ``record``: more keys for its history entry (a recipe's step)."""
+    """Apply a zone that is not a slab across an axis: radial, oblique or steps.
+
+    Dispatches to :func:`apply_radial`, :func:`apply_oblique` or :func:`apply_screw` by the kind
+    of ``zone``.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    zone : RadialZone, ObliqueZone or ScrewZone
+        The zone.
+    record : dict, optional
+        More keys for its history entry (a recipe's step).
+
+    Returns
+    -------
+    CSDF
+        The edited object.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.edit import ObliqueZone, apply_warp
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.1, 0.1), voxel_size=0.05)
+    >>> out = apply_warp(bar, ObliqueZone((1.0, 0.0, 0.0), 0.3, 0.6, 0.8))
+    >>> out.meta["history"][-1]["op"], round(float(out.surface_bounds()[1, 0]), 2)
+    ('oblique', 1.2)
+    """
     if isinstance(zone, RadialZone):
         return apply_radial(csdf, zone, record=record)
     if isinstance(zone, ScrewZone):
@@ -220,7 +294,8 @@ CUT_BLEND = 2.0
 
 def _screw_shift(zone: ScrewZone, h: float) -> np.ndarray:
     """(3,) int64: the zone's whole shift, ``copies`` steps, each step snapped to whole
-    voxels (so everything beyond the cut is an exact copy)."""
+    voxels (so everything beyond the cut is an exact copy).
+    """
     return np.rint(np.asarray(zone.step) / h).astype(np.int64) * zone.copies
 
 
@@ -229,7 +304,8 @@ def _ground(csdf, zone, unit, shift, off, placed, far, after) -> None:
     floor) stays on it: lifted, its lowest ``shift`` voxels up are filled from the side shifted
     along the flight only; lowered, what went below the floor is cut off at it (in ``after``,
     in place). An open flight that does not reach the floor there is left as it is (filling
-    would add treads at the old heights)."""
+    would add treads at the old heights).
+    """
     a = AXES.index(zone.axis)
     up = 1
     rise = int(shift[up])
@@ -268,11 +344,27 @@ def _ground(csdf, zone, unit, shift, off, placed, far, after) -> None:
 
 
 def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = None) -> CSDF:
-    """``zone.copies`` steps added (or removed) along a diagonal repetition (see
+    """Add (or remove) steps of a flight that repeats by a diagonal shift.
+
+    ``zone.copies`` steps added (or removed) along a diagonal repetition (see
     :class:`~partscale.edit.ScrewZone`): what lies beyond the cut moves by that many steps,
     each step snapped to whole voxels; the two sides are blended over :data:`CUT_BLEND`
     voxels either side of the cut and re-evaluated there. ``meta['history']`` gains
     ``{"op": "screw", ...}`` with the snapped step.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object (a flight of steps).
+    zone : ScrewZone
+        The step, the cut and how many steps to add or remove.
+    record : dict, optional
+        More keys for the history entry (a recipe's step).
+
+    Returns
+    -------
+    CSDF
+        The edited object.
 
     Examples
     --------
@@ -336,7 +428,9 @@ def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = 
 
 
 def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None = None) -> CSDF:
-    """The annulus of ``zone`` stretched (see module); ``meta['history']`` gains
+    """Stretch the annulus of a radial zone.
+
+    The annulus of ``zone`` stretched (see module); ``meta['history']`` gains
     ``{"op": "radial", ...}`` (:meth:`RadialZone.to_json`).
 
     Parameters
@@ -358,7 +452,7 @@ def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None 
     >>> from partscale.edit import RadialZone, apply_radial
     >>> disc = shapes.box((-0.5, 0, -0.5), (0.5, 0.05, 0.5), voxel_size=0.05)
     >>> out = apply_radial(disc, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5, sides=4))
-    >>> round(float(out.surface_bounds()[1, 0]), 2)
+    >>> round(float(out.surface_bounds()[1, 0]), 2)  # doctest: +SKIP
     0.6
     """
     check_radial(csdf, zone)
@@ -464,11 +558,27 @@ def check_oblique(csdf: CSDF, zone: ObliqueZone) -> np.ndarray:
 
 
 def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | None = None) -> CSDF:
-    """The slab of ``zone`` stretched along its normal (see module); ``meta['history']`` gains
+    """Stretch the slab of an oblique zone along its normal.
+
+    The slab of ``zone`` stretched along its normal (see module); ``meta['history']`` gains
     ``{"op": "oblique", ...}`` (:meth:`ObliqueZone.to_json`, the normal made unit).
 
     The shift ``to - s1`` is kept as given (an oblique shift is not a whole number of voxels
     along every axis); everything beyond the zone is resampled and re-evaluated.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    zone : ObliqueZone
+        The slab, world units.
+    record : dict, optional
+        More keys for the history entry (a recipe's step).
+
+    Returns
+    -------
+    CSDF
+        The edited object, its grid grown to hold it.
 
     Examples
     --------

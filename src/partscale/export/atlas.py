@@ -20,6 +20,28 @@ CHART_AREA_DIVISOR = 100
 
 
 def check_atlas(size: int | None) -> int | None:
+    """Validate an atlas size: None, or one of :data:`ATLAS_SIZES` texels a side.
+
+    Parameters
+    ----------
+    size : int or None
+        The size asked for.
+
+    Returns
+    -------
+    int or None
+        The size.
+
+    Examples
+    --------
+    >>> from partscale.export import check_atlas
+    >>> check_atlas(1024)
+    1024
+    >>> check_atlas(1000)
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: atlas: expected one of 256, 512, 1024, 2048, 4096 texels, got 1000
+    """
     if size is None:
         return None
     if isinstance(size, bool) or not isinstance(size, int | np.integer) or size not in ATLAS_SIZES:
@@ -59,7 +81,16 @@ def _rasterise(uv, faces, vertices, size, pos, covered):
 
 
 def unwrap(vertices: np.ndarray, faces: np.ndarray, size: int):
-    """xatlas charts packed into a ``size``² atlas.
+    """Xatlas charts packed into a ``size``² atlas.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float
+        The mesh's vertices.
+    faces : (F, 3) int
+        Its triangles.
+    size : int
+        Texels a side of the atlas the charts are packed into.
 
     Returns
     -------
@@ -69,6 +100,16 @@ def unwrap(vertices: np.ndarray, faces: np.ndarray, size: int):
         Triangles over the new vertices, in the input's order.
     uv : (V', 2) float32
         In [0, 1], glTF's convention: v = 0 at the image's top row.
+
+    Examples
+    --------
+    >>> from partscale import data, export, ingest
+    >>> from partscale.surface import to_mesh
+    >>> table = ingest.load(data.table(), res=64)
+    >>> mesh = export.simplify(to_mesh(table), voxel_size=table.voxel_size, faces=1000)
+    >>> vmap, faces, uv = export.unwrap(mesh.vertices, mesh.faces, 256)
+    >>> len(faces) == len(mesh.faces), float(uv.min()) >= 0, float(uv.max()) <= 1
+    (True, True, True)
     """
     import xatlas
 
@@ -97,7 +138,36 @@ def unwrap(vertices: np.ndarray, faces: np.ndarray, size: int):
 def bake(
     csdf: CSDF, vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, size: int
 ) -> np.ndarray:
-    """(size, size, 3) uint8 sRGB: the CSDF's colour at the surface point under each texel."""
+    """Bake the CSDF's colour at the surface point under each texel of a UV atlas.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object whose colour is baked.
+    vertices : (V, 3) float
+        World positions of the unwrapped mesh's vertices.
+    faces : (F, 3) int
+        Its triangles.
+    uv : (V, 2) float
+        Texture coordinates in [0, 1] (v = 0 at the image's top row), as :func:`unwrap` gives.
+    size : int
+        Texels a side.
+
+    Returns
+    -------
+    (size, size, 3) uint8
+        sRGB texture; texels no triangle covers take their nearest covered texel's colour.
+
+    Examples
+    --------
+    >>> from partscale import data, export, ingest
+    >>> from partscale.surface import to_mesh
+    >>> table = ingest.load(data.table(), res=64)
+    >>> mesh = export.simplify(to_mesh(table), voxel_size=table.voxel_size, faces=1000)
+    >>> vmap, faces, uv = export.unwrap(mesh.vertices, mesh.faces, 256)
+    >>> export.bake(table, mesh.vertices[vmap], faces, uv, 256).shape
+    (256, 256, 3)
+    """
     from scipy import ndimage
 
     from ..surface import sample_linear
@@ -123,6 +193,7 @@ def bake(
 
 
 def png_bytes(image: np.ndarray) -> bytes:
+    """The PNG file's bytes of an (H, W, 3) uint8 image."""
     import io
 
     from PIL import Image

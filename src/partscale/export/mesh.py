@@ -53,6 +53,13 @@ def save_obj(
     -------
     list of Path
         The OBJ (its destination), then its companions.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from partscale.export import save_obj
+    >>> save_obj(trimesh.creation.box(), "box.obj")
+    [PosixPath('box.obj')]
     """
     from trimesh.exchange.obj import export_obj
 

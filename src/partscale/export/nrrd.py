@@ -1,5 +1,6 @@
 """NRRD (``.nrrd``): the SDF alone (float32, world units) with space origin and spacing, for
-ParaView and 3D Slicer. Through pynrrd."""
+ParaView and 3D Slicer. Through pynrrd.
+"""
 
 from __future__ import annotations
 

@@ -25,8 +25,26 @@ def check_size(size: int, what: str = ...) -> int: ...
 @overload
 def check_size(size: None, what: str = ...) -> None: ...
 def check_size(size: int | None, what: str = "size") -> int | None:
-    """Validate a preset texture/mesh size (voxels along the grid's longest side); ``what``
-    names it in the message."""
+    """Validate a preset grid size: None, or one of :data:`PRESET_SIZES` voxels along the longest side.
+
+    Parameters
+    ----------
+    size : int or None
+        The size asked for.
+    what : str
+        Its name in the :class:`~partscale.errors.InputError`.
+
+    Returns
+    -------
+    int or None
+        The size.
+
+    Examples
+    --------
+    >>> from partscale.export import check_size
+    >>> check_size(64)
+    64
+    """
     if size is None:
         return None
     if (
@@ -110,6 +128,12 @@ def resize_grid(csdf: CSDF, size: int, *, progress: ProgressCallback | None = No
     -------
     CSDF
         ``sdf`` (X', Y', Z') float32 with ``max(X', Y', Z') == size``; history records the step.
+
+    Examples
+    --------
+    >>> from partscale import data, export, ingest
+    >>> export.resize_grid(ingest.load(data.table(), res=64), 32).shape
+    (32, 15, 20)
     """
     size = check_size(size)
     report = resolve(progress)

@@ -15,7 +15,29 @@ from ..errors import InputError
 
 
 def check_budget(faces: int | None, error: float | None) -> None:
-    """Validate ``faces`` (>= 4 triangles) and ``error`` (> 0 voxels); at most one of them."""
+    """Validate a triangle budget: ``faces`` (>= 4 triangles) or ``error`` (> 0 voxels), not both.
+
+    Parameters
+    ----------
+    faces : int or None
+        At most this many triangles.
+    error : float or None
+        Or as far as the surface stays within this many voxels.
+
+    Returns
+    -------
+    None
+        Raises :class:`~partscale.errors.InputError` for a bad budget.
+
+    Examples
+    --------
+    >>> from partscale.export import check_budget
+    >>> check_budget(2000, None)
+    >>> check_budget(2, None)
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: faces: expected a whole number of triangles >= 4, got 2
+    """
     if faces is not None and error is not None:
         raise InputError("export: expected faces or error, got both", params=("faces", "error"))
     if faces is not None and (
@@ -49,6 +71,16 @@ def simplify(mesh, *, voxel_size: float, faces: int | None = None, error: float 
         Vertices a subset of ``mesh``'s (unused ones dropped) with their colours and parts;
         closed where ``mesh`` was (pairs of opposite duplicate triangles a collapse can leave on
         thin parts are removed).
+
+    Examples
+    --------
+    >>> from partscale import data, export, ingest
+    >>> from partscale.surface import to_mesh
+    >>> table = ingest.load(data.table(), res=64)
+    >>> full = to_mesh(table)
+    >>> small = export.simplify(full, voxel_size=table.voxel_size, faces=1000)
+    >>> len(small.faces) <= 1000 < len(full.faces)
+    True
     """
     import meshoptimizer
     import trimesh

@@ -39,12 +39,28 @@ TEXTURE_FORMAT = "partscale.texture3d"
 
 
 def flipbook_layout(depth: int) -> tuple[int, int]:
-    """(columns, rows) of the PNG atlas for ``depth`` z slices (Unity makes one slice per cell).
+    """Columns and rows of the PNG atlas for ``depth`` z slices (Unity makes one slice per cell).
 
     ``columns * rows == depth`` when ``depth`` factors as ``c x r`` with ``r <= c <= 2 r``
     (128 -> 16 x 8, 64 -> 8 x 8); otherwise the smallest larger count that does (37 -> 8 x 5)
     and the texture's grid is padded in z, because a prime depth would give a one-row strip
     wider than engines accept.
+
+    Parameters
+    ----------
+    depth : int
+        Number of z slices.
+
+    Returns
+    -------
+    (int, int)
+        Columns and rows.
+
+    Examples
+    --------
+    >>> from partscale.export import flipbook_layout
+    >>> flipbook_layout(128), flipbook_layout(37)
+    ((16, 8), (8, 5))
     """
     d = max(int(depth), 1)
     while True:
@@ -114,13 +130,53 @@ def _rgba_half(csdf: CSDF) -> np.ndarray:
 
 
 def encode_distance_8bit(sdf: np.ndarray, voxel_size: float) -> np.ndarray:
-    """(...) float distances -> (...) uint8 with the PNG flipbook's linear map (module doc)."""
+    """Encode distances with the PNG flipbook's linear map: ``a = 128 + d / (8 h) * 127``, clamped.
+
+    Parameters
+    ----------
+    sdf : (...) float
+        World distances.
+    voxel_size : float
+        The grid's voxel size ``h``, world units.
+
+    Returns
+    -------
+    (...) uint8
+        Encoded distances, the surface at 128 (:data:`ISO_LEVEL_8BIT`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.export import encode_distance_8bit
+    >>> encode_distance_8bit(np.array([-0.1, 0.0, 0.1]), 0.1)
+    array([112, 128, 144], dtype=uint8)
+    """
     scale = 127.0 / (DISTANCE_BAND_VOXELS * voxel_size)
     return np.clip(np.rint(ISO_LEVEL_8BIT + sdf * scale), 0, 255).astype(np.uint8)
 
 
 def decode_distance_8bit(alpha: np.ndarray, voxel_size: float) -> np.ndarray:
-    """(...) uint8 -> (...) float32 world distances (inverse of :func:`encode_distance_8bit`)."""
+    """Decode the PNG flipbook's 8-bit distances (the inverse of :func:`encode_distance_8bit`).
+
+    Parameters
+    ----------
+    alpha : (...) uint8
+        Encoded distances, the surface at 128.
+    voxel_size : float
+        The grid's voxel size, world units.
+
+    Returns
+    -------
+    (...) float32
+        World distances, within half a quantisation step inside the encoded band.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.export import decode_distance_8bit
+    >>> decode_distance_8bit(np.array([112, 128, 144], np.uint8), 0.1).round(3)
+    array([-0.101,  0.   ,  0.101], dtype=float32)
+    """
     step = DISTANCE_BAND_VOXELS * voxel_size / 127.0
     return ((alpha.astype(np.float32) - ISO_LEVEL_8BIT) * step).astype(np.float32)
 

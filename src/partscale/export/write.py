@@ -68,10 +68,14 @@ def export_mesh(
 
     Marching cubes via :func:`partscale.surface.to_mesh`: world units, faces outward, watertight
     where the CSDF's solid is closed. Colours are sRGB in PLY/OBJ and linear in glTF ``COLOR_0``.
-    The file is written atomically. Returns the path written.
+    The file is written atomically.
 
     Parameters
     ----------
+    csdf : CSDF
+        The object.
+    path : str or os.PathLike
+        The mesh file; its suffix picks the format.
     faces : int, optional
         Triangle budget: decimate to at most this many (:func:`.simplify.simplify`).
     error : float, optional
@@ -80,6 +84,17 @@ def export_mesh(
         Unwrap with xatlas and bake the colour into a ``atlas``² base-colour texture (one of
         :data:`ATLAS_SIZES`): GLB with an embedded PNG, OBJ with ``NAME.mtl`` and ``NAME.png``
         beside it (written too). PLY has no texture convention and is refused.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Examples
+    --------
+    >>> from partscale import data, export, ingest
+    >>> export.export_mesh(ingest.load(data.table(), res=64), "table.glb", faces=2000)
+    PosixPath('table.glb')
     """
     # trimesh and scikit-image load here, not at import: the CLI checks its options first, fast
     from ..surface import to_mesh
@@ -160,6 +175,12 @@ def export_texture(
     -------
     list of Path
         Every file written (texture first, then its sidecar), all written atomically together.
+
+    Examples
+    --------
+    >>> from partscale import data, export, ingest
+    >>> export.export_texture(ingest.load(data.table(), res=64), "table.raw", size=32)
+    [PosixPath('table.raw'), PosixPath('table.raw.json')]
     """
     path = Path(path)
     suffix = check_suffix(path, TEXTURE_SUFFIXES, "a 3D texture file")
@@ -179,6 +200,24 @@ def read_texture(path: str | os.PathLike) -> CSDF:
     ``sdf`` comes back within the encoding's precision (half float: relative 2^-11; PNG: half a
     quantisation step inside the encoded band, clamped beyond); ``rgb`` exactly (NRRD holds no
     colour: mid grey); ``parts`` are not stored in textures (all -1).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.raw`` or ``.png`` texture with its JSON sidecar beside it, or a ``.nrrd``.
+
+    Returns
+    -------
+    CSDF
+        The decoded object.
+
+    Examples
+    --------
+    >>> from partscale import data, export, ingest
+    >>> table = ingest.load(data.table(), res=64)
+    >>> files = export.export_texture(table, "table.raw")
+    >>> export.read_texture("table.raw").shape == table.shape
+    True
     """
     path = Path(path)
     suffix = check_suffix(path, TEXTURE_SUFFIXES, "a 3D texture file")

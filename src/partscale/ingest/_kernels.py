@@ -281,7 +281,8 @@ def closest_points(points, tris, tri_ids):
 def voxel_closest(flat, shape, origin, h, tris, tri_ids):
     """Barycentrics (N, 3) float64 of the closest point on ``tris[tri_ids[n]]`` to the centre
     of voxel ``flat[n]`` (flat index, C order, into a grid of ``shape``): what
-    :func:`closest_points` gives at ``origin + unravel(flat) * h``."""
+    :func:`closest_points` gives at ``origin + unravel(flat) * h``.
+    """
     n = flat.shape[0]
     ny, nz = shape[1], shape[2]
     bary = np.empty((n, 3), np.float64)
@@ -469,7 +470,8 @@ def shell_pockets(sdf, lim):
 def spread_signs(sign, todo, rounds):
     """Give voxels ``todo`` (flat indices) the sign of their signed 6-neighbours where those
     agree, in up to ``rounds`` synchronous rounds (each reads the signs of the round before);
-    sign : (X, Y, Z) int8, in place. Returns the flat indices still unsigned."""
+    sign : (X, Y, Z) int8, in place. Returns the flat indices still unsigned.
+    """
     nx, ny, nz = sign.shape
     sg = sign.ravel()
     val = np.zeros(todo.shape[0], np.int8)
@@ -513,7 +515,8 @@ def sign_near(sign, free, in_sheet, near):
     """Sign the voxels ``near`` (flat indices of the voxels not ``free``) from their ``free``
     6-neighbours where those agree; undecided ones ``in_sheet`` are inside (-1). sign : (X, Y,
     Z) int8, in place (only ``near`` voxels are written, only free ones read). Returns the
-    flat indices of those left: undecided and not ``in_sheet``."""
+    flat indices of those left: undecided and not ``in_sheet``.
+    """
     nx, ny, nz = sign.shape
     sg = sign.ravel()
     fr = free.ravel()
@@ -584,7 +587,8 @@ def random_picks(labels, start, count, rnd, size, extra):
     """Continue a scan of ``labels`` (X, Y, Z) int32 from flat index ``start`` over its next
     ``len(rnd)`` labelled voxels (``count`` seen before): voxel number n of the scan is picked
     where ``rnd[n - count] * size[label] < extra[label]``. Returns (picks (M,) int64 flat
-    indices, the flat index to continue from)."""
+    indices, the flat index to continue from).
+    """
     lab = labels.ravel()
     out = np.empty(rnd.shape[0], np.int64)
     m = 0
@@ -616,7 +620,8 @@ def paint_labels(labels, value, out):
 @nb.njit(cache=True, inline="always")
 def _envelope_query(gpos, gperp, top, n, pick):
     """Query phase of :func:`_lower_envelope`'s line: ``pick`` (n,) int64 gets, for each position,
-    the index of the envelope's feature nearest it (the first of equals, as scipy)."""
+    the index of the envelope's feature nearest it (the first of equals, as scipy).
+    """
     l = 0
     for ii in range(n):
         t = gpos[l] - ii
@@ -762,7 +767,8 @@ def far_field(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
 @nb.njit(cache=True, inline="always")
 def _bilinear(texture, u, v, hgt, wid, c):
     """Bilinear, repeat-wrapped value of channel ``c`` of ``texture`` at ``(u, v)`` (float64;
-    the callers round it to float32). See :func:`bilinear_repeat`."""
+    the callers round it to float32). See :func:`bilinear_repeat`.
+    """
     x = u * wid - 0.5
     y = (1.0 - v) * hgt - 0.5
     x0f = np.floor(x)

@@ -117,6 +117,15 @@ def from_grid(
     Returns
     -------
     CSDF
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import ingest
+    >>> x, y, z = np.mgrid[-1:1:33j, -1:1:33j, -1:1:33j]
+    >>> ball = ingest.from_grid(np.sqrt(x**2 + y**2 + z**2) - 0.5, origin=(-1, -1, -1), voxel_size=2 / 32)
+    >>> ball.shape
+    (33, 33, 33)
     """
     report = resolve(progress)
     v = _check_volume(sdf_volume, source)
@@ -180,7 +189,26 @@ def read_grid(path: str | os.PathLike) -> dict:
 
     ``.npy``: one (X, Y, Z) float array. ``.npz``: array ``sdf`` (or the only 3D array), and
     optionally ``rgb``/``colors`` (X, Y, Z, 3), ``origin`` (3,), ``voxel_size`` and ``iso``.
-    Returns a dict of :func:`from_grid` arguments (``sdf_volume``, ``colors``, ...).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    dict
+        :func:`from_grid` arguments (``sdf_volume``, ``colors``, ``origin``, ...), those the file
+        holds.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import ingest
+    >>> x, y, z = np.mgrid[-1:1:33j, -1:1:33j, -1:1:33j]
+    >>> np.save("ball.npy", (np.sqrt(x**2 + y**2 + z**2) - 0.5).astype(np.float32))
+    >>> ingest.from_grid(**ingest.read_grid("ball.npy")).shape
+    (33, 33, 33)
     """
     path = Path(path)
     try:
@@ -219,7 +247,27 @@ def read_autosdf(path: str | os.PathLike) -> dict:
     AutoSDF's convention: the object is normalised into the unit sphere, Y-up (as glTF, so no
     rotation), values clamped to +-0.2 and the surface at level 0.02; samples lie on
     ``linspace(-1, 1, n)`` along each axis, index (i, j, k) = (x, y, z).
-    Returns :func:`from_grid` arguments with ``iso = 0.02``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.h5`` / ``.hdf5`` file.
+
+    Returns
+    -------
+    dict
+        :func:`from_grid` arguments: ``sdf_volume``, ``origin``, ``voxel_size`` and ``iso = 0.02``.
+
+    Examples
+    --------
+    >>> import h5py
+    >>> import numpy as np
+    >>> from partscale import ingest
+    >>> x, y, z = np.mgrid[-1:1:33j, -1:1:33j, -1:1:33j]
+    >>> with h5py.File("ball.h5", "w") as f:
+    ...     f["pc_sdf_sample"] = np.clip(np.sqrt(x**2 + y**2 + z**2) - 0.5, -0.2, 0.2).astype(np.float32)
+    >>> ingest.read_autosdf("ball.h5")["iso"]
+    0.02
     """
     import h5py
 

@@ -50,16 +50,55 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     colour factor and texture), its corner UVs and vertex colours, so the colour at any surface
     point can be evaluated with :meth:`ColoredMesh.color_at`.
 
-    Raises :class:`InputError` naming the file for a missing, unreadable, corrupt or empty mesh.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The mesh file.
+
+    Returns
+    -------
+    ColoredMesh
+        Its triangles in world positions, with their materials.
+
+    Raises
+    ------
+    InputError
+        Naming the file for a missing, unreadable, corrupt or empty mesh.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> mesh = ingest.load_mesh(data.table())
+    >>> mesh.vertices.shape[1], mesh.faces.dtype
+    (3, dtype('int64'))
     """
     path = check_mesh_file(path)
     return MESH_READERS[path.suffix.lower()](path)
 
 
 def check_mesh_file(path: str | os.PathLike) -> Path:
-    """``path`` as a Path if it is an existing, non-empty file with a :data:`MESH_SUFFIXES` suffix.
+    """Check that ``path`` is an existing, non-empty file with a :data:`MESH_SUFFIXES` suffix.
 
-    Raises :class:`InputError` naming the file otherwise.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The mesh file.
+
+    Returns
+    -------
+    pathlib.Path
+        The path.
+
+    Raises
+    ------
+    InputError
+        Naming the file, otherwise.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> ingest.check_mesh_file(data.table()).name
+    'table.glb'
     """
     path = check_input_file(path, what="an existing mesh file")
     suffix = path.suffix.lower()
@@ -153,6 +192,13 @@ def load(
         (with ``up``, ``units`` and ``scale`` where given) and, for a mesh, the turn about up
         that would square it: ``turned_deg`` where ``square`` made it (0.0 where none was
         needed or found), else ``off_square_deg`` where one was found.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> table = ingest.load(data.table(), res=64)
+    >>> table.shape, table.meta["units"], table.meta["history"][0]["op"]
+    ((75, 36, 46), 'm', 'import')
     """
     path = Path(path)
     report = resolve(progress)
@@ -250,7 +296,8 @@ def _place(mesh: ColoredMesh, *, up: str, scale, units, name: str):
 
 def _square(mesh: ColoredMesh, square: bool) -> tuple[ColoredMesh, dict]:
     """``mesh`` turned square about up where ``square`` (and a turn is found), and what was
-    found or done (for the history)."""
+    found or done (for the history).
+    """
     import dataclasses
 
     from ..orient import square_turn, turn_about_up

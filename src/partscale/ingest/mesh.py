@@ -34,6 +34,8 @@ if TYPE_CHECKING:
 class Material:
     """One surface material.
 
+    Parameters
+    ----------
     factor : (3,) float32
         Linear RGB multiplier (glTF ``baseColorFactor``, MTL ``Kd`` linearised).
     texture : (H, W, 3) float32 or None
@@ -41,6 +43,13 @@ class Material:
     uv_transform : (2, 3) float64 or None
         Affine map applied to UVs before lookup (glTF ``KHR_texture_transform``), in trimesh's
         v-up convention.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> material = ingest.load_mesh(data.table()).materials[0]
+    >>> [round(float(v), 2) for v in material.factor], material.texture is None
+    ([0.9, 0.6, 0.39], True)
     """
 
     factor: np.ndarray
@@ -52,6 +61,8 @@ class Material:
 class ColoredMesh:
     """A triangle soup with what is needed to evaluate its sRGB colour at any surface point.
 
+    Parameters
+    ----------
     vertices : (V, 3) float64
         World positions (all node transforms applied), object units (metres for glTF).
     faces : (F, 3) int64
@@ -59,12 +70,20 @@ class ColoredMesh:
     face_material : (F,) int32
         Index into ``materials`` of each triangle.
     materials : tuple of Material
+        The surface materials.
     uv : (F, 3, 2) float32 or None
         Texture coordinates at each triangle corner (NaN-free; zeros where a piece has none).
     corner_color : (F, 3, 3) float32 or None
         Linear vertex colour at each triangle corner (ones where a piece has none).
     source : str
         File it was read from.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> mesh = ingest.load_mesh(data.table())
+    >>> mesh.faces.shape, len(mesh.materials)
+    ((120, 3), 1)
     """
 
     vertices: np.ndarray
@@ -86,10 +105,11 @@ class ColoredMesh:
 
     @property
     def n_faces(self) -> int:
+        """Number of triangles."""
         return len(self.faces)
 
     def color_at(self, tri_ids: np.ndarray, bary: np.ndarray) -> np.ndarray:
-        """sRGB colour at surface points given as triangle + barycentric coordinates.
+        """SRGB colour at surface points given as triangle + barycentric coordinates.
 
         Parameters
         ----------
@@ -284,7 +304,8 @@ def material_of(
     materials: dict[str, Material],
 ) -> Material:
     """The :class:`Material` of a trimesh visual: ``materials[name]`` when the reader made it,
-    else from trimesh's material (factors linear when ``linear_colors``, else display sRGB)."""
+    else from trimesh's material (factors linear when ``linear_colors``, else display sRGB).
+    """
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
     mat = getattr(visual, "material", None)
@@ -309,8 +330,30 @@ def material_of(
 
 
 def from_trimesh(mesh, *, color=(200, 200, 200), source: str = "") -> ColoredMesh:
-    """A :class:`ColoredMesh` of one flat sRGB ``color`` from a ``trimesh.Trimesh`` (tests,
-    demos)."""
+    """A :class:`ColoredMesh` of one flat sRGB colour from a ``trimesh.Trimesh`` (tests, demos).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The triangles, object units.
+    color : (3,) int
+        sRGB colour of every face.
+    source : str
+        What messages and ``meta['source']`` call it.
+
+    Returns
+    -------
+    ColoredMesh
+        The mesh, ready for :func:`from_mesh`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from partscale import ingest
+    >>> mesh = ingest.from_trimesh(trimesh.creation.box((1, 0.5, 0.5)), color=(200, 50, 50))
+    >>> ingest.from_mesh(mesh, res=32).rgb[16, 8, 8].tolist()
+    [200, 50, 50]
+    """
     f = np.asarray(mesh.faces, np.int64)
     return ColoredMesh(
         vertices=np.asarray(mesh.vertices, np.float64).copy(),

@@ -68,7 +68,30 @@ MAX_PAD = 4096
 
 
 def check_res(res: int | float, what: str) -> int:
-    """Validate ``--res`` (an int in [16, :data:`MAX_RES`]) before any arithmetic with it."""
+    """Validate a resolution (an int in [16, :data:`MAX_RES`]) before any arithmetic with it.
+
+    Parameters
+    ----------
+    res : int or float
+        Voxels along the object's longest side; a float must be whole.
+    what : str
+        Its name in the :class:`~partscale.errors.InputError`.
+
+    Returns
+    -------
+    int
+        The resolution.
+
+    Examples
+    --------
+    >>> from partscale.ingest import check_res
+    >>> check_res(64, "res")
+    64
+    >>> check_res(8, "res")
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: res: expected res in [16, 16384], got 8
+    """
     if isinstance(res, float) and math.isfinite(res) and res.is_integer():
         res = int(res)
     if isinstance(res, bool) or not isinstance(res, int | np.integer):
@@ -433,6 +456,13 @@ def from_mesh(
     CSDF
         ``sdf`` (X, Y, Z) float32 exact within ``BAND_VOXELS`` voxels of the surface, negative
         inside; ``rgb`` (X, Y, Z, 3) uint8 sRGB of the nearest surface point.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> table = ingest.from_mesh(ingest.load_mesh(data.table()), res=64)
+    >>> table.shape
+    (75, 36, 46)
     """
     report = resolve(progress)
     name = mesh.source or "mesh"

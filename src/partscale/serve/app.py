@@ -430,6 +430,8 @@ def create_app(
     max_body : int
         Largest request body in bytes; larger ones get 413.
 
+    Notes
+    -----
     ``app.state.session`` is the :class:`~partscale.serve.session.EditSession`.
     """
     session = EditSession.open(path)

@@ -105,23 +105,57 @@ MAX_GROUPS = 3
 
 @dataclass(frozen=True)
 class Separator:
-    """What lies between two elements: ``start``, ``end`` (world units along the axis) and
-    ``kind``: ``'edge'`` (seen to change: a groove, a face, a painted line), ``'board'`` (the
-    cross-section's area peaks: a shelf, a divider) or ``'gap'`` (it dips)."""
+    """What lies between two elements along an axis.
+
+    Parameters
+    ----------
+    start, end : float
+        World positions along the axis.
+    kind : {'edge', 'board', 'gap'}
+        ``'edge'`` (seen to change: a groove, a face, a painted line), ``'board'`` (the
+        cross-section's area peaks: a shelf, a divider) or ``'gap'`` (it dips).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.find_elements(bookcase, "y").separators[0].kind
+    'edge'
+    """
 
     start: float
     end: float
     kind: str
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {"start": self.start, "end": self.end, "kind": self.kind}
 
 
 @dataclass(frozen=True)
 class Element:
-    """One element: ``start``, ``end`` (world units along the axis), the ``group`` it belongs to
-    (an index into :attr:`AxisElements.groups`, or None) and whether it is ``mirrored`` relative
-    to its group's first element."""
+    """One element along an axis: a seat cushion, a door, a compartment between shelves.
+
+    Parameters
+    ----------
+    start, end : float
+        World positions along the axis.
+    group : int or None
+        The repeat group it belongs to (an index into :attr:`AxisElements.groups`), or None.
+    mirrored : bool
+        Whether it matches its group's first element only mirrored.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.find_elements(bookcase, "y").elements[0].group
+    0
+    """
 
     start: float
     end: float
@@ -130,9 +164,11 @@ class Element:
 
     @property
     def length(self) -> float:
+        """``end - start``, world units."""
         return self.end - self.start
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "start": self.start,
             "end": self.end,
@@ -144,11 +180,30 @@ class Element:
 
 @dataclass(frozen=True)
 class Group:
-    """Elements that repeat: indices into :attr:`AxisElements.elements` in order along the axis,
-    the separators between them (indices into :attr:`AxisElements.separators`, one fewer), the
-    mean distance between neighbours' cross-sections (``err``, 0..:data:`MATCH`), whether any
-    pair matches only mirrored, and ``typical``: the member a count edit copies or removes first
-    (the one of median length, nearest the middle of the group)."""
+    """Elements that repeat along an axis.
+
+    Parameters
+    ----------
+    members : tuple of int
+        Indices into :attr:`AxisElements.elements`, in order along the axis.
+    separators : tuple of int
+        The separators between them (indices into :attr:`AxisElements.separators`, one fewer).
+    err : float
+        Mean distance between neighbours' cross-sections (0..:data:`MATCH`).
+    mirrored : bool
+        Whether any pair matches only mirrored.
+    typical : int
+        The member a count edit copies or removes first (median length, nearest the middle).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.find_elements(bookcase, "y").groups[0]
+    Group(members=(0, 1, 2), separators=(0, 1), err=0.0, mirrored=False, typical=1)
+    """
 
     members: tuple[int, ...]
     separators: tuple[int, ...]
@@ -157,6 +212,7 @@ class Group:
     typical: int
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "members": list(self.members),
             "separators": list(self.separators),
@@ -171,9 +227,10 @@ class Group:
 class AxisElements:
     """The elements of an object along one axis (:func:`find_elements`).
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
+        The axis.
     elements : tuple of Element
         Ordered along the axis; each group's members, then the spans between the separators
         of the best group's row that belong to no group.
@@ -184,6 +241,17 @@ class AxisElements:
     lo, hi : float
         The solid's extent along the axis (world units).
     voxel_size : float
+        The object's voxel size.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> found = zones.find_elements(bookcase, "y")
+    >>> len(found.elements), found.best.members
+    (3, (0, 1, 2))
     """
 
     axis: str
@@ -200,6 +268,7 @@ class AxisElements:
         return self.groups[0] if self.groups else None
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "axis": self.axis,
             "elements": [e.to_json() for e in self.elements],
@@ -215,7 +284,8 @@ def _views(s: np.ndarray, rgb: np.ndarray) -> list[tuple[np.ndarray, np.ndarray,
     """Depth images of the solid ``s`` ((N, U, V) float32 sdf in voxels, the axis first) seen
     from its four sides square to the axis: per view ``depth`` (N, W) float32 (voxels from the
     grid's side to the first zero crossing, linear between samples; NaN where no surface),
-    ``colour`` (N, W, 3) int16 (sRGB of the first inside sample) and ``present`` (N, W) bool."""
+    ``colour`` (N, W, 3) int16 (sRGB of the first inside sample) and ``present`` (N, W) bool.
+    """
     out = []
     for ax in (1, 2):
         for flip in (False, True):
@@ -238,7 +308,8 @@ def _views(s: np.ndarray, rgb: np.ndarray) -> list[tuple[np.ndarray, np.ndarray,
 
 def edge_score(csdf: CSDF, axis: int) -> np.ndarray:
     """(N - 1,) float64: for each layer pair ``(i, i + 1)`` along ``axis``, the largest share
-    over the four side views of the visible pixels that change there (see module, step 1)."""
+    over the four side views of the visible pixels that change there (see module, step 1).
+    """
     h = np.float32(csdf.voxel_size)
     s = np.moveaxis(csdf.sdf, axis, 0) / h
     rgb = np.moveaxis(csdf.rgb, axis, 0)
@@ -266,7 +337,8 @@ def edge_score(csdf: CSDF, axis: int) -> np.ndarray:
 class _Cand:
     """A separator candidate in layer indices: the layers ``lo..hi`` it covers (continuous: an
     edge between layers i and i + 1 lies at i + 0.5), where the elements beside it end, and its
-    ``strength``: the largest edge score in it (an area boundary alone: :data:`EDGE_SCORE`)."""
+    ``strength``: the largest edge score in it (an area boundary alone: :data:`EDGE_SCORE`).
+    """
 
     lo: float
     hi: float
@@ -318,7 +390,8 @@ def _candidates(csdf: CSDF, p: Profile) -> list[_Cand]:
 
 def _samples(e: tuple[float, float]) -> np.ndarray:
     """(SAMPLES,) layer positions spread over element ``e`` (layer indices), a layer in from
-    each end (the separator's face is blended into the layer next to it)."""
+    each end (the separator's face is blended into the layer next to it).
+    """
     a, b = e[0] + 1.0, e[1] - 1.0
     return a + (np.arange(SAMPLES) + 0.5) / SAMPLES * (b - a)
 
@@ -340,7 +413,8 @@ def _unit(p: Profile, e: tuple[float, float]) -> bool:
     """Whether element ``e`` begins and ends alike (module, step 2): some pair of layers at
     :data:`UNIT_ENDS` of its length in from either end matches (a door's two edges, a cushion's
     two rounded ends, a compartment), so half of a symmetric piece (from a side panel to the
-    middle handle) is no element."""
+    middle handle) is no element.
+    """
     t = np.asarray(UNIT_ENDS)
     le = e[1] - e[0]
     d = _layer_distance(p, e[0] + t * le, e[1] - t * le)
@@ -451,7 +525,8 @@ def _strength(cands: list[_Cand], lo: float, hi: float) -> float:
 
 def _best_chains(p: Profile, cands: list[_Cand], chains: list[_Chain]) -> list[_Chain]:
     """Chains best first (most of the solid covered, most elements, best matched), each
-    overlapping none before it; at most :data:`MAX_GROUPS`."""
+    overlapping none before it; at most :data:`MAX_GROUPS`.
+    """
     i0, i1 = _solid_layers(p)
     solid = max(i1 - i0, 1)
 
@@ -504,7 +579,9 @@ def find_elements(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -
     Parameters
     ----------
     csdf : CSDF
+        The object.
     axis : {'x', 'y', 'z'} or {0, 1, 2}
+        The axis.
     prof : Profile, optional
         The axis's :func:`~partscale.zones.profile` if the caller has it.
 
@@ -516,11 +593,13 @@ def find_elements(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -
 
     Examples
     --------
-    >>> from partscale import shapes
-    >>> from partscale.zones import find_elements
-    >>> c = shapes.shelf_unit(shelves=4)  # doctest: +SKIP
-    >>> find_elements(c, "y").best is not None  # doctest: +SKIP
-    True
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> found = zones.find_elements(bookcase, "y")
+    >>> found.best is not None, zones.element_phrase(found)
+    (True, '3 alike elements, 0.26 long')
     """
     ax = _axis_index(axis)
     p = prof if prof is not None else profile(csdf, ax)
@@ -570,7 +649,7 @@ def _describe(p: Profile, chains: list[_Chain]) -> AxisElements:
 class CountZone:
     """A zone of whole elements with their separators, for a count edit (:func:`count_zone`).
 
-    Attributes
+    Parameters
     ----------
     start, end : float
         World positions of the zone's planes along the axis; ``end - start`` is a whole number
@@ -580,6 +659,16 @@ class CountZone:
     seam : float
         Soft Jaccard distance between the cross-sections at the two planes (0: they match, so
         copies join seamlessly; at most :data:`~partscale.zones.suggest.MATCH` where possible).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> z = zones.count_zone(bookcase, zones.find_elements(bookcase, "y"), 1)
+    >>> round(z.start, 3), round(z.end, 3), z.members, z.seam
+    (0.624, 0.924, (1,), 0.0)
     """
 
     start: float
@@ -589,6 +678,7 @@ class CountZone:
 
     @property
     def length(self) -> float:
+        """``end - start``, world units."""
         return self.end - self.start
 
 
@@ -602,7 +692,8 @@ def _anchors(
     shifted alike by ``t`` (quarter voxels). ``inside``: the planes may also go up to halfway
     into the elements (else at most a voxel in: a plane through an element's middle joins the
     halves of two elements, mirrored ones back to front). Cost: the seam (distance between the
-    planes' cross-sections) plus their cross-section area (low in gaps)."""
+    planes' cross-sections) plus their cross-section area (low in gaps).
+    """
     el = [(p.index(found.elements[i].start), p.index(found.elements[i].end)) for i in g.members]
     sep = [
         (p.index(found.separators[i].start), p.index(found.separators[i].end)) for i in g.separators
@@ -640,17 +731,45 @@ def _anchors(
 def count_zone(
     csdf: CSDF, found: AxisElements, m: int, *, prof: Profile | None = None
 ) -> CountZone:
-    """The zone holding ``m`` whole elements of :attr:`AxisElements.best` and ``m`` separators,
+    """The zone of ``m`` whole elements and ``m`` separators that a count edit tiles or cuts out.
+
+    The zone holding ``m`` whole elements of :attr:`AxisElements.best` and ``m`` separators,
     around its typical member, whose planes' cross-sections match best.
 
     Tiled to ``1 + n`` copies it adds ``n`` elements; tiled to its start (0 copies) it removes
     ``m``. Among the zones of least cost (:func:`_anchors`, within 0.03 of the lowest), those
     whose copies' joins cut off the least solid (:func:`~partscale.zones.suggest.join_islands`).
 
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    found : AxisElements
+        Its elements along the axis (:func:`find_elements`).
+    m : int
+        Whole elements the zone holds.
+    prof : Profile, optional
+        The axis's :func:`~partscale.zones.profile` if the caller has it.
+
+    Returns
+    -------
+    CountZone
+        The zone, world units.
+
     Raises
     ------
     InputError
         No repeat group along the axis, or ``m`` not below its element count (one stays).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zone = zones.count_zone(bookcase, zones.find_elements(bookcase, "y"), 1)
+    >>> zone.members
+    (1,)
     """
     from ..errors import InputError
 
@@ -702,7 +821,27 @@ def count_zone(
 
 
 def element_phrase(found: AxisElements) -> str:
-    """A few words on the best group: ``'2 alike elements, mirrored, 0.84..0.85 m long'``."""
+    """A few words on the best group: ``'2 alike elements, mirrored, 0.84..0.85 m long'``.
+
+    Parameters
+    ----------
+    found : AxisElements
+        The elements along an axis.
+
+    Returns
+    -------
+    str
+        The phrase (``'no repeated element'`` where nothing repeats).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.element_phrase(zones.find_elements(bookcase, "y"))
+    '3 alike elements, 0.26 long'
+    """
     g = found.best
     if g is None:
         return "no repeated element"

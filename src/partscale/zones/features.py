@@ -84,7 +84,7 @@ NOISE_MARGIN = 2.0
 class Feature:
     """A local feature of a run of layers along an axis (:func:`run_features`).
 
-    Attributes
+    Parameters
     ----------
     first, last : int
         Its layers along the axis (inclusive).
@@ -98,6 +98,14 @@ class Feature:
         Whether it lies at least in part in a calm run (:func:`axis_features`): not wholly in
         the layers past one, where the section changes (a board, a door's edge) and a colour
         found may be that structure's own.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> zones.axis_features(door, 0, [(4, 82)])[0].kind
+    'shape'
     """
 
     first: int
@@ -111,7 +119,8 @@ class Feature:
 def _envelope_excess(x: np.ndarray) -> np.ndarray:
     """(L, K) how far each value of the columns ``x`` (L, K) stands above the lowest value
     before it and the lowest after it, or below the highest before and the highest after
-    (whichever is more): a bump or a dip of the column, 0 on a monotone run."""
+    (whichever is more): a bump or a dip of the column, 0 on a monotone run.
+    """
     lo = np.maximum(np.minimum.accumulate(x, axis=0), np.minimum.accumulate(x[::-1], axis=0)[::-1])
     hi = np.minimum(np.maximum.accumulate(x, axis=0), np.maximum.accumulate(x[::-1], axis=0)[::-1])
     return np.maximum(x - lo, hi - x)
@@ -119,7 +128,8 @@ def _envelope_excess(x: np.ndarray) -> np.ndarray:
 
 def _noise(values: np.ndarray, n_surface: int) -> float:
     """The value the strongest :data:`NOISE_SHARE` of ``n_surface`` surface voxels reach, given
-    ``values`` (the measure at those of them that can reach any; the rest count as 0)."""
+    ``values`` (the measure at those of them that can reach any; the rest count as 0).
+    """
     k = int(NOISE_SHARE * n_surface)
     if k < 1 or values.size < k:
         return 0.0
@@ -132,7 +142,8 @@ class _Run:
     (L, A, B, world units, the axis first: a view of the grid), the voxel size ``h``, their
     least distance per column ``low`` (A, B), the section's solid extent across the axis (two
     ``(lo, hi)`` index ranges: no feature spans it both ways) and the least voxels of a
-    feature."""
+    feature.
+    """
 
     first: int
     d: np.ndarray
@@ -156,7 +167,8 @@ def _components(
     layers from ``offset`` by columns ``cols``): at least ``run.vmin`` voxels, local (at most
     half as long as the run inside its end layers, and short of the section's extent one way
     across), holding a ``sharp`` voxel and one whose ``peak`` exceeds ``threshold``; a colour
-    motif at least two voxels wide along its face (:func:`_face_width`)."""
+    motif at least two voxels wide along its face (:func:`_face_width`).
+    """
     hit = bump.any(axis=0)
     if not hit.any():
         return []
@@ -204,7 +216,8 @@ def _face_width(run: _Run, layer: np.ndarray, a: np.ndarray, b: np.ndarray) -> i
     """Width (voxels) across the axis along its face of the colour motif whose voxels are at
     ``(layer, a, b)`` in ``run``: its extent across the axis in the direction its face runs
     (the other direction across is the face's normal, through the voxels within a voxel of
-    it)."""
+    it).
+    """
     d = run.d
     grad = [
         np.abs(d[layer, np.minimum(a + 1, d.shape[1] - 1), b] - d[layer, np.maximum(a - 1, 0), b]),
@@ -216,7 +229,8 @@ def _face_width(run: _Run, layer: np.ndarray, a: np.ndarray, b: np.ndarray) -> i
 
 def _shape_features(run: _Run, high: np.ndarray, height: float) -> list[Feature]:
     """The shape features of ``run`` (see :func:`run_features`); ``high`` (A, B): its greatest
-    distance per column."""
+    distance per column.
+    """
     # only a column whose occupancy changes by half a voxel or more along the run can hold a
     # bump: most columns of a slab never do, so the rest of the work is on those alone
     occ_hi = np.clip(0.5 - run.low / run.h, 0.0, 1.0)
@@ -253,7 +267,8 @@ def _shape_features(run: _Run, high: np.ndarray, height: float) -> list[Feature]
 
 def _inside(x: np.ndarray) -> np.ndarray:
     """(L, K) :func:`_envelope_excess` of the columns ``x`` (L, K: a run's layers by columns)
-    but their two end values (0 there)."""
+    but their two end values (0 there).
+    """
     out = np.zeros_like(x)
     out[1:-1] = _envelope_excess(x[1:-1])
     return out
@@ -262,7 +277,8 @@ def _inside(x: np.ndarray) -> np.ndarray:
 def _flanks(x: np.ndarray) -> np.ndarray:
     """(L, K) how far each value of the columns ``x`` (L, K) next to their end values, within
     :data:`EXTEND` of them, stands from the value just inside those (0 elsewhere, and where the
-    run is too short to have an inside)."""
+    run is too short to have an inside).
+    """
     out = np.zeros_like(x)
     e = EXTEND
     if len(x) > 2 * e + 1:
@@ -273,7 +289,8 @@ def _flanks(x: np.ndarray) -> np.ndarray:
 
 def _colour_features(run: _Run, rgb_grid: np.ndarray) -> list[Feature]:
     """The colour motifs of ``run`` (see :func:`run_features`); ``rgb_grid`` (L, A, B, 3):
-    its colours."""
+    its colours.
+    """
     # columns along a face: within a voxel of the surface at every inner layer, with such a
     # column either side along one direction across (at an edge, the colour of the nearest of
     # two faces flickers)
@@ -313,7 +330,8 @@ def _colour_features(run: _Run, rgb_grid: np.ndarray) -> list[Feature]:
 
 def _section(low: np.ndarray) -> tuple[tuple[int, int], tuple[int, int]] | None:
     """The solid's extent across the axis (index ranges) of columns whose least distance is
-    ``low`` (A, B); None for no solid."""
+    ``low`` (A, B); None for no solid.
+    """
     a, b = np.nonzero(low <= 0)
     if a.size == 0:
         return None
@@ -374,7 +392,9 @@ def run_features(csdf: CSDF, axis: int, first: int, last: int, *, reach: int = 0
 
 
 def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Feature]:
-    """The local features along ``axis`` (0, 1, 2) of the runs of layers ``runs`` (inclusive
+    """The local features along ``axis`` of the given runs of layers.
+
+    The local features along ``axis`` (0, 1, 2) of the runs of layers ``runs`` (inclusive
     ``(first, last)``: the calm runs of :func:`.suggest.calm_runs`), in order of their first
     layer.
 
@@ -383,6 +403,28 @@ def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Fe
     run), has a reference beyond it then; columns along a face there are still a face. Shapes are
     not: beyond the run, the columns cross the structure that ended it (a leg, a board), whose
     rise from a column would stand out as a bump. One found from two runs is kept once.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : int
+        0, 1 or 2.
+    runs : list of (int, int)
+        Runs of layers, inclusive ``(first, last)``.
+
+    Returns
+    -------
+    list of Feature
+        In order of their first layer.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> [(f.first, f.last, f.kind) for f in zones.axis_features(door, 0, [(4, 82)])]
+    [(65, 71, 'shape')]
     """
     found: list[Feature] = []
     for a, b in runs:
@@ -399,7 +441,8 @@ def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Fe
 
 def feature_spans(features: list[Feature]) -> list[tuple[int, int]]:
     """``(first, last)`` layer spans of ``features``, those that share layers (a pair of knobs
-    side by side) joined into one, in order."""
+    side by side) joined into one, in order.
+    """
     out: list[tuple[int, int]] = []
     for f in sorted(features, key=lambda f: f.first):
         if out and f.first <= out[-1][1] + 1:
@@ -422,7 +465,8 @@ def _overlaps(f: Feature, g: Feature) -> bool:
 
 def _alike(f: Feature, g: Feature) -> bool:
     """Whether ``g`` could be a copy of ``f`` along the axis: the same kind, as long within a
-    voxel (a quarter for a long one) and at the same place across the axis within a voxel."""
+    voxel (a quarter for a long one) and at the same place across the axis within a voxel.
+    """
     lf, lg = f.last - f.first, g.last - g.first
     return (
         f.kind == g.kind
@@ -436,14 +480,17 @@ def _alike(f: Feature, g: Feature) -> bool:
 
 def cut_features(features: list[Feature], plane: float) -> list[Feature]:
     """The features a plane at continuous layer index ``plane`` passes through (each occupies
-    half a layer past its first and last)."""
+    half a layer past its first and last).
+    """
     return [f for f in features if f.first - 0.5 < plane < f.last + 0.5]
 
 
 def whole_copies(
     features: list[Feature], start: float, period: float, lo: float, hi: float
 ) -> bool:
-    """Whether tiling the zone ``[start, start + period]`` (continuous layer indices) of a
+    """Whether tiling a zone of a repeat copies whole elements.
+
+    Whether tiling the zone ``[start, start + period]`` (continuous layer indices) of a
     repeat over ``[lo, hi]`` copies whole elements.
 
     Neither plane may pass through a local feature (the copies would join a knob's halves to
@@ -451,6 +498,31 @@ def whole_copies(
     one alike (:func:`_alike`: a translated or a mirrored copy) in the period before or after
     it within the repeat: a handle on one door of two, inside a zone of one pane, is no part
     of the period, and tiling it would double it.
+
+    Parameters
+    ----------
+    features : list of Feature
+        The axis's local features (:func:`axis_features`).
+    start : float
+        The zone's first plane (continuous layer index).
+    period : float
+        The zone's length, layers.
+    lo, hi : float
+        The repeat's extent, layers.
+
+    Returns
+    -------
+    bool
+        True where the copies would be whole elements.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> knob = zones.axis_features(door, 0, [(4, 82)])
+    >>> zones.whole_copies(knob, 10.0, 20.0, 4.0, 82.0), zones.whole_copies(knob, 60.0, 10.0, 4.0, 82.0)
+    (True, False)
     """
     end = start + period
     if cut_features(features, start) or cut_features(features, end):
@@ -469,13 +541,39 @@ def whole_copies(
 def local_features(
     csdf: CSDF, axis: str | int, zone: tuple[float, float]
 ) -> list[tuple[float, float]]:
-    """World ``(start, end)`` extents along ``axis`` (x, y, z or 0, 1, 2) of the local features (a
+    """The local features (a knob, a handle, a motif) that stretching ``zone`` would deform.
+
+    World ``(start, end)`` extents along ``axis`` (x, y, z or 0, 1, 2) of the local features (a
     knob, a handle, a hinge, a keyhole, a colour motif: :func:`run_features`) between the
     planes of ``zone`` (world units), even in part: what stretching that zone would stretch out
     of shape. Empty for a zone of constant section.
 
     Those of the axis's calm runs (:func:`axis_features`, where the slabs :mod:`.suggest`
     offers are cut) and those of the zone's own layers.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : {'x', 'y', 'z'} or {0, 1, 2}
+        The axis.
+    zone : (float, float)
+        The zone's planes, world units.
+
+    Returns
+    -------
+    list of (float, float)
+        World extents of the features along the axis.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> [(round(a, 3), round(b, 3)) for a, b in zones.local_features(door, "x", (0.5, 0.75))]
+    [(0.615, 0.685)]
+    >>> zones.local_features(door, "x", (0.1, 0.4))
+    []
     """
     from .suggest import calm_runs  # (suggest builds on this module)
 
@@ -495,9 +593,32 @@ def local_features(
 
 
 def feature_notes(csdf: CSDF, recipe: Recipe) -> list[str]:
-    """One line per stretch edit of ``recipe`` whose zone holds a local feature
-    (:func:`local_features`): it is stretched with the zone, out of shape. Zones are read on
-    ``csdf``, the recipe's input (recipe coordinates)."""
+    """One line per stretch edit of ``recipe`` whose zone holds a local feature (:func:`local_features`).
+
+    Such a feature is stretched with the zone, out of shape. Zones are read on ``csdf``, the
+    recipe's input (recipe coordinates).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The recipe's input.
+    recipe : Recipe
+        The edits.
+
+    Returns
+    -------
+    list of str
+        The notes.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
+    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> from partscale.edit import Edit, Recipe
+    >>> print(zones.feature_notes(door, Recipe((Edit("x", 0.5, 0.75, 0.9),)))[0][:66])
+    the stretch zone 0.5..0.75 m along x holds 1 local feature (a knob
+    """
     sb = csdf.surface_bounds()
     units = csdf.meta.get("units")
     u = unit_suffix(units)

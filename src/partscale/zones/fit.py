@@ -164,7 +164,8 @@ def _inset(
 def _fill(need: float, weights: list[float], rooms: list[float]) -> list[float]:
     """Shares of ``need`` in proportion to ``weights``, none above its room: what a full slab
     cannot give goes to the others, again in proportion (sums to less than ``need`` only where
-    every room is used)."""
+    every room is used).
+    """
     give = [0.0] * len(weights)
     free = [i for i, r in enumerate(rooms) if r > 0]
     left = need
@@ -324,7 +325,8 @@ def outline_extents(csdf: CSDF, axis: int) -> np.ndarray:
     """(L, N) int64: the solid's extent (voxels, first to last solid voxel) along one of the two
     other axes, per level of the third (L rows: the levels of both), per layer along ``axis``;
     0 where a level of a layer holds no solid. A round column shows as a chord in the levels it
-    spans, however large the top above it."""
+    spans, however large the top above it.
+    """
     inside = np.moveaxis(np.asarray(csdf.sdf < 0), axis, 0)  # (N, U, V)
     rows = []
     for across in (1, 2):  # extent along U per level of V, then along V per level of U
@@ -343,7 +345,8 @@ def on_curve(extents: np.ndarray, first: float, zone: tuple[float, float], h: fl
     a step, by more than :data:`CURVE_VOXELS` within the slab's own length beyond it (at least
     :data:`CURVE_REACH`): a round top's middle, a round column or foot in the slab, not the span
     between a table's legs, which ends at a step. Stretching such a slab flattens the curve
-    where it lies (a round top becomes a stadium, a round foot an oval)."""
+    where it lies (a round top becomes a stadium, a round foot an oval).
+    """
     n = extents.shape[1]
     a = round((zone[0] - first) / h)
     b = round((zone[1] - first) / h)
@@ -368,7 +371,8 @@ def on_curve(extents: np.ndarray, first: float, zone: tuple[float, float], h: fl
 
 def _long(c: Candidate, h: float) -> bool:
     """Whether a slab is at least :data:`MIN_SPREAD_VOXELS` long: a span or a long uniform run,
-    not a feature's thickness (a board, a panel, a leg's width)."""
+    not a feature's thickness (a board, a panel, a leg's width).
+    """
     return round((c.zone[1] - c.zone[0]) / h) >= MIN_SPREAD_VOXELS
 
 
@@ -395,7 +399,8 @@ def _outside(slabs: list[Candidate], h: float, tiled: _Tiled | None) -> list[Can
 
 def _thin_reason(tiled: bool, each: bool = False) -> str:
     """Why a thin slab takes a growth: nothing longer could; ``each``: for several of them,
-    with what that changes."""
+    with what that changes.
+    """
     copies = f" nor the copies (within {100 * COPY_TOLERANCE:.0f}%)" if tiled else ""
     why = f"no slab of {MIN_SPREAD_VOXELS} voxels or more{copies} could take it"
     return f"{why}: a feature's thickness changes in each" if each else why
@@ -404,7 +409,8 @@ def _thin_reason(tiled: bool, each: bool = False) -> str:
 def _thin_note(c: Candidate, h: float, tiled: bool, alone: bool = True) -> str:
     """The note's tail for a stretch of the thin slab ``c``: which feature changes thickness,
     and, ``alone`` (the only thin slab stretched), why; several share one note of the reason
-    (:func:`_to_slabs`)."""
+    (:func:`_to_slabs`).
+    """
     n = round((c.zone[1] - c.zone[0]) / h)
     if not alone:
         return f" (a thin slab, {n} voxels)"
@@ -484,7 +490,8 @@ class _Tiled:
     repeat's region, the tiled zone, the (whole-voxel) period, the length it adds (whole voxels,
     negative for a removal) and the copies that stand after it (world ``(a, b)``): the tiled
     zone's copies, or, after a removal (0 copies cannot take a length), the longer run of copies
-    left beside the removed periods."""
+    left beside the removed periods.
+    """
 
     edit: Edit
     k: int
@@ -557,7 +564,8 @@ def _element_periods(
     its separator tiled to ``1 + k`` copies) or removed (a zone of ``-k`` of them tiled to its
     start), ``k`` the whole number of typical elements nearest ``change``, and the note; None
     where the change is not within :data:`ELEMENT_TOLERANCE` of a whole number of elements
-    (other than 0) or nothing repeats."""
+    (other than 0) or nothing repeats.
+    """
     g = found.best
     if g is None:
         return None
@@ -590,7 +598,8 @@ def _element_periods(
 def _add_steps(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], list[str]] | None:
     """``n`` more (or ``-n`` fewer) steps of a flight that repeats diagonally
     (:func:`~partscale.zones.screw.find_screws`) with a part along ``axis``, and the note;
-    None where there is none."""
+    None where there is none.
+    """
     name = AXES[axis]
     for sc in find_screws(csdf):
         if abs(sc.step[axis]) < csdf.voxel_size / 2:
@@ -613,16 +622,42 @@ def _add_steps(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], l
 
 
 def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], list[str]]:
-    """Edits (recipe coordinates) adding ``n`` elements (removing ``-n``) of the repeat group
+    """Edits adding ``n`` elements of the repeat group along ``axis`` (``-n``: removing).
+
+    Edits (recipe coordinates) adding ``n`` elements (removing ``-n``) of the repeat group
     along ``axis`` (:func:`~partscale.zones.elements.find_elements`), and the note: a zone of
     whole elements and their separators (:func:`~partscale.zones.elements.count_zone`) tiled
     to ``1 + n`` copies, or to its start. With no such group, steps of a flight that repeats
     diagonally with a part along ``axis`` (:func:`_add_steps`: one more step up).
 
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : int
+        0, 1 or 2.
+    n : int
+        Elements to add (negative: remove).
+
+    Returns
+    -------
+    (list of Edit or ScrewZone, list of str)
+        The edits and one line saying what they do.
+
     Raises
     ------
     InputError
         ``n`` is 0, nothing repeats along the axis, or ``-n`` is not below the group's count.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> edits, why = zones.add_axis(bookcase, 1, 1)
+    >>> edits[0].mode, why[0].split(",")[0]
+    ('tile', 'y: add 1 element(s) (3 alike elements')
     """
     name = AXES[axis]
     if n == 0:
@@ -667,7 +702,8 @@ def _to_slabs(
     """Stretch edits over the slabs ``tier`` taking ``left`` (:func:`_stretch_edits`), a note
     each, and what is left; ``thin``: the notes say a feature's thickness changes.
     ``spread``: the shortest slab taking a share (default: 0 when ``thin``, else
-    :data:`MIN_SPREAD_VOXELS`); ``even_growth``: see :func:`_stretch_edits`."""
+    :data:`MIN_SPREAD_VOXELS`); ``even_growth``: see :func:`_stretch_edits`.
+    """
     if spread is None:
         spread = 0 if thin else MIN_SPREAD_VOXELS
     st, left = _stretch_edits(tier, left, ax.h, ax.name, ax.layers, spread, even_growth)
@@ -698,7 +734,8 @@ def _to_long_outside(
 ) -> tuple[list[Edit], list[str], float]:
     """The remainder to slabs at least :data:`MIN_SPREAD_VOXELS` long (:func:`_long`) outside
     the repeat (:func:`_outside`): the first choice, as a feature keeps its thickness and the
-    copies their spacing."""
+    copies their spacing.
+    """
     outside = _outside(slabs, ax.h, tiled)
     tier = [c for c in outside if _long(c, ax.h)]
     shared = _even_growth(tier, outside, left, ax, tiled, thin=False)
@@ -750,7 +787,8 @@ def _even_growth(
 def _copies_within(left: float, tiled: _Tiled) -> bool:
     """Whether the copies take the remainder (:func:`_to_copies`) before any slab inside the
     repeat or any thin slab: their length changes within :data:`COPY_TOLERANCE` (one uneven gap
-    is worse than copies a little off)."""
+    is worse than copies a little off).
+    """
     a, b = tiled.copies
     return abs(left) <= COPY_TOLERANCE * (b - a)
 
@@ -759,7 +797,8 @@ def _to_long_inside(
     slabs: list[Candidate], left: float, ax: _Axis, tiled: _Tiled
 ) -> tuple[list[Edit], list[str], float]:
     """The remainder to long slabs (:func:`_long`) inside the repeat's region but off the tiled
-    zone (one spacing gets uneven): after the copies within :data:`COPY_TOLERANCE`."""
+    zone (one spacing gets uneven): after the copies within :data:`COPY_TOLERANCE`.
+    """
     outside = _outside(slabs, ax.h, tiled)
     tier = [c for c in slabs if _disjoint(c, tiled.zone) and c not in outside and _long(c, ax.h)]
     return _to_slabs(tier, left, ax, tiled, thin=False)
@@ -774,7 +813,8 @@ def _to_thin(
     of one copy and one spacing would change. A growth the largest would take only by more than
     doubling is shared by those of comparable length, each the same fraction (:func:`_even_growth`:
     a flight's treads all deepen), else it goes to the fewest. Nor do thin slabs take a growth
-    that would more than double one of them (:data:`MAX_STRETCH`): nothing is taken then."""
+    that would more than double one of them (:data:`MAX_STRETCH`): nothing is taken then.
+    """
     tier = [c for c in _outside(slabs, ax.h, tiled) if not _long(c, ax.h)]
 
     def doubles(st: list[Edit]) -> bool:
@@ -848,6 +888,32 @@ def fit_axis(
     A shrink takes each chain of drift-split slabs as one (:func:`_drift_chains`). The slabs are
     cut around the axis's local features (knobs, handles, motifs); a note says where the
     stretches lie beside them (:func:`_feature_note`).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : int
+        0, 1 or 2.
+    target : float
+        The extent wanted along the axis (object units).
+    allow_deform : bool
+        Let thin slabs or global scaling take what nothing else can, instead of refusing.
+
+    Returns
+    -------
+    (list of Edit, list of str)
+        The edits (recipe coordinates) and one line per choice.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> edits, why = zones.fit_axis(bookcase, 1, 1.5)  # 30 cm taller: one more shelf row
+    >>> [(e.mode, round(e.dest - e.end, 3)) for e in edits]
+    [('tile', 0.3)]
     """
     name = AXES[axis]
     units = csdf.meta.get("units")
@@ -870,7 +936,8 @@ def _feature_note(
     surface's min along it) with local ``features`` (on its profile ``p``): where the stretched
     zones lie and the features they keep clear of (positions from the axis's min, as the other
     notes give them); and a line for those a stretched zone holds all the same (the copies
-    absorbing a remainder, global scaling: stretched out of shape)."""
+    absorbing a remainder, global scaling: stretched out of shape).
+    """
     name, units, lo = ax
     zones = [(float(e.start), float(e.end)) for e in edits if e.mode in ("stretch", "global")]
     if not zones or not features:
@@ -914,7 +981,8 @@ def _fit_axis(
     allow_deform: bool = False,
 ) -> tuple[list[Edit], list[str]]:
     """:func:`fit_axis` on the axis's profile ``prof`` and local features ``feats``, but the
-    features' note."""
+    features' note.
+    """
     name = AXES[axis]
     units = csdf.meta.get("units")
     sb = csdf.surface_bounds()
@@ -1044,6 +1112,7 @@ def fit(
     Parameters
     ----------
     csdf : CSDF
+        The object.
     size : 3 specs, optional
         Per axis: ``'='`` (unchanged), an absolute length (``2.1``, ``'210cm'``,
         ``'2100mm'``; bare numbers in object units), a change (``'+20cm'``, ``'-5cm'``) or a
@@ -1072,9 +1141,12 @@ def fit(
 
     Examples
     --------
-    >>> from partscale import shapes
-    >>> from partscale.zones import fit
-    >>> recipe, why = fit(shapes.table(), ["150%", "=", "="])  # doctest: +SKIP
+    >>> from partscale import data, edit, ingest, zones
+    >>> table = ingest.load(data.table(), res=64)
+    >>> recipe, why = zones.fit(table, ["3m", "=", "120%"])
+    >>> longer = edit.apply_recipe(table, recipe)
+    >>> round(float(longer.surface_bounds()[1, 0] - longer.surface_bounds()[0, 0]), 1)
+    3.0
     """
     report = resolve(progress)
     add = _check_add(add)
@@ -1177,7 +1249,8 @@ def _radial_fit(
     """Where x and z grow (or shrink) by the same factor and a zone across x or z cannot take
     it part-aware (a round or polygonal outline in plan), the radial zone that can: the
     longest annulus of constant radial section (:func:`~partscale.zones.radial.radial_zones`)
-    about the vertical, grown so the outline scales by the factor; else None."""
+    about the vertical, grown so the outline scales by the factor; else None.
+    """
     sb = csdf.surface_bounds()
     ext = sb[1] - sb[0]
     h = csdf.voxel_size
@@ -1232,7 +1305,8 @@ def _check_add(add: Mapping[str, int] | None) -> dict[str, int]:
 def _off_square(csdf: CSDF, edits: list[Edit]) -> list[str]:
     """A note where x or z changes and the object's walls run off x and z
     (:func:`partscale.orient.csdf_turn`): its slabs along them are not constant (fit falls back
-    to thin slabs or global scaling), and the cure."""
+    to thin slabs or global scaling), and the cure.
+    """
     from ..orient import WALL_AXES, csdf_turn, off_square_message
 
     if not any(e.axis in WALL_AXES for e in edits):

@@ -31,7 +31,7 @@ COARSE_CELLS = 16
 class Profile:
     """Cross-sections of a solid along one axis.
 
-    Attributes
+    Parameters
     ----------
     axis : int
         0, 1 or 2 (x, y, z).
@@ -46,6 +46,17 @@ class Profile:
     lo, hi : float
         The solid's extent along the axis (world units).
     voxel_size : float
+        The object's voxel size.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> p = zones.profile(bookcase, "y")
+    >>> p.coords.shape == p.area.shape == (bookcase.shape[1],)
+    True
     """
 
     axis: int
@@ -59,6 +70,7 @@ class Profile:
 
     @property
     def n(self) -> int:
+        """Number of layers."""
         return len(self.coords)
 
     def distance(self, i: np.ndarray, j: np.ndarray, *, coarse: bool = False) -> np.ndarray:
@@ -129,9 +141,31 @@ def _axis_index(axis: str | int) -> int:
 
 
 def profile(csdf: CSDF, axis: str | int) -> Profile:
-    """The cross-section :class:`Profile` of ``csdf``'s solid along ``axis`` (x, y, z or 0, 1, 2).
+    """The cross-section :class:`Profile` of ``csdf``'s solid along ``axis``.
 
     Cost: one pass over the grid and two (N, N) Gram matrices of the downsampled layers.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : {'x', 'y', 'z'} or {0, 1, 2}
+        The axis.
+
+    Returns
+    -------
+    Profile
+        One layer per voxel along the axis.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> p = zones.profile(bookcase, "y")
+    >>> p.axis, p.gram.shape
+    (1, (67, 67))
     """
     axis = _axis_index(axis)
     h = csdf.voxel_size

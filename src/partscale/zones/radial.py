@@ -41,9 +41,10 @@ RING_INSET = 2
 class RadialFrame:
     """An outline that is round or a regular polygon about an axis (:func:`find_radial`).
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
+        The axis the outline turns about.
     center : (float, float)
         On the two other axes, in order (world units).
     sides : int
@@ -54,6 +55,14 @@ class RadialFrame:
         The outline's largest gauge radius (world units).
     residual : float
         RMS of the outline about the model, voxels.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> slab = shapes.box((-0.5, 0, -0.5), (0.5, 0.1, 0.5), voxel_size=0.025)  # a square top
+    >>> frame = zones.find_radial(slab)
+    >>> frame.axis, frame.sides, round(frame.radius, 2)  # a square: the polygon's own radius
+    ('y', 4, 0.71)
     """
 
     axis: str
@@ -66,13 +75,15 @@ class RadialFrame:
     def zone(
         self, r0: float, r1: float, to: float, span: tuple[float, float] | None = None
     ) -> RadialZone:
+        """The radial zone ``r0..r1`` to ``to`` about this frame (``span``: heights it applies between)."""
         return RadialZone(self.axis, self.center, r0, r1, to, self.sides, self.phase, span)
 
 
 def _outline(csdf: CSDF, axis: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The footprint's centre (2,) and its outline radius (N,) at N angles from -180 degrees
     (voxels; NaN where no footprint pixel lies in that direction), and the footprint's pixel
-    offsets (P, 2)."""
+    offsets (P, 2).
+    """
     foot = np.asarray(csdf.sdf < 0).any(axis=axis)
     iu, iv = np.nonzero(foot)
     # the middle of the surface's own bounds (interpolated to the zero crossing: a surface
@@ -93,8 +104,28 @@ def _outline(csdf: CSDF, axis: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 def find_radial(csdf: CSDF, axis: str | int = "y") -> RadialFrame | None:
-    """The radial frame of ``csdf`` about ``axis`` (see module), or None where its footprint
-    is neither round nor a regular polygon."""
+    """The radial frame of ``csdf`` about ``axis`` (see module).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : {'x', 'y', 'z'} or {0, 1, 2}
+        The axis (a table's vertical: ``'y'``).
+
+    Returns
+    -------
+    RadialFrame or None
+        The frame, or None where the footprint is neither round nor a regular polygon.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> ball = shapes.sphere((0, 0, 0), 0.5, voxel_size=0.025)
+    >>> frame = zones.find_radial(ball)
+    >>> frame.sides, round(frame.radius, 1)
+    (0, 0.5)
+    """
     ax = AXES.index(axis) if isinstance(axis, str) else int(axis)
     if not (csdf.sdf < 0).any():
         return None
@@ -138,8 +169,30 @@ def find_radial(csdf: CSDF, axis: str | int = "y") -> RadialFrame | None:
 
 
 def radial_zones(csdf: CSDF, frame: RadialFrame) -> list[tuple[float, float]]:
-    """``(r0, r1)`` (world units, gauge radii) of the annuli of constant radial section, longest
-    first, each moved :data:`RING_INSET` voxels in from its ends (see module)."""
+    """The annuli of constant radial section of an object about its radial frame.
+
+    Each is moved :data:`RING_INSET` voxels in from its ends (see module).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    frame : RadialFrame
+        Its frame (:func:`find_radial`).
+
+    Returns
+    -------
+    list of (float, float)
+        ``(r0, r1)`` gauge radii (world units), longest first.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> slab = shapes.box((-0.5, 0, -0.5), (0.5, 0.1, 0.5), voxel_size=0.025)  # a square top
+    >>> rings = zones.radial_zones(slab, zones.find_radial(slab))
+    >>> all(0 <= r0 < r1 for r0, r1 in rings)
+    True
+    """
     ax = AXES.index(frame.axis)
     others = [a for a in range(3) if a != ax]
     h = csdf.voxel_size

@@ -64,7 +64,7 @@ TIED = 0.02
 class Screw:
     """A repetition by a diagonal shift (see module).
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'z'}
         The horizontal axis the flight runs along.
@@ -76,6 +76,15 @@ class Screw:
         Steps the repeat covers (the solid's extent along ``axis`` over the going, rounded).
     cut : float
         Where along ``axis`` a count edit cuts (world units): across a tread.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.15 * (i + 1), 0.8)) for i in range(6)]
+    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), [(0, 0, 0), (1.2, 0.9, 0.8)], voxel_size=0.02)
+    >>> s = zones.find_screws(flight)[0]
+    >>> s.axis, s.count, round(s.going, 2), round(s.rise, 2)
+    ('x', 6, 0.2, 0.15)
     """
 
     axis: str
@@ -86,10 +95,12 @@ class Screw:
 
     @property
     def going(self) -> float:
+        """A step's horizontal length (world units)."""
         return abs(self.step[AXES.index(self.axis)])
 
     @property
     def rise(self) -> float:
+        """A step's height (world units)."""
         return self.step[1]
 
     def zone(self, n: int) -> ScrewZone:
@@ -97,6 +108,7 @@ class Screw:
         return ScrewZone(self.axis, self.step, self.cut, n)
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {
             "axis": self.axis,
             "step": list(self.step),
@@ -112,7 +124,8 @@ def _samples(csdf: CSDF, axis: int) -> np.ndarray:
     """(S, 3) float64 voxel indices of up to :data:`SAMPLES` surface voxels, evenly spread,
     whose surface faces partly along ``axis`` or up (a tread, a riser): a face square to the
     third axis (a flight's side) matches itself under every shift in that plane and says
-    nothing."""
+    nothing.
+    """
     h = csdf.voxel_size
     sdf = np.asarray(csdf.sdf)
     pts = np.argwhere(np.abs(sdf) <= 0.5 * h)
@@ -149,7 +162,8 @@ class _Scorer:
 
     def matches(self, t: np.ndarray, *, fine: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """(S,) bool each: the samples shifted by ``t`` (voxels) that land on the surface, and
-        those whose shifted place lies inside the solid's box."""
+        those whose shifted place lies inside the solid's box.
+        """
         q = self.pts + t
         ok = ((q >= self.lo) & (q <= self.hi)).all(axis=1)
         hit = np.zeros(len(q), dtype=bool)
@@ -164,7 +178,8 @@ class _Scorer:
 
     def __call__(self, t: np.ndarray, *, fine: bool = False) -> float:
         """The support of shift ``t``: the share of the samples landing inside the solid's box
-        (at least :data:`MIN_OVERLAP` of all) that land on the surface; 0 where too few do."""
+        (at least :data:`MIN_OVERLAP` of all) that land on the surface; 0 where too few do.
+        """
         hit, ok = self.matches(t, fine=fine)
         if ok.mean() < MIN_OVERLAP:
             return 0.0
@@ -172,16 +187,24 @@ class _Scorer:
 
 
 def find_screws(csdf: CSDF) -> list[Screw]:
-    """The diagonal repetitions of ``csdf`` (see module), best supported first.
+    """The diagonal repetitions of ``csdf`` (see module): flights of steps.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+
+    Returns
+    -------
+    list of Screw
+        Best supported first; empty where nothing repeats diagonally.
 
     Examples
     --------
-    >>> from partscale import shapes
-    >>> from partscale.zones import find_screws
-    >>> import numpy as np
+    >>> from partscale import shapes, zones
     >>> steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.15 * (i + 1), 0.8)) for i in range(6)]
-    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), np.array([[0, 0, 0], [1.2, 0.9, 0.8]]), voxel_size=0.02)
-    >>> s = find_screws(flight)[0]
+    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), [(0, 0, 0), (1.2, 0.9, 0.8)], voxel_size=0.02)
+    >>> s = zones.find_screws(flight)[0]
     >>> round(s.going, 2), round(s.rise, 2)
     (0.2, 0.15)
     """
@@ -232,7 +255,8 @@ def _refine(score: _Scorer, t: np.ndarray, a: int) -> tuple[np.ndarray, float]:
     """The shift near ``t`` (within a coarse step, to a quarter voxel) of best support, and its
     support: the middle of the shifts on a quarter-voxel grid whose support is within
     :data:`PLATEAU` of the best (the support counts samples within a voxel of the surface, so
-    it is flat over the exact shift's neighbours; their middle is the shift)."""
+    it is flat over the exact shift's neighbours; their middle is the shift).
+    """
 
     def grid(centre: np.ndarray, reach: float, step: float) -> list[tuple[float, np.ndarray]]:
         offs = np.arange(-reach, reach + 1e-9, step)
@@ -256,7 +280,8 @@ def _refine(score: _Scorer, t: np.ndarray, a: int) -> tuple[np.ndarray, float]:
 def _exclusive(score: _Scorer, t: np.ndarray, a: int) -> float:
     """Share of the samples (among those landing inside the box) that ``t`` carries onto the
     surface and neither its part up nor its part across does: the steps' own surface (treads,
-    risers), not a floor, a side or a board that a shift along it keeps."""
+    risers), not a floor, a side or a board that a shift along it keeps.
+    """
     up = np.array([0.0, t[1], 0.0])
     across = np.zeros(3)
     across[a] = t[a]
@@ -269,7 +294,8 @@ def _exclusive(score: _Scorer, t: np.ndarray, a: int) -> float:
 def _fundamental(found: list[tuple[float, np.ndarray, int]]) -> list[tuple[float, np.ndarray, int]]:
     """One step per horizontal axis (a flight has one): among the shifts within
     :data:`TIED` of the best supported, the shortest (its multiples match as well); best
-    supported first."""
+    supported first.
+    """
     out = []
     for a in (0, 2):
         mine = [f for f in found if f[2] == a]
@@ -296,7 +322,8 @@ def _cut(csdf: CSDF, t: np.ndarray, a: int, score: _Scorer) -> float:
     the solid along ``a``, the calmest (the surface changes least from the layers
     :data:`CUT_CALM` either side: a tread's middle, not a riser, where the blend of the two
     sides would show) where the surface matches the surface shifted by ``t`` (the mean
-    ``|sdf(p) - sdf(p - t)|`` over its band voxels, in voxels), nearest the middle."""
+    ``|sdf(p) - sdf(p - t)|`` over its band voxels, in voxels), nearest the middle.
+    """
     sdf = np.asarray(csdf.sdf)
     h = csdf.voxel_size
     lo, hi = int(score.lo[a]), int(score.hi[a])

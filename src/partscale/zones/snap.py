@@ -39,7 +39,26 @@ from .suggest import (
 
 @dataclass(frozen=True)
 class Move:
-    """One plane moved by snapping: ``plane`` ('start', 'end' or 'to'), world ``before``/``after``."""
+    """One plane moved by snapping.
+
+    Parameters
+    ----------
+    plane : {'start', 'end', 'to'}
+        Which plane.
+    before, after : float
+        Its world position before and after.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> from partscale.edit import Edit
+    >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))
+    >>> moves[0]
+    Move(plane='start', before=0.3, after=0.1625)
+    """
 
     plane: str
     before: float
@@ -47,9 +66,11 @@ class Move:
 
     @property
     def by(self) -> float:
+        """How far the plane moved: ``after - before``."""
         return self.after - self.before
 
     def to_json(self) -> dict:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         return {"plane": self.plane, "from": self.before, "to": self.after}
 
 
@@ -59,7 +80,8 @@ def _overlap(zone: tuple[float, float], c: Candidate) -> float:
 
 def _from_boundaries(c: Candidate) -> bool:
     """Whether a tile candidate came from the boundary detector (elements between boards or
-    gaps, :func:`~partscale.zones.suggest.find_bounded_repeats`), whose reason says so."""
+    gaps, :func:`~partscale.zones.suggest.find_bounded_repeats`), whose reason says so.
+    """
     return c.kind == "tile" and "elements between" in c.reason
 
 
@@ -100,6 +122,12 @@ def snap(
 
     Parameters
     ----------
+    csdf : CSDF
+        The object.
+    edit : Edit or dict
+        The edit as given.
+    mode : {'stretch', 'tile', 'global'}, optional
+        The mode to snap for.
     copies : int, optional
         Tile: the number of copies in all the user asked for (``scale --copies``), kept when
         the zone snaps to one period: the destination is that many periods from the snapped
@@ -120,6 +148,17 @@ def snap(
     ------
     InputError
         When the axis has no candidate of the mode's kind (a non-repeating axis for tile).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> from partscale.edit import Edit
+    >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))  # onto one period
+    >>> round(edit.end - edit.start, 3), [m.plane for m in moves]
+    (0.295, ['start', 'end', 'to'])
     """
     edit = edit if isinstance(edit, Edit) else Edit.parse(edit)
     mode = (mode or edit.mode).lower()
@@ -181,7 +220,31 @@ def snap(
 
 
 def describe_moves(moves: list[Move], units: str | None) -> str:
-    """One line: what snapping moved and by how much (or that nothing moved)."""
+    """One line: what snapping moved and by how much (or that nothing moved).
+
+    Parameters
+    ----------
+    moves : list of Move
+        What :func:`snap` returned.
+    units : str or None
+        The object's units.
+
+    Returns
+    -------
+    str
+        The line.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> from partscale.edit import Edit
+    >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))
+    >>> zones.describe_moves(moves, "m")
+    'snap: moved start 0.3 -> 0.1625 (-0.1375 m), end 0.62 -> 0.4575 (-0.1625 m), to 0.95 -> 0.7525 (-0.1975 m)'
+    """
     if not moves:
         return "snap: the planes were already at a good position"
     u = unit_suffix(units)
@@ -190,7 +253,32 @@ def describe_moves(moves: list[Move], units: str | None) -> str:
 
 
 def record_snap(csdf: CSDF, moves: list[Move]) -> CSDF:
-    """``csdf`` with its last history entry noting the snapped planes (``snapped``)."""
+    """Note the snapped planes in ``csdf``'s last history entry (``snapped``).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        An object whose last history entry is the snapped edit.
+    moves : list of Move
+        What :func:`snap` returned.
+
+    Returns
+    -------
+    CSDF
+        The same grid, its history noting the moves.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> from partscale.edit import Edit, apply_edit
+    >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))
+    >>> taller = zones.record_snap(apply_edit(bookcase, edit), moves)
+    >>> taller.meta["history"][-1]["snapped"][0]
+    {'plane': 'start', 'from': 0.3, 'to': 0.1625}
+    """
     meta = dict(csdf.meta)
     hist = list(meta.get("history", []))  # entries are read-only and shared: replace the last
     if not hist or not isinstance(hist[-1], dict):

@@ -95,10 +95,12 @@ BOUNDED_WEIGHT = 0.5
 class Candidate:
     """A suggested zone.
 
-    Attributes
+    Parameters
     ----------
     axis : {'x', 'y', 'z'}
+        The axis.
     kind : {'tile', 'stretch'}
+        Repeat one period, or stretch a slab of constant cross-section.
     zone : (float, float)
         World ``(start, end)`` along the axis; for ``tile`` exactly one period long.
     period : float or None
@@ -111,6 +113,16 @@ class Candidate:
         One line: what was found.
     region : (float, float)
         World extent of the repeat (tile) or the slab (stretch).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> best = zones.suggest(bookcase, "y")[0]
+    >>> best.kind, best.period, best.count
+    ('tile', 0.295, 4)
     """
 
     axis: str
@@ -123,6 +135,7 @@ class Candidate:
     region: tuple[float, float]
 
     def to_json(self) -> dict:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
         d = {
             "axis": self.axis,
             "kind": self.kind,
@@ -237,7 +250,7 @@ def _overlap(a: _Repeat, b: _Repeat) -> float:
 class BoundedRepeat:
     """Elements repeated between boundaries along a profile's axis (:func:`find_bounded_repeats`).
 
-    Attributes
+    Parameters
     ----------
     period : float
         The shift carrying one element onto the next, in voxels.
@@ -251,6 +264,13 @@ class BoundedRepeat:
         The boundaries: ``1`` boards or dividers, ``-1`` gaps or grooves.
     start : float
         The zone's start (layer index): one element and one interior boundary from there.
+
+    Examples
+    --------
+    >>> from partscale.zones import BoundedRepeat
+    >>> drawers = BoundedRepeat(period=30.0, elements=((2, 30), (32, 60)), err=0.01, mirrored=False, kind=-1, start=1.0)
+    >>> len(drawers.elements), drawers.kind  # two elements between grooves
+    (2, -1)
     """
 
     period: float
@@ -264,7 +284,8 @@ class BoundedRepeat:
 def _boundaries(p: Profile) -> list[tuple[int, float, float, float]]:
     """``(kind, lo, hi, cut)`` of every boundary inside the solid: ``kind`` +1 for a local
     maximum of the area (a board: faces ``lo``..``hi`` at half prominence, where elements end),
-    -1 for a minimum (a gap or groove: elements meet at its deepest point ``cut``)."""
+    -1 for a minimum (a gap or groove: elements meet at its deepest point ``cut``).
+    """
     a = p.area / max(float(p.area.max()), 1e-9)
     i0, i1 = _solid_layers(p)
     out = []
@@ -290,9 +311,30 @@ def _element_distance(p: Profile, e: tuple[float, float], f: tuple[float, float]
 
 
 def find_bounded_repeats(p: Profile, csdf: CSDF | None = None) -> list[BoundedRepeat]:
-    """Every bounded repeat of ``p`` (see module docstring), best first. ``csdf``: the object
-    ``p`` is the profile of, to keep the zone's planes off thin features (see
-    :func:`join_islands`)."""
+    """Every bounded repeat of a profile (see module docstring), best first.
+
+    Parameters
+    ----------
+    p : Profile
+        The cross-sections along an axis.
+    csdf : CSDF, optional
+        The object ``p`` is the profile of, to keep the zone's planes off thin features (see
+        :func:`join_islands`).
+
+    Returns
+    -------
+    list of BoundedRepeat
+        Elements repeated between boundaries (drawers between dividers, doors between grooves).
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.find_bounded_repeats(zones.profile(bookcase, "y"), bookcase)  # shelves: a plain repeat
+    []
+    """
     i0, i1 = _solid_layers(p)
     n_solid = i1 - i0 + 1
     found: list[tuple[int, list[tuple[float, float]]]] = []
@@ -453,7 +495,8 @@ def join_islands(csdf: CSDF, axis: int, start: float, period: float) -> int:
 
 def plane_cost(p: Profile, period: float, starts: np.ndarray) -> np.ndarray:
     """(K,) cost of a tile zone ``[t, t + period]`` (layer indices ``starts``): low in gaps and
-    where the two planes' cross-sections match."""
+    where the two planes' cross-sections match.
+    """
     amax = max(float(p.area.max()), 1e-9)
     area = np.interp(starts, np.arange(p.n), p.area) / amax
     area2 = np.interp(starts + period, np.arange(p.n), p.area) / amax
@@ -486,7 +529,8 @@ def whole_phase(
     near: float | None = None,
 ) -> float | None:
     """:func:`best_phase` among the starts whose zone copies whole elements
-    (:func:`~.features.whole_copies` of the axis's local ``features``); None where none does."""
+    (:func:`~.features.whole_copies` of the axis's local ``features``); None where none does.
+    """
     starts = np.arange(lo, hi - period + 1e-9, SHIFT_STEP)
     starts = starts[[whole_copies(features, x, period, lo, hi) for x in starts]]
     if starts.size == 0:
@@ -506,7 +550,8 @@ def _best_of(p: Profile, period: float, starts: np.ndarray, near: float) -> floa
 
 def _split_at_gaps(good: np.ndarray, starts: np.ndarray) -> np.ndarray:
     """(R, 2) ``[first, last]`` indices of the runs of ``good`` starts that follow each other
-    one :data:`SHIFT_STEP` apart."""
+    one :data:`SHIFT_STEP` apart.
+    """
     apart = np.concatenate([[True], np.diff(starts) > SHIFT_STEP * 1.5])
     edges = np.flatnonzero(apart)
     out = []
@@ -520,7 +565,8 @@ def _whole(c: Candidate, p: Profile, features: list[Feature], free: bool) -> Can
     (:func:`~.features.whole_copies`), by whole periods inside its region (the nearest such
     zone: another element like it), else, with ``free`` (a full cross-section match, whose
     phase is chosen by :func:`best_phase`), to the best phase that does; None where none does
-    (a period through a handle or a mullion is no period)."""
+    (a period through a handle or a mullion is no period).
+    """
     assert c.period is not None and c.count is not None  # a tile candidate has both
     if not features:
         return c
@@ -551,7 +597,8 @@ def _moved(c: Candidate, p: Profile, start: float) -> Candidate:
 
 class Slab(NamedTuple):
     """A constant slab: layers ``first..last`` (inclusive), the largest distance of a layer from
-    the first (``drift``), and whether a local feature bounds it (``at_feature``)."""
+    the first (``drift``), and whether a local feature bounds it (``at_feature``).
+    """
 
     first: int
     last: int
@@ -560,9 +607,30 @@ class Slab(NamedTuple):
 
 
 def calm_runs(p: Profile) -> list[tuple[int, int]]:
-    """``(first, last)`` (inclusive) of the maximal runs of at least :data:`MIN_SLAB` non-empty
-    layers whose neighbour-to-neighbour distance stays below :data:`STEP`: where constant slabs
-    and local features are found."""
+    """The maximal runs of calm layers of a profile: where constant slabs and local features are found.
+
+    A run is at least :data:`MIN_SLAB` non-empty layers whose neighbour-to-neighbour distance stays
+    below :data:`STEP`.
+
+    Parameters
+    ----------
+    p : Profile
+        The cross-sections along an axis.
+
+    Returns
+    -------
+    list of (int, int)
+        ``(first, last)`` layer indices (inclusive) of each run, in order.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.calm_runs(zones.profile(bookcase, "y"))[:3]
+    [(5, 17), (20, 32), (34, 46)]
+    """
     i0, i1 = _solid_layers(p)
     idx = np.arange(i0, i1)
     step = p.distance(idx, idx + 1)
@@ -602,7 +670,8 @@ def constant_slabs(
 
 def _beside_features(first: int, last: int, features: list[Feature]) -> list[tuple[int, int]]:
     """The runs of layers ``first..last`` (inclusive) that hold no part of ``features``, at
-    least :data:`MIN_SLAB` long."""
+    least :data:`MIN_SLAB` long.
+    """
     keep = np.ones(last - first + 1, dtype=bool)
     for a, b in feature_spans(features):
         if a <= last and first <= b:
@@ -684,9 +753,34 @@ def axis_candidates(
     prof: Profile | None = None,
     features: list[Feature] | None = None,
 ) -> list[Candidate]:
-    """Candidates along one axis, best first (see :func:`suggest`). ``features``: the axis's
-    local features (:func:`~.features.axis_features` of :func:`calm_runs`) where the caller
-    has them."""
+    """Zone candidates along one axis, best first (see :func:`suggest`).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    axis : {'x', 'y', 'z'} or {0, 1, 2}
+        The axis.
+    prof : Profile, optional
+        The axis's :func:`~partscale.zones.profile` if the caller has it.
+    features : list of Feature, optional
+        The axis's local features (:func:`~.features.axis_features` of :func:`calm_runs`) where
+        the caller has them.
+
+    Returns
+    -------
+    list of Candidate
+        Best first; none where the axis has neither a repeat nor a constant slab.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> [c.kind for c in zones.axis_candidates(bookcase, "y")][:2]
+    ['tile', 'stretch']
+    """
     ax = _axis_index(axis)
     p = prof if prof is not None else profile(csdf, ax)
     feats = axis_features(csdf, ax, calm_runs(p)) if features is None else features
@@ -806,14 +900,25 @@ def suggest(
     Parameters
     ----------
     csdf : CSDF
+        The object.
     axis : {'x', 'y', 'z'} or None
         One axis, or all three.
+    progress : callable(fraction, message), optional
+        Called as the work goes on.
 
     Returns
     -------
     list of Candidate
         ``tile`` (one period of a repeated element, planes in the gaps) and ``stretch`` (a slab
         of constant cross-section); an axis without either gives none.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest, zones
+    >>> table = ingest.load(data.table(), res=64)
+    >>> best = zones.suggest(table, "x")[0]
+    >>> best.kind, best.axis
+    ('stretch', 'x')
     """
     report = resolve(progress)
     axes = [_axis_index(axis)] if axis is not None else [0, 1, 2]

@@ -1,0 +1,204 @@
+"""The API's docstrings: every example in them runs, and the public names of the packages a user
+touches first each have a numpydoc docstring with Parameters, Returns and an Example.
+
+Examples run as doctests (ELLIPSIS and NORMALIZE_WHITESPACE on) in a temporary folder, on the
+table shipped with partscale (``partscale.data.table()``) or on ``partscale.shapes``.
+"""
+
+from __future__ import annotations
+
+import doctest
+import importlib
+import inspect
+import re
+from types import ModuleType
+
+import pytest
+
+#: Packages whose public names must each have Parameters, Returns and an Example.
+COVERED = [
+    "partscale",
+    "partscale.data",
+    "partscale.csdf",
+    "partscale.ingest",
+    "partscale.edit",
+    "partscale.zones",
+    "partscale.export",
+    "partscale.render",
+    "partscale.shapes",
+]
+
+#: Packages whose docstring examples run too (their coverage is not yet held to the rule).
+OTHERS = [
+    "partscale.segment",
+    "partscale.complete",
+    "partscale.meshedit",
+    "partscale.batch",
+    "partscale.evaluate",
+    "partscale.serve",
+    "partscale.color",
+    "partscale.orient",
+    "partscale.surface",
+    "partscale.thickness",
+    "partscale.warmup",
+]
+
+
+def public_names(module: ModuleType) -> list[str]:
+    """A package's ``__all__``; for a module without one, what it defines without a leading ``_``."""
+    if hasattr(module, "__all__"):
+        return list(module.__all__)
+    return [
+        n
+        for n, obj in vars(module).items()
+        if not n.startswith("_")
+        and (inspect.isfunction(obj) or inspect.isclass(obj))
+        and obj.__module__ == module.__name__
+    ]
+
+
+def public_callables(package: str) -> list[tuple[str, object]]:
+    module = importlib.import_module(package)
+    out = []
+    for name in public_names(module):
+        obj = getattr(module, name)
+        if inspect.isfunction(obj) or inspect.isclass(obj):
+            out.append((f"{package}.{name}", obj))
+    return out
+
+
+def _doctests() -> list[doctest.DocTest]:
+    finder = doctest.DocTestFinder(exclude_empty=True)
+    seen: set[str] = set()
+    tests = []
+    for package in COVERED + OTHERS:
+        module = importlib.import_module(package)
+        objects = [(package, module), *public_callables(package)]
+        for name, obj in objects:
+            for t in finder.find(obj, name, module=False, globs={}):
+                key = f"{t.filename}:{t.lineno}"
+                if t.examples and key not in seen:
+                    seen.add(key)
+                    tests.append(t)
+    return tests
+
+
+DOCTESTS = _doctests()
+
+
+@pytest.mark.parametrize("test", DOCTESTS, ids=[t.name for t in DOCTESTS])
+def test_docstring_example_runs(test, tmp_path, monkeypatch):
+    """Each docstring example gives the output it shows (run in a folder of its own)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PARTSCALE_CACHE", str(tmp_path / "cache"))
+    flags = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
+    runner = doctest.DocTestRunner(optionflags=flags)
+    out: list[str] = []
+    test.globs = {}
+    result = runner.run(test, out=out.append)
+    assert result.failed == 0, "".join(out)
+
+
+def _params(obj) -> list[str]:
+    target = obj.__init__ if inspect.isclass(obj) else obj
+    try:
+        sig = inspect.signature(target)
+    except (TypeError, ValueError):
+        return []
+    return [
+        p.name
+        for p in sig.parameters.values()
+        if p.name not in ("self", "cls") and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+    ]
+
+
+def _returns_something(obj) -> bool:
+    if inspect.isclass(obj):
+        return False
+    ann = inspect.signature(obj).return_annotation
+    return ann not in (None, "None", inspect.Signature.empty) or ann is inspect.Signature.empty
+
+
+def _section(doc: str, name: str) -> bool:
+    return re.search(rf"^\s*{name}\n\s*-{{3,}}\s*$", doc, re.MULTILINE) is not None
+
+
+def missing_sections(obj) -> list[str]:
+    """What the numpydoc rule asks of ``obj``'s docstring and it lacks."""
+    doc = inspect.getdoc(obj) or ""
+    if not doc:
+        return ["a docstring"]
+    missing = []
+    if "\n" in doc.split("\n\n", 1)[0]:
+        missing.append("one-line summary")
+    if _params(obj) and not (_section(doc, "Parameters") or _section(doc, "Attributes")):
+        missing.append("Parameters")
+    if _returns_something(obj) and not (_section(doc, "Returns") or _section(doc, "Yields")):
+        missing.append("Returns")
+    if not (_section(doc, "Examples") and ">>>" in doc):
+        missing.append("Examples with >>>")
+    return missing
+
+
+@pytest.mark.parametrize("package", COVERED)
+def test_public_names_have_parameters_returns_and_an_example(package):
+    """Every public function and class of the covered packages says what it is in one line, then
+    documents its parameters, what it returns and how to call it (a class's Parameters may be
+    its Attributes)."""
+    problems = [
+        f"{name}: no {', '.join(miss)}"
+        for name, obj in public_callables(package)
+        if (miss := missing_sections(obj))
+    ]
+    assert not problems, "\n".join(problems)
+
+
+def test_the_rule_catches_a_bare_docstring():
+    """The check above, on a function documented the way most were: caught."""
+
+    def resize(csdf, factor: float) -> object:
+        """The object scaled by ``factor``,
+        about its centre."""
+
+    assert missing_sections(resize) == [
+        "one-line summary",
+        "Parameters",
+        "Returns",
+        "Examples with >>>",
+    ]
+
+
+def test_doctests_were_found():
+    """The examples are collected (a finder that finds nothing would pass every run)."""
+    assert len(DOCTESTS) >= 100, len(DOCTESTS)
+    assert all(t.name.startswith("partscale") and t.examples for t in DOCTESTS)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="found while running the docstring examples: a radial edit of a centred square "
+    "slab grows it one voxel less on the +x/+z side than on the -x/-z side (apply_radial's "
+    "example, 0.6 expected, 0.5 got, is skipped until this passes)",
+)
+def test_a_radial_edit_grows_a_centred_slab_alike_on_both_sides():
+    from partscale import shapes
+    from partscale.edit import RadialZone, apply_radial
+
+    slab = shapes.box((-0.5, 0, -0.5), (0.5, 0.05, 0.5), voxel_size=0.05)
+    out = apply_radial(slab, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5, sides=0))
+    lo, hi = out.surface_bounds()
+    # one-sided: the growth along +x within a voxel of the growth along -x
+    assert abs((hi[0] - 0.5) - (-0.5 - lo[0])) <= 0.5 * slab.voxel_size
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="found while writing find_radial's example: the axis of a sphere centred on the "
+    "origin is found half a voxel off it on both other axes (-0.0125 at 0.025 voxels)",
+)
+def test_find_radial_finds_a_centred_sphere_about_its_centre():
+    from partscale import shapes, zones
+
+    ball = shapes.sphere((0, 0, 0), 0.5, voxel_size=0.025)
+    frame = zones.find_radial(ball)
+    assert max(abs(c) for c in frame.center) <= 0.25 * ball.voxel_size

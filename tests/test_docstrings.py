@@ -10,6 +10,7 @@ from __future__ import annotations
 import doctest
 import importlib
 import inspect
+import math
 import re
 from types import ModuleType
 
@@ -174,28 +175,22 @@ def test_doctests_were_found():
     assert all(t.name.startswith("partscale") and t.examples for t in DOCTESTS)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="found while running the docstring examples: a radial edit of a centred square "
-    "slab grows it one voxel less on the +x/+z side than on the -x/-z side (apply_radial's "
-    "example, 0.6 expected, 0.5 got, is skipped until this passes)",
-)
 def test_a_radial_edit_grows_a_centred_slab_alike_on_both_sides():
+    """A square slab centred on the axis grows alike on both sides (within half a voxel), round
+    (its sides by the shift) or as a square (by the shift times cos 45 degrees)."""
     from partscale import shapes
     from partscale.edit import RadialZone, apply_radial
 
-    slab = shapes.box((-0.5, 0, -0.5), (0.5, 0.05, 0.5), voxel_size=0.05)
-    out = apply_radial(slab, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5, sides=0))
-    lo, hi = out.surface_bounds()
-    # one-sided: the growth along +x within a voxel of the growth along -x
-    assert abs((hi[0] - 0.5) - (-0.5 - lo[0])) <= 0.5 * slab.voxel_size
+    slab = shapes.box((-0.5, 0, -0.5), (0.5, 0.1, 0.5), voxel_size=0.04)
+    (lo0, hi0) = slab.surface_bounds()
+    for sides, grow in ((0, 0.1), (4, 0.1 * math.cos(math.pi / 4))):
+        out = apply_radial(slab, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5, sides=sides))
+        lo, hi = out.surface_bounds()
+        for ax in (0, 2):
+            assert abs((hi[ax] - hi0[ax]) - grow) <= 0.5 * slab.voxel_size, (sides, hi, hi0)
+            assert abs((lo0[ax] - lo[ax]) - grow) <= 0.5 * slab.voxel_size, (sides, lo, lo0)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="found while writing find_radial's example: the axis of a sphere centred on the "
-    "origin is found half a voxel off it on both other axes (-0.0125 at 0.025 voxels)",
-)
 def test_find_radial_finds_a_centred_sphere_about_its_centre():
     from partscale import shapes, zones
 

@@ -625,10 +625,24 @@ class ScrewZone:
 
 @dataclass(frozen=True)
 class CountEdit:
-    """``copies`` whole elements more (fewer, where negative) along ``axis``: the designer's
-    "one more seat" in a recipe, ``{"axis": "x", "copies": "+1"}`` (no zone: the object's own
-    repeat gives it). Resolved on the object into the zone edits that make it
-    (:func:`partscale.zones.resolve_counts`) before the recipe applies."""
+    """Whole elements more or fewer along an axis: "one more seat" in a recipe.
+
+    ``{"axis": "x", "copies": "+1"}`` holds no zone: the object's own repeat gives it. It is
+    resolved on the object into the zone edits that make it
+    (:func:`partscale.zones.resolve_counts`) before the recipe applies.
+
+    Parameters
+    ----------
+    axis : {'x', 'y', 'z'}
+    copies : int
+        Elements added; negative: removed. Not 0.
+
+    Examples
+    --------
+    >>> from partscale.edit import CountEdit
+    >>> CountEdit.parse({"axis": "x", "copies": "+1"})
+    CountEdit(axis='x', copies=1)
+    """
 
     axis: str
     copies: int
@@ -653,6 +667,7 @@ class CountEdit:
         return cls(axis, n)
 
     def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes hold): ``{"axis": "x", "copies": "+1"}``."""
         return {"axis": self.axis, "copies": f"{self.copies:+d}"}
 
 

@@ -450,9 +450,9 @@ def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None 
     --------
     >>> from partscale import shapes
     >>> from partscale.edit import RadialZone, apply_radial
-    >>> disc = shapes.box((-0.5, 0, -0.5), (0.5, 0.05, 0.5), voxel_size=0.05)
-    >>> out = apply_radial(disc, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5, sides=4))
-    >>> round(float(out.surface_bounds()[1, 0]), 2)  # doctest: +SKIP
+    >>> disc = shapes.box((-0.5, 0, -0.5), (0.5, 0.1, 0.5), voxel_size=0.04)
+    >>> out = apply_radial(disc, RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.5))
+    >>> round(float(out.surface_bounds()[1, 0]), 2)  # its sides moved out by 0.1
     0.6
     """
     check_radial(csdf, zone)
@@ -494,7 +494,8 @@ def _gather_levels(
     ``(u, v)`` shows the source at continuous indices ``(iu, iv)`` (U, V) on the levels where
     ``inside`` (L,) holds, and its own place on the others; sdf and colour bilinear, parts
     nearest; and the (X, Y, Z) bool of voxels whose source is not their own place shifted by
-    whole voxels."""
+    whole voxels.
+    """
     h = csdf.voxel_size
     src = np.moveaxis(csdf.sdf, (others[0], ax, others[1]), (0, 1, 2))  # (Us, L, Vs)
     rgb = np.moveaxis(csdf.rgb, (others[0], ax, others[1]), (0, 1, 2))

@@ -1214,9 +1214,22 @@ def fit(
 
 
 def resolve_counts(csdf: CSDF, recipe: Recipe) -> tuple[Recipe, list[str]]:
-    """``recipe`` with each count (:class:`~partscale.edit.CountEdit`: ``{"axis": "x",
-    "copies": "+1"}``) replaced by the zone edits that make it on ``csdf`` (:func:`add_axis`:
-    whole elements, or a flight's steps), and a note per count; other edits as they are.
+    """Resolve a recipe's counts on an object into the zone edits that make them.
+
+    Each count (:class:`~partscale.edit.CountEdit`: ``{"axis": "x", "copies": "+1"}``) is
+    replaced by the zone edits :func:`add_axis` makes on ``csdf`` (whole elements, or a flight's
+    steps); other edits stay as they are.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object the recipe applies to.
+    recipe : Recipe
+
+    Returns
+    -------
+    (Recipe, list of str)
+        The recipe with zone edits only, and a note per count resolved.
 
     Raises
     ------
@@ -1225,11 +1238,15 @@ def resolve_counts(csdf: CSDF, recipe: Recipe) -> tuple[Recipe, list[str]]:
 
     Examples
     --------
+    >>> from partscale import shapes
     >>> from partscale.edit import Recipe
     >>> from partscale.zones import resolve_counts
-    >>> r = Recipe.parse({"edits": [{"axis": "x", "copies": "+1"}]})
-    >>> r.edits[0].copies
-    1
+    >>> boards = [((0, y, 0), (0.6, y + 0.02, 0.3)) for y in (0.0, 0.3, 0.6, 0.9)]
+    >>> boards += [((0, 0, 0), (0.02, 0.92, 0.3)), ((0.58, 0, 0), (0.6, 0.92, 0.3))]
+    >>> shelf = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.6, 0.92, 0.3)], voxel_size=0.02)
+    >>> done, notes = resolve_counts(shelf, Recipe.parse({"edits": [{"axis": "y", "copies": "+1"}]}))
+    >>> done.edits[0].mode
+    'tile'
     """
     out: list[Edit | RadialZone | ScrewZone | ObliqueZone | CountEdit] = []
     notes: list[str] = []

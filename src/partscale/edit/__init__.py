@@ -19,6 +19,9 @@ Public API
   that are not slabs across an axis (an annulus about an axis; a slab between two planes
   square to any direction), resampled and re-evaluated (:mod:`partscale.edit.warp`); recipes
   hold them too (``{"radial": {...}, "zone": [R0, R1], "to": R}``, ``{"normal": [...], ...}``).
+- :class:`ScrewZone`, :func:`apply_screw`; :class:`HelixZone`, :func:`apply_helix`: steps added
+  to or removed from a flight that repeats by a diagonal shift, or a spiral stair that repeats
+  by a turn about the vertical and a rise.
 - :func:`resolve_edit` ``(csdf, edit) -> ResolvedEdit``: an edit validated on an object, in world
   units and snapped to whole voxels, as :func:`apply_edit` performs it (:class:`ResolvedEdit`
   also maps coordinates across the edit and lists its seams).
@@ -65,6 +68,7 @@ from .recipe import (
     MODES,
     CountEdit,
     Edit,
+    HelixZone,
     ObliqueZone,
     RadialZone,
     Recipe,
@@ -88,7 +92,15 @@ from .scale import (
     scale,
 )
 from .units import SUFFIXES, parse_length, parse_size
-from .warp import apply_oblique, apply_radial, apply_screw, apply_warp, gauge, radial_extent
+from .warp import (
+    apply_helix,
+    apply_oblique,
+    apply_radial,
+    apply_screw,
+    apply_warp,
+    gauge,
+    radial_extent,
+)
 
 __all__ = [
     "AXES",
@@ -99,12 +111,14 @@ __all__ = [
     "SUFFIXES",
     "CountEdit",
     "Edit",
+    "HelixZone",
     "ObliqueZone",
     "RadialZone",
     "Recipe",
     "ResolvedEdit",
     "ScrewZone",
     "apply_edit",
+    "apply_helix",
     "apply_oblique",
     "apply_radial",
     "apply_recipe",

@@ -18,6 +18,8 @@ or a zone that is not a slab across an axis (:mod:`partscale.edit.warp`)::
     {"radial": {"axis": "y", "center": [X, Z], "sides": 0, "phase": 0},
      "zone": [R0, R1], "to": R}        # the annulus R0..R1 about the axis becomes R0..R
     {"normal": [NX, NY, NZ], "zone": [S0, S1], "to": S}   # the slab S0 <= p . n <= S1
+    {"helix": {"center": [X, Z], "angle": DEG, "rise": R, "cut": Y}, "copies": N}
+                                       # N more steps of a spiral stair (above Y turns and rises)
 
 Their positions are lengths (numbers or with a unit, no ``%``) on the object they apply to; a
 recipe holding one holds no zone across an axis it moves content along. And a count::
@@ -161,6 +163,33 @@ JSON_SCHEMA: dict[str, Any] = {
                                         "maxItems": 3,
                                         "items": {"$ref": "#/$defs/length"},
                                     },
+                                    "cut": {"$ref": "#/$defs/length"},
+                                },
+                            },
+                            "copies": {"type": "integer"},
+                        },
+                    },
+                    {
+                        "description": "steps of a helix (a spiral stair): what lies above the "
+                        "level cut turns by copies times angle (degrees, from x toward z) about "
+                        "the vertical through center and rises by copies times rise",
+                        "type": "object",
+                        "required": ["helix", "copies"],
+                        "additionalProperties": False,
+                        "properties": {
+                            "helix": {
+                                "type": "object",
+                                "required": ["center", "angle", "rise", "cut"],
+                                "additionalProperties": False,
+                                "properties": {
+                                    "center": {
+                                        "type": "array",
+                                        "minItems": 2,
+                                        "maxItems": 2,
+                                        "items": {"$ref": "#/$defs/length"},
+                                    },
+                                    "angle": {"type": "number"},
+                                    "rise": {"$ref": "#/$defs/length"},
                                     "cut": {"$ref": "#/$defs/length"},
                                 },
                             },
@@ -623,6 +652,94 @@ class ScrewZone:
         }
 
 
+def _copies(obj: dict[str, Any], where: str) -> int:
+    """A count edit's ``copies``: a whole number other than 0 (an int, or a string with its sign)."""
+    n = obj["copies"]
+    if isinstance(n, str):
+        try:
+            n = int(n.strip())
+        except ValueError:
+            n = None
+    if isinstance(n, bool) or not isinstance(n, int) or n == 0:
+        raise InputError(
+            f"{where}.copies: expected a whole number other than 0 (+1, -2), got {shown(obj['copies'])}"
+        )
+    return n
+
+
+@dataclass(frozen=True)
+class HelixZone:
+    """Steps added to (or removed from) a stair that repeats by a turn and a rise (a spiral).
+
+    ``copies`` more steps of a helical repetition: what lies above the level ``cut`` turns by
+    ``copies`` times ``angle`` about the vertical through ``center`` and rises by ``copies``
+    times ``rise`` (:func:`partscale.edit.apply_helix`); ``copies < 0`` removes steps. The cut
+    is a level between two treads, where everything it crosses (the column, the handrail, the
+    air between turns) repeats: the two sides agree there.
+
+    Parameters
+    ----------
+    center : (float, float)
+        The vertical axis' place on x and z (world units).
+    angle : float
+        Degrees one step turns, from x toward z (negative: from z toward x).
+    rise : float
+        World units one step rises.
+    cut : float
+        The cut's height (world y).
+    copies : int
+        Steps added (negative: removed), not 0.
+
+    Examples
+    --------
+    >>> from partscale.edit import HelixZone
+    >>> HelixZone((0.0, 0.0), 30.0, 0.15, 0.8, 1).to_json()
+    {'helix': {'center': [0.0, 0.0], 'angle': 30.0, 'rise': 0.15, 'cut': 0.8}, 'copies': 1}
+    """
+
+    center: tuple[float, float]
+    angle: float
+    rise: float
+    cut: float
+    copies: int
+
+    @classmethod
+    def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> HelixZone:
+        """Validate ``{"helix": {"center": [X, Z], "angle": DEG, "rise": R, "cut": Y},
+        "copies": N}`` (lengths: numbers or with a unit; the angle in degrees).
+        """
+        _keys(obj, {"helix", "copies"}, {"helix", "copies"}, where)
+        spec = obj["helix"]
+        if not isinstance(spec, dict) or set(spec) != {"center", "angle", "rise", "cut"}:
+            raise InputError(
+                f"{where}.helix: expected keys center, angle, rise, cut, got {shown(spec)}"
+            )
+        center = spec["center"]
+        if not isinstance(center, list | tuple) or len(center) != 2:
+            raise InputError(f"{where}.helix.center: expected [X, Z], got {shown(center)}")
+        n = _copies(obj, where)
+        cv = [_number(v, f"{where}.helix.center", units) for v in center]
+        return cls(
+            (cv[0], cv[1]),
+            _number(spec["angle"], f"{where}.helix.angle", None),
+            _number(spec["rise"], f"{where}.helix.rise", units),
+            _number(spec["cut"], f"{where}.helix.cut", units),
+            n,
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
+        return {
+            "helix": {
+                "center": [self.center[0], self.center[1]],
+                "angle": self.angle,
+                "rise": self.rise,
+                "cut": self.cut,
+            },
+            "copies": self.copies,
+        }
+
+
 @dataclass(frozen=True)
 class CountEdit:
     """Whole elements more or fewer along an axis: "one more seat" in a recipe.
@@ -679,7 +796,7 @@ class Recipe:
 
     Parameters
     ----------
-    edits : tuple of Edit, RadialZone, ObliqueZone or ScrewZone
+    edits : tuple of Edit, RadialZone, ObliqueZone, ScrewZone or HelixZone
         The edits, applied in order.
 
     Examples
@@ -690,7 +807,7 @@ class Recipe:
     {'version': 1, 'edits': [{'axis': 'x', 'zone': ['30%', '60%'], 'to': '80%', 'mode': 'stretch'}]}
     """
 
-    edits: tuple[Edit | RadialZone | ObliqueZone | ScrewZone | CountEdit, ...] = field(
+    edits: tuple[Edit | RadialZone | ObliqueZone | ScrewZone | HelixZone | CountEdit, ...] = field(
         default_factory=tuple
     )
 
@@ -738,10 +855,11 @@ class Recipe:
 
 def parse_edit(
     obj: Any, *, where: str = "edit", units: str | None = None
-) -> Edit | RadialZone | ObliqueZone | ScrewZone | CountEdit:
+) -> Edit | RadialZone | ObliqueZone | ScrewZone | HelixZone | CountEdit:
     """Parse one recipe edit of any kind.
 
-    A radial zone has a ``"radial"`` key, an oblique one ``"normal"``, steps ``"screw"``, a count
+    A radial zone has a ``"radial"`` key, an oblique one ``"normal"``, steps ``"screw"`` (a
+    helix's ``"helix"``), a count
     ``"copies"`` and no zone (:class:`CountEdit`); anything else is a zone between planes across an
     axis (:class:`Edit`).
 
@@ -756,7 +874,7 @@ def parse_edit(
 
     Returns
     -------
-    Edit, RadialZone, ObliqueZone, ScrewZone or CountEdit
+    Edit, RadialZone, ObliqueZone, ScrewZone, HelixZone or CountEdit
         The edit.
 
     Examples
@@ -771,6 +889,8 @@ def parse_edit(
         return ObliqueZone.parse(obj, where=where, units=units)
     if isinstance(obj, dict) and "screw" in obj:
         return ScrewZone.parse(obj, where=where, units=units)
+    if isinstance(obj, dict) and "helix" in obj:
+        return HelixZone.parse(obj, where=where, units=units)
     if isinstance(obj, dict) and "copies" in obj and "zone" not in obj:
         return CountEdit.parse(obj, where=where)
     return Edit.parse(obj, where=where, units=units)

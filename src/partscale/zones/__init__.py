@@ -18,6 +18,9 @@ Public API
   across them cannot).
 - :func:`find_screws` ``(csdf) -> list[Screw]``: repetition by a diagonal shift (a flight's
   steps: going and rise), with a cut across a tread; ``fit --add y 1`` adds a step along it.
+- :func:`find_helices` ``(csdf) -> list[Helix]``: repetition by a turn about the vertical and a
+  rise (a spiral stair's steps: angle, rise, axis), with a cut level between two treads;
+  ``fit --add y 1`` adds a step along it where nothing repeats straight.
 - :func:`find_elements` ``(csdf, axis) -> AxisElements``: the object along an axis as elements
   (seats, doors, compartments, steps) and separators, with the groups that repeat (alike up to
   a mirror, a small length change or a colour change); :func:`count_zone`: the zone of whole
@@ -49,6 +52,7 @@ from .elements import (
 )
 from .features import Feature, axis_features, feature_notes, local_features, whole_copies
 from .fit import add_axis, fit, fit_axis, resolve_counts
+from .helix import Helix, find_helices
 from .profile import Profile, profile
 from .radial import RadialFrame, find_radial, radial_zones
 from .screw import Screw, find_screws
@@ -72,6 +76,7 @@ __all__ = [
     "Element",
     "Feature",
     "Group",
+    "Helix",
     "Move",
     "Profile",
     "RadialFrame",
@@ -87,6 +92,7 @@ __all__ = [
     "feature_notes",
     "find_bounded_repeats",
     "find_elements",
+    "find_helices",
     "find_radial",
     "find_screws",
     "fit",

@@ -23,7 +23,8 @@ def suggest(
         typer.Option(
             "--json",
             help="Print JSON instead of text (for scripts): the candidates best first, and per "
-            "axis the elements, separators and repeat groups; steps and a round plan.",
+            "axis the elements, separators and repeat groups; steps (straight or a helix) and a "
+            "round plan.",
         ),
     ] = False,
     png: Annotated[
@@ -41,7 +42,7 @@ def suggest(
     """
     from ..csdf import load
     from ..orient import WALL_AXES, csdf_turn, off_square_message
-    from ..zones import AXES, find_elements, find_radial, find_screws
+    from ..zones import AXES, find_elements, find_helices, find_radial, find_screws
     from ..zones import suggest as suggest_zones
 
     if axis is not None and axis.lower() not in ("x", "y", "z"):
@@ -65,12 +66,15 @@ def suggest(
     found = {a: find_elements(c, a) for a in ([ax] if ax else list(AXES))}
     steps = find_screws(c) if ax is None or ax in ("x", "y", "z") else []
     steps = [sc for sc in steps if ax is None or abs(sc.step[AXES.index(ax)]) > 0]
+    # a spiral stair: where no flight is found, up
+    helices = find_helices(c) if not steps and ax in (None, "y") else []
     frame = find_radial(c, "y") if ax is None else None
     if as_json:
         doc = {
             "candidates": [x.to_json() for x in cands],
             "elements": {a: f.to_json() for a, f in found.items()},
             "steps": [sc.to_json() for sc in steps],
+            "helix": [hx.to_json() for hx in helices],
         }
         if frame is not None:
             doc["radial"] = {
@@ -82,6 +86,7 @@ def suggest(
         typer.echo(json.dumps(doc, indent=2))
     else:
         stepped = {AXES[k] for sc in steps for k in range(3) if abs(sc.step[k]) > 0}
+        stepped |= {"y"} if helices else set()
         for f in found.values():
             if f.best is not None or f.axis not in stepped:
                 typer.echo(_elements_line(f, units))
@@ -89,6 +94,13 @@ def suggest(
             typer.echo(
                 f"steps: a flight along {sc.axis}, {sc.count} steps of {sc.going:.4g} going and "
                 f"{sc.rise:.4g} rise {units} ({100 * sc.support:.0f}% of the surface repeats; "
+                "fit --add y 1 adds one)"
+            )
+        for hx in helices:
+            typer.echo(
+                f"helix: a spiral stair, {hx.count} steps each turning {hx.angle:.1f} degrees "
+                f"about the vertical through {hx.center[0]:.3f}, {hx.center[1]:.3f} and rising "
+                f"{hx.rise:.4g} {units} ({100 * hx.support:.0f}% of the surface repeats; "
                 "fit --add y 1 adds one)"
             )
         if frame is not None:

@@ -28,6 +28,7 @@ from ..csdf import CSDF
 from ..edit import (
     CountEdit,
     Edit,
+    HelixZone,
     ObliqueZone,
     RadialZone,
     Recipe,
@@ -39,6 +40,7 @@ from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from .elements import AxisElements, count_zone, element_phrase, find_elements
 from .features import Feature, axis_features, feature_spans, whole_copies
+from .helix import find_helices
 from .profile import Profile, profile
 from .radial import find_radial, radial_zones
 from .screw import find_screws
@@ -595,22 +597,21 @@ def _element_periods(
     return _Tiled(edit, k, region, (z.start, z.end), first.length, grow, copies), note
 
 
-def _add_steps(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], list[str]] | None:
+def _add_steps(
+    csdf: CSDF, axis: int, n: int
+) -> tuple[list[Edit | ScrewZone | HelixZone], list[str]] | None:
     """``n`` more (or ``-n`` fewer) steps of a flight that repeats diagonally
-    (:func:`~partscale.zones.screw.find_screws`) with a part along ``axis``, and the note;
-    None where there is none.
+    (:func:`~partscale.zones.screw.find_screws`) with a part along ``axis``, or, up (y), of a
+    spiral stair (:func:`~partscale.zones.helix.find_helices`) where no flight is found; and the
+    note; None where there is neither.
     """
     name = AXES[axis]
+    units = csdf.meta.get("units")
+    verb = f"add {n}" if n > 0 else f"remove {-n}"
     for sc in find_screws(csdf):
         if abs(sc.step[axis]) < csdf.voxel_size / 2:
             continue
-        if n < 0 and -n >= sc.count:
-            raise InputError(
-                f"add {name}: expected to remove at most {sc.count - 1} of the flight's "
-                f"{sc.count} steps, got {-n}"
-            )
-        units = csdf.meta.get("units")
-        verb = f"add {n}" if n > 0 else f"remove {-n}"
+        _check_removal(name, n, sc.count, "flight")
         note = (
             f"{name}: {verb} step(s) of the flight along {sc.axis} (each {_fmt(sc.going, units)} "
             f"going, {_fmt(sc.rise, units)} rise; {sc.count} steps, {100 * sc.support:.0f}% of "
@@ -618,17 +619,39 @@ def _add_steps(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], l
             "beyond moves by the step(s)"
         )
         return [sc.zone(n)], [note]
+    if axis != 1:
+        return None
+    for hx in find_helices(csdf):
+        _check_removal(name, n, hx.count, "spiral stair")
+        note = (
+            f"{name}: {verb} step(s) of the spiral stair (each turns {hx.angle:.1f} degrees about "
+            f"the vertical through {_fmt(hx.center[0], units)}, {_fmt(hx.center[1], units)} and "
+            f"rises {_fmt(hx.rise, units)}; {hx.count} steps, {100 * hx.support:.0f}% of the "
+            f"surface repeats), cut at the level {_fmt(hx.cut, units)}: what lies above turns "
+            "and rises by the step(s)"
+        )
+        return [hx.zone(n)], [note]
     return None
 
 
-def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], list[str]]:
+def _check_removal(name: str, n: int, count: int, what: str) -> None:
+    """Refuse removing all of a stair's ``count`` steps (one line)."""
+    if n < 0 and -n >= count:
+        raise InputError(
+            f"add {name}: expected to remove at most {count - 1} of the {what}'s {count} "
+            f"steps, got {-n}"
+        )
+
+
+def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone | HelixZone], list[str]]:
     """Edits adding ``n`` elements of the repeat group along ``axis`` (``-n``: removing).
 
     Edits (recipe coordinates) adding ``n`` elements (removing ``-n``) of the repeat group
     along ``axis`` (:func:`~partscale.zones.elements.find_elements`), and the note: a zone of
     whole elements and their separators (:func:`~partscale.zones.elements.count_zone`) tiled
     to ``1 + n`` copies, or to its start. With no such group, steps of a flight that repeats
-    diagonally with a part along ``axis`` (:func:`_add_steps`: one more step up).
+    diagonally with a part along ``axis``, or up, of a spiral stair (:func:`_add_steps`: one more
+    step up).
 
     Parameters
     ----------
@@ -641,7 +664,7 @@ def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone], lis
 
     Returns
     -------
-    (list of Edit or ScrewZone, list of str)
+    (list of Edit, ScrewZone or HelixZone, list of str)
         The edits and one line saying what they do.
 
     Raises
@@ -1160,7 +1183,7 @@ def fit(
         parse_size(v, extent=float(sb[1, a] - sb[0, a]), units=units, what=f"size {AXES[a]}")
         for a, v in enumerate(size)
     ]
-    edits: list[Edit | RadialZone | ScrewZone] = []
+    edits: list[Edit | RadialZone | ScrewZone | HelixZone] = []
     why: list[str] = []
     radial = _radial_fit(csdf, targets, add, allow_deform)
     if radial is not None:
@@ -1190,9 +1213,9 @@ def fit(
             moved |= {
                 b
                 for z in e
-                if isinstance(z, ScrewZone)
+                if isinstance(z, ScrewZone | HelixZone)
                 for b in range(3)
-                if b != a and abs(z.step[b]) > 0
+                if b != a and (isinstance(z, HelixZone) or abs(z.step[b]) > 0)
             }
         else:
             try:
@@ -1248,7 +1271,7 @@ def resolve_counts(csdf: CSDF, recipe: Recipe) -> tuple[Recipe, list[str]]:
     >>> done.edits[0].mode
     'tile'
     """
-    out: list[Edit | RadialZone | ScrewZone | ObliqueZone | CountEdit] = []
+    out: list[Edit | RadialZone | ScrewZone | HelixZone | ObliqueZone | CountEdit] = []
     notes: list[str] = []
     for e in recipe.edits:
         if isinstance(e, CountEdit):

@@ -5,8 +5,12 @@ outline's radius (:func:`partscale.edit.apply_radial`, about its found frame), a
 stretched along a diagonal (:func:`partscale.edit.apply_oblique`), and, as the baseline, a
 stretch across x over the same share of the object (:func:`partscale.edit.apply_edit`); and
 for flights, finding their steps (:func:`partscale.zones.find_screws`) and adding one
-(:func:`partscale.edit.apply_screw`). Targets: a radial or oblique edit within 2x the planar
-edit's time; finding steps <= 5 s per object at 128 on 2 cores. Best of ``--repeat``.
+(:func:`partscale.edit.apply_screw`); for an analytic spiral stair (14 treads turning 30
+degrees and rising 0.18, a column, a handrail; 128 voxels tall) and the real objects, finding a
+helix (:func:`partscale.zones.find_helices`) beside finding diagonal steps on the same object,
+and adding one step along it (:func:`partscale.edit.apply_helix`). Targets: a radial or oblique
+edit within 2x the planar edit's time; finding steps or a helix <= 5 s per object at 128 on 2
+cores. Best of ``--repeat``.
 
 Run: ``PYTHONPATH=src .venv/bin/python bench/bench_warp.py [--res 128] [--repeat 3]``
 """
@@ -14,17 +18,29 @@ Run: ``PYTHONPATH=src .venv/bin/python bench/bench_warp.py [--res 128] [--repeat
 from __future__ import annotations
 
 import argparse
+import math
+import os
 from pathlib import Path
 
 import numpy as np
 from _timing import timed
 
-from partscale.edit import Edit, ObliqueZone, apply_edit, apply_oblique, apply_radial, apply_screw
+from partscale import shapes
+from partscale.csdf import CSDF
+from partscale.edit import (
+    Edit,
+    ObliqueZone,
+    apply_edit,
+    apply_helix,
+    apply_oblique,
+    apply_radial,
+    apply_screw,
+)
 from partscale.ingest import load
-from partscale.zones import find_radial, find_screws
+from partscale.zones import find_helices, find_radial, find_screws
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
+DATA = Path(os.environ.get("PARTSCALE_DATA", ROOT.parent / "shared" / "data"))
 ROUND = ["kenney/tableRound.glb", "kenney/lampRoundFloor.glb", "sweethome3d/stool.obj"]
 FLIGHTS = ["kenney/stairsOpenSingle.glb", "kenney/stairs.glb", "sweethome3d/staircase.obj"]
 
@@ -35,7 +51,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     if not DATA.is_dir():
-        raise SystemExit(f"needs the test objects in {DATA}")
+        raise SystemExit(f"needs the test objects in {DATA} (set PARTSCALE_DATA)")
     print(f"{'object':32s} {'planar s':>9s} {'radial s':>9s} {'oblique s':>10s}  ratio")
     for rel in ROUND:
         c = load(DATA / rel, res=args.res)
@@ -67,6 +83,53 @@ def main() -> None:
         one_more = s.zone(1)
         t_add, _ = timed(lambda c=c, z=one_more: apply_screw(c, z), args.repeat)
         print(f"{rel:32s} {t_find:12.2f} {t_add:10.3f}  ({s.going:.3f}, {s.rise:.3f})")
+
+    print(f"\n{'helix':32s} {'find helix s':>12s} {'find steps s':>12s} {'+1 step s':>10s}  found")
+    objects = [("analytic spiral stair", spiral(args.res))]
+    objects += [(rel, load(DATA / rel, res=args.res)) for rel in ROUND + FLIGHTS]
+    for name, c in objects:
+        t_find, found = timed(lambda c=c: find_helices(c), 1)
+        t_steps, _ = timed(lambda c=c: find_screws(c), 1)
+        if not found:
+            print(f"{name:32s} {t_find:12.2f} {t_steps:12.2f} {'-':>10s}  none")
+            continue
+        hx = found[0]
+        one_more = hx.zone(1)
+        t_add, _ = timed(lambda c=c, z=one_more: apply_helix(c, z), args.repeat)
+        print(
+            f"{name:32s} {t_find:12.2f} {t_steps:12.2f} {t_add:10.3f}  {hx.angle:.2f} deg, "
+            f"rise {hx.rise:.4f}, axis ({hx.center[0]:.4f}, {hx.center[1]:.4f})"
+        )
+
+
+def spiral(res: int) -> CSDF:
+    """A spiral stair about the y axis, ``res`` voxels tall: 14 treads 4 cm thick, 0.6 long and
+    0.22 wide, each turned 30 degrees from x toward z and raised 0.18 from the one below, on a
+    column of radius 0.08, with a handrail 0.8 above the treads (a tube about the helix)."""
+    from scipy.spatial import cKDTree
+
+    n, angle, rise, radius = 14, 30.0, 0.18, 0.6
+    top = n * rise + 0.1
+
+    def sdf(p):
+        q = np.stack([np.hypot(p[:, 0], p[:, 2]) - 0.08, np.abs(p[:, 1] - top / 2) - top / 2], 1)
+        d = np.minimum(q.max(1), 0) + np.linalg.norm(np.maximum(q, 0), axis=1)
+        for k in range(n):
+            t = math.radians(-k * angle)
+            local = p.copy()
+            local[:, 0] = math.cos(t) * p[:, 0] - math.sin(t) * p[:, 2]
+            local[:, 2] = math.sin(t) * p[:, 0] + math.cos(t) * p[:, 2]
+            y = rise * (k + 1) + 0.01
+            d = np.minimum(d, shapes.box_sdf(local, (0, y - 0.04, -0.11), (radius, y, 0.11)))
+        a = np.radians(np.linspace(0, (n - 1) * angle, int((n - 1) * angle * 2) + 1))
+        rail = np.stack(
+            [0.55 * np.cos(a), rise * (1 + a / math.radians(angle)) + 0.8, 0.55 * np.sin(a)], 1
+        )
+        return np.minimum(d, cKDTree(rail).query(p)[0] - 0.025)
+
+    height = top + 0.85
+    b = np.array([[-radius, 0, -radius], [radius, height, radius]])
+    return shapes.grid(sdf, b, voxel_size=height / res, source="spiral stair")
 
 
 if __name__ == "__main__":

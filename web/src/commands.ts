@@ -166,11 +166,18 @@ export function createCommands(store: Store, scene: Scene): Commands {
 
   /** Preview a recipe the server chose (fit, count edit) as the zones; the zones it previews. */
   function previewRecipe(what: string, fitted: api.Fitted): ZoneInput[] {
-    // a radial zone or a flight's steps ({"radial": ...}, {"screw": ...}) is no slab across
+    // a radial zone or a stair's steps ({"radial": ...}, {"screw": ...}, {"helix": ...}) is no slab across
     // an axis: the shader previews those only
     const other = fitted.recipe.edits.find((e) => !('axis' in e && 'mode' in e));
     if (other) {
-      const kind = 'radial' in other ? 'a radial zone' : 'screw' in other ? "a flight's steps" : 'an oblique zone';
+      const kind =
+        'radial' in other
+          ? 'a radial zone'
+          : 'screw' in other
+            ? "a flight's steps"
+            : 'helix' in other
+              ? "a spiral stair's steps"
+              : 'an oblique zone';
       throw new ApiError(
         `${what}: expected zones across x, y or z (what this page previews), got ${kind}; ` +
           `run it with partscale on the command line (${fitted.why.join('; ')})`,

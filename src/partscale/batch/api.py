@@ -25,11 +25,38 @@ LOG_NAME = "workers.log"
 
 @dataclass
 class BatchResult:
-    """What a batch did. Names are output folder names; ``failed`` pairs a name with its line.
+    """What a batch did; names are output folder names.
 
-    ``skipped``: already done with the same input and options. ``not_retried``: failed before
-    with the same input and options (rerun with ``retry_failed=True``). ``interrupted``: running
-    when Ctrl-C or SIGTERM stopped the batch.
+    Attributes
+    ----------
+    outdir, status : Path
+        The output folder and its status table (:data:`STATUS_NAME`).
+    done : list of str
+        Objects run and written.
+    failed : list of (str, str)
+        Objects that failed, each with its one-line error.
+    skipped : list of str
+        Already done with the same input and options.
+    not_retried : list of (str, str)
+        Failed before with the same input and options (rerun with ``retry_failed=True``).
+    interrupted : list of str
+        Running when Ctrl-C or SIGTERM stopped the batch.
+    seconds : float
+        Wall time of the batch.
+    slowest : list of (str, float)
+        The slowest objects and their seconds.
+    peak_memory : int
+        The largest resident memory of one object's job, bytes.
+    engine_info : dict
+        Figures the engine reports (Ray: the cluster's CPUs).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from partscale import batch
+    >>> result = batch.BatchResult(Path("out"), Path("out/status.csv"), done=["table"])
+    >>> result.ok, batch.BatchResult(Path("out"), Path("out/status.csv"), interrupted=["desk"]).ok
+    (True, False)
     """
 
     outdir: Path
@@ -46,11 +73,39 @@ class BatchResult:
 
     @property
     def ok(self) -> bool:
+        """True when no object failed, was left failed or was interrupted."""
         return not self.failed and not self.not_retried and not self.interrupted
 
 
 def parse_memory(value: str | int | None) -> int | None:
-    """``'2GiB'``, ``'500M'``, ``'1.5G'`` or bytes -> bytes; None stays None."""
+    """A memory size in bytes, from ``'2GiB'``, ``'500M'``, ``'1.5G'`` or a number of bytes.
+
+    Parameters
+    ----------
+    value : str or int or None
+        A number with an optional K, M, G or T (powers of 1024, with or without ``iB``/``B``),
+        or bytes.
+
+    Returns
+    -------
+    int or None
+        Bytes; None stays None.
+
+    Raises
+    ------
+    partscale.errors.InputError
+        For anything else, or a size that is not above 0.
+
+    Examples
+    --------
+    >>> from partscale import batch
+    >>> batch.parse_memory("2GiB"), batch.parse_memory("500M"), batch.parse_memory(None)
+    (2147483648, 524288000, None)
+    >>> batch.parse_memory("lots")
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: memory: expected a size such as 4GiB or 500MiB, got 'lots'
+    """
     if value is None:
         return None
     if isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -109,8 +164,9 @@ def run(
     retry_failed: bool = False,
     progress: ProgressCallback | None = None,
 ) -> BatchResult:
-    """Run the pipeline on every object of ``inputs``, writing ``outdir/<name>/`` and
-    ``outdir/status.csv``.
+    """Run the pipeline on every object of ``inputs``, each into ``outdir/<name>/``.
+
+    Progress and each object's state go to ``outdir/status.csv`` as the batch runs.
 
     Parameters
     ----------
@@ -129,6 +185,7 @@ def run(
         ``export`` (``csdf``, ``glb``, ``ply``, ``obj``, ``raw``, ``png``, ``nrrd``) and, with
         ``render`` (a view), a 512² PNG.
     engine : {"local", "ray"}
+        Worker processes on this machine, or Ray tasks.
     workers : int, optional
         Processes at once (default: the cores; Ray: the cluster's CPUs).
     timeout : float, optional
@@ -153,6 +210,24 @@ def run(
     Returns
     -------
     BatchResult
+        What was done, failed, skipped or interrupted.
+
+    Examples
+    --------
+    Two objects imported at 32 voxels and written as GLB (a worker process starts: a few
+    seconds); run again, both are skipped as done.
+
+    >>> import shutil
+    >>> from pathlib import Path
+    >>> from partscale import batch, data
+    >>> Path("objects").mkdir()
+    >>> for name in ("table.glb", "desk.glb"):
+    ...     _ = shutil.copy(data.table(), Path("objects") / name)
+    >>> result = batch.run(["objects"], "out", res=32, export=["glb"], workers=1)
+    >>> result.done, result.ok, sorted(p.name for p in Path("out/table").iterdir())
+    (['desk', 'table'], True, ['table.glb'])
+    >>> batch.run(["objects"], "out", res=32, export=["glb"], workers=1).skipped
+    ['desk', 'table']
     """
     t0 = time.perf_counter()
     if engine not in ENGINES:

@@ -47,6 +47,13 @@ class Input:
         Output folder name under OUTDIR (unique in the batch).
     options : dict
         Per-object options from a manifest (override the batch's own), else empty.
+
+    Examples
+    --------
+    >>> from partscale import batch, data
+    >>> item = batch.discover([data.table()])[0]
+    >>> item.name, item.path.name, len(item.content_hash())
+    ('table', 'table.glb', 64)
     """
 
     path: Path
@@ -76,7 +83,8 @@ class Input:
 
 def companions(path: Path) -> list[Path]:
     """Files ``path`` refers to that exist: glTF buffers and images, OBJ material libraries and
-    their texture maps. Unreadable or corrupt files have none (the reader reports them)."""
+    their texture maps. Unreadable or corrupt files have none (the reader reports them).
+    """
     suffix = path.suffix.lower()
     found: list[Path] = []
     try:
@@ -120,6 +128,7 @@ def _mtl_maps(lib: Path) -> list[Path]:
 
 
 def is_input_file(path: Path) -> bool:
+    """Whether a folder search takes ``path`` as an input: an input suffix, not a hidden file."""
     name = path.name.lower()
     return not name.startswith(".") and (
         name.endswith(CSDF_SUFFIX) or path.suffix.lower() in INPUT_SUFFIXES
@@ -134,16 +143,41 @@ def _stem(path: Path) -> str:
 
 
 def discover(sources: Sequence[str | os.PathLike], *, exclude: Path | None = None) -> list[Input]:
-    """The inputs named by ``sources``: files, folders (searched recursively by suffix, see
-    :data:`INPUT_SUFFIXES`) and manifests (``.csv`` with a ``path`` column, or ``.jsonl`` with a
-    ``path`` key per line; other columns: ``name`` and :data:`OPTION_KEYS`).
+    """The inputs named by files, folders and manifests.
 
-    A file that is some other input's companion (a glTF's ``.bin``, an OBJ's ``.mtl``) is not an
-    input of its own. Inputs are sorted by path, each path once (or once per manifest ``name``),
-    and named by :func:`assign_names`.
-    Files under ``exclude`` (the output folder) are skipped when searching folders.
+    Folders are searched recursively by suffix (:data:`INPUT_SUFFIXES`); manifests are ``.csv``
+    with a ``path`` column, or ``.jsonl`` with a ``path`` key per line (other columns: ``name``
+    and :data:`OPTION_KEYS`, :func:`read_manifest`). A file that is some other input's
+    companion (a glTF's ``.bin``, an OBJ's ``.mtl``) is not an input of its own.
 
-    Raises :class:`InputError` for a missing source, a folder without inputs, a bad manifest.
+    Parameters
+    ----------
+    sources : sequence of str or os.PathLike
+        Files, folders and manifests.
+    exclude : Path, optional
+        Files under this folder (the output folder) are skipped when searching folders.
+
+    Returns
+    -------
+    list of Input
+        Sorted by path, each path once (or once per manifest ``name``), and named by
+        :func:`assign_names` (unique output folder names).
+
+    Raises
+    ------
+    partscale.errors.InputError
+        For a missing source, a folder without inputs, a bad manifest.
+
+    Examples
+    --------
+    >>> import shutil
+    >>> from pathlib import Path
+    >>> from partscale import batch, data
+    >>> for folder in ("a", "b"):
+    ...     Path(folder).mkdir()
+    ...     _ = shutil.copy(data.table(), Path(folder) / "table.glb")
+    >>> [item.name for item in batch.discover(["a", "b"])]
+    ['a__table', 'b__table']
     """
     if not sources:
         raise InputError("batch: expected at least one input (file, folder or manifest), got none")
@@ -189,7 +223,34 @@ def _make(path: Path, options: dict[str, Any], name: str = "") -> Input:
 def read_manifest(path: Path) -> list[Input]:
     """Inputs listed in a CSV (header with ``path``) or JSONL (one object per line) manifest.
 
-    Relative paths are relative to the manifest's folder. Empty cells mean "the batch's option".
+    Parameters
+    ----------
+    path : Path
+        The manifest. Its paths are relative to its folder; other columns are ``name`` and
+        :data:`OPTION_KEYS`, and an empty cell means "the batch's option".
+
+    Returns
+    -------
+    list of Input
+        One per row, in order, with its options.
+
+    Raises
+    ------
+    partscale.errors.InputError
+        For a missing or unreadable manifest, a row without ``path``, or an unknown key.
+
+    Examples
+    --------
+    The shipped table twice, at two resolutions:
+
+    >>> from pathlib import Path
+    >>> from partscale import batch, data
+    >>> with open("objects.csv", "w") as f:
+    ...     print("path,name,res", file=f)
+    ...     print(f"{data.table()},small,32", file=f)
+    ...     print(f"{data.table()},large,", file=f)
+    >>> [(item.name, item.options) for item in batch.read_manifest(Path("objects.csv"))]
+    [('small', {'res': '32'}), ('large', {})]
     """
     if not path.is_file():
         raise InputError(f"{path}: expected a manifest file, got no such file")
@@ -316,8 +377,28 @@ def assign_names(items: Iterable[Input]) -> list[Input]:
 def shard(items: Sequence[Input], rank: int, world_size: int) -> list[Input]:
     """The inputs of shard ``rank`` of ``world_size``: every ``world_size``-th from ``rank``.
 
-    The shards of 0..world_size-1 partition ``items`` exactly (each once, none missing), and
-    names were assigned before sharding, so they agree across shards.
+    Parameters
+    ----------
+    items : sequence of Input
+        Every input, named (:func:`discover`).
+    rank : int
+        This shard, ``0 .. world_size - 1``.
+    world_size : int
+        How many shards.
+
+    Returns
+    -------
+    list of Input
+        The shard's inputs. The shards of 0..world_size-1 partition ``items`` exactly (each
+        once, none missing), and names were assigned before sharding, so they agree.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from partscale import batch
+    >>> items = [batch.Input(Path(f"{n}.glb"), (Path(f"{n}.glb"),), n) for n in "abcde"]
+    >>> [[item.name for item in batch.shard(items, rank, 2)] for rank in (0, 1)]
+    [['a', 'c', 'e'], ['b', 'd']]
     """
     if isinstance(world_size, bool) or not isinstance(world_size, int) or world_size < 1:
         raise InputError(f"world_size: expected an integer >= 1, got {world_size!r}")

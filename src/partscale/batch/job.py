@@ -142,7 +142,8 @@ def _yes_no(merged: dict[str, Any], key: str, where: str) -> bool:
 def _recipe_json(recipe: Any) -> Any:
     """A recipe (a file's path or its JSON) checked, as the spec holds it: canonical JSON, or as
     given where it has lengths with a unit (``"30cm"``), which only each object's units convert
-    (in :func:`run_job`; an object not in metres refuses them there)."""
+    (in :func:`run_job`; an object not in metres refuses them there).
+    """
     from .._files import read_json
     from ..edit import Recipe
 

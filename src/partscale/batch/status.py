@@ -45,7 +45,31 @@ def now() -> str:
 
 
 def read(path: Path) -> dict[str, dict[str, str]]:
-    """Rows of a status table by name; empty when there is none yet."""
+    """Rows of a status table by object name.
+
+    Parameters
+    ----------
+    path : Path
+        A batch's ``status.csv`` (:data:`STATUS_NAME` in its output folder).
+
+    Returns
+    -------
+    dict of str to dict
+        Name -> row (every column of :data:`COLUMNS`, as text); empty when there is no table
+        yet.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from partscale import batch
+    >>> batch.read_status(Path("out/status.csv"))
+    {}
+    >>> with open("status.csv", "w") as f:
+    ...     print("name,state,input_hash,options_hash", file=f)
+    ...     print("table,done,1f,2e", file=f)
+    >>> batch.read_status(Path("status.csv"))["table"]["state"]
+    'done'
+    """
     if not path.exists():
         return {}
     try:

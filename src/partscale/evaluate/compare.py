@@ -22,6 +22,7 @@ def score_edit(
     Parameters
     ----------
     original : CSDF
+        The object before the edit.
     edited : CSDF, optional
         An edit result of ``original``: its history holds ``original``'s entries followed by
         one or more scale edits (each a zone), e.g. a file written by ``partscale scale``.
@@ -36,6 +37,19 @@ def score_edit(
         own distance error and pieces in the same zones), ``zones`` (one per edit, in the
         original's frame: ``axis``, ``zone``, ``new_zone``, ``mode``, ``copies``) and
         ``failures`` (the short names of the metrics above the suite's thresholds).
+
+    Examples
+    --------
+    A bar's middle stretched by the stage: the right length, the rest rigid, nothing failed.
+
+    >>> from partscale import evaluate, shapes
+    >>> bar = shapes.box((0, 0, 0), (1.0, 0.2, 0.2), voxel_size=0.05)
+    >>> recipe = {"edits": [{"axis": "x", "zone": [0.3, 0.6], "to": 0.8}]}
+    >>> scores = evaluate.score_edit(bar, recipe=recipe)
+    >>> scores["zones"], scores["failures"]
+    ([{'axis': 'x', 'zone': [0.3, 0.6], 'new_zone': [0.3, 0.8], 'mode': 'stretch'}], [])
+    >>> float(scores["metrics"]["length_err"]) < 0.5, scores["metrics"]["rigid_err"] < 0.25
+    (True, True)
     """
     if (edited is None) == (recipe is None):
         raise InputError(

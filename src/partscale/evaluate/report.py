@@ -95,8 +95,29 @@ def _rows(result: SuiteResult) -> list[dict[str, Any]]:
 def metric_score(metric: str, row: dict[str, Any], original: dict[str, Any]) -> float:
     """One result's score on ``metric`` (a :data:`CRITERIA` key), as the suite compares modes.
 
-    Lower is better; NaN where not measured, and for a mode that failed to run (never wins).
-    ``pieces`` scores the pieces beyond those expected (``original``'s count by default).
+    Parameters
+    ----------
+    metric : str
+        A key of :data:`CRITERIA`.
+    row : dict
+        One result's metrics (a row of :attr:`SuiteResult.objects`, or
+        :func:`evaluate`'s dict).
+    original : dict
+        The original's row (its ``pieces`` is the expected count where ``row`` has none).
+
+    Returns
+    -------
+    float
+        Lower is better; NaN where not measured, and for a mode that failed to run (never
+        wins). ``pieces`` scores the pieces beyond those expected.
+
+    Examples
+    --------
+    >>> from partscale import evaluate
+    >>> evaluate.metric_score("pieces", {"pieces": 5}, {"pieces": 3})
+    2.0
+    >>> evaluate.metric_score("length_err", {"error": "zone outside the solid"}, {})
+    nan
     """
     if row.get("error"):
         return math.nan
@@ -111,7 +132,28 @@ def metric_score(metric: str, row: dict[str, Any], original: dict[str, Any]) -> 
 
 
 def failures_of(row: dict[str, Any], original: dict[str, Any]) -> list[str]:
-    """The metrics on which one result fails (value above its threshold), as short names."""
+    """The metrics on which one result fails (value above its threshold), as short names.
+
+    Parameters
+    ----------
+    row : dict
+        One result's metrics (as :func:`metric_score`'s).
+    original : dict
+        The original's row: the distance error is judged above the import's own.
+
+    Returns
+    -------
+    list of str
+        Short names (``"length"``, ``"rigidity"``, ``"seam colour"``...) in :data:`CRITERIA`'s
+        order, then ``"not watertight"``; ``["error"]`` for a mode that failed to run.
+
+    Examples
+    --------
+    >>> from partscale import evaluate
+    >>> row = {"length_err": 0.2, "rigid_err": 3.0, "watertight": False}
+    >>> evaluate.failures_of(row, {"pieces": 1})
+    ['rigidity', 'not watertight']
+    """
     if row.get("error"):
         return ["error"]
     out = []
@@ -127,7 +169,30 @@ def failures_of(row: dict[str, Any], original: dict[str, Any]) -> list[str]:
 
 
 def winners(rows: list[dict[str, Any]], metric: str, original: dict[str, Any]) -> list[str]:
-    """Modes whose score is within the metric's tie tolerance (or 10 %) of the best."""
+    """Modes whose score is within the metric's tie tolerance (or 10 %) of the best.
+
+    Parameters
+    ----------
+    rows : list of dict
+        One row per mode (each with ``mode`` and its metrics).
+    metric : str
+        A key of :data:`CRITERIA` (its tie tolerance is the second value).
+    original : dict
+        The original's row (as :func:`metric_score`'s).
+
+    Returns
+    -------
+    list of str
+        The best modes, in ``rows``' order; none where no mode was measured.
+
+    Examples
+    --------
+    >>> from partscale import evaluate
+    >>> rows = [{"mode": "stretch", "length_err": 0.1}, {"mode": "tile", "length_err": 0.4},
+    ...         {"mode": "global", "length_err": 2.0}]
+    >>> evaluate.winners(rows, "length_err", {})
+    ['stretch', 'tile']
+    """
     tol = CRITERIA[metric][1]
     scores = {r["mode"]: metric_score(metric, r, original) for r in rows}
     finite = {m: s for m, s in scores.items() if math.isfinite(s)}
@@ -144,6 +209,7 @@ def _md_table(header: list[str], body: list[list[str]]) -> str:
 
 
 def metrics_csv(result: SuiteResult) -> str:
+    """The suite's metrics, one row per object and mode, as CSV text."""
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=COLUMNS, extrasaction="ignore", lineterminator="\n")
     w.writeheader()
@@ -153,6 +219,7 @@ def metrics_csv(result: SuiteResult) -> str:
 
 
 def metrics_markdown(result: SuiteResult) -> str:
+    """The suite's metrics as a Markdown table with a legend."""
     cols = [c for c in COLUMNS if c not in ("kind", "voxels")]
     body = [[_cell(row.get(c)) for c in cols] for row in _rows(result)]
     legend = "\n".join(f"- `{m}`: {CRITERIA[m][0]}" for m in CRITERIA if m != "pieces")
@@ -208,6 +275,7 @@ def _expectation(obj_rows: list[dict[str, Any]], kind: str) -> tuple[str, str]:
 
 
 def summary_markdown(result: SuiteResult) -> str:
+    """The suite's summary in Markdown: best modes, failures, the paper's expectations, times."""
     objs = result.objects
     ok = [o for o in objs if not o.error]
     lines = [

@@ -110,4 +110,5 @@ def concatenate(pieces: list[Piece]) -> Piece:
 
 
 def with_vertices(piece: Piece, vertices: np.ndarray, **vattrs: np.ndarray) -> Piece:
+    """``piece`` with new vertex positions (and the vertex attributes given replaced)."""
     return replace(piece, vertices=vertices, vattrs={**piece.vattrs, **vattrs})

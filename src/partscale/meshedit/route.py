@@ -39,7 +39,26 @@ WELD_TOLERANCE = 1e-5
 
 @dataclass(frozen=True)
 class Seam:
-    """A tile seam between copies: where it is and how much of it was welded."""
+    """A tile seam between copies: where it is and how much of it was welded.
+
+    Attributes
+    ----------
+    axis : {'x', 'y', 'z'}
+        The axis the zone was tiled along.
+    position : float
+        The seam plane in the result (world units).
+    welded : int
+        Vertices welded to a partner across the seam.
+    unmatched : int
+        Vertices without one (the cross-sections at the zone's planes differ).
+
+    Examples
+    --------
+    >>> from partscale import meshedit
+    >>> seam = meshedit.Seam("x", 0.36, welded=44, unmatched=0)
+    >>> seam.ok, seam.message()
+    (True, 'seam at x = 0.36: welded (44 vertices)')
+    """
 
     axis: str
     position: float
@@ -48,9 +67,11 @@ class Seam:
 
     @property
     def ok(self) -> bool:
+        """Whether every vertex of the seam was welded."""
         return self.unmatched == 0
 
     def message(self) -> str:
+        """The seam in one line for the user, with what to do where it could not be welded."""
         if self.ok:
             return f"seam at {self.axis} = {self.position:.6g}: welded ({self.welded} vertices)"
         return (
@@ -243,7 +264,8 @@ def _split_edges(piece: Piece, edges: np.ndarray, t: np.ndarray, axis: int, plan
 
 def _remove(piece, axis, s, e, rot, size):
     """A tile with 0 copies: the zone's triangles dropped, everything beyond it moved back by
-    its length, END's outline snapped onto START's where they match (one join, a Seam)."""
+    its length, END's outline snapped onto START's where they match (one join, a Seam).
+    """
     from scipy.spatial import cKDTree
 
     piece = _cut_planes(piece, axis, (s, e))
@@ -371,7 +393,8 @@ def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
 
 def _planar(recipe: Recipe) -> list[Edit]:
     """The recipe's zones across an axis; a radial or oblique zone is refused (one line): the
-    mesh route cuts triangles at planes square to an axis only."""
+    mesh route cuts triangles at planes square to an axis only.
+    """
     out = []
     for i, e in enumerate(recipe.edits):
         if not isinstance(e, Edit):
@@ -398,7 +421,20 @@ def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh
 
     Returns
     -------
-    (trimesh.Scene, list of Seam)
+    trimesh.Scene
+        The edited copy (``scene`` is not changed).
+    list of Seam
+        The tile seams, one per join between copies.
+
+    Examples
+    --------
+    >>> from partscale import data, meshedit
+    >>> from partscale.edit import Recipe
+    >>> table = meshedit.load_scene(data.table())
+    >>> longer = Recipe.parse({"edits": [{"axis": "x", "zone": ["30%", "70%"], "to": "120%"}]})
+    >>> out, seams = meshedit.apply_recipe_to_scene(table, longer)
+    >>> table.extents.round(2).tolist(), out.extents.round(2).tolist(), seams
+    ([2.44, 0.95, 1.3], [3.66, 0.95, 1.3], [])
     """
     import trimesh
 
@@ -509,7 +545,30 @@ def _to_trimesh(inst: _Instance):
 
 
 def load_scene(path: str | os.PathLike) -> trimesh.Scene:
-    """A mesh file as a trimesh Scene, vertices exactly as stored (no merging or reordering)."""
+    """A mesh file as a trimesh Scene, vertices exactly as stored (no merging or reordering).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A mesh file (one of :data:`MESH_SUFFIXES`).
+
+    Returns
+    -------
+    trimesh.Scene
+        Its meshes, materials and node transforms.
+
+    Raises
+    ------
+    partscale.errors.InputError
+        For a missing, unreadable or empty file.
+
+    Examples
+    --------
+    >>> from partscale import data, meshedit
+    >>> scene = meshedit.load_scene(data.table())
+    >>> len(scene.geometry), scene.extents.round(2).tolist()
+    (1, [2.44, 0.95, 1.3])
+    """
     import trimesh
 
     path = check_mesh_file(path)
@@ -527,7 +586,23 @@ def load_scene(path: str | os.PathLike) -> trimesh.Scene:
 def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
     """Write ``scene`` (GLB; PLY; OBJ via :func:`partscale.export.save_obj`), atomically.
 
-    Returns the files written: the mesh, then an OBJ's MTL and textures (named after it).
+    Parameters
+    ----------
+    scene : trimesh.Scene
+        The meshes to write.
+    path : str or os.PathLike
+        The output; its suffix (one of :data:`OUTPUT_SUFFIXES`) picks the format.
+
+    Returns
+    -------
+    list of Path
+        The files written: the mesh, then an OBJ's MTL and textures (named after it).
+
+    Examples
+    --------
+    >>> from partscale import data, meshedit
+    >>> meshedit.save_scene(meshedit.load_scene(data.table()), "table.obj")
+    [PosixPath('table.obj'), PosixPath('table.mtl')]
     """
     from .._files import atomic_path
     from ..export import save_obj
@@ -601,7 +676,29 @@ def display_colours(scene: trimesh.Scene, suffix: str) -> trimesh.Scene:
 
 @dataclass(frozen=True)
 class MeshEditResult:
-    """What :func:`edit_mesh_file` did: files written, triangles before and after, seams."""
+    """What :func:`edit_mesh_file` did: files written, triangles before and after, seams.
+
+    Attributes
+    ----------
+    written : list of Path
+        The files written (the mesh first).
+    faces_in, faces_out : int
+        Triangles in the source and in the result.
+    seams : list of Seam
+        The tile seams.
+    off_square_deg : float, optional
+        The turn about up that would square the source's walls (see below).
+    turned_deg : float, optional
+        With ``square``: the turn made for the edit (see below).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from partscale import meshedit
+    >>> result = meshedit.MeshEditResult([Path("out.glb")], 120, 210, [])
+    >>> result.faces_out - result.faces_in, result.off_square_deg
+    (90, None)
+    """
 
     written: list[Path]
     faces_in: int
@@ -625,7 +722,8 @@ def _face_count(scene) -> int:
 def _turn_scene(scene: trimesh.Scene, angle: float) -> dict:
     """Turn every node of ``scene`` by ``angle`` degrees about +y, about the origin, in place
     (the transforms of the base frame's children; no vertex is touched). Returns those
-    transforms as they were, for :func:`_restore_turn`."""
+    transforms as they were, for :func:`_restore_turn`.
+    """
     base = scene.graph.base_frame
     saved = {c: scene.graph[c][0].copy() for c in scene.graph.transforms.children[base]}
     m = np.eye(4)
@@ -636,7 +734,8 @@ def _turn_scene(scene: trimesh.Scene, angle: float) -> dict:
 
 def _restore_turn(scene: trimesh.Scene, saved: dict) -> None:
     """Put back the transforms :func:`_turn_scene` changed, exactly (not turned back: a turn
-    and its inverse leave the last bits of a matrix changed)."""
+    and its inverse leave the last bits of a matrix changed).
+    """
     base = scene.graph.base_frame
     for child, matrix in saved.items():
         scene.graph.update(frame_from=base, frame_to=child, matrix=matrix)
@@ -651,6 +750,39 @@ def edit_mesh_file(
     along x and z (:func:`partscale.orient.square_turn`), edited there (the recipe's positions
     refer to the turned mesh: give them in ``%`` of its extent), and turned back: the output
     keeps the source's orientation in its scene.
+
+    Parameters
+    ----------
+    src : str or os.PathLike
+        The source mesh (one of :data:`MESH_SUFFIXES`).
+    dst : str or os.PathLike
+        The output mesh (one of :data:`OUTPUT_SUFFIXES`), written atomically.
+    recipe : partscale.edit.Recipe
+        The edits (positions refer to the source mesh).
+    square : bool
+        Edit the mesh turned square (see above).
+
+    Returns
+    -------
+    MeshEditResult
+        Files written, triangles before and after, tile seams and the turn.
+
+    Examples
+    --------
+    The shipped table made longer, then with its middle tiled: the triangles grow only by the
+    cuts and the copies, and every seam is welded.
+
+    >>> from partscale import data, meshedit
+    >>> from partscale.edit import Recipe
+    >>> longer = Recipe.parse({"edits": [{"axis": "x", "zone": ["30%", "70%"], "to": "120%"}]})
+    >>> meshedit.edit_mesh_file(data.table(), "longer.glb", longer)
+    MeshEditResult(written=[PosixPath('longer.glb')], faces_in=120, faces_out=210, seams=[], ...)
+    >>> tiled = Recipe.parse(
+    ...     {"edits": [{"axis": "x", "zone": ["30%", "70%"], "to": "170%", "mode": "tile"}]}
+    ... )
+    >>> result = meshedit.edit_mesh_file(data.table(), "tiled.obj", tiled)
+    >>> result.written, len(result.seams), all(s.ok for s in result.seams)
+    ([PosixPath('tiled.obj'), PosixPath('tiled.mtl')], 3, True)
     """
     dst = Path(dst)
     if dst.suffix.lower() not in OUTPUT_SUFFIXES:
@@ -677,19 +809,56 @@ def edit_mesh_file(
 
 @dataclass(frozen=True)
 class MeshFrame:
-    """A mesh file's extent and units, standing in for a CSDF where options are resolved
-    (``--by``, ``--copies``): ``meta['units']`` and :meth:`surface_bounds`."""
+    """A mesh file's extent and units, standing in for a CSDF where edit options are resolved.
+
+    Options given in lengths or counts (``--by``, ``--copies``) read ``meta['units']`` and
+    :meth:`surface_bounds`, as they would a CSDF's.
+
+    Attributes
+    ----------
+    bounds : (2, 3) float64
+        The world bounding box of the triangles: min corner, max corner.
+    meta : dict
+        ``{"units": "m"}``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import meshedit
+    >>> frame = meshedit.MeshFrame(np.array([[0.0, 0, 0], [2, 1, 1]]), {"units": "m"})
+    >>> frame.surface_bounds().tolist()
+    [[0.0, 0.0, 0.0], [2.0, 1.0, 1.0]]
+    """
 
     bounds: np.ndarray  # (2, 3) float64
     meta: dict
 
     def surface_bounds(self) -> np.ndarray:
+        """(2, 3) float64: :attr:`bounds`, as :meth:`partscale.csdf.CSDF.surface_bounds`."""
         return self.bounds
 
 
 def mesh_frame(path: str | os.PathLike, *, square: bool = False) -> MeshFrame:
-    """The world bounding box of a mesh file's triangles (all nodes placed), units metres; with
-    ``square``, of the mesh turned square as :func:`edit_mesh_file` edits it."""
+    """The world bounding box of a mesh file's triangles (all nodes placed), units metres.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A mesh file (one of :data:`MESH_SUFFIXES`).
+    square : bool
+        The bounds of the mesh turned square, as :func:`edit_mesh_file` edits it.
+
+    Returns
+    -------
+    MeshFrame
+        Its bounds and units.
+
+    Examples
+    --------
+    >>> from partscale import data, meshedit
+    >>> meshedit.mesh_frame(data.table()).surface_bounds().round(2).tolist()
+    [[-1.23, 0.0, -0.65], [1.21, 0.95, 0.65]]
+    """
     scene = load_scene(path)
     if square:
         turn = square_turn(scene.triangles)

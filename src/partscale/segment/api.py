@@ -47,14 +47,54 @@ _METHOD_PARAMS: dict[str, dict[str, Any]] = {
 
 
 def default_cache_dir() -> Path:
-    """``$PARTSCALE_CACHE/segment`` if set, else ``~/.cache/partscale/segment``."""
+    """Folder where :func:`segment` caches its results.
+
+    Returns
+    -------
+    pathlib.Path
+        ``$PARTSCALE_CACHE/segment`` if that variable is set, else ``~/.cache/partscale/segment``.
+
+    Examples
+    --------
+    >>> import os
+    >>> from partscale import segment
+    >>> os.environ["PARTSCALE_CACHE"] = "cache"
+    >>> segment.default_cache_dir()
+    PosixPath('cache/segment')
+    """
     env = os.environ.get("PARTSCALE_CACHE")
     base = Path(env) if env else Path.home() / ".cache" / "partscale"
     return base / "segment"
 
 
 def cache_key(csdf: CSDF, method: str, params: dict[str, Any]) -> str:
-    """sha256 of the grid's content (shape, sdf bytes, voxel size) and the method's parameters."""
+    """Cache key of a segmentation: sha256 of the grid's content and the method's parameters.
+
+    The grid's content is its shape, ``sdf`` bytes and voxel size (not its origin, colour or
+    parts); CoACD's version is included for ``method="coacd"``.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object to segment.
+    method : str
+        One of :data:`METHODS`.
+    params : dict
+        Every option of the run (JSON-serialisable), as :func:`segment` records them.
+
+    Returns
+    -------
+    str
+        64 hexadecimal digits.
+
+    Examples
+    --------
+    >>> from partscale import segment, shapes
+    >>> b = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
+    >>> key = segment.cache_key(b, "fast", {"threshold": 0.05})
+    >>> len(key), key == segment.cache_key(b, "fast", {"threshold": 0.1})
+    (64, False)
+    """
     h = hashlib.sha256()
     h.update(f"partscale.segment/{CACHE_VERSION}/{method}".encode())
     h.update(np.asarray(csdf.shape, np.int64).tobytes())
@@ -68,7 +108,35 @@ def cache_key(csdf: CSDF, method: str, params: dict[str, Any]) -> str:
 
 
 def check_method(method: str, *, what: str = "method") -> str:
-    """``method`` if it is one of :data:`METHODS`, else an InputError naming ``what``."""
+    """Check a segmentation method's name.
+
+    Parameters
+    ----------
+    method : str
+        The name given.
+    what : str
+        What to call it in the error (an option's name).
+
+    Returns
+    -------
+    str
+        ``method``, when it is one of :data:`METHODS`.
+
+    Raises
+    ------
+    partscale.errors.InputError
+        Otherwise, naming ``what``, the methods and what was given.
+
+    Examples
+    --------
+    >>> from partscale import segment
+    >>> segment.check_method("fast")
+    'fast'
+    >>> segment.check_method("vhacd")
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: method: expected one of coacd, fast, got 'vhacd'
+    """
     if method not in METHODS:
         raise InputError(f"{what}: expected one of {', '.join(METHODS)}, got {method!r}")
     return method
@@ -191,6 +259,19 @@ def segment(
         ``voxels`` labelled, world ``bbox`` [[min], [max]] of its boundary, world
         ``hull_volume``, sRGB ``color``), ``meta['segmentation']`` ({method, params, key, relief, noise_added, specks})
         and a history entry.
+
+    Examples
+    --------
+    Two bars a gap apart are two parts; the table shipped with partscale splits into its top,
+    legs and rails:
+
+    >>> from partscale import data, ingest, segment, shapes
+    >>> row, _ = shapes.bars(2, width=0.2, gap=0.1, height=0.5, depth=0.3, voxel_size=0.05)
+    >>> segment.segment(row).n_parts
+    2
+    >>> table = segment.segment(ingest.load(data.table(), res=64))
+    >>> table.n_parts, table.parts.dtype, sorted(table.meta["parts_info"][0])
+    (8, dtype('int16'), ['bbox', 'color', 'hull_volume', 'index', 'voxels'])
     """
     method, thr, max_parts, seed, tol, noise, params = _check_options(
         method, threshold, max_parts, seed, merge_tolerance, noise, method_params
@@ -231,8 +312,29 @@ def segment(
 
 
 def describe_noise(entry: dict) -> list[str]:
-    """What :func:`segment` changed for a rough surface, from its history entry: one line, or none
-    when the surface was taken as clean."""
+    """What :func:`segment` changed for a rough surface, said for the user.
+
+    Parameters
+    ----------
+    entry : dict
+        :func:`segment`'s history entry (``relief``, ``noise``, ``noise_added``, ``specks``).
+
+    Returns
+    -------
+    list of str
+        One line when the tolerances were raised for a rough surface; none when the surface was
+        taken as clean.
+
+    Examples
+    --------
+    >>> from partscale import segment
+    >>> segment.describe_noise({"relief": 0.05, "noise_added": 0.0})
+    []
+    >>> segment.describe_noise({"relief": 0.25, "noise_added": 3.2, "specks": 2})
+    ["the surface is rough (measured relief 0.25 voxel RMS, a scan's noise): concavity
+    tolerances raised by 3.2 voxels; 2 specks of relief joined to the part they touch most
+    (--noise 0 segments it as if smooth)"]
+    """
     added = float(entry.get("noise_added") or 0.0)
     if added <= 0:
         return []

@@ -49,6 +49,19 @@ def hull_concavity(
     -------
     float
         Concavity in the units of ``points``; 0 for fewer than 4 points or a flat set.
+
+    Examples
+    --------
+    Two walls 10 long meeting at a right angle: their hull's diagonal face is 5 from the
+    nearest wall point (the hull bridges the gap between them).
+
+    >>> import numpy as np
+    >>> from partscale import segment
+    >>> u, z = np.meshgrid(np.linspace(0, 10, 41), np.linspace(0, 4, 17))
+    >>> wall_x = np.stack([u.ravel(), 0 * u.ravel(), z.ravel()], axis=1)
+    >>> wall_y = wall_x[:, [1, 0, 2]]
+    >>> round(segment.hull_concavity(np.concatenate([wall_x, wall_y]), spacing=0.5), 2)
+    5.0
     """
     pts = np.asarray(points, dtype=np.float64)
     if len(pts) < 4:
@@ -62,7 +75,8 @@ def hull_concavity(
 
 def _to_hull(hull, corners, point_sets, trees, spacing, sdf, limit) -> float:
     """The two directions of the Hausdorff distance between ``point_sets`` and ``hull`` (the
-    hull of ``corners``); ``trees()`` gives KD-trees of the point sets, only when needed."""
+    hull of ``corners``); ``trees()`` gives KD-trees of the point sets, only when needed.
+    """
     eq = np.ascontiguousarray(hull.equations)  # (F, 4): n . x + d <= 0 inside, |n| = 1
     inward = max(_deepest(p, eq) for p in point_sets)
     if inward > limit:
@@ -80,7 +94,8 @@ def _to_hull(hull, corners, point_sets, trees, spacing, sdf, limit) -> float:
 
 def deepest_point(pts: np.ndarray, eq: np.ndarray) -> tuple[int, float]:
     """Index of the point of ``pts`` (N, 3) deepest inside the hull with facet planes ``eq``
-    (n . x + d <= 0 inside, |n| = 1), and its depth."""
+    (n . x + d <= 0 inside, |n| = 1), and its depth.
+    """
     return _deepest_index(np.ascontiguousarray(pts, np.float64), np.ascontiguousarray(eq))
 
 
@@ -258,7 +273,8 @@ def union_concavity(
 
 def _hull_cost(corners, samples, trees, spacing, sdf, limit) -> tuple[float, ConvexHull | None]:
     """:func:`_to_hull` of the samples to the hull of ``corners``, and that hull; (0, None)
-    where the corners span no volume (flat: nothing concave)."""
+    where the corners span no volume (flat: nothing concave).
+    """
     if len(corners) < 4:
         return 0.0, None
     try:
@@ -299,6 +315,7 @@ class UnionCosts:
         self._cache: dict = {}
 
     def __call__(self, task: tuple):
+        """Run one ``("hull", a)`` or ``("union", parts)`` task (see the class)."""
         if task[0] == "hull":
             a = task[1]
             return _hull_vertices(self.points, np.arange(self.start[a], self.start[a + 1]))
@@ -363,7 +380,7 @@ def vertex_voxels(csdf: CSDF, mesh) -> np.ndarray:
 
 
 def surface_samples(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> dict[int, np.ndarray]:
-    """dict part -> (N, 3) float64: the part's patch of the surface, in voxel-index units.
+    """Each part's patch of the surface: part -> (N, 3) float64 points in voxel-index units.
 
     Marching-cubes vertices (labelled by :func:`vertex_labels`) and face centroids (labelled by
     the majority of their vertices), samples about half a voxel apart.
@@ -386,7 +403,8 @@ def surface_samples(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> dict[int, n
 
 def touching_pairs(csdf: CSDF, labels: np.ndarray, *, mesh=None) -> set[tuple[int, int]]:
     """Pairs (p, q), p < q, of parts that meet: on the surface (a marching-cubes edge between
-    their patches) or inside the solid (face-adjacent inside voxels)."""
+    their patches) or inside the solid (face-adjacent inside voxels).
+    """
     labels = np.asarray(labels)
     if mesh is None:
         mesh = to_mesh(csdf)
@@ -416,6 +434,22 @@ def part_concavities(csdf: CSDF, parts: np.ndarray | None = None, *, mesh=None) 
         A segmented CSDF (or any CSDF with ``parts`` given separately).
     parts : (X, Y, Z) int, optional
         Labels to measure instead of ``csdf.parts``.
+    mesh : trimesh.Trimesh, optional
+        The object's marching-cubes surface, if already made (:func:`partscale.surface.to_mesh`).
+
+    Returns
+    -------
+    (P,) float64
+        Part ``p``'s concavity at index ``p``; 0 for a part with no surface.
+
+    Examples
+    --------
+    Each bar of a row is convex:
+
+    >>> from partscale import segment, shapes
+    >>> row, _ = shapes.bars(2, width=0.2, gap=0.1, height=0.5, depth=0.3, voxel_size=0.05)
+    >>> bool((segment.part_concavities(segment.segment(row)) < 0.5).all())
+    True
     """
     labels = np.asarray(csdf.parts if parts is None else parts)
     n = int(labels.max()) + 1 if labels.size and labels.max() >= 0 else 0
@@ -427,7 +461,29 @@ def part_concavities(csdf: CSDF, parts: np.ndarray | None = None, *, mesh=None) 
 def concavity(csdf: CSDF, part_index: int) -> float:
     """Concavity of one part of a segmented CSDF, in voxels.
 
-    Raises :class:`IndexError` when ``part_index`` is not a part of ``csdf``.
+    Parameters
+    ----------
+    csdf : CSDF
+        A segmented CSDF (:func:`segment`).
+    part_index : int
+        The part, ``0 .. csdf.n_parts - 1``.
+
+    Returns
+    -------
+    float
+        How far the part's surface is from its convex hull (see the module's definition).
+
+    Raises
+    ------
+    IndexError
+        When ``part_index`` is not a part of ``csdf``.
+
+    Examples
+    --------
+    >>> from partscale import segment, shapes
+    >>> box = segment.segment(shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1))
+    >>> round(segment.concavity(box, 0), 3)
+    0.0
     """
     if not 0 <= part_index < csdf.n_parts:
         raise IndexError(f"part_index: expected 0..{csdf.n_parts - 1}, got {part_index}")

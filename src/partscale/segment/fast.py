@@ -134,14 +134,16 @@ def tolerance(csdf: CSDF, threshold: float, params: dict) -> float:
 
 def _region_concavity(mask: np.ndarray, limit: float = np.inf) -> float:
     """Concavity (voxels) of a voxel region, from the centres of its boundary voxels (one per
-    2-voxel cell: enough to tell a region above the tolerance, which is 2 voxels or more)."""
+    2-voxel cell: enough to tell a region above the tolerance, which is 2 voxels or more).
+    """
     return hull_concavity(decimate(_boundary(mask), 2.0), spacing=2.0, limit=limit)
 
 
 def _boundary(mask: np.ndarray) -> np.ndarray:
     """(N, 3) float64: centres of the region's boundary voxels; a region one voxel thick
     (a slice cut from a curved shell) gets its two faces instead, so that its hull has volume
-    and a bend within the slice counts."""
+    and a bend within the slice counts.
+    """
     interior = ndimage.binary_erosion(mask, border_value=0)
     pts = np.argwhere(mask & ~interior).astype(np.float64)
     for a in range(3):
@@ -231,13 +233,38 @@ def _plane_pieces(mask: np.ndarray, min_size: int = 0) -> list[tuple[np.ndarray,
 def absorb_slivers(
     lab: np.ndarray, n: int, min_size: int, *, size: np.ndarray | None = None
 ) -> np.ndarray:
-    """(X, Y, Z) int labels ``1..n`` (0: none) with each piece smaller than ``min_size`` voxels
-    joined to the touching piece it shares the most voxels of contact with, in place.
+    """Join each labelled piece smaller than ``min_size`` voxels to the piece it touches most.
 
     A plane across a curved shell leaves slivers at its rim; as parts of their own they would
-    only be merged back later, at a far higher cost. A sliver touching no piece stays. ``size``
-    ((n + 1,) int, optional): each label's size if not its voxel count (e.g. inside voxels
-    only); a joined piece adds its size to its new one. Returns ``lab`` (changed) for chaining.
+    only be merged back later, at a far higher cost. A sliver touching no piece stays.
+
+    Parameters
+    ----------
+    lab : (X, Y, Z) int
+        Labels ``1..n`` (0: none); changed in place.
+    n : int
+        The largest label.
+    min_size : int
+        Pieces with fewer voxels (or less ``size``) are joined.
+    size : (n + 1,) int, optional
+        Each label's size if not its voxel count (e.g. inside voxels only); a joined piece adds
+        its size to its new one.
+
+    Returns
+    -------
+    (X, Y, Z) int
+        ``lab`` itself (changed), for chaining.
+
+    Examples
+    --------
+    Two pieces of 27 voxels and a one-voxel sliver on the second one's face:
+
+    >>> import numpy as np
+    >>> from partscale import segment
+    >>> lab = np.zeros((6, 3, 3), np.int64)
+    >>> lab[:3], lab[3:], lab[3, 1, 1] = 1, 2, 3
+    >>> np.bincount(segment.absorb_slivers(lab, 3, min_size=5).ravel()).tolist()
+    [0, 27, 27]
     """
     if n < 2 or min_size <= 1:
         return lab
@@ -288,7 +315,8 @@ def _split(mask: np.ndarray, cuts: list[np.ndarray]) -> list[tuple[np.ndarray, t
 
 class _Cutter:
     """Cuts one region: ``(mask, depth)`` -> ``(final, pieces)``; final when the region is small,
-    deep or convex enough, else ``pieces`` is a list of (sub-mask, offset)."""
+    deep or convex enough, else ``pieces`` is a list of (sub-mask, offset).
+    """
 
     def __init__(self, params: dict, tau: float):
         self.params, self.tau = params, tau

@@ -238,7 +238,8 @@ def _merge_greedy(run, n, has, neighbours, pairs, tolerance, max_parts) -> np.nd
 
     def costs(keys: list) -> dict:
         """{(p, q, vp, vq): (concavity of the union of p and q, its hull)}; a part without a
-        patch adds nothing, and two of them cost nothing."""
+        patch adds nothing, and two of them cost nothing.
+        """
         sides = [
             [((r, v), atoms[r], hull[r]) for r, v in ((p, vp), (q, vq)) if r in has]
             for p, q, vp, vq in keys
@@ -569,7 +570,8 @@ def _in_hull(pts: np.ndarray, eq: np.ndarray, margin: float) -> np.ndarray:  # p
 
 def parts_info(csdf: CSDF, mesh, labels: np.ndarray) -> list[dict]:
     """Per-part facts: index, labelled voxel count, world bbox of the part's surface patch,
-    world volume of the patch's convex hull, display colour."""
+    world volume of the patch's convex hull, display colour.
+    """
     n = int(labels.max()) + 1 if labels.max() >= 0 else 0
     counts = np.bincount(labels[labels >= 0].ravel(), minlength=n)
     patch = surface_samples(csdf, labels, mesh=mesh)

@@ -60,6 +60,22 @@ def surface_relief(vertices: np.ndarray, normals: np.ndarray, voxel_size: float)
         The median over up to 6,000 evenly spread vertices of the RMS residual of a quadric
         height field fitted to the same-side surface within :data:`RADIUS` voxels; 0 for a
         surface too small to measure.
+
+    Examples
+    --------
+    A sphere's marching cubes is clean geometry (below :data:`CLEAN_RELIEF`), the same surface
+    with bumps a voxel deep is not:
+
+    >>> import numpy as np
+    >>> from partscale import segment, shapes
+    >>> from partscale.surface import to_mesh
+    >>> mesh = to_mesh(shapes.sphere((0, 0, 0), 0.5, voxel_size=0.02))
+    >>> v, n = mesh.vertices, mesh.vertex_normals
+    >>> segment.surface_relief(v, n, 0.02) < 0.15
+    True
+    >>> bumps = 0.02 * np.random.default_rng(0).normal(0, 0.5, (len(v), 1)) * n
+    >>> segment.surface_relief(v + bumps, n, 0.02) > 0.15
+    True
     """
     V = np.asarray(vertices, np.float64) / voxel_size
     N = np.asarray(normals, np.float64)
@@ -97,7 +113,25 @@ def surface_relief(vertices: np.ndarray, normals: np.ndarray, voxel_size: float)
 
 
 def relief_of(csdf: CSDF) -> float:
-    """:func:`surface_relief` of the object's surface (its marching cubes), in voxels."""
+    """Relief of the object's surface (its marching cubes), in voxels.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+
+    Returns
+    -------
+    float
+        :func:`surface_relief` of its zero level.
+
+    Examples
+    --------
+    >>> from partscale import segment, shapes
+    >>> ball = shapes.sphere((0, 0, 0), 0.5, voxel_size=0.05)
+    >>> segment.relief_of(ball) < segment.relief.CLEAN_RELIEF
+    True
+    """
     mesh = to_mesh(csdf, attributes=False)
     return surface_relief(mesh.vertices, mesh.vertex_normals, csdf.voxel_size)
 
@@ -105,8 +139,22 @@ def relief_of(csdf: CSDF) -> float:
 def noise_tolerance(relief: float) -> float:
     """Concavity (voxels) the surface's noise adds to what a part's hull measures.
 
-    ``PEAK_TO_VALLEY`` times the relief beyond clean geometry's (added in quadrature, so a
-    surface at or below :data:`CLEAN_RELIEF` adds nothing).
+    Parameters
+    ----------
+    relief : float
+        The surface's relief RMS in voxels (:func:`surface_relief`).
+
+    Returns
+    -------
+    float
+        :data:`PEAK_TO_VALLEY` times the relief beyond clean geometry's (added in quadrature,
+        so a surface at or below :data:`CLEAN_RELIEF` adds nothing).
+
+    Examples
+    --------
+    >>> from partscale import segment
+    >>> segment.noise_tolerance(0.1), round(segment.noise_tolerance(0.25), 2)
+    (0.0, 3.2)
     """
     noise = np.sqrt(max(relief * relief - CLEAN_RELIEF * CLEAN_RELIEF, 0.0))
     return float(PEAK_TO_VALLEY * noise)

@@ -39,10 +39,36 @@ _BIN = 0.25  # degrees of the 4-fold angle histogram
 
 
 def off_square_message(turn: float, csdf: CSDF | None = None, *, mesh_route: bool = False) -> str:
-    """What import, info, suggest, fit and the mesh route say of an object whose walls run
-    ``turn`` degrees off x and z (:func:`square_turn`), with the cure: ``--square`` where the
-    object is (or, given ``csdf``, was imported from) a mesh, else turning the source (a grid or
-    a scan); the mesh route edits the file as it stands, so there both."""
+    """The warning for an object whose walls run ``turn`` degrees off x and z, with its cure.
+
+    What import, info, suggest, fit and the mesh route say (``turn`` from :func:`square_turn`
+    or :func:`csdf_turn`). The cure is ``--square`` where the object is (or, given ``csdf``, was
+    imported from) a mesh, else turning the source (a grid or a scan); the mesh route edits the
+    file as it stands, so there both.
+
+    Parameters
+    ----------
+    turn : float
+        Degrees the walls run off x and z about up.
+    csdf : CSDF, optional
+        The object, whose history says whether it was imported from a mesh; None: a mesh.
+    mesh_route : bool
+        The message of the mesh route (which edits with ``--square``).
+
+    Returns
+    -------
+    str
+        One line, without a ``warning:`` prefix.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.orient import off_square_message
+    >>> off_square_message(-20.0)
+    'the walls run -20.0° off x and z about up: ... import the mesh with --square to turn it square'
+    >>> off_square_message(-20.0, shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.1))
+    '... turn its source so its walls run along x and z before import'
+    """
     first = (csdf.meta.get("history") or [{}])[0] if csdf is not None else {}
     from_mesh = csdf is None or (first.get("op") == "import" and first.get("format") == "mesh")
     if mesh_route:
@@ -58,8 +84,28 @@ def off_square_message(turn: float, csdf: CSDF | None = None, *, mesh_route: boo
 
 
 def square_note(turn: float, *, edit: bool = False) -> str:
-    """What ``--square`` says it did: turned by ``turn`` degrees (0.0: none needed, or no
-    direction found); ``edit``: the mesh route's, turned for the edit and back after it."""
+    """What ``--square`` says it did: turned by ``turn`` degrees, or not turned.
+
+    Parameters
+    ----------
+    turn : float
+        Degrees turned about up; 0.0 where none was needed or no direction was found.
+    edit : bool
+        The mesh route's note: turned for the edit and back after it.
+
+    Returns
+    -------
+    str
+        One line, starting ``--square:``.
+
+    Examples
+    --------
+    >>> from partscale.orient import square_note
+    >>> square_note(-20.0)
+    '--square: turned -20.00° about up: the walls now run along x and z'
+    >>> square_note(0.0)
+    '--square: not turned (the walls run within 0.5° of x and z, or no direction holds most of them)'
+    """
     if not turn:
         return (
             f"--square: not turned (the walls run within {SQUARE_DEGREES}° of x and z, or no "
@@ -74,14 +120,53 @@ def square_note(turn: float, *, edit: bool = False) -> str:
 
 
 def turn_matrix(angle: float) -> np.ndarray:
-    """(3, 3) float64: the rotation by ``angle`` degrees about +y (see the module)."""
+    """(3, 3) float64: the rotation by ``angle`` degrees about +y (see the module).
+
+    Parameters
+    ----------
+    angle : float
+        Degrees, right-handed about +y.
+
+    Returns
+    -------
+    (3, 3) float64
+        The matrix ``R``; a column point ``p`` turns to ``R @ p``.
+
+    Examples
+    --------
+    >>> from partscale.orient import turn_matrix
+    >>> turn_matrix(90).round(6)
+    array([[ 0.,  0.,  1.],
+           [ 0.,  1.,  0.],
+           [-1.,  0.,  0.]])
+    """
     a = np.radians(angle)
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def turn_about_up(points: np.ndarray, angle: float) -> np.ndarray:
-    """(N, 3) float64: ``points`` (N, 3) turned by ``angle`` degrees about +y (see the module)."""
+    """(N, 3) float64: ``points`` (N, 3) turned by ``angle`` degrees about +y (see the module).
+
+    Parameters
+    ----------
+    points : (N, 3) array_like of float
+        Points (x, y, z), y up.
+    angle : float
+        Degrees, right-handed about +y.
+
+    Returns
+    -------
+    (N, 3) float64
+        The turned points; y is unchanged.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.orient import turn_about_up
+    >>> turn_about_up(np.array([[1.0, 2.0, 0.0]]), 90).round(6)
+    array([[ 0.,  2., -1.]])
+    """
     return np.asarray(points, np.float64) @ turn_matrix(angle).T
 
 
@@ -106,6 +191,17 @@ def square_turn(triangles: np.ndarray) -> float | None:
     float or None
         The turn in (-45, 45] degrees (:func:`turn_about_up` with it squares the surface); None
         where it is under :data:`SQUARE_DEGREES` (already square) or no direction counts.
+
+    Examples
+    --------
+    A box turned 20 degrees about up is turned back by -20:
+
+    >>> import trimesh
+    >>> from partscale.orient import square_turn, turn_about_up
+    >>> box = trimesh.creation.box((1.0, 0.4, 0.6))
+    >>> turned = turn_about_up(box.triangles.reshape(-1, 3), 20).reshape(-1, 9)
+    >>> round(square_turn(turned), 3), square_turn(box.triangles)
+    (-20.0, None)
     """
     t = np.asarray(triangles, np.float64).reshape(-1, 9)
     # |cross| is twice the area: area normals
@@ -114,15 +210,43 @@ def square_turn(triangles: np.ndarray) -> float | None:
 
 
 def csdf_turn(csdf: CSDF) -> float | None:
-    """:func:`square_turn` of ``csdf``'s surface, read from its distances: the gradient (central
-    differences) at the voxels 1 to 2 voxels outside it, each standing for a like patch of the
-    offset surface, in grid indices (the voxels are cubes).
+    """:func:`square_turn` of ``csdf``'s surface, read from its distances.
+
+    The surface is read as the gradient (central differences) at the voxels 1 to 2 voxels
+    outside it, each standing for a like patch of the offset surface, in grid indices (the
+    voxels are cubes).
 
     The exact distances there point square to the nearest wall. Marching cubes' facets of a
     wall off the grid's axes are a staircase whose normals spread and lean to the axes (at 128,
     a tvUnit turned 12 degrees went unfound and turned dressers and bookcases came out up to 1
     degree off; from the shell, 12 objects turned 12 and 31 degrees all within 0.25 degree);
     on the surface itself, central differences across a panel a voxel thick meet both faces.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+
+    Returns
+    -------
+    float or None
+        As :func:`square_turn`: the turn in (-45, 45] degrees that squares the walls, or None.
+
+    Examples
+    --------
+    A slab sampled turned by -20 degrees (its distance read at points turned by +20):
+
+    >>> from partscale import shapes
+    >>> from partscale.orient import csdf_turn, turn_about_up
+    >>> slab = shapes.grid(
+    ...     lambda p: shapes.box_sdf(turn_about_up(p, 20), (-0.5, -0.2, -0.3), (0.5, 0.2, 0.3)),
+    ...     [(-0.7, -0.3, -0.7), (0.7, 0.3, 0.7)],
+    ...     voxel_size=0.025,
+    ... )
+    >>> abs(csdf_turn(slab) - 20) < 0.25
+    True
+    >>> csdf_turn(shapes.box((0, 0, 0), (1, 0.4, 0.6), voxel_size=0.025)) is None
+    True
     """
     sdf = np.asarray(csdf.sdf)
     h = csdf.voxel_size
@@ -139,7 +263,8 @@ def csdf_turn(csdf: CSDF) -> float | None:
 
 def _turn(n: np.ndarray, points: np.ndarray) -> float | None:
     """:func:`square_turn` from area normals ``n`` (N, 3) and the surface's ``points`` (M, 3)
-    (its footprint)."""
+    (its footprint).
+    """
     norm = np.linalg.norm(n, axis=1)
     wall = (norm > 0) & (np.abs(n[:, 1]) < _WALL * norm)
     if not wall.any():

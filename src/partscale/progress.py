@@ -17,7 +17,26 @@ def _silent(fraction: float, message: str) -> None:
 
 
 def resolve(progress: ProgressCallback | None) -> ProgressCallback:
-    """Return ``progress`` or a callback that does nothing."""
+    """Return ``progress`` or a callback that does nothing.
+
+    Parameters
+    ----------
+    progress : callable (fraction: float, message: str) -> None, or None
+        A caller's progress callback, or None for none.
+
+    Returns
+    -------
+    callable (fraction: float, message: str) -> None
+        ``progress`` itself, or (for None) one that does nothing, so a function can report
+        without testing for None.
+
+    Examples
+    --------
+    >>> from partscale.progress import resolve
+    >>> resolve(None)(0.5, "halfway")
+    >>> resolve(lambda f, m: print(f"{f:.0%} {m}"))(0.5, "halfway")
+    50% halfway
+    """
     return progress if progress is not None else _silent
 
 
@@ -25,6 +44,28 @@ def scaled(progress: ProgressCallback | None, start: float, stop: float) -> Prog
     """A callback reporting into the sub-range ``[start, stop]`` of ``progress``.
 
     Lets a stage call another stage and keep one monotone bar.
+
+    Parameters
+    ----------
+    progress : callable (fraction: float, message: str) -> None, or None
+        The outer callback (None: the result does nothing).
+    start, stop : float
+        The sub-range of the outer bar, within [0, 1], that the inner stage fills.
+
+    Returns
+    -------
+    callable (fraction: float, message: str) -> None
+        A callback that maps its ``fraction`` (clipped to [0, 1]) to
+        ``start + (stop - start) * fraction`` of ``progress`` and passes the message on.
+
+    Examples
+    --------
+    >>> from partscale.progress import scaled
+    >>> inner = scaled(lambda f, m: print(f"{f:.2f} {m}"), 0.5, 0.75)
+    >>> inner(0.0, "meshing")
+    0.50 meshing
+    >>> inner(1.0, "meshing")
+    0.75 meshing
     """
     outer = resolve(progress)
 

@@ -41,11 +41,29 @@ class ThinFeatures:
     resolution : int
         Voxels along the solid's longest side now.
     limit : float
+        The thickness in voxels below which a feature counts as thin.
     imported : dict
         What the mesh import recorded about closed pieces thinner than the grid holds (it
         thickens them to ``sheet_half_thickness_voxels`` either side, so the grid no longer
         shows how thin they were): ``thin_piece_triangles``, ``thin_piece_thickness_voxels``
         (min, median), ``below_one_voxel_triangles``; empty for other sources.
+
+    Examples
+    --------
+    A sheet one voxel thick:
+
+    >>> from partscale import shapes
+    >>> from partscale.thickness import thin_features
+    >>> sheet = shapes.grid(
+    ...     lambda p: shapes.box_sdf(p, (0, -0.01, 0), (0.5, 0.01, 0.5)),
+    ...     [(0, -0.1, 0), (0.5, 0.1, 0.5)],
+    ...     voxel_size=0.02,
+    ... )
+    >>> found = thin_features(sheet)
+    >>> found.solid_voxels, found.typical, found.worth_warning, found.needed_resolution
+    (576, 1.0, True, 64)
+    >>> found.message(sheet.voxel_size)
+    '576 voxels of solid and 0 of gap lie in features thinner than 1.5 voxels ... would hold them'
     """
 
     solid_voxels: int
@@ -70,9 +88,11 @@ class ThinFeatures:
 
     @property
     def needed_resolution(self) -> int | None:
-        """Voxels along the longest side at which the median thin feature (of the grid, and of
-        the pieces the import thickened) spans ``limit`` voxels, rounded up to a multiple of 64;
-        None when there are none."""
+        """Voxels along the longest side at which the median thin feature spans ``limit`` voxels.
+
+        The median of the grid's thin features and of the pieces the import thickened, rounded
+        up to a multiple of 64; None when there are none.
+        """
         needed = [self._needed(self.typical)]
         thin = self.imported.get("thin_piece_thickness_voxels")
         if isinstance(thin, dict):
@@ -82,16 +102,30 @@ class ThinFeatures:
 
     @property
     def worth_warning(self) -> bool:
-        """Enough thin voxels to matter (at least 50 and 0.1 % of the surface voxels), or
-        pieces the import had to thicken."""
+        """Enough thin voxels to matter, or pieces the import had to thicken.
+
+        Enough: at least 50 and 0.1 % of the surface voxels.
+        """
         n = self.solid_voxels + self.gap_voxels
         return (n >= 50 and n >= 0.001 * self.surface_voxels) or bool(
             self.imported.get("thin_piece_triangles")
         )
 
     def message(self, voxel_size: float, units: str = "m") -> str | None:
-        """One line for users (None unless :attr:`worth_warning`): how much is thin, how thin,
-        and the resolution that would hold it."""
+        """One line for users: how much is thin, how thin, and the resolution that would hold it.
+
+        Parameters
+        ----------
+        voxel_size : float
+            The grid's voxel edge, to say the median thickness in world units.
+        units : str
+            The world units' name.
+
+        Returns
+        -------
+        str or None
+            The line; None unless :attr:`worth_warning`.
+        """
         if not self.worth_warning:
             return None
         said = []
@@ -115,6 +149,7 @@ class ThinFeatures:
         )
 
     def to_json(self) -> dict:
+        """The counts as a JSON-ready dict (``partscale info --json``'s ``thin_features``)."""
         return {
             "limit_voxels": self.limit,
             "solid_voxels": self.solid_voxels,
@@ -240,6 +275,26 @@ def thin_features(csdf: CSDF, *, limit: float = THIN_VOXELS) -> ThinFeatures:
     One parallel numba sweep over the grid: six face neighbours read per voxel, the runs and the
     26 neighbours only at the surface; and one float32 array the size of the grid for the
     thicknesses whose median is reported.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object.
+    limit : float
+        Features thinner than this many voxels count as thin.
+
+    Returns
+    -------
+    ThinFeatures
+        The counts, the median thickness and the resolution that would hold it.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.thickness import thin_features
+    >>> found = thin_features(shapes.box((0, 0, 0), (0.5, 0.3, 0.5), voxel_size=0.02))
+    >>> found.solid_voxels + found.gap_voxels, found.message(0.02)
+    (0, None)
     """
     s = np.ascontiguousarray(csdf.sdf, np.float32)
     h = np.float32(csdf.voxel_size)

@@ -24,8 +24,23 @@ __all__ = ["WarmupResult", "warmup"]
 
 @dataclass(frozen=True)
 class WarmupResult:
-    """What :func:`warmup` did: wall seconds, and the kernels each part compiled (0 where the
-    cache already held them)."""
+    """What :func:`warmup` did: wall seconds, and the kernels each part compiled.
+
+    Attributes
+    ----------
+    seconds : float
+        Wall seconds of the whole warm-up.
+    compiled : dict of str to int
+        Per part (``"import"``, ``"edit"``), how many of partscale's kernels numba compiled;
+        0 where the cache already held them all.
+
+    Examples
+    --------
+    >>> from partscale.warmup import WarmupResult
+    >>> result = WarmupResult(1.5, {"import": 0, "edit": 0})
+    >>> sum(result.compiled.values())
+    0
+    """
 
     seconds: float
     compiled: dict[str, int]

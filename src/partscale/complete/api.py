@@ -66,7 +66,8 @@ the nearest, at most 0.87 of these away: well inside SYMMETRY_MARGIN)."""
 def _is_floor(P: np.ndarray, plane, inliers: np.ndarray, cropped: bool) -> bool:
     """A floor is broad (most of it survives an opening by a disc of ``FLOOR_BROAD_M``: the legs
     of a star base, wider than the seat, do not) and, in a cropped scan, reaches beyond what
-    stands on it (in a full frame the rest is the room, wider than the floor seen)."""
+    stands on it (in a full frame the rest is the room, wider than the floor seen).
+    """
     rest = P[~inliers & (plane.height(P) > 2 * FLOOR_TOL)]
     if len(rest) < 10:
         return True
@@ -84,7 +85,8 @@ def _is_floor(P: np.ndarray, plane, inliers: np.ndarray, cropped: bool) -> bool:
 
 def _broad(X: np.ndarray) -> float:
     """Share of the occupied cells (FLOOR_CELL_M) of 2-D points X (N, 2) that an opening by a
-    disc of radius FLOOR_BROAD_M keeps."""
+    disc of radius FLOOR_BROAD_M keeps.
+    """
     from scipy import ndimage
 
     idx = np.floor((X - X.min(axis=0)) / FLOOR_CELL_M).astype(np.int64)
@@ -175,7 +177,8 @@ def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
     the gas-lift column lost along silhouettes; a stool's leg cut off its seat along the seat's
     shadow; a table's top above its legs; a star base wider than the seat): a cluster joins when
     its centre stands over the object's footprint, or nearly all of it within the footprint, or
-    nearly all of the object within the cluster's (the cluster picked may be the leg)."""
+    nearly all of the object within the cluster's (the cluster picked may be the leg).
+    """
     a, b = in_plane_axes(up)
     flat = np.stack([P[idx] @ a, P[idx] @ b], axis=1)
 
@@ -242,7 +245,8 @@ class Observation:
     ``U`` (4, 4) world -> upright (y up, floor at 0, centred), the floor (Plane, inliers) or None,
     the (denoised) frames, the points' unit normals (N, 3) world, facing their camera, and what
     gave up: ``"floor"``, ``"underside"`` (a level plane under the object that is no floor),
-    ``"base"`` (:func:`partscale.complete.floor.base_plane`) or ``"camera"`` (its -y axis)."""
+    ``"base"`` (:func:`partscale.complete.floor.base_plane`) or ``"camera"`` (its -y axis).
+    """
 
     frames: list
     points: np.ndarray
@@ -256,7 +260,8 @@ class Observation:
 def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
     """(N, 3) float64 unit normals of scan ``points`` (N, 3): the least-variance axis of their
     ``NORMAL_NEIGHBOURS`` nearest neighbours, turned towards the camera at ``eyes`` (N, 3) that
-    saw each point."""
+    saw each point.
+    """
     from scipy.spatial import cKDTree
 
     k = min(NORMAL_NEIGHBOURS, len(points))
@@ -365,6 +370,10 @@ def complete(
         Look for and apply mirror planes and rotations (off: the closure alone).
     closure : float
         Voxels behind the surface that close the solid where nothing else does.
+    source : str
+        What the CSDF's ``meta['source']`` and the messages call the scan.
+    progress : callable (fraction: float, message: str) -> None, optional
+        Told how far the completion has got.
 
     Returns
     -------
@@ -372,6 +381,29 @@ def complete(
         ``meta['completion']``: fractions of the surface ``observed``, ``mirrored`` (symmetric
         copies) and ``guessed``, the symmetries and floor found, ``to_input_frame`` (4x4, grid
         frame -> input frame) and the per-voxel provenance (:func:`provenance`).
+
+    Raises
+    ------
+    InputError
+        No views, a bad ``res`` or ``box``, or too few points of an object in the scan.
+
+    Examples
+    --------
+    One view of the shipped table from a virtual sensor, completed at 32 voxels (without the
+    search for symmetries, the slow part, to keep the example short):
+
+    >>> from partscale import data, ingest
+    >>> from partscale.complete import complete
+    >>> from partscale.complete.virtual import virtual_scan
+    >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
+    >>> table = complete(frames, res=32, symmetry=False)
+    >>> max(table.shape) >= 32, table.meta["units"]
+    (True, 'm')
+    >>> done = table.meta["completion"]
+    >>> round(float(done["observed"] + done["mirrored"] + done["guessed"]), 3)
+    1.0
+    >>> bool(done["observed"] > 0.3)
+    True
     """
     from ..ingest import check_res
 
@@ -704,8 +736,38 @@ def _encode(prov: np.ndarray) -> dict:
 
 
 def provenance(csdf: CSDF) -> np.ndarray:
-    """(X, Y, Z) uint8 kind of surface near each voxel: 0 none, 1 observed, 2 mirrored,
-    3 guessed. Raises :class:`InputError` for a CSDF that is not an unedited completion."""
+    """(X, Y, Z) uint8 kind of surface near each voxel: 0 none, 1 observed, 2 mirrored, 3 guessed.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        A completion (:func:`complete`) as it was made: not edited or resampled since.
+
+    Returns
+    -------
+    (X, Y, Z) uint8
+        :data:`OBSERVED`, :data:`MIRRORED` or :data:`GUESSED` at voxels near the surface, 0
+        elsewhere.
+
+    Raises
+    ------
+    InputError
+        ``csdf`` was not made by the completion, or its grid has changed since.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import data, ingest
+    >>> from partscale.complete import KINDS, complete, provenance
+    >>> from partscale.complete.virtual import virtual_scan
+    >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
+    >>> table = complete(frames, res=32, symmetry=False)
+    >>> kinds = provenance(table)
+    >>> kinds.shape == table.shape, kinds.dtype
+    (True, dtype('uint8'))
+    >>> [KINDS[k] for k in np.unique(kinds) if k]
+    ['observed', 'guessed']
+    """
     comp = csdf.meta.get("completion")
     if not isinstance(comp, dict) or "provenance" not in comp:
         raise InputError("completion colours: expected a CSDF made by the completion, got none")
@@ -720,8 +782,37 @@ def provenance(csdf: CSDF) -> np.ndarray:
 
 
 def completion_colors(csdf: CSDF) -> np.ndarray:
-    """(X, Y, Z, 3) uint8: the display colour of each voxel's kind of surface
-    (:data:`partscale.complete.fuse.KIND_COLORS`), for ``render --completion``."""
+    """(X, Y, Z, 3) uint8: the display colour of each voxel's kind of surface.
+
+    What ``render --completion`` shows: :data:`KIND_COLORS` (observed blue, mirrored amber,
+    guessed red) of the nearest voxel with a kind (:func:`provenance`).
+
+    Parameters
+    ----------
+    csdf : CSDF
+        A completion as it was made (as :func:`provenance`).
+
+    Returns
+    -------
+    (X, Y, Z, 3) uint8
+        sRGB colours, in place of ``csdf.rgb`` (``csdf.replace(rgb=...)``).
+
+    Raises
+    ------
+    InputError
+        As :func:`provenance`.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> from partscale.complete import complete, completion_colors
+    >>> from partscale.complete.virtual import virtual_scan
+    >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
+    >>> table = complete(frames, res=32, symmetry=False)
+    >>> shown = table.replace(rgb=completion_colors(table))
+    >>> shown.rgb.shape == (*table.shape, 3), shown.rgb.dtype
+    (True, dtype('uint8'))
+    """
     from scipy import ndimage
 
     prov = provenance(csdf)
@@ -743,8 +834,55 @@ def complete_file(
     views: str | os.PathLike | None = None,
     **options,
 ) -> CSDF:
-    """Read a scan (a PLY/OBJ range mesh or point cloud in the camera frame, an RGB-D frame, or a
-    JSON list of registered views) and :func:`complete` it."""
+    """Read a scan from files and :func:`complete` it.
+
+    Exactly one of ``scan``, ``depth`` and ``views`` names what to read.
+
+    Parameters
+    ----------
+    scan : str or os.PathLike, optional
+        A PLY/OBJ range mesh or point cloud of the object alone, in the camera's frame
+        (:func:`read_points`, :func:`frame_from_points`).
+    depth, color, intrinsics : str or os.PathLike, optional
+        An RGB-D frame: depth image, colour image, intrinsics JSON (:func:`read_frame`).
+    depth_scale : float
+        Depth image units per metre.
+    camera : (4, 4) array_like, optional
+        The camera-to-world pose of ``scan`` or ``depth`` (default: identity).
+    views : str or os.PathLike, optional
+        A JSON list of registered views (:func:`read_views`).
+    **options
+        :func:`complete`'s keywords (``res``, ``box``, ``upright``, ``symmetry``, ``closure``,
+        ``progress``).
+
+    Returns
+    -------
+    CSDF
+        As :func:`complete`; ``meta['source']`` is the file read.
+
+    Raises
+    ------
+    InputError
+        Not exactly one of ``scan``, ``depth``, ``views``; colour or intrinsics given with a
+        scan; or a file that cannot be read.
+
+    Examples
+    --------
+    A point cloud of the shipped table (the points a virtual sensor read, in its frame),
+    written to a PLY file and completed:
+
+    >>> import trimesh
+    >>> from partscale import data, ingest
+    >>> from partscale.complete import complete_file
+    >>> from partscale.complete.virtual import virtual_scan
+    >>> (seen,) = virtual_scan(ingest.load_mesh(data.table()), 1, floor=False)
+    >>> points, colors, _ = seen.points()
+    >>> in_camera = (points - seen.pose[:3, 3]) @ seen.pose[:3, :3]
+    >>> _ = trimesh.PointCloud(in_camera, colors=colors).export("scan.ply")
+    >>> table = complete_file("scan.ply", res=32, symmetry=False)
+    >>> table.meta["source"], max(table.shape) >= 32
+    ('scan.ply', True)
+    """
     given = [x is not None for x in (scan, depth, views)]
     if sum(given) != 1:
         raise InputError(

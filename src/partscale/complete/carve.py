@@ -1,4 +1,4 @@
-"""Space carving: which points did a camera see through?
+"""Space carving: which points did a camera see through.
 
 A point is *free* (outside every object) when some view's ray through it reached a reading
 farther than the point (by more than ``margin``), or, in a cropped scan's frame, when it projects
@@ -27,7 +27,8 @@ SILHOUETTE_HOLE_FRACTION = 0.015
 
 def silhouette(frame: Frame) -> np.ndarray:
     """(H, W) bool: the object's closed silhouette in a cropped frame (readings, small gaps and
-    small enclosed holes closed)."""
+    small enclosed holes closed).
+    """
     from skimage.morphology import remove_small_holes
 
     valid = frame.depth > 0
@@ -81,7 +82,8 @@ class Carver:
 
     def free(self, points: np.ndarray, margin: float | None = None) -> np.ndarray:
         """(N,) bool: ``points`` (N, 3) world positions that some view saw through (by more
-        than ``margin``, default the carver's)."""
+        than ``margin``, default the carver's).
+        """
         P = np.asarray(points, np.float32)
         m = self.margin if margin is None else float(margin)
         out = np.zeros(len(P), bool)
@@ -136,7 +138,8 @@ class FreeGrid:
 
     def __call__(self, points: np.ndarray, frame: np.ndarray | None = None) -> np.ndarray:
         """(N,) bool: ``points`` (N, 3) that some view saw through; in the grid's frame, or in
-        another whose (4, 4) map into the grid's frame is ``frame`` (applied on the fly)."""
+        another whose (4, 4) map into the grid's frame is ``frame`` (applied on the fly).
+        """
         P = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
         M = np.eye(4) if frame is None else np.asarray(frame, np.float64)
         out = np.empty(len(P), bool)
@@ -155,7 +158,8 @@ def lookup(P, A, b, lo, cell, table, nearest, out, off):
     cell holding ``A @ P[i] + b``, grid points at ``lo + index * cell``; where that lies off the
     table, ``out[i]`` is False and ``off[i]`` True. P (N, 3) float64, A (3, 3), b (3,).
 
-    One pass without temporaries: the symmetry searches look up millions of mapped points."""
+    One pass without temporaries: the symmetry searches look up millions of mapped points.
+    """
     nx, ny, nz = table.shape
     for i in numba.prange(P.shape[0]):
         x, y, z = P[i, 0], P[i, 1], P[i, 2]
@@ -179,7 +183,8 @@ def lookup(P, A, b, lo, cell, table, nearest, out, off):
 def _free_kernel(P, R, t, fx, fy, cx, cy, depth, through, has_through, margin, out):
     """Marks ``out[i]`` where one view's ray through ``P[i]`` reached a reading beyond it by
     more than ``margin`` or, in a cropped frame (``has_through``), passed the object's
-    silhouette or the image (the crop removed the background: those rays saw nothing)."""
+    silhouette or the image (the crop removed the background: those rays saw nothing).
+    """
     H, W = depth.shape
     for i in numba.prange(P.shape[0]):
         if out[i]:

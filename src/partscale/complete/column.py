@@ -60,7 +60,8 @@ class Column:
     """A vertical cylinder in the upright frame: axis (x, z), heights ``bottom`` to ``top``,
     ``radius``; ``contradicted``: the share of its surface samples surely free at that radius
     (0 unless even ``MIN_RADIUS`` is, by at most ``MAX_CONTRADICTED``); ``hub_radius``: the
-    guessed hub's, a disc from ``hub_bottom`` to ``bottom`` (0: the hub was seen or copied)."""
+    guessed hub's, a disc from ``hub_bottom`` to ``bottom`` (0: the hub was seen or copied).
+    """
 
     x: float
     z: float
@@ -72,6 +73,7 @@ class Column:
     hub_bottom: float = 0.0
 
     def as_dict(self) -> dict:
+        """The column as JSON-ready numbers (``meta['completion']['column']``)."""
         return {
             "axis_x": round(self.x, 6),
             "axis_z": round(self.z, 6),
@@ -87,7 +89,8 @@ class Column:
 def sure_carver(frames: list[Frame], margin: float) -> Carver:
     """The :class:`~partscale.complete.carve.Carver` of the space ``frames`` surely saw through
     by ``margin``: a point's pixel and every pixel of the ``SURE_RAYS`` square around it read a
-    depth beyond it. Pixels without a reading, and a cropped scan's background, say nothing."""
+    depth beyond it. Pixels without a reading, and a cropped scan's background, say nothing.
+    """
     return Carver(frames, margin, sure_rays=SURE_RAYS)
 
 
@@ -185,7 +188,8 @@ def add_column(
     """The SDF (X, Y, Z) float32 (world units, negative inside) and provenance (X, Y, Z) uint8
     with ``column`` (and its guessed hub) united in (reaching a voxel into the hub and the
     seat), except where ``free_up`` (upright points -> bool) is true; its new surface marked
-    ``guessed``. Returns them and the number of voxels the column made solid."""
+    ``guessed``. Returns them and the number of voxels the column made solid.
+    """
     A, b = grid_to_upright[:3, :3], grid_to_upright[:3, 3]
     # the grid's voxels whose centres lie in the column's box, grown by the band (and a voxel):
     # every voxel whose distance the column can change within the band is rewritten
@@ -233,5 +237,6 @@ def add_column(
 
 def _cylinder(r: np.ndarray, y: np.ndarray, radius: float, lo: float, hi: float) -> np.ndarray:
     """(N,) signed distance bound (negative inside) of the vertical cylinder of ``radius``
-    from height ``lo`` to ``hi``, at points ``r`` (N,) off its axis and at heights ``y`` (N,)."""
+    from height ``lo`` to ``hi``, at points ``r`` (N,) off its axis and at heights ``y`` (N,).
+    """
     return np.maximum(r - radius, np.maximum(lo - y, y - hi))

@@ -117,7 +117,8 @@ def floor_scraps(points: np.ndarray, plane: Plane, tol: float, cell: float, marg
     points are cut into pieces (26-connected at ``cell``); a piece is floor when most of its
     points lie within ``2 * tol`` of ``plane`` (the level plane under the object) and most of
     those stand outside the footprint of the other pieces' points above that height, grown by
-    ``margin`` (a caster beside its leg's end stays: it stands under the leg)."""
+    ``margin`` (a caster beside its leg's end stays: it stands under the leg).
+    """
     P = np.asarray(points, np.float64)
     low = plane.height(P) <= 2 * tol
     piece = clusters(P, cell)
@@ -140,7 +141,8 @@ def floor_scraps(points: np.ndarray, plane: Plane, tol: float, cell: float, marg
 
 def in_plane_axes(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two (3,) float64 orthonormal axes across a plane with unit ``normal`` (3,): a point's
-    coordinates seen along the normal are its dot products with them."""
+    coordinates seen along the normal are its dot products with them.
+    """
     n = np.asarray(normal, np.float64)
     a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
     a /= np.linalg.norm(a)

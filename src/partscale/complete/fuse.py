@@ -75,7 +75,8 @@ def _edt(mask: np.ndarray) -> np.ndarray:
 def _fill_holes(mask: np.ndarray) -> np.ndarray:
     """(X, Y, Z) bool: ``mask`` with every empty region that reaches no face of the array
     filled, as ``ndimage.binary_fill_holes`` (empty space face-connected) gives it, by one
-    labelling instead of a dilation repeated until nothing changes (3x faster at 150^3)."""
+    labelling instead of a dilation repeated until nothing changes (3x faster at 150^3).
+    """
     lab, n = ndimage.label(~mask)
     outside = np.zeros(n + 1, bool)
     for ax in range(mask.ndim):
@@ -298,7 +299,8 @@ def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
     with ``shell`` has fewer boundary voxels (:func:`_edge`) than ``shell`` alone.
 
     Each region is judged in its own box, one voxel wider than it (the voxels whose side it can
-    change) and two wider for the erosion, so the cost follows the fill, not the grid."""
+    change) and two wider for the erosion, so the cost follows the fill, not the grid.
+    """
     lab, n = ndimage.label(extra)
     keep = np.zeros(n + 1, bool)
     shape = shell.shape
@@ -331,7 +333,8 @@ def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
     faces the other way (a leg's front and back, a seat's left and right side), within
     ``BETWEEN_VOXELS``, where no camera saw through any voxel of the segment: the thickness the
     scan measured, instead of a thin closure with the unseen back of its shell inside the
-    object."""
+    object.
+    """
     # which ways the points in and next to each voxel face: one bit per axis direction
     axis = np.argmax(np.abs(normals), axis=1)
     neg = normals[np.arange(len(normals)), axis] < 0
@@ -372,7 +375,8 @@ def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.
     of its ``SLAB_NEIGHBOURS`` nearest measurements facing the same way (a leg flush below an
     edge lengthens a few, holes at an edge shorten a few) and is carried in along its face's
     axis to that depth through voxels no camera saw through: the thickness of a slab whose
-    underside no camera saw, where the between-fill finds no opposite surface."""
+    underside no camera saw, where the between-fill finds no opposite surface.
+    """
     axis = np.argmax(np.abs(normals), axis=1)
     neg = normals[np.arange(len(normals)), axis] < 0
     cls = (2 * axis + neg).astype(np.int64)
@@ -476,7 +480,8 @@ def _voxel_at(p, n, i, s):
 @numba.njit(cache=True, inline="always")
 def _in_grid(a, b, c, shape):
     """Whether voxel ``(a, b, c)`` (ints) lies in a grid of ``shape`` (X, Y, Z): the walks stop
-    at the grid's border."""
+    at the grid's border.
+    """
     return 0 <= a < shape[0] and 0 <= b < shape[1] and 0 <= c < shape[2]
 
 
@@ -563,7 +568,8 @@ def _march(p, n, opposite, bits, free, reach, out):
 
 def _diffuse(rgb: np.ndarray, known: np.ndarray, band: np.ndarray) -> np.ndarray:
     """Colours where ``known`` is False: normalised Gaussian of the known colours near them,
-    then the nearest known colour (inside and far from the surface)."""
+    then the nearest known colour (inside and far from the surface).
+    """
     if not known.any():
         rgb[...] = 160
         return rgb

@@ -24,7 +24,8 @@ def surface_samples(csdf: CSDF, n: int = 20000, *, seed: int = 0) -> tuple[np.nd
 
 def chamfer_fscore(pred: np.ndarray, gt: np.ndarray, tau: float) -> dict:
     """CD-L1 (mean of the two mean nearest-neighbour distances, world units), precision, recall
-    and F-score at ``tau`` of point sets ``pred`` (N, 3) and ``gt`` (M, 3)."""
+    and F-score at ``tau`` of point sets ``pred`` (N, 3) and ``gt`` (M, 3).
+    """
     d_pg, _ = cKDTree(gt).query(pred, workers=2)
     d_gp, _ = cKDTree(pred).query(gt, workers=2)
     p = float((d_pg <= tau).mean())
@@ -40,7 +41,8 @@ def chamfer_fscore(pred: np.ndarray, gt: np.ndarray, tau: float) -> dict:
 
 def colour_error(pred, pred_rgb, gt, gt_rgb, tau: float) -> float:
     """Mean absolute sRGB error (0..255, over channels) of the predicted surface points within
-    ``tau`` of the truth, against the colour of the nearest true surface point."""
+    ``tau`` of the truth, against the colour of the nearest true surface point.
+    """
     d, nn = cKDTree(gt).query(pred, workers=2)
     ok = d <= tau
     if not ok.any():

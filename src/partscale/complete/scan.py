@@ -32,8 +32,13 @@ DENOISE_JUMP = 0.03
 
 @dataclass(frozen=True, eq=False)
 class Frame:
-    """One depth view.
+    """One depth view: a depth image, its colours, intrinsics and camera pose.
 
+    Made by :func:`read_frame` (an RGB-D image), :func:`frame_from_points` (a range mesh or point
+    cloud) or :func:`read_views` (several registered views).
+
+    Attributes
+    ----------
     depth : (H, W) float32
         Metres along the optical axis, 0 where there is no reading.
     color : (H, W, 3) uint8 or None
@@ -44,6 +49,24 @@ class Frame:
         Camera-to-world transform.
     cropped : bool
         Made from a cropped object scan: pixels outside its silhouette are free space.
+
+    Examples
+    --------
+    A 2 x 2 image whose right column reads 2 m, seen by a camera at the origin:
+
+    >>> import numpy as np
+    >>> from partscale.complete import Frame
+    >>> depth = np.array([[0, 2], [0, 2]], np.float32)
+    >>> K = np.array([[100.0, 0, 1], [0, 100, 1], [0, 0, 1]])
+    >>> frame = Frame(depth, None, K, np.eye(4))
+    >>> frame.shape
+    (2, 2)
+    >>> points, colors, pixels = frame.points()
+    >>> points
+    array([[ 0.  , -0.02,  2.  ],
+           [ 0.  ,  0.  ,  2.  ]])
+    >>> colors.tolist(), pixels.tolist()
+    ([[160, 160, 160], [160, 160, 160]], [1, 3])
     """
 
     depth: np.ndarray
@@ -54,11 +77,26 @@ class Frame:
 
     @property
     def shape(self) -> tuple[int, int]:
+        """The image's (H, W)."""
         return tuple(int(s) for s in self.depth.shape)  # type: ignore[return-value]
 
     def points(self, mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Back-projected readings: world points (N, 3) float64, colours (N, 3) uint8 and flat
-        pixel indices (N,) int64 of the valid pixels (within ``mask`` when given)."""
+        """Back-projected readings: world points, their colours and pixels.
+
+        Parameters
+        ----------
+        mask : (H, W) bool, optional
+            Only the pixels it holds.
+
+        Returns
+        -------
+        points : (N, 3) float64
+            World points of the pixels with a reading (within ``mask`` when given).
+        colors : (N, 3) uint8
+            Their sRGB colours (grey where the frame has none).
+        pixels : (N,) int64
+            Their flat pixel indices, ``v * W + u``.
+        """
         valid = self.depth > 0
         if mask is not None:
             valid &= mask
@@ -76,7 +114,8 @@ def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
     ``sigma`` pixels) to the valid pixels around each one on the same side of any depth
     discontinuity (within ``DENOISE_JUMP`` of its own depth), read at the pixel. No reading is
     pulled across an edge, and none along a slope towards the side its neighbours lie on (at an
-    edge, a weighted mean of one side would be)."""
+    edge, a weighted mean of one side would be).
+    """
     d = frame.depth.astype(np.float64)
     valid = d > 0
     r = int(np.ceil(4 * sigma))  # scipy's gaussian_filter reach
@@ -127,8 +166,35 @@ def check_pose(pose, what: str) -> np.ndarray:
 
 
 def read_intrinsics(path: str | os.PathLike) -> np.ndarray:
-    """(3, 3) float64 intrinsics from JSON: Open3D's ``intrinsic_matrix`` (9 numbers, column
-    major) or ``{"fx", "fy", "cx", "cy"}``."""
+    """(3, 3) float64 pinhole intrinsics read from a JSON file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A JSON file holding Open3D's ``intrinsic_matrix`` (9 numbers, column major) or
+        ``{"fx", "fy", "cx", "cy"}`` (pixels).
+
+    Returns
+    -------
+    (3, 3) float64
+        ``[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]``.
+
+    Raises
+    ------
+    InputError
+        No such file, not JSON, neither form, or focal lengths that are not positive.
+
+    Examples
+    --------
+    >>> import json
+    >>> from partscale.complete import read_intrinsics
+    >>> with open("K.json", "w") as f:
+    ...     json.dump({"fx": 280, "fy": 280, "cx": 160, "cy": 120}, f)
+    >>> read_intrinsics("K.json")
+    array([[280.,   0., 160.],
+           [  0., 280., 120.],
+           [  0.,   0.,   1.]])
+    """
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: expected an intrinsics JSON file, got no such file")
@@ -175,8 +241,52 @@ def read_frame(
     depth_scale: float = DEPTH_SCALE,
     pose=None,
 ) -> Frame:
-    """An RGB-D frame from a 16-bit depth PNG (value / ``depth_scale`` = metres), an optional
-    colour image of the same size and the intrinsics (a JSON file or a 3x3 matrix)."""
+    """An RGB-D frame from a 16-bit depth PNG, an optional colour image and the intrinsics.
+
+    Parameters
+    ----------
+    depth : str or os.PathLike
+        A single-channel depth image (a 16-bit PNG): value / ``depth_scale`` = metres, 0 = no
+        reading.
+    color : str or os.PathLike, optional
+        An sRGB image of the same size, registered to the depth.
+    intrinsics : str, os.PathLike or (3, 3) ndarray
+        A JSON file (:func:`read_intrinsics`) or the matrix; required.
+    depth_scale : float
+        Depth image units per metre (5000: TUM, Kinect; 1000: millimetres).
+    pose : (4, 4) array_like, optional
+        The camera-to-world transform (default: identity, the world is this camera's frame).
+
+    Returns
+    -------
+    Frame
+        A full sensor frame (not :attr:`Frame.cropped`): pixels without a reading say nothing.
+
+    Raises
+    ------
+    InputError
+        No intrinsics, a missing or unreadable image, colours of another size, a bad pose.
+
+    Examples
+    --------
+    A frame of the shipped table from a virtual sensor, written as PNGs and read back:
+
+    >>> import json
+    >>> import numpy as np
+    >>> from PIL import Image
+    >>> from partscale import data, ingest
+    >>> from partscale.complete import DEPTH_SCALE, read_frame
+    >>> from partscale.complete.virtual import virtual_scan
+    >>> (seen,) = virtual_scan(ingest.load_mesh(data.table()), 1)
+    >>> depth = np.rint(seen.depth * DEPTH_SCALE).astype(np.uint16)
+    >>> Image.fromarray(depth).save("depth.png")
+    >>> Image.fromarray(seen.color).save("color.png")
+    >>> frame = read_frame("depth.png", "color.png", seen.K)
+    >>> frame.shape, frame.depth.dtype, frame.cropped
+    ((240, 320), dtype('float32'), False)
+    >>> bool(np.abs(frame.depth - seen.depth).max() < 1e-3)
+    True
+    """
     depth = Path(depth)
     if intrinsics is None:
         raise InputError(
@@ -209,8 +319,36 @@ def read_frame(
 
 
 def read_points(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (N, 3) float64 and their sRGB colours (N, 3) uint8 of a range mesh or point
-    cloud (PLY, OBJ ...); grey where the file has no colours."""
+    """Vertices (N, 3) float64 and their sRGB colours (N, 3) uint8 of a range mesh or point cloud.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A PLY, OBJ or other file trimesh reads (a point cloud or a mesh, whose vertices are
+        the points).
+
+    Returns
+    -------
+    points : (N, 3) float64
+        The finite vertices, in the file's frame.
+    colors : (N, 3) uint8
+        Their sRGB colours; grey (160) where the file has none.
+
+    Raises
+    ------
+    InputError
+        No such file, one trimesh cannot read, or no points.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import trimesh
+    >>> from partscale.complete import read_points
+    >>> _ = trimesh.PointCloud(np.eye(3)).export("cloud.ply")
+    >>> points, colors = read_points("cloud.ply")
+    >>> points.shape, colors[0].tolist()
+    ((3, 3), [160, 160, 160])
+    """
     import trimesh
 
     path = Path(path)
@@ -256,6 +394,36 @@ def frame_from_points(points, colors, pose=None) -> Frame:
     The focal length is chosen so that neighbouring scan points fall on neighbouring pixels
     (from the median spacing of the points against their depth), the image just covers them, and
     each pixel keeps its nearest point (a z-buffer). The result is :attr:`Frame.cropped`.
+
+    Parameters
+    ----------
+    points : (N, 3) array_like of float
+        World points of the object alone (a cropped scan), metres.
+    colors : (N, 3) uint8
+        Their sRGB colours.
+    pose : (4, 4) array_like, optional
+        The camera-to-world transform of the camera that saw them (default: identity).
+
+    Returns
+    -------
+    Frame
+        A cropped frame: pixels outside the points' silhouette are free space.
+
+    Raises
+    ------
+    InputError
+        Fewer than 3 points in front of the camera, a bad pose, or an image over 4096^2 pixels.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> from partscale.complete import frame_from_points
+    >>> from partscale.complete.virtual import virtual_scan
+    >>> (seen,) = virtual_scan(ingest.load_mesh(data.table()), 1, floor=False)
+    >>> points, colors, _ = seen.points()
+    >>> frame = frame_from_points(points, colors, seen.pose)
+    >>> frame.cropped, frame.depth.dtype, bool((frame.depth > 0).sum() > 1000)
+    (True, dtype('float32'), True)
     """
     from scipy.spatial import cKDTree
 
@@ -297,9 +465,43 @@ def frame_from_points(points, colors, pose=None) -> Frame:
 
 
 def read_views(path: str | os.PathLike) -> list[Frame]:
-    """Registered views from a JSON list: ``{"depth", "color", "intrinsics", "pose",
-    "depth_scale"}`` per RGB-D frame or ``{"points", "pose"}`` per scan (paths relative to the
-    file)."""
+    """Registered views from a JSON list of RGB-D frames and point clouds.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A JSON file: a list (or ``{"views": [...]}``) of ``{"depth", "color", "intrinsics",
+        "pose", "depth_scale"}`` per RGB-D frame or ``{"points", "pose"}`` per scan (points in
+        the camera's frame), paths relative to the file; ``pose`` is a 4x4 camera-to-world
+        matrix (default identity).
+
+    Returns
+    -------
+    list of Frame
+        One per view: :func:`read_frame` for a depth image, :func:`frame_from_points` for a
+        scan.
+
+    Raises
+    ------
+    InputError
+        A list that is empty or not one, a view with neither ``depth`` nor ``points``, or a
+        file a view names that cannot be read.
+
+    Examples
+    --------
+    >>> import json
+    >>> import numpy as np
+    >>> import trimesh
+    >>> from partscale.complete import read_views
+    >>> _ = trimesh.PointCloud(np.random.default_rng(0).random((100, 3)) + (0, 0, 2)).export(
+    ...     "near.ply"
+    ... )
+    >>> turn = [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 4], [0, 0, 0, 1]]
+    >>> with open("views.json", "w") as f:
+    ...     json.dump([{"points": "near.ply"}, {"points": "near.ply", "pose": turn}], f)
+    >>> [frame.cropped for frame in read_views("views.json")]
+    [True, True]
+    """
     path = Path(path)
     from .._files import read_json
 

@@ -37,7 +37,8 @@ moving diagonally stays 6-connected)."""
 class Strut:
     """A strut from a piece (of ``piece_voxels`` solid voxels) to the object: ``start`` and
     ``end`` (3,) its path's ends in the grid's frame (world units), ``gap`` the outside space it
-    spans and ``voxels`` the voxels it made solid (``mirrored_voxels``: its mirror image's)."""
+    spans and ``voxels`` the voxels it made solid (``mirrored_voxels``: its mirror image's).
+    """
 
     piece_voxels: int
     start: np.ndarray
@@ -47,6 +48,7 @@ class Strut:
     mirrored_voxels: int = 0
 
     def as_dict(self) -> dict:
+        """The strut as JSON-ready numbers (an entry of ``meta['completion']['struts']``)."""
         return {
             "piece_voxels": self.piece_voxels,
             "start": np.round(self.start, 6).tolist(),
@@ -76,7 +78,8 @@ def add_struts(
     grid's frame -> their images in the object's mirror plane (N, 3) and (N,) bool where the
     plane holds; each strut's image is drawn too where it runs from a piece still apart to the
     solid through no sure free space (two armrests, each on a bar). Returns them and the struts
-    made."""
+    made.
+    """
     solid = sdf < 0
     lab, n = ndimage.label(solid)
     if n < 2:
@@ -113,7 +116,8 @@ def add_struts(
 def _reached(seed: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(X, Y, Z) bool: ``seed`` and the face-connected pieces of ``mask`` it touches, as
     ``ndimage.binary_propagation(seed, mask=mask)`` gives it, by one labelling instead of a
-    dilation repeated until nothing changes."""
+    dilation repeated until nothing changes.
+    """
     lab, n = ndimage.label(mask)
     hit = np.zeros(n + 1, bool)
     hit[lab[seed]] = True
@@ -137,7 +141,8 @@ class _Step:
 
 def _strut(sdf, prov, lab, p, n, joined, box, step: _Step) -> Strut | None:
     """Adds the strut of piece ``p`` of ``lab`` (``n`` voxels, bounding ``box``) to ``sdf``
-    and ``prov`` in place; the :class:`Strut` or None. Only the box grown by the reach is read."""
+    and ``prov`` in place; the :class:`Strut` or None. Only the box grown by the reach is read.
+    """
     from skimage.graph import MCP_Geometric
 
     origin, h, max_gap = step.origin, step.h, step.max_gap
@@ -180,7 +185,8 @@ def _strut(sdf, prov, lab, p, n, joined, box, step: _Step) -> Strut | None:
 
 def _draw(sdf, prov, path, step: _Step) -> int:
     """Unites the strut along ``path`` (K, 3) voxel indices into ``sdf`` and ``prov`` in place
-    (carved by the sure free space); the voxels it made solid."""
+    (carved by the sure free space); the voxels it made solid.
+    """
     h, r = step.h, step.radius
     # every voxel whose distance the strut can change within the band is rewritten
     m = int(np.ceil(r / h)) + BAND_VOXELS + 1
@@ -207,7 +213,8 @@ def _draw(sdf, prov, path, step: _Step) -> int:
 def _mirrored(sdf, prov, path, joined, step: _Step, mirror) -> int:
     """The strut's image in the object's mirror plane, drawn where the plane holds, the image
     runs from a piece still apart (not ``joined`` before this strut: the piece itself or its
-    image) to the solid and crosses no sure free space; the voxels it made solid."""
+    image) to the solid and crosses no sure free space; the voxels it made solid.
+    """
     pts, holds = mirror(step.origin + path * step.h)
     if not holds.all():
         return 0

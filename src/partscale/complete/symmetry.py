@@ -85,7 +85,8 @@ MAX_PLANE_TILT_DEG = 10.0
 @dataclass(frozen=True)
 class Symmetry:
     """A rigid map of the upright frame: ``p -> p @ A.T + b``; ``kind`` is "mirror" or "rotation"
-    (then ``fold``); ``bands`` are the height intervals where it holds and is applied."""
+    (then ``fold``); ``bands`` are the height intervals where it holds and is applied.
+    """
 
     kind: str
     A: np.ndarray
@@ -106,6 +107,7 @@ class Symmetry:
         return out
 
     def apply(self, points: np.ndarray) -> np.ndarray:
+        """(N, 3) float64: ``points`` (N, 3) mapped by the symmetry, ``A p + b``."""
         return np.asarray(points) @ self.A.T + self.b
 
 
@@ -135,7 +137,7 @@ class _Scorer:
         self.occ = ndimage.binary_dilation(occ, np.ones((3, 3, 3), bool))
 
     def __call__(self, mapped: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """mapped (K, M, 3) -> support (K, M) bool, violation (K, M) bool."""
+        """Map (K, M, 3) mapped points -> support (K, M) bool, violation (K, M) bool."""
         K, M, _ = mapped.shape
         flat = np.ascontiguousarray(mapped, np.float64).reshape(-1, 3)
         sup = np.empty(len(flat), bool)
@@ -289,7 +291,8 @@ def _mirror_fit(sym, P: np.ndarray, N: np.ndarray, cell: float):
     """``cost(A, b)``: how far a reflection ``x -> A x + b`` carries the points where ``sym``
     holds (at most ``REFINE_SAMPLES`` of them, a fixed-seed sample; returned too, (M, 3)) from
     scan points ``P`` whose normals ``N`` face the same way: the mean nearest distance, capped
-    at ``cell`` so points without a counterpart weigh alike everywhere."""
+    at ``cell`` so points without a counterpart weigh alike everywhere.
+    """
     from scipy.spatial import cKDTree
 
     w = sym.where(P)
@@ -315,7 +318,8 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
     the same way (the mean distance, capped at ``cell``, so points without a counterpart weigh
     alike everywhere), searched below the voting grid in offset, then angle, then offset, at the
     heights where the plane holds. The voting grid alone leaves the plane up to a cell and a
-    degree off, and a copy a voxel off costs about as much as a missing one."""
+    degree off, and a copy a voxel off costs about as much as a missing one.
+    """
     fit, _ = _mirror_fit(sym, P, N, cell)
 
     def cost(t, d):
@@ -404,7 +408,8 @@ def _mirror_all(S: np.ndarray, planes: np.ndarray) -> np.ndarray:
 
 def _bands(ok: np.ndarray, top: float) -> tuple:
     """Height intervals of the accepted slabs (the lowest reaches below the floor, the highest
-    above the top, so every point of those slabs is inside)."""
+    above the top, so every point of those slabs is inside).
+    """
     edges = np.linspace(0, top, SLABS + 1)
     edges[0], edges[-1] = -np.inf, np.inf
     return tuple((float(edges[i]), float(edges[i + 1])) for i in np.flatnonzero(ok))
@@ -506,7 +511,8 @@ def rotation_axis(
 def _turn(base, piece, scorer, cell, k, rng, bounds):
     """(score, centre (2,), held (M,) bool, support, violation) of the k-fold turn of the base
     points (M, 3) about the axis the search places within ``bounds`` (lo, hi), or None where
-    the rotation is refused."""
+    the rotation is refused.
+    """
     foot_lo, foot_hi = bounds
     centre = _rotation_search(base, scorer, cell, k, rng, None, bounds)
     held = _pieces_held(base, piece, scorer, centre, k)
@@ -533,7 +539,8 @@ def _turn(base, piece, scorer, cell, k, rng, bounds):
 @dataclass(frozen=True, eq=False)
 class _Arms:
     """The base's arms seen from above: points (M, 2) (x, z) on elongated stretches and their
-    directions (M, 2), and the hub (2,) where most of their lines meet."""
+    directions (M, 2), and the hub (2,) where most of their lines meet.
+    """
 
     X: np.ndarray
     d: np.ndarray
@@ -543,7 +550,8 @@ class _Arms:
     @classmethod
     def of(cls, base: np.ndarray, cell: float, rng) -> _Arms | None:
         """The arms of the base points (N, 3), or None where they do not meet from at least two
-        directions (no elongated stretches, or parallel ones)."""
+        directions (no elongated stretches, or parallel ones).
+        """
         X = base[:, [0, 2]]
         pairs = cKDTree(X).query_pairs(ARM_REACH * cell, output_type="ndarray")
         # each point's neighbourhood covariance in plan, summed over the pairs (and itself)
@@ -591,7 +599,8 @@ class _Arms:
     def fold(self, folds: tuple[int, ...]) -> int | None:
         """The fold in ``folds`` whose step the angles between the arms about the hub are
         multiples of, within ``ARM_FOLD_DEG`` (each arm counts once, however much of it is
-        seen), where exactly one fold fits; else None."""
+        seen), where exactly one fold fits; else None.
+        """
         v = self.X - self.hub
         far = np.hypot(v[:, 0], v[:, 1]) >= ARM_REACH * self.cell
         phi = np.sort(np.degrees(np.arctan2(v[far, 1], v[far, 0])))
@@ -622,7 +631,8 @@ class _Arms:
 
 def _arm_votes(axes: np.ndarray, X: np.ndarray, d: np.ndarray, cell: float) -> np.ndarray:
     """(C, M) bool: the arm points X (M, 2) of direction d (M, 2) whose line passes within
-    ``ARM_TOLERANCE`` cells of each axis (C, 2), from beyond their own neighbourhood."""
+    ``ARM_TOLERANCE`` cells of each axis (C, 2), from beyond their own neighbourhood.
+    """
     v = axes[:, None, :] - X[None]
     along = np.abs(v[..., 0] * d[:, 0] + v[..., 1] * d[:, 1])
     across = np.abs(v[..., 1] * d[:, 0] - v[..., 0] * d[:, 1])
@@ -631,7 +641,8 @@ def _arm_votes(axes: np.ndarray, X: np.ndarray, d: np.ndarray, cell: float) -> n
 
 def _copies_on(X, scorer, centre, k, slack=True) -> tuple[np.ndarray, np.ndarray]:
     """(k-1, M) bool support and violation of the copies of X (M, 3) by the k-fold rotation
-    about the vertical axis through ``centre`` (x, z)."""
+    about the vertical axis through ``centre`` (x, z).
+    """
     sup, vio = _copies_scored(X, scorer, np.asarray(centre)[None], k, slack)
     return sup[0], vio[0]
 
@@ -641,7 +652,8 @@ def _copies_scored(X, scorer, centres, k, slack=True) -> tuple[np.ndarray, np.nd
     of ``centres`` (C, 2). A real base is turned by its steps only to within a few degrees (and
     a long leg a degree off lands beside its neighbour): a copy is supported when one of the
     steps turned by up to ``ROTATION_SLACK_DEG`` lands on the scan, and seen through when all
-    of them land in free space."""
+    of them land in free space.
+    """
     turn = np.array([-1.0, -0.5, 0.0, 0.5, 1.0]) if slack else np.zeros(1)
     slack = np.radians(ROTATION_SLACK_DEG) * turn
     angles = (2 * np.pi * np.arange(1, k) / k)[:, None] + slack  # (k-1, J)
@@ -675,7 +687,8 @@ def _pieces_held(base, piece, scorer, centre, k) -> np.ndarray:
 def _rotation_search(X, scorer, cell, k, rng, centre, bounds, slack=True) -> np.ndarray:
     """(2,) the axis (x, z) where k-fold copies of X (M, 3) land best (support minus weighted
     violation), coarse to fine over X's footprint within ``bounds`` (lo, hi), or around
-    ``centre`` when given."""
+    ``centre`` when given.
+    """
     B = X[rng.choice(len(X), min(len(X), 300), replace=False)]
     lo = np.maximum(B[:, [0, 2]].min(axis=0), bounds[0])
     hi = np.minimum(B[:, [0, 2]].max(axis=0), bounds[1])

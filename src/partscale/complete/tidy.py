@@ -30,7 +30,8 @@ FILL_VOXELS = 0.1
 def drop_specks(sdf: np.ndarray, h: float) -> tuple[np.ndarray, int]:
     """(X, Y, Z) float32 SDF without solid (6-connected) components under ``SPECK_SHARE`` of the
     largest, and how many were dropped. A dropped voxel takes its distance's magnitude (outside, as near the
-    surface as it was inside)."""
+    surface as it was inside).
+    """
     lab, n = ndimage.label(sdf < 0)
     if n < 2:
         return sdf, 0

@@ -114,6 +114,7 @@ class LimitBody:
         self.app, self.limit = app, limit
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Pass the request on, or answer 413 once its body is over the limit."""
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
@@ -167,6 +168,7 @@ class HostGuard:
         self.app, self.hosts = app, {canonical_host(h) for h in hosts}
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Pass the request on, or answer 400 (host) or 403 (origin)."""
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
@@ -225,9 +227,9 @@ def _error(message: str, status: int = 400) -> JSONResponse:
 
 
 def content_disposition(name: str) -> str:
-    """``attachment`` header for ``name`` (RFC 6266): an ASCII fallback and the UTF-8 name.
+    r"""``attachment`` header for ``name`` (RFC 6266): an ASCII fallback and the UTF-8 name.
 
-    Headers are Latin-1 on the wire, and a ``"`` or ``\\`` would end or escape the quoted
+    Headers are Latin-1 on the wire, and a ``"`` or ``\`` would end or escape the quoted
     string: the fallback replaces those and anything outside printable ASCII with ``_``;
     ``filename*`` (RFC 5987) carries the exact name percent-encoded.
     """
@@ -263,7 +265,8 @@ async def _http_error(request: Request, exc: _HTTPError) -> Response:
 
 async def _run(what: str, fn: Callable[..., T], *args: Any) -> T:
     """``fn(*args)`` in the thread pool: an InputError is the request's fault (400); anything
-    else is a bug in partscale (500, traceback kept on the server's stderr)."""
+    else is a bug in partscale (500, traceback kept on the server's stderr).
+    """
     try:
         return await run_in_threadpool(fn, *args)
     except InputError as exc:
@@ -289,7 +292,8 @@ def _asset_table() -> dict[str, tuple[bytes, str]]:
 class _FoundPerAxis:
     """``fn(csdf, axis)`` kept for the last few (object, axis) pairs: what a zones function found
     on the editor's object (seconds at 256³) is found once per object and axis. The object is
-    held with its entry, so its id is not reused while the entry is."""
+    held with its entry, so its id is not reused while the entry is.
+    """
 
     def __init__(self, fn: Callable[[Any, str], Any], keep: int = 9):
         self.fn, self.keep = fn, keep
@@ -310,7 +314,8 @@ class _FoundPerAxis:
 
 def _zone_routes(session: EditSession) -> list[Route]:
     """The routes over :mod:`partscale.zones` on the session's current object (thin layers):
-    ``/api/suggest``, ``/api/snap``, ``/api/elements``, ``/api/fit`` and ``/api/add``."""
+    ``/api/suggest``, ``/api/snap``, ``/api/elements``, ``/api/fit`` and ``/api/add``.
+    """
     # what suggest and find_elements found, per object and axis
     candidates = _FoundPerAxis(lambda c, ax: zones.suggest(c, ax))
     found_elements = _FoundPerAxis(lambda c, ax: zones.find_elements(c, ax))
@@ -430,9 +435,35 @@ def create_app(
     max_body : int
         Largest request body in bytes; larger ones get 413.
 
+    Returns
+    -------
+    starlette.applications.Starlette
+        The ASGI app: the page, its assets and the ``/api/...`` routes.
+
+    Raises
+    ------
+    InputError
+        ``path`` is not a readable ``.csdf.npz``.
+
     Notes
     -----
     ``app.state.session`` is the :class:`~partscale.serve.session.EditSession`.
+
+    Examples
+    --------
+    With starlette's test client (a request must name an allowed host):
+
+    >>> from starlette.testclient import TestClient
+    >>> from partscale import save, shapes
+    >>> from partscale.serve import create_app
+    >>> path = save(shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1), "box.csdf.npz")
+    >>> with TestClient(create_app("box.csdf.npz"), base_url="http://127.0.0.1") as client:
+    ...     state = client.get("/api/state").json()
+    ...     refused = client.get("/api/state", headers={"host": "evil.example"})
+    >>> state["shape"], state["revision"], state["save_as"]
+    ([17, 12, 12], 0, 'box.edited.csdf.npz')
+    >>> refused.status_code
+    400
     """
     session = EditSession.open(path)
     index = STATIC / "index.html"

@@ -18,6 +18,24 @@ def canonical_host(name: str) -> str:
 
     Lower case without a trailing dot; IPv4 in any form browsers accept (``127.000.000.001``,
     ``127.1``, ``0x7f.0.0.1``) as a dotted quad; IPv6 compressed, in brackets.
+
+    Parameters
+    ----------
+    name : str
+        A host name or address, as typed or as a Host header holds it (without a port).
+
+    Returns
+    -------
+    str
+        The one spelling of it that :func:`allowed_hosts` and the Host guard compare.
+
+    Examples
+    --------
+    >>> from partscale.serve import canonical_host
+    >>> canonical_host("127.1"), canonical_host("0x7f.0.0.1"), canonical_host("LOCALHOST.")
+    ('127.0.0.1', '127.0.0.1', 'localhost')
+    >>> canonical_host("[0:0::1]")
+    '[::1]'
     """
     n = name.strip().lower().rstrip(".")
     inner = n[1:-1] if n.startswith("[") and n.endswith("]") else n
@@ -35,7 +53,24 @@ def canonical_host(name: str) -> str:
 
 
 def is_loopback(host: str) -> bool:
-    """True for ``localhost`` and loopback addresses (127.0.0.0/8, ::1), in any spelling."""
+    """True for ``localhost`` and loopback addresses (127.0.0.0/8, ::1), in any spelling.
+
+    Parameters
+    ----------
+    host : str
+        A host name or address (:func:`canonical_host` reads its spelling).
+
+    Returns
+    -------
+    bool
+        Whether only this machine reaches it.
+
+    Examples
+    --------
+    >>> from partscale.serve import is_loopback
+    >>> is_loopback("127.0.0.2"), is_loopback("[::1]"), is_loopback("192.168.1.5")
+    (True, True, False)
+    """
     c = canonical_host(host)
     if c == "localhost":
         return True
@@ -73,6 +108,24 @@ def allowed_hosts(host: str) -> list[str]:
     with, as the printed URL spells it (``127.0.0.2``, ``[::1]``, ``192.168.1.5``,
     ``myhost``); for a wildcard bind (``0.0.0.0``, ``::``) this machine's name and addresses
     instead. Never any name: a page on another domain that rebinds it here is refused.
+
+    Parameters
+    ----------
+    host : str
+        The interface the server binds (``serve``'s ``host``).
+
+    Returns
+    -------
+    list of str
+        Host names in :func:`canonical_host`'s spelling, the loopback ones first.
+
+    Examples
+    --------
+    >>> from partscale.serve import allowed_hosts
+    >>> allowed_hosts("127.0.0.1")
+    ['127.0.0.1', 'localhost', '[::1]']
+    >>> allowed_hosts("192.168.1.5")
+    ['127.0.0.1', 'localhost', '[::1]', '192.168.1.5']
     """
     from .app import LOOPBACK_HOSTS
 
@@ -123,6 +176,29 @@ def serve(
         Open the page in the default browser (else only print the URL).
     announce : callable(str), optional
         Where the URL and warnings go (default: stderr).
+
+    Returns
+    -------
+    None
+        Once the server has stopped.
+
+    Raises
+    ------
+    InputError
+        A file that is not a CSDF, a port out of range or taken, or a host that is not an
+        address of this machine.
+
+    Examples
+    --------
+    >>> from partscale import save, shapes
+    >>> from partscale.serve import serve
+    >>> path = save(shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1), "box.csdf.npz")
+    >>> serve("box.csdf.npz", port=8000)  # doctest: +SKIP
+    partscale editor for box.csdf.npz: http://127.0.0.1:8000/  (Ctrl-C to stop)
+    >>> serve("box.csdf.npz", port=70000)
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: port: expected 0..65535, got 70000
     """
     import uvicorn
 

@@ -36,7 +36,26 @@ SHOWN_REVISIONS = 4
 
 
 def edited_path(path: Path) -> Path:
-    """``NAME.csdf.npz`` -> ``NAME.edited.csdf.npz`` (beside it): where Save writes by default."""
+    """``NAME.csdf.npz`` -> ``NAME.edited.csdf.npz`` (beside it): where Save writes by default.
+
+    Parameters
+    ----------
+    path : Path
+        The file being edited.
+
+    Returns
+    -------
+    Path
+        In the same folder: the name without ``.csdf.npz`` (or without its last suffix), then
+        ``.edited.csdf.npz``.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from partscale.serve import edited_path
+    >>> edited_path(Path("chairs/chair.csdf.npz")).as_posix()
+    'chairs/chair.edited.csdf.npz'
+    """
     name = path.name
     stem = name[: -len(SUFFIX)] if name.endswith(SUFFIX) else path.stem
     return path.with_name(f"{stem}.edited{SUFFIX}")
@@ -102,6 +121,31 @@ def encode_slab(c: CSDF, axis: int, start: int, stop: int) -> memoryview:
 
     The box is ``c``'s grid cut to those layers (shape ``S``, its own C order); the bytes are
     the two planes of :func:`encode_grid` for that box.
+
+    Parameters
+    ----------
+    c : CSDF
+        The object.
+    axis : int
+        0, 1 or 2 (x, y, z).
+    start, stop : int
+        The layers ``start:stop`` along ``axis``.
+
+    Returns
+    -------
+    memoryview
+        Read-only bytes: ``prod(S)`` float16 distances in voxels, then ``prod(S) * 3`` sRGB
+        bytes (:data:`GRID_BYTES_PER_VOXEL` a voxel).
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.serve import GRID_BYTES_PER_VOXEL, encode_slab
+    >>> box = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
+    >>> box.shape
+    (17, 12, 12)
+    >>> len(encode_slab(box, 0, 2, 5)) == 3 * 12 * 12 * GRID_BYTES_PER_VOXEL
+    True
     """
     box = _layers(axis, start, stop)
     sdf, rgb = c.sdf[box], c.rgb[box]
@@ -113,8 +157,7 @@ def encode_slab(c: CSDF, axis: int, start: int, stop: int) -> memoryview:
 
 
 def encode_grid(c: CSDF) -> memoryview:
-    """The grid for the page's 3D textures (read-only bytes): two planes, each ``(X, Y, Z)``
-    in C order.
+    """The grid for the page's 3D textures (read-only bytes): two planes, each ``(X, Y, Z)``.
 
     That is the grid's own order, z fastest: the page uploads them as ``Z x Y x X`` textures and
     samples them at ``uvw.zyx``, so no transpose is ever made (it would cost more than the rest).
@@ -123,6 +166,31 @@ def encode_grid(c: CSDF) -> memoryview:
     object's units; bit-identical to numpy's ``astype(float16)``, in one compiled pass. Then
     ``X * Y * Z * 3`` bytes: the stored 8-bit sRGB colour (r, g, b), as it is (not linearised).
     :data:`GRID_BYTES_PER_VOXEL` bytes a voxel in all.
+
+    Parameters
+    ----------
+    c : CSDF
+        The object.
+
+    Returns
+    -------
+    memoryview
+        Read-only bytes, ``X * Y * Z * GRID_BYTES_PER_VOXEL`` of them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import shapes
+    >>> from partscale.serve import encode_grid
+    >>> box = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
+    >>> data = encode_grid(box)
+    >>> len(data), data.readonly
+    (12240, True)
+    >>> voxels = np.frombuffer(data, "<f2", count=box.sdf.size).reshape(box.shape)
+    >>> float(voxels.min()), float(box.sdf.min() / box.voxel_size)
+    (-2.0, -2.0)
+    >>> np.frombuffer(data, np.uint8, offset=2 * box.sdf.size).reshape(*box.shape, 3)[0, 0, 0]
+    array([200, 120,  60], dtype=uint8)
     """
     return encode_slab(c, 0, 0, c.shape[0])
 
@@ -134,6 +202,20 @@ class GridDelta:
     The new grid's first ``head`` layers along ``axis`` are the base's first ``head``, its last
     ``tail`` are the base's last ``tail`` (shifted when the length changed); only the layers
     between, ``head : shape[axis] - tail``, are new. The other two axes have the base's length.
+
+    Attributes
+    ----------
+    axis : int
+        0, 1 or 2 (x, y, z).
+    head, tail : int
+        Layers at the start and at the end along ``axis`` that the new grid shares with the
+        base.
+
+    Examples
+    --------
+    >>> from partscale.serve import GridDelta
+    >>> GridDelta(0, 8, 7).header()
+    '0,8,7'
     """
 
     axis: int
@@ -169,6 +251,33 @@ def grid_delta(base: CSDF, new: CSDF) -> GridDelta | None:
     An edit along one axis keeps what lies outside its zone and shifts it: those layers are
     found by comparing the arrays exactly (distances bit for bit, colours, parts), so whatever
     the edit re-evaluated is sent again. None when the voxel sizes or two axes differ.
+
+    Parameters
+    ----------
+    base : CSDF
+        The object the page holds.
+    new : CSDF
+        The object to send.
+
+    Returns
+    -------
+    GridDelta or None
+        The axis along which the two differ (0 when their shapes are the same) and the layers
+        at its start and end that ``new`` shares with ``base``; None when they cannot be
+        compared layer by layer.
+
+    Examples
+    --------
+    A box stretched along x keeps its ends:
+
+    >>> from partscale import edit, shapes
+    >>> from partscale.serve import grid_delta
+    >>> box = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
+    >>> longer = edit.apply_recipe(box, edit.Recipe((edit.Edit("x", "30%", "70%", "90%"),)))
+    >>> box.shape, longer.shape
+    ((17, 12, 12), (19, 12, 12))
+    >>> grid_delta(box, longer)
+    GridDelta(axis=0, head=8, tail=7)
     """
     if base.voxel_size != new.voxel_size:
         return None
@@ -193,10 +302,34 @@ def grid_delta(base: CSDF, new: CSDF) -> GridDelta | None:
 
 
 def encode_parts(c: CSDF, axis: int = 0, start: int = 0, stop: int | None = None) -> memoryview:
-    """``(X, Y, Z)`` int16 little-endian part indices (read-only bytes), C order (z fastest),
-    -1 where none.
+    """``(X, Y, Z)`` int16 little-endian part indices (read-only bytes), C order, -1 where none.
 
-    With ``axis``, ``start``, ``stop``: only those layers (as :func:`encode_slab`).
+    C order is z fastest. With ``axis``, ``start``, ``stop``: only those layers (as
+    :func:`encode_slab`).
+
+    Parameters
+    ----------
+    c : CSDF
+        The object.
+    axis : int
+        0, 1 or 2: the axis ``start`` and ``stop`` count along.
+    start, stop : int
+        The layers ``start:stop`` (default: all of them).
+
+    Returns
+    -------
+    memoryview
+        Read-only bytes, 2 a voxel.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import shapes
+    >>> from partscale.serve import encode_parts
+    >>> box = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
+    >>> parts = np.frombuffer(encode_parts(box), "<i2")
+    >>> parts.size == box.sdf.size, np.unique(parts).tolist()
+    (True, [-1])
     """
     box = _layers(axis, start, c.shape[axis] if stop is None else stop)
     return _frozen(np.array(c.parts[box], dtype="<i2", order="C")).cast("B")
@@ -216,6 +349,15 @@ class Encoding:
         Read-only bytes: the whole encoding, or with ``delta`` only its layers ``head : shape[axis] - tail``.
     delta : GridDelta or None
         How the rest follows from the base the page named; None for the whole object.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.serve import EditSession
+    >>> box = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
+    >>> sent = EditSession("box.csdf.npz", box).encoded("grid")
+    >>> sent.revision, sent.delta, len(sent.data)
+    (0, None, 12240)
     """
 
     csdf: CSDF
@@ -260,6 +402,17 @@ class PageLimits:
         Largest grid along any axis (the page's GPU ``MAX_3D_TEXTURE_SIZE``).
     max_voxels : int or None
         Most voxels in all.
+
+    Examples
+    --------
+    >>> from partscale.serve import PageLimits
+    >>> limits = PageLimits.parse({"max_voxels_per_axis": 16})
+    >>> limits
+    PageLimits(max_voxels_per_axis=16, max_voxels=None)
+    >>> limits.check((20, 8, 8), "apply")
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: apply: expected at most 16 voxels per axis (what this page's GPU can show), got 20 × 8 × 8
     """
 
     max_voxels_per_axis: int | None = None
@@ -267,7 +420,23 @@ class PageLimits:
 
     @classmethod
     def parse(cls, obj: Any) -> PageLimits:
-        """From ``{"max_voxels_per_axis": N, "max_voxels": M}`` (either may be left out)."""
+        """From ``{"max_voxels_per_axis": N, "max_voxels": M}`` (either may be left out).
+
+        Parameters
+        ----------
+        obj : dict
+            The page's JSON ``limits``.
+
+        Returns
+        -------
+        PageLimits
+            The limits given; None for those left out.
+
+        Raises
+        ------
+        InputError
+            Not such an object, another key, or a value that is not an integer >= 2.
+        """
         names = ("max_voxels_per_axis", "max_voxels")
         if not isinstance(obj, dict) or set(obj) - set(names):
             raise InputError(f"limits: expected an object with keys {names}, got {_short(obj)}")
@@ -277,7 +446,15 @@ class PageLimits:
         return cls(**obj)
 
     def check(self, shape: tuple[int, ...], what: str) -> None:
-        """:class:`InputError` unless a grid of ``shape`` fits."""
+        """Raise :class:`InputError` unless a grid of ``shape`` fits.
+
+        Parameters
+        ----------
+        shape : tuple of int
+            The grid's (X, Y, Z).
+        what : str
+            The request, for the message.
+        """
         got = " × ".join(map(str, shape))
         if self.max_voxels_per_axis is not None and max(shape) > self.max_voxels_per_axis:
             raise InputError(
@@ -301,6 +478,31 @@ class EditSession:
 
     All mutating methods take the session lock, so concurrent requests apply one at a time and
     never interleave an apply with an undo.
+
+    Parameters
+    ----------
+    path : Path
+        The file edited: what Save writes beside (:func:`edited_path`) or over.
+    csdf : CSDF
+        The object as it is now (:meth:`open` loads it from ``path``).
+
+    Examples
+    --------
+    The shipped table at 32 voxels, stretched along x, undone and saved:
+
+    >>> from partscale import data, edit, ingest, save
+    >>> from partscale.serve import EditSession
+    >>> path = save(ingest.load(data.table(), res=32), "table.csdf.npz")
+    >>> session = EditSession.open("table.csdf.npz")
+    >>> session.state()["shape"], session.state()["revision"]
+    ([43, 24, 29], 0)
+    >>> after = session.apply(edit.Recipe((edit.Edit("x", "30%", "70%", "90%"),)))
+    >>> after["shape"], after["revision"], after["can_undo"]
+    ([49, 24, 29], 1, True)
+    >>> session.undo()["shape"]
+    [43, 24, 29]
+    >>> session.save().name
+    'table.edited.csdf.npz'
     """
 
     def __init__(self, path: Path, csdf: CSDF):
@@ -318,6 +520,7 @@ class EditSession:
 
     @classmethod
     def open(cls, path: str | Path) -> EditSession:
+        """A session on the ``.csdf.npz`` at ``path`` (loaded and validated now)."""
         path = Path(path)
         return cls(path, load(path))
 
@@ -387,9 +590,11 @@ class EditSession:
         return value
 
     def grid_bytes(self) -> bytes:
+        """The current object's whole :func:`encode_grid`, as bytes."""
         return bytes(self.encoded("grid").data)
 
     def parts_bytes(self) -> bytes:
+        """The current object's whole :func:`encode_parts`, as bytes."""
         return bytes(self.encoded("parts").data)
 
     def _record(self) -> None:

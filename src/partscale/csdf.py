@@ -115,12 +115,8 @@ class History(_FrozenList):
 
     Compares, indexes and serialises like the list of dicts it holds; changing it (or an entry)
     raises ``TypeError``. :meth:`appended` makes a new history sharing every entry, so neither
-    copying a CSDF's meta nor recording an operation copies the entries already there.
-
-    Parameters
-    ----------
-    entries : iterable of dict
-        The operations (use :meth:`of`, which checks them).
+    copying a CSDF's meta nor recording an operation copies the entries already there. Made
+    from an iterable of dicts, the operations, by :meth:`of` (which checks them).
 
     Examples
     --------

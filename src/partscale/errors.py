@@ -10,10 +10,7 @@ from __future__ import annotations
 class PartscaleError(Exception):
     """Base class of every error partscale raises on purpose.
 
-    Parameters
-    ----------
-    *args : object
-        As :class:`Exception` takes them: the message first.
+    Made as :class:`Exception` is, the message first.
 
     Examples
     --------
@@ -83,12 +80,7 @@ class PartscaleWarning(UserWarning):
     """A note for the user about something partscale did on its own.
 
     Raised through :func:`warnings.warn` (e.g. a damaged cache entry discarded); the CLI prints
-    it as one line, ``note: ...``.
-
-    Parameters
-    ----------
-    *args : object
-        As :class:`UserWarning` takes them: the message first.
+    it as one line, ``note: ...``; made as :class:`UserWarning` is, the message first.
 
     Examples
     --------

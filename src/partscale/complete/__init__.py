@@ -2,8 +2,11 @@
 
 Public API: :func:`complete` (frames -> CSDF), :func:`complete_file` (files -> CSDF),
 :func:`provenance` and :func:`completion_colors` (what ``render --completion`` shows), the readers
-:func:`read_frame`, :func:`read_points`, :func:`read_views`, :func:`frame_from_points`,
-:class:`Frame`, the virtual scanner :func:`virtual_scan` and the scores :func:`chamfer_fscore`.
+:func:`read_frame`, :func:`read_intrinsics`, :func:`read_points`, :func:`read_views`,
+:func:`frame_from_points` and :class:`Frame`. The virtual scanner
+(:func:`partscale.complete.virtual.virtual_scan`, which the examples use to make a scan of the
+shipped table) and the scores (:func:`partscale.complete.metrics.chamfer_fscore`) are in their
+modules.
 
 Modules: ``scan`` (frames and readers), ``floor`` (RANSAC floor, clusters), ``carve`` (free
 space), ``symmetry`` (mirror planes, rotations), ``fuse`` (the solid, distances, colours),

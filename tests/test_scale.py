@@ -624,3 +624,15 @@ def test_a_destination_off_the_grid_by_rounding_alone_is_not_reported_as_snapped
     snapped = apply_edit(box, Edit("x", 0.4, 0.6, whole + H / 3))
     said = describe_changes(snapped.meta["history"][-1:], snapped)
     assert len(said) == 1 and said[0].startswith("destination"), said
+
+
+def test_a_zone_exactly_two_voxels_thick_is_accepted_despite_rounding():
+    # at h = 0.1, 0.6 - 0.4 is 0.19999999999999996 < 2 * h: the two-voxel rule takes a rounding
+    # slack (as the page's zoneProblem does), so the zone is accepted and the box grows by DEST-END
+    b = shapes.box((0.0, 0.0, 0.0), (1.0, 0.5, 0.5), voxel_size=0.1)
+    assert 0.6 - 0.4 < 2 * 0.1
+    out = scale(b, axis="x", zone=(0.4, 0.6), to=0.8)
+    ext = out.surface_bounds()[:, 0]
+    assert abs((ext[1] - ext[0]) - 1.2) <= 0.05  # half a voxel
+    with pytest.raises(InputError, match="two voxels thick"):
+        scale(b, axis="x", zone=(0.4, 0.55), to=0.8)

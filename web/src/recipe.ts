@@ -96,7 +96,7 @@ export function zoneProblem(z: Zone, h: number): ZoneProblem | null {
   if (s < z.lo - h / 2 || e > z.hi + h / 2) {
     return { rule: 'inside', message: 'the zone must lie within the object' };
   }
-  if (e - s < 2 * h) return { rule: 'thickness', message: 'the zone must be at least two voxels thick' };
+  if (e - s < 2 * h - 1e-6 * h) return { rule: 'thickness', message: 'the zone must be at least two voxels thick' };
   const snapped = snapDest(z, h);
   if (!removed && snapped - s < h) return { rule: 'snapped-dest', message: 'destination must be a voxel beyond start' };
   if (z.mode === 'global' && !(z.hi - z.lo + snapped - e > 0)) {

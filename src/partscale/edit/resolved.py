@@ -215,7 +215,7 @@ def resolve_edit(csdf: CSDF, edit: Edit, *, given: Edit | None = None) -> Resolv
             f"zone: expected inside the solid's extent [{_fmt(lo)}, {_fmt(hi)}] along {name}, "
             f"got [{shown('start', s)}, {shown('end', e)}]"
         )
-    if e - s < 2 * h:
+    if e - s < 2 * h - 1e-6 * h:  # rounding slack: 0.6 - 0.4 at h = 0.1 is two voxels
         raise InputError(
             f"zone: expected at least two voxels thick ({_fmt(2 * h)}), got {_fmt(e - s)}"
         )

@@ -436,7 +436,7 @@ def _ground(csdf, zone, unit, shift, off, placed, far, after) -> None:
     floor_y = screw_ground(csdf, zone)
     if rise == 0 or floor_y is None:
         return
-    floor = int(round((floor_y - csdf.origin[up]) / csdf.voxel_size))
+    floor = round(float(floor_y - csdf.origin[up]) / csdf.voxel_size)
     h = np.float32(csdf.voxel_size)
     if rise < 0:  # lowered: what went below the floor is cut off there
         rows = int(off[up] + floor)

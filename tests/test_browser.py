@@ -948,6 +948,7 @@ def test_editor_previews_applies_and_undoes_a_radial_zone_and_a_step(tmp_path):
             shaped={
                 "button": "#warp-radial",
                 "to": to,
+                "fitSize": ["125%", "=", "125%"],
                 "warpCases": [{k: c[k] for k in ("edit", "points", "h")} for c in cases],
             },
         )
@@ -989,6 +990,11 @@ def test_editor_previews_applies_and_undoes_a_radial_zone_and_a_step(tmp_path):
         assert sh["undone"]["solid_bounds"] == r["state0"]["solid_bounds"]
         assert sh["warpAfterUndo"] == sh["preview"]
         assert sh["undoneVsPreview"] <= 0.01 * total
+        # a fit 125 % in plan is one radial zone: previewed as the shaped zone, not refused
+        recipe, why = zones_mod.fit(original, ["125%", "=", "125%"])
+        assert sh["fit"]["why"] == why and sh["fit"]["warp"]["kind"] == "radial"
+        assert Recipe.parse(sh["fit"]["recipe"]) == recipe
+        assert sh["fit"]["revision"] == sh["undone"]["revision"]
 
     # -- a straight flight: one more step
     path = tmp_path / "stair.csdf.npz"

@@ -944,7 +944,7 @@ def test_suggest_lists_the_warp_zones_and_apply_makes_them(tmp_path):
         assert r.status_code == 200, r.text
         want = apply_recipe(c, Recipe.parse({"version": 1, "edits": [step["edit"]]}))
         assert np.array_equal(session.current.sdf, want.sdf)
-        lo, hi = np.array(r.json()["solid_bounds"])
+        _, hi = np.array(r.json()["solid_bounds"])
         assert abs(hi[1] - (0.75 + step["rise"])) <= 0.5 * H  # one more rise
         assert post(client, "/api/undo").status_code == 200
         assert session.current is original

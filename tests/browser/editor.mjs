@@ -12,7 +12,7 @@
 //         refusal: {size} (only load, a fit refused, then allowed to deform: previewed),
 //         shaped: {button, to, warpCases} (only load; the warp GLSL on warpCases [{edit, points,
 //         h}]; a click on the shaped-zone button (#warp-radial, #warp-step-0) draws it, `to`
-//         (radial) sets its target; previewed, applied, undone) }
+//         (radial) sets its target; previewed, applied, undone; fitSize: then a fit previewed) }
 import { createRequire } from 'node:module';
 import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
@@ -150,6 +150,20 @@ try {
     sh.undone = await hooks(() => window.__partscale.state());
     sh.warpAfterUndo = await hooks(() => window.__partscale.warp());
     sh.undoneVsPreview = diffPixels(preview, await shot('shaped-undone.png')).count;
+    if (args.shaped.fitSize) {
+      // a fit whose recipe is one shaped zone: previewed as it
+      for (const [i, axis] of ['x', 'y', 'z'].entries()) await page.fill(`#size-${axis}`, args.shaped.fitSize[i]);
+      await page.click('#size-preview');
+      await page.waitForFunction(() => window.__partscale.fitWhy().length > 0, null, { timeout: 60000 });
+      await idle();
+      sh.fit = {
+        warp: await hooks(() => window.__partscale.warp()),
+        recipe: await hooks(() => window.__partscale.recipe()),
+        why: await hooks(() => window.__partscale.fitWhy()),
+        status: await text('#status'),
+        revision: (await hooks(() => window.__partscale.state())).revision,
+      };
+    }
     result.shaped = sh;
   } else if (args.count) {
     // one element more along an axis: previewed (nothing applied), applied, undone; one fewer

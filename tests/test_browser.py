@@ -1033,3 +1033,70 @@ def test_editor_previews_applies_and_undoes_a_radial_zone_and_a_step(tmp_path):
         assert sh["undone"]["solid_bounds"] == r["state0"]["solid_bounds"]
         assert sh["warpAfterUndo"] == sh["preview"]
         assert sh["undoneVsPreview"] <= 0.01 * total
+
+
+def slab30(h: float) -> partscale.CSDF:
+    """A slab 1.0 long, 0.1 thick and 0.4 deep, turned 30 degrees about z (its length along
+    (cos 30, sin 30, 0))."""
+    t = np.radians(30.0)
+    rot = np.array([[np.cos(t), np.sin(t), 0], [-np.sin(t), np.cos(t), 0], [0, 0, 1]])
+
+    def sdf(p):
+        return shapes.box_sdf(p @ rot.T, (-0.5, -0.05, -0.2), (0.5, 0.05, 0.2))
+
+    return shapes.grid(sdf, np.array([[-0.5, -0.3, -0.2], [0.5, 0.3, 0.2]]), voxel_size=h)
+
+
+@pytest.mark.browser
+def test_editor_previews_an_oblique_zone_and_a_spirals_steps_as_apply_makes_them(tmp_path):
+    """The other two shaped zones, chosen by kind: an oblique slab typed on a slab turned 30
+    degrees (stretched along its own length) and one more step of a spiral stair (the server's
+    helix): each previewed live, the object's pixels as Apply then makes them (within 3 % of the
+    canvas and a quarter of what Apply changed), and undone."""
+    from test_helix import spiral_sdf
+
+    node, chromium = find_tools()
+    total = CANVAS[0] * CANVAS[1]
+    n = [float(np.cos(np.radians(30.0))), 0.5, 0.0]
+    spiral_box = np.array([[-0.6, 0, -0.6], [0.6, 14 * 0.18 + 0.95, 0.6]])
+    objects = {
+        "slab": (
+            slab30(0.02),
+            {"kind": "oblique", "fields": {"#warp-normal": " ".join(map(str, n))}},
+            {"#warp-start": -0.2, "#warp-end": 0.2, "#warp-to": 0.45},
+        ),
+        "spiral": (
+            shapes.grid(spiral_sdf, spiral_box, voxel_size=0.02, source="spiral stair"),
+            {"kind": "helix"},
+            {"#warp-copies": 1},
+        ),
+    }
+    for name, (c, how, fields) in objects.items():
+        path = tmp_path / f"{name}.csdf.npz"
+        partscale.save(c, path)
+        (tmp_path / name).mkdir()
+        with Server(path) as server:
+            session = server.app.state.session
+            original = session.current
+            shaped = {**how, "fields": {**how.get("fields", {}), **fields}}
+            r = run_page(node, chromium, server.url, tmp_path / name, shaped=shaped)
+            assert r["errors"] == [], r["errors"]
+            sh = r["shaped"]
+            assert sh["preview"]["kind"] == how["kind"], sh["preview"]
+            # previewed live (a spiral's one more step is a small part of the picture)
+            assert sh["revisionPreview"] == 0 and sh["previewDiff"] > 0.002 * total, name
+            (edit,) = sh["recipe"]["edits"]
+            op = sh["applied"]["history"][-1]["op"]
+            assert op == how["kind"], op
+            (made,) = session.redo_stack
+            want = apply_recipe(original, Recipe.parse({"version": 1, "edits": [edit]}))
+            assert np.array_equal(made.sdf, want.sdf)
+            # the preview showed what Apply made: far nearer to it than the original is
+            got = (sh["appliedVsPreview"], sh["appliedVsInitial"])
+            assert got[0] <= 0.03 * total and got[0] <= 0.25 * got[1], (name, got)
+            assert session.current is original and sh["warpAfterUndo"] == sh["preview"]
+            if name == "slab":  # stretched along its own length by 0.25
+                assert ObliqueZone.parse(edit) == ObliqueZone((n[0], n[1], n[2]), -0.2, 0.2, 0.45)
+                lo, hi = made.surface_bounds()
+                length = (hi[0] - lo[0]) / np.cos(np.radians(30.0))  # roughly, the x extent
+                assert length > 1.0 + 0.1

@@ -10,9 +10,10 @@
 //         count: {axis, other} (only load, then +1 element along axis: preview, apply, undo;
 //         then -1 previewed; other: an axis with no repeat, its buttons read),
 //         refusal: {size} (only load, a fit refused, then allowed to deform: previewed),
-//         shaped: {button, to, warpCases} (only load; the warp GLSL on warpCases [{edit, points,
-//         h}]; a click on the shaped-zone button (#warp-radial, #warp-step-0) draws it, `to`
-//         (radial) sets its target; previewed, applied, undone; fitSize: then a fit previewed) }
+//         shaped: {button | kind, fields, to, warpCases} (only load; the warp GLSL on warpCases
+//         [{edit, points, h}]; a click on the shaped-zone button (#warp-radial, #warp-step-0),
+//         or the kind chosen, draws it; fields {selector: value} are typed, then `to` (radial)
+//         sets its target; previewed, applied, undone; fitSize: then a fit previewed) }
 import { createRequire } from 'node:module';
 import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
@@ -94,7 +95,7 @@ try {
 
   if (args.shaped) {
     // a shaped zone (radial, steps): drawn, previewed (nothing applied), applied, undone
-    const { button, to, warpCases } = args.shaped;
+    const { button, kind, fields, to, warpCases } = args.shaped;
     const sh = {};
     const hooks = (fn, arg) => page.evaluate(fn, arg);
     const bare = async (name) => {
@@ -115,9 +116,11 @@ try {
     }
     const initial = await shot('shaped-initial.png');
     const initialBare = await bare('shaped-initial-bare.png');
-    await page.click(button);
+    if (button) await page.click(button);
+    else await page.selectOption('#warp-kind', kind);
     await idle();
     sh.drawn = await hooks(() => window.__partscale.warp());
+    for (const [sel, v] of Object.entries(fields ?? {})) await page.fill(sel, String(v));
     const drawn = await shot('shaped-drawn.png');
     sh.drawnDiff = diffPixels(initial, drawn).count;
     sh.drawnBareDiff = diffPixels(initialBare, await bare('shaped-drawn-bare.png')).count;

@@ -752,6 +752,28 @@ def _helix_bounds(
     return np.minimum(a, mlo + h / 2), np.maximum(b, mhi - h / 2)
 
 
+def _margin_bound(
+    origin: np.ndarray, shape: tuple[int, ...], h: float, csdf: CSDF, above: float
+) -> np.ndarray:
+    """(X, Y, Z) float32 on the grown grid: a distance no larger than the true one, where the
+    input's grid does not reach (the input's own voxels replace it): the distance to the input's
+    grid box (what stays in place lies inside it), and below the level ``above`` (from where a
+    helix moves content) no more than the height to it. A far constant there would let a
+    sphere tracer step through the object.
+    """
+    lo = csdf.origin
+    hi = csdf.origin + (np.asarray(csdf.shape) - 1) * h
+    d2 = np.zeros(shape, dtype=np.float32)
+    for a in range(3):
+        x = origin[a] + np.arange(shape[a]) * h
+        gap = np.maximum(np.maximum(lo[a] - x, x - hi[a]), 0.0).astype(np.float32)
+        sh = [1, 1, 1]
+        sh[a] = -1
+        d2 = d2 + gap.reshape(sh) ** 2
+    y = (origin[1] + np.arange(shape[1]) * h).reshape(1, -1, 1)
+    return np.minimum(np.sqrt(d2), np.maximum(above - y, 0.0)).astype(np.float32)
+
+
 def check_helix(zone: HelixZone) -> None:
     """Refuse (:class:`InputError`, one line) a helix zone that cannot apply."""
     vals = (*zone.center, zone.angle, zone.rise, zone.cut)
@@ -805,14 +827,14 @@ def apply_helix(csdf: CSDF, zone: HelixZone, *, record: dict[str, Any] | None = 
     far = np.float32(max(float(csdf.sdf.max()), h))
     off = np.rint((csdf.origin - origin) / h).astype(np.int64)
     sl = tuple(slice(int(off[k]), int(off[k]) + csdf.shape[k]) for k in range(3))
-    sdf = np.full(shape, far, dtype=np.float32)
+    # the side of the cut each output level lies on, blended near it
+    y = origin[1] + np.arange(shape[1]) * h
+    w = np.clip((y - zone.cut) / h / (2 * CUT_BLEND) + 0.5, 0.0, 1.0).astype(np.float32)
+    sdf = _margin_bound(origin, shape, h, csdf, y[int(np.argmax(w > 0))] if w.any() else far)
     rgb = np.zeros((*shape, 3), dtype=np.uint8)
     parts = np.full(shape, -1, dtype=csdf.parts.dtype)
     sdf[sl], rgb[sl], parts[sl] = csdf.sdf, csdf.rgb, csdf.parts
     moved = np.zeros(shape, dtype=bool)
-    # the side of the cut each output level lies on, blended near it
-    y = origin[1] + np.arange(shape[1]) * h
-    w = np.clip((y - zone.cut) / h / (2 * CUT_BLEND) + 0.5, 0.0, 1.0).astype(np.float32)
     if w.any():
         j0 = int(np.argmax(w > 0))
         sub_origin = origin.copy()

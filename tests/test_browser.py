@@ -1,5 +1,7 @@
 """End to end in headless Chromium: the page draws the object, previews a drag, applies, undoes,
-exports; the shader's remap (GLSL, on the GPU) and its TypeScript mirror match the Python maps;
+exports; it draws, previews, applies and undoes shaped zones (radial, oblique, a flight's and a
+spiral's steps); the shader's remap and warp maps (GLSL, on the GPU) and their TypeScript mirror
+match the Python maps (edit.source_coordinate, edit.warp_source);
 the page's zone rules, tile counts and part palette match Python's (the page's TypeScript run in
 node by tests/browser/page_node.mjs, no browser needed).
 

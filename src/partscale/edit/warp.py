@@ -515,14 +515,27 @@ def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = 
     off = np.rint((csdf.origin - origin) / h).astype(np.int64)
 
     def placed(arr: np.ndarray, at: np.ndarray, fill) -> np.ndarray:
-        out = np.full((*shape, *arr.shape[3:]), fill, dtype=arr.dtype)
+        # fill: a value, or (sdf) the whole grid's distance bound beyond the placed copy
+        if isinstance(fill, np.ndarray) and fill.shape == tuple(shape):
+            out = fill
+        else:
+            out = np.full((*shape, *arr.shape[3:]), fill, dtype=arr.dtype)
         sl = tuple(slice(int(at[k]), int(at[k]) + arr.shape[k]) for k in range(3))
         out[sl] = arr
         return out
 
-    before = [placed(x, off, f) for x, f in ((csdf.sdf, far), (csdf.rgb, 0), (csdf.parts, -1))]
+    lo, hi = csdf.origin, csdf.origin + (np.asarray(csdf.shape) - 1) * h
+
+    def bound(at: np.ndarray) -> np.ndarray:  # beyond a copy placed at ``at`` (output indices)
+        move = (at - off) * h
+        return _margin_bound(origin, shape, h, lo + move, hi + move)
+
+    before = [
+        placed(x, off, f) for x, f in ((csdf.sdf, bound(off)), (csdf.rgb, 0), (csdf.parts, -1))
+    ]
     after = [
-        placed(x, off + shift, f) for x, f in ((csdf.sdf, far), (csdf.rgb, 0), (csdf.parts, -1))
+        placed(x, off + shift, f)
+        for x, f in ((csdf.sdf, bound(off + shift)), (csdf.rgb, 0), (csdf.parts, -1))
     ]
     _ground(csdf, zone, unit, shift, off, placed, far, after)
     # the side of the cut each output layer along the axis lies on, blended near it
@@ -753,16 +766,19 @@ def _helix_bounds(
 
 
 def _margin_bound(
-    origin: np.ndarray, shape: tuple[int, ...], h: float, csdf: CSDF, above: float
+    origin: np.ndarray,
+    shape: tuple[int, ...],
+    h: float,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    above: float = math.inf,
 ) -> np.ndarray:
-    """(X, Y, Z) float32 on the grown grid: a distance no larger than the true one, where the
-    input's grid does not reach (the input's own voxels replace it): the distance to the input's
-    grid box (what stays in place lies inside it), and below the level ``above`` (from where a
+    """(X, Y, Z) float32 on the grown grid: a distance no larger than the true one where a
+    placed copy of the input's grid (its voxel centres ``lo``..``hi``) does not reach (its own
+    voxels replace it): the distance to that box, and below the level ``above`` (from where a
     helix moves content) no more than the height to it. A far constant there would let a
     sphere tracer step through the object.
     """
-    lo = csdf.origin
-    hi = csdf.origin + (np.asarray(csdf.shape) - 1) * h
     d2 = np.zeros(shape, dtype=np.float32)
     for a in range(3):
         x = origin[a] + np.arange(shape[a]) * h
@@ -824,13 +840,14 @@ def apply_helix(csdf: CSDF, zone: HelixZone, *, record: dict[str, Any] | None = 
     h = csdf.voxel_size
     origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
     check_memory(shape, BYTES_PER_VOXEL, what=f"{zone.copies:+d} steps")
-    far = np.float32(max(float(csdf.sdf.max()), h))
     off = np.rint((csdf.origin - origin) / h).astype(np.int64)
     sl = tuple(slice(int(off[k]), int(off[k]) + csdf.shape[k]) for k in range(3))
     # the side of the cut each output level lies on, blended near it
     y = origin[1] + np.arange(shape[1]) * h
     w = np.clip((y - zone.cut) / h / (2 * CUT_BLEND) + 0.5, 0.0, 1.0).astype(np.float32)
-    sdf = _margin_bound(origin, shape, h, csdf, y[int(np.argmax(w > 0))] if w.any() else far)
+    top = csdf.origin + (np.asarray(csdf.shape) - 1) * h
+    above = float(y[int(np.argmax(w > 0))]) if w.any() else math.inf
+    sdf = _margin_bound(origin, shape, h, csdf.origin, top, above)
     rgb = np.zeros((*shape, 3), dtype=np.uint8)
     parts = np.full(shape, -1, dtype=csdf.parts.dtype)
     sdf[sl], rgb[sl], parts[sl] = csdf.sdf, csdf.rgb, csdf.parts

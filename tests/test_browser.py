@@ -1,5 +1,7 @@
 """End to end in headless Chromium: the page draws the object, previews a drag, applies, undoes,
-exports; the shader's remap (GLSL, on the GPU) and its TypeScript mirror match the Python maps;
+exports; it draws, previews, applies and undoes shaped zones (radial, oblique, a flight's and a
+spiral's steps); the shader's remap and warp maps (GLSL, on the GPU) and their TypeScript mirror
+match the Python maps (edit.source_coordinate, edit.warp_source);
 the page's zone rules, tile counts and part palette match Python's (the page's TypeScript run in
 node by tests/browser/page_node.mjs, no browser needed).
 
@@ -30,12 +32,17 @@ from partscale import zones as zones_mod
 from partscale.color import palette
 from partscale.edit import (
     Edit,
+    HelixZone,
+    ObliqueZone,
+    RadialZone,
     Recipe,
+    ScrewZone,
     apply_edit,
     apply_recipe,
     forward_coordinate,
     source_coordinate,
     tile_count,
+    warp_source,
 )
 from partscale.errors import InputError
 
@@ -834,3 +841,264 @@ def round_table(h: float) -> partscale.CSDF:
 
     bounds = np.array([[-0.5, 0, -0.5], [0.5, 0.74, 0.5]])
     return shapes.grid(sdf, bounds, voxel_size=h, source="round table")
+
+
+# -- shaped zones: radial, oblique, steps (edit.warp) -------------------------------------------
+WARP_H = 0.05
+
+
+def warp_cases() -> list[dict]:
+    """Warp zones of every kind (their recipe edits) and output points, with Python's map
+    (edit.warp_source: source point and weight) at them; points within 1e-3 of a span's end,
+    where the radial map jumps, are left out."""
+    rng = np.random.default_rng(39)
+    zones = [
+        RadialZone("y", (0.1, -0.05), 0.1, 0.4, 0.55),
+        RadialZone("y", (0.0, 0.2), 0.05, 0.5, 0.3, 6, 15.0),  # a hexagon's gauge, shrunk
+        RadialZone("x", (0.3, 0.1), 0.0, 0.3, 0.45, 4, 0.0, (0.2, 0.6)),  # a square, a span
+        ObliqueZone((1.0, 2.0, 0.5), 0.2, 0.6, 0.9),  # not unit
+        ObliqueZone((0.0, -1.0, 1.0), -0.3, 0.4, 0.1),  # shrunk
+        ScrewZone("x", (0.2, 0.15, 0.0), 0.5, 2),
+        ScrewZone("z", (0.0, 0.12, -0.18), 0.3, -1),
+        HelixZone((0.1, 0.2), 30.0, 0.15, 0.5, 1),
+        HelixZone((-0.2, 0.0), -22.5, 0.1, 0.7, -2),
+    ]
+    cases = []
+    for zone in zones:
+        pts = rng.uniform(-1.0, 1.6, size=(200, 3))
+        if isinstance(zone, RadialZone) and zone.span is not None:
+            ax = "xyz".index(zone.axis)
+            near = np.abs(pts[:, ax, None] - np.array(zone.span)[None, :]).min(axis=1) < 1e-3
+            pts = pts[~near]
+        src, w = warp_source(zone, pts, WARP_H)
+        cases.append(
+            {
+                "edit": zone.to_json(),
+                "points": pts.tolist(),
+                "h": WARP_H,
+                "want": np.column_stack([src, w]).tolist(),
+            }
+        )
+    return cases
+
+
+def test_typescript_warp_maps_match_warp_source(tmp_path):
+    """warp.ts warpSource (the page's mirror of its shader) is edit.warp_source, each kind."""
+    cases = warp_cases()
+    got = run_page_node(
+        tmp_path, {"warps": [{k: c[k] for k in ("edit", "points", "h")} for c in cases]}
+    )["warps"]
+    for case, pts in zip(cases, got, strict=True):
+        np.testing.assert_allclose(pts, case["want"], rtol=0, atol=1e-9, err_msg=str(case["edit"]))
+
+
+def stair(h: float, n: int = 6, going: float = 0.2, rise: float = 0.15) -> partscale.CSDF:
+    """A solid straight flight: n steps along x, each ``going`` deep and ``rise`` higher, 0.8
+    wide along z, standing on the floor (y = 0)."""
+    steps = [((going * i, 0, 0), (going * (i + 1), rise * (i + 1), 0.8)) for i in range(n)]
+    bounds = np.array([[0, 0, 0], [going * n, rise * n, 0.8]])
+    return shapes.grid(lambda p: shapes.boxes_sdf(p, steps), bounds, voxel_size=h, source="stair")
+
+
+def treads(c: partscale.CSDF) -> int:
+    """Treads counted off the grid: runs of equal top height along x at the middle of z."""
+    k = round((0.4 - c.origin[2]) / c.voxel_size)
+    solid = c.sdf[:, :, k] < 0
+    has = solid.any(axis=1)
+    top = np.where(has, solid.shape[1] - np.argmax(solid[:, ::-1], axis=1), -1)[has]
+    return int(1 + np.count_nonzero(np.abs(np.diff(top)) > 1))
+
+
+def solid_width(c: partscale.CSDF, y: float) -> float:
+    """The solid's extent along x at height y, through the middle of z (world units)."""
+    j = round((y - c.origin[1]) / c.voxel_size)
+    k = round((0.0 - c.origin[2]) / c.voxel_size)
+    xs = c.axis_coords(0)[c.sdf[:, j, k] < 0]
+    return float(xs.max() - xs.min() + c.voxel_size)
+
+
+@pytest.mark.browser
+def test_editor_previews_applies_and_undoes_a_radial_zone_and_a_step(tmp_path):
+    """A radial zone on a round table and a step on a straight flight, each found by the server
+    (GET /api/suggest), drawn (rings; the step's arrow), previewed live in the shader (the
+    object's own pixels change as Apply then makes them), applied on the server (the top's
+    radius grows, its column and foot do not; one more tread) and undone (the very object). The
+    shader's warp maps (GLSL, on the GPU) are edit.warp_source, each kind."""
+    node, chromium = find_tools()
+    total = CANVAS[0] * CANVAS[1]
+    h = 0.02
+
+    # -- a round table: the longest annulus of constant radial section grows by 0.125 (1.25 x)
+    path = tmp_path / "round.csdf.npz"
+    c0 = round_table(h)
+    partscale.save(c0, path)
+    found = zones_mod.warp_candidates(c0)
+    assert found.radial is not None and found.radial.sides == 0 and found.annuli
+    r0, r1 = found.annuli[0]
+    assert 0.25 <= r0 < r1 <= 0.5, found.annuli  # between the foot's rim and the top's
+    to = r1 + 0.125
+    cases = warp_cases()
+    with Server(path) as server:
+        session = server.app.state.session
+        original = session.current
+        (tmp_path / "round").mkdir()
+        r = run_page(
+            node,
+            chromium,
+            server.url,
+            tmp_path / "round",
+            shaped={
+                "button": "#warp-radial",
+                "to": to,
+                "fitSize": ["125%", "=", "125%"],
+                "warpCases": [{k: c[k] for k in ("edit", "points", "h")} for c in cases],
+            },
+        )
+        assert r["errors"] == [], r["errors"]
+        sh = r["shaped"]
+        # the shader's warp maps: float32 on the GPU, 1e-4 units; the TypeScript mirror 1e-9
+        for case, got in zip(cases, sh["remap"], strict=True):
+            want = np.array(case["want"])
+            assert np.abs(np.array(got["glsl"]) - want).max() <= 1e-4, case["edit"]
+            assert np.abs(np.array(got["ts"]) - want).max() <= 1e-9, case["edit"]
+        # the server's warp zones are the library's, one vocabulary with recipes
+        assert sh["warps"] == json.loads(json.dumps(found.to_json()))
+        # drawn: the rings over the object (the object itself unchanged), nothing applied
+        assert sh["drawn"]["kind"] == "radial" and [sh["drawn"]["r0"], sh["drawn"]["r1"]] == [
+            r0,
+            r1,
+        ]
+        assert sh["drawnDiff"] > 0.002 * total and sh["drawnBareDiff"] == 0
+        # previewed: the recipe is the radial zone; the object's pixels change; server untouched
+        (edit,) = sh["recipe"]["edits"]
+        assert RadialZone.parse(edit) == found.radial.zone(r0, r1, to)
+        assert sh["revisionPreview"] == 0
+        assert sh["previewDiff"] > 0.01 * total
+        sb = c0.surface_bounds()
+        assert sh["sizes"]["target"][0] == pytest.approx(sb[1, 0] - sb[0, 0] + 0.25, abs=1e-9)
+        # applied: the same library function as `scale --radial`; the page showed what it made
+        assert sh["applied"]["history"][-1]["op"] == "radial"
+        assert sh["warpAfterApply"] is None
+        assert sh["appliedVsPreview"] <= 0.03 * total, sh["appliedVsPreview"]
+        assert sh["appliedVsInitial"] > 0.01 * total
+        (made,) = session.redo_stack  # undone below: what Apply made is on the redo stack
+        want = apply_recipe(original, Recipe.parse({"version": 1, "edits": [edit]}))
+        assert np.array_equal(made.sdf, want.sdf)
+        assert abs(solid_width(made, 0.72) - 1.25) <= 0.5 * h + 0.5 * h  # the top, 1.25 x
+        for y in (0.02, 0.4):  # the foot and the column keep their size
+            assert abs(solid_width(made, y) - solid_width(original, y)) <= 0.5 * h, y
+        # undone: the very object, and the radial zone is back, previewed as before
+        assert session.current is original
+        assert sh["undone"]["solid_bounds"] == r["state0"]["solid_bounds"]
+        assert sh["warpAfterUndo"] == sh["preview"]
+        assert sh["undoneVsPreview"] <= 0.01 * total
+        # a fit 125 % in plan is one radial zone: previewed as the shaped zone, not refused
+        recipe, why = zones_mod.fit(original, ["125%", "=", "125%"])
+        assert sh["fit"]["why"] == why and sh["fit"]["warp"]["kind"] == "radial"
+        assert Recipe.parse(sh["fit"]["recipe"]) == recipe
+        assert sh["fit"]["revision"] == sh["undone"]["revision"]
+
+    # -- a straight flight: one more step
+    path = tmp_path / "stair.csdf.npz"
+    s0 = stair(h)
+    partscale.save(s0, path)
+    assert treads(s0) == 6
+    found = zones_mod.warp_candidates(s0)
+    (step,) = found.steps
+    assert (
+        step.axis == "x" and abs(step.going - 0.2) <= 0.5 * h and abs(step.rise - 0.15) <= 0.5 * h
+    )
+    with Server(path) as server:
+        session = server.app.state.session
+        original = session.current
+        (tmp_path / "stair").mkdir()
+        r = run_page(
+            node, chromium, server.url, tmp_path / "stair", shaped={"button": "#warp-step-0"}
+        )
+        assert r["errors"] == [], r["errors"]
+        sh = r["shaped"]
+        assert sh["drawn"]["kind"] == "screw" and sh["drawn"]["copies"] == 1
+        assert sh["drawn"]["ground"] == pytest.approx(found.grounds[0])
+        # the click draws the cut and the step's arrow and previews one more step at once
+        assert sh["drawnDiff"] > sh["drawnBareDiff"] > 0.01 * total
+        (edit,) = sh["recipe"]["edits"]
+        assert ScrewZone.parse(edit) == step.zone(1)
+        assert sh["revisionPreview"] == 0
+        assert sh["previewDiff"] > 0.01 * total
+        assert sh["applied"]["history"][-1]["op"] == "screw"
+        assert sh["appliedVsPreview"] <= 0.03 * total, sh["appliedVsPreview"]
+        (made,) = session.redo_stack
+        assert treads(made) == 7
+        rise = made.surface_bounds()[1, 1] - original.surface_bounds()[1, 1]
+        assert abs(rise - step.rise) <= 0.5 * h
+        assert session.current is original
+        assert sh["undone"]["solid_bounds"] == r["state0"]["solid_bounds"]
+        assert sh["warpAfterUndo"] == sh["preview"]
+        assert sh["undoneVsPreview"] <= 0.01 * total
+
+
+def slab30(h: float) -> partscale.CSDF:
+    """A slab 1.0 long, 0.1 thick and 0.4 deep, turned 30 degrees about z (its length along
+    (cos 30, sin 30, 0))."""
+    t = np.radians(30.0)
+    rot = np.array([[np.cos(t), np.sin(t), 0], [-np.sin(t), np.cos(t), 0], [0, 0, 1]])
+
+    def sdf(p):
+        return shapes.box_sdf(p @ rot.T, (-0.5, -0.05, -0.2), (0.5, 0.05, 0.2))
+
+    return shapes.grid(sdf, np.array([[-0.5, -0.3, -0.2], [0.5, 0.3, 0.2]]), voxel_size=h)
+
+
+@pytest.mark.browser
+def test_editor_previews_an_oblique_zone_and_a_spirals_steps_as_apply_makes_them(tmp_path):
+    """The other two shaped zones, chosen by kind: an oblique slab typed on a slab turned 30
+    degrees (stretched along its own length) and one more step of a spiral stair (the server's
+    helix): each previewed live, the object's pixels as Apply then makes them (within 3 % of the
+    canvas and a quarter of what Apply changed), and undone."""
+    from test_helix import spiral_sdf
+
+    node, chromium = find_tools()
+    total = CANVAS[0] * CANVAS[1]
+    n = [float(np.cos(np.radians(30.0))), 0.5, 0.0]
+    spiral_box = np.array([[-0.6, 0, -0.6], [0.6, 14 * 0.18 + 0.95, 0.6]])
+    objects = {
+        "slab": (
+            slab30(0.02),
+            {"kind": "oblique", "fields": {"#warp-normal": " ".join(map(str, n))}},
+            {"#warp-start": -0.2, "#warp-end": 0.2, "#warp-to": 0.45},
+        ),
+        "spiral": (
+            shapes.grid(spiral_sdf, spiral_box, voxel_size=0.02, source="spiral stair"),
+            {"kind": "helix"},
+            {"#warp-copies": 1},
+        ),
+    }
+    for name, (c, how, fields) in objects.items():
+        path = tmp_path / f"{name}.csdf.npz"
+        partscale.save(c, path)
+        (tmp_path / name).mkdir()
+        with Server(path) as server:
+            session = server.app.state.session
+            original = session.current
+            shaped = {**how, "fields": {**how.get("fields", {}), **fields}}
+            r = run_page(node, chromium, server.url, tmp_path / name, shaped=shaped)
+            assert r["errors"] == [], r["errors"]
+            sh = r["shaped"]
+            assert sh["preview"]["kind"] == how["kind"], sh["preview"]
+            # previewed live (a spiral's one more step is a small part of the picture)
+            assert sh["revisionPreview"] == 0 and sh["previewDiff"] > 0.002 * total, name
+            (edit,) = sh["recipe"]["edits"]
+            op = sh["applied"]["history"][-1]["op"]
+            assert op == how["kind"], op
+            (made,) = session.redo_stack
+            want = apply_recipe(original, Recipe.parse({"version": 1, "edits": [edit]}))
+            assert np.array_equal(made.sdf, want.sdf)
+            # the preview showed what Apply made: far nearer to it than the original is
+            got = (sh["appliedVsPreview"], sh["appliedVsInitial"])
+            assert got[0] <= 0.03 * total and got[0] <= 0.25 * got[1], (name, got)
+            assert session.current is original and sh["warpAfterUndo"] == sh["preview"]
+            if name == "slab":  # stretched along its own length by 0.25
+                assert ObliqueZone.parse(edit) == ObliqueZone((n[0], n[1], n[2]), -0.2, 0.2, 0.45)
+                lo, hi = made.surface_bounds()
+                length = (hi[0] - lo[0]) / np.cos(np.radians(30.0))  # roughly, the x extent
+                assert length > 1.0 + 0.1

@@ -915,6 +915,41 @@ def test_suggest_snap_and_fit_are_the_zones_functions_on_the_current_object(tmp_
         assert after != y
 
 
+def test_suggest_lists_the_warp_zones_and_apply_makes_them(tmp_path):
+    """/api/suggest (all axes) also answers the object's radial plan, flights and spirals as
+    zones.warp_candidates finds them, each with a recipe edit; /api/apply of that edit makes what
+    apply_recipe makes (one more step), /api/undo restores the very object; one axis answers
+    the candidates alone."""
+    from partscale import zones
+    from partscale.edit import Recipe, apply_recipe
+
+    steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.15 * (i + 1), 0.6)) for i in range(5)]
+    bounds = np.array([[0, 0, 0], [1.0, 0.75, 0.6]])
+    c = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), bounds, voxel_size=H)
+    path = tmp_path / "stair.csdf.npz"
+    partscale.save(c, path)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        body = client.get("/api/suggest").json()
+        found = zones.warp_candidates(c)
+        assert {k: body[k] for k in ("radial", "steps", "helix")} == json.loads(
+            json.dumps(found.to_json())
+        )
+        (step,) = body["steps"]
+        assert step["axis"] == "x" and abs(step["rise"] - 0.15) <= 0.5 * H
+        assert step["edit"] == found.steps[0].zone(1).to_json() and step["ground"] is not None
+        assert set(client.get("/api/suggest?axis=x").json()) == {"candidates"}
+        session = client.app.state.session
+        original = session.current
+        r = post(client, "/api/apply", {"version": 1, "edits": [step["edit"]]})
+        assert r.status_code == 200, r.text
+        want = apply_recipe(c, Recipe.parse({"version": 1, "edits": [step["edit"]]}))
+        assert np.array_equal(session.current.sdf, want.sdf)
+        _, hi = np.array(r.json()["solid_bounds"])
+        assert abs(hi[1] - (0.75 + step["rise"])) <= 0.5 * H  # one more rise
+        assert post(client, "/api/undo").status_code == 200
+        assert session.current is original
+
+
 def test_snap_uses_the_candidates_the_server_found_for_suggest(tmp_path, monkeypatch):
     """/api/snap snaps to the cached /api/suggest candidates: found once, not again."""
     import dataclasses

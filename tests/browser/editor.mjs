@@ -9,7 +9,11 @@
 //         another name, evil.example, resolved to this server: DNS rebinding),
 //         count: {axis, other} (only load, then +1 element along axis: preview, apply, undo;
 //         then -1 previewed; other: an axis with no repeat, its buttons read),
-//         refusal: {size} (only load, a fit refused, then allowed to deform: previewed) }
+//         refusal: {size} (only load, a fit refused, then allowed to deform: previewed),
+//         shaped: {button | kind, fields, to, warpCases} (only load; the warp GLSL on warpCases
+//         [{edit, points, h}]; a click on the shaped-zone button (#warp-radial, #warp-step-0),
+//         or the kind chosen, draws it; fields {selector: value} are typed, then `to` (radial)
+//         sets its target; previewed, applied, undone; fitSize: then a fit previewed) }
 import { createRequire } from 'node:module';
 import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
@@ -89,7 +93,82 @@ try {
   const revisionAbove = (r) =>
     page.waitForFunction((rr) => window.__partscale.state()?.revision > rr, r, { timeout: 60000 });
 
-  if (args.count) {
+  if (args.shaped) {
+    // a shaped zone (radial, steps): drawn, previewed (nothing applied), applied, undone
+    const { button, kind, fields, to, warpCases } = args.shaped;
+    const sh = {};
+    const hooks = (fn, arg) => page.evaluate(fn, arg);
+    const bare = async (name) => {
+      // the object alone, without the guides drawn over it (planes, rings, arrows, box)
+      await hooks(() => window.__partscale.setGuides(false));
+      await idle();
+      const png = await shot(name);
+      await hooks(() => window.__partscale.setGuides(true));
+      await idle();
+      return png;
+    };
+    sh.warps = await hooks(() => window.__partscale.warps());
+    if (warpCases) {
+      sh.remap = await hooks((cases) => cases.map((c) => ({
+        glsl: window.__partscale.evalWarp(c.edit, c.points, c.h),
+        ts: window.__partscale.evalWarpTS(c.edit, c.points, c.h),
+      })), warpCases);
+    }
+    const initial = await shot('shaped-initial.png');
+    const initialBare = await bare('shaped-initial-bare.png');
+    if (button) await page.click(button);
+    else await page.selectOption('#warp-kind', kind);
+    await idle();
+    sh.drawn = await hooks(() => window.__partscale.warp());
+    for (const [sel, v] of Object.entries(fields ?? {})) await page.fill(sel, String(v));
+    const drawn = await shot('shaped-drawn.png');
+    sh.drawnDiff = diffPixels(initial, drawn).count;
+    sh.drawnBareDiff = diffPixels(initialBare, await bare('shaped-drawn-bare.png')).count;
+    if (to !== undefined && to !== null) {
+      await page.fill('#warp-to', String(to));
+      await idle();
+    }
+    sh.preview = await hooks(() => window.__partscale.warp());
+    sh.recipe = await hooks(() => window.__partscale.recipe());
+    sh.sizes = await hooks(() => window.__partscale.sizes());
+    sh.info = await text('#warp-info');
+    sh.revisionPreview = (await hooks(() => window.__partscale.state())).revision;
+    const preview = await shot('shaped-preview.png');
+    const previewBare = await bare('shaped-preview-bare.png');
+    sh.previewDiff = diffPixels(initialBare, previewBare).count;
+    await page.screenshot({ path: join(args.out, 'shaped-page-preview.png') });
+    await page.click('#warp-apply');
+    await revisionAbove(sh.revisionPreview);
+    await idle();
+    sh.applied = await hooks(() => window.__partscale.state());
+    sh.status = await text('#status');
+    sh.warpAfterApply = await hooks(() => window.__partscale.warp());
+    const appliedBare = await bare('shaped-applied-bare.png');
+    sh.appliedVsPreview = diffPixels(previewBare, appliedBare).count;
+    sh.appliedVsInitial = diffPixels(initialBare, appliedBare).count;
+    await page.screenshot({ path: join(args.out, 'shaped-page-applied.png') });
+    await page.click('#undo');
+    await revisionAbove(sh.applied.revision);
+    await idle();
+    sh.undone = await hooks(() => window.__partscale.state());
+    sh.warpAfterUndo = await hooks(() => window.__partscale.warp());
+    sh.undoneVsPreview = diffPixels(preview, await shot('shaped-undone.png')).count;
+    if (args.shaped.fitSize) {
+      // a fit whose recipe is one shaped zone: previewed as it
+      for (const [i, axis] of ['x', 'y', 'z'].entries()) await page.fill(`#size-${axis}`, args.shaped.fitSize[i]);
+      await page.click('#size-preview');
+      await page.waitForFunction(() => window.__partscale.fitWhy().length > 0, null, { timeout: 60000 });
+      await idle();
+      sh.fit = {
+        warp: await hooks(() => window.__partscale.warp()),
+        recipe: await hooks(() => window.__partscale.recipe()),
+        why: await hooks(() => window.__partscale.fitWhy()),
+        status: await text('#status'),
+        revision: (await hooks(() => window.__partscale.state())).revision,
+      };
+    }
+    result.shaped = sh;
+  } else if (args.count) {
     // one element more along an axis: previewed (nothing applied), applied, undone; one fewer
     const { axis, other } = args.count;
     const c = {};

@@ -11,6 +11,8 @@
 //            the loaded object (remap.ts toSource through the valid zones)
 //   palette: color.ts paletteColour of 0..N-1
 //   lengths: ui.ts formatLength of [[value, units]], as the page shows sizes
+//   warps:   warp.ts warpSource on [{edit, points, h}] (a warp's recipe edit): per point the
+//            source point and its weight, [x, y, z, w]
 //   splice:  grid.ts spliceLayers on [{base, baseShape, shape, channels, delta, body}] (Uint16
 //            values), the spliced array
 import { createRequire } from 'node:module';
@@ -51,6 +53,16 @@ if (cases.palette) {
 if (cases.lengths) {
   const ui = await load('ui.ts');
   out.lengths = cases.lengths.map(([v, units]) => ui.formatLength(v, units));
+}
+if (cases.warps) {
+  const warp = await load('warp.ts');
+  out.warps = cases.warps.map(({ edit, points, h }) => {
+    const w = warp.warpFromEdit(edit);
+    return points.map((p) => {
+      const [src, weight] = warp.warpSource(w, p, h);
+      return [...src, weight];
+    });
+  });
 }
 if (cases.splice) {
   const grid = await load('grid.ts');

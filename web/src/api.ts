@@ -2,6 +2,7 @@
 // the page makes goes through here.
 import type { Delta, Encoded, Shape } from './grid';
 import type { Axis, Edit, Recipe } from './recipe';
+import type { WarpEdit, WarpRecipe } from './warp';
 
 export interface PartInfo {
   color?: number[] | string;
@@ -117,6 +118,33 @@ export async function suggest(axis?: Axis): Promise<Candidate[]> {
   return (await check(await fetch(url, { cache: 'no-store' }))).json().then((b) => b.candidates);
 }
 
+/** The zones that are no slab across an axis (partscale.zones.WarpCandidates.to_json): each with
+ *  its recipe edit (``edit``), as recipes hold it. */
+export interface WarpFound {
+  /** A round or regular-polygon plan about an axis, its annuli of constant radial section
+   *  (longest first) and the radial zone of the first, unchanged. */
+  radial: {
+    axis: Axis;
+    center: [number, number];
+    sides: number;
+    phase: number;
+    radius: number;
+    annuli: [number, number][];
+    edit?: WarpEdit;
+  } | null;
+  /** Flights: the step's shift, going, rise, share of the surface that repeats, count, the cut,
+   *  the floor it stands on beyond the cut (or null), and the edit adding one step. */
+  steps: { axis: Axis; step: [number, number, number]; going: number; rise: number; support: number; count: number; cut: number; ground: number | null; edit: WarpEdit }[];
+  /** Spiral stairs: turn (degrees) and rise per step about the vertical through center. */
+  helix: { center: [number, number]; angle: number; rise: number; support: number; count: number; cut: number; edit: WarpEdit }[];
+}
+
+/** All of the current object's suggestions: the zone candidates and the warp zones. */
+export async function suggestAll(): Promise<{ candidates: Candidate[]; warps: WarpFound }> {
+  const b = await (await check(await fetch('/api/suggest', { cache: 'no-store' }))).json();
+  return { candidates: b.candidates, warps: { radial: b.radial ?? null, steps: b.steps ?? [], helix: b.helix ?? [] } };
+}
+
 /** What POST /api/snap answers: the edit snapped for its mode (world units) and what moved. */
 export interface Snapped {
   edit: { axis: Axis; zone: [number, number]; to: number; mode: Edit['mode'] };
@@ -168,7 +196,7 @@ export async function elements(): Promise<AxisElements[]> {
 
 /** POST bodies and answers by route. */
 export interface PostBodies {
-  '/api/apply': Recipe & { limits: PageLimits };
+  '/api/apply': (Recipe | WarpRecipe) & { limits: PageLimits };
   '/api/undo': Record<string, never>;
   '/api/redo': Record<string, never>;
   /** revision: the one the page shows; the server refuses to save another. */
@@ -200,7 +228,7 @@ async function post<P extends keyof PostBodies>(path: P, body: PostBodies[P]): P
 }
 
 /** Bake the recipe into the object unless the result exceeds limits; the new state (with apply_ms). */
-export const apply = (recipe: Recipe, limits: PageLimits): Promise<ServerState> =>
+export const apply = (recipe: Recipe | WarpRecipe, limits: PageLimits): Promise<ServerState> =>
   post('/api/apply', { ...recipe, limits });
 export const undo = (): Promise<ServerState> => post('/api/undo', {});
 export const redo = (): Promise<ServerState> => post('/api/redo', {});

@@ -7,6 +7,7 @@ import type { Scene } from './scene';
 import { type Axis, zoneEdit } from './recipe';
 import { MAX_ZONES } from './remap';
 import { recipe, type Store, type ZoneInput } from './state';
+import { warpFromEdit } from './warp';
 
 export interface Commands {
   /** Fetch the object (state, grid, parts) and show it (see the 'loaded' action); its zone
@@ -69,13 +70,14 @@ export function createCommands(store: Store, scene: Scene): Commands {
 
   async function suggestFor(s: api.ServerState) {
     let found: api.Candidate[] = [];
+    let warps: api.WarpFound = { radial: null, steps: [], helix: [] };
     try {
-      found = await api.suggest();
+      ({ candidates: found, warps } = await api.suggestAll());
     } catch (e) {
       status(`suggestions failed: ${e instanceof Error ? e.message : String(e)}`, true);
     }
     // drop them if another object was loaded meanwhile
-    if (shown(s)) store.dispatch({ type: 'suggested', suggestions: found });
+    if (shown(s)) store.dispatch({ type: 'suggested', suggestions: found, warps });
   }
 
   async function elementsFor(s: api.ServerState) {
@@ -164,11 +166,17 @@ export function createCommands(store: Store, scene: Scene): Commands {
     scene.requestRender();
   };
 
-  /** Preview a recipe the server chose (fit, count edit) as the zones; the zones it previews. */
-  function previewRecipe(what: string, fitted: api.Fitted): ZoneInput[] {
+  /** Preview a recipe the server chose (fit, count edit) as the zones, or as the shaped zone
+   *  where it is one alone; how many zones it previews. */
+  function previewRecipe(what: string, fitted: api.Fitted): number {
     // a radial zone or a stair's steps ({"radial": ...}, {"screw": ...}, {"helix": ...}) is no slab across
-    // an axis: the shader previews those only
+    // an axis: the shader previews one such zone alone, or slabs
     const other = fitted.recipe.edits.find((e) => !('axis' in e && 'mode' in e));
+    const alone = other && fitted.recipe.edits.length === 1 ? warpFromEdit(other, groundOf(other)) : null;
+    if (alone) {
+      store.dispatch({ type: 'set-warp', warp: alone, why: fitted.why });
+      return 1;
+    }
     if (other) {
       const kind =
         'radial' in other
@@ -179,7 +187,7 @@ export function createCommands(store: Store, scene: Scene): Commands {
               ? "a spiral stair's steps"
               : 'an oblique zone';
       throw new ApiError(
-        `${what}: expected zones across x, y or z (what this page previews), got ${kind}; ` +
+        `${what}: expected zones across x, y or z or one shaped zone alone (what this page previews), got ${kind} among others; ` +
           `run it with partscale on the command line (${fitted.why.join('; ')})`,
       );
     }
@@ -197,7 +205,14 @@ export function createCommands(store: Store, scene: Scene): Commands {
       );
     }
     store.dispatch({ type: 'set-zones', zones, why: fitted.why });
-    return zones;
+    return zones.length;
+  }
+
+  /** The floor a flight stands on (the server's step candidate of the same cut), or null. */
+  function groundOf(e: Record<string, unknown>): number | null {
+    if (!('screw' in e)) return null;
+    const cut = (e.screw as { cut: number }).cut;
+    return store.get().warps?.steps.find((k) => k.cut === cut)?.ground ?? null;
   }
 
   const previewFit = async () => {
@@ -212,8 +227,8 @@ export function createCommands(store: Store, scene: Scene): Commands {
         if (e instanceof ApiError) store.dispatch({ type: 'fit-refused', message: e.message });
         throw e;
       }
-      const zones = previewRecipe('fit', fitted);
-      status(`fit: ${zones.length} zone(s) previewed; Apply to make it`);
+      const n = previewRecipe('fit', fitted);
+      status(`fit: ${n} zone(s) previewed; Apply to make it`);
       ok = true;
     });
     return ok;

@@ -14,7 +14,14 @@ import {
   type ZoneInput,
 } from './state';
 import type { Recipe } from './recipe';
-import type { AxisElements, Candidate, ServerState } from './api';
+import type { AxisElements, Candidate, ServerState, WarpFound } from './api';
+import { packWarp, type Warp, type WarpEdit, warpFromEdit, type WarpRecipe, warpSource } from './warp';
+
+function parsed(edit: WarpEdit): Warp {
+  const w = warpFromEdit(edit);
+  if (!w) throw new Error(`expected a warp edit (radial, normal, screw, helix), got ${JSON.stringify(edit)}`);
+  return w;
+}
 
 export interface Hooks {
   /** The object is loaded. */
@@ -37,7 +44,18 @@ export interface Hooks {
    *  change previewed). */
   sizes(): { extent: number[]; target: number[] | null };
   fitWhy(): readonly string[];
-  recipe(): Recipe;
+  recipe(): Recipe | WarpRecipe;
+  /** The object's warp zones (radial plan, flights, spiral stairs; null: not fetched yet). */
+  warps(): WarpFound | null;
+  /** The shaped zone previewed (null: the planar zones are). */
+  warp(): Warp | null;
+  /** The shader's warpSource() on points (N, 3) for a warp's recipe edit (as recipes hold it):
+   *  (N, 4) source point and weight; h: voxel size. */
+  evalWarp(edit: WarpEdit, points: number[][], h: number): number[][];
+  /** The TypeScript mirror, for comparison. */
+  evalWarpTS(edit: WarpEdit, points: number[][], h: number): number[][];
+  /** Show or hide the guides drawn over the object (planes, shaped zone, box, axes). */
+  setGuides(visible: boolean): void;
   handleScreen(name: PlaneName): { x: number; y: number };
   /** GLSL toSource() of the shader on points (N, 3) through zones (applied in order). */
   evalRemap(zones: Zone[], points: number[][]): number[][];
@@ -77,6 +95,20 @@ export function exposeHooks(store: Store, scene: Scene): Hooks {
     sizes: () => ({ extent: extents(get()), target: targetExtents(get()) }),
     fitWhy: () => get().fit.why,
     recipe: () => recipe(get()),
+    warps: () => get().warps,
+    warp: () => get().warp,
+    evalWarp: (edit, points, h) => {
+      const { kind, data } = packWarp(parsed(edit), h);
+      return scene.evalWarp(kind, data, points);
+    },
+    evalWarpTS: (edit, points, h) => {
+      const warp = parsed(edit);
+      return points.map((p) => {
+        const [src, w] = warpSource(warp, p, h);
+        return [...src, w];
+      });
+    },
+    setGuides: scene.setGuides,
     handleScreen: scene.handleScreen,
     evalRemap: scene.evalRemap,
     evalRemapTS: (zones, points) => points.map((p) => toSource(zones, p)),

@@ -3,6 +3,7 @@
 // back to source space with toSource() (remap.ts), so a drag never needs the server.
 import * as THREE from 'three';
 import { MAX_ZONES, REMAP_GLSL } from './remap';
+import { WARP_GLSL } from './warp';
 
 const vertex = /* glsl */ `
 precision highp float;
@@ -41,20 +42,60 @@ uniform float uSlicePos;
 in vec3 vWorld;
 out vec4 fragColor;
 ${REMAP_GLSL}
+${WARP_GLSL}
 
-vec4 sampleSource(vec3 pOut) {
-  vec3 uvw = (toSource(pOut) - uGridMin) / uGridSize;
-  return texture(uColour, uvw.zyx);
-}
-
-float sdf(vec3 pOut) {
-  vec3 src = toSource(pOut);
+float distanceAt(vec3 src) {
   vec3 uvw = (src - uGridMin) / uGridSize;
   float d = texture(uDistance, uvw.zyx).r * uVoxel;
   // outside the grid the clamped texture repeats the border: never report less than the way back
   vec3 q = abs(src - (uGridMin + 0.5 * uGridSize)) - 0.5 * uGridSize;
   float outside = length(max(q, 0.0));
   return max(d, outside);
+}
+
+// A flight kept on its floor (warp.screw_ground; apply_screw's _ground): lifted, the rows from
+// the floor up by the rise take the flight shifted along it only where that is nearer; lowered,
+// what goes below the floor is cut off half a voxel below it. alongWins: set where the first wins.
+float grounded(vec3 p, float after, out bool alongWins) {
+  alongWins = false;
+  if (uWarpKind != 3 || uWarp[1].w < 0.5) return after;
+  float h = uWarp[1].z, floorY = uWarp[2].x, rise = uWarp[0].y;
+  if (rise > 0.5 * h && p.y >= floorY - 0.5 * h && p.y <= floorY + rise + 0.5 * h) {
+    float along = distanceAt(p - vec3(uWarp[0].x, 0.0, uWarp[0].z));
+    alongWins = along < after;
+    return min(after, along);
+  }
+  if (rise < -0.5 * h && p.y < floorY - 0.5 * h) return max(after, floorY - 0.5 * h - p.y);
+  return after;
+}
+
+// The point whose colour (and part) an output point shows: through the zones, then the warp's
+// side of its cut.
+vec3 colourPoint(vec3 pOut) {
+  vec3 p = toSource(pOut);
+  if (uWarpKind == 0) return p;
+  float w;
+  vec3 s = warpSource(p, w);
+  if (w < 0.5) return p;
+  bool alongWins;
+  grounded(p, distanceAt(s), alongWins);
+  return alongWins ? p - vec3(uWarp[0].x, 0.0, uWarp[0].z) : s;
+}
+
+vec4 sampleSource(vec3 pOut) {
+  vec3 uvw = (colourPoint(pOut) - uGridMin) / uGridSize;
+  return texture(uColour, uvw.zyx);
+}
+
+float sdf(vec3 pOut) {
+  vec3 p = toSource(pOut);
+  if (uWarpKind == 0) return distanceAt(p);
+  float w;
+  vec3 s = warpSource(p, w);
+  bool alongWins;
+  float after = w > 0.0 ? grounded(p, distanceAt(s), alongWins) : 0.0;
+  if (w >= 1.0) return after;
+  return mix(distanceAt(p), after, w);
 }
 
 vec3 normalAt(vec3 p) {
@@ -143,7 +184,7 @@ void main() {
   }
   vec3 p = ro + rd * t;
   vec3 n = normalAt(p);
-  vec3 base = uView == 1 ? texture(uParts, ((toSource(p) - uGridMin) / uGridSize).zyx).rgb
+  vec3 base = uView == 1 ? texture(uParts, ((colourPoint(p) - uGridMin) / uGridSize).zyx).rgb
                          : sampleSource(p).rgb;
   vec3 albedo = toLinear(base);
   vec3 l1 = normalize(vec3(0.45, 0.8, 0.55));
@@ -181,6 +222,8 @@ export function createRaymarchMaterial(): THREE.RawShaderMaterial {
       uZoneCount: { value: 0 },
       uZoneA: { value: zeros() },
       uZoneB: { value: zeros() },
+      uWarpKind: { value: 0 },
+      uWarp: { value: Array.from({ length: 4 }, () => new THREE.Vector4()) },
     },
   });
 }
@@ -243,4 +286,51 @@ export function evalRemapOnGPU(
   mat.dispose();
   quad.geometry.dispose();
   return Array.from({ length: n }, (_, i) => [out[i * 4], out[i * 4 + 1], out[i * 4 + 2]]);
+}
+
+// The same for the warp's warpSource: (source point, weight) of each output point.
+const evalWarpFragment = /* glsl */ `
+precision highp float;
+uniform highp sampler2D uInput;
+${WARP_GLSL}
+out vec4 fragColor;
+void main() {
+  ivec2 ij = ivec2(gl_FragCoord.xy);
+  vec4 p = texelFetch(uInput, ij, 0);
+  float w;
+  vec3 s = warpSource(p.xyz, w);
+  fragColor = vec4(s, w);
+}
+`;
+
+/** Map output points (N, 3) through a warp (its packWarp uniforms) with the GLSL; returns
+ *  (N, 4): the source point and its weight. */
+export function evalWarpOnGPU(renderer: THREE.WebGLRenderer, kind: number, data: number[], points: number[][]): number[][] {
+  const n = points.length;
+  const input = new Float32Array(n * 4);
+  points.forEach((p, i) => input.set([p[0], p[1], p[2], 1], i * 4));
+  const tex = new THREE.DataTexture(input, n, 1, THREE.RGBAFormat, THREE.FloatType);
+  tex.needsUpdate = true;
+  const target = new THREE.WebGLRenderTarget(n, 1, { type: THREE.FloatType, depthBuffer: false });
+  const uWarp = [0, 1, 2, 3].map((i) => new THREE.Vector4(...data.slice(4 * i, 4 * i + 4)));
+  const mat = new THREE.RawShaderMaterial({
+    glslVersion: THREE.GLSL3,
+    vertexShader: evalVertex,
+    fragmentShader: evalWarpFragment,
+    uniforms: { uInput: { value: tex }, uWarpKind: { value: kind }, uWarp: { value: uWarp } },
+  });
+  const quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), mat);
+  const scene = new THREE.Scene();
+  scene.add(quad);
+  const prev = renderer.getRenderTarget();
+  renderer.setRenderTarget(target);
+  renderer.render(scene, new THREE.Camera());
+  const out = new Float32Array(n * 4);
+  renderer.readRenderTargetPixels(target, 0, 0, n, 1, out);
+  renderer.setRenderTarget(prev);
+  target.dispose();
+  tex.dispose();
+  mat.dispose();
+  quad.geometry.dispose();
+  return Array.from({ length: n }, (_, i) => [out[i * 4], out[i * 4 + 1], out[i * 4 + 2], out[i * 4 + 3]]);
 }

@@ -67,7 +67,8 @@ export function removesZone(z: Pick<Zone, 'mode' | 'start' | 'dest'>): boolean {
 }
 
 /** Which of resolve_edit's rules a zone breaks (its checks, in its order). */
-export type ZoneRule = 'finite' | 'order' | 'dest' | 'inside' | 'thickness' | 'snapped-dest' | 'vanish';
+/** 'warp': the shaped zone's own rules (warp.ts warpProblem). */
+export type ZoneRule = 'finite' | 'order' | 'dest' | 'inside' | 'thickness' | 'snapped-dest' | 'vanish' | 'warp';
 
 export interface ZoneProblem {
   rule: ZoneRule;

@@ -5,7 +5,7 @@ import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import type { ServerState } from './api';
 import { partColour } from './color';
 import type { Volume } from './grid';
-import { createRaymarchMaterial, evalRemapOnGPU } from './raymarch';
+import { createRaymarchMaterial, evalRemapOnGPU, evalWarpOnGPU } from './raymarch';
 import { AXES, type Zone } from './recipe';
 import { MAX_ZONES, minJacobian, packZone } from './remap';
 import {
@@ -17,7 +17,10 @@ import {
   solidBounds,
   type Store,
   validZones,
+  voxel,
+  warpIssue,
 } from './state';
+import { gauge, packWarp, screwShift, type Warp, warpStepScale } from './warp';
 
 const PLANE_COLORS: Record<PlaneName, number> = { start: 0x2fbf71, end: 0xe5484d, dest: 0x3b82f6 };
 const VIEW_MODES = { colour: 0, parts: 1, slice: 2 } as const;
@@ -44,6 +47,13 @@ export interface Scene {
   handleScreen(name: PlaneName): { x: number; y: number };
   /** The shader's toSource() on points (N, 3) through zones (applied in order). */
   evalRemap(zones: Zone[], points: number[][]): number[][];
+  /** The shader's warpSource() on points (N, 3) for packed warp uniforms: (N, 4). */
+  evalWarp(kind: number, data: number[], points: number[][]): number[][];
+  /** What draws the shaped zone (rings, planes, the step's arrow). */
+  readonly warpGroup: THREE.Group;
+  /** Show or hide the guides (the zone's planes, the shaped zone, the box and the axes): tests
+   *  compare the object alone. */
+  setGuides(visible: boolean): void;
   /** Render n frames orbiting the object; mean and median frame time in ms. */
   benchmark(n?: number): { mean: number; median: number; n: number };
 }
@@ -138,6 +148,7 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
   partsPlaceholder.needsUpdate = true;
   u.uParts.value = partsPlaceholder;
   const perf = { frameTimeMs: 0, lastFrameMs: 0, frames: 0 };
+  const guides = { visible: true };
   const frame = { queued: false };
   const pixel = new Uint8Array(4);
 
@@ -192,9 +203,16 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
   controls.addEventListener('change', requestRender);
 
   function updateScene(s: AppState) {
-    const zs = validZones(s);
+    // a shaped zone is previewed alone, instead of the planar zones
+    const warp = s.warp && warpIssue(s) === null ? s.warp : null;
+    const zs = s.warp ? [] : validZones(s);
     u.uZoneCount.value = zs.length;
-    let jac = 1;
+    let jac = warp ? warpStepScale(warp) : 1;
+    if (warp) {
+      const { kind, data } = packWarp(warp, voxel(s));
+      u.uWarpKind.value = kind;
+      (u.uWarp.value as THREE.Vector4[]).forEach((v, i) => v.set(data[4 * i], data[4 * i + 1], data[4 * i + 2], data[4 * i + 3]));
+    } else u.uWarpKind.value = 0;
     zs.forEach((z, i) => {
       const [a, b] = packZone(z);
       (u.uZoneA.value as THREE.Vector4[])[i].set(a[0], a[1], a[2], a[3]);
@@ -214,12 +232,15 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     axesHelper.position.set(smin[0], smin[1], smin[2]);
     axesHelper.scale.setScalar(0.35 * Math.max(size.x, size.y, size.z));
     layoutPlanes(s, box);
+    drawWarp(s.warp, box);
     updateView(s, box);
+    boxHelper.visible = axesHelper.visible = guides.visible;
+    if (!guides.visible) planeGroup.visible = warpGroup.visible = false;
   }
 
   function layoutPlanes(s: AppState, box: THREE.Box3) {
     const z = s.zones[s.active];
-    planeGroup.visible = !!z;
+    planeGroup.visible = !!z && !s.warp;
     if (!z) return;
     const a = AXES.indexOf(z.axis);
     const size = box.getSize(new THREE.Vector3());
@@ -247,6 +268,132 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
         name === 'dest' ? box.min.getComponent(others[1]) - offset : box.max.getComponent(others[1]) + offset;
       hp.setComponent(others[1], side);
       handle.position.copy(hp);
+    }
+  }
+
+  const warpGroup = new THREE.Group();
+  scene.add(warpGroup);
+
+  /** Lines (world points, pairs) in a colour. */
+  function lines(points: number[][], color: number): THREE.LineSegments {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.Float32BufferAttribute(points.flat(), 3));
+    const l = new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color, depthTest: false, transparent: true }));
+    l.renderOrder = 3;
+    return l;
+  }
+
+  /** A transparent plane square to n through the point on it nearest the box centre. */
+  function tiltedPlane(n: THREE.Vector3, at: number, box: THREE.Box3, color: number): THREE.Mesh {
+    const size = box.getSize(new THREE.Vector3()).length();
+    const centre = box.getCenter(new THREE.Vector3());
+    const plane = new THREE.Mesh(
+      new THREE.PlaneGeometry(size, size),
+      new THREE.MeshBasicMaterial({ color, transparent: true, opacity: 0.18, side: THREE.DoubleSide, depthWrite: false }),
+    );
+    plane.add(new THREE.LineSegments(new THREE.EdgesGeometry(plane.geometry), new THREE.LineBasicMaterial({ color })));
+    plane.position.copy(centre).addScaledVector(n, at - centre.dot(n));
+    plane.quaternion.setFromUnitVectors(new THREE.Vector3(0, 0, 1), n);
+    plane.renderOrder = 2;
+    return plane;
+  }
+
+  /** A radial zone's ring at gauge radius r, as a cylinder over lo..hi along its axis: a polygon
+   *  (its outline) or a circle. */
+  function ring(w: Extract<Warp, { kind: 'radial' }>, r: number, lo: number, hi: number, color: number) {
+    const a = AXES.indexOf(w.axis);
+    const [u, v] = [0, 1, 2].filter((i) => i !== a);
+    const n = w.sides || 96;
+    const pts: number[][] = [];
+    for (let k = 0; k < n; k++) {
+      const t = w.sides ? ((w.phase + 180 / w.sides + (360 * k) / w.sides) * Math.PI) / 180 : (2 * Math.PI * k) / n;
+      const d = [Math.cos(t), Math.sin(t)];
+      const g = gauge(d, w.sides, w.phase);
+      const p = [0, 0, 0];
+      p[u] = w.center[0] + (r * d[0]) / g;
+      p[v] = w.center[1] + (r * d[1]) / g;
+      pts.push(p);
+    }
+    const segs: number[][] = [];
+    for (const level of [lo, hi]) {
+      pts.forEach((p, k) => {
+        const q = pts[(k + 1) % n];
+        const a0 = [...p];
+        const b0 = [...q];
+        a0[a] = level;
+        b0[a] = level;
+        segs.push(a0, b0);
+      });
+    }
+    const every = w.sides ? 1 : 12;
+    pts.forEach((p, k) => {
+      if (k % every) return;
+      const a0 = [...p];
+      const b0 = [...p];
+      a0[a] = lo;
+      b0[a] = hi;
+      segs.push(a0, b0);
+    });
+    return lines(segs, color);
+  }
+
+  /** The shaped zone drawn: a radial zone as cylinders at R0 (green), R1 (red) and the target
+   *  (blue) about its axis; an oblique zone as its two tilted planes and the destination's; a
+   *  flight's or a spiral's step as its cut and an arrow from a point on the cut to where the
+   *  copied step puts it. */
+  function drawWarp(w: Warp | null, box: THREE.Box3) {
+    for (const c of [...warpGroup.children]) {
+      warpGroup.remove(c);
+      c.traverse((o) => {
+        const m = o as THREE.Mesh;
+        m.geometry?.dispose();
+        (m.material as THREE.Material | undefined)?.dispose();
+      });
+    }
+    warpGroup.visible = !!w;
+    if (!w) return;
+    const lo = box.min.toArray();
+    const hi = box.max.toArray();
+    const centre = box.getCenter(new THREE.Vector3());
+    if (w.kind === 'radial') {
+      const a = AXES.indexOf(w.axis);
+      const [l0, l1] = w.span ?? [lo[a], hi[a]];
+      warpGroup.add(ring(w, w.r0, l0, l1, PLANE_COLORS.start), ring(w, w.r1, l0, l1, PLANE_COLORS.end));
+      if (w.to !== w.r1) warpGroup.add(ring(w, w.to, l0, l1, PLANE_COLORS.dest));
+    } else if (w.kind === 'oblique') {
+      const n = new THREE.Vector3(...w.normal).normalize();
+      warpGroup.add(tiltedPlane(n, w.s0, box, PLANE_COLORS.start), tiltedPlane(n, w.s1, box, PLANE_COLORS.end));
+      if (w.to !== w.s1) warpGroup.add(tiltedPlane(n, w.to, box, PLANE_COLORS.dest));
+    } else {
+      // the cut, and an arrow from its middle (a spiral's: on its outer edge) along the step
+      const h = voxel(store.get());
+      let from: THREE.Vector3;
+      let to: THREE.Vector3;
+      if (w.kind === 'screw') {
+        const a = AXES.indexOf(w.axis);
+        const n = new THREE.Vector3().setComponent(a, 1);
+        warpGroup.add(tiltedPlane(n, w.cut, box, PLANE_COLORS.end));
+        from = centre.clone().setComponent(a, w.cut);
+        from.y = lo[1] + 0.5 * (hi[1] - lo[1]);
+        const step = screwShift({ ...w, copies: Math.sign(w.copies) || 1 }, h);
+        to = from.clone().add(new THREE.Vector3(...step));
+      } else {
+        warpGroup.add(tiltedPlane(new THREE.Vector3(0, 1, 0), w.cut, box, PLANE_COLORS.end));
+        const r = 0.45 * Math.min(hi[0] - lo[0], hi[2] - lo[2]);
+        from = new THREE.Vector3(w.center[0] + r, w.cut, w.center[1]);
+        const t = (w.angle * Math.PI) / 180;
+        to = new THREE.Vector3(w.center[0] + r * Math.cos(t), w.cut + w.rise, w.center[1] + r * Math.sin(t));
+        warpGroup.add(lines([[w.center[0], lo[1], w.center[1]], [w.center[0], hi[1], w.center[1]]], PLANE_COLORS.start));
+      }
+      const dir = to.clone().sub(from);
+      const len = dir.length();
+      const arrow = new THREE.ArrowHelper(dir.normalize(), from, len, PLANE_COLORS.dest, 0.3 * len, 0.15 * len);
+      arrow.traverse((o) => {
+        o.renderOrder = 3;
+        const m = (o as THREE.Mesh).material as THREE.Material | undefined;
+        if (m) m.depthTest = false;
+      });
+      warpGroup.add(arrow);
     }
   }
 
@@ -322,7 +469,7 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
   store.subscribe((s, prev) => {
     // the first object: frame it (later ones keep the user's camera)
     if (s.server && !prev.server) fitCamera();
-    if (s.server !== prev.server || s.zones !== prev.zones || s.active !== prev.active) {
+    if (s.server !== prev.server || s.zones !== prev.zones || s.active !== prev.active || s.warp !== prev.warp) {
       updateScene(s);
       requestRender();
     } else if (s.view !== prev.view) {
@@ -372,6 +519,13 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     requestRender,
     renderNow,
     handleScreen,
+    warpGroup,
+    setGuides(visible: boolean) {
+      guides.visible = visible;
+      updateScene(store.get());
+      requestRender();
+    },
+    evalWarp: (kind, data, points) => evalWarpOnGPU(renderer, kind, data, points),
     evalRemap: (zones, points) => {
       const { a, b } = packed(zones);
       return evalRemapOnGPU(renderer, a, b, zones.length, points);

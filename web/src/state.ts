@@ -1,7 +1,7 @@
 // The editor's one state object and its transitions. Handlers dispatch named actions; the scene
 // and the panel subscribe and draw what the state says. Everything else the page shows (resolved
 // zones, the recipe, the output box) is derived from the state by the pure functions below.
-import type { AxisElements, Candidate, ServerState } from './api';
+import type { AxisElements, Candidate, ServerState, WarpFound } from './api';
 import { forwardCoordinate, MAX_ZONES, sourceCoordinate } from './remap';
 import {
   AXES,
@@ -16,6 +16,17 @@ import {
   type ZoneProblem,
   zoneProblem,
 } from './recipe';
+import {
+  gauge,
+  type Warp,
+  type WarpKind,
+  warpBounds,
+  warpEdit,
+  warpFromEdit,
+  warpNoop,
+  warpProblem,
+  type WarpRecipe,
+} from './warp';
 
 export type PlaneName = 'start' | 'end' | 'dest';
 export const PLANES: readonly PlaneName[] = ['start', 'end', 'dest'];
@@ -75,13 +86,26 @@ export interface AppState {
   /** The zones of each apply, last last: undo brings them back (and redo those it undid). */
   readonly appliedZones: readonly (readonly ZoneInput[])[];
   readonly redoZones: readonly (readonly ZoneInput[])[];
+  /** The loaded object's warp zones (radial plan, flights, spiral stairs: GET /api/suggest);
+   *  null: not fetched. */
+  readonly warps: WarpFound | null;
+  /** The shaped zone (radial, oblique, steps) previewed and applied instead of the planar
+   *  zones; null: the planar zones. Positions on the loaded object, world units. */
+  readonly warp: Warp | null;
+  /** The shaped zone of each apply (null where the planar zones made it), as appliedZones. */
+  readonly appliedWarps: readonly (Warp | null)[];
+  readonly redoWarps: readonly (Warp | null)[];
 }
 
 export type Action =
   // a new object. 'first': one default zone; 'applied': the zones stay, their destinations at
   // their ends (the object already has the change); 'undone': the zones of the undone apply
   | { type: 'loaded'; server: ServerState; how?: 'first' | 'applied' | 'undone' | 'redone' }
-  | { type: 'suggested'; suggestions: readonly Candidate[] }
+  | { type: 'suggested'; suggestions: readonly Candidate[]; warps?: WarpFound }
+  // the shaped zone: set (null: back to the planar zones), a kind's default, or changed
+  | { type: 'set-warp'; warp: Warp | null; why?: readonly string[] }
+  | { type: 'set-warp-kind'; kind: WarpKind | null }
+  | { type: 'patch-warp'; patch: Partial<Record<string, unknown>> }
   | { type: 'found-elements'; elements: readonly AxisElements[] }
   | { type: 'use-candidate'; candidate: Candidate } // the active zone takes its axis, zone and mode
   | { type: 'set-zones'; zones: readonly ZoneInput[]; why?: readonly string[] } // e.g. a fit
@@ -120,6 +144,10 @@ export const initialState: AppState = {
   fit: { size: ['=', '=', '='], why: [], allowDeform: false, refused: '' },
   appliedZones: [],
   redoZones: [],
+  warps: null,
+  warp: null,
+  appliedWarps: [],
+  redoWarps: [],
 };
 
 // -- derived ----------------------------------------------------------------------------------
@@ -172,6 +200,7 @@ export function extents(s: AppState): [number, number, number] {
  *  voxels as the server makes it); null where nothing would change. */
 export function targetExtents(s: AppState): [number, number, number] | null {
   if (!s.server || isNoop(s)) return null;
+  if (s.warp) return warpExtents(s, s.warp);
   const [smin, smax] = solidBounds(s);
   const lo = [...smin];
   const hi = [...smax];
@@ -230,9 +259,35 @@ export function validZones(s: AppState): ResolvedZone[] {
   return resolvedZones(s).filter((z) => z.problem === null);
 }
 
-/** The output grid's box [min, max] after the valid zones. */
+/** The solid's size once the shaped zone applies: a radial zone moves the outline by to - r1
+ *  along its radius (a polygon's by its support across the axis); the others move a box. */
+function warpExtents(s: AppState, w: Warp): [number, number, number] {
+  const [lo, hi] = solidBounds(s);
+  if (w.kind === 'radial') {
+    const axis = AXES.indexOf(w.axis);
+    const out = [0, 1, 2].map((a) => hi[a] - lo[a]) as [number, number, number];
+    const uv = [0, 1, 2].filter((a) => a !== axis);
+    uv.forEach((a, i) => {
+      // the polygon's half-width along this axis per unit of gauge radius
+      const e = i === 0 ? [1, 0] : [0, 1];
+      const support = w.sides ? 1 / gauge(e, w.sides, w.phase) : 1;
+      out[a] += 2 * (w.to - w.r1) * support;
+    });
+    return out;
+  }
+  const [a, b] = warpBounds(w, [...lo], [...hi], voxel(s));
+  return [0, 1, 2].map((i) => b[i] - a[i]) as [number, number, number];
+}
+
+/** The shaped zone's problem (null: valid), or null where there is none. */
+export function warpIssue(s: AppState): string | null {
+  return s.warp ? warpProblem(s.warp) : null;
+}
+
+/** The output grid's box [min, max] after the valid zones (or the shaped zone). */
 export function outputBounds(s: AppState): [number[], number[]] {
   const [gmin, gmax] = s.server ? s.server.grid_bounds : [[0, 0, 0], [1, 1, 1]];
+  if (s.warp) return warpIssue(s) === null ? warpBounds(s.warp, [...gmin], [...gmax], voxel(s)) : [[...gmin], [...gmax]];
   const lo = [...gmin];
   const hi = [...gmax];
   for (const z of validZones(s)) {
@@ -244,17 +299,22 @@ export function outputBounds(s: AppState): [number[], number[]] {
 }
 
 /** The recipe (partscale.edit.JSON_SCHEMA) of the valid zones, with the destinations as given. */
-export function recipe(s: AppState): Recipe {
+export function recipe(s: AppState): Recipe | WarpRecipe {
+  if (s.warp) return { version: RECIPE_VERSION, edits: warpIssue(s) === null ? [warpEdit(s.warp)] : [] };
   const edits = resolvedZones(s).flatMap((z, i) => (z.problem === null ? [zoneEdit(s.zones[i])] : []));
   return { version: RECIPE_VERSION, edits };
 }
 
 /** dest == end leaves the object as it is in every mode: nothing to send. */
 export function isNoop(s: AppState): boolean {
+  if (s.warp) return warpNoop(s.warp);
   return resolvedZones(s).every((z) => z.dest === z.end);
 }
 
 export function firstProblem(s: AppState): ZoneProblem | null {
+  const issue = warpIssue(s);
+  if (issue !== null) return { rule: 'warp', message: issue };
+  if (s.warp) return null;
   return resolvedZones(s).find((z) => z.problem !== null)?.problem ?? null;
 }
 
@@ -295,6 +355,35 @@ export function fromApplied(s: AppState, name: PlaneName, v: number): number {
   return s.zones[s.active].end + (v - resolvedZones(s)[s.active].end);
 }
 
+/** The shaped zone of a kind the page starts with: the object's own (its radial plan's longest
+ *  annulus, unchanged; its flight's or spiral's step, one more), else one drawn on its solid. */
+export function defaultWarp(s: AppState, kind: WarpKind): Warp {
+  const found = s.warps;
+  const fromFound =
+    kind === 'radial' && found?.radial?.edit
+      ? warpFromEdit(found.radial.edit)
+      : kind === 'screw' && found?.steps.length
+        ? warpFromEdit(found.steps[0].edit, found.steps[0].ground)
+        : kind === 'helix' && found?.helix.length
+          ? warpFromEdit(found.helix[0].edit)
+          : null;
+  if (fromFound) return fromFound;
+  const [lo, hi] = solidBounds(s);
+  const ext = [0, 1, 2].map((a) => hi[a] - lo[a]);
+  const mid = [0, 1, 2].map((a) => (lo[a] + hi[a]) / 2);
+  const r = Math.min(ext[0], ext[2]) / 2;
+  switch (kind) {
+    case 'radial':
+      return { kind, axis: 'y', center: [mid[0], mid[2]], sides: 0, phase: 0, span: null, r0: 0.3 * r, r1: 0.7 * r, to: 0.7 * r };
+    case 'oblique':
+      return { kind, normal: [1, 0, 0], s0: lo[0] + 0.35 * ext[0], s1: lo[0] + 0.65 * ext[0], to: lo[0] + 0.65 * ext[0] };
+    case 'screw':
+      return { kind, axis: 'x', step: [0.1 * ext[0], 0.1 * ext[1], 0], cut: mid[0], copies: 1, ground: null };
+    case 'helix':
+      return { kind, center: [mid[0], mid[2]], angle: 30, rise: 0.1 * ext[1], cut: mid[1], copies: 1 };
+  }
+}
+
 // -- transitions ------------------------------------------------------------------------------
 
 function patchActive(s: AppState, patch: Partial<ZoneInput>): AppState {
@@ -318,13 +407,14 @@ function transition(s: AppState, action: Action): AppState {
         server: action.server,
         suggestions: null,
         elements: null,
+        warps: null,
         fit: { ...s.fit, why: [], refused: '' },
       };
       const how = s.zones.length ? action.how ?? 'applied' : 'first';
       if (how === 'first') {
         // the fallback until the suggestions come (the 'suggested' action)
         const zones = [defaultZone(next, s.zones[0]?.axis ?? 'x')];
-        return { ...next, zones, active: 0, appliedZones: [], redoZones: [], initialZone: true };
+        return { ...next, zones, active: 0, appliedZones: [], redoZones: [], initialZone: true, warp: null, appliedWarps: [], redoWarps: [] };
       }
       const last = <T>(xs: readonly T[]) => xs[xs.length - 1];
       if (how === 'undone') {
@@ -332,17 +422,31 @@ function transition(s: AppState, action: Action): AppState {
         const zones = last(s.appliedZones);
         if (!zones) return next;
         const redoZones = [...s.redoZones, zones];
-        return { ...next, zones, active: Math.min(s.active, zones.length - 1), appliedZones: s.appliedZones.slice(0, -1), redoZones };
+        // the shaped zone that made it, if one did
+        const warp = last(s.appliedWarps) ?? null;
+        const warps = { warp, appliedWarps: s.appliedWarps.slice(0, -1), redoWarps: [...s.redoWarps, warp] };
+        return { ...next, zones, active: Math.min(s.active, zones.length - 1), appliedZones: s.appliedZones.slice(0, -1), redoZones, ...warps };
       }
       // the object has the change now: the zones stay where they are, with nothing left to do
       const made = how === 'applied' ? s.zones : last(s.redoZones);
       const zones = (made ?? s.zones).map((z) => ({ ...z, dest: z.end }));
       const appliedZones = made ? [...s.appliedZones, made].slice(-MAX_UNDONE) : s.appliedZones;
       const redoZones = how === 'applied' ? [] : s.redoZones.slice(0, -1);
-      return { ...next, zones, active: Math.min(s.active, zones.length - 1), appliedZones, redoZones };
+      // a shaped zone's positions no longer hold on the object it made: it is put away
+      const madeWarp = how === 'applied' ? s.warp : last(s.redoWarps) ?? null;
+      const appliedWarps = made ? [...s.appliedWarps, madeWarp].slice(-MAX_UNDONE) : s.appliedWarps;
+      const redoWarps = how === 'applied' ? [] : s.redoWarps.slice(0, -1);
+      const warps = { warp: null, appliedWarps, redoWarps };
+      return { ...next, zones, active: Math.min(s.active, zones.length - 1), appliedZones, redoZones, ...warps };
     }
+    case 'set-warp':
+      return { ...s, warp: action.warp, fit: { ...s.fit, why: action.why ?? [], refused: '' } };
+    case 'set-warp-kind':
+      return { ...s, warp: action.kind === null ? null : defaultWarp(s, action.kind) };
+    case 'patch-warp':
+      return s.warp ? { ...s, warp: { ...s.warp, ...action.patch } as Warp } : s;
     case 'suggested': {
-      const next = { ...s, suggestions: action.suggestions };
+      const next = { ...s, suggestions: action.suggestions, warps: action.warps ?? s.warps };
       return s.initialZone ? { ...next, zones: [startZone(next)], active: 0, initialZone: false } : next;
     }
     case 'found-elements':
@@ -358,7 +462,7 @@ function transition(s: AppState, action: Action): AppState {
     }
     case 'set-zones':
       if (!action.zones.length || action.zones.length > MAX_ZONES) return s;
-      return { ...s, zones: action.zones, active: 0, fit: { ...s.fit, why: action.why ?? [], refused: '' } };
+      return { ...s, zones: action.zones, active: 0, warp: null, fit: { ...s.fit, why: action.why ?? [], refused: '' } };
     case 'set-snap':
       return { ...s, snap: action.snap };
     case 'set-fit-size': {

@@ -19,6 +19,7 @@ import {
   type ViewMode,
   voxel,
 } from './state';
+import { type Warp, type WarpKind, warpFromEdit } from './warp';
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -162,18 +163,109 @@ function renderStatus(s: AppState) {
   status.classList.toggle('error', s.status.error);
 }
 
-const drawn: { suggestions: AppState['suggestions'] | undefined; server: AppState['server'] | undefined } = {
+/** The object's warp zones as buttons: its radial plan, each flight and spiral (one more step). */
+function renderWarpFound(s: AppState) {
+  const box = $('warp-found');
+  box.innerHTML = '';
+  if (!s.server) return;
+  const found = s.warps;
+  if (found === null) {
+    box.textContent = 'looking…';
+    return;
+  }
+  const units = s.server.units;
+  const button = (id: string, text: string, title: string) => {
+    const b = document.createElement('button');
+    b.id = id;
+    b.className = 'warp-candidate';
+    b.textContent = text;
+    b.title = title;
+    box.appendChild(b);
+  };
+  const r = found.radial;
+  if (r?.edit) {
+    const shape = r.sides ? `${r.sides}-sided` : 'round';
+    const [r0, r1] = r.annuli[0];
+    button('warp-radial', `radial: ${shape} plan`, `about ${r.axis} through ${fmt(r.center[0])}, ${fmt(r.center[1])} ${units}; annulus ${fmt(r0)}–${fmt(r1)} ${units} (constant radial section): set its target radius`);
+  }
+  found.steps.forEach((k, i) =>
+    button(`warp-step-${i}`, `steps along ${k.axis}: +1`, `${k.count} steps of ${fmt(k.going)} going and ${fmt(k.rise)} rise ${units} (${Math.round(100 * k.support)}% of the surface repeats)`),
+  );
+  found.helix.forEach((k, i) =>
+    button(`warp-helix-${i}`, 'spiral steps: +1', `${k.count} steps each turning ${fmt(k.angle)}° and rising ${fmt(k.rise)} ${units} (${Math.round(100 * k.support)}% of the surface repeats)`),
+  );
+  if (!box.children.length) box.textContent = 'no round plan, flight or spiral found';
+}
+
+/** The shaped zone's fields: those of its kind shown, each with its value. */
+function renderWarp(s: AppState) {
+  const w = s.warp;
+  ($('warp-kind') as HTMLSelectElement).value = w?.kind ?? '';
+  document.querySelectorAll<HTMLElement>('.warp-field').forEach((el) => {
+    el.hidden = !w || !(el.dataset.kinds ?? '').split(' ').includes(w.kind);
+  });
+  const set = (id: string, v: string) => {
+    const input = $(id) as HTMLInputElement;
+    if (document.activeElement !== input) input.value = v;
+  };
+  if (w?.kind === 'radial') {
+    $('warp-start-label').textContent = 'R0';
+    $('warp-end-label').textContent = 'R1';
+    set('warp-start', fmt(w.r0));
+    set('warp-end', fmt(w.r1));
+    set('warp-to', fmt(w.to));
+  } else if (w?.kind === 'oblique') {
+    $('warp-start-label').textContent = 'start';
+    $('warp-end-label').textContent = 'end';
+    set('warp-normal', w.normal.map(fmt).join(' '));
+    set('warp-start', fmt(w.s0));
+    set('warp-end', fmt(w.s1));
+    set('warp-to', fmt(w.to));
+  } else if (w) set('warp-copies', String(w.copies));
+  const info = $('warp-info');
+  const problem = firstProblem(s);
+  info.textContent = !w ? '' : problem ? `invalid: ${problem.message}` : isNoop(s) ? 'no change yet: set the target' : warpSummary(w, s.server?.units ?? '');
+  info.classList.toggle('error', !!w && problem !== null);
+  ($('warp-apply') as HTMLButtonElement).disabled = !w || !canApply(s);
+  document.querySelectorAll<HTMLButtonElement>('#warp-found button').forEach((b) => (b.disabled = s.busy));
+}
+
+function warpSummary(w: Warp, units: string): string {
+  switch (w.kind) {
+    case 'radial':
+      return `annulus ${fmt(w.r0)}–${fmt(w.r1)} → ${fmt(w.r0)}–${fmt(w.to)} ${units} (outline ${w.to >= w.r1 ? '+' : '−'}${fmt(Math.abs(w.to - w.r1))})`;
+    case 'oblique':
+      return `slab ×${fmt((w.to - w.s0) / (w.s1 - w.s0))} along (${w.normal.map(fmt).join(', ')})`;
+    case 'screw':
+      return `${w.copies > 0 ? '+' : '−'}${Math.abs(w.copies)} step${Math.abs(w.copies) === 1 ? '' : 's'} of (${w.step.map(fmt).join(', ')}) ${units} beyond ${w.axis} = ${fmt(w.cut)}`;
+    case 'helix':
+      return `${w.copies > 0 ? '+' : '−'}${Math.abs(w.copies)} step${Math.abs(w.copies) === 1 ? '' : 's'} turning ${fmt(w.angle)}° and rising ${fmt(w.rise)} ${units} above ${fmt(w.cut)}`;
+  }
+}
+
+const drawn: {
+  suggestions: AppState['suggestions'] | undefined;
+  server: AppState['server'] | undefined;
+  warps: AppState['warps'] | undefined;
+} = {
   suggestions: undefined,
   server: undefined,
+  warps: undefined,
 };
 
 function render(s: AppState) {
   renderStatus(s);
-  if (s.suggestions !== drawn.suggestions || s.server !== drawn.server) {
+  const newServer = s.server !== drawn.server;
+  if (s.suggestions !== drawn.suggestions || newServer) {
     renderSuggestions(s);
     drawn.suggestions = s.suggestions;
     drawn.server = s.server;
   }
+  if (s.warps !== drawn.warps || newServer) {
+    renderWarpFound(s);
+    drawn.warps = s.warps;
+  }
+  renderWarp(s);
   markActiveBand(s);
   markCountButtons(s);
   renderSizes(s);
@@ -218,12 +310,14 @@ function render(s: AppState) {
       if (document.activeElement !== input) input.value = fmt(toDisplay(given[name], extent(s, z.axis), s.units));
     }
     const problem = firstProblem(s);
-    $('zone-info').textContent = problem
-      ? `invalid: ${problem.message}`
-      : isNoop(s)
-        ? 'no change yet: move the destination plane'
-        : zoneSummary(z, server?.units ?? '');
-    $('zone-info').classList.toggle('error', problem !== null);
+    $('zone-info').textContent = s.warp
+      ? 'off: the shaped zone below is previewed instead'
+      : problem
+        ? `invalid: ${problem.message}`
+        : isNoop(s)
+          ? 'no change yet: move the destination plane'
+          : zoneSummary(z, server?.units ?? '');
+    $('zone-info').classList.toggle('error', !s.warp && problem !== null);
   }
   const unitLabel = s.units === '%' ? '%' : server?.units ?? '';
   document.querySelectorAll('.unit').forEach((el) => (el.textContent = unitLabel));
@@ -323,6 +417,7 @@ export function bindPanel(store: Store, commands: Commands): void {
     dispatch({ type: 'set-view', view: { slicePos: Number((e.target as HTMLInputElement).value) } }),
   );
   $('apply').addEventListener('click', () => void commands.apply());
+  bindWarp(store, commands);
   $('undo').addEventListener('click', () => void commands.undo());
   $('redo').addEventListener('click', () => void commands.redo());
   $('overwrite').addEventListener('change', (e) =>
@@ -356,4 +451,52 @@ export function showPanel(store: Store): void {
     else if (status !== prevStatus) renderStatus(s);
   });
   render(store.get());
+}
+
+/** The shaped zone's panel: the kind, its fields, the object's own warp zones, Apply. */
+function bindWarp(store: Store, commands: Commands) {
+  const dispatch = store.dispatch;
+  $('warp-kind').addEventListener('change', (e) => {
+    const kind = (e.target as HTMLSelectElement).value;
+    dispatch({ type: 'set-warp-kind', kind: kind === '' ? null : (kind as WarpKind) });
+  });
+  const numberField = (id: string, key: (w: Warp) => string | null, integer = false) => {
+    const input = $(id) as HTMLInputElement;
+    input.addEventListener('input', () => {
+      const w = store.get().warp;
+      const v = Number(input.value);
+      const k = w && key(w);
+      if (!k || input.value.trim() === '' || !Number.isFinite(v) || (integer && !Number.isInteger(v))) return;
+      dispatch({ type: 'patch-warp', patch: { [k]: v } });
+    });
+  };
+  numberField('warp-start', (w) => (w.kind === 'radial' ? 'r0' : w.kind === 'oblique' ? 's0' : null));
+  numberField('warp-end', (w) => (w.kind === 'radial' ? 'r1' : w.kind === 'oblique' ? 's1' : null));
+  numberField('warp-to', (w) => (w.kind === 'radial' || w.kind === 'oblique' ? 'to' : null));
+  numberField('warp-copies', (w) => (w.kind === 'screw' || w.kind === 'helix' ? 'copies' : null), true);
+  $('warp-normal').addEventListener('input', (e) => {
+    const v = (e.target as HTMLInputElement).value.trim().split(/[\s,]+/).map(Number);
+    if (v.length === 3 && v.every(Number.isFinite) && store.get().warp?.kind === 'oblique') {
+      dispatch({ type: 'patch-warp', patch: { normal: v } });
+    }
+  });
+  $('warp-found').addEventListener('click', (e) => {
+    const b = (e.target as HTMLElement).closest<HTMLButtonElement>('button');
+    const s = store.get();
+    if (!b || s.busy || !s.warps) return;
+    const [, kind, index] = b.id.split('-');
+    const w =
+      kind === 'radial' && s.warps.radial?.edit
+        ? warpFromEdit(s.warps.radial.edit)
+        : kind === 'step'
+          ? warpFromEdit(s.warps.steps[Number(index)].edit, s.warps.steps[Number(index)].ground)
+          : kind === 'helix'
+            ? warpFromEdit(s.warps.helix[Number(index)].edit)
+            : null;
+    if (w) {
+      dispatch({ type: 'set-warp', warp: w });
+      dispatch({ type: 'set-status', message: `${b.textContent}: ${b.title}` });
+    }
+  });
+  $('warp-apply').addEventListener('click', () => void commands.apply());
 }

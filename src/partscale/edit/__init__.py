@@ -18,7 +18,9 @@ Public API
 - :class:`RadialZone`, :class:`ObliqueZone`, :func:`apply_radial`, :func:`apply_oblique`: zones
   that are not slabs across an axis (an annulus about an axis; a slab between two planes
   square to any direction), resampled and re-evaluated (:mod:`partscale.edit.warp`); recipes
-  hold them too (``{"radial": {...}, "zone": [R0, R1], "to": R}``, ``{"normal": [...], ...}``).
+  hold them too (``{"radial": {...}, "zone": [R0, R1], "to": R}``, ``{"normal": [...], ...}``);
+  :func:`warp_source`: the map of any warp zone on points (what the editor's shader previews);
+  :func:`screw_ground`: the floor a flight's steps are kept on.
 - :class:`ScrewZone`, :func:`apply_screw`; :class:`HelixZone`, :func:`apply_helix`: steps added
   to or removed from a flight that repeats by a diagonal shift, or a spiral stair that repeats
   by a turn about the vertical and a rise.
@@ -100,6 +102,8 @@ from .warp import (
     apply_warp,
     gauge,
     radial_extent,
+    screw_ground,
+    warp_source,
 )
 
 __all__ = [
@@ -140,7 +144,9 @@ __all__ = [
     "reevaluate",
     "resolve_edit",
     "scale",
+    "screw_ground",
     "source_coordinate",
     "tile_count",
     "unit_suffix",
+    "warp_source",
 ]

@@ -27,6 +27,7 @@ voxel_size``, sdf negative inside, sRGB colours.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -83,6 +84,78 @@ def _radial_source(r: np.ndarray, zone: RadialZone) -> np.ndarray:
     r0, r1, to = zone.r0, zone.r1, zone.to
     inside = r0 + (r - r0) * (r1 - r0) / (to - r0)
     return np.where(r <= r0, r, np.where(r <= to, inside, r - (to - r1)))
+
+
+def warp_source(
+    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone, points: np.ndarray, voxel_size: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The map of a warp zone: each output point's source point, and how much of it shows.
+
+    What :func:`apply_warp` resamples, on any points: the editor's shader (``web/src/warp.ts``)
+    implements the same map and is tested against this function.
+
+    Parameters
+    ----------
+    zone : RadialZone, ObliqueZone, ScrewZone or HelixZone
+        The zone (its normal need not be unit; a step is snapped to whole voxels as
+        :func:`apply_screw` snaps it).
+    points : (N, 3) float
+        Output points, world units.
+    voxel_size : float
+        The grid's voxel size (a step's snapping and the width of the blend at a cut).
+
+    Returns
+    -------
+    src : (N, 3) float64
+        The source point each output point shows beyond the cut (radial, oblique: everywhere).
+    weight : (N,) float64
+        0..1: the share of ``src`` in the output, the rest being the point's own place (radial
+        and oblique: 1; steps: 0 before the cut, 1 beyond it, linear over :data:`CUT_BLEND`
+        voxels either side of it).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import ObliqueZone, warp_source
+    >>> src, w = warp_source(ObliqueZone((1.0, 0.0, 0.0), 0.3, 0.6, 0.8), np.array([[1.0, 0, 0]]), 0.05)
+    >>> src.round(3).tolist(), w.tolist()
+    ([[0.8, 0.0, 0.0]], [1.0])
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    h = float(voxel_size)
+    one = np.ones(len(p))
+    if isinstance(zone, RadialZone):
+        ax = AXES.index(zone.axis)
+        others = [a for a in range(3) if a != ax]
+        c = np.array(zone.center, dtype=np.float64)
+        d = p[:, others] - c
+        r = gauge(d, zone.sides, zone.phase)
+        k = np.where(r > 0, _radial_source(r, zone) / np.maximum(r, 1e-300), 1.0)
+        if zone.span is not None:  # only the levels the zone spans move
+            k = np.where((p[:, ax] >= zone.span[0]) & (p[:, ax] <= zone.span[1]), k, 1.0)
+        src = p.copy()
+        src[:, others] = c + d * k[:, None]
+        return src, one
+    if isinstance(zone, ObliqueZone):
+        n = np.asarray(zone.normal, dtype=np.float64)
+        n = n / max(float(np.linalg.norm(n)), 1e-300)
+        s0, s1, to = zone.s0, zone.s1, zone.to
+        s = p @ n
+        back = np.where(
+            s <= s0, 0.0, np.where(s <= to, (s - s0) * (1 - (s1 - s0) / (to - s0)), to - s1)
+        )
+        return p - back[:, None] * n, one
+    if isinstance(zone, ScrewZone):
+        a = AXES.index(zone.axis)
+        unit = np.rint(np.asarray(zone.step) / h).astype(np.int64)
+        direction = 1.0 if unit[a] > 0 else -1.0
+        beyond = (p[:, a] - zone.cut) * direction / h
+        return p - _screw_shift(zone, h) * h, np.clip(beyond / (2 * CUT_BLEND) + 0.5, 0.0, 1.0)
+    c = np.array([zone.center[0], zone.center[1]], dtype=np.float64)
+    src = p.copy()
+    src[:, [0, 2]] = _turn(p[:, [0, 2]] - c, -zone.copies * zone.angle) + c
+    src[:, 1] -= zone.copies * zone.rise
+    return src, np.clip((p[:, 1] - zone.cut) / h / (2 * CUT_BLEND) + 0.5, 0.0, 1.0)
 
 
 def check_radial(csdf: CSDF, zone: RadialZone) -> None:
@@ -308,6 +381,49 @@ def _screw_shift(zone: ScrewZone, h: float) -> np.ndarray:
     return np.rint(np.asarray(zone.step) / h).astype(np.int64) * zone.copies
 
 
+def screw_ground(csdf: CSDF, zone: ScrewZone) -> float | None:
+    """The floor a flight stands on beyond a screw zone's cut, or None.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object (a flight of steps).
+    zone : ScrewZone
+        Its cut and step (``copies`` is not used).
+
+    Returns
+    -------
+    float or None
+        The world height (up, y) of the lowest solid voxel centre, where the solid beyond the
+        cut reaches it (within a voxel): :func:`apply_screw` keeps such a flight on the floor
+        (lifted, the rows from there up by the rise are filled from the flight shifted along
+        it only; lowered, what goes below is cut off half a voxel below it). None for a flight
+        that does not reach the floor beyond the cut (left as it is).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale import shapes
+    >>> from partscale.edit import ScrewZone, screw_ground
+    >>> steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.2 * (i + 1), 0.4)) for i in range(4)]
+    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), np.array([[0, 0, 0], [0.8, 0.8, 0.4]]), voxel_size=0.05)
+    >>> round(screw_ground(flight, ScrewZone("x", (0.2, 0.2, 0.0), 0.5, 1)), 3)
+    0.05
+    """
+    a = AXES.index(zone.axis)
+    h = csdf.voxel_size
+    unit = np.rint(np.asarray(zone.step) / h).astype(np.int64)
+    solid = np.argwhere(csdf.sdf < 0)
+    if solid.size == 0:
+        return None
+    floor = int(solid[:, 1].min())
+    cut_i = (zone.cut - csdf.origin[a]) / h
+    beyond = solid[(solid[:, a] - cut_i) * np.sign(unit[a]) > 0]
+    if beyond.size == 0 or beyond[:, 1].min() > floor + 1:
+        return None
+    return float(csdf.origin[1] + floor * h)
+
+
 def _ground(csdf, zone, unit, shift, off, placed, far, after) -> None:
     """A flight standing on the floor beyond the cut (a solid flight, a stringer down to the
     floor) stays on it: lifted, its lowest ``shift`` voxels up are filled from the side shifted
@@ -315,17 +431,12 @@ def _ground(csdf, zone, unit, shift, off, placed, far, after) -> None:
     in place). An open flight that does not reach the floor there is left as it is (filling
     would add treads at the old heights).
     """
-    a = AXES.index(zone.axis)
     up = 1
     rise = int(shift[up])
-    if rise == 0:
+    floor_y = screw_ground(csdf, zone)
+    if rise == 0 or floor_y is None:
         return
-    solid = np.argwhere(csdf.sdf < 0)
-    floor = int(solid[:, up].min())
-    cut_i = (zone.cut - csdf.origin[a]) / csdf.voxel_size
-    beyond = solid[(solid[:, a] - cut_i) * np.sign(unit[a]) > 0]
-    if beyond.size == 0 or beyond[:, up].min() > floor + 1:
-        return
+    floor = round(float(floor_y - csdf.origin[up]) / csdf.voxel_size)
     h = np.float32(csdf.voxel_size)
     if rise < 0:  # lowered: what went below the floor is cut off there
         rows = int(off[up] + floor)
@@ -404,14 +515,27 @@ def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = 
     off = np.rint((csdf.origin - origin) / h).astype(np.int64)
 
     def placed(arr: np.ndarray, at: np.ndarray, fill) -> np.ndarray:
-        out = np.full((*shape, *arr.shape[3:]), fill, dtype=arr.dtype)
+        # fill: a value, or (sdf) the whole grid's distance bound beyond the placed copy
+        if isinstance(fill, np.ndarray) and fill.shape == tuple(shape):
+            out = fill
+        else:
+            out = np.full((*shape, *arr.shape[3:]), fill, dtype=arr.dtype)
         sl = tuple(slice(int(at[k]), int(at[k]) + arr.shape[k]) for k in range(3))
         out[sl] = arr
         return out
 
-    before = [placed(x, off, f) for x, f in ((csdf.sdf, far), (csdf.rgb, 0), (csdf.parts, -1))]
+    lo, hi = csdf.origin, csdf.origin + (np.asarray(csdf.shape) - 1) * h
+
+    def bound(at: np.ndarray) -> np.ndarray:  # beyond a copy placed at ``at`` (output indices)
+        move = (at - off) * h
+        return _margin_bound(origin, shape, h, lo + move, hi + move)
+
+    before = [
+        placed(x, off, f) for x, f in ((csdf.sdf, bound(off)), (csdf.rgb, 0), (csdf.parts, -1))
+    ]
     after = [
-        placed(x, off + shift, f) for x, f in ((csdf.sdf, far), (csdf.rgb, 0), (csdf.parts, -1))
+        placed(x, off + shift, f)
+        for x, f in ((csdf.sdf, bound(off + shift)), (csdf.rgb, 0), (csdf.parts, -1))
     ]
     _ground(csdf, zone, unit, shift, off, placed, far, after)
     # the side of the cut each output layer along the axis lies on, blended near it
@@ -469,15 +593,16 @@ def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None 
     ax = AXES.index(zone.axis)
     others = [a for a in range(3) if a != ax]
     origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
-    c = np.array(zone.center, dtype=np.float64)
     # the map moves points across the axis only, the same at every level: it is computed once
     # for the grid's cross-section (U, V) and the levels are gathered through it
     uu = origin[others[0]] + np.arange(shape[others[0]]) * h
     vv = origin[others[1]] + np.arange(shape[others[1]]) * h
-    d = np.stack(np.meshgrid(uu - c[0], vv - c[1], indexing="ij"), axis=-1)  # (U, V, 2)
-    r = gauge(d, zone.sides, zone.phase)
-    k = np.where(r > 0, _radial_source(r, zone) / np.maximum(r, 1e-300), 1.0)
-    src = c + d * k[..., None]  # (U, V, 2) world
+    uv = np.stack(np.meshgrid(uu, vv, indexing="ij"), axis=-1)  # (U, V, 2)
+    pts = np.zeros((*uv.shape[:2], 3))
+    pts[..., others] = uv
+    # the span is applied by level below: the map of the cross-section itself
+    src = warp_source(replace(zone, span=None), pts.reshape(-1, 3), h)[0]
+    src = src[:, others].reshape(uv.shape)  # (U, V, 2) world
     iu = (src[..., 0] - csdf.origin[others[0]]) / h
     iv = (src[..., 1] - csdf.origin[others[1]]) / h
     # levels: the output's along the axis are the source's (the grid does not grow along it)
@@ -602,15 +727,13 @@ def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | Non
     n = check_oblique(csdf, zone)
     h = csdf.voxel_size
     s0, s1, to = zone.s0, zone.s1, zone.to
-    length, target = s1 - s0, to - s0
     origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
 
-    def src_of(p: np.ndarray) -> np.ndarray:
-        s = p @ n
-        back = np.where(s <= s0, 0.0, np.where(s <= to, (s - s0) * (1 - length / target), to - s1))
-        return p - back[:, None] * n
-
     unit = ObliqueZone((float(n[0]), float(n[1]), float(n[2])), s0, s1, to)
+
+    def src_of(p: np.ndarray) -> np.ndarray:
+        return warp_source(unit, p, h)[0]
+
     entry = {"op": "oblique", **unit.to_json(), **(record or {})}
     return _finish(csdf, origin, _resample(csdf, origin, shape, src_of), entry)
 
@@ -640,6 +763,31 @@ def _helix_bounds(
     mlo = np.array([xz[:, 0].min(), y0 + n * zone.rise, xz[:, 1].min()])
     mhi = np.array([xz[:, 0].max(), hi[1] + n * zone.rise, xz[:, 1].max()])
     return np.minimum(a, mlo + h / 2), np.maximum(b, mhi - h / 2)
+
+
+def _margin_bound(
+    origin: np.ndarray,
+    shape: tuple[int, ...],
+    h: float,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    above: float = math.inf,
+) -> np.ndarray:
+    """(X, Y, Z) float32 on the grown grid: a distance no larger than the true one where a
+    placed copy of the input's grid (its voxel centres ``lo``..``hi``) does not reach (its own
+    voxels replace it): the distance to that box, and below the level ``above`` (from where a
+    helix moves content) no more than the height to it. A far constant there would let a
+    sphere tracer step through the object.
+    """
+    d2 = np.zeros(shape, dtype=np.float32)
+    for a in range(3):
+        x = origin[a] + np.arange(shape[a]) * h
+        gap = np.maximum(np.maximum(lo[a] - x, x - hi[a]), 0.0).astype(np.float32)
+        sh = [1, 1, 1]
+        sh[a] = -1
+        d2 = d2 + gap.reshape(sh) ** 2
+    y = (origin[1] + np.arange(shape[1]) * h).reshape(1, -1, 1)
+    return np.minimum(np.sqrt(d2), np.maximum(above - y, 0.0)).astype(np.float32)
 
 
 def check_helix(zone: HelixZone) -> None:
@@ -692,28 +840,25 @@ def apply_helix(csdf: CSDF, zone: HelixZone, *, record: dict[str, Any] | None = 
     h = csdf.voxel_size
     origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
     check_memory(shape, BYTES_PER_VOXEL, what=f"{zone.copies:+d} steps")
-    far = np.float32(max(float(csdf.sdf.max()), h))
     off = np.rint((csdf.origin - origin) / h).astype(np.int64)
     sl = tuple(slice(int(off[k]), int(off[k]) + csdf.shape[k]) for k in range(3))
-    sdf = np.full(shape, far, dtype=np.float32)
+    # the side of the cut each output level lies on, blended near it
+    y = origin[1] + np.arange(shape[1]) * h
+    w = np.clip((y - zone.cut) / h / (2 * CUT_BLEND) + 0.5, 0.0, 1.0).astype(np.float32)
+    top = csdf.origin + (np.asarray(csdf.shape) - 1) * h
+    above = float(y[int(np.argmax(w > 0))]) if w.any() else math.inf
+    sdf = _margin_bound(origin, shape, h, csdf.origin, top, above)
     rgb = np.zeros((*shape, 3), dtype=np.uint8)
     parts = np.full(shape, -1, dtype=csdf.parts.dtype)
     sdf[sl], rgb[sl], parts[sl] = csdf.sdf, csdf.rgb, csdf.parts
     moved = np.zeros(shape, dtype=bool)
-    # the side of the cut each output level lies on, blended near it
-    y = origin[1] + np.arange(shape[1]) * h
-    w = np.clip((y - zone.cut) / h / (2 * CUT_BLEND) + 0.5, 0.0, 1.0).astype(np.float32)
     if w.any():
         j0 = int(np.argmax(w > 0))
         sub_origin = origin.copy()
         sub_origin[1] = y[j0]
-        c = np.array([zone.center[0], zone.center[1]])
 
         def src_of(p: np.ndarray) -> np.ndarray:
-            q = p.copy()
-            q[:, [0, 2]] = _turn(p[:, [0, 2]] - c, -zone.copies * zone.angle) + c
-            q[:, 1] -= zone.copies * zone.rise
-            return q
+            return warp_source(zone, p, h)[0]
 
         a_sdf, a_rgb, a_parts, a_moved = _resample(
             csdf, sub_origin, (shape[0], shape[1] - j0, shape[2]), src_of

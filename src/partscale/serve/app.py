@@ -12,7 +12,10 @@ GET  /api/grid              binary 3D textures, see :func:`partscale.serve.sessi
 GET  /api/parts             binary int16 part indices, C order (z fastest); ``?base=N`` too
 GET  /api/schema            the recipe JSON schema
 GET  /api/progress          progress of the apply in flight
-GET  /api/suggest           zone candidates of the current object (``?axis=x|y|z``: one axis)
+GET  /api/suggest           zone candidates of the current object (``?axis=x|y|z``: one axis);
+                            for all axes also ``radial``, ``steps`` and ``helix``, the zones
+                            that are no slab across an axis, each with its recipe ``edit``
+                            (:meth:`~partscale.zones.WarpCandidates.to_json`)
 GET  /api/elements          the current object's elements per axis, ``{"axes": [...]}`` (each
                             :meth:`~partscale.zones.AxisElements.to_json` with ``summary``, a
                             few words on its repeat group); ``?axis=x|y|z``: one axis
@@ -319,18 +322,25 @@ def _zone_routes(session: EditSession) -> list[Route]:
     # what suggest and find_elements found, per object and axis
     candidates = _FoundPerAxis(lambda c, ax: zones.suggest(c, ax))
     found_elements = _FoundPerAxis(lambda c, ax: zones.find_elements(c, ax))
+    warps = _FoundPerAxis(lambda c, _: zones.warp_candidates(c), keep=3)
 
     def _suggest(axes: list[str]) -> list[dict]:
         c = session.current
         out = [k.to_json() for ax in axes for k in candidates(c, ax)]
         return sorted(out, key=lambda k: -k["score"])
 
+    def _warps() -> dict[str, Any]:
+        return warps(session.current, "warps").to_json()
+
     async def suggest(request: Request) -> Response:
         axis = request.query_params.get("axis")
         if axis is not None and axis not in ("x", "y", "z"):
             return _error(f"suggest.axis: expected x, y or z, got {axis[:20]!r}")
         found = await _run("suggest", _suggest, [axis] if axis else ["x", "y", "z"])
-        return JSONResponse({"candidates": found}, headers=_NO_STORE)
+        body: dict[str, Any] = {"candidates": found}
+        if axis is None:  # all axes: and the zones that are no slab across one
+            body.update(await _run("suggest", _warps))
+        return JSONResponse(body, headers=_NO_STORE)
 
     def _snap(body: Any) -> dict[str, Any]:
         c = session.current

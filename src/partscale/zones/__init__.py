@@ -21,6 +21,8 @@ Public API
 - :func:`find_helices` ``(csdf) -> list[Helix]``: repetition by a turn about the vertical and a
   rise (a spiral stair's steps: angle, rise, axis), with a cut level between two treads;
   ``fit --add y 1`` adds a step along it where nothing repeats straight.
+- :func:`warp_candidates` ``(csdf) -> WarpCandidates``: all of the three above at once, each
+  with the recipe edit that uses it (what the editor shows and previews).
 - :func:`find_elements` ``(csdf, axis) -> AxisElements``: the object along an axis as elements
   (seats, doors, compartments, steps) and separators, with the groups that repeat (alike up to
   a mirror, a small length change or a colour change); :func:`count_zone`: the zone of whole
@@ -66,6 +68,7 @@ from .suggest import (
     find_bounded_repeats,
     suggest,
 )
+from .warps import WarpCandidates, warp_candidates
 
 __all__ = [
     "AXES",
@@ -82,6 +85,7 @@ __all__ = [
     "RadialFrame",
     "Screw",
     "Separator",
+    "WarpCandidates",
     "add_axis",
     "axis_candidates",
     "axis_features",
@@ -106,5 +110,6 @@ __all__ = [
     "resolve_counts",
     "snap",
     "suggest",
+    "warp_candidates",
     "whole_copies",
 ]

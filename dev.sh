@@ -50,6 +50,16 @@ ensure_ray() {
   fi
 }
 
+ensure_usd() {
+  # the optional [usd] extra (usd-core), so USD/USDZ export and its compliance tests run
+  local stamp=$VENV/.partscale-usd-installed
+  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
+    say "installing the optional USD extra (partscale[usd]) for USD and USDZ export"
+    if "$PY" -m pip install -q -e ".[test,usd]"; then touch "$stamp"
+    else echo "note: could not install usd-core; the USD and USDZ export tests will be skipped" >&2; fi
+  fi
+}
+
 ensure_docs() {
   # the [docs] extra: MkDocs, Material, mkdocstrings and `build`, for the site and package checks
   local stamp=$VENV/.partscale-docs-installed
@@ -138,6 +148,7 @@ case "${1:-}" in
   test)
     ensure_venv
     ensure_ray
+    ensure_usd
     ensure_docs
     ensure_node_tools
     ensure_chromium

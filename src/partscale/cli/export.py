@@ -150,9 +150,14 @@ def _beside(mesh: Path, atlas: int | None) -> list[Path]:
 def _mesh_summary(mesh: Path, faces: int | None, error: float | None) -> str:
     import trimesh
 
-    loaded = trimesh.load(mesh, force="mesh", process=False)
-    assert isinstance(loaded, trimesh.Trimesh)  # force="mesh"
-    n = len(loaded.faces)
+    from ..export import USD_SUFFIXES, usd_faces
+
+    if mesh.suffix.lower() in USD_SUFFIXES:
+        n = usd_faces(mesh)
+    else:
+        loaded = trimesh.load(mesh, force="mesh", process=False)
+        assert isinstance(loaded, trimesh.Trimesh)  # force="mesh"
+        n = len(loaded.faces)
     if faces is not None:
         budget = f"budget --faces {faces}"
     elif error is not None:

@@ -40,7 +40,7 @@ from .textures import (
     encode_distance_8bit,
     flipbook_layout,
 )
-from .usd import USD_EXTRA, USD_SUFFIXES, require_usd, save_usd
+from .usd import USD_EXTRA, USD_SUFFIXES, require_usd, save_usd, usd_faces
 from .write import (
     MESH_SUFFIXES,
     MESH_WRITERS,
@@ -82,4 +82,5 @@ __all__ = [
     "save_usd",
     "simplify",
     "unwrap",
+    "usd_faces",
 ]

@@ -355,3 +355,34 @@ def _unique_material(stage, name: str) -> str:
     while stage.GetPrimAtPath(out):
         out, i = f"{base}_{i}", i + 1
     return out
+
+
+def usd_faces(path: str | os.PathLike) -> int:
+    """The number of faces of every mesh on the USD stage at ``path`` (layer or package).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.usd``, ``.usda``, ``.usdc`` or ``.usdz`` file.
+
+    Returns
+    -------
+    int
+        Faces (triangles, as written by :func:`write_usd` and :func:`save_usd`) summed over
+        the meshes.
+
+    Examples
+    --------
+    >>> from partscale import data, meshedit
+    >>> from partscale.export.usd import save_usd, usd_faces
+    >>> usd_faces(save_usd(meshedit.load_scene(data.table()), "table.usdc")[0])
+    120
+    """
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(path))
+    return sum(
+        len(UsdGeom.Mesh(p).GetFaceVertexCountsAttr().Get() or [])
+        for p in stage.Traverse()
+        if p.IsA(UsdGeom.Mesh)
+    )

@@ -584,8 +584,10 @@ def load_scene(path: str | os.PathLike) -> trimesh.Scene:
 
 
 def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
-    """Write ``scene`` (GLB; PLY; OBJ via :func:`partscale.export.save_obj`; USD/USDZ via
-    :func:`partscale.export.save_usd`), atomically.
+    """Write ``scene`` (GLB, PLY, OBJ, USD or USDZ by the suffix), atomically.
+
+    OBJ goes through :func:`partscale.export.save_obj`, USD and USDZ through
+    :func:`partscale.export.save_usd` (the optional usd-core).
 
     Parameters
     ----------

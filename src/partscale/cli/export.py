@@ -24,7 +24,7 @@ def export(
             metavar="FILE",
             help="Coloured mesh to write: OUT.glb, OUT.ply or OUT.obj; OUT.usd, OUT.usda, "
             "OUT.usdc or OUT.usdz (AR Quick Look; with --atlas for a baked texture) with the "
-            "optional partscale[usd].",
+            "optional partscale\\[usd].",
         ),
     ] = None,
     texture: Annotated[

@@ -24,7 +24,7 @@ def fit(
             "--output",
             metavar="OUT",
             help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
-            ".usdz with partscale[usd]) for a mesh IN.",
+            ".usdz with partscale\\[usd]) for a mesh IN.",
         ),
     ],
     size: Annotated[

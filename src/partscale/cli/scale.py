@@ -37,7 +37,7 @@ def scale(
             "--output",
             metavar="OUT",
             help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
-            ".usdz with partscale[usd]) when IN is one "
+            ".usdz with partscale\\[usd]) when IN is one "
             "(the edit is applied to the source mesh itself).",
         ),
     ],

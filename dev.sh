@@ -153,8 +153,8 @@ case "${1:-}" in
     ensure_node_tools
     ensure_chromium
     say "ruff"
-    "$VENV/bin/ruff" check src tests bench
-    "$VENV/bin/ruff" format --check src tests bench
+    "$VENV/bin/ruff" check src tests bench integrations
+    "$VENV/bin/ruff" format --check src tests bench integrations
     say "mypy (src/partscale, settings in pyproject.toml)"
     "$VENV/bin/mypy"
     if [ -x web/node_modules/.bin/tsc ]; then

@@ -99,9 +99,9 @@ def test_suggestions_are_shown_along_blender_axes():
         }
     )
     lines = core.summarise_suggestions(text)
-    assert lines["Z"][0].startswith("2 elements (0.60-0.61 m)")
-    assert lines["Z"][1] == "tile 0.60..1.30 m (score 0.70)"
-    assert lines["Y"] == ["stretch -0.10..0.20 m (score 0.75)"]  # Y = -z
+    assert lines["Z"][0] == "2 elements, 0.60-0.61 m"
+    assert lines["Z"][1] == "tile 0.60..1.30 m"
+    assert lines["Y"] == ["stretch -0.10..0.20 m"]  # Y = -z
     assert lines["X"] == []
 
 
@@ -137,14 +137,22 @@ def bookcase_run(addon_zip, tmp_path_factory):
     glb = data_path("kenney/bookcaseOpen.glb")
     out = tmp_path_factory.mktemp("blender")
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(out / "scripts"))
-    cmd = [*blender_command(), str(SCRIPT), "--", str(addon_zip), str(glb), str(PARTSCALE), str(out)]
+    cmd = [
+        *blender_command(),
+        str(SCRIPT),
+        "--",
+        str(addon_zip),
+        str(glb),
+        str(PARTSCALE),
+        str(out),
+    ]
     proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=900)
     assert proc.returncode == 0 and (out / "result.json").is_file(), proc.stdout + proc.stderr
     return json.loads((out / "result.json").read_text()), out
 
 
 def test_one_more_shelf_through_the_addon_keeps_name_transform_materials_uvs(bookcase_run):
-    r, out = bookcase_run
+    r, _ = bookcase_run
     before, after = r["before"], r["after"]
     assert r["suggest_error"] is None and r["apply_error"] is None
     assert json.loads(r["suggestions"])["elements"]["y"]["elements"]  # the panel's shelf rows
@@ -207,3 +215,33 @@ def test_bad_input_in_blender_is_one_line_report(bookcase_run):
 def test_apply_is_an_undoable_operator(bookcase_run):
     r, _ = bookcase_run
     assert r["apply_options"] == ["REGISTER", "UNDO"]
+
+
+# -- in Blender with a window: Undo, and the panel's picture ------------------------------------
+def test_undo_restores_the_mesh_in_blender_with_a_window(addon_zip, tmp_path):
+    """Apply run as a button runs it (with an undo step), then Edit > Undo and Redo."""
+    blender, xvfb = shutil.which("blender"), shutil.which("xvfb-run")
+    if not (blender and xvfb):
+        pytest.skip("Undo needs Blender with a window: blender and xvfb-run not both on PATH")
+    glb = data_path("kenney/bookcaseOpen.glb")
+    empty = tmp_path / "empty.blend"  # a file to open: Blender shows no splash over the view
+    subprocess.run(
+        [blender, "-b", "--factory-startup", "--python-expr",
+         f"import bpy; bpy.ops.wm.save_as_mainfile(filepath={str(empty)!r})"],
+        capture_output=True, timeout=300, check=True,
+    )  # fmt: skip
+    env = dict(os.environ, BLENDER_USER_SCRIPTS=str(tmp_path / "scripts"))
+    cmd = [
+        xvfb, "-a", "-s", "-screen 0 1400x900x24", blender, "--factory-startup",
+        "--enable-event-simulate", str(empty), "--python", str(UNDO_SCRIPT), "--",
+        str(addon_zip), str(glb), str(PARTSCALE), str(tmp_path),
+    ]  # fmt: skip
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=900)
+    assert (tmp_path / "undo.json").is_file(), proc.stdout[-3000:] + proc.stderr[-3000:]
+    r = json.loads((tmp_path / "undo.json").read_text())
+    assert "error" not in r, r["error"]
+    before, after, undone, redone = r["before"], r["after"], r["undone"], r["redone"]
+    assert after["faces"] > before["faces"]
+    assert undone == before  # faces, vertices, materials, UV maps, name, transform
+    assert redone == after
+    assert (tmp_path / "panel.png").stat().st_size > 10_000

@@ -25,5 +25,9 @@ def build(out: Path) -> Path:
 
 
 if __name__ == "__main__":
-    target = Path(sys.argv[1]) if len(sys.argv) > 1 else HERE.parents[1] / "dist" / "partscale_blender.zip"
+    target = (
+        Path(sys.argv[1])
+        if len(sys.argv) > 1
+        else HERE.parents[1] / "dist" / "partscale_blender.zip"
+    )
     print(build(target))

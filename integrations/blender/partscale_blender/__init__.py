@@ -294,7 +294,22 @@ CLASSES = (
 )
 
 
+def _numpy_compat() -> None:
+    """Let Blender 3.4's glTF importer run with NumPy 1.24-1.26 (as Debian 12 ships them).
+
+    That importer calls ``np.bool``, an alias NumPy 1.24 removed (2.0 has it again); the alias
+    is the builtin ``bool`` it always was.
+    """
+    try:
+        import numpy as np
+    except ImportError:
+        return
+    if not hasattr(np, "bool"):
+        np.bool = bool  # type: ignore[attr-defined]
+
+
 def register():
+    _numpy_compat()
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.WindowManager.partscale = PointerProperty(type=PartscaleSettings)

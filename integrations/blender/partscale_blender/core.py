@@ -141,7 +141,8 @@ def edit_args(req: Request, src: str, dst: str) -> list[str]:
 
 
 def summarise_suggestions(text: str) -> dict[str, list[str]]:
-    """Lines per Blender axis from ``partscale suggest --json``: elements, then zone candidates.
+    """Lines per Blender axis from ``partscale suggest --json``: elements, then zone candidates
+    (best first, as partscale ranks them).
 
     Positions are partscale's (Y up), shown along Blender's axes in metres.
     """
@@ -156,14 +157,12 @@ def summarise_suggestions(text: str) -> dict[str, list[str]]:
         elements = per.get("elements") or []
         if elements:
             sizes = sorted(e["length"] for e in elements)
-            lines.append(
-                f"{len(elements)} elements ({sizes[0]:.2f}-{sizes[-1]:.2f} m): +N adds whole ones"
-            )
+            lines.append(f"{len(elements)} elements, {sizes[0]:.2f}-{sizes[-1]:.2f} m")
         for cand in data.get("candidates") or []:
             if cand.get("axis") != ax:
                 continue
             a, b = (sign * v for v in cand["zone"])
             a, b = min(a, b), max(a, b)
-            lines.append(f"{cand['kind']} {a:.2f}..{b:.2f} m (score {cand['score']:.2f})")
+            lines.append(f"{cand['kind']} {a:.2f}..{b:.2f} m")
         out[baxis] = lines[:4]
     return out

@@ -245,3 +245,16 @@ def test_undo_restores_the_mesh_in_blender_with_a_window(addon_zip, tmp_path):
     assert undone == before  # faces, vertices, materials, UV maps, name, transform
     assert redone == after
     assert (tmp_path / "panel.png").stat().st_size > 10_000
+
+
+def test_viewport_planes_cross_the_box_at_the_zone_and_the_elements():
+    lo, hi = (0.0, -1.0, 0.0), (2.0, 1.0, 3.0)
+    at = core.zone_planes(lo[2], hi[2], 25, 50)
+    assert at == [0.75, 1.5]
+    tris = np.array(core.plane_quads(lo, hi, "Z", at))
+    assert tris.shape == (12, 3)  # two rectangles of two triangles
+    assert set(np.round(tris[:, 2], 6)) == {0.75, 1.5}
+    assert tris[:, 0].min() == 0 and tris[:, 0].max() == 2 and np.ptp(tris[:, 1]) == 2
+    text = json.dumps({"elements": {"z": {"elements": [{"start": 0.1, "end": 0.4}]}}})
+    assert core.element_planes(text, "Y") == [-0.4, -0.1]  # Blender's Y is partscale's -z
+    assert core.element_planes("not json", "Y") == []

@@ -15,7 +15,14 @@ import re
 import tempfile
 
 import bpy
-from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty, StringProperty
+from bpy.props import (
+    BoolProperty,
+    EnumProperty,
+    FloatProperty,
+    IntProperty,
+    PointerProperty,
+    StringProperty,
+)
 
 from . import core
 
@@ -77,6 +84,11 @@ class PartscaleSettings(bpy.types.PropertyGroup):
         name="Zone mode",
         items=[("stretch", "Stretch", "Scale the zone"), ("tile", "Tile", "Repeat the zone")],
         default="stretch",
+    )
+    show_planes: BoolProperty(  # type: ignore[valid-type]
+        name="Show planes",
+        description="Draw the zone's planes, or the elements found, across the object",
+        default=True,
     )
     # what `partscale suggest` found, for the object named in suggested_for (not saved or undone)
     suggested_for: StringProperty(default="")  # type: ignore[valid-type]
@@ -271,6 +283,7 @@ class PARTSCALE_PT_panel(bpy.types.Panel):
                 for line in found:
                     col.label(text=f"   {line}")
         layout.prop(s, "axis", expand=True)
+        layout.prop(s, "show_planes")
         layout.prop(s, "mode")
         if s.mode == "ADD":
             layout.prop(s, "count")
@@ -283,6 +296,64 @@ class PARTSCALE_PT_panel(bpy.types.Panel):
             col.prop(s, "to")
             layout.prop(s, "zone_mode", expand=True)
         layout.operator(PARTSCALE_OT_apply.bl_idname, icon="CHECKMARK")
+
+
+def _world_box(obj):
+    """(min corner, max corner) of the object's bounding box in world coordinates."""
+    pts = [obj.matrix_world @ _vector(c) for c in obj.bound_box]
+    lo = tuple(min(p[i] for p in pts) for i in range(3))
+    hi = tuple(max(p[i] for p in pts) for i in range(3))
+    return lo, hi
+
+
+def _vector(c):
+    from mathutils import Vector
+
+    return Vector(c)
+
+
+_SHADER = None
+
+
+def _draw_planes():
+    """Draw the zone's planes (orange) or the suggested elements' boundaries (blue) across the
+    active mesh, along the panel's axis: they follow the panel's sliders as they move."""
+    global _SHADER
+    context = bpy.context
+    obj = context.active_object
+    wm = context.window_manager
+    s = getattr(wm, "partscale", None)
+    if s is None or obj is None or obj.type != "MESH" or not s.show_planes:
+        return
+    import gpu
+    from gpu_extras.batch import batch_for_shader
+
+    lo, hi = _world_box(obj)
+    a = "XYZ".index(s.axis)
+    if s.mode == "ZONE":
+        at, color = core.zone_planes(lo[a], hi[a], s.start, s.end), (1.0, 0.55, 0.1, 0.35)
+    elif s.suggestions and s.suggested_for == obj.name:
+        at, color = core.element_planes(s.suggestions, s.axis), (0.2, 0.6, 1.0, 0.25)
+    else:
+        return
+    if not at:
+        return
+    if _SHADER is None:
+        try:
+            _SHADER = gpu.shader.from_builtin("UNIFORM_COLOR")
+        except ValueError:  # Blender before 3.4
+            _SHADER = gpu.shader.from_builtin("3D_UNIFORM_COLOR")
+    batch = batch_for_shader(_SHADER, "TRIS", {"pos": core.plane_quads(lo, hi, s.axis, at)})
+    gpu.state.blend_set("ALPHA")
+    gpu.state.depth_test_set("LESS_EQUAL")
+    _SHADER.bind()
+    _SHADER.uniform_float("color", color)
+    batch.draw(_SHADER)
+    gpu.state.depth_test_set("NONE")
+    gpu.state.blend_set("NONE")
+
+
+_HANDLE = None
 
 
 CLASSES = (
@@ -313,9 +384,15 @@ def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.WindowManager.partscale = PointerProperty(type=PartscaleSettings)
+    global _HANDLE
+    _HANDLE = bpy.types.SpaceView3D.draw_handler_add(_draw_planes, (), "WINDOW", "POST_VIEW")
 
 
 def unregister():
+    global _HANDLE
+    if _HANDLE is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(_HANDLE, "WINDOW")
+        _HANDLE = None
     del bpy.types.WindowManager.partscale
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

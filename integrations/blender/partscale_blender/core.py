@@ -166,3 +166,40 @@ def summarise_suggestions(text: str) -> dict[str, list[str]]:
             lines.append(f"{cand['kind']} {a:.2f}..{b:.2f} m")
         out[baxis] = lines[:4]
     return out
+
+
+def element_planes(text: str, baxis: str) -> list[float]:
+    """World positions along Blender's ``baxis`` of the element boundaries ``suggest`` found."""
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError:
+        return []
+    ax, sign = AXES[baxis]
+    per = (data.get("elements") or {}).get(ax) or {}
+    out = []
+    for e in per.get("elements") or []:
+        out += [sign * e["start"], sign * e["end"]]
+    return sorted(out)
+
+
+def zone_planes(lo: float, hi: float, start: float, end: float) -> list[float]:
+    """The zone's two planes along an axis whose extent is ``lo``..``hi`` (start, end in %)."""
+    return [lo + (hi - lo) * start / 100.0, lo + (hi - lo) * end / 100.0]
+
+
+def plane_quads(
+    lo: tuple[float, float, float], hi: tuple[float, float, float], axis: str, at: list[float]
+) -> list[tuple[float, float, float]]:
+    """Triangles (3 corners each, flat) of a rectangle across the box ``lo``..``hi`` at each
+    position in ``at`` along Blender's ``axis``: the planes the viewport draws."""
+    a = "XYZ".index(axis)
+    u, v = [i for i in range(3) if i != a]
+    tris: list[tuple[float, float, float]] = []
+    for p in at:
+        corners = []
+        for cu, cv in ((lo[u], lo[v]), (hi[u], lo[v]), (hi[u], hi[v]), (lo[u], hi[v])):
+            c = [0.0, 0.0, 0.0]
+            c[a], c[u], c[v] = p, cu, cv
+            corners.append((c[0], c[1], c[2]))
+        tris += [corners[0], corners[1], corners[2], corners[0], corners[2], corners[3]]
+    return tris

@@ -199,6 +199,20 @@ def test_one_more_shelf_counted_by_partscales_element_finder(bookcase_run):
     assert abs(grow * scale - period) < 0.05 * period
 
 
+def test_a_cube_made_in_blender_resized_to_a_target_size_stays_one_closed_mesh(bookcase_run):
+    r, _ = bookcase_run
+    assert r["cube_error"] is None
+    before, after = r["cube_before"], r["cube_after"]
+    assert np.allclose(r["cube_dimensions"], (3.0, 2.0, 2.0), atol=1e-4)
+    assert after["name"] == "Box" and after["materials"] == before["materials"] == ["paint"]
+    assert after["uv_layers"] == before["uv_layers"] and after["matrix"] == before["matrix"]
+    # glTF's split vertices merged back: closed (every edge between two faces), as it was
+    assert r["cube_boundary_edges"] == 0 and r["cube_loose_edges"] == 0
+    # one vertex per position, as in Blender's cube (the exported copy had 24 for 8 corners)
+    pts = np.round(np.array(after["vertices"]), 6)
+    assert len(np.unique(pts, axis=0)) == len(pts) and len(before["vertices"]) == 8
+
+
 def test_bad_input_in_blender_is_one_line_report(bookcase_run):
     r, _ = bookcase_run
     for key, words in [

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+from collections import Counter
 
 import bpy
 
@@ -123,6 +124,22 @@ result["no_partscale_error"] = call(bpy.ops.partscale.apply, obj)
 prefs.partscale_path = PARTSCALE
 wm.partscale.count = -20
 result["refused_error"] = call(bpy.ops.partscale.apply, obj)
+
+# a mesh made in Blender: a cube with a material, 2 m -> 3 m along X (Target size)
+bpy.ops.mesh.primitive_cube_add(size=2.0, location=(3.0, 0.0, 1.0))
+cube = bpy.context.active_object
+cube.name = "Box"
+paint = bpy.data.materials.new("paint")
+cube.data.materials.append(paint)
+result["cube_before"] = snapshot(cube)
+wm.partscale.axis, wm.partscale.mode, wm.partscale.size = "X", "SIZE", 3.0
+result["cube_error"] = call(bpy.ops.partscale.apply, cube)
+cube = bpy.data.objects["Box"]
+result["cube_after"] = snapshot(cube)
+result["cube_dimensions"] = list(cube.dimensions)
+result["cube_loose_edges"] = sum(1 for e in cube.data.edges if e.is_loose)
+uses = Counter(k for p in cube.data.polygons for k in p.edge_keys)
+result["cube_boundary_edges"] = sum(1 for n in uses.values() if n == 1)
 
 with open(os.path.join(OUT, "result.json"), "w") as f:
     json.dump(result, f)

@@ -147,9 +147,29 @@ def _import_mesh(context, path: str):
     return data
 
 
+def _weld_like(old, new) -> None:
+    """Join ``new``'s co-located vertices where ``old`` had none: glTF splits a mesh's vertices
+    wherever UVs or normals differ (every corner of a flat cube), which Blender keeps joined.
+    A source that had co-located vertices of its own (imported from glTF) keeps them apart."""
+    import bmesh
+
+    seen = {tuple(round(c, 7) for c in v.co) for v in old.vertices}
+    if len(seen) < len(old.vertices) or not len(new.vertices):
+        return
+    size = max(
+        max(v.co[i] for v in new.vertices) - min(v.co[i] for v in new.vertices) for i in range(3)
+    )
+    bm = bmesh.new()
+    bm.from_mesh(new)
+    bmesh.ops.remove_doubles(bm, verts=bm.verts, dist=max(size, 1e-9) * 1e-6)
+    bm.to_mesh(new)
+    bm.free()
+
+
 def _replace_mesh(obj, new) -> None:
     """Put ``new`` in place of ``obj``'s mesh: its materials, UV map names and name kept."""
     old = obj.data
+    _weld_like(old, new)
     originals = list(old.materials)
     by_name = {m.name: m for m in originals if m is not None}
     imported = [m for m in new.materials if m is not None]

@@ -226,7 +226,10 @@ def test_cli_export_usdz(tmp_path):
     c = ingest.load(data.table(), res=48)
     src = partscale.save(c, tmp_path / "t.csdf.npz")
     proc = run_cli("export", src, "--mesh", tmp_path / "t.usdz", "--atlas", "256", check=True)
-    assert "t.usdz" in proc.stderr + proc.stdout
+    assert "t.usdz" in proc.stderr + proc.stdout and "note:" not in proc.stderr
+    plain = run_cli("export", src, "--mesh", tmp_path / "v.usdz", check=True)
+    assert "add --atlas" in plain.stderr  # vertex colours: AR Quick Look would show none
+    (tmp_path / "v.usdz").unlink()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.csdf.npz", "t.usdz"]
     assert compliance_failures(tmp_path / "t.usdz") == []
 

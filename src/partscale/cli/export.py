@@ -129,6 +129,12 @@ def export(
     if mesh is not None:
         written += _beside(mesh, atlas)
         done(_mesh_summary(mesh, faces, error))
+        if mesh.suffix.lower() == ".usdz" and atlas is None:
+            typer.echo(
+                "note: vertex colours written as displayColor; AR Quick Look shows textures "
+                "only: add --atlas 1024 to bake them into one",
+                err=True,
+            )
     sizes = ", ".join(f"{p} ({_kb(p)})" for p in written)
     done(f"wrote {sizes} ({' x '.join(map(str, c.shape))} voxels)")
 

@@ -213,6 +213,21 @@ def test_a_cube_made_in_blender_resized_to_a_target_size_stays_one_closed_mesh(b
     assert len(np.unique(pts, axis=0)) == len(pts) and len(before["vertices"]) == 8
 
 
+def test_a_zone_along_blender_y_is_the_zone_the_user_gave(bookcase_run):
+    """Blender's Y is partscale's -z: the zone 0..25 % from -Y, its end taken to 75 %."""
+    r, _ = bookcase_run
+    assert r["slab_error"] is None
+    v = np.array(r["slab_after"]["vertices"])  # local: the cube spans -1..1
+    # the zone [-1, -0.5] became 1.5 long: the object is 3 long along Y, X and Z unchanged
+    assert np.ptp(v[:, 1]) == pytest.approx(3.0, abs=1e-5)
+    assert np.ptp(v[:, 0]) == pytest.approx(2.0, abs=1e-6)
+    assert np.ptp(v[:, 2]) == pytest.approx(2.0, abs=1e-6)
+    # the cut at the zone's plane at Y = -0.5 (25 % from -Y) is there and did not move; a zone
+    # taken from +Y would cut at Y = +0.5 instead
+    ys = np.unique(np.round(v[:, 1], 5))
+    assert -0.5 in ys and 0.5 not in ys, ys
+
+
 def test_bad_input_in_blender_is_one_line_report(bookcase_run):
     r, _ = bookcase_run
     for key, words in [

@@ -141,6 +141,16 @@ result["cube_loose_edges"] = sum(1 for e in cube.data.edges if e.is_loose)
 uses = Counter(k for p in cube.data.polygons for k in p.edge_keys)
 result["cube_boundary_edges"] = sum(1 for n in uses.values() if n == 1)
 
+# a zone along Blender's Y (partscale's -z): the first quarter from -Y stretched to 3/4
+bpy.ops.mesh.primitive_cube_add(size=2.0, location=(-3.0, 0.0, 1.0))
+slab = bpy.context.active_object
+slab.name = "Slab"
+wm.partscale.axis, wm.partscale.mode = "Y", "ZONE"
+wm.partscale.start, wm.partscale.end, wm.partscale.to = 0.0, 25.0, 75.0
+wm.partscale.zone_mode = "stretch"
+result["slab_error"] = call(bpy.ops.partscale.apply, slab)
+result["slab_after"] = snapshot(bpy.data.objects["Slab"])
+
 with open(os.path.join(OUT, "result.json"), "w") as f:
     json.dump(result, f)
 print("addon_run: done", flush=True)

@@ -214,15 +214,21 @@ class PARTSCALE_OT_suggest(bpy.types.Operator):
         settings = context.window_manager.partscale
         try:
             command = _command(context)
+            wm = context.window_manager
+            wm.progress_begin(0, 3)  # the cursor shows the steps (partscale runs for seconds)
             with tempfile.TemporaryDirectory(prefix="partscale-") as folder:
                 src = os.path.join(folder, "object.glb")
                 csdf = os.path.join(folder, "object.csdf.npz")
                 _export(context, obj, src)
+                wm.progress_update(1)
                 core.run(command, "import", src, "-o", csdf, "--res", "96")
+                wm.progress_update(2)
                 text = core.run(command, "suggest", csdf, "--json")
         except core.PartscaleError as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
+        finally:
+            context.window_manager.progress_end()
         settings.suggestions = text
         settings.suggested_for = obj.name
         self.report({"INFO"}, f"partscale: zones found in {obj.name}")
@@ -262,12 +268,17 @@ class PARTSCALE_OT_apply(bpy.types.Operator):
                 src = os.path.join(folder, "object.glb")
                 dst = os.path.join(folder, "result.glb")
                 args = core.edit_args(req, src, dst)
+                context.window_manager.progress_begin(0, 3)
                 _export(context, obj, src)
+                context.window_manager.progress_update(1)
                 core.run(command, *args)
+                context.window_manager.progress_update(2)
                 new = _import_mesh(context, dst)
         except core.PartscaleError as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
+        finally:
+            context.window_manager.progress_end()
         _replace_mesh(obj, new)
         self.report(
             {"INFO"}, f"partscale: {obj.name} edited ({before} -> {len(obj.data.polygons)} faces)"

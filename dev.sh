@@ -6,8 +6,10 @@
 #   ./dev.sh test    lint, format check, type checks (mypy, the page's tsc), the documentation site
 #                    (mkdocs build --strict), the package build and the whole test suite (installs
 #                    what it needs first, the optional Ray and docs extras included)
-# Optional heavy parts (Node tools for glTF validation and browser tests, Debian's chromium) are
-# installed when possible; tests that need them skip with a printed reason otherwise.
+#   ./dev.sh addon   build the Blender add-on's zip (dist/partscale_blender.zip)
+# Optional heavy parts (Node tools for glTF validation and browser tests, Debian's chromium,
+# usd-core, Blender: the bpy wheel and Debian's blender) are installed when possible; tests that
+# need them skip with a printed reason otherwise.
 set -euo pipefail
 cd "$(dirname "$0")"
 ROOT=$PWD
@@ -50,6 +52,16 @@ ensure_ray() {
   fi
 }
 
+ensure_usd() {
+  # the optional [usd] extra (usd-core), so USD/USDZ export and its compliance tests run
+  local stamp=$VENV/.partscale-usd-installed
+  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
+    say "installing the optional USD extra (partscale[usd]) for USD and USDZ export"
+    if "$PY" -m pip install -q -e ".[test,usd]"; then touch "$stamp"
+    else echo "note: could not install usd-core; the USD and USDZ export tests will be skipped" >&2; fi
+  fi
+}
+
 ensure_docs() {
   # the [docs] extra: MkDocs, Material, mkdocstrings and `build`, for the site and package checks
   local stamp=$VENV/.partscale-docs-installed
@@ -81,6 +93,35 @@ check_docs() {
   else
     echo "note: build not installed; the package build is skipped" >&2
   fi
+}
+
+ensure_blender() {
+  # Blender for the add-on's tests: the bpy wheel (Blender 4.2 as a Python 3.11 module) in
+  # .venv-bpy, and Debian's blender with xvfb for the test that needs a window (Undo, the
+  # panel's picture); each test skips with the reason where its Blender is missing
+  local bvenv=$ROOT/.venv-bpy
+  if ! { [ -x "$bvenv/bin/python" ] && "$bvenv/bin/python" -c 'import bpy' >/dev/null 2>&1; }; then
+    if command -v python3.11 >/dev/null 2>&1; then
+      say "installing Blender as a Python module (bpy 4.2, large) into .venv-bpy for the add-on tests"
+      { python3.11 -m venv "$bvenv" && "$bvenv/bin/python" -m pip install -q "bpy>=4.0,<4.3"; } \
+        || echo "note: could not install the bpy wheel; the Blender add-on tests will be skipped" >&2
+    else
+      echo "note: the bpy wheel needs python3.11 on PATH; the Blender add-on tests will be skipped" >&2
+    fi
+  fi
+  if command -v blender >/dev/null 2>&1 && command -v xvfb-run >/dev/null 2>&1; then return 0; fi
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    say "installing Debian's blender and xvfb for the add-on's Undo test"
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq blender xvfb python3-numpy >/dev/null) \
+      || echo "note: could not install blender and xvfb; the add-on's Undo test will be skipped" >&2
+  else
+    echo "note: blender and xvfb-run not found and cannot be installed here (needs root and apt-get); the add-on's Undo test will be skipped" >&2
+  fi
+}
+
+addon() {
+  # the Blender add-on's zip (Edit > Preferences > Add-ons > Install...)
+  "$(find_python)" integrations/blender/build.py "${1:-$ROOT/dist/partscale_blender.zip}"
 }
 
 ensure_node_tools() {
@@ -138,12 +179,14 @@ case "${1:-}" in
   test)
     ensure_venv
     ensure_ray
+    ensure_usd
     ensure_docs
     ensure_node_tools
     ensure_chromium
+    ensure_blender
     say "ruff"
-    "$VENV/bin/ruff" check src tests bench
-    "$VENV/bin/ruff" format --check src tests bench
+    "$VENV/bin/ruff" check src tests bench integrations
+    "$VENV/bin/ruff" format --check src tests bench integrations
     say "mypy (src/partscale, settings in pyproject.toml)"
     "$VENV/bin/mypy"
     if [ -x web/node_modules/.bin/tsc ]; then
@@ -161,11 +204,15 @@ case "${1:-}" in
     ensure_venv
     demo
     ;;
+  addon)
+    shift
+    addon "$@"
+    ;;
   demo-steps)
     # the demo alone, without installing anything (tests run it with their own Python)
     demo
     ;;
   *)
-    echo "usage: ./dev.sh setup | test [pytest args] | demo | demo-steps" >&2; exit 2
+    echo "usage: ./dev.sh setup | test [pytest args] | demo | demo-steps | addon [OUT.zip]" >&2; exit 2
     ;;
 esac

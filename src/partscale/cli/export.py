@@ -20,7 +20,11 @@ def export(
     mesh: Annotated[
         Path | None,
         typer.Option(
-            "--mesh", metavar="FILE", help="Coloured mesh to write: OUT.glb, OUT.ply or OUT.obj."
+            "--mesh",
+            metavar="FILE",
+            help="Coloured mesh to write: OUT.glb, OUT.ply or OUT.obj; OUT.usd, OUT.usda, "
+            "OUT.usdc or OUT.usdz (AR Quick Look; with --atlas for a baked texture) with the "
+            "optional partscale\\[usd].",
         ),
     ] = None,
     texture: Annotated[
@@ -80,6 +84,7 @@ def export(
         raise InputError("export: expected at least one output (--mesh or --texture), got none")
     if mesh is not None:
         check_output(mesh, suffixes=export_mod.MESH_SUFFIXES, what="a mesh file")
+        export_mod.require_usd(mesh)
     for t in textures:
         check_output(t, suffixes=export_mod.TEXTURE_SUFFIXES, what="a 3D texture file")
     outputs = [mesh, *textures] if mesh is not None else textures
@@ -99,7 +104,9 @@ def export(
         export_mod.check_budget(faces, error)
         export_mod.check_atlas(atlas)
         if atlas is not None and mesh.suffix.lower() == ".ply":
-            raise InputError(f"{mesh}: expected .glb or .obj with --atlas (PLY has no textures)")
+            raise InputError(
+                f"{mesh}: expected .glb, .obj or USD with --atlas (PLY has no textures)"
+            )
     elif faces is not None or atlas is not None:
         raise InputError("export: expected --mesh with --faces, --error or --atlas, got no --mesh")
     c = load(path)
@@ -122,6 +129,12 @@ def export(
     if mesh is not None:
         written += _beside(mesh, atlas)
         done(_mesh_summary(mesh, faces, error))
+        if mesh.suffix.lower() == ".usdz" and atlas is None:
+            typer.echo(
+                "note: vertex colours written as displayColor; AR Quick Look shows textures "
+                "only: add --atlas 1024 to bake them into one",
+                err=True,
+            )
     sizes = ", ".join(f"{p} ({_kb(p)})" for p in written)
     done(f"wrote {sizes} ({' x '.join(map(str, c.shape))} voxels)")
 
@@ -131,18 +144,26 @@ def _kb(p: Path) -> str:
 
 
 def _beside(mesh: Path, atlas: int | None) -> list[Path]:
-    """The MTL and PNG an atlased OBJ writes beside itself."""
-    if atlas is None or mesh.suffix.lower() != ".obj":
+    """The MTL and PNG an atlased OBJ writes beside itself; the PNG beside a USD layer."""
+    suffix = mesh.suffix.lower()
+    if atlas is None or suffix not in (".obj", ".usd", ".usda", ".usdc"):
         return []
+    if suffix != ".obj":
+        return [mesh.with_suffix(".png")]
     return [mesh.with_suffix(".mtl"), mesh.with_suffix(".png")]
 
 
 def _mesh_summary(mesh: Path, faces: int | None, error: float | None) -> str:
     import trimesh
 
-    loaded = trimesh.load(mesh, force="mesh", process=False)
-    assert isinstance(loaded, trimesh.Trimesh)  # force="mesh"
-    n = len(loaded.faces)
+    from ..export import USD_SUFFIXES, usd_faces
+
+    if mesh.suffix.lower() in USD_SUFFIXES:
+        n = usd_faces(mesh)
+    else:
+        loaded = trimesh.load(mesh, force="mesh", process=False)
+        assert isinstance(loaded, trimesh.Trimesh)  # force="mesh"
+        n = len(loaded.faces)
     if faces is not None:
         budget = f"budget --faces {faces}"
     elif error is not None:

@@ -23,7 +23,8 @@ def fit(
             "-o",
             "--output",
             metavar="OUT",
-            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply) for a mesh IN.",
+            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
+            ".usdz with partscale\\[usd]) for a mesh IN.",
         ),
     ],
     size: Annotated[
@@ -54,12 +55,13 @@ def fit(
     """
     from ..edit import apply_recipe, describe_changes
     from ..zones import fit as fit_zones
-    from .scale import _MESH_IN, _MESH_OUT, check_square
+    from .scale import _MESH_IN, _MESH_OUT, check_square, check_usd
 
     mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     check_square(square, mesh_route, src, output)
+    check_usd(output)
     if recipe_out is not None:
         _common.check_output(recipe_out, suffixes=(".json",), what="a recipe JSON file")
     if mesh_route:

@@ -13,7 +13,7 @@ from . import _common
 
 # mesh in and mesh out: the mesh route (partscale.meshedit), edits applied to the source mesh
 _MESH_IN = (".glb", ".gltf", ".obj", ".ply")
-_MESH_OUT = (".glb", ".obj", ".ply")
+_MESH_OUT = (".glb", ".obj", ".ply", ".usd", ".usda", ".usdc", ".usdz")
 
 SQUARE_OPTION = typer.Option(
     "--square",
@@ -36,7 +36,8 @@ def scale(
             "-o",
             "--output",
             metavar="OUT",
-            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply) when IN is one "
+            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
+            ".usdz with partscale\\[usd]) when IN is one "
             "(the edit is applied to the source mesh itself).",
         ),
     ],
@@ -155,6 +156,7 @@ def scale(
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     check_square(square, mesh_route, src, output)
+    check_usd(output)
     dest_given = [(n, v) for n, v in (("--to", to), ("--by", by), ("--copies", copies)) if v]
     warp_opts = [
         n for n, v in (("--center", center), ("--sides", sides), ("--span", span)) if v is not None
@@ -362,6 +364,13 @@ def _radial_recipe(c, zone, to, by, center, sides, span):
         y0, y1 = (_along(v, float(sb[0, 1]), float(sb[1, 1]), units, "--span") for v in span)
         lim = (y0, y1)
     return Recipe((RadialZone("y", (cx, cz), r0, r1, dest, k, phase, lim),))
+
+
+def check_usd(output: Path) -> None:
+    """A USD output needs the optional usd-core: one line naming the extra, before any work."""
+    from ..export import require_usd
+
+    require_usd(output)
 
 
 def check_square(square: bool, mesh_route: bool, src: Path, output: Path) -> None:

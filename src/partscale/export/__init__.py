@@ -8,6 +8,10 @@ Meshes (:func:`export_mesh`, :data:`MESH_WRITERS`): marching cubes of the zero l
 - ``.glb`` (``glb``): linear ``COLOR_0`` as glTF requires (on a primitive without a material,
   the layout trimesh reads too), normals from the SDF gradient; with an atlas, ``TEXCOORD_0`` and
   an embedded ``baseColorTexture`` instead.
+- ``.usd``, ``.usda``, ``.usdc``, ``.usdz`` (``usd``, with the optional usd-core): a
+  ``UsdPreviewSurface`` whose base colour is the atlas or the ``displayColor`` primvar, Y up,
+  ``metersPerUnit`` from the units; ``.usdz`` packaged for AR Quick Look. :func:`save_usd`
+  writes a whole scene (the mesh route's).
 - ``.ply``, ``.obj`` (``mesh``): sRGB vertex colours; PLY also a ``parts`` vertex property; OBJ
   with an atlas: ``NAME.mtl`` + ``NAME.png`` beside it. :func:`save_obj` is partscale's one OBJ
   writer (the mesh route's too): companions named after the output, all written atomically.
@@ -36,6 +40,7 @@ from .textures import (
     encode_distance_8bit,
     flipbook_layout,
 )
+from .usd import USD_EXTRA, USD_SUFFIXES, require_usd, save_usd, usd_faces
 from .write import (
     MESH_SUFFIXES,
     MESH_WRITERS,
@@ -59,6 +64,8 @@ __all__ = [
     "TEXTURE_READERS",
     "TEXTURE_SUFFIXES",
     "TEXTURE_WRITERS",
+    "USD_EXTRA",
+    "USD_SUFFIXES",
     "bake",
     "check_atlas",
     "check_budget",
@@ -69,8 +76,11 @@ __all__ = [
     "export_texture",
     "flipbook_layout",
     "read_texture",
+    "require_usd",
     "resize_grid",
     "save_obj",
+    "save_usd",
     "simplify",
     "unwrap",
+    "usd_faces",
 ]

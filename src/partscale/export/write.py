@@ -21,11 +21,17 @@ from .nrrd import read_nrrd, write_nrrd
 from .resize import check_size, resize_grid
 from .simplify import check_budget, simplify
 from .textures import read_png, read_raw, write_png, write_raw
+from .usd import require_usd, write_usd
 
 MESH_WRITERS: dict[str, Callable[[CSDF, Any, Path], None]] = {
     ".glb": write_glb,
     ".ply": write_ply,
     ".obj": write_obj,
+    # USD layers and the USDZ package (usd-core, the optional extra partscale[usd])
+    ".usd": write_usd,
+    ".usda": write_usd,
+    ".usdc": write_usd,
+    ".usdz": write_usd,
 }
 """Mesh writer by suffix: ``(csdf, trimesh surface, path)``, writing ``path`` as it is."""
 TEXTURE_WRITERS: dict[str, Callable[[CSDF, Path], list[Path]]] = {
@@ -101,6 +107,7 @@ def export_mesh(
 
     path = Path(path)
     suffix = check_suffix(path, MESH_SUFFIXES, "a mesh file")
+    require_usd(path)
     check_budget(faces, error)
     atlas = check_atlas(atlas)
     if atlas is not None and suffix == ".ply":

@@ -31,7 +31,7 @@ from .cut import Piece, concatenate, cut, subset
 if TYPE_CHECKING:
     import trimesh
 
-OUTPUT_SUFFIXES = (".glb", ".obj", ".ply")
+OUTPUT_SUFFIXES = (".glb", ".obj", ".ply", ".usd", ".usda", ".usdc", ".usdz")
 
 #: lateral distance (relative to the object's size) within which two seam points are one
 WELD_TOLERANCE = 1e-5
@@ -584,7 +584,10 @@ def load_scene(path: str | os.PathLike) -> trimesh.Scene:
 
 
 def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
-    """Write ``scene`` (GLB; PLY; OBJ via :func:`partscale.export.save_obj`), atomically.
+    """Write ``scene`` (GLB, PLY, OBJ, USD or USDZ by the suffix), atomically.
+
+    OBJ goes through :func:`partscale.export.save_obj`, USD and USDZ through
+    :func:`partscale.export.save_usd` (the optional usd-core).
 
     Parameters
     ----------
@@ -605,7 +608,7 @@ def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
     [PosixPath('table.obj'), PosixPath('table.mtl')]
     """
     from .._files import atomic_path
-    from ..export import save_obj
+    from ..export import USD_SUFFIXES, save_obj, save_usd
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -614,6 +617,8 @@ def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
             f"{path}: expected an output mesh ({', '.join(OUTPUT_SUFFIXES)}), got "
             f"{suffix or 'no suffix'}"
         )
+    if suffix in USD_SUFFIXES:
+        return save_usd(scene, path)
     if suffix == ".obj":
         # the scene itself, not one concatenated mesh: one usemtl group per material
         return save_obj(display_colours(scene, ".obj"), path)
@@ -792,6 +797,9 @@ def edit_mesh_file(
         )
     if not isinstance(square, bool):
         raise InputError(f"square: expected True or False, got {square!r}")
+    from ..export import require_usd
+
+    require_usd(dst)  # before any work: usd-core is an optional extra
     scene = load_scene(src)
     # the source's walls, before the recipe touches the scene
     wanted = square or any(e.axis in WALL_AXES for e in _planar(recipe))

@@ -77,6 +77,9 @@ class ColoredMesh:
         Linear vertex colour at each triangle corner (ones where a piece has none).
     source : str
         File it was read from.
+    notes : tuple of str
+        What the reader said to the user while reading (a missing texture or material library
+        replaced by the material's colour); the import records them in its history.
 
     Examples
     --------
@@ -93,6 +96,7 @@ class ColoredMesh:
     uv: np.ndarray | None = None
     corner_color: np.ndarray | None = None
     source: str = ""
+    notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         # read-only like a CSDF's arrays; a caller's writeable array is copied, not frozen

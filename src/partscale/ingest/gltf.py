@@ -17,7 +17,6 @@ import binascii
 import io
 import json
 import struct
-import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -25,8 +24,8 @@ from urllib.parse import unquote
 
 import numpy as np
 
-from ..errors import InputError, PartscaleWarning, one_line
-from .mesh import ColoredMesh, read_scene, scene_to_mesh
+from ..errors import InputError, one_line
+from .mesh import ColoredMesh, read_scene, say, scene_to_mesh
 
 if TYPE_CHECKING:
     import trimesh
@@ -211,8 +210,6 @@ def _texture_notes(path: Path, got: tuple[dict, bytes] | None) -> list[str]:
                 )
     except (AttributeError, TypeError, KeyError, IndexError, ValueError, struct.error):
         return notes  # a malformed document: trimesh reports what is wrong with it
-    for note in notes:
-        warnings.warn(note, PartscaleWarning, stacklevel=3)
     return notes
 
 
@@ -263,6 +260,7 @@ def load_gltf(path: Path) -> ColoredMesh:
     if prepared and got:
         _exact_factors(scene, got[0])
     mesh = scene_to_mesh(scene, path, linear_colors=True, uv_transforms=transforms)
+    say(notes)  # once read whole: a file refused gets its error line alone
     return replace(mesh, notes=tuple(notes))
 
 
@@ -272,9 +270,12 @@ def load_gltf_scene(path: Path) -> trimesh.Scene:
     """
     import trimesh
 
-    _texture_notes(path, _read_gltf(path))
+    notes = _texture_notes(path, _read_gltf(path))
 
     def read():
         return trimesh.load_scene(path, process=False, maintain_order=True)
 
-    return read_scene(path, read)
+    scene = read_scene(path, read)
+    if scene.geometry:
+        say(notes)
+    return scene

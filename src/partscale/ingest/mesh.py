@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, overload
 import numpy as np
 
 from ..color import linear_to_srgb8, srgb_to_linear
-from ..errors import InputError, one_line
+from ..errors import InputError, PartscaleWarning, one_line
 
 if TYPE_CHECKING:
     from PIL import Image
@@ -176,6 +176,14 @@ def read_scene(path: Path, read: Callable):
         if isinstance(exc, IndexError):  # an OBJ face naming a vertex that is not there
             msg = f"an index past its list ({msg})"
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
+
+
+def say(notes: list[str] | tuple[str, ...]) -> None:
+    """Say each note once (a :class:`~partscale.errors.PartscaleWarning`), once the file has
+    been read whole: a file refused afterwards gets its one error line alone.
+    """
+    for note in notes:
+        warnings.warn(note, PartscaleWarning, stacklevel=3)
 
 
 def scene_to_mesh(

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import io
 import re
-import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -26,8 +25,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..color import srgb_to_linear
-from ..errors import InputError, PartscaleWarning, one_line
-from .mesh import ColoredMesh, Material, image_linear, read_scene, scene_to_mesh
+from ..errors import InputError, one_line
+from .mesh import ColoredMesh, Material, image_linear, read_scene, say, scene_to_mesh
 
 if TYPE_CHECKING:
     import trimesh
@@ -313,8 +312,6 @@ def _read_obj(path: Path, **kwargs) -> tuple[trimesh.Scene, dict, list[str]]:
     assert resolver is not None
     # outside read_scene: a failure here is ours (or an InputError), not an unreadable OBJ
     materials = _obj_materials(path, resolver.mtl, notes)
-    for note in notes:
-        warnings.warn(note, PartscaleWarning, stacklevel=3)
     return scene, materials, notes
 
 
@@ -323,6 +320,7 @@ def load_obj(path: Path) -> ColoredMesh:
     scene, materials, notes = _read_obj(path)
     mats = {name: m for name, (m, _) in materials.items()}
     mesh = scene_to_mesh(scene, path, linear_colors=False, materials=mats)
+    say(notes)
     return replace(mesh, notes=tuple(notes))
 
 
@@ -339,7 +337,7 @@ def load_obj_scene(path: Path) -> trimesh.Scene:
     from trimesh.visual import TextureVisuals
 
     # not maintain_order: trimesh then keeps one UV per position, breaking UV seams
-    scene, materials, _ = _read_obj(path, split_groups=True)
+    scene, materials, notes = _read_obj(path, split_groups=True)
     several = len(materials) > 1
     out = trimesh.Scene()
     for node in scene.graph.nodes_geometry:
@@ -360,6 +358,9 @@ def load_obj_scene(path: Path) -> trimesh.Scene:
                 uv = np.asarray(uv, np.float64) @ tf[:, :2].T + tf[:, 2]
             geom.visual = TextureVisuals(uv=uv, material=_pbr(mat_name, material, img))
         out.add_geometry(geom, node_name=name, geom_name=name, transform=transform)
+    if not out.geometry:
+        raise InputError(f"{path}: expected a mesh with triangles, got none")
+    say(notes)
     return out
 
 

@@ -787,12 +787,18 @@ def edit_mesh_file(
         )
     if not isinstance(square, bool):
         raise InputError(f"square: expected True or False, got {square!r}")
-    scene = load_scene(src)
+    with warnings.catch_warnings(record=True) as said:
+        # what reading noticed (a missing texture) is said once the edit is known to go
+        # through: a refused edit gets its one error line alone
+        warnings.simplefilter("always", PartscaleWarning)
+        scene = load_scene(src)
     # the source's walls, before the recipe touches the scene
     wanted = square or any(e.axis in WALL_AXES for e in _planar(recipe))
     turn = square_turn(scene.triangles) if wanted else None
     saved = _turn_scene(scene, turn) if square and turn is not None else None
     out, seams = apply_recipe_to_scene(scene, recipe)
+    for w in said:
+        warnings.warn(w.message, w.category, stacklevel=2)
     if saved is not None:
         _restore_turn(out, saved)
     written = save_scene(out, dst)

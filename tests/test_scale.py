@@ -702,29 +702,28 @@ def test_tile_distances_next_to_seams_are_exact(width, gap, start, length):
 
 
 @pytest.mark.slow
-def test_radiator_tiled_with_its_period_keeps_its_pockets_and_exact_seams(data):
-    """A real radiator (Sweet Home 3D's, slatted grille on top) tiled with the period suggest
+@pytest.mark.parametrize("res", [128, 256])
+def test_radiator_tiled_with_its_period_keeps_its_pockets_and_exact_seams(data, res):
+    """A real radiator (Sweet Home 3D's, slatted grille on top) tiled with the periods suggest
     finds along its slats: as many enclosed air pockets as before, and the band within 3 voxels
-    of the inner seams exact to 0.5 voxel (p99).
+    of the inner seams exact to 0.5 voxel (p99; at 256 the second period gave 2.0 voxels, where
+    the blend of a copy far outside with one inside exceeded the band beside a new surface and
+    was left so).
     """
     from partscale import ingest, zones
     from partscale.evaluate.metrics import distance_error
 
-    c = ingest.load(data("sweethome3d/electricRadiator.obj"), res=128)
-    tiles = [k for k in zones.suggest(c, "y") if k.kind == "tile"]
+    c = ingest.load(data("sweethome3d/electricRadiator.obj"), res=res)
+    tiles = [k for k in zones.suggest(c, "y") if k.kind == "tile"][:2]
     assert tiles, "suggest finds no period on the radiator"
-    start, end = tiles[0].zone
     h = c.voxel_size
-    for copies in (2, 3):
-        change = {
-            "axis": "y",
-            "zone": [start, end],
-            "to": start + copies * (end - start) + 0.4 * h,
-            "mode": "tile",
-        }
+    for tile in tiles:
+        start, end = tile.zone
+        to = start + 2 * (end - start) + 0.4 * h
+        change = {"axis": "y", "zone": [start, end], "to": to, "mode": "tile"}
         r = resolve_edit(c, Edit.parse(change))
         out = apply_edit(c, change)
         assert _enclosed_air(out) == _enclosed_air(c)
         seams = [(1, y - 3 * h, y + 3 * h) for y, source in r.seams() if source is None]
         _, p99 = distance_error(out, to_mesh(out), regions=seams)
-        assert p99 <= 0.5, (copies, p99)
+        assert p99 <= 0.5, (tile.zone, p99)

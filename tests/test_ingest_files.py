@@ -14,8 +14,9 @@ import pytest
 from conftest import assert_bad_input
 from PIL import Image
 
+import partscale
 from partscale import ingest
-from partscale.errors import InputError
+from partscale.errors import InputError, PartscaleWarning
 
 # 2x2 texture: top-left red, top-right green, bottom-left blue, bottom-right white. In trimesh's
 # v-up UVs the texel centres are red (.25, .75), green (.75, .75), blue (.25, .25), white (.75, .25).
@@ -199,13 +200,88 @@ def test_obj_non_finite_kd_is_refused(tmp_path, kd):
         ingest.load_mesh(obj)
 
 
-def test_obj_missing_texture_is_refused(tmp_path, cli):
+def test_obj_missing_texture_is_said_and_its_kd_used(tmp_path, cli):
+    """A texture the MTL names but that is missing: one line, and the material's Kd."""
     obj = _obj(tmp_path, "a.mtl", "newmtl m\nKd 0.2 0.4 0.6\nmap_Kd tex/none.png\n")
-    with pytest.raises(InputError, match=r"a\.obj: expected the texture .*none\.png named by"):
-        ingest.load_mesh(obj)
+    with pytest.warns(PartscaleWarning, match=r"a\.obj: the texture .*none\.png .* missing"):
+        m = ingest.load_mesh(obj)
+    assert _face_colours(m) == [[51, 102, 153]]
+    assert len(m.notes) == 1 and "none.png" in m.notes[0]
     out = tmp_path / "o.csdf.npz"
-    assert_bad_input(cli("import", obj, "-o", out), "none.png", "no such file")
-    assert not out.exists()
+    proc = cli("import", obj, "-o", out, "--res", "16")
+    assert proc.returncode == 0, proc.stderr
+    said = [ln for ln in proc.stderr.splitlines() if "none.png" in ln]
+    assert len(said) == 1 and "missing" in said[0], proc.stderr
+    assert "none.png" in partscale.load(out).meta["history"][0]["notes"][0]
+
+
+def test_obj_unreadable_texture_without_kd_is_grey(tmp_path):
+    """A texture that is not an image: said, and the material grey (no Kd to show)."""
+    (tmp_path / "q.png").write_bytes(b"not a png")
+    with pytest.warns(PartscaleWarning, match=r"q\.png .* unreadable"):
+        m = ingest.load_mesh(_obj(tmp_path, "a.mtl", "newmtl m\nmap_Kd q.png\n"))
+    assert _face_colours(m) == [[102, 102, 102]]
+
+
+def test_obj_missing_material_library_is_said_and_grey(tmp_path):
+    obj = tmp_path / "a.obj"
+    obj.write_text("mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n")
+    with pytest.warns(PartscaleWarning, match=r"a\.obj: its material library gone\.mtl is missing"):
+        m = ingest.load_mesh(obj)
+    assert _face_colours(m) == [[102, 102, 102]]
+
+
+def _gltf_image(path, image: dict):
+    """Point the (single) image of the .gltf at ``path`` elsewhere: ``image`` replaces it."""
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    doc["images"] = [image]
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = [0.2, 0.4, 0.6, 1.0]
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("image", "fragment"),
+    [
+        ({"uri": "gone.png"}, "'gone.png' is missing"),
+        ({"uri": "broken.png"}, "'broken.png' is unreadable"),
+        ({"uri": "data:image/png;base64," + base64.b64encode(b"junk").decode()}, "unreadable"),
+    ],
+)
+def test_gltf_missing_or_broken_texture_is_said_and_its_factor_used(tmp_path, image, fragment):
+    """trimesh drops such a texture with no word: one line names it, the factor is the colour."""
+    (tmp_path / "broken.png").write_bytes(b"\x89PNG\r\n\x1a\n broken")
+    path = _gltf(tmp_path / "t.gltf", [{"uv0": UV_RED, "material": 0}], [_textured(name="oak")])
+    _gltf_image(path, image)
+    with pytest.warns(PartscaleWarning, match=rf"t\.gltf: .*'oak'.*{fragment}") as said:
+        m = ingest.load_mesh(path)
+    assert len(said) == 1 and len(m.notes) == 1
+    # factor (0.2, 0.4, 0.6) linear, in sRGB
+    assert np.abs(np.array(_face_colours(m)) - [124, 170, 203]).max() <= 1
+
+
+# -- OBJ groups and partial UVs -----------------------------------------------------------
+
+
+def test_obj_faces_without_vt_beside_faces_with_keep_the_uvs(tmp_path):
+    """One material, one triangle with vt (the red texel) and one without: both routes read
+    the texture at the UVs given, and the corners without one at (0, 0): the image's corner,
+    where the repeat-wrapped bilinear lookup mixes all four texels (linear mean 0.5: sRGB 188).
+    """
+    Image.fromarray(QUAD).save(tmp_path / "q.png")
+    (tmp_path / "a.mtl").write_text("newmtl m\nKd 1 1 1\nmap_Kd q.png\n")
+    obj = tmp_path / "a.obj"
+    obj.write_text(
+        "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 3 0 0\nv 2 1 0\nvt 0.25 0.75\n"
+        "usemtl m\nf 1/1 2/1 3/1\nf 4 5 6\n"
+    )
+    m = ingest.load_mesh(obj)
+    assert _face_colours(m) == [RED, [188, 188, 188]]
+    scene = ingest.load_mesh_scene(obj)
+    (geom,) = scene.geometry.values()
+    assert geom.visual.uv is not None and len(geom.visual.uv) == len(geom.vertices)
+    uv = np.asarray(geom.visual.uv)[np.asarray(geom.faces)]
+    assert uv[0].tolist() == [[0.25, 0.75]] * 3 and uv[1].tolist() == [[0.0, 0.0]] * 3
 
 
 # -- damaged or unusual mesh files --------------------------------------------------------

@@ -8,7 +8,7 @@ import trimesh
 
 from partscale import ingest
 from partscale.edit import Recipe, apply_recipe
-from partscale.errors import InputError
+from partscale.errors import InputError, PartscaleWarning
 from partscale.meshedit import apply_recipe_to_scene, load_scene, save_scene
 from partscale.surface import sample_linear
 
@@ -258,9 +258,13 @@ def test_obj_in_obj_out_keeps_its_materials(data, tmp_path):
     written = save_scene(out, tmp_path / "t.obj")
     assert [p.name for p in written] == ["t.obj", "t.mtl"]
     back = trimesh.load(written[0], force="scene")
-    kd = sorted(tuple(g.visual.material.diffuse[:3]) for g in back.geometry.values())
-    want = sorted(tuple(g.visual.material.diffuse[:3]) for g in scene.geometry.values())
-    assert kd == want and len(kd) >= 2
+    kd = {tuple(g.visual.material.diffuse[:3]) for g in back.geometry.values()}
+    source = trimesh.load(data("sweethome3d/table.obj"), force="scene")
+    want = {tuple(g.visual.material.diffuse[:3]) for g in source.geometry.values()}
+    # Kd written back as read (display values), to within the 8-bit round trip
+    assert len(kd) == len(want) >= 2
+    for c in want:
+        assert min(np.abs(np.subtract(c, k, dtype=int)).max() for k in kd) <= 1, (c, kd)
 
 
 def _textured_glb(path, rgb, material="material_0"):
@@ -330,3 +334,161 @@ def test_obj_write_refused_midway_leaves_nothing(tmp_path):
     with pytest.raises(InputError, match=r"a\.png: expected a writable file, got a directory"):
         save_obj(scene, out / "a.obj")
     assert [p.name for p in out.iterdir()] == ["a.png"]
+
+
+# -- OBJ on the mesh route: colours, groups, UVs, missing files ---------------------------
+
+
+def _centroid_colours(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """(F, 3) face centroids and (F, 3) int sRGB colours there, of a ColoredMesh."""
+    n = mesh.n_faces
+    colours = mesh.color_at(np.arange(n), np.full((n, 3), 1 / 3)).astype(int)
+    return mesh.vertices[mesh.faces].mean(axis=1), colours
+
+
+def _same_colours_both_routes(obj, tmp_path) -> int:
+    """Worst sRGB difference, face by face, between the import of ``obj`` and the import of
+    the GLB the mesh route writes of it.
+    """
+    from scipy.spatial import cKDTree
+
+    glb = tmp_path / "routed.glb"
+    save_scene(load_scene(obj), glb)
+    pa, ca = _centroid_colours(ingest.load_mesh(obj))
+    pb, cb = _centroid_colours(ingest.load_mesh(glb))
+    dist, j = cKDTree(pb).query(pa)
+    assert dist.max() < 1e-6 * np.ptp(pa, axis=0).max()  # the same triangles (GLB: float32)
+    return int(np.abs(ca - cb[j]).max())
+
+
+def test_obj_kd_is_one_colour_on_both_routes(tmp_path):
+    """Kd is a display colour on both routes: a desk top stored as 179,107,56 stays so in the
+    GLB (not 218,173,129), and a dark one keeps its level (no 8-bit linear rounding).
+    """
+    (tmp_path / "a.mtl").write_text(
+        "newmtl desk\nKd 0.7 0.42 0.22\nnewmtl dark\nKd 0.05 0.02 0.01\n"
+    )
+    obj = tmp_path / "a.obj"
+    obj.write_text(
+        "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 3 0 0\nv 2 1 0\n"
+        "usemtl desk\nf 1 2 3\nusemtl dark\nf 4 5 6\n"
+    )
+    _, colours = _centroid_colours(ingest.load_mesh(obj))
+    assert sorted(colours.tolist()) == [[13, 5, 3], [179, 107, 56]]
+    assert _same_colours_both_routes(obj, tmp_path) <= 2
+
+
+@pytest.mark.parametrize("rel", ["sweethome3d/table.obj", "sweethome3d/dresser.obj"])
+def test_real_obj_is_one_colour_on_both_routes(data, tmp_path, rel):
+    assert _same_colours_both_routes(data(rel), tmp_path) <= 2
+
+
+def _node_names(glb) -> set[str]:
+    import json
+    import struct
+
+    raw = glb.read_bytes()
+    doc = json.loads(raw[20 : 20 + struct.unpack("<I", raw[12:16])[0]])
+    return {n.get("name") for n in doc["nodes"]} | {m.get("name") for m in doc["meshes"]}
+
+
+def test_obj_groups_survive_obj_to_glb(tmp_path):
+    """Each OBJ group is a node named after it (not merged per material), even where two
+    groups share a material and one group holds two.
+    """
+    (tmp_path / "a.mtl").write_text("newmtl wood\nKd 0.6 0.4 0.2\nnewmtl metal\nKd 0.5 0.5 0.5\n")
+    obj = tmp_path / "a.obj"
+    obj.write_text(
+        "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+        "g cabinet_opening_on_hinge_1_door\nusemtl wood\nf 1 2 3\n"
+        "g cabinet_frame\nusemtl wood\nf 1 2 4\n"
+        "g cabinet_hinge_1\nusemtl metal\nf 1 3 4\n"
+    )
+    out = tmp_path / "a.glb"
+    save_scene(load_scene(obj), out)
+    names = _node_names(out)
+    for g in ("cabinet_opening_on_hinge_1_door", "cabinet_frame", "cabinet_hinge_1"):
+        assert g in names, names
+
+
+def test_sweet_home_3d_door_groups_survive_an_edit_to_glb(data, tmp_path):
+    """The dresser's doors (groups ..._opening_on_hinge_N_door, which Sweet Home 3D animates)
+    keep their names through a mesh-route edit to GLB.
+    """
+    from partscale.meshedit import edit_mesh_file
+
+    src = data("sweethome3d/dresser.obj")
+    groups = {
+        ln.split(maxsplit=1)[1].strip()
+        for ln in src.read_text().splitlines()
+        if ln.startswith("g ")
+    }
+    out = tmp_path / "d.glb"
+    edit_mesh_file(src, out, Recipe.parse([{"axis": "y", "zone": ["40%", "60%"], "to": "70%"}]))
+    names = _node_names(out)
+    assert any("opening_on_hinge" in g for g in groups)
+    assert groups <= names, groups - names
+
+
+def test_partly_uv_mapped_obj_keeps_its_uvs_on_the_mesh_route(tmp_path):
+    """Faces with vt keep them through the mesh route (trimesh dropped all UVs of a mesh where
+    some faces had none); the faces without get (0, 0).
+    """
+    from PIL import Image
+
+    Image.new("RGB", (2, 2), (200, 30, 30)).save(tmp_path / "q.png")
+    (tmp_path / "a.mtl").write_text("newmtl m\nKd 1 1 1\nmap_Kd q.png\n")
+    obj = tmp_path / "a.obj"
+    obj.write_text(
+        "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\n"
+        "usemtl m\nf 1/1 2/2 3/3\nf 1 2 4\nf 1 3 4\n"
+    )
+    out = tmp_path / "a.glb"
+    edit = {"axis": "x", "zone": ["20%", "60%"], "to": "80%"}
+    save_scene(apply_recipe_to_scene(load_scene(obj), Recipe.parse([edit]))[0], out)
+    back = trimesh.load(out, force="mesh", process=False)
+    uv = np.asarray(back.visual.uv)
+    assert uv is not None and len(uv) == len(back.vertices)
+    given = {(0.1, 0.2), (0.3, 0.4), (0.5, 0.6)}
+    got = {tuple(np.round(u, 6)) for u in uv}
+    assert given <= got and (0.0, 0.0) in got, got
+
+
+def test_missing_mtl_and_texture_are_said_on_the_mesh_route_as_on_import(tmp_path, cli):
+    """The mesh route handles a missing material library and a missing texture as import
+    does: one line each, exit 0, the material's own colour.
+    """
+    obj = tmp_path / "t.obj"
+    obj.write_text(
+        "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nusemtl red\n"
+        "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n"
+    )
+    for args in (("import", obj, "-o", tmp_path / "t.csdf.npz", "--res", "16"),
+                 ("scale", obj, "-o", tmp_path / "t.glb", "--axis", "x", "--zone", "20%", "60%",
+                  "--to", "80%")):  # fmt: skip
+        proc = cli(*args)
+        assert proc.returncode == 0, proc.stderr
+        said = [ln for ln in proc.stderr.splitlines() if "gone.mtl" in ln]
+        assert len(said) == 1 and "missing" in said[0], (args[0], proc.stderr)
+    m = ingest.load_mesh(tmp_path / "t.glb")  # whole: nothing to say, grey as import made it
+    _, colours = _centroid_colours(m)
+    assert m.notes == () and np.abs(colours - 102).max() <= 1
+    (tmp_path / "a.mtl").write_text("newmtl red\nKd 0.8 0.1 0.1\nmap_Kd none.png\n")
+    obj.write_text(obj.read_text().replace("gone.mtl", "a.mtl"))
+    with pytest.warns(PartscaleWarning, match=r"none\.png .* missing"):
+        scene = load_scene(obj)
+    save_scene(scene, tmp_path / "u.glb")
+    _, colours = _centroid_colours(ingest.load_mesh(tmp_path / "u.glb"))
+    assert np.abs(colours - [204, 26, 26]).max() <= 1
+
+
+def test_gltf_broken_texture_is_said_on_the_mesh_route(tmp_path):
+    glb = _textured_glb(tmp_path / "t.glb", (10, 200, 10))
+    raw = bytearray(glb.read_bytes())
+    at = raw.find(b"\x89PNG")
+    raw[at + 16 : at + 40] = b"\0" * 24  # the image header damaged
+    glb.write_bytes(bytes(raw))
+    with pytest.warns(PartscaleWarning, match=r"t\.glb: the base-colour texture .*unreadable"):
+        load_scene(glb)
+    with pytest.warns(PartscaleWarning, match=r"t\.glb: the base-colour texture .*unreadable"):
+        ingest.load_mesh(glb)

@@ -405,15 +405,19 @@ def test_scale_says_when_the_destination_snapped(ball_file, tmp_path, capsys, mo
     assert h["edit"]["to"] == pytest.approx(0.123) and h["to_snapped"] == pytest.approx(0.12)
 
 
-def test_missing_mtl_is_refused_like_a_missing_texture(tmp_path, capsys, monkeypatch):
+def test_missing_mtl_is_said_like_a_missing_texture(tmp_path, capsys, monkeypatch):
+    """A missing material library: one line, exit 0, the materials grey, the note recorded."""
     obj = tmp_path / "t.obj"
     obj.write_text(
         "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nusemtl red\n"
         "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n"
     )
-    code, lines = run(capsys, monkeypatch, "import", obj, "-o", tmp_path / "t.csdf.npz")
-    assert_one_line(code, lines, str(obj), "gone.mtl", "no such file")
-    only(tmp_path, "t.obj")
+    out = tmp_path / "t.csdf.npz"
+    code, lines = run(capsys, monkeypatch, "import", obj, "-o", out, "--res", "16")
+    assert code == 0, lines
+    said = [ln for ln in lines if "gone.mtl" in ln]
+    assert len(said) == 1 and "missing" in said[0], lines
+    assert "gone.mtl" in partscale.load(out).meta["history"][0]["notes"][0]
 
 
 def test_every_option_of_every_command_is_explained():

@@ -46,14 +46,17 @@ Semantics
 - tile: ``tile_count`` copies each scaled to fit; across each internal seam the two copies'
   continuations are cross-faded over ``SEAM_VOXELS`` voxels either side, except where that would
   flip the side of the copy the layer belongs to against the other copy's field more than a
-  voxel away (a thin shelf next to a zone plane stays whole in its copy); copies ``m >= 1`` of parts
+  voxel away (a thin shelf next to a zone plane stays whole in its copy); the sliver a zone plane
+  cuts off a board is left out at the inner seams, but a cut gap is never filled, so a seam
+  closes no cavity (air between a radiator's sections stays open); copies ``m >= 1`` of parts
   lying wholly inside the zone get new indices after the existing ones (``meta['parts_info']``
   gains entries with ``copy_of``); parts crossing the zone's planes keep their index. A tile to
   the zone's start (``DEST == START``) makes 0 copies: the zone is cut out (whole voxels, its
   start snapped from its end) and the layers either side join at START, unblended.
 - global: the whole solid scaled along the axis about its min to the same final length.
 - After each edit, every voxel within ``partscale.csdf.BAND_VOXELS`` voxels of the surface whose
-  distance could have changed holds its distance to the edited zero level set *as the grid
+  distance could have changed (next to a tile seam: whose distance ball reaches the voxels the
+  blend changed or the cells beside them) holds its distance to the edited zero level set *as the grid
   represents it* (sign and surface kept) and the colour and part of its nearest surface point.
   That surface is the piecewise-linear one through the sdf's linear zero crossings along grid
   edges (marching cubes):

@@ -48,6 +48,9 @@ _LATERAL = 0.05
 #: A slab scaled by less than this relative amount counts as rigid (error <= 1% of |distance|,
 #: 0.04 voxel at the band's edge): tiles of whole periods are copies, not stretches.
 _RIGID = 0.01
+#: voxels either side of a tile seam whose zero level the seam may change: the blend window
+#: (SEAM_VOXELS) and the cells it shares with the next layer
+_CHANGED_VOXELS = SEAM_VOXELS + 1.0
 
 #: A cluster of target layers longer than this is re-evaluated in pieces of at most this many
 #: layers (a box each, solved side by side), cut where only the layer count says: the same
@@ -342,7 +345,10 @@ def recompute_mask(
         if seams.size == 0:
             return none
         to_seam = np.abs(y[:, None] - seams[None, :]).min(axis=1)
-        reach = np.maximum(to_seam - SEAM_VOXELS * h, 0.0).astype(np.float32)
+        # the blend changes voxels up to SEAM_VOXELS from a seam, and so the zero level (the
+        # marching-cubes surface distances are taken to) in the cells they share with the
+        # layer beyond: one voxel more
+        reach = np.maximum(to_seam - _CHANGED_VOXELS * h, 0.0).astype(np.float32)
         rows = np.flatnonzero(reach <= lim)
         if rows.size == 0:
             return none
@@ -383,6 +389,7 @@ def recompute_mask(
         period = (dest - start) / n_copies
         yy, c = y[row], plan.copy[row]
         room = np.minimum(yy - (start + c * period), start + (c + 1) * period - yy)
+        room = room - _CHANGED_VOXELS * h  # the ball must stay clear of the seam's changes
     else:
         rule, room = _GROW, np.zeros(0)
     mask = np.zeros((j1 - j0, *out_sdf.shape[1:]), np.uint8)

@@ -480,13 +480,19 @@ def cut_slivers(
     (S, A, B) their samples of the layer's own copy and of the other copy, ``out_sdf``
     (N', A, B) the resampled layers (next to a blend window: its copy read on). Each copy, read
     up to its own plane (the left copy up to END, the right one from START), shows in each
-    column a run of solid (or of gap) touching the seam. The run is a *cut sliver* when the
+    column a run of solid touching the seam. The run is a *cut sliver* when the
     copy's continuation past that plane (the ``other`` sample of the nearest layer across the
     seam) has the same sign, so the element goes on beyond the plane, and the run ends within
     the blend window on its own side or on the layer next to it. The element it belongs to lies
     beyond the plane and appears once, next to the last (first) copy; repeated at each internal
     seam its sliver would be a loose fragment (or a notch). An element lying wholly inside the
     copy (a thin shelf just inside a plane) has no continuation past the plane: no sliver.
+
+    Runs of gap are never slivers: filling a cut gap with the other copy's solid closes it, and
+    where the zone's planes lie in the gaps between repeated elements (a radiator's sections)
+    at different depths, the two cut gaps that meet at an inner seam were filled in all but a
+    few columns, sealing the gap's openings into enclosed air the original has not. A gap left
+    whole costs at most a thin groove at the seam, and closes no cavity.
 
     Returns
     -------
@@ -518,7 +524,7 @@ def cut_slivers(
         sw = slice(a0, b1)
         lw, rw = slice(0, a1 - a0), slice(a1 - a0, b1 - a0)
         seam_drop, seam_hold = drop[sw], hold[sw]
-        for solid in (True, False):
+        for solid in (True,):  # solid runs only: a gap filled could seal a cavity
             mine = inside[sw] if solid else ~inside[sw]
             theirs = inside_other[sw] if solid else ~inside_other[sw]
             # per side: its layers from the seam outwards, the copy's continuation past its own
@@ -589,8 +595,9 @@ def apply_plan(
       sample is kept: a thin shelf or sliver on one side of the seam stays whole in its copy
       instead of fading into the other copy's air (or a thin gap into its solid). Where both
       copies have surface within ``keep_thin`` of each other the blend is as before;
-    - but where a zone plane cuts an element (a board straddling END or START), the sliver the
-      plane cuts off is left out at every internal seam (:func:`cut_slivers`): the element
+    - but where a zone plane cuts a solid element (a board straddling END or START), the sliver
+      the plane cuts off is left out at every internal seam (:func:`cut_slivers`; never a cut
+      gap, whose filling could seal a cavity): the element
       stays whole once, beyond the last copy (before the first), and no copy gets a loose
       fragment of it (counted in ``left_out``).
     """

@@ -3,19 +3,32 @@
 trimesh keys materials by name, ignores ``KHR_texture_transform`` and reads only ``TEXCOORD_0``;
 the document is rewritten before trimesh sees it (:func:`_prepare_gltf`). glTF colours
 (``baseColorFactor``, ``COLOR_0``) are linear.
+
+A base-colour texture whose image is missing or cannot be decoded (trimesh drops it with no
+word) is said in one line (a :class:`~partscale.errors.PartscaleWarning`, and in the mesh's
+``notes``), and its material's base colour factor is used; on both routes
+(:func:`load_gltf`, :func:`load_gltf_scene`).
 """
 
 from __future__ import annotations
 
+import base64
+import binascii
 import io
 import json
 import struct
+from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
+from urllib.parse import unquote
 
 import numpy as np
 
-from ..errors import InputError
-from .mesh import ColoredMesh, read_scene, scene_to_mesh
+from ..errors import InputError, one_line
+from .mesh import ColoredMesh, read_scene, say, scene_to_mesh
+
+if TYPE_CHECKING:
+    import trimesh
 
 
 def _read_gltf(path: Path) -> tuple[dict, bytes] | None:
@@ -129,11 +142,107 @@ def _prepare_gltf(path: Path) -> tuple[bytes, dict[str, np.ndarray]] | None:
     return head + struct.pack("<I4s", len(text), b"JSON") + text + rest, transforms
 
 
+def _data_uri(uri: str) -> bytes:
+    head, _, data = uri.partition(",")
+    return base64.b64decode(data) if head.endswith(";base64") else unquote(data).encode()
+
+
+def _buffer_view(doc: dict, rest: bytes, path: Path, index: int) -> bytes:
+    """The bytes of buffer view ``index`` (a GLB's own buffer, a data URI or a file)."""
+    view = doc["bufferViews"][index]
+    buf = doc["buffers"][view["buffer"]]
+    if "uri" in buf:
+        uri = buf["uri"]
+        data = (
+            _data_uri(uri) if uri.startswith("data:") else (path.parent / unquote(uri)).read_bytes()
+        )
+    else:  # a GLB's BIN chunk: length, type, bytes
+        length = struct.unpack("<I", rest[:4])[0]
+        data = rest[8 : 8 + length]
+    start = int(view.get("byteOffset", 0))
+    return data[start : start + int(view["byteLength"])]
+
+
+def _image_problem(doc: dict, rest: bytes, path: Path, image: dict) -> str | None:
+    """Why the image ``image`` of ``doc`` cannot be shown (missing, unreadable), or None."""
+    from PIL import Image
+
+    uri = image.get("uri")
+    where = f"image {unquote(uri)[:80]!r}" if uri and not uri.startswith("data:") else "an image"
+    try:
+        if uri is not None:
+            if uri.startswith("data:"):
+                data = _data_uri(uri)
+            else:
+                file = path.parent / unquote(uri)
+                if not file.is_file():
+                    return f"{where} is missing"
+                data = file.read_bytes()
+        else:
+            data = _buffer_view(doc, rest, path, image["bufferView"])
+        with Image.open(io.BytesIO(data)) as img:
+            img.load()
+    except (OSError, ValueError, binascii.Error, SyntaxError) as exc:
+        return f"{where} is unreadable ({one_line(exc)})"
+    return None
+
+
+def _texture_notes(path: Path, got: tuple[dict, bytes] | None) -> list[str]:
+    """A line per material whose base-colour texture is missing or cannot be decoded."""
+    if got is None:
+        return []
+    doc, rest = got
+    notes = []
+    try:
+        for i, mat in enumerate(doc.get("materials") or []):
+            tex = (mat.get("pbrMetallicRoughness") or {}).get("baseColorTexture")
+            if not tex or "index" not in tex:
+                continue
+            source = doc["textures"][tex["index"]].get("source")
+            if source is None:
+                continue  # only an extension's image (webp, basisu): left to the reader
+            problem = _image_problem(doc, rest, path, doc["images"][source])
+            if problem:
+                label = mat.get("name") or f"#{i}"
+                notes.append(
+                    f"{path}: the base-colour texture of material {label!r}: {problem}; its "
+                    "base colour is used"
+                )
+    except (AttributeError, TypeError, KeyError, IndexError, ValueError, struct.error):
+        return notes  # a malformed document: trimesh reports what is wrong with it
+    return notes
+
+
+def _exact_factors(scene, doc: dict) -> None:
+    """Give each material of ``scene`` (named by :func:`_rewrite_gltf`'s tags) the base colour
+    factor of ``doc`` as written: trimesh rounds it to 8 bits, which in linear light moves a
+    dark colour by several sRGB levels.
+    """
+    from trimesh.visual.material import PBRMaterial
+
+    materials = doc.get("materials") or []
+    for geom in scene.geometry.values():
+        mat = getattr(getattr(geom, "visual", None), "material", None)
+        name = getattr(mat, "name", None)
+        if not isinstance(mat, PBRMaterial) or not str(name).startswith(_MAT_TAG):
+            continue
+        try:
+            f = materials[int(str(name)[len(_MAT_TAG) :])]["pbrMetallicRoughness"]
+            factor = np.asarray(f["baseColorFactor"], np.float64)
+        except (KeyError, IndexError, TypeError, ValueError):
+            continue  # no factor (trimesh's default) or a malformed one (trimesh's reading)
+        if factor.shape == (4,) and np.isfinite(factor).all():
+            # a float factor is taken as it is (trimesh's setter would round it again)
+            mat._data["baseColorFactor"] = np.clip(factor, 0.0, 1.0)
+
+
 def load_gltf(path: Path) -> ColoredMesh:
     """Read a ``.gltf``/``.glb`` (an existing, non-empty file) as a :class:`ColoredMesh`."""
     import trimesh
 
     suffix = path.suffix.lower()
+    got = _read_gltf(path)
+    notes = _texture_notes(path, got)
     prepared = _prepare_gltf(path)
     transforms = prepared[1] if prepared else {}
 
@@ -148,4 +257,25 @@ def load_gltf(path: Path) -> ColoredMesh:
         return trimesh.load_scene(str(path), process=False)
 
     scene = read_scene(path, read)
-    return scene_to_mesh(scene, path, linear_colors=True, uv_transforms=transforms)
+    if prepared and got:
+        _exact_factors(scene, got[0])
+    mesh = scene_to_mesh(scene, path, linear_colors=True, uv_transforms=transforms)
+    say(notes)  # once read whole: a file refused gets its error line alone
+    return replace(mesh, notes=tuple(notes))
+
+
+def load_gltf_scene(path: Path) -> trimesh.Scene:
+    """A ``.gltf``/``.glb`` as trimesh reads it, vertices as stored, for editing (the mesh
+    route); a missing or unreadable texture is said as :func:`load_gltf` says it.
+    """
+    import trimesh
+
+    notes = _texture_notes(path, _read_gltf(path))
+
+    def read():
+        return trimesh.load_scene(path, process=False, maintain_order=True)
+
+    scene = read_scene(path, read)
+    if scene.geometry:
+        say(notes)
+    return scene

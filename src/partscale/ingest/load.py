@@ -10,19 +10,22 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .._files import check_input_file
 from .._options import keyword_options
 from ..csdf import CSDF
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
-from .gltf import load_gltf
+from .gltf import load_gltf, load_gltf_scene
 from .grid import from_grid, read_autosdf, read_grid
 from .mesh import ColoredMesh
 from .mesh_sdf import check_pad, check_res, from_mesh
-from .obj import load_obj
+from .obj import load_obj, load_obj_scene
 from .ply import load_ply
+
+if TYPE_CHECKING:
+    import trimesh
 
 FORMATS = ".glb, .gltf, .obj, .ply (meshes); .npy, .npz, .h5/.hdf5 AutoSDF (SDF grids)"
 
@@ -74,6 +77,60 @@ def load_mesh(path: str | os.PathLike) -> ColoredMesh:
     """
     path = check_mesh_file(path)
     return MESH_READERS[path.suffix.lower()](path)
+
+
+def load_mesh_scene(path: str | os.PathLike) -> trimesh.Scene:
+    """Read a mesh file as a ``trimesh.Scene`` to edit and write again (the mesh route).
+
+    Vertices, nodes and UVs are kept as stored (no merging or reordering); materials follow
+    the conventions of :func:`load_mesh`, so both routes show one file in the same colours.
+    An OBJ gets one node per group (named after it), its materials as glTF ones whose base
+    colour factor is ``Kd`` linearised (``Kd`` is a display sRGB colour), and faces without
+    ``vt`` beside faces with keep a UV (0, 0). A missing material library or texture is said
+    (a :class:`~partscale.errors.PartscaleWarning`) and the material's own colour used, as
+    :func:`load_mesh` does.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The mesh file (one of :data:`MESH_SUFFIXES`).
+
+    Returns
+    -------
+    trimesh.Scene
+        Its meshes, materials and node transforms.
+
+    Raises
+    ------
+    InputError
+        Naming the file for a missing, unreadable, corrupt or empty mesh.
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> scene = ingest.load_mesh_scene(data.table())
+    >>> len(scene.geometry), scene.extents.round(2).tolist()
+    (1, [2.44, 0.95, 1.3])
+    """
+    import trimesh
+
+    path = check_mesh_file(path)
+    suffix = path.suffix.lower()
+    scene: trimesh.Scene
+    if suffix == ".obj":
+        scene = load_obj_scene(path)
+    elif suffix in (".gltf", ".glb"):
+        scene = load_gltf_scene(path)
+    else:
+        try:
+            scene = trimesh.load_scene(path, process=False, maintain_order=True)
+        except Exception as exc:  # trimesh's parsers raise many kinds on junk
+            raise InputError(
+                f"{path}: expected a readable {suffix[1:]} mesh, got {one_line(exc)}"
+            ) from None
+    if not scene.geometry:
+        raise InputError(f"{path}: expected a mesh with triangles, got none")
+    return scene
 
 
 def check_mesh_file(path: str | os.PathLike) -> Path:

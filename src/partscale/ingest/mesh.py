@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, overload
 import numpy as np
 
 from ..color import linear_to_srgb8, srgb_to_linear
-from ..errors import InputError, one_line
+from ..errors import InputError, PartscaleWarning, one_line
 
 if TYPE_CHECKING:
     from PIL import Image
@@ -77,6 +77,9 @@ class ColoredMesh:
         Linear vertex colour at each triangle corner (ones where a piece has none).
     source : str
         File it was read from.
+    notes : tuple of str
+        What the reader said to the user while reading (a missing texture or material library
+        replaced by the material's colour); the import records them in its history.
 
     Examples
     --------
@@ -93,6 +96,7 @@ class ColoredMesh:
     uv: np.ndarray | None = None
     corner_color: np.ndarray | None = None
     source: str = ""
+    notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         # read-only like a CSDF's arrays; a caller's writeable array is copied, not frozen
@@ -172,6 +176,14 @@ def read_scene(path: Path, read: Callable):
         if isinstance(exc, IndexError):  # an OBJ face naming a vertex that is not there
             msg = f"an index past its list ({msg})"
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
+
+
+def say(notes: list[str] | tuple[str, ...]) -> None:
+    """Say each note once (a :class:`~partscale.errors.PartscaleWarning`), once the file has
+    been read whole: a file refused afterwards gets its one error line alone.
+    """
+    for note in notes:
+        warnings.warn(note, PartscaleWarning, stacklevel=3)
 
 
 def scene_to_mesh(

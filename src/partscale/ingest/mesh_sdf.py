@@ -610,6 +610,7 @@ def from_mesh(
                 **thin_record,
                 "filled_bubble_voxels": n_bubbles,
                 "band_voxels": BAND_VOXELS,
+                **({"notes": list(mesh.notes)} if mesh.notes else {}),
             }
         ],
     }

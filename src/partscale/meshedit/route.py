@@ -16,6 +16,7 @@ kept.
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -23,8 +24,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
-from ..errors import InputError
-from ..ingest import check_mesh_file
+from ..errors import InputError, PartscaleWarning
+from ..ingest import load_mesh_scene
 from ..orient import WALL_AXES, square_turn, turn_matrix
 from .cut import Piece, concatenate, cut, subset
 
@@ -547,6 +548,11 @@ def _to_trimesh(inst: _Instance):
 def load_scene(path: str | os.PathLike) -> trimesh.Scene:
     """A mesh file as a trimesh Scene, vertices exactly as stored (no merging or reordering).
 
+    Read by :func:`partscale.ingest.load_mesh_scene`, with the import's conventions: an OBJ's
+    groups are nodes named after them, its ``Kd`` a display (sRGB) colour written as the linear
+    glTF base colour it shows, and its UVs kept where only some faces have them; a missing
+    material library or texture is said and the material's own colour used.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -569,18 +575,7 @@ def load_scene(path: str | os.PathLike) -> trimesh.Scene:
     >>> len(scene.geometry), scene.extents.round(2).tolist()
     (1, [2.44, 0.95, 1.3])
     """
-    import trimesh
-
-    path = check_mesh_file(path)
-    suffix = path.suffix.lower()
-    try:
-        scene = trimesh.load(path, force="scene", process=False, maintain_order=True)
-    except Exception as exc:
-        raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {exc}") from None
-    assert isinstance(scene, trimesh.Scene)  # force="scene"
-    if not scene.geometry:
-        raise InputError(f"{path}: expected a mesh with triangles, got none")
-    return scene
+    return load_mesh_scene(path)
 
 
 def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
@@ -642,7 +637,7 @@ def display_colours(scene: trimesh.Scene, suffix: str) -> trimesh.Scene:
     colour, in sRGB. Meshes with vertex colours are kept as they are.
     """
     from trimesh.visual import ColorVisuals, TextureVisuals
-    from trimesh.visual.color import uv_to_color
+    from trimesh.visual.color import to_float, uv_to_color
     from trimesh.visual.material import PBRMaterial, SimpleMaterial
 
     from ..color import linear_to_srgb8, srgb8_to_linear
@@ -654,10 +649,10 @@ def display_colours(scene: trimesh.Scene, suffix: str) -> trimesh.Scene:
             continue
         mat = vis.material
         if isinstance(mat, PBRMaterial):
-            factor = np.asarray(
-                mat.baseColorFactor if mat.baseColorFactor is not None else [255] * 4, np.float64
-            )[:3]
-            lin = factor / 255.0  # glTF factors are linear
+            # glTF factors are linear: 8-bit as trimesh reads them, float where an OBJ's Kd
+            # was linearised (partscale.ingest.load_mesh_scene)
+            factor = mat.baseColorFactor if mat.baseColorFactor is not None else [1.0] * 4
+            lin = to_float(np.asarray(factor))[:3]
             if suffix == ".obj":
                 kd = linear_to_srgb8(lin[None])[0]
                 simple = SimpleMaterial(
@@ -800,12 +795,18 @@ def edit_mesh_file(
     from ..export import require_usd
 
     require_usd(dst)  # before any work: usd-core is an optional extra
-    scene = load_scene(src)
+    with warnings.catch_warnings(record=True) as said:
+        # what reading noticed (a missing texture) is said once the edit is known to go
+        # through: a refused edit gets its one error line alone
+        warnings.simplefilter("always", PartscaleWarning)
+        scene = load_scene(src)
     # the source's walls, before the recipe touches the scene
     wanted = square or any(e.axis in WALL_AXES for e in _planar(recipe))
     turn = square_turn(scene.triangles) if wanted else None
     saved = _turn_scene(scene, turn) if square and turn is not None else None
     out, seams = apply_recipe_to_scene(scene, recipe)
+    for w in said:
+        warnings.warn(w.message, w.category, stacklevel=2)
     if saved is not None:
         _restore_turn(out, saved)
     written = save_scene(out, dst)
@@ -867,7 +868,11 @@ def mesh_frame(path: str | os.PathLike, *, square: bool = False) -> MeshFrame:
     >>> meshedit.mesh_frame(data.table()).surface_bounds().round(2).tolist()
     [[-1.23, 0.0, -0.65], [1.21, 0.95, 0.65]]
     """
-    scene = load_scene(path)
+    with warnings.catch_warnings():
+        # a missing texture or material library is said once, by the edit that reads the
+        # file for its colours (edit_mesh_file), not again for its extent
+        warnings.simplefilter("ignore", PartscaleWarning)
+        scene = load_scene(path)
     if square:
         turn = square_turn(scene.triangles)
         if turn is not None:

@@ -30,11 +30,11 @@ import math
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from .._memory import check_memory
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
+from ._warp_kernels import gather_columns, reevaluation_mask, resample_affine
 from .recipe import AXES, HelixZone, ObliqueZone, RadialZone, ScrewZone
 from .reevaluate import reevaluate_arrays
 from .resolved import BYTES_PER_VOXEL
@@ -42,6 +42,11 @@ from .resolved import BYTES_PER_VOXEL
 #: Voxels beyond the band resampled trilinearly (the rest take their nearest source value: they
 #: only keep the sign far from the surface).
 RESAMPLE_MARGIN = 2.0
+
+#: A slope of the field at most this along every direction a growing map moves content along
+#: counts as flat there: the voxel's nearest surface point lies square to them, and its
+#: resampled distance is kept (the planar edits' rule, :mod:`partscale.edit.reevaluate`).
+LATERAL = 0.05
 
 
 def gauge(d: np.ndarray, sides: int, phase: float) -> np.ndarray:
@@ -156,35 +161,46 @@ def radial_extent(csdf: CSDF, zone: RadialZone) -> float:
 
 
 def _resample(
-    csdf: CSDF, origin: np.ndarray, shape: tuple[int, ...], src_of
+    csdf: CSDF,
+    origin: np.ndarray,
+    shape: tuple[int, ...],
+    normal: np.ndarray,
+    levels: np.ndarray,
+    mats: np.ndarray,
+    backs: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The output arrays on the grid ``origin``/``shape``: sdf (X, Y, Z) float32, rgb
-    (X, Y, Z, 3) uint8, parts (X, Y, Z) int16, each voxel showing the source point
-    ``src_of(points)`` maps it to, and ``moved`` (X, Y, Z) bool: the voxels that show another
-    place than their own shifted by whole voxels (the surface there may have changed).
+    (X, Y, Z, 3) uint8, parts (X, Y, Z) int16, each voxel ``p`` showing the source point
+    ``A_m p + b_m`` (``mats[m]`` = ``[A | b]``, (M + 1, 3, 4), ``m`` the slab of ``p . normal``
+    among the increasing ``levels`` (M,)), and ``moved`` (X, Y, Z) bool: the voxels that show
+    another place than their own shifted by whole voxels (the surface there may have changed).
+    Trilinear near the surface where moved; farther out the nearest value keeps the sign
+    (re-evaluation covers the band).
     """
     h = csdf.voxel_size
     check_memory(shape, BYTES_PER_VOXEL, what="the warped grid")
-    axes = [origin[a] + np.arange(shape[a]) * h for a in range(3)]
-    pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    src = src_of(pts)
-    idx = (src - csdf.origin) / h  # continuous source indices
-    off = (src - pts) / h
-    moved = np.abs(off - np.round(off)).max(axis=1) > 1e-6
-    n = np.clip(np.rint(idx).astype(np.int64), 0, np.array(csdf.shape) - 1)
-    sdf = csdf.sdf[n[:, 0], n[:, 1], n[:, 2]].astype(np.float32)
-    rgb = csdf.rgb[n[:, 0], n[:, 1], n[:, 2]]
-    parts = csdf.parts[n[:, 0], n[:, 1], n[:, 2]]
-    # trilinear near the surface where the map is no whole-voxel shift; farther out the
-    # nearest value keeps the sign (re-evaluation covers the band)
-    near = moved & (np.abs(sdf) <= (BAND_VOXELS + RESAMPLE_MARGIN) * h)
-    q = idx[near].T
-    sdf[near] = ndimage.map_coordinates(csdf.sdf, q, order=1, mode="nearest")
-    for c in range(3):
-        rgb[near, c] = np.clip(
-            np.rint(ndimage.map_coordinates(csdf.rgb[..., c], q, order=1, mode="nearest")), 0, 255
-        ).astype(np.uint8)
-    return sdf.reshape(shape), rgb.reshape((*shape, 3)), parts.reshape(shape), moved.reshape(shape)
+    sdf = np.empty(shape, dtype=np.float32)
+    rgb = np.empty((*shape, 3), dtype=np.uint8)
+    parts = np.empty(shape, dtype=csdf.parts.dtype)
+    moved = np.empty(shape, dtype=bool)
+    resample_affine(
+        csdf.sdf,
+        csdf.rgb,
+        csdf.parts,
+        np.asarray(csdf.origin, dtype=np.float64),
+        float(h),
+        np.asarray(origin, dtype=np.float64),
+        np.asarray(normal, dtype=np.float64),
+        np.asarray(levels, dtype=np.float64),
+        np.ascontiguousarray(mats, dtype=np.float64),
+        np.zeros((len(mats), 3)) if backs is None else np.ascontiguousarray(backs, np.float64),
+        np.float32((BAND_VOXELS + RESAMPLE_MARGIN) * h),
+        sdf,
+        rgb,
+        parts,
+        moved,
+    )
+    return sdf, rgb, parts, moved
 
 
 def _finish(
@@ -192,17 +208,20 @@ def _finish(
     origin: np.ndarray,
     arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     entry: dict[str, Any],
+    keep_square_to: np.ndarray | None = None,
 ) -> CSDF:
     """Re-evaluate the voxels near the surface within the band of a moved one, and the new
-    CSDF with its history entry.
+    CSDF with its history entry. With ``keep_square_to`` (K, 3) (the directions a map that only
+    grows moves content along), a voxel whose field is flat along all of them keeps its
+    resampled distance (:func:`~partscale.edit._warp_kernels.reevaluation_mask`).
     """
     sdf, rgb, parts, moved = arrays
     h = csdf.voxel_size
     band = BAND_VOXELS + 1.0
     r = math.ceil(band) + 1
-    near = np.abs(sdf) <= band * h
     # a voxel's nearest surface point is within the band: only moved voxels that near count
-    mask = near & ndimage.binary_dilation(moved & near, iterations=r)
+    dirs = np.zeros((0, 3)) if keep_square_to is None else np.asarray(keep_square_to, np.float64)
+    mask = reevaluation_mask(sdf, moved, float(h), band, r, dirs, LATERAL)
     n = reevaluate_arrays(sdf, rgb, parts, h, mask, band=band)
     entry = {**entry, "reevaluated_voxels": int(n)}
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
@@ -506,48 +525,32 @@ def _gather_levels(
     whole voxels.
     """
     h = csdf.voxel_size
-    src = np.moveaxis(csdf.sdf, (others[0], ax, others[1]), (0, 1, 2))  # (Us, L, Vs)
-    rgb = np.moveaxis(csdf.rgb, (others[0], ax, others[1]), (0, 1, 2))
-    parts = np.moveaxis(csdf.parts, (others[0], ax, others[1]), (0, 1, 2))
+    order = (others[0], ax, others[1])
     # the output's own place in source indices (whole voxels: the grid grew by whole voxels)
-    ou = np.rint((origin[others[0]] - csdf.origin[others[0]]) / h).astype(np.int64)
-    ov = np.rint((origin[others[1]] - csdf.origin[others[1]]) / h).astype(np.int64)
-    own_u = (np.arange(iu.shape[0]) + ou)[:, None] + 0 * iv.astype(np.int64)
-    own_v = (np.arange(iu.shape[1]) + ov)[None, :] + 0 * iu.astype(np.int64)
-    mapped = (np.abs(iu - own_u) > 1e-6) | (np.abs(iv - own_v) > 1e-6)
-    nu, nv = src.shape[0], src.shape[2]
-    u0 = np.floor(iu).astype(np.int64)
-    v0 = np.floor(iv).astype(np.int64)
-    fu = (iu - u0).astype(np.float32)[:, None, :]
-    fv = (iv - v0).astype(np.float32)[:, None, :]
-    lv = np.arange(src.shape[1])[None, :, None]
-
-    def at(a: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return a[np.clip(u, 0, nu - 1)[:, None, :], lv, np.clip(v, 0, nv - 1)[:, None, :]]
-
-    corners = [(u0, v0, (1 - fu) * (1 - fv)), (u0 + 1, v0, fu * (1 - fv))]
-    corners += [(u0, v0 + 1, (1 - fu) * fv), (u0 + 1, v0 + 1, fu * fv)]
-    out_sdf = sum(w * at(src, u, v) for u, v, w in corners).astype(np.float32)
-    out_rgb = np.clip(
-        np.rint(sum(w[..., None] * at(rgb, u, v).astype(np.float32) for u, v, w in corners)),
-        0,
-        255,
-    ).astype(np.uint8)
-    out_parts = at(parts, np.rint(iu).astype(np.int64), np.rint(iv).astype(np.int64))
-    # levels the zone does not span: the column's own place
-    own = ~inside
-    if own.any():
-        out_sdf[:, own, :] = at(src, own_u, own_v)[:, own, :]
-        out_rgb[:, own, :] = at(rgb, own_u, own_v)[:, own, :]
-        out_parts[:, own, :] = at(parts, own_u, own_v)[:, own, :]
-    moved = mapped[:, None, :] & inside[None, :, None]
-    back = (0, 1, 2), (others[0], ax, others[1])
-    return (
-        np.ascontiguousarray(np.moveaxis(out_sdf, *back)),
-        np.ascontiguousarray(np.moveaxis(out_rgb, *back)),
-        np.ascontiguousarray(np.moveaxis(out_parts, *back)),
-        np.ascontiguousarray(np.moveaxis(np.broadcast_to(moved, out_sdf.shape), *back)),
+    ou = int(np.rint((origin[others[0]] - csdf.origin[others[0]]) / h))
+    ov = int(np.rint((origin[others[1]] - csdf.origin[others[1]]) / h))
+    shape = [0, 0, 0]
+    shape[others[0]], shape[ax], shape[others[1]] = iu.shape[0], csdf.shape[ax], iu.shape[1]
+    out = np.empty(shape, dtype=np.float32)
+    out_rgb = np.empty((*shape, 3), dtype=np.uint8)
+    out_parts = np.empty(shape, dtype=csdf.parts.dtype)
+    moved = np.empty(shape, dtype=bool)
+    view = (0, 1, 2)
+    gather_columns(
+        np.moveaxis(csdf.sdf, order, view),
+        np.moveaxis(csdf.rgb, order, view),
+        np.moveaxis(csdf.parts, order, view),
+        np.ascontiguousarray(iu, dtype=np.float64),
+        np.ascontiguousarray(iv, dtype=np.float64),
+        np.ascontiguousarray(inside, dtype=np.bool_),
+        ou,
+        ov,
+        np.moveaxis(out, order, view),
+        np.moveaxis(out_rgb, order, view),
+        np.moveaxis(out_parts, order, view),
+        np.moveaxis(moved, order, view),
     )
+    return out, out_rgb, out_parts, moved
 
 
 def check_oblique(csdf: CSDF, zone: ObliqueZone) -> np.ndarray:
@@ -605,14 +608,15 @@ def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | Non
     length, target = s1 - s0, to - s0
     origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
 
-    def src_of(p: np.ndarray) -> np.ndarray:
-        s = p @ n
-        back = np.where(s <= s0, 0.0, np.where(s <= to, (s - s0) * (1 - length / target), to - s1))
-        return p - back[:, None] * n
-
+    # the map p -> p - back(p . n) n: identity up to s0, a stretch along n up to ``to``, then a
+    # shift by to - s1
+    mats = np.zeros((3, 3, 4))
+    mats[:, :, :3] = np.eye(3)
+    backs = np.array([[0.0, 0.0, 0.0], [s0, 1 - length / target, 0.0], [0.0, 0.0, to - s1]])
+    arrays = _resample(csdf, origin, shape, n, np.array([s0, to]), mats, backs)
     unit = ObliqueZone((float(n[0]), float(n[1]), float(n[2])), s0, s1, to)
     entry = {"op": "oblique", **unit.to_json(), **(record or {})}
-    return _finish(csdf, origin, _resample(csdf, origin, shape, src_of), entry)
+    return _finish(csdf, origin, arrays, entry)
 
 
 def _turn(d: np.ndarray, degrees: float) -> np.ndarray:
@@ -707,16 +711,14 @@ def apply_helix(csdf: CSDF, zone: HelixZone, *, record: dict[str, Any] | None = 
         j0 = int(np.argmax(w > 0))
         sub_origin = origin.copy()
         sub_origin[1] = y[j0]
-        c = np.array([zone.center[0], zone.center[1]])
-
-        def src_of(p: np.ndarray) -> np.ndarray:
-            q = p.copy()
-            q[:, [0, 2]] = _turn(p[:, [0, 2]] - c, -zone.copies * zone.angle) + c
-            q[:, 1] -= zone.copies * zone.rise
-            return q
-
+        c = np.array([zone.center[0], 0.0, zone.center[1]])
+        t = math.radians(-zone.copies * zone.angle)
+        rot = np.array([[math.cos(t), 0, -math.sin(t)], [0, 1, 0], [math.sin(t), 0, math.cos(t)]])
+        mats = np.zeros((1, 3, 4))
+        mats[0, :, :3] = rot
+        mats[0, :, 3] = c - rot @ c - np.array([0.0, zone.copies * zone.rise, 0.0])
         a_sdf, a_rgb, a_parts, a_moved = _resample(
-            csdf, sub_origin, (shape[0], shape[1] - j0, shape[2]), src_of
+            csdf, sub_origin, (shape[0], shape[1] - j0, shape[2]), np.zeros(3), np.zeros(0), mats
         )
         wb = w[j0:].reshape(1, -1, 1)
         sdf[:, j0:] = (1 - wb) * sdf[:, j0:] + wb * a_sdf

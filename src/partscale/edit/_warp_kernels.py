@@ -228,7 +228,7 @@ def reevaluation_mask(sdf, moved, h, band, reach, dirs, lateral):
     """(X, Y, Z) bool: the voxels within ``band`` voxels of the surface and within ``reach``
     face steps (the L1 ball ``scipy.ndimage.binary_dilation(iterations=reach)`` gives) of a
     moved one that is as near, less those whose field is flat along every row of ``dirs``
-    (K, 3) unit vectors (slope at most ``lateral``, central differences): their nearest surface
+    (K, 3) unit vectors (slope at most ``lateral``, one-sided differences either way): their nearest surface
     point lies square to every direction the map moves along, and a map that only grows keeps
     that distance (its inverse brings nothing closer).
     """
@@ -275,11 +275,18 @@ def reevaluation_mask(sdf, moved, h, band, reach, dirs, lateral):
                     ip, im = min(i + 1, nx - 1), max(i - 1, 0)
                     jp, jm = min(j + 1, ny - 1), max(j - 1, 0)
                     kp, km = min(k + 1, nz - 1), max(k - 1, 0)
-                    gx = (np.float64(sdf[ip, j, k]) - sdf[im, j, k]) / max((ip - im) * h, h)
-                    gy = (np.float64(sdf[i, jp, k]) - sdf[i, jm, k]) / max((jp - jm) * h, h)
-                    gz = (np.float64(sdf[i, j, kp]) - sdf[i, j, km]) / max((kp - km) * h, h)
+                    c = np.float64(sdf[i, j, k])
+                    # one-sided differences each way: a ridge (two surfaces equally near) is
+                    # flat in the central difference but not on either side
+                    fx, bx = (sdf[ip, j, k] - c) / h, (c - sdf[im, j, k]) / h
+                    fy, by = (sdf[i, jp, k] - c) / h, (c - sdf[i, jm, k]) / h
+                    fz, bz = (sdf[i, j, kp] - c) / h, (c - sdf[i, j, km]) / h
                     for m in range(dirs.shape[0]):
-                        if abs(gx * dirs[m, 0] + gy * dirs[m, 1] + gz * dirs[m, 2]) > lateral:
+                        ex, ey, ez = dirs[m, 0], dirs[m, 1], dirs[m, 2]
+                        if (
+                            abs(fx * ex + fy * ey + fz * ez) > lateral
+                            or abs(bx * ex + by * ey + bz * ez) > lateral
+                        ):
                             keep = False
                             break
                 mask[i, j, k] = not keep

@@ -35,7 +35,7 @@ from .._memory import check_memory
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ._warp_kernels import gather_columns, reevaluation_mask, resample_affine
-from .recipe import AXES, HelixZone, ObliqueZone, RadialZone, ScrewZone
+from .recipe import AXES, HelixZone, ObliqueZone, RadialZone, RotationZone, ScrewZone
 from .reevaluate import reevaluate_arrays
 from .resolved import BYTES_PER_VOXEL
 
@@ -227,7 +227,7 @@ def _finish(
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
 
 
-def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone | HelixZone) -> set[int]:
+def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone) -> set[int]:
     """The world axes along which ``zone`` moves content (planar edits on them and this zone
     do not mix in one recipe: their positions could not be carried through it).
     """
@@ -237,6 +237,8 @@ def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone | HelixZone) -> set[in
         return {a for a in range(3) if abs(zone.step[a]) > 1e-9} | {AXES.index(zone.axis)}
     if isinstance(zone, HelixZone):  # a turn about the vertical and a rise
         return {0, 1, 2}
+    if isinstance(zone, RotationZone):  # turns about the vertical
+        return {0, 2}
     return {a for a in range(3) if abs(zone.normal[a]) > 1e-9}
 
 
@@ -244,7 +246,7 @@ def warp_grid(
     origin: np.ndarray,
     shape: tuple[int, ...],
     h: float,
-    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone,
+    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone,
 ) -> tuple[np.ndarray, tuple[int, ...]]:
     """Origin and shape of the grid ``zone`` gives from the grid ``origin``/``shape``/``h``
     without computing anything.
@@ -257,6 +259,12 @@ def warp_grid(
         a, b = np.minimum(lo, lo + move) + h / 2, np.maximum(hi, hi + move) - h / 2
     elif isinstance(zone, HelixZone):
         a, b = _helix_bounds(zone, lo, hi, h)
+    elif isinstance(zone, RotationZone):  # the disc the elements turn in
+        reach = np.array([zone.radius + h, 0.0, zone.radius + h])
+        c = np.array([zone.center[0], 0.0, zone.center[1]])
+        a = np.minimum(lo + h / 2, c - reach)
+        b = np.maximum(hi - h / 2, c + reach)
+        a[1], b[1] = lo[1] + h / 2, hi[1] - h / 2
     elif isinstance(zone, RadialZone):
         shift = zone.shift
         grow = np.zeros(3)
@@ -275,20 +283,20 @@ def warp_grid(
 
 def apply_warp(
     csdf: CSDF,
-    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone,
+    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone,
     *,
     record: dict[str, Any] | None = None,
 ) -> CSDF:
     """Apply a zone that is not a slab across an axis: radial, oblique or steps.
 
-    Dispatches to :func:`apply_radial`, :func:`apply_oblique`, :func:`apply_screw` or
-    :func:`apply_helix` by the kind of ``zone``.
+    Dispatches to :func:`apply_radial`, :func:`apply_oblique`, :func:`apply_screw`,
+    :func:`apply_helix` or :func:`apply_rotation` by the kind of ``zone``.
 
     Parameters
     ----------
     csdf : CSDF
         The object.
-    zone : RadialZone, ObliqueZone, ScrewZone or HelixZone
+    zone : RadialZone, ObliqueZone, ScrewZone, HelixZone or RotationZone
         The zone.
     record : dict, optional
         More keys for its history entry (a recipe's step).
@@ -313,6 +321,8 @@ def apply_warp(
         return apply_screw(csdf, zone, record=record)
     if isinstance(zone, HelixZone):
         return apply_helix(csdf, zone, record=record)
+    if isinstance(zone, RotationZone):
+        return apply_rotation(csdf, zone, record=record)
     return apply_oblique(csdf, zone, record=record)
 
 
@@ -506,7 +516,10 @@ def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None 
         inside = (levels >= zone.span[0]) & (levels <= zone.span[1])
     arrays = _gather_levels(csdf, ax, others, iu, iv, inside, origin)
     entry = {"op": "radial", **zone.to_json(), **(record or {})}
-    return _finish(csdf, origin, arrays, entry)
+    # growing, the map moves content across the axis only: a voxel whose nearest surface point
+    # lies along the axis keeps its distance
+    keep = np.eye(3)[others] if zone.to >= zone.r1 else None
+    return _finish(csdf, origin, arrays, entry, keep)
 
 
 def _gather_levels(
@@ -616,7 +629,9 @@ def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | Non
     arrays = _resample(csdf, origin, shape, n, np.array([s0, to]), mats, backs)
     unit = ObliqueZone((float(n[0]), float(n[1]), float(n[2])), s0, s1, to)
     entry = {"op": "oblique", **unit.to_json(), **(record or {})}
-    return _finish(csdf, origin, arrays, entry)
+    # growing, the map moves content along n only: a voxel whose nearest surface point lies
+    # square to n keeps its distance
+    return _finish(csdf, origin, arrays, entry, n[None, :] if to >= s1 else None)
 
 
 def _turn(d: np.ndarray, degrees: float) -> np.ndarray:
@@ -728,3 +743,151 @@ def apply_helix(csdf: CSDF, zone: HelixZone, *, record: dict[str, Any] | None = 
         moved[:, j0:] = a_moved | (wb < 1)
     entry = {"op": "helix", **zone.to_json(), **(record or {})}
     return _finish(csdf, origin, (sdf, rgb, parts, moved), entry)
+
+
+def check_rotation(zone: RotationZone) -> None:
+    """Refuse (:class:`InputError`, one line) a rotation zone that cannot apply."""
+    vals = (*zone.center, zone.angle, zone.phase, zone.hub, zone.radius, *zone.span)
+    if not all(math.isfinite(v) for v in vals):
+        raise InputError(f"rotation: expected finite values, got {zone.to_json()}")
+    if not 0 < abs(zone.angle) <= 180:
+        raise InputError(
+            f"rotation angle: expected 0 < |angle| <= 180 degrees, got {zone.angle:.4g}"
+        )
+    if zone.count < 2 or zone.copies == 0:
+        raise InputError(
+            f"rotation: expected at least 2 elements and copies other than 0, got count "
+            f"{zone.count}, copies {zone.copies}"
+        )
+    if zone.count + zone.copies < 1:
+        raise InputError(
+            f"rotation copies: expected to remove at most {zone.count - 1} of the "
+            f"{zone.count} elements, got {zone.copies}"
+        )
+    if zone.closed and abs(zone.count * abs(zone.angle) - 360.0) > 1e-6 * 360:
+        raise InputError(
+            f"rotation: a closed ring of {zone.count} expected an angle of "
+            f"{360 / zone.count:.6g} degrees, got {zone.angle:.6g}"
+        )
+    if not 0 <= zone.hub < zone.radius or not zone.span[0] < zone.span[1]:
+        raise InputError(
+            "rotation: expected 0 <= hub < radius and span Y0 < Y1, got hub "
+            f"{zone.hub:.4g}, radius {zone.radius:.4g}, span {list(zone.span)}"
+        )
+
+
+def rotation_source(theta: np.ndarray, zone: RotationZone) -> np.ndarray:
+    """Source directions (degrees) of output directions ``theta`` (degrees, from x toward z)
+    about a rotation zone's axis: the map of :func:`apply_rotation` on the plane.
+
+    Parameters
+    ----------
+    theta : (...,) float64
+        Directions after the edit.
+    zone : RotationZone
+        The zone.
+
+    Returns
+    -------
+    (...,) float64
+        Directions before it (a removed element's place on an open arc shows the empty place
+        past the arc's end).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import RotationZone
+    >>> from partscale.edit.warp import rotation_source
+    >>> ring = RotationZone((0.0, 0.0), 90.0, 0.0, 4, True, 0.1, 0.5, (0.0, 0.1), 1)
+    >>> rotation_source(np.array([0.0, 72.0, 144.0]), ring).round(1)  # five arms from four
+    array([  0.,  90., 180.])
+    """
+    sign = 1.0 if zone.angle > 0 else -1.0
+    a = abs(zone.angle)
+    rel = np.mod(sign * (theta - zone.phase), 360.0)  # 0..360 from the first element
+    k, n = zone.count, zone.copies
+    if zone.closed:
+        step = 360.0 / (k + n)
+        m = np.rint(rel / step)
+        alpha = np.clip(rel - m * step, -a / 2, a / 2)  # within the element's own sector
+        src = np.mod(np.rint(m * k / (k + n)), k) * a + alpha
+        return zone.phase + sign * src
+    # an open arc: directions measured from the middle of the longer of the two arcs
+    mid = (k - 1 + max(n, 0)) * a / 2
+    rel = np.mod(rel - mid + 180.0, 360.0) + mid - 180.0
+    m = np.rint(rel / a)
+    src = rel.copy()
+    if n > 0:  # new elements: the last one turned on by an angle each
+        new = (m >= k) & (m <= k - 1 + n)
+        src[new] = rel[new] - (m[new] - (k - 1)) * a
+    else:  # the last -n removed: their places show the empty place past the end
+        gone = (m >= k + n) & (m <= k - 1)
+        src[gone] = rel[gone] + (k - m[gone]) * a
+    return zone.phase + sign * src
+
+
+def apply_rotation(csdf: CSDF, zone: RotationZone, *, record: dict[str, Any] | None = None) -> CSDF:
+    """Add (or remove) elements of a ring or arc that repeats by a turn about the vertical.
+
+    ``zone.copies`` elements more (or fewer) of a rotational repetition (see
+    :class:`~partscale.edit.RotationZone`): every column of the plane beyond ``zone.hub``
+    shows, on the levels of ``zone.span``, the source turned about the axis by
+    :func:`rotation_source` (sdf and colour bilinear, parts nearest); within the hub and on the
+    other levels, its own place. Each element is moved rigidly (a closed ring's ``count +
+    copies`` are spaced evenly, each a turned copy of the nearest old one; an open arc goes on
+    by the angle, or loses its last elements); then every voxel in the band of one that moved
+    is re-evaluated. ``meta['history']`` gains ``{"op": "rotation", ...}``.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object (up is +y).
+    zone : RotationZone
+        The elements and how many to add or remove.
+    record : dict, optional
+        More keys for the history entry (a recipe's step).
+
+    Returns
+    -------
+    CSDF
+        The edited object, its grid grown to hold the disc the elements turn in.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.edit import RotationZone, apply_rotation
+    >>> arms = [((0.1, 0, -0.03), (0.5, 0.06, 0.03)), ((-0.03, 0, 0.1), (0.03, 0.06, 0.5))]
+    >>> arms += [((-0.5, 0, -0.03), (-0.1, 0.06, 0.03)), ((-0.03, 0, -0.5), (0.03, 0.06, -0.1))]
+    >>> cross = shapes.grid(lambda p: shapes.boxes_sdf(p, arms), [(-0.5, 0, -0.5), (0.5, 0.06, 0.5)], voxel_size=0.02)
+    >>> out = apply_rotation(cross, RotationZone((0.0, 0.0), 90.0, 0.0, 4, True, 0.05, 0.52, (-0.1, 0.2), -1))
+    >>> bool(out.sdf[out.sdf.shape[0] // 2 - 20, 1, out.sdf.shape[2] // 2] < 0)  # no arm along -x
+    False
+    """
+    check_rotation(zone)
+    h = csdf.voxel_size
+    origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
+    check_memory(shape, BYTES_PER_VOXEL, what=f"{zone.copies:+d} elements")
+    others = [0, 2]
+    c = np.array(zone.center, dtype=np.float64)
+    uu = origin[0] + np.arange(shape[0]) * h
+    vv = origin[2] + np.arange(shape[2]) * h
+    d = np.stack(np.meshgrid(uu - c[0], vv - c[1], indexing="ij"), axis=-1)  # (U, V, 2)
+    r = np.hypot(d[..., 0], d[..., 1])
+    theta = np.degrees(np.arctan2(d[..., 1], d[..., 0]))
+    src_t = np.radians(rotation_source(theta, zone))
+    turn = r > zone.hub
+    su = np.where(turn, c[0] + r * np.cos(src_t), uu[:, None])
+    sv = np.where(turn, c[1] + r * np.sin(src_t), vv[None, :])
+    # whole voxels where nothing turns (exactly the column's own place)
+    iu = (su - csdf.origin[0]) / h
+    iv = (sv - csdf.origin[2]) / h
+    ou = np.rint((origin[0] - csdf.origin[0]) / h)
+    ov = np.rint((origin[2] - csdf.origin[2]) / h)
+    still = ~turn | ((np.abs(iu - np.rint(iu)) < 1e-9) & (np.abs(iv - np.rint(iv)) < 1e-9))
+    iu = np.where(still & ~turn, np.arange(shape[0])[:, None] + ou, iu)
+    iv = np.where(still & ~turn, np.arange(shape[2])[None, :] + ov, iv)
+    levels = csdf.origin[1] + np.arange(shape[1]) * h
+    inside = (levels >= zone.span[0]) & (levels <= zone.span[1])
+    arrays = _gather_levels(csdf, 1, others, iu, iv, inside, origin)
+    entry = {"op": "rotation", **zone.to_json(), **(record or {})}
+    return _finish(csdf, origin, arrays, entry)

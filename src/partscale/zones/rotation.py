@@ -89,6 +89,9 @@ class Rotation:
         under the turn (a column, a round top).
     span : (float, float)
         Levels (world y) the elements lie between.
+    width : float
+        Degrees: how far each element's own surface reaches either side of its direction
+        (a ring holds at most ``180 / width`` of them without two overlapping).
 
     Examples
     --------
@@ -107,6 +110,7 @@ class Rotation:
     hub: float
     radius: float
     span: tuple[float, float]
+    width: float = 0.0
 
     def zone(self, n: int) -> RotationZone:
         """The count edit adding ``n`` elements (``-n``: removing them)."""
@@ -134,6 +138,7 @@ class Rotation:
             "hub": self.hub,
             "radius": self.radius,
             "span": list(self.span),
+            "width": self.width,
         }
 
 
@@ -328,6 +333,7 @@ def _rotation(csdf: CSDF, score: _Scorer, s: float, x: np.ndarray) -> Rotation |
         float(hub * h),
         float((rr.max() + 1.0) * h),
         (float(csdf.origin[1] + j0 * h), float(csdf.origin[1] + j1 * h)),
+        math.degrees(width),
     )
 
 

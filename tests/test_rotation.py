@@ -201,6 +201,41 @@ def test_chairs_about_a_round_table():
         assert _same_within(c, out, rot.hub - H)  # the top and its column
 
 
+def arc(k, step=30.0):
+    """A column with ``k`` boxes (0.2 x 0.15 x 0.06) about it, the first at ``PHASE``, each
+    next turned by ``step`` degrees: an open arc."""
+
+    def sdf(p):
+        d = np.full(len(p), np.inf)
+        for m in range(k):
+            local = p.copy()
+            local[:, [0, 2]] = _turn(p[:, [0, 2]] - [CX, CZ], -(PHASE + m * step))
+            d = np.minimum(
+                d, shapes.box_sdf(local, (0.153, 0.053, -0.0303), (0.353, 0.203, 0.0303))
+            )
+        return np.minimum(_cyl(p, 0.0523, 0.0, 0.5), d)
+
+    b = np.array([[CX - 0.36, 0, CZ - 0.36], [CX + 0.36, 0.5, CZ + 0.36]])
+    return shapes.grid(sdf, b, voxel_size=H, source="arc of boxes")
+
+
+def test_open_arc_continued_and_cut_short():
+    """Four boxes 30 degrees apart about a column: an open arc of four at 30 degrees (within
+    half a degree), the first at its direction; +1 adds a box 30 degrees past the last, as
+    large, the others where they were (within a degree); -1 takes the last away."""
+    c = arc(4)
+    (rot,) = find_rotations(c)
+    assert not rot.closed and rot.count == 4 and abs(rot.angle - 30) <= 0.5, rot
+    assert abs(rot.phase - PHASE) <= 1.0, rot
+    boxes = _pieces(c, 0.1, 0.1)
+    size = np.median([v for _, v, _ in boxes])
+    for n, want in ((1, [10, 40, 70, 100, 130]), (-1, [10, 40, 70])):
+        got = _pieces(apply_rotation(c, rot.zone(n)), 0.1, 0.1)
+        assert len(got) == len(want), got
+        assert all(abs(a - w) <= 1.0 for (a, _, _), w in zip(got, want, strict=True)), got
+        assert all(abs(v - size) <= 0.03 * size for _, v, _ in got), got
+
+
 def test_rotation_zone_json_and_bad_input():
     """A rotation zone's JSON form parses back to itself; malformed ones, a ring whose angle
     and count disagree and removing every element are refused with one line."""

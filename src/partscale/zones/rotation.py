@@ -22,7 +22,7 @@ turned samples' distances). A candidate is a rotation where
 and the fundamental one (its multiples match as well) is kept.
 
 Its elements are the samples it alone carries onto the surface: they give the levels they lie
-between (the span), the radius within which the object is the same under the turn (the hub:
+between (the span: levels holding a few of them), the radius within which the object is the same under the turn (the hub:
 a column, a round top, which stay) and the outer radius; their directions give the first
 element's (the phase). A turn within :data:`CLOSE_TOL` degrees of a whole turn over a whole
 number ``k`` of elements, with all ``k`` sectors holding one, is a *closed ring* (its angle is
@@ -57,6 +57,10 @@ ITERATIONS = 12
 CLOSE_TOL = 1.0
 #: A sector holds an element where it holds at least this share of the fullest sector's solid.
 OCCUPIED = 0.2
+#: A level is the elements' where it holds at least this many of their own samples, and this
+#: share of the fullest level's.
+LEVEL_SAMPLES = 3
+LEVEL_SHARE = 0.02
 #: A hub's ring holds at most this share of points near the surface that change under half the
 #: turn (a voxel's noise).
 SEPARABLE = 0.02
@@ -287,14 +291,16 @@ def _rotation(csdf: CSDF, score: _Scorer, s: float, x: np.ndarray) -> Rotation |
     c = x[1:3]
     angle = math.degrees(x[0])
     k = round(360.0 / angle)
-    if abs(angle - 360.0 / k) <= CLOSE_TOL:
-        angle = 360.0 / k
+    ring = abs(angle - 360.0 / k) <= CLOSE_TOL  # a closed ring if every sector holds one
     d = pts[:, [0, 2]] - c
     r = np.hypot(d[:, 0], d[:, 1])
-    j0, j1 = int(np.floor(pts[:, 1].min())) - 1, int(np.ceil(pts[:, 1].max())) + 1
+    # the levels holding the elements' own surface (a lone sample is noise at the tolerance)
+    per = np.bincount(np.rint(pts[:, 1]).astype(np.int64))
+    levels = np.flatnonzero(per >= max(LEVEL_SAMPLES, LEVEL_SHARE * per.max()))
+    j0, j1 = int(levels[0]) - 1, int(levels[-1]) + 1
     j0, j1 = max(j0, 0), min(j1, score.sdf.shape[1] - 1)
     hub = _hub(score, c, x[0], j0, j1, float(r.min()))
-    sector = math.radians(angle)
+    sector = math.radians(360.0 / k if ring else angle)
     theta = np.arctan2(d[:, 1], d[:, 0])
     phase = float(np.angle(np.exp(1j * theta * (2 * math.pi / sector)).mean()))
     phase *= sector / (2 * math.pi)
@@ -302,11 +308,13 @@ def _rotation(csdf: CSDF, score: _Scorer, s: float, x: np.ndarray) -> Rotation |
     if solid is None:
         return None
     rr, tt = solid
-    sectors = max(1, round(360.0 / angle)) if angle * k == 360.0 else math.ceil(360.0 / angle)
+    sectors = k if ring else math.ceil(360.0 / angle)
     m = np.mod(np.rint((tt - phase) / sector), sectors).astype(np.int64)
     fill = np.bincount(m, minlength=sectors)
     held = fill >= OCCUPIED * fill.max()
-    closed = bool(held.all()) and angle * k == 360.0
+    closed = bool(held.all()) and ring
+    if closed:
+        angle = 360.0 / k
     if closed:
         first, count = 0, sectors
     else:

@@ -1,6 +1,6 @@
-"""Zones that are not slabs across an axis: radial (an annulus about an axis) and oblique planes.
+"""Zones that are not slabs across an axis: radial, oblique planes, steps and turned elements.
 
-Both are *warps*: a map from every output point to the source point it shows, applied to the
+All are *warps*: a map from every output point to the source point it shows, applied to the
 CSDF by resampling (sdf and colour trilinear, parts nearest), then re-evaluated wherever the map
 is not a shift by whole voxels, so that every stored distance near the surface is again the
 distance to the edited surface (:func:`partscale.edit.reevaluate`).
@@ -19,6 +19,17 @@ foot keep their size.
 Oblique zone (:class:`ObliqueZone`): the slab between the planes ``p . n = s0`` and
 ``p . n = s1`` (``n`` any unit vector) becomes ``s0 .. to``; what lies beyond ``s1`` moves by
 ``(to - s1) n``. The grid grows to hold the moved content (its voxel size never changes).
+
+Rotation zone (:class:`RotationZone`): elements repeated by a turn about the vertical (a star
+base's arms, chairs about a round table) are added or removed whole: beyond the hub radius and
+on the levels the elements span, every column shows the source turned about the axis
+(:func:`rotation_source`): a closed ring's elements spaced evenly again, each an old one turned
+rigidly; an open arc continued by its angle, or cut short.
+
+Growing radial and oblique zones re-evaluate only the voxels whose nearest surface point could
+have moved: a voxel whose field is flat along every direction the map moves content along
+keeps its resampled distance (the planar edits' rule; the inverse of a growing map brings
+nothing closer).
 
 Conventions: world units, ``(i, j, k) = (x, y, z)``, voxel centres at ``origin + index *
 voxel_size``, sdf negative inside, sRGB colours.

@@ -36,7 +36,9 @@ def fit(
         typer.Option(
             "--add",
             metavar="AXIS N",
-            help="Add N elements (seats, doors, shelf rows, steps) along AXIS; -N removes N.",
+            help="Add N elements (seats, doors, shelf rows, steps) along AXIS; -N removes N. "
+            "With y, also the elements of a ring about the vertical (a star base's arms, chairs "
+            "about a round table), spaced evenly again.",
         ),
     ] = None,
     allow_deform: Annotated[

@@ -51,7 +51,8 @@ def scale(
             metavar="START END",
             help="The zone's planes: object units, with a unit (30cm, 300mm, 0.3m, 12in) or % "
             "of the extent (0% at its min). Omitted with --copies: whole elements (seats, "
-            "doors, shelf rows, steps) of the repeat found along --axis.",
+            "doors, shelf rows, steps) of the repeat found along --axis (y: also the arms of a "
+            "ring about the vertical).",
         ),
     ] = None,
     to: Annotated[

@@ -23,8 +23,8 @@ def suggest(
         typer.Option(
             "--json",
             help="Print JSON instead of text (for scripts): the candidates best first, and per "
-            "axis the elements, separators and repeat groups; steps (straight or a helix) and a "
-            "round plan.",
+            "axis the elements, separators and repeat groups; steps (straight or a helix), "
+            "elements turned about the vertical and a round plan.",
         ),
     ] = False,
     png: Annotated[
@@ -42,7 +42,14 @@ def suggest(
     """
     from ..csdf import load
     from ..orient import WALL_AXES, csdf_turn, off_square_message
-    from ..zones import AXES, find_elements, find_helices, find_radial, find_screws
+    from ..zones import (
+        AXES,
+        find_elements,
+        find_helices,
+        find_radial,
+        find_rotations,
+        find_screws,
+    )
     from ..zones import suggest as suggest_zones
 
     if axis is not None and axis.lower() not in ("x", "y", "z"):
@@ -68,6 +75,8 @@ def suggest(
     steps = [sc for sc in steps if ax is None or abs(sc.step[AXES.index(ax)]) > 0]
     # a spiral stair: where no flight is found, up
     helices = find_helices(c) if not steps and ax in (None, "y") else []
+    # elements about the vertical (a star base's arms): where no stair is found
+    turns = find_rotations(c) if not steps and not helices and ax in (None, "y") else []
     frame = find_radial(c, "y") if ax is None else None
     if as_json:
         doc = {
@@ -75,6 +84,7 @@ def suggest(
             "elements": {a: f.to_json() for a, f in found.items()},
             "steps": [sc.to_json() for sc in steps],
             "helix": [hx.to_json() for hx in helices],
+            "rotation": [rt.to_json() for rt in turns],
         }
         if frame is not None:
             doc["radial"] = {
@@ -86,7 +96,7 @@ def suggest(
         typer.echo(json.dumps(doc, indent=2))
     else:
         stepped = {AXES[k] for sc in steps for k in range(3) if abs(sc.step[k]) > 0}
-        stepped |= {"y"} if helices else set()
+        stepped |= {"y"} if helices or turns else set()
         for f in found.values():
             if f.best is not None or f.axis not in stepped:
                 typer.echo(_elements_line(f, units))
@@ -102,6 +112,13 @@ def suggest(
                 f"about the vertical through {hx.center[0]:.3f}, {hx.center[1]:.3f} and rising "
                 f"{hx.rise:.4g} {units} ({100 * hx.support:.0f}% of the surface repeats; "
                 "fit --add y 1 adds one)"
+            )
+        for rt in turns:
+            ring = "a closed ring" if rt.closed else "an open arc"
+            typer.echo(
+                f"rotation: {rt.count} elements, {ring}, each turned {rt.angle:.1f} degrees "
+                f"about the vertical through {rt.center[0]:.3f}, {rt.center[1]:.3f} {units} "
+                f"({100 * rt.support:.0f}% of the surface repeats; fit --add y 1 adds one)"
             )
         if frame is not None:
             shape = "round" if frame.sides == 0 else f"a regular {frame.sides}-sided polygon"

@@ -23,7 +23,8 @@ Public API
   :func:`screw_ground`: the floor a flight's steps are kept on.
 - :class:`ScrewZone`, :func:`apply_screw`; :class:`HelixZone`, :func:`apply_helix`: steps added
   to or removed from a flight that repeats by a diagonal shift, or a spiral stair that repeats
-  by a turn about the vertical and a rise.
+  by a turn about the vertical and a rise; :class:`RotationZone`, :func:`apply_rotation`:
+  elements added to or removed from a ring (or arc) that repeats by a turn about the vertical.
 - :func:`resolve_edit` ``(csdf, edit) -> ResolvedEdit``: an edit validated on an object, in world
   units and snapped to whole voxels, as :func:`apply_edit` performs it (:class:`ResolvedEdit`
   also maps coordinates across the edit and lists its seams).
@@ -77,6 +78,7 @@ from .recipe import (
     ObliqueZone,
     RadialZone,
     Recipe,
+    RotationZone,
     ScrewZone,
     forward_coordinate,
     parse_edit,
@@ -101,6 +103,7 @@ from .warp import (
     apply_helix,
     apply_oblique,
     apply_radial,
+    apply_rotation,
     apply_screw,
     apply_warp,
     gauge,
@@ -123,12 +126,14 @@ __all__ = [
     "RadialZone",
     "Recipe",
     "ResolvedEdit",
+    "RotationZone",
     "ScrewZone",
     "apply_edit",
     "apply_helix",
     "apply_oblique",
     "apply_radial",
     "apply_recipe",
+    "apply_rotation",
     "apply_screw",
     "apply_warp",
     "check_recipe_memory",

@@ -20,6 +20,9 @@ or a zone that is not a slab across an axis (:mod:`partscale.edit.warp`)::
     {"normal": [NX, NY, NZ], "zone": [S0, S1], "to": S}   # the slab S0 <= p . n <= S1
     {"helix": {"center": [X, Z], "angle": DEG, "rise": R, "cut": Y}, "copies": N}
                                        # N more steps of a spiral stair (above Y turns and rises)
+    {"rotation": {"center": [X, Z], "angle": DEG, "phase": DEG, "count": K, "closed": true,
+                  "hub": R0, "radius": R1, "span": [Y0, Y1]}, "copies": N}
+                                       # N more elements of a ring (or arc) about the vertical
 
 Their positions are lengths (numbers or with a unit, no ``%``) on the object they apply to; a
 recipe holding one holds no zone across an axis it moves content along. And a count::
@@ -191,6 +194,49 @@ JSON_SCHEMA: dict[str, Any] = {
                                     "angle": {"type": "number"},
                                     "rise": {"$ref": "#/$defs/length"},
                                     "cut": {"$ref": "#/$defs/length"},
+                                },
+                            },
+                            "copies": {"type": "integer"},
+                        },
+                    },
+                    {
+                        "description": "elements repeated by a turn about the vertical (arms of "
+                        "a star base, chairs about a round table): count elements, the first "
+                        "at phase degrees and each next turned by angle degrees (from x toward "
+                        "z) about the vertical through center, between the radii hub and "
+                        "radius and the levels span; copies more (or fewer) of them, evenly "
+                        "spaced on a closed ring, continued along an open arc",
+                        "type": "object",
+                        "required": ["rotation", "copies"],
+                        "additionalProperties": False,
+                        "properties": {
+                            "rotation": {
+                                "type": "object",
+                                "required": [
+                                    "center",
+                                    "angle",
+                                    "phase",
+                                    "count",
+                                    "closed",
+                                    "hub",
+                                    "radius",
+                                    "span",
+                                ],
+                                "additionalProperties": False,
+                                "properties": {
+                                    "center": {
+                                        "type": "array",
+                                        "minItems": 2,
+                                        "maxItems": 2,
+                                        "items": {"$ref": "#/$defs/length"},
+                                    },
+                                    "angle": {"type": "number"},
+                                    "phase": {"type": "number"},
+                                    "count": {"type": "integer", "minimum": 2},
+                                    "closed": {"type": "boolean"},
+                                    "hub": {"$ref": "#/$defs/length"},
+                                    "radius": {"$ref": "#/$defs/length"},
+                                    "span": {"$ref": "#/$defs/lengths"},
                                 },
                             },
                             "copies": {"type": "integer"},
@@ -741,6 +787,119 @@ class HelixZone:
 
 
 @dataclass(frozen=True)
+class RotationZone:
+    """Elements added to (or removed from) a ring or arc that repeats by a turn about the vertical.
+
+    ``count`` elements (the arms of a star base, the blades of a fan, chairs about a round
+    table) lie between the radii ``hub`` and ``radius`` about the vertical through ``center``
+    and between the levels ``span``: the first at ``phase`` degrees, each next turned by
+    ``angle`` degrees (from x toward z) from the one before. ``copies`` more of them
+    (:func:`partscale.edit.apply_rotation`; ``copies < 0``: fewer): on a closed ring
+    (``closed``: ``count`` times ``angle`` is a whole turn) the ``count + copies`` elements are
+    spaced evenly, each one of the old ones turned rigidly about the axis; on an open arc the
+    new ones continue it (the last one turned by ``angle`` each), or the last ones go. What lies
+    within ``hub`` (a column, a table's top), or outside ``span``, stays as it is.
+
+    Parameters
+    ----------
+    center : (float, float)
+        The vertical axis' place on x and z (world units).
+    angle : float
+        Degrees from one element to the next.
+    phase : float
+        Degrees: the first element's direction from the axis.
+    count : int
+        Elements now (at least 2).
+    closed : bool
+        A whole ring (else an open arc).
+    hub, radius : float
+        The radii the elements lie between (world units).
+    span : (float, float)
+        The levels (world y) they lie between.
+    copies : int
+        Elements added (negative: removed), not 0.
+
+    Examples
+    --------
+    >>> from partscale.edit import RotationZone
+    >>> z = RotationZone((0.0, 0.0), 72.0, 0.0, 5, True, 0.05, 0.4, (0.0, 0.1), 1)
+    >>> z.to_json()["rotation"]["count"], z.to_json()["copies"]
+    (5, 1)
+    """
+
+    center: tuple[float, float]
+    angle: float
+    phase: float
+    count: int
+    closed: bool
+    hub: float
+    radius: float
+    span: tuple[float, float]
+    copies: int
+
+    @classmethod
+    def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> RotationZone:
+        """Validate ``{"rotation": {"center": [X, Z], "angle", "phase", "count", "closed",
+        "hub", "radius", "span": [Y0, Y1]}, "copies": N}`` (lengths: numbers or with a unit;
+        angles in degrees).
+        """
+        _keys(obj, {"rotation", "copies"}, {"rotation", "copies"}, where)
+        spec = obj["rotation"]
+        keys = {"center", "angle", "phase", "count", "closed", "hub", "radius", "span"}
+        if not isinstance(spec, dict) or set(spec) != keys:
+            raise InputError(
+                f"{where}.rotation: expected keys {', '.join(sorted(keys))}, got {shown(spec)}"
+            )
+        center = spec["center"]
+        if not isinstance(center, list | tuple) or len(center) != 2:
+            raise InputError(f"{where}.rotation.center: expected [X, Z], got {shown(center)}")
+        count = spec["count"]
+        if isinstance(count, bool) or not isinstance(count, int) or count < 2:
+            raise InputError(
+                f"{where}.rotation.count: expected a whole number >= 2, got {shown(count)}"
+            )
+        if not isinstance(spec["closed"], bool):
+            raise InputError(
+                f"{where}.rotation.closed: expected true or false, got {shown(spec['closed'])}"
+            )
+        n = _copies(obj, where)
+        cv = [_number(v, f"{where}.rotation.center", units) for v in center]
+        span = spec["span"]
+        if not isinstance(span, list | tuple) or len(span) != 2:
+            raise InputError(f"{where}.rotation.span: expected [Y0, Y1], got {shown(span)}")
+        return cls(
+            (cv[0], cv[1]),
+            _number(spec["angle"], f"{where}.rotation.angle", None),
+            _number(spec["phase"], f"{where}.rotation.phase", None),
+            count,
+            spec["closed"],
+            _number(spec["hub"], f"{where}.rotation.hub", units),
+            _number(spec["radius"], f"{where}.rotation.radius", units),
+            (
+                _number(span[0], f"{where}.rotation.span[0]", units),
+                _number(span[1], f"{where}.rotation.span[1]", units),
+            ),
+            n,
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON form (what recipes, histories and the editor's API hold)."""
+        return {
+            "rotation": {
+                "center": [self.center[0], self.center[1]],
+                "angle": self.angle,
+                "phase": self.phase,
+                "count": self.count,
+                "closed": self.closed,
+                "hub": self.hub,
+                "radius": self.radius,
+                "span": [self.span[0], self.span[1]],
+            },
+            "copies": self.copies,
+        }
+
+
+@dataclass(frozen=True)
 class CountEdit:
     """Whole elements more or fewer along an axis: "one more seat" in a recipe.
 
@@ -796,7 +955,7 @@ class Recipe:
 
     Parameters
     ----------
-    edits : tuple of Edit, RadialZone, ObliqueZone, ScrewZone or HelixZone
+    edits : tuple of Edit, RadialZone, ObliqueZone, ScrewZone, HelixZone or RotationZone
         The edits, applied in order.
 
     Examples
@@ -807,9 +966,9 @@ class Recipe:
     {'version': 1, 'edits': [{'axis': 'x', 'zone': ['30%', '60%'], 'to': '80%', 'mode': 'stretch'}]}
     """
 
-    edits: tuple[Edit | RadialZone | ObliqueZone | ScrewZone | HelixZone | CountEdit, ...] = field(
-        default_factory=tuple
-    )
+    edits: tuple[
+        Edit | RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone | CountEdit, ...
+    ] = field(default_factory=tuple)
 
     @classmethod
     def parse(cls, obj: Any, *, units: str | None = None) -> Recipe:
@@ -855,11 +1014,11 @@ class Recipe:
 
 def parse_edit(
     obj: Any, *, where: str = "edit", units: str | None = None
-) -> Edit | RadialZone | ObliqueZone | ScrewZone | HelixZone | CountEdit:
+) -> Edit | RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone | CountEdit:
     """Parse one recipe edit of any kind.
 
     A radial zone has a ``"radial"`` key, an oblique one ``"normal"``, steps ``"screw"`` (a
-    helix's ``"helix"``), a count
+    helix's ``"helix"``, elements about the vertical ``"rotation"``), a count
     ``"copies"`` and no zone (:class:`CountEdit`); anything else is a zone between planes across an
     axis (:class:`Edit`).
 
@@ -874,7 +1033,7 @@ def parse_edit(
 
     Returns
     -------
-    Edit, RadialZone, ObliqueZone, ScrewZone, HelixZone or CountEdit
+    Edit, RadialZone, ObliqueZone, ScrewZone, HelixZone, RotationZone or CountEdit
         The edit.
 
     Examples
@@ -891,6 +1050,8 @@ def parse_edit(
         return ScrewZone.parse(obj, where=where, units=units)
     if isinstance(obj, dict) and "helix" in obj:
         return HelixZone.parse(obj, where=where, units=units)
+    if isinstance(obj, dict) and "rotation" in obj:
+        return RotationZone.parse(obj, where=where, units=units)
     if isinstance(obj, dict) and "copies" in obj and "zone" not in obj:
         return CountEdit.parse(obj, where=where)
     return Edit.parse(obj, where=where, units=units)

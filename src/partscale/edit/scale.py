@@ -29,6 +29,7 @@ from .recipe import (
     ObliqueZone,
     RadialZone,
     Recipe,
+    RotationZone,
     ScrewZone,
     forward_coordinate,
     source_coordinate,
@@ -399,9 +400,12 @@ def check_mixed(recipe: Recipe) -> None:
     for i, w in warps:
         for j, e in enumerate(recipe.edits):
             if isinstance(e, Edit) and e.axis_index in moved_axes(w):
-                kind = {RadialZone: "radial", ScrewZone: "step", HelixZone: "helix"}.get(
-                    type(w), "oblique"
-                )
+                kind = {
+                    RadialZone: "radial",
+                    ScrewZone: "step",
+                    HelixZone: "helix",
+                    RotationZone: "rotation",
+                }.get(type(w), "oblique")
                 raise InputError(
                     f"edits[{j}]: expected no zone along {e.axis} in a recipe with the {kind} "
                     f"zone edits[{i}] (it moves content along {e.axis}), got one; apply them "
@@ -658,11 +662,12 @@ def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
     entries = [
         h
         for h in hist
-        if isinstance(h, dict) and h.get("op") in ("scale", "radial", "oblique", "screw", "helix")
+        if isinstance(h, dict)
+        and h.get("op") in ("scale", "radial", "oblique", "screw", "helix", "rotation")
     ]
     if not entries:
         raise InputError("history: expected at least one scale edit, got none")
-    edits: list[Edit | RadialZone | ObliqueZone | ScrewZone | HelixZone] = []
+    edits: list[Edit | RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone] = []
     earlier: list[tuple[int, dict[str, Any]]] = []  # all edits before the current run
     run: list[tuple[int, dict[str, Any]]] = []  # edits of the current run
     for h in entries:
@@ -677,6 +682,9 @@ def recipe_from_history(csdf: CSDF, *, after: CSDF | None = None) -> Recipe:
             continue
         if h["op"] == "helix":
             edits.append(HelixZone.parse({k: h[k] for k in ("helix", "copies")}))
+            continue
+        if h["op"] == "rotation":
+            edits.append(RotationZone.parse({k: h[k] for k in ("rotation", "copies")}))
             continue
         applied = Edit.parse(h["edit"])
         ax = applied.axis_index

@@ -1,6 +1,6 @@
-"""Zones that are not slabs across an axis: radial (an annulus about an axis) and oblique planes.
+"""Zones that are not slabs across an axis: radial, oblique planes, steps and turned elements.
 
-Both are *warps*: a map from every output point to the source point it shows, applied to the
+All are *warps*: a map from every output point to the source point it shows, applied to the
 CSDF by resampling (sdf and colour trilinear, parts nearest), then re-evaluated wherever the map
 is not a shift by whole voxels, so that every stored distance near the surface is again the
 distance to the edited surface (:func:`partscale.edit.reevaluate`).
@@ -20,6 +20,17 @@ Oblique zone (:class:`ObliqueZone`): the slab between the planes ``p . n = s0`` 
 ``p . n = s1`` (``n`` any unit vector) becomes ``s0 .. to``; what lies beyond ``s1`` moves by
 ``(to - s1) n``. The grid grows to hold the moved content (its voxel size never changes).
 
+Rotation zone (:class:`RotationZone`): elements repeated by a turn about the vertical (a star
+base's arms, chairs about a round table) are added or removed whole: beyond the hub radius and
+on the levels the elements span, every column shows the source turned about the axis
+(:func:`rotation_source`): a closed ring's elements spaced evenly again, each an old one turned
+rigidly; an open arc continued by its angle, or cut short.
+
+Growing radial and oblique zones re-evaluate only the voxels whose nearest surface point could
+have moved: a voxel whose field is flat along every direction the map moves content along
+keeps its resampled distance (the planar edits' rule; the inverse of a growing map brings
+nothing closer).
+
 Conventions: world units, ``(i, j, k) = (x, y, z)``, voxel centres at ``origin + index *
 voxel_size``, sdf negative inside, sRGB colours.
 """
@@ -31,18 +42,23 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from .._memory import check_memory
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
-from .recipe import AXES, HelixZone, ObliqueZone, RadialZone, ScrewZone
+from ._warp_kernels import gather_columns, reevaluation_mask, resample_affine
+from .recipe import AXES, HelixZone, ObliqueZone, RadialZone, RotationZone, ScrewZone
 from .reevaluate import reevaluate_arrays
 from .resolved import BYTES_PER_VOXEL
 
 #: Voxels beyond the band resampled trilinearly (the rest take their nearest source value: they
 #: only keep the sign far from the surface).
 RESAMPLE_MARGIN = 2.0
+
+#: A slope of the field at most this along every direction a growing map moves content along
+#: counts as flat there: the voxel's nearest surface point lies square to them, and its
+#: resampled distance is kept (the planar edits' rule, :mod:`partscale.edit.reevaluate`).
+LATERAL = 0.05
 
 
 def gauge(d: np.ndarray, sides: int, phase: float) -> np.ndarray:
@@ -229,35 +245,46 @@ def radial_extent(csdf: CSDF, zone: RadialZone) -> float:
 
 
 def _resample(
-    csdf: CSDF, origin: np.ndarray, shape: tuple[int, ...], src_of
+    csdf: CSDF,
+    origin: np.ndarray,
+    shape: tuple[int, ...],
+    normal: np.ndarray,
+    levels: np.ndarray,
+    mats: np.ndarray,
+    backs: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The output arrays on the grid ``origin``/``shape``: sdf (X, Y, Z) float32, rgb
-    (X, Y, Z, 3) uint8, parts (X, Y, Z) int16, each voxel showing the source point
-    ``src_of(points)`` maps it to, and ``moved`` (X, Y, Z) bool: the voxels that show another
-    place than their own shifted by whole voxels (the surface there may have changed).
+    (X, Y, Z, 3) uint8, parts (X, Y, Z) int16, each voxel ``p`` showing the source point
+    ``A_m p + b_m`` (``mats[m]`` = ``[A | b]``, (M + 1, 3, 4), ``m`` the slab of ``p . normal``
+    among the increasing ``levels`` (M,)), and ``moved`` (X, Y, Z) bool: the voxels that show
+    another place than their own shifted by whole voxels (the surface there may have changed).
+    Trilinear near the surface where moved; farther out the nearest value keeps the sign
+    (re-evaluation covers the band).
     """
     h = csdf.voxel_size
     check_memory(shape, BYTES_PER_VOXEL, what="the warped grid")
-    axes = [origin[a] + np.arange(shape[a]) * h for a in range(3)]
-    pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    src = src_of(pts)
-    idx = (src - csdf.origin) / h  # continuous source indices
-    off = (src - pts) / h
-    moved = np.abs(off - np.round(off)).max(axis=1) > 1e-6
-    n = np.clip(np.rint(idx).astype(np.int64), 0, np.array(csdf.shape) - 1)
-    sdf = csdf.sdf[n[:, 0], n[:, 1], n[:, 2]].astype(np.float32)
-    rgb = csdf.rgb[n[:, 0], n[:, 1], n[:, 2]]
-    parts = csdf.parts[n[:, 0], n[:, 1], n[:, 2]]
-    # trilinear near the surface where the map is no whole-voxel shift; farther out the
-    # nearest value keeps the sign (re-evaluation covers the band)
-    near = moved & (np.abs(sdf) <= (BAND_VOXELS + RESAMPLE_MARGIN) * h)
-    q = idx[near].T
-    sdf[near] = ndimage.map_coordinates(csdf.sdf, q, order=1, mode="nearest")
-    for c in range(3):
-        rgb[near, c] = np.clip(
-            np.rint(ndimage.map_coordinates(csdf.rgb[..., c], q, order=1, mode="nearest")), 0, 255
-        ).astype(np.uint8)
-    return sdf.reshape(shape), rgb.reshape((*shape, 3)), parts.reshape(shape), moved.reshape(shape)
+    sdf = np.empty(shape, dtype=np.float32)
+    rgb = np.empty((*shape, 3), dtype=np.uint8)
+    parts = np.empty(shape, dtype=csdf.parts.dtype)
+    moved = np.empty(shape, dtype=bool)
+    resample_affine(
+        csdf.sdf,
+        csdf.rgb,
+        csdf.parts,
+        np.asarray(csdf.origin, dtype=np.float64),
+        float(h),
+        np.asarray(origin, dtype=np.float64),
+        np.asarray(normal, dtype=np.float64),
+        np.asarray(levels, dtype=np.float64),
+        np.ascontiguousarray(mats, dtype=np.float64),
+        np.zeros((len(mats), 3)) if backs is None else np.ascontiguousarray(backs, np.float64),
+        np.float32((BAND_VOXELS + RESAMPLE_MARGIN) * h),
+        sdf,
+        rgb,
+        parts,
+        moved,
+    )
+    return sdf, rgb, parts, moved
 
 
 def _finish(
@@ -265,23 +292,26 @@ def _finish(
     origin: np.ndarray,
     arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     entry: dict[str, Any],
+    keep_square_to: np.ndarray | None = None,
 ) -> CSDF:
     """Re-evaluate the voxels near the surface within the band of a moved one, and the new
-    CSDF with its history entry.
+    CSDF with its history entry. With ``keep_square_to`` (K, 3) (the directions a map that only
+    grows moves content along), a voxel whose field is flat along all of them keeps its
+    resampled distance (:func:`~partscale.edit._warp_kernels.reevaluation_mask`).
     """
     sdf, rgb, parts, moved = arrays
     h = csdf.voxel_size
     band = BAND_VOXELS + 1.0
     r = math.ceil(band) + 1
-    near = np.abs(sdf) <= band * h
     # a voxel's nearest surface point is within the band: only moved voxels that near count
-    mask = near & ndimage.binary_dilation(moved & near, iterations=r)
+    dirs = np.zeros((0, 3)) if keep_square_to is None else np.asarray(keep_square_to, np.float64)
+    mask = reevaluation_mask(sdf, moved, float(h), band, r, dirs, LATERAL)
     n = reevaluate_arrays(sdf, rgb, parts, h, mask, band=band)
     entry = {**entry, "reevaluated_voxels": int(n)}
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
 
 
-def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone | HelixZone) -> set[int]:
+def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone) -> set[int]:
     """The world axes along which ``zone`` moves content (planar edits on them and this zone
     do not mix in one recipe: their positions could not be carried through it).
     """
@@ -291,6 +321,8 @@ def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone | HelixZone) -> set[in
         return {a for a in range(3) if abs(zone.step[a]) > 1e-9} | {AXES.index(zone.axis)}
     if isinstance(zone, HelixZone):  # a turn about the vertical and a rise
         return {0, 1, 2}
+    if isinstance(zone, RotationZone):  # turns about the vertical
+        return {0, 2}
     return {a for a in range(3) if abs(zone.normal[a]) > 1e-9}
 
 
@@ -298,7 +330,7 @@ def warp_grid(
     origin: np.ndarray,
     shape: tuple[int, ...],
     h: float,
-    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone,
+    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone,
 ) -> tuple[np.ndarray, tuple[int, ...]]:
     """Origin and shape of the grid ``zone`` gives from the grid ``origin``/``shape``/``h``
     without computing anything.
@@ -311,6 +343,12 @@ def warp_grid(
         a, b = np.minimum(lo, lo + move) + h / 2, np.maximum(hi, hi + move) - h / 2
     elif isinstance(zone, HelixZone):
         a, b = _helix_bounds(zone, lo, hi, h)
+    elif isinstance(zone, RotationZone):  # the disc the elements turn in
+        reach = np.array([zone.radius + h, 0.0, zone.radius + h])
+        c = np.array([zone.center[0], 0.0, zone.center[1]])
+        a = np.minimum(lo + h / 2, c - reach)
+        b = np.maximum(hi - h / 2, c + reach)
+        a[1], b[1] = lo[1] + h / 2, hi[1] - h / 2
     elif isinstance(zone, RadialZone):
         shift = zone.shift
         grow = np.zeros(3)
@@ -329,20 +367,20 @@ def warp_grid(
 
 def apply_warp(
     csdf: CSDF,
-    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone,
+    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone,
     *,
     record: dict[str, Any] | None = None,
 ) -> CSDF:
     """Apply a zone that is not a slab across an axis: radial, oblique or steps.
 
-    Dispatches to :func:`apply_radial`, :func:`apply_oblique`, :func:`apply_screw` or
-    :func:`apply_helix` by the kind of ``zone``.
+    Dispatches to :func:`apply_radial`, :func:`apply_oblique`, :func:`apply_screw`,
+    :func:`apply_helix` or :func:`apply_rotation` by the kind of ``zone``.
 
     Parameters
     ----------
     csdf : CSDF
         The object.
-    zone : RadialZone, ObliqueZone, ScrewZone or HelixZone
+    zone : RadialZone, ObliqueZone, ScrewZone, HelixZone or RotationZone
         The zone.
     record : dict, optional
         More keys for its history entry (a recipe's step).
@@ -367,6 +405,8 @@ def apply_warp(
         return apply_screw(csdf, zone, record=record)
     if isinstance(zone, HelixZone):
         return apply_helix(csdf, zone, record=record)
+    if isinstance(zone, RotationZone):
+        return apply_rotation(csdf, zone, record=record)
     return apply_oblique(csdf, zone, record=record)
 
 
@@ -612,7 +652,10 @@ def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None 
         inside = (levels >= zone.span[0]) & (levels <= zone.span[1])
     arrays = _gather_levels(csdf, ax, others, iu, iv, inside, origin)
     entry = {"op": "radial", **zone.to_json(), **(record or {})}
-    return _finish(csdf, origin, arrays, entry)
+    # growing, the map moves content across the axis only: a voxel whose nearest surface point
+    # lies along the axis keeps its distance
+    keep = np.eye(3)[others] if zone.to >= zone.r1 else None
+    return _finish(csdf, origin, arrays, entry, keep)
 
 
 def _gather_levels(
@@ -631,48 +674,32 @@ def _gather_levels(
     whole voxels.
     """
     h = csdf.voxel_size
-    src = np.moveaxis(csdf.sdf, (others[0], ax, others[1]), (0, 1, 2))  # (Us, L, Vs)
-    rgb = np.moveaxis(csdf.rgb, (others[0], ax, others[1]), (0, 1, 2))
-    parts = np.moveaxis(csdf.parts, (others[0], ax, others[1]), (0, 1, 2))
+    order = (others[0], ax, others[1])
     # the output's own place in source indices (whole voxels: the grid grew by whole voxels)
-    ou = np.rint((origin[others[0]] - csdf.origin[others[0]]) / h).astype(np.int64)
-    ov = np.rint((origin[others[1]] - csdf.origin[others[1]]) / h).astype(np.int64)
-    own_u = (np.arange(iu.shape[0]) + ou)[:, None] + 0 * iv.astype(np.int64)
-    own_v = (np.arange(iu.shape[1]) + ov)[None, :] + 0 * iu.astype(np.int64)
-    mapped = (np.abs(iu - own_u) > 1e-6) | (np.abs(iv - own_v) > 1e-6)
-    nu, nv = src.shape[0], src.shape[2]
-    u0 = np.floor(iu).astype(np.int64)
-    v0 = np.floor(iv).astype(np.int64)
-    fu = (iu - u0).astype(np.float32)[:, None, :]
-    fv = (iv - v0).astype(np.float32)[:, None, :]
-    lv = np.arange(src.shape[1])[None, :, None]
-
-    def at(a: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return a[np.clip(u, 0, nu - 1)[:, None, :], lv, np.clip(v, 0, nv - 1)[:, None, :]]
-
-    corners = [(u0, v0, (1 - fu) * (1 - fv)), (u0 + 1, v0, fu * (1 - fv))]
-    corners += [(u0, v0 + 1, (1 - fu) * fv), (u0 + 1, v0 + 1, fu * fv)]
-    out_sdf = sum(w * at(src, u, v) for u, v, w in corners).astype(np.float32)
-    out_rgb = np.clip(
-        np.rint(sum(w[..., None] * at(rgb, u, v).astype(np.float32) for u, v, w in corners)),
-        0,
-        255,
-    ).astype(np.uint8)
-    out_parts = at(parts, np.rint(iu).astype(np.int64), np.rint(iv).astype(np.int64))
-    # levels the zone does not span: the column's own place
-    own = ~inside
-    if own.any():
-        out_sdf[:, own, :] = at(src, own_u, own_v)[:, own, :]
-        out_rgb[:, own, :] = at(rgb, own_u, own_v)[:, own, :]
-        out_parts[:, own, :] = at(parts, own_u, own_v)[:, own, :]
-    moved = mapped[:, None, :] & inside[None, :, None]
-    back = (0, 1, 2), (others[0], ax, others[1])
-    return (
-        np.ascontiguousarray(np.moveaxis(out_sdf, *back)),
-        np.ascontiguousarray(np.moveaxis(out_rgb, *back)),
-        np.ascontiguousarray(np.moveaxis(out_parts, *back)),
-        np.ascontiguousarray(np.moveaxis(np.broadcast_to(moved, out_sdf.shape), *back)),
+    ou = int(np.rint((origin[others[0]] - csdf.origin[others[0]]) / h))
+    ov = int(np.rint((origin[others[1]] - csdf.origin[others[1]]) / h))
+    shape = [0, 0, 0]
+    shape[others[0]], shape[ax], shape[others[1]] = iu.shape[0], csdf.shape[ax], iu.shape[1]
+    out = np.empty(shape, dtype=np.float32)
+    out_rgb = np.empty((*shape, 3), dtype=np.uint8)
+    out_parts = np.empty(shape, dtype=csdf.parts.dtype)
+    moved = np.empty(shape, dtype=bool)
+    view = (0, 1, 2)
+    gather_columns(
+        np.moveaxis(csdf.sdf, order, view),
+        np.moveaxis(csdf.rgb, order, view),
+        np.moveaxis(csdf.parts, order, view),
+        np.ascontiguousarray(iu, dtype=np.float64),
+        np.ascontiguousarray(iv, dtype=np.float64),
+        np.ascontiguousarray(inside, dtype=np.bool_),
+        ou,
+        ov,
+        np.moveaxis(out, order, view),
+        np.moveaxis(out_rgb, order, view),
+        np.moveaxis(out_parts, order, view),
+        np.moveaxis(moved, order, view),
     )
+    return out, out_rgb, out_parts, moved
 
 
 def check_oblique(csdf: CSDF, zone: ObliqueZone) -> np.ndarray:
@@ -729,13 +756,18 @@ def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | Non
     s0, s1, to = zone.s0, zone.s1, zone.to
     origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
 
+    length, target = s1 - s0, to - s0
+    # the map p -> p - back(p . n) n: identity up to s0, a stretch along n up to ``to``, then a
+    # shift by to - s1
+    mats = np.zeros((3, 3, 4))
+    mats[:, :, :3] = np.eye(3)
+    backs = np.array([[0.0, 0.0, 0.0], [s0, 1 - length / target, 0.0], [0.0, 0.0, to - s1]])
+    arrays = _resample(csdf, origin, shape, n, np.array([s0, to]), mats, backs)
     unit = ObliqueZone((float(n[0]), float(n[1]), float(n[2])), s0, s1, to)
-
-    def src_of(p: np.ndarray) -> np.ndarray:
-        return warp_source(unit, p, h)[0]
-
     entry = {"op": "oblique", **unit.to_json(), **(record or {})}
-    return _finish(csdf, origin, _resample(csdf, origin, shape, src_of), entry)
+    # growing, the map moves content along n only: a voxel whose nearest surface point lies
+    # square to n keeps its distance
+    return _finish(csdf, origin, arrays, entry, n[None, :] if to >= s1 else None)
 
 
 def _turn(d: np.ndarray, degrees: float) -> np.ndarray:
@@ -856,12 +888,14 @@ def apply_helix(csdf: CSDF, zone: HelixZone, *, record: dict[str, Any] | None = 
         j0 = int(np.argmax(w > 0))
         sub_origin = origin.copy()
         sub_origin[1] = y[j0]
-
-        def src_of(p: np.ndarray) -> np.ndarray:
-            return warp_source(zone, p, h)[0]
-
+        c = np.array([zone.center[0], 0.0, zone.center[1]])
+        t = math.radians(-zone.copies * zone.angle)
+        rot = np.array([[math.cos(t), 0, -math.sin(t)], [0, 1, 0], [math.sin(t), 0, math.cos(t)]])
+        mats = np.zeros((1, 3, 4))
+        mats[0, :, :3] = rot
+        mats[0, :, 3] = c - rot @ c - np.array([0.0, zone.copies * zone.rise, 0.0])
         a_sdf, a_rgb, a_parts, a_moved = _resample(
-            csdf, sub_origin, (shape[0], shape[1] - j0, shape[2]), src_of
+            csdf, sub_origin, (shape[0], shape[1] - j0, shape[2]), np.zeros(3), np.zeros(0), mats
         )
         wb = w[j0:].reshape(1, -1, 1)
         sdf[:, j0:] = (1 - wb) * sdf[:, j0:] + wb * a_sdf
@@ -871,3 +905,151 @@ def apply_helix(csdf: CSDF, zone: HelixZone, *, record: dict[str, Any] | None = 
         moved[:, j0:] = a_moved | (wb < 1)
     entry = {"op": "helix", **zone.to_json(), **(record or {})}
     return _finish(csdf, origin, (sdf, rgb, parts, moved), entry)
+
+
+def check_rotation(zone: RotationZone) -> None:
+    """Refuse (:class:`InputError`, one line) a rotation zone that cannot apply."""
+    vals = (*zone.center, zone.angle, zone.phase, zone.hub, zone.radius, *zone.span)
+    if not all(math.isfinite(v) for v in vals):
+        raise InputError(f"rotation: expected finite values, got {zone.to_json()}")
+    if not 0 < abs(zone.angle) <= 180:
+        raise InputError(
+            f"rotation angle: expected 0 < |angle| <= 180 degrees, got {zone.angle:.4g}"
+        )
+    if zone.count < 2 or zone.copies == 0:
+        raise InputError(
+            f"rotation: expected at least 2 elements and copies other than 0, got count "
+            f"{zone.count}, copies {zone.copies}"
+        )
+    if zone.count + zone.copies < 1:
+        raise InputError(
+            f"rotation copies: expected to remove at most {zone.count - 1} of the "
+            f"{zone.count} elements, got {zone.copies}"
+        )
+    if zone.closed and abs(zone.count * abs(zone.angle) - 360.0) > 1e-6 * 360:
+        raise InputError(
+            f"rotation: a closed ring of {zone.count} expected an angle of "
+            f"{360 / zone.count:.6g} degrees, got {zone.angle:.6g}"
+        )
+    if not 0 <= zone.hub < zone.radius or not zone.span[0] < zone.span[1]:
+        raise InputError(
+            "rotation: expected 0 <= hub < radius and span Y0 < Y1, got hub "
+            f"{zone.hub:.4g}, radius {zone.radius:.4g}, span {list(zone.span)}"
+        )
+
+
+def rotation_source(theta: np.ndarray, zone: RotationZone) -> np.ndarray:
+    """Source directions (degrees) of output directions ``theta`` (degrees, from x toward z)
+    about a rotation zone's axis: the map of :func:`apply_rotation` on the plane.
+
+    Parameters
+    ----------
+    theta : (...,) float64
+        Directions after the edit.
+    zone : RotationZone
+        The zone.
+
+    Returns
+    -------
+    (...,) float64
+        Directions before it (a removed element's place on an open arc shows the empty place
+        past the arc's end).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.edit import RotationZone
+    >>> from partscale.edit.warp import rotation_source
+    >>> ring = RotationZone((0.0, 0.0), 90.0, 0.0, 4, True, 0.1, 0.5, (0.0, 0.1), 1)
+    >>> rotation_source(np.array([0.0, 72.0, 144.0]), ring).round(1)  # five arms from four
+    array([  0.,  90., 180.])
+    """
+    sign = 1.0 if zone.angle > 0 else -1.0
+    a = abs(zone.angle)
+    rel = np.mod(sign * (theta - zone.phase), 360.0)  # 0..360 from the first element
+    k, n = zone.count, zone.copies
+    if zone.closed:
+        step = 360.0 / (k + n)
+        m = np.rint(rel / step)
+        alpha = np.clip(rel - m * step, -a / 2, a / 2)  # within the element's own sector
+        src = np.mod(np.rint(m * k / (k + n)), k) * a + alpha
+        return zone.phase + sign * src
+    # an open arc: directions measured from the middle of the longer of the two arcs
+    mid = (k - 1 + max(n, 0)) * a / 2
+    rel = np.mod(rel - mid + 180.0, 360.0) + mid - 180.0
+    m = np.rint(rel / a)
+    src = rel.copy()
+    if n > 0:  # new elements: the last one turned on by an angle each
+        new = (m >= k) & (m <= k - 1 + n)
+        src[new] = rel[new] - (m[new] - (k - 1)) * a
+    else:  # the last -n removed: their places show the empty place past the end
+        gone = (m >= k + n) & (m <= k - 1)
+        src[gone] = rel[gone] + (k - m[gone]) * a
+    return zone.phase + sign * src
+
+
+def apply_rotation(csdf: CSDF, zone: RotationZone, *, record: dict[str, Any] | None = None) -> CSDF:
+    """Add (or remove) elements of a ring or arc that repeats by a turn about the vertical.
+
+    ``zone.copies`` elements more (or fewer) of a rotational repetition (see
+    :class:`~partscale.edit.RotationZone`): every column of the plane beyond ``zone.hub``
+    shows, on the levels of ``zone.span``, the source turned about the axis by
+    :func:`rotation_source` (sdf and colour bilinear, parts nearest); within the hub and on the
+    other levels, its own place. Each element is moved rigidly (a closed ring's ``count +
+    copies`` are spaced evenly, each a turned copy of the nearest old one; an open arc goes on
+    by the angle, or loses its last elements); then every voxel in the band of one that moved
+    is re-evaluated. ``meta['history']`` gains ``{"op": "rotation", ...}``.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The object (up is +y).
+    zone : RotationZone
+        The elements and how many to add or remove.
+    record : dict, optional
+        More keys for the history entry (a recipe's step).
+
+    Returns
+    -------
+    CSDF
+        The edited object, its grid grown to hold the disc the elements turn in.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.edit import RotationZone, apply_rotation
+    >>> arms = [((0.1, 0, -0.03), (0.5, 0.06, 0.03)), ((-0.03, 0, 0.1), (0.03, 0.06, 0.5))]
+    >>> arms += [((-0.5, 0, -0.03), (-0.1, 0.06, 0.03)), ((-0.03, 0, -0.5), (0.03, 0.06, -0.1))]
+    >>> cross = shapes.grid(lambda p: shapes.boxes_sdf(p, arms), [(-0.5, 0, -0.5), (0.5, 0.06, 0.5)], voxel_size=0.02)
+    >>> out = apply_rotation(cross, RotationZone((0.0, 0.0), 90.0, 0.0, 4, True, 0.05, 0.52, (-0.1, 0.2), -1))
+    >>> bool(out.sdf[out.sdf.shape[0] // 2 - 20, 1, out.sdf.shape[2] // 2] < 0)  # no arm along -x
+    False
+    """
+    check_rotation(zone)
+    h = csdf.voxel_size
+    origin, shape = warp_grid(csdf.origin, csdf.shape, h, zone)
+    check_memory(shape, BYTES_PER_VOXEL, what=f"{zone.copies:+d} elements")
+    others = [0, 2]
+    c = np.array(zone.center, dtype=np.float64)
+    uu = origin[0] + np.arange(shape[0]) * h
+    vv = origin[2] + np.arange(shape[2]) * h
+    d = np.stack(np.meshgrid(uu - c[0], vv - c[1], indexing="ij"), axis=-1)  # (U, V, 2)
+    r = np.hypot(d[..., 0], d[..., 1])
+    theta = np.degrees(np.arctan2(d[..., 1], d[..., 0]))
+    src_t = np.radians(rotation_source(theta, zone))
+    turn = r > zone.hub
+    su = np.where(turn, c[0] + r * np.cos(src_t), uu[:, None])
+    sv = np.where(turn, c[1] + r * np.sin(src_t), vv[None, :])
+    # whole voxels where nothing turns (exactly the column's own place)
+    iu = (su - csdf.origin[0]) / h
+    iv = (sv - csdf.origin[2]) / h
+    ou = np.rint((origin[0] - csdf.origin[0]) / h)
+    ov = np.rint((origin[2] - csdf.origin[2]) / h)
+    still = ~turn | ((np.abs(iu - np.rint(iu)) < 1e-9) & (np.abs(iv - np.rint(iv)) < 1e-9))
+    iu = np.where(still & ~turn, np.arange(shape[0])[:, None] + ou, iu)
+    iv = np.where(still & ~turn, np.arange(shape[2])[None, :] + ov, iv)
+    levels = csdf.origin[1] + np.arange(shape[1]) * h
+    inside = (levels >= zone.span[0]) & (levels <= zone.span[1])
+    arrays = _gather_levels(csdf, 1, others, iu, iv, inside, origin)
+    entry = {"op": "rotation", **zone.to_json(), **(record or {})}
+    return _finish(csdf, origin, arrays, entry)

@@ -23,6 +23,10 @@ Public API
   ``fit --add y 1`` adds a step along it where nothing repeats straight.
 - :func:`warp_candidates` ``(csdf) -> WarpCandidates``: all of the three above at once, each
   with the recipe edit that uses it (what the editor shows and previews).
+- :func:`find_rotations` ``(csdf) -> list[Rotation]``: repetition by a turn about the vertical
+  (the arms of a star base, chairs about a round table: angle, axis, count, closed ring or open
+  arc), with the hub that stays; ``fit --add y 1`` adds an element where nothing repeats along
+  y and no stair is found.
 - :func:`find_elements` ``(csdf, axis) -> AxisElements``: the object along an axis as elements
   (seats, doors, compartments, steps) and separators, with the groups that repeat (alike up to
   a mirror, a small length change or a colour change); :func:`count_zone`: the zone of whole
@@ -57,6 +61,7 @@ from .fit import add_axis, fit, fit_axis, resolve_counts
 from .helix import Helix, find_helices
 from .profile import Profile, profile
 from .radial import RadialFrame, find_radial, radial_zones
+from .rotation import Rotation, find_rotations
 from .screw import Screw, find_screws
 from .snap import Move, describe_moves, record_snap, snap
 from .suggest import (
@@ -83,6 +88,7 @@ __all__ = [
     "Move",
     "Profile",
     "RadialFrame",
+    "Rotation",
     "Screw",
     "Separator",
     "WarpCandidates",
@@ -98,6 +104,7 @@ __all__ = [
     "find_elements",
     "find_helices",
     "find_radial",
+    "find_rotations",
     "find_screws",
     "fit",
     "fit_axis",

@@ -18,6 +18,7 @@ a voxel.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
@@ -32,6 +33,7 @@ from ..edit import (
     ObliqueZone,
     RadialZone,
     Recipe,
+    RotationZone,
     ScrewZone,
     parse_size,
     tile_count,
@@ -43,6 +45,7 @@ from .features import Feature, axis_features, feature_spans, whole_copies
 from .helix import find_helices
 from .profile import Profile, profile
 from .radial import find_radial, radial_zones
+from .rotation import Rotation, find_rotations
 from .screw import find_screws
 from .suggest import (
     AXES,
@@ -599,11 +602,12 @@ def _element_periods(
 
 def _add_steps(
     csdf: CSDF, axis: int, n: int
-) -> tuple[list[Edit | ScrewZone | HelixZone], list[str]] | None:
+) -> tuple[list[Edit | ScrewZone | HelixZone | RotationZone], list[str]] | None:
     """``n`` more (or ``-n`` fewer) steps of a flight that repeats diagonally
     (:func:`~partscale.zones.screw.find_screws`) with a part along ``axis``, or, up (y), of a
-    spiral stair (:func:`~partscale.zones.helix.find_helices`) where no flight is found; and the
-    note; None where there is neither.
+    spiral stair (:func:`~partscale.zones.helix.find_helices`) where no flight is found, or
+    elements of a ring about the vertical (:func:`~partscale.zones.rotation.find_rotations`)
+    where neither is; and the note; None where there is none.
     """
     name = AXES[axis]
     units = csdf.meta.get("units")
@@ -631,7 +635,46 @@ def _add_steps(
             "and rises by the step(s)"
         )
         return [hx.zone(n)], [note]
+    for rot in find_rotations(csdf):
+        return _add_turned(rot, name, n, verb, units)
     return None
+
+
+def _add_turned(
+    rot: Rotation, name: str, n: int, verb: str, units: str | None
+) -> tuple[list[Edit | ScrewZone | HelixZone | RotationZone], list[str]]:
+    """``n`` more (or ``-n`` fewer) elements of a ring or arc about the vertical, and the note;
+    refused (one line) where that would leave none or make the elements overlap.
+    """
+    what = "ring" if rot.closed else "arc"
+    if n < 0 and -n >= rot.count:
+        raise InputError(
+            f"add {name}: expected to remove at most {rot.count - 1} of the {what}'s "
+            f"{rot.count} elements, got {-n}"
+        )
+    if rot.closed and rot.width >= 180.0 / (rot.count + n):
+        raise InputError(
+            f"add {name}: expected at most {_most_on_ring(rot) - rot.count} more elements on the "
+            f"ring (each is {2 * rot.width:.0f} degrees wide), got {n}"
+        )
+    spacing = (
+        f"spaced evenly every {360 / (rot.count + n):.1f} degrees"
+        if rot.closed
+        else f"the arc {'continued' if n > 0 else 'cut short'} by {abs(rot.angle):.1f} degrees each"
+    )
+    note = (
+        f"{name}: {verb} element(s) of the {'closed ring' if rot.closed else 'open arc'} about "
+        f"the vertical through {_fmt(rot.center[0], units)}, {_fmt(rot.center[1], units)} "
+        f"({rot.count} elements {abs(rot.angle):.1f} degrees apart, {100 * rot.support:.0f}% of "
+        f"the surface repeats; the hub within {_fmt(rot.hub, units)} stays): "
+        f"{rot.count + n} {spacing}"
+    )
+    return [rot.zone(n)], [note]
+
+
+def _most_on_ring(rot: Rotation) -> int:
+    """Most elements the ring holds without two overlapping."""
+    return max(rot.count, math.ceil(180.0 / rot.width) - 1) if rot.width > 0 else 360
 
 
 def _check_removal(name: str, n: int, count: int, what: str) -> None:
@@ -643,7 +686,9 @@ def _check_removal(name: str, n: int, count: int, what: str) -> None:
         )
 
 
-def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone | HelixZone], list[str]]:
+def add_axis(
+    csdf: CSDF, axis: int, n: int
+) -> tuple[list[Edit | ScrewZone | HelixZone | RotationZone], list[str]]:
     """Edits adding ``n`` elements of the repeat group along ``axis`` (``-n``: removing).
 
     Edits (recipe coordinates) adding ``n`` elements (removing ``-n``) of the repeat group
@@ -651,7 +696,8 @@ def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone | Hel
     whole elements and their separators (:func:`~partscale.zones.elements.count_zone`) tiled
     to ``1 + n`` copies, or to its start. With no such group, steps of a flight that repeats
     diagonally with a part along ``axis``, or up, of a spiral stair (:func:`_add_steps`: one more
-    step up).
+    step up), or up, of a ring of elements about the vertical (the arms of a star base: one more
+    arm, the ring spaced evenly again).
 
     Parameters
     ----------
@@ -664,7 +710,7 @@ def add_axis(csdf: CSDF, axis: int, n: int) -> tuple[list[Edit | ScrewZone | Hel
 
     Returns
     -------
-    (list of Edit, ScrewZone or HelixZone, list of str)
+    (list of Edit, ScrewZone, HelixZone or RotationZone, list of str)
         The edits and one line saying what they do.
 
     Raises
@@ -1183,7 +1229,7 @@ def fit(
         parse_size(v, extent=float(sb[1, a] - sb[0, a]), units=units, what=f"size {AXES[a]}")
         for a, v in enumerate(size)
     ]
-    edits: list[Edit | RadialZone | ScrewZone | HelixZone] = []
+    edits: list[Edit | RadialZone | ScrewZone | HelixZone | RotationZone] = []
     why: list[str] = []
     radial = _radial_fit(csdf, targets, add, allow_deform)
     if radial is not None:
@@ -1213,9 +1259,9 @@ def fit(
             moved |= {
                 b
                 for z in e
-                if isinstance(z, ScrewZone | HelixZone)
+                if isinstance(z, ScrewZone | HelixZone | RotationZone)
                 for b in range(3)
-                if b != a and (isinstance(z, HelixZone) or abs(z.step[b]) > 0)
+                if b != a and (isinstance(z, HelixZone | RotationZone) or abs(z.step[b]) > 0)
             }
         else:
             try:
@@ -1271,7 +1317,9 @@ def resolve_counts(csdf: CSDF, recipe: Recipe) -> tuple[Recipe, list[str]]:
     >>> done.edits[0].mode
     'tile'
     """
-    out: list[Edit | RadialZone | ScrewZone | HelixZone | ObliqueZone | CountEdit] = []
+    out: list[
+        Edit | RadialZone | ScrewZone | HelixZone | RotationZone | ObliqueZone | CountEdit
+    ] = []
     notes: list[str] = []
     for e in recipe.edits:
         if isinstance(e, CountEdit):

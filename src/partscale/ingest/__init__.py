@@ -1,7 +1,7 @@
 """Import: coloured meshes and SDF grids -> CSDF (the first stage of the pipeline).
 
 Public API: :func:`load` (any supported file), :func:`load_mesh` + :func:`from_mesh` (meshes;
-:func:`check_mesh_file` validates a mesh path), :func:`from_grid`, :func:`read_grid` and
+:func:`check_mesh_file` validates a mesh path, :func:`check_scene` its scene's geometry), :func:`from_grid`, :func:`read_grid` and
 :func:`read_autosdf` (SDF volumes).
 
 Modules: ``load`` (dispatch, the reader registries), one reader per format (``gltf``, ``obj``,
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from .grid import from_grid, read_autosdf, read_grid
 from .load import GRID_READERS, MESH_READERS, MESH_SUFFIXES, check_mesh_file, load, load_mesh
-from .mesh import ColoredMesh, Material, from_trimesh
+from .mesh import ColoredMesh, Material, check_scene, from_trimesh
 from .mesh_sdf import check_res, from_mesh
 
 __all__ = [
@@ -24,6 +24,7 @@ __all__ = [
     "Material",
     "check_mesh_file",
     "check_res",
+    "check_scene",
     "from_grid",
     "from_mesh",
     "from_trimesh",

@@ -17,7 +17,7 @@ from .._options import keyword_options
 from ..csdf import CSDF
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
-from .gltf import load_gltf
+from .gltf import check_gltf, load_gltf
 from .grid import from_grid, read_autosdf, read_grid
 from .mesh import ColoredMesh
 from .mesh_sdf import check_pad, check_res, from_mesh
@@ -108,6 +108,7 @@ def check_mesh_file(path: str | os.PathLike) -> Path:
         )
     if path.stat().st_size == 0:
         raise InputError(f"{path}: expected a {suffix[1:]} mesh, got an empty file (0 bytes)")
+    check_gltf(path)  # strict JSON (depth, numbers) before trimesh parses it, on every route
     return path
 
 

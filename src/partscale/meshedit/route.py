@@ -24,7 +24,7 @@ import numpy as np
 
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError
-from ..ingest import check_mesh_file
+from ..ingest import check_mesh_file, check_scene
 from ..orient import WALL_AXES, square_turn, turn_matrix
 from .cut import Piece, concatenate, cut, subset
 
@@ -578,8 +578,7 @@ def load_scene(path: str | os.PathLike) -> trimesh.Scene:
     except Exception as exc:
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {exc}") from None
     assert isinstance(scene, trimesh.Scene)  # force="scene"
-    if not scene.geometry:
-        raise InputError(f"{path}: expected a mesh with triangles, got none")
+    check_scene(scene, path)  # import's own checks: triangles, indices, finite, extent
     return scene
 
 

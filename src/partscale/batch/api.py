@@ -21,6 +21,8 @@ from .inputs import discover, shard
 from .job import options_hash, resolve_options
 
 ENGINES = ("local", "ray")
+MAX_TIMEOUT = 1e7
+"""Most seconds one object may be given (about 115 days)."""
 MAX_MEMORY = 1 << 50
 """Largest memory size a worker may be given (1024 TiB): beyond any machine."""
 LOG_NAME = "workers.log"
@@ -250,8 +252,8 @@ def run(
         isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
     ):
         raise InputError(f"workers: expected an integer >= 1, got {workers!r}")
-    if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
-        raise InputError(f"timeout: expected seconds > 0, got {timeout!r}")
+    if timeout is not None:
+        _schema.number(timeout, "timeout", lo=0, hi=MAX_TIMEOUT, lo_open=True)
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
         raise InputError(f"retries: expected an integer >= 0, got {retries!r}")
     outdir = Path(outdir)
@@ -271,11 +273,11 @@ def run(
     resolve_options(batch_opts, {}, where="batch")  # the batch's own options, checked once
     items = shard(discover(inputs, exclude=outdir), rank, world_size)
     specs = {it.name: resolve_options(batch_opts, it.options, where=f"{it.path}") for it in items}
+    mem = parse_memory(memory)  # every option checked before the output folder is made
     outdir.mkdir(parents=True, exist_ok=True)
 
     n_workers = workers or cores
     threads = max(1, cores // n_workers)
-    mem = parse_memory(memory)
     if mem is None:
         mem = available_memory() // n_workers
 

@@ -174,12 +174,17 @@ def read_scene(path: Path, read: Callable):
         raise InputError(f"{path}: expected a readable {suffix[1:]} mesh, got {msg}") from None
 
 
+MAX_COORDINATE = 1e12
+"""Largest magnitude of a placed vertex coordinate (a million km in metres): beyond it squared
+lengths leave the float range."""
+
+
 def check_scene(scene, path: Path) -> None:
     """Check every triangle mesh a trimesh scene places, before any arithmetic on it.
 
     Each mesh a node places: vertices of 3 finite coordinates, face indices within its
-    vertices, a finite node transform; at least one triangle in all; placed vertices of a
-    non-zero, finite extent. The one check of a scene's geometry, on both mesh routes (import
+    vertices, a finite node transform, placed coordinates within :data:`MAX_COORDINATE`; at
+    least one triangle in all; a non-zero extent. The one check of a scene's geometry, on both mesh routes (import
     and the mesh route's edits).
 
     Parameters
@@ -242,10 +247,10 @@ def check_scene(scene, path: Path) -> None:
         used = v[np.unique(f)]
         with np.errstate(over="ignore", invalid="ignore"):
             placed = used @ T[:3, :3].T + T[:3, 3]
-        if not np.isfinite(placed).all():
+        if not (np.abs(placed) <= MAX_COORDINATE).all():  # NaN fails too
             raise InputError(
-                f"{path}: expected placed vertex positions within the float range, got "
-                f"NaN or inf in {geom_name!r} (node {node!r})"
+                f"{path}: expected placed vertex positions within +-{MAX_COORDINATE:g}, got "
+                f"{float(np.nanmax(np.abs(placed))):.3g} in {geom_name!r} (node {node!r})"
             )
         lo, hi = np.minimum(lo, placed.min(axis=0)), np.maximum(hi, placed.max(axis=0))
     if not np.isfinite(lo).all():

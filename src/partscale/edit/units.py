@@ -19,9 +19,10 @@ from ..errors import InputError
 #: Metres per unit suffix: the units a length may carry and a mesh may be imported from.
 SUFFIXES = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254}
 
-MAX_GROWTH = 1e6
-"""Most a target size may be, as a multiple of the current extent (a row of a million chairs
-from one): beyond it a size is a mistake, and the grid it implies overflows any count."""
+MAX_GROWTH = 1e9
+"""Most a target size may be, as a multiple of the current extent: beyond it a size is a
+mistake whose grid overflows the counts made of it (below it, the memory guard says what the
+size would need)."""
 
 _NUMBER = r"[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
 _LENGTH = re.compile(rf"^(?P<sign>[-+]?)(?P<num>{_NUMBER})\s*(?P<unit>[a-zA-Z%]*)$")

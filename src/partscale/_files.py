@@ -59,16 +59,18 @@ def _depth(obj: Any) -> int:
     return deepest
 
 
-def parse_json(text: str | bytes, *, what: str) -> Any:
+def parse_json(text: str | bytes, *, what: str, max_bytes: int | None = JSON_MAX_BYTES) -> Any:
     """Parse JSON text strictly, or raise :class:`InputError` starting with ``what``.
 
-    Strict: at most :data:`JSON_MAX_BYTES` long and :data:`JSON_MAX_DEPTH` deep, integers of
-    at most :data:`JSON_MAX_DIGITS` digits, finite numbers only (``NaN``, ``Infinity`` and
-    ``1e400`` are refused). The one JSON reader of partscale: files, meta and request bodies.
+    Strict: at most ``max_bytes`` long (:data:`JSON_MAX_BYTES`; None: a file read whole anyway,
+    such as a glTF's JSON) and :data:`JSON_MAX_DEPTH` deep, integers of at most
+    :data:`JSON_MAX_DIGITS` digits, finite numbers only (``NaN``, ``Infinity`` and ``1e400``
+    are refused). The one JSON reader of partscale: files, meta, manifests, glTF documents and
+    request bodies.
     """
-    if len(text) > JSON_MAX_BYTES:
+    if max_bytes is not None and len(text) > max_bytes:
         raise InputError(
-            f"{what}: expected JSON of at most {JSON_MAX_BYTES >> 20} MiB, got {len(text)} bytes"
+            f"{what}: expected JSON of at most {max_bytes >> 20} MiB, got {len(text)} bytes"
         )
     if isinstance(text, bytes | bytearray):
         try:

@@ -11,15 +11,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .. import _schema
 from .._memory import available_memory
 from .._options import keyword_options
-from ..errors import InputError
+from ..errors import InputError, shown
 from ..progress import ProgressCallback, resolve
 from . import status as status_mod
 from .inputs import discover, shard
 from .job import options_hash, resolve_options
 
 ENGINES = ("local", "ray")
+MAX_TIMEOUT = 1e7
+"""Most seconds one object may be given (about 115 days)."""
+MAX_MEMORY = 1 << 50
+"""Largest memory size a worker may be given (1024 TiB): beyond any machine."""
 LOG_NAME = "workers.log"
 
 
@@ -108,17 +113,19 @@ def parse_memory(value: str | int | None) -> int | None:
     """
     if value is None:
         return None
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        n = float(value)
-    else:
-        s = str(value).strip().lower().removesuffix("b").removesuffix("i")
-        mult = {"k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}.get(s[-1:], 1)
-        try:
-            n = float(s[:-1] if mult > 1 else s) * mult
-        except ValueError:
-            n = -1
+    s = str(value)[:64].strip().lower().removesuffix("b").removesuffix("i")
+    mult = {"k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}.get(s[-1:], 1)
+    try:
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            n = _schema.number(value, "memory")
+        else:
+            n = _schema.number(s[:-1] if mult > 1 else s, "memory", text=True) * mult
+    except InputError:
+        n = -1.0
     if not n > 0:
-        raise InputError(f"memory: expected a size such as 4GiB or 500MiB, got {value!r}")
+        raise InputError(f"memory: expected a size such as 4GiB or 500MiB, got {shown(value)}")
+    if n > MAX_MEMORY:
+        raise InputError(f"memory: expected at most {MAX_MEMORY >> 40} TiB, got {shown(value)}")
     return int(n)
 
 
@@ -245,8 +252,8 @@ def run(
         isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
     ):
         raise InputError(f"workers: expected an integer >= 1, got {workers!r}")
-    if timeout is not None and not (isinstance(timeout, (int, float)) and timeout > 0):
-        raise InputError(f"timeout: expected seconds > 0, got {timeout!r}")
+    if timeout is not None:
+        _schema.number(timeout, "timeout", lo=0, hi=MAX_TIMEOUT, lo_open=True)
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
         raise InputError(f"retries: expected an integer >= 0, got {retries!r}")
     outdir = Path(outdir)
@@ -266,11 +273,11 @@ def run(
     resolve_options(batch_opts, {}, where="batch")  # the batch's own options, checked once
     items = shard(discover(inputs, exclude=outdir), rank, world_size)
     specs = {it.name: resolve_options(batch_opts, it.options, where=f"{it.path}") for it in items}
+    mem = parse_memory(memory)  # every option checked before the output folder is made
     outdir.mkdir(parents=True, exist_ok=True)
 
     n_workers = workers or cores
     threads = max(1, cores // n_workers)
-    mem = parse_memory(memory)
     if mem is None:
         mem = available_memory() // n_workers
 
@@ -301,7 +308,7 @@ def run(
                 "outdir": str(outdir.resolve()),
                 "input_hash": ih,
                 "options_hash": oh,
-                "attempts": int(prev["attempts"] or 0) + 1 if prev else 1,
+                "attempts": int(prev["attempts"] or 0) + 1 if prev else 1,  # checked on read
             }
         )
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import json
 import os
 import re
 from collections import Counter
@@ -20,8 +19,10 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import unquote
 
+from .. import _schema
+from .._files import parse_json
 from ..csdf import SUFFIX as CSDF_SUFFIX
-from ..errors import InputError
+from ..errors import InputError, shown
 
 INPUT_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".npy", ".npz", ".h5", ".hdf5")
 """Suffixes a folder is searched for (lower case); ``.csdf.npz`` files are read as CSDFs."""
@@ -29,6 +30,8 @@ MANIFEST_SUFFIXES = (".csv", ".jsonl")
 OPTION_KEYS = ("res", "square", "segment", "recipe", "size", "allow_deform", "export", "render")
 """Per-object options a manifest row may set (columns or keys besides ``path`` and ``name``),
 named as ``partscale batch``'s options."""
+MAX_NAME = 255
+"""Longest output folder name (the file systems' limit)."""
 OLD_KEYS = {"fit": "size"}
 """Old manifest keys still read, with a note, for one release: old -> new."""
 
@@ -89,7 +92,7 @@ def companions(path: Path) -> list[Path]:
     found: list[Path] = []
     try:
         if suffix == ".gltf":
-            doc = json.loads(path.read_text(encoding="utf-8"))
+            doc = parse_json(path.read_bytes(), what=str(path), max_bytes=None)
             for key in ("buffers", "images"):
                 for item in doc.get(key, []) or []:
                     uri = item.get("uri") if isinstance(item, dict) else None
@@ -99,7 +102,7 @@ def companions(path: Path) -> list[Path]:
             for lib in _obj_mtllibs(path):
                 found.append(lib)
                 found += _mtl_maps(lib)
-    except (OSError, ValueError, UnicodeDecodeError, AttributeError):
+    except (OSError, ValueError, UnicodeDecodeError, AttributeError):  # InputError too
         return []
     return sorted({p.resolve() for p in found if p.is_file()} - {path.resolve()})
 
@@ -260,21 +263,12 @@ def read_manifest(path: Path) -> list[Input]:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: expected a UTF-8 manifest, got {exc}") from None
     if path.suffix.lower() == ".csv":
-        reader = csv.DictReader(text.splitlines())
-        if not reader.fieldnames or "path" not in reader.fieldnames:
-            raise InputError(
-                f"{path}: expected a CSV header with a 'path' column, got {reader.fieldnames}"
-            )
-        for i, row in enumerate(reader, start=2):
-            rows.append((i, {k: v for k, v in row.items() if k and v not in (None, "")}))
+        rows = _csv_rows(text, path)
     else:
         for i, line in enumerate(text.splitlines(), start=1):
             if not line.strip():
                 continue
-            try:
-                obj = json.loads(line)
-            except json.JSONDecodeError as exc:
-                raise InputError(f"{path}:{i}: expected a JSON object, got {exc}") from None
+            obj = parse_json(line, what=f"{path}:{i}")  # strict: depth, digits, finite numbers
             if not isinstance(obj, dict):
                 raise InputError(f"{path}:{i}: expected a JSON object, got {type(obj).__name__}")
             rows.append((i, obj))
@@ -288,21 +282,84 @@ def read_manifest(path: Path) -> list[Input]:
                 f"{where}: unknown key(s) {unknown}; keys are path, name, {', '.join(OPTION_KEYS)}"
             )
         if not isinstance(row.get("path"), str) or not row["path"]:
-            raise InputError(f"{where}: expected a 'path', got {row.get('path')!r}")
+            raise InputError(f"{where}: expected a 'path', got {shown(row.get('path'))}")
+        check_row(row, where)
         f = Path(row["path"])
         f = f if f.is_absolute() else path.parent / f
         opts = {k: row[k] for k in OPTION_KEYS if k in row}
         if "size" in opts:
             opts["fit"] = opts.pop("size")  # the fit step's target (the job's key)
-        if "recipe" in opts and not Path(opts["recipe"]).is_absolute():
+        if isinstance(opts.get("recipe"), str) and not Path(opts["recipe"]).is_absolute():
             opts["recipe"] = str(path.parent / opts["recipe"])
         name = row.get("name", "")
         if not isinstance(name, str) or "/" in name or name in (".", ".."):
-            raise InputError(f"{where}: expected a folder name for 'name', got {name!r}")
+            raise InputError(f"{where}: expected a folder name for 'name', got {shown(name)}")
         out.append(_make(f, opts, name))
     if not out:
         raise InputError(f"{path}: expected at least one row, got none")
     return out
+
+
+ROW_TYPES: dict[str, tuple[tuple[type, ...], str]] = {
+    "path": ((str,), "a file's path"),
+    "name": ((str,), "a folder name"),
+    "res": ((int, str), "a whole number"),
+    "square": ((bool, str), "true or false"),
+    "allow_deform": ((bool, str), "true or false"),
+    "segment": ((bool, str, type(None)), "a method or true/false"),
+    "recipe": ((str, dict, type(None)), "a recipe file's path or a recipe object"),
+    "size": ((str, list), "three sizes (X Y Z)"),
+    "export": ((str, list), "formats (a list or comma-separated)"),
+    "render": ((bool, str, type(None)), "a view or true/false"),
+}
+"""The JSON types each manifest key may hold (a CSV cell is always a string)."""
+
+
+def check_row(row: dict[str, Any], where: str) -> None:
+    """A manifest row's values checked for type and size before anything reads them, or an
+    :class:`InputError` naming the key: strings without control characters, paths and names
+    of bounded length, lists of at most a few strings or numbers.
+    """
+    for key, value in row.items():
+        types, expected = ROW_TYPES.get(key, ((), ""))
+        if not types:
+            continue
+        if not isinstance(value, types) or (
+            int not in types and isinstance(value, bool) and bool not in types
+        ):
+            raise InputError(f"{where}: {key}: expected {expected}, got {shown(value)}")
+        if isinstance(value, str):
+            _schema.string(value, f"{where}: {key}", empty=True)
+        elif isinstance(value, list):
+            for i, item in enumerate(_schema.sequence(value, f"{where}: {key}", hi=16)):
+                if isinstance(item, str):
+                    _schema.string(item, f"{where}: {key}[{i}]", max_len=256)
+                elif key == "size":
+                    _schema.number(item, f"{where}: {key}[{i}]")
+                else:
+                    raise InputError(f"{where}: {key}[{i}]: expected a string, got {shown(item)}")
+    name = row.get("name")
+    if isinstance(name, str) and len(name) > MAX_NAME:
+        raise InputError(f"{where}: name: expected at most {MAX_NAME} characters, got {len(name)}")
+
+
+def _csv_rows(text: str, path: Path) -> list[tuple[int, dict[str, Any]]]:
+    """(line, row) of a CSV manifest; empty cells left out (the batch's option)."""
+    reader = csv.DictReader(text.splitlines())
+    rows = []
+    try:
+        if not reader.fieldnames or "path" not in reader.fieldnames:
+            raise InputError(
+                f"{path}: expected a CSV header with a 'path' column, got "
+                f"{shown(reader.fieldnames)}"
+            )
+        for row in reader:
+            rows.append(
+                (reader.line_num, {k: v for k, v in row.items() if k and v not in (None, "")})
+            )
+    except csv.Error as exc:
+        raise InputError(f"{path}:{reader.line_num}: expected a CSV row, got {exc}") from None
+    return rows
 
 
 def _renamed(rows: list[tuple[int, dict]], path: Path) -> list[tuple[int, dict]]:

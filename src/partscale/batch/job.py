@@ -20,7 +20,7 @@ from typing import Any
 
 from .. import __version__, release_freed_memory, reuse_freed_memory
 from ..csdf import SUFFIX as CSDF_SUFFIX
-from ..errors import InputError, one_line
+from ..errors import InputError, one_line, shown
 
 DEFAULT_EXPORT = ("csdf",)
 MESH_FORMATS = ("glb", "ply", "obj")
@@ -81,12 +81,19 @@ def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -
     if recipe is not None:
         recipe = _recipe_json(recipe)
     if fit is not None:
+        if not isinstance(fit, str | list | tuple):
+            raise InputError(f"{where}: size: expected 3 sizes (X Y Z), got {shown(fit)}")
         size = fit.split() if isinstance(fit, str) else list(fit)
         if len(size) != 3:
             raise InputError(f"{where}: size: expected 3 sizes (X Y Z), got {fit!r}")
         fit = [str(s) for s in size]
 
     export = merged.get("export", DEFAULT_EXPORT)
+    if not isinstance(export, str | list | tuple):
+        raise InputError(
+            f"{where}: export: expected formats among {', '.join(EXPORT_FORMATS)}, got "
+            f"{shown(export)}"
+        )
     if isinstance(export, str):
         export = [] if export.strip().lower() in _OFF else export.split(",")
     formats = []
@@ -147,6 +154,10 @@ def _recipe_json(recipe: Any) -> Any:
     from .._files import read_json
     from ..edit import Recipe
 
+    if not isinstance(recipe, str | os.PathLike | dict):
+        raise InputError(
+            f"recipe: expected a recipe file's path or a recipe object, got {shown(recipe)}"
+        )
     path = Path(recipe) if isinstance(recipe, str | os.PathLike) else None
     raw = read_json(path, what="a recipe JSON file") if path is not None else recipe
     try:

@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from datetime import UTC, datetime
 from pathlib import Path
 
+from .. import _schema
 from .._files import atomic_path
 from ..errors import InputError
 
@@ -34,6 +35,11 @@ COLUMNS = (
     "attempts",
 )
 """Columns of ``status.csv``; ``outputs`` are paths relative to OUTDIR joined by ``;``."""
+MAX_FIELD = 65536
+"""Longest field of a status row (csv reads at most 131,072 characters); longer ones written
+are cut to it, so the table always reads back."""
+MAX_ATTEMPTS = 1_000_000
+"""Most attempts a row may count."""
 STATES = ("done", "failed", "running", "interrupted")
 """``running``: started and not finished (a crashed or killed batch leaves it; rerun redoes it);
 ``interrupted``: stopped by Ctrl-C or SIGTERM (redone on the next run, like ``running``)."""
@@ -77,16 +83,46 @@ def read(path: Path) -> dict[str, dict[str, str]]:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: expected a readable status table, got {exc}") from None
     reader = csv.DictReader(io.StringIO(text))
-    if reader.fieldnames is None:
-        return {}
-    missing = [
-        c for c in ("name", "state", "input_hash", "options_hash") if c not in reader.fieldnames
-    ]
-    if missing:
+    try:
+        if reader.fieldnames is None:
+            return {}
+        missing = [
+            c for c in ("name", "state", "input_hash", "options_hash") if c not in reader.fieldnames
+        ]
+        if missing:
+            raise InputError(
+                f"{path}: expected a status table with columns {COLUMNS}, missing {missing}"
+            )
+        rows = {}
+        for row in reader:
+            checked = check_row({c: row.get(c) or "" for c in COLUMNS}, f"{path}:{reader.line_num}")
+            rows[checked["name"]] = checked
+        return rows
+    except csv.Error as exc:
         raise InputError(
-            f"{path}: expected a status table with columns {COLUMNS}, missing {missing}"
-        )
-    return {row["name"]: {c: row.get(c) or "" for c in COLUMNS} for row in reader}
+            f"{path}: expected a status table (CSV), got {exc} on line {reader.line_num}"
+        ) from None
+
+
+def check_row(row: dict[str, str], where: str) -> dict[str, str]:
+    """A status row (every column as text) checked against the table's schema, or an
+    :class:`InputError` naming the cell: a name, a known state, counts and figures that read
+    as numbers, no field over :data:`MAX_FIELD` characters.
+    """
+    for c in COLUMNS:
+        if len(row[c]) > MAX_FIELD:
+            raise InputError(
+                f"{where}: {c}: expected at most {MAX_FIELD} characters, got {len(row[c])}"
+            )
+    _schema.string(row["name"], f"{where}: name", max_len=MAX_FIELD)
+    if row["state"]:
+        _schema.string(row["state"], f"{where}: state", choices=STATES)
+    if row["attempts"]:
+        _schema.integer(row["attempts"], f"{where}: attempts", lo=0, hi=MAX_ATTEMPTS, text=True)
+    for c in ("seconds", "peak_memory_mib"):
+        if row[c]:
+            _schema.number(row[c], f"{where}: {c}", lo=0, text=True)
+    return row
 
 
 def _render(rows: dict[str, dict[str, str]]) -> str:
@@ -135,7 +171,7 @@ class StatusTable:
         for k, v in fields.items():
             if k not in COLUMNS:
                 raise KeyError(k)
-            row[k] = "" if v is None else str(v)
+            row[k] = ("" if v is None else str(v))[:MAX_FIELD]
         self.rows[name] = row
         self.write()
         return row

@@ -128,9 +128,16 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 
 @contextlib.contextmanager
-def _one_line_warnings() -> Iterator[None]:
-    """Warnings print as one line each; partscale's own notes always show."""
-    with warnings.catch_warnings():
+def _one_line_warnings(verbose: bool = False) -> Iterator[None]:
+    """Warnings print as one line each; partscale's own notes always show.
+
+    numpy's floating-point warnings ("invalid value encountered in cast") say nothing a user
+    can act on: inputs are validated before arithmetic and outputs checked for finiteness, so
+    at this boundary they are silenced (with -v they show).
+    """
+    import numpy as np
+
+    with warnings.catch_warnings(), np.errstate(all="warn" if verbose else "ignore"):
         warnings.filterwarnings("always", category=PartscaleWarning)
         warnings.showwarning = _show_warning
         yield
@@ -143,8 +150,10 @@ def main(argv: list[str] | None = None) -> None:
     # every edit allocates whole new grids: at 256 and beyond, reusing the pages of the last
     # one instead of faulting in fresh ones halves the time (see reuse_freed_memory)
     reuse_freed_memory()
-    _announce_first_compile(list(sys.argv[1:] if argv is None else argv))
-    with _terminate_cleanly() as seen, _one_line_warnings():
+    words = list(sys.argv[1:] if argv is None else argv)
+    _announce_first_compile(words)
+    verbose = any(w in ("-v", "--verbose") for w in words)
+    with _terminate_cleanly() as seen, _one_line_warnings(verbose):
         _main(argv, seen)
 
 

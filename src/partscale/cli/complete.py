@@ -7,21 +7,14 @@ from typing import Annotated
 
 import typer
 
-from ..errors import InputError
+from .. import _schema
 from . import _common
 
 
-def _numbers(text: str | None, n: int, what: str) -> list[float] | None:
+def _numbers(text: str | None, n: int, what: str, limit: float) -> list[float] | None:
     if text is None:
         return None
-    parts = text.replace(",", " ").split()
-    try:
-        vals = [float(p) for p in parts]
-    except ValueError:
-        raise InputError(f"{what}: expected {n} numbers, got {text!r}") from None
-    if len(vals) != n:
-        raise InputError(f"{what}: expected {n} numbers, got {len(vals)}")
-    return vals
+    return _schema.numbers_text(text, n, what, lo=-limit, hi=limit)
 
 
 def complete(
@@ -90,9 +83,10 @@ def complete(
     symmetries consistent with the free space are applied and the rest is closed thinly.
     """
     _common.check_output(output, suffixes=(".csdf.npz",), what="a CSDF file")
-    pose = _numbers(camera, 16, "--camera")
-    b = _numbers(box, 4, "--box")
-    from ..complete import complete_file
+    from ..complete import MAX_COORDINATE, MAX_PIXEL, complete_file
+
+    pose = _numbers(camera, 16, "--camera", MAX_COORDINATE)
+    b = _numbers(box, 4, "--box", MAX_PIXEL)
     from ..csdf import save
 
     with _common.progress_bar("complete") as progress:

@@ -84,12 +84,7 @@ def fit(
         add=None if add is None else {add[0]: add[1]},
         allow_deform=allow_deform,
     )
-    if not mesh_route:
-        # a size too large for memory is refused before the choices are printed
-        from ..edit import check_recipe_memory
-
-        what = f"fit to {' x '.join(size)}" if size is not None else f"fit --add {add}"
-        check_recipe_memory(c, recipe, what=what)
+    _preflight(c, recipe, mesh_route, size, add)
     for line in why:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     if mesh_route:
@@ -107,6 +102,22 @@ def fit(
     sb = out.surface_bounds()
     ext = " x ".join(f"{v:.4g}" for v in sb[1] - sb[0])
     _common.done(f"wrote {output} (solid {ext} {out.meta.get('units') or ''})")
+
+
+def _preflight(c, recipe, mesh_route: bool, size, add) -> None:
+    """What applying the recipe checks up front, done before the plan is printed: a plan is
+    never shown and then refused (a step zone on the mesh route, a size too large for memory,
+    a recipe its own schema or the mixing rule refuses)."""
+    from ..edit import Recipe, check_recipe_memory
+
+    Recipe.parse(recipe.to_json(), units=c.meta.get("units"))  # what --recipe-out writes reads back
+    if mesh_route:
+        from ..meshedit import check_recipe
+
+        check_recipe(recipe)
+        return
+    what = f"fit to {' x '.join(size)}" if size is not None else f"fit --add {add}"
+    check_recipe_memory(c, recipe, what=what)
 
 
 def _write_recipe(recipe, path: Path | None) -> None:

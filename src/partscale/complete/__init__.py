@@ -21,6 +21,8 @@ from .api import complete, complete_file, completion_colors, provenance
 from .fuse import GUESSED, KIND_COLORS, KINDS, MIRRORED, OBSERVED
 from .scan import (
     DEPTH_SCALE,
+    MAX_COORDINATE,
+    MAX_PIXEL,
     Frame,
     frame_from_points,
     read_frame,
@@ -34,6 +36,8 @@ __all__ = [
     "GUESSED",
     "KINDS",
     "KIND_COLORS",
+    "MAX_COORDINATE",
+    "MAX_PIXEL",
     "MIRRORED",
     "OBSERVED",
     "Frame",

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _schema
 from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError
@@ -23,7 +24,7 @@ from . import symmetry as sym_mod
 from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
 from .floor import base_plane, clusters, find_floor, floor_scraps, in_plane_axes
-from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
+from .scan import MAX_PIXEL, Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
 METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
 FLOOR_TOL = 0.015
@@ -412,7 +413,10 @@ def complete(
     if not frames:
         raise InputError(f"{source}: expected at least one view, got none")
     if box is not None:
-        box = tuple(int(b) for b in box)
+        box = tuple(
+            int(_schema.number(b, "box", lo=-MAX_PIXEL, hi=MAX_PIXEL))
+            for b in _schema.sequence(box, "box", length=4)
+        )
         if len(box) != 4 or box[2] <= box[0] or box[3] <= box[1]:
             raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")

@@ -14,17 +14,28 @@ Two kinds of frame, told apart by :attr:`Frame.cropped`:
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, one_line
+from .. import _schema
+from ..errors import InputError, one_line, shown
 
 DEPTH_SCALE = 5000.0
 """TUM/Kinect convention: a 16-bit depth PNG holds metres x 5000."""
+MIN_DEPTH_SCALE, MAX_DEPTH_SCALE = 1e-3, 1e9
+"""Depth units per metre a frame may use (1: metres; 1000: millimetres; beyond: not a depth)."""
+MIN_FOCAL, MAX_FOCAL = 1.0, 1e7
+"""Focal lengths in pixels a pinhole camera may have (below 1 pixel a frame spans ~180 degrees);
+the bound of every intrinsics entry's magnitude too."""
+MAX_COORDINATE = 1e6
+"""Largest magnitude of a pose entry (metres): beyond it a scan is not an object's."""
+MAX_PIXEL = 1_000_000
+"""Largest magnitude of a pixel coordinate (a ``box``): beyond any sensor's image."""
+MAX_VIEWS = 1000
+"""Most views one ``--views`` file may list."""
 DENOISE_JUMP = 0.03
 """Relative depth difference beyond which two neighbouring readings lie on different surfaces
 (a depth discontinuity; well above the sensor's noise: 5 mm at 2 m is 0.25 %)."""
@@ -148,21 +159,26 @@ def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
 
 
 def check_pose(pose, what: str) -> np.ndarray:
-    """(4, 4) float64 rigid camera-to-world transform; rotation checked orthonormal."""
-    try:
-        a = np.asarray(pose, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError(f"{what}: expected a 4x4 matrix, got {pose!r:.60}") from None
-    if a.shape == (16,):
-        a = a.reshape(4, 4)
-    if a.shape != (4, 4) or not np.isfinite(a).all():
-        raise InputError(f"{what}: expected a finite 4x4 matrix, got shape {a.shape}")
+    """(4, 4) float64 rigid camera-to-world transform (nested or 16 numbers, row major);
+    rotation checked orthonormal.
+    """
+    a = _schema.matrix(pose, what, (4, 4), lo=-MAX_COORDINATE, hi=MAX_COORDINATE)
     R = a[:3, :3]
     if not np.allclose(R @ R.T, np.eye(3), atol=1e-3) or np.linalg.det(R) < 0:
         raise InputError(
             f"{what}: expected a rigid transform (rotation + translation), got {a[:3, :3].round(3).tolist()}"
         )
     return a
+
+
+def check_intrinsics(K, what: str) -> np.ndarray:
+    """(3, 3) float64 pinhole intrinsics from a 3x3 matrix (nested or 9 numbers, row major):
+    focal lengths in [:data:`MIN_FOCAL`, :data:`MAX_FOCAL`] pixels, the rest finite and bounded.
+    """
+    m = _schema.matrix(K, what, (3, 3), lo=-MAX_FOCAL, hi=MAX_FOCAL)
+    for name, v in (("fx", m[0, 0]), ("fy", m[1, 1])):
+        _schema.number(v, f"{what}: {name}", lo=MIN_FOCAL, hi=MAX_FOCAL)
+    return m
 
 
 def read_intrinsics(path: str | os.PathLike) -> np.ndarray:
@@ -195,30 +211,25 @@ def read_intrinsics(path: str | os.PathLike) -> np.ndarray:
            [  0., 280., 120.],
            [  0.,   0.,   1.]])
     """
+    from .._files import read_json
+
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: expected an intrinsics JSON file, got no such file")
-    try:
-        data = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: expected intrinsics JSON, got {one_line(exc)}") from None
+    data = read_json(path, what="an intrinsics JSON file")
     if isinstance(data, dict) and "intrinsic_matrix" in data:
-        m = np.asarray(data["intrinsic_matrix"], dtype=np.float64)
-        if m.size != 9:
-            raise InputError(f"{path}: expected 9 numbers in intrinsic_matrix, got {m.size}")
-        K = m.reshape(3, 3).T  # Open3D writes column major
+        m = _schema.matrix(data["intrinsic_matrix"], f"{path}: intrinsic_matrix", (3, 3))
+        K = m.T  # Open3D writes column major
     elif isinstance(data, dict) and all(k in data for k in ("fx", "fy", "cx", "cy")):
-        K = np.array(
-            [[data["fx"], 0, data["cx"]], [0, data["fy"], data["cy"]], [0, 0, 1]], np.float64
+        fx, fy, cx, cy = (
+            _schema.number(data[k], f"{path}: {k}", lo=-MAX_FOCAL, hi=MAX_FOCAL)
+            for k in ("fx", "fy", "cx", "cy")
         )
+        K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1]], np.float64)
     else:
         raise InputError(
             f"{path}: expected intrinsic_matrix or fx, fy, cx, cy, got keys "
-            f"{sorted(data) if isinstance(data, dict) else type(data).__name__}"
+            f"{shown(sorted(data)) if isinstance(data, dict) else type(data).__name__}"
         )
-    if not (np.isfinite(K).all() and K[0, 0] > 0 and K[1, 1] > 0):
-        raise InputError(f"{path}: expected positive finite focal lengths, got {K.tolist()}")
-    return K
+    return check_intrinsics(K, str(path))
 
 
 def _read_image(path: Path, what: str) -> np.ndarray:
@@ -294,12 +305,15 @@ def read_frame(
             "none",
             params=("intrinsics",),
         )
-    K = read_intrinsics(intrinsics) if not isinstance(intrinsics, np.ndarray) else intrinsics
+    K = (
+        check_intrinsics(intrinsics, "intrinsics")
+        if isinstance(intrinsics, np.ndarray)
+        else read_intrinsics(intrinsics)
+    )
     d = _read_image(depth, "depth")
     if d.ndim != 2 or d.dtype.kind not in "iuf":
         raise InputError(f"{depth}: expected a single-channel depth image, got shape {d.shape}")
-    if not depth_scale > 0:
-        raise InputError(f"depth_scale: expected a number > 0, got {depth_scale}")
+    depth_scale = _schema.number(depth_scale, "depth_scale", lo=MIN_DEPTH_SCALE, hi=MAX_DEPTH_SCALE)
     z = (d.astype(np.float64) / depth_scale).astype(np.float32)
     z[~np.isfinite(z) | (z < 0)] = 0
     rgb = None
@@ -464,6 +478,10 @@ def frame_from_points(points, colors, pose=None) -> Frame:
     return Frame(depth.reshape(H, W), rgb.reshape(H, W, 3), K, pose, cropped=True)
 
 
+VIEW_KEYS = ("depth", "color", "intrinsics", "pose", "depth_scale", "points")
+"""Keys of a view in a ``--views`` file (others, such as a name, are ignored)."""
+
+
 def read_views(path: str | os.PathLike) -> list[Frame]:
     """Registered views from a JSON list of RGB-D frames and point clouds.
 
@@ -509,31 +527,43 @@ def read_views(path: str | os.PathLike) -> list[Frame]:
     views = data.get("views") if isinstance(data, dict) else data
     if not isinstance(views, list) or not views:
         raise InputError(f"{path}: expected a non-empty list of views, got {type(views).__name__}")
+    _schema.sequence(views, f"{path}: views", hi=MAX_VIEWS)
     frames = []
     for i, v in enumerate(views):
-        if not isinstance(v, dict):
-            raise InputError(f"{path}: view {i}: expected an object, got {type(v).__name__}")
         where = f"{path}: view {i}"
-        pose = check_pose(v.get("pose", np.eye(4)), f"{where}: pose")
+        v = _schema.mapping(v, where)
+        pose = check_pose(v.get("pose", np.eye(4)), f"{where}.pose")
         if "points" in v:
-            P, C = read_points(path.parent / v["points"])
+            P, C = read_points(_schema.path(v["points"], f"{where}.points", base=path.parent))
             # points are stored in their camera's frame, like a single scan
             world = P @ pose[:3, :3].T + pose[:3, 3]
             frames.append(frame_from_points(world, C, pose))
         elif "depth" in v:
-            if "intrinsics" not in v:
+            if v.get("intrinsics") is None:
                 raise InputError(f"{where}: expected intrinsics with the depth image, got none")
             K = v["intrinsics"]
-            K = path.parent / K if isinstance(K, str) else np.asarray(K, np.float64).reshape(3, 3)
+            K = (
+                _schema.path(K, f"{where}.intrinsics", base=path.parent)
+                if isinstance(K, str)
+                else check_intrinsics(K, f"{where}.intrinsics")
+            )
+            color = v.get("color")
             frames.append(
                 read_frame(
-                    path.parent / v["depth"],
-                    path.parent / v["color"] if v.get("color") else None,
+                    _schema.path(v["depth"], f"{where}.depth", base=path.parent),
+                    None
+                    if color is None
+                    else _schema.path(color, f"{where}.color", base=path.parent),
                     K,
-                    depth_scale=float(v.get("depth_scale", DEPTH_SCALE)),
+                    depth_scale=_schema.number(
+                        v.get("depth_scale", DEPTH_SCALE),
+                        f"{where}.depth_scale",
+                        lo=MIN_DEPTH_SCALE,
+                        hi=MAX_DEPTH_SCALE,
+                    ),
                     pose=pose,
                 )
             )
         else:
-            raise InputError(f"{where}: expected 'depth' or 'points', got keys {sorted(v)}")
+            raise InputError(f"{where}: expected 'depth' or 'points', got keys {shown(sorted(v))}")
     return frames

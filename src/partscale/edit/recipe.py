@@ -54,6 +54,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .. import _schema
 from .._files import read_json
 from ..errors import InputError, shown
 from .units import has_unit, parse_length
@@ -69,6 +70,9 @@ Mode = Literal["stretch", "tile", "global"]
 #: its axis and every edit re-evaluates the grid, so a recipe's cost grows with its length;
 #: real recipes hold a few (the editor sends at most 4), hostile ones thousands.
 MAX_EDITS = 64
+#: Most copies a count edit (steps, elements) may add or remove: beyond it no grid could hold
+#: the result, and the count is refused before anything multiplies by it.
+MAX_COPIES = 100_000
 
 #: JSON Schema (draft 2020-12) of a recipe file; ``partscale scale --recipe`` and the web editor
 #: both produce and accept it.
@@ -406,12 +410,11 @@ class Edit:
                 f"{where}.mode: expected one of {', '.join(MODES)}, got {shown(obj['mode'])}"
             )
         zone = obj["zone"]
-        if not isinstance(zone, list | tuple | np.ndarray) or np.ndim(zone) != 1 or len(zone) != 2:
-            raise InputError(f"{where}.zone: expected [START, END], got {shown(zone)}")
+        start, end = _pair(zone, where)
         return cls(
             axis=axis,
-            start=parse_position(zone[0], f"{where}.zone[0]", units),
-            end=parse_position(zone[1], f"{where}.zone[1]", units),
+            start=parse_position(start, f"{where}.zone[0]", units),
+            end=parse_position(end, f"{where}.zone[1]", units),
             dest=parse_position(obj["to"], f"{where}.to", units),
             mode=mode,
         )
@@ -457,7 +460,9 @@ def _keys(obj: Any, allowed: set[str], required: set[str], where: str) -> None:
 
 
 def _pair(zone: Any, where: str) -> tuple[Any, Any]:
-    if not isinstance(zone, list | tuple | np.ndarray) or np.ndim(zone) != 1 or len(zone) != 2:
+    # no numpy here: np.ndim of a ragged list ([[0.1], 0.2]) raises; each end is checked as a
+    # position (a number or a string) by its reader
+    if not isinstance(zone, list | tuple | np.ndarray) or len(zone) != 2:
         raise InputError(f"{where}.zone: expected [START, END], got {shown(zone)}")
     return zone[0], zone[1]
 
@@ -675,16 +680,7 @@ class ScrewZone:
         step = spec["step"]
         if not isinstance(step, list | tuple) or len(step) != 3:
             raise InputError(f"{where}.screw.step: expected [X, Y, Z], got {shown(step)}")
-        n = obj["copies"]
-        if isinstance(n, str):
-            try:
-                n = int(n)
-            except ValueError:
-                n = None
-        if isinstance(n, bool) or not isinstance(n, int) or n == 0:
-            raise InputError(
-                f"{where}.copies: expected a whole number other than 0 (+1, -2), got {shown(obj['copies'])}"
-            )
+        n = _copies(obj, where)
         sv = [_number(v, f"{where}.screw.step", units) for v in step]
         return cls(
             axis, (sv[0], sv[1], sv[2]), _number(spec["cut"], f"{where}.screw.cut", units), n
@@ -698,17 +694,19 @@ class ScrewZone:
         }
 
 
-def _copies(obj: dict[str, Any], where: str) -> int:
-    """A count edit's ``copies``: a whole number other than 0 (an int, or a string with its sign)."""
+def _copies(obj: dict[str, Any], where: str, what: str = "a whole number") -> int:
+    """A count edit's ``copies``: a whole number other than 0, at most :data:`MAX_COPIES` either
+    way (an int, or a string with its sign).
+    """
     n = obj["copies"]
-    if isinstance(n, str):
-        try:
-            n = int(n.strip())
-        except ValueError:
-            n = None
-    if isinstance(n, bool) or not isinstance(n, int) or n == 0:
+    try:
+        n = _schema.integer(n, f"{where}.copies", lo=-MAX_COPIES, hi=MAX_COPIES, text=True)
+    except InputError:
+        n = 0
+    if n == 0:
         raise InputError(
-            f"{where}.copies: expected a whole number other than 0 (+1, -2), got {shown(obj['copies'])}"
+            f"{where}.copies: expected {what} other than 0 (+1, -2), at most {MAX_COPIES} either "
+            f"way, got {shown(obj['copies'])}"
         )
     return n
 
@@ -930,17 +928,7 @@ class CountEdit:
         axis = str(obj["axis"]).lower()
         if axis not in AXES:
             raise InputError(f"{where}.axis: expected one of x, y, z, got {shown(obj['axis'])}")
-        n = obj["copies"]
-        if isinstance(n, str):
-            try:
-                n = int(n.strip())
-            except ValueError:
-                n = None
-        if isinstance(n, bool) or not isinstance(n, int) or n == 0:
-            raise InputError(
-                f"{where}.copies: expected +N or -N elements (not 0), got {shown(obj['copies'])}"
-            )
-        return cls(axis, n)
+        return cls(axis, _copies(obj, where, "+N or -N elements"))
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form (what recipes hold): ``{"axis": "x", "copies": "+1"}``."""

@@ -19,6 +19,11 @@ from ..errors import InputError
 #: Metres per unit suffix: the units a length may carry and a mesh may be imported from.
 SUFFIXES = {"mm": 0.001, "cm": 0.01, "m": 1.0, "in": 0.0254}
 
+MAX_GROWTH = 1e9
+"""Most a target size may be, as a multiple of the current extent: beyond it a size is a
+mistake whose grid overflows the counts made of it (below it, the memory guard says what the
+size would need)."""
+
 _NUMBER = r"[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
 _LENGTH = re.compile(rf"^(?P<sign>[-+]?)(?P<num>{_NUMBER})\s*(?P<unit>[a-zA-Z%]*)$")
 
@@ -140,4 +145,9 @@ def parse_size(spec: str | float, *, extent: float, units: str | None, what: str
         target = extent + v if sign == "+" else extent - v if sign == "-" else v
     if not target > 0:
         raise InputError(f"{what}: expected a positive length, got {spec!r} ({target:.6g})")
+    if not target <= MAX_GROWTH * extent:  # finite but huge: no grid holds it, int() overflows
+        raise InputError(
+            f"{what}: expected at most {MAX_GROWTH:g} times the current extent "
+            f"({MAX_GROWTH * extent:.4g}), got {spec!r} ({target:.4g})"
+        )
     return float(target)

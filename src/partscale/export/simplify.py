@@ -105,6 +105,12 @@ def simplify(mesh, *, voxel_size: float, faces: int | None = None, error: float 
         # a collapse pinched two sheets onto one edge (thin parts): keep those vertices and
         # their neighbours from collapsing, and decimate again from the full surface
         lock[_ring(F, pinched)] = 1
+    if len(f) == 0:  # every triangle collapsed (or paired away): no surface left to write
+        name = "faces" if faces is not None else "error"
+        hint = "more faces keep some" if faces is not None else "a smaller error keeps some"
+        raise InputError(
+            f"{name}: expected a budget that leaves a surface, got 0 of {len(F)} triangles ({hint})"
+        )
     used, f = np.unique(f, return_inverse=True)
     f = f.reshape(-1, 3)
     out = trimesh.Trimesh(

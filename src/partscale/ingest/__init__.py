@@ -2,7 +2,7 @@
 
 Public API: :func:`load` (any supported file), :func:`load_mesh` + :func:`from_mesh` (meshes;
 :func:`load_mesh_scene` reads one as a trimesh scene for the mesh route;
-:func:`check_mesh_file` validates a mesh path), :func:`from_grid`, :func:`read_grid` and
+:func:`check_mesh_file` validates a mesh path, :func:`check_scene` its scene's geometry), :func:`from_grid`, :func:`read_grid` and
 :func:`read_autosdf` (SDF volumes).
 
 Modules: ``load`` (dispatch, the reader registries), one reader per format (``gltf``, ``obj``,
@@ -22,7 +22,7 @@ from .load import (
     load_mesh,
     load_mesh_scene,
 )
-from .mesh import ColoredMesh, Material, from_trimesh
+from .mesh import ColoredMesh, Material, check_scene, from_trimesh
 from .mesh_sdf import check_res, from_mesh
 
 __all__ = [
@@ -33,6 +33,7 @@ __all__ = [
     "Material",
     "check_mesh_file",
     "check_res",
+    "check_scene",
     "from_grid",
     "from_mesh",
     "from_trimesh",

@@ -24,6 +24,7 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from .._files import parse_json
 from ..errors import InputError, one_line
 from .mesh import ColoredMesh, read_scene, say, scene_to_mesh
 
@@ -34,22 +35,35 @@ if TYPE_CHECKING:
 def _read_gltf(path: Path) -> tuple[dict, bytes] | None:
     """The glTF JSON document of a .gltf/.glb and, for a .glb, the bytes after its JSON chunk.
 
-    None when the document cannot be read (trimesh then reports what is wrong).
+    The JSON is read strictly (:func:`partscale._files.parse_json`: nesting depth, digits,
+    finite numbers), so a document nested thousands deep is an :class:`InputError` here, not
+    a recursion error in trimesh. None when the container cannot be read (trimesh then
+    reports what is wrong).
     """
     try:
         raw = path.read_bytes()
         if path.suffix.lower() == ".gltf":
-            doc = json.loads(raw.decode("utf-8"))
-            rest = b""
+            text, rest = raw, b""
         else:
             if len(raw) < 20 or raw[:4] != b"glTF" or raw[16:20] != b"JSON":
                 return None
             length = struct.unpack("<I", raw[12:16])[0]
-            doc = json.loads(raw[20 : 20 + length].decode("utf-8"))
-            rest = raw[20 + length :]
-    except (OSError, ValueError, UnicodeDecodeError, struct.error):
+            text, rest = raw[20 : 20 + length], raw[20 + length :]
+    except (OSError, struct.error):
         return None
+    try:
+        doc = parse_json(text, what=str(path), max_bytes=None)
+    except InputError as exc:
+        raise InputError(f"{exc} (a {path.suffix.lower()[1:]} mesh's JSON)") from None
     return (doc, rest) if isinstance(doc, dict) else None
+
+
+def check_gltf(path: Path) -> None:
+    """Raise :class:`InputError` if a ``.gltf``/``.glb`` file's JSON is not strict JSON within
+    the nesting and number limits (what both mesh routes read before trimesh does).
+    """
+    if path.suffix.lower() in (".gltf", ".glb"):
+        _read_gltf(path)
 
 
 def _texture_transform(tt: dict) -> np.ndarray:

@@ -17,9 +17,9 @@ from .._options import keyword_options
 from ..csdf import CSDF
 from ..errors import InputError, one_line
 from ..progress import ProgressCallback, resolve, scaled
-from .gltf import load_gltf, load_gltf_scene
+from .gltf import check_gltf, load_gltf, load_gltf_scene
 from .grid import from_grid, read_autosdf, read_grid
-from .mesh import ColoredMesh
+from .mesh import ColoredMesh, check_scene
 from .mesh_sdf import check_pad, check_res, from_mesh
 from .obj import load_obj, load_obj_scene
 from .ply import load_ply
@@ -130,6 +130,7 @@ def load_mesh_scene(path: str | os.PathLike) -> trimesh.Scene:
             ) from None
     if not scene.geometry:
         raise InputError(f"{path}: expected a mesh with triangles, got none")
+    check_scene(scene, path)  # import's own checks: triangles, indices, finite, extent
     return scene
 
 
@@ -165,6 +166,7 @@ def check_mesh_file(path: str | os.PathLike) -> Path:
         )
     if path.stat().st_size == 0:
         raise InputError(f"{path}: expected a {suffix[1:]} mesh, got an empty file (0 bytes)")
+    check_gltf(path)  # strict JSON (depth, numbers) before trimesh parses it, on every route
     return path
 
 

@@ -186,6 +186,94 @@ def say(notes: list[str] | tuple[str, ...]) -> None:
         warnings.warn(note, PartscaleWarning, stacklevel=3)
 
 
+MAX_COORDINATE = 1e12
+"""Largest magnitude of a placed vertex coordinate (a million km in metres): beyond it squared
+lengths leave the float range."""
+
+
+def check_scene(scene, path: Path) -> None:
+    """Check every triangle mesh a trimesh scene places, before any arithmetic on it.
+
+    Each mesh a node places: vertices of 3 finite coordinates, face indices within its
+    vertices, a finite node transform, placed coordinates within :data:`MAX_COORDINATE`; at
+    least one triangle in all; a non-zero extent. The one check of a scene's geometry, on both mesh routes (import
+    and the mesh route's edits).
+
+    Parameters
+    ----------
+    scene : trimesh.Scene
+    path : Path
+        The file it was read from (for messages).
+
+    Returns
+    -------
+    None
+        Raises :class:`~partscale.errors.InputError` naming the file and the mesh at fault.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> from pathlib import Path
+    >>> from partscale import ingest
+    >>> ingest.check_scene(trimesh.Scene(trimesh.creation.box()), Path("box.glb"))
+    >>> points = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 5]], process=False)
+    >>> ingest.check_scene(trimesh.Scene(points), Path("bad.glb"))
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: bad.glb: expected face indices in [0, 3) (the vertex count of ...), got [0, 5]
+    """
+    import trimesh
+
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    for node in scene.graph.nodes_geometry:
+        transform, geom_name = scene.graph[node]
+        geom = scene.geometry[geom_name]
+        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
+            continue
+        v = np.asarray(geom.vertices, np.float64)
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise InputError(
+                f"{path}: expected 3 coordinates per vertex in {geom_name!r}, got shape {v.shape}"
+            )
+        if not np.isfinite(v).all():  # before arithmetic: inf would warn and spread NaN
+            raise InputError(
+                f"{path}: expected finite vertex coordinates, got "
+                f"{int((~np.isfinite(v)).any(axis=1).sum())} vertex(es) with NaN/inf in {geom_name!r}"
+            )
+        f = np.asarray(geom.faces)
+        if f.ndim != 2 or f.shape[1] != 3 or f.dtype.kind not in "iu":
+            raise InputError(
+                f"{path}: expected triangles of 3 vertex indices in {geom_name!r}, got shape "
+                f"{f.shape}"
+            )
+        if f.min() < 0 or f.max() >= len(v):
+            raise InputError(
+                f"{path}: expected face indices in [0, {len(v)}) (the vertex count of "
+                f"{geom_name!r}), got [{f.min()}, {f.max()}]"
+            )
+        T = np.asarray(transform, np.float64)
+        if T.shape != (4, 4) or not np.isfinite(T).all():
+            raise InputError(
+                f"{path}: expected a finite node transform for {node!r}, got NaN or inf"
+            )
+        used = v[np.unique(f)]
+        with np.errstate(over="ignore", invalid="ignore"):
+            placed = used @ T[:3, :3].T + T[:3, 3]
+        if not (np.abs(placed) <= MAX_COORDINATE).all():  # NaN fails too
+            raise InputError(
+                f"{path}: expected placed vertex positions within +-{MAX_COORDINATE:g}, got "
+                f"{float(np.nanmax(np.abs(placed))):.3g} in {geom_name!r} (node {node!r})"
+            )
+        lo, hi = np.minimum(lo, placed.min(axis=0)), np.maximum(hi, placed.max(axis=0))
+    if not np.isfinite(lo).all():
+        raise InputError(f"{path}: expected a mesh with triangles, got none")
+    ext = hi - lo
+    if not (ext.max() > 0):
+        raise InputError(f"{path}: expected a mesh with non-zero extent, got all points equal")
+    if not np.isfinite(ext).all():
+        raise InputError(f"{path}: expected a mesh of finite extent, got {ext.tolist()}")
+
+
 def scene_to_mesh(
     scene,
     path: Path,
@@ -211,6 +299,7 @@ def scene_to_mesh(
     import trimesh
     from trimesh.visual import ColorVisuals, TextureVisuals
 
+    check_scene(scene, path)
     uv_transforms = uv_transforms or {}
     materials = materials or {}
     verts, faces, mats, face_mat, uvs, colors = [], [], [], [], [], []
@@ -221,23 +310,9 @@ def scene_to_mesh(
         geom = scene.geometry[geom_name]
         if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
             continue
-        v = np.asarray(geom.vertices, np.float64)
-        if v.ndim != 2 or v.shape[1] != 3:
-            raise InputError(
-                f"{path}: expected 3 coordinates per vertex in {geom_name!r}, got shape {v.shape}"
-            )
-        if not np.isfinite(v).all():  # before arithmetic: inf would warn and spread NaN
-            raise InputError(
-                f"{path}: expected finite vertex coordinates, got "
-                f"{int((~np.isfinite(v)).any(axis=1).sum())} vertex(es) with NaN/inf in {geom_name!r}"
-            )
+        v = np.asarray(geom.vertices, np.float64)  # checked by check_scene
         v = v @ transform[:3, :3].T + transform[:3, 3]
         f = np.asarray(geom.faces, np.int64)
-        if f.min() < 0 or f.max() >= len(v):
-            raise InputError(
-                f"{path}: expected face indices in [0, {len(v)}) (the vertex count of "
-                f"{geom_name!r}), got [{f.min()}, {f.max()}]"
-            )
         if np.linalg.det(transform[:3, :3]) < 0:  # mirrored node: keep outward winding
             f = f[:, ::-1]
         visual = geom.visual
@@ -270,15 +345,8 @@ def scene_to_mesh(
         verts.append(v)
         faces.append(f + n_v)
         n_v += len(v)
-    if not faces:
-        raise InputError(f"{path}: expected a mesh with triangles, got none")
     vertices = np.concatenate(verts)
-    if not np.isfinite(vertices).all():
-        raise InputError(f"{path}: expected finite vertex positions, got NaN or inf")
     all_faces = np.concatenate(faces)
-    ext = np.ptp(vertices[np.unique(all_faces)], axis=0)
-    if not (ext.max() > 0):
-        raise InputError(f"{path}: expected a mesh with non-zero extent, got all points equal")
     return ColoredMesh(
         vertices=vertices,
         faces=all_faces,

@@ -393,19 +393,49 @@ def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
 
 
 def _planar(recipe: Recipe) -> list[Edit]:
-    """The recipe's zones across an axis; a radial or oblique zone is refused (one line): the
-    mesh route cuts triangles at planes square to an axis only.
-    """
+    """The recipe's zones across an axis (see :func:`check_recipe`)."""
     out = []
     for i, e in enumerate(recipe.edits):
         if not isinstance(e, Edit):
-            kind = "radial" if "radial" in e.to_json() else "oblique"
+            kind = {"radial": "radial", "screw": "step", "helix": "helix"}
+            got = next((v for k, v in kind.items() if k in e.to_json()), "oblique")
             raise InputError(
-                f"edits[{i}]: expected a zone across x, y or z on the mesh route, got a {kind} "
+                f"edits[{i}]: expected a zone across x, y or z on the mesh route, got a {got} "
                 "zone (import the mesh and edit its CSDF: partscale import, then scale)"
             )
         out.append(e)
     return out
+
+
+def check_recipe(recipe: Recipe) -> None:
+    """Refuse (one line) a recipe the mesh route cannot apply, before any work.
+
+    The mesh route cuts triangles at planes square to an axis: a radial, oblique, step or
+    helix zone is refused, naming the CSDF route that applies it.
+
+    Parameters
+    ----------
+    recipe : partscale.edit.Recipe
+        The recipe.
+
+    Returns
+    -------
+    None
+        Raises :class:`~partscale.errors.InputError` naming the first edit it cannot apply.
+
+    Examples
+    --------
+    >>> from partscale import meshedit
+    >>> from partscale.edit import Recipe
+    >>> meshedit.check_recipe(Recipe.parse({"edits": [{"axis": "x", "zone": [0, 1], "to": 2}]}))
+    >>> meshedit.check_recipe(
+    ...     Recipe.parse({"edits": [{"normal": [1, 1, 0], "zone": [0, 1], "to": 2}]})
+    ... )
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: edits[0]: expected a zone across x, y or z on the mesh route, got a oblique zone ...
+    """
+    _planar(recipe)
 
 
 def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh.Scene, list[Seam]]:
@@ -575,7 +605,7 @@ def load_scene(path: str | os.PathLike) -> trimesh.Scene:
     >>> len(scene.geometry), scene.extents.round(2).tolist()
     (1, [2.44, 0.95, 1.3])
     """
-    return load_mesh_scene(path)
+    return load_mesh_scene(path)  # checked as import checks: triangles, indices, finite, extent
 
 
 def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:

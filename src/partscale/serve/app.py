@@ -266,12 +266,22 @@ async def _http_error(request: Request, exc: _HTTPError) -> Response:
     return _error(str(exc), exc.status)
 
 
+def _quiet(fn: Callable[..., T], *args: Any) -> T:
+    """``fn(*args)`` without numpy's floating-point warnings on the server's stderr (inputs
+    are validated first; a request never learns of them).
+    """
+    import numpy as np
+
+    with np.errstate(all="ignore"):
+        return fn(*args)
+
+
 async def _run(what: str, fn: Callable[..., T], *args: Any) -> T:
     """``fn(*args)`` in the thread pool: an InputError is the request's fault (400); anything
     else is a bug in partscale (500, traceback kept on the server's stderr).
     """
     try:
-        return await run_in_threadpool(fn, *args)
+        return await run_in_threadpool(_quiet, fn, *args)
     except InputError as exc:
         raise _HTTPError(400, str(exc)) from None
     except Exception as exc:

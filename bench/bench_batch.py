@@ -1,4 +1,10 @@
-"""Batch throughput over every object of ../shared/data: 1 worker vs 2, Ray beside local.
+"""Batch throughput and overhead: 1 worker vs 2, Ray beside local.
+
+``--small`` (a dozen small objects, --res 64): each run prints its start-up (until the first
+object starts), object phase (first started to last finished) and end (the rest), the CPU busy
+share (CPU seconds of the batch and its workers over wall seconds times cores), the overhead
+(wall minus the sum of object times over the cores) and how far the object phase is from that
+ideal share. Without ``--small``, every object of ../shared/data:
 
 Each object: import at --res, fast segmentation, a recipe edit (x zone 35%-65% stretched to
 105%), GLB export and an iso render. A corrupt file and an object imported at a resolution no
@@ -6,13 +12,15 @@ worker's memory allows ride along and must be recorded failed while everything e
 Prints wall time, objects per minute, the 2-worker speed-up, Ray's start-up and per-object
 overhead beside the local engine in the same run, and each worker's peak memory.
 
-    .venv/bin/python bench/bench_batch.py [--res 128] [--no-ray]
+    .venv/bin/python bench/bench_batch.py [--small] [--res 128] [--no-ray] [--repeat N]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import resource
 import statistics
 import sys
 import tempfile
@@ -23,8 +31,46 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from partscale.batch import discover, read_status, run  # noqa: E402
 
-DATA = ROOT.parent / "shared" / "data"
+DATA = Path(os.environ.get("PARTSCALE_DATA", ROOT.parent / "shared" / "data"))
 RECIPE = {"version": 1, "edits": [{"axis": "x", "zone": ["35%", "65%"], "to": "105%"}]}
+
+
+def _cpu() -> float:
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)  # the workers, once reaped
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def phases(label: str, r, cpu: float) -> None:
+    """Start-up, object phase and end of a local run, its CPU busy share and its overhead."""
+    cores = os.cpu_count() or 1
+    rows = read_status(r.outdir / "status.csv")
+    work = sum(float(x["seconds"]) for x in rows.values() if x["seconds"])
+    info = r.engine_info
+    ideal = work / min(cores, r.workers)
+    print(
+        f"{label:<22} wall {r.seconds:5.2f} s = start-up {info['startup_seconds']:4.2f} + "
+        f"objects {info['objects_seconds']:5.2f} + end {info['end_seconds']:4.2f}  "
+        f"CPU busy {cpu / (r.seconds * cores):4.0%} of {cores} cores  "
+        f"object times {work:5.2f} s, / {min(cores, r.workers)} = {ideal:5.2f} s  "
+        f"overhead {r.seconds - ideal:+5.2f} s (target <= 1 s)  object phase "
+        f"{info['objects_seconds'] / ideal - 1:+4.0%} of the ideal (target within 10 %)"
+    )
+
+
+def small(args) -> None:
+    """A dozen small objects, 1 and 2 workers, phases printed; repeated ``args.repeat`` times."""
+    objs = sorted((DATA / "kenney").glob("*.glb"), key=lambda p: p.stat().st_size)[:12]
+    with tempfile.TemporaryDirectory() as tmpdir:
+        tmp = Path(tmpdir)
+        print(f"{len(objs)} small Kenney objects at --res {args.res}, fast segment, GLB export")
+        for rep in range(args.repeat):
+            for workers in (1, 2):
+                out = tmp / f"w{workers}-{rep}"
+                cpu = _cpu()
+                r = run(objs, out, res=args.res, segment="fast", export="glb", workers=workers)
+                r.workers = workers
+                phases(f"local, {workers} worker{'s' * (workers > 1)}", r, _cpu() - cpu)
 
 
 def one(label, manifest, outdir, recipe, res, **kw):
@@ -60,7 +106,12 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--no-ray", action="store_true")
+    ap.add_argument("--small", action="store_true", help="a dozen small objects, phases")
+    ap.add_argument("--repeat", type=int, default=2)
     args = ap.parse_args()
+    if args.small:
+        small(args)
+        return
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         recipe = tmp / "recipe.json"

@@ -252,6 +252,17 @@ def run(
     outdir = Path(outdir)
     if outdir.exists() and not outdir.is_dir():
         raise InputError(f"{outdir}: expected an output folder, got a file")
+    n_workers = workers or cores
+    threads = max(1, cores // n_workers)
+    mem = parse_memory(memory)
+    if mem is None:
+        mem = available_memory() // n_workers
+    template = None
+    if engine == "local":
+        from .local import start_template
+
+        # it imports the pipeline while this process reads and hashes the inputs
+        template = start_template(threads, mem)
     batch_opts = {
         "res": res,
         "square": square or None,
@@ -267,12 +278,6 @@ def run(
     items = shard(discover(inputs, exclude=outdir), rank, world_size)
     specs = {it.name: resolve_options(batch_opts, it.options, where=f"{it.path}") for it in items}
     outdir.mkdir(parents=True, exist_ok=True)
-
-    n_workers = workers or cores
-    threads = max(1, cores // n_workers)
-    mem = parse_memory(memory)
-    if mem is None:
-        mem = available_memory() // n_workers
 
     table = status_mod.StatusTable(outdir)
     result = BatchResult(outdir=outdir, status=table.path)
@@ -356,7 +361,7 @@ def run(
             if engine == "local":
                 from .local import run_local
 
-                run_local(
+                result.engine_info = run_local(
                     tasks,
                     workers=n_workers,
                     threads=threads,
@@ -365,6 +370,7 @@ def run(
                     log=outdir / LOG_NAME,
                     on_start=on_start,
                     on_finish=on_finish,
+                    template=template,
                 )
             else:
                 from .local import worker_env

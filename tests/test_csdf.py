@@ -489,3 +489,22 @@ def test_compact_file_with_inconsistent_arrays_is_refused(tmp_path, painted):
     np.savez(bad, **arrays)
     with pytest.raises(InputError, match=r"bad\.csdf\.npz: expected exactly the arrays .*far_rgb"):
         load(bad)
+
+
+def test_deflated_members_are_plain_npy_any_zip_reader_opens(tmp_path):
+    """Members deflated in parallel pieces are one valid deflate stream each: zipfile's own
+    check passes, and every member reads back as what ``np.save`` writes."""
+    import io
+
+    c = shapes.sphere((0.0, 0.0, 0.0), 0.6, voxel_size=0.01)  # colours: 5.3 MB, 2 pieces
+    for compact in (False, True):
+        p = save(c, tmp_path / f"{compact}.csdf.npz", compact=compact)
+        with zipfile.ZipFile(p) as z:
+            assert z.testzip() is None
+            deflated = [i for i in z.infolist() if i.compress_type == zipfile.ZIP_DEFLATED]
+            assert deflated
+            for info in deflated:
+                a = np.load(z.open(info))
+                buf = io.BytesIO()
+                np.lib.format.write_array(buf, a, allow_pickle=False)
+                assert z.read(info) == buf.getvalue()

@@ -24,6 +24,7 @@ CSDFs made from it, so an edit costs the same whatever the history's length.
 from __future__ import annotations
 
 import copy
+import io
 import os
 import zipfile
 import zlib
@@ -74,6 +75,8 @@ reads distances from (the 3D textures' distance channel)."""
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)  # the earliest a zip can say
 _DEFLATE_SAMPLE = 1 << 18
 """Bytes of each of up to four spread samples of an array deflated to judge it (:func:`save`)."""
+_DEFLATE_CHUNK = 1 << 22
+"""Bytes of an array member deflated as one piece; pieces deflate in parallel (:func:`save`)."""
 _DEFLATE_GAIN = 0.8
 """An array is deflated when its samples shrink below this share of their size. Exact float
 distances do not (SheenChair's sdf at 256: to 90 % in 1.6 s, 0.3 s more to read): they are
@@ -655,10 +658,59 @@ def save(
             info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_TIME)
             deflate = compress and _deflates(a)
             info.compress_type = zipfile.ZIP_DEFLATED if deflate else zipfile.ZIP_STORED
-            info._compresslevel = level  # type: ignore[attr-defined]  # open() skips the zip's
             with zf.open(info, "w", force_zip64=True) as f:  # as savez: sizes unknown up front
-                np.lib.format.write_array(f, a, allow_pickle=False)
+                if deflate:
+                    _write_deflated(f, a, 6 if level is None else level)
+                else:
+                    np.lib.format.write_array(f, a, allow_pickle=False)
     return path
+
+
+class _Deflated:
+    """Stands in for a zip member's compressor: the deflate stream is made ahead (in parallel),
+    zipfile still counts the plain bytes and their CRC as they pass through.
+    """
+
+    def __init__(self, stream: bytes):
+        self.stream = stream
+
+    def compress(self, data: Any) -> bytes:
+        return b""
+
+    def flush(self) -> bytes:
+        return self.stream
+
+
+def _deflate(chunks: list[memoryview], level: int) -> bytes:
+    """One raw deflate stream of the chunks in order, deflated at once on the cores: each chunk
+    ends on a byte boundary (a sync flush), the last one ends the stream (as pigz does). The
+    chunks are fixed, so the same data give the same bytes on any machine.
+    """
+    from ._workers import thread_map
+
+    def one(i: int) -> bytes:
+        z = zlib.compressobj(level, zlib.DEFLATED, -15)
+        end = zlib.Z_FINISH if i == len(chunks) - 1 else zlib.Z_SYNC_FLUSH
+        return z.compress(chunks[i]) + z.flush(end)
+
+    return b"".join(thread_map(one, range(len(chunks))))
+
+
+def _write_deflated(f: Any, a: np.ndarray, level: int) -> None:
+    """``a`` as a ``.npy`` (what ``np.lib.format.write_array`` writes) into zip member ``f``,
+    opened for writing deflated; chunks of :data:`_DEFLATE_CHUNK` bytes deflate in parallel.
+    """
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, np.lib.format.header_data_from_array_1_0(a))
+    head = buf.getvalue()
+    body = np.ascontiguousarray(a).reshape(-1).view(np.uint8).data
+    k = max(0, _DEFLATE_CHUNK - len(head))
+    chunks = [memoryview(head + bytes(body[:k]))]
+    chunks += [body[s : s + _DEFLATE_CHUNK] for s in range(k, len(body), _DEFLATE_CHUNK)]
+    # zipfile counts the plain bytes and their CRC as they pass; the stream is ours
+    f._compressor = _Deflated(_deflate(chunks, level))
+    for c in chunks:
+        f.write(c)
 
 
 def _deflates(a: np.ndarray) -> bool:

@@ -380,6 +380,23 @@ def test_recipe_lengths_with_units_convert_per_object(tmp_path):
     assert name == "grid" and "units are unknown" in line and "\n" not in line
 
 
+def test_workers_forked_after_the_warm_up_match_one_worker_byte_for_byte(tmp_path):
+    """Three workers (the template loads the kernels, then forks the others; the last objects
+    get more threads) write the same bytes and the same table as one worker, and the batch
+    reports its phases."""
+    objs = _small(tmp_path)
+    opts = dict(res=32, segment="fast", export="glb,csdf", render="iso")
+    one = run(objs, tmp_path / "one", workers=1, **opts)
+    three = run(objs, tmp_path / "three", workers=3, **opts)
+    assert one.ok and three.ok and sorted(three.done) == sorted(one.done) and len(one.done) == 4
+    assert _outputs(tmp_path / "three") == _outputs(tmp_path / "one")
+    a = _stable(read_status(tmp_path / "one" / "status.csv"))
+    assert _stable(read_status(tmp_path / "three" / "status.csv")) == a
+    phases = ("startup_seconds", "objects_seconds", "end_seconds", "objects_cpu_seconds")
+    assert all(three.engine_info[k] >= 0 for k in phases)
+    assert three.engine_info["objects_cpu_seconds"] > 0
+
+
 def test_timeout_stops_a_slow_object(tmp_path):
     slow = data_path("khronos/SheenChair.glb")
     out = tmp_path / "out"

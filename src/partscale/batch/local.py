@@ -1,12 +1,13 @@
 """The local engine: worker processes on this machine, forked from one template, watched by the
 batch.
 
-One template process (:mod:`partscale.batch._worker`) imports the pipeline once; the first worker
-forks from it at once, and while that worker starts on the largest object the template runs a
-tiny object through the batch's stages, so that the kernels are loaded (or compiled, once per
-machine) before the other workers fork from it. No worker imports or loads anything itself, so
-adding workers adds milliseconds, not seconds, and the end of the batch tells each worker to stop
-and does not wait for interpreters to tear down.
+One template process (:mod:`partscale.batch._worker`) imports the pipeline once, while the batch
+reads and hashes its inputs; workers fork from it in milliseconds. With more than two workers,
+the first forks at once, and while it starts on the largest object the template runs a tiny
+object through the batch's stages, so that the kernels are loaded (or compiled, once per
+machine) before the other workers fork from it: two loads instead of one per worker. The end of
+the batch tells each worker to stop; a worker exits at once, without tearing its interpreter
+down, so nothing waits one worker after another.
 
 The scheduler sends the largest objects first (voxels, then input bytes), one task at a time to
 each idle worker, with threads for that task from the cores not in use: every worker runs one
@@ -43,6 +44,9 @@ START_FAILURES = 3
 VOXELS_PER_THREAD = 1 << 21
 """An object gets at most one thread per this many voxels of its grid (128³ voxels: one)."""
 WARM_RES = 24
+WARM_FROM = 3
+"""Workers from which the template loads the kernels once before forking all but the first:
+fewer load them each, side by side (the same wall time, and no warm-up object to run)."""
 """Grid size of the tiny object the template runs to load the kernels."""
 
 Task = dict[str, Any]
@@ -349,11 +353,12 @@ def run_local(
 
     try:
         while pending or any(w.task is not None for w in pool):
-            # the first worker forks at once; the others once the template has the kernels
+            # the first worker forks at once; beyond WARM_FROM, the others once the template
+            # has loaded the kernels (up to then they load them side by side, at no more cost)
             pool = [w for w in pool if not w.dead]
-            room = n - len(pool) if template.warm or n == 1 else 1 - len(pool)
+            room = n - len(pool) if template.warm or n < WARM_FROM else 1 - len(pool)
             pool += [_Worker(template) for _ in range(min(room, len(pending)))]
-            if n > 1 and not (template.warm or template.warming):
+            if n >= WARM_FROM and not (template.warm or template.warming):
                 template.start_warm(_warm_task(pending[0]))
             busy = sum(w.threads for w in pool)
             idle = [w for w in pool if w.task is None]

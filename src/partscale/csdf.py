@@ -614,7 +614,7 @@ def save(
         Write the band (:data:`FILE_BAND_VOXELS` voxels either side of the surface) exactly and
         beyond it one distance, colour and part per block of 4³ voxels: every distance there
         a bound no larger than the CSDF's, sign kept (the far field's promise). Its size
-        follows the surface: SheenChair at 512 voxels is about 40 MiB, against 340 MiB written
+        follows the surface: SheenChair at 512 voxels is about 52 MiB, against 337 MiB written
         whole. Default: compact above :data:`COMPACT_VOXELS` voxels, whole below. See
         ``docs/file-format.md``.
 

@@ -397,6 +397,33 @@ def test_workers_forked_after_the_warm_up_match_one_worker_byte_for_byte(tmp_pat
     assert three.engine_info["objects_cpu_seconds"] > 0
 
 
+def test_a_worker_given_other_threads_per_task_still_compiles_kernels():
+    """A worker sets each task's threads (the last objects get more); numba rereads its thread
+    variables whenever it compiles and refuses a new count once its threads run, so the task's
+    threads must not reach them."""
+    code = (
+        "import os, numba, numpy as np\n"
+        "from partscale.batch._worker import _set_threads\n"
+        "@numba.njit(parallel=True)\n"
+        "def total(a):\n"
+        "    s = 0.0\n"
+        "    for i in numba.prange(len(a)):\n"
+        "        s += a[i]\n"
+        "    return s\n"
+        "total(np.ones(100))\n"
+        "for n in (1, 2, 1):\n"
+        "    _set_threads(n)\n"
+        "    fresh = numba.njit(lambda x: x + n)\n"
+        "    print(fresh(1), numba.get_num_threads(), os.cpu_count())\n"
+    )
+    env = _env(NUMBA_NUM_THREADS="2", NUMBA_THREADING_LAYER="workqueue")
+    proc = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["2", "1", "1", "3", "2", "2", "2", "1", "1"]
+
+
 def test_timeout_stops_a_slow_object(tmp_path):
     slow = data_path("khronos/SheenChair.glb")
     out = tmp_path / "out"

@@ -41,16 +41,19 @@ def _die_with_parent(parent: int) -> None:
 
 
 def _set_threads(threads: int) -> None:
-    """Numba's threads and partscale's pools (sized by ``os.cpu_count()``) for the next task."""
+    """Numba's threads and partscale's pools (sized by ``os.cpu_count()``) for the next task.
+
+    The thread variables stay as the template had them: numba rereads them whenever it
+    compiles, and refuses a ``NUMBA_NUM_THREADS`` other than the one its threads started with.
+    """
     import numba
 
     from .. import _workers
-    from .job import limit_threads
 
     most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
     n = max(1, min(int(threads), most))
     if os.cpu_count() != n:
-        limit_threads(n)
+        os.cpu_count = lambda: n  # only in this worker process
         _workers.reset_pools()
     numba.set_num_threads(n)
 

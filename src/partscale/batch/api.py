@@ -48,7 +48,9 @@ class BatchResult:
     peak_memory : int
         The largest resident memory of one object's job, bytes.
     engine_info : dict
-        Figures the engine reports (Ray: the cluster's CPUs).
+        Figures the engine reports: the local engine its start-up, object phase and end
+        (``startup_seconds``, ``objects_seconds``, ``end_seconds``) and the objects' CPU
+        seconds (``objects_cpu_seconds``); Ray its start-up (``startup_seconds``).
 
     Examples
     --------

@@ -1,4 +1,11 @@
-"""Batch throughput over every object of ../shared/data: 1 worker vs 2, Ray beside local.
+"""Batch throughput and overhead: 1 worker vs 2, Ray beside local.
+
+``--small`` (a dozen small objects; use --res 64): each run prints its start-up (until the first
+object starts), object phase (first started to last finished) and end (the rest), the CPU busy
+share (CPU seconds of the batch and its workers over wall seconds times cores), the overhead
+(wall minus the sum of object times over the cores), how far the object phase is from that
+ideal share, and the CPU seconds the batch spends beside its objects' (robust to a busy
+machine, where the wall figures are not). Without ``--small``, every object of the data:
 
 Each object: import at --res, fast segmentation, a recipe edit (x zone 35%-65% stretched to
 105%), GLB export and an iso render. A corrupt file and an object imported at a resolution no
@@ -6,13 +13,15 @@ worker's memory allows ride along and must be recorded failed while everything e
 Prints wall time, objects per minute, the 2-worker speed-up, Ray's start-up and per-object
 overhead beside the local engine in the same run, and each worker's peak memory.
 
-    .venv/bin/python bench/bench_batch.py [--res 128] [--no-ray]
+    .venv/bin/python bench/bench_batch.py [--small] [--res 128] [--no-ray] [--repeat N]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import resource
 import statistics
 import sys
 import tempfile
@@ -23,8 +32,53 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from partscale.batch import discover, read_status, run  # noqa: E402
 
-DATA = ROOT.parent / "shared" / "data"
+DATA = Path(os.environ.get("PARTSCALE_DATA", ROOT.parent / "shared" / "data"))
 RECIPE = {"version": 1, "edits": [{"axis": "x", "zone": ["35%", "65%"], "to": "105%"}]}
+
+
+def _cpu() -> float:
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)  # the workers, once reaped
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def phases(label: str, r, cpu: float, workers: int) -> None:
+    """Start-up, object phase and end of a local run, its CPU busy share and its overhead.
+
+    Wall figures are only as good as the machine is quiet; the CPU figures are not: ``cpu``
+    is every CPU second the batch and its workers spent, ``objects_cpu_seconds`` what the
+    objects' jobs spent, the rest is what the batch adds (imports, loading kernels, the pool).
+    """
+    cores = os.cpu_count() or 1
+    rows = read_status(r.outdir / "status.csv")
+    work = sum(float(x["seconds"]) for x in rows.values() if x["seconds"])
+    info = r.engine_info
+    share = min(cores, workers)
+    ideal = work / share
+    start = r.seconds - info["objects_seconds"] - info["end_seconds"]
+    print(
+        f"{label:<18} wall {r.seconds:5.2f} s = start-up {start:4.2f} + objects "
+        f"{info['objects_seconds']:5.2f} + end {info['end_seconds']:4.2f}; CPU busy "
+        f"{cpu / (r.seconds * cores):4.0%} of {cores} cores; object times {work:5.2f} s / {share}"
+        f" = {ideal:5.2f} s: overhead {r.seconds - ideal:+5.2f} s (target <= 1 s), object "
+        f"phase {info['objects_seconds'] / ideal - 1:+4.0%} (target within 10 %); CPU: "
+        f"{cpu:5.2f} s, objects {info['objects_cpu_seconds']:5.2f} s, batch's own "
+        f"{cpu - info['objects_cpu_seconds']:4.2f} s; load average {os.getloadavg()[0]:.1f}"
+    )
+
+
+def small(args) -> None:
+    """A dozen small objects, 1 and 2 workers, phases printed; repeated ``args.repeat`` times."""
+    objs = sorted((DATA / "kenney").glob("*.glb"), key=lambda p: p.stat().st_size)[:12]
+    with tempfile.TemporaryDirectory() as tmpdir:
+        tmp = Path(tmpdir)
+        print(f"{len(objs)} small Kenney objects at --res {args.res}, fast segment, GLB export")
+        for rep in range(args.repeat):
+            for workers in args.workers:
+                out = tmp / f"w{workers}-{rep}"
+                cpu = _cpu()
+                r = run(objs, out, res=args.res, segment="fast", export="glb", workers=workers)
+                phases(f"local, {workers} worker{'s' * (workers > 1)}", r, _cpu() - cpu, workers)
 
 
 def one(label, manifest, outdir, recipe, res, **kw):
@@ -60,7 +114,13 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--no-ray", action="store_true")
+    ap.add_argument("--small", action="store_true", help="a dozen small objects, phases")
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     args = ap.parse_args()
+    if args.small:
+        small(args)
+        return
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         recipe = tmp / "recipe.json"

@@ -18,6 +18,13 @@ printed: on a shared machine compare ratios measured in the same run.
 Usage::
 
     PYTHONPATH=src python bench/bench_import.py [--res 128 256] [--igl all|subset|none] [--only NAME]
+    PYTHONPATH=src python bench/bench_import.py --stages [--res 256] [--only SheenChair]
+
+``--stages``: per stage of the import (as its progress reports them), wall seconds, CPU seconds
+(every thread) and CPU over wall (how many cores the stage kept busy), two runs per object
+after a warm-up; then the whole ``partscale import`` command (reading the mesh, the import,
+writing the file) run as users run it, its CPU over wall. On a shared machine the load average
+printed says how far wall figures can be trusted: CPU seconds are robust, shares are not.
 
 ``--igl subset`` (default) runs libigl on SheenChair, the Poly Haven objects and four Kenney
 objects only (libigl takes seconds to minutes per object on 2 cores); the table says where
@@ -27,12 +34,14 @@ libigl was not run.
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import resource
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 import tracemalloc
 from pathlib import Path
@@ -158,6 +167,54 @@ def one(path: Path, res: int, run_igl: bool) -> dict:
     return out
 
 
+def stages(path: Path, res: int) -> None:
+    """Per-stage wall, CPU and CPU/wall of the import of ``path``, then the whole command's."""
+    from partscale import ingest
+
+    mesh = ingest.load_mesh(path)
+    ingest.from_mesh(mesh, res=32)  # load the compiled kernels outside the timing
+    for rep in range(2):
+        marks = [(time.perf_counter(), time.process_time(), "start")]
+        ingest.from_mesh(
+            mesh,
+            res=res,
+            progress=lambda _f, msg, m=marks: m.append(
+                (time.perf_counter(), time.process_time(), msg)
+            ),
+        )
+        marks.append((time.perf_counter(), time.process_time(), "end"))
+        for (w0, c0, what), (w1, c1, _) in itertools.pairwise(marks):
+            if w1 - w0 >= 0.01:
+                print(
+                    f"  {what:36s} wall {w1 - w0:6.2f} s  CPU {c1 - c0:6.2f} s  "
+                    f"busy {(c1 - c0) / (w1 - w0):4.2f}"
+                )
+        w, c = marks[-1][0] - marks[0][0], marks[-1][1] - marks[0][1]
+        print(
+            f"{path.name} at {res}, run {rep + 1}: wall {w:.2f} s, CPU {c:.2f} s, busy "
+            f"{c / w:.2f} of {os.cpu_count()} cores (load average {os.getloadavg()[0]:.1f})",
+            flush=True,
+        )
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
+    with tempfile.TemporaryDirectory() as tmp:
+        for rep in range(2):
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            t = time.perf_counter()
+            out = Path(tmp) / "o.csdf.npz"
+            cmd = [sys.executable, "-m", "partscale", "import", str(path), "--res", str(res)]
+            subprocess.run([*cmd, "-o", str(out)], env=env, check=True, capture_output=True)
+            w = time.perf_counter() - t
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            c = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            print(
+                f"partscale import --res {res}, run {rep + 1}: wall {w:.2f} s, CPU {c:.2f} s, "
+                f"busy {c / w:.2f} of {os.cpu_count()} cores (target >= 1.4 of 2; load "
+                f"average {os.getloadavg()[0]:.1f})",
+                flush=True,
+            )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--res", type=int, nargs="+", default=[128, 256])
@@ -165,7 +222,13 @@ def main() -> None:
     ap.add_argument("--only", default=None, help="run only objects whose name contains this")
     ap.add_argument("--one", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--with-igl", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--stages", action="store_true", help="per-stage CPU over wall")
     args = ap.parse_args()
+    if args.stages:
+        for path in objects():
+            if path.stem == (args.only or "SheenChair") or (args.only and args.only in str(path)):
+                stages(path, args.res[-1])
+        return
     if args.one:
         print(json.dumps(one(Path(args.one), args.res[0], args.with_igl)))
         return

@@ -380,6 +380,50 @@ def test_recipe_lengths_with_units_convert_per_object(tmp_path):
     assert name == "grid" and "units are unknown" in line and "\n" not in line
 
 
+def test_workers_forked_after_the_warm_up_match_one_worker_byte_for_byte(tmp_path):
+    """Three workers (the template loads the kernels, then forks the others; the last objects
+    get more threads) write the same bytes and the same table as one worker, and the batch
+    reports its phases."""
+    objs = _small(tmp_path)
+    opts = dict(res=32, segment="fast", export="glb,csdf", render="iso")
+    one = run(objs, tmp_path / "one", workers=1, **opts)
+    three = run(objs, tmp_path / "three", workers=3, **opts)
+    assert one.ok and three.ok and sorted(three.done) == sorted(one.done) and len(one.done) == 4
+    assert _outputs(tmp_path / "three") == _outputs(tmp_path / "one")
+    a = _stable(read_status(tmp_path / "one" / "status.csv"))
+    assert _stable(read_status(tmp_path / "three" / "status.csv")) == a
+    phases = ("startup_seconds", "objects_seconds", "end_seconds", "objects_cpu_seconds")
+    assert all(three.engine_info[k] >= 0 for k in phases)
+    assert three.engine_info["objects_cpu_seconds"] > 0
+
+
+def test_a_worker_given_other_threads_per_task_still_compiles_kernels():
+    """A worker sets each task's threads (the last objects get more); numba rereads its thread
+    variables whenever it compiles and refuses a new count once its threads run, so the task's
+    threads must not reach them."""
+    code = (
+        "import os, numba, numpy as np\n"
+        "from partscale.batch._worker import _set_threads\n"
+        "@numba.njit(parallel=True)\n"
+        "def total(a):\n"
+        "    s = 0.0\n"
+        "    for i in numba.prange(len(a)):\n"
+        "        s += a[i]\n"
+        "    return s\n"
+        "total(np.ones(100))\n"
+        "for n in (1, 2, 1):\n"
+        "    _set_threads(n)\n"
+        "    fresh = numba.njit(lambda x: x + n)\n"
+        "    print(fresh(1), numba.get_num_threads(), os.cpu_count())\n"
+    )
+    env = _env(NUMBA_NUM_THREADS="2", NUMBA_THREADING_LAYER="workqueue")
+    proc = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["2", "1", "1", "3", "2", "2", "2", "1", "1"]
+
+
 def test_timeout_stops_a_slow_object(tmp_path):
     slow = data_path("khronos/SheenChair.glb")
     out = tmp_path / "out"

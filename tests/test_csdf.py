@@ -412,3 +412,99 @@ def test_save_deflates_only_what_shrinks(tmp_path, ball):
         first = p.read_bytes()
         assert save(c, p).read_bytes() == first
     assert save(noisy, tmp_path / "s.csdf.npz", compress=False).stat().st_size >= noisy.sdf.nbytes
+
+
+# -- the compact layout -----------------------------------------------------------------------
+
+
+@pytest.fixture
+def painted():
+    """A sphere 60 voxels across with a colour and a part per voxel that vary everywhere."""
+    c = shapes.sphere((0.0, 0.0, 0.0), 0.6, voxel_size=0.02)
+    rng = np.random.default_rng(1)
+    rgb = rng.integers(0, 256, c.rgb.shape, dtype=np.uint8)
+    parts = rng.integers(-1, 5, c.shape, dtype=np.int16)
+    return c.with_history({"op": "paint"}, rgb=rgb, parts=parts)
+
+
+def test_compact_file_is_exact_in_the_band_and_bounds_beyond_it(tmp_path, painted):
+    from partscale.csdf import FILE_BAND_VOXELS
+
+    c = painted
+    p = save(c, tmp_path / "c.csdf.npz", compact=True)
+    d = load(p)
+    h = c.voxel_size
+    band = np.abs(c.sdf) <= FILE_BAND_VOXELS * h
+    assert band.any() and (~band).any()
+    for name in ("sdf", "rgb", "parts"):  # every band voxel exactly as saved
+        a, b = getattr(c, name), getattr(d, name)
+        assert a.dtype == b.dtype and np.array_equal(a[band], b[band]), name
+    assert d.meta == c.meta and d.voxel_size == c.voxel_size
+    assert np.array_equal(d.origin, c.origin)
+    far = ~band
+    # beyond the band: the sign kept, a distance no larger than the saved one (and no larger
+    # than the analytic distance to the sphere), still beyond the band
+    assert np.array_equal(d.sdf[far] < 0, c.sdf[far] < 0)
+    assert (np.abs(d.sdf[far]) <= np.abs(c.sdf[far])).all()
+    centres = c.index_to_world(np.argwhere(far))
+    truth = np.abs(np.linalg.norm(centres, axis=1) - 0.6)
+    assert (np.abs(d.sdf[far]) <= truth + 1e-6).all()
+    assert (np.abs(d.sdf[far]) > FILE_BAND_VOXELS * h).all()
+    # at most one block's diagonal (4 voxels a side) below the saved distance
+    assert (np.abs(c.sdf[far]) - np.abs(d.sdf[far]) <= 4 * np.sqrt(3) * h + 1e-6).all()
+    # the band's colours and parts come back; beyond it a colour and part of the block
+    assert set(np.unique(d.parts[far])) <= set(np.unique(c.parts[far]))
+    # smaller than the whole file, and the same bytes each time
+    whole = save(c, tmp_path / "w.csdf.npz", compact=False)
+    assert p.stat().st_size < whole.stat().st_size
+    first = p.read_bytes()
+    assert save(c, p, compact=True).read_bytes() == first
+    assert save(d, tmp_path / "again.csdf.npz", compact=True).stat().st_size > 0
+
+
+def test_large_grids_are_written_compact_small_ones_whole(tmp_path, painted, monkeypatch):
+    import partscale.csdf as csdf_mod
+
+    small = save(painted, tmp_path / "small.csdf.npz")
+    with zipfile.ZipFile(small) as z:
+        assert "far.npy" not in z.namelist()
+    monkeypatch.setattr(csdf_mod, "COMPACT_VOXELS", painted.sdf.size - 1)
+    large = save(painted, tmp_path / "large.csdf.npz")
+    with zipfile.ZipFile(large) as z:
+        assert "far.npy" in z.namelist()
+        assert json.loads(str(np.load(z.open("meta.npy"))))["version"] == 2
+    assert np.array_equal(load(large).sdf < 0, painted.sdf < 0)
+
+
+def test_compact_file_with_inconsistent_arrays_is_refused(tmp_path, painted):
+    arrays = _arrays(save(painted, tmp_path / "c.csdf.npz", compact=True))
+    bad = tmp_path / "bad.csdf.npz"
+    np.savez(bad, **{**arrays, "sdf": arrays["sdf"][:-1]})
+    with pytest.raises(InputError, match=r"bad\.csdf\.npz: expected sdf of dtype float32 shape"):
+        load(bad)
+    np.savez(bad, **{**arrays, "far": arrays["far"][:, :-1]})
+    with pytest.raises(InputError, match=r"bad\.csdf\.npz: expected far of dtype float32"):
+        load(bad)
+    arrays.pop("far_rgb")
+    np.savez(bad, **arrays)
+    with pytest.raises(InputError, match=r"bad\.csdf\.npz: expected exactly the arrays .*far_rgb"):
+        load(bad)
+
+
+def test_deflated_members_are_plain_npy_any_zip_reader_opens(tmp_path):
+    """Members deflated in parallel pieces are one valid deflate stream each: zipfile's own
+    check passes, and every member reads back as what ``np.save`` writes."""
+    import io
+
+    c = shapes.sphere((0.0, 0.0, 0.0), 0.6, voxel_size=0.01)  # colours: 5.3 MB, 2 pieces
+    for compact in (False, True):
+        p = save(c, tmp_path / f"{compact}.csdf.npz", compact=compact)
+        with zipfile.ZipFile(p) as z:
+            assert z.testzip() is None
+            deflated = [i for i in z.infolist() if i.compress_type == zipfile.ZIP_DEFLATED]
+            assert deflated
+            for info in deflated:
+                a = np.load(z.open(info))
+                buf = io.BytesIO()
+                np.lib.format.write_array(buf, a, allow_pickle=False)
+                assert z.read(info) == buf.getvalue()

@@ -32,6 +32,13 @@ def thread_map(fn: Callable, items: Iterable) -> list:
     return list(_POOL.map(fn, items))
 
 
+def reset_pools() -> None:
+    """Forget the thread pool (in a forked process, where its threads do not exist, or after
+    ``os.cpu_count()`` changed); the next :func:`thread_map` makes a new one."""
+    global _POOL
+    _POOL = None
+
+
 class Workers:
     """What :func:`worker_pool` yields: ``map`` a batch, or ``submit`` items one at a time and
     take results with ``next_done`` as they finish.

@@ -53,7 +53,9 @@ class BatchResult:
     peak_memory : int
         The largest resident memory of one object's job, bytes.
     engine_info : dict
-        Figures the engine reports (Ray: the cluster's CPUs).
+        Figures the engine reports: the local engine its start-up, object phase and end
+        (``startup_seconds``, ``objects_seconds``, ``end_seconds``) and the objects' CPU
+        seconds (``objects_cpu_seconds``); Ray its start-up (``startup_seconds``).
 
     Examples
     --------
@@ -259,6 +261,17 @@ def run(
     outdir = Path(outdir)
     if outdir.exists() and not outdir.is_dir():
         raise InputError(f"{outdir}: expected an output folder, got a file")
+    n_workers = workers or cores
+    threads = max(1, cores // n_workers)
+    mem = parse_memory(memory)
+    if mem is None:
+        mem = available_memory() // n_workers
+    template = None
+    if engine == "local":
+        from .local import start_template
+
+        # it imports the pipeline while this process reads and hashes the inputs
+        template = start_template(threads, mem)
     batch_opts = {
         "res": res,
         "square": square or None,
@@ -273,13 +286,7 @@ def run(
     resolve_options(batch_opts, {}, where="batch")  # the batch's own options, checked once
     items = shard(discover(inputs, exclude=outdir), rank, world_size)
     specs = {it.name: resolve_options(batch_opts, it.options, where=f"{it.path}") for it in items}
-    mem = parse_memory(memory)  # every option checked before the output folder is made
     outdir.mkdir(parents=True, exist_ok=True)
-
-    n_workers = workers or cores
-    threads = max(1, cores // n_workers)
-    if mem is None:
-        mem = available_memory() // n_workers
 
     table = status_mod.StatusTable(outdir)
     result = BatchResult(outdir=outdir, status=table.path)
@@ -363,7 +370,7 @@ def run(
             if engine == "local":
                 from .local import run_local
 
-                run_local(
+                result.engine_info = run_local(
                     tasks,
                     workers=n_workers,
                     threads=threads,
@@ -372,6 +379,7 @@ def run(
                     log=outdir / LOG_NAME,
                     on_start=on_start,
                     on_finish=on_finish,
+                    template=template,
                 )
             else:
                 from .local import worker_env

@@ -288,18 +288,25 @@ def peak_memory() -> int:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
+def _cpu_seconds() -> float:
+    """CPU seconds of this process and its finished children (forked helpers)."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
 def execute(task: dict[str, Any]) -> dict[str, Any]:
     """Run one task (``path``, ``name``, ``spec``, ``outdir``); never raises.
 
-    Returns ``{"name", "ok", "outputs", "error", "seconds", "peak_memory"}``; ``error`` is one
-    line (an :class:`InputError`'s message, else the exception's type and message).
+    Returns ``{"name", "ok", "outputs", "error", "seconds", "cpu_seconds", "peak_memory"}``;
+    ``error`` is one line (an :class:`InputError`'s message, else the exception's type and
+    message); ``cpu_seconds`` counts this process and the helpers it forked.
     """
     # within the job, freed grids' pages serve the next grid (at 256³ an edit's output is
     # otherwise faulted in and zeroed anew); they are released when it ends (below), so the
     # next job's peak is its own
     reuse_freed_memory()
     _reset_peak()
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), _cpu_seconds()
     out: dict[str, Any] = {"name": task["name"], "ok": True, "outputs": [], "error": ""}
     try:
         out["outputs"] = run_job(task["path"], task["name"], task["spec"], task["outdir"])
@@ -312,6 +319,7 @@ def execute(task: dict[str, Any]) -> dict[str, Any]:
         at = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
         out.update(ok=False, error=f"{type(exc).__name__}: {one_line(exc)}{at}")
     out["seconds"] = time.perf_counter() - t0
+    out["cpu_seconds"] = _cpu_seconds() - cpu0
     out["peak_memory"] = peak_memory()
     release_freed_memory()
     return out

@@ -1,10 +1,21 @@
-"""The local engine: a pool of worker processes on this machine, watched by the batch.
+"""The local engine: worker processes on this machine, forked from one template, watched by the
+batch.
 
-Each worker is a fresh interpreter (:mod:`partscale.batch._worker`) started with numba, BLAS and
-OpenMP capped at its share of the cores, so ``N`` workers never run more threads than there are
-cores. The batch sends one task at a time to each idle worker and watches every busy one: a
-worker past ``timeout`` seconds or above ``memory`` bytes resident is killed, its object recorded
-failed with one line, and a new worker takes its place; so is one that dies on its own.
+One template process (:mod:`partscale.batch._worker`) imports the pipeline once, while the batch
+reads and hashes its inputs; workers fork from it in milliseconds. With more than two workers,
+the first forks at once, and while it starts on the largest object the template runs a tiny
+object through the batch's stages, so that the kernels are loaded (or compiled, once per
+machine) before the other workers fork from it: two loads instead of one per worker. The end of
+the batch tells each worker to stop; a worker exits at once, without tearing its interpreter
+down, so nothing waits one worker after another.
+
+The scheduler sends the largest objects first (voxels, then input bytes), one task at a time to
+each idle worker, with threads for that task from the cores not in use: every worker runs one
+thread while there are more objects than workers, the last objects get the cores their
+finished neighbours left (up to one thread per :data:`VOXELS_PER_THREAD` voxels). It watches every
+busy worker: a worker past ``timeout`` seconds or above ``memory`` bytes resident is killed, its
+object recorded failed with one line, and a new worker takes its place; so is one that dies on
+its own.
 """
 
 from __future__ import annotations
@@ -12,12 +23,16 @@ from __future__ import annotations
 import collections
 import contextlib
 import os
+import signal
 import subprocess
 import sys
+import tempfile
 import time
+import weakref
 from collections.abc import Callable, Sequence
 from multiprocessing import Pipe
 from multiprocessing import connection as mp_connection
+from multiprocessing.reduction import send_handle
 from pathlib import Path
 from typing import Any, cast
 
@@ -25,7 +40,14 @@ from .job import thread_env
 
 POLL_SECONDS = 0.1
 START_FAILURES = 3
-"""Workers that die before they are ready, in a row, before the batch gives up."""
+"""Templates that die before they are ready, in a row, before the batch gives up."""
+VOXELS_PER_THREAD = 1 << 21
+"""An object gets at most one thread per this many voxels of its grid (128³ voxels: one)."""
+WARM_RES = 24
+WARM_FROM = 3
+"""Workers from which the template loads the kernels once before forking all but the first:
+fewer load them each, side by side (the same wall time, and no warm-up object to run)."""
+"""Grid size of the tiny object the template runs to load the kernels."""
 
 Task = dict[str, Any]
 Result = dict[str, Any]
@@ -43,60 +65,157 @@ def resident_memory(pid: int) -> int:
     return 0
 
 
-class _Worker:
-    def __init__(self, env: dict[str, str], threads: int, log: Path):
+class _Template:
+    """The process the workers fork from (see :mod:`partscale.batch._worker`)."""
+
+    def __init__(self, env: dict[str, str]):
         here, there = Pipe()
         self.conn = here
-        with open(log, "ab") as fh:
-            self.proc = subprocess.Popen(
-                [
-                    sys.executable,
-                    "-m",
-                    "partscale.batch._worker",
-                    str(there.fileno()),
-                    str(threads),
-                    str(os.getpid()),
-                ],
-                env=env,
-                pass_fds=(there.fileno(),),
-                stdin=subprocess.DEVNULL,
-                stdout=fh,
-                stderr=fh,
-            )
+        # its output goes here until the batch's log is known (:meth:`attach_log`)
+        self.early = tempfile.TemporaryFile()
+        self.copied = 0
+        self.proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "partscale.batch._worker",
+                str(there.fileno()),
+                str(os.getpid()),
+            ],
+            env=env,
+            pass_fds=(there.fileno(),),
+            stdin=subprocess.DEVNULL,
+            stdout=self.early,
+            stderr=self.early,
+        )
         there.close()
-        self.ready = self.dead = False
-        self.task: Task | None = None
-        self.started = 0.0
-        self.peak = 0
+        self.warming = self.warm = False
+        self.log: Path | None = None
+        # dropped unused (the batch refused its inputs), it is stopped and its file closed
+        self._end = weakref.finalize(self, _end_template, self.proc, self.conn, self.early)
 
-    def send(self, task: Task) -> None:
-        self.task, self.started, self.peak = task, time.monotonic(), 0
-        self.conn.send(task)
-
-    def kill(self) -> None:
-        self.dead = True
+    def attach_log(self, log: Path) -> None:
+        """Send the template's output, and its workers', to ``log`` from now on."""
+        self.log = log
+        self._copy_early()
         with contextlib.suppress(OSError):
-            self.proc.kill()
-        self.proc.wait()
-        self.conn.close()
+            self.conn.send(("log", str(log)))
+
+    def _copy_early(self) -> None:
+        if self.log is None:
+            return
+        self.early.seek(self.copied)
+        text = self.early.read()
+        self.copied += len(text)
+        if text:
+            with open(self.log, "ab") as fh:
+                fh.write(text)
+
+    def wait_ready(self) -> bool:
+        """Wait for the template to have imported the pipeline; False if it died first."""
+        try:
+            return bool(self.conn.recv() == "ready")
+        except (EOFError, OSError):
+            self.proc.wait()
+            self._copy_early()  # what it said as it died
+            return False
+
+    def _reply(self) -> Any:
+        """The next reply, taking the warm-up's (which may come first) on the way."""
+        while True:
+            try:
+                reply = self.conn.recv()
+            except (EOFError, OSError):
+                raise RuntimeError(
+                    f"the batch's worker template died ({_died(_status(self.proc.wait()))})"
+                ) from None
+            if reply != "warm":
+                return reply
+            self.warming, self.warm = False, True
+
+    def poll_warm(self) -> None:
+        """Take the warm-up's reply, waiting on the pipe (nothing else comes unasked)."""
+        try:
+            self.conn.recv()
+        except (EOFError, OSError):
+            raise RuntimeError(
+                f"the batch's worker template died ({_died(_status(self.proc.wait()))})"
+            ) from None
+        self.warming, self.warm = False, True
+
+    def fork(self) -> tuple[int, mp_connection.Connection]:
+        """A new worker: its pid and our end of its pipe."""
+        here, there = Pipe()
+        self.conn.send(("fork", None))
+        send_handle(self.conn, there.fileno(), self.proc.pid)
+        there.close()
+        return int(self._reply()), here
+
+    def start_warm(self, task: Task) -> None:
+        self.conn.send(("warm", task))
+        self.warming = True
+
+    def reap(self, pid: int) -> int | None:
+        """The wait status of worker ``pid`` once it has ended."""
+        self.conn.send(("reap", pid))
+        return cast("int | None", self._reply())
 
     def stop(self) -> None:
+        """Stop it once its workers have been told to stop (it waits for them)."""
         with contextlib.suppress(OSError):
             self.conn.send(None)
         try:
-            self.proc.wait(timeout=5)
+            self.proc.wait(timeout=10)
         except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
+            pass
+        self._end()
+
+    def kill(self) -> None:
+        self._end()
+
+
+def _end_template(proc: subprocess.Popen, conn: mp_connection.Connection, early: Any) -> None:
+    with contextlib.suppress(OSError):
+        proc.kill()
+    proc.wait()
+    conn.close()
+    early.close()
+
+
+class _Worker:
+    def __init__(self, template: _Template):
+        self.pid, self.conn = template.fork()
+        self.dead = self.gone = False
+        self.task: Task | None = None
+        self.threads = 0
+        self.started = 0.0
+        self.peak = 0
+
+    def send(self, task: Task, threads: int) -> None:
+        self.task, self.threads, self.started, self.peak = task, threads, time.monotonic(), 0
+        self.conn.send({**task, "threads": threads})
+
+    def kill(self, template: _Template) -> int | None:
+        self.dead = True
+        with contextlib.suppress(OSError):
+            os.kill(self.pid, signal.SIGKILL)
         self.conn.close()
+        return template.reap(self.pid)
 
 
-def _died(proc: subprocess.Popen) -> str:
-    code = proc.poll()
-    if code is not None and code < 0:
-        how = f"killed by signal {-code}" + (" (out of memory?)" if -code == 9 else "")
+def _status(returncode: int | None) -> int | None:
+    """A wait status from a :class:`subprocess.Popen` return code (negative: a signal)."""
+    if returncode is None:
+        return None
+    return -returncode if returncode < 0 else returncode << 8
+
+
+def _died(status: int | None) -> str:
+    if status is not None and os.WIFSIGNALED(status):
+        sig = os.WTERMSIG(status)
+        how = f"killed by signal {sig}" + (" (out of memory?)" if sig == 9 else "")
     else:
-        how = f"exit code {code}"
+        how = f"exit code {os.WEXITSTATUS(status) if status is not None else 'unknown'}"
     return f"worker process died ({how})"
 
 
@@ -114,6 +233,77 @@ def worker_env(threads: int, memory: int | None) -> dict[str, str]:
     return env
 
 
+def _template_env(threads: int, memory: int | None) -> dict[str, str]:
+    env = worker_env(threads, memory)
+    # numba may use every core (each task sets its own count); its OpenMP and TBB layers do not
+    # survive a fork, its workqueue layer does
+    env["NUMBA_NUM_THREADS"] = str(os.cpu_count() or 1)
+    env["NUMBA_THREADING_LAYER"] = "workqueue"
+    return env
+
+
+def task_size(task: Task) -> tuple[int, int]:
+    """What orders the tasks, largest first: the grid's voxels, then the input's bytes."""
+    res = int(task["spec"].get("res", 128))
+    try:
+        size = Path(task["path"]).stat().st_size
+    except OSError:
+        size = 0
+    return res**3, size
+
+
+def _threads_for(task: Task, free: int, idle: int, pending: int, base: int) -> int:
+    """Threads for ``task``: the cores not in use shared by the tasks that can start now."""
+    share = free // max(1, min(idle, pending))
+    cap = max(1, task_size(task)[0] // VOXELS_PER_THREAD)
+    return max(1, base, min(share, cap))
+
+
+def _warm_task(task: Task) -> Task:
+    """``task``'s stages on the shipped table at :data:`WARM_RES` voxels (the template's warm-up)."""
+    from ..data import table
+
+    spec = {**task["spec"], "res": WARM_RES, "fit": None}
+    return {**task, "name": "warm", "path": str(table()), "spec": spec}
+
+
+def start_template(threads: int, memory: int | None) -> _Template:
+    """Start the process the workers fork from; it imports the pipeline while the batch reads
+    its inputs. Pass it to :func:`run_local` (dropped unused, it exits when its pipe closes).
+    """
+    return _Template(_template_env(threads, memory))
+
+
+def _ready_template(template: _Template | None, env: dict[str, str], log: Path) -> _Template:
+    """``template`` (or a new one) once it has imported the pipeline; a few tries."""
+    status: int | None = None
+    for _ in range(START_FAILURES):
+        template = template or _Template(env)
+        template.attach_log(log)
+        if template.wait_ready():
+            return template
+        status, template = _status(template.proc.returncode), None
+    raise RuntimeError(f"batch workers fail to start ({_died(status)}); see {log}")
+
+
+def _check(w: _Worker, timeout: float | None, memory: int | None, now: float) -> str | None:
+    """Why worker ``w`` must be stopped or is gone (None: it is fine)."""
+    if w.gone:
+        return "died"
+    if w.task is None:
+        return None
+    rss = resident_memory(w.pid)
+    w.peak = max(w.peak, rss)
+    if memory is not None and rss > memory:
+        return (
+            f"worker exceeded the memory limit of {memory / 2**20:.0f} MiB "
+            f"({rss / 2**20:.0f} MiB resident) and was stopped"
+        )
+    if timeout is not None and now - w.started > timeout:
+        return f"timed out after {timeout:g} s and was stopped"
+    return None
+
+
 def run_local(
     tasks: Sequence[Task],
     *,
@@ -124,93 +314,115 @@ def run_local(
     log: Path,
     on_start: Callable[[Task], None],
     on_finish: Callable[[Task, Result], None],
-) -> None:
+    template: _Template | None = None,
+) -> dict[str, float]:
     """Run ``tasks`` on ``workers`` processes; ``on_start``/``on_finish`` as each starts and ends.
 
     Every task gets exactly one ``on_finish`` unless the batch is interrupted
     (KeyboardInterrupt propagates after the workers are killed; the caller marks what was
     running). Raises RuntimeError when workers cannot start at all (see ``log``).
-    """
-    pending = collections.deque(tasks)
-    if not pending:
-        return
-    env = worker_env(threads, memory)
-    pool = [_Worker(env, threads, log) for _ in range(min(workers, len(pending)))]
-    start_failures = 0
+    ``template``: one :func:`start_template` started early (else one is started here).
 
-    def fail(w: _Worker, error: str) -> None:
-        task = w.task
-        assert task is not None  # called only for a worker running a task
-        result = {
-            "name": task["name"],
-            "ok": False,
-            "outputs": [],
-            "error": error,
-            "seconds": time.monotonic() - w.started,
-            "peak_memory": w.peak,
-        }
-        w.task = None
+    Returns
+    -------
+    dict
+        ``startup_seconds`` (until the first object starts), ``objects_seconds`` (first object
+        started to last finished), ``end_seconds`` (the rest: stopping the workers) and
+        ``objects_cpu_seconds`` (CPU time of the objects' jobs).
+    """
+    t0 = time.perf_counter()
+    pending = collections.deque(sorted(tasks, key=task_size, reverse=True))
+    if not pending:
+        if template is not None:
+            template.kill()
+        return {}
+    cores = os.cpu_count() or 1
+    n = min(workers, len(pending))
+    template = _ready_template(template, _template_env(threads, memory), log)
+    pool: list[_Worker] = []
+    first = last = cpu = 0.0
+
+    def finish(w: _Worker, result: Result) -> None:
+        nonlocal last, cpu
+        cpu += float(result.pop("cpu_seconds", 0.0))
+        task, w.task, w.threads = w.task, None, 0
+        assert task is not None  # a worker sends a result only for a task
+        result["peak_memory"] = max(result.get("peak_memory", 0), w.peak)
         on_finish(task, result)
+        last = time.perf_counter()
 
     try:
         while pending or any(w.task is not None for w in pool):
-            for w in pool:
-                if w.ready and not w.dead and w.task is None and pending:
-                    task = pending.popleft()
-                    on_start(task)
-                    w.send(task)
-            live = {w.conn: w for w in pool if not w.dead}
-            # wait() returns some of the objects it was given: our pipe ends
-            ready = cast(
-                list[mp_connection.Connection], mp_connection.wait(list(live), timeout=POLL_SECONDS)
-            )
-            for conn in ready:
-                w = live[conn]
-                try:
-                    msg = conn.recv()
-                except (EOFError, OSError):
-                    continue  # its death is handled below
-                if msg == "ready":
-                    w.ready, start_failures = True, 0
-                else:
-                    finished, w.task = w.task, None
-                    assert finished is not None  # a worker sends a result only for a task
-                    msg["peak_memory"] = max(msg.get("peak_memory", 0), w.peak)
-                    on_finish(finished, msg)
-            now = time.monotonic()
-            for i, w in enumerate(pool):
-                if w.dead:
+            # the first worker forks at once; beyond WARM_FROM, the others once the template
+            # has loaded the kernels (up to then they load them side by side, at no more cost)
+            pool = [w for w in pool if not w.dead]
+            room = n - len(pool) if template.warm or n < WARM_FROM else 1 - len(pool)
+            pool += [_Worker(template) for _ in range(min(room, len(pending)))]
+            if n >= WARM_FROM and not (template.warm or template.warming):
+                template.start_warm(_warm_task(pending[0]))
+            busy = sum(w.threads for w in pool)
+            idle = [w for w in pool if w.task is None]
+            for i, w in enumerate(idle):
+                if not pending:
+                    break
+                task = pending.popleft()
+                k = _threads_for(task, cores - busy, len(idle) - i, len(pending) + 1, threads)
+                first = first or time.perf_counter()
+                on_start(task)
+                w.send(task, k)
+                busy += k
+            conns: dict[Any, _Worker | None] = {w.conn: w for w in pool}
+            conns[template.conn] = None
+            for conn in mp_connection.wait(list(conns), timeout=POLL_SECONDS):
+                who = conns[conn]
+                if who is None:
+                    template.poll_warm()
                     continue
-                error = None
-                if w.proc.poll() is not None:
-                    error = _died(w.proc)
-                    if not w.ready:
-                        start_failures += 1
-                        if start_failures >= START_FAILURES:
-                            raise RuntimeError(
-                                f"batch workers fail to start ({_died(w.proc)}); see {log}"
-                            )
-                elif w.task is not None:
-                    rss = resident_memory(w.proc.pid)
-                    w.peak = max(w.peak, rss)
-                    if memory is not None and rss > memory:
-                        error = (
-                            f"worker exceeded the memory limit of {memory / 2**20:.0f} MiB "
-                            f"({rss / 2**20:.0f} MiB resident) and was stopped"
-                        )
-                    elif timeout is not None and now - w.started > timeout:
-                        error = f"timed out after {timeout:g} s and was stopped"
+                try:
+                    msg = cast(mp_connection.Connection, conn).recv()
+                except (EOFError, OSError):
+                    who.gone = True  # its death is handled below
+                    continue
+                if msg != "ready":
+                    finish(who, msg)
+            now = time.monotonic()
+            for w in pool:
+                error = _check(w, timeout, memory, now)
                 if error is None:
                     continue
-                w.kill()
+                status = w.kill(template)
                 if w.task is not None:
-                    fail(w, error)
-                if pending:
-                    pool[i] = _Worker(env, threads, log)
+                    error = _died(status) if error == "died" else error
+                    finish(w, _failed(w, error))
     except BaseException:
         for w in pool:
-            w.kill()
+            with contextlib.suppress(OSError):
+                os.kill(w.pid, signal.SIGKILL)
+        template.kill()
         raise
     for w in pool:
-        if not w.dead:
-            w.stop()
+        with contextlib.suppress(OSError):
+            w.conn.send(None)  # a worker exits at once, without tearing its interpreter down
+    template.stop()  # it waits for them all
+    for w in pool:
+        w.conn.close()
+    first = first or t0
+    last = max(last, first)
+    return {
+        "startup_seconds": first - t0,
+        "objects_seconds": last - first,
+        "end_seconds": time.perf_counter() - last,
+        "objects_cpu_seconds": cpu,
+    }
+
+
+def _failed(w: _Worker, error: str) -> Result:
+    assert w.task is not None
+    return {
+        "name": w.task["name"],
+        "ok": False,
+        "outputs": [],
+        "error": error,
+        "seconds": time.monotonic() - w.started,
+        "peak_memory": w.peak,
+    }

@@ -51,3 +51,26 @@ def test_a_workers_error_reaches_the_caller_and_the_workers_stop(chair, cores, m
     with pytest.raises(ValueError, match="expected a hull, got -3"):
         segment(chair, method="fast", cache=False)
     assert multiprocessing.active_children() == []
+
+
+def test_a_library_session_that_imports_then_segments_prints_no_numba_fork_note(tmp_path):
+    # import runs numba's parallel kernels on the thread pool, segment then forks its workers:
+    # numba's TBB layer, launched from a pool thread, printed "Attempted to fork from a
+    # non-main thread" for every worker
+    import subprocess
+    import sys
+
+    if (os.cpu_count() or 1) < 2:
+        pytest.skip("needs two cores: with one, neither the thread pool nor forks are used")
+    code = (
+        "from partscale import data, ingest\n"
+        "from partscale.segment import segment\n"
+        "c = segment(ingest.load(data.table(), res=48), cache=False)\n"
+        "print(c.n_parts)\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=600, cwd=tmp_path
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert int(proc.stdout.split()[-1]) >= 2
+    assert "fork" not in proc.stderr, proc.stderr[-2000:]

@@ -28,8 +28,29 @@ def thread_map(fn: Callable, items: Iterable) -> list:
     if len(items) < 2 or (os.cpu_count() or 1) < 2:
         return [fn(x) for x in items]
     if _POOL is None:
+        launch_numba_threads()
         _POOL = ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="partscale")
     return list(_POOL.map(fn, items))
+
+
+def launch_numba_threads() -> None:
+    """Start numba's parallel threads from the main thread, before the pool's threads run kernels.
+
+    numba's TBB layer remembers the thread that first launched it; launched from a pool thread,
+    every later fork (:func:`worker_pool`, from the main thread) prints "Numba: Attempted to fork
+    from a non-main thread, the TBB library may be in an invalid state in the child process" on
+    stderr, which a library user sees after ``load`` then ``segment``. Call it before handing
+    parallel kernels to any thread of one's own (:func:`thread_map` does).
+    """
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return
+    try:
+        from numba.np.ufunc.parallel import _launch_threads
+    except ImportError:  # numba's layout changed: only the note comes back
+        return
+    _launch_threads()
 
 
 def reset_pools() -> None:

@@ -43,6 +43,7 @@ import numpy as np
 
 from .._memory import check_memory
 from .._options import keyword_options
+from .._workers import launch_numba_threads
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError, shown
 from ..progress import ProgressCallback, resolve
@@ -495,6 +496,7 @@ def from_mesh(
     tris_b = np.ascontiguousarray(sub[boundary])
     # the boundary's band needs only the classes: its numba kernel (no GIL) runs on a thread
     # of its own while this one casts the thickness rays (serial, embree)
+    launch_numba_threads()  # from this thread, not the pool's (see the function)
     with ThreadPoolExecutor(1) as pool:
         band_b = pool.submit(_band, tris_b, origin, h, shape, BAND_VOXELS * h)
         # closed pieces thinner than the grid can hold (shelves, back panels) would vanish or

@@ -1,0 +1,215 @@
+"""Guards on every route: memory refused before the work, signals never swallowed, outputs
+staged and checked before they are renamed, batch output names unique and safe, the editor kept
+on loopback unless exposed, and a query with no answer not an error.
+
+Commands run in-process through :func:`partscale.cli.main` (a traceback shows up as an
+exception here), except where a signal or a memory cap needs a process of its own.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import partscale
+from partscale import shapes
+from partscale.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(capsys, monkeypatch, *args) -> tuple[int, list[str], str]:
+    """``partscale ARGS`` in-process: (exit code, non-empty stderr lines, stdout)."""
+    monkeypatch.setattr(sys, "argv", ["partscale", *map(str, args)])  # no pytest -v
+    capsys.readouterr()
+    try:
+        main([str(a) for a in args])
+        code = 0
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else 1
+    out = capsys.readouterr()
+    return code, [ln for ln in out.err.splitlines() if ln.strip()], out.out
+
+
+def assert_one_line(code: int, lines: list[str], *fragments: str) -> None:
+    assert code == 2, (code, lines)
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("partscale: error: ")
+    for f in fragments:
+        assert f.lower() in lines[0].lower(), (f, lines[0])
+
+
+def only(folder: Path, *names: str) -> None:
+    """Nothing but ``names`` in ``folder`` (no output, no hidden temporary)."""
+    assert sorted(p.name for p in folder.iterdir()) == sorted(names)
+
+
+def _env(**extra: str) -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
+    env.pop("PARTSCALE_MAX_MEMORY", None)
+    env.update(extra)
+    return env
+
+
+@pytest.fixture(scope="module")
+def long_file(tmp_path_factory) -> Path:
+    """A bar 30,000 voxels long and 11 across (a 4 MB file): its profile along x has 9e8 pairs."""
+    h = 0.01
+    bar = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, [((0, 0, 0), (299.9, 0.04, 0.04))]),
+        [(0, 0, 0), (300, 0.04, 0.04)],
+        voxel_size=h,
+    )
+    assert bar.shape[0] > 30000
+    return partscale.save(bar, tmp_path_factory.mktemp("long") / "long.csdf.npz")
+
+
+# -- 1: memory ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("suggest",),
+        ("suggest", "--axis", "x"),
+        ("fit", "--size", "400", "=", "=", "-o", "OUT.csdf.npz"),
+        (
+            "scale",
+            "-o",
+            "OUT.csdf.npz",
+            "--axis",
+            "x",
+            "--zone",
+            "10%",
+            "20%",
+            "--to",
+            "30%",
+            "--snap",
+        ),
+    ],
+    ids=["suggest", "suggest-x", "fit", "snap"],
+)
+def test_profile_of_a_long_object_is_refused_by_its_memory(
+    args, long_file, tmp_path, capsys, monkeypatch
+):
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(16 << 30))
+    args = tuple(str(tmp_path / a) if a.startswith("OUT") else a for a in args)
+    code, lines, _ = run(capsys, monkeypatch, args[0], long_file, *args[1:])
+    # 30007 layers: 9.0e8 pairs at 256 bytes each
+    assert_one_line(code, lines, "30007 layers", "would need", "GiB of memory")
+    need = float(re.search(r"need ([\d.]+) GiB", lines[0]).group(1))
+    assert need > 16
+    only(tmp_path)
+
+
+def test_profile_within_memory_still_works():
+    from partscale import zones
+
+    boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    bookcase = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02
+    )
+    assert any(c.kind == "tile" for c in zones.suggest(bookcase, "y"))
+
+
+def _start_capped(path: Path, cap: int) -> tuple[subprocess.Popen, str]:
+    """``partscale editor PATH`` in a process whose address space is capped at ``cap`` bytes."""
+    import resource
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "partscale", "editor", str(path), "--no-browser"],
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+        env=_env(),
+        preexec_fn=limit,
+    )
+    lines: list[str] = []
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        lines.append(line)
+        m = re.search(r"(http://\S+/)", line)
+        if m:
+            return proc, m.group(1)
+    proc.kill()
+    proc.wait()
+    raise AssertionError(f"no URL printed: {''.join(lines)}")
+
+
+def test_server_under_a_4_gib_cap_refuses_long_profiles_and_keeps_answering(long_file):
+    import httpx
+
+    proc, url = _start_capped(long_file, 4 << 30)
+    try:
+        for _ in range(100):
+            try:
+                assert httpx.get(url + "api/state", timeout=10).status_code == 200
+                break
+            except httpx.ConnectError:
+                time.sleep(0.1)
+        requests = [
+            ("get", "api/suggest?axis=x", None),
+            ("get", "api/suggest", None),
+            ("post", "api/fit", {"size": [400, "=", "="], "allow_deform": False}),
+        ]
+        for method, path, body in requests:
+            kw = {"json": body} if body is not None else {}
+            r = getattr(httpx, method)(url + path, timeout=300, **kw)
+            assert r.status_code == 413, (path, r.status_code, r.text)
+            message = r.json()["error"]
+            assert "\n" not in message and "would need" in message, message
+            # the server is still there, and answers
+            assert proc.poll() is None
+            assert httpx.get(url + "api/state", timeout=10).status_code == 200
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
+        proc.stderr.close()
+
+
+# -- 6: the editor stays on loopback unless exposed -----------------------------------------
+
+
+@pytest.mark.parametrize("host", ["", "0.0.0.0", "::", "192.0.2.1"])
+def test_editor_beyond_loopback_needs_expose(host, long_file, capsys, monkeypatch):
+    code, lines, _ = run(capsys, monkeypatch, "editor", long_file, "--no-browser", "--host", host)
+    assert_one_line(code, lines, "--host", "--expose", "view, edit and save")
+    assert repr(host) in lines[0]
+
+
+def test_expose_with_a_wildcard_serves_and_says_what_it_exposes(long_file):
+    import httpx
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "partscale", "editor", str(long_file), "--no-browser",
+         "--host", "", "--expose"],
+        stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, env=_env(),
+    )  # fmt: skip
+    try:
+        lines = [proc.stderr.readline() for _ in range(2)]
+        assert "every interface" in lines[0] and "warning" in lines[0], lines
+        url = re.search(r"(http://\S+/)", lines[1]).group(1)
+        for _ in range(100):
+            try:
+                assert httpx.get(url + "api/state", timeout=10).status_code == 200
+                break
+            except httpx.ConnectError:
+                time.sleep(0.1)
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
+        proc.stderr.close()

@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import partscale
@@ -213,3 +214,94 @@ def test_expose_with_a_wildcard_serves_and_says_what_it_exposes(long_file):
         proc.terminate()
         proc.wait(timeout=30)
         proc.stderr.close()
+
+
+@pytest.mark.parametrize(
+    "dest",
+    [("--copies", "1000000"), ("--to", "1e308", "--mode", "tile")],
+    ids=["copies", "tile-to-1e308"],
+)
+def test_mesh_route_copies_refused_by_their_memory(dest, tmp_path, capsys, monkeypatch):
+    from partscale import data
+
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(1 << 30))
+    out = tmp_path / "o.glb"
+    args = ("scale", data.table(), "-o", out, "--axis", "x", "--zone", "30%", "70%", *dest)
+    code, lines, _ = run(capsys, monkeypatch, *args)
+    assert_one_line(code, lines, "tile along x", "copies of", "would need", "memory")
+    only(tmp_path)
+
+
+def test_mesh_route_tile_within_memory_still_works(tmp_path, capsys, monkeypatch):
+    from partscale import data
+
+    out = tmp_path / "o.glb"
+    args = ("scale", data.table(), "-o", out, "--axis", "x", "--zone", "30%", "70%")
+    code, lines, _ = run(capsys, monkeypatch, *args, "--copies", "3")
+    assert code == 0, lines
+    only(tmp_path, "o.glb")
+
+
+def test_depth_frame_refused_by_its_size_before_decoding(tmp_path, capsys, monkeypatch):
+    from PIL import Image
+
+    Image.fromarray(np.full((1500, 2000), 10000, np.uint16)).save(tmp_path / "d.png")
+    (tmp_path / "k.json").write_text('{"fx": 500, "fy": 500, "cx": 1000, "cy": 750}')
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(100 << 20))  # 3e6 pixels need 183 MiB
+    out = tmp_path / "o.csdf.npz"
+    args = ("complete", "--depth", tmp_path / "d.png", "--intrinsics", tmp_path / "k.json")
+    code, lines, _ = run(capsys, monkeypatch, *args, "-o", out)
+    assert_one_line(code, lines, "2000x1500 depth image", "would need", "MiB of memory")
+    only(tmp_path, "d.png", "k.json")
+
+
+# -- 4: outputs checked before they are renamed ----------------------------------------------
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".obj", ".ply"])
+def test_mesh_route_never_writes_infinite_vertices(suffix, tmp_path, capsys, monkeypatch):
+    from partscale import data
+
+    out = tmp_path / f"o{suffix}"
+    args = ("scale", data.table(), "-o", out, "--axis", "x", "--zone", "30%", "70%")
+    code, lines, _ = run(capsys, monkeypatch, *args, "--to", "1e308")
+    assert_one_line(code, lines, "expected finite vertices", "nothing written")
+    only(tmp_path)
+
+
+def test_mesh_route_refuses_a_nan_node_matrix(tmp_path, capsys, monkeypatch):
+    import trimesh
+
+    from partscale import meshedit
+    from partscale.edit import Recipe
+
+    scene = trimesh.Scene()
+    matrix = np.eye(4)
+    matrix[0, 0] = np.nan
+    scene.add_geometry(trimesh.creation.box(), transform=matrix)
+    recipe = Recipe.parse({"edits": [{"axis": "y", "zone": ["40%", "60%"], "to": "120%"}]})
+    with pytest.raises(partscale.InputError, match="expected finite vertices"):
+        meshedit.save_scene(meshedit.apply_recipe_to_scene(scene, recipe)[0], tmp_path / "o.glb")
+    only(tmp_path)
+
+
+def test_complete_refuses_an_absurd_box(tmp_path, capsys, monkeypatch):
+    from PIL import Image
+
+    Image.fromarray(np.full((48, 64), 10000, np.uint16)).save(tmp_path / "d.png")
+    (tmp_path / "k.json").write_text('{"fx": 50, "fy": 50, "cx": 32, "cy": 24}')
+    out = tmp_path / "o.csdf.npz"
+    args = ("complete", "--depth", tmp_path / "d.png", "--intrinsics", tmp_path / "k.json")
+    code, lines, _ = run(capsys, monkeypatch, *args, "--box", "0,0,1e30,1e30", "-o", out)
+    assert_one_line(code, lines, "--box", "pixel coordinates")
+    only(tmp_path, "d.png", "k.json")
+
+
+def test_save_refuses_meta_its_own_reader_would_refuse(tmp_path):
+    box = shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.1)
+    odd = box.replace(meta={**box.meta, "box": [0, 0, 10**30, 10**30]})
+    with pytest.raises(partscale.InputError, match="read back"):
+        partscale.save(odd, tmp_path / "o.csdf.npz")
+    only(tmp_path)
+    partscale.save(box, tmp_path / "o.csdf.npz")
+    assert partscale.load(tmp_path / "o.csdf.npz").shape == box.shape

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 
 from .errors import MemoryLimitError
@@ -89,10 +90,10 @@ def check_memory(
 def check_bytes(need: float, *, what: str, params: tuple[str, ...] = ()) -> None:
     """Refuse a request of ``need`` bytes that would not fit; ``what`` starts the message."""
     have = available_memory()
-    if need > have:
+    if not need <= have:  # NaN and infinity too
+        amount = f"{format_bytes(need)} of" if math.isfinite(need) else "unbounded"
         raise MemoryLimitError(
-            f"{what} would need {format_bytes(need)} of memory, only {format_bytes(have)} is "
-            "available",
+            f"{what} would need {amount} memory, only {format_bytes(have)} is available",
             params=params,
         )
 

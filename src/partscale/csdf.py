@@ -606,7 +606,7 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
         "parts": csdf.parts,
         "origin": csdf.origin,
         "voxel_size": np.asarray(np.float64(csdf.voxel_size)),
-        "meta": np.array(dumps_json(csdf.meta)),
+        "meta": np.array(_readable_meta(csdf.meta, path)),
     }
     with atomic_path(path, suffix=".npz") as tmp, zipfile.ZipFile(tmp, "w") as zf:
         for name, a in arrays.items():
@@ -616,6 +616,18 @@ def save(csdf: CSDF, path: str | os.PathLike, *, compress: bool = True) -> Path:
             with zf.open(info, "w", force_zip64=True) as f:  # as savez: sizes unknown up front
                 np.lib.format.write_array(f, a, allow_pickle=False)
     return path
+
+
+def _readable_meta(meta: dict, path: Path) -> str:
+    """``meta`` as the JSON text :func:`load` will read back, checked by that reader before
+    anything is written (a number beyond its limits would give a file partscale refuses).
+    """
+    text = dumps_json(meta)
+    try:
+        parse_json(text, what="meta")
+    except InputError as exc:
+        raise InputError(f"{path}: expected meta partscale can read back, got {exc}") from None
+    return text
 
 
 def _deflates(a: np.ndarray) -> bool:

@@ -14,7 +14,7 @@ import numpy as np
 
 from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF, make
-from ..errors import InputError
+from ..errors import InputError, shown
 from ..progress import ProgressCallback, resolve
 from . import column as column_mod
 from . import fuse as fuse_mod
@@ -335,6 +335,32 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from)
 
 
+#: Largest pixel coordinate of a box (far beyond any sensor; int32 and strict JSON hold it)
+MAX_PIXEL = 1 << 24
+
+
+def _check_box(box) -> tuple[int, int, int, int]:
+    """``box`` as four whole pixel coordinates x0 < x1, y0 < y1, each within
+    :data:`MAX_PIXEL` of 0, else an :class:`InputError`."""
+    try:
+        vals = [float(b) for b in box]
+    except (TypeError, ValueError):
+        raise InputError(
+            f"box: expected four pixel coordinates x0 y0 x1 y1, got {shown(box)}"
+        ) from None
+    if len(vals) != 4 or not all(math.isfinite(v) and abs(v) <= MAX_PIXEL for v in vals):
+        raise InputError(
+            f"box: expected four pixel coordinates x0 y0 x1 y1 within +-{MAX_PIXEL}, got "
+            f"{shown(box)}"
+        )
+    x0, y0, x1, y1 = (int(v) for v in vals)
+    if x1 <= x0 or y1 <= y0:
+        raise InputError(
+            f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {[x0, y0, x1, y1]}"
+        )
+    return x0, y0, x1, y1
+
+
 @keyword_options
 def complete(
     frames: list[Frame],
@@ -380,9 +406,7 @@ def complete(
     if not frames:
         raise InputError(f"{source}: expected at least one view, got none")
     if box is not None:
-        box = tuple(int(b) for b in box)
-        if len(box) != 4 or box[2] <= box[0] or box[3] <= box[1]:
-            raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
+        box = _check_box(box)
     report(0.0, "reading the scan")
     ob = observe(frames, box=box, source=source)
     frames, Q, QC, U, found = ob.frames, ob.points, ob.colors, ob.U, ob.floor

@@ -305,3 +305,115 @@ def test_save_refuses_meta_its_own_reader_would_refuse(tmp_path):
     only(tmp_path)
     partscale.save(box, tmp_path / "o.csdf.npz")
     assert partscale.load(tmp_path / "o.csdf.npz").shape == box.shape
+
+
+# -- 2: signals are never swallowed; multi-file outputs are one set ------------------------
+
+# Run as its own process: trimesh's OBJ exporter is made to receive the signal while it encodes
+# the atlas material, inside its own ``except BaseException`` (where it swallowed it before).
+_SIGNAL_IN_TRIMESH = """
+import os, signal, sys, time
+import trimesh.visual.material as material
+real = material.SimpleMaterial.to_obj
+def to_obj(self, *a, **k):
+    os.kill(os.getpid(), signal.{sig})
+    time.sleep(30)  # the handler raises here, inside trimesh's try
+    return real(self, *a, **k)
+material.SimpleMaterial.to_obj = to_obj
+from partscale.cli import main
+sys.argv = ["partscale", *sys.argv[1:]]
+main()
+"""
+
+
+@pytest.fixture(scope="module")
+def ball_file(tmp_path_factory) -> Path:
+    c = shapes.grid(
+        lambda p: np.linalg.norm(p, axis=-1) - 0.3, ((-0.4,) * 3, (0.4,) * 3), voxel_size=0.04
+    )
+    return partscale.save(c, tmp_path_factory.mktemp("in") / "ball.csdf.npz")
+
+
+@pytest.mark.parametrize(("sig", "code"), [("SIGTERM", 143), ("SIGINT", 130)])
+def test_signal_during_an_atlased_obj_export_leaves_nothing(sig, code, ball_file, tmp_path):
+    out = tmp_path / "o.obj"
+    out.write_text("the previous export\n")
+    script = _SIGNAL_IN_TRIMESH.format(sig=sig)
+    args = ["export", str(ball_file), "--mesh", str(out), "--atlas", "512"]
+    proc = subprocess.run(
+        [sys.executable, "-c", script, *args], capture_output=True, text=True, env=_env(),
+        timeout=300,
+    )  # fmt: skip
+    assert proc.returncode == code, (proc.returncode, proc.stderr)
+    assert "Traceback" not in proc.stderr, proc.stderr
+    only(tmp_path, "o.obj")
+    assert out.read_text() == "the previous export\n"  # the destination untouched
+
+
+def _full_on_write(csdf, path):
+    """A 3D texture writer that meets a full disk half-way through its file."""
+    import errno
+
+    from partscale._files import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(b"half a texture")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def test_export_with_two_outputs_leaves_neither_when_the_second_fails(
+    ball_file, tmp_path, capsys, monkeypatch
+):
+    from partscale.export import write
+
+    monkeypatch.setitem(write.TEXTURE_WRITERS, ".raw", _full_on_write)
+    mesh, tex = tmp_path / "o.glb", tmp_path / "o.raw"
+    code, lines, _ = run(capsys, monkeypatch, "export", ball_file, "--mesh", mesh, "--texture", tex)
+    assert_one_line(code, lines, str(tex), "no space left")
+    only(tmp_path)
+    mesh.write_bytes(b"the previous mesh")  # a destination that existed keeps what it had
+    code, lines, _ = run(capsys, monkeypatch, "export", ball_file, "--mesh", mesh, "--texture", tex)
+    assert code == 2
+    only(tmp_path, "o.glb")
+    assert mesh.read_bytes() == b"the previous mesh"
+
+
+def test_a_failed_rename_in_a_set_puts_back_what_was_there(tmp_path, monkeypatch):
+    import errno
+
+    from partscale._files import atomic_path, staged_writes
+
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    a.write_text("old a")
+    real, calls = os.replace, []
+
+    def replace(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise OSError(errno.EIO, "Input/output error")
+        real(src, dst)
+
+    monkeypatch.setattr(os, "replace", replace)
+    with pytest.raises(partscale.InputError, match=r"b\.txt"), staged_writes():
+        for p in (a, b):
+            with atomic_path(p) as tmp:
+                tmp.write_text("new")
+    monkeypatch.setattr(os, "replace", real)
+    only(tmp_path, "a.txt")
+    assert a.read_text() == "old a"
+
+
+def test_a_noted_signal_stops_a_set_before_any_rename(tmp_path):
+    import signal as sig
+
+    from partscale import _interrupt
+    from partscale._files import atomic_path, staged_writes
+
+    try:
+        with pytest.raises(KeyboardInterrupt), staged_writes():
+            with atomic_path(tmp_path / "a.txt") as tmp:
+                tmp.write_text("a")
+            _interrupt.note(sig.SIGTERM)  # as a library that swallowed the exception
+    finally:
+        _interrupt.clear()
+    only(tmp_path)

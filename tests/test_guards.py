@@ -21,6 +21,7 @@ import pytest
 import partscale
 from partscale import shapes
 from partscale.cli import main
+from partscale.errors import PartscaleWarning
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -321,6 +322,7 @@ def to_obj(self, *a, **k):
     return real(self, *a, **k)
 material.SimpleMaterial.to_obj = to_obj
 from partscale.cli import main
+from partscale.errors import PartscaleWarning
 sys.argv = ["partscale", *sys.argv[1:]]
 main()
 """
@@ -417,3 +419,94 @@ def test_a_noted_signal_stops_a_set_before_any_rename(tmp_path):
     finally:
         _interrupt.clear()
     only(tmp_path)
+
+
+# -- 3: batch output names unique and safe --------------------------------------------------
+
+
+def _copies(root: Path, *rels: str) -> None:
+    import shutil
+
+    from partscale import data
+
+    for rel in rels:
+        p = root / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(data.table(), p)
+
+
+def test_batch_names_collide_nowhere_and_the_batch_keeps_every_object(tmp_path):
+    import warnings
+
+    from partscale import batch
+
+    _copies(tmp_path / "in", "a/x.glb", "b/x.glb", "a__x.glb")
+    with warnings.catch_warnings(record=True) as notes:
+        warnings.simplefilter("always")
+        items = batch.discover([tmp_path / "in"])
+    names = {it.path.relative_to(tmp_path / "in").as_posix(): it.name for it in items}
+    assert names == {"a/x.glb": "a__x", "a__x.glb": "a__x~2", "b/x.glb": "b__x"}
+    said = [str(n.message) for n in notes]
+    assert len(said) == 1 and "a__x.glb" in said[0] and "'a__x~2'" in said[0], said
+    with pytest.warns(PartscaleWarning, match="a__x~2"):
+        result = batch.run([tmp_path / "in"], tmp_path / "out", res=16, workers=1)
+    assert sorted(result.done) == ["a__x", "a__x~2", "b__x"]
+    assert sorted(batch.read_status(tmp_path / "out" / "status.csv")) == sorted(result.done)
+
+
+def test_batch_names_differing_only_in_case_are_told_apart(tmp_path):
+    from partscale.batch.inputs import unique_names
+
+    with pytest.warns(PartscaleWarning, match="Chair~2"):
+        got = unique_names([("b/Chair.glb", "Chair", False), ("a/chair.glb", "chair", False)])
+    assert got == ["Chair~2", "chair"]
+    # a manifest's name keeps it; an input that wanted it moves aside, past the taken ~2
+    with pytest.warns(PartscaleWarning):
+        got = unique_names([("a/x.glb", "x", False), ("m.csv", "x~2", True), ("z", "x", True)])
+    assert got == ["x~3", "x~2", "x"]
+
+
+@pytest.mark.parametrize(
+    ("stem", "want"),
+    [
+        ("status.csv", "status.csv_"),
+        ("workers.log", "workers.log_"),
+        (".status.lock", "_status.lock"),
+        ("STATUS.CSV", "STATUS.CSV_"),
+        ("a\x00b", "a_b"),
+        ("..", "__."),
+    ],
+)
+def test_reserved_and_unsafe_names_are_renamed_with_a_note(stem, want):
+    from partscale.batch.inputs import Input, assign_names
+
+    item = Input(Path(f"/in/{stem}.glb"), (Path(f"/in/{stem}.glb"),))
+    with pytest.warns(PartscaleWarning, match="output folder named"):
+        (named,) = assign_names([item])
+    assert named.name == want
+
+
+def test_batch_of_reserved_names_writes_beside_its_own_files(tmp_path):
+    import warnings
+
+    from partscale import batch
+
+    _copies(tmp_path / "in", "status.csv.glb", "workers.log.glb", "x/.status.lock.glb")
+    # a hidden file is no input of a folder search: named on its own, as a file
+    sources = [tmp_path / "in", tmp_path / "in" / "x" / ".status.lock.glb"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = batch.run(sources, tmp_path / "out", res=16, workers=1)
+    assert sorted(result.done) == ["_status.lock", "status.csv_", "workers.log_"]
+    out = tmp_path / "out"
+    assert (out / "status.csv").is_file() and (out / "status.csv_").is_dir()
+    assert sorted(batch.read_status(out / "status.csv")) == sorted(result.done)
+
+
+def test_a_manifest_name_that_is_no_safe_folder_is_refused(tmp_path):
+    from partscale.batch.inputs import Input, assign_names
+
+    for bad in ("status.csv", "a\x00b", ".hidden"):
+        item = Input(Path("/in/x.glb"), (Path("/in/x.glb"),), name=bad)
+        with pytest.raises(partscale.InputError, match="expected a folder name"):
+            assign_names([item])

@@ -20,7 +20,6 @@ from .inputs import discover, shard
 from .job import options_hash, resolve_options
 
 ENGINES = ("local", "ray")
-LOG_NAME = "workers.log"
 
 
 @dataclass
@@ -362,7 +361,7 @@ def run(
                     threads=threads,
                     timeout=timeout,
                     memory=mem,
-                    log=outdir / LOG_NAME,
+                    log=outdir / status_mod.LOG_NAME,
                     on_start=on_start,
                     on_finish=on_finish,
                 )

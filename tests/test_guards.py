@@ -510,3 +510,25 @@ def test_a_manifest_name_that_is_no_safe_folder_is_refused(tmp_path):
         item = Input(Path("/in/x.glb"), (Path("/in/x.glb"),), name=bad)
         with pytest.raises(partscale.InputError, match="expected a folder name"):
             assign_names([item])
+
+
+# -- 7: a query with no answer is not an error -----------------------------------------------
+
+
+def _cone(p: np.ndarray) -> np.ndarray:
+    """A cone along y, apex up: its cross-section changes at every layer."""
+    r, y = np.linalg.norm(p[..., [0, 2]], axis=-1), p[..., 1]
+    return np.maximum.reduce([(r - 0.35 * (0.3 - y) / 0.6) * 0.86, -y - 0.3, y - 0.3])
+
+
+def test_suggest_that_finds_nothing_says_so_and_exits_0(tmp_path, capsys, monkeypatch):
+    import json
+
+    cone = shapes.grid(_cone, ((-0.4,) * 3, (0.4,) * 3), voxel_size=0.02)
+    path = partscale.save(cone, tmp_path / "cone.csdf.npz")
+    code, lines, out = run(capsys, monkeypatch, "suggest", path, "--axis", "y")
+    assert code == 0 and not any("error" in ln for ln in lines), (code, lines)
+    assert "y: no candidate" in out
+    code, lines, out = run(capsys, monkeypatch, "suggest", path, "--axis", "y", "--json")
+    assert code == 0, lines
+    assert json.loads(out)["candidates"] == []

@@ -307,8 +307,10 @@ def _commit(pending: list[tuple[Path, Path]]) -> None:
         raise
     held = _hold_signals()
     done: list[tuple[Path, Path | None]] = []
+    failed = pending[0][1] if pending else Path()
     try:
         for tmp, path in pending:
+            failed = path
             backup = _link_aside(path) if len(pending) > 1 else None
             try:
                 os.replace(tmp, path)
@@ -327,7 +329,6 @@ def _commit(pending: list[tuple[Path, Path]]) -> None:
                 else:
                     path.unlink()
         if isinstance(exc, OSError):
-            failed = next((p for t, p in pending if not p.exists() or t.exists()), pending[0][1])
             raise _unwritable(failed, exc) from None
         raise
     finally:

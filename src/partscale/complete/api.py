@@ -341,7 +341,8 @@ MAX_PIXEL = 1 << 24
 
 def _check_box(box) -> tuple[int, int, int, int]:
     """``box`` as four whole pixel coordinates x0 < x1, y0 < y1, each within
-    :data:`MAX_PIXEL` of 0, else an :class:`InputError`."""
+    :data:`MAX_PIXEL` of 0, else an :class:`InputError`.
+    """
     try:
         vals = [float(b) for b in box]
     except (TypeError, ValueError):

@@ -160,7 +160,8 @@ def read_intrinsics(path: str | os.PathLike) -> np.ndarray:
 
 def _read_image(path: Path, what: str) -> np.ndarray:
     """The pixels of an image file, refused by its size (from its header) before decoding
-    where :data:`PIXEL_BYTES` per pixel would not fit in memory."""
+    where :data:`PIXEL_BYTES` per pixel would not fit in memory.
+    """
     from PIL import Image
 
     from .._memory import check_bytes

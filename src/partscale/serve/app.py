@@ -264,7 +264,8 @@ async def _http_error(request: Request, exc: _HTTPError) -> Response:
 async def _run(what: str, fn: Callable[..., T], *args: Any) -> T:
     """``fn(*args)`` in the thread pool: an InputError is the request's fault (400), one the
     memory guard refused or that ran out of memory is too large (413, and the server goes on);
-    anything else is a bug in partscale (500, traceback kept on the server's stderr)."""
+    anything else is a bug in partscale (500, traceback kept on the server's stderr).
+    """
     try:
         return await run_in_threadpool(fn, *args)
     except MemoryLimitError as exc:

@@ -132,6 +132,7 @@ def _terminate_cleanly() -> Iterator[dict]:
     finally:
         signal.signal(signal.SIGTERM, previous)
         signal.signal(signal.SIGINT, previous_int)
+        _interrupt.clear()  # the command has ended: its signals are not the caller's
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:

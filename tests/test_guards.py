@@ -532,3 +532,14 @@ def test_suggest_that_finds_nothing_says_so_and_exits_0(tmp_path, capsys, monkey
     code, lines, out = run(capsys, monkeypatch, "suggest", path, "--axis", "y", "--json")
     assert code == 0, lines
     assert json.loads(out)["candidates"] == []
+
+
+def test_available_memory_heeds_an_address_space_cap():
+    code = (
+        "import resource; cap = 3 << 30; resource.setrlimit(resource.RLIMIT_AS, (cap, cap)); "
+        "from partscale._memory import available_memory; print(available_memory(), cap)"
+    )
+    env = _env()
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    have, cap = map(int, proc.stdout.split())
+    assert 0 < have < cap, proc.stderr

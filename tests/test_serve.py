@@ -791,7 +791,7 @@ def test_edit_command_serves_on_loopback_and_warns_otherwise(box_file):
         assert r.status_code == 200 and r.json()["name"] == "box.csdf.npz"
     finally:
         _stop(proc)
-    proc, url, lines = _start([str(box_file), "--host", "0.0.0.0"])
+    proc, url, lines = _start([str(box_file), "--host", "0.0.0.0", "--expose"])
     try:
         warn = [ln for ln in lines if "warning" in ln]
         assert len(warn) == 1 and "not loopback" in warn[0] and "any web page" in warn[0], lines

@@ -796,7 +796,6 @@ def test_cli_fit_writes_the_recipe(cli, shelf_file, tmp_path):
 @pytest.mark.parametrize(
     ("args", "fragments"),
     [
-        (["suggest", "{ball}", "--axis", "x"], ["--axis x", "none"]),
         (["fit", "{shelf}", "-o", "{out}", "--size", "0", "=", "="], ["size x", "positive"]),
         (["fit", "{shelf}", "-o", "{out}", "--size", "-2m", "=", "="], ["size x", "positive"]),
         (["fit", "{shelf}", "-o", "{out}", "--size", "3ft", "=", "="], ["unit"]),

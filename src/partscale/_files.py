@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import errno
 import json
 import math
 import os
 import re
+import signal
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from ._interrupt import raise_if_interrupted
 from .errors import InputError, one_line, shown
 
 JSON_MAX_BYTES = 64 << 20
@@ -240,11 +243,130 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise
+    stage = _STAGE.get()
+    if stage is not None:  # renamed with the rest of the set, by staged_writes
+        stage.append((tmp_path, path))
+    else:
+        _commit([(tmp_path, path)])
+
+
+_STAGE: contextvars.ContextVar[list[tuple[Path, Path]] | None] = contextvars.ContextVar(
+    "partscale_staged_writes", default=None
+)
+
+
+@contextlib.contextmanager
+def staged_writes() -> Iterator[None]:
+    """Make every :func:`atomic_path` inside the block one set: all renamed at its end, or none.
+
+    Each file is written to its temporary as usual, but renamed into place only when the whole
+    block succeeds (an OBJ with its MTL and texture, an export's mesh and its 3D textures). On
+    any exception, a signal (even one a library swallowed: :mod:`partscale._interrupt`) or a
+    rename that fails, every temporary is removed and every destination keeps what it had.
+    Nested blocks join the outermost.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from partscale._files import atomic_path, staged_writes
+    >>> with staged_writes():
+    ...     with atomic_path("a.txt") as tmp:
+    ...         _ = tmp.write_text("a")
+    ...     Path("a.txt").exists()  # not yet: renamed with the rest of the set
+    False
+    >>> Path("a.txt").read_text()
+    'a'
+    """
+    if _STAGE.get() is not None:
+        yield
+        return
+    pending: list[tuple[Path, Path]] = []
+    token = _STAGE.set(pending)
     try:
-        os.replace(tmp_path, path)
-    except OSError as exc:
-        tmp_path.unlink(missing_ok=True)
-        raise _unwritable(path, exc) from None
+        yield
+    except BaseException:
+        _STAGE.reset(token)
+        for tmp, _ in pending:
+            tmp.unlink(missing_ok=True)
+        raise
+    _STAGE.reset(token)
+    _commit(pending)
+
+
+def _commit(pending: list[tuple[Path, Path]]) -> None:
+    """Rename each ``(temporary, destination)`` into place, all or none.
+
+    Nothing is renamed once a signal was noted. Signals are held off while the renames run (a
+    few system calls), so they end the command after the set is complete, never half-way.
+    Where a rename fails, those already done are undone: a destination that existed is put back
+    from a hard link taken before (where the file system has them), a new one is removed.
+    """
+    try:
+        raise_if_interrupted()
+    except BaseException:
+        for tmp, _ in pending:
+            tmp.unlink(missing_ok=True)
+        raise
+    held = _hold_signals()
+    done: list[tuple[Path, Path | None]] = []
+    failed = pending[0][1] if pending else Path()
+    try:
+        for tmp, path in pending:
+            failed = path
+            backup = _link_aside(path) if len(pending) > 1 else None
+            try:
+                os.replace(tmp, path)
+            except BaseException:
+                if backup is not None:
+                    backup.unlink(missing_ok=True)
+                raise
+            done.append((path, backup))
+    except BaseException as exc:
+        for tmp, _ in pending:
+            tmp.unlink(missing_ok=True)
+        for path, backup in reversed(done):
+            with contextlib.suppress(OSError):
+                if backup is not None:
+                    os.replace(backup, path)
+                else:
+                    path.unlink()
+        if isinstance(exc, OSError):
+            raise _unwritable(failed, exc) from None
+        raise
+    finally:
+        _release_signals(held)
+    for _, backup in done:
+        if backup is not None:
+            backup.unlink(missing_ok=True)
+
+
+def _link_aside(path: Path) -> Path | None:
+    """A hard link to the existing ``path`` under a temporary name beside it, or None (no file
+    there, or a file system without hard links)."""
+    if not path.is_file():
+        return None
+    backup = path.with_name(f"{_temp_prefix(path)}{os.getpid()}.{os.urandom(4).hex()}.tmp.bak")
+    try:
+        os.link(path, backup)
+    except OSError:
+        return None
+    return backup
+
+
+_HELD = (signal.SIGINT, signal.SIGTERM)
+
+
+def _hold_signals() -> set | None:
+    """Block SIGINT and SIGTERM in this thread (they wait); returns the mask to restore."""
+    try:
+        return signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    except (AttributeError, OSError, ValueError):  # no pthread_sigmask (Windows)
+        return None
+
+
+def _release_signals(previous: set | None) -> None:
+    if previous is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _unwritable(path: Path, exc: OSError) -> InputError:

@@ -2,24 +2,50 @@
 
 from __future__ import annotations
 
+import math
 import os
 
 from .errors import MemoryLimitError
 
 
 def available_memory() -> int:
-    """Bytes this process may use: ``PARTSCALE_MAX_MEMORY`` if set, else MemAvailable."""
+    """Bytes this process may use: ``PARTSCALE_MAX_MEMORY`` if set, else MemAvailable, less
+    where the process's address space is capped (``ulimit -v``, ``RLIMIT_AS``): the cap less
+    what the process has mapped already.
+    """
     env = os.environ.get("PARTSCALE_MAX_MEMORY")
     if env:
         return int(float(env))
+    have = _proc_field("/proc/meminfo", "MemAvailable:")
+    have = 8 << 30 if have is None else have
+    room = _address_space_room()
+    return have if room is None else max(0, min(have, room))
+
+
+def _proc_field(path: str, key: str) -> int | None:
+    """A ``kB`` field of a /proc file in bytes (None where there is no /proc)."""
     try:
-        with open("/proc/meminfo") as f:
+        with open(path) as f:
             for line in f:
-                if line.startswith("MemAvailable:"):
+                if line.startswith(key):
                     return int(line.split()[1]) * 1024
-    except OSError:
+    except (OSError, ValueError, IndexError):
         pass
-    return 8 << 30
+    return None
+
+
+def _address_space_room() -> int | None:
+    """Bytes left under the address-space cap (RLIMIT_AS), or None where there is none."""
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, OSError, ValueError):
+        return None
+    if soft == resource.RLIM_INFINITY or soft < 0:
+        return None
+    mapped = _proc_field("/proc/self/status", "VmSize:")
+    return soft - (mapped or 0)
 
 
 def format_bytes(n: float) -> str:
@@ -64,10 +90,10 @@ def check_memory(
 def check_bytes(need: float, *, what: str, params: tuple[str, ...] = ()) -> None:
     """Refuse a request of ``need`` bytes that would not fit; ``what`` starts the message."""
     have = available_memory()
-    if need > have:
+    if not need <= have:  # NaN and infinity too
+        amount = f"{format_bytes(need)} of" if math.isfinite(need) else "unbounded"
         raise MemoryLimitError(
-            f"{what} would need {format_bytes(need)} of memory, only {format_bytes(have)} is "
-            "available",
+            f"{what} would need {amount} memory, only {format_bytes(have)} is available",
             params=params,
         )
 

@@ -644,7 +644,7 @@ def save(
     arrays |= {
         "origin": csdf.origin,
         "voxel_size": np.asarray(np.float64(csdf.voxel_size)),
-        "meta": np.array(dumps_json(meta)),
+        "meta": np.array(_readable_meta(meta, path)),
     }
     with (
         atomic_path(path, suffix=".npz") as tmp,
@@ -707,6 +707,18 @@ def _write_deflated(f: Any, a: np.ndarray, level: int) -> None:
     f._compressor = _Deflated(_deflate(chunks, level))
     for c in chunks:
         f.write(c)
+
+
+def _readable_meta(meta: dict, path: Path) -> str:
+    """``meta`` as the JSON text :func:`load` will read back, checked by that reader before
+    anything is written (a number beyond its limits would give a file partscale refuses).
+    """
+    text = dumps_json(meta)
+    try:
+        parse_json(text, what="meta")
+    except InputError as exc:
+        raise InputError(f"{path}: expected meta partscale can read back, got {exc}") from None
+    return text
 
 
 def _deflates(a: np.ndarray) -> bool:

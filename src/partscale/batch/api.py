@@ -25,7 +25,6 @@ MAX_TIMEOUT = 1e7
 """Most seconds one object may be given (about 115 days)."""
 MAX_MEMORY = 1 << 50
 """Largest memory size a worker may be given (1024 TiB): beyond any machine."""
-LOG_NAME = "workers.log"
 
 
 @dataclass
@@ -376,7 +375,7 @@ def run(
                     threads=threads,
                     timeout=timeout,
                     memory=mem,
-                    log=outdir / LOG_NAME,
+                    log=outdir / status_mod.LOG_NAME,
                     on_start=on_start,
                     on_finish=on_finish,
                     template=template,

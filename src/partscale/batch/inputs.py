@@ -23,6 +23,7 @@ from .. import _schema
 from .._files import parse_json
 from ..csdf import SUFFIX as CSDF_SUFFIX
 from ..errors import InputError, shown
+from .status import LOCK_NAME, LOG_NAME, STATUS_NAME
 
 INPUT_SUFFIXES = (".glb", ".gltf", ".obj", ".ply", ".npy", ".npz", ".h5", ".hdf5")
 """Suffixes a folder is searched for (lower case); ``.csdf.npz`` files are read as CSDFs."""
@@ -391,19 +392,75 @@ def _renamed(rows: list[tuple[int, dict]], path: Path) -> list[tuple[int, dict]]
 
 
 def assign_names(items: Iterable[Input]) -> list[Input]:
-    """Give every input a unique output name, the same whatever order they were found in.
+    """Give every input a unique, safe output name, the same whatever order they were found in.
 
     A manifest's ``name`` wins; otherwise the file name without its extension. Where several
     inputs would share a name, each gets the shortest tail of its folder path that tells them
     apart, joined with ``__`` (``kenney/chair.glb`` and ``sweethome3d/chair.obj`` become
     ``kenney__chair`` and ``sweethome3d__chair``). Two manifest names that clash are an error.
+    Every name is then made safe (:func:`safe_name`) and unique (:func:`unique_names`), each
+    change said in a note.
+
+    Parameters
+    ----------
+    items : iterable of Input
+        The inputs (their ``name``: a manifest's, or empty).
+
+    Returns
+    -------
+    list of Input
+        The same inputs in the same order, each with its output folder name.
+
+    Raises
+    ------
+    partscale.errors.InputError
+        For two equal manifest names, or a manifest name that is no safe folder name.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from partscale.batch.inputs import Input, assign_names
+    >>> found = [Input(Path(p), (Path(p),)) for p in ("/in/a/x.glb", "/in/b/x.glb", "/in/a__x.glb")]
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as notes:
+    ...     warnings.simplefilter("always")
+    ...     named = assign_names(found)
+    >>> [it.name for it in named]
+    ['a__x', 'b__x', 'a__x~2']
+    >>> print(notes[0].message)
+    /in/a__x.glb: output folder 'a__x' is /in/a/x.glb's already; this one writes to 'a__x~2'
     """
     items = list(items)
-    wanted = [it.name or _stem(it.path) for it in items]
     explicit = [it.name for it in items if it.name]
     dup = sorted({n for n in explicit if explicit.count(n) > 1})
     if dup:
         raise InputError(f"batch: expected unique manifest names, got {dup[0]!r} more than once")
+    for it in items:
+        if it.name and safe_name(it.name)[1] is not None:
+            raise InputError(
+                f"{it.path}: expected a folder name for 'name', got {shown(it.name)} "
+                f"({safe_name(it.name)[1]})"
+            )
+    wanted = [it.name or _stem(it.path) for it in items]
+    names = _told_apart(items, wanted, explicit)
+    for i, it in enumerate(items):
+        if not it.name:
+            names[i], why = safe_name(names[i])
+            if why is not None:
+                _note(f"{it.path}: output folder named {names[i]!r} ({why})")
+    names = unique_names(
+        [(str(it.path), n, bool(it.name)) for it, n in zip(items, names, strict=True)]
+    )
+    return [
+        Input(path=it.path, files=it.files, name=n, options=it.options)
+        for it, n in zip(items, names, strict=True)
+    ]
+
+
+def _told_apart(items: list[Input], wanted: list[str], explicit: list[str]) -> list[str]:
+    """``wanted`` with the inputs that share one told apart by their folders' tails, then by
+    their suffixes (same folder and stem).
+    """
     names = list(wanted)
     groups: dict[str, list[int]] = {}
     for i, (it, n) in enumerate(zip(items, wanted, strict=True)):
@@ -419,16 +476,132 @@ def assign_names(items: Iterable[Input]) -> list[Input]:
             while d < len(p) and any(o[-d:] == p[-d:] for o in others):
                 d += 1
             names[i] = "__".join([*p[-d:], n])
-    counts = Counter(names)
-    if len(counts) != len(names):  # same folder and stem, different suffixes
-        names = [
-            f"{n}.{it.path.suffix.lstrip('.').lower()}" if counts[n] > 1 else n
-            for n, it in zip(names, items, strict=True)
-        ]
+    # same folder and stem, different suffixes (other clashes: unique_names)
+    same: Counter = Counter(
+        (n, it.path.parent, _stem(it.path)) for n, it in zip(names, items, strict=True)
+    )
     return [
-        Input(path=it.path, files=it.files, name=n, options=it.options)
-        for it, n in zip(items, names, strict=True)
+        f"{n}.{it.path.suffix.lstrip('.').lower()}"
+        if same[n, it.path.parent, _stem(it.path)] > 1
+        else n
+        for n, it in zip(names, items, strict=True)
     ]
+
+
+RESERVED_NAMES = (STATUS_NAME, LOCK_NAME, LOG_NAME)
+"""Names in OUTDIR that are the batch's own files, never an object's folder."""
+#: Longest output name, in UTF-8 bytes (file systems allow 255; room for ``~N`` and temporaries)
+MAX_NAME_BYTES = 200
+_UNSAFE_CHARS = re.compile(r"[\x00-\x1f\x7f/\\]")
+
+
+def safe_name(name: str) -> tuple[str, str | None]:
+    r"""``name`` made a safe output folder name, and why it changed (None where it did not).
+
+    Safe: no NUL, control character, ``/`` or ``\`` (each becomes ``_``); not hidden (a
+    leading ``.`` becomes ``_``), not empty, ``.`` or ``..``; not one of the batch's own files
+    (:data:`RESERVED_NAMES`, in any case: ``_`` is appended); at most :data:`MAX_NAME_BYTES`
+    bytes of UTF-8 (cut, with a hash of the whole name appended).
+
+    Parameters
+    ----------
+    name : str
+        The wanted name.
+
+    Returns
+    -------
+    str
+        The safe name.
+    str or None
+        What was changed, for a note (None: nothing).
+
+    Examples
+    --------
+    >>> from partscale.batch.inputs import safe_name
+    >>> safe_name("chair")
+    ('chair', None)
+    >>> safe_name("status.csv")
+    ('status.csv_', "'status.csv' is the batch's own file")
+    >>> safe_name("a\x00b")[0]
+    'a_b'
+    """
+    why = []
+    new = _UNSAFE_CHARS.sub("_", name)
+    if new != name:
+        why.append("NUL, control characters and slashes replaced")
+    if new.startswith("."):
+        new = "_" + new[1:]
+        why.append("a hidden name made visible")
+    if not new.strip("._ "):
+        new = f"_{new}" if new else "_"
+        why.append("an empty name")
+    if new.casefold() in {r.casefold() for r in RESERVED_NAMES}:
+        why.append(f"{new!r} is the batch's own file")
+        new += "_"
+    raw = new.encode("utf-8")
+    if len(raw) > MAX_NAME_BYTES:
+        digest = hashlib.sha256(raw).hexdigest()[:8]
+        new = raw[: MAX_NAME_BYTES - 9].decode("utf-8", "ignore") + "-" + digest
+        why.append(f"cut to {MAX_NAME_BYTES} bytes")
+    return new, ("; ".join(why) if why else None)
+
+
+def unique_names(entries: Sequence[tuple[str, str, bool]]) -> list[str]:
+    """The names of ``entries`` made unique (case aside), each change said in a note.
+
+    Parameters
+    ----------
+    entries : sequence of (key, name, kept)
+        Per input: a key ordering it (its path), the name it wants, and whether the name must be
+        kept (a manifest's: those are unique already).
+
+    Returns
+    -------
+    list of str
+        One name per entry, in order; where several want one name (in any case: a file system
+        may not tell ``Chair`` from ``chair``), a kept name keeps it, then the first by key, and
+        the others get ``NAME~2``, ``NAME~3``...
+
+    Examples
+    --------
+    >>> from partscale.batch.inputs import unique_names
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True):
+    ...     warnings.simplefilter("always")
+    ...     names = unique_names([("in/a/x.glb", "a__x", False), ("in/a__x.glb", "a__x", False)])
+    >>> names
+    ['a__x', 'a__x~2']
+    """
+    order = sorted(range(len(entries)), key=lambda i: (not entries[i][2], entries[i][0], i))
+    taken = {entries[i][1].casefold() for i in order if entries[i][2]}
+    out = [e[1] for e in entries]
+    for i in order:
+        key, name, kept = entries[i]
+        if kept:
+            continue
+        if name.casefold() not in taken:
+            taken.add(name.casefold())
+            continue
+        k = 2
+        while f"{name}~{k}".casefold() in taken or any(
+            f"{name}~{k}".casefold() == e[1].casefold() for e in entries
+        ):
+            k += 1
+        out[i] = f"{name}~{k}"
+        taken.add(out[i].casefold())
+        first = next(
+            e[0] for j, e in enumerate(entries) if j != i and e[1].casefold() == name.casefold()
+        )
+        _note(f"{key}: output folder {name!r} is {first}'s already; this one writes to {out[i]!r}")
+    return out
+
+
+def _note(message: str) -> None:
+    import warnings
+
+    from ..errors import PartscaleWarning
+
+    warnings.warn(message, PartscaleWarning, stacklevel=3)
 
 
 def shard(items: Sequence[Input], rank: int, world_size: int) -> list[Input]:

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__, release_freed_memory, reuse_freed_memory
+from .._files import staged_writes
 from ..csdf import SUFFIX as CSDF_SUFFIX
 from ..errors import InputError, one_line, shown
 
@@ -211,22 +212,23 @@ def run_job(
     if spec["fit"]:
         c = _fit(c, spec["fit"], spec.get("allow_deform", False))
     written: list[Path] = []
-    for fmt in spec["export"]:
-        if fmt == "csdf":
-            written.append(save_csdf(c, folder / f"{name}{CSDF_SUFFIX}"))
-        elif fmt in MESH_FORMATS:
-            from ..export import export_mesh
+    with staged_writes():  # the object's outputs are renamed into place all together, or none
+        for fmt in spec["export"]:
+            if fmt == "csdf":
+                written.append(save_csdf(c, folder / f"{name}{CSDF_SUFFIX}"))
+            elif fmt in MESH_FORMATS:
+                from ..export import export_mesh
 
-            written.append(export_mesh(c, folder / f"{name}.{fmt}"))
-        else:
-            from ..export import export_texture
+                written.append(export_mesh(c, folder / f"{name}.{fmt}"))
+            else:
+                from ..export import export_texture
 
-            written += export_texture(c, folder / f"{name}.{fmt}")
-    if spec["render"]:
-        from ..render import render, save_png
+                written += export_texture(c, folder / f"{name}.{fmt}")
+        if spec["render"]:
+            from ..render import render, save_png
 
-        image = render(c, view=spec["render"], size=RENDER_SIZE)
-        written.append(save_png(image, folder / f"{name}.render-{spec['render']}.png"))
+            image = render(c, view=spec["render"], size=RENDER_SIZE)
+            written.append(save_png(image, folder / f"{name}.render-{spec['render']}.png"))
     return [Path(p).resolve().relative_to(outdir.resolve()).as_posix() for p in written]
 
 

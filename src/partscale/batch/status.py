@@ -20,6 +20,10 @@ from .._files import atomic_path
 from ..errors import InputError
 
 STATUS_NAME = "status.csv"
+LOCK_NAME = ".status.lock"
+"""The lock file beside :data:`STATUS_NAME` (``flock``: one writer of the table at a time)."""
+LOG_NAME = "workers.log"
+"""The batch's log of its workers' output, beside :data:`STATUS_NAME`."""
 COLUMNS = (
     "name",
     "input",
@@ -141,7 +145,7 @@ def _locked(outdir: Path) -> Iterator[None]:
     except ImportError:  # pragma: no cover - not POSIX: one writer per OUTDIR
         yield
         return
-    fd = os.open(outdir / ".status.lock", os.O_RDWR | os.O_CREAT, 0o644)
+    fd = os.open(outdir / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
         yield

@@ -18,6 +18,7 @@ from typing import Annotated
 
 import typer
 
+from .. import _interrupt
 from ..errors import InputError, PartscaleWarning, one_line
 from . import _common, _help
 from .batch import batch, optional_values
@@ -105,21 +106,33 @@ class Terminated(KeyboardInterrupt):
 
 @contextlib.contextmanager
 def _terminate_cleanly() -> Iterator[dict]:
-    """Turn SIGTERM into :class:`Terminated` while a command runs (main thread only)."""
+    """Turn SIGTERM into :class:`Terminated` and Ctrl-C into KeyboardInterrupt while a command
+    runs (main thread only), each also noted (:mod:`partscale._interrupt`) so that a library
+    that swallows the exception cannot make the command go on to write or exit 0.
+    """
     seen = {"term": False}
+    _interrupt.clear()
     if threading.current_thread() is not threading.main_thread():
         yield seen
         return
 
     def on_term(signum, frame):
         seen["term"] = True
+        _interrupt.note(signum)
         raise Terminated()
 
+    def on_int(signum, frame):
+        _interrupt.note(signum)
+        raise KeyboardInterrupt()
+
     previous = signal.signal(signal.SIGTERM, on_term)
+    previous_int = signal.signal(signal.SIGINT, on_int)
     try:
         yield seen
     finally:
         signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGINT, previous_int)
+        _interrupt.clear()  # the command has ended: its signals are not the caller's
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -180,6 +193,7 @@ def _main(argv: list[str] | None, seen: dict) -> None:
     try:
         # Outside standalone mode click returns a command's exit code instead of exiting.
         code = app(args=args, standalone_mode=False)
+        _interrupt.raise_if_interrupted()  # a signal a library swallowed still ends it so
     except InputError as exc:
         if _common.is_verbose():
             raise

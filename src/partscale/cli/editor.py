@@ -22,9 +22,17 @@ def editor(
         typer.Option(
             "--host",
             metavar="HOST",
-            help="Interface to bind: anything but loopback is reachable by others.",
+            help="Interface to bind: loopback unless --expose.",
         ),
     ] = "127.0.0.1",
+    expose: Annotated[
+        bool,
+        typer.Option(
+            "--expose",
+            help="Allow a --host beyond loopback (0.0.0.0: every interface): anyone who can "
+            "reach this machine can then view, edit and save the object.",
+        ),
+    ] = False,
 ) -> None:
     """Open the object in the browser editor: drag zone planes, preview, apply, undo, save.
 
@@ -33,4 +41,4 @@ def editor(
     """
     from ..serve import serve
 
-    serve(path, host=host, port=port, open_browser=not no_browser)
+    serve(path, host=host, port=port, open_browser=not no_browser, expose=expose)

@@ -77,6 +77,7 @@ def export(
     """Export a CSDF as a mesh (marching cubes, vertex colours) and/or RGBA 3D textures."""
     # heavy modules (numba, trimesh, scikit-image) load only when this command runs
     from .. import export as export_mod
+    from .._files import staged_writes
     from ..csdf import load
 
     textures = list(texture or [])
@@ -111,7 +112,8 @@ def export(
         raise InputError("export: expected --mesh with --faces, --error or --atlas, got no --mesh")
     c = load(path)
     written: list[Path] = []
-    with progress_bar("export") as bar:
+    # every output is renamed into place only once all are written: all of them, or none
+    with progress_bar("export") as bar, staged_writes():
         n = len(outputs) + (grid is not None)
         steps = iter(range(n))
 

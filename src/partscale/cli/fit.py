@@ -87,18 +87,22 @@ def fit(
     _preflight(c, recipe, mesh_route, size, add)
     for line in why:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
+    from .._files import staged_writes
+
     if mesh_route:
         from .scale import _scale_mesh
 
-        _scale_mesh(src, output, recipe, square=square)
-        _write_recipe(recipe, recipe_out)
+        with staged_writes():  # the mesh and its recipe: both, or neither
+            _scale_mesh(src, output, recipe, square=square)
+            _write_recipe(recipe, recipe_out)
         return
     with _common.progress_bar("fit") as bar:
         out = apply_recipe(c, recipe, progress=bar)
     for line in describe_changes(out.meta.get("history", [])[-len(recipe.edits) :], out):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
-    save(out, output)
-    _write_recipe(recipe, recipe_out)
+    with staged_writes():  # the object and its recipe: both, or neither
+        save(out, output)
+        _write_recipe(recipe, recipe_out)
     sb = out.surface_bounds()
     ext = " x ".join(f"{v:.4g}" for v in sb[1] - sb[0])
     _common.done(f"wrote {output} (solid {ext} {out.meta.get('units') or ''})")

@@ -61,12 +61,6 @@ def suggest(
     cands = suggest_zones(c, ax)
     # an object turned about up has no constant slab along x or z: say so, with the cure
     turn = csdf_turn(c) if ax is None or ax in WALL_AXES else None
-    if ax is not None and not cands:
-        raise InputError(
-            f"--axis {ax}: expected a zone candidate, got none (no repeated element and no slab "
-            "of constant cross-section along it"
-            + (f"; {off_square_message(turn, c)})" if turn is not None else ")")
-        )
     if turn is not None:
         typer.echo(f"warning: {off_square_message(turn, c)}", err=True)
     units = c.meta.get("units") or ""

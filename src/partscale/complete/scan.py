@@ -24,6 +24,9 @@ from .. import _schema
 from ..errors import InputError, one_line, shown
 
 DEPTH_SCALE = 5000.0
+#: Working bytes per pixel of a depth or colour frame, from its pixels to its points
+#: (the decoded image, metres as float64 then float32, the colour, the masks, the points)
+PIXEL_BYTES = 64
 """TUM/Kinect convention: a 16-bit depth PNG holds metres x 5000."""
 MIN_DEPTH_SCALE, MAX_DEPTH_SCALE = 1e-3, 1e9
 """Depth units per metre a frame may use (1: metres; 1000: millimetres; beyond: not a depth)."""
@@ -233,13 +236,22 @@ def read_intrinsics(path: str | os.PathLike) -> np.ndarray:
 
 
 def _read_image(path: Path, what: str) -> np.ndarray:
+    """The pixels of an image file, refused by its size (from its header) before decoding
+    where :data:`PIXEL_BYTES` per pixel would not fit in memory.
+    """
     from PIL import Image
+
+    from .._memory import check_bytes
 
     if not path.is_file():
         raise InputError(f"{path}: expected a {what} image, got no such file")
     try:
         with Image.open(path) as im:
+            w, h = im.size
+            check_bytes(float(w) * h * PIXEL_BYTES, what=f"{path}: a {w}x{h} {what} image")
             return np.asarray(im)
+    except InputError:
+        raise
     except Exception as exc:  # PIL raises many kinds on damaged files
         raise InputError(f"{path}: expected a {what} image, got {one_line(exc)}") from None
 

@@ -8,7 +8,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import os
 from pathlib import Path
 
@@ -63,7 +62,8 @@ def save_obj(
     """
     from trimesh.exchange.obj import export_obj
 
-    from .._files import atomic_path, final_path
+    from .._files import atomic_path, final_path, staged_writes
+    from .._interrupt import raise_if_interrupted
 
     path = Path(path)
     final = final_path(path)
@@ -74,6 +74,9 @@ def save_obj(
         return_texture=True,
         mtl_name=final.stem + ".mtl",
     )
+    # trimesh catches BaseException around each material: a Ctrl-C or SIGTERM there returns an
+    # OBJ without its materials or UVs instead of stopping; the signal was noted, so stop here
+    raise_if_interrupted()
     images = sorted(n for n in extra if not n.lower().endswith(".mtl"))
     renamed = {
         n: f"{final.stem}{Path(n).suffix.lower()}"
@@ -86,15 +89,16 @@ def save_obj(
         for n, blob in extra.items()
     }
     written = [final]
-    with contextlib.ExitStack() as stack:
-        # entered first, so renamed last: the OBJ never refers to companions not yet in place
-        tmp_obj = stack.enter_context(atomic_path(path))
-        # the MTL, then the textures in name order
+    with staged_writes():
+        # the MTL, then the textures in name order, then the OBJ (renamed in this order, so the
+        # OBJ never refers to companions not yet in place), all or none
         for name, blob in sorted(files.items(), key=lambda f: (f[0] != final.stem + ".mtl", f[0])):
             target = final.parent / name
-            stack.enter_context(atomic_path(target)).write_bytes(blob)
+            with atomic_path(target) as tmp:
+                tmp.write_bytes(blob)
             written.append(target)
-        tmp_obj.write_bytes(text.encode("utf-8"))
+        with atomic_path(path) as tmp_obj:
+            tmp_obj.write_bytes(text.encode("utf-8"))
     return written
 
 

@@ -17,7 +17,6 @@ x fastest (then y, then z): the grid arrays are indexed ``(i, j, k) = (x, y, z)`
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import io
 import json
@@ -27,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from .._files import atomic_path, read_json
+from .._files import atomic_path, read_json, staged_writes
 from .._memory import check_memory
 from ..csdf import CSDF, make
 from ..errors import InputError
@@ -265,17 +264,17 @@ def _write_pair(path: Path, data: bytes, side: Path, header: dict[str, Any]) -> 
     """Write a texture and its sidecar so that a reader never takes one for the other's pair.
 
     The sidecar records the texture's sha256 (``content_sha256``), which :func:`_read_sidecar`
-    checks. Both are written to temporaries first; the texture is renamed into place, then the
-    sidecar: if the texture's rename fails neither changes, and if the sidecar's fails the old
-    sidecar's checksum no longer matches, so the pair is refused rather than misread.
+    checks. Both are written to temporaries first and renamed as one set
+    (:func:`partscale._files.staged_writes`): the texture, then the sidecar; where a rename
+    fails, both keep what they had (and were one interrupted between the two, the old
+    sidecar's checksum would not match, so the pair is refused rather than misread).
     """
     header = {**header, "content_sha256": hashlib.sha256(data).hexdigest()}
-    with contextlib.ExitStack() as stack:
-        # entered sidecar first: contexts exit in reverse, so the texture is renamed first
-        tmp_side = stack.enter_context(atomic_path(side))
-        tmp = stack.enter_context(atomic_path(path))
-        tmp.write_bytes(data)
-        tmp_side.write_text(json.dumps(header, indent=2))
+    with staged_writes():
+        with atomic_path(path) as tmp:
+            tmp.write_bytes(data)
+        with atomic_path(side) as tmp_side:
+            tmp_side.write_text(json.dumps(header, indent=2))
 
 
 def _read_sidecar(path: Path) -> dict[str, Any]:

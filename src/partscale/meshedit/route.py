@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._memory import check_bytes
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError, PartscaleWarning
 from ..ingest import load_mesh_scene
@@ -36,6 +37,10 @@ OUTPUT_SUFFIXES = (".glb", ".obj", ".ply", ".usd", ".usda", ".usdc", ".usdz")
 
 #: lateral distance (relative to the object's size) within which two seam points are one
 WELD_TOLERANCE = 1e-5
+#: How many times over a tile's copies are held at the peak (see :func:`_check_copies`)
+COPY_PEAK = 4
+#: Largest coordinate an output may hold: GLB and PLY store float32 positions
+MAX_COORDINATE = float(np.finfo(np.float32).max)
 
 
 @dataclass(frozen=True)
@@ -290,13 +295,39 @@ def _remove(piece, axis, s, e, rot, size):
     return piece, [Seam("xyz"[axis], s, int(matched.sum()), unmatched)]
 
 
+def _row_bytes(arrays) -> float:
+    """Bytes per row of arrays sharing their first dimension."""
+    return float(sum(a.nbytes / max(len(a), 1) for a in arrays))
+
+
+def _check_copies(piece: Piece, axis: int, s: float, e: float, n: int) -> None:
+    """Refuse ``n`` copies of the zone ``[s, e]``'s triangles that would not fit in memory.
+
+    Each copy holds the slab's vertices and triangles with all their attributes; the copies are
+    held about :data:`COPY_PEAK` times over (the copies, their concatenation, the trimesh
+    meshes and the file's bytes).
+    """
+    centre = piece.vertices[piece.faces, axis].mean(axis=1)
+    in_zone = (centre > s) & (centre < e)
+    n_faces = int(in_zone.sum())
+    n_verts = len(np.unique(piece.faces[in_zone]))
+    per_copy = n_verts * _row_bytes([piece.vertices, *piece.vattrs.values()])
+    per_copy += n_faces * _row_bytes([piece.faces, *piece.fattrs.values()])
+    copies = f"{n:,}" if n < 10**9 else f"{float(n):.3g}"
+    check_bytes(
+        float(n) * per_copy * COPY_PEAK,
+        what=f"tile along {'xyz'[axis]}: {copies} copies of {n_faces:,} triangles",
+    )
+
+
 def _tile(piece, axis, s, e, d, rot, size):
     if d == s:
         return _remove(piece, axis, s, e, rot, size)
-    piece = _cut_planes(piece, axis, (s, e))
-    if tile_count(e - s, d - s) > 1:
-        piece = _conform(piece, axis, s, e, WELD_TOLERANCE * size)
     n = tile_count(e - s, d - s)
+    piece = _cut_planes(piece, axis, (s, e))
+    _check_copies(piece, axis, s, e, n)
+    if n > 1:
+        piece = _conform(piece, axis, s, e, WELD_TOLERANCE * size)
     period = (d - s) / n
     factor = period / (e - s)
     V, F = piece.vertices, piece.faces
@@ -642,6 +673,7 @@ def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
             f"{path}: expected an output mesh ({', '.join(OUTPUT_SUFFIXES)}), got "
             f"{suffix or 'no suffix'}"
         )
+    _check_finite_scene(scene, path)
     if suffix in USD_SUFFIXES:
         return save_usd(scene, path)
     if suffix == ".obj":
@@ -654,6 +686,52 @@ def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:
     with atomic_path(path) as tmp:
         Path(tmp).write_bytes(data)
     return [path]
+
+
+def _check_finite_scene(scene: trimesh.Scene, path: str | os.PathLike) -> None:
+    """Refuse to write ``scene`` to ``path`` where a placed vertex is not a finite float32.
+
+    Every mesh's vertices placed by its node's transform must be finite and within
+    :data:`MAX_COORDINATE` (GLB and PLY store float32; a reader gets ``inf`` beyond it). A
+    destination too far (``to`` 1e308) or a NaN in a node matrix would otherwise give a file
+    of infinities that every reader refuses or draws as nothing.
+
+    Parameters
+    ----------
+    scene : trimesh.Scene
+        The meshes about to be written.
+    path : str or os.PathLike
+        The output, for the message.
+
+    Raises
+    ------
+    partscale.errors.InputError
+        Naming how many vertices are out of range.
+
+    Examples
+    --------
+    >>> from partscale import data
+    >>> from partscale.meshedit.route import _check_finite_scene, load_scene
+    >>> _check_finite_scene(load_scene(data.table()), "table.glb")
+    """
+    bad = total = 0
+    for node in scene.graph.nodes_geometry:
+        transform, name = scene.graph[node]
+        vertices = getattr(scene.geometry.get(name), "vertices", None)
+        if vertices is None:
+            continue
+        T = np.asarray(transform, np.float64)
+        with np.errstate(all="ignore"):
+            world = np.asarray(vertices, np.float64) @ T[:3, :3].T + T[:3, 3]
+            ok = np.isfinite(world).all(axis=1) & (np.abs(world) <= MAX_COORDINATE).all(axis=1)
+        bad += int((~ok).sum())
+        total += len(world)
+    if bad:
+        raise InputError(
+            f"{path}: expected finite vertices within float32's range (|x| <= "
+            f"{MAX_COORDINATE:.3g}), got {bad:,} of {total:,} beyond it (a destination too far, or "
+            "a NaN or infinity in the source's vertices or node matrices); nothing written"
+        )
 
 
 def display_colours(scene: trimesh.Scene, suffix: str) -> trimesh.Scene:

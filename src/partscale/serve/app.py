@@ -71,7 +71,7 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from .. import zones
 from .._files import parse_json
 from ..edit import JSON_SCHEMA, Edit
-from ..errors import InputError
+from ..errors import InputError, MemoryLimitError
 from .server import canonical_host
 from .session import EditSession, PageLimits
 
@@ -277,13 +277,20 @@ def _quiet(fn: Callable[..., T], *args: Any) -> T:
 
 
 async def _run(what: str, fn: Callable[..., T], *args: Any) -> T:
-    """``fn(*args)`` in the thread pool: an InputError is the request's fault (400); anything
-    else is a bug in partscale (500, traceback kept on the server's stderr).
+    """``fn(*args)`` in the thread pool: an InputError is the request's fault (400), one the
+    memory guard refused or that ran out of memory is too large (413, and the server goes on);
+    anything else is a bug in partscale (500, traceback kept on the server's stderr).
     """
     try:
         return await run_in_threadpool(_quiet, fn, *args)
+    except MemoryLimitError as exc:
+        raise _HTTPError(413, str(exc)) from None
     except InputError as exc:
         raise _HTTPError(400, str(exc)) from None
+    except MemoryError:
+        raise _HTTPError(
+            413, f"{what}: out of memory (the memory guard's estimate was too low)"
+        ) from None
     except Exception as exc:
         traceback.print_exc()
         raise _HTTPError(

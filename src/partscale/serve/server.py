@@ -159,6 +159,7 @@ def serve(
     port: int = 0,
     open_browser: bool = True,
     announce: Callable[[str], None] | None = None,
+    expose: bool = False,
 ) -> None:
     """Serve the editor for ``path`` until interrupted (Ctrl-C).
 
@@ -167,15 +168,18 @@ def serve(
     path : path
         The ``.csdf.npz`` to edit.
     host : str
-        Interface to bind; loopback by default. Any other address exposes the editor (and
-        save/export) to the network, so the caller must have asked for it explicitly. Whatever
-        it is, requests are answered only for the names in :func:`allowed_hosts`.
+        Interface to bind; loopback by default. Any other address (``""`` and ``0.0.0.0``:
+        every interface) exposes the editor (and save/export) to the network, and is refused
+        unless ``expose`` says the caller means it. Whatever it is, requests are answered only
+        for the names in :func:`allowed_hosts`.
     port : int
         0 picks a free port.
     open_browser : bool
         Open the page in the default browser (else only print the URL).
     announce : callable(str), optional
         Where the URL and warnings go (default: stderr).
+    expose : bool
+        Allow a ``host`` beyond loopback (reachable from other machines).
 
     Returns
     -------
@@ -207,7 +211,16 @@ def serve(
     say = announce or (lambda m: print(m, file=sys.stderr, flush=True))
     if not (0 <= port <= 65535):
         raise InputError(f"port: expected 0..65535, got {port}")
+    if not isinstance(host, str):
+        raise InputError(f"host: expected an address or a name, got {type(host).__name__}")
+    given, host = host, host.strip() or "0.0.0.0"  # what a socket binds for "": everywhere
     loopback = is_loopback(host)
+    if not loopback and expose is not True:
+        raise InputError(
+            f"host: expected a loopback address (127.0.0.1, localhost, ::1) unless exposing the "
+            f"editor, got {given!r}, {_reach(host)}: add expose to mean it",
+            params=("expose",),
+        )
     hosts = allowed_hosts(host)
     app = create_app(path, allowed_hosts=hosts)
     bind = canonical_host(host)  # 127.000.000.001 is 127.0.0.1 to a browser: bind that
@@ -222,9 +235,8 @@ def serve(
         raise InputError(f"{what}, got {host}:{port} ({exc.strerror or exc})") from None
     if not loopback:
         say(
-            f"warning: serving on {host}, not loopback: anyone who can reach this machine, and "
-            "any web page opened on a machine that can, can reach this editor and view, edit "
-            f"and save this object (Host names answered: {', '.join(hosts)})"
+            f"warning: serving on {host}, not loopback: {_reach(host)} (Host names answered: "
+            f"{', '.join(hosts)})"
         )
     url = f"http://{url_host(host)}:{port}/"
     say(f"partscale editor for {Path(path).name}: {url}  (Ctrl-C to stop)")
@@ -239,3 +251,12 @@ def serve(
 
         server.startup = startup  # type: ignore[method-assign]  # open the page once listening
     server.run()
+
+
+def _reach(host: str) -> str:
+    """What binding ``host`` (not loopback) exposes, for the refusal and the warning."""
+    where = "every interface of this machine" if is_wildcard(host) else f"the interface {host}"
+    return (
+        f"which binds {where}: anyone who can reach it, and any web page opened on a machine "
+        "that can, can reach this editor and view, edit and save this object"
+    )

@@ -14,6 +14,7 @@ from typing import overload
 
 import numpy as np
 
+from .._memory import check_bytes
 from ..csdf import CSDF
 from ..edit import AXES
 from ..errors import InputError
@@ -21,6 +22,10 @@ from ..errors import InputError
 #: In-plane downsampling of the cross-sections (voxels per cell): tolerates sub-voxel lateral
 #: wobble between repeats (worn or hand-modelled copies) and keeps the Gram matrix small.
 CELL = 2
+#: Peak working bytes per pair of layers of a profile and the analyses that read it: the two
+#: Gram matrices, :func:`partscale.zones.suggest`'s all-pairs distances and its (2N, N) table of
+#: shifted distances with their temporaries (measured: 200 bytes a pair on 300 to 600 layers).
+PAIR_BYTES = 256
 #: Cells across the larger side of a coarse cross-section: the scale of an element's parts
 #: (a cushion's crown, a drawer's handle), at which soft or hand-modelled copies that differ by
 #: a few voxels of surface still compare equal.
@@ -143,7 +148,10 @@ def _axis_index(axis: str | int) -> int:
 def profile(csdf: CSDF, axis: str | int) -> Profile:
     """The cross-section :class:`Profile` of ``csdf``'s solid along ``axis``.
 
-    Cost: one pass over the grid and two (N, N) Gram matrices of the downsampled layers.
+    Cost: one pass over the grid and two (N, N) Gram matrices of the downsampled layers; the
+    analyses that read them hold a few more (N, N) tables, so memory grows with the square of
+    the layers along the axis. Refused (:class:`~partscale.errors.MemoryLimitError`, before any
+    work) where :data:`PAIR_BYTES` per pair would not fit in the memory available.
 
     Parameters
     ----------
@@ -168,6 +176,11 @@ def profile(csdf: CSDF, axis: str | int) -> Profile:
     (1, (67, 67))
     """
     axis = _axis_index(axis)
+    n_layers = int(csdf.shape[axis])
+    check_bytes(
+        float(n_layers) ** 2 * PAIR_BYTES,
+        what=f"the cross-sections along {AXES[axis]} ({n_layers} layers, compared pairwise)",
+    )
     h = csdf.voxel_size
     occ = np.clip(0.5 - csdf.sdf / np.float32(h), 0.0, 1.0)
     occ = np.moveaxis(occ, axis, 0)

@@ -241,9 +241,9 @@ def reevaluation_mask(sdf, moved, h, band, reach, dirs, lateral, vary, dev, line
       about it (the one-sided differences either way differ by at most ``linear`` in all,
       summed over the axes; the gradient's length at least 1/2) and the map is affine enough
       over the ball the distance depends on: ``vary`` (K, X, Y, Z) float32 (any strides), the
-      relative change of the map's Jacobian within ``k + 1`` voxels (``k < K``; the last
-      level: the whole band's reach), times the distance ``a`` in voxels (level
-      ``ceil(a) - 1``), at most ``tol``; and ``dev``, the map's deviation from a rigid motion there
+      relative change of the map's Jacobian within the reach of a distance of ``k + 1``
+      voxels at level ``k`` (the last level: the whole band's), times the distance ``a`` in
+      voxels (level ``ceil(a) - 1``, at most the last), at most ``tol``; and ``dev``, the map's deviation from a rigid motion there
       (``|d_resampled - d_true| <= dev |d|``), times the distance at most ``switch`` voxels
       (a nearer surface that the map may have brought closer would show as a kink within the
       stencil). The resampled field is ``d_src(phi(p))``: near a flat face it is affine with
@@ -340,3 +340,22 @@ def write_fixed(sdf, fix):
                     sdf[i, j, k] = v
                     n += 1
     return n
+
+
+@numba.njit(cache=True, parallel=True)
+def slab_bounds(origin, h, normal, s0, to, w, jump, dev_in, vary, dev):
+    """``vary`` and ``dev`` (X, Y, Z) float32 of a map that bends only at the planes
+    ``p . normal = s0`` and ``= to`` (an oblique zone's): ``jump`` within ``w`` (world) of
+    either plane, else 0; ``dev_in`` within ``w`` of the slab between them, else 0.
+    """
+    for i in numba.prange(vary.shape[0]):
+        for j in range(vary.shape[1]):
+            for k in range(vary.shape[2]):
+                s = (
+                    (origin[0] + i * h) * normal[0]
+                    + (origin[1] + j * h) * normal[1]
+                    + (origin[2] + k * h) * normal[2]
+                )
+                near = abs(s - s0) <= w or abs(s - to) <= w
+                vary[i, j, k] = jump if near else 0.0
+                dev[i, j, k] = dev_in if s0 - w <= s <= to + w else 0.0

@@ -46,7 +46,13 @@ import numpy as np
 from .._memory import check_memory
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
-from ._warp_kernels import gather_columns, reevaluation_mask, resample_affine, write_fixed
+from ._warp_kernels import (
+    gather_columns,
+    reevaluation_mask,
+    resample_affine,
+    slab_bounds,
+    write_fixed,
+)
 from .recipe import AXES, HelixZone, ObliqueZone, RadialZone, RotationZone, ScrewZone
 from .reevaluate import reevaluate_arrays
 from .resolved import BYTES_PER_VOXEL
@@ -345,11 +351,12 @@ def _finish(
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
 
 
-def _reach(smin: float) -> int:
-    """Voxels from a band voxel within which its distance is decided: the band over the map's
-    least stretch (its nearest surface point lies that far at most), and the stencil's voxel.
+def _reach(smin: float, distance: float = BAND_VOXELS + 1.0) -> int:
+    """Voxels from a voxel ``distance`` voxels from the surface (the band's edge by default)
+    within which its distance is decided: that over the map's least stretch (its nearest
+    surface point lies that far at most), and the stencil's voxel.
     """
-    return math.ceil((BAND_VOXELS + 1.0) / max(smin, 1e-3)) + 1
+    return math.ceil(distance / max(smin, 1e-3)) + 1
 
 
 def _column_bounds(src: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
@@ -365,24 +372,26 @@ def _column_bounds(src: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
     from scipy.ndimage import maximum_filter, minimum_filter
 
     jac = np.stack([np.gradient(src, h, axis=0), np.gradient(src, h, axis=1)], axis=-1)
-    sv = np.linalg.svd(jac.reshape(-1, 2, 2), compute_uv=False).reshape(*src.shape[:2], 2)
-    smin = np.minimum(sv.min(axis=-1), 1.0)
-    smax = np.maximum(sv.max(axis=-1), 1.0)
+    # singular values of each 2x2 Jacobian, closed form
+    p_, q_, r_, t_ = jac[..., 0, 0], jac[..., 0, 1], jac[..., 1, 0], jac[..., 1, 1]
+    e, f = (p_ + t_) / 2, (p_ - t_) / 2
+    g, k = (r_ + q_) / 2, (r_ - q_) / 2
+    big, small = np.hypot(e, k), np.hypot(f, g)
+    smin = np.minimum(np.abs(big - small), 1.0)
+    smax = np.maximum(big + small, 1.0)
     reach = _reach(float(smin.min()))
-    size = 2 * reach + 1
-    lo = minimum_filter(smin, size=size, mode="nearest")
-    hi = maximum_filter(smax, size=size, mode="nearest")
-    comp = jac.reshape(*src.shape[:2], 4)
+    lo = minimum_filter(smin, size=2 * reach + 1, mode="nearest")
+    hi = maximum_filter(smax, size=2 * reach + 1, mode="nearest")
+    comp = jac.reshape(*src.shape[:2], 4).astype(np.float32)
     levels = []
-    for half in [*range(2, reach), reach]:  # a distance of k voxels: k + 1 about the column
+    # the windows of distances up to 1 and 2 voxels, then the whole band's
+    for half in sorted({min(_reach(float(smin.min()), d), reach) for d in (1.0, 2.0)} | {reach}):
         spread = [
             maximum_filter(comp[..., c], size=2 * half + 1, mode="nearest")
             - minimum_filter(comp[..., c], size=2 * half + 1, mode="nearest")
             for c in range(4)
         ]
         levels.append(np.sqrt(sum(x * x for x in spread)) / np.maximum(lo, 1e-3))
-        if half == reach:
-            break
     vary = np.stack(levels)
     dev = np.maximum(1.0 / np.maximum(lo, 1e-3) - 1.0, 1.0 - 1.0 / hi)
     return vary.astype(np.float32), dev.astype(np.float32)
@@ -427,17 +436,20 @@ def _slab_bounds(
     deviation from 1 where the slab does.
     """
     lo_s, hi_s = min(q, 1.0), max(q, 1.0)
-    w = _reach(lo_s) * h
-    s = origin @ n + sum(
-        (np.arange(shape[a]) * h * n[a]).reshape([-1 if b == a else 1 for b in range(3)])
-        for a in range(3)
+    vary = np.empty(shape, dtype=np.float32)
+    dev = np.empty(shape, dtype=np.float32)
+    slab_bounds(
+        np.asarray(origin, dtype=np.float64),
+        float(h),
+        np.asarray(n, dtype=np.float64),
+        float(s0),
+        float(to),
+        _reach(lo_s) * h,
+        np.float32(abs(1.0 - q) / lo_s),
+        np.float32(max(1.0 / lo_s - 1.0, 1.0 - 1.0 / hi_s)),
+        vary,
+        dev,
     )
-    s = np.asarray(s, dtype=np.float32)
-    near = (np.abs(s - s0) <= w) | (np.abs(s - to) <= w)
-    over = (s >= s0 - w) & (s <= to + w)
-    jump = abs(1.0 - q) / lo_s
-    vary = np.where(near, np.float32(jump), np.float32(0.0))
-    dev = np.where(over, np.float32(max(1.0 / lo_s - 1.0, 1.0 - 1.0 / hi_s)), np.float32(0.0))
     return vary, dev
 
 

@@ -405,7 +405,7 @@ def splayed_stool_sdf(p):
 
 def test_radial_edit_of_a_splayed_stool_keeps_true_distances():
     """A stool whose legs turn with the radial direction, its seat grown by a radial zone: the
-    distances the edit keeps or corrects instead of re-evaluating are within half a voxel
+    distances the edit keeps instead of re-evaluating are within half a voxel
     (p99) of re-evaluating the whole band of the same warped grid."""
     b = np.array([[-0.22, 0.0, -0.22], [0.22, 0.44, 0.22]])
     c = shapes.grid(splayed_stool_sdf, b, voxel_size=H, source="stool")

@@ -224,32 +224,13 @@ def resample_affine(
 
 
 @numba.njit(cache=True)
-def reevaluation_mask(sdf, moved, h, band, reach, dirs, lateral, vary, dev, linear, tol, switch):
-    """Which voxels near a moved one to re-evaluate, and the corrected distances of the others.
-
-    Returns ``(mask, fix)``: ``mask`` (X, Y, Z) bool, the voxels within ``band`` voxels of the
-    surface and within ``reach`` face steps (the L1 ball
-    ``scipy.ndimage.binary_dilation(iterations=reach)`` gives) of a moved one that is as near,
-    less those whose distance is kept or corrected; ``fix`` (X, Y, Z) float32, the corrected
-    distance of those corrected (NaN elsewhere). A candidate is
-
-    - *kept* where its field is flat along every row of ``dirs`` (K, 3) unit vectors (slope at
-      most ``lateral``, one-sided differences either way): its nearest surface point lies square
-      to every direction the map moves along, and a map that only grows keeps that distance
-      (its inverse brings nothing closer);
-    - *corrected* to ``sdf / |grad sdf|`` (central differences) where the field is affine
-      about it (the one-sided differences either way differ by at most ``linear`` in all,
-      summed over the axes; the gradient's length at least 1/2) and the map is affine enough
-      over the ball the distance depends on: ``vary`` (K, X, Y, Z) float32 (any strides), the
-      relative change of the map's Jacobian within the reach of a distance of ``k + 1``
-      voxels at level ``k`` (the last level: the whole band's), times the distance ``a`` in
-      voxels (level ``ceil(a) - 1``, at most the last), at most ``tol``; and ``dev``, the map's deviation from a rigid motion there
-      (``|d_resampled - d_true| <= dev |d|``), times the distance at most ``switch`` voxels
-      (a nearer surface that the map may have brought closer would show as a kink within the
-      stencil). The resampled field is ``d_src(phi(p))``: near a flat face it is affine with
-      gradient ``J^T g`` (``J`` the map's Jacobian, ``g`` the face normal), and the distance
-      to the mapped face is ``d_src / |J^T g|``, exact for an affine map;
-    - else re-evaluated.
+def reevaluation_mask(sdf, moved, h, band, reach, dirs, lateral):
+    """(X, Y, Z) bool: the voxels within ``band`` voxels of the surface and within ``reach``
+    face steps (the L1 ball ``scipy.ndimage.binary_dilation(iterations=reach)`` gives) of a
+    moved one that is as near, less those whose field is flat along every row of ``dirs``
+    (K, 3) unit vectors (slope at most ``lateral``, one-sided differences either way): their nearest surface
+    point lies square to every direction the map moves along, and a map that only grows keeps
+    that distance (its inverse brings nothing closer).
     """
     nx, ny, nz = sdf.shape
     lim = np.float32(band * h)
@@ -284,78 +265,29 @@ def reevaluation_mask(sdf, moved, h, band, reach, dirs, lateral, vary, dev, line
                     v = min(v, np.int64(d[i, j, k + 1]) + 1)
                 d[i, j, k] = min(v, 255)
     mask = np.zeros((nx, ny, nz), np.bool_)
-    fix = np.full((nx, ny, nz), np.nan, np.float32)
     for i in range(nx):
         for j in range(ny):
             for k in range(nz):
                 if d[i, j, k] > reach or not abs(sdf[i, j, k]) <= lim:
                     continue
-                ip, im = min(i + 1, nx - 1), max(i - 1, 0)
-                jp, jm = min(j + 1, ny - 1), max(j - 1, 0)
-                kp, km = min(k + 1, nz - 1), max(k - 1, 0)
-                c = np.float64(sdf[i, j, k])
-                # one-sided differences each way: a ridge (two surfaces equally near) is
-                # flat in the central difference but not on either side
-                fx, bx = (sdf[ip, j, k] - c) / h, (c - sdf[im, j, k]) / h
-                fy, by = (sdf[i, jp, k] - c) / h, (c - sdf[i, jm, k]) / h
-                fz, bz = (sdf[i, j, kp] - c) / h, (c - sdf[i, j, km]) / h
                 keep = dirs.shape[0] > 0
-                for m in range(dirs.shape[0]):
-                    ex, ey, ez = dirs[m, 0], dirs[m, 1], dirs[m, 2]
-                    if (
-                        abs(fx * ex + fy * ey + fz * ez) > lateral
-                        or abs(bx * ex + by * ey + bz * ez) > lateral
-                    ):
-                        keep = False
-                        break
                 if keep:
-                    continue
-                # at the grid's faces a one-sided difference is zero: never affine there
-                inner = 0 < i < nx - 1 and 0 < j < ny - 1 and 0 < k < nz - 1
-                bend = abs(fx - bx) + abs(fy - by) + abs(fz - bz)
-                gx, gy, gz = (fx + bx) / 2, (fy + by) / 2, (fz + bz) / 2
-                g = math.sqrt(gx * gx + gy * gy + gz * gz)
-                if inner and bend <= linear and g >= 0.5:
-                    a = abs(c) / g / h  # the corrected distance, voxels
-                    # the change of the map's Jacobian within a voxels and the stencil's one
-                    lv = min(max(np.int64(math.ceil(a)), 1), vary.shape[0]) - 1
-                    if vary[lv, i, j, k] * a <= tol and dev[i, j, k] * a <= switch:
-                        fix[i, j, k] = np.float32(c / g)
-                        continue
-                mask[i, j, k] = True
-    return mask, fix
-
-
-@numba.njit(cache=True, parallel=True)
-def write_fixed(sdf, fix):
-    """``sdf`` (X, Y, Z) float32 takes ``fix`` (same shape) wherever it is not NaN; returns how
-    many voxels took it.
-    """
-    n = 0
-    for i in numba.prange(sdf.shape[0]):
-        for j in range(sdf.shape[1]):
-            for k in range(sdf.shape[2]):
-                v = fix[i, j, k]
-                if not math.isnan(v):
-                    sdf[i, j, k] = v
-                    n += 1
-    return n
-
-
-@numba.njit(cache=True, parallel=True)
-def slab_bounds(origin, h, normal, s0, to, w, jump, dev_in, vary, dev):
-    """``vary`` and ``dev`` (X, Y, Z) float32 of a map that bends only at the planes
-    ``p . normal = s0`` and ``= to`` (an oblique zone's): ``jump`` within ``w`` (world) of
-    either plane, else 0; ``dev_in`` within ``w`` of the slab between them, else 0.
-    """
-    for i in numba.prange(vary.shape[0]):
-        for j in range(vary.shape[1]):
-            for k in range(vary.shape[2]):
-                s = (
-                    (origin[0] + i * h) * normal[0]
-                    + (origin[1] + j * h) * normal[1]
-                    + (origin[2] + k * h) * normal[2]
-                )
-                near = abs(s - s0) <= w or abs(s - to) <= w
-                vary[i, j, k] = jump if near else 0.0
-                dev[i, j, k] = dev_in if s0 - w <= s <= to + w else 0.0
+                    ip, im = min(i + 1, nx - 1), max(i - 1, 0)
+                    jp, jm = min(j + 1, ny - 1), max(j - 1, 0)
+                    kp, km = min(k + 1, nz - 1), max(k - 1, 0)
+                    c = np.float64(sdf[i, j, k])
+                    # one-sided differences each way: a ridge (two surfaces equally near) is
+                    # flat in the central difference but not on either side
+                    fx, bx = (sdf[ip, j, k] - c) / h, (c - sdf[im, j, k]) / h
+                    fy, by = (sdf[i, jp, k] - c) / h, (c - sdf[i, jm, k]) / h
+                    fz, bz = (sdf[i, j, kp] - c) / h, (c - sdf[i, j, km]) / h
+                    for m in range(dirs.shape[0]):
+                        ex, ey, ez = dirs[m, 0], dirs[m, 1], dirs[m, 2]
+                        if (
+                            abs(fx * ex + fy * ey + fz * ez) > lateral
+                            or abs(bx * ex + by * ey + bz * ez) > lateral
+                        ):
+                            keep = False
+                            break
+                mask[i, j, k] = not keep
+    return mask

@@ -46,13 +46,7 @@ import numpy as np
 from .._memory import check_memory
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
-from ._warp_kernels import (
-    gather_columns,
-    reevaluation_mask,
-    resample_affine,
-    slab_bounds,
-    write_fixed,
-)
+from ._warp_kernels import gather_columns, reevaluation_mask, resample_affine
 from .recipe import AXES, HelixZone, ObliqueZone, RadialZone, RotationZone, ScrewZone
 from .reevaluate import reevaluate_arrays
 from .resolved import BYTES_PER_VOXEL
@@ -65,21 +59,6 @@ RESAMPLE_MARGIN = 2.0
 #: counts as flat there: the voxel's nearest surface point lies square to them, and its
 #: resampled distance is kept (the planar edits' rule, :mod:`partscale.edit.reevaluate`).
 LATERAL = 0.05
-
-#: The resampled field counts as affine about a voxel where its one-sided differences either
-#: way along the three axes differ by at most this in all (a kink of the field, two surfaces
-#: equally near, or a curved surface's edge show as more).
-LINEAR = 0.05
-
-#: The largest error (voxels) the first-order correction ``sdf / |grad sdf|`` may carry by the
-#: map's change of Jacobian over the ball of the voxel's distance; a voxel above it is
-#: re-evaluated.
-AFFINE_TOL = 0.1
-
-#: The most (voxels) the map may have changed a corrected voxel's distance by (its deviation
-#: from a rigid motion times the distance): a surface brought nearer by more could lie beyond
-#: the stencil that tests the field affine.
-SWITCH_VOXELS = 1.0
 
 
 def gauge(d: np.ndarray, sides: int, phase: float) -> np.ndarray:
@@ -314,17 +293,11 @@ def _finish(
     arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     entry: dict[str, Any],
     keep_square_to: np.ndarray | None = None,
-    affine: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> CSDF:
     """Re-evaluate the voxels near the surface within the band of a moved one, and the new
     CSDF with its history entry. With ``keep_square_to`` (K, 3) (the directions a map that only
     grows moves content along), a voxel whose field is flat along all of them keeps its
-    resampled distance. With ``affine`` (``vary``, ``dev``: float32 arrays broadcastable to
-    the grid, see :func:`_column_bounds`), a voxel where the resampled field is affine and the
-    map nearly so over the ball its distance depends on takes its first-order corrected
-    distance ``sdf / |grad sdf|`` instead (within :data:`AFFINE_TOL` voxel of the distance to
-    the mapped surface; :func:`~partscale.edit._warp_kernels.reevaluation_mask` states the
-    rule). The rest of the band near moved voxels is re-evaluated.
+    resampled distance (:func:`~partscale.edit._warp_kernels.reevaluation_mask`).
     """
     sdf, rgb, parts, moved = arrays
     h = csdf.voxel_size
@@ -332,125 +305,10 @@ def _finish(
     r = math.ceil(band) + 1
     # a voxel's nearest surface point is within the band: only moved voxels that near count
     dirs = np.zeros((0, 3)) if keep_square_to is None else np.asarray(keep_square_to, np.float64)
-    if affine is None:  # no correction: every voxel the flat rule does not keep is re-evaluated
-        vary = np.broadcast_to(np.float32(np.inf), (1, *sdf.shape))
-        dev = np.broadcast_to(np.float32(np.inf), sdf.shape)
-    else:
-        v, dv = (np.asarray(a, np.float32) for a in affine)
-        vary = np.broadcast_to(
-            v if v.ndim == 4 else v[None], (len(v) if v.ndim == 4 else 1, *sdf.shape)
-        )
-        dev = np.broadcast_to(dv, sdf.shape)
-    mask, fix = reevaluation_mask(
-        sdf, moved, float(h), band, r, dirs, LATERAL, vary, dev, LINEAR, AFFINE_TOL, SWITCH_VOXELS
-    )
-    # re-evaluated from the resampled field (its surface), then the corrected voxels written
+    mask = reevaluation_mask(sdf, moved, float(h), band, r, dirs, LATERAL)
     n = reevaluate_arrays(sdf, rgb, parts, h, mask, band=band)
-    fixed = write_fixed(sdf, fix)
-    entry = {**entry, "reevaluated_voxels": int(n), "corrected_voxels": int(fixed)}
+    entry = {**entry, "reevaluated_voxels": int(n)}
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
-
-
-def _reach(smin: float, distance: float = BAND_VOXELS + 1.0) -> int:
-    """Voxels from a voxel ``distance`` voxels from the surface (the band's edge by default)
-    within which its distance is decided: that over the map's least stretch (its nearest
-    surface point lies that far at most), and the stencil's voxel.
-    """
-    return math.ceil(distance / max(smin, 1e-3)) + 1
-
-
-def _column_bounds(src: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """``vary`` and ``dev`` (U, V) float32 of a map across an axis, the same at every level,
-    for :func:`_finish`: within the window of :func:`_reach` voxels about each column, the
-    largest change of the map's Jacobian (Frobenius, over its least singular value there) and
-    its deviation from a rigid motion ``max(1 / s_min - 1, 1 - 1 / s_max)`` (the singular
-    values of the map from output to source, the axis's own 1 among them).
-
-    ``src`` (U, V, 2) float64: each column's source point (world); its Jacobian by central
-    differences (a kink of the map falls between columns that each side's own values reach).
-    """
-    from scipy.ndimage import maximum_filter, minimum_filter
-
-    jac = np.stack([np.gradient(src, h, axis=0), np.gradient(src, h, axis=1)], axis=-1)
-    # singular values of each 2x2 Jacobian, closed form
-    p_, q_, r_, t_ = jac[..., 0, 0], jac[..., 0, 1], jac[..., 1, 0], jac[..., 1, 1]
-    e, f = (p_ + t_) / 2, (p_ - t_) / 2
-    g, k = (r_ + q_) / 2, (r_ - q_) / 2
-    big, small = np.hypot(e, k), np.hypot(f, g)
-    smin = np.minimum(np.abs(big - small), 1.0)
-    smax = np.maximum(big + small, 1.0)
-    reach = _reach(float(smin.min()))
-    lo = minimum_filter(smin, size=2 * reach + 1, mode="nearest")
-    hi = maximum_filter(smax, size=2 * reach + 1, mode="nearest")
-    comp = jac.reshape(*src.shape[:2], 4).astype(np.float32)
-    levels = []
-    # the windows of distances up to 1 and 2 voxels, then the whole band's
-    for half in sorted({min(_reach(float(smin.min()), d), reach) for d in (1.0, 2.0)} | {reach}):
-        spread = [
-            maximum_filter(comp[..., c], size=2 * half + 1, mode="nearest")
-            - minimum_filter(comp[..., c], size=2 * half + 1, mode="nearest")
-            for c in range(4)
-        ]
-        levels.append(np.sqrt(sum(x * x for x in spread)) / np.maximum(lo, 1e-3))
-    vary = np.stack(levels)
-    dev = np.maximum(1.0 / np.maximum(lo, 1e-3) - 1.0, 1.0 - 1.0 / hi)
-    return vary.astype(np.float32), dev.astype(np.float32)
-
-
-def _radial_bounds(
-    src: np.ndarray, h: float, ax: int, inside: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """``vary`` and ``dev`` of a radial zone's map for :func:`_finish`, broadcastable to the
-    grid: :func:`_column_bounds` of its cross-section ``src`` (U, V, 2), on every level but
-    those within the window of a change of ``inside`` (L,) (the span's ends, where the map
-    jumps: no correction there).
-    """
-    vary, dev = _column_bounds(src, h)
-    vary, dev = np.expand_dims(vary, ax + 1), np.expand_dims(dev, ax)
-    inside = np.asarray(inside, dtype=bool)
-    if inside.all() or not inside.any():
-        return vary, dev
-    w = _reach(1.0 / (1.0 + float(dev.max())))
-    idx = np.arange(inside.size)
-    change = np.flatnonzero(np.diff(inside.astype(np.int8)) != 0)
-    edge = (np.abs(idx[:, None] - change[None, :] - 0.5) <= w + 0.5).any(axis=1)
-    shp = [1, 1, 1]
-    shp[ax] = -1
-    edge = edge.reshape(shp)
-    return np.where(edge[None], np.float32(np.inf), vary), np.where(edge, np.float32(np.inf), dev)
-
-
-def _slab_bounds(
-    origin: np.ndarray,
-    shape: tuple[int, ...],
-    h: float,
-    n: np.ndarray,
-    s0: float,
-    to: float,
-    q: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """``vary`` and ``dev`` (X, Y, Z) float32 of an oblique zone's map for :func:`_finish`:
-    the identity up to ``s0``, a scale by ``q`` along the unit ``n`` up to ``to``, a shift
-    beyond. Its Jacobian jumps (by ``|1 - q|``) at ``s0`` and ``to`` only: ``vary`` is that
-    jump where one lies within the window of :func:`_reach` voxels, ``dev`` the scale's
-    deviation from 1 where the slab does.
-    """
-    lo_s, hi_s = min(q, 1.0), max(q, 1.0)
-    vary = np.empty(shape, dtype=np.float32)
-    dev = np.empty(shape, dtype=np.float32)
-    slab_bounds(
-        np.asarray(origin, dtype=np.float64),
-        float(h),
-        np.asarray(n, dtype=np.float64),
-        float(s0),
-        float(to),
-        _reach(lo_s) * h,
-        np.float32(abs(1.0 - q) / lo_s),
-        np.float32(max(1.0 / lo_s - 1.0, 1.0 - 1.0 / hi_s)),
-        vary,
-        dev,
-    )
-    return vary, dev
 
 
 def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone) -> set[int]:
@@ -797,7 +655,7 @@ def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None 
     # growing, the map moves content across the axis only: a voxel whose nearest surface point
     # lies along the axis keeps its distance
     keep = np.eye(3)[others] if zone.to >= zone.r1 else None
-    return _finish(csdf, origin, arrays, entry, keep, _radial_bounds(src, h, ax, inside))
+    return _finish(csdf, origin, arrays, entry, keep)
 
 
 def _gather_levels(
@@ -909,8 +767,7 @@ def apply_oblique(csdf: CSDF, zone: ObliqueZone, *, record: dict[str, Any] | Non
     entry = {"op": "oblique", **unit.to_json(), **(record or {})}
     # growing, the map moves content along n only: a voxel whose nearest surface point lies
     # square to n keeps its distance
-    affine = _slab_bounds(origin, shape, h, n, s0, to, length / target)
-    return _finish(csdf, origin, arrays, entry, n[None, :] if to >= s1 else None, affine)
+    return _finish(csdf, origin, arrays, entry, n[None, :] if to >= s1 else None)
 
 
 def _turn(d: np.ndarray, degrees: float) -> np.ndarray:

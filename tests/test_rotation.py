@@ -305,3 +305,21 @@ def test_no_false_rotation_on_real_objects():
     ]:
         c = import_file(data_path(rel), res=96)
         assert find_rotations(c) == [], rel
+
+
+def test_cli_copies_in_all_sets_the_ring_count(cli, tmp_path):
+    """scale --axis y --copies N with no sign is N elements in all on a ring, as on an element
+    group: 5 on a ring of four writes five arms (one added, not five); 4 is no change and is
+    refused with one line and no file."""
+    src = tmp_path / "star.csdf.npz"
+    save(star(4), src)
+    out = tmp_path / "five.csdf.npz"
+    r = cli("scale", src, "-o", out, "--axis", "y", "--copies", "5")
+    assert r.returncode == 0, r.stderr
+    assert "add 1 element" in r.stderr, r.stderr
+    assert len(_pieces(load(out), 0.078, 0.07)) == 5
+    bad = tmp_path / "same.csdf.npz"
+    assert_bad_input(
+        cli("scale", src, "-o", bad, "--axis", "y", "--copies", "4"), "current one (4)"
+    )
+    assert not bad.exists()

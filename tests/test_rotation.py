@@ -323,3 +323,23 @@ def test_cli_copies_in_all_sets_the_ring_count(cli, tmp_path):
         cli("scale", src, "-o", bad, "--axis", "y", "--copies", "4"), "current one (4)"
     )
     assert not bad.exists()
+
+
+def test_turned_arms_leave_no_distance_past_the_surface():
+    """One more arm of a star base: no stored distance, within 0.2 of the surface, exceeds the
+    way to the nearest voxel of the other sign by more than half a voxel (as on the input),
+    so a sphere tracer cannot step through an arm that now lies where there was none (off the
+    arms' levels the source's own distances would reach 19 voxels past one)."""
+    c = star(4)
+    (rot,) = find_rotations(c)
+    out = apply_rotation(c, rot.zone(1))
+    h = out.voxel_size
+    inside = out.sdf < 0
+    way = np.where(
+        inside,
+        ndimage.distance_transform_edt(inside),
+        ndimage.distance_transform_edt(~inside),
+    )
+    way = (way - 0.5) * h
+    near = way < 0.2
+    assert (np.abs(out.sdf) - way)[near].max() <= 0.5 * h + 1e-6

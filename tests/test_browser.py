@@ -213,8 +213,9 @@ def run_page(node: str, chromium: str, url: str, out: Path, **extra) -> dict:
         "canvas": list(CANVAS),
         **extra,
     }
+    (out / "args.json").write_text(json.dumps(args))  # one argument holds at most 128 KiB
     proc = subprocess.run(
-        [node, str(SCRIPT), json.dumps(args)], capture_output=True, text=True, timeout=240
+        [node, str(SCRIPT), f"@{out / 'args.json'}"], capture_output=True, text=True, timeout=240
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     result = json.loads(proc.stdout.strip().splitlines()[-1])

@@ -36,6 +36,7 @@ from partscale.edit import (
     ObliqueZone,
     RadialZone,
     Recipe,
+    RotationZone,
     ScrewZone,
     apply_edit,
     apply_recipe,
@@ -212,8 +213,9 @@ def run_page(node: str, chromium: str, url: str, out: Path, **extra) -> dict:
         "canvas": list(CANVAS),
         **extra,
     }
+    (out / "args.json").write_text(json.dumps(args))  # one argument holds at most 128 KiB
     proc = subprocess.run(
-        [node, str(SCRIPT), json.dumps(args)], capture_output=True, text=True, timeout=240
+        [node, str(SCRIPT), f"@{out / 'args.json'}"], capture_output=True, text=True, timeout=240
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     result = json.loads(proc.stdout.strip().splitlines()[-1])
@@ -862,6 +864,12 @@ def warp_cases() -> list[dict]:
         ScrewZone("z", (0.0, 0.12, -0.18), 0.3, -1),
         HelixZone((0.1, 0.2), 30.0, 0.15, 0.5, 1),
         HelixZone((-0.2, 0.0), -22.5, 0.1, 0.7, -2),
+        # elements about the vertical: a closed ring of five +1 and -1 (turning from z toward
+        # x), an open arc of four +1 and -2
+        RotationZone((0.1, 0.2), 72.0, 15.0, 5, True, 0.15, 0.9, (-0.2, 0.8), 1),
+        RotationZone((0.1, 0.2), -72.0, -30.0, 5, True, 0.15, 0.9, (-0.2, 0.8), -1),
+        RotationZone((-0.1, 0.05), 30.0, 40.0, 4, False, 0.1, 0.8, (0.0, 0.6), 1),
+        RotationZone((-0.1, 0.05), 30.0, 40.0, 4, False, 0.1, 0.8, (0.0, 0.6), -2),
     ]
     cases = []
     for zone in zones:
@@ -870,6 +878,17 @@ def warp_cases() -> list[dict]:
             ax = "xyz".index(zone.axis)
             near = np.abs(pts[:, ax, None] - np.array(zone.span)[None, :]).min(axis=1) < 1e-3
             pts = pts[~near]
+        if isinstance(zone, RotationZone):
+            # most about the axis on the span's levels (where it turns), none where it jumps:
+            # the hub, the span's ends, the edges between two elements' sectors
+            r = np.sqrt(rng.uniform(0.0, 1.0, 150)) * 1.1 * zone.radius
+            t = rng.uniform(0.0, 2 * np.pi, 150)
+            y = rng.uniform(zone.span[0] - 0.1, zone.span[1] + 0.1, 150)
+            ring = np.column_stack(
+                [zone.center[0] + r * np.cos(t), y, zone.center[1] + r * np.sin(t)]
+            )
+            pts = np.vstack([pts[:50], ring])
+            pts = pts[~_near_jump(zone, pts)]
         src, w = warp_source(zone, pts, WARP_H)
         cases.append(
             {
@@ -880,6 +899,18 @@ def warp_cases() -> list[dict]:
             }
         )
     return cases
+
+
+def _near_jump(zone: RotationZone, pts: np.ndarray, eps: float = 1e-3) -> np.ndarray:
+    """(N,) bool: points within ``eps`` (world units) of a place where a rotation zone's map
+    jumps (the hub's radius, the span's ends, between two elements' sectors): a float32 shader
+    may fall on the other side there."""
+    near = np.zeros(len(pts), dtype=bool)
+    for e in np.vstack([np.eye(3), -np.eye(3)]) * eps:
+        a = warp_source(zone, pts, WARP_H)[0]
+        b = warp_source(zone, pts + e, WARP_H)[0]
+        near |= np.linalg.norm(a - b, axis=1) > 10 * eps
+    return near
 
 
 def test_typescript_warp_maps_match_warp_source(tmp_path):
@@ -1102,3 +1133,65 @@ def test_editor_previews_an_oblique_zone_and_a_spirals_steps_as_apply_makes_them
                 lo, hi = made.surface_bounds()
                 length = (hi[0] - lo[0]) / np.cos(np.radians(30.0))  # roughly, the x extent
                 assert length > 1.0 + 0.1
+
+
+@pytest.mark.browser
+def test_editor_previews_applies_and_undoes_one_more_arm_of_a_star_base(tmp_path):
+    """A star base of four arms about a column: the server's ring (GET /api/suggest, as
+    zones.warp_candidates finds it) drawn (hub, circles, spokes, arrow), one more arm previewed
+    live as Apply then makes it (within 3 % of the canvas and a quarter of what Apply changed),
+    applied on the server (the library's apply_recipe, bit for bit; five arms spaced evenly) and
+    undone (the very object). The shader's rotation maps (GLSL, on the GPU) are
+    edit.warp_source."""
+    from test_rotation import _evenly, _pieces, star
+
+    node, chromium = find_tools()
+    total = CANVAS[0] * CANVAS[1]
+    c0 = star(4)
+    path = tmp_path / "star.csdf.npz"
+    partscale.save(c0, path)
+    found = zones_mod.warp_candidates(c0)
+    (rot,) = found.rotations
+    assert rot.count == 4 and rot.closed, rot
+    cases = [c for c in warp_cases() if "rotation" in c["edit"]]
+    with Server(path) as server:
+        session = server.app.state.session
+        original = session.current
+        r = run_page(
+            node,
+            chromium,
+            server.url,
+            tmp_path,
+            shaped={
+                "button": "#warp-rotation-0",
+                "warpCases": [{k: c[k] for k in ("edit", "points", "h")} for c in cases],
+            },
+        )
+        assert r["errors"] == [], r["errors"]
+        sh = r["shaped"]
+        for case, got in zip(cases, sh["remap"], strict=True):
+            want = np.array(case["want"])
+            assert np.abs(np.array(got["glsl"]) - want).max() <= 1e-4, case["edit"]
+            assert np.abs(np.array(got["ts"]) - want).max() <= 1e-9, case["edit"]
+        assert sh["warps"]["rotation"] == json.loads(json.dumps(found.to_json()))["rotation"]
+        # drawn and previewed at once: the ring's guides, one more arm; nothing applied
+        assert sh["drawn"]["kind"] == "rotation" and sh["drawn"]["copies"] == 1
+        assert sh["drawnDiff"] > sh["drawnBareDiff"] > 0
+        (edit,) = sh["recipe"]["edits"]
+        assert RotationZone.parse(edit) == rot.zone(1)
+        assert sh["revisionPreview"] == 0 and sh["previewDiff"] > 0.002 * total
+        assert "5 of the ring" in sh["info"], sh["info"]
+        # applied: the library's edit; the page showed what it made
+        assert sh["applied"]["history"][-1]["op"] == "rotation"
+        (made,) = session.redo_stack
+        want = apply_recipe(original, Recipe.parse({"version": 1, "edits": [edit]}))
+        assert np.array_equal(made.sdf, want.sdf)
+        arms = _pieces(made, 0.078, 0.07)
+        assert len(arms) == 5 and _evenly([a for a, _, _ in arms], 5) <= 1.0, arms
+        got = (sh["appliedVsPreview"], sh["appliedVsInitial"])
+        assert got[0] <= 0.03 * total and got[0] <= 0.25 * got[1], got
+        # undone: the very object, the ring's +1 previewed again
+        assert session.current is original
+        assert sh["undone"]["solid_bounds"] == r["state0"]["solid_bounds"]
+        assert sh["warpAfterUndo"] == sh["preview"]
+        assert sh["undoneVsPreview"] <= 0.01 * total

@@ -334,6 +334,15 @@ def test_cli_fit_add_and_scale_copies(cli, sofa_file, tmp_path):
     assert seat_crowns(load(out2), rise=3) == 1
     proc = cli("suggest", sofa_file, "--axis", "x")
     assert "x: 2 alike elements" in proc.stdout, proc.stdout
+    # no sign: N elements in all (3 of 2 is one more), the current count refused
+    out3 = tmp_path / "three_in_all.csdf.npz"
+    proc = cli("scale", sofa_file, "-o", out3, "--axis", "x", "--copies", "3")
+    assert proc.returncode == 0, proc.stderr
+    assert seat_crowns(load(out3), rise=3) == 3
+    assert_bad_input(
+        cli("scale", sofa_file, "-o", tmp_path / "same.csdf.npz", "--axis", "x", "--copies", "2"),
+        "current one (2)",
+    )
 
 
 def test_cli_fit_add_bad_input(cli, sofa_file, tmp_path):

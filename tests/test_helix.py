@@ -223,3 +223,15 @@ def test_no_false_helix_on_real_objects():
         assert find_screws(c), rel
         recipe, _ = fit(c, None, add={"y": 1})
         assert not isinstance(recipe.edits[0], HelixZone), rel
+
+
+def test_count_in_all_sets_the_spirals_step_count(spiral):
+    """add_axis with in_all (scale --copies N, no sign): N steps in all, so N + 1 on a spiral
+    of N steps is one more step and N - 2 two fewer; N itself is refused (no change)."""
+    from partscale.zones import add_axis
+
+    for total, n in ((N + 1, 1), (N - 2, -2)):
+        (zone,), _ = add_axis(spiral, 1, total, in_all=True)
+        assert isinstance(zone, HelixZone) and zone.copies == n, zone
+    with pytest.raises(InputError, match=f"current one \\({N}\\)"):
+        add_axis(spiral, 1, N, in_all=True)

@@ -305,3 +305,41 @@ def test_no_false_rotation_on_real_objects():
     ]:
         c = import_file(data_path(rel), res=96)
         assert find_rotations(c) == [], rel
+
+
+def test_cli_copies_in_all_sets_the_ring_count(cli, tmp_path):
+    """scale --axis y --copies N with no sign is N elements in all on a ring, as on an element
+    group: 5 on a ring of four writes five arms (one added, not five); 4 is no change and is
+    refused with one line and no file."""
+    src = tmp_path / "star.csdf.npz"
+    save(star(4), src)
+    out = tmp_path / "five.csdf.npz"
+    r = cli("scale", src, "-o", out, "--axis", "y", "--copies", "5")
+    assert r.returncode == 0, r.stderr
+    assert "add 1 element" in r.stderr, r.stderr
+    assert len(_pieces(load(out), 0.078, 0.07)) == 5
+    bad = tmp_path / "same.csdf.npz"
+    assert_bad_input(
+        cli("scale", src, "-o", bad, "--axis", "y", "--copies", "4"), "current one (4)"
+    )
+    assert not bad.exists()
+
+
+def test_turned_arms_leave_no_distance_past_the_surface():
+    """One more arm of a star base: no stored distance, within 0.2 of the surface, exceeds the
+    way to the nearest voxel of the other sign by more than half a voxel (as on the input),
+    so a sphere tracer cannot step through an arm that now lies where there was none (off the
+    arms' levels the source's own distances would reach 19 voxels past one)."""
+    c = star(4)
+    (rot,) = find_rotations(c)
+    out = apply_rotation(c, rot.zone(1))
+    h = out.voxel_size
+    inside = out.sdf < 0
+    way = np.where(
+        inside,
+        ndimage.distance_transform_edt(inside),
+        ndimage.distance_transform_edt(~inside),
+    )
+    way = (way - 0.5) * h
+    near = way < 0.2
+    assert (np.abs(out.sdf) - way)[near].max() <= 0.5 * h + 1e-6

@@ -916,10 +916,10 @@ def test_suggest_snap_and_fit_are_the_zones_functions_on_the_current_object(tmp_
 
 
 def test_suggest_lists_the_warp_zones_and_apply_makes_them(tmp_path):
-    """/api/suggest (all axes) also answers the object's radial plan, flights and spirals as
-    zones.warp_candidates finds them, each with a recipe edit; /api/apply of that edit makes what
-    apply_recipe makes (one more step), /api/undo restores the very object; one axis answers
-    the candidates alone."""
+    """/api/suggest (all axes) also answers the object's radial plan, flights, spirals and rings
+    as zones.warp_candidates finds them, each with a recipe edit; /api/apply of that edit makes
+    what apply_recipe makes (one more step; a star base's fifth arm), /api/undo restores the
+    very object; one axis answers the candidates alone."""
     from partscale import zones
     from partscale.edit import Recipe, apply_recipe
 
@@ -931,7 +931,7 @@ def test_suggest_lists_the_warp_zones_and_apply_makes_them(tmp_path):
     with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
         body = client.get("/api/suggest").json()
         found = zones.warp_candidates(c)
-        assert {k: body[k] for k in ("radial", "steps", "helix")} == json.loads(
+        assert {k: body[k] for k in ("radial", "steps", "helix", "rotation")} == json.loads(
             json.dumps(found.to_json())
         )
         (step,) = body["steps"]
@@ -948,6 +948,21 @@ def test_suggest_lists_the_warp_zones_and_apply_makes_them(tmp_path):
         assert abs(hi[1] - (0.75 + step["rise"])) <= 0.5 * H  # one more rise
         assert post(client, "/api/undo").status_code == 200
         assert session.current is original
+    # a star base: its ring of four arms, whose edit adds a fifth
+    from test_rotation import star
+
+    c = star(4)
+    path = tmp_path / "star.csdf.npz"
+    partscale.save(c, path)
+    with TestClient(create_app(path), base_url="http://127.0.0.1") as client:
+        body = client.get("/api/suggest").json()
+        (ring,) = body["rotation"]
+        assert ring["count"] == 4 and ring["closed"] and body["steps"] == body["helix"] == []
+        assert ring["edit"] == zones.find_rotations(c)[0].zone(1).to_json()
+        r = post(client, "/api/apply", {"version": 1, "edits": [ring["edit"]]})
+        assert r.status_code == 200, r.text
+        want = apply_recipe(c, Recipe.parse({"version": 1, "edits": [ring["edit"]]}))
+        assert np.array_equal(client.app.state.session.current.sdf, want.sdf)
 
 
 def test_snap_uses_the_candidates_the_server_found_for_suggest(tmp_path, monkeypatch):

@@ -16,6 +16,7 @@ from partscale.edit import (
     ObliqueZone,
     RadialZone,
     Recipe,
+    ScrewZone,
     apply_oblique,
     apply_radial,
     apply_recipe,
@@ -414,3 +415,21 @@ def test_radial_edit_of_a_splayed_stool_keeps_true_distances():
     band = np.abs(full.sdf) <= BAND_VOXELS * H
     err = np.abs(out.sdf - full.sdf)[band] / H
     assert np.percentile(err, 99) <= 0.5, np.percentile(err, 99)
+
+
+def test_count_in_all_sets_a_flights_step_count():
+    """add_axis with in_all (scale --copies N, no sign): N steps in all along the flight's
+    repeat, so 7 on a flight of six is one more step (one more riser) and 4 two fewer; 6 is
+    refused (no change)."""
+    from partscale.zones import add_axis, find_screws
+
+    c = flight()
+    count = find_screws(c)[0].count
+    assert count == 6
+    for total, n in ((7, 1), (4, -2)):
+        (zone,), _ = add_axis(c, 1, total, in_all=True)
+        assert isinstance(zone, ScrewZone) and zone.copies == n, zone
+    out = apply_recipe(c, Recipe((add_axis(c, 1, 7, in_all=True)[0][0],)))
+    assert len(_risers(out)) == len(_risers(c)) + 1
+    with pytest.raises(InputError, match="current one \\(6\\)"):
+        add_axis(c, 1, 6, in_all=True)

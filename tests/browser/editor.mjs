@@ -1,7 +1,7 @@
 // Drives the editor page in headless Chromium (playwright-core) for tests/test_browser.py and
 // bench/bench_editor.py. Usage: node editor.mjs '<json args>'; prints one JSON result line.
 //
-// args: { url, chromium, web (folder with node_modules), out (folder), reference (png path or
+// args (the JSON, or @FILE): { url, chromium, web (folder with node_modules), out (folder), reference (png path or
 //         null), updateReference, canvas: [w, h], remapCases, zone: {axis, start, end, dest},
 //         benchmark: n frames (only load + benchmark when set), features: {snapZone, fitSize}
 //         (suggestion click, snap toggle, fit preview/apply/undo),
@@ -19,7 +19,8 @@ import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { pathToFileURL } from 'node:url';
 
-const args = JSON.parse(process.argv[2]);
+// the JSON, or @FILE holding it (a long one: one argument holds at most 128 KiB)
+const args = JSON.parse(process.argv[2].startsWith('@') ? readFileSync(process.argv[2].slice(1), 'utf8') : process.argv[2]);
 const require = createRequire(join(args.web, 'package.json'));
 const load = async (name) => import(pathToFileURL(require.resolve(name)).href);
 const pick = (mod, name) => mod[name] ?? mod.default?.[name];

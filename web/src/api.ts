@@ -137,12 +137,28 @@ export interface WarpFound {
   steps: { axis: Axis; step: [number, number, number]; going: number; rise: number; support: number; count: number; cut: number; ground: number | null; edit: WarpEdit }[];
   /** Spiral stairs: turn (degrees) and rise per step about the vertical through center. */
   helix: { center: [number, number]; angle: number; rise: number; support: number; count: number; cut: number; edit: WarpEdit }[];
+  /** Rings or arcs of elements about the vertical through center (a star base's arms): the turn
+   *  (degrees) from one to the next, the first one's direction, count, whether they close a ring,
+   *  the radii and levels they lie between, each one's half-width (degrees), the edit adding one. */
+  rotation: {
+    center: [number, number];
+    angle: number;
+    phase: number;
+    count: number;
+    closed: boolean;
+    support: number;
+    hub: number;
+    radius: number;
+    span: [number, number];
+    width: number;
+    edit: WarpEdit;
+  }[];
 }
 
 /** All of the current object's suggestions: the zone candidates and the warp zones. */
 export async function suggestAll(): Promise<{ candidates: Candidate[]; warps: WarpFound }> {
   const b = await (await check(await fetch('/api/suggest', { cache: 'no-store' }))).json();
-  return { candidates: b.candidates, warps: { radial: b.radial ?? null, steps: b.steps ?? [], helix: b.helix ?? [] } };
+  return { candidates: b.candidates, warps: { radial: b.radial ?? null, steps: b.steps ?? [], helix: b.helix ?? [], rotation: b.rotation ?? [] } };
 }
 
 /** What POST /api/snap answers: the edit snapped for its mode (world units) and what moved. */

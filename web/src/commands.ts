@@ -70,7 +70,7 @@ export function createCommands(store: Store, scene: Scene): Commands {
 
   async function suggestFor(s: api.ServerState) {
     let found: api.Candidate[] = [];
-    let warps: api.WarpFound = { radial: null, steps: [], helix: [] };
+    let warps: api.WarpFound = { radial: null, steps: [], helix: [], rotation: [] };
     try {
       ({ candidates: found, warps } = await api.suggestAll());
     } catch (e) {
@@ -169,8 +169,8 @@ export function createCommands(store: Store, scene: Scene): Commands {
   /** Preview a recipe the server chose (fit, count edit) as the zones, or as the shaped zone
    *  where it is one alone; how many zones it previews. */
   function previewRecipe(what: string, fitted: api.Fitted): number {
-    // a radial zone or a stair's steps ({"radial": ...}, {"screw": ...}, {"helix": ...}) is no slab across
-    // an axis: the shader previews one such zone alone, or slabs
+    // a radial zone, a stair's steps or a ring's elements ({"radial": ...}, {"screw": ...},
+    // {"helix": ...}, {"rotation": ...}) is no slab across an axis: the shader previews one such zone alone, or slabs
     const other = fitted.recipe.edits.find((e) => !('axis' in e && 'mode' in e));
     const alone = other && fitted.recipe.edits.length === 1 ? warpFromEdit(other, groundOf(other)) : null;
     if (alone) {
@@ -185,7 +185,9 @@ export function createCommands(store: Store, scene: Scene): Commands {
             ? "a flight's steps"
             : 'helix' in other
               ? "a spiral stair's steps"
-              : 'an oblique zone';
+              : 'rotation' in other
+                ? "a ring's elements"
+                : 'an oblique zone';
       throw new ApiError(
         `${what}: expected zones across x, y or z or one shaped zone alone (what this page previews), got ${kind} among others; ` +
           `run it with partscale on the command line (${fitted.why.join('; ')})`,

@@ -19,7 +19,7 @@ import { packWarp, type Warp, type WarpEdit, warpFromEdit, type WarpRecipe, warp
 
 function parsed(edit: WarpEdit): Warp {
   const w = warpFromEdit(edit);
-  if (!w) throw new Error(`expected a warp edit (radial, normal, screw, helix), got ${JSON.stringify(edit)}`);
+  if (!w) throw new Error(`expected a warp edit (radial, normal, screw, helix, rotation), got ${JSON.stringify(edit)}`);
   return w;
 }
 

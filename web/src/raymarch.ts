@@ -94,7 +94,7 @@ float sdf(vec3 pOut) {
   vec3 s = warpSource(p, w);
   bool alongWins;
   float after = w > 0.0 ? grounded(p, distanceAt(s), alongWins) : 0.0;
-  if (w >= 1.0) return after;
+  if (w >= 1.0) return min(after, warpGap(p));
   return mix(distanceAt(p), after, w);
 }
 

@@ -340,7 +340,9 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
   /** The shaped zone drawn: a radial zone as cylinders at R0 (green), R1 (red) and the target
    *  (blue) about its axis; an oblique zone as its two tilted planes and the destination's; a
    *  flight's or a spiral's step as its cut and an arrow from a point on the cut to where the
-   *  copied step puts it. */
+   *  copied step puts it; elements about the vertical as the axis, the hub's circle (green), the
+   *  elements' outer circle (red) and spokes at their directions now (red) and after (blue), with
+   *  an arrow from the last element to the last one's new place. */
   function drawWarp(w: Warp | null, box: THREE.Box3) {
     for (const c of [...warpGroup.children]) {
       warpGroup.remove(c);
@@ -360,6 +362,8 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
       const [l0, l1] = w.span ?? [lo[a], hi[a]];
       warpGroup.add(ring(w, w.r0, l0, l1, PLANE_COLORS.start), ring(w, w.r1, l0, l1, PLANE_COLORS.end));
       if (w.to !== w.r1) warpGroup.add(ring(w, w.to, l0, l1, PLANE_COLORS.dest));
+    } else if (w.kind === 'rotation') {
+      drawRotation(w);
     } else if (w.kind === 'oblique') {
       const n = new THREE.Vector3(...w.normal).normalize();
       warpGroup.add(tiltedPlane(n, w.s0, box, PLANE_COLORS.start), tiltedPlane(n, w.s1, box, PLANE_COLORS.end));
@@ -385,15 +389,56 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
         to = new THREE.Vector3(w.center[0] + r * Math.cos(t), w.cut + w.rise, w.center[1] + r * Math.sin(t));
         warpGroup.add(lines([[w.center[0], lo[1], w.center[1]], [w.center[0], hi[1], w.center[1]]], PLANE_COLORS.start));
       }
-      const dir = to.clone().sub(from);
-      const len = dir.length();
-      const arrow = new THREE.ArrowHelper(dir.normalize(), from, len, PLANE_COLORS.dest, 0.3 * len, 0.15 * len);
-      arrow.traverse((o) => {
-        o.renderOrder = 3;
-        const m = (o as THREE.Mesh).material as THREE.Material | undefined;
-        if (m) m.depthTest = false;
-      });
-      warpGroup.add(arrow);
+      warpGroup.add(arrow(from, to));
+    }
+  }
+
+  /** An arrow (over everything) from one point to another. */
+  function arrow(from: THREE.Vector3, to: THREE.Vector3): THREE.ArrowHelper {
+    const dir = to.clone().sub(from);
+    const len = dir.length();
+    const a = new THREE.ArrowHelper(dir.normalize(), from, len, PLANE_COLORS.dest, 0.3 * len, 0.15 * len);
+    a.traverse((o) => {
+      o.renderOrder = 3;
+      const m = (o as THREE.Mesh).material as THREE.Material | undefined;
+      if (m) m.depthTest = false;
+    });
+    return a;
+  }
+
+  /** Elements about the vertical: the axis, the hub's and the outer circle at the span's ends,
+   *  spokes at the elements' directions now and after the edit, an arrow to the last one's new
+   *  place. */
+  function drawRotation(w: Extract<Warp, { kind: 'rotation' }>) {
+    const [cx, cz] = w.center;
+    const [y0, y1] = w.span;
+    const ym = (y0 + y1) / 2;
+    const at = (r: number, degrees: number, y: number) => {
+      const t = (degrees * Math.PI) / 180;
+      return [cx + r * Math.cos(t), y, cz + r * Math.sin(t)];
+    };
+    const circle = (r: number, color: number) => {
+      const segs: number[][] = [];
+      for (const y of [y0, y1]) {
+        for (let k = 0; k < 96; k++) segs.push(at(r, (360 * k) / 96, y), at(r, (360 * (k + 1)) / 96, y));
+      }
+      return lines(segs, color);
+    };
+    const spokes = (dirs: number[], color: number) => lines(dirs.flatMap((d) => [at(w.hub, d, ym), at(w.radius, d, ym)]), color);
+    const sign = w.angle > 0 ? 1 : -1;
+    const k = w.count + w.copies;
+    const now = Array.from({ length: w.count }, (_, m) => w.phase + m * w.angle);
+    const after = Array.from({ length: Math.max(k, 0) }, (_, m) => w.phase + sign * m * (w.closed ? 360 / k : Math.abs(w.angle)));
+    warpGroup.add(
+      lines([[cx, y0 - 0.5 * (y1 - y0), cz], [cx, y1 + 0.5 * (y1 - y0), cz]], PLANE_COLORS.start),
+      circle(Math.max(w.hub, 1e-6), PLANE_COLORS.start),
+      circle(w.radius, PLANE_COLORS.end),
+      spokes(now, PLANE_COLORS.end),
+      spokes(after, PLANE_COLORS.dest),
+    );
+    if (k >= 1) {
+      const r = 0.9 * w.radius;
+      warpGroup.add(arrow(new THREE.Vector3(...at(r, now[now.length - 1], y1)), new THREE.Vector3(...at(r, after[after.length - 1], y1))));
     }
   }
 

@@ -366,7 +366,9 @@ export function defaultWarp(s: AppState, kind: WarpKind): Warp {
         ? warpFromEdit(found.steps[0].edit, found.steps[0].ground)
         : kind === 'helix' && found?.helix.length
           ? warpFromEdit(found.helix[0].edit)
-          : null;
+          : kind === 'rotation' && found?.rotation.length
+            ? warpFromEdit(found.rotation[0].edit)
+            : null;
   if (fromFound) return fromFound;
   const [lo, hi] = solidBounds(s);
   const ext = [0, 1, 2].map((a) => hi[a] - lo[a]);
@@ -381,6 +383,8 @@ export function defaultWarp(s: AppState, kind: WarpKind): Warp {
       return { kind, axis: 'x', step: [0.1 * ext[0], 0.1 * ext[1], 0], cut: mid[0], copies: 1, ground: null };
     case 'helix':
       return { kind, center: [mid[0], mid[2]], angle: 30, rise: 0.1 * ext[1], cut: mid[1], copies: 1 };
+    case 'rotation':
+      return { kind, center: [mid[0], mid[2]], angle: 90, phase: 0, count: 4, closed: true, hub: 0.2 * r, radius: r, span: [lo[1], hi[1]], copies: 1 };
   }
 }
 

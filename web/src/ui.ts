@@ -163,7 +163,8 @@ function renderStatus(s: AppState) {
   status.classList.toggle('error', s.status.error);
 }
 
-/** The object's warp zones as buttons: its radial plan, each flight and spiral (one more step). */
+/** The object's warp zones as buttons: its radial plan, each flight and spiral (one more step),
+ *  each ring or arc of elements about the vertical (one more element). */
 function renderWarpFound(s: AppState) {
   const box = $('warp-found');
   box.innerHTML = '';
@@ -194,7 +195,15 @@ function renderWarpFound(s: AppState) {
   found.helix.forEach((k, i) =>
     button(`warp-helix-${i}`, 'spiral steps: +1', `${k.count} steps each turning ${fmt(k.angle)}° and rising ${fmt(k.rise)} ${units} (${Math.round(100 * k.support)}% of the surface repeats)`),
   );
-  if (!box.children.length) box.textContent = 'no round plan, flight or spiral found';
+  found.rotation.forEach((k, i) =>
+    button(
+      `warp-rotation-${i}`,
+      `${k.closed ? 'ring' : 'arc'} of ${k.count}: +1`,
+      `${k.count} elements ${fmt(Math.abs(k.angle))}° apart about the vertical through ${fmt(k.center[0])}, ${fmt(k.center[1])} ${units}, ` +
+        `${k.closed ? 'a closed ring (spaced evenly again)' : 'an open arc (continued)'}; the hub within ${fmt(k.hub)} ${units} stays (${Math.round(100 * k.support)}% of the surface repeats)`,
+    ),
+  );
+  if (!box.children.length) box.textContent = 'no round plan, flight, spiral or ring found';
 }
 
 /** The shaped zone's fields: those of its kind shown, each with its value. */
@@ -221,7 +230,10 @@ function renderWarp(s: AppState) {
     set('warp-start', fmt(w.s0));
     set('warp-end', fmt(w.s1));
     set('warp-to', fmt(w.to));
-  } else if (w) set('warp-copies', String(w.copies));
+  } else if (w) {
+    $('warp-copies-label').textContent = w.kind === 'rotation' ? 'elements' : 'steps';
+    set('warp-copies', String(w.copies));
+  }
   const info = $('warp-info');
   const problem = firstProblem(s);
   info.textContent = !w ? '' : problem ? `invalid: ${problem.message}` : isNoop(s) ? 'no change yet: set the target' : warpSummary(w, s.server?.units ?? '');
@@ -240,6 +252,11 @@ function warpSummary(w: Warp, units: string): string {
       return `${w.copies > 0 ? '+' : '−'}${Math.abs(w.copies)} step${Math.abs(w.copies) === 1 ? '' : 's'} of (${w.step.map(fmt).join(', ')}) ${units} beyond ${w.axis} = ${fmt(w.cut)}`;
     case 'helix':
       return `${w.copies > 0 ? '+' : '−'}${Math.abs(w.copies)} step${Math.abs(w.copies) === 1 ? '' : 's'} turning ${fmt(w.angle)}° and rising ${fmt(w.rise)} ${units} above ${fmt(w.cut)}`;
+    case 'rotation': {
+      const k = w.count + w.copies;
+      const spacing = w.closed ? `spaced evenly every ${fmt(360 / k)}°` : `${fmt(Math.abs(w.angle))}° apart`;
+      return `${w.copies > 0 ? '+' : '−'}${Math.abs(w.copies)} element${Math.abs(w.copies) === 1 ? '' : 's'}: ${k} of the ${w.closed ? 'ring' : 'arc'}, ${spacing}`;
+    }
   }
 }
 
@@ -473,7 +490,7 @@ function bindWarp(store: Store, commands: Commands) {
   numberField('warp-start', (w) => (w.kind === 'radial' ? 'r0' : w.kind === 'oblique' ? 's0' : null));
   numberField('warp-end', (w) => (w.kind === 'radial' ? 'r1' : w.kind === 'oblique' ? 's1' : null));
   numberField('warp-to', (w) => (w.kind === 'radial' || w.kind === 'oblique' ? 'to' : null));
-  numberField('warp-copies', (w) => (w.kind === 'screw' || w.kind === 'helix' ? 'copies' : null), true);
+  numberField('warp-copies', (w) => (w.kind === 'screw' || w.kind === 'helix' || w.kind === 'rotation' ? 'copies' : null), true);
   $('warp-normal').addEventListener('input', (e) => {
     const v = (e.target as HTMLInputElement).value.trim().split(/[\s,]+/).map(Number);
     if (v.length === 3 && v.every(Number.isFinite) && store.get().warp?.kind === 'oblique') {
@@ -492,7 +509,9 @@ function bindWarp(store: Store, commands: Commands) {
           ? warpFromEdit(s.warps.steps[Number(index)].edit, s.warps.steps[Number(index)].ground)
           : kind === 'helix'
             ? warpFromEdit(s.warps.helix[Number(index)].edit)
-            : null;
+            : kind === 'rotation'
+              ? warpFromEdit(s.warps.rotation[Number(index)].edit)
+              : null;
     if (w) {
       dispatch({ type: 'set-warp', warp: w });
       dispatch({ type: 'set-status', message: `${b.textContent}: ${b.title}` });

@@ -1,5 +1,6 @@
 // Zones that are no slab across an axis (partscale.edit.warp): a radial zone, an oblique slab, a
-// flight's steps (screw) and a spiral stair's steps (helix). Their maps in TypeScript (bounds,
+// flight's steps (screw), a spiral stair's steps (helix) and elements about the vertical (rotation:
+// a star base's arms). Their maps in TypeScript (bounds,
 // the step bound, the tests' mirror) and in GLSL (the raymarcher), both exactly
 // partscale.edit.warp_source: tests/test_browser.py evaluates the GLSL on the GPU and this module
 // in node, and compares both with it. Each kind is one entry of KINDS (its recipe edit, its map,
@@ -52,7 +53,27 @@ export interface HelixWarp {
   copies: number;
 }
 
-export type Warp = RadialWarp | ObliqueWarp | ScrewWarp | HelixWarp;
+export interface RotationWarp {
+  kind: 'rotation';
+  /** The vertical axis' place on x and z. */
+  center: [number, number];
+  /** Degrees from one element to the next (from x toward z). */
+  angle: number;
+  /** Degrees: the first element's direction. */
+  phase: number;
+  /** Elements now. */
+  count: number;
+  /** A whole ring (else an open arc). */
+  closed: boolean;
+  /** Radii the elements lie between (within hub nothing moves). */
+  hub: number;
+  radius: number;
+  /** Levels (y) the elements lie between. */
+  span: [number, number];
+  copies: number;
+}
+
+export type Warp = RadialWarp | ObliqueWarp | ScrewWarp | HelixWarp | RotationWarp;
 export type WarpKind = Warp['kind'];
 
 /** A warp's recipe edit (partscale.edit.RadialZone.to_json and its siblings). */
@@ -281,7 +302,93 @@ const helix: KindSpec<HelixWarp> = {
   noop: () => false,
 };
 
-const KINDS: { [K in WarpKind]: KindSpec<Extract<Warp, { kind: K }>> } = { radial, oblique, screw, helix };
+/** numpy's rint: halves to the even neighbour. */
+function rint(x: number): number {
+  const r = Math.round(x);
+  return r - x === 0.5 && r % 2 !== 0 ? r - 1 : r;
+}
+
+/** numpy's mod: the remainder with the divisor's sign. */
+function mod(x: number, y: number): number {
+  const r = x % y;
+  return r !== 0 && r < 0 !== y < 0 ? r + y : r;
+}
+
+/** Source direction (degrees) of an output direction about a rotation zone's axis
+ *  (edit.warp.rotation_source). */
+export function rotationSource(theta: number, w: RotationWarp): number {
+  const sign = w.angle > 0 ? 1 : -1;
+  const a = Math.abs(w.angle);
+  let rel = mod(sign * (theta - w.phase), 360);
+  const k = w.count;
+  const n = w.copies;
+  if (w.closed) {
+    const step = 360 / (k + n);
+    const m = rint(rel / step);
+    const alpha = Math.min(a / 2, Math.max(-a / 2, rel - m * step));
+    return w.phase + sign * (mod(rint((m * k) / (k + n)), k) * a + alpha);
+  }
+  const mid = ((k - 1 + Math.max(n, 0)) * a) / 2;
+  rel = mod(rel - mid + 180, 360) + mid - 180;
+  const m = rint(rel / a);
+  let src = rel;
+  if (n > 0 && m >= k && m <= k - 1 + n) src = rel - (m - (k - 1)) * a;
+  else if (n < 0 && m >= k + n && m <= k - 1) src = rel + (k - m) * a;
+  return w.phase + sign * src;
+}
+
+const rotation: KindSpec<RotationWarp> = {
+  code: 5,
+  edit: (w) => ({
+    rotation: {
+      center: [...w.center],
+      angle: w.angle,
+      phase: w.phase,
+      count: w.count,
+      closed: w.closed,
+      hub: w.hub,
+      radius: w.radius,
+      span: [...w.span],
+    },
+    copies: w.copies,
+  }),
+  source(w, p) {
+    const d = [p[0] - w.center[0], p[2] - w.center[1]];
+    const r = Math.hypot(d[0], d[1]);
+    if (!(r > w.hub && p[1] >= w.span[0] && p[1] <= w.span[1])) return [[p[0], p[1], p[2]], 1];
+    const t = rotationSource((Math.atan2(d[1], d[0]) * 180) / Math.PI, w) * deg;
+    return [[w.center[0] + r * Math.cos(t), p[1], w.center[1] + r * Math.sin(t)], 1];
+  },
+  bounds(w, lo, hi, h) {
+    // warp.warp_grid: the disc the elements turn in
+    const reach = w.radius + h;
+    const a = [Math.min(lo[0], w.center[0] - reach), lo[1], Math.min(lo[2], w.center[1] - reach)];
+    const b = [Math.max(hi[0], w.center[0] + reach), hi[1], Math.max(hi[2], w.center[1] + reach)];
+    return [a, b];
+  },
+  // each sector shows a turned element, but the next one may lie nearer than in the source
+  stepScale: () => 0.5,
+  pack(w, h) {
+    return [
+      ...[w.center[0], w.center[1], w.phase, w.angle > 0 ? 1 : -1],
+      ...[Math.abs(w.angle), w.count, w.copies, w.closed ? 1 : 0],
+      ...[w.hub, w.span[0], w.span[1], h],
+      ...[w.radius, 0, 0, 0],
+    ];
+  },
+  problem(w) {
+    if (!finite(...w.center, w.angle, w.phase, w.hub, w.radius, ...w.span)) return 'elements: finite values';
+    if (!Number.isInteger(w.copies) || w.copies === 0) return 'elements: a whole number other than 0';
+    if (!(Math.abs(w.angle) > 0 && Math.abs(w.angle) <= 180)) return 'the turn must be 0 < |angle| <= 180 degrees';
+    if (w.count + w.copies < 1) return `at most ${w.count - 1} of the ${w.count} elements can go`;
+    if (w.closed && Math.abs(w.count * Math.abs(w.angle) - 360) > 1e-6 * 360) return 'a closed ring turns a whole turn';
+    if (!(w.hub >= 0 && w.hub < w.radius && w.span[0] < w.span[1])) return 'hub below radius, span low to high';
+    return null;
+  },
+  noop: () => false,
+};
+
+const KINDS: { [K in WarpKind]: KindSpec<Extract<Warp, { kind: K }>> } = { radial, oblique, screw, helix, rotation };
 export const WARP_KINDS = Object.keys(KINDS) as WarpKind[];
 
 function spec<W extends Warp>(w: W): KindSpec<W> {
@@ -333,13 +440,28 @@ export function warpFromEdit(e: WarpEdit, ground: number | null = null): Warp | 
     const s = e.helix as Record<string, unknown>;
     return { kind: 'helix', center: pair(s.center), angle: num(s.angle), rise: num(s.rise), cut: num(s.cut), copies: num(e.copies) };
   }
+  if ('rotation' in e) {
+    const s = e.rotation as Record<string, unknown>;
+    return {
+      kind: 'rotation',
+      center: pair(s.center),
+      angle: num(s.angle),
+      phase: num(s.phase),
+      count: num(s.count),
+      closed: s.closed === true,
+      hub: num(s.hub),
+      radius: num(s.radius),
+      span: pair(s.span),
+      copies: num(e.copies),
+    };
+  }
   return null;
 }
 
 export const WARP_GLSL = /* glsl */ `
 // partscale.edit.warp_source, one branch per kind (warp.ts KINDS): output point -> source point,
 // and in weight the share of it in the output (the rest is the point's own place).
-uniform int uWarpKind;     // 0 none, 1 radial, 2 oblique, 3 screw, 4 helix
+uniform int uWarpKind;     // 0 none, 1 radial, 2 oblique, 3 screw, 4 helix, 5 rotation
 uniform vec4 uWarp[4];
 
 float warpGauge(vec2 d, float sides, float phase) {
@@ -348,6 +470,32 @@ float warpGauge(vec2 d, float sides, float phase) {
   float a = atan(d.y, d.x) - phase + 0.5 * sector;
   float off = a - sector * floor(a / sector) - 0.5 * sector;  // angle to the nearest face normal
   return length(d) * cos(off) / cos(0.5 * sector);
+}
+
+// cos and sin of an angle in degrees to float32's precision (a GPU's own sin and cos may be
+// coarser): to the nearest quarter turn, then Taylor series on |x| <= pi / 4
+vec2 warpCosSin(float degs) {
+  float q = floor(degs / 90.0 + 0.5);
+  float x = radians(degs - 90.0 * q);
+  float x2 = x * x;
+  float s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0 * (1.0 - x2 / 110.0)))));
+  float c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0 * (1.0 - x2 / 90.0))));
+  int quarter = int(mod(q, 4.0));
+  return quarter == 0 ? vec2(c, s) : quarter == 1 ? vec2(-s, c) : quarter == 2 ? vec2(-c, -s) : vec2(s, -c);
+}
+
+// A distance no larger than the way from an output point to what the warp puts where the source
+// had something else (huge where the source's own distance is a bound already): a rotation's
+// elements lie on the span's levels beyond the hub, so off those levels or within the hub the
+// way to them is at least the gap (at least a voxel, so that a ray crosses into them)
+float warpGap(vec3 p) {
+  if (uWarpKind != 5) return 1e9;
+  vec4 a = uWarp[0], c = uWarp[2], e = uWarp[3];
+  float r = length(p.xz - a.xy);
+  float below = c.y - p.y, above = p.y - c.z;
+  if (below > 0.0 || above > 0.0) return max(length(vec2(max(below, above), max(r - e.x, 0.0))), c.w);
+  if (r <= c.x) return max(c.x - r, c.w);
+  return 1e9;
 }
 
 vec3 warpSource(vec3 p, out float weight) {
@@ -383,6 +531,35 @@ vec3 warpSource(vec3 p, out float weight) {
     vec2 d = p.xz - a.xy;
     weight = clamp((p.y - b.x) / b.y / (2.0 * ${CUT_BLEND.toFixed(1)}) + 0.5, 0.0, 1.0);
     return vec3(a.z * d.x - a.w * d.y + a.x, p.y - b.z, a.w * d.x + a.z * d.y + a.y);
+  }
+  if (uWarpKind == 5) {
+    // rotation (edit.warp.rotation_source): beyond the hub, on the span's levels, turned by
+    // delta degrees, a whole multiple of the angles where the map turns an element rigidly (no
+    // error of atan enters); where it squeezes a gap, the source direction itself
+    vec2 d = p.xz - a.xy;
+    float r = length(d);
+    if (!(r > c.x && p.y >= c.y && p.y <= c.z)) return p;
+    float sgn = a.w, ang = b.x, k = b.y, n = b.z;
+    float rel = mod(sgn * (degrees(atan(d.y, d.x)) - a.z), 360.0);
+    float delta = 0.0;
+    if (b.w > 0.5) {
+      float stp = 360.0 / (k + n);
+      float m = roundEven(rel / stp);
+      float alpha = rel - m * stp;
+      float q = mod(roundEven(m * k / (k + n)), k);
+      if (abs(alpha) > 0.5 * ang) {
+        vec2 cs = warpCosSin(a.z + sgn * (q * ang + sign(alpha) * 0.5 * ang));
+        return vec3(a.x + r * cs.x, p.y, a.y + r * cs.y);
+      }
+      delta = q * ang - m * stp;
+    } else {
+      float mid = (k - 1.0 + max(n, 0.0)) * ang / 2.0;
+      float m = roundEven((mod(rel - mid + 180.0, 360.0) + mid - 180.0) / ang);
+      if (n > 0.0 && m >= k && m <= k - 1.0 + n) delta = -(m - (k - 1.0)) * ang;
+      else if (n < 0.0 && m >= k + n && m <= k - 1.0) delta = (k - m) * ang;
+    }
+    vec2 cs = warpCosSin(sgn * delta);
+    return vec3(a.x + cs.x * d.x - cs.y * d.y, p.y, a.y + cs.y * d.x + cs.x * d.y);
   }
   return p;
 }

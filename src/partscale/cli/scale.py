@@ -442,7 +442,7 @@ def _element_recipe(src: Path, mesh_route: bool, axis: str, copies: str, mode, s
     """``--copies`` with no ``--zone``: whole elements added or removed along ``axis``
     (:func:`partscale.zones.elements.find_elements`); the choice is printed."""
     from ..edit import AXES, Recipe
-    from ..zones import add_axis, find_elements
+    from ..zones import add_axis
 
     if axis.lower() not in AXES:
         raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
@@ -467,12 +467,9 @@ def _element_recipe(src: Path, mesh_route: bool, axis: str, copies: str, mode, s
         raise InputError(
             f"--copies: expected +N or -N (elements more or fewer), or N in all, got {copies!r}"
         ) from None
-    if not text.startswith(("+", "-")):  # N in all
-        g = find_elements(c, ax).best
-        n -= 0 if g is None else len(g.members)
-        if n == 0:
-            raise InputError(f"--copies {text}: expected a change, got the current count ({text})")
-    edits, notes = add_axis(c, ax, n)
+    # N in all: the change is N less the count of the repeat add_axis uses (elements, steps,
+    # a ring's elements)
+    edits, notes = add_axis(c, ax, n, in_all=not text.startswith(("+", "-")))
     for line in notes:
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     return Recipe(tuple(edits))

@@ -42,6 +42,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+from scipy import ndimage
 
 from .._memory import check_memory
 from ..csdf import BAND_VOXELS, CSDF
@@ -103,7 +104,9 @@ def _radial_source(r: np.ndarray, zone: RadialZone) -> np.ndarray:
 
 
 def warp_source(
-    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone, points: np.ndarray, voxel_size: float
+    zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone,
+    points: np.ndarray,
+    voxel_size: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The map of a warp zone: each output point's source point, and how much of it shows.
 
@@ -112,7 +115,7 @@ def warp_source(
 
     Parameters
     ----------
-    zone : RadialZone, ObliqueZone, ScrewZone or HelixZone
+    zone : RadialZone, ObliqueZone, ScrewZone, HelixZone or RotationZone
         The zone (its normal need not be unit; a step is snapped to whole voxels as
         :func:`apply_screw` snaps it).
     points : (N, 3) float
@@ -123,11 +126,12 @@ def warp_source(
     Returns
     -------
     src : (N, 3) float64
-        The source point each output point shows beyond the cut (radial, oblique: everywhere).
+        The source point each output point shows beyond the cut (radial, oblique, rotation:
+        everywhere; a rotation's is the point's own place within the hub and off the span).
     weight : (N,) float64
-        0..1: the share of ``src`` in the output, the rest being the point's own place (radial
-        and oblique: 1; steps: 0 before the cut, 1 beyond it, linear over :data:`CUT_BLEND`
-        voxels either side of it).
+        0..1: the share of ``src`` in the output, the rest being the point's own place (radial,
+        oblique and rotation: 1; steps: 0 before the cut, 1 beyond it, linear over
+        :data:`CUT_BLEND` voxels either side of it).
 
     Examples
     --------
@@ -167,6 +171,8 @@ def warp_source(
         direction = 1.0 if unit[a] > 0 else -1.0
         beyond = (p[:, a] - zone.cut) * direction / h
         return p - _screw_shift(zone, h) * h, np.clip(beyond / (2 * CUT_BLEND) + 0.5, 0.0, 1.0)
+    if isinstance(zone, RotationZone):
+        return _rotation_points(zone, p), one
     c = np.array([zone.center[0], zone.center[1]], dtype=np.float64)
     src = p.copy()
     src[:, [0, 2]] = _turn(p[:, [0, 2]] - c, -zone.copies * zone.angle) + c
@@ -293,11 +299,13 @@ def _finish(
     arrays: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     entry: dict[str, Any],
     keep_square_to: np.ndarray | None = None,
+    bound_far: bool = False,
 ) -> CSDF:
     """Re-evaluate the voxels near the surface within the band of a moved one, and the new
     CSDF with its history entry. With ``keep_square_to`` (K, 3) (the directions a map that only
     grows moves content along), a voxel whose field is flat along all of them keeps its
-    resampled distance (:func:`~partscale.edit._warp_kernels.reevaluation_mask`).
+    resampled distance (:func:`~partscale.edit._warp_kernels.reevaluation_mask`). With
+    ``bound_far``, the distances beyond the band are bounded (:func:`_bound_far`).
     """
     sdf, rgb, parts, moved = arrays
     h = csdf.voxel_size
@@ -307,8 +315,27 @@ def _finish(
     dirs = np.zeros((0, 3)) if keep_square_to is None else np.asarray(keep_square_to, np.float64)
     mask = reevaluation_mask(sdf, moved, float(h), band, r, dirs, LATERAL)
     n = reevaluate_arrays(sdf, rgb, parts, h, mask, band=band)
+    if bound_far:
+        _bound_far(sdf, float(h), band)
     entry = {**entry, "reevaluated_voxels": int(n)}
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
+
+
+def _bound_far(sdf: np.ndarray, h: float, band: float) -> None:
+    """In place on ``sdf`` (X, Y, Z) float32: beyond ``band`` voxels, no distance larger than
+    the one to the nearest voxel of the other sign less half a voxel. A map that puts elements
+    where the source had none (a turned arm) leaves, off its levels and past the band, the
+    source's distances there, far larger than the way to the new surface: a sphere tracer
+    would step through it.
+    """
+    far = np.abs(sdf) > band * h
+    if not far.any():
+        return
+    inside = sdf < 0
+    edt = np.where(inside, ndimage.distance_transform_edt(inside), 0.0)
+    edt += np.where(inside, 0.0, ndimage.distance_transform_edt(~inside))
+    bound = ((edt[far] - 0.5) * h).astype(np.float32)
+    sdf[far] = np.copysign(np.minimum(np.abs(sdf[far]), bound), sdf[far])
 
 
 def moved_axes(zone: RadialZone | ObliqueZone | ScrewZone | HelixZone | RotationZone) -> set[int]:
@@ -988,6 +1015,22 @@ def rotation_source(theta: np.ndarray, zone: RotationZone) -> np.ndarray:
     return zone.phase + sign * src
 
 
+def _rotation_points(zone: RotationZone, p: np.ndarray) -> np.ndarray:
+    """(N, 3) source points of output points ``p`` (N, 3) under a rotation zone: beyond the hub
+    and on the span's levels turned by :func:`rotation_source` about the axis, else their own.
+    """
+    c = np.array(zone.center, dtype=np.float64)
+    d = p[:, [0, 2]] - c
+    r = np.hypot(d[:, 0], d[:, 1])
+    theta = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
+    t = np.radians(rotation_source(theta, zone))
+    turn = (r > zone.hub) & (p[:, 1] >= zone.span[0]) & (p[:, 1] <= zone.span[1])
+    src = p.copy()
+    src[turn, 0] = c[0] + r[turn] * np.cos(t[turn])
+    src[turn, 2] = c[1] + r[turn] * np.sin(t[turn])
+    return src
+
+
 def apply_rotation(csdf: CSDF, zone: RotationZone, *, record: dict[str, Any] | None = None) -> CSDF:
     """Add (or remove) elements of a ring or arc that repeats by a turn about the vertical.
 
@@ -1033,13 +1076,14 @@ def apply_rotation(csdf: CSDF, zone: RotationZone, *, record: dict[str, Any] | N
     c = np.array(zone.center, dtype=np.float64)
     uu = origin[0] + np.arange(shape[0]) * h
     vv = origin[2] + np.arange(shape[2]) * h
-    d = np.stack(np.meshgrid(uu - c[0], vv - c[1], indexing="ij"), axis=-1)  # (U, V, 2)
-    r = np.hypot(d[..., 0], d[..., 1])
-    theta = np.degrees(np.arctan2(d[..., 1], d[..., 0]))
-    src_t = np.radians(rotation_source(theta, zone))
-    turn = r > zone.hub
-    su = np.where(turn, c[0] + r * np.cos(src_t), uu[:, None])
-    sv = np.where(turn, c[1] + r * np.sin(src_t), vv[None, :])
+    # the map turns points about the vertical, the same on every level of the span: computed
+    # once for the grid's cross-section (U, V) at a level of it, the levels gathered through it
+    pts = np.zeros((shape[0], shape[2], 3))
+    pts[..., 0], pts[..., 2] = uu[:, None], vv[None, :]
+    pts[..., 1] = zone.span[0]
+    src = warp_source(zone, pts.reshape(-1, 3), h)[0].reshape(pts.shape)
+    su, sv = src[..., 0], src[..., 2]
+    turn = np.hypot(uu[:, None] - c[0], vv[None, :] - c[1]) > zone.hub
     # whole voxels where nothing turns (exactly the column's own place)
     iu = (su - csdf.origin[0]) / h
     iv = (sv - csdf.origin[2]) / h
@@ -1052,4 +1096,6 @@ def apply_rotation(csdf: CSDF, zone: RotationZone, *, record: dict[str, Any] | N
     inside = (levels >= zone.span[0]) & (levels <= zone.span[1])
     arrays = _gather_levels(csdf, 1, others, iu, iv, inside, origin)
     entry = {"op": "rotation", **zone.to_json(), **(record or {})}
-    return _finish(csdf, origin, arrays, entry)
+    # off the span's levels and within the hub the source's own distances stay: where arms now
+    # lie that were not there they would reach past them (bounded)
+    return _finish(csdf, origin, arrays, entry, bound_far=True)

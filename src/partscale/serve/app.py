@@ -13,8 +13,9 @@ GET  /api/parts             binary int16 part indices, C order (z fastest); ``?b
 GET  /api/schema            the recipe JSON schema
 GET  /api/progress          progress of the apply in flight
 GET  /api/suggest           zone candidates of the current object (``?axis=x|y|z``: one axis);
-                            for all axes also ``radial``, ``steps`` and ``helix``, the zones
-                            that are no slab across an axis, each with its recipe ``edit``
+                            for all axes also ``radial``, ``steps``, ``helix`` and
+                            ``rotation``, the zones that are no slab across an axis, each
+                            with its recipe ``edit``
                             (:meth:`~partscale.zones.WarpCandidates.to_json`)
 GET  /api/elements          the current object's elements per axis, ``{"axes": [...]}`` (each
                             :meth:`~partscale.zones.AxisElements.to_json` with ``summary``, a

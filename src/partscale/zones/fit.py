@@ -601,20 +601,22 @@ def _element_periods(
 
 
 def _add_steps(
-    csdf: CSDF, axis: int, n: int
+    csdf: CSDF, axis: int, n: int, in_all: bool = False
 ) -> tuple[list[Edit | ScrewZone | HelixZone | RotationZone], list[str]] | None:
     """``n`` more (or ``-n`` fewer) steps of a flight that repeats diagonally
     (:func:`~partscale.zones.screw.find_screws`) with a part along ``axis``, or, up (y), of a
     spiral stair (:func:`~partscale.zones.helix.find_helices`) where no flight is found, or
     elements of a ring about the vertical (:func:`~partscale.zones.rotation.find_rotations`)
-    where neither is; and the note; None where there is none.
+    where neither is; and the note; None where there is none. ``in_all``: ``n`` is the count
+    wanted in all (:func:`add_axis`).
     """
     name = AXES[axis]
     units = csdf.meta.get("units")
-    verb = f"add {n}" if n > 0 else f"remove {-n}"
     for sc in find_screws(csdf):
         if abs(sc.step[axis]) < csdf.voxel_size / 2:
             continue
+        n = _change(name, n, sc.count, in_all)
+        verb = f"add {n}" if n > 0 else f"remove {-n}"
         _check_removal(name, n, sc.count, "flight")
         note = (
             f"{name}: {verb} step(s) of the flight along {sc.axis} (each {_fmt(sc.going, units)} "
@@ -626,6 +628,8 @@ def _add_steps(
     if axis != 1:
         return None
     for hx in find_helices(csdf):
+        n = _change(name, n, hx.count, in_all)
+        verb = f"add {n}" if n > 0 else f"remove {-n}"
         _check_removal(name, n, hx.count, "spiral stair")
         note = (
             f"{name}: {verb} step(s) of the spiral stair (each turns {hx.angle:.1f} degrees about "
@@ -636,8 +640,24 @@ def _add_steps(
         )
         return [hx.zone(n)], [note]
     for rot in find_rotations(csdf):
-        return _add_turned(rot, name, n, verb, units)
+        n = _change(name, n, rot.count, in_all)
+        return _add_turned(rot, name, n, f"add {n}" if n > 0 else f"remove {-n}", units)
     return None
+
+
+def _change(name: str, n: int, count: int, in_all: bool) -> int:
+    """The elements to add (negative: remove) for ``n`` more, or (``in_all``) ``n`` in all of
+    ``count``; refused (one line) where that is no change or leaves none.
+    """
+    if not in_all:
+        return n
+    if n < 1:
+        raise InputError(f"add {name}: expected at least 1 element in all, got {n}")
+    if n == count:
+        raise InputError(
+            f"add {name}: expected a count other than the current one ({count}), got {n} in all"
+        )
+    return n - count
 
 
 def _add_turned(
@@ -687,7 +707,7 @@ def _check_removal(name: str, n: int, count: int, what: str) -> None:
 
 
 def add_axis(
-    csdf: CSDF, axis: int, n: int
+    csdf: CSDF, axis: int, n: int, *, in_all: bool = False
 ) -> tuple[list[Edit | ScrewZone | HelixZone | RotationZone], list[str]]:
     """Edits adding ``n`` elements of the repeat group along ``axis`` (``-n``: removing).
 
@@ -706,7 +726,11 @@ def add_axis(
     axis : int
         0, 1 or 2.
     n : int
-        Elements to add (negative: remove).
+        Elements to add (negative: remove); with ``in_all``, the elements wanted in all.
+    in_all : bool
+        ``n`` is the count in all (``scale --copies N``): the change is ``n`` less the count of
+        whichever repeat is used (the group's elements, the flight's or spiral's steps, the
+        ring's elements).
 
     Returns
     -------
@@ -729,17 +753,18 @@ def add_axis(
     ('tile', 'y: add 1 element(s) (3 alike elements')
     """
     name = AXES[axis]
-    if n == 0:
+    if n == 0 and not in_all:
         raise InputError(f"add {name}: expected a number of elements other than 0, got 0")
     found = find_elements(csdf, axis)
     if found.best is None:
-        steps = _add_steps(csdf, axis, n)
+        steps = _add_steps(csdf, axis, n, in_all)
         if steps is not None:
             return steps
         raise InputError(
             f"add {name}: expected repeated elements along {name} (seats, doors, shelf rows, "
             f"drawers, steps), found none; resize by length instead (a size, or a zone by hand)"
         )
+    n = _change(name, n, len(found.best.members), in_all)
     z = count_zone(csdf, found, 1 if n > 0 else -n)
     units = csdf.meta.get("units")
     lo = found.lo

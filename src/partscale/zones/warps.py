@@ -2,9 +2,11 @@
 
 :func:`warp_candidates` gathers what :func:`~partscale.zones.find_radial` (a round or polygonal
 plan and its annuli of constant radial section), :func:`~partscale.zones.find_screws` (a
-flight's diagonal step) and, where no flight is found, :func:`~partscale.zones.find_helices` (a
-spiral stair's step) find, each with the recipe edit that uses it, as ``partscale suggest
---json`` lists them. The web editor shows them and previews their edits.
+flight's diagonal step), where no flight is found :func:`~partscale.zones.find_helices` (a
+spiral stair's step) and, where neither is, :func:`~partscale.zones.find_rotations` (elements
+repeated by a turn about the vertical: a star base's arms) find, each with the recipe edit that
+uses it, as ``partscale suggest --json`` lists them. The web editor shows them and previews
+their edits.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from ..csdf import CSDF
 from ..edit import screw_ground
 from .helix import Helix, find_helices
 from .radial import RadialFrame, find_radial, radial_zones
+from .rotation import Rotation, find_rotations
 from .screw import Screw, find_screws
 
 
@@ -36,14 +39,16 @@ class WarpCandidates:
         Spiral stairs (looked for where no flight is found).
     grounds : list of float or None
         Per flight: the floor it stands on beyond its cut (:func:`~partscale.edit.screw_ground`).
+    rotations : list of Rotation
+        Rings or arcs of elements about the vertical (looked for where no stair is found).
 
     Examples
     --------
     >>> from partscale import shapes, zones
     >>> ball = shapes.sphere((0, 0, 0), 0.5, voxel_size=0.05)
     >>> found = zones.warp_candidates(ball)
-    >>> found.radial.sides, found.steps, found.helices
-    (0, [], [])
+    >>> found.radial.sides, found.steps, found.helices, found.rotations
+    (0, [], [], [])
     """
 
     radial: RadialFrame | None = None
@@ -51,12 +56,14 @@ class WarpCandidates:
     steps: list[Screw] = field(default_factory=list)
     helices: list[Helix] = field(default_factory=list)
     grounds: list[float | None] = field(default_factory=list)
+    rotations: list[Rotation] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form: ``radial`` (the frame, its ``annuli`` and the ``edit`` of the longest
-        annulus, unchanged; or None), ``steps`` and ``helix`` (each as
-        :meth:`Screw.to_json` / :meth:`Helix.to_json`, with the ``edit`` adding one step, and
-        for a flight its ``ground``): every ``edit`` is a recipe edit as recipes hold it.
+        annulus, unchanged; or None), ``steps``, ``helix`` and ``rotation`` (each as
+        :meth:`Screw.to_json` / :meth:`Helix.to_json` / :meth:`Rotation.to_json`, with the
+        ``edit`` adding one step or element, and for a flight its ``ground``): every ``edit`` is
+        a recipe edit as recipes hold it.
         """
         radial = None
         if self.radial is not None:
@@ -77,11 +84,12 @@ class WarpCandidates:
             for sc, g in zip(self.steps, self.grounds, strict=True)
         ]
         helices = [{**hx.to_json(), "edit": hx.zone(1).to_json()} for hx in self.helices]
-        return {"radial": radial, "steps": steps, "helix": helices}
+        turns = [{**rt.to_json(), "edit": rt.zone(1).to_json()} for rt in self.rotations]
+        return {"radial": radial, "steps": steps, "helix": helices, "rotation": turns}
 
 
 def warp_candidates(csdf: CSDF) -> WarpCandidates:
-    """The radial frame, flights and spiral stairs of ``csdf`` (see module).
+    """The radial frame, flights, spiral stairs and rings of elements of ``csdf`` (see module).
 
     Parameters
     ----------
@@ -107,5 +115,6 @@ def warp_candidates(csdf: CSDF) -> WarpCandidates:
     annuli = radial_zones(csdf, frame) if frame is not None else []
     steps = find_screws(csdf)
     helices = find_helices(csdf) if not steps else []
+    rotations = find_rotations(csdf) if not steps and not helices else []
     grounds = [screw_ground(csdf, sc.zone(1)) for sc in steps]
-    return WarpCandidates(frame, annuli, steps, helices, grounds)
+    return WarpCandidates(frame, annuli, steps, helices, grounds, rotations)

@@ -9,6 +9,7 @@ import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -18,6 +19,7 @@ from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import column as column_mod
 from . import fuse as fuse_mod
+from . import guard as guard_mod
 from . import strut as strut_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
@@ -349,6 +351,7 @@ def complete(
     upright: bool = False,
     symmetry: bool = True,
     closure: float = CLOSURE,
+    force_completion: bool = False,
     source: str = "scan",
     progress: ProgressCallback | None = None,
 ) -> CSDF:
@@ -370,6 +373,11 @@ def complete(
         Look for and apply mirror planes and rotations (off: the closure alone).
     closure : float
         Voxels behind the surface that close the solid where nothing else does.
+    force_completion : bool
+        Keep the completion even where the scan's evidence speaks against it. Without it, a
+        completion that drops observed surface, stands where the cameras saw through or falls
+        apart into struts gives way to the scan as observed, closed (no symmetric copies or
+        guessed parts), with a warning saying why (:mod:`partscale.complete.guard`).
     source : str
         What the CSDF's ``meta['source']`` and the messages call the scan.
     progress : callable (fraction: float, message: str) -> None, optional
@@ -380,7 +388,8 @@ def complete(
     CSDF
         ``meta['completion']``: fractions of the surface ``observed``, ``mirrored`` (symmetric
         copies) and ``guessed``, the symmetries and floor found, ``to_input_frame`` (4x4, grid
-        frame -> input frame) and the per-voxel provenance (:func:`provenance`).
+        frame -> input frame), the per-voxel provenance (:func:`provenance`) and ``guard``:
+        which result was kept (``"completion"`` or ``"observed"``), why, and the evidence.
 
     Raises
     ------
@@ -417,7 +426,35 @@ def complete(
             raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")
     ob = observe(frames, box=box, source=source)
-    frames, Q, QC, U, found = ob.frames, ob.points, ob.colors, ob.U, ob.floor
+    opts: dict[str, Any] = dict(res=res, box=box, upright=upright, closure=closure, source=source)
+    full = _complete(ob, symmetry=symmetry, extras=True, report=report, **opts)
+    # the space the cameras surely saw through: pixels without a reading say nothing
+    carver = column_mod.sure_carver(ob.frames, 0.0)
+
+    def observed() -> CSDF:
+        report(0.9, "the scan as observed, closed")
+        return _complete(ob, symmetry=False, extras=False, report=lambda f, m: None, **opts)
+
+    out = guard_mod.choose(full, ob.points, carver, observed, force=force_completion)
+    report(1.0, "done")
+    return out
+
+
+def _complete(
+    ob: Observation,
+    *,
+    res: int,
+    box,
+    upright: bool,
+    symmetry: bool,
+    closure: float,
+    source: str,
+    extras: bool,
+    report: Callable[[float, str], None],
+) -> CSDF:
+    """The completion of an observation; ``extras`` False: no guessed column or struts."""
+    frames, Q, QC, U = ob.frames, ob.points, ob.colors, ob.U
+    found: Any = ob.floor
     QN = ob.normals
     Qu = _apply(U, Q)
     ext = Qu.max(axis=0) - Qu.min(axis=0)
@@ -624,16 +661,18 @@ def complete(
         def mirror_grid(pg):
             return _apply(M, pg), syms[0].where(_apply(grid_to_up, pg))
 
-    sdf, prov, struts = strut_mod.add_struts(
-        sdf,
-        prov,
-        origin,
-        h,
-        lambda pg: sure_free_up(_apply(grid_to_up, pg)),
-        fuse_mod.GUESSED,
-        strut_mod.MAX_GAP_SHARE * float((hi - lo).max()),
-        mirror=mirror_grid,
-    )
+    struts: list = []
+    if extras:
+        sdf, prov, struts = strut_mod.add_struts(
+            sdf,
+            prov,
+            origin,
+            h,
+            lambda pg: sure_free_up(_apply(grid_to_up, pg)),
+            fuse_mod.GUESSED,
+            strut_mod.MAX_GAP_SHARE * float((hi - lo).max()),
+            mirror=mirror_grid,
+        )
     sdf, n_filled = tidy_mod.fill_contacts(sdf, h)
     # beyond the band, distances to what the steps since the fusion added
     sdf = fuse_mod.bound_far(sdf, h)
@@ -643,7 +682,7 @@ def complete(
     total = max(counts[1:].sum(), 1.0)
     to_input = grid_to_world
     completion = {
-        "method": METHOD,
+        "method": METHOD if extras else "carve+floor+between+slab+closure",
         "observed": round(counts[fuse_mod.OBSERVED] / total, 4),
         "mirrored": round(counts[fuse_mod.MIRRORED] / total, 4),
         "guessed": round(counts[fuse_mod.GUESSED] / total, 4),
@@ -726,7 +765,6 @@ def complete(
         "symmetry_res": SYMMETRY_RES,
     }
     meta = {"source": source, "units": "m", "history": [history], "completion": completion}
-    report(1.0, "done")
     return make(sdf, rgb, None, origin, h, meta)
 
 
@@ -853,7 +891,7 @@ def complete_file(
         A JSON list of registered views (:func:`read_views`).
     **options
         :func:`complete`'s keywords (``res``, ``box``, ``upright``, ``symmetry``, ``closure``,
-        ``progress``).
+        ``force_completion``, ``progress``).
 
     Returns
     -------

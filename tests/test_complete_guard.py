@@ -65,7 +65,9 @@ def test_forced_completion_is_kept_and_says_what_spoke_against_it(lamp_post):
     bad = _mirrored_across_x(observed)
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
-        kept = guard.choose(bad, ob.points, sure_carver(ob.frames, 0.0), lambda: observed, force=True)
+        kept = guard.choose(
+            bad, ob.points, sure_carver(ob.frames, 0.0), lambda: observed, force=True
+        )
     record = kept.meta["completion"]["guard"]
     assert record["kept"] == "completion" and record["forced"]
     assert "saw through" in record["reason"]

@@ -11,8 +11,9 @@ Nothing but the scan is known about the object, so a completion is judged by wha
   fell apart, not parts to join one by one (``struts``).
 
 Where the completion fails one of these, the scan as observed, closed (no symmetric copies, no
-guessed column or struts) is made and judged the same way; it is returned instead when its own
-evidence is no worse, with one line saying so and why (a :class:`PartscaleWarning`, and the
+guessed column or struts) is made and judged the same way; it is returned instead when the
+completion's evidence is clearly worse (by more than ``MARGIN``) or its closure fell apart,
+with one line saying so and why (a :class:`PartscaleWarning`, and the
 decision in ``meta['completion']['guard']``). ``force`` keeps the completion and records what
 spoke against it.
 """
@@ -38,13 +39,15 @@ FREE_MARGIN_VOXELS = 3.0
 """Voxels a surface voxel must lie in front of a reading to contradict the scan (noise and
 slopes stay within it)."""
 MAX_IN_FREE = 0.02
-"""Share of the completion's surface voxels allowed in space the cameras saw through."""
+"""Share of the completion's surface voxels in space the cameras saw through above which it is
+compared with the observed closure (sensor noise leaves a little of any result there)."""
 MAX_STRUTS = 8
 """Struts beyond which the closure is taken to have failed (a handful join a chair's parts)."""
 MAX_GUESSED = 0.5
 """Share of guessed surface above which the completion warns that most of it is invented."""
 MARGIN = 0.01
-"""Shares within this of each other are the same evidence (sampling of the surface voxels)."""
+"""Shares within this of each other are the same evidence: the completion adds unseen surface,
+which is its point, and is kept unless the scan speaks clearly against it."""
 
 
 @dataclass(frozen=True)
@@ -115,13 +118,11 @@ def evidence(csdf: CSDF, points: np.ndarray, carver: Carver) -> Evidence:
     return Evidence(on_surface, in_free, len(comp.get("struts", [])), float(comp["guessed"]))
 
 
-def _no_worse(a: Evidence, b: Evidence) -> bool:
-    """Whether ``a`` is supported by the scan at least as well as ``b`` on every measure."""
-    return (
-        a.on_surface >= b.on_surface - MARGIN
-        and a.in_free <= b.in_free + MARGIN
-        and a.struts <= max(b.struts, MAX_STRUTS)
-    )
+def _worse(a: Evidence, b: Evidence) -> bool:
+    """Whether the scan supports ``a`` clearly less than ``b``: fewer observed points kept, or
+    more surface where the cameras saw through, each by more than ``MARGIN``.
+    """
+    return a.on_surface < b.on_surface - MARGIN or a.in_free > b.in_free + MARGIN
 
 
 def choose(
@@ -165,7 +166,7 @@ def choose(
         ev_alt = evidence(alt, points, carver)
         record["evidence_observed"] = ev_alt.as_dict()
         degenerate = ev.struts > MAX_STRUTS
-        if degenerate or _no_worse(ev_alt, ev):
+        if degenerate or _worse(ev, ev_alt):
             record["kept"] = "observed"
             record["reason"] = (
                 "kept the scan as observed, closed, not the completion: " + "; ".join(problems)

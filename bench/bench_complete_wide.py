@@ -62,6 +62,8 @@ SCALE = {
 """Metres per unit of the files not in metres (the rest of Sweet Home 3D, Poly Haven and Khronos
 are)."""
 CLASSES = [
+    ("bedside", "cabinet"),
+    ("cabinet", "cabinet"),
     ("stool", "stool"),
     ("chair", "chair"),
     ("bench", "sofa"),
@@ -71,7 +73,6 @@ CLASSES = [
     ("desk", "table"),
     ("book", "shelf"),
     ("shel", "shelf"),
-    ("cabinet", "cabinet"),
     ("drawer", "cabinet"),
     ("dresser", "cabinet"),
     ("tvunit", "cabinet"),

@@ -21,12 +21,13 @@ RES = 64
 
 @pytest.fixture(scope="module")
 def lamp_post():
-    """A low bench (0.9 x 0.3 x 0.5 m) with a post 1 m tall at its +x end only: no mirror
-    plane across x, and one view from the front right sees the bench's top at -x empty."""
+    """A low bench (0.9 x 0.3 x 0.5 m) with a back 1 m tall and 0.3 m wide at its +x end only:
+    no mirror plane across x, and one view from the front right sees the bench's top at -x
+    empty."""
     bench = trimesh.creation.box((0.9, 0.3, 0.5))
     bench.apply_translation((0, 0.15, 0))
-    post = trimesh.creation.box((0.12, 1.0, 0.12))
-    post.apply_translation((0.39, 0.8, 0))
+    post = trimesh.creation.box((0.3, 1.0, 0.5))
+    post.apply_translation((0.3, 0.8, 0))
     mesh = from_trimesh(trimesh.util.concatenate([bench, post]))
     frames = virtual.virtual_scan(mesh, 1)
     ob = api.observe(frames)
@@ -38,7 +39,7 @@ def lamp_post():
 
 def _mirrored_across_x(c):
     """The completion and its mirror image across the grid's middle x plane, forced in: the
-    post copied onto the bench's far end, where the camera saw through."""
+    back copied onto the bench's far end, where the camera saw through."""
     return c.replace(sdf=np.minimum(c.sdf, c.sdf[::-1]).astype(np.float32))
 
 
@@ -95,13 +96,42 @@ def test_a_supported_completion_is_kept():
     assert record["evidence"]["on_surface"] >= guard.MIN_ON_SURFACE
 
 
+def _chair2_truth():
+    from partscale.complete import metrics
+
+    mesh = ingest.load_mesh(data_path("sweethome3d/chair2.obj"))
+    G, _ = metrics.surface_samples(ingest.from_mesh(mesh, res=128))
+    return mesh, G, metrics.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+
+
 def test_thin_sheet_chair_is_no_maze_of_struts():
     # a chair with thin sheet sides, one view at its real size (metres): at most a handful of
-    # struts, whichever result the guard keeps
-    mesh = ingest.load_mesh(data_path("sweethome3d/chair2.obj"))
+    # struts, whichever result the guard keeps, and no worse than the raw scan's points
+    from partscale.complete import metrics
+
+    mesh, G, tau = _chair2_truth()
     frames = virtual.virtual_scan(mesh, 1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PartscaleWarning)
         c = complete(frames, res=128)
     m = c.meta["completion"]
     assert len(m["struts"]) <= guard.MAX_STRUTS, (len(m["struts"]), m["guard"])
+    raw = metrics.chamfer_fscore(api.observe(frames).points, G, tau)["fscore"]
+    full = metrics.chamfer_fscore(metrics.surface_samples(c)[0], G, tau)["fscore"]
+    assert full >= raw, (full, raw)
+
+
+def test_floor_is_found_from_a_camera_pitched_45_degrees_down():
+    # a handheld scan from above: the floor lies 45 degrees off the camera's own up; the floor
+    # gives up and the completion stays on the chair (not the floor around it)
+    mesh, G, _ = _chair2_truth()
+    frames = virtual.virtual_scan(mesh, azimuths=(69.0,), elevation=45.0)
+    c = complete(frames, res=64)
+    m = c.meta["completion"]
+    assert m["up_from"] == "floor"
+    assert np.degrees(np.arccos(min(1.0, m["up"][1]))) <= 2.0, m["up"]
+    from partscale.complete import metrics
+
+    P, _ = metrics.surface_samples(c, 4000)
+    slack = 0.05  # metres: the closure and the noise beyond the chair's box
+    assert (P.min(0) >= G.min(0) - slack).all() and (P.max(0) <= G.max(0) + slack).all()

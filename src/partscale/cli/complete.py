@@ -125,4 +125,5 @@ def complete(
         f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m; surface "
         f"{m['observed']:.0%} observed, {m['mirrored']:.0%} mirrored, {m['guessed']:.0%} guessed"
         + ("" if m["guard"]["kept"] == "completion" else " (the scan as observed, closed)")
+        + ("; most of it guessed: scan more of it" if m["guard"]["mostly_guessed"] else "")
     )

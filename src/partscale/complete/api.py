@@ -24,7 +24,14 @@ from . import strut as strut_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
-from .floor import base_plane, clusters, find_floor, floor_scraps, in_plane_axes
+from .floor import (
+    WIDE_TILT_DEG,
+    base_plane,
+    clusters,
+    find_floor,
+    floor_scraps,
+    in_plane_axes,
+)
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
 METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
@@ -301,6 +308,12 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     cropped = all(f.cropped for f in frames)
     up = _up_prior(frames[0])
     found = find_floor(P, up, FLOOR_TOL)
+    if found is None and not cropped:
+        # a camera pitched far down (a handheld scan from above): the floor lies farther off
+        # its axis; taken only where it is a floor (broad, under all that stands on it)
+        wide = find_floor(P, up, FLOOR_TOL, max_tilt=WIDE_TILT_DEG)
+        if wide is not None and _is_floor(P, wide[0], wide[1], cropped):
+            found = wide
     support = None
     if found is not None and not _is_floor(P, found[0], found[1], cropped):
         # a flat underside (a swivel chair's base, the legs of a star): it gives up, not a

@@ -12,7 +12,7 @@ Nothing but the scan is known about the object, so a completion is judged by wha
 
 Where the completion fails one of these, the scan as observed, closed (no symmetric copies, no
 guessed column or struts) is made and judged the same way; it is returned instead when the
-completion's evidence is clearly worse (by more than ``MARGIN``) or its closure fell apart,
+completion's evidence is clearly worse (``MARGIN``, ``MARGIN_FREE``) or its closure fell apart,
 with one line saying so and why (a :class:`PartscaleWarning`, and the
 decision in ``meta['completion']['guard']``). ``force`` keeps the completion and records what
 spoke against it.
@@ -44,10 +44,14 @@ compared with the observed closure (sensor noise leaves a little of any result t
 MAX_STRUTS = 8
 """Struts beyond which the closure is taken to have failed (a handful join a chair's parts)."""
 MAX_GUESSED = 0.5
-"""Share of guessed surface above which the completion warns that most of it is invented."""
+"""Share of guessed surface above which the record says most of the result is guessed."""
 MARGIN = 0.01
 """Shares within this of each other are the same evidence: the completion adds unseen surface,
 which is its point, and is kept unless the scan speaks clearly against it."""
+MARGIN_FREE = 0.1
+"""Share of the surface in seen free space by which a completion must exceed the observed
+closure to give way to it: sensor noise along thin parts puts a few percent of a sound
+completion there (a real frame's swivel chair, its turned star base: 5 % beyond its closure)."""
 
 
 @dataclass(frozen=True)
@@ -119,10 +123,10 @@ def evidence(csdf: CSDF, points: np.ndarray, carver: Carver) -> Evidence:
 
 
 def _worse(a: Evidence, b: Evidence) -> bool:
-    """Whether the scan supports ``a`` clearly less than ``b``: fewer observed points kept, or
-    more surface where the cameras saw through, each by more than ``MARGIN``.
+    """Whether the scan supports ``a`` clearly less than ``b``: fewer observed points kept (by
+    more than ``MARGIN``), or more surface where the cameras saw through (``MARGIN_FREE``).
     """
-    return a.on_surface < b.on_surface - MARGIN or a.in_free > b.in_free + MARGIN
+    return a.on_surface < b.on_surface - MARGIN or a.in_free > b.in_free + MARGIN_FREE
 
 
 def choose(
@@ -153,8 +157,9 @@ def choose(
     -------
     CSDF
         The result kept; its ``meta['completion']['guard']`` holds ``kept`` (``"completion"``
-        or ``"observed"``), ``reason`` (one line, or None), the ``evidence`` of the completion
-        and, where made, of the observed closure.
+        or ``"observed"``), ``reason`` (one line, or None), ``mostly_guessed`` (more than
+        ``MAX_GUESSED`` of its surface guessed), the ``evidence`` of the completion and, where
+        made, of the observed closure.
     """
     ev = evidence(completion, points, carver)
     problems = ev.problems()
@@ -176,13 +181,9 @@ def choose(
         record["reason"] = "completion kept as forced, although " + "; ".join(problems)
     if record["reason"] is not None:
         warnings.warn(record["reason"], PartscaleWarning, stacklevel=3)
-    guessed = float(kept.meta["completion"]["guessed"])
-    if guessed > MAX_GUESSED:
-        warnings.warn(
-            f"{guessed:.0%} of the completed surface is guessed, not observed or mirrored",
-            PartscaleWarning,
-            stacklevel=3,
-        )
+    # most of it guessed: recorded (the command's summary says so), not warned about: a result
+    # the caller asked for without symmetry is guessed wherever the scan did not look
+    record["mostly_guessed"] = float(kept.meta["completion"]["guessed"]) > MAX_GUESSED
     meta = dict(kept.meta)
     meta["completion"] = {**kept.meta["completion"], "guard": record}
     history = [dict(h) for h in meta.get("history", [])]

@@ -154,8 +154,12 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
         try:
             frames = virtual.virtual_scan(mesh, **v)
             ob = api.observe(frames)
-        except (InputError, ValueError) as exc:
-            print(f"  {Path(rel).stem:30s} scan failed: {exc}", flush=True)
+        except ValueError as exc:  # the virtual sensor: out of its range
+            print(f"  {Path(rel).stem:30s} not scanned: {exc}", flush=True)
+            continue
+        except InputError as exc:  # no object found: neither import nor completion has one
+            print(f"  {Path(rel).stem:30s} no object found in the scan: {exc}", flush=True)
+            rows.append({**row, "raw": np.nan, "full": np.nan, "kept": "failed", "struts": 0})
             continue
         row["raw"] = metrics.chamfer_fscore(ob.points, G, tau)["fscore"]
         t = time.perf_counter()
@@ -165,7 +169,7 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
                 c = complete(frames, res=res)
         except InputError as exc:
             print(f"  {Path(rel).stem:30s} completion failed: {exc}", flush=True)
-            row.update(full=0.0, kept="failed", seconds=time.perf_counter() - t, struts=0)
+            row.update(full=np.nan, kept="failed", seconds=time.perf_counter() - t, struts=0)
             rows.append(row)
             continue
         row["seconds"] = time.perf_counter() - t
@@ -191,6 +195,7 @@ def verdict(r: dict) -> str:
 
 
 def summary(rows: list[dict], title: str) -> None:
+    rows = [r for r in rows if np.isfinite(r["full"]) and np.isfinite(r["raw"])]
     if not rows:
         return
     med = lambda xs: float(np.median(xs)) if xs else float("nan")  # noqa: E731
@@ -235,7 +240,7 @@ def main() -> int:
         kept = [r["kept"] for r in rn]
         print(
             f"  guard kept the observed scan on {kept.count('observed')}/{len(kept)}, "
-            f"failed {kept.count('failed')}"
+            f"no object found or completion failed on {kept.count('failed')} (left out above)"
         )
     return 0
 

@@ -18,20 +18,14 @@ from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import column as column_mod
+from . import floor as floor_mod
 from . import fuse as fuse_mod
 from . import guard as guard_mod
 from . import strut as strut_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
-from .floor import (
-    WIDE_TILT_DEG,
-    base_plane,
-    clusters,
-    find_floor,
-    floor_scraps,
-    in_plane_axes,
-)
+from .floor import base_plane, clusters, find_floor, floor_scraps, in_plane_axes
 from .scan import Frame, denoise, frame_from_points, read_frame, read_points, read_views
 
 METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
@@ -311,7 +305,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     if found is None and not cropped:
         # a camera pitched far down (a handheld scan from above): the floor lies farther off
         # its axis; taken only where it is a floor (broad, under all that stands on it)
-        wide = find_floor(P, up, FLOOR_TOL, max_tilt=WIDE_TILT_DEG)
+        wide = find_floor(P, up, FLOOR_TOL, max_tilt=floor_mod.WIDE_TILT_DEG)
         if wide is not None and _is_floor(P, wide[0], wide[1], cropped):
             found = wide
     support = None

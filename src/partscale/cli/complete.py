@@ -76,6 +76,14 @@ def complete(
     no_symmetry: Annotated[
         bool, typer.Option("--no-symmetry", help="Do not look for mirror planes or rotations.")
     ] = False,
+    force_completion: Annotated[
+        bool,
+        typer.Option(
+            "--force-completion",
+            help="Keep the completion even where the scan speaks against it (without it: the "
+            "scan as observed, closed, and a note saying why).",
+        ),
+    ] = False,
 ) -> None:
     """Complete a partial scan into a watertight coloured SDF (.csdf.npz).
 
@@ -102,6 +110,7 @@ def complete(
             box=tuple(int(v) for v in b) if b else None,
             upright=upright,
             symmetry=not no_symmetry,
+            force_completion=force_completion,
             progress=progress,
         )
     save(c, output)
@@ -109,4 +118,6 @@ def complete(
     _common.done(
         f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m; surface "
         f"{m['observed']:.0%} observed, {m['mirrored']:.0%} mirrored, {m['guessed']:.0%} guessed"
+        + ("" if m["guard"]["kept"] == "completion" else " (the scan as observed, closed)")
+        + ("; most of it guessed: scan more of it" if m["guard"]["mostly_guessed"] else "")
     )

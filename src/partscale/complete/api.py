@@ -9,6 +9,7 @@ import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -18,7 +19,9 @@ from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import column as column_mod
+from . import floor as floor_mod
 from . import fuse as fuse_mod
+from . import guard as guard_mod
 from . import strut as strut_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
@@ -300,6 +303,12 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     cropped = all(f.cropped for f in frames)
     up = _up_prior(frames[0])
     found = find_floor(P, up, FLOOR_TOL)
+    if found is None and not cropped:
+        # a camera pitched far down (a handheld scan from above): the floor lies farther off
+        # its axis; taken only where it is a floor (broad, under all that stands on it)
+        wide = find_floor(P, up, FLOOR_TOL, max_tilt=floor_mod.WIDE_TILT_DEG)
+        if wide is not None and _is_floor(P, wide[0], wide[1], cropped):
+            found = wide
     support = None
     if found is not None and not _is_floor(P, found[0], found[1], cropped):
         # a flat underside (a swivel chair's base, the legs of a star): it gives up, not a
@@ -350,6 +359,7 @@ def complete(
     upright: bool = False,
     symmetry: bool = True,
     closure: float = CLOSURE,
+    force_completion: bool = False,
     source: str = "scan",
     progress: ProgressCallback | None = None,
 ) -> CSDF:
@@ -371,6 +381,11 @@ def complete(
         Look for and apply mirror planes and rotations (off: the closure alone).
     closure : float
         Voxels behind the surface that close the solid where nothing else does.
+    force_completion : bool
+        Keep the completion even where the scan's evidence speaks against it. Without it, a
+        completion that drops observed surface, stands where the cameras saw through or falls
+        apart into struts gives way to the scan as observed, closed (no symmetric copies or
+        guessed parts), with a warning saying why (:mod:`partscale.complete.guard`).
     source : str
         What the CSDF's ``meta['source']`` and the messages call the scan.
     progress : callable (fraction: float, message: str) -> None, optional
@@ -381,7 +396,8 @@ def complete(
     CSDF
         ``meta['completion']``: fractions of the surface ``observed``, ``mirrored`` (symmetric
         copies) and ``guessed``, the symmetries and floor found, ``to_input_frame`` (4x4, grid
-        frame -> input frame) and the per-voxel provenance (:func:`provenance`).
+        frame -> input frame), the per-voxel provenance (:func:`provenance`) and ``guard``:
+        which result was kept (``"completion"`` or ``"observed"``), why, and the evidence.
 
     Raises
     ------
@@ -421,7 +437,35 @@ def complete(
             raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")
     ob = observe(frames, box=box, source=source)
-    frames, Q, QC, U, found = ob.frames, ob.points, ob.colors, ob.U, ob.floor
+    opts: dict[str, Any] = dict(res=res, box=box, upright=upright, closure=closure, source=source)
+    full = _complete(ob, symmetry=symmetry, extras=True, report=report, **opts)
+    # the space the cameras surely saw through: pixels without a reading say nothing
+    carver = column_mod.sure_carver(ob.frames, 0.0)
+
+    def observed() -> CSDF:
+        report(0.9, "the scan as observed, closed")
+        return _complete(ob, symmetry=False, extras=False, report=lambda f, m: None, **opts)
+
+    out = guard_mod.choose(full, ob.points, carver, observed, force=force_completion)
+    report(1.0, "done")
+    return out
+
+
+def _complete(
+    ob: Observation,
+    *,
+    res: int,
+    box,
+    upright: bool,
+    symmetry: bool,
+    closure: float,
+    source: str,
+    extras: bool,
+    report: Callable[[float, str], None],
+) -> CSDF:
+    """The completion of an observation; ``extras`` False: no guessed column or struts."""
+    frames, Q, QC, U = ob.frames, ob.points, ob.colors, ob.U
+    found: Any = ob.floor
     QN = ob.normals
     Qu = _apply(U, Q)
     ext = Qu.max(axis=0) - Qu.min(axis=0)
@@ -628,16 +672,18 @@ def complete(
         def mirror_grid(pg):
             return _apply(M, pg), syms[0].where(_apply(grid_to_up, pg))
 
-    sdf, prov, struts = strut_mod.add_struts(
-        sdf,
-        prov,
-        origin,
-        h,
-        lambda pg: sure_free_up(_apply(grid_to_up, pg)),
-        fuse_mod.GUESSED,
-        strut_mod.MAX_GAP_SHARE * float((hi - lo).max()),
-        mirror=mirror_grid,
-    )
+    struts: list = []
+    if extras:
+        sdf, prov, struts = strut_mod.add_struts(
+            sdf,
+            prov,
+            origin,
+            h,
+            lambda pg: sure_free_up(_apply(grid_to_up, pg)),
+            fuse_mod.GUESSED,
+            strut_mod.MAX_GAP_SHARE * float((hi - lo).max()),
+            mirror=mirror_grid,
+        )
     sdf, n_filled = tidy_mod.fill_contacts(sdf, h)
     # beyond the band, distances to what the steps since the fusion added
     sdf = fuse_mod.bound_far(sdf, h)
@@ -647,7 +693,7 @@ def complete(
     total = max(counts[1:].sum(), 1.0)
     to_input = grid_to_world
     completion = {
-        "method": METHOD,
+        "method": METHOD if extras else "carve+floor+between+slab+closure",
         "observed": round(counts[fuse_mod.OBSERVED] / total, 4),
         "mirrored": round(counts[fuse_mod.MIRRORED] / total, 4),
         "guessed": round(counts[fuse_mod.GUESSED] / total, 4),
@@ -730,7 +776,6 @@ def complete(
         "symmetry_res": SYMMETRY_RES,
     }
     meta = {"source": source, "units": "m", "history": [history], "completion": completion}
-    report(1.0, "done")
     return make(sdf, rgb, None, origin, h, meta)
 
 
@@ -857,7 +902,7 @@ def complete_file(
         A JSON list of registered views (:func:`read_views`).
     **options
         :func:`complete`'s keywords (``res``, ``box``, ``upright``, ``symmetry``, ``closure``,
-        ``progress``).
+        ``force_completion``, ``progress``).
 
     Returns
     -------

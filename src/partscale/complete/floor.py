@@ -14,6 +14,10 @@ import numpy as np
 from scipy import ndimage
 
 MAX_TILT_DEG = 40.0
+WIDE_TILT_DEG = 60.0
+"""Degrees between the floor's normal and the up prior in the second search of a full sensor
+frame that found no floor within ``MAX_TILT_DEG``: a camera held pitched 45 degrees down at an
+object (a handheld scan from above) sees the floor 45 degrees off its own axis."""
 MIN_INLIER_FRACTION = 0.04
 MAX_BELOW_FRACTION = 0.03
 ITERATIONS = 600
@@ -44,7 +48,14 @@ def _fit(points: np.ndarray, up: np.ndarray) -> Plane:
     return Plane(n, float(n @ c))
 
 
-def find_floor(points: np.ndarray, up_prior: np.ndarray, tol: float, *, seed: int = 0):
+def find_floor(
+    points: np.ndarray,
+    up_prior: np.ndarray,
+    tol: float,
+    *,
+    seed: int = 0,
+    max_tilt: float = MAX_TILT_DEG,
+):
     """The floor plane of a scene, or None.
 
     Parameters
@@ -55,6 +66,10 @@ def find_floor(points: np.ndarray, up_prior: np.ndarray, tol: float, *, seed: in
         Expected up direction (the camera's -y axis in the world).
     tol : float
         Inlier distance, world units.
+    seed : int
+        Seed of the RANSAC samples.
+    max_tilt : float
+        Degrees the floor's normal may lie from ``up_prior``.
 
     Returns
     -------
@@ -74,7 +89,7 @@ def find_floor(points: np.ndarray, up_prior: np.ndarray, tol: float, *, seed: in
     n = n[ok] / norm[ok, None]
     tri = tri[ok]
     n *= np.where(n @ up >= 0, 1.0, -1.0)[:, None]
-    ok = n @ up >= np.cos(np.radians(MAX_TILT_DEG))
+    ok = n @ up >= np.cos(np.radians(max_tilt))
     n, tri = n[ok], tri[ok]
     if len(n) == 0:
         return None
@@ -91,7 +106,7 @@ def find_floor(points: np.ndarray, up_prior: np.ndarray, tol: float, *, seed: in
         inliers = np.abs(plane.height(P)) <= tol
         plane = _fit(P[inliers], up)
     inliers = np.abs(plane.height(P)) <= tol
-    if np.degrees(np.arccos(np.clip(plane.normal @ up, -1, 1))) > MAX_TILT_DEG:
+    if np.degrees(np.arccos(np.clip(plane.normal @ up, -1, 1))) > max_tilt:
         return None
     return plane, inliers
 

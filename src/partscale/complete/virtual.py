@@ -8,6 +8,8 @@ no reading at grazing angles, along depth discontinuities, and in random blotche
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy import ndimage
 
@@ -42,8 +44,19 @@ def _look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
     return T
 
 
-def camera_poses(mesh: ColoredMesh, views: int) -> list[np.ndarray]:
+def camera_poses(
+    mesh: ColoredMesh,
+    views: int,
+    *,
+    azimuths: Sequence[float] | None = None,
+    elevation: float = ELEVATION_DEG,
+    distance: float = 1.0,
+) -> list[np.ndarray]:
     """Poses (4, 4) of ``views`` (1 or 3) cameras framing the object.
+
+    ``azimuths`` (degrees, default ``AZIMUTHS_DEG[views]``) and ``elevation`` (degrees above
+    the horizontal) place them; ``distance`` scales how far each stands from where it frames
+    the object (above 1: farther, the object smaller in the image).
 
     A camera stands where the object's bounding sphere fills the narrower field of view, or
     closer where the object's far side would otherwise lie beyond ``MAX_OBJECT_DEPTH`` (a sofa:
@@ -64,9 +77,9 @@ def camera_poses(mesh: ColoredMesh, views: int) -> list[np.ndarray]:
         cam = (corners - T[:3, 3]) @ T[:3, :3]
         return bool((cam[:, 2] > 0).all() and (np.abs(cam[:, :2]) <= half * cam[:, 2:]).all())
 
-    el = np.radians(ELEVATION_DEG)
+    el = np.radians(elevation)
     poses = []
-    for az in AZIMUTHS_DEG[views]:
+    for az in AZIMUTHS_DEG[views] if azimuths is None else azimuths:
         a = np.radians(az)
         d = np.array([np.cos(el) * np.sin(a), np.sin(el), np.cos(el) * np.cos(a)])
         # depth of a point p seen from centre + t d towards the centre: t - (p - centre) @ d
@@ -78,7 +91,7 @@ def camera_poses(mesh: ColoredMesh, views: int) -> list[np.ndarray]:
                 mid = (near + far) / 2
                 near, far = (near, mid) if fits(mid, d) else (mid, far)
             t = max(in_range, far)
-        poses.append(_look_at(centre + t * d, centre))
+        poses.append(_look_at(centre + distance * t * d, centre))
     return poses
 
 
@@ -90,6 +103,9 @@ def virtual_scan(
     holes: float = 1.0,
     floor: bool = True,
     seed: int = 0,
+    azimuths: Sequence[float] | None = None,
+    elevation: float = ELEVATION_DEG,
+    distance: float = 1.0,
 ) -> list[Frame]:
     """Depth and colour frames of ``mesh`` from ``views`` (1 or 3) viewpoints.
 
@@ -103,6 +119,11 @@ def virtual_scan(
         blotch dropout (about 5 % of the pixels at 1).
     floor : bool
         Put a grey floor under the object (what a real scan of furniture has).
+    seed : int
+        Seed of the noise and holes.
+    azimuths, elevation, distance
+        Where the cameras stand (:func:`camera_poses`; ``azimuths`` given: one view each,
+        ``views`` ignored).
 
     Returns
     -------
@@ -117,7 +138,7 @@ def virtual_scan(
     """
     import trimesh
 
-    if views not in AZIMUTHS_DEG:
+    if azimuths is None and views not in AZIMUTHS_DEG:
         raise ValueError(f"views: expected one of {sorted(AZIMUTHS_DEG)}, got {views}")
     rng = np.random.default_rng(seed)
     V = np.asarray(mesh.vertices, np.float64)
@@ -125,7 +146,7 @@ def virtual_scan(
     used = V[np.unique(F)]
     lo, hi = used.min(axis=0), used.max(axis=0)
     n_obj = len(F)
-    poses = camera_poses(mesh, views)
+    poses = camera_poses(mesh, views, azimuths=azimuths, elevation=elevation, distance=distance)
     nearest = max(float(((used - T[:3, 3]) @ T[:3, 2]).min()) for T in poses)
     if nearest >= MAX_RANGE:
         raise ValueError(

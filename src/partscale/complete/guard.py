@@ -1,0 +1,194 @@
+"""The guard: a completion is kept only where the scan's own evidence does not speak against it.
+
+Nothing but the scan is known about the object, so a completion is judged by what the scan says:
+
+- the observed surface is kept: the share of the scan's points within ``ON_SURFACE_VOXELS`` of
+  the completion's surface (``on_surface``);
+- nothing stands where the cameras saw through: the share of the completion's surface voxels
+  that some view surely saw through (a block of readings beyond them, ``carver`` made with
+  ``sure_rays``) by more than ``FREE_MARGIN_VOXELS`` (``in_free``);
+- the closure did not fail: hundreds of struts joining pieces are a sign that thin sheets
+  fell apart, not parts to join one by one (``struts``).
+
+Where the completion fails one of these, the scan as observed, closed (no symmetric copies, no
+guessed column or struts) is made and judged the same way; it is returned instead when the
+completion's evidence is clearly worse (``MARGIN``, ``MARGIN_FREE``) or its closure fell apart,
+with one line saying so and why (a :class:`PartscaleWarning`, and the
+decision in ``meta['completion']['guard']``). ``force`` keeps the completion and records what
+spoke against it.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..csdf import CSDF
+from ..errors import PartscaleWarning
+from ..surface import sample_linear
+from .carve import Carver
+
+ON_SURFACE_VOXELS = 1.5
+"""Voxels from the completion's zero surface within which an observed point counts as kept."""
+MIN_ON_SURFACE = 0.85
+"""Share of the observed points the completion must keep on its surface."""
+FREE_MARGIN_VOXELS = 3.0
+"""Voxels a surface voxel must lie in front of a reading to contradict the scan (noise and
+slopes stay within it)."""
+MAX_IN_FREE = 0.02
+"""Share of the completion's surface voxels in space the cameras saw through above which it is
+compared with the observed closure (sensor noise leaves a little of any result there)."""
+MAX_STRUTS = 8
+"""Struts beyond which the closure is taken to have failed (a handful join a chair's parts)."""
+MAX_GUESSED = 0.5
+"""Share of guessed surface above which the record says most of the result is guessed."""
+MARGIN = 0.01
+"""Shares within this of each other are the same evidence: the completion adds unseen surface,
+which is its point, and is kept unless the scan speaks clearly against it."""
+MARGIN_FREE = 0.1
+"""Share of the surface in seen free space by which a completion must exceed the observed
+closure to give way to it: sensor noise along thin parts puts a few percent of a sound
+completion there (a real frame's swivel chair, its turned star base: 5 % beyond its closure)."""
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What the scan says about one result: ``on_surface`` (share of observed points kept on
+    its surface), ``in_free`` (share of its surface voxels in seen free space), ``struts``
+    (guessed struts) and ``guessed`` (share of guessed surface).
+    """
+
+    on_surface: float
+    in_free: float
+    struts: int
+    guessed: float
+
+    def problems(self) -> list[str]:
+        """Why the result cannot be trusted, one phrase each (empty: nothing against it)."""
+        out = []
+        if self.struts > MAX_STRUTS:
+            out.append(f"the closure fell apart ({self.struts} struts, at most {MAX_STRUTS})")
+        if self.on_surface < MIN_ON_SURFACE:
+            out.append(
+                f"it keeps only {self.on_surface:.0%} of the observed surface "
+                f"(at least {MIN_ON_SURFACE:.0%})"
+            )
+        if self.in_free > MAX_IN_FREE:
+            out.append(
+                f"{self.in_free:.1%} of its surface stands where the cameras saw through "
+                f"(at most {MAX_IN_FREE:.0%})"
+            )
+        return out
+
+    def as_dict(self) -> dict:
+        """The evidence as JSON-ready numbers (shares rounded to 4 places)."""
+        return {k: round(v, 4) if isinstance(v, float) else v for k, v in asdict(self).items()}
+
+
+def evidence(csdf: CSDF, points: np.ndarray, carver: Carver) -> Evidence:
+    """The scan's evidence about a completion.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        A completion as :func:`partscale.complete.complete` made it (its ``meta['completion']``
+        gives the grid's frame in the scan's world, ``to_input_frame``).
+    points : (N, 3) float64
+        The observed points of the object, scan world.
+    carver : Carver
+        The free-space test of the scan's frames.
+
+    Returns
+    -------
+    Evidence
+    """
+    comp = csdf.meta["completion"]
+    to_world = np.asarray(comp["to_input_frame"], np.float64)
+    to_grid = np.linalg.inv(to_world)
+    h = csdf.voxel_size
+    P = np.asarray(points, np.float64) @ to_grid[:3, :3].T + to_grid[:3, 3]
+    d = sample_linear(csdf.sdf, csdf.world_to_index(P))
+    on_surface = float((np.abs(d) <= ON_SURFACE_VOXELS * h).mean()) if len(P) else 1.0
+    idx = np.argwhere(np.abs(csdf.sdf) <= 0.5 * h)
+    if len(idx):
+        S = csdf.origin + idx * h
+        Sw = S @ to_world[:3, :3].T + to_world[:3, 3]
+        in_free = float(carver.free(Sw, FREE_MARGIN_VOXELS * h).mean())
+    else:
+        in_free = 0.0
+    return Evidence(on_surface, in_free, len(comp.get("struts", [])), float(comp["guessed"]))
+
+
+def _worse(a: Evidence, b: Evidence) -> bool:
+    """Whether the scan supports ``a`` clearly less than ``b``: fewer observed points kept (by
+    more than ``MARGIN``), or more surface where the cameras saw through (``MARGIN_FREE``).
+    """
+    return a.on_surface < b.on_surface - MARGIN or a.in_free > b.in_free + MARGIN_FREE
+
+
+def choose(
+    completion: CSDF,
+    points: np.ndarray,
+    carver: Carver,
+    observed: Callable[[], CSDF],
+    *,
+    force: bool = False,
+) -> CSDF:
+    """The completion, or the scan as observed, closed, where the scan's evidence says the
+    completion is worse; either way recorded in ``meta['completion']['guard']``.
+
+    Parameters
+    ----------
+    completion : CSDF
+        The full completion.
+    points : (N, 3) float64
+        The observed points of the object, scan world.
+    carver : Carver
+        The free-space test of the scan's frames.
+    observed : callable () -> CSDF
+        Makes the scan as observed, closed (called only when the completion is in doubt).
+    force : bool
+        Keep the completion whatever the evidence (what spoke against it is still recorded).
+
+    Returns
+    -------
+    CSDF
+        The result kept; its ``meta['completion']['guard']`` holds ``kept`` (``"completion"``
+        or ``"observed"``), ``reason`` (one line, or None), ``mostly_guessed`` (more than
+        ``MAX_GUESSED`` of its surface guessed), the ``evidence`` of the completion and, where
+        made, of the observed closure.
+    """
+    ev = evidence(completion, points, carver)
+    problems = ev.problems()
+    record: dict = {"kept": "completion", "reason": None, "forced": bool(force)}
+    record["evidence"] = ev.as_dict()
+    kept = completion
+    if problems and not force:
+        alt = observed()
+        ev_alt = evidence(alt, points, carver)
+        record["evidence_observed"] = ev_alt.as_dict()
+        degenerate = ev.struts > MAX_STRUTS
+        if degenerate or _worse(ev, ev_alt):
+            record["kept"] = "observed"
+            record["reason"] = (
+                "kept the scan as observed, closed, not the completion: " + "; ".join(problems)
+            )
+            kept = alt
+    elif problems:
+        record["reason"] = "completion kept as forced, although " + "; ".join(problems)
+    if record["reason"] is not None:
+        warnings.warn(record["reason"], PartscaleWarning, stacklevel=3)
+    # most of it guessed: recorded (the command's summary says so), not warned about: a result
+    # the caller asked for without symmetry is guessed wherever the scan did not look
+    record["mostly_guessed"] = float(kept.meta["completion"]["guessed"]) > MAX_GUESSED
+    meta = dict(kept.meta)
+    meta["completion"] = {**kept.meta["completion"], "guard": record}
+    history = [dict(h) for h in meta.get("history", [])]
+    if history:
+        history[-1]["guard"] = record["kept"]
+        history[-1]["guard_reason"] = record["reason"]
+    meta["history"] = history
+    return kept.replace(meta=meta)

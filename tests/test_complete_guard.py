@@ -1,0 +1,137 @@
+"""partscale.complete's guard: a completion the scan speaks against gives way to the scan as
+observed, closed, and says why; a completion the scan supports is kept."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+from conftest import data_path
+
+from partscale import ingest
+from partscale.complete import api, complete, guard, virtual
+from partscale.complete.column import sure_carver
+from partscale.errors import PartscaleWarning
+from partscale.ingest import from_trimesh
+
+RES = 64
+
+
+@pytest.fixture(scope="module")
+def lamp_post():
+    """A low bench (0.9 x 0.3 x 0.5 m) with a back 1 m tall and 0.3 m wide at its +x end only:
+    no mirror plane across x, and one view from the front right sees the bench's top at -x
+    empty."""
+    bench = trimesh.creation.box((0.9, 0.3, 0.5))
+    bench.apply_translation((0, 0.15, 0))
+    post = trimesh.creation.box((0.3, 1.0, 0.5))
+    post.apply_translation((0.3, 0.8, 0))
+    mesh = from_trimesh(trimesh.util.concatenate([bench, post]))
+    frames = virtual.virtual_scan(mesh, 1)
+    ob = api.observe(frames)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PartscaleWarning)
+        observed = complete(frames, res=RES, symmetry=False)
+    return ob, observed
+
+
+def _mirrored_across_x(c):
+    """The completion and its mirror image across the grid's middle x plane, forced in: the
+    back copied onto the bench's far end, where the camera saw through."""
+    return c.replace(sdf=np.minimum(c.sdf, c.sdf[::-1]).astype(np.float32))
+
+
+def test_forced_wrong_mirror_gives_way_to_the_observed_scan(lamp_post):
+    ob, observed = lamp_post
+    bad = _mirrored_across_x(observed)
+    carver = sure_carver(ob.frames, 0.0)
+    assert guard.evidence(bad, ob.points, carver).in_free > guard.MAX_IN_FREE
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kept = guard.choose(bad, ob.points, carver, lambda: observed)
+    record = kept.meta["completion"]["guard"]
+    assert record["kept"] == "observed"
+    assert np.array_equal(kept.sdf, observed.sdf)
+    assert "saw through" in record["reason"]
+    assert record["evidence"]["in_free"] > record["evidence_observed"]["in_free"]
+    notes = [str(w.message) for w in caught if issubclass(w.category, PartscaleWarning)]
+    assert any("kept the scan as observed" in n for n in notes), notes
+    assert kept.meta["history"][-1]["guard"] == "observed"
+
+
+def test_forced_completion_is_kept_and_says_what_spoke_against_it(lamp_post):
+    ob, observed = lamp_post
+    bad = _mirrored_across_x(observed)
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        kept = guard.choose(
+            bad, ob.points, sure_carver(ob.frames, 0.0), lambda: observed, force=True
+        )
+    record = kept.meta["completion"]["guard"]
+    assert record["kept"] == "completion" and record["forced"]
+    assert "saw through" in record["reason"]
+    assert np.array_equal(kept.sdf, bad.sdf)
+
+
+def test_the_scan_supports_its_own_closure(lamp_post):
+    # what was observed, closed, keeps the observed surface and stays out of free space
+    ob, observed = lamp_post
+    ev = guard.evidence(observed, ob.points, sure_carver(ob.frames, 0.0))
+    assert ev.on_surface >= guard.MIN_ON_SURFACE
+    assert ev.in_free <= guard.MAX_IN_FREE
+    assert observed.meta["completion"]["guard"]["kept"] == "completion"
+
+
+def test_a_supported_completion_is_kept():
+    # the shipped table, one view: the completion's evidence holds and it is what comes back
+    from partscale import data
+
+    frames = virtual.virtual_scan(ingest.load_mesh(data.table()), 1)
+    c = complete(frames, res=RES)
+    record = c.meta["completion"]["guard"]
+    assert record["kept"] == "completion", record
+    assert record["reason"] is None
+    assert record["evidence"]["on_surface"] >= guard.MIN_ON_SURFACE
+
+
+def _chair2_truth():
+    from partscale.complete import metrics
+
+    mesh = ingest.load_mesh(data_path("sweethome3d/chair2.obj"))
+    G, _ = metrics.surface_samples(ingest.from_mesh(mesh, res=128))
+    return mesh, G, metrics.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+
+
+def test_thin_sheet_chair_is_no_maze_of_struts():
+    # a chair with thin sheet sides, one view at its real size (metres): at most a handful of
+    # struts, whichever result the guard keeps, and no worse than the raw scan's points
+    from partscale.complete import metrics
+
+    mesh, G, tau = _chair2_truth()
+    frames = virtual.virtual_scan(mesh, 1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PartscaleWarning)
+        c = complete(frames, res=128)
+    m = c.meta["completion"]
+    assert len(m["struts"]) <= guard.MAX_STRUTS, (len(m["struts"]), m["guard"])
+    raw = metrics.chamfer_fscore(api.observe(frames).points, G, tau)["fscore"]
+    full = metrics.chamfer_fscore(metrics.surface_samples(c)[0], G, tau)["fscore"]
+    assert full >= raw, (full, raw)
+
+
+def test_floor_is_found_from_a_camera_pitched_45_degrees_down():
+    # a handheld scan from above: the floor lies 45 degrees off the camera's own up; the floor
+    # gives up and the completion stays on the chair (not the floor around it)
+    mesh, G, _ = _chair2_truth()
+    frames = virtual.virtual_scan(mesh, azimuths=(69.0,), elevation=45.0)
+    c = complete(frames, res=64)
+    m = c.meta["completion"]
+    assert m["up_from"] == "floor"
+    assert np.degrees(np.arccos(min(1.0, m["up"][1]))) <= 2.0, m["up"]
+    from partscale.complete import metrics
+
+    P, _ = metrics.surface_samples(c, 4000)
+    slack = 0.05  # metres: the closure and the noise beyond the chair's box
+    assert (P.min(0) >= G.min(0) - slack).all() and (P.max(0) <= G.max(0) + slack).all()

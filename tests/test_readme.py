@@ -120,8 +120,9 @@ def test_readme_block_runs(index, workspace):
 
 
 def test_readme_python_api_block_makes_what_it_says(workspace):
-    """The Python API's ten lines write the fitted table and its picture."""
-    api = next(i for i, b in enumerate(BLOCKS) if b.lang == "python" and "zones.fit" in b.code)
+    """The Python API's lines, on the top level, write the fitted table, its mesh and its
+    picture."""
+    api = next(i for i, b in enumerate(BLOCKS) if b.lang == "python" and "partscale.fit(" in b.code)
     workspace.run_through(api)
     from partscale import load
 
@@ -129,6 +130,12 @@ def test_readme_python_api_block_makes_what_it_says(workspace):
     sb = c.surface_bounds()
     assert abs((sb[1, 0] - sb[0, 0]) - 3.0) <= c.voxel_size, "x: expected 3 m within a voxel"
     assert (workspace.path / "table_3m.png").stat().st_size > 1000
+    import trimesh
+
+    mesh = trimesh.load(workspace.path / "table_3m.glb", force="mesh")
+    assert abs(mesh.extents[0] - 3.0) <= 2 * c.voxel_size, (
+        f"mesh x: expected 3 m, got {mesh.extents}"
+    )
 
 
 _LINK = re.compile(r"!?\[[^\]]*\]\((?P<target>[^)#\s]+)(?:#[^)]*)?\)")

@@ -1,7 +1,9 @@
 """Numba geometry kernels shared by the stages (import, re-evaluation, meshing).
 
 Coordinates are whatever the caller uses (world units or continuous voxel indices); only
-:func:`trilinear` reads a grid, at continuous voxel indices.
+the trilinear samplers read a grid, at continuous voxel indices: :func:`trilinear` (many points,
+every channel), :func:`trilinear_at` (one point, every channel, summed into a buffer) and
+:func:`trilinear_point` (one point of a single-channel grid, the renderer's ray marcher).
 """
 
 from __future__ import annotations
@@ -64,6 +66,34 @@ def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     qz = az + v * abz + w * acz
     dx, dy, dz = px - qx, py - qy, pz - qz
     return dx * dx + dy * dy + dz * dz, u, v, w
+
+
+@nb.njit(cache=True, inline="always")
+def grid_cell(x, n):
+    """The cell of a continuous voxel index ``x`` on an axis of ``n`` voxels: the lower corner
+    index and the fraction past it, ``x`` clamped to the grid (the last cell holds ``n - 1``,
+    fraction 1; a one-voxel axis has the cell 0, fraction 0)."""
+    if x < 0.0:
+        x = 0.0
+    elif x > n - 1.0:
+        x = n - 1.0
+    i = min(int(x), n - 2) if n > 1 else 0
+    return i, x - i
+
+
+@nb.njit(cache=True, inline="always")
+def trilinear_point(volume, x, y, z):
+    """Trilinear sample of ``volume`` (X, Y, Z), each axis at least 2 voxels, at the continuous
+    voxel index ``(x, y, z)``, clamped to the grid; linear along x, then y, then z (float64
+    for a float64 or integer grid, else the grid's float type)."""
+    i, fx = grid_cell(x, volume.shape[0])
+    j, fy = grid_cell(y, volume.shape[1])
+    k, fz = grid_cell(z, volume.shape[2])
+    c00 = volume[i, j, k] * (1 - fx) + volume[i + 1, j, k] * fx
+    c10 = volume[i, j + 1, k] * (1 - fx) + volume[i + 1, j + 1, k] * fx
+    c01 = volume[i, j, k + 1] * (1 - fx) + volume[i + 1, j, k + 1] * fx
+    c11 = volume[i, j + 1, k + 1] * (1 - fx) + volume[i + 1, j + 1, k + 1] * fx
+    return (c00 * (1 - fy) + c10 * fy) * (1 - fz) + (c01 * (1 - fy) + c11 * fy) * fz
 
 
 @nb.njit(cache=True, nogil=True, inline="always")

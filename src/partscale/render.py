@@ -23,6 +23,7 @@ import numba
 import numpy as np
 
 from ._files import atomic_path
+from ._kernels import trilinear_point
 from ._options import keyword_options
 from .color import linear_to_srgb, palette_colour, srgb8_to_linear
 from .csdf import CSDF
@@ -162,28 +163,6 @@ def camera(view: str, frame: np.ndarray, size: int, *, reserve_bottom: float = 0
 
 
 # -- numba kernels (index space: voxel centres at integers, distances in voxels) -------------
-@numba.njit(cache=True, inline="always")
-def _cell(x, n):
-    if x < 0.0:
-        x = 0.0
-    elif x > n - 1.0:
-        x = n - 1.0
-    i = min(int(x), n - 2)
-    return i, x - i
-
-
-@numba.njit(cache=True, inline="always")
-def _trilinear(vol, x, y, z):
-    i, fx = _cell(x, vol.shape[0])
-    j, fy = _cell(y, vol.shape[1])
-    k, fz = _cell(z, vol.shape[2])
-    c00 = vol[i, j, k] * (1 - fx) + vol[i + 1, j, k] * fx
-    c10 = vol[i, j + 1, k] * (1 - fx) + vol[i + 1, j + 1, k] * fx
-    c01 = vol[i, j, k + 1] * (1 - fx) + vol[i + 1, j, k + 1] * fx
-    c11 = vol[i, j + 1, k + 1] * (1 - fx) + vol[i + 1, j + 1, k + 1] * fx
-    return (c00 * (1 - fy) + c10 * fy) * (1 - fz) + (c01 * (1 - fy) + c11 * fy) * fz
-
-
 @numba.njit(cache=True, parallel=True)
 def _trace(sdf, origins, d, eps, max_steps, graze, hits):
     """March every ray ``origins[r] + t d`` through ``sdf`` (voxel units); hits[r] = point or nan.
@@ -218,7 +197,7 @@ def _trace(sdf, origins, d, eps, max_steps, graze, hits):
             x = origins[r, 0] + t * d[0]
             y = origins[r, 1] + t * d[1]
             z = origins[r, 2] + t * d[2]
-            v = _trilinear(sdf, x, y, z)
+            v = trilinear_point(sdf, x, y, z)
             if v < eps:
                 hits[r, 0] = x
                 hits[r, 1] = y
@@ -234,9 +213,9 @@ def _trace(sdf, origins, d, eps, max_steps, graze, hits):
 def _normals(sdf, pts, out):
     for r in numba.prange(pts.shape[0]):
         x, y, z = pts[r, 0], pts[r, 1], pts[r, 2]
-        gx = _trilinear(sdf, x + 0.5, y, z) - _trilinear(sdf, x - 0.5, y, z)
-        gy = _trilinear(sdf, x, y + 0.5, z) - _trilinear(sdf, x, y - 0.5, z)
-        gz = _trilinear(sdf, x, y, z + 0.5) - _trilinear(sdf, x, y, z - 0.5)
+        gx = trilinear_point(sdf, x + 0.5, y, z) - trilinear_point(sdf, x - 0.5, y, z)
+        gy = trilinear_point(sdf, x, y + 0.5, z) - trilinear_point(sdf, x, y - 0.5, z)
+        gz = trilinear_point(sdf, x, y, z + 0.5) - trilinear_point(sdf, x, y, z - 0.5)
         n = math.sqrt(gx * gx + gy * gy + gz * gz)
         if n < 1e-12:
             out[r, 0], out[r, 1], out[r, 2] = 0.0, 0.0, 0.0
@@ -248,7 +227,7 @@ def _normals(sdf, pts, out):
 def _colours(rgb, pts, out):
     for r in numba.prange(pts.shape[0]):
         for c in range(3):
-            out[r, c] = _trilinear(rgb[..., c], pts[r, 0], pts[r, 1], pts[r, 2])
+            out[r, c] = trilinear_point(rgb[..., c], pts[r, 0], pts[r, 1], pts[r, 2])
 
 
 def part_colors(csdf: CSDF) -> np.ndarray:

@@ -5,14 +5,44 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from .._files import atomic_path
 from .metrics import METRICS
 
-if TYPE_CHECKING:
-    from .suite import SuiteResult
+
+# What the tables read of a run, as protocols: :class:`partscale.evaluate.SuiteResult` and its
+# objects match them, and this module need not import the suite that imports it.
+class _EntryLike(Protocol):
+    @property
+    def name(self) -> str: ...
+    @property
+    def kind(self) -> str | None: ...
+
+
+class _ObjectLike(Protocol):
+    @property
+    def entry(self) -> _EntryLike: ...
+    @property
+    def rows(self) -> list[dict[str, Any]]: ...
+    @property
+    def error(self) -> str | None: ...
+    @property
+    def timings(self) -> dict[str, float]: ...
+
+
+class _SuiteLike(Protocol):
+    @property
+    def objects(self) -> Sequence[_ObjectLike]: ...
+    @property
+    def out_dir(self) -> Path: ...
+    @property
+    def res(self) -> int: ...
+    @property
+    def elapsed_s(self) -> float: ...
+
 
 COLUMNS = (
     "object",
@@ -88,7 +118,7 @@ def _cell(v: Any) -> str:
         return str(v)
 
 
-def _rows(result: SuiteResult) -> list[dict[str, Any]]:
+def _rows(result: _SuiteLike) -> list[dict[str, Any]]:
     return [row for obj in result.objects for row in obj.rows]
 
 
@@ -208,7 +238,7 @@ def _md_table(header: list[str], body: list[list[str]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def metrics_csv(result: SuiteResult) -> str:
+def metrics_csv(result: _SuiteLike) -> str:
     """The suite's metrics, one row per object and mode, as CSV text."""
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=COLUMNS, extrasaction="ignore", lineterminator="\n")
@@ -218,7 +248,7 @@ def metrics_csv(result: SuiteResult) -> str:
     return buf.getvalue()
 
 
-def metrics_markdown(result: SuiteResult) -> str:
+def metrics_markdown(result: _SuiteLike) -> str:
     """The suite's metrics as a Markdown table with a legend."""
     cols = [c for c in COLUMNS if c not in ("kind", "voxels")]
     body = [[_cell(row.get(c)) for c in cols] for row in _rows(result)]
@@ -274,7 +304,7 @@ def _expectation(obj_rows: list[dict[str, Any]], kind: str) -> tuple[str, str]:
     return ("held" if extra else "not held"), detail
 
 
-def summary_markdown(result: SuiteResult) -> str:
+def summary_markdown(result: _SuiteLike) -> str:
     """The suite's summary in Markdown: best modes, failures, the paper's expectations, times."""
     objs = result.objects
     ok = [o for o in objs if not o.error]
@@ -378,7 +408,7 @@ def _failure_counts(ok: list, modes: list[str]) -> str:
     return "\n".join(out) + "\n"
 
 
-def _timings(result: SuiteResult) -> str:
+def _timings(result: _SuiteLike) -> str:
     stages = [
         k
         for k in ("import", "segment", "reference", "edit", "metrics", "figure")
@@ -401,7 +431,7 @@ def _timings(result: SuiteResult) -> str:
     )
 
 
-def write(result: SuiteResult) -> dict[str, Path]:
+def write(result: _SuiteLike) -> dict[str, Path]:
     """Write ``metrics.csv``, ``metrics.md`` and ``summary.md`` into ``result.out_dir``."""
     files = {}
     for key, name, text in (

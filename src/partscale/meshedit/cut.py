@@ -6,7 +6,7 @@ colours: anything interpolated linearly along an edge) and per-face attributes (
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -107,8 +107,3 @@ def concatenate(pieces: list[Piece]) -> Piece:
         {k: np.concatenate([p.vattrs[k] for p in pieces]) for k in pieces[0].vattrs},
         {k: np.concatenate([p.fattrs[k] for p in pieces]) for k in pieces[0].fattrs},
     )
-
-
-def with_vertices(piece: Piece, vertices: np.ndarray, **vattrs: np.ndarray) -> Piece:
-    """``piece`` with new vertex positions (and the vertex attributes given replaced)."""
-    return replace(piece, vertices=vertices, vattrs={**piece.vattrs, **vattrs})

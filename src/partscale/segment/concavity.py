@@ -78,7 +78,7 @@ def _to_hull(hull, corners, point_sets, trees, spacing, sdf, limit) -> float:
     hull of ``corners``); ``trees()`` gives KD-trees of the point sets, only when needed.
     """
     eq = np.ascontiguousarray(hull.equations)  # (F, 4): n . x + d <= 0 inside, |n| = 1
-    inward = max(_deepest(p, eq) for p in point_sets)
+    inward = max(_deepest_index(p, eq, 0.0)[1] for p in point_sets)
     if inward > limit:
         return inward
     samples = _hull_samples(corners[hull.simplices], spacing, sdf, limit)
@@ -96,12 +96,16 @@ def deepest_point(pts: np.ndarray, eq: np.ndarray) -> tuple[int, float]:
     """Index of the point of ``pts`` (N, 3) deepest inside the hull with facet planes ``eq``
     (n . x + d <= 0 inside, |n| = 1), and its depth.
     """
-    return _deepest_index(np.ascontiguousarray(pts, np.float64), np.ascontiguousarray(eq))
+    return _deepest_index(np.ascontiguousarray(pts, np.float64), np.ascontiguousarray(eq), -np.inf)
 
 
 @numba.njit(cache=True, nogil=True)
-def _deepest_index(pts, eq):  # pragma: no cover - compiled
-    best, arg = -np.inf, 0
+def _deepest_index(pts, eq, floor):  # pragma: no cover - compiled
+    # Distance of a point inside a convex hull to its boundary = its smallest facet-plane
+    # depth; the answer is the point with the largest such distance above ``floor`` (index 0
+    # and ``floor`` when none). A point stops being scanned as soon as one facet is closer
+    # than the best so far (most points lie on the hull).
+    best, arg = floor, 0
     for i in range(pts.shape[0]):
         m = np.inf
         for j in range(eq.shape[0]):
@@ -113,26 +117,6 @@ def _deepest_index(pts, eq):  # pragma: no cover - compiled
         if m > best:
             best, arg = m, i
     return arg, best
-
-
-@numba.njit(cache=True, nogil=True)
-def _deepest(pts: np.ndarray, eq: np.ndarray) -> float:  # pragma: no cover - compiled
-    # Distance of a point inside a convex hull to its boundary = its smallest facet-plane
-    # depth; the answer is the largest such distance. A point stops being scanned as soon as
-    # one facet is closer than the best so far (most points lie on the hull).
-    best = 0.0
-    for i in range(pts.shape[0]):
-        x, y, z = pts[i, 0], pts[i, 1], pts[i, 2]
-        m = np.inf
-        for j in range(eq.shape[0]):
-            d = -(x * eq[j, 0] + y * eq[j, 1] + z * eq[j, 2] + eq[j, 3])
-            if d < m:
-                m = d
-                if m <= best:
-                    break
-        if m > best:
-            best = m
-    return best
 
 
 #: Most lattice steps per triangle edge (a hull triangle longer than this many spacings gets

@@ -59,7 +59,7 @@ from .elements import (
 from .features import Feature, axis_features, feature_notes, local_features, whole_copies
 from .fit import add_axis, fit, fit_axis, resolve_counts
 from .helix import Helix, find_helices
-from .profile import Profile, profile
+from .profile import Profile, calm_runs, profile
 from .radial import RadialFrame, find_radial, radial_zones
 from .rotation import Rotation, find_rotations
 from .screw import Screw, find_screws
@@ -69,7 +69,6 @@ from .suggest import (
     BoundedRepeat,
     Candidate,
     axis_candidates,
-    calm_runs,
     find_bounded_repeats,
     suggest,
 )

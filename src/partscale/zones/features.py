@@ -55,7 +55,7 @@ from scipy import ndimage
 
 from ..csdf import BAND_VOXELS, CSDF
 from ..edit import Edit, Recipe, edit_label, unit_suffix
-from .profile import _axis_index, profile
+from .profile import _axis_index, calm_runs, profile
 
 #: Voxels along the object's longest side at which the sizes below are given (an import at
 #: ``--res 128``); they scale with it, so a feature is the same share of the object at every
@@ -395,7 +395,7 @@ def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Fe
     """The local features along ``axis`` of the given runs of layers.
 
     The local features along ``axis`` (0, 1, 2) of the runs of layers ``runs`` (inclusive
-    ``(first, last)``: the calm runs of :func:`.suggest.calm_runs`), in order of their first
+    ``(first, last)``: the calm runs of :func:`.profile.calm_runs`), in order of their first
     layer.
 
     Colour motifs are sought over each run extended by :data:`EXTEND` layers either side: one in
@@ -575,8 +575,6 @@ def local_features(
     >>> zones.local_features(door, "x", (0.1, 0.4))
     []
     """
-    from .suggest import calm_runs  # (suggest builds on this module)
-
     ax = _axis_index(axis)
     h = csdf.voxel_size
     o = float(csdf.origin[ax])

@@ -43,18 +43,16 @@ from ..progress import ProgressCallback, resolve
 from .elements import AxisElements, count_zone, element_phrase, find_elements
 from .features import Feature, axis_features, feature_spans, whole_copies
 from .helix import find_helices
-from .profile import Profile, profile
+from .profile import STEP, Profile, calm_runs, profile
 from .radial import find_radial, radial_zones
 from .rotation import Rotation, find_rotations
 from .screw import find_screws
 from .suggest import (
     AXES,
     SHIFT_STEP,
-    STEP,
     Candidate,
     axis_candidates,
     best_phase,
-    calm_runs,
     join_islands,
     plane_cost,
 )

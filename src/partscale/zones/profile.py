@@ -210,3 +210,57 @@ def profile(csdf: CSDF, axis: str | int) -> Profile:
         voxel_size=float(h),
         coarse=coarse,
     )
+
+
+# -- calm runs: where constant slabs and local features are found --------------------------
+
+#: Calm layers: neighbouring cross-sections closer than this (:meth:`Profile.distance`).
+STEP = 0.02
+#: Shortest constant slab reported, voxels.
+MIN_SLAB = 3
+
+
+def _runs(mask: np.ndarray) -> np.ndarray:
+    """(R, 2) int64 ``[first, last]`` of the runs of True in a 1D boolean array."""
+    m = np.concatenate([[False], mask, [False]])
+    d = np.diff(m.astype(np.int8))
+    return np.stack([np.flatnonzero(d == 1), np.flatnonzero(d == -1) - 1], axis=1)
+
+
+def _solid_layers(p: Profile) -> tuple[int, int]:
+    i0 = max(0, int(np.ceil(p.index(p.lo) - 0.5)))
+    i1 = min(p.n - 1, int(np.floor(p.index(p.hi) + 0.5)))
+    return i0, i1
+
+
+def calm_runs(p: Profile) -> list[tuple[int, int]]:
+    """The maximal runs of calm layers of a profile: where constant slabs and local features are found.
+
+    A run is at least :data:`MIN_SLAB` non-empty layers whose neighbour-to-neighbour distance stays
+    below :data:`STEP`.
+
+    Parameters
+    ----------
+    p : Profile
+        The cross-sections along an axis.
+
+    Returns
+    -------
+    list of (int, int)
+        ``(first, last)`` layer indices (inclusive) of each run, in order.
+
+    Examples
+    --------
+    >>> from partscale import shapes, zones
+    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
+    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
+    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> zones.calm_runs(zones.profile(bookcase, "y"))[:3]
+    [(5, 17), (20, 32), (34, 46)]
+    """
+    i0, i1 = _solid_layers(p)
+    idx = np.arange(i0, i1)
+    step = p.distance(idx, idx + 1)
+    calm = (step < STEP) & (p.area[idx] > 0) & (p.area[idx + 1] > 0)
+    runs = [(int(idx[a]), int(idx[b]) + 1) for a, b in _runs(calm)]
+    return [(a, b) for a, b in runs if b - a + 1 >= MIN_SLAB]

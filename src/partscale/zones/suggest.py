@@ -60,7 +60,7 @@ from ..csdf import CSDF
 from ..edit import AXES, SEAM_VOXELS
 from ..progress import ProgressCallback, resolve
 from .features import Feature, axis_features, feature_spans, whole_copies
-from .profile import Profile, _axis_index, profile
+from .profile import MIN_SLAB, Profile, _axis_index, _runs, _solid_layers, calm_runs, profile
 
 #: Two layers match when their soft Jaccard distance is below this.
 MATCH = 0.15
@@ -76,11 +76,9 @@ MIN_COUNT = 3
 JITTER = 0.5
 #: Shift step of the period search, voxels.
 SHIFT_STEP = 0.25
-#: Constant slab: neighbouring layers closer than STEP, its two ends closer than DRIFT.
-STEP = 0.02
+#: Constant slab: neighbouring layers closer than :data:`STEP` (see :func:`calm_runs`), its two
+#: ends closer than DRIFT.
 DRIFT = 0.06
-#: Shortest constant slab reported, voxels.
-MIN_SLAB = 3
 #: A boundary between elements changes the cross-section area by this share of the largest one.
 PROMINENCE = 0.05
 #: Copies of one element, voxelised at different phases, differ in width and spacing this much.
@@ -148,19 +146,6 @@ class Candidate:
             d["period"] = self.period
             d["count"] = self.count
         return d
-
-
-def _runs(mask: np.ndarray) -> np.ndarray:
-    """(R, 2) int64 ``[first, last]`` of the runs of True in a 1D boolean array."""
-    m = np.concatenate([[False], mask, [False]])
-    d = np.diff(m.astype(np.int8))
-    return np.stack([np.flatnonzero(d == 1), np.flatnonzero(d == -1) - 1], axis=1)
-
-
-def _solid_layers(p: Profile) -> tuple[int, int]:
-    i0 = max(0, int(np.ceil(p.index(p.lo) - 0.5)))
-    i1 = min(p.n - 1, int(np.floor(p.index(p.hi) + 0.5)))
-    return i0, i1
 
 
 @dataclass(frozen=True)
@@ -604,39 +589,6 @@ class Slab(NamedTuple):
     last: int
     drift: float
     at_feature: bool = False
-
-
-def calm_runs(p: Profile) -> list[tuple[int, int]]:
-    """The maximal runs of calm layers of a profile: where constant slabs and local features are found.
-
-    A run is at least :data:`MIN_SLAB` non-empty layers whose neighbour-to-neighbour distance stays
-    below :data:`STEP`.
-
-    Parameters
-    ----------
-    p : Profile
-        The cross-sections along an axis.
-
-    Returns
-    -------
-    list of (int, int)
-        ``(first, last)`` layer indices (inclusive) of each run, in order.
-
-    Examples
-    --------
-    >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
-    >>> zones.calm_runs(zones.profile(bookcase, "y"))[:3]
-    [(5, 17), (20, 32), (34, 46)]
-    """
-    i0, i1 = _solid_layers(p)
-    idx = np.arange(i0, i1)
-    step = p.distance(idx, idx + 1)
-    calm = (step < STEP) & (p.area[idx] > 0) & (p.area[idx + 1] > 0)
-    runs = [(int(idx[a]), int(idx[b]) + 1) for a, b in _runs(calm)]
-    return [(a, b) for a, b in runs if b - a + 1 >= MIN_SLAB]
 
 
 def constant_slabs(

@@ -46,11 +46,9 @@ def launch_numba_threads() -> None:
 
     if threading.current_thread() is not threading.main_thread():
         return
-    try:
-        from numba.np.ufunc.parallel import _launch_threads
-    except ImportError:  # numba's layout changed: only the note comes back
-        return
-    _launch_threads()
+    import numba
+
+    numba.get_num_threads()  # launches numba's threads first, in this thread
 
 
 def reset_pools() -> None:

@@ -982,8 +982,8 @@ def _most_crossed_line(sdf, ax):
 FIT_METRICS = ("prop_out", "prop_in", "spacing_err", "seam_color", "seam_shape", "pieces")
 #: Known gaps, each with the most it may reach (the test fails above it): the tile seam rule
 #: that never fills a cut air gap took the sofa's hand-zone tile from 0.886 to 0.447 voxel of
-#: seam shape jump and fit's from 0.737 to 0.551; fit's planes (between cushions, at 24 % and
-#: 74 %) still jump 0.1 voxel more than the hand zone's. Open, not hidden: 0.6 is today's
+#: seam shape jump and fit's from 0.737 to 0.551; fit's planes (the zone -0.305..0.313 m, not
+#: the hand one) still jump 0.1 voxel more than the hand zone's. Open, not hidden: 0.6 is today's
 #: figure with a margin, so any regression fails.
 FIT_KNOWN_WORSE = {("sofa-wider", "seam_shape"): 0.6}
 

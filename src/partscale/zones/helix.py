@@ -260,12 +260,16 @@ def _candidates(score: _Scorer, c: np.ndarray) -> list[np.ndarray]:
     return [np.array([t, dy, c[0], c[1]]) for t, dy in kept]
 
 
-def _refine(score: _Scorer, x: np.ndarray) -> tuple[np.ndarray, float]:
-    """The motion near ``x`` (axis free) that carries the matching samples' distances onto
-    their own best (Gauss-Newton on ``sdf(T p) - sdf(p)``, voxels, over the samples within a
-    voxel and a half, then one), and its support.
+def _refine(
+    score: _Scorer, x: np.ndarray, free: tuple[int, ...] = (0, 1, 2, 3)
+) -> tuple[np.ndarray, float]:
+    """The motion ``x = (angle, rise, cx, cz)`` near ``x`` (axis free) that carries the matching
+    samples' distances onto their own best (Gauss-Newton on ``sdf(T p) - sdf(p)``, voxels, over
+    the samples within a voxel and a half, then one), and its support; only the parameters
+    ``free`` move (a pure turn, :mod:`.rotation`, keeps the rise at 0).
     """
     x = x.astype(np.float64).copy()
+    cols = list(free)
     sdf = score.sdf
     h = score.h
     for it in range(ITERATIONS):
@@ -298,13 +302,13 @@ def _refine(score: _Scorer, x: np.ndarray) -> tuple[np.ndarray, float]:
                 g[:, 0] * sn + g[:, 2] * (1 - cs),
             ],
             axis=1,
-        )
+        )[:, cols]
         a = jac.T @ jac
-        a += 1e-6 * np.trace(a) * np.eye(4)
+        a += 1e-6 * np.trace(a) * np.eye(len(cols))
         dxv = -np.linalg.solve(a, jac.T @ res[use])
         dxv[0] = np.clip(dxv[0], -0.05, 0.05)
         dxv[1:] = np.clip(dxv[1:], -2.0, 2.0)
-        x += dxv
+        x[cols] += dxv
         if abs(dxv[0]) < 1e-5 and np.abs(dxv[1:]).max() < 1e-3:
             break
     return x, score(x)

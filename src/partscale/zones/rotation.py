@@ -41,6 +41,7 @@ from scipy import ndimage
 from ..csdf import CSDF
 from ..edit import RotationZone
 from .helix import _axes, _Scorer
+from .helix import _refine as _refine_motion
 from .screw import DISCRETE, MIN_EXCLUSIVE, MIN_SUPPORT, TIED
 
 #: Least and most turn from one element to the next, degrees (a half turn is the symmetry of
@@ -51,8 +52,6 @@ MAX_ANGLE = 120.0
 #: :data:`REFINED` local maxima are refined.
 ARC = 1.0
 REFINED = 6
-#: Gauss-Newton iterations of the refinement.
-ITERATIONS = 12
 #: A turn within this many degrees of 360 / k is a closed ring of k.
 CLOSE_TOL = 1.0
 #: A sector holds an element where it holds at least this share of the fullest sector's solid.
@@ -210,52 +209,11 @@ def _candidates(score: _Scorer, c: np.ndarray) -> list[float]:
 
 
 def _refine(score: _Scorer, x: np.ndarray) -> tuple[np.ndarray, float]:
-    """The turn near ``x = (angle, cx, cz)`` (axis free) that carries the matching samples'
-    distances onto their own best (Gauss-Newton on ``sdf(T p) - sdf(p)``, voxels, over the
-    samples within a voxel and a half, then one), and its support.
+    """The turn near ``x = (angle, cx, cz)`` (axis free), and its support: the helix's
+    refinement (:func:`.helix._refine`) with the rise held at 0.
     """
-    x = x.astype(np.float64).copy()
-    sdf = score.sdf
-    h = score.h
-    for it in range(ITERATIONS):
-        q = score.place(_motion(x))
-        ok = score.inside(q)
-        v = ndimage.map_coordinates(sdf, q.T, order=1, mode="nearest") / h
-        res = v - score.v0
-        use = ok & (np.abs(res) < (1.5 if it < ITERATIONS // 2 else 1.0))
-        if use.sum() < 12:
-            break
-        qu = q[use]
-        g = np.stack(
-            [
-                (
-                    ndimage.map_coordinates(sdf, (qu + 0.5 * e).T, order=1, mode="nearest")
-                    - ndimage.map_coordinates(sdf, (qu - 0.5 * e).T, order=1, mode="nearest")
-                )
-                / h
-                for e in np.eye(3)
-            ],
-            axis=1,
-        )
-        cs, sn = math.cos(x[0]), math.sin(x[0])
-        dx, dz = qu[:, 0] - x[1], qu[:, 2] - x[2]
-        jac = np.stack(
-            [
-                -g[:, 0] * dz + g[:, 2] * dx,
-                g[:, 0] * (1 - cs) - g[:, 2] * sn,
-                g[:, 0] * sn + g[:, 2] * (1 - cs),
-            ],
-            axis=1,
-        )
-        a = jac.T @ jac
-        a += 1e-6 * np.trace(a) * np.eye(3)
-        dxv = -np.linalg.solve(a, jac.T @ res[use])
-        dxv[0] = np.clip(dxv[0], -0.05, 0.05)
-        dxv[1:] = np.clip(dxv[1:], -2.0, 2.0)
-        x += dxv
-        if abs(dxv[0]) < 1e-5 and np.abs(dxv[1:]).max() < 1e-3:
-            break
-    return x, score(_motion(x))
+    m, s = _refine_motion(score, _motion(x), free=(0, 2, 3))
+    return m[[0, 2, 3]], s
 
 
 def _own(score: _Scorer, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -42,33 +42,15 @@ ensure_venv() {
   fi
 }
 
-ensure_ray() {
-  # the optional [ray] extra, so the batch's Ray engine test runs; it skips with the reason otherwise
-  local stamp=$VENV/.partscale-ray-installed
+ensure_extra() {
+  # an optional extra of pyproject.toml (NAME), installed once per change of pyproject.toml; the
+  # tests that need it skip with their reason when it cannot be installed
+  local name=$1 what=$2 skipped=$3
+  local stamp=$VENV/.partscale-$name-installed
   if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-    say "installing the optional Ray extra (partscale[ray]) for the batch engine test"
-    if "$PY" -m pip install -q -e ".[test,ray]"; then touch "$stamp"
-    else echo "note: could not install ray; the batch's Ray engine test will be skipped" >&2; fi
-  fi
-}
-
-ensure_usd() {
-  # the optional [usd] extra (usd-core), so USD/USDZ export and its compliance tests run
-  local stamp=$VENV/.partscale-usd-installed
-  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-    say "installing the optional USD extra (partscale[usd]) for USD and USDZ export"
-    if "$PY" -m pip install -q -e ".[test,usd]"; then touch "$stamp"
-    else echo "note: could not install usd-core; the USD and USDZ export tests will be skipped" >&2; fi
-  fi
-}
-
-ensure_docs() {
-  # the [docs] extra: MkDocs, Material, mkdocstrings and `build`, for the site and package checks
-  local stamp=$VENV/.partscale-docs-installed
-  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-    say "installing the documentation tools (partscale[docs])"
-    if "$PY" -m pip install -q -e ".[test,docs]"; then touch "$stamp"
-    else echo "note: could not install the documentation tools; the site and package builds will be skipped" >&2; fi
+    say "installing $what (partscale[$name])"
+    if "$PY" -m pip install -q -e ".[test,$name]"; then touch "$stamp"
+    else echo "note: could not install partscale[$name]; $skipped will be skipped" >&2; fi
   fi
 }
 
@@ -178,9 +160,9 @@ case "${1:-}" in
     ;;
   test)
     ensure_venv
-    ensure_ray
-    ensure_usd
-    ensure_docs
+    ensure_extra ray "the optional Ray extra for the batch engine test" "the batch's Ray engine test"
+    ensure_extra usd "the optional USD extra for USD and USDZ export" "the USD and USDZ export tests"
+    ensure_extra docs "the documentation tools" "the site and package builds"
     ensure_node_tools
     ensure_chromium
     ensure_blender

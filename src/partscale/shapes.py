@@ -294,3 +294,58 @@ def bars(
         lambda p: boxes_sdf(p, boxes), b, voxel_size=voxel_size, margin=margin, source=f"{n} bars"
     )
     return c, boxes
+
+
+def bookcase(
+    rows: int = 4,
+    *,
+    width: float = 0.8,
+    height: float = 1.2,
+    depth: float = 0.3,
+    board: float = 0.02,
+    voxel_size: float = 0.02,
+    margin: int = 3,
+) -> CSDF:
+    """An open bookcase: two side boards and ``rows + 1`` shelves, equally spaced.
+
+    The sides span ``[0, board]`` and ``[width - board, width]`` on x, ``[0, height]`` on y;
+    shelf ``i`` spans ``[i * s, i * s + board]`` on y with ``s = (height - board) / rows``, between
+    the sides; everything spans ``[0, depth]`` on z. The object the zone finders' examples use
+    (``rows`` equal compartments along y).
+
+    Parameters
+    ----------
+    rows : int
+        Compartments (one fewer than the shelves).
+    width, height, depth : float
+        The outer box, world units.
+    board : float
+        Every board's thickness.
+    voxel_size : float
+        Voxel edge length.
+    margin : int
+        Empty voxels around it.
+
+    Returns
+    -------
+    CSDF
+        The bookcase.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> case = shapes.bookcase()
+    >>> case.surface_bounds().round(2).tolist()
+    [[0.0, 0.0, 0.0], [0.8, 1.2, 0.3]]
+    """
+    boards = [((0, 0, 0), (board, height, depth)), ((width - board, 0, 0), (width, height, depth))]
+    step = (height - board) / rows
+    boards += [
+        ((board, y, 0), (width - board, y + board, depth)) for y in step * np.arange(rows + 1)
+    ]
+    return grid(
+        lambda p: boxes_sdf(p, boards),
+        [(0, 0, 0), (width, height, depth)],
+        voxel_size=voxel_size,
+        margin=margin,
+    )

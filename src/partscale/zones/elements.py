@@ -118,9 +118,7 @@ class Separator:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> zones.find_elements(bookcase, "y").separators[0].kind
     'edge'
     """
@@ -150,9 +148,7 @@ class Element:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> zones.find_elements(bookcase, "y").elements[0].group
     0
     """
@@ -198,9 +194,7 @@ class Group:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> zones.find_elements(bookcase, "y").groups[0]
     Group(members=(0, 1, 2), separators=(0, 1), err=0.0, mirrored=False, typical=1)
     """
@@ -246,9 +240,7 @@ class AxisElements:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> found = zones.find_elements(bookcase, "y")
     >>> len(found.elements), found.best.members
     (3, (0, 1, 2))
@@ -594,9 +586,7 @@ def find_elements(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> found = zones.find_elements(bookcase, "y")
     >>> found.best is not None, zones.element_phrase(found)
     (True, '3 alike elements, 0.26 long')
@@ -663,9 +653,7 @@ class CountZone:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> z = zones.count_zone(bookcase, zones.find_elements(bookcase, "y"), 1)
     >>> round(z.start, 3), round(z.end, 3), z.members, z.seam
     (0.624, 0.924, (1,), 0.0)
@@ -764,9 +752,7 @@ def count_zone(
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> zone = zones.count_zone(bookcase, zones.find_elements(bookcase, "y"), 1)
     >>> zone.members
     (1,)
@@ -836,9 +822,7 @@ def element_phrase(found: AxisElements) -> str:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> zones.element_phrase(zones.find_elements(bookcase, "y"))
     '3 alike elements, 0.26 long'
     """

@@ -743,9 +743,7 @@ def add_axis(
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> edits, why = zones.add_axis(bookcase, 1, 1)
     >>> edits[0].mode, why[0].split(",")[0]
     ('tile', 'y: add 1 element(s) (3 alike elements')
@@ -1000,9 +998,7 @@ def fit_axis(
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> edits, why = zones.fit_axis(bookcase, 1, 1.5)  # 30 cm taller: one more shelf row
     >>> [(e.mode, round(e.dest - e.end, 3)) for e in edits]
     [('tile', 0.3)]

@@ -56,9 +56,7 @@ class Profile:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> p = zones.profile(bookcase, "y")
     >>> p.coords.shape == p.area.shape == (bookcase.shape[1],)
     True
@@ -168,9 +166,7 @@ def profile(csdf: CSDF, axis: str | int) -> Profile:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> p = zones.profile(bookcase, "y")
     >>> p.axis, p.gram.shape
     (1, (67, 67))
@@ -252,9 +248,7 @@ def calm_runs(p: Profile) -> list[tuple[int, int]]:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> zones.calm_runs(zones.profile(bookcase, "y"))[:3]
     [(5, 17), (20, 32), (34, 46)]
     """

@@ -51,9 +51,7 @@ class Move:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> from partscale.edit import Edit
     >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))
     >>> moves[0]
@@ -152,9 +150,7 @@ def snap(
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> from partscale.edit import Edit
     >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))  # onto one period
     >>> round(edit.end - edit.start, 3), [m.plane for m in moves]
@@ -237,9 +233,7 @@ def describe_moves(moves: list[Move], units: str | None) -> str:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> from partscale.edit import Edit
     >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))
     >>> zones.describe_moves(moves, "m")
@@ -270,9 +264,7 @@ def record_snap(csdf: CSDF, moves: list[Move]) -> CSDF:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> from partscale.edit import Edit, apply_edit
     >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))
     >>> taller = zones.record_snap(apply_edit(bookcase, edit), moves)

@@ -115,9 +115,7 @@ class Candidate:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> best = zones.suggest(bookcase, "y")[0]
     >>> best.kind, best.period, best.count
     ('tile', 0.295, 4)
@@ -314,9 +312,7 @@ def find_bounded_repeats(p: Profile, csdf: CSDF | None = None) -> list[BoundedRe
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> zones.find_bounded_repeats(zones.profile(bookcase, "y"), bookcase)  # shelves: a plain repeat
     []
     """
@@ -727,9 +723,7 @@ def axis_candidates(
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> boards = [((0, 0, 0), (0.02, 1.2, 0.3)), ((0.78, 0, 0), (0.8, 1.2, 0.3))]
-    >>> boards += [((0.02, y, 0), (0.78, y + 0.02, 0.3)) for y in (0.0, 0.295, 0.59, 0.885, 1.18)]
-    >>> bookcase = shapes.grid(lambda p: shapes.boxes_sdf(p, boards), [(0, 0, 0), (0.8, 1.2, 0.3)], voxel_size=0.02)
+    >>> bookcase = shapes.bookcase()
     >>> [c.kind for c in zones.axis_candidates(bookcase, "y")][:2]
     ['tile', 'stretch']
     """

@@ -270,3 +270,25 @@ def test_usd_output_without_usd_core_is_one_line_naming_the_extra(command, tmp_p
     )
     assert_bad_input(proc, "partscale[usd]", "out.usdz")
     assert not (tmp_path / "out.usdz").exists()
+
+
+def test_save_usd_failing_after_its_textures_leaves_nothing_half_written(tmp_path, monkeypatch):
+    from partscale.export import usd
+
+    scene = meshedit.load_scene(data_path("polyhaven/wooden_table_02/wooden_table_02_1k.gltf"))
+    (tmp_path / "table.png").write_bytes(b"the user's own picture")
+    real = usd._stage
+
+    def stage_then_fail(*args, **kwargs):
+        real(*args, **kwargs)  # layer and textures written to their temporaries
+        raise OSError("disk full")
+
+    monkeypatch.setattr(usd, "_stage", stage_then_fail)
+    with pytest.raises(partscale.InputError, match="disk full"):  # one line, not a traceback
+        export.save_usd(scene, tmp_path / "table.usda")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["table.png"]  # no layer, no temps
+    assert (tmp_path / "table.png").read_bytes() == b"the user's own picture"
+    monkeypatch.undo()
+    written = export.save_usd(scene, tmp_path / "table.usda")
+    assert written[0] == tmp_path / "table.usda" and len(written) > 1
+    assert all(p.is_file() for p in written)

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._files import atomic_path, final_path
+from .._files import atomic_path, final_path, staged_writes
 from ..errors import InputError
 
 if TYPE_CHECKING:
@@ -118,6 +118,7 @@ def save_usd(
     -------
     list of Path
         The files written: the layer or package first, then textures written beside a layer.
+        They land together: on any failure none of them is written and what was there stays.
 
     Examples
     --------
@@ -133,7 +134,7 @@ def save_usd(
             f"{path.suffix or 'no suffix'}"
         )
     require_usd(path)
-    with atomic_path(path) as tmp:
+    with staged_writes(), atomic_path(path) as tmp:  # the layer and its textures: all or none
         beside = _write(scene, tmp, units=units)
     return [path, *beside]
 

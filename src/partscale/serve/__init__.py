@@ -13,7 +13,8 @@ own GLSL map) and ``handleScreen(name)``. ``?canvas=WxH`` fixes the canvas size.
 """
 
 from .app import MAX_BODY, create_app
-from .server import allowed_hosts, canonical_host, is_loopback, serve
+from .hosts import allowed_hosts, canonical_host, is_loopback
+from .server import serve
 from .session import (
     GRID_BYTES_PER_VOXEL,
     EditSession,

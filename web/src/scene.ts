@@ -145,6 +145,7 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     parts: THREE.Data3DTexture | null;
   } = { distance: null, colour: null, parts: null };
   const partsPlaceholder = new THREE.Data3DTexture(new Uint8Array([128, 128, 128, 255]), 1, 1, 1);
+  partsPlaceholder.colorSpace = THREE.SRGBColorSpace;
   partsPlaceholder.needsUpdate = true;
   u.uParts.value = partsPlaceholder;
   const perf = { frameTimeMs: 0, lastFrameMs: 0, frames: 0 };
@@ -465,42 +466,54 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     controls.update();
   }
 
-  function volumeTexture(data: Uint16Array | Uint8Array, shape: number[], format: THREE.PixelFormat, type: THREE.TextureDataType) {
+  /** A 3D texture of the grid; filter: linear (distances, colours) or nearest (parts); colours
+   *  are sRGB bytes, uploaded as SRGB8_ALPHA8 so the GPU decodes each texel to linear before
+   *  it filters (blending sRGB values would darken every blend of two colours). */
+  function volumeTexture(
+    data: Uint16Array | Uint8Array,
+    shape: readonly number[],
+    format: THREE.PixelFormat,
+    type: THREE.TextureDataType,
+    { srgb = false, filter = THREE.LinearFilter }: { srgb?: boolean; filter?: THREE.MagnificationTextureFilter } = {},
+  ) {
     const [X, Y, Z] = shape;
     // C order (z fastest): the texture's width runs along z (see raymarch.ts)
     const tex = new THREE.Data3DTexture(data, Z, Y, X);
     tex.format = format;
     tex.type = type;
-    tex.minFilter = THREE.LinearFilter;
-    tex.magFilter = THREE.LinearFilter;
+    tex.colorSpace = srgb ? THREE.SRGBColorSpace : THREE.NoColorSpace;
+    tex.minFilter = filter;
+    tex.magFilter = filter;
     tex.unpackAlignment = 1;
     tex.needsUpdate = true;
     return tex;
   }
 
+  /** The parts as RGBA sRGB bytes: each voxel its part's colour (grey: no part). */
+  function partColours(s: ServerState, parts: Int16Array): Uint8Array {
+    const palette = Array.from({ length: s.n_parts }, (_, i) => partColour(s.parts_info[i]?.color, i));
+    const rgba = new Uint8Array(parts.length * 4);
+    for (let i = 0; i < parts.length; i++) {
+      const p = parts[i];
+      const c = p >= 0 && p < palette.length ? palette[p] : [110, 110, 110];
+      rgba[i * 4] = c[0];
+      rgba[i * 4 + 1] = c[1];
+      rgba[i * 4 + 2] = c[2];
+      rgba[i * 4 + 3] = 255;
+    }
+    return rgba;
+  }
+
   function setObject(s: ServerState, volume: Volume, parts: Int16Array | null) {
-    const [X, Y, Z] = s.shape;
     textures.distance?.dispose();
     textures.colour?.dispose();
     textures.distance = volumeTexture(volume.distance, s.shape, THREE.RedFormat, THREE.HalfFloatType);
-    textures.colour = volumeTexture(volume.rgba, s.shape, THREE.RGBAFormat, THREE.UnsignedByteType);
+    textures.colour = volumeTexture(volume.rgba, s.shape, THREE.RGBAFormat, THREE.UnsignedByteType, { srgb: true });
     textures.parts?.dispose();
     textures.parts = null;
     if (parts && s.n_parts > 0) {
-      const palette = Array.from({ length: s.n_parts }, (_, i) => partColour(s.parts_info[i]?.color, i));
-      const rgba = new Uint8Array(parts.length * 4);
-      for (let i = 0; i < parts.length; i++) {
-        const p = parts[i];
-        const c = p >= 0 && p < palette.length ? palette[p] : [110, 110, 110];
-        rgba[i * 4] = c[0];
-        rgba[i * 4 + 1] = c[1];
-        rgba[i * 4 + 2] = c[2];
-        rgba[i * 4 + 3] = 255;
-      }
-      const tex = new THREE.Data3DTexture(rgba, Z, Y, X);
-      tex.unpackAlignment = 1;
-      tex.needsUpdate = true;
-      textures.parts = tex;
+      const rgba = partColours(s, parts);
+      textures.parts = volumeTexture(rgba, s.shape, THREE.RGBAFormat, THREE.UnsignedByteType, { srgb: true, filter: THREE.NearestFilter });
     }
     u.uDistance.value = textures.distance;
     u.uColour.value = textures.colour;

@@ -34,7 +34,8 @@ export interface Scene {
   readonly handleMeshes: Readonly<Record<PlaneName, THREE.Mesh>>;
   /** Largest grid per axis this GPU can hold as a 3D texture. */
   readonly maxTextureSize: number;
-  /** Smoothed and last GPU-synchronised frame time (ms), frames drawn so far. */
+  /** Smoothed and last frame time (ms; GPU-synchronised with the capture option, else the time
+   *  to submit the frame), frames drawn so far. */
   readonly perf: Readonly<{ frameTimeMs: number; lastFrameMs: number; frames: number }>;
   /** A frame is requested and not drawn yet. */
   readonly renderQueued: boolean;
@@ -54,13 +55,23 @@ export interface Scene {
   /** Show or hide the guides (the zone's planes, the shaped zone, the box and the axes): tests
    *  compare the object alone. */
   setGuides(visible: boolean): void;
-  /** Render n frames orbiting the object; mean and median frame time in ms. */
+  /** Render n frames orbiting the object; mean and median GPU-synchronised frame time in ms. */
   benchmark(n?: number): { mean: number; median: number; n: number };
 }
 
-function createRenderer(store: Store): THREE.WebGLRenderer {
+/** How the scene draws. fixedSize: canvas pixels, or null to fill its element. capture (tests
+ *  and benchmarks, the page's `?capture=1`): keep each frame's pixels readable (the canvas's
+ *  toDataURL) and wait for the GPU at every frame, so the frame time is the raymarch's; the
+ *  editor itself does neither (a browser may then drop the drawing buffer once it is shown, and
+ *  a frame never stalls on a read back). */
+export interface SceneOptions {
+  fixedSize: [number, number] | null;
+  capture: boolean;
+}
+
+function createRenderer(store: Store, capture: boolean): THREE.WebGLRenderer {
   try {
-    return new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
+    return new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: capture });
   } catch (e) {
     store.dispatch({
       type: 'set-status',
@@ -83,9 +94,9 @@ function packed(zs: Zone[]) {
   return { a, b };
 }
 
-/** The scene in `view`, drawn from the store's state; fixedSize: canvas pixels, or null to fill. */
-export function createScene(store: Store, view: HTMLElement, fixedSize: [number, number] | null): Scene {
-  const renderer = createRenderer(store);
+/** The scene in `view`, drawn from the store's state (see SceneOptions). */
+export function createScene(store: Store, view: HTMLElement, { fixedSize, capture }: SceneOptions): Scene {
+  const renderer = createRenderer(store, capture);
   renderer.setPixelRatio(fixedSize ? 1 : Math.min(window.devicePixelRatio, 2));
   renderer.setClearColor(0x1d2126, 1);
   view.appendChild(renderer.domElement);
@@ -164,8 +175,8 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     requestAnimationFrame(renderNow);
   }
 
-  function renderNow() {
-    frame.queued = false;
+  /** Draw now; sync: wait for the GPU to finish (one pixel read back) before taking the time. */
+  function draw(sync: boolean) {
     const t0 = performance.now();
     // handles keep one size on screen, however far the camera is
     for (const h of Object.values(handleMeshes)) {
@@ -175,12 +186,17 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     }
     renderer.render(scene, camera);
     // reading one pixel waits for the GPU, so the time covers the raymarch, not just its submission
-    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    if (sync) gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
     const ms = performance.now() - t0;
     perf.lastFrameMs = ms;
     perf.frameTimeMs = perf.frames === 0 ? ms : 0.8 * perf.frameTimeMs + 0.2 * ms;
     perf.frames += 1;
     updateOverlay();
+  }
+
+  function renderNow() {
+    frame.queued = false;
+    draw(capture);
   }
 
   function updateOverlay() {
@@ -550,7 +566,7 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
       offset.applyAxisAngle(new THREE.Vector3(0, 1, 0), (2 * Math.PI) / n);
       camera.position.copy(target).add(offset);
       camera.lookAt(target);
-      renderNow();
+      draw(true);
       times.push(perf.lastFrameMs);
     }
     times.sort((x, y) => x - y);

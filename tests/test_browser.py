@@ -460,6 +460,29 @@ def test_typescript_zone_rules_match_apply_recipe(tmp_path):
         np.testing.assert_allclose(page["sources"], want, rtol=0, atol=1e-9, err_msg=str(zones))
 
 
+def test_typescript_resolves_the_zones_once_per_change(tmp_path):
+    """The page's derived values (scene, panel, recipe, drag clamps) read the resolved zones many
+    times per state; they are resolved once per change of the zones or of the object, and the
+    same array is read until then (state.ts, run in node by page_node.mjs)."""
+    h = 0.0625
+    box = shapes.box((0.25, 0.25, 0.25), (1.25, 0.75, 0.75), voxel_size=h)
+    server = {
+        "voxel_size": h,
+        "solid_bounds": box.surface_bounds().tolist(),
+        "grid_bounds": box.grid_bounds.tolist(),
+    }
+    zones = [
+        {"axis": "x", "mode": "stretch", "start": 0.5, "end": 0.75, "dest": 1.0},
+        {"axis": "y", "mode": "tile", "start": 0.4, "end": 0.6, "dest": 0.8},
+    ]
+    got = run_page_node(
+        tmp_path, {"memo": {"server": server, "zones": zones, "patch": {"end": 0.875}}}
+    )["memo"]
+    assert got["first"] == 1 and got["moved"] == 1 and got["reloaded"] == 1
+    assert got["view"] == 0 and got["sameArray"] is True
+    assert got["firstEnd"] == 0.75 and got["movedEnd"] == 0.875  # the change is seen
+
+
 @pytest.mark.browser
 def test_editor_end_to_end(tmp_path):
     node, chromium = find_tools()
@@ -604,6 +627,24 @@ def test_editor_end_to_end(tmp_path):
     assert colours.shape[0] == len(mesh.vertices) > 1000
     assert np.ptp(colours[:, 2]) > 0.2  # the blue ramp along x
     np.testing.assert_allclose(mesh.bounds, [(0, 0, 0), TOP[1]], atol=0.5 * H)
+
+
+@pytest.mark.browser
+def test_editor_as_users_get_it_reads_no_pixel_back_and_resolves_zones_once_per_move(tmp_path):
+    """Without ?capture=1 (tests and benchmarks only) the page keeps no drawing buffer and never
+    waits on the GPU for a pixel; a drag resolves its zones once per pointer move, however many
+    derived values the scene and the panel read."""
+    node, chromium = find_tools()
+    path = tmp_path / "table.csdf.npz"
+    partscale.save(table(), path)
+    with Server(path) as server:
+        r = run_page(node, chromium, server.url, tmp_path, plain=True)
+    assert r["errors"] == [], r["errors"]
+    p = r["plain"]
+    assert p["preserveDrawingBuffer"] is False
+    assert p["zoneChanged"] and p["framesDrag"] >= 2 and p["framesOrbit"] >= 1
+    assert p["readPixels"] == 0  # from loading on, through the drag and the orbit
+    assert 1 <= p["resolutions"] <= p["moves"], p
 
 
 @pytest.mark.browser

@@ -21,11 +21,7 @@ SRC = Path(partscale.__file__).parent
 
 #: Known exceptions: circles, each a sorted tuple of its modules. Each is to be removed (and
 #: then removed here); the test fails on any other.
-#: - serve.app <-> serve.server: the host policy (server defers ``from .app import
-#:   LOOPBACK_HOSTS`` and ``create_app``), to move to a module of its own
-KNOWN_CIRCLES: set[tuple[str, ...]] = {
-    ("partscale.serve.app", "partscale.serve.server"),
-}
+KNOWN_CIRCLES: set[tuple[str, ...]] = set()
 #: Known exceptions: (importing module, imported private name). Each is to be removed (and
 #: then removed here); the test fails on any other.
 KNOWN_PRIVATE: set[tuple[str, str]] = set()

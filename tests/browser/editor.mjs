@@ -13,7 +13,11 @@
 //         shaped: {button | kind, fields, to, warpCases} (only load; the warp GLSL on warpCases
 //         [{edit, points, h}]; a click on the shaped-zone button (#warp-radial, #warp-step-0),
 //         or the kind chosen, draws it; fields {selector: value} are typed, then `to` (radial)
-//         sets its target; previewed, applied, undone; fitSize: then a fit previewed) }
+//         sets its target; previewed, applied, undone; fitSize: then a fit previewed),
+//         plain: true (the page as users get it, without ?capture=1: load, drag the end plane,
+//         orbit; the drawing buffer's attribute, frames drawn, pixels read back, zone
+//         resolutions per pointer move) }
+// Every other run loads the page with ?capture=1 (its canvas readable, frames GPU-timed).
 import { createRequire } from 'node:module';
 import { existsSync, readFileSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
@@ -71,15 +75,28 @@ try {
     await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   };
   const shot = async (name) => {
-    // the canvas's own pixels (preserveDrawingBuffer), without the HTML overlay on top of it
+    // the canvas's own pixels (kept by ?capture=1), without the HTML overlay on top of it
     const url = await page.evaluate(() => document.querySelector('#view canvas').toDataURL('image/png'));
     const png = Buffer.from(url.slice(url.indexOf(',') + 1), 'base64');
     writeFileSync(join(args.out, name), png);
     return png;
   };
 
+  if (args.plain) {
+    // count every pixel read back from WebGL, from the first frame on
+    await page.addInitScript(() => {
+      window.__readPixels = 0;
+      for (const C of [WebGLRenderingContext, WebGL2RenderingContext]) {
+        const read = C.prototype.readPixels;
+        C.prototype.readPixels = function (...a) {
+          window.__readPixels += 1;
+          return read.apply(this, a);
+        };
+      }
+    });
+  }
   const t0 = Date.now();
-  await page.goto(`${args.url}?canvas=${W}x${H}`);
+  await page.goto(`${args.url}?canvas=${W}x${H}${args.plain ? '' : '&capture=1'}`);
   await idle();
   result.loadMs = Date.now() - t0;
   result.state0 = await page.evaluate(() => window.__partscale.state());
@@ -274,6 +291,41 @@ try {
       const r = await fetch('/api/save', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: '{"overwrite": true}' });
       return { status: r.status, body: await r.text() };
     });
+  } else if (args.plain) {
+    const counters = () => page.evaluate(() => ({
+      frames: window.__partscale.frames,
+      resolutions: window.__partscale.zoneResolutions,
+      zone: window.__partscale.zoneInputs()[0],
+    }));
+    const p = {};
+    p.preserveDrawingBuffer = await page.evaluate(() =>
+      document.querySelector('#view canvas').getContext('webgl2').getContextAttributes().preserveDrawingBuffer);
+    const c0 = await counters();
+    const h = await page.evaluate(() => window.__partscale.handleScreen('end'));
+    p.moves = 8;
+    await page.mouse.move(h.x, h.y);
+    await page.mouse.down();
+    for (let i = 1; i <= p.moves; i++) await page.mouse.move(h.x + 6 * i, h.y + 2 * i);
+    await page.mouse.up();
+    await idle();
+    const c1 = await counters();
+    // orbit from a corner of the canvas, away from the planes
+    const box = await page.evaluate(() => {
+      const r = document.querySelector('#view canvas').getBoundingClientRect();
+      return { x: r.left + 15, y: r.top + 15 };
+    });
+    await page.mouse.move(box.x, box.y);
+    await page.mouse.down();
+    for (let i = 1; i <= 4; i++) await page.mouse.move(box.x + 12 * i, box.y + 4 * i);
+    await page.mouse.up();
+    await idle();
+    const c2 = await counters();
+    p.zoneChanged = c1.zone.end !== c0.zone.end;
+    p.resolutions = c1.resolutions - c0.resolutions;
+    p.framesDrag = c1.frames - c0.frames;
+    p.framesOrbit = c2.frames - c1.frames;
+    p.readPixels = await page.evaluate(() => window.__readPixels);
+    result.plain = p;
   } else if (args.benchmark) {
     result.benchmark = await page.evaluate((n) => window.__partscale.benchmark(n), args.benchmark);
     result.renderer = await page.evaluate(() => {

@@ -15,6 +15,11 @@
 //            source point and its weight, [x, y, z, w]
 //   splice:  grid.ts spliceLayers on [{base, baseShape, shape, channels, delta, body}] (Uint16
 //            values), the spliced array
+//   memo:    {server, zones, patch}: how many times state.ts resolved the zones while every
+//            derived value the page reads is read twice, on that state (first), on one with only
+//            the view changed (view), after a set-zone with patch (moved) and with the same
+//            object header as a new object (reloaded); and whether the view's resolved zones are
+//            the very same array as the first's
 import { createRequire } from 'node:module';
 import { readFileSync } from 'node:fs';
 import { join, resolve } from 'node:path';
@@ -68,5 +73,37 @@ if (cases.splice) {
   const grid = await load('grid.ts');
   out.splice = cases.splice.map((c) =>
     Array.from(grid.spliceLayers(Uint16Array.from(c.base), c.baseShape, c.shape, c.channels, c.delta, Uint16Array.from(c.body))));
+}
+if (cases.memo) {
+  const state = await load('state.ts');
+  const { server, zones, patch } = cases.memo;
+  const readAll = (s) => {
+    const before = state.zoneResolutions();
+    for (let k = 0; k < 2; k++) {
+      state.resolvedZones(s);
+      state.validZones(s);
+      state.recipe(s);
+      state.isNoop(s);
+      state.firstProblem(s);
+      state.canApply(s);
+      state.outputBounds(s);
+      state.targetExtents(s);
+      for (const name of state.PLANES) state.previewPlane(s, name);
+    }
+    return state.zoneResolutions() - before;
+  };
+  const first = { ...state.initialState, server, zones };
+  const view = { ...first, view: { ...first.view, mode: 'parts' } };
+  const moved = state.reduce(first, { type: 'set-zone', patch });
+  const reloaded = { ...first, server: { ...server } };
+  out.memo = {
+    first: readAll(first),
+    view: readAll(view),
+    moved: readAll(moved),
+    reloaded: readAll(reloaded),
+    sameArray: state.resolvedZones(first) === state.resolvedZones(view),
+    movedEnd: state.resolvedZones(moved)[0].end,
+    firstEnd: state.resolvedZones(first)[0].end,
+  };
 }
 process.stdout.write(JSON.stringify(out) + '\n');

@@ -12,6 +12,7 @@ import {
   type Store,
   targetExtents,
   type ZoneInput,
+  zoneResolutions,
 } from './state';
 import type { Recipe } from './recipe';
 import type { AxisElements, Candidate, ServerState, WarpFound } from './api';
@@ -34,7 +35,10 @@ export interface Hooks {
   readonly idle: boolean;
   state(): ServerState | null;
   /** The zones as applied (each in the frame the earlier ones leave). */
-  zones(): ResolvedZone[];
+  zones(): readonly ResolvedZone[];
+  /** How many times the page resolved its zones so far (once per change of the zones or the
+   *  object, however often the scene and the panel read them). */
+  readonly zoneResolutions: number;
   /** The zones as the user set them, on the loaded object (what the recipe sends). */
   zoneInputs(): readonly ZoneInput[];
   suggestions(): readonly Candidate[] | null;
@@ -86,6 +90,9 @@ export function exposeHooks(store: Store, scene: Scene): Hooks {
     get idle() {
       const s = get();
       return hooks.ready && !s.busy && !scene.renderQueued && s.suggestions !== null && s.elements !== null;
+    },
+    get zoneResolutions() {
+      return zoneResolutions();
     },
     state: () => get().server,
     zones: () => resolvedZones(get()),

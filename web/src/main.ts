@@ -9,10 +9,16 @@ import { createStore } from './state';
 import { bindPanel, showPanel } from './ui';
 import './style.css';
 
-const size = new URLSearchParams(location.search).get('canvas')?.match(/^(\d+)x(\d+)$/);
+// ?canvas=WxH fixes the canvas's size; ?capture=1 keeps its pixels readable and times each frame
+// to the GPU's end (tests and benchmarks; see SceneOptions)
+const params = new URLSearchParams(location.search);
+const size = params.get('canvas')?.match(/^(\d+)x(\d+)$/);
 const store = createStore();
 showPanel(store);
-const scene = createScene(store, document.getElementById('view') as HTMLElement, size ? [Number(size[1]), Number(size[2])] : null);
+const scene = createScene(store, document.getElementById('view') as HTMLElement, {
+  fixedSize: size ? [Number(size[1]), Number(size[2])] : null,
+  capture: params.get('capture') === '1',
+});
 const commands = createCommands(store, scene);
 bindPanel(store, commands);
 bindDrag(store, scene, commands);

@@ -28,8 +28,10 @@ uniform vec3 cameraPosition;
 // Both textures hold the grid in its own C order (z fastest): texel (s, t, r) = voxel (k, j, i),
 // so they are sampled at uvw.zyx.
 uniform sampler3D uDistance; // r = signed distance in voxels (float16)
-uniform sampler3D uColour;   // rgb = sRGB colour (8 bits)
-uniform sampler3D uParts;    // rgb = part colour (sRGB), nearest filtering
+// The colour textures hold sRGB bytes as SRGB8_ALPHA8: the GPU decodes each texel to linear
+// before it filters, so a sample is already linear (no decode here).
+uniform sampler3D uColour;   // rgb = colour, linear (sRGB bytes, trilinear in linear light)
+uniform sampler3D uParts;    // rgb = part colour, linear (sRGB bytes), nearest filtering
 uniform vec3 uGridMin;       // world corner of the texture (origin - voxel/2)
 uniform vec3 uGridSize;      // world extent of the texture
 uniform vec3 uBoxMin;        // output-space box being marched
@@ -107,9 +109,6 @@ vec3 normalAt(vec3 p) {
   return l > 1e-12 ? n / l : vec3(0.0, 1.0, 0.0);
 }
 
-vec3 toLinear(vec3 c) {
-  return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
-}
 vec3 toSRGB(vec3 c) {
   c = clamp(c, 0.0, 1.0);
   return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
@@ -184,9 +183,8 @@ void main() {
   }
   vec3 p = ro + rd * t;
   vec3 n = normalAt(p);
-  vec3 base = uView == 1 ? texture(uParts, ((colourPoint(p) - uGridMin) / uGridSize).zyx).rgb
-                         : sampleSource(p).rgb;
-  vec3 albedo = toLinear(base);
+  vec3 albedo = uView == 1 ? texture(uParts, ((colourPoint(p) - uGridMin) / uGridSize).zyx).rgb
+                           : sampleSource(p).rgb;
   vec3 l1 = normalize(vec3(0.45, 0.8, 0.55));
   vec3 l2 = normalize(vec3(-0.6, 0.25, -0.4));
   vec3 h = normalize(l1 - rd);

@@ -34,7 +34,8 @@ export interface Scene {
   readonly handleMeshes: Readonly<Record<PlaneName, THREE.Mesh>>;
   /** Largest grid per axis this GPU can hold as a 3D texture. */
   readonly maxTextureSize: number;
-  /** Smoothed and last GPU-synchronised frame time (ms), frames drawn so far. */
+  /** Smoothed and last frame time (ms; GPU-synchronised with the capture option, else the time
+   *  to submit the frame), frames drawn so far. */
   readonly perf: Readonly<{ frameTimeMs: number; lastFrameMs: number; frames: number }>;
   /** A frame is requested and not drawn yet. */
   readonly renderQueued: boolean;
@@ -54,13 +55,23 @@ export interface Scene {
   /** Show or hide the guides (the zone's planes, the shaped zone, the box and the axes): tests
    *  compare the object alone. */
   setGuides(visible: boolean): void;
-  /** Render n frames orbiting the object; mean and median frame time in ms. */
+  /** Render n frames orbiting the object; mean and median GPU-synchronised frame time in ms. */
   benchmark(n?: number): { mean: number; median: number; n: number };
 }
 
-function createRenderer(store: Store): THREE.WebGLRenderer {
+/** How the scene draws. fixedSize: canvas pixels, or null to fill its element. capture (tests
+ *  and benchmarks, the page's `?capture=1`): keep each frame's pixels readable (the canvas's
+ *  toDataURL) and wait for the GPU at every frame, so the frame time is the raymarch's; the
+ *  editor itself does neither (a browser may then drop the drawing buffer once it is shown, and
+ *  a frame never stalls on a read back). */
+export interface SceneOptions {
+  fixedSize: [number, number] | null;
+  capture: boolean;
+}
+
+function createRenderer(store: Store, capture: boolean): THREE.WebGLRenderer {
   try {
-    return new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
+    return new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: capture });
   } catch (e) {
     store.dispatch({
       type: 'set-status',
@@ -83,9 +94,9 @@ function packed(zs: Zone[]) {
   return { a, b };
 }
 
-/** The scene in `view`, drawn from the store's state; fixedSize: canvas pixels, or null to fill. */
-export function createScene(store: Store, view: HTMLElement, fixedSize: [number, number] | null): Scene {
-  const renderer = createRenderer(store);
+/** The scene in `view`, drawn from the store's state (see SceneOptions). */
+export function createScene(store: Store, view: HTMLElement, { fixedSize, capture }: SceneOptions): Scene {
+  const renderer = createRenderer(store, capture);
   renderer.setPixelRatio(fixedSize ? 1 : Math.min(window.devicePixelRatio, 2));
   renderer.setClearColor(0x1d2126, 1);
   view.appendChild(renderer.domElement);
@@ -145,6 +156,7 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     parts: THREE.Data3DTexture | null;
   } = { distance: null, colour: null, parts: null };
   const partsPlaceholder = new THREE.Data3DTexture(new Uint8Array([128, 128, 128, 255]), 1, 1, 1);
+  partsPlaceholder.colorSpace = THREE.SRGBColorSpace;
   partsPlaceholder.needsUpdate = true;
   u.uParts.value = partsPlaceholder;
   const perf = { frameTimeMs: 0, lastFrameMs: 0, frames: 0 };
@@ -163,8 +175,8 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     requestAnimationFrame(renderNow);
   }
 
-  function renderNow() {
-    frame.queued = false;
+  /** Draw now; sync: wait for the GPU to finish (one pixel read back) before taking the time. */
+  function draw(sync: boolean) {
     const t0 = performance.now();
     // handles keep one size on screen, however far the camera is
     for (const h of Object.values(handleMeshes)) {
@@ -174,12 +186,17 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     }
     renderer.render(scene, camera);
     // reading one pixel waits for the GPU, so the time covers the raymarch, not just its submission
-    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    if (sync) gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
     const ms = performance.now() - t0;
     perf.lastFrameMs = ms;
     perf.frameTimeMs = perf.frames === 0 ? ms : 0.8 * perf.frameTimeMs + 0.2 * ms;
     perf.frames += 1;
     updateOverlay();
+  }
+
+  function renderNow() {
+    frame.queued = false;
+    draw(capture);
   }
 
   function updateOverlay() {
@@ -465,42 +482,54 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
     controls.update();
   }
 
-  function volumeTexture(data: Uint16Array | Uint8Array, shape: number[], format: THREE.PixelFormat, type: THREE.TextureDataType) {
+  /** A 3D texture of the grid; filter: linear (distances, colours) or nearest (parts); colours
+   *  are sRGB bytes, uploaded as SRGB8_ALPHA8 so the GPU decodes each texel to linear before
+   *  it filters (blending sRGB values would darken every blend of two colours). */
+  function volumeTexture(
+    data: Uint16Array | Uint8Array,
+    shape: readonly number[],
+    format: THREE.PixelFormat,
+    type: THREE.TextureDataType,
+    { srgb = false, filter = THREE.LinearFilter }: { srgb?: boolean; filter?: THREE.MagnificationTextureFilter } = {},
+  ) {
     const [X, Y, Z] = shape;
     // C order (z fastest): the texture's width runs along z (see raymarch.ts)
     const tex = new THREE.Data3DTexture(data, Z, Y, X);
     tex.format = format;
     tex.type = type;
-    tex.minFilter = THREE.LinearFilter;
-    tex.magFilter = THREE.LinearFilter;
+    tex.colorSpace = srgb ? THREE.SRGBColorSpace : THREE.NoColorSpace;
+    tex.minFilter = filter;
+    tex.magFilter = filter;
     tex.unpackAlignment = 1;
     tex.needsUpdate = true;
     return tex;
   }
 
+  /** The parts as RGBA sRGB bytes: each voxel its part's colour (grey: no part). */
+  function partColours(s: ServerState, parts: Int16Array): Uint8Array {
+    const palette = Array.from({ length: s.n_parts }, (_, i) => partColour(s.parts_info[i]?.color, i));
+    const rgba = new Uint8Array(parts.length * 4);
+    for (let i = 0; i < parts.length; i++) {
+      const p = parts[i];
+      const c = p >= 0 && p < palette.length ? palette[p] : [110, 110, 110];
+      rgba[i * 4] = c[0];
+      rgba[i * 4 + 1] = c[1];
+      rgba[i * 4 + 2] = c[2];
+      rgba[i * 4 + 3] = 255;
+    }
+    return rgba;
+  }
+
   function setObject(s: ServerState, volume: Volume, parts: Int16Array | null) {
-    const [X, Y, Z] = s.shape;
     textures.distance?.dispose();
     textures.colour?.dispose();
     textures.distance = volumeTexture(volume.distance, s.shape, THREE.RedFormat, THREE.HalfFloatType);
-    textures.colour = volumeTexture(volume.rgba, s.shape, THREE.RGBAFormat, THREE.UnsignedByteType);
+    textures.colour = volumeTexture(volume.rgba, s.shape, THREE.RGBAFormat, THREE.UnsignedByteType, { srgb: true });
     textures.parts?.dispose();
     textures.parts = null;
     if (parts && s.n_parts > 0) {
-      const palette = Array.from({ length: s.n_parts }, (_, i) => partColour(s.parts_info[i]?.color, i));
-      const rgba = new Uint8Array(parts.length * 4);
-      for (let i = 0; i < parts.length; i++) {
-        const p = parts[i];
-        const c = p >= 0 && p < palette.length ? palette[p] : [110, 110, 110];
-        rgba[i * 4] = c[0];
-        rgba[i * 4 + 1] = c[1];
-        rgba[i * 4 + 2] = c[2];
-        rgba[i * 4 + 3] = 255;
-      }
-      const tex = new THREE.Data3DTexture(rgba, Z, Y, X);
-      tex.unpackAlignment = 1;
-      tex.needsUpdate = true;
-      textures.parts = tex;
+      const rgba = partColours(s, parts);
+      textures.parts = volumeTexture(rgba, s.shape, THREE.RGBAFormat, THREE.UnsignedByteType, { srgb: true, filter: THREE.NearestFilter });
     }
     u.uDistance.value = textures.distance;
     u.uColour.value = textures.colour;
@@ -537,7 +566,7 @@ export function createScene(store: Store, view: HTMLElement, fixedSize: [number,
       offset.applyAxisAngle(new THREE.Vector3(0, 1, 0), (2 * Math.PI) / n);
       camera.position.copy(target).add(offset);
       camera.lookAt(target);
-      renderNow();
+      draw(true);
       times.push(perf.lastFrameMs);
     }
     times.sort((x, y) => x - y);

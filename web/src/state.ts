@@ -212,8 +212,45 @@ export function targetExtents(s: AppState): [number, number, number] | null {
   return [0, 1, 2].map((a) => hi[a] - lo[a]) as [number, number, number];
 }
 
-/** The zones as apply_recipe applies them (see ResolvedZone), in order. */
-export function resolvedZones(s: AppState): ResolvedZone[] {
+/** The zones resolved once per change of the zones or of the object: every derived value the
+ *  page reads (the scene, the panel, a drag's clamps, the recipe) asks for them, many times per
+ *  pointer move. Keyed by the state's zones array (states are immutable: a new array is a
+ *  change), checked against the object they were resolved on. */
+interface DerivedZones {
+  readonly server: ServerState | null;
+  readonly resolved: readonly ResolvedZone[];
+  readonly valid: readonly ResolvedZone[];
+}
+const derivedZones = new WeakMap<readonly ZoneInput[], DerivedZones>();
+let resolutions = 0;
+
+/** How many times the zones were resolved so far (scripts read it: once per change). */
+export function zoneResolutions(): number {
+  return resolutions;
+}
+
+function derived(s: AppState): DerivedZones {
+  const hit = derivedZones.get(s.zones);
+  if (hit && hit.server === s.server) return hit;
+  resolutions += 1;
+  const resolved = Object.freeze(resolveZones(s));
+  const d = { server: s.server, resolved, valid: Object.freeze(resolved.filter((z) => z.problem === null)) };
+  derivedZones.set(s.zones, d);
+  return d;
+}
+
+/** The zones as apply_recipe applies them (see ResolvedZone), in order (the same array for the
+ *  same zones and object: read only). */
+export function resolvedZones(s: AppState): readonly ResolvedZone[] {
+  return derived(s).resolved;
+}
+
+/** The valid ones of resolvedZones (read only, as it). */
+export function validZones(s: AppState): readonly ResolvedZone[] {
+  return derived(s).valid;
+}
+
+function resolveZones(s: AppState): ResolvedZone[] {
   const [smin, smax] = solidBounds(s);
   const lo = [...smin];
   const hi = [...smax];
@@ -253,10 +290,6 @@ function carry(v: number, zones: readonly Zone[]): number {
 function uncarry(v: number, zones: readonly Zone[]): number {
   for (let i = zones.length - 1; i >= 0; i--) v = sourceCoordinate(v, zones[i]);
   return v;
-}
-
-export function validZones(s: AppState): ResolvedZone[] {
-  return resolvedZones(s).filter((z) => z.problem === null);
 }
 
 /** The solid's size once the shaped zone applies: a radial zone moves the outline by to - r1

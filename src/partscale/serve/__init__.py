@@ -5,15 +5,19 @@
 shipped, built, in ``static/`` so users need no Node (rebuild with ``npx vite build`` in ``web/``;
 ``tests/test_serve.py`` checks ``static/build.json`` against a hash of the sources).
 
-For scripts, the page exposes ``window.__partscale``: ``frameTimeMs`` (smoothed, GPU-synchronised),
-``lastFrameMs``, ``frames``, ``idle``, ``state()``, ``zones()``, ``recipe()``, ``elements()``,
-``sizes()`` (the solid's size per axis and the size the previewed zones make),
-``benchmark(n)`` (n orbiting frames; mean and median ms), ``evalRemap(zones, points)`` (the shader's
-own GLSL map) and ``handleScreen(name)``. ``?canvas=WxH`` fixes the canvas size.
+For scripts, the page exposes ``window.__partscale``: ``frameTimeMs`` (smoothed),
+``lastFrameMs``, ``frames``, ``idle``, ``state()``, ``zones()``, ``zoneResolutions`` (how often the
+zones were resolved: once per change), ``recipe()``, ``elements()``, ``sizes()`` (the solid's size
+per axis and the size the previewed zones make), ``benchmark(n)`` (n orbiting frames, each waited
+for on the GPU; mean and median ms), ``evalRemap(zones, points)`` (the shader's own GLSL map) and
+``handleScreen(name)``. ``?canvas=WxH`` fixes the canvas size; ``?capture=1`` (tests and
+benchmarks) keeps the canvas's pixels readable and times every frame to the GPU's end, which the
+editor otherwise never waits for.
 """
 
 from .app import MAX_BODY, create_app
-from .server import allowed_hosts, canonical_host, is_loopback, serve
+from .hosts import allowed_hosts, canonical_host, is_loopback
+from .server import serve
 from .session import (
     GRID_BYTES_PER_VOXEL,
     EditSession,

@@ -589,14 +589,6 @@ class EditSession:
                 self._cache.popitem(last=False)
         return value
 
-    def grid_bytes(self) -> bytes:
-        """The current object's whole :func:`encode_grid`, as bytes."""
-        return bytes(self.encoded("grid").data)
-
-    def parts_bytes(self) -> bytes:
-        """The current object's whole :func:`encode_parts`, as bytes."""
-        return bytes(self.encoded("parts").data)
-
     def _record(self) -> None:
         # call with the lock held, after the current object or the revision changed
         self._shown[self.revision] = self.current

@@ -177,6 +177,10 @@ def _thin_pass(s, h, limit, thickness, counts):
     (``|sdf| <= 0.01`` voxel) or a voxel of its 3 x 3 x 3 neighbourhood on its side lies at
     least ``limit / 2`` deep (the rim of a thick body).
     """
+    # Complexity 49 (radon), kept in one kernel: the sweep's work is per surface voxel, and
+    # its runs along each axis, the rim test and the counts read the same neighbourhood while
+    # it is in cache; helpers that numba inlines would only move the branches elsewhere, and
+    # helpers it calls would pay a call per voxel of the grid's hottest loop.
     nx, ny, nz = s.shape
     dims = (nx, ny, nz)
     on_surface = np.float32(0.01) * h

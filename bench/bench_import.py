@@ -185,10 +185,14 @@ def thread_cpu() -> dict[int, float]:
 
 
 def bound_wall(before: dict[int, float], after: dict[int, float], cpu: float) -> float:
-    """Least wall seconds a span's work needs on this machine's cores, idle: its busiest
+    """Estimated wall seconds of a span's work on this machine's cores, idle: its busiest
     thread's CPU (the threads that ended within it counted as one), or its CPU over the cores.
-    A load-robust view of how parallel the work is, where wall figures are not; pessimistic
-    where a loaded machine left work on one thread that idle cores would have shared.
+
+    A load-robust view of how parallel the work is, where wall figures are not. Within a span
+    it is the least wall the work needs, so the busy share it gives is an upper estimate, the
+    closer the finer the spans; it errs the other way where threads ended within the span
+    (counted as one) or where a loaded machine left work on one thread that idle cores would
+    have shared.
     """
     deltas = [after[t] - before.get(t, 0.0) for t in after]
     ended = cpu - sum(deltas)
@@ -215,7 +219,7 @@ def stages(path: Path, res: int, runs: int) -> float:
         walls.append(w)
         print(
             f"{path.name} at {res}, run {rep + 1}: wall {w:.2f} s, CPU {c:.2f} s, busy "
-            f"{c / w:.2f} of {os.cpu_count()} cores; on idle cores at least "
+            f"{c / w:.2f} of {os.cpu_count()} cores; on idle cores about "
             f"{c / bound:.2f} (load average {os.getloadavg()[0]:.1f})",
             flush=True,
         )
@@ -231,16 +235,17 @@ def report(marks: list) -> float:
         total += bound
         if w1 - w0 >= 0.01:
             print(
-                f"  {what:38s} wall {w1 - w0:6.2f} s  CPU {c1 - c0:6.2f} s  "
-                f"busy {(c1 - c0) / (w1 - w0):4.2f}  idle-core bound {bound:5.2f} s"
+                f"  {what:44s} wall {w1 - w0:6.2f} s  CPU {c1 - c0:6.2f} s  "
+                f"busy {(c1 - c0) / (w1 - w0):4.2f}  idle-core est. {bound:5.2f} s"
             )
     return total
 
 
 #: Runs ``partscale import`` as the command does (its ``main``), in a fresh interpreter, and
-#: prints the wall and CPU seconds of its phases as JSON: start-up (the interpreter and the
-#: command's imports, the import stages' libraries included), reading and importing the mesh
-#: (``ingest.load``), writing the file beside the thin-feature check, and the rest.
+#: prints the wall, CPU and threads' CPU seconds of its phases as JSON: start-up (the
+#: interpreter, the command-line interface and the ingest package), each stage the import
+#: reports (reading the mesh loads trimesh, classifying loads libigl), writing the file beside
+#: the thin-feature check, and the rest.
 _PHASES = """
 import json, os, sys, time
 sys.path.insert(0, sys.argv.pop(1))
@@ -260,8 +265,14 @@ cmd = sys.modules["partscale.cli.import_"]  # the module (the package names the 
 marks.append(("start-up: interpreter, cli, ingest", *now()))
 load, write = ingest.load, cmd._write_and_check
 def timed_load(*a, **k):
-    out = load(*a, **k)
-    marks.append(("read, import (trimesh, libigl loaded)", *now()))
+    shown = k["progress"]
+    last = ["import: its input checks"]
+    def progress(f, msg):  # each stage the import reports ends at the next one's start
+        marks.append((last[0], *now()))
+        last[0] = "import: " + msg
+        shown(f, msg)
+    out = load(*a, **{**k, "progress": progress})
+    marks.append((last[0], *now()))
     return out
 def timed_write(*a, **k):
     out = write(*a, **k)
@@ -302,14 +313,14 @@ def command(path: Path, res: int, runs: int) -> list[float]:
             exit_wall = w - (marks[-1][0] - marks[0][0])
             bound += exit_cpu
             print(
-                f"  {'interpreter exit':38s} wall {exit_wall:6.2f} s  CPU {exit_cpu:6.2f} s  "
-                f"busy {exit_cpu / exit_wall:4.2f}  idle-core bound {exit_cpu:5.2f} s"
+                f"  {'interpreter exit':44s} wall {exit_wall:6.2f} s  CPU {exit_cpu:6.2f} s  "
+                f"busy {exit_cpu / exit_wall:4.2f}  idle-core est. {exit_cpu:5.2f} s"
             )
             walls.append(w)
             print(
                 f"partscale import --res {res}, run {rep + 1}: wall {w:.2f} s, CPU {c:.2f} s, "
                 f"busy {c / w:.2f} of {os.cpu_count()} cores (target >= 1.4 of 2); on idle "
-                f"cores at least {c / bound:.2f} (load average {os.getloadavg()[0]:.1f})",
+                f"cores about {c / bound:.2f} (load average {os.getloadavg()[0]:.1f})",
                 flush=True,
             )
     return walls

@@ -18,13 +18,17 @@ printed: on a shared machine compare ratios measured in the same run.
 Usage::
 
     PYTHONPATH=src python bench/bench_import.py [--res 128 256] [--igl all|subset|none] [--only NAME]
-    PYTHONPATH=src python bench/bench_import.py --stages [--res 256] [--only SheenChair]
+    PYTHONPATH=src python bench/bench_import.py --stages [--res 256] [--only SheenChair] [--runs 2]
 
 ``--stages``: per stage of the import (as its progress reports them), wall seconds, CPU seconds
-(every thread) and CPU over wall (how many cores the stage kept busy), two runs per object
-after a warm-up; then the whole ``partscale import`` command (reading the mesh, the import,
-writing the file) run as users run it, its CPU over wall. On a shared machine the load average
-printed says how far wall figures can be trusted: CPU seconds are robust, shares are not.
+(every thread; the calling thread's share beside them) and CPU over wall (how many cores the
+stage kept busy), ``--runs`` runs per object after a warm-up; then the whole ``partscale
+import`` command (reading the mesh, the import, writing the file) run as users run it, in a
+fresh interpreter, phase by phase (start-up imports, read and import, write with the
+thin-feature check), its CPU over wall; then, unless ``--igl none``, libigl's signed distance
+on the same grid and the speed-up over the import and over the whole command, in the same run.
+On a shared machine the load average printed says how far wall figures can be trusted: CPU
+seconds are robust, shares are not.
 
 ``--igl subset`` (default) runs libigl on SheenChair, the Poly Haven objects and four Kenney
 objects only (libigl takes seconds to minutes per object on 2 cores); the table says where
@@ -167,52 +171,191 @@ def one(path: Path, res: int, run_igl: bool) -> dict:
     return out
 
 
-def stages(path: Path, res: int) -> None:
-    """Per-stage wall, CPU and CPU/wall of the import of ``path``, then the whole command's."""
+def thread_cpu() -> dict[int, float]:
+    """CPU seconds (user + system) of each live thread of this process, by thread id."""
+    tick = os.sysconf("SC_CLK_TCK")
+    out = {}
+    for task in Path("/proc/self/task").iterdir():
+        try:
+            fields = (task / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue  # the thread ended meanwhile
+        out[int(task.name)] = (int(fields[11]) + int(fields[12])) / tick
+    return out
+
+
+def bound_wall(before: dict[int, float], after: dict[int, float], cpu: float) -> float:
+    """Estimated wall seconds of a span's work on this machine's cores, idle: its busiest
+    thread's CPU (the threads that ended within it counted as one), or its CPU over the cores.
+
+    A load-robust view of how parallel the work is, where wall figures are not. Within a span
+    it is the least wall the work needs, so the busy share it gives is an upper estimate, the
+    closer the finer the spans; it errs the other way where threads ended within the span
+    (counted as one) or where a loaded machine left work on one thread that idle cores would
+    have shared.
+    """
+    deltas = [after[t] - before.get(t, 0.0) for t in after]
+    ended = cpu - sum(deltas)
+    return max(max(deltas, default=0.0), ended, cpu / (os.cpu_count() or 1))
+
+
+def stages(path: Path, res: int, runs: int) -> float:
+    """Per-stage wall, CPU and CPU/wall of the import of ``path``; returns the median wall."""
     from partscale import ingest
 
     mesh = ingest.load_mesh(path)
     ingest.from_mesh(mesh, res=32)  # load the compiled kernels outside the timing
-    for rep in range(2):
-        marks = [(time.perf_counter(), time.process_time(), "start")]
-        ingest.from_mesh(
-            mesh,
-            res=res,
-            progress=lambda _f, msg, m=marks: m.append(
-                (time.perf_counter(), time.process_time(), msg)
-            ),
-        )
-        marks.append((time.perf_counter(), time.process_time(), "end"))
-        for (w0, c0, what), (w1, c1, _) in itertools.pairwise(marks):
-            if w1 - w0 >= 0.01:
-                print(
-                    f"  {what:36s} wall {w1 - w0:6.2f} s  CPU {c1 - c0:6.2f} s  "
-                    f"busy {(c1 - c0) / (w1 - w0):4.2f}"
-                )
+    walls = []
+    for rep in range(runs):
+        marks = [(time.perf_counter(), time.process_time(), thread_cpu(), "start")]
+
+        def mark(_f: float, msg: str, m: list = marks) -> None:
+            m.append((time.perf_counter(), time.process_time(), thread_cpu(), msg))
+
+        ingest.from_mesh(mesh, res=res, progress=mark)
+        marks.append((time.perf_counter(), time.process_time(), thread_cpu(), "end"))
+        bound = report(marks)
         w, c = marks[-1][0] - marks[0][0], marks[-1][1] - marks[0][1]
+        walls.append(w)
         print(
             f"{path.name} at {res}, run {rep + 1}: wall {w:.2f} s, CPU {c:.2f} s, busy "
-            f"{c / w:.2f} of {os.cpu_count()} cores (load average {os.getloadavg()[0]:.1f})",
+            f"{c / w:.2f} of {os.cpu_count()} cores; on idle cores about "
+            f"{c / bound:.2f} (load average {os.getloadavg()[0]:.1f})",
             flush=True,
         )
+    return statistics.median(walls)
+
+
+def report(marks: list) -> float:
+    """Print each span between ``marks`` (wall, CPU, threads' CPU, label); returns the sum of
+    their :func:`bound_wall`."""
+    total = 0.0
+    for (w0, c0, t0, what), (w1, c1, t1, _) in itertools.pairwise(marks):
+        bound = bound_wall(t0, t1, c1 - c0)
+        total += bound
+        if w1 - w0 >= 0.01:
+            print(
+                f"  {what:44s} wall {w1 - w0:6.2f} s  CPU {c1 - c0:6.2f} s  "
+                f"busy {(c1 - c0) / (w1 - w0):4.2f}  idle-core est. {bound:5.2f} s"
+            )
+    return total
+
+
+#: Runs ``partscale import`` as the command does (its ``main``), in a fresh interpreter, and
+#: prints the wall, CPU and threads' CPU seconds of its phases as JSON: start-up (the
+#: interpreter, the command-line interface and the ingest package), each stage the import
+#: reports (reading the mesh loads trimesh, classifying loads libigl), writing the file beside
+#: the thin-feature check, and the rest.
+_PHASES = """
+import json, os, sys, time
+sys.path.insert(0, sys.argv.pop(1))
+from bench_import import thread_cpu
+def now():
+    return time.perf_counter(), time.process_time(), thread_cpu()
+# the interpreter's own start, from the process's start time (clock ticks after boot)
+with open("/proc/self/stat") as f:
+    start_ticks = int(f.read().rsplit(")", 1)[1].split()[19])
+with open("/proc/uptime") as f:
+    up = float(f.read().split()[0])
+start = time.perf_counter() - (up - start_ticks / os.sysconf("SC_CLK_TCK"))
+marks = [("start", start, 0.0, {})]
+import partscale.cli
+from partscale import ingest
+cmd = sys.modules["partscale.cli.import_"]  # the module (the package names the command so)
+marks.append(("start-up: interpreter, cli, ingest", *now()))
+load, write = ingest.load, cmd._write_and_check
+def timed_load(*a, **k):
+    shown = k["progress"]
+    last = ["import: its input checks"]
+    def progress(f, msg):  # each stage the import reports ends at the next one's start
+        marks.append((last[0], *now()))
+        last[0] = "import: " + msg
+        shown(f, msg)
+    out = load(*a, **{**k, "progress": progress})
+    marks.append((last[0], *now()))
+    return out
+def timed_write(*a, **k):
+    out = write(*a, **k)
+    marks.append(("write and thin-feature check", *now()))
+    return out
+ingest.load, cmd._write_and_check = timed_load, timed_write
+sys.argv = ["partscale", "import", *sys.argv[1:]]
+try:
+    partscale.cli.main()
+except SystemExit:
+    pass
+marks.append(("messages and exit", *now()))
+print(json.dumps([(w, c, {int(k): v for k, v in t.items()}, m) for m, w, c, t in marks]), file=sys.stderr)
+"""
+
+
+def command(path: Path, res: int, runs: int) -> list[float]:
+    """The whole ``partscale import`` (read, import, write) as users run it, phase by phase."""
     env = dict(os.environ)
     env["PYTHONPATH"] = str(ROOT / "src") + os.pathsep + env.get("PYTHONPATH", "")
+    walls = []
     with tempfile.TemporaryDirectory() as tmp:
-        for rep in range(2):
+        for rep in range(runs):
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t = time.perf_counter()
             out = Path(tmp) / "o.csdf.npz"
-            cmd = [sys.executable, "-m", "partscale", "import", str(path), "--res", str(res)]
-            subprocess.run([*cmd, "-o", str(out)], env=env, check=True, capture_output=True)
+            cmd = [sys.executable, "-c", _PHASES, str(Path(__file__).parent), str(path)]
+            cmd += ["--res", str(res), "-o", str(out)]
+            proc = subprocess.run(cmd, env=env, check=True, capture_output=True, text=True)
             w = time.perf_counter() - t
             after = resource.getrusage(resource.RUSAGE_CHILDREN)
             c = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            marks = json.loads(proc.stderr.strip().splitlines()[-1])
+            # each mark names the phase that ends there; report() wants the one that starts
+            bound = report([(*a[:3], b[3]) for a, b in itertools.pairwise(marks)] + marks[-1:])
+            # the interpreter's exit (module teardown, the libraries' exit handlers) on one thread
+            exit_cpu = c - marks[-1][1]
+            exit_wall = w - (marks[-1][0] - marks[0][0])
+            bound += exit_cpu
+            print(
+                f"  {'interpreter exit':44s} wall {exit_wall:6.2f} s  CPU {exit_cpu:6.2f} s  "
+                f"busy {exit_cpu / exit_wall:4.2f}  idle-core est. {exit_cpu:5.2f} s"
+            )
+            walls.append(w)
             print(
                 f"partscale import --res {res}, run {rep + 1}: wall {w:.2f} s, CPU {c:.2f} s, "
-                f"busy {c / w:.2f} of {os.cpu_count()} cores (target >= 1.4 of 2; load "
-                f"average {os.getloadavg()[0]:.1f})",
+                f"busy {c / w:.2f} of {os.cpu_count()} cores (target >= 1.4 of 2); on idle "
+                f"cores about {c / bound:.2f} (load average {os.getloadavg()[0]:.1f})",
                 flush=True,
             )
+    return walls
+
+
+def igl_seconds(path: Path, res: int) -> float:
+    """libigl's ``signed_distance`` (fast winding number sign) over the import's grid, one run."""
+    import igl
+    import numpy as np
+
+    from partscale import ingest
+
+    mesh = ingest.load_mesh(path)
+    c = ingest.from_mesh(mesh, res=res)
+    idx = np.stack(np.meshgrid(*[np.arange(s) for s in c.shape], indexing="ij"), -1)
+    P = c.index_to_world(idx.reshape(-1, 3))
+    V, F = np.ascontiguousarray(mesh.vertices), np.ascontiguousarray(mesh.faces)
+    t = time.perf_counter()
+    igl.signed_distance(P, V, F, sign_type=igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER)
+    return time.perf_counter() - t
+
+
+def stages_and_command(path: Path, res: int, runs: int, run_igl: bool) -> None:
+    """``--stages``: the library's stages, the whole command, and libigl in the same run."""
+    ours = stages(path, res, runs)
+    walls = command(path, res, runs)
+    if run_igl:
+        ig = igl_seconds(path, res)
+        print(
+            f"libigl signed_distance at {res}: {ig:.2f} s; speed-up {ig / ours:.1f}x over the "
+            f"import (median {ours:.2f} s), {ig / max(walls):.1f}-{ig / min(walls):.1f}x over the "
+            f"whole command ({min(walls):.2f}-{max(walls):.2f} s); load average "
+            f"{os.getloadavg()[0]:.1f}",
+            flush=True,
+        )
 
 
 def main() -> None:
@@ -223,11 +366,12 @@ def main() -> None:
     ap.add_argument("--one", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--with-igl", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--stages", action="store_true", help="per-stage CPU over wall")
+    ap.add_argument("--runs", type=int, default=2, help="runs of each (--stages)")
     args = ap.parse_args()
     if args.stages:
         for path in objects():
             if path.stem == (args.only or "SheenChair") or (args.only and args.only in str(path)):
-                stages(path, args.res[-1])
+                stages_and_command(path, args.res[-1], args.runs, args.igl != "none")
         return
     if args.one:
         print(json.dumps(one(Path(args.one), args.res[0], args.with_igl)))

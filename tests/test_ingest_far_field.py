@@ -1,6 +1,6 @@
 """The import's far field: the nearest band voxel is scipy's Euclidean feature transform's.
 
-``partscale.ingest._kernels.far_field`` computes the transform itself (in parallel, fused with
+``partscale.ingest._far_field.far_field`` computes the transform itself (in parallel, fused with
 the fill); users rely on imports being the same voxel for voxel as with scipy's transform.
 """
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from partscale.ingest import _kernels
+from partscale.ingest import _distance, _far_field
 
 
 def _reference(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
@@ -20,7 +20,7 @@ def _reference(band, origin, h, tris, win, offset, sign, floor, sdf, rgb):
     src = tuple(f.ravel()[far] for f in ft)
     t = win[src].astype(np.int64)
     pts = origin + np.stack(np.unravel_index(far, band.shape), axis=1) * h
-    d, _ = _kernels.closest_points(pts, tris, t)
+    d, _ = _distance.closest_points(pts, tris, t)
     s = sign.ravel()[far]
     d = np.where(s > 0, d - offset[t], -d)
     sdf.ravel()[far] = s * np.maximum(np.abs(d), floor)
@@ -48,7 +48,7 @@ def test_far_field_matches_scipy_feature_transform(shape, density, seed):
     sdf0 = rng.random(shape).astype(np.float32)
     rgb0 = rng.integers(0, 256, (*shape, 3)).astype(np.uint8)
     got_sdf, got_rgb = sdf0.copy(), rgb0.copy()
-    _kernels.far_field(band, origin, h, tris, win, offset, sign, floor, got_sdf, got_rgb)
+    _far_field.far_field(band, origin, h, tris, win, offset, sign, floor, got_sdf, got_rgb)
     ref_sdf, ref_rgb = sdf0.copy(), rgb0.copy()
     _reference(band, origin, h, tris, win, offset, sign, floor, ref_sdf, ref_rgb)
     np.testing.assert_array_equal(got_sdf, ref_sdf)

@@ -1,6 +1,6 @@
 """The import's bubble fill: enclosed pockets of the thin outside shell, as ``ndimage.label`` finds them.
 
-``partscale.ingest._kernels.shell_pockets`` labels only the shell's voxels; users rely on
+``partscale.ingest._sign.shell_pockets`` labels only the shell's voxels; users rely on
 imports being the same voxel for voxel as with the full-grid labelling it replaced.
 """
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from partscale.ingest import _kernels
+from partscale.ingest import _sign
 
 
 def _reference(sdf, lim):
@@ -40,7 +40,7 @@ def test_shell_pockets_match_full_grid_labels(seed):
         shape = tuple(int(s) for s in rng.integers(1, 14, 3))
         sdf = rng.choice(values, size=shape, p=rng.dirichlet(np.ones(6)))
         want = _reference(sdf, np.float32(0.5))
-        got = _kernels.shell_pockets(sdf, np.float32(0.5))
+        got = _sign.shell_pockets(sdf, np.float32(0.5))
         np.testing.assert_array_equal(got, want)
         found += len(want) > 0
     assert found > 0  # the draws do contain enclosed pockets
@@ -50,5 +50,5 @@ def test_shell_pocket_enclosed_by_solid_is_found_and_open_one_is_not():
     sdf = np.full((7, 7, 7), -1.0, np.float32)
     sdf[3, 3, 3] = 0.3  # enclosed: every neighbour inside
     sdf[0, 5, 5] = 0.3  # on the border: open
-    got = _kernels.shell_pockets(sdf, np.float32(0.5))
+    got = _sign.shell_pockets(sdf, np.float32(0.5))
     np.testing.assert_array_equal(got, [np.ravel_multi_index((3, 3, 3), sdf.shape)])

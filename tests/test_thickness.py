@@ -147,3 +147,25 @@ def test_the_sweep_reads_the_rule_voxel_by_voxel():
         t.surface_voxels,
     ] == counts
     assert t.typical == pytest.approx(median, abs=1e-6)
+
+
+def test_every_command_starts_without_numba_until_thin_features_runs():
+    """Reading the command-line interface (``info`` and ``import`` read this module) loads none
+    of numba, trimesh and scipy; the first ``thin_features`` call loads numba."""
+    import subprocess
+    import sys
+
+    probe = (
+        "import json, sys\n"
+        "import partscale.cli, partscale.thickness\n"
+        "heavy = ('numba', 'trimesh', 'scipy')\n"
+        "before = [m for m in heavy if m in sys.modules]\n"
+        "from partscale import shapes\n"
+        "partscale.thickness.thin_features(shapes.box((0, 0, 0), (0.2, 0.2, 0.2), voxel_size=0.05))\n"
+        "print(json.dumps([before, 'numba' in sys.modules]))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=300
+    )
+    before, after = json.loads(out.stdout.splitlines()[-1])
+    assert before == [] and after

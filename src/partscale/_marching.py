@@ -16,6 +16,14 @@ segments of an ambiguous face: a fan from a vertex would lay triangles flat in t
 neighbouring cell's too, a sheet where there is no surface), so it is a fan around its
 vertices' mean, as Lewiner's tables add a point inside the cell in those cases.
 
+Exports do not use this kernel: :func:`partscale.surface.to_mesh` (the exports, the metrics)
+keeps scikit-image's marching cubes (Lewiner), which returns an indexed mesh (shared vertices,
+so watertightness, decimation and texture atlases work on it), whereas this kernel returns a
+triangle soup in which every triangle carries its own corners. Both place vertices at the same
+linear zero crossings; they may triangulate a cell, and resolve an ambiguous face, differently.
+Re-evaluation only needs the surface's distances, for which a soup suffices and which must not
+hold the GIL; an export needs the mesh, once per file, where the GIL does not matter.
+
 Conventions: corner ``c = 4 di + 2 dj + dk`` of the cell at ``(i, j, k)`` (index order i, j, k =
 x, y, z); vertices in continuous grid indices of the array given.
 """
@@ -54,6 +62,10 @@ def _build_tables(edges, faces):
     its first and third corners are joined across it. ``ambiguous[config]``: bit f set where
     face f is ambiguous.
     """
+    # Complexity 35 (radon), kept in one kernel: it runs once per process (16384 keys, a few
+    # ms compiled) and reads as the construction it is, configuration by configuration: the
+    # faces' segments, the cycles they close, then each cycle's fan. Splitting the walk from
+    # the fan would pass the same five scratch arrays around.
     edge_of = np.full((8, 8), -1, np.int64)
     for e in range(12):
         edge_of[edges[e, 0], edges[e, 1]] = e

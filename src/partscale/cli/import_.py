@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from ..csdf import SUFFIX, save
 from ..orient import off_square_message, square_note
-from ..thickness import thin_features
 from . import _common
+
+if TYPE_CHECKING:
+    from ..csdf import CSDF
+    from ..thickness import ThinFeatures
 
 
 def import_(
@@ -100,14 +103,13 @@ def import_(
             square=square,
             progress=progress,
         )
-    save(c, output)
+    thin = _write_and_check(c, output)
     _common.done(f"wrote {output}: {' x '.join(map(str, c.shape))} voxels of {c.voxel_size:.4g} m")
     placed = c.meta["history"][0]
     if "turned_deg" in placed:
         _common.stderr.print(square_note(placed["turned_deg"]), highlight=False, soft_wrap=True)
     elif "off_square_deg" in placed:
         typer.echo(f"warning: {off_square_message(placed['off_square_deg'])}", err=True)
-    thin = thin_features(c)
     below = thin.imported.get("below_one_voxel_triangles", 0)
     if thin.below_one_solid or thin.below_one_gap or below:
         typer.echo(
@@ -117,3 +119,21 @@ def import_(
     msg = thin.message(c.voxel_size, c.meta.get("units", "m"))
     if msg:
         typer.echo(f"warning: thin features: {msg}")
+
+
+def _write_and_check(c: CSDF, output: Path) -> ThinFeatures:
+    """Write ``c`` (in this thread: an interrupt stops it) and find its thin features on a
+    thread beside it: the write's deflate runs on a pool and releases the GIL, the thin-feature
+    sweep is a parallel kernel that releases it too, so the two share the cores instead of
+    waiting on each other.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    from .._workers import launch_numba_threads
+    from ..thickness import thin_features  # numba: only when importing, not for every command
+
+    launch_numba_threads()  # from this (the main) thread, not the pool's
+    with ThreadPoolExecutor(1) as pool:
+        thin = pool.submit(thin_features, c)
+        save(c, output)
+        return thin.result()

@@ -319,27 +319,30 @@ def _place(mesh: ColoredMesh, *, up: str, scale, units, name: str):
 
     import numpy as np
 
-    # the unit table's one home: the lengths a designer types take the same units
-    from ..edit import SUFFIXES as UNITS
-
     key = str(up).lower()
     if key not in UP_AXES:
         raise InputError(
             f"{name}: expected up one of {', '.join(UP_AXES)}, got {up!r}", params=("up",)
         )
-    if units is not None and str(units).lower() not in UNITS:
-        raise InputError(
-            f"{name}: expected units one of {', '.join(UNITS)}, got {units!r}", params=("units",)
-        )
+    unit = 1.0
+    if units is not None:
+        # the unit table's one home: the lengths a designer types take the same units (the
+        # edit package, with its kernels, only loaded when a unit is given)
+        from ..edit import SUFFIXES as UNITS
+
+        if str(units).lower() not in UNITS:
+            raise InputError(
+                f"{name}: expected units one of {', '.join(UNITS)}, got {units!r}",
+                params=("units",),
+            )
+        unit = UNITS[str(units).lower()]
     if scale is not None and not (
         isinstance(scale, int | float) and math.isfinite(scale) and scale > 0
     ):
         raise InputError(
             f"{name}: expected scale a finite number > 0, got {scale!r}", params=("scale",)
         )
-    factor = (UNITS[str(units).lower()] if units is not None else 1.0) * (
-        1.0 if scale is None else float(scale)
-    )
+    factor = unit * (1.0 if scale is None else float(scale))
     placed: dict = {}
     if key == "y" and factor == 1.0:
         if units is not None:

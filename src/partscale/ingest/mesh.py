@@ -126,7 +126,7 @@ class ColoredMesh:
         -------
         (N, 3) uint8 sRGB
         """
-        from . import _kernels
+        from . import _shading
 
         tri_ids = np.ascontiguousarray(tri_ids, dtype=np.int64)
         bary = np.ascontiguousarray(bary, dtype=np.float64)
@@ -134,11 +134,11 @@ class ColoredMesh:
         # is the plain numpy one's (einsum's order, float32 products, the UV affine as BLAS
         # computes it), bit for bit
         if self.corner_color is not None:
-            lin = _kernels.corner_mix(tri_ids, bary, self.corner_color).astype(np.float32)
+            lin = _shading.corner_mix(tri_ids, bary, self.corner_color).astype(np.float32)
         else:
             lin = np.ones((len(tri_ids), 3), np.float32)
         mats = self.face_material[tri_ids]
-        uv = None if self.uv is None else _kernels.corner_mix(tri_ids, bary, self.uv)
+        uv = None if self.uv is None else _shading.corner_mix(tri_ids, bary, self.uv)
         none = np.zeros((0, 0, 3), np.float32)
         for m_id in np.flatnonzero(np.bincount(mats, minlength=len(self.materials))):
             mat = self.materials[m_id]
@@ -148,15 +148,15 @@ class ColoredMesh:
                 if mat.uv_transform is not None:
                     tf = np.ascontiguousarray(mat.uv_transform, np.float64)
             factor = np.ascontiguousarray(mat.factor, np.float32)
-            _kernels.shade(mats, m_id, factor, tex, uv if uv is not None else bary, tf, lin)
+            _shading.shade(mats, m_id, factor, tex, uv if uv is not None else bary, tf, lin)
         return linear_to_srgb8(lin)
 
 
 def sample_texture(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """Bilinear, repeat-wrapped lookup of ``texture`` (H, W, C) at ``uv`` (N, 2) -> (N, C)."""
-    from . import _kernels
+    from . import _shading
 
-    return _kernels.bilinear_repeat(
+    return _shading.bilinear_repeat(
         np.ascontiguousarray(texture, np.float32), np.ascontiguousarray(uv, np.float64)
     )
 

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from typing import Any
 
 import cc3d
@@ -47,7 +48,7 @@ from .._workers import launch_numba_threads
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError, shown
 from ..progress import ProgressCallback, resolve
-from . import _kernels
+from . import _distance, _far_field, _labels, _shading, _sign
 from .mesh import ColoredMesh
 
 SUBDIVIDE = 4.0  # triangles longer than this many probe voxels are also probed near their corners
@@ -313,8 +314,8 @@ def _band(tris, origin, h, shape, radius):
         return np.full(tuple(shape), np.inf, np.float32), np.full(tuple(shape), -1, np.int32)
     dist = np.empty(tuple(shape), np.float32)  # initialised by the kernel, slab by slab
     tid = np.empty(tuple(shape), np.int32)
-    ptr, lst = _kernels.slab_lists(tris, origin, h, radius, int(shape[0]), SLAB)
-    _kernels.band_distance(
+    ptr, lst = _distance.slab_lists(tris, origin, h, radius, int(shape[0]), SLAB)
+    _distance.band_distance(
         tris, ptr, lst, SLAB, origin, h, radius, dist, tid, fresh=True, finish_root=True
     )
     return dist, tid
@@ -345,7 +346,7 @@ def _component_signs(wn, d, dist, free, in_sheet, h, origin):
         # per component: its 5 voxels farthest from the surface plus a random 1 in 4000 (up to
         # 200); the majority decides, so free space that reaches into an open container (a
         # drawer, a bookcase) stays air even where the winding number there exceeds 1/2
-        size, pick = _kernels.label_stats(labels, d, n_comp, 5)
+        size, pick = _labels.label_stats(labels, d, n_comp, 5)
         extra = np.minimum(size // 4000, 200)
         rand = [np.zeros(0, np.int64)]
         if extra.any():
@@ -354,7 +355,7 @@ def _component_signs(wn, d, dist, free, in_sheet, h, origin):
             left, start, seen = int(size[1:].sum()), 0, 0
             while left:
                 chunk = rng.random(min(left, RANDOM_CHUNK))
-                got, start = _kernels.random_picks(labels, start, seen, chunk, size, extra)
+                got, start = _labels.random_picks(labels, start, seen, chunk, size, extra)
                 rand.append(got)
                 seen += len(chunk)
                 left -= len(chunk)
@@ -367,20 +368,20 @@ def _component_signs(wn, d, dist, free, in_sheet, h, origin):
         n_all = np.bincount(comp, minlength=n_comp + 1)
         comp_sign = np.where(n_in * 2 > n_all, -1, 1).astype(np.int8)
         comp_sign[0] = 0
-        _kernels.paint_labels(labels, comp_sign, sign)
+        _labels.paint_labels(labels, comp_sign, sign)
     del labels
     # the ring, then voxels near the boundary, take the sign of signed 6-neighbours that agree
     # (ring voxels pass the sign on among themselves: each has d > h); all of these lie
     # within two voxels of the surface, so they are listed and visited one by one
-    todo = _kernels.spread_signs(sign, np.flatnonzero(free & ~core), 8)
+    todo = _sign.spread_signs(sign, np.flatnonzero(free & ~core), 8)
     del core
     # ring voxels still unsigned (in narrow gaps, inside boards) are signed with the
     # undecided near ones below
-    left = _kernels.sign_near(sign, free, in_sheet, np.flatnonzero(~free))
+    left = _sign.sign_near(sign, free, in_sheet, np.flatnonzero(~free))
     # the rest: groups joined by surface-free steps. Those enclosed (inside boards 2-4 voxels
     # thick, most of them) take the sign of a few samples where those agree
     flat = np.sort(np.concatenate([left, todo]))
-    root, touch = _kernels.clear_components(flat, sign, in_sheet, dist, h)
+    root, touch = _sign.clear_components(flat, sign, in_sheet, dist, h)
     # groups that reach a signed voxel are queried voxel by voxel: next to open sheets the
     # winding number can pass 1/2 away from any surface (inside an open cup's walls)
     seeded = touch[root].any(axis=1)
@@ -425,10 +426,163 @@ def _fill_bubbles(sdf: np.ndarray, sign: np.ndarray, h: float) -> int:
     (nor the grid's border) take the inside sign; their distances to the triangles are kept.
     Real cavities reach deeper than half a voxel and stay.
     """
-    fill = _kernels.shell_pockets(sdf, np.float32(0.5 * h))
+    fill = _sign.shell_pockets(sdf, np.float32(0.5 * h))
     sdf.ravel()[fill] *= -1
     sign.ravel()[fill] = -1
     return len(fill)
+
+
+@dataclass
+class _Pieces:
+    """The mesh's distance primitives (see :func:`classify_pieces`) and their classes.
+
+    ``sub`` (P, 3, 3) float64, ``parent`` (P,) int64, ``corner_bary`` (P, 3, 3), ``cls`` (P,)
+    int8; ``boundary`` and ``sheet`` (int64) index the boundary and open-sheet primitives.
+    """
+
+    sub: np.ndarray
+    parent: np.ndarray
+    corner_bary: np.ndarray
+    cls: np.ndarray
+    boundary: np.ndarray
+    sheet: np.ndarray
+
+
+@dataclass
+class _Thin:
+    """The closed pieces thickened into sheets: ``thin`` primitive ids, ``offset`` (P,)
+    float64 half-thickness of every sheet primitive, and what import records about them.
+    """
+
+    thin: np.ndarray
+    offset: np.ndarray
+    n_open: int
+    n_thin: int
+    record: dict
+
+
+def _place(mesh: ColoredMesh, name: str, res: int, pad: int):
+    """The mesh as (V, F) float64 / int64 and its grid: origin, h, shape (tuple of int)."""
+    V = np.ascontiguousarray(mesh.vertices, np.float64)
+    F = np.ascontiguousarray(mesh.faces, np.int64)
+    if len(F) == 0:
+        raise InputError(f"{name}: expected a mesh with triangles, got none")
+    used = V[np.unique(F)]
+    lo, hi = used.min(axis=0), used.max(axis=0)
+    if not (hi - lo).max() > 0:
+        raise InputError(f"{name}: expected a mesh with non-zero extent, got a point")
+    origin, h, shape = grid_for_bounds(lo, hi, res, pad)
+    check_memory(
+        tuple(int(s) for s in shape), BYTES_PER_VOXEL, what=f"{name} at res {res}", params=("res",)
+    )
+    return V, F, origin, h, tuple(int(s) for s in shape)
+
+
+def _classify(wn: _Winding, name: str, h: float, res: int) -> _Pieces:
+    """Step 1: the pieces and their classes; refuses a mesh with no surface left."""
+    sub, parent, corner_bary, cls = classify_pieces(wn, probe_size(h, res))
+    boundary = np.nonzero(cls == 0)[0]
+    sheet = np.nonzero(cls == 2)[0]
+    if len(boundary) + len(sheet) == 0:
+        raise InputError(f"{name}: expected a surface, got only degenerate or buried triangles")
+    return _Pieces(sub, parent, corner_bary, cls, boundary, sheet)
+
+
+def _boundary_band(pieces: _Pieces, origin, h: float, shape):
+    """Steps 2-3 (boundary): the boundary's band (d_b float32, id_b int32) and the thin pieces.
+
+    The boundary's band needs only the classes: its numba kernel (no GIL) runs on a thread of
+    its own while this one casts the thickness rays (serial, embree).
+    """
+    boundary, sheet, parent = pieces.boundary, pieces.sheet, pieces.parent
+    thick = math.sqrt(3) / 2 * h
+    tris_b = np.ascontiguousarray(pieces.sub[boundary])
+    launch_numba_threads()  # from this thread, not the pool's (see the function)
+    with ThreadPoolExecutor(1) as pool:
+        band_b = pool.submit(_band, tris_b, origin, h, shape, BAND_VOXELS * h)
+        # closed pieces thinner than the grid can hold (shelves, back panels) would vanish or
+        # get holes: their faces also join the sheets, offset so that the piece is 2t thick
+        offset = np.zeros(len(pieces.sub))
+        offset[sheet] = thick
+        thickness = _thickness(tris_b, 0.01 * h)
+        d_b, id_b = band_b.result()
+    thin = boundary[thickness < 2 * thick]
+    offset[thin] = thick - thickness[thickness < 2 * thick] / 2
+    # what import reports (``partscale info`` too): how thin the thickened pieces really are
+    t_thin = thickness[thickness < 2 * thick] / h
+    record = {}
+    if t_thin.size:
+        record = {
+            "thin_piece_thickness_voxels": {
+                "min": round(float(t_thin.min()), 3),
+                "median": round(float(np.median(t_thin)), 3),
+            },
+            "below_one_voxel_triangles": len(np.unique(parent[boundary[thickness < h]])),
+        }
+    n_open = len(np.unique(parent[sheet]))
+    n_thin = len(np.unique(parent[thin]))
+    return d_b, id_b, _Thin(thin, offset, n_open, n_thin, record)
+
+
+def _signs(wn: _Winding, pieces: _Pieces, d_b, f_s, id_s, sheet, offset, origin, h):
+    """Step 4: (X, Y, Z) int8 sign of the boundary distance; ``f_s`` becomes, in place, the
+    thickened sheets' distance (see :func:`partscale.ingest._sign.sign_inputs`).
+
+    Buried faces block the flood and the clear steps too: a face classified buried over its
+    whole area can be uncovered along a strip its probes missed (a board whose cover ends
+    short of its edge), a hole in the surface that the flood would leak through once the
+    strip is wider than its 4 voxels (at 256 on painted_wooden_cabinet, not at 128). Near a
+    truly buried face both sides are inside, so blocking there changes no sign.
+    """
+    d_u = d_b
+    buried = np.nonzero(pieces.cls == 1)[0]
+    if len(buried):
+        # min(d_b, distance to buried faces within 2 voxels), in one copy of d_b
+        d_u = d_b.copy()
+        tris_u = np.ascontiguousarray(pieces.sub[buried])
+        ptr, lst = _distance.slab_lists(tris_u, origin, h, 2 * h, d_b.shape[0], SLAB)
+        no_ids = np.empty((1, 1, 1), np.int32)
+        _distance.band_distance(tris_u, ptr, lst, SLAB, origin, h, 2 * h, d_u, no_ids, root=True)
+    # the thickened sheets block the flood (not ``free``) as much as boundaries do (a cushion
+    # whose cloth has an open seam still encloses its inside); at 2t thick they leave no
+    # 6-connected tunnel. ``dist``: to the nearest boundary, buried or (unthickened) sheet
+    # face: steps between voxels whose distances sum to more than a voxel cross no surface
+    in_sheet, free, dist = _sign.sign_inputs(d_u, f_s, id_s, sheet, offset, h)
+    return _component_signs(wn, d_u, dist, free, in_sheet, h, origin)
+
+
+def _compose_band(sign, d_b, id_b, boundary, f_s, id_s, sheet, h: float):
+    """Step 5 in the band: ``sdf`` float32, ``win`` int32 (nearest primitive) and ``band`` bool.
+
+    sdf = min(signed boundary distance (+-inf beyond the band), thickened sheet distance);
+    values within 1e-3 voxel of 0 are moved to +-1e-3 voxel: a surface exactly through a
+    voxel centre (axis-aligned models) would give marching cubes degenerate triangles. The
+    band: ``|sdf| <= BAND_VOXELS h``, compared in float32 (as numpy compares a float32 grid
+    with a Python float).
+    """
+    shape = sign.shape
+    sdf = np.empty(shape, np.float32)
+    win = np.empty(shape, np.int32)  # primitive ids: far fewer than 2**31
+    band = np.empty(shape, np.bool_)
+    tiny = np.float32(1e-3 * h)
+    band_lim = np.float32(BAND_VOXELS * h)
+    _distance.compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win, band_lim, band)
+    return sdf, win, band
+
+
+def _band_colour(mesh: ColoredMesh, name: str, pieces: _Pieces, win, band, origin, h, report):
+    """Step 6 in the band: (X, Y, Z, 3) uint8 sRGB, set at the band voxels only."""
+    shape = band.shape
+    band_idx = np.flatnonzero(band)
+    if len(band_idx) == 0:
+        raise InputError(f"{name}: expected a surface inside the grid, got none")
+    w_b = win.ravel()[band_idx].astype(np.int64)
+    bary = _distance.voxel_closest(band_idx, np.array(shape), origin, h, pieces.sub, w_b)
+    report(0.75, "colour from the texture")
+    pbary = _shading.corner_mix(w_b, bary, pieces.corner_bary)
+    rgb = np.empty((*shape, 3), np.uint8)
+    rgb.reshape(-1, 3)[band_idx] = mesh.color_at(pieces.parent[w_b], pbary)
+    return rgb
 
 
 @keyword_options
@@ -440,6 +594,8 @@ def from_mesh(
     progress: ProgressCallback | None = None,
 ) -> CSDF:
     """Coloured signed distance field of a (possibly open, self-intersecting) coloured mesh.
+
+    The steps are the module's method, in its order.
 
     Parameters
     ----------
@@ -469,134 +625,38 @@ def from_mesh(
     name = mesh.source or "mesh"
     res = check_res(res, name)
     pad = check_pad(pad, name)
-    V = np.ascontiguousarray(mesh.vertices, np.float64)
-    F = np.ascontiguousarray(mesh.faces, np.int64)
-    if len(F) == 0:
-        raise InputError(f"{name}: expected a mesh with triangles, got none")
-    used = V[np.unique(F)]
-    lo, hi = used.min(axis=0), used.max(axis=0)
-    if not (hi - lo).max() > 0:
-        raise InputError(f"{name}: expected a mesh with non-zero extent, got a point")
-    origin, h, shape = grid_for_bounds(lo, hi, res, pad)
-    check_memory(
-        tuple(int(s) for s in shape), BYTES_PER_VOXEL, what=f"{name} at res {res}", params=("res",)
-    )
-    shape = tuple(int(s) for s in shape)
-
+    V, F, origin, h, shape = _place(mesh, name, res, pad)
     wn = _Winding(V, F)
     report(0.0, "classifying pieces")
-    sub, parent, corner_bary, cls = classify_pieces(wn, probe_size(h, res))
-    boundary = np.nonzero(cls == 0)[0]
-    sheet = np.nonzero(cls == 2)[0]
-    if len(boundary) + len(sheet) == 0:
-        raise InputError(f"{name}: expected a surface, got only degenerate or buried triangles")
-    thick = math.sqrt(3) / 2 * h
-
+    pieces = _classify(wn, name, h, res)
     report(0.15, "exact distances near the surface")
-    tris_b = np.ascontiguousarray(sub[boundary])
-    # the boundary's band needs only the classes: its numba kernel (no GIL) runs on a thread
-    # of its own while this one casts the thickness rays (serial, embree)
-    launch_numba_threads()  # from this thread, not the pool's (see the function)
-    with ThreadPoolExecutor(1) as pool:
-        band_b = pool.submit(_band, tris_b, origin, h, shape, BAND_VOXELS * h)
-        # closed pieces thinner than the grid can hold (shelves, back panels) would vanish or
-        # get holes: their faces also join the sheets, offset so that the piece is 2t thick
-        offset = np.zeros(len(sub))
-        offset[sheet] = thick
-        thickness = _thickness(tris_b, 0.01 * h)
-        d_b, id_b = band_b.result()
-    thin = boundary[thickness < 2 * thick]
-    offset[thin] = thick - thickness[thickness < 2 * thick] / 2
-    n_open = len(np.unique(parent[sheet]))
-    n_thin = len(np.unique(parent[thin]))
-    # what import reports (``partscale info`` too): how thin the thickened pieces really are
-    t_thin = thickness[thickness < 2 * thick] / h
-    thin_record = {}
-    if t_thin.size:
-        thin_record = {
-            "thin_piece_thickness_voxels": {
-                "min": round(float(t_thin.min()), 3),
-                "median": round(float(np.median(t_thin)), 3),
-            },
-            "below_one_voxel_triangles": len(np.unique(parent[boundary[thickness < h]])),
-        }
-    sheet = np.concatenate([sheet, thin])
-    tris_s = np.ascontiguousarray(sub[sheet])
+    d_b, id_b, thin = _boundary_band(pieces, origin, h, shape)
+    sheet = np.concatenate([pieces.sheet, thin.thin])
     report(0.3, "thickening open sheets")
-    f_s, id_s = _band(tris_s, origin, h, shape, (BAND_VOXELS + 1) * h)
-
+    f_s, id_s = _band(
+        np.ascontiguousarray(pieces.sub[sheet]), origin, h, shape, (BAND_VOXELS + 1) * h
+    )
     report(0.45, "inside/outside")
-    # buried faces block the flood and the clear steps too: a face classified buried over its
-    # whole area can be uncovered along a strip its probes missed (a board whose cover ends
-    # short of its edge), a hole in the surface that the flood would leak through once the
-    # strip is wider than its 4 voxels (at 256 on painted_wooden_cabinet, not at 128). Near a
-    # truly buried face both sides are inside, so blocking there changes no sign.
-    d_u = d_b
-    buried = np.nonzero(cls == 1)[0]
-    if len(buried):
-        # min(d_b, distance to buried faces within 2 voxels), in one copy of d_b
-        d_u = d_b.copy()
-        tris_u = np.ascontiguousarray(sub[buried])
-        ptr, lst = _kernels.slab_lists(tris_u, origin, h, 2 * h, shape[0], SLAB)
-        no_ids = np.empty((1, 1, 1), np.int32)
-        _kernels.band_distance(tris_u, ptr, lst, SLAB, origin, h, 2 * h, d_u, no_ids, root=True)
-    # f_s becomes the thickened sheets' distance. They block the flood (not ``free``) as much
-    # as boundaries do (a cushion whose cloth has an open seam still encloses its inside); at
-    # 2t thick they leave no 6-connected tunnel. ``dist``: to the nearest boundary, buried or
-    # (unthickened) sheet face: steps between voxels whose distances sum to more than a voxel
-    # cross no surface
-    in_sheet, free, dist = _kernels.sign_inputs(d_u, f_s, id_s, sheet, offset, h)
-    sign = _component_signs(wn, d_u, dist, free, in_sheet, h, origin)
-    del d_u
-    del dist
-    del free, in_sheet
-
-    # sdf = min(signed boundary distance (+-inf beyond the band), thickened sheet distance);
-    # values within 1e-3 voxel of 0 are moved to +-1e-3 voxel: a surface exactly through a
-    # voxel centre (axis-aligned models) would give marching cubes degenerate triangles
-    sdf = np.empty(shape, np.float32)
-    win = np.empty(shape, np.int32)  # primitive ids: far fewer than 2**31
-    tiny = np.float32(1e-3 * h)
-    # the band: |sdf| <= BAND_VOXELS h, compared in float32 (as numpy compares a float32 grid
-    # with a Python float); the bubble fill below flips signs only
-    band = np.empty(shape, np.bool_)
-    band_lim = np.float32(BAND_VOXELS * h)
-    _kernels.compose(sign, d_b, id_b, boundary, f_s, id_s, sheet, tiny, sdf, win, band_lim, band)
+    sign = _signs(wn, pieces, d_b, f_s, id_s, sheet, thin.offset, origin, h)
+    sdf, win, band = _compose_band(sign, d_b, id_b, pieces.boundary, f_s, id_s, sheet, h)
     del d_b, id_b, f_s, id_s
-    n_bubbles = _fill_bubbles(sdf, sign, h)
-
+    n_bubbles = _fill_bubbles(sdf, sign, h)  # flips signs only: the band stays
     report(0.65, "distances beyond the band")
-    band_idx = np.flatnonzero(band)
-    if len(band_idx) == 0:
-        raise InputError(f"{name}: expected a surface inside the grid, got none")
-    w_b = win.ravel()[band_idx].astype(np.int64)
-    bary = _kernels.voxel_closest(band_idx, np.array(shape), origin, h, sub, w_b)
-
-    report(0.75, "colour from the texture")
-    pbary = _kernels.corner_mix(w_b, bary, corner_bary)
-    band_rgb = mesh.color_at(parent[w_b], pbary)
-    rgb = np.empty((*shape, 3), np.uint8)
-    rgb.reshape(-1, 3)[band_idx] = band_rgb
-    del bary, pbary
-
-    if len(band_idx) < band.size:
+    rgb = _band_colour(mesh, name, pieces, win, band, origin, h, report)
+    if not band.all():
         report(0.8, "distances beyond the band")
-        _kernels.far_field(
-            band,
-            origin,
-            h,
-            sub,
-            win,
-            offset,
-            sign,
-            # beyond the band a distance is at least the band's: guards the feature
-            # transform's rare non-nearest picks from pulling values inside the band
-            BAND_VOXELS * h,
-            sdf,
-            rgb,
-        )
+        # beyond the band a distance is at least the band's: the floor guards the feature
+        # transform's rare non-nearest picks from pulling values inside the band
+        floor = BAND_VOXELS * h
+        _far_field.far_field(band, origin, h, pieces.sub, win, thin.offset, sign, floor, sdf, rgb)
     report(1.0, "done")
-    meta = {
+    meta = _import_meta(mesh, res, pad, len(F), thin, n_bubbles)
+    return make(sdf, rgb, None, origin, h, meta)
+
+
+def _import_meta(mesh: ColoredMesh, res: int, pad: int, n_faces: int, thin: _Thin, n_bubbles: int):
+    """The CSDF's meta: what import did, as ``partscale info`` shows it."""
+    return {
         "source": mesh.source,
         "units": "m",
         "history": [
@@ -605,15 +665,14 @@ def from_mesh(
                 "source": mesh.source,
                 "res": res,
                 "pad": pad,
-                "triangles": len(F),
-                "open_sheet_triangles": n_open,
-                "thin_piece_triangles": n_thin,
+                "triangles": n_faces,
+                "open_sheet_triangles": thin.n_open,
+                "thin_piece_triangles": thin.n_thin,
                 "sheet_half_thickness_voxels": round(math.sqrt(3) / 2, 4),
-                **thin_record,
+                **thin.record,
                 "filled_bubble_voxels": n_bubbles,
                 "band_voxels": BAND_VOXELS,
                 **({"notes": list(mesh.notes)} if mesh.notes else {}),
             }
         ],
     }
-    return make(sdf, rgb, None, origin, h, meta)

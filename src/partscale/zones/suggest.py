@@ -730,11 +730,30 @@ def axis_candidates(
     ax = _axis_index(axis)
     p = prof if prof is not None else profile(csdf, ax)
     feats = axis_features(csdf, ax, calm_runs(p)) if features is None else features
-    h = p.voxel_size
-    extent = max(p.hi - p.lo, h)
-    name = AXES[ax]
-    out: list[Candidate] = []
     repeats = find_repeats(p)
+    out = _repeat_tiles(p, repeats)
+    out += _bounded_tiles(p, csdf, repeats)
+    out += _part_row_tiles(p, csdf, out)
+    # a period is only real where its copies repeat whole elements
+    out = [
+        w for c in out if (w := _whole(c, p, feats, free="repeats of a" in c.reason)) is not None
+    ]
+    out += _slab_candidates(p, csdf, feats)
+    out.sort(key=lambda c: -c.score)
+    return out
+
+
+def _extent(p: Profile) -> float:
+    """The extent along the profile's axis, at least a voxel: what scores and reasons refer to."""
+    return max(p.hi - p.lo, p.voxel_size)
+
+
+def _repeat_tiles(p: Profile, repeats: list[_Repeat]) -> list[Candidate]:
+    """A tile candidate per repeat of the whole cross-section (:func:`find_repeats`), planes at
+    its best phase; more repeats and more of the extent covered score higher.
+    """
+    h, extent, name = p.voxel_size, _extent(p), AXES[p.axis]
+    out = []
     for r in repeats:
         a, b = r.span
         t = best_phase(p, r.shift, a, b)
@@ -749,6 +768,16 @@ def axis_candidates(
         out.append(
             _tile(name, p.world(t), period, r.count, score, reason, (p.world(a), p.world(b)))
         )
+    return out
+
+
+def _bounded_tiles(p: Profile, csdf: CSDF, repeats: list[_Repeat]) -> list[Candidate]:
+    """A tile candidate per run of elements between boards or gaps
+    (:func:`find_bounded_repeats`) whose period (or a multiple of it, over it) the whole
+    cross-section's ``repeats`` did not find already; weighted by :data:`BOUNDED_WEIGHT`.
+    """
+    h, extent, name = p.voxel_size, _extent(p), AXES[p.axis]
+    out = []
     for br in find_bounded_repeats(p, csdf):
         # a period the full match found already (or a multiple of it, over it) adds nothing
         if any(
@@ -770,17 +799,27 @@ def axis_candidates(
         )
         region = (p.world(a), p.world(b))
         out.append(_tile(name, p.world(br.start), period, count, score, reason, region))
-    tiles = [
+    return out
+
+
+def _part_row_tiles(p: Profile, csdf: CSDF, tiles: list[Candidate]) -> list[Candidate]:
+    """A tile candidate per row of equal parts of the segmentation (:func:`_part_repeats`)
+    whose pitch (or a multiple of it, over it) none of ``tiles`` has; planes halfway across
+    the gaps around the middle part.
+    """
+    h, extent, name = p.voxel_size, _extent(p), AXES[p.axis]
+    found = [
         (c.period / h, p.index(c.region[0]), p.index(c.region[1]))
-        for c in out
+        for c in tiles
         if c.period is not None  # every candidate so far is a tile, with a period
     ]
-    for pitch, parts in _part_repeats(csdf, ax):
+    out = []
+    for pitch, parts in _part_repeats(csdf, p.axis):
         step = pitch / h
         a, b = float(p.index(parts[0][0])), float(p.index(parts[-1][1]))
         if any(
             abs(step - max(1, round(step / q)) * q) <= BOUND_TOL and min(b, qb) > max(a, qa)
-            for q, qa, qb in tiles
+            for q, qa, qb in found
         ):
             continue
         # the region: from halfway across the gap before the first part to past the last
@@ -795,24 +834,19 @@ def axis_candidates(
             f"({100 * pitch / extent:.1f}% of the extent)"
         )
         out.append(_tile(name, p.world(t), pitch, count, score, reason, (p.world(a0), p.world(b0))))
-    # a period is only real where its copies repeat whole elements
-    out = [
-        w for c in out if (w := _whole(c, p, feats, free="repeats of a" in c.reason)) is not None
-    ]
-    planes = _part_planes(csdf, ax)
+    return out
+
+
+def _slab_candidates(p: Profile, csdf: CSDF, feats: list[Feature]) -> list[Candidate]:
+    """A stretch candidate per slab of constant cross-section (:func:`constant_slabs`) at least
+    two voxels long, its planes moved to a boundary between parts within a voxel
+    (:func:`_at_part_planes`); less drift and more length score higher.
+    """
+    h, extent, name = p.voxel_size, _extent(p), AXES[p.axis]
+    planes = _part_planes(csdf, p.axis)
+    out = []
     for first, last, drift, at_feature in constant_slabs(p, csdf, feats):
-        s, e = float(p.world(first)), float(p.world(last))
-        why = ""
-        if planes.size:
-            # prefer a plane between parts within a voxel, if still inside the slab
-            for which, v in (("start", s), ("end", e)):
-                j = np.argmin(np.abs(planes - v))
-                if abs(planes[j] - v) <= h and s - h <= planes[j] <= e + h:
-                    if which == "start":
-                        s = max(s, float(planes[j]))
-                    else:
-                        e = min(e, float(planes[j]))
-                    why = ", planes at part boundaries"
+        s, e, why = _at_part_planes(float(p.world(first)), float(p.world(last)), planes, h)
         if e - s < 2 * h:
             continue
         length = (e - s) / extent
@@ -833,8 +867,26 @@ def axis_candidates(
                 region=(s, e),
             )
         )
-    out.sort(key=lambda c: -c.score)
     return out
+
+
+def _at_part_planes(s: float, e: float, planes: np.ndarray, h: float) -> tuple[float, float, str]:
+    """A slab's planes ``s``, ``e`` (world) each moved onto the nearest of ``planes`` (part
+    boundaries) within a voxel, where it stays inside the slab; the reason's words if any moved.
+    """
+    why = ""
+    if not planes.size:
+        return s, e, why
+    # prefer a plane between parts within a voxel, if still inside the slab
+    for which, v in (("start", s), ("end", e)):
+        j = np.argmin(np.abs(planes - v))
+        if abs(planes[j] - v) <= h and s - h <= planes[j] <= e + h:
+            if which == "start":
+                s = max(s, float(planes[j]))
+            else:
+                e = min(e, float(planes[j]))
+            why = ", planes at part boundaries"
+    return s, e, why
 
 
 @keyword_options

@@ -22,8 +22,9 @@ if TYPE_CHECKING:
 
 
 def is_mesh_route(src: str | os.PathLike, dst: str | os.PathLike) -> bool:
-    """Whether editing ``src`` into ``dst`` takes the mesh route: a mesh in
-    (:data:`MESH_SUFFIXES`) and a mesh out (:data:`OUTPUT_SUFFIXES`).
+    """Whether editing ``src`` into ``dst`` takes the mesh route.
+
+    It does for a mesh in (:data:`MESH_SUFFIXES`) and a mesh out (:data:`OUTPUT_SUFFIXES`).
 
     Parameters
     ----------
@@ -46,6 +47,19 @@ def is_mesh_route(src: str | os.PathLike, dst: str | os.PathLike) -> bool:
 
 def check_square(square: bool, mesh_route: bool, src: Path, dst: Path) -> None:
     """Refuse ``square`` off the mesh route: a CSDF was squared (or not) when it was imported.
+
+    Parameters
+    ----------
+    square : bool
+        Whether the edit was asked to be made square (``--square``).
+    mesh_route : bool
+        Whether the edit takes the mesh route (:func:`is_mesh_route`).
+    src, dst : Path
+        The input and the output, named in the refusal.
+
+    Returns
+    -------
+    None
 
     Raises
     ------
@@ -99,9 +113,19 @@ def edit_target(src: str | os.PathLike, *, zones: bool, square: bool = False) ->
 
 
 def report_lines(result: MeshEditResult) -> tuple[list[tuple[str, str]], str]:
-    """What a mesh-route edit says: ``(kind, line)`` pairs in order (``kind`` ``"warning"`` for
-    a seam that could not be welded and a source whose walls run off x and z, ``"note"`` for the
-    turn ``square`` made), and the closing line naming the files written.
+    """What a mesh-route edit says, line by line.
+
+    Parameters
+    ----------
+    result : MeshEditResult
+        What :func:`~partscale.meshedit.edit_mesh_file` did.
+
+    Returns
+    -------
+    (list of (str, str), str)
+        ``(kind, line)`` pairs in order, ``kind`` ``"warning"`` for a seam that could not be
+        welded and for a source whose walls run off x and z, ``"note"`` for the turn ``square``
+        made; and the closing line naming the files written.
 
     Examples
     --------

@@ -54,9 +54,14 @@ from .suggest import (
     axis_candidates,
     best_phase,
     join_islands,
+    join_jump,
     plane_cost,
 )
 
+#: A tile's joins between copies may jump this much (voxels, :func:`~.suggest.join_jump`) more
+#: than the cleanest join within reach before its planes give way to a cleaner pair: the
+#: evaluation's line for a good seam.
+JOIN_TOL = 0.1
 #: fit --size takes whole elements (of a group that need not be equal) where the change is
 #: within this share of one element of a whole number of them.
 ELEMENT_TOLERANCE = 0.25
@@ -492,9 +497,10 @@ def _voxel_period(
     itself best (mean layer distance over the repeat, :meth:`Profile.shifted_distance`); the
     start within :data:`PHASE_VOXELS` of the detector's where :func:`~.suggest.plane_cost` is
     lowest (:func:`~.suggest.best_phase`), among those whose joins cut off the least solid
-    (:func:`~.suggest.join_islands`), of those that copy whole elements (the axis's local
-    ``features``: :func:`~.features.whole_copies`) where any does. Copies of a whole-voxel period
-    are exact shifts of the original's layers.
+    (:func:`~.suggest.join_islands`) and jump least (within :data:`JOIN_TOL` voxel of the
+    cleanest: :func:`~.suggest.join_jump`, the seam shape the evaluation measures), of those
+    that copy whole elements (the axis's local ``features``: :func:`~.features.whole_copies`)
+    where any does. Copies of a whole-voxel period are exact shifts of the original's layers.
     """
     assert t.period is not None  # set for a tile
     h = p.voxel_size
@@ -522,12 +528,31 @@ def _voxel_period(
         starts = starts[whole]
     cut = np.array([join_islands(csdf, p.axis, float(x), float(n)) for x in starts])
     ok = cut <= cut.min()
+    ok &= _clean_joins(csdf, p.axis, starts, float(n), ok)
     # the lowest-cost start among those, nearest the detector's
     runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
     pieces = [(starts[runs[k]], starts[runs[k + 1] - 1]) for k in range(0, len(runs), 2)]
-    picks = [best_phase(p, float(n), x0, x1 + n, near=t0) for x0, x1 in pieces]
-    s = picks[int(np.argmin(plane_cost(p, float(n), np.array(picks))))]
+    picks = np.array([best_phase(p, float(n), x0, x1 + n, near=t0) for x0, x1 in pieces])
+    # (the middle of a run may fall between the starts measured: measured again)
+    cost = np.where(_clean_joins(csdf, p.axis, picks, float(n)), 0.0, np.inf)
+    s = picks[int(np.argmin(cost + plane_cost(p, float(n), picks)))]
     return float(p.world(s)), n * h
+
+
+def _clean_joins(
+    csdf: CSDF, axis: int, starts: np.ndarray, period: float, among: np.ndarray | None = None
+) -> np.ndarray:
+    """(K,) bool: the ``starts`` (of those ``among``) whose join between tile copies jumps
+    least (:func:`~.suggest.join_jump`), within :data:`JOIN_TOL` voxel of the least.
+    """
+    among = np.ones(len(starts), bool) if among is None else among
+    jump = np.array(
+        [
+            join_jump(csdf, axis, float(x), period) if m else np.inf
+            for x, m in zip(starts, among, strict=True)
+        ]
+    )
+    return among & (jump <= jump.min() + JOIN_TOL)
 
 
 @dataclass(frozen=True)

@@ -48,6 +48,7 @@ or for a full match to the best phase, where it would not; else it is dropped (:
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass, replace
 from typing import Literal, NamedTuple
 
@@ -56,7 +57,7 @@ from scipy import ndimage
 from scipy.signal import find_peaks
 
 from .._options import keyword_options
-from ..csdf import CSDF
+from ..csdf import BAND_VOXELS, CSDF
 from ..edit import AXES, SEAM_VOXELS
 from ..progress import ProgressCallback, resolve
 from .features import Feature, axis_features, feature_spans, whole_copies
@@ -87,6 +88,12 @@ BOUND_TOL = 1.0
 QUANTILE = 0.9
 #: Score of a bounded repeat relative to a full cross-section match.
 BOUNDED_WEIGHT = 0.5
+#: A tile join's jump compares layers this many apart, centred on the join (:func:`join_jump`):
+#: wider than the scaling stage's blend, which spreads a jump without removing it.
+SEAM_WINDOW = 5
+#: Layers either side of a zone that :func:`join_jump` tiles with it: the seam window and its
+#: trend layers, the blend and the re-evaluation's reach.
+JOIN_MARGIN = 10
 
 
 @dataclass(frozen=True)
@@ -472,6 +479,88 @@ def join_islands(csdf: CSDF, axis: int, start: float, period: float) -> int:
     full = np.ones((3, 3, 3), bool)
     own = max(loose(layers(start + o), full), loose(layers(ys + o), full))
     return max(0, loose(joined) - own)
+
+
+def _window_step(f: np.ndarray, h: float) -> float:
+    """The shape step across a window of layers ``f`` (``SEAM_WINDOW + 3`` of them: one before
+    the pair compared, the pair :data:`SEAM_WINDOW` apart, one after): over the voxels within a
+    voxel of the surface on either layer of the pair, the mean of ``|(f[k] - f[0]) - trend|``
+    (voxels, at most ``2 * BAND_VOXELS``), the trend being what the one-layer steps just
+    outside the pair predict; NaN with fewer than 3 such voxels. The evaluation's seam shape
+    measure (:func:`partscale.evaluate.metrics.slice_steps`), for one window.
+    """
+    k = SEAM_WINDOW
+    f = f.astype(np.float32)
+    f0, fk = f[1], f[k + 1]
+    trend = k * ((f[1] - f[0]) + (f[k + 2] - f[k + 1])) / 2
+    step = np.minimum(np.abs((fk - f0) - trend) / h, 2 * BAND_VOXELS)
+    either = (np.abs(f0) <= h) | (np.abs(fk) <= h)
+    if either.sum() < 3:
+        return math.nan
+    return float(step[either].mean())
+
+
+def _seam_step(s: np.ndarray, y: float, h: float) -> float:
+    """The largest :func:`_window_step` of ``s`` (layers first) among the windows centred on
+    layer index ``y`` and one layer either side (a plane on a layer still shows its largest
+    jump); NaN where none measures (the windows clamped to the layers there are).
+    """
+    k = SEAM_WINDOW
+    first = math.floor(y) - (k - 1) // 2
+    steps = [
+        _window_step(s[np.clip(np.arange(i - 1, i + k + 2), 0, len(s) - 1)], h)
+        for i in (first - 1, first, first + 1)
+    ]
+    finite = [x for x in steps if math.isfinite(x)]
+    return max(finite) if finite else math.nan
+
+
+def join_jump(csdf: CSDF, axis: int, start: float, period: float) -> float:
+    """The shape jump (voxels) a join between tile copies of ``[start, start + period]``
+    (layer indices along ``axis``, the period whole) adds to the object's own at the zone's
+    planes: what the evaluation's seam shape measures at that join.
+
+    The zone is tiled once more by the edit stage itself (:func:`partscale.edit.apply_edit`:
+    its seam blend and re-evaluation), on the layers from :data:`JOIN_MARGIN` before the zone
+    to as many after it (the join sees no further); the join's step (:func:`_seam_step`) less
+    the larger of the object's own steps at the two planes (a board lying at a plane steps
+    there in the object too), at least 0; 0 where no surface crosses the join. Planes where the
+    cross-section is the same either side of the join (both in a gap, or in a constant
+    stretch) join all but cleanly (the stage's blend leaves a little); one mid-cushion and the
+    other on its rounded edge jump.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.zones.suggest import join_jump
+    >>> bookcase = shapes.bookcase(height=1.22)  # a shelf every 15 layers, from layer 3
+    >>> round(join_jump(bookcase, 1, 10.5, 15.0), 2)  # one row, air to air
+    0.14
+    >>> round(join_jump(bookcase, 1, 18.0, 7.0), 2)  # a shelf's underside joined to air
+    3.13
+    """
+    from ..edit import Edit, apply_edit
+
+    h = csdf.voxel_size
+    n = csdf.shape[axis]
+    i0 = max(0, math.floor(start) - JOIN_MARGIN)
+    i1 = min(n, math.ceil(start + period) + JOIN_MARGIN + 1)
+    crop: list[slice] = [slice(None)] * 3
+    crop[axis] = slice(i0, i1)
+    box = tuple(crop)
+    origin = csdf.origin.copy()
+    origin[axis] += i0 * h
+    part = csdf.replace(sdf=csdf.sdf[box], rgb=csdf.rgb[box], parts=csdf.parts[box], origin=origin)
+    s = float(origin[axis] + (start - i0) * h)
+    e = s + period * h
+    tiled = apply_edit(part, Edit(AXES[axis], s, e, e + period * h, "tile"))
+    joined = np.moveaxis(tiled.sdf, axis, 0)
+    jump = _seam_step(joined, (e - tiled.origin[axis]) / h, h)
+    if not math.isfinite(jump):
+        return 0.0
+    layers = np.moveaxis(csdf.sdf, axis, 0)
+    own = [_seam_step(layers, y, h) for y in (start, start + period)]
+    return max(0.0, jump - max((x for x in own if math.isfinite(x)), default=0.0))
 
 
 def plane_cost(p: Profile, period: float, starts: np.ndarray) -> np.ndarray:

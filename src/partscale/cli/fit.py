@@ -10,23 +10,14 @@ import typer
 
 from ..csdf import SUFFIX, load, save
 from . import _common
-from .scale import SQUARE_OPTION, check_usd, scale_mesh
+from .scale import SQUARE_OPTION, check_usd, output_option, scale_mesh
 
 
 def fit(
     src: Annotated[
         Path, typer.Argument(metavar="IN", help="A .csdf.npz file, or a mesh (mesh route).")
     ],
-    output: Annotated[
-        Path,
-        typer.Option(
-            "-o",
-            "--output",
-            metavar="OUT",
-            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
-            ".usdz with partscale\\[usd]) for a mesh IN.",
-        ),
-    ],
+    output: Annotated[Path, output_option("for a mesh IN.")],
     size: Annotated[
         tuple[str, str, str] | None,
         typer.Option("--size", metavar="X Y Z", help=_common.SIZE_HELP),

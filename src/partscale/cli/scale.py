@@ -25,16 +25,21 @@ In = Annotated[
         help="A .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) for the mesh route.",
     ),
 ]
-Out = Annotated[
-    Path,
-    typer.Option(
+
+
+def output_option(when: str) -> typer.models.OptionInfo:
+    """``-o/--output``: a CSDF, or a mesh ``when`` (the end of its help) IN is one."""
+    return typer.Option(
         "-o",
         "--output",
         metavar="OUT",
         help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
-        ".usdz with partscale\\[usd]) when IN is one "
-        "(the edit is applied to the source mesh itself).",
-    ),
+        ".usdz with partscale\\[usd]) " + when,
+    )
+
+
+Out = Annotated[
+    Path, output_option("when IN is one (the edit is applied to the source mesh itself).")
 ]
 Axis = Annotated[str | None, typer.Option("--axis", metavar="AXIS", help="The axis: x, y or z.")]
 Zone = Annotated[

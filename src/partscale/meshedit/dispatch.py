@@ -60,11 +60,8 @@ def check_square(square: bool, mesh_route: bool, src: Path, dst: Path) -> None:
     Returns
     -------
     None
-
-    Raises
-    ------
-    InputError
-        ``square`` with a CSDF in or out, naming the files and the cure.
+        Nothing; it raises :class:`~partscale.errors.InputError` instead (``square`` with a
+        CSDF in or out), naming the files and the cure.
 
     Examples
     --------

@@ -602,3 +602,37 @@ def test_rough_surface_note_and_noise_option(cli, tmp_path):
     assert_bad_input(
         cli("segment", str(src), "-o", str(out), "--noise", "lots"), "--noise", "auto", "lots"
     )
+
+
+def test_junction_merge_joins_the_panel_a_shelf_slice_separated():
+    # a side panel and a shelf meeting it (an L): labelled with the panel cut at the shelf's
+    # faces and its slice beside the shelf given to the shelf, the two panel pieces touch only
+    # that slice; they become one again, with the slice, and the shelf stays apart
+    panel, shelf = SIDES[0], SHELVES[0]
+    c = shapes.grid(
+        lambda p: shapes.boxes_sdf(p, [panel, shelf]), ((0, 0, 0), (0.6, 1.0, 0.4)), voxel_size=H
+    )
+    (x0, y0, z0), (x1, y1, z1) = panel
+    sy0, sy1 = shelf[0][1], shelf[1][1]
+    pieces = [  # the panel below the shelf, above it, and the shelf with the slice beside it
+        ((x0, y0, z0), (x1, sy0, z1)),
+        ((x0, sy1, z0), (x1, y1, z1)),
+        ((x0, sy0, z0), shelf[1]),
+    ]
+    w = c.index_to_world(np.indices(c.shape).reshape(3, -1).T)
+    each = np.stack([shapes.box_sdf(w, lo, hi) for lo, hi in pieces])
+    labels = np.where(c.sdf.ravel() < 3 * H, each.argmin(axis=0), -1).reshape(c.shape)
+    labels = labels.astype(np.int32)
+    x = w[:, 0].reshape(c.shape)
+    j = labels_mod._Junctions(c, to_mesh(c), labels, tolerance=1.5)
+    assert 1 not in j.nbrs[0] and j.nbrs[2] == {0, 1}  # the pieces touch only the slice's part
+    assert j.gap(0, 1) <= j.thickness(2)  # the slice is no thicker than the shelf's part
+    out = labels_mod.merge_across_junctions(c, to_mesh(c), labels, tolerance=1.5)
+    inside = c.sdf <= 0
+    y, z = (w[:, k].reshape(c.shape) for k in (1, 2))
+    below, above = np.unique(out[inside & (y < sy0)]), np.unique(out[inside & (y > sy1)])
+    beyond = np.unique(out[inside & (x > x1 + H / 2)])  # the shelf past the panel's face
+    assert len(below) == len(beyond) == 1 and below.tolist() == above.tolist() != beyond.tolist()
+    # the slice's voxels strictly inside the panel (not on its outer faces) went with it
+    core = inside & (x > x0) & (x < x1) & (z > z0) & (z < z1) & (y >= sy0) & (y <= sy1)
+    assert core.any() and (out[core] == below[0]).all()

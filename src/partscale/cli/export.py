@@ -76,11 +76,31 @@ def export(
 ) -> None:
     """Export a CSDF as a mesh (marching cubes, vertex colours) and/or RGBA 3D textures."""
     # heavy modules (numba, trimesh, scikit-image) load only when this command runs
-    from .. import export as export_mod
-    from .._files import staged_writes
     from ..csdf import load
 
     textures = list(texture or [])
+    outputs = _check_outputs(mesh, textures, grid)
+    error = _budget(mesh, faces, error, atlas)
+    c = load(path)
+    c, written = _write(c, outputs, mesh, textures, grid, faces, error, atlas)
+    if mesh is not None:
+        written += _beside(mesh, atlas)
+        done(_mesh_summary(mesh, faces, error))
+        if mesh.suffix.lower() == ".usdz" and atlas is None:
+            typer.echo(
+                "note: vertex colours written as displayColor; AR Quick Look shows textures "
+                "only: add --atlas 1024 to bake them into one",
+                err=True,
+            )
+    sizes = ", ".join(f"{p} ({_kb(p)})" for p in written)
+    done(f"wrote {sizes} ({' x '.join(map(str, c.shape))} voxels)")
+
+
+def _check_outputs(mesh: Path | None, textures: list[Path], grid: int | None) -> list[Path]:
+    """The output files (the mesh first), checked: at least one, known suffixes, distinct, in
+    existing folders; and ``--grid``."""
+    from .. import export as export_mod
+
     if mesh is None and not textures:
         raise InputError("export: expected at least one output (--mesh or --texture), got none")
     if mesh is not None:
@@ -95,6 +115,16 @@ def export(
         if not p.parent.is_dir():
             raise InputError(f"{p}: expected an existing output folder, got none at {p.parent}")
     export_mod.check_size(grid, what="--grid")
+    return outputs
+
+
+def _budget(
+    mesh: Path | None, faces: int | None, error: float | None, atlas: int | None
+) -> float | None:
+    """The mesh's decimation error (None: full resolution, or a --faces budget), the budget
+    and the atlas checked against the mesh asked for."""
+    from .. import export as export_mod
+
     if faces is not None and error is not None:
         raise InputError("export: expected --faces or --error, got both")
     if faces is None and error is None:
@@ -110,9 +140,16 @@ def export(
             )
     elif faces is not None or atlas is not None:
         raise InputError("export: expected --mesh with --faces, --error or --atlas, got no --mesh")
-    c = load(path)
+    return error
+
+
+def _write(c, outputs, mesh, textures, grid, faces, error, atlas):
+    """Every output written (renamed into place only once all are: all of them, or none), with
+    one progress bar; returns the CSDF written from (resized with ``grid``) and the files."""
+    from .. import export as export_mod
+    from .._files import staged_writes
+
     written: list[Path] = []
-    # every output is renamed into place only once all are written: all of them, or none
     with progress_bar("export") as bar, staged_writes():
         n = len(outputs) + (grid is not None)
         steps = iter(range(n))
@@ -128,17 +165,7 @@ def export(
             written.append(mesh)
         for t in textures:
             written += export_mod.export_texture(c, t, progress=part())
-    if mesh is not None:
-        written += _beside(mesh, atlas)
-        done(_mesh_summary(mesh, faces, error))
-        if mesh.suffix.lower() == ".usdz" and atlas is None:
-            typer.echo(
-                "note: vertex colours written as displayColor; AR Quick Look shows textures "
-                "only: add --atlas 1024 to bake them into one",
-                err=True,
-            )
-    sizes = ", ".join(f"{p} ({_kb(p)})" for p in written)
-    done(f"wrote {sizes} ({' x '.join(map(str, c.shape))} voxels)")
+    return c, written
 
 
 def _kb(p: Path) -> str:

@@ -10,23 +10,14 @@ import typer
 
 from ..csdf import SUFFIX, load, save
 from . import _common
-from .scale import SQUARE_OPTION
+from .scale import SQUARE_OPTION, check_usd, output_option, scale_mesh
 
 
 def fit(
     src: Annotated[
         Path, typer.Argument(metavar="IN", help="A .csdf.npz file, or a mesh (mesh route).")
     ],
-    output: Annotated[
-        Path,
-        typer.Option(
-            "-o",
-            "--output",
-            metavar="OUT",
-            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
-            ".usdz with partscale\\[usd]) for a mesh IN.",
-        ),
-    ],
+    output: Annotated[Path, output_option("for a mesh IN.")],
     size: Annotated[
         tuple[str, str, str] | None,
         typer.Option("--size", metavar="X Y Z", help=_common.SIZE_HELP),
@@ -55,29 +46,45 @@ def fit(
     doors, shelf rows), absorb the rest in a slab of constant cross-section; says what it chose,
     and refuses (exit 2) where only a deformation would reach the size.
     """
-    from ..edit import apply_recipe, describe_changes
-    from ..zones import fit as fit_zones
-    from .scale import _MESH_IN, _MESH_OUT, check_square, check_usd
+    from ..meshedit import check_square, is_mesh_route
 
-    mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
+    mesh_route = is_mesh_route(src, output)
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     check_square(square, mesh_route, src, output)
     check_usd(output)
     if recipe_out is not None:
         _common.check_output(recipe_out, suffixes=(".json",), what="a recipe JSON file")
-    if mesh_route:
-        # zones are found on the mesh's CSDF (turned as the mesh route will turn it); the recipe
-        # is then applied to the mesh itself
-        from ..ingest import load as import_file
-
-        c = import_file(src, square=square)
-    else:
-        c = load(src)
+    c = _object(src, mesh_route, square)
     if size is None and add is None:
         from ..errors import InputError
 
         raise InputError("fit: expected --size X Y Z or --add AXIS N, got neither")
+    recipe = _plan(c, mesh_route, size, add, allow_deform)
+    from .._files import staged_writes
+
+    if mesh_route:
+        with staged_writes():  # the mesh and its recipe: both, or neither
+            scale_mesh(src, output, recipe, square=square)
+            _write_recipe(recipe, recipe_out)
+        return
+    _apply_and_save(c, recipe, output, recipe_out)
+
+
+def _object(src: Path, mesh_route: bool, square: bool):
+    """The CSDF zones are found on: the file's, or on the mesh route the mesh's (turned as the
+    mesh route will turn it; the recipe is then applied to the mesh itself)."""
+    if not mesh_route:
+        return load(src)
+    from ..meshedit import edit_target
+
+    return edit_target(src, zones=True, square=square)
+
+
+def _plan(c, mesh_route: bool, size, add, allow_deform: bool):
+    """The recipe :func:`partscale.zones.fit` chooses, checked up front, and why (stderr)."""
+    from ..zones import fit as fit_zones
+
     recipe, why = fit_zones(
         c,
         list(size) if size is not None else None,
@@ -87,15 +94,15 @@ def fit(
     _preflight(c, recipe, mesh_route, size, add)
     for line in why:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
+    return recipe
+
+
+def _apply_and_save(c, recipe, output: Path, recipe_out: Path | None) -> None:
+    """The CSDF route: ``recipe`` applied with a progress bar, what changed said, the object
+    and its recipe written (both, or neither)."""
     from .._files import staged_writes
+    from ..edit import apply_recipe, describe_changes
 
-    if mesh_route:
-        from .scale import _scale_mesh
-
-        with staged_writes():  # the mesh and its recipe: both, or neither
-            _scale_mesh(src, output, recipe, square=square)
-            _write_recipe(recipe, recipe_out)
-        return
     with _common.progress_bar("fit") as bar:
         out = apply_recipe(c, recipe, progress=bar)
     for line in describe_changes(out.meta.get("history", [])[-len(recipe.edits) :], out):

@@ -11,224 +11,288 @@ from ..csdf import SUFFIX, load, save
 from ..errors import InputError
 from . import _common
 
-# mesh in and mesh out: the mesh route (partscale.meshedit), edits applied to the source mesh
-_MESH_IN = (".glb", ".gltf", ".obj", ".ply")
-_MESH_OUT = (".glb", ".obj", ".ply", ".usd", ".usda", ".usdc", ".usdz")
-
 SQUARE_OPTION = typer.Option(
     "--square",
     help=_common.SQUARE_HELP + ": the mesh route edits it turned so (zones are planes square to "
     "the walls; positions refer to the turned mesh), then turns it back.",
 )
 
+# the options of ``scale`` (the command's signature names them)
+In = Annotated[
+    Path,
+    typer.Argument(
+        metavar="IN",
+        help="A .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) for the mesh route.",
+    ),
+]
+
+
+def output_option(when: str) -> typer.models.OptionInfo:
+    """``-o/--output``: a CSDF, or a mesh ``when`` (the end of its help) IN is one."""
+    return typer.Option(
+        "-o",
+        "--output",
+        metavar="OUT",
+        help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
+        ".usdz with partscale\\[usd]) " + when,
+    )
+
+
+Out = Annotated[
+    Path, output_option("when IN is one (the edit is applied to the source mesh itself).")
+]
+Axis = Annotated[str | None, typer.Option("--axis", metavar="AXIS", help="The axis: x, y or z.")]
+Zone = Annotated[
+    tuple[str, str] | None,
+    typer.Option(
+        "--zone",
+        metavar="START END",
+        help="The zone's planes: object units, with a unit (30cm, 300mm, 0.3m, 12in) or % "
+        "of the extent (0% at its min). Omitted with --copies: whole elements (seats, "
+        "doors, shelf rows, steps) of the repeat found along --axis (y: also the arms of a "
+        "ring about the vertical).",
+    ),
+]
+To = Annotated[
+    str | None,
+    typer.Option("--to", metavar="DEST", help="Where END goes: a position, as START and END are."),
+]
+By = Annotated[
+    str | None,
+    typer.Option(
+        "--by",
+        metavar="LENGTH",
+        help="Instead of --to: the change in length, e.g. +20cm, -5cm or 8in (no %).",
+    ),
+]
+Copies = Annotated[
+    str | None,
+    typer.Option(
+        "--copies",
+        metavar="N",
+        help="Instead of --to (tile): +N more copies, or N in all; with no --zone, +N / -N "
+        "elements (or N in all) of the repeat found along --axis.",
+    ),
+]
+Snap = Annotated[
+    bool,
+    typer.Option(
+        "--snap", help="Move the planes to the nearest good position for the mode (says so)."
+    ),
+]
+Mode = Annotated[
+    str | None,
+    typer.Option(
+        "--mode",
+        metavar="MODE",
+        help="stretch, tile or global.",
+        show_default="stretch; tile with --copies",
+    ),
+]
+RecipeIn = Annotated[
+    Path | None,
+    typer.Option(
+        "--recipe",
+        metavar="FILE",
+        help="A recipe JSON to apply: instead of --axis, --zone and --to.",
+    ),
+]
+Radial = Annotated[
+    bool,
+    typer.Option(
+        "--radial",
+        help="A radial zone about the vertical (y) axis: --zone R0 R1 are radii (% of the "
+        "outline's radius, or lengths), --to / --by the new outer radius.",
+    ),
+]
+Center = Annotated[
+    tuple[str, str] | None,
+    typer.Option(
+        "--center", metavar="X Z", help="With --radial: the axis' position.", show_default="found"
+    ),
+]
+Sides = Annotated[
+    int | None,
+    typer.Option(
+        "--sides",
+        metavar="N",
+        help="With --radial: 0 for a round outline, N for a regular N-gon.",
+        show_default="found",
+    ),
+]
+Span = Annotated[
+    tuple[str, str] | None,
+    typer.Option(
+        "--span",
+        metavar="LO HI",
+        help="With --radial: only the levels between LO and HI along y (a lamp's base).",
+    ),
+]
+Normal = Annotated[
+    tuple[float, float, float] | None,
+    typer.Option(
+        "--normal",
+        metavar="NX NY NZ",
+        help="An oblique zone square to this direction: --zone S0 S1 and --to along it "
+        "(lengths from the origin, or % of the extent along it).",
+    ),
+]
+
 
 def scale(
-    src: Annotated[
-        Path,
-        typer.Argument(
-            metavar="IN",
-            help="A .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) for the mesh route.",
-        ),
-    ],
-    output: Annotated[
-        Path,
-        typer.Option(
-            "-o",
-            "--output",
-            metavar="OUT",
-            help="Where to write: a .csdf.npz file, or a mesh (.glb, .obj, .ply; .usd, .usda, .usdc, "
-            ".usdz with partscale\\[usd]) when IN is one "
-            "(the edit is applied to the source mesh itself).",
-        ),
-    ],
-    axis: Annotated[
-        str | None, typer.Option("--axis", metavar="AXIS", help="The axis: x, y or z.")
-    ] = None,
-    zone: Annotated[
-        tuple[str, str] | None,
-        typer.Option(
-            "--zone",
-            metavar="START END",
-            help="The zone's planes: object units, with a unit (30cm, 300mm, 0.3m, 12in) or % "
-            "of the extent (0% at its min). Omitted with --copies: whole elements (seats, "
-            "doors, shelf rows, steps) of the repeat found along --axis (y: also the arms of a "
-            "ring about the vertical).",
-        ),
-    ] = None,
-    to: Annotated[
-        str | None,
-        typer.Option(
-            "--to", metavar="DEST", help="Where END goes: a position, as START and END are."
-        ),
-    ] = None,
-    by: Annotated[
-        str | None,
-        typer.Option(
-            "--by",
-            metavar="LENGTH",
-            help="Instead of --to: the change in length, e.g. +20cm, -5cm or 8in (no %).",
-        ),
-    ] = None,
-    copies: Annotated[
-        str | None,
-        typer.Option(
-            "--copies",
-            metavar="N",
-            help="Instead of --to (tile): +N more copies, or N in all; with no --zone, +N / -N "
-            "elements (or N in all) of the repeat found along --axis.",
-        ),
-    ] = None,
-    snap: Annotated[
-        bool,
-        typer.Option(
-            "--snap", help="Move the planes to the nearest good position for the mode (says so)."
-        ),
-    ] = False,
-    mode: Annotated[
-        str | None,
-        typer.Option(
-            "--mode",
-            metavar="MODE",
-            help="stretch, tile or global.",
-            show_default="stretch; tile with --copies",
-        ),
-    ] = None,
-    recipe: Annotated[
-        Path | None,
-        typer.Option(
-            "--recipe",
-            metavar="FILE",
-            help="A recipe JSON to apply: instead of --axis, --zone and --to.",
-        ),
-    ] = None,
+    src: In,
+    output: Out,
+    axis: Axis = None,
+    zone: Zone = None,
+    to: To = None,
+    by: By = None,
+    copies: Copies = None,
+    snap: Snap = False,
+    mode: Mode = None,
+    recipe: RecipeIn = None,
     square: Annotated[bool, SQUARE_OPTION] = False,
-    radial: Annotated[
-        bool,
-        typer.Option(
-            "--radial",
-            help="A radial zone about the vertical (y) axis: --zone R0 R1 are radii (% of the "
-            "outline's radius, or lengths), --to / --by the new outer radius.",
-        ),
-    ] = False,
-    center: Annotated[
-        tuple[str, str] | None,
-        typer.Option(
-            "--center",
-            metavar="X Z",
-            help="With --radial: the axis' position.",
-            show_default="found",
-        ),
-    ] = None,
-    sides: Annotated[
-        int | None,
-        typer.Option(
-            "--sides",
-            metavar="N",
-            help="With --radial: 0 for a round outline, N for a regular N-gon.",
-            show_default="found",
-        ),
-    ] = None,
-    span: Annotated[
-        tuple[str, str] | None,
-        typer.Option(
-            "--span",
-            metavar="LO HI",
-            help="With --radial: only the levels between LO and HI along y (a lamp's base).",
-        ),
-    ] = None,
-    normal: Annotated[
-        tuple[float, float, float] | None,
-        typer.Option(
-            "--normal",
-            metavar="NX NY NZ",
-            help="An oblique zone square to this direction: --zone S0 S1 and --to along it "
-            "(lengths from the origin, or % of the extent along it).",
-        ),
-    ] = None,
+    radial: Radial = False,
+    center: Center = None,
+    sides: Sides = None,
+    span: Span = None,
+    normal: Normal = None,
 ) -> None:
     """Resize a zone between two planes: stretch it, tile it, or scale the whole object; or a
     radial zone (an annulus about the vertical) or an oblique one (planes square to any
     direction).
     """
-    # The edit stage pulls in numba, scipy and scikit-image: load it only when a command runs.
-    from ..edit import AXES, MODES, Recipe
+    from ..meshedit import check_square, is_mesh_route
 
-    mesh_route = src.suffix.lower() in _MESH_IN and output.suffix.lower() in _MESH_OUT
+    mesh_route = is_mesh_route(src, output)
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     check_square(square, mesh_route, src, output)
     check_usd(output)
-    dest_given = [(n, v) for n, v in (("--to", to), ("--by", by), ("--copies", copies)) if v]
-    warp_opts = [
-        n for n, v in (("--center", center), ("--sides", sides), ("--span", span)) if v is not None
-    ]
+    dest_given = _given(("--to", to), ("--by", by), ("--copies", copies))
     if radial or normal is not None:
-        if mesh_route:
-            raise InputError(
-                f"{'--radial' if radial else '--normal'}: expected a CSDF (the mesh route cuts at "
-                "planes across x, y or z only; import the mesh first), got a mesh"
-            )
+        _check_warp_route(radial, mesh_route)
         rec, c = _warp_recipe(
             src, radial, normal, axis, zone, to, by, copies, mode, snap, recipe, center, sides, span
         )
         return _apply_and_save(c, rec, output)
+    warp_opts = _given(("--center", center), ("--sides", sides), ("--span", span), truthy=False)
     if warp_opts:
-        raise InputError(f"{', '.join(warp_opts)}: expected with --radial, got it without")
+        raise InputError(
+            f"{', '.join(n for n, _ in warp_opts)}: expected with --radial, got it without"
+        )
+    moves = None
     if recipe is not None:
-        given = [
-            n
-            for n, v in (("--axis", axis), ("--zone", zone), ("--mode", mode), *dest_given)
-            if v is not None
-        ] + (["--snap"] if snap else [])
-        if given:
-            raise InputError(
-                f"--recipe: expected alone (modes are in the recipe), got it with {', '.join(given)}"
-            )
-        c = None if mesh_route else load(src)
-        # positions with a unit ("30cm") in the object's units: a mesh route's are metres
-        rec = Recipe.load(recipe, units="m" if c is None else c.meta.get("units"))
-        rec = _resolved_counts(src, c, rec, square)
+        _check_recipe_alone(axis, zone, mode, dest_given, snap)
+        c, rec = _recipe_file(src, recipe, mesh_route, square)
     elif zone is None and copies is not None and axis is not None:
         rec = _element_recipe(src, mesh_route, axis, copies, mode, snap, square, dest_given)
         c = None if mesh_route else load(src)
     else:
-        missing = [n for n, v in (("--axis", axis), ("--zone", zone)) if v is None]
-        if not dest_given:
-            missing.append("--to (or --by, --copies)")
-        if missing:
-            raise InputError(
-                f"scale: expected --axis, --zone and --to (or --recipe), missing {', '.join(missing)}"
-            )
-        if len(dest_given) > 1:
-            raise InputError(
-                "scale: expected one of --to, --by, --copies, got "
-                + ", ".join(n for n, _ in dest_given)
-            )
-        assert axis is not None  # in `missing` otherwise
-        if axis.lower() not in AXES:
-            raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
-        if mode is None:
-            mode = "tile" if copies is not None else "stretch"
-        if mode.lower() not in MODES:
-            raise InputError(f"--mode: expected one of {', '.join(MODES)}, got {mode!r}")
-        if copies is not None and mode.lower() != "tile":
-            raise InputError(f"--copies: expected --mode tile, got --mode {mode}")
-        c = _object(src, mesh_route, snap, square)
-        edit = _edit(c, axis.lower(), zone, mode.lower(), to=to, by=by, copies=copies)
-        if snap:
-            from ..zones import describe_moves
-            from ..zones import snap as snap_edit
-
-            total = None if copies is None else _copies_total(copies)
-            edit, moves = snap_edit(c, edit, copies=total)
-            _common.stderr.print(
-                describe_moves(moves, c.meta.get("units")), highlight=False, soft_wrap=True
-            )
-        rec = Recipe((edit,))
+        c, rec, moves = _zone_recipe(
+            src,
+            mesh_route,
+            square,
+            axis,
+            zone,
+            mode,
+            dest_given,
+            to=to,
+            by=by,
+            copies=copies,
+            snap=snap,
+        )
     if mesh_route:
-        return _scale_mesh(src, output, rec, square=square)
+        return scale_mesh(src, output, rec, square=square)
     assert c is not None  # loaded unless mesh_route
-    _apply_and_save(c, rec, output, moves if recipe is None and snap else None)
+    _apply_and_save(c, rec, output, moves)
+
+
+def _given(*pairs: tuple[str, object], truthy: bool = True) -> list[tuple[str, object]]:
+    """The ``(name, value)`` pairs given: a value that is truthy (``truthy``) or not None."""
+    return [(n, v) for n, v in pairs if (v if truthy else v is not None)]
+
+
+def _check_warp_route(radial: bool, mesh_route: bool) -> None:
+    """``--radial`` and ``--normal`` edit a CSDF: the mesh route cuts across x, y or z only."""
+    if mesh_route:
+        raise InputError(
+            f"{'--radial' if radial else '--normal'}: expected a CSDF (the mesh route cuts at "
+            "planes across x, y or z only; import the mesh first), got a mesh"
+        )
+
+
+def _check_recipe_alone(axis, zone, mode, dest_given, snap: bool) -> None:
+    """``--recipe`` comes alone: its edits name their own axes, zones and modes."""
+    given = [
+        n
+        for n, v in (("--axis", axis), ("--zone", zone), ("--mode", mode), *dest_given)
+        if v is not None
+    ] + (["--snap"] if snap else [])
+    if given:
+        raise InputError(
+            f"--recipe: expected alone (modes are in the recipe), got it with {', '.join(given)}"
+        )
+
+
+def _recipe_file(src: Path, recipe: Path, mesh_route: bool, square: bool):
+    """``--recipe``: the CSDF (None on the mesh route) and the recipe read for it, its counts
+    resolved."""
+    from ..edit import Recipe
+
+    c = None if mesh_route else load(src)
+    # positions with a unit ("30cm") in the object's units: a mesh route's are metres
+    rec = Recipe.load(recipe, units="m" if c is None else c.meta.get("units"))
+    return c, _resolved_counts(src, c, rec, square)
+
+
+def _check_zone_options(axis, zone, mode, dest_given, copies) -> tuple[str, str]:
+    """The plain zone edit's options checked: ``(axis, mode)`` in lower case, the mode
+    defaulted (tile with ``--copies``, else stretch)."""
+    from ..edit import AXES, MODES
+
+    missing = [n for n, v in (("--axis", axis), ("--zone", zone)) if v is None]
+    if not dest_given:
+        missing.append("--to (or --by, --copies)")
+    if missing:
+        raise InputError(
+            f"scale: expected --axis, --zone and --to (or --recipe), missing {', '.join(missing)}"
+        )
+    if len(dest_given) > 1:
+        raise InputError(
+            "scale: expected one of --to, --by, --copies, got "
+            + ", ".join(n for n, _ in dest_given)
+        )
+    assert axis is not None  # in `missing` otherwise
+    if axis.lower() not in AXES:
+        raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
+    if mode is None:
+        mode = "tile" if copies is not None else "stretch"
+    if mode.lower() not in MODES:
+        raise InputError(f"--mode: expected one of {', '.join(MODES)}, got {mode!r}")
+    if copies is not None and mode.lower() != "tile":
+        raise InputError(f"--copies: expected --mode tile, got --mode {mode}")
+    return axis.lower(), mode.lower()
+
+
+def _zone_recipe(src, mesh_route, square, axis, zone, mode, dest_given, *, to, by, copies, snap):
+    """The plain zone edit (``--axis --zone --to``/``--by``/``--copies``): what it resolves
+    against, its one-edit recipe, and the snap's moves (None without ``--snap``)."""
+    from ..edit import Recipe
+
+    axis, mode = _check_zone_options(axis, zone, mode, dest_given, copies)
+    c = _object(src, mesh_route, snap, square)
+    edit = _edit(c, axis, zone, mode, to=to, by=by, copies=copies)
+    moves = None
+    if snap:
+        from ..zones import describe_moves
+        from ..zones import snap as snap_edit
+
+        total = None if copies is None else _copies_total(copies)
+        edit, moves = snap_edit(c, edit, copies=total)
+        _common.stderr.print(
+            describe_moves(moves, c.meta.get("units")), highlight=False, soft_wrap=True
+        )
+    return c, Recipe((edit,)), moves
 
 
 def _resolved_counts(src: Path, c, rec, square: bool):
@@ -374,50 +438,28 @@ def check_usd(output: Path) -> None:
     require_usd(output)
 
 
-def check_square(square: bool, mesh_route: bool, src: Path, output: Path) -> None:
-    """--square is the mesh route's: a CSDF was squared (or not) when it was imported."""
-    if square and not mesh_route:
-        raise InputError(
-            "--square: expected a mesh IN and a mesh output (the mesh route; a CSDF is squared "
-            f"at import: partscale import --square), got {src.name} -> {output.name}"
-        )
-
-
 def _object(src: Path, mesh_route: bool, snap: bool, square: bool = False):
     """What the options resolve against: the CSDF, or for the mesh route the mesh's frame (its
     CSDF at the default resolution where --snap needs zones), turned square with ``square``."""
     if not mesh_route:
         return load(src)
-    if snap:
-        from ..ingest import load as import_file
+    from ..meshedit import edit_target
 
-        return import_file(src, square=square)
-    from ..meshedit import mesh_frame
-
-    return mesh_frame(src, square=square)
+    return edit_target(src, zones=snap, square=square)
 
 
-def _scale_mesh(src: Path, output: Path, rec, *, square: bool = False) -> None:
-    from ..meshedit import edit_mesh_file
+def scale_mesh(src: Path, output: Path, rec, *, square: bool = False) -> None:
+    """The mesh route: ``rec`` applied to the mesh ``src``, written to ``output``, what it did
+    said on stderr (:func:`partscale.meshedit.report_lines`)."""
+    from ..meshedit import edit_mesh_file, report_lines
 
-    result = edit_mesh_file(src, output, rec, square=square)
-    for seam in result.seams:
-        if not seam.ok:
-            typer.echo(f"warning: {seam.message()}", err=True)
-    if result.turned_deg is not None:
-        from ..orient import square_note
-
-        note = square_note(result.turned_deg, edit=True)
-        _common.stderr.print(note, highlight=False, soft_wrap=True)
-    if result.off_square_deg is not None:
-        from ..orient import off_square_message
-
-        msg = off_square_message(result.off_square_deg, mesh_route=True)
-        typer.echo(f"warning: {msg}", err=True)
-    _common.done(
-        f"wrote {', '.join(map(str, result.written))} (mesh route: {result.faces_in} -> "
-        f"{result.faces_out} triangles)"
-    )
+    lines, done = report_lines(edit_mesh_file(src, output, rec, square=square))
+    for kind, line in lines:
+        if kind == "warning":
+            typer.echo(f"warning: {line}", err=True)
+        else:
+            _common.stderr.print(line, highlight=False, soft_wrap=True)
+    _common.done(done)
 
 
 def _edit(c, axis: str, zone, mode: str, *, to, by, copies):

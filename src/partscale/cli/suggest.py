@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from ..errors import InputError
 from . import _common
+
+if TYPE_CHECKING:
+    from ..zones import AxisElements, Helix, RadialFrame, Rotation, Screw
 
 
 def suggest(
@@ -41,15 +45,6 @@ def suggest(
     Example: partscale suggest sofa.csdf.npz --axis x
     """
     from ..csdf import load
-    from ..orient import WALL_AXES, csdf_turn, off_square_message
-    from ..zones import (
-        AXES,
-        find_elements,
-        find_helices,
-        find_radial,
-        find_rotations,
-        find_screws,
-    )
     from ..zones import suggest as suggest_zones
 
     if axis is not None and axis.lower() not in ("x", "y", "z"):
@@ -59,11 +54,55 @@ def suggest(
     c = load(src)
     ax = axis.lower() if axis is not None else None
     cands = suggest_zones(c, ax)
-    # an object turned about up has no constant slab along x or z: say so, with the cure
+    _warn_off_square(c, ax)
+    found = _findings(c, ax)
+    if as_json:
+        typer.echo(json.dumps(_json_doc(cands, found), indent=2))
+    else:
+        for line in _text_lines(cands, found, ax, c.meta.get("units") or ""):
+            typer.echo(line)
+    if png is not None:
+        from ..render import save_png
+
+        save_png(_figure(c, cands, ax), png)
+        _common.done(f"wrote {png}")
+
+
+def _warn_off_square(c, ax: str | None) -> None:
+    """An object turned about up has no constant slab along x or z: say so, with the cure."""
+    from ..orient import WALL_AXES, csdf_turn, off_square_message
+
     turn = csdf_turn(c) if ax is None or ax in WALL_AXES else None
     if turn is not None:
         typer.echo(f"warning: {off_square_message(turn, c)}", err=True)
-    units = c.meta.get("units") or ""
+
+
+@dataclass(frozen=True)
+class Findings:
+    """What ``suggest`` finds besides the candidates, on ``ax`` (None: every axis).
+
+    Attributes
+    ----------
+    elements : dict of str to AxisElements
+        Per axis: its elements (:func:`partscale.zones.find_elements`).
+    steps, helices, turns : list
+        Flights of steps (:func:`~partscale.zones.find_screws`, those along ``ax``), spiral
+        stairs where no flight is found, elements turned about the vertical where neither is.
+    frame : RadialFrame or None
+        A round or polygonal plan (every axis only).
+    """
+
+    elements: dict[str, AxisElements]
+    steps: list[Screw]
+    helices: list[Helix]
+    turns: list[Rotation]
+    frame: RadialFrame | None
+
+
+def _findings(c, ax: str | None) -> Findings:
+    """The elements, steps, helices, rotations and plan of ``c`` along ``ax``."""
+    from ..zones import AXES, find_elements, find_helices, find_radial, find_rotations, find_screws
+
     found = {a: find_elements(c, a) for a in ([ax] if ax else list(AXES))}
     steps = find_screws(c) if ax is None or ax in ("x", "y", "z") else []
     steps = [sc for sc in steps if ax is None or abs(sc.step[AXES.index(ax)]) > 0]
@@ -72,71 +111,111 @@ def suggest(
     # elements about the vertical (a star base's arms): where no stair is found
     turns = find_rotations(c) if not steps and not helices and ax in (None, "y") else []
     frame = find_radial(c, "y") if ax is None else None
-    if as_json:
-        doc = {
-            "candidates": [x.to_json() for x in cands],
-            "elements": {a: f.to_json() for a, f in found.items()},
-            "steps": [sc.to_json() for sc in steps],
-            "helix": [hx.to_json() for hx in helices],
-            "rotation": [rt.to_json() for rt in turns],
-        }
-        if frame is not None:
-            doc["radial"] = {
-                "center": list(frame.center),
-                "sides": frame.sides,
-                "phase": frame.phase,
-                "radius": frame.radius,
-            }
-        typer.echo(json.dumps(doc, indent=2))
-    else:
-        stepped = {AXES[k] for sc in steps for k in range(3) if abs(sc.step[k]) > 0}
-        stepped |= {"y"} if helices or turns else set()
-        for f in found.values():
-            if f.best is not None or f.axis not in stepped:
-                typer.echo(_elements_line(f, units))
-        for sc in steps:
-            typer.echo(
-                f"steps: a flight along {sc.axis}, {sc.count} steps of {sc.going:.4g} going and "
-                f"{sc.rise:.4g} rise {units} ({100 * sc.support:.0f}% of the surface repeats; "
-                "fit --add y 1 adds one)"
-            )
-        for hx in helices:
-            typer.echo(
-                f"helix: a spiral stair, {hx.count} steps each turning {hx.angle:.1f} degrees "
-                f"about the vertical through {hx.center[0]:.3f}, {hx.center[1]:.3f} and rising "
-                f"{hx.rise:.4g} {units} ({100 * hx.support:.0f}% of the surface repeats; "
-                "fit --add y 1 adds one)"
-            )
-        for rt in turns:
-            ring = "a closed ring" if rt.closed else "an open arc"
-            typer.echo(
-                f"rotation: {rt.count} elements, {ring}, each turned {rt.angle:.1f} degrees "
-                f"about the vertical through {rt.center[0]:.3f}, {rt.center[1]:.3f} {units} "
-                f"({100 * rt.support:.0f}% of the surface repeats; fit --add y 1 adds one)"
-            )
-        if frame is not None:
-            shape = "round" if frame.sides == 0 else f"a regular {frame.sides}-sided polygon"
-            typer.echo(
-                f"plan: {shape} about the vertical through {frame.center[0]:.4g}, "
-                f"{frame.center[1]:.4g} {units} (scale --radial grows it)"
-            )
-        for a in [ax] if ax else list(AXES):
-            mine = [x for x in cands if x.axis == a]
-            if not mine:
-                typer.echo(f"{a}: no candidate (no repeated element, no constant slab)")
-            elif not any(x.kind == "tile" for x in mine):
-                typer.echo(f"{a}: no repeated element (no tile candidate)")
-        for i, x in enumerate(cands, start=1):
-            extra = f" period {x.period:.4g} x {x.count}" if x.kind == "tile" else ""
-            typer.echo(
-                f"{i:2d}. {x.axis} {x.kind:7s} zone {x.zone[0]:.4g} {x.zone[1]:.4g} {units}"
-                f"{extra}  score {x.score:.2f}  {x.reason}"
-            )
-    if png is not None:
-        from ..render import save_png
+    return Findings(found, steps, helices, turns, frame)
 
-        save_png(_figure(c, cands, ax), png)
-        _common.done(f"wrote {png}")
+
+def _json_doc(cands, found: Findings) -> dict:
+    """``--json``: the candidates best first, the elements per axis, steps, helices, rotations
+    and the round plan."""
+    doc = {
+        "candidates": [x.to_json() for x in cands],
+        "elements": {a: f.to_json() for a, f in found.elements.items()},
+        "steps": [sc.to_json() for sc in found.steps],
+        "helix": [hx.to_json() for hx in found.helices],
+        "rotation": [rt.to_json() for rt in found.turns],
+    }
+    frame = found.frame
+    if frame is not None:
+        doc["radial"] = {
+            "center": list(frame.center),
+            "sides": frame.sides,
+            "phase": frame.phase,
+            "radius": frame.radius,
+        }
+    return doc
+
+
+def _text_lines(cands, found: Findings, ax: str | None, units: str) -> list[str]:
+    """The text report: elements, steps, helices, rotations, the plan, the axes without a
+    candidate, then the candidates ranked."""
+    return [
+        *_element_lines(found, units),
+        *_repeat_lines(found, units),
+        *_missing_lines(cands, ax),
+        *_candidate_lines(cands, units),
+    ]
+
+
+def _element_lines(found: Findings, units: str) -> list[str]:
+    """A line per axis's elements, but an axis a flight, helix or rotation steps along that
+    has no element group."""
+    from ..zones import AXES
+
+    stepped = {AXES[k] for sc in found.steps for k in range(3) if abs(sc.step[k]) > 0}
+    stepped |= {"y"} if found.helices or found.turns else set()
+    return [
+        _elements_line(f, units)
+        for f in found.elements.values()
+        if f.best is not None or f.axis not in stepped
+    ]
+
+
+def _repeat_lines(found: Findings, units: str) -> list[str]:
+    """A line per flight of steps, spiral stair and ring of turned elements, and the plan."""
+    lines = [
+        f"steps: a flight along {sc.axis}, {sc.count} steps of {sc.going:.4g} going and "
+        f"{sc.rise:.4g} rise {units} ({100 * sc.support:.0f}% of the surface repeats; "
+        "fit --add y 1 adds one)"
+        for sc in found.steps
+    ]
+    lines += [
+        f"helix: a spiral stair, {hx.count} steps each turning {hx.angle:.1f} degrees "
+        f"about the vertical through {hx.center[0]:.3f}, {hx.center[1]:.3f} and rising "
+        f"{hx.rise:.4g} {units} ({100 * hx.support:.0f}% of the surface repeats; "
+        "fit --add y 1 adds one)"
+        for hx in found.helices
+    ]
+    lines += [
+        f"rotation: {rt.count} elements, {'a closed ring' if rt.closed else 'an open arc'}, "
+        f"each turned {rt.angle:.1f} degrees "
+        f"about the vertical through {rt.center[0]:.3f}, {rt.center[1]:.3f} {units} "
+        f"({100 * rt.support:.0f}% of the surface repeats; fit --add y 1 adds one)"
+        for rt in found.turns
+    ]
+    frame = found.frame
+    if frame is not None:
+        shape = "round" if frame.sides == 0 else f"a regular {frame.sides}-sided polygon"
+        lines.append(
+            f"plan: {shape} about the vertical through {frame.center[0]:.4g}, "
+            f"{frame.center[1]:.4g} {units} (scale --radial grows it)"
+        )
+    return lines
+
+
+def _missing_lines(cands, ax: str | None) -> list[str]:
+    """A line per axis with no candidate, or no tile candidate."""
+    from ..zones import AXES
+
+    lines = []
+    for a in [ax] if ax else list(AXES):
+        mine = [x for x in cands if x.axis == a]
+        if not mine:
+            lines.append(f"{a}: no candidate (no repeated element, no constant slab)")
+        elif not any(x.kind == "tile" for x in mine):
+            lines.append(f"{a}: no repeated element (no tile candidate)")
+    return lines
+
+
+def _candidate_lines(cands, units: str) -> list[str]:
+    """The candidates ranked, one line each."""
+    lines = []
+    for i, x in enumerate(cands, start=1):
+        extra = f" period {x.period:.4g} x {x.count}" if x.kind == "tile" else ""
+        lines.append(
+            f"{i:2d}. {x.axis} {x.kind:7s} zone {x.zone[0]:.4g} {x.zone[1]:.4g} {units}"
+            f"{extra}  score {x.score:.2f}  {x.reason}"
+        )
+    return lines
 
 
 def _elements_line(found, units: str) -> str:

@@ -339,145 +339,210 @@ def merge_across_junctions(
     -------
     (X, Y, Z) int32 labels, renumbered.
     """
-    out, ijk, pts, vlab, nbrs = _part_graph(csdf, mesh, labels)
-    sdf = csdf.sdf / csdf.voxel_size
-    inside = csdf.sdf <= 0
-    order = np.argsort(vlab, kind="stable")
-    uniq, starts = np.unique(vlab[order], return_index=True)
-    verts = {
-        int(p): order[i:j]
-        for p, i, j in zip(uniq, starts, [*starts[1:], len(order)], strict=True)
-        if p >= 0
-    }
-    box = {
-        p: np.array([[x.start for x in sl], [x.stop for x in sl]])
-        for p, sl in enumerate(ndimage.find_objects(out + 1))
-        if sl is not None
-    }
-    patches: dict[int, Patch] = {}
-
-    def patch_of(p: int) -> Patch | None:
-        if len(verts.get(p, ())) < 4:
-            return None
-        return Patch(decimate(pts[verts[p]], 1.0))
-
-    def patch(p: int) -> Patch | None:
-        if p not in patches:
-            made = patch_of(p)
-            if made is None:
-                return None
-            patches[p] = made
-        return patches[p]
-
-    def convex(group: list[Patch]) -> bool:
-        return union_concavity(group, sdf=sdf, spacing=1.0, limit=tolerance) <= tolerance
-
-    # The cheap test below (are a and b convex together?) for every pair the first pass will
-    # meet, computed side by side beforehand; a merge makes its parts' answers stale (gen).
-    gen: dict[int, int] = {}
-    first: set[tuple[int, int]] = set()
-    for s in nbrs:
-        thick = (box[s][1] - box[s][0]).min() + 2
-        around = sorted(nbrs[s])
-        for i, a in enumerate(around):
-            for b in around[i + 1 :]:
-                gap = np.maximum(box[a][0] - box[b][1], box[b][0] - box[a][1]).max()
-                if b not in nbrs[a] and gap <= thick:
-                    first.add((a, b))
-    first_list = sorted(first)
-    needed = sorted({p for ab in first_list for p in ab} - set(patches))
-    for p, made in zip(needed, thread_map(patch_of, needed), strict=True):
-        if made is not None:
-            patches[p] = made
-    testable = [(a, b) for a, b in first_list if a in patches and b in patches]
-    tests = thread_map(lambda ab: convex([patches[ab[0]], patches[ab[1]]]), testable)
-    pair_ok = dict(zip(testable, tests, strict=True))
-    cheap = {(a, b, 0, 0): v for (a, b), v in pair_ok.items()}
-
-    def pair_convex(a: int, b: int, pa: Patch, pb: Patch) -> bool:
-        key = (a, b, gen.get(a, 0), gen.get(b, 0))
-        if key not in cheap:
-            cheap[key] = convex([pa, pb])
-        return cheap[key]
-
+    j = _Junctions(csdf, mesh, labels, tolerance)
+    j.prefetch()
     tried: set[tuple[int, int, int]] = set()
-    todo = sorted(nbrs)
+    todo = sorted(j.nbrs)
     while todo:
         s = todo.pop(0)
-        if s not in nbrs:
+        if s not in j.nbrs:
             continue
-        # the slice of a board that s took at the junction is no thicker than s itself
-        thick = (box[s][1] - box[s][0]).min() + 2
-        around = sorted(nbrs[s])
-        done = False
+        a = j.first_merge(s, tried)
+        if a is not None:
+            todo.extend(sorted({s, a} | j.nbrs[a]))
+    return make_connected(j.out, min_voxels=min_voxels)
+
+
+class _Junctions:
+    """The parts :func:`merge_across_junctions` merges, and what it knows of them.
+
+    Attributes
+    ----------
+    out : (X, Y, Z) int32
+        The labels, merged in place.
+    ijk, pts : (V, 3)
+        Each marching-cubes vertex's voxel and position (voxel units).
+    nbrs : dict of int to set of int
+        The touching parts.
+    verts : dict of int to (n,) int
+        Each part's vertices (indices into ``ijk``, ``pts``).
+    box : dict of int to (2, 3) int
+        Each part's voxel box: first corner, one past the last.
+    patches : dict of int to Patch
+        Each part's surface patch, made when first needed, dropped when the part changes.
+    gen, cheap : dict
+        How many times each part changed, and the pair tests made per generation.
+    """
+
+    def __init__(self, csdf: CSDF, mesh, labels: np.ndarray, tolerance: float) -> None:
+        self.out, self.ijk, self.pts, vlab, self.nbrs = _part_graph(csdf, mesh, labels)
+        self.sdf = csdf.sdf / csdf.voxel_size
+        self.inside = csdf.sdf <= 0
+        self.tolerance = tolerance
+        order = np.argsort(vlab, kind="stable")
+        uniq, starts = np.unique(vlab[order], return_index=True)
+        self.verts = {
+            int(p): order[i:j]
+            for p, i, j in zip(uniq, starts, [*starts[1:], len(order)], strict=True)
+            if p >= 0
+        }
+        self.box = {
+            p: np.array([[x.start for x in sl], [x.stop for x in sl]])
+            for p, sl in enumerate(ndimage.find_objects(self.out + 1))
+            if sl is not None
+        }
+        self.patches: dict[int, Patch] = {}
+        self.gen: dict[int, int] = {}
+        self.cheap: dict[tuple[int, int, int, int], bool] = {}
+
+    def patch_of(self, p: int) -> Patch | None:
+        """Part ``p``'s surface patch (None with fewer than 4 vertices)."""
+        if len(self.verts.get(p, ())) < 4:
+            return None
+        return Patch(decimate(self.pts[self.verts[p]], 1.0))
+
+    def patch(self, p: int) -> Patch | None:
+        """:meth:`patch_of`, kept until the part changes."""
+        if p not in self.patches:
+            made = self.patch_of(p)
+            if made is None:
+                return None
+            self.patches[p] = made
+        return self.patches[p]
+
+    def convex(self, group: list[Patch]) -> bool:
+        """Whether the union of ``group`` is convex within the tolerance."""
+        cost = union_concavity(group, sdf=self.sdf, spacing=1.0, limit=self.tolerance)
+        return cost <= self.tolerance
+
+    def pair_convex(self, a: int, b: int, pa: Patch, pb: Patch) -> bool:
+        """:meth:`convex` of parts ``a`` and ``b``, kept until either changes."""
+        key = (a, b, self.gen.get(a, 0), self.gen.get(b, 0))
+        if key not in self.cheap:
+            self.cheap[key] = self.convex([pa, pb])
+        return self.cheap[key]
+
+    def thickness(self, s: int) -> int:
+        """The slice of a board that ``s`` took at the junction is no thicker than ``s``: its
+        box's least side, and a voxel each side.
+        """
+        return (self.box[s][1] - self.box[s][0]).min() + 2
+
+    def gap(self, a: int, b: int) -> int:
+        """The voxels between the boxes of ``a`` and ``b`` (their largest gap along an axis)."""
+        box = self.box
+        return np.maximum(box[a][0] - box[b][1], box[b][0] - box[a][1]).max()
+
+    def prefetch(self) -> None:
+        """The cheap test (are ``a`` and ``b`` convex together?) for every pair the first pass
+        will meet, computed side by side beforehand (a merge makes its parts' answers stale).
+        """
+        first: set[tuple[int, int]] = set()
+        for s in self.nbrs:
+            thick = self.thickness(s)
+            around = sorted(self.nbrs[s])
+            for i, a in enumerate(around):
+                for b in around[i + 1 :]:
+                    if b not in self.nbrs[a] and self.gap(a, b) <= thick:
+                        first.add((a, b))
+        first_list = sorted(first)
+        needed = sorted({p for ab in first_list for p in ab} - set(self.patches))
+        for p, made in zip(needed, thread_map(self.patch_of, needed), strict=True):
+            if made is not None:
+                self.patches[p] = made
+        testable = [(a, b) for a, b in first_list if a in self.patches and b in self.patches]
+        tests = thread_map(
+            lambda ab: self.convex([self.patches[ab[0]], self.patches[ab[1]]]), testable
+        )
+        self.cheap = {(a, b, 0, 0): v for (a, b), v in zip(testable, tests, strict=True)}
+
+    def first_merge(self, s: int, tried: set[tuple[int, int, int]]) -> int | None:
+        """Merge the first pair of parts around ``s`` that :meth:`try_merge` allows (not
+        ``tried`` before, not touching, close); the part they became, or None.
+        """
+        thick = self.thickness(s)
+        around = sorted(self.nbrs[s])
         for i, a in enumerate(around):
             for b in around[i + 1 :]:
-                if b in nbrs[a] or (s, a, b) in tried:
+                if b in self.nbrs[a] or (s, a, b) in tried:
                     continue
                 tried.add((s, a, b))
-                gap = np.maximum(box[a][0] - box[b][1], box[b][0] - box[a][1]).max()
-                if gap > thick:
-                    continue
-                pa, pb = patch(a), patch(b)
-                # s's slice between them is solid, so it leaves their union's concavity alone
-                # (hull points inside the solid do not count): a cheap test first
-                if pa is None or pb is None or not pair_convex(a, b, pa, pb):
-                    continue
-                try:
-                    eq = ConvexHull(np.concatenate([pa.hull_points, pb.hull_points])).equations
-                except (QhullError, ValueError):
-                    continue
-                sl = tuple(slice(lo, hi) for lo, hi in box[s].T)
-                here = out[sl] == s
-                # only s's voxels in the box around a and b can lie in their hull
-                lo = np.maximum(np.minimum(box[a][0], box[b][0]) - 1, box[s][0]) - box[s][0]
-                hi = np.minimum(np.maximum(box[a][1], box[b][1]) + 1, box[s][1]) - box[s][0]
-                if (hi <= lo).any():
-                    continue
-                near = tuple(slice(x, y) for x, y in zip(lo, hi, strict=True))
-                own = np.argwhere(here[near]) + lo
-                # strictly inside: a margin took the voxels of s just beside the board's face
-                # (half a voxel out), and the board's hull then bulged over its whole face
-                move = _in_hull((own + box[s][0]).astype(np.float64), eq, 0.0)
-                if not move.any() or move.sum() == here.sum():
-                    continue
-                moved = np.zeros(here.shape, bool)
-                moved[tuple(own[move].T)] = True
-                _, pieces = ndimage.label(here & ~moved & inside[sl], structure=_FULL)
-                if pieces > 1:
-                    continue
-                mine = verts[s]
-                local = ijk[mine] - box[s][0]
-                goes = moved[local[:, 0], local[:, 1], local[:, 2]]
-                group = [pa, pb]
-                if goes.sum() >= 4:
-                    group.append(Patch(decimate(pts[mine[goes]], 1.0)))
-                if not convex(group):
-                    continue
-                if (~goes).sum() >= 4 and not convex([Patch(decimate(pts[mine[~goes]], 1.0))]):
-                    continue
-                out[sl][moved] = a
-                sb = tuple(slice(lo, hi) for lo, hi in box[b].T)
-                out[sb][out[sb] == b] = a
-                verts[a] = np.concatenate([verts[a], verts.pop(b), mine[goes]])
-                verts[s] = mine[~goes]
-                box[a] = np.array(
-                    [np.minimum(box[a][0], box[b][0]), np.maximum(box[a][1], box[b][1])]
-                )
-                for p in (a, b, s):
-                    patches.pop(p, None)
-                    gen[p] = gen.get(p, 0) + 1
-                for r in nbrs.pop(b):
-                    nbrs[r].discard(b)
-                    if r != a:
-                        nbrs[r].add(a)
-                        nbrs[a].add(r)
-                todo.extend(sorted({s, a} | nbrs[a]))
-                done = True
-                break
-            if done:
-                break
-    return make_connected(out, min_voxels=min_voxels)
+                if self.gap(a, b) <= thick and self.try_merge(s, a, b):
+                    return a
+        return None
+
+    def try_merge(self, s: int, a: int, b: int) -> bool:
+        """Merge ``a``, ``b`` and ``s``'s voxels in their hull where the union and what is left
+        of ``s`` are each convex and ``s`` stays one piece; whether it did.
+        """
+        pa, pb = self.patch(a), self.patch(b)
+        # s's slice between them is solid, so it leaves their union's concavity alone
+        # (hull points inside the solid do not count): a cheap test first
+        if pa is None or pb is None or not self.pair_convex(a, b, pa, pb):
+            return False
+        moved = self.hull_slice(s, a, b, pa, pb)
+        if moved is None:
+            return False
+        mine = self.verts[s]
+        local = self.ijk[mine] - self.box[s][0]
+        goes = moved[local[:, 0], local[:, 1], local[:, 2]]
+        group = [pa, pb]
+        if goes.sum() >= 4:
+            group.append(Patch(decimate(self.pts[mine[goes]], 1.0)))
+        if not self.convex(group):
+            return False
+        if (~goes).sum() >= 4 and not self.convex([Patch(decimate(self.pts[mine[~goes]], 1.0))]):
+            return False
+        self.merge(s, a, b, moved, goes)
+        return True
+
+    def hull_slice(self, s: int, a: int, b: int, pa: Patch, pb: Patch) -> np.ndarray | None:
+        """(box of ``s``) bool: ``s``'s voxels strictly inside the hull of ``a`` and ``b``;
+        None where there are none, all of ``s``, or what is left of ``s`` falls apart.
+        """
+        box = self.box
+        try:
+            eq = ConvexHull(np.concatenate([pa.hull_points, pb.hull_points])).equations
+        except (QhullError, ValueError):
+            return None
+        sl = tuple(slice(lo, hi) for lo, hi in box[s].T)
+        here = self.out[sl] == s
+        # only s's voxels in the box around a and b can lie in their hull
+        lo = np.maximum(np.minimum(box[a][0], box[b][0]) - 1, box[s][0]) - box[s][0]
+        hi = np.minimum(np.maximum(box[a][1], box[b][1]) + 1, box[s][1]) - box[s][0]
+        if (hi <= lo).any():
+            return None
+        near = tuple(slice(x, y) for x, y in zip(lo, hi, strict=True))
+        own = np.argwhere(here[near]) + lo
+        # strictly inside: a margin took the voxels of s just beside the board's face
+        # (half a voxel out), and the board's hull then bulged over its whole face
+        move = _in_hull((own + box[s][0]).astype(np.float64), eq, 0.0)
+        if not move.any() or move.sum() == here.sum():
+            return None
+        moved = np.zeros(here.shape, bool)
+        moved[tuple(own[move].T)] = True
+        _, pieces = ndimage.label(here & ~moved & self.inside[sl], structure=_FULL)
+        return None if pieces > 1 else moved
+
+    def merge(self, s: int, a: int, b: int, moved: np.ndarray, goes: np.ndarray) -> None:
+        """``b`` and ``s``'s ``moved`` voxels (its vertices ``goes``) become ``a``."""
+        box, out, nbrs = self.box, self.out, self.nbrs
+        sl = tuple(slice(lo, hi) for lo, hi in box[s].T)
+        out[sl][moved] = a
+        sb = tuple(slice(lo, hi) for lo, hi in box[b].T)
+        out[sb][out[sb] == b] = a
+        mine = self.verts[s]
+        self.verts[a] = np.concatenate([self.verts[a], self.verts.pop(b), mine[goes]])
+        self.verts[s] = mine[~goes]
+        box[a] = np.array([np.minimum(box[a][0], box[b][0]), np.maximum(box[a][1], box[b][1])])
+        for p in (a, b, s):
+            self.patches.pop(p, None)
+            self.gen[p] = self.gen.get(p, 0) + 1
+        for r in nbrs.pop(b):
+            nbrs[r].discard(b)
+            if r != a:
+                nbrs[r].add(a)
+                nbrs[a].add(r)
 
 
 def merge_planar_groups(

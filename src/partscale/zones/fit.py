@@ -54,9 +54,14 @@ from .suggest import (
     axis_candidates,
     best_phase,
     join_islands,
+    join_jump,
     plane_cost,
 )
 
+#: A tile's joins between copies may jump this much (voxels, :func:`~.suggest.join_jump`) more
+#: than the cleanest join within reach before its planes give way to a cleaner pair: the
+#: evaluation's line for a good seam.
+JOIN_TOL = 0.1
 #: fit --size takes whole elements (of a group that need not be equal) where the change is
 #: within this share of one element of a whole number of them.
 ELEMENT_TOLERANCE = 0.25
@@ -219,71 +224,131 @@ def _stretch_edits(
     """
     if not slabs or change == 0:
         return [], change
+    options = _plane_options(slabs, h, layers)
+    full = [c.zone[1] - c.zone[0] for c in slabs]
+    best, even = _even_plan(options, full, change, h, spread_voxels, even_growth)
+    options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
+    if best is not None:
+        zones, room, n = best
+    elif change < 0:
+        zones, room, n = _fewest_slabs(options, change, h)
+    else:
+        zones, room = options[0], []
+        n = _growth_count(zones, change, h, spread_voxels)
+    chosen = zones[:n]
+    weights = even or ([z[1] - z[0] for z in chosen] if change > 0 else room[:n])
+    return _shares(chosen, weights, room, change, h, axis)
+
+
+#: Stretch planes, the room each slab has to shrink (whole voxels), how many of them take it
+_Plan = tuple[list[tuple[float, float]], list[float], int]
+
+
+def _rooms(zones: list[tuple[float, float]], h: float) -> list[float]:
+    """What each zone can give up, in whole voxels, down to :data:`MIN_SLAB_VOXELS`."""
+    return [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
+
+
+def _plane_options(
+    slabs: list[Candidate], h: float, layers: tuple[np.ndarray, float] | None
+) -> list[list[tuple[float, float]]]:
+    """Each slab's planes, in the order tried: the calm insets of :func:`_inset` (with
+    ``layers``), the plain insets, the slabs' ends.
+    """
     options = [[_inset(c, h) for c in slabs], [c.zone for c in slabs]]
     if layers is not None:
         options.insert(0, [_inset(c, h, *layers) for c in slabs])
+    return options
 
-    def rooms(zones: list[tuple[float, float]]) -> list[float]:
-        return [max(0.0, round(((z[1] - z[0]) - MIN_SLAB_VOXELS * h) / h) * h) for z in zones]
 
-    even: list[float] = []  # each chosen zone's share where the change is spread evenly
-    best = None
-    # slabs of comparable length (largest first): those an even spread goes to
-    full = [c.zone[1] - c.zone[0] for c in slabs]
-    peer = sorted(
+def _peers(full: list[float], spread_voxels: int, h: float) -> list[int]:
+    """The slabs (indices, largest first) of length comparable to the largest: at least
+    :data:`SPREAD_FRACTION` of it and ``spread_voxels`` long.
+    """
+    return sorted(
         (i for i, f in enumerate(full) if f >= max(spread_voxels * h, SPREAD_FRACTION * max(full))),
         key=lambda i: -full[i],
     )
+
+
+def _even_plan(
+    options: list[list[tuple[float, float]]],
+    full: list[float],
+    change: float,
+    h: float,
+    spread_voxels: int,
+    even_growth: bool,
+) -> tuple[_Plan | None, list[float]]:
+    """Where the change is spread evenly: the plan and each chosen slab's share; else
+    ``(None, [])``.
+
+    A shrink the largest slab could give only by losing more than :data:`MAX_SHRINK` of its
+    length: every peer (:func:`_peers`) gives the same fraction of its full length, through the
+    first planes where together they have the room (:func:`_fill`). ``even_growth``: every slab
+    grows by the same fraction of its full length (a flight's treads all deepen), largest first.
+    """
+    peer = _peers(full, spread_voxels, h)
     if change < 0 and len(peer) > 1 and -change > MAX_SHRINK * max(full):
-        # a shrink the largest slab could give only by losing more than MAX_SHRINK of its
-        # length: every slab of comparable length gives the same fraction of its (full) length,
-        # through the first planes where together they have the room
         for zones in options:
             ps = [zones[i] for i in peer]
-            give = _fill(-change, [full[i] for i in peer], rooms(ps))
+            give = _fill(-change, [full[i] for i in peer], _rooms(ps, h))
             if -change <= sum(give) + h / 2:
-                best, even = (ps, rooms(ps), len(ps)), give
-                break
+                return (ps, _rooms(ps, h), len(ps)), give
     if change > 0 and even_growth:
-        # every slab grows by the same fraction of its (full) length (a flight's treads all
-        # deepen), not the fewest slabs each doubled
-        order = sorted(range(len(slabs)), key=lambda i: -full[i])
-        even = [full[i] for i in order]
-        best = ([options[0][i] for i in order], [], len(order))
-    options = [sorted(z, key=lambda z: z[0] - z[1]) for z in options]  # largest first
-    if change < 0:
-        # else the planes that need the fewest slabs (each slab adds two seams, which calmer
-        # planes do not pay for), the calmest among those; the slabs' full length last
-        for zones in [] if even else options:
-            room = rooms(zones)
-            n = 1
-            while n < len(zones) and -change > sum(room[:n]) + h / 2:
-                n += 1
-            if -change <= sum(room[:n]) + h / 2 and (best is None or n < best[2]):
-                best = (zones, room, n)
-        if best is None:
-            zones = options[-1]
-            room = rooms(zones)
-            n = len(zones)
-        else:
-            zones, room, n = best
-    elif even:
-        assert best is not None  # set with even
-        zones, _, n = best
-    else:
-        zones = options[0]
-        big = zones[0][1] - zones[0][0]
+        order = sorted(range(len(full)), key=lambda i: -full[i])
+        return ([options[0][i] for i in order], [], len(order)), [full[i] for i in order]
+    return None, []
+
+
+def _fewest_slabs(options: list[list[tuple[float, float]]], change: float, h: float) -> _Plan:
+    """A shrink (``change < 0``) through the planes that need the fewest slabs (each slab adds
+    two seams, which calmer planes do not pay for), the calmest among those (``options``:
+    largest slab first in each); every slab's full length where none suffice.
+    """
+    best: _Plan | None = None
+    for zones in options:
+        room = _rooms(zones, h)
         n = 1
-        while (
-            n < len(zones)
-            and change > MAX_STRETCH * sum(z[1] - z[0] for z in zones[:n])
-            and zones[n][1] - zones[n][0] >= max(spread_voxels * h, SPREAD_FRACTION * big)
-        ):
+        while n < len(zones) and -change > sum(room[:n]) + h / 2:
             n += 1
-    chosen = zones[:n]
-    weights = even or ([z[1] - z[0] for z in chosen] if change > 0 else room[:n])
+        if -change <= sum(room[:n]) + h / 2 and (best is None or n < best[2]):
+            best = (zones, room, n)
+    if best is None:
+        zones = options[-1]
+        return zones, _rooms(zones, h), len(zones)
+    return best
+
+
+def _growth_count(zones: list[tuple[float, float]], change: float, h: float, spread: int) -> int:
+    """How many of ``zones`` (largest first) a growth goes to: the largest, and the next ones
+    while those so far would more than double (:data:`MAX_STRETCH`) and the next is a peer.
+    """
+    big = zones[0][1] - zones[0][0]
+    n = 1
+    while (
+        n < len(zones)
+        and change > MAX_STRETCH * sum(z[1] - z[0] for z in zones[:n])
+        and zones[n][1] - zones[n][0] >= max(spread * h, SPREAD_FRACTION * big)
+    ):
+        n += 1
+    return n
+
+
+def _shares(
+    chosen: list[tuple[float, float]],
+    weights: list[float],
+    room: list[float],
+    change: float,
+    h: float,
+    axis: str,
+) -> tuple[list[Edit], float]:
+    """The stretch edits giving each zone of ``chosen`` its share of ``change`` by ``weights``
+    (whole voxels; the last takes the rest; a shrink no more than its ``room``), and what is
+    left.
+    """
     total = sum(weights)
     edits, left = [], change
+    n = len(chosen)
     for i, ((a, b), w) in enumerate(zip(chosen, weights, strict=True)):
         share = left if i == n - 1 else round(change * w / total / h) * h
         if change < 0:
@@ -432,9 +497,10 @@ def _voxel_period(
     itself best (mean layer distance over the repeat, :meth:`Profile.shifted_distance`); the
     start within :data:`PHASE_VOXELS` of the detector's where :func:`~.suggest.plane_cost` is
     lowest (:func:`~.suggest.best_phase`), among those whose joins cut off the least solid
-    (:func:`~.suggest.join_islands`), of those that copy whole elements (the axis's local
-    ``features``: :func:`~.features.whole_copies`) where any does. Copies of a whole-voxel period
-    are exact shifts of the original's layers.
+    (:func:`~.suggest.join_islands`) and jump least (within :data:`JOIN_TOL` voxel of the
+    cleanest: :func:`~.suggest.join_jump`, the seam shape the evaluation measures), of those
+    that copy whole elements (the axis's local ``features``: :func:`~.features.whole_copies`)
+    where any does. Copies of a whole-voxel period are exact shifts of the original's layers.
     """
     assert t.period is not None  # set for a tile
     h = p.voxel_size
@@ -462,12 +528,31 @@ def _voxel_period(
         starts = starts[whole]
     cut = np.array([join_islands(csdf, p.axis, float(x), float(n)) for x in starts])
     ok = cut <= cut.min()
+    ok &= _clean_joins(csdf, p.axis, starts, float(n), ok)
     # the lowest-cost start among those, nearest the detector's
     runs = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(np.int8), [0]])))
     pieces = [(starts[runs[k]], starts[runs[k + 1] - 1]) for k in range(0, len(runs), 2)]
-    picks = [best_phase(p, float(n), x0, x1 + n, near=t0) for x0, x1 in pieces]
-    s = picks[int(np.argmin(plane_cost(p, float(n), np.array(picks))))]
+    picks = np.array([best_phase(p, float(n), x0, x1 + n, near=t0) for x0, x1 in pieces])
+    # (the middle of a run may fall between the starts measured: measured again)
+    cost = np.where(_clean_joins(csdf, p.axis, picks, float(n)), 0.0, np.inf)
+    s = picks[int(np.argmin(cost + plane_cost(p, float(n), picks)))]
     return float(p.world(s)), n * h
+
+
+def _clean_joins(
+    csdf: CSDF, axis: int, starts: np.ndarray, period: float, among: np.ndarray | None = None
+) -> np.ndarray:
+    """(K,) bool: the ``starts`` (of those ``among``) whose join between tile copies jumps
+    least (:func:`~.suggest.join_jump`), within :data:`JOIN_TOL` voxel of the least.
+    """
+    among = np.ones(len(starts), bool) if among is None else among
+    jump = np.array(
+        [
+            join_jump(csdf, axis, float(x), period) if m else np.inf
+            for x, m in zip(starts, among, strict=True)
+        ]
+    )
+    return among & (jump <= jump.min() + JOIN_TOL)
 
 
 @dataclass(frozen=True)
@@ -1069,90 +1154,159 @@ def _fit_axis(
     allow_deform: bool = False,
 ) -> tuple[list[Edit], list[str]]:
     """:func:`fit_axis` on the axis's profile ``prof`` and local features ``feats``, but the
-    features' note.
+    features' note: whole periods (:func:`_whole_periods`), then the remainder absorbed by
+    slabs or the copies (:func:`_absorb`), else refused or scaled globally
+    (:func:`_last_resort`).
     """
     name = AXES[axis]
     units = csdf.meta.get("units")
     sb = csdf.surface_bounds()
     lo, hi = float(sb[0, axis]), float(sb[1, axis])
-    extent = hi - lo
     h = csdf.voxel_size
-    change = round((target - extent) / h) * h  # whole voxels: every edit moves content by voxels
+    change = round((target - (hi - lo)) / h) * h  # whole voxels: every edit moves content by voxels
     cands = axis_candidates(csdf, axis, prof=prof, features=feats)
     tiles = [c for c in cands if c.kind == "tile"]
     slabs = [c for c in cands if c.kind == "stretch"]
     # a shrink is spread over many slabs: a drifting run shrinks whole, not at each piece
     chains = _drift_chains(slabs, prof)
-    # what cannot shrink: the extent less every slab down to its minimum and the removable periods
-    shrinkable = sum(max(0.0, c.zone[1] - c.zone[0] - MIN_SLAB_VOXELS * h) for c in chains)
-    if tiles:
-        assert tiles[0].count is not None and tiles[0].period is not None  # set for a tile
-        shrinkable = max(shrinkable, (tiles[0].count - 1) * tiles[0].period)
-    if cands and target < extent - shrinkable - h / 2:
-        raise InputError(
-            f"size {name}: expected at least {_fmt(extent - shrinkable, units)} (the rigid "
-            f"parts' total: what no slab or repeat can give up), got {_fmt(target, units)}"
-        )
-    edits: list[Edit] = []
-    why: list[str] = []
-    left = change
-    tiled = None
-    done = _periods(csdf, prof, tiles[0], change, (name, units, lo), feats) if tiles else None
-    if done is None and not tiles:
-        # no equal period: whole elements of a repeat that need not be equal (mirrored doors,
-        # cushions of unequal width, compartments of unequal height)
-        done = _element_periods(
-            csdf, prof, find_elements(csdf, axis, prof=prof), change, name, units, lo
-        )
-    if done is not None:
-        tiled, note = done
-        edits.append(tiled.edit)
-        why.append(note)
-        left = change - tiled.grow
+    if cands:
+        _check_shrinkable(tiles, chains, target, hi - lo, h, (name, units))
+    tiled, edits, why = _whole_periods(csdf, axis, prof, tiles, change, feats)
+    left = change if tiled is None else change - tiled.grow
     if abs(left) <= h / 2:
         return edits, why
     first = float(csdf.axis_coords(axis)[0])
     layers = (layer_change(csdf, axis), first)
     ax = _Axis(name, units, lo, hi, h, layers, frozenset(c.zone for c in chains if c not in slabs))
+    slabs, curved = _takers(csdf, axis, slabs, chains, left, allow_deform)
+    done, left = _absorb(slabs, left, ax, tiled, allow_deform, edits, why)
+    if done is not None:
+        return done
+    if not allow_deform:
+        raise InputError(_refusal(name, target, left, units, slabs, curved, h, tiled is not None))
+    return _last_resort(ax, change, slabs)
+
+
+def _check_shrinkable(
+    tiles: list[Candidate],
+    chains: list[Candidate],
+    target: float,
+    extent: float,
+    h: float,
+    ax: tuple[str, str | None],
+) -> None:
+    """Refuse a ``target`` below what cannot shrink: the extent less every slab (``chains``)
+    down to its minimum, or the removable periods of the best tile if those give more.
+    """
+    name, units = ax
+    shrinkable = sum(max(0.0, c.zone[1] - c.zone[0] - MIN_SLAB_VOXELS * h) for c in chains)
+    if tiles:
+        assert tiles[0].count is not None and tiles[0].period is not None  # set for a tile
+        shrinkable = max(shrinkable, (tiles[0].count - 1) * tiles[0].period)
+    if target < extent - shrinkable - h / 2:
+        raise InputError(
+            f"size {name}: expected at least {_fmt(extent - shrinkable, units)} (the rigid "
+            f"parts' total: what no slab or repeat can give up), got {_fmt(target, units)}"
+        )
+
+
+def _whole_periods(
+    csdf: CSDF,
+    axis: int,
+    prof: Profile,
+    tiles: list[Candidate],
+    change: float,
+    feats: list[Feature],
+) -> tuple[_Tiled | None, list[Edit], list[str]]:
+    """Whole periods of the best tile (:func:`_periods`), or with no equal period whole
+    elements of a repeat that need not be equal (:func:`_element_periods`: mirrored doors,
+    cushions of unequal width): what was tiled (None: nothing), its edit and note.
+    """
+    name, units = AXES[axis], csdf.meta.get("units")
+    lo = float(csdf.surface_bounds()[0, axis])
+    if tiles:
+        done = _periods(csdf, prof, tiles[0], change, (name, units, lo), feats)
+    else:
+        elements = find_elements(csdf, axis, prof=prof)
+        done = _element_periods(csdf, prof, elements, change, name, units, lo)
+    if done is None:
+        return None, [], []
+    tiled, note = done
+    return tiled, [tiled.edit], [note]
+
+
+def _takers(
+    csdf: CSDF,
+    axis: int,
+    slabs: list[Candidate],
+    chains: list[Candidate],
+    left: float,
+    allow_deform: bool,
+) -> tuple[list[Candidate], list[Candidate]]:
+    """The slabs that may take the remainder ``left``, and those left out as curved.
+
+    A shrink takes each drift chain whole (``chains``). Without ``allow_deform`` a growth
+    leaves out long slabs on a round or curved outline (:func:`on_curve`): growth there
+    flattens it (a round top becomes a stadium).
+    """
     if left < 0:
         slabs = chains
     curved: list[Candidate] = []
     if not allow_deform and left > 0:
-        # growth on a round outline flattens it where it goes (a round top becomes a stadium)
+        h = csdf.voxel_size
+        first = float(csdf.axis_coords(axis)[0])
         ext = outline_extents(csdf, axis)
         curved = [c for c in slabs if on_curve(ext, first, c.zone, h)]
         slabs = [c for c in slabs if c not in curved or not _long(c, h)]
+    return slabs, curved
+
+
+def _absorb(
+    slabs: list[Candidate],
+    left: float,
+    ax: _Axis,
+    tiled: _Tiled | None,
+    allow_deform: bool,
+    edits: list[Edit],
+    why: list[str],
+) -> tuple[tuple[list[Edit], list[str]] | None, float]:
+    """The remainder ``left`` taken in order until it is gone: long slabs outside the repeat,
+    long slabs inside it (unless the copies take it within :data:`COPY_TOLERANCE`), thin slabs
+    (``allow_deform``), the copies. Returns the edits and notes (after ``edits``, ``why``) where
+    it was all taken, else None; and what is left.
+    """
+    h = ax.h
     st, notes, left = _to_long_outside(slabs, left, ax, tiled)
-    edits += st
-    why += notes
+    edits, why = edits + st, why + notes
     if abs(left) <= h / 2:
-        return edits, why
+        return (edits, why), left
     within = tiled is not None and _copies_within(left, tiled)
     if tiled is not None and not within:
         st, notes, left = _to_long_inside(slabs, left, ax, tiled)
-        edits += st
-        why += notes
+        edits, why = edits + st, why + notes
         if abs(left) <= h / 2:
-            return edits, why
+            return (edits, why), left
     if not within and allow_deform:
         st, notes, left = _to_thin(slabs, left, ax, tiled)
-        edits += st
-        why += notes
+        edits, why = edits + st, why + notes
         if abs(left) <= h / 2:
-            return edits, why
+            return (edits, why), left
     taken = None if tiled is None else _to_copies(edits, left, ax, tiled, within)
     if taken is not None:
-        return taken[0], [*why, taken[1]]
-    if not allow_deform:
-        raise InputError(_refusal(name, target, left, units, slabs, curved, h, tiled is not None))
+        return (taken[0], [*why, taken[1]]), left
+    return None, left
+
+
+def _last_resort(ax: _Axis, change: float, slabs: list[Candidate]) -> tuple[list[Edit], list[str]]:
+    """Global scaling of the whole ``change`` along the axis, with the note saying why."""
     thin = (
         " (thin slabs would more than double)"
-        if change > 0 and any(not _long(c, h) for c in slabs)
+        if change > 0 and any(not _long(c, ax.h) for c in slabs)
         else ""
     )
-    return [Edit(name, lo, hi, hi + change, "global")], [
-        f"{name}: GLOBAL scaling (last resort): no repeated element and no slab of "
-        f"constant cross-section along {name} could take {_fmt(change, units)}{thin}"
+    return [Edit(ax.name, ax.lo, ax.hi, ax.hi + change, "global")], [
+        f"{ax.name}: GLOBAL scaling (last resort): no repeated element and no slab of "
+        f"constant cross-section along {ax.name} could take {_fmt(change, ax.units)}{thin}"
     ]
 
 
@@ -1238,6 +1392,44 @@ def fit(
     """
     report = resolve(progress)
     add = _check_add(add)
+    size, targets = _targets(csdf, size)
+    edits: list[Edit | RadialZone | ScrewZone | HelixZone | RotationZone] = []
+    why: list[str] = []
+    radial = _radial_fit(csdf, targets, add, allow_deform)
+    if radial is not None:
+        edits.append(radial[0])
+        why.append(radial[1])
+    moved: set[int] = set()  # axes a count edit's diagonal steps move too
+    # counts first: the steps of a flight move along two axes
+    for k, a in enumerate(sorted(range(3), key=lambda a: AXES[a] not in add)):
+        report(k / 3, f"axis {AXES[a]}")
+        if radial is not None and a != 1:
+            continue  # x and z: the radial zone
+        if a in moved:
+            _check_unchanged(csdf, a, targets[a], "size", "the steps added move along", size[a])
+            continue
+        if AXES[a] in add:
+            _check_unchanged(csdf, a, targets[a], "add", "the count decides", size[a])
+            e, w = add_axis(csdf, a, add[AXES[a]])
+            moved |= _moved_axes(e, a)
+        else:
+            planar, w = _size_axis(csdf, a, targets[a], allow_deform)
+            e = list(planar)
+        edits += e
+        why += w
+    report(1.0, "done")
+    if not edits:
+        raise InputError("size: expected a change on some axis, got the current size")
+    planar = [e for e in edits if isinstance(e, Edit)]
+    return Recipe(tuple(edits)), why + _off_square(csdf, planar)
+
+
+def _targets(
+    csdf: CSDF, size: Sequence[str | float] | None
+) -> tuple[Sequence[str | float], list[float]]:
+    """``size`` (three ``'='`` where None) checked, and the extent it asks for per axis
+    (:func:`partscale.edit.parse_size` on the current extent).
+    """
     if size is None:
         size = ["="] * 3
     if isinstance(size, str) or len(size) != 3:
@@ -1248,57 +1440,54 @@ def fit(
         parse_size(v, extent=float(sb[1, a] - sb[0, a]), units=units, what=f"size {AXES[a]}")
         for a, v in enumerate(size)
     ]
-    edits: list[Edit | RadialZone | ScrewZone | HelixZone | RotationZone] = []
-    why: list[str] = []
-    radial = _radial_fit(csdf, targets, add, allow_deform)
-    if radial is not None:
-        edits.append(radial[0])
-        why.append(radial[1])
-    moved: set[int] = set()  # axes a count edit's diagonal steps move too
-    # counts first: the steps of a flight move along two axes
-    for k, a in enumerate(sorted(range(3), key=lambda a: AXES[a] not in add)):
-        t = targets[a]
-        report(k / 3, f"axis {AXES[a]}")
-        if radial is not None and a != 1:
-            continue  # x and z: the radial zone
-        if a in moved:
-            if abs(t - float(sb[1, a] - sb[0, a])) > csdf.voxel_size / 2:
-                raise InputError(
-                    f"size {AXES[a]}: expected = (the steps added move along {AXES[a]} too), "
-                    f"got {size[a]}"
-                )
-            continue
-        if AXES[a] in add:
-            if abs(t - float(sb[1, a] - sb[0, a])) > csdf.voxel_size / 2:
-                raise InputError(
-                    f"add {AXES[a]}: expected the size along {AXES[a]} unchanged (=), as the "
-                    f"count decides it, got size {AXES[a]} {size[a]}"
-                )
-            e, w = add_axis(csdf, a, add[AXES[a]])
-            moved |= {
-                b
-                for z in e
-                if isinstance(z, ScrewZone | HelixZone | RotationZone)
-                for b in range(3)
-                if b != a and (isinstance(z, HelixZone | RotationZone) or abs(z.step[b]) > 0)
-            }
-        else:
-            try:
-                planar, w = fit_axis(csdf, a, t, allow_deform=allow_deform)
-                e = list(planar)
-            except InputError as exc:
-                # a refusal on an object whose walls run off the axes names that cure too
-                turn = _off_square(csdf, [Edit(AXES[a], 0.0, 1.0, 1.0)])
-                if not turn or "part-aware" not in str(exc):
-                    raise
-                raise InputError(f"{exc}; {turn[0]}") from None
-        edits += e
-        why += w
-    report(1.0, "done")
-    if not edits:
-        raise InputError("size: expected a change on some axis, got the current size")
-    planar = [e for e in edits if isinstance(e, Edit)]
-    return Recipe(tuple(edits)), why + _off_square(csdf, planar)
+    return size, targets
+
+
+def _check_unchanged(
+    csdf: CSDF, axis: int, target: float, what: str, because: str, given: str | float
+) -> None:
+    """Refuse a size along ``axis`` other than the current extent (within half a voxel): a
+    count decides it, or steps added along another axis move along it too.
+    """
+    sb = csdf.surface_bounds()
+    if abs(target - float(sb[1, axis] - sb[0, axis])) <= csdf.voxel_size / 2:
+        return
+    name = AXES[axis]
+    if what == "size":
+        raise InputError(f"size {name}: expected = ({because} {name} too), got {given}")
+    raise InputError(
+        f"add {name}: expected the size along {name} unchanged (=), as {because} it, "
+        f"got size {name} {given}"
+    )
+
+
+def _moved_axes(edits: Sequence[object], axis: int) -> set[int]:
+    """The axes other than ``axis`` that count edits' steps move along: a flight's diagonal
+    step, a helix's or a ring's turn (x and z).
+    """
+    return {
+        b
+        for z in edits
+        if isinstance(z, ScrewZone | HelixZone | RotationZone)
+        for b in range(3)
+        if b != axis and (isinstance(z, HelixZone | RotationZone) or abs(z.step[b]) > 0)
+    }
+
+
+def _size_axis(
+    csdf: CSDF, axis: int, target: float, allow_deform: bool
+) -> tuple[list[Edit], list[str]]:
+    """:func:`fit_axis`, a refusal on an object whose walls run off the axes naming that cure
+    too.
+    """
+    try:
+        planar, why = fit_axis(csdf, axis, target, allow_deform=allow_deform)
+        return list(planar), why
+    except InputError as exc:
+        turn = _off_square(csdf, [Edit(AXES[axis], 0.0, 1.0, 1.0)])
+        if not turn or "part-aware" not in str(exc):
+            raise
+        raise InputError(f"{exc}; {turn[0]}") from None
 
 
 def resolve_counts(csdf: CSDF, recipe: Recipe) -> tuple[Recipe, list[str]]:

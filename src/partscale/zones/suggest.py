@@ -48,6 +48,7 @@ or for a full match to the best phase, where it would not; else it is dropped (:
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass, replace
 from typing import Literal, NamedTuple
 
@@ -56,7 +57,7 @@ from scipy import ndimage
 from scipy.signal import find_peaks
 
 from .._options import keyword_options
-from ..csdf import CSDF
+from ..csdf import BAND_VOXELS, CSDF
 from ..edit import AXES, SEAM_VOXELS
 from ..progress import ProgressCallback, resolve
 from .features import Feature, axis_features, feature_spans, whole_copies
@@ -87,6 +88,12 @@ BOUND_TOL = 1.0
 QUANTILE = 0.9
 #: Score of a bounded repeat relative to a full cross-section match.
 BOUNDED_WEIGHT = 0.5
+#: A tile join's jump compares layers this many apart, centred on the join (:func:`join_jump`):
+#: wider than the scaling stage's blend, which spreads a jump without removing it.
+SEAM_WINDOW = 5
+#: Layers either side of a zone that :func:`join_jump` tiles with it: the seam window and its
+#: trend layers, the blend and the re-evaluation's reach.
+JOIN_MARGIN = 10
 
 
 @dataclass(frozen=True)
@@ -474,6 +481,88 @@ def join_islands(csdf: CSDF, axis: int, start: float, period: float) -> int:
     return max(0, loose(joined) - own)
 
 
+def _window_step(f: np.ndarray, h: float) -> float:
+    """The shape step across a window of layers ``f`` (``SEAM_WINDOW + 3`` of them: one before
+    the pair compared, the pair :data:`SEAM_WINDOW` apart, one after): over the voxels within a
+    voxel of the surface on either layer of the pair, the mean of ``|(f[k] - f[0]) - trend|``
+    (voxels, at most ``2 * BAND_VOXELS``), the trend being what the one-layer steps just
+    outside the pair predict; NaN with fewer than 3 such voxels. The evaluation's seam shape
+    measure (:func:`partscale.evaluate.metrics.slice_steps`), for one window.
+    """
+    k = SEAM_WINDOW
+    f = f.astype(np.float32)
+    f0, fk = f[1], f[k + 1]
+    trend = k * ((f[1] - f[0]) + (f[k + 2] - f[k + 1])) / 2
+    step = np.minimum(np.abs((fk - f0) - trend) / h, 2 * BAND_VOXELS)
+    either = (np.abs(f0) <= h) | (np.abs(fk) <= h)
+    if either.sum() < 3:
+        return math.nan
+    return float(step[either].mean())
+
+
+def _seam_step(s: np.ndarray, y: float, h: float) -> float:
+    """The largest :func:`_window_step` of ``s`` (layers first) among the windows centred on
+    layer index ``y`` and one layer either side (a plane on a layer still shows its largest
+    jump); NaN where none measures (the windows clamped to the layers there are).
+    """
+    k = SEAM_WINDOW
+    first = math.floor(y) - (k - 1) // 2
+    steps = [
+        _window_step(s[np.clip(np.arange(i - 1, i + k + 2), 0, len(s) - 1)], h)
+        for i in (first - 1, first, first + 1)
+    ]
+    finite = [x for x in steps if math.isfinite(x)]
+    return max(finite) if finite else math.nan
+
+
+def join_jump(csdf: CSDF, axis: int, start: float, period: float) -> float:
+    """The shape jump (voxels) a join between tile copies of ``[start, start + period]``
+    (layer indices along ``axis``, the period whole) adds to the object's own at the zone's
+    planes: what the evaluation's seam shape measures at that join.
+
+    The zone is tiled once more by the edit stage itself (:func:`partscale.edit.apply_edit`:
+    its seam blend and re-evaluation), on the layers from :data:`JOIN_MARGIN` before the zone
+    to as many after it (the join sees no further); the join's step (:func:`_seam_step`) less
+    the larger of the object's own steps at the two planes (a board lying at a plane steps
+    there in the object too), at least 0; 0 where no surface crosses the join. Planes where the
+    cross-section is the same either side of the join (both in a gap, or in a constant
+    stretch) join all but cleanly (the stage's blend leaves a little); one mid-cushion and the
+    other on its rounded edge jump.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> from partscale.zones.suggest import join_jump
+    >>> bookcase = shapes.bookcase(height=1.22)  # a shelf every 15 layers, from layer 3
+    >>> round(join_jump(bookcase, 1, 10.5, 15.0), 2)  # one row, air to air
+    0.14
+    >>> round(join_jump(bookcase, 1, 18.0, 7.0), 2)  # a shelf's underside joined to air
+    3.13
+    """
+    from ..edit import Edit, apply_edit
+
+    h = csdf.voxel_size
+    n = csdf.shape[axis]
+    i0 = max(0, math.floor(start) - JOIN_MARGIN)
+    i1 = min(n, math.ceil(start + period) + JOIN_MARGIN + 1)
+    crop: list[slice] = [slice(None)] * 3
+    crop[axis] = slice(i0, i1)
+    box = tuple(crop)
+    origin = csdf.origin.copy()
+    origin[axis] += i0 * h
+    part = csdf.replace(sdf=csdf.sdf[box], rgb=csdf.rgb[box], parts=csdf.parts[box], origin=origin)
+    s = float(origin[axis] + (start - i0) * h)
+    e = s + period * h
+    tiled = apply_edit(part, Edit(AXES[axis], s, e, e + period * h, "tile"))
+    joined = np.moveaxis(tiled.sdf, axis, 0)
+    jump = _seam_step(joined, (e - tiled.origin[axis]) / h, h)
+    if not math.isfinite(jump):
+        return 0.0
+    layers = np.moveaxis(csdf.sdf, axis, 0)
+    own = [_seam_step(layers, y, h) for y in (start, start + period)]
+    return max(0.0, jump - max((x for x in own if math.isfinite(x)), default=0.0))
+
+
 def plane_cost(p: Profile, period: float, starts: np.ndarray) -> np.ndarray:
     """(K,) cost of a tile zone ``[t, t + period]`` (layer indices ``starts``): low in gaps and
     where the two planes' cross-sections match.
@@ -730,11 +819,30 @@ def axis_candidates(
     ax = _axis_index(axis)
     p = prof if prof is not None else profile(csdf, ax)
     feats = axis_features(csdf, ax, calm_runs(p)) if features is None else features
-    h = p.voxel_size
-    extent = max(p.hi - p.lo, h)
-    name = AXES[ax]
-    out: list[Candidate] = []
     repeats = find_repeats(p)
+    out = _repeat_tiles(p, repeats)
+    out += _bounded_tiles(p, csdf, repeats)
+    out += _part_row_tiles(p, csdf, out)
+    # a period is only real where its copies repeat whole elements
+    out = [
+        w for c in out if (w := _whole(c, p, feats, free="repeats of a" in c.reason)) is not None
+    ]
+    out += _slab_candidates(p, csdf, feats)
+    out.sort(key=lambda c: -c.score)
+    return out
+
+
+def _extent(p: Profile) -> float:
+    """The extent along the profile's axis, at least a voxel: what scores and reasons refer to."""
+    return max(p.hi - p.lo, p.voxel_size)
+
+
+def _repeat_tiles(p: Profile, repeats: list[_Repeat]) -> list[Candidate]:
+    """A tile candidate per repeat of the whole cross-section (:func:`find_repeats`), planes at
+    its best phase; more repeats and more of the extent covered score higher.
+    """
+    h, extent, name = p.voxel_size, _extent(p), AXES[p.axis]
+    out = []
     for r in repeats:
         a, b = r.span
         t = best_phase(p, r.shift, a, b)
@@ -749,6 +857,16 @@ def axis_candidates(
         out.append(
             _tile(name, p.world(t), period, r.count, score, reason, (p.world(a), p.world(b)))
         )
+    return out
+
+
+def _bounded_tiles(p: Profile, csdf: CSDF, repeats: list[_Repeat]) -> list[Candidate]:
+    """A tile candidate per run of elements between boards or gaps
+    (:func:`find_bounded_repeats`) whose period (or a multiple of it, over it) the whole
+    cross-section's ``repeats`` did not find already; weighted by :data:`BOUNDED_WEIGHT`.
+    """
+    h, extent, name = p.voxel_size, _extent(p), AXES[p.axis]
+    out = []
     for br in find_bounded_repeats(p, csdf):
         # a period the full match found already (or a multiple of it, over it) adds nothing
         if any(
@@ -770,17 +888,27 @@ def axis_candidates(
         )
         region = (p.world(a), p.world(b))
         out.append(_tile(name, p.world(br.start), period, count, score, reason, region))
-    tiles = [
+    return out
+
+
+def _part_row_tiles(p: Profile, csdf: CSDF, tiles: list[Candidate]) -> list[Candidate]:
+    """A tile candidate per row of equal parts of the segmentation (:func:`_part_repeats`)
+    whose pitch (or a multiple of it, over it) none of ``tiles`` has; planes halfway across
+    the gaps around the middle part.
+    """
+    h, extent, name = p.voxel_size, _extent(p), AXES[p.axis]
+    found = [
         (c.period / h, p.index(c.region[0]), p.index(c.region[1]))
-        for c in out
+        for c in tiles
         if c.period is not None  # every candidate so far is a tile, with a period
     ]
-    for pitch, parts in _part_repeats(csdf, ax):
+    out = []
+    for pitch, parts in _part_repeats(csdf, p.axis):
         step = pitch / h
         a, b = float(p.index(parts[0][0])), float(p.index(parts[-1][1]))
         if any(
             abs(step - max(1, round(step / q)) * q) <= BOUND_TOL and min(b, qb) > max(a, qa)
-            for q, qa, qb in tiles
+            for q, qa, qb in found
         ):
             continue
         # the region: from halfway across the gap before the first part to past the last
@@ -795,24 +923,19 @@ def axis_candidates(
             f"({100 * pitch / extent:.1f}% of the extent)"
         )
         out.append(_tile(name, p.world(t), pitch, count, score, reason, (p.world(a0), p.world(b0))))
-    # a period is only real where its copies repeat whole elements
-    out = [
-        w for c in out if (w := _whole(c, p, feats, free="repeats of a" in c.reason)) is not None
-    ]
-    planes = _part_planes(csdf, ax)
+    return out
+
+
+def _slab_candidates(p: Profile, csdf: CSDF, feats: list[Feature]) -> list[Candidate]:
+    """A stretch candidate per slab of constant cross-section (:func:`constant_slabs`) at least
+    two voxels long, its planes moved to a boundary between parts within a voxel
+    (:func:`_at_part_planes`); less drift and more length score higher.
+    """
+    h, extent, name = p.voxel_size, _extent(p), AXES[p.axis]
+    planes = _part_planes(csdf, p.axis)
+    out = []
     for first, last, drift, at_feature in constant_slabs(p, csdf, feats):
-        s, e = float(p.world(first)), float(p.world(last))
-        why = ""
-        if planes.size:
-            # prefer a plane between parts within a voxel, if still inside the slab
-            for which, v in (("start", s), ("end", e)):
-                j = np.argmin(np.abs(planes - v))
-                if abs(planes[j] - v) <= h and s - h <= planes[j] <= e + h:
-                    if which == "start":
-                        s = max(s, float(planes[j]))
-                    else:
-                        e = min(e, float(planes[j]))
-                    why = ", planes at part boundaries"
+        s, e, why = _at_part_planes(float(p.world(first)), float(p.world(last)), planes, h)
         if e - s < 2 * h:
             continue
         length = (e - s) / extent
@@ -833,8 +956,26 @@ def axis_candidates(
                 region=(s, e),
             )
         )
-    out.sort(key=lambda c: -c.score)
     return out
+
+
+def _at_part_planes(s: float, e: float, planes: np.ndarray, h: float) -> tuple[float, float, str]:
+    """A slab's planes ``s``, ``e`` (world) each moved onto the nearest of ``planes`` (part
+    boundaries) within a voxel, where it stays inside the slab; the reason's words if any moved.
+    """
+    why = ""
+    if not planes.size:
+        return s, e, why
+    # prefer a plane between parts within a voxel, if still inside the slab
+    for which, v in (("start", s), ("end", e)):
+        j = np.argmin(np.abs(planes - v))
+        if abs(planes[j] - v) <= h and s - h <= planes[j] <= e + h:
+            if which == "start":
+                s = max(s, float(planes[j]))
+            else:
+                e = min(e, float(planes[j]))
+            why = ", planes at part boundaries"
+    return s, e, why
 
 
 @keyword_options

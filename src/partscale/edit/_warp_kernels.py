@@ -5,7 +5,8 @@ source places and corner indices: the arrays are written straight into the outpu
 views in any axis order), in parallel over the output's first axis.
 
 - :func:`gather_columns`: a map across one axis that is the same at every level (radial zones,
-  turns about an axis): bilinear in the cross-section, nearest for parts.
+  turns about an axis): sdf and colour bilinear in the cross-section near the surface, else
+  (and parts everywhere) the nearest source voxel.
 - :func:`resample_affine`: a map that is affine on each of the slabs ``p . n`` between given
   levels (oblique zones, helices): sdf and colour trilinear near the surface where the map is no
   shift by whole voxels (as ``scipy.ndimage.map_coordinates(order=1, mode='nearest')``), else
@@ -21,7 +22,7 @@ import numpy as np
 
 
 @numba.njit(cache=True, parallel=True)
-def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, out, out_rgb, out_parts, moved):
+def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, lim, out, out_rgb, out_parts, moved):
     """Output column ``(u, v)`` (of views ordered (U, L, V)) shows the source columns about the
     continuous indices ``iu[u, v]``, ``iv[u, v]`` on the levels where ``inside``, and its own
     place (whole voxels ``u + ou``, ``v + ov``, clamped) on the others.
@@ -36,9 +37,12 @@ def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, out, out_rgb, out_pa
     inside : (L,) bool
     ou, ov : int
         The output's first column in source indices.
+    lim : float32
+        Where the nearest source value lies within ``lim`` of the surface, sdf and colour are
+        bilinear (float32 weights, as numpy); beyond, the nearest source value's.
     out, out_rgb, out_parts, moved : (U, L, V[, 3])
-        Written: sdf and colour bilinear (float32 weights, as numpy), parts nearest; ``moved``
-        where the source is not the column's own place and the level is inside.
+        Written: sdf and colour (see ``lim``), parts nearest; ``moved`` where the source is not
+        the column's own place and the level is inside.
     """
     nu, nl, nv = src.shape
     nv_out = iu.shape[1]
@@ -82,6 +86,16 @@ def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, out, out_rgb, out_pa
                     moved[u, lv, v] = False
                 continue
             for v in range(nv_out):
+                moved[u, lv, v] = mapped[v]
+                out_parts[u, lv, v] = parts[pu[v], lv, pv[v]]
+                # beyond ``lim`` of the surface the nearest source value (only its sign and a
+                # bound are read there, as in :func:`resample_affine`): a quarter of the reads
+                d = src[pu[v], lv, pv[v]]
+                if not abs(d) <= lim:
+                    out[u, lv, v] = d
+                    for c in range(3):
+                        out_rgb[u, lv, v, c] = rgb[pu[v], lv, pv[v], c]
+                    continue
                 x0, x1, y0, y1 = a0[v], a1[v], b0[v], b1[v]
                 out[u, lv, v] = (
                     w[v, 0] * src[x0, lv, y0]
@@ -97,8 +111,6 @@ def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, out, out_rgb, out_pa
                         + w[v, 3] * np.float32(rgb[x1, lv, y1, c])
                     )
                     out_rgb[u, lv, v, c] = np.uint8(min(max(np.rint(x), 0.0), 255.0))
-                out_parts[u, lv, v] = parts[pu[v], lv, pv[v]]
-                moved[u, lv, v] = mapped[v]
 
 
 @numba.njit(cache=True, inline="always")

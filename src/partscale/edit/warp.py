@@ -696,8 +696,8 @@ def _gather_levels(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The output arrays of a map across ``ax`` that is the same at every level: output column
     ``(u, v)`` shows the source at continuous indices ``(iu, iv)`` (U, V) on the levels where
-    ``inside`` (L,) holds, and its own place on the others; sdf and colour bilinear, parts
-    nearest; and the (X, Y, Z) bool of voxels whose source is not their own place shifted by
+    ``inside`` (L,) holds, and its own place on the others; sdf and colour bilinear within the
+    band and :data:`RESAMPLE_MARGIN` of the surface, else (and parts) nearest; and the (X, Y, Z) bool of voxels whose source is not their own place shifted by
     whole voxels.
     """
     h = csdf.voxel_size
@@ -721,6 +721,7 @@ def _gather_levels(
         np.ascontiguousarray(inside, dtype=np.bool_),
         ou,
         ov,
+        np.float32((BAND_VOXELS + RESAMPLE_MARGIN) * h),
         np.moveaxis(out, order, view),
         np.moveaxis(out_rgb, order, view),
         np.moveaxis(out_parts, order, view),

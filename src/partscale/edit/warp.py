@@ -318,6 +318,24 @@ def _finish(
     if bound_far:
         _bound_far(sdf, float(h), band)
     entry = {**entry, "reevaluated_voxels": int(n)}
+    return _handed_over(csdf, entry, sdf, rgb, parts, origin)
+
+
+def _handed_over(
+    csdf: CSDF,
+    entry: dict[str, Any],
+    sdf: np.ndarray,
+    rgb: np.ndarray,
+    parts: np.ndarray,
+    origin: np.ndarray,
+) -> CSDF:
+    """The warped CSDF with its history entry: ``sdf``, ``rgb``, ``parts`` were made by the
+    warp and nothing else holds them, so they are made read-only and the CSDF takes them as
+    they are instead of copying them (the planar edits do the same; a copy of the three
+    arrays cost ~0.02-0.17 s of a 128 grid's warp on a loaded machine).
+    """
+    for a in (sdf, rgb, parts):
+        a.flags.writeable = False
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
 
 
@@ -624,7 +642,7 @@ def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = 
     n = reevaluate_arrays(sdf, rgb, parts, h, np.ascontiguousarray(mask), band=BAND_VOXELS + 1.0)
     snapped = ScrewZone(zone.axis, tuple(float(v * h) for v in unit), zone.cut, zone.copies)  # type: ignore[arg-type]
     entry = {"op": "screw", **snapped.to_json(), "reevaluated_voxels": int(n), **(record or {})}
-    return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
+    return _handed_over(csdf, entry, sdf, rgb, parts, origin)
 
 
 def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None = None) -> CSDF:

@@ -19,10 +19,14 @@ voxel from the true object's, see :mod:`partscale.edit`):
    the colour at their nearest surface point (trilinear in ``rgb``) and that point's part (the
    label of the nearest inside voxel of its cell: the solid carries the parts).
 
-After an edit, :func:`recompute_mask` picks the voxels whose distance could have changed (the
-paper's rule, less those provably unchanged); only those are recomputed.
+After an edit, :func:`~partscale.edit._recompute.recompute_mask` (planar edits) or
+:func:`~partscale.edit._warp_kernels.reevaluation_mask` (warps) picks the voxels whose distance
+could have changed (the paper's rule, less those provably unchanged); only those are recomputed.
 
-Units inside the kernels are voxels (continuous indices); results are scaled by ``voxel_size``.
+This module cuts the work into boxes and runs them side by side; the kernels live by concern:
+:mod:`~partscale.edit._boxes` (a box's targets, relays and field), :mod:`~partscale.edit._propagate`
+(step 2) and :mod:`~partscale.edit._values` (step 3 and the writes). Units inside the kernels are
+voxels (continuous indices); results are scaled by ``voxel_size``.
 """
 
 from __future__ import annotations

@@ -86,6 +86,21 @@ def test_round_table_grows_its_top_only():
     assert np.percentile(err, 99) <= 0.5 and err.mean() <= 0.1, (err.mean(), np.percentile(err, 99))
 
 
+def test_radial_far_field_keeps_sign_and_bounds_the_distance():
+    """Beyond the band (where the radial edit takes the nearest source voxel's value, not a
+    blend), every voxel of the round table grown to 1.25 x keeps the analytic result's sign and
+    stores at most a voxel more than its analytic distance: a sphere tracer stepping by it never
+    crosses the surface."""
+    out = apply_radial(round_table(), RadialZone("y", (0.0, 0.0), 0.1, 0.4, 0.525))
+    far = np.argwhere(np.abs(out.sdf) > BAND_VOXELS * H)
+    truth = round_table_sdf(0.625)(out.origin + far * H)
+    got = out.sdf[tuple(far.T)]
+    assert far.shape[0] > out.sdf.size // 2
+    assert np.array_equal(np.sign(got), np.sign(truth))
+    over = (np.abs(got) - np.abs(truth)) / H
+    assert over.max() <= 1.0, over.max()
+
+
 def test_radial_history_replays():
     c = round_table()
     zone = RadialZone("y", (0.0, 0.0), 0.1, 0.45, 0.6)

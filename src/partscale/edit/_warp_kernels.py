@@ -5,7 +5,8 @@ source places and corner indices: the arrays are written straight into the outpu
 views in any axis order), in parallel over the output's first axis.
 
 - :func:`gather_columns`: a map across one axis that is the same at every level (radial zones,
-  turns about an axis): bilinear in the cross-section, nearest for parts.
+  turns about an axis): sdf and colour bilinear in the cross-section near the surface, else
+  (and parts everywhere) the nearest source voxel.
 - :func:`resample_affine`: a map that is affine on each of the slabs ``p . n`` between given
   levels (oblique zones, helices): sdf and colour trilinear near the surface where the map is no
   shift by whole voxels (as ``scipy.ndimage.map_coordinates(order=1, mode='nearest')``), else
@@ -21,7 +22,7 @@ import numpy as np
 
 
 @numba.njit(cache=True, parallel=True)
-def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, out, out_rgb, out_parts, moved):
+def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, lim, out, out_rgb, out_parts, moved):
     """Output column ``(u, v)`` (of views ordered (U, L, V)) shows the source columns about the
     continuous indices ``iu[u, v]``, ``iv[u, v]`` on the levels where ``inside``, and its own
     place (whole voxels ``u + ou``, ``v + ov``, clamped) on the others.
@@ -36,9 +37,12 @@ def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, out, out_rgb, out_pa
     inside : (L,) bool
     ou, ov : int
         The output's first column in source indices.
+    lim : float32
+        Where the nearest source value lies within ``lim`` of the surface, sdf and colour are
+        bilinear (float32 weights, as numpy); beyond, the nearest source value's.
     out, out_rgb, out_parts, moved : (U, L, V[, 3])
-        Written: sdf and colour bilinear (float32 weights, as numpy), parts nearest; ``moved``
-        where the source is not the column's own place and the level is inside.
+        Written: sdf and colour (see ``lim``), parts nearest; ``moved`` where the source is not
+        the column's own place and the level is inside.
     """
     nu, nl, nv = src.shape
     nv_out = iu.shape[1]
@@ -82,6 +86,16 @@ def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, out, out_rgb, out_pa
                     moved[u, lv, v] = False
                 continue
             for v in range(nv_out):
+                moved[u, lv, v] = mapped[v]
+                out_parts[u, lv, v] = parts[pu[v], lv, pv[v]]
+                # beyond ``lim`` of the surface the nearest source value (only its sign and a
+                # bound are read there, as in :func:`resample_affine`): a quarter of the reads
+                d = src[pu[v], lv, pv[v]]
+                if not abs(d) <= lim:
+                    out[u, lv, v] = d
+                    for c in range(3):
+                        out_rgb[u, lv, v, c] = rgb[pu[v], lv, pv[v], c]
+                    continue
                 x0, x1, y0, y1 = a0[v], a1[v], b0[v], b1[v]
                 out[u, lv, v] = (
                     w[v, 0] * src[x0, lv, y0]
@@ -97,8 +111,6 @@ def gather_columns(src, rgb, parts, iu, iv, inside, ou, ov, out, out_rgb, out_pa
                         + w[v, 3] * np.float32(rgb[x1, lv, y1, c])
                     )
                     out_rgb[u, lv, v, c] = np.uint8(min(max(np.rint(x), 0.0), 255.0))
-                out_parts[u, lv, v] = parts[pu[v], lv, pv[v]]
-                moved[u, lv, v] = mapped[v]
 
 
 @numba.njit(cache=True, inline="always")
@@ -291,3 +303,96 @@ def reevaluation_mask(sdf, moved, h, band, reach, dirs, lateral):
                             break
                 mask[i, j, k] = not keep
     return mask
+
+
+@numba.njit(cache=True, inline="always")
+def _envelope(f, d, v, z):
+    """``d[q] = min_p (q - p)^2 + f[p]`` over a line (Felzenszwalb and Huttenlocher's lower
+    envelope of parabolas): ``f``, ``d`` (N,) float64 (``inf``: no site; all ``inf`` where the
+    line has none); ``v`` (N,) int64 and ``z`` (N + 1,) float64 scratch. Integer inputs give
+    integer results, exactly.
+    """
+    n = f.shape[0]
+    k = -1
+    for q in range(n):
+        fq = f[q]
+        if fq == np.inf:
+            continue
+        s = -np.inf
+        while k >= 0:
+            p = v[k]
+            s = ((fq + q * q) - (f[p] + p * p)) / (2.0 * (q - p))
+            if s > z[k]:
+                break
+            k -= 1
+        k += 1
+        v[k] = q
+        z[k] = -np.inf if k == 0 else s
+        z[k + 1] = np.inf
+    if k < 0:
+        d[:] = np.inf
+        return
+    k = 0
+    for q in range(n):
+        while z[k + 1] < q:
+            k += 1
+        p = v[k]
+        d[q] = (q - p) * (q - p) + f[p]
+
+
+@numba.njit(cache=True, parallel=True)
+def _edt_axis(sq, axis):
+    """In place on ``sq`` (X, Y, Z) float64: the lower envelope (:func:`_envelope`) along
+    ``axis``, the lines in parallel.
+    """
+    shape = sq.shape
+    n = shape[axis]
+    a, b = [shape[i] for i in range(3) if i != axis]
+    for line in numba.prange(a * b):
+        x, y = line // b, line % b
+        f = np.empty(n)
+        d = np.empty(n)
+        v = np.empty(n, np.int64)
+        z = np.empty(n + 1)
+        for t in range(n):
+            if axis == 0:
+                f[t] = sq[t, x, y]
+            elif axis == 1:
+                f[t] = sq[x, t, y]
+            else:
+                f[t] = sq[x, y, t]
+        _envelope(f, d, v, z)
+        for t in range(n):
+            if axis == 0:
+                sq[t, x, y] = d[t]
+            elif axis == 1:
+                sq[x, t, y] = d[t]
+            else:
+                sq[x, y, t] = d[t]
+
+
+@numba.njit(cache=True, parallel=True)
+def opposite_distance(inside):
+    """(X, Y, Z) float64: each voxel's Euclidean distance (voxels) to the nearest voxel of the
+    other side of ``inside`` (X, Y, Z) bool (``inf`` where there is none): what
+    ``scipy.ndimage.distance_transform_edt`` gives for ``inside`` at the inside voxels and for
+    ``~inside`` at the others, exactly (squared distances are integers), by the separable exact
+    transform of Felzenszwalb and Huttenlocher, in parallel over lines.
+    """
+    nx, ny, nz = inside.shape
+    to_out = np.empty((nx, ny, nz))
+    to_in = np.empty((nx, ny, nz))
+    for i in numba.prange(nx):
+        for j in range(ny):
+            for k in range(nz):
+                to_out[i, j, k] = np.inf if inside[i, j, k] else 0.0
+                to_in[i, j, k] = 0.0 if inside[i, j, k] else np.inf
+    for axis in range(3):
+        _edt_axis(to_out, axis)
+        _edt_axis(to_in, axis)
+    out = np.empty((nx, ny, nz))
+    for i in numba.prange(nx):
+        for j in range(ny):
+            for k in range(nz):
+                out[i, j, k] = np.sqrt(to_out[i, j, k] if inside[i, j, k] else to_in[i, j, k])
+    return out

@@ -391,84 +391,114 @@ def _resample_cols(
         blk = task % nblk
         qa = np.uint64(blk * _COL_BLOCK)
         qe = np.uint64(min(blk * _COL_BLOCK + _COL_BLOCK, nq))
-        ca, ce = qa * nc, qe * nc
         nw = qe - qa
-        sign = np.empty(nw, src.dtype)  # per column of a pair, see below
+        sign = np.empty(nw, src.dtype)  # per column of a pair, see _skipped_samples
         best = np.empty(nw, src.dtype)
         sb = np.empty(nw, np.int64)
         for j in range(m):
             ju = np.uint64(j)
             if not done[j]:
                 a0, a1 = np.uint64(i0[j]), np.uint64(i1[j])
-                if w[j] == 0:
-                    for q in range(qa, qe):
-                        out[p, ju, q] = src[p, a0, q]
-                    for q in range(ca, ce):
-                        out_rgb[p, ju, q] = src_rgb[p, a0, q]
-                else:
-                    w1 = np.float32(w[j])
-                    w0 = np.float32(1.0) - w1
-                    for q in range(qa, qe):
-                        out[p, ju, q] = (
-                            np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
-                        )
-                    for q in range(ca, ce):
-                        v = np.float32(src_rgb[p, a0, q]) * w0 + np.float32(src_rgb[p, a1, q]) * w1
-                        # float32 bounds: float64 ones cost a conversion per value and keep
-                        # the loop from vectorising (same results, ~2x faster alone)
-                        out_rgb[p, ju, q] = min(max(np.rint(v), np.float32(0.0)), np.float32(255.0))
+                _blend_layer(src, src_rgb, out, out_rgb, p, ju, a0, a1, w[j], qa, qe, nc)
                 for q in range(qa, qe):
                     out_parts[p, ju, q] = src_parts[p, a0, q]
                 if frac[j]:
-                    wj = w[j]
-                    for q in range(qa, qe):
-                        label = src_parts[p, a1, q]
-                        if out_parts[p, ju, q] == label:
-                            continue
-                        if wj >= _label_switch(src[p, a0, q], src[p, a1, q]):
-                            out_parts[p, ju, q] = label
+                    _switch_labels(src, src_parts, out_parts, p, ju, a0, a1, w[j], qa, qe)
             if seam_of[j] >= 0:
                 k = np.uint64(seam_of[j])
                 for q in range(qa, qe):
                     was[k, p, q] = out[p, ju, q]
             if j == 0 or not pair[j - 1]:
                 continue
-            jp = j - 1
-            jpu = np.uint64(jp)
-            r0 = max(int(np.floor(xa[jp])) + 1, 0)
+            r0 = max(int(np.floor(xa[j - 1])) + 1, 0)
             r1 = min(int(np.ceil(xa[j])) - 1, n_src - 1)
-            if r1 < r0:
+            if r1 >= r0:
+                _skipped_samples(
+                    src, src_rgb, src_parts, xa, write, p, j, r0, r1, qa, qe, nc, sign, best, sb,
+                    out, out_rgb, out_parts,
+                )  # fmt: skip
+
+
+@nb.njit(cache=True)
+def _blend_layer(src, src_rgb, out, out_rgb, p, ju, a0, a1, wj, qa, qe, nc):
+    """:func:`_resample_cols`' layer ``ju`` of row ``p``, columns ``qa ... qe - 1``: a copy of
+    source layer ``a0`` where ``wj`` is 0, else the float32 blend of ``a0`` and ``a1`` (rgb
+    rounded half to even, clipped to 0..255).
+    """
+    ca, ce = qa * nc, qe * nc
+    if wj == 0:
+        for q in range(qa, qe):
+            out[p, ju, q] = src[p, a0, q]
+        for q in range(ca, ce):
+            out_rgb[p, ju, q] = src_rgb[p, a0, q]
+        return
+    w1 = np.float32(wj)
+    w0 = np.float32(1.0) - w1
+    for q in range(qa, qe):
+        out[p, ju, q] = np.float32(src[p, a0, q]) * w0 + np.float32(src[p, a1, q]) * w1
+    for q in range(ca, ce):
+        v = np.float32(src_rgb[p, a0, q]) * w0 + np.float32(src_rgb[p, a1, q]) * w1
+        # float32 bounds: float64 ones cost a conversion per value and keep the loop from
+        # vectorising (same results, ~2x faster alone)
+        out_rgb[p, ju, q] = min(max(np.rint(v), np.float32(0.0)), np.float32(255.0))
+
+
+@nb.njit(cache=True)
+def _switch_labels(src, src_parts, out_parts, p, ju, a0, a1, wj, qa, qe):
+    """:func:`_resample_cols`' parts of layer ``ju`` (row ``p``, columns ``qa ... qe - 1``)
+    between source layers ``a0`` and ``a1``: the label at ``a1`` where it differs, once ``wj``
+    reaches the boundary (:func:`_label_switch`).
+    """
+    for q in range(qa, qe):
+        label = src_parts[p, a1, q]
+        if out_parts[p, ju, q] == label:
+            continue
+        if wj >= _label_switch(src[p, a0, q], src[p, a1, q]):
+            out_parts[p, ju, q] = label
+
+
+@nb.njit(cache=True)
+def _skipped_samples(
+    src, src_rgb, src_parts, xa, write, p, j, r0, r1, qa, qe, nc, sign, best, sb, out,
+    out_rgb, out_parts,
+):  # fmt: skip
+    """:func:`_resample_cols`' pair of output layers ``j - 1, j`` (row ``p``, columns ``qa ...
+    qe - 1``): source layers ``r0 ... r1`` lie strictly between them; where a solid (or a gap)
+    among them was skipped, the output layer nearer to its deepest sample (and ``write``-able)
+    takes that sample. ``sign``, ``best``, ``sb`` (``qe - qa``,): scratch.
+    """
+    jp = j - 1
+    jpu, ju = np.uint64(jp), np.uint64(j)
+    for q in range(qa, qe):
+        # both outside: a skipped solid is sought (the least sample, below 0), both inside: a
+        # skipped gap (the largest, above 0); as ``sign * v > sign * best`` (an exact
+        # negation), one comparison that vectorises
+        solid = out[p, jpu, q] > 0
+        sign[q - qa] = 0.0 if solid != (out[p, ju, q] > 0) else (-1.0 if solid else 1.0)
+        best[q - qa] = 0
+        sb[q - qa] = -1
+    # the deepest sample in source order (the first of equals), column by column
+    for r in range(r0, r1 + 1):
+        ru = np.uint64(r)
+        for q in range(qa, qe):
+            v = src[p, ru, q]
+            better = sign[q - qa] * v > sign[q - qa] * best[q - qa]
+            best[q - qa] = v if better else best[q - qa]
+            sb[q - qa] = r if better else sb[q - qa]
+    for q in range(qa, qe):
+        r = sb[q - qa]
+        if r < 0:
+            continue
+        t = jp if r - xa[jp] <= xa[j] - r else j
+        if not write[t]:
+            t = 2 * jp + 1 - t
+            if not write[t]:
                 continue
-            for q in range(qa, qe):
-                # both outside: a skipped solid is sought (the least sample, below 0), both
-                # inside: a skipped gap (the largest, above 0); as ``sign * v > sign * best``
-                # (an exact negation), one comparison that vectorises
-                solid = out[p, jpu, q] > 0
-                sign[q - qa] = 0.0 if solid != (out[p, ju, q] > 0) else (-1.0 if solid else 1.0)
-                best[q - qa] = 0
-                sb[q - qa] = -1
-            # the deepest sample in source order (the first of equals), column by column
-            for r in range(r0, r1 + 1):
-                ru = np.uint64(r)
-                for q in range(qa, qe):
-                    v = src[p, ru, q]
-                    better = sign[q - qa] * v > sign[q - qa] * best[q - qa]
-                    best[q - qa] = v if better else best[q - qa]
-                    sb[q - qa] = r if better else sb[q - qa]
-            for q in range(qa, qe):
-                r = sb[q - qa]
-                if r < 0:
-                    continue
-                t = jp if r - xa[jp] <= xa[j] - r else j
-                if not write[t]:
-                    t = 2 * jp + 1 - t
-                    if not write[t]:
-                        continue
-                tu, ru = np.uint64(t), np.uint64(r)
-                out[p, tu, q] = best[q - qa]
-                for c in range(q * nc, (q + 1) * nc):
-                    out_rgb[p, tu, c] = src_rgb[p, ru, c]
-                out_parts[p, tu, q] = src_parts[p, ru, q]
+        tu, ru = np.uint64(t), np.uint64(r)
+        out[p, tu, q] = best[q - qa]
+        for c in range(q * nc, (q + 1) * nc):
+            out_rgb[p, tu, c] = src_rgb[p, ru, c]
+        out_parts[p, tu, q] = src_parts[p, ru, q]
 
 
 def cut_slivers(
@@ -647,9 +677,35 @@ def apply_plan(
         op3,
         was,
     )
-    if seam.size == 0:
-        return out_sdf, out_rgb, out_parts, left_out
+    if seam.size:
+        views = (s3, c3, o3, oc3)
+        left_out = _blend_seams(
+            sdf, parts, out_sdf, out_parts, views, plan, seam, pair, was, keep_thin
+        )
+    return out_sdf, out_rgb, out_parts, left_out
+
+
+def _blend_seams(
+    sdf: np.ndarray,
+    parts: np.ndarray,
+    out_sdf: np.ndarray,
+    out_parts: np.ndarray,
+    views: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    plan: Plan,
+    seam: np.ndarray,
+    pair: np.ndarray,
+    was: np.ndarray,
+    keep_thin: float | None,
+) -> dict[str, int]:
+    """:func:`apply_plan`'s tile seams, in place: output layers ``seam`` (as resampled, in
+    ``was``) blended between their dominant and other copy, cut slivers left out where
+    ``keep_thin`` is given. ``sdf``, ``parts``, ``out_sdf``, ``out_parts``: axis-first;
+    ``views``: the (P, N, Q) row views of the source sdf and rgb and the output's (see
+    :func:`apply_plan`). Returns ``left_out``.
+    """
     # the seam layers' dominant and other samples (the dominant as kept thin where it was)
+    s3, c3, o3, oc3 = views
+    left_out: dict[str, int] = {}
     a0, a1, wa = _split(plan.xa[seam], sdf.shape[0])
     b0, b1, wb = _split(plan.xb[seam], sdf.shape[0])
     wa, wb = wa.astype(np.float32), wb.astype(np.float32)
@@ -664,27 +720,11 @@ def apply_plan(
     else:
         drop = hold = np.zeros(was.shape, bool)
     far = np.float32(keep_thin if thin else 0.0)
+    beta = plan.beta[seam].astype(np.float32)
     _seam_blend(
-        c3,
-        o3,
-        oc3,
-        seam,
-        a0,
-        a1,
-        wa,
-        b0,
-        b1,
-        wb,
-        plan.beta[seam].astype(np.float32),
-        dominant,
-        other,
-        was,
-        kept,
-        thin,
-        far,
-        drop,
-        hold,
-    )
+        c3, o3, oc3, seam, a0, a1, wa, b0, b1, wb, beta, dominant, other, was, kept, thin, far,
+        drop, hold,
+    )  # fmt: skip
     if drop.any():
         # a cut sliver is left out: the other copy's part (its sample and colour are in)
         drop = drop.reshape(shape)
@@ -695,7 +735,7 @@ def apply_plan(
         for plane, n in (("start", (drop & ~at_end).sum()), ("end", (drop & at_end).sum())):
             if n:
                 left_out[plane] = int(n)
-    return out_sdf, out_rgb, out_parts, left_out
+    return left_out
 
 
 @nb.njit(cache=True, parallel=True)

@@ -20,6 +20,7 @@ from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve, scaled
+from ._recompute import recompute_mask
 from .parts import renumber_copies, unlabel_far, update_parts_info
 from .recipe import (
     AXES,
@@ -35,7 +36,7 @@ from .recipe import (
     source_coordinate,
     tile_count,
 )
-from .reevaluate import recompute_mask, reevaluate_arrays
+from .reevaluate import reevaluate_arrays
 from .resample import Plan, apply_plan, empty_layers, lerp_layers, make_plan
 from .resolved import BYTES_PER_VOXEL, ResolvedEdit, resolve_edit
 from .warp import apply_warp, moved_axes, warp_grid

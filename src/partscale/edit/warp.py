@@ -42,12 +42,11 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from .._memory import check_memory
 from ..csdf import BAND_VOXELS, CSDF
 from ..errors import InputError
-from ._warp_kernels import gather_columns, reevaluation_mask, resample_affine
+from ._warp_kernels import gather_columns, opposite_distance, reevaluation_mask, resample_affine
 from .recipe import AXES, HelixZone, ObliqueZone, RadialZone, RotationZone, ScrewZone
 from .reevaluate import reevaluate_arrays
 from .resolved import BYTES_PER_VOXEL
@@ -318,6 +317,24 @@ def _finish(
     if bound_far:
         _bound_far(sdf, float(h), band)
     entry = {**entry, "reevaluated_voxels": int(n)}
+    return _handed_over(csdf, entry, sdf, rgb, parts, origin)
+
+
+def _handed_over(
+    csdf: CSDF,
+    entry: dict[str, Any],
+    sdf: np.ndarray,
+    rgb: np.ndarray,
+    parts: np.ndarray,
+    origin: np.ndarray,
+) -> CSDF:
+    """The warped CSDF with its history entry: ``sdf``, ``rgb``, ``parts`` were made by the
+    warp and nothing else holds them, so they are made read-only and the CSDF takes them as
+    they are instead of copying them (the planar edits do the same; a copy of the three
+    arrays cost ~0.02-0.17 s of a 128 grid's warp on a loaded machine).
+    """
+    for a in (sdf, rgb, parts):
+        a.flags.writeable = False
     return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
 
 
@@ -331,9 +348,7 @@ def _bound_far(sdf: np.ndarray, h: float, band: float) -> None:
     far = np.abs(sdf) > band * h
     if not far.any():
         return
-    inside = sdf < 0
-    edt = np.where(inside, ndimage.distance_transform_edt(inside), 0.0)
-    edt += np.where(inside, 0.0, ndimage.distance_transform_edt(~inside))
+    edt = opposite_distance(sdf < 0)  # scipy's exact transform of either side, 3-6x faster
     bound = ((edt[far] - 0.5) * h).astype(np.float32)
     sdf[far] = np.copysign(np.minimum(np.abs(sdf[far]), bound), sdf[far])
 
@@ -624,7 +639,7 @@ def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = 
     n = reevaluate_arrays(sdf, rgb, parts, h, np.ascontiguousarray(mask), band=BAND_VOXELS + 1.0)
     snapped = ScrewZone(zone.axis, tuple(float(v * h) for v in unit), zone.cut, zone.copies)  # type: ignore[arg-type]
     entry = {"op": "screw", **snapped.to_json(), "reevaluated_voxels": int(n), **(record or {})}
-    return csdf.with_trusted_history(entry, sdf=sdf, rgb=rgb, parts=parts, origin=origin)
+    return _handed_over(csdf, entry, sdf, rgb, parts, origin)
 
 
 def apply_radial(csdf: CSDF, zone: RadialZone, *, record: dict[str, Any] | None = None) -> CSDF:
@@ -696,8 +711,8 @@ def _gather_levels(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The output arrays of a map across ``ax`` that is the same at every level: output column
     ``(u, v)`` shows the source at continuous indices ``(iu, iv)`` (U, V) on the levels where
-    ``inside`` (L,) holds, and its own place on the others; sdf and colour bilinear, parts
-    nearest; and the (X, Y, Z) bool of voxels whose source is not their own place shifted by
+    ``inside`` (L,) holds, and its own place on the others; sdf and colour bilinear within the
+    band and :data:`RESAMPLE_MARGIN` of the surface, else (and parts) nearest; and the (X, Y, Z) bool of voxels whose source is not their own place shifted by
     whole voxels.
     """
     h = csdf.voxel_size
@@ -721,6 +736,7 @@ def _gather_levels(
         np.ascontiguousarray(inside, dtype=np.bool_),
         ou,
         ov,
+        np.float32((BAND_VOXELS + RESAMPLE_MARGIN) * h),
         np.moveaxis(out, order, view),
         np.moveaxis(out_rgb, order, view),
         np.moveaxis(out_parts, order, view),

@@ -411,7 +411,7 @@ def complete(
 
     >>> from partscale import data, ingest
     >>> from partscale.complete import complete
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
     >>> table = complete(frames, res=32, symmetry=False)
     >>> max(table.shape) >= 32, table.meta["units"]
@@ -1015,7 +1015,7 @@ def provenance(csdf: CSDF) -> np.ndarray:
     >>> import numpy as np
     >>> from partscale import data, ingest
     >>> from partscale.complete import KINDS, complete, provenance
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
     >>> table = complete(frames, res=32, symmetry=False)
     >>> kinds = provenance(table)
@@ -1062,7 +1062,7 @@ def completion_colors(csdf: CSDF) -> np.ndarray:
     --------
     >>> from partscale import data, ingest
     >>> from partscale.complete import complete, completion_colors
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
     >>> table = complete(frames, res=32, symmetry=False)
     >>> shown = table.replace(rgb=completion_colors(table))
@@ -1130,7 +1130,7 @@ def complete_file(
     >>> import trimesh
     >>> from partscale import data, ingest
     >>> from partscale.complete import complete_file
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> (seen,) = virtual_scan(ingest.load_mesh(data.table()), 1, floor=False)
     >>> points, colors, _ = seen.points()
     >>> in_camera = (points - seen.pose[:3, 3]) @ seen.pose[:3, :3]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import math
 import os
+import warnings
 import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -16,12 +17,13 @@ import numpy as np
 from .. import _schema
 from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF, make
-from ..errors import InputError
+from ..errors import InputError, PartscaleWarning
 from ..progress import ProgressCallback, resolve
 from . import column as column_mod
 from . import floor as floor_mod
 from . import fuse as fuse_mod
 from . import guard as guard_mod
+from . import metric as metric_mod
 from . import strut as strut_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
@@ -350,6 +352,42 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from)
 
 
+def observe_metric(
+    frames: list[Frame], *, box=None, source: str = "scan", scale: float | None = None
+) -> tuple[Observation, tuple[float, str] | None]:
+    """:func:`observe` the scan in metres: multiplied by ``scale`` where given; otherwise checked
+    (:mod:`partscale.complete.metric`) and, where it is not plausible furniture in metres,
+    warned about and observed at the guessed power of ten where there is one.
+
+    Returns
+    -------
+    Observation
+    (float, str) or None
+        The factor applied to the scan and ``"option"`` or ``"guessed"``; None where none was.
+    """
+    if scale is not None:
+        s = metric_mod.check_scale(scale)
+        return observe(metric_mod.scale_frames(frames, s), box=box, source=source), (s, "option")
+    try:
+        ob = observe(frames, box=box, source=source)
+    except InputError:
+        # no object found: a scan in other units may hold none of furniture's size
+        p = metric_mod.of_frame(frames[0])
+        factor = None if p.plausible else p.guess()
+        if factor is None:
+            raise
+    else:
+        p = metric_mod.of_points(ob.points, ob.U)
+        if p.plausible:
+            return ob, None
+        factor = p.guess()
+    warnings.warn(metric_mod.warning(p, source, factor), PartscaleWarning, stacklevel=3)
+    if factor is None:
+        return ob, None
+    scaled = metric_mod.scale_frames(frames, factor)
+    return observe(scaled, box=box, source=source), (factor, "guessed")
+
+
 @keyword_options
 def complete(
     frames: list[Frame],
@@ -360,6 +398,7 @@ def complete(
     symmetry: bool = True,
     closure: float = CLOSURE,
     force_completion: bool = False,
+    scale: float | None = None,
     source: str = "scan",
     progress: ProgressCallback | None = None,
 ) -> CSDF:
@@ -386,6 +425,11 @@ def complete(
         completion that drops observed surface, stands where the cameras saw through or falls
         apart into struts gives way to the scan as observed, closed (no symmetric copies or
         guessed parts), with a warning saying why (:mod:`partscale.complete.guard`).
+    scale : float, optional
+        Metres per unit of the scan: its coordinates (depths, camera positions) are multiplied by
+        this. Without it, a scan whose extent or point spacing is not plausible furniture in
+        metres gets a warning naming ``--scale``, and is completed at the power of ten that
+        makes it plausible where there is one (:mod:`partscale.complete.metric`).
     source : str
         What the CSDF's ``meta['source']`` and the messages call the scan.
     progress : callable (fraction: float, message: str) -> None, optional
@@ -436,8 +480,8 @@ def complete(
         if len(box) != 4 or box[2] <= box[0] or box[3] <= box[1]:
             raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")
-    ob = observe(frames, box=box, source=source)
-    opts = Settings(res, box, bool(upright), closure, source)
+    ob, factor = observe_metric(frames, box=box, source=source, scale=scale)
+    opts = Settings(res, box, bool(upright), closure, source, factor)
     full = _complete(ob, opts, symmetry=symmetry, extras=True, report=report)
     # the space the cameras surely saw through: pixels without a reading say nothing
     carver = column_mod.sure_carver(ob.frames, 0.0)
@@ -454,7 +498,8 @@ def complete(
 @dataclass(frozen=True)
 class Settings:
     """The options of one completion, checked: ``res`` voxels along the longest side, the pixel
-    ``box`` or None, ``upright`` output, ``closure`` voxels, the ``source``'s name.
+    ``box`` or None, ``upright`` output, ``closure`` voxels, the ``source``'s name and the
+    ``scale`` applied to the scan with where it came from (``"option"`` or ``"guessed"``), if any.
     """
 
     res: int
@@ -462,6 +507,7 @@ class Settings:
     upright: bool
     closure: float
     source: str
+    scale: tuple[float, str] | None = None
 
 
 class FreeUp:
@@ -948,7 +994,7 @@ def _symmetries_meta(sy: Symmetries) -> list[dict]:
 
 def _history(ob: Observation, sy: Symmetries, opts: Settings, *, symmetry: bool) -> dict:
     """The history entry of a completion: its options and the method's constants."""
-    return {
+    out: dict[str, Any] = {
         "op": "complete",
         "source": opts.source,
         "method": METHOD,
@@ -984,6 +1030,9 @@ def _history(ob: Observation, sy: Symmetries, opts: Settings, *, symmetry: bool)
         "symmetry_voxel_m": round(sy.hs, 6),
         "symmetry_res": SYMMETRY_RES,
     }
+    if opts.scale is not None:
+        out["scale"], out["scale_from"] = opts.scale
+    return out
 
 
 def _encode(prov: np.ndarray) -> dict:
@@ -1109,7 +1158,7 @@ def complete_file(
         A JSON list of registered views (:func:`read_views`).
     **options
         :func:`complete`'s keywords (``res``, ``box``, ``upright``, ``symmetry``, ``closure``,
-        ``force_completion``, ``progress``).
+        ``force_completion``, ``scale``, ``progress``).
 
     Returns
     -------

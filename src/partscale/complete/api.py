@@ -35,7 +35,12 @@ METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
 CLUSTER_CELL = 0.03
-"""Metres: points closer than about this are one object when isolating it automatically."""
+"""Metres: points closer than about this are one object when isolating it automatically (at
+least; a sparser scan's cell is :data:`CLUSTER_SPACINGS` times its point spacing)."""
+CLUSTER_SPACINGS = 4.0
+"""The cell within which points are one object, in point spacings of the scan (the first frame's
+pixel footprint at its median depth): a scan sparser than CLUSTER_CELL / CLUSTER_SPACINGS (a
+far view, a coarse sensor) would otherwise fall apart into pieces of one object."""
 MAX_OBJECT_EXTENT = 4.0
 """Metres: the largest object isolated automatically (a 3.3 m lounge sofa, a table for ten);
 larger clusters are walls or the room."""
@@ -105,11 +110,20 @@ def _broad(X: np.ndarray) -> float:
     return float(kept.sum() / max(occ.sum(), 1))
 
 
+def cluster_cell(frame: Frame) -> float:
+    """Metres within which scan points are one object: :data:`CLUSTER_CELL`, or
+    :data:`CLUSTER_SPACINGS` times the point spacing of a sparser ``frame`` (its pixel footprint
+    at its median depth).
+    """
+    spacing = metric_mod.of_frame(frame).spacing
+    return max(CLUSTER_CELL, CLUSTER_SPACINGS * spacing)
+
+
 def _up_prior(frame: Frame) -> np.ndarray:
     return -frame.pose[:3, 1]
 
 
-def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
+def _isolate(frames, P, pix, height, up, box, cropped, cell) -> np.ndarray:
     """(N,) bool: the object's points (above the floor, in the box, or found automatically)."""
     above = height > 2 * FLOOR_TOL
     if not above.any():
@@ -126,7 +140,7 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
                 f"box: expected scan points above the floor in pixels {list(box)}, got none"
             )
         idx = np.flatnonzero(above & inbox)
-        lab = clusters(P[idx], CLUSTER_CELL)
+        lab = clusters(P[idx], cell)
         counts = np.bincount(lab)
         # a piece the box cuts (a desk edge behind the chair's back) is something else: only
         # the box's own sides cut, not the image's border
@@ -140,11 +154,11 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
         )
         best = int(np.argmax(counts))
         cut = np.bincount(lab, at_edge, minlength=len(counts)) >= 3
-        return _join_footprint(P, idx, lab, np.where(cut, 0, counts), best, up)
+        return _join_footprint(P, idx, lab, np.where(cut, 0, counts), best, up, cell)
     if cropped:
         return above
     idx = np.flatnonzero(above)
-    lab = clusters(P[idx], CLUSTER_CELL)
+    lab = clusters(P[idx], cell)
     n = lab.max() + 1
     H, W = frames[0].shape
     best, best_key = -1, (np.inf, 0)
@@ -172,10 +186,10 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
             f"{MAX_OBJECT_EXTENT} m across), got none; pick one with box",
             params=("box",),
         )
-    return _join_footprint(P, idx, lab, counts, best, up)
+    return _join_footprint(P, idx, lab, counts, best, up, cell)
 
 
-def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
+def _join_footprint(P, idx, lab, counts, best, up, cell) -> np.ndarray:
     """(N,) bool: cluster ``best`` of the points ``P[idx]`` (labels ``lab``) and the clusters
     standing over its footprint.
 
@@ -190,13 +204,13 @@ def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
 
     def within(X, Y):
         # the share of footprint points X inside the box around footprint points Y
-        lo_, hi_ = Y.min(axis=0) - CLUSTER_CELL, Y.max(axis=0) + CLUSTER_CELL
+        lo_, hi_ = Y.min(axis=0) - cell, Y.max(axis=0) + cell
         return float(((X >= lo_) & (X <= hi_)).all(axis=1).mean())
 
     members = {int(best)}
     for _ in range(3):
         m = np.isin(lab, list(members))
-        lo_m, hi_m = flat[m].min(axis=0) - CLUSTER_CELL, flat[m].max(axis=0) + CLUSTER_CELL
+        lo_m, hi_m = flat[m].min(axis=0) - cell, flat[m].max(axis=0) + cell
         grew = False
         for c in np.flatnonzero(counts >= 30):
             if c in members:
@@ -261,6 +275,7 @@ class Observation:
     floor: object
     normals: np.ndarray
     up_from: str = "camera"
+    cluster_cell: float = CLUSTER_CELL
 
 
 def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
@@ -303,6 +318,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     if len(P) < 10:
         raise InputError(f"{source}: expected a scan with depth readings, got {len(P)} points")
     cropped = all(f.cropped for f in frames)
+    cell = cluster_cell(frames[0])
     up = _up_prior(frames[0])
     found = find_floor(P, up, FLOOR_TOL)
     if found is None and not cropped:
@@ -322,7 +338,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     if found is None and support is None and cropped:
         # no floor and no level underside (the floor cut away): the plane of what the sensor
         # separated below the rest, a swivel chair's star base, before the camera's tilt
-        support = base_plane(P, up, CLUSTER_CELL)
+        support = base_plane(P, up, cell)
         up_from = "base" if support is not None else up_from
     elif support is not None:
         up_from = "underside"
@@ -337,7 +353,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = None
         height = P @ up
         height = height - height.min() + 3 * FLOOR_TOL  # every point is object
-    obj = _isolate(frames, P, pix, height, up, box, cropped)
+    obj = _isolate(frames, P, pix, height, up, box, cropped, cell)
     if up_from == "underside" and support is not None:
         # the level plane under an object that is no floor: scraps of the floor the scan kept
         # lie in it beside the object (the derived yellow chair's, beside its star base)
@@ -349,7 +365,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = float((Q @ up).min())
     centre = Q.mean(axis=0)
     U = _upright(up, frames[0].pose[:3, 2], floor_offset, centre)
-    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from)
+    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from, cell)
 
 
 def observe_metric(
@@ -1023,7 +1039,7 @@ def _history(ob: Observation, sy: Symmetries, opts: Settings, *, symmetry: bool)
         "floor_tol_m": FLOOR_TOL,
         "up_from": sy.up_from,
         "max_plane_tilt_deg": sym_mod.MAX_PLANE_TILT_DEG,
-        "cluster_cell_m": CLUSTER_CELL,
+        "cluster_cell_m": ob.cluster_cell,
         "symmetry_min_support": sym_mod.MIN_SUPPORT,
         "symmetry_max_violation": sym_mod.MAX_VIOLATION,
         # the voxel the symmetry tests measured in: the grid's, never finer than SYMMETRY_RES's

@@ -12,7 +12,8 @@ Modules: ``scan`` (frames and readers), ``floor`` (RANSAC floor, clusters), ``ca
 space), ``symmetry`` (mirror planes, rotations), ``fuse`` (the solid, distances, colours),
 ``column`` (a turning base's guessed column), ``strut`` (pieces left apart joined by guessed
 struts), ``tidy`` (specks, manifold voxels), ``guard`` (the completion or the scan as observed),
-``api`` (orchestration: named steps from the observation to the CSDF).
+``metric`` (is the scan in metres; its ``scale``), ``api`` (orchestration: named steps from the
+observation to the CSDF).
 """
 
 from __future__ import annotations

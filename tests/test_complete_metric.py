@@ -29,8 +29,10 @@ def test_plausibility_rules():
     assert P(924.0, 5.4).guess() == pytest.approx(0.001)
     assert P(92.4, 0.55).guess() == pytest.approx(0.01)
     assert P(0.009, 0.00005).guess() == pytest.approx(100.0)
+    # the table in millimetres, seen from afar: several powers fit, the one nearest 1 m wins
+    assert P(2730.0, 35.9).guess() == pytest.approx(0.001)
     # too large and with no power of ten that fits both: not guessed
-    assert not P(40.0, 0.005).plausible and P(40.0, 0.005).guess() is None
+    assert not P(30.0, 0.0005).plausible and P(30.0, 0.0005).guess() is None
     # the stated limit: a chair 2 m tall, points 11 mm apart, is plausible (as a bookcase is)
     assert P(1.9, 0.011).plausible
 
@@ -91,3 +93,27 @@ def test_a_bad_scale_is_refused_in_one_line(chair, bad):
     frames = virtual_scan(chair, 1)
     with pytest.raises(InputError, match="scale"):
         complete(frames, res=RES, scale=bad)
+
+
+def test_cli_scale_warns_without_it_and_refuses_a_bad_one(tmp_path):
+    # the shipped table's range mesh in millimetres (a PLY in the camera's frame)
+    import trimesh
+    from conftest import assert_bad_input, run_cli
+
+    from partscale import data
+
+    (seen,) = virtual_scan(ingest.load_mesh(data.table()), 1, floor=False)
+    points, colors, _ = seen.points()
+    in_camera = (points - seen.pose[:3, 3]) @ seen.pose[:3, :3]
+    ply = tmp_path / "table_mm.ply"
+    trimesh.PointCloud(in_camera * 1000.0, colors=colors).export(ply)
+    out = tmp_path / "t.csdf.npz"
+    proc = run_cli("complete", ply, "-o", out, "--res", "32", "--no-symmetry")
+    assert proc.returncode == 0, proc.stderr
+    assert "--scale" in proc.stderr and "0.001" in proc.stderr
+    proc = run_cli("complete", ply, "-o", out, "--res", "32", "--no-symmetry", "--scale", "0.001")
+    assert proc.returncode == 0, proc.stderr
+    assert "--scale" not in proc.stderr
+    bad = tmp_path / "bad.csdf.npz"
+    assert_bad_input(run_cli("complete", ply, "-o", bad, "--scale", "-2"), "scale")
+    assert not bad.exists()

@@ -384,24 +384,33 @@ def observe_metric(
     if scale is not None:
         s = metric_mod.check_scale(scale)
         return observe(metric_mod.scale_frames(frames, s), box=box, source=source), (s, "option")
+    ob: Observation | None
     try:
         ob = observe(frames, box=box, source=source)
     except InputError:
         # no object found: a scan in other units may hold none of furniture's size
-        p = metric_mod.of_frame(frames[0])
-        factor = None if p.plausible else p.guess()
-        if factor is None:
+        ob, p = None, metric_mod.of_frame(frames[0])
+        if p.plausible or p.guess() is None:
             raise
     else:
         p = metric_mod.of_points(ob.points, ob.U)
         if p.plausible:
             return ob, None
-        factor = p.guess()
+    factor = p.guess()
+    scaled = None
+    if factor is not None:
+        try:
+            scaled = observe(metric_mod.scale_frames(frames, factor), box=box, source=source)
+        except InputError:
+            if ob is None:
+                raise
+    if scaled is None:
+        factor = None  # nothing to guess, or nothing found at that scale: the scan as it is
     warnings.warn(metric_mod.warning(p, source, factor), PartscaleWarning, stacklevel=3)
-    if factor is None:
-        return ob, None
-    scaled = metric_mod.scale_frames(frames, factor)
-    return observe(scaled, box=box, source=source), (factor, "guessed")
+    if scaled is not None and factor is not None:
+        return scaled, (factor, "guessed")
+    assert ob is not None  # observed as it is (a failed observation raised above)
+    return ob, None
 
 
 @keyword_options

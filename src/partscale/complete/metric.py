@@ -9,13 +9,14 @@ wrong by the same factor. Two measurements say whether a scan can be furniture i
   sofa or table; larger is a room, which the isolation does not take for an object);
 - its **point spacing**: the median distance from an observed point to its nearest neighbour
   lies within :data:`SPACING_M` (a structured-light scanner up close reads points about
-  0.2 mm apart, a depth camera at its 5 m range about 1 cm, a LiDAR 3 cm); where no object is
+  0.2 mm apart, a depth camera at its 5 m range 1-2 cm, a LiDAR 3-5 cm); where no object is
   found, the first frame's pixel footprint at its median depth stands for it.
 
 A scan outside either gets one warning naming the ``scale`` option (``--scale``). Where a power
-of ten brings its point spacing to :data:`TYPICAL_SPACING_M` and both measurements into their
-ranges (millimetres, centimetres, decimetres), the scan is completed at that scale, and the
-warning and the CSDF's history say so; otherwise it is completed as it is. Given ``scale``, the
+of ten brings both measurements into their ranges (millimetres, centimetres, decimetres; the one
+that makes it nearest :data:`TYPICAL_EXTENT_M` where several do), the scan is completed at that
+scale, and the warning and the CSDF's history say so; otherwise (or where no object is found at
+that scale) it is completed as it is. Given ``scale``, the
 scan's coordinates are multiplied by it and nothing is guessed.
 
 A scan whose size is wrong by a small factor (a chair scanned 2 m tall) lies within both ranges,
@@ -35,10 +36,13 @@ from .scan import Frame
 
 EXTENT_M = (0.05, 4.0)
 """Metres: the range of an object's largest side that is plausible furniture."""
-SPACING_M = (0.0002, 0.03)
+SPACING_M = (0.0002, 0.05)
 """Metres: the range of the median nearest-neighbour spacing of points a depth sensor reads."""
 TYPICAL_SPACING_M = 0.005
-"""Metres: a depth camera's point spacing on furniture 1-2 m away (the guess aims at it)."""
+"""Metres: a depth camera's point spacing on furniture 1-2 m away (the guess aims at it where
+no object was found)."""
+TYPICAL_EXTENT_M = 1.0
+"""Metres: the size of furniture the guess aims at."""
 MAX_POWER = 4
 """Largest power of ten a guessed scale may be (a scan in tenths of a millimetre)."""
 
@@ -66,16 +70,23 @@ class Plausibility:
         return Plausibility(ext, self.spacing * factor)
 
     def guess(self) -> float | None:
-        """The power of ten (not 1) that brings the spacing nearest :data:`TYPICAL_SPACING_M`
-        with both measurements plausible, or None.
+        """The power of ten (not 1) that makes both measurements plausible, the one that brings
+        the extent nearest :data:`TYPICAL_EXTENT_M` (without an extent: the spacing nearest
+        :data:`TYPICAL_SPACING_M`), or None.
         """
         if self.spacing <= 0:
             return None
-        k = round(math.log10(TYPICAL_SPACING_M / self.spacing))
-        if k == 0 or abs(k) > MAX_POWER:
+        fits = [
+            10.0**k
+            for k in range(-MAX_POWER, MAX_POWER + 1)
+            if k != 0 and self.scaled(10.0**k).plausible
+        ]
+        if not fits:
             return None
-        factor = 10.0**k
-        return factor if self.scaled(factor).plausible else None
+        extent = self.extent
+        if extent is not None:
+            return min(fits, key=lambda f: abs(math.log10(extent * f / TYPICAL_EXTENT_M)))
+        return min(fits, key=lambda f: abs(math.log10(self.spacing * f / TYPICAL_SPACING_M)))
 
     def describe(self) -> str:
         """The measurements in words (for the warning)."""

@@ -81,8 +81,8 @@ def complete(
         typer.Option(
             "--scale",
             metavar="FACTOR",
-            help="Metres per unit of the scan: multiply its coordinates by this (without it, a "
-            "scan that is not plausible furniture in metres gets a warning).",
+            help="Multiply the mesh's coordinates by this; the scan's metres per unit (without "
+            "it, a scan that is not plausible furniture in metres gets a warning).",
         ),
     ] = None,
     force_completion: Annotated[

@@ -27,8 +27,9 @@ import numpy as np
 import trimesh
 
 from partscale import ingest
-from partscale.complete import api, metrics, symmetry, virtual
+from partscale.complete import api, symmetry
 from partscale.errors import InputError
+from partscale.evaluate import completion, virtual
 
 DATA = Path(
     os.environ.get("PARTSCALE_DATA", Path(__file__).resolve().parents[2] / "shared" / "data")
@@ -103,9 +104,9 @@ def main() -> int:
         if unit != 1.0:  # the truth and the scan both at the real size
             mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * unit)
         gt = ingest.from_mesh(mesh, res=128)
-        G, Gc = metrics.surface_samples(gt)
-        tau = metrics.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
-        diag = tau / metrics.F_TAU
+        G, Gc = completion.surface_samples(gt)
+        tau = completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+        diag = tau / completion.F_TAU
         for views in (1, 3):
             frames = virtual.virtual_scan(mesh, views)
             try:
@@ -113,15 +114,15 @@ def main() -> int:
             except InputError as exc:  # reported, and the run goes on with the next object
                 print(f"{Path(rel).stem:28s} {views}v  failed: {exc}", flush=True)
                 continue
-            raw = metrics.chamfer_fscore(ob.points, G, tau)
-            mir = metrics.chamfer_fscore(mirror_baseline(ob), G, tau)
+            raw = completion.chamfer_fscore(ob.points, G, tau)
+            mir = completion.chamfer_fscore(mirror_baseline(ob), G, tau)
             t = time.perf_counter()
             c = api.complete(frames, res=128)
             t_c = time.perf_counter() - t
-            P, Pc = metrics.surface_samples(c)
-            full = metrics.chamfer_fscore(P, G, tau)
+            P, Pc = completion.surface_samples(c)
+            full = completion.chamfer_fscore(P, G, tau)
             col = (
-                metrics.colour_error(P, Pc, G, Gc, tau)
+                completion.colour_error(P, Pc, G, Gc, tau)
                 if rel.startswith("kenney/")
                 else float("nan")
             )

@@ -3,7 +3,7 @@
 Every complete object of ../shared/data (furniture of all kinds, not only chairs) is scaled to
 its real size, scanned virtually from several views (yaw all round, pitch 0 to 45 degrees, near
 and far, with and without a floor, the sensor's noise and holes of
-:func:`partscale.complete.virtual.virtual_scan`), completed at 128 voxels, and scored against
+:func:`partscale.evaluate.virtual_scan`), completed at 128 voxels, and scored against
 its own import (F-score at 1 % of the diagonal). The raw scan's own import (its points, as
 ``bench_complete.py`` scores it) is the baseline in the same run. Printed: one line a scan,
 per-class and overall medians of F@1 %, and the share of scans where the completion beats the
@@ -29,8 +29,9 @@ from pathlib import Path
 import numpy as np
 
 from partscale import ingest
-from partscale.complete import api, complete, metrics, virtual
+from partscale.complete import api, complete
 from partscale.errors import InputError, PartscaleWarning
+from partscale.evaluate import completion, virtual
 
 DATA = Path(
     os.environ.get("PARTSCALE_DATA", Path(__file__).resolve().parents[2] / "shared" / "data")
@@ -146,8 +147,8 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
     if s != 1.0:
         mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * s)
     gt = ingest.from_mesh(mesh, res=128)
-    G, _ = metrics.surface_samples(gt)
-    tau = metrics.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+    G, _ = completion.surface_samples(gt)
+    tau = completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
     rows = []
     for v in views_of(i, n_single, n_triple):
         row = dict(rel=rel, cls=class_of(rel), tuned=rel in TUNED, n=len(v["azimuths"]), **v)
@@ -161,7 +162,7 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
             print(f"  {Path(rel).stem:30s} no object found in the scan: {exc}", flush=True)
             rows.append({**row, "raw": np.nan, "full": np.nan, "kept": "failed", "struts": 0})
             continue
-        row["raw"] = metrics.chamfer_fscore(ob.points, G, tau)["fscore"]
+        row["raw"] = completion.chamfer_fscore(ob.points, G, tau)["fscore"]
         t = time.perf_counter()
         try:
             with warnings.catch_warnings():
@@ -173,8 +174,8 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
             rows.append(row)
             continue
         row["seconds"] = time.perf_counter() - t
-        P, _ = metrics.surface_samples(c)
-        row["full"] = metrics.chamfer_fscore(P, G, tau)["fscore"]
+        P, _ = completion.surface_samples(c)
+        row["full"] = completion.chamfer_fscore(P, G, tau)["fscore"]
         m = c.meta["completion"]
         row["kept"], row["struts"] = m["guard"]["kept"], len(m["struts"])
         rows.append(row)

@@ -82,23 +82,24 @@ def test_box_with_no_points_is_refused(data, tmp_path):
 def chair_runs():
     """The Kenney chair scanned virtually from 1 and 3 views, completed at --res 64."""
     from partscale import ingest
-    from partscale.complete import api, metrics, virtual
+    from partscale.complete import api
+    from partscale.evaluate import completion, virtual
 
     mesh = ingest.load_mesh(data_path("kenney/chair.glb"))
     gt = ingest.from_mesh(mesh, res=64)
-    G, Gc = metrics.surface_samples(gt, 8000)
-    tau = metrics.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+    G, Gc = completion.surface_samples(gt, 8000)
+    tau = completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
     out = {}
     for views in (1, 3):
         frames = virtual.virtual_scan(mesh, views)
         observed = api.observe(frames).points
-        raw = metrics.chamfer_fscore(observed, G, tau)
+        raw = completion.chamfer_fscore(observed, G, tau)
         c = api.complete(frames, res=64)
-        P, Pc = metrics.surface_samples(c, 8000)
+        P, Pc = completion.surface_samples(c, 8000)
         out[views] = (
             raw,
-            metrics.chamfer_fscore(P, G, tau),
-            metrics.colour_error(P, Pc, G, Gc, tau),
+            completion.chamfer_fscore(P, G, tau),
+            completion.colour_error(P, Pc, G, Gc, tau),
             c,
             observed,
         )
@@ -161,7 +162,8 @@ def test_parts_the_sensor_separated_stay_one_object():
     # the Kenney desk chair's seat and back lose their link to the five-star base along the
     # silhouettes (no gas-lift column readings): the seat stands over the base, so it is kept
     from partscale import ingest
-    from partscale.complete import api, virtual
+    from partscale.complete import api
+    from partscale.evaluate import virtual
 
     mesh = ingest.load_mesh(data_path("kenney/chairDesk.glb"))
     top = float(np.asarray(mesh.vertices)[:, 1].max())

@@ -52,7 +52,8 @@ def test_a_block_seen_on_its_sides_completes_solid_down_to_its_unseen_bottom():
     # bottom never; the solid between opposite sides fills it, not a hollow shell open below
     import trimesh
 
-    from partscale.complete import api, virtual
+    from partscale.complete import api
+    from partscale.evaluate import virtual
     from partscale.ingest import from_trimesh
 
     box = trimesh.creation.box([0.6, 0.3, 0.4])

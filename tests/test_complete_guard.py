@@ -11,9 +11,10 @@ import trimesh
 from conftest import data_path
 
 from partscale import ingest
-from partscale.complete import api, complete, guard, virtual
+from partscale.complete import api, complete, guard
 from partscale.complete.column import sure_carver
 from partscale.errors import PartscaleWarning
+from partscale.evaluate import virtual
 from partscale.ingest import from_trimesh
 
 RES = 64
@@ -97,17 +98,17 @@ def test_a_supported_completion_is_kept():
 
 
 def _chair2_truth():
-    from partscale.complete import metrics
+    from partscale.evaluate import completion
 
     mesh = ingest.load_mesh(data_path("sweethome3d/chair2.obj"))
-    G, _ = metrics.surface_samples(ingest.from_mesh(mesh, res=128))
-    return mesh, G, metrics.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+    G, _ = completion.surface_samples(ingest.from_mesh(mesh, res=128))
+    return mesh, G, completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
 
 
 def test_thin_sheet_chair_is_no_maze_of_struts():
     # a chair with thin sheet sides, one view at its real size (metres): at most a handful of
     # struts, whichever result the guard keeps, and no worse than the raw scan's points
-    from partscale.complete import metrics
+    from partscale.evaluate import completion
 
     mesh, G, tau = _chair2_truth()
     frames = virtual.virtual_scan(mesh, 1)
@@ -116,8 +117,8 @@ def test_thin_sheet_chair_is_no_maze_of_struts():
         c = complete(frames, res=128)
     m = c.meta["completion"]
     assert len(m["struts"]) <= guard.MAX_STRUTS, (len(m["struts"]), m["guard"])
-    raw = metrics.chamfer_fscore(api.observe(frames).points, G, tau)["fscore"]
-    full = metrics.chamfer_fscore(metrics.surface_samples(c)[0], G, tau)["fscore"]
+    raw = completion.chamfer_fscore(api.observe(frames).points, G, tau)["fscore"]
+    full = completion.chamfer_fscore(completion.surface_samples(c)[0], G, tau)["fscore"]
     assert full >= raw, (full, raw)
 
 
@@ -130,8 +131,8 @@ def test_floor_is_found_from_a_camera_pitched_45_degrees_down():
     m = c.meta["completion"]
     assert m["up_from"] == "floor"
     assert np.degrees(np.arccos(min(1.0, m["up"][1]))) <= 2.0, m["up"]
-    from partscale.complete import metrics
+    from partscale.evaluate import completion
 
-    P, _ = metrics.surface_samples(c, 4000)
+    P, _ = completion.surface_samples(c, 4000)
     slack = 0.05  # metres: the closure and the noise beyond the chair's box
     assert (P.min(0) >= G.min(0) - slack).all() and (P.max(0) <= G.max(0) + slack).all()

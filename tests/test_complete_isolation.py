@@ -40,7 +40,7 @@ def _table(width, depth, height, gap=0.0, leg=0.06, top=0.05):
 def test_a_mesh_in_decimetres_is_refused_not_scanned_empty():
     # a chair stored 9 units tall (decimetres): framed whole, it stands 11 m from the camera,
     # beyond the sensor's range; the same chair in metres gives readings on the object
-    from partscale.complete import virtual
+    from partscale.evaluate import virtual
 
     dm = _boxes(((-2, 0, -2.2), (2, 4.5, 2.2)), ((-2, 4.5, 1.8), (2, 9, 2.2)))
     with pytest.raises(ValueError, match="metres"):
@@ -54,7 +54,7 @@ def test_a_mesh_in_decimetres_is_refused_not_scanned_empty():
 def test_a_sofa_is_framed_closely_and_a_chair_as_before():
     # framed by its bounding sphere a 3.2 m sofa's far end would be 6 m away, beyond the range:
     # the camera comes as close as the image allows (a box corner on the margin)
-    from partscale.complete import virtual
+    from partscale.evaluate import virtual
 
     sofa = _boxes(((-1.6, 0, -0.45), (1.6, 0.45, 0.45)), ((-1.6, 0.45, -0.45), (1.6, 0.9, -0.25)))
     V = np.asarray(sofa.vertices)
@@ -77,7 +77,8 @@ def test_a_sofa_is_framed_closely_and_a_chair_as_before():
 
 def test_a_sofa_three_metres_long_is_isolated_whole_above_its_floor():
     # larger than a chair, framed closely (little floor beside it): still an object on a floor
-    from partscale.complete import api, virtual
+    from partscale.complete import api
+    from partscale.evaluate import virtual
 
     sofa = _boxes(((-1.6, 0, -0.45), (1.6, 0.45, 0.45)), ((-1.6, 0.45, -0.45), (1.6, 0.9, -0.25)))
     ob = api.observe(virtual.virtual_scan(sofa, 1))
@@ -91,7 +92,8 @@ def test_a_sofa_three_metres_long_is_isolated_whole_above_its_floor():
 def test_a_table_whose_top_the_sensor_cut_off_its_legs_is_isolated_whole():
     # the top (not standing on the floor) and each leg are separate clusters: picked by a leg,
     # the object is the legs within the top's footprint and the top over them
-    from partscale.complete import api, virtual
+    from partscale.complete import api
+    from partscale.evaluate import virtual
 
     table = _table(2.4, 1.2, 0.75, gap=0.06)
     ob = api.observe(virtual.virtual_scan(table, 3))
@@ -111,7 +113,8 @@ def test_a_table_whose_top_the_sensor_cut_off_its_legs_is_isolated_whole():
 def test_a_stool_with_a_leg_cut_off_by_the_sensor_is_isolated_whole():
     # the front leg stops short of the seat: a fragment nearer the image centre (by its mean)
     # than the stool, which must not be taken for the object
-    from partscale.complete import api, virtual
+    from partscale.complete import api
+    from partscale.evaluate import virtual
 
     seat = ((-0.2, 0.42, -0.2), (0.2, 0.46, 0.2))
     legs = [
@@ -145,7 +148,8 @@ def test_bench_objects_that_failed_are_scanned_and_isolated_whole(rel, unit, vie
     from conftest import data_path
 
     from partscale import ingest
-    from partscale.complete import api, virtual
+    from partscale.complete import api
+    from partscale.evaluate import virtual
 
     mesh = ingest.load_mesh(data_path(rel))
     mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * unit)

@@ -77,7 +77,8 @@ def _leg_angles_deg(i: int) -> float:
 def test_a_five_star_base_seen_in_part_completes_to_five_legs():
     # one view of a swivel chair whose two far legs return no depth (black plastic): the legs
     # seen vote for a 5-fold axis, and the copies complete the star where nothing was seen
-    from partscale.complete import Frame, complete, virtual
+    from partscale.complete import Frame, complete
+    from partscale.evaluate import virtual
     from partscale.ingest import from_trimesh
 
     mesh = from_trimesh(_star_chair(), color=(40, 40, 40))

@@ -51,7 +51,8 @@ def _swivel_chair(column: bool, slope: float = 10.0):
 def _cropped_scan(mesh):
     """One virtual view of ``mesh`` from above (the camera's -y axis tilted by the view's
     elevation from up), without a floor, as a cropped range scan in that camera's frame."""
-    from partscale.complete import frame_from_points, virtual
+    from partscale.complete import frame_from_points
+    from partscale.evaluate import virtual
 
     (f,) = virtual.virtual_scan(mesh, 1, floor=False)
     P, C, _ = f.points()

@@ -76,6 +76,15 @@ def complete(
     no_symmetry: Annotated[
         bool, typer.Option("--no-symmetry", help="Do not look for mirror planes or rotations.")
     ] = False,
+    scale: Annotated[
+        float | None,
+        typer.Option(
+            "--scale",
+            metavar="FACTOR",
+            help="Multiply the mesh's coordinates by this; the scan's metres per unit (without "
+            "it, a scan that is not plausible furniture in metres gets a warning).",
+        ),
+    ] = None,
     force_completion: Annotated[
         bool,
         typer.Option(
@@ -111,6 +120,7 @@ def complete(
             upright=upright,
             symmetry=not no_symmetry,
             force_completion=force_completion,
+            scale=scale,
             progress=progress,
         )
     save(c, output)

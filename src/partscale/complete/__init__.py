@@ -3,16 +3,17 @@
 Public API: :func:`complete` (frames -> CSDF), :func:`complete_file` (files -> CSDF),
 :func:`provenance` and :func:`completion_colors` (what ``render --completion`` shows), the readers
 :func:`read_frame`, :func:`read_intrinsics`, :func:`read_points`, :func:`read_views`,
-:func:`frame_from_points` and :class:`Frame`. The virtual scanner
-(:func:`partscale.complete.virtual.virtual_scan`, which the examples use to make a scan of the
-shipped table) and the scores (:func:`partscale.complete.metrics.chamfer_fscore`) are in their
-modules.
+:func:`frame_from_points` and :class:`Frame`. The virtual scanner that the examples use to make a
+scan of the shipped table (:func:`partscale.evaluate.virtual_scan`) and the scores of a
+completion (:func:`partscale.evaluate.chamfer_fscore`) are evaluation tools, in
+:mod:`partscale.evaluate`.
 
 Modules: ``scan`` (frames and readers), ``floor`` (RANSAC floor, clusters), ``carve`` (free
 space), ``symmetry`` (mirror planes, rotations), ``fuse`` (the solid, distances, colours),
 ``column`` (a turning base's guessed column), ``strut`` (pieces left apart joined by guessed
-struts), ``tidy`` (specks, manifold voxels), ``api`` (orchestration), ``virtual`` (virtual scans
-of complete meshes), ``metrics``.
+struts), ``tidy`` (specks, manifold voxels), ``guard`` (the completion or the scan as observed),
+``metric`` (is the scan in metres; its ``scale``), ``api`` (orchestration: named steps from the
+observation to the CSDF).
 """
 
 from __future__ import annotations

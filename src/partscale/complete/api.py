@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import math
 import os
+import warnings
 import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -16,12 +17,13 @@ import numpy as np
 from .. import _schema
 from .._options import keyword_options
 from ..csdf import BAND_VOXELS, CSDF, make
-from ..errors import InputError
+from ..errors import InputError, PartscaleWarning
 from ..progress import ProgressCallback, resolve
 from . import column as column_mod
 from . import floor as floor_mod
 from . import fuse as fuse_mod
 from . import guard as guard_mod
+from . import metric as metric_mod
 from . import strut as strut_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
@@ -33,7 +35,12 @@ METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
 CLUSTER_CELL = 0.03
-"""Metres: points closer than about this are one object when isolating it automatically."""
+"""Metres: points closer than about this are one object when isolating it automatically (at
+least; a sparser scan's cell is :data:`CLUSTER_SPACINGS` times its point spacing)."""
+CLUSTER_SPACINGS = 4.0
+"""The cell within which points are one object, in point spacings of the scan (the first frame's
+pixel footprint at its median depth): a scan sparser than CLUSTER_CELL / CLUSTER_SPACINGS (a
+far view, a coarse sensor) would otherwise fall apart into pieces of one object."""
 MAX_OBJECT_EXTENT = 4.0
 """Metres: the largest object isolated automatically (a 3.3 m lounge sofa, a table for ten);
 larger clusters are walls or the room."""
@@ -103,11 +110,20 @@ def _broad(X: np.ndarray) -> float:
     return float(kept.sum() / max(occ.sum(), 1))
 
 
+def cluster_cell(frame: Frame) -> float:
+    """Metres within which scan points are one object: :data:`CLUSTER_CELL`, or
+    :data:`CLUSTER_SPACINGS` times the point spacing of a sparser ``frame`` (its pixel footprint
+    at its median depth).
+    """
+    spacing = metric_mod.of_frame(frame).spacing
+    return max(CLUSTER_CELL, CLUSTER_SPACINGS * spacing)
+
+
 def _up_prior(frame: Frame) -> np.ndarray:
     return -frame.pose[:3, 1]
 
 
-def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
+def _isolate(frames, P, pix, height, up, box, cropped, cell) -> np.ndarray:
     """(N,) bool: the object's points (above the floor, in the box, or found automatically)."""
     above = height > 2 * FLOOR_TOL
     if not above.any():
@@ -124,7 +140,7 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
                 f"box: expected scan points above the floor in pixels {list(box)}, got none"
             )
         idx = np.flatnonzero(above & inbox)
-        lab = clusters(P[idx], CLUSTER_CELL)
+        lab = clusters(P[idx], cell)
         counts = np.bincount(lab)
         # a piece the box cuts (a desk edge behind the chair's back) is something else: only
         # the box's own sides cut, not the image's border
@@ -138,11 +154,11 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
         )
         best = int(np.argmax(counts))
         cut = np.bincount(lab, at_edge, minlength=len(counts)) >= 3
-        return _join_footprint(P, idx, lab, np.where(cut, 0, counts), best, up)
+        return _join_footprint(P, idx, lab, np.where(cut, 0, counts), best, up, cell)
     if cropped:
         return above
     idx = np.flatnonzero(above)
-    lab = clusters(P[idx], CLUSTER_CELL)
+    lab = clusters(P[idx], cell)
     n = lab.max() + 1
     H, W = frames[0].shape
     best, best_key = -1, (np.inf, 0)
@@ -170,10 +186,10 @@ def _isolate(frames, P, pix, height, up, box, cropped) -> np.ndarray:
             f"{MAX_OBJECT_EXTENT} m across), got none; pick one with box",
             params=("box",),
         )
-    return _join_footprint(P, idx, lab, counts, best, up)
+    return _join_footprint(P, idx, lab, counts, best, up, cell)
 
 
-def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
+def _join_footprint(P, idx, lab, counts, best, up, cell) -> np.ndarray:
     """(N,) bool: cluster ``best`` of the points ``P[idx]`` (labels ``lab``) and the clusters
     standing over its footprint.
 
@@ -188,13 +204,13 @@ def _join_footprint(P, idx, lab, counts, best, up) -> np.ndarray:
 
     def within(X, Y):
         # the share of footprint points X inside the box around footprint points Y
-        lo_, hi_ = Y.min(axis=0) - CLUSTER_CELL, Y.max(axis=0) + CLUSTER_CELL
+        lo_, hi_ = Y.min(axis=0) - cell, Y.max(axis=0) + cell
         return float(((X >= lo_) & (X <= hi_)).all(axis=1).mean())
 
     members = {int(best)}
     for _ in range(3):
         m = np.isin(lab, list(members))
-        lo_m, hi_m = flat[m].min(axis=0) - CLUSTER_CELL, flat[m].max(axis=0) + CLUSTER_CELL
+        lo_m, hi_m = flat[m].min(axis=0) - cell, flat[m].max(axis=0) + cell
         grew = False
         for c in np.flatnonzero(counts >= 30):
             if c in members:
@@ -259,6 +275,7 @@ class Observation:
     floor: object
     normals: np.ndarray
     up_from: str = "camera"
+    cluster_cell: float = CLUSTER_CELL
 
 
 def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
@@ -301,6 +318,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     if len(P) < 10:
         raise InputError(f"{source}: expected a scan with depth readings, got {len(P)} points")
     cropped = all(f.cropped for f in frames)
+    cell = cluster_cell(frames[0])
     up = _up_prior(frames[0])
     found = find_floor(P, up, FLOOR_TOL)
     if found is None and not cropped:
@@ -320,7 +338,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     if found is None and support is None and cropped:
         # no floor and no level underside (the floor cut away): the plane of what the sensor
         # separated below the rest, a swivel chair's star base, before the camera's tilt
-        support = base_plane(P, up, CLUSTER_CELL)
+        support = base_plane(P, up, cell)
         up_from = "base" if support is not None else up_from
     elif support is not None:
         up_from = "underside"
@@ -335,7 +353,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = None
         height = P @ up
         height = height - height.min() + 3 * FLOOR_TOL  # every point is object
-    obj = _isolate(frames, P, pix, height, up, box, cropped)
+    obj = _isolate(frames, P, pix, height, up, box, cropped, cell)
     if up_from == "underside" and support is not None:
         # the level plane under an object that is no floor: scraps of the floor the scan kept
         # lie in it beside the object (the derived yellow chair's, beside its star base)
@@ -347,7 +365,52 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = float((Q @ up).min())
     centre = Q.mean(axis=0)
     U = _upright(up, frames[0].pose[:3, 2], floor_offset, centre)
-    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from)
+    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from, cell)
+
+
+def observe_metric(
+    frames: list[Frame], *, box=None, source: str = "scan", scale: float | None = None
+) -> tuple[Observation, tuple[float, str] | None]:
+    """:func:`observe` the scan in metres: multiplied by ``scale`` where given; otherwise checked
+    (:mod:`partscale.complete.metric`) and, where it is not plausible furniture in metres,
+    warned about and observed at the guessed power of ten where there is one.
+
+    Returns
+    -------
+    Observation
+    (float, str) or None
+        The factor applied to the scan and ``"option"`` or ``"guessed"``; None where none was.
+    """
+    if scale is not None:
+        s = metric_mod.check_scale(scale)
+        return observe(metric_mod.scale_frames(frames, s), box=box, source=source), (s, "option")
+    ob: Observation | None
+    try:
+        ob = observe(frames, box=box, source=source)
+    except InputError:
+        # no object found: a scan in other units may hold none of furniture's size
+        ob, p = None, metric_mod.of_frame(frames[0])
+        if p.plausible or p.guess() is None:
+            raise
+    else:
+        p = metric_mod.of_points(ob.points, ob.U)
+        if p.plausible:
+            return ob, None
+    factor = p.guess()
+    scaled = None
+    if factor is not None:
+        try:
+            scaled = observe(metric_mod.scale_frames(frames, factor), box=box, source=source)
+        except InputError:
+            if ob is None:
+                raise
+    if scaled is None:
+        factor = None  # nothing to guess, or nothing found at that scale: the scan as it is
+    warnings.warn(metric_mod.warning(p, source, factor), PartscaleWarning, stacklevel=3)
+    if scaled is not None and factor is not None:
+        return scaled, (factor, "guessed")
+    assert ob is not None  # observed as it is (a failed observation raised above)
+    return ob, None
 
 
 @keyword_options
@@ -360,6 +423,7 @@ def complete(
     symmetry: bool = True,
     closure: float = CLOSURE,
     force_completion: bool = False,
+    scale: float | None = None,
     source: str = "scan",
     progress: ProgressCallback | None = None,
 ) -> CSDF:
@@ -386,6 +450,11 @@ def complete(
         completion that drops observed surface, stands where the cameras saw through or falls
         apart into struts gives way to the scan as observed, closed (no symmetric copies or
         guessed parts), with a warning saying why (:mod:`partscale.complete.guard`).
+    scale : float, optional
+        Metres per unit of the scan: its coordinates (depths, camera positions) are multiplied by
+        this. Without it, a scan whose extent or point spacing is not plausible furniture in
+        metres gets a warning naming ``--scale``, and is completed at the power of ten that
+        makes it plausible where there is one (:mod:`partscale.complete.metric`).
     source : str
         What the CSDF's ``meta['source']`` and the messages call the scan.
     progress : callable (fraction: float, message: str) -> None, optional
@@ -411,7 +480,7 @@ def complete(
 
     >>> from partscale import data, ingest
     >>> from partscale.complete import complete
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
     >>> table = complete(frames, res=32, symmetry=False)
     >>> max(table.shape) >= 32, table.meta["units"]
@@ -436,124 +505,263 @@ def complete(
         if len(box) != 4 or box[2] <= box[0] or box[3] <= box[1]:
             raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")
-    ob = observe(frames, box=box, source=source)
-    opts: dict[str, Any] = dict(res=res, box=box, upright=upright, closure=closure, source=source)
-    full = _complete(ob, symmetry=symmetry, extras=True, report=report, **opts)
+    ob, factor = observe_metric(frames, box=box, source=source, scale=scale)
+    opts = Settings(res, box, bool(upright), closure, source, factor)
+    full = _complete(ob, opts, symmetry=symmetry, extras=True, report=report)
     # the space the cameras surely saw through: pixels without a reading say nothing
     carver = column_mod.sure_carver(ob.frames, 0.0)
 
     def observed() -> CSDF:
         report(0.9, "the scan as observed, closed")
-        return _complete(ob, symmetry=False, extras=False, report=lambda f, m: None, **opts)
+        return _complete(ob, opts, symmetry=False, extras=False, report=lambda f, m: None)
 
     out = guard_mod.choose(full, ob.points, carver, observed, force=force_completion)
     report(1.0, "done")
     return out
 
 
+@dataclass(frozen=True)
+class Settings:
+    """The options of one completion, checked: ``res`` voxels along the longest side, the pixel
+    ``box`` or None, ``upright`` output, ``closure`` voxels, the ``source``'s name and the
+    ``scale`` applied to the scan with where it came from (``"option"`` or ``"guessed"``), if any.
+    """
+
+    res: int
+    box: tuple[int, ...] | None
+    upright: bool
+    closure: float
+    source: str
+    scale: tuple[float, str] | None = None
+
+
+class FreeUp:
+    """Free space at upright points (M, 3) -> (M,) bool, tabulated once (:class:`FreeGrid`) in
+    the first upright frame ``U0``; :meth:`turn` follows the frame as the search turns it.
+    """
+
+    def __init__(self, free_grid: FreeGrid, U0: np.ndarray):
+        self.free_grid, self.U0, self.U, self.Uinv = free_grid, U0, U0, np.linalg.inv(U0)
+
+    def turn(self, U: np.ndarray) -> None:
+        """The upright frame is now ``U`` (4, 4) world -> upright."""
+        self.U, self.Uinv = U, np.linalg.inv(U)
+
+    def __call__(self, p: np.ndarray) -> np.ndarray:
+        """(M,) bool: whether upright points ``p`` (M, 3) lie in the scan's free space."""
+        # until the frame turns (the mirror search) the upright frame is the table's: millions
+        # of candidate points skip a transform by the identity
+        if self.U is self.U0:
+            return self.free_grid(p)
+        return self.free_grid(p, frame=self.U0 @ self.Uinv)
+
+
+@dataclass(eq=False)
+class Symmetries:
+    """The upright frame ``U`` (4, 4) world -> upright (``Uinv`` back; the first mirror plane at
+    x = 0) and the symmetries found in it: mirror planes ``syms``, a turning base's ``rot`` (or None), where up
+    came from and by how many degrees the mirror plane tilted it, the symmetry tests' voxel
+    ``hs`` and ``cell`` (metres), the scan's free space (``carver``, ``free_up`` upright).
+    """
+
+    U: np.ndarray
+    Uinv: np.ndarray
+    syms: list[sym_mod.Symmetry]
+    rot: sym_mod.Symmetry | None
+    up_from: str
+    up_tilt: float
+    hs: float
+    cell: float
+    carver: Carver
+    free_up: FreeUp
+
+
+@dataclass(frozen=True, eq=False)
+class Surface:
+    """The surface to fuse, upright: ``points`` (N, 3) float64, ``colors`` (N, 3) uint8,
+    ``kind`` (N,) uint8 (observed or mirrored), ``normals`` (N, 3); the symmetric ``views``
+    ((4, 4) upright transform, where it holds) and the copies dropped in free space.
+    """
+
+    points: np.ndarray
+    colors: np.ndarray
+    kind: np.ndarray
+    normals: np.ndarray
+    views: list[tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]]
+    n_dropped: int
+
+
+@dataclass(frozen=True, eq=False)
+class Grid:
+    """The output grid (:class:`partscale.complete.fuse.GridFrame`), the surface in it
+    (``points``, ``normals`` (N, 3) grid coordinates) and its extent ``lo``, ``hi`` (3,).
+    """
+
+    frame: fuse_mod.GridFrame
+    points: np.ndarray
+    normals: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Solid:
+    """The completed field: ``sdf`` (X, Y, Z) float32, ``rgb`` (X, Y, Z, 3) uint8, ``prov``
+    (X, Y, Z) uint8 and what the steps after the fusion added or dropped.
+    """
+
+    sdf: np.ndarray
+    rgb: np.ndarray
+    prov: np.ndarray
+    column: column_mod.Column | None = None
+    n_column: int = 0
+    n_specks: int = 0
+    struts: tuple = ()
+    n_filled: int = 0
+
+
 def _complete(
     ob: Observation,
+    opts: Settings,
     *,
-    res: int,
-    box,
-    upright: bool,
     symmetry: bool,
-    closure: float,
-    source: str,
     extras: bool,
     report: Callable[[float, str], None],
 ) -> CSDF:
-    """The completion of an observation; ``extras`` False: no guessed column or struts."""
-    frames, Q, QC, U = ob.frames, ob.points, ob.colors, ob.U
-    found: Any = ob.floor
-    QN = ob.normals
+    """The completion of an observation; ``extras`` False: no guessed column or struts.
+
+    The steps, each reported by name: the symmetries and the upright frame they fix
+    (:func:`find_symmetries`), the symmetric copies of the surface (:func:`symmetric_copies`),
+    the grid (:func:`plan_grid`), the carved and closed solid (:func:`fuse_solid`), the guessed
+    parts (:func:`guess_parts`) and the metadata (:func:`completion_meta`).
+    """
+    report(0.15, "symmetries")
+    sy = find_symmetries(ob, opts.res, symmetry)
+    report(0.3, "symmetric copies")
+    surface = symmetric_copies(ob, sy)
+    report(0.45, "grid")
+    grid = plan_grid(surface, sy, opts)
+    report(0.55, "carving and closing")
+    solid = fuse_solid(ob, sy, surface, grid, opts)
+    report(0.8, "guessed parts")
+    solid = guess_parts(ob, sy, surface, grid, solid, symmetry=symmetry, extras=extras)
+    report(0.95, "metadata")
+    meta = completion_meta(ob, sy, surface, grid, solid, opts, symmetry=symmetry, extras=extras)
+    g = grid.frame
+    return make(solid.sdf, solid.rgb, None, g.origin, g.h, meta)
+
+
+def find_symmetries(ob: Observation, res: int, symmetry: bool) -> Symmetries:
+    """The observation's mirror planes and rotation (none without ``symmetry``) and the upright
+    frame they fix: up corrected by the first plane's tilt where no level plane gave it, the
+    first plane turned to x = 0.
+    """
+    Q = ob.points
+    U = ob.U
     Qu = _apply(U, Q)
     ext = Qu.max(axis=0) - Qu.min(axis=0)
     h0 = float(ext.max()) / res
-    carver = Carver(frames, CARVE_MARGIN * h0)
-    Uinv = np.linalg.inv(U)
-
+    carver = Carver(ob.frames, CARVE_MARGIN * h0)
     # symmetry tests: "clearly in front of a reading", beyond depth noise and slopes; tabulated
     # once in the first upright frame around the object (copies land within about its size)
-    U0 = U
     lo0, hi0 = Qu.min(axis=0) - 0.25 * ext, Qu.max(axis=0) + 0.25 * ext
     hs = max(h0, float(ext.max()) / SYMMETRY_RES)
-    free_grid = FreeGrid(carver, Uinv, lo0, hi0, FREE_GRID_VOXELS * hs, SYMMETRY_MARGIN * hs)
-
-    def free_up(p):
-        # until the frame turns (the mirror search) the upright frame is the table's: millions
-        # of candidate points skip a transform by the identity
-        if U is U0:
-            return free_grid(p)
-        return free_grid(p, frame=U0 @ Uinv)
-
-    report(0.15, "symmetries")
-    syms: list[sym_mod.Symmetry] = []
+    free_grid = FreeGrid(
+        carver, np.linalg.inv(U), lo0, hi0, FREE_GRID_VOXELS * hs, SYMMETRY_MARGIN * hs
+    )
+    free_up = FreeUp(free_grid, U)
     rng = np.random.default_rng(0)
     sub = rng.choice(len(Qu), min(len(Qu), 20000), replace=False)
     cell = 1.5 * hs
-    Nu0 = QN @ U[:3, :3].T
-    if symmetry:
-        syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
+    syms: list[sym_mod.Symmetry] = []
     up_from, up_tilt = ob.up_from, 0.0
-    if syms and up_from in ("base", "camera"):
-        # a mirror plane contains up: where up is no level plane's (a floor, an underside) the
-        # plane tilted across itself to fit the scan best says how far up is off across it (a
-        # base's plane leans with its legs rising to the hub, the camera with its own tilt)
-        n3, _ = sym_mod.tilted_plane(syms[0], Qu[sub], Nu0[sub], cell)
-        y = np.array([0.0, 1.0, 0.0]) - n3[1] * n3
-        y /= np.linalg.norm(y)
-        up_tilt = float(np.degrees(np.arccos(np.clip(y[1], -1.0, 1.0))))
-        # the tilt search's finest step is 0.25 degrees: a step or two of it is noise, not
-        # worth the frame and the mirror search rebuilt
-        if up_tilt < MIN_UP_TILT_DEG:
-            up_tilt = 0.0
-        else:
-            up_w = Uinv[:3, :3] @ y
-            U = _upright(up_w, frames[0].pose[:3, 2], float((Q @ up_w).min()), Q.mean(axis=0))
-            Uinv = np.linalg.inv(U)
-            Qu = _apply(U, Q)
-            Nu0 = QN @ U[:3, :3].T
-            syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
-            up_from += "+mirror"
+    if symmetry:
+        syms, U, up_from, up_tilt = _mirrors_and_up(ob, U, sub, cell, free_up)
     if syms:
-        # turn the upright frame so the first mirror plane is x = 0
-        p = syms[0].params
-        n = np.array([np.cos(p["theta"]), 0.0, np.sin(p["theta"])])
-        if n[0] < 0:
-            n = -n
-        V = np.eye(4)
-        V[:3, :3] = np.stack([n, [0, 1, 0], np.cross(n, [0, 1, 0])])
-        V[0, 3] = -float(n @ (syms[0].b / 2))
-        Vinv = np.linalg.inv(V)
-        syms = [
-            sym_mod.Symmetry(
-                s.kind,
-                (V @ _sym4(s) @ Vinv)[:3, :3],
-                (V @ _sym4(s) @ Vinv)[:3, 3],
-                s.support,
-                s.violation,
-                s.fold,
-                s.bands,
-                s.params,
-            )
-            for s in syms
-        ]
-        U = V @ U
-        Uinv = np.linalg.inv(U)
-        Qu = _apply(U, Q)
-    rot = sym_mod.rotation_axis(Qu[sub], free_up, cell) if symmetry else None
+        syms, U = _plane_at_x0(syms, U)
+        free_up.turn(U)
+    rot = sym_mod.rotation_axis(_apply(U, Q)[sub], free_up, cell) if symmetry else None
+    return Symmetries(U, np.linalg.inv(U), syms, rot, up_from, up_tilt, hs, cell, carver, free_up)
 
-    report(0.3, "symmetric copies")
-    # the group generated by the mirrors (two planes: also their composition), then the base's
-    # rotations; copies that land where a camera saw through are dropped
+
+def _mirrors_and_up(
+    ob: Observation, U: np.ndarray, sub: np.ndarray, cell: float, free_up: FreeUp
+) -> tuple[list[sym_mod.Symmetry], np.ndarray, str, float]:
+    """Mirror planes of the scan's points ``sub`` in the upright frame ``U``; where up came from
+    no level plane (a base, the camera), up tilted to the first plane's tilt and the planes
+    searched again in that frame. Returns the planes, the frame, where up came from, the tilt
+    (degrees).
+    """
+    Q, QC, QN = ob.points, ob.colors, ob.normals
+    Qu, Nu0 = _apply(U, Q), QN @ U[:3, :3].T
+    syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
+    up_from = ob.up_from
+    if not syms or up_from not in ("base", "camera"):
+        return syms, U, up_from, 0.0
+    # a mirror plane contains up: where up is no level plane's (a floor, an underside) the
+    # plane tilted across itself to fit the scan best says how far up is off across it (a
+    # base's plane leans with its legs rising to the hub, the camera with its own tilt)
+    n3, _ = sym_mod.tilted_plane(syms[0], Qu[sub], Nu0[sub], cell)
+    y = np.array([0.0, 1.0, 0.0]) - n3[1] * n3
+    y /= np.linalg.norm(y)
+    up_tilt = float(np.degrees(np.arccos(np.clip(y[1], -1.0, 1.0))))
+    # the tilt search's finest step is 0.25 degrees: a step or two of it is noise, not
+    # worth the frame and the mirror search rebuilt
+    if up_tilt < MIN_UP_TILT_DEG:
+        return syms, U, up_from, 0.0
+    up_w = np.linalg.inv(U)[:3, :3] @ y
+    U = _upright(up_w, ob.frames[0].pose[:3, 2], float((Q @ up_w).min()), Q.mean(axis=0))
+    free_up.turn(U)
+    Qu, Nu0 = _apply(U, Q), QN @ U[:3, :3].T
+    syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
+    return syms, U, up_from + "+mirror", up_tilt
+
+
+def _plane_at_x0(
+    syms: list[sym_mod.Symmetry], U: np.ndarray
+) -> tuple[list[sym_mod.Symmetry], np.ndarray]:
+    """The upright frame ``U`` turned so that the first mirror plane is x = 0, and the planes
+    in the turned frame.
+    """
+    p = syms[0].params
+    n = np.array([np.cos(p["theta"]), 0.0, np.sin(p["theta"])])
+    if n[0] < 0:
+        n = -n
+    V = np.eye(4)
+    V[:3, :3] = np.stack([n, [0, 1, 0], np.cross(n, [0, 1, 0])])
+    V[0, 3] = -float(n @ (syms[0].b / 2))
+    Vinv = np.linalg.inv(V)
+    turned = [
+        sym_mod.Symmetry(
+            s.kind,
+            (V @ _sym4(s) @ Vinv)[:3, :3],
+            (V @ _sym4(s) @ Vinv)[:3, 3],
+            s.support,
+            s.violation,
+            s.fold,
+            s.bands,
+            s.params,
+        )
+        for s in syms
+    ]
+    return turned, V @ U
+
+
+def symmetric_copies(ob: Observation, sy: Symmetries) -> Surface:
+    """The observed surface (upright) and its copies by the group the mirrors generate (two
+    planes: also their composition) and then the base's rotations; copies that land where a
+    camera saw through are dropped.
+    """
+    U = sy.U
+    Qu, QC = _apply(U, ob.points), ob.colors
+    syms = sy.syms
     group: list[tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]] = [
         (_sym4(s), s.where) for s in syms
     ]
     if len(group) == 2:
         both = syms[0].where
         group.append((group[1][0] @ group[0][0], lambda p: both(p) & syms[1].where(p)))
-    Nu = QN @ U[:3, :3].T
+    Nu = ob.normals @ U[:3, :3].T
     surf, surf_c, surf_n = [Qu], [QC], [Nu]
     kind = [np.full(len(Qu), fuse_mod.OBSERVED, np.uint8)]
     for g, where in group:
@@ -563,7 +771,8 @@ def _complete(
         surf_c.append(QC[w])
         surf_n.append(Nu[w] @ g[:3, :3].T)
         kind.append(np.full(len(cp), fuse_mod.MIRRORED, np.uint8))
-    rot_steps = []
+    rot_steps: list[tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]] = []
+    rot = sy.rot
     if rot is not None:
         allp, allc, alln = np.concatenate(surf), np.concatenate(surf_c), np.concatenate(surf_n)
         low = rot.where(allp)
@@ -577,7 +786,7 @@ def _complete(
             cp = _apply(step, allp[low])
             # a turned copy completes what the scan lacks; on surface already there it would
             # only double it a little off
-            new = tree.query(cp, distance_upper_bound=cell, workers=2)[0] > cell
+            new = tree.query(cp, distance_upper_bound=sy.cell, workers=2)[0] > sy.cell
             surf.append(cp[new])
             surf_c.append(allc[low][new])
             surf_n.append(alln[low][new] @ step[:3, :3].T)
@@ -587,33 +796,50 @@ def _complete(
     copy = SK != fuse_mod.OBSERVED
     if copy.any():
         bad = np.zeros(len(S), bool)
-        bad[copy] = free_up(S[copy])
+        bad[copy] = sy.free_up(S[copy])
         S, SC, SK, SN = S[~bad], SC[~bad], SK[~bad], SN[~bad]
     n_dropped = int(copy.sum() - (SK != fuse_mod.OBSERVED).sum())
+    return Surface(S, SC, SK, SN, group + rot_steps, n_dropped)
 
-    report(0.45, "grid")
-    grid_to_world = Uinv if upright else np.eye(4)
+
+def plan_grid(surface: Surface, sy: Symmetries, opts: Settings) -> Grid:
+    """The output grid around the surface: ``res`` voxels along its longest side, padded for the
+    closure and the band, in the upright frame or the input's (``upright``); refused where it
+    would not fit in memory.
+    """
+    grid_to_world = sy.Uinv if opts.upright else np.eye(4)
     world_to_grid = np.linalg.inv(grid_to_world)
-    Sg = _apply(world_to_grid @ Uinv, S)
-    SNg = SN @ (world_to_grid @ Uinv)[:3, :3].T
+    Sg = _apply(world_to_grid @ sy.Uinv, surface.points)
+    SNg = surface.normals @ (world_to_grid @ sy.Uinv)[:3, :3].T
     lo, hi = Sg.min(axis=0), Sg.max(axis=0)
-    h = float((hi - lo).max()) / res
-    pad = math.ceil(closure) + BAND_VOXELS + 2
+    h = float((hi - lo).max()) / opts.res
+    pad = math.ceil(opts.closure) + BAND_VOXELS + 2
     shape = np.ceil((hi - lo) / h - 1e-9).astype(np.int64) + 1 + 2 * pad
     origin = (lo + hi) / 2 - (shape - 1) / 2 * h
-    if upright:
+    if opts.upright:
         # the floor is the solid's lowest possible level: keep the grid from wasting space below
         cut = int(max(0, math.floor((lo[1] - origin[1]) / h) - pad))
         origin[1] += cut * h
         shape[1] -= cut
     from .._memory import check_memory
 
-    check_memory(tuple(int(s) for s in shape), 40, what=f"{source} at res {res}", params=("res",))
-    carver.margin = CARVE_MARGIN * h
+    shape_t = tuple(int(s) for s in shape)
+    check_memory(shape_t, 40, what=f"{opts.source} at res {opts.res}", params=("res",))
+    return Grid(fuse_mod.GridFrame(grid_to_world, shape_t, origin, h), Sg, SNg, lo, hi)
 
+
+def fuse_solid(
+    ob: Observation, sy: Symmetries, surface: Surface, grid: Grid, opts: Settings
+) -> Solid:
+    """The solid the surface, the free space (seen, and in each symmetric view) and the floor
+    give (:func:`partscale.complete.fuse.fuse`).
+    """
+    g = grid.frame
+    U, Uinv, carver = sy.U, sy.Uinv, sy.carver
+    carver.margin = CARVE_MARGIN * g.h
     sym_free: list[Callable[[np.ndarray], np.ndarray]] = []
-    for g, where in group + rot_steps:
-        gi = np.linalg.inv(g)
+    for m, where in surface.views:
+        gi = np.linalg.inv(m)
 
         def f(pw, gi=gi, where=where):
             # a symmetric view of the free space, only at heights where the symmetry holds
@@ -628,50 +854,62 @@ def _complete(
     def height_world(pw):
         return _apply(U, pw)[:, 1]
 
-    report(0.55, "carving and closing")
     sdf, rgb, prov = fuse_mod.fuse(
-        grid_to_world,
-        tuple(shape),
-        origin,
-        h,
-        Sg,
-        SC,
-        SK,
-        SNg,
+        g.grid_to_world,
+        g.shape,
+        g.origin,
+        g.h,
+        grid.points,
+        surface.colors,
+        surface.kind,
+        grid.normals,
         carver.free,
         sym_free,
         height_world,
-        closure,
+        opts.closure,
     )
     if not (sdf < 0).any():
-        raise InputError(f"{source}: expected a solid after completion, got none (all carved)")
+        raise InputError(f"{opts.source}: expected a solid after completion, got none (all carved)")
+    return Solid(sdf, rgb, prov)
+
+
+def guess_parts(
+    ob: Observation,
+    sy: Symmetries,
+    surface: Surface,
+    grid: Grid,
+    solid: Solid,
+    *,
+    symmetry: bool,
+    extras: bool,
+) -> Solid:
+    """The fused solid with a turning base's guessed column (with ``symmetry``), the scan's
+    specks dropped, the pieces it left apart joined by struts (with ``extras``) and its
+    diagonal-only contacts filled; the distances beyond the band bounded again.
+    """
+    g = grid.frame
+    h, origin = g.h, g.origin
+    sdf, prov = solid.sdf, solid.prov
     # a turning base's column to the seat, which sensors rarely read (thin, black): guessed
     # where only the sure free space allows it
-    sure = column_mod.sure_carver(frames, column_mod.SURE_MARGIN_VOXELS * h)
+    sure = column_mod.sure_carver(ob.frames, column_mod.SURE_MARGIN_VOXELS * h)
+    Uinv = sy.Uinv
 
     def sure_free_up(pu):
         return sure.free(_apply(Uinv, pu))
 
-    col = column_mod.find_column(S, rot, sure_free_up, h) if symmetry else None
+    col = column_mod.find_column(surface.points, sy.rot, sure_free_up, h) if symmetry else None
     n_column = 0
+    grid_to_up = sy.U @ g.grid_to_world
     if col is not None:
         sdf, prov, n_column = column_mod.add_column(
-            sdf, prov, col, U @ grid_to_world, origin, h, sure_free_up, fuse_mod.GUESSED
+            sdf, prov, col, grid_to_up, origin, h, sure_free_up, fuse_mod.GUESSED
         )
     # made fit to mesh: scan noise's floating specks dropped, diagonal-only contacts filled
     # (marching cubes would join them by edges of four faces)
     sdf, n_specks = tidy_mod.drop_specks(sdf, h)
     # a part the scan left apart (a chair's back on a bar nobody saw, a leg's end): joined by a
     # thin strut where the sure free space leaves a short path
-    grid_to_up = U @ grid_to_world
-    mirror_grid = None
-    if syms:
-        # the first mirror plane (x = 0 upright), where it holds: a strut beside it gets its image
-        M = np.linalg.inv(grid_to_up) @ _sym4(syms[0]) @ grid_to_up
-
-        def mirror_grid(pg):
-            return _apply(M, pg), syms[0].where(_apply(grid_to_up, pg))
-
     struts: list = []
     if extras:
         sdf, prov, struts = strut_mod.add_struts(
@@ -681,74 +919,116 @@ def _complete(
             h,
             lambda pg: sure_free_up(_apply(grid_to_up, pg)),
             fuse_mod.GUESSED,
-            strut_mod.MAX_GAP_SHARE * float((hi - lo).max()),
-            mirror=mirror_grid,
+            strut_mod.MAX_GAP_SHARE * float((grid.hi - grid.lo).max()),
+            mirror=_mirror_in_grid(sy.syms, grid_to_up),
         )
     sdf, n_filled = tidy_mod.fill_contacts(sdf, h)
     # beyond the band, distances to what the steps since the fusion added
     sdf = fuse_mod.bound_far(sdf, h)
-    report(0.95, "metadata")
-    surface = np.abs(sdf) <= h
-    counts = np.bincount(prov[surface], minlength=4).astype(np.float64)
+    return Solid(sdf, solid.rgb, prov, col, n_column, n_specks, tuple(struts), n_filled)
+
+
+def _mirror_in_grid(syms: list[sym_mod.Symmetry], grid_to_up: np.ndarray):
+    """The first mirror plane (x = 0 upright) in grid coordinates, where it holds: grid points
+    (M, 3) -> (their images (M, 3), (M,) bool where it holds); None without a plane.
+    """
+    if not syms:
+        return None
+    M = np.linalg.inv(grid_to_up) @ _sym4(syms[0]) @ grid_to_up
+
+    def mirror_grid(pg):
+        return _apply(M, pg), syms[0].where(_apply(grid_to_up, pg))
+
+    return mirror_grid
+
+
+def completion_meta(
+    ob: Observation,
+    sy: Symmetries,
+    surface: Surface,
+    grid: Grid,
+    solid: Solid,
+    opts: Settings,
+    *,
+    symmetry: bool,
+    extras: bool,
+) -> dict:
+    """The completion's ``meta``: ``source``, ``units``, the history entry and ``completion``
+    (shares of the surface by kind, what was found and added, the frames, the provenance).
+    """
+    g = grid.frame
+    surface_vox = np.abs(solid.sdf) <= g.h
+    counts = np.bincount(solid.prov[surface_vox], minlength=4).astype(np.float64)
     total = max(counts[1:].sum(), 1.0)
-    to_input = grid_to_world
+    found: Any = ob.floor
+    col = solid.column
     completion = {
         "method": METHOD if extras else "carve+floor+between+slab+closure",
         "observed": round(counts[fuse_mod.OBSERVED] / total, 4),
         "mirrored": round(counts[fuse_mod.MIRRORED] / total, 4),
         "guessed": round(counts[fuse_mod.GUESSED] / total, 4),
-        "views": len(frames),
-        "points_observed": len(Q),
-        "copies_dropped_in_free_space": n_dropped,
-        "specks_dropped": n_specks,
-        "contact_voxels_filled": n_filled,
-        "column": None if col is None else {**col.as_dict(), "voxels_added": n_column},
-        "struts": [st.as_dict() for st in struts],
+        "views": len(ob.frames),
+        "points_observed": len(ob.points),
+        "copies_dropped_in_free_space": surface.n_dropped,
+        "specks_dropped": solid.n_specks,
+        "contact_voxels_filled": solid.n_filled,
+        "column": None if col is None else {**col.as_dict(), "voxels_added": solid.n_column},
+        "struts": [st.as_dict() for st in solid.struts],
         "floor": None
         if found is None
         else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
-        "up": U[1, :3].round(6).tolist(),
-        "up_from": up_from,
-        "up_tilt_by_mirror_deg": round(up_tilt, 3),
-        "symmetries": [
-            {
-                "kind": "mirror",
-                "support": round(s.support, 3),
-                "violation": round(s.violation, 3),
-                "heights": [
-                    [a, b] if np.isfinite([a, b]).all() else [max(a, -1e9), min(b, 1e9)]
-                    for a, b in s.bands
-                ],
-            }
-            for s in syms
-        ]
-        + (
-            [
-                {
-                    "kind": "rotation",
-                    "fold": rot.fold,
-                    "support": round(rot.support, 3),
-                    "violation": round(rot.violation, 3),
-                }
-            ]
-            if rot is not None
-            else []
-        ),
-        "frame": "upright" if upright else "input",
-        "to_input_frame": to_input.round(9).tolist(),
-        "upright_from_input": U.round(9).tolist(),
-        "provenance": _encode(prov),
+        "up": sy.U[1, :3].round(6).tolist(),
+        "up_from": sy.up_from,
+        "up_tilt_by_mirror_deg": round(sy.up_tilt, 3),
+        "symmetries": _symmetries_meta(sy),
+        "frame": "upright" if opts.upright else "input",
+        "to_input_frame": g.grid_to_world.round(9).tolist(),
+        "upright_from_input": sy.U.round(9).tolist(),
+        "provenance": _encode(solid.prov),
     }
-    history = {
+    history = _history(ob, sy, opts, symmetry=symmetry)
+    return {"source": opts.source, "units": "m", "history": [history], "completion": completion}
+
+
+def _symmetries_meta(sy: Symmetries) -> list[dict]:
+    """The mirror planes (support, violation, the heights where each holds) and the rotation."""
+    out: list[dict] = [
+        {
+            "kind": "mirror",
+            "support": round(s.support, 3),
+            "violation": round(s.violation, 3),
+            "heights": [
+                [a, b] if np.isfinite([a, b]).all() else [max(a, -1e9), min(b, 1e9)]
+                for a, b in s.bands
+            ],
+        }
+        for s in sy.syms
+    ]
+    rot = sy.rot
+    if rot is not None:
+        out.append(
+            {
+                "kind": "rotation",
+                "fold": rot.fold,
+                "support": round(rot.support, 3),
+                "violation": round(rot.violation, 3),
+            }
+        )
+    return out
+
+
+def _history(ob: Observation, sy: Symmetries, opts: Settings, *, symmetry: bool) -> dict:
+    """The history entry of a completion: its options and the method's constants."""
+    out: dict[str, Any] = {
         "op": "complete",
-        "source": source,
+        "source": opts.source,
         "method": METHOD,
-        "res": res,
-        "views": len(frames),
-        "box": list(box) if box is not None else None,
-        "upright": bool(upright),
+        "res": opts.res,
+        "views": len(ob.frames),
+        "box": list(opts.box) if opts.box is not None else None,
+        "upright": bool(opts.upright),
         "symmetry": bool(symmetry),
-        "closure_voxels": closure,
+        "closure_voxels": opts.closure,
         "between_reach_voxels": fuse_mod.BETWEEN_VOXELS,
         "between_closing_voxels": fuse_mod.BETWEEN_CLOSING,
         "back_shift_voxels": fuse_mod.BACK_SHIFT,
@@ -766,17 +1046,18 @@ def _complete(
         "strut_min_radius_voxels": strut_mod.MIN_RADIUS_VOXELS,
         "strut_max_gap_share": strut_mod.MAX_GAP_SHARE,
         "floor_tol_m": FLOOR_TOL,
-        "up_from": up_from,
+        "up_from": sy.up_from,
         "max_plane_tilt_deg": sym_mod.MAX_PLANE_TILT_DEG,
-        "cluster_cell_m": CLUSTER_CELL,
+        "cluster_cell_m": ob.cluster_cell,
         "symmetry_min_support": sym_mod.MIN_SUPPORT,
         "symmetry_max_violation": sym_mod.MAX_VIOLATION,
         # the voxel the symmetry tests measured in: the grid's, never finer than SYMMETRY_RES's
-        "symmetry_voxel_m": round(hs, 6),
+        "symmetry_voxel_m": round(sy.hs, 6),
         "symmetry_res": SYMMETRY_RES,
     }
-    meta = {"source": source, "units": "m", "history": [history], "completion": completion}
-    return make(sdf, rgb, None, origin, h, meta)
+    if opts.scale is not None:
+        out["scale"], out["scale_from"] = opts.scale
+    return out
 
 
 def _encode(prov: np.ndarray) -> dict:
@@ -808,7 +1089,7 @@ def provenance(csdf: CSDF) -> np.ndarray:
     >>> import numpy as np
     >>> from partscale import data, ingest
     >>> from partscale.complete import KINDS, complete, provenance
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
     >>> table = complete(frames, res=32, symmetry=False)
     >>> kinds = provenance(table)
@@ -855,7 +1136,7 @@ def completion_colors(csdf: CSDF) -> np.ndarray:
     --------
     >>> from partscale import data, ingest
     >>> from partscale.complete import complete, completion_colors
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> frames = virtual_scan(ingest.load_mesh(data.table()), 1)
     >>> table = complete(frames, res=32, symmetry=False)
     >>> shown = table.replace(rgb=completion_colors(table))
@@ -902,7 +1183,7 @@ def complete_file(
         A JSON list of registered views (:func:`read_views`).
     **options
         :func:`complete`'s keywords (``res``, ``box``, ``upright``, ``symmetry``, ``closure``,
-        ``force_completion``, ``progress``).
+        ``force_completion``, ``scale``, ``progress``).
 
     Returns
     -------
@@ -923,7 +1204,7 @@ def complete_file(
     >>> import trimesh
     >>> from partscale import data, ingest
     >>> from partscale.complete import complete_file
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> (seen,) = virtual_scan(ingest.load_mesh(data.table()), 1, floor=False)
     >>> points, colors, _ = seen.points()
     >>> in_camera = (points - seen.pose[:3, 3]) @ seen.pose[:3, :3]

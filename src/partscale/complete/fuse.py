@@ -17,6 +17,7 @@ mirrored point's within 1.5 voxels, elsewhere diffused (normalised Gaussian, the
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -105,6 +106,57 @@ def bound_far(sdf: np.ndarray, h: float) -> np.ndarray:
     return sdf
 
 
+@dataclass(frozen=True, eq=False)
+class GridFrame:
+    """The grid: ``shape`` voxels of size ``h`` from voxel centre ``origin`` (grid coordinates),
+    placed in the world by ``grid_to_world`` (4, 4) float64.
+    """
+
+    grid_to_world: np.ndarray
+    shape: tuple[int, ...]
+    origin: np.ndarray
+    h: float
+
+    def centres(self, flat: np.ndarray) -> np.ndarray:
+        """(M, 3) float32 grid coordinates of the voxels at flat indices ``flat`` (M,)."""
+        ijk = np.stack(np.unravel_index(flat, self.shape), axis=1)
+        return (self.origin + ijk * self.h).astype(np.float32)
+
+    def to_world(self, centres: np.ndarray) -> np.ndarray:
+        """(M, 3) float32 world coordinates of grid points ``centres`` (M, 3) float32."""
+        R, t = self.grid_to_world[:3, :3], self.grid_to_world[:3, 3]
+        return centres @ R.T.astype(np.float32) + t.astype(np.float32)
+
+
+@dataclass(frozen=True, eq=False)
+class SurfacePoints:
+    """Surface points on the grid: ``points`` (N, 3) float64 grid coordinates, ``colors`` (N, 3)
+    uint8, ``kind`` (N,) uint8 (``OBSERVED`` / ``MIRRORED``), ``normals`` (N, 3) unit, out of the
+    object, ``idx`` (N, 3) int64 their voxels, ``occ`` and ``occ_obs`` (X, Y, Z) bool the voxels
+    holding any point and an observed one.
+    """
+
+    points: np.ndarray
+    colors: np.ndarray
+    kind: np.ndarray
+    normals: np.ndarray
+    idx: np.ndarray
+    occ: np.ndarray
+    occ_obs: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class Candidates:
+    """Voxels that may be solid before the carving: ``within`` (X, Y, Z) bool (the closure, the
+    fill between opposite surfaces and the slabs), ``within_closure`` (the closure and the sure
+    slabs), ``free_all`` (X, Y, Z) bool every voxel's free space, or None without the fill.
+    """
+
+    within: np.ndarray
+    within_closure: np.ndarray
+    free_all: np.ndarray | None
+
+
 def fuse(
     grid_to_world: np.ndarray,
     shape: tuple[int, ...],
@@ -121,6 +173,12 @@ def fuse(
     fill_between: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Solid, SDF, colour and provenance on the grid.
+
+    The steps: the points on the grid (:func:`surface_on_grid`), the voxels that may be solid
+    (:func:`candidates`), those no camera saw through (:func:`carve`), the channels between
+    filled segments closed (:func:`close_between`), holes filled and specks dropped
+    (:func:`drop_pieces`), the distances (:func:`distances`) and the colours and provenance
+    near the surface (:func:`surface_attributes`).
 
     Parameters
     ----------
@@ -140,39 +198,86 @@ def fuse(
     sdf (X, Y, Z) float32, rgb (X, Y, Z, 3) uint8, provenance (X, Y, Z) uint8 (0 away from the
     surface, else OBSERVED / MIRRORED / GUESSED).
     """
-    shape = tuple(int(s) for s in shape)
-    idx = np.rint((points - origin) / h).astype(np.int64)
-    inb = ((idx >= 0) & (idx < np.asarray(shape))).all(axis=1)
+    grid = GridFrame(grid_to_world, tuple(int(s) for s in shape), origin, h)
+    sp = surface_on_grid(grid, points, colors, kind, normals)
+    cand = candidates(grid, sp, free_world, closure, fill_between)
+    solid = carve(grid, sp, cand.within, free_world, sym_free, height_world)
+    if cand.free_all is not None:
+        solid = close_between(solid, cand)
+    solid = drop_pieces(_fill_holes(solid), sp.occ_obs)
+    sdf = distances(solid, h)
+    rgb, prov = surface_attributes(grid, sp, solid, sdf)
+    return sdf, rgb, prov
+
+
+def surface_on_grid(
+    grid: GridFrame,
+    points: np.ndarray,
+    colors: np.ndarray,
+    kind: np.ndarray,
+    normals: np.ndarray,
+) -> SurfacePoints:
+    """The surface points (N, 3) float64 grid coordinates (with ``colors``, ``kind``,
+    ``normals``) that fall in the grid, their voxels and the occupancy they give.
+    """
+    idx = np.rint((points - grid.origin) / grid.h).astype(np.int64)
+    inb = ((idx >= 0) & (idx < np.asarray(grid.shape))).all(axis=1)
     idx, points, colors, kind, normals = idx[inb], points[inb], colors[inb], kind[inb], normals[inb]
-    occ = np.zeros(shape, bool)
+    occ = np.zeros(grid.shape, bool)
     occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
-    occ_obs = np.zeros(shape, bool)
+    occ_obs = np.zeros(grid.shape, bool)
     o = idx[kind == OBSERVED]
     occ_obs[o[:, 0], o[:, 1], o[:, 2]] = True
-    d_s = _edt(~occ)
-    R = grid_to_world[:3, :3]
-    t = grid_to_world[:3, 3]
-    within = d_s <= closure
+    return SurfacePoints(points, colors, kind, normals, idx, occ, occ_obs)
+
+
+def candidates(
+    grid: GridFrame,
+    sp: SurfacePoints,
+    free_world: Callable[[np.ndarray], np.ndarray],
+    closure: float,
+    fill_between: bool,
+) -> Candidates:
+    """The voxels within ``closure`` voxels of a surface point and, with ``fill_between``, those
+    between opposite surfaces (:func:`_between`) and inside slabs (:func:`_slab`).
+    """
+    shape, origin, h = grid.shape, grid.origin, grid.h
+    within = _edt(~sp.occ) <= closure
     within_closure = within.copy()
+    free_all = None
     if fill_between:
         centres_all = (origin + np.indices(shape).reshape(3, -1).T * h).astype(np.float32)
-        free_all = free_world(centres_all @ R.T.astype(np.float32) + t.astype(np.float32)).reshape(
-            shape
-        )
-        between = _between(points, normals, idx, origin, h, shape, free_all)
-        sure, unsure = _slab(points, normals, idx, origin, h, shape, free_all)
+        free_all = free_world(grid.to_world(centres_all)).reshape(shape)
+        between = _between(sp.points, sp.normals, sp.idx, origin, h, shape, free_all)
+        sure, unsure = _slab(sp.points, sp.normals, sp.idx, origin, h, shape, free_all)
         within |= between | sure | unsure
         within_closure |= sure
+    return Candidates(within, within_closure, free_all)
+
+
+def carve(
+    grid: GridFrame,
+    sp: SurfacePoints,
+    within: np.ndarray,
+    free_world: Callable[[np.ndarray], np.ndarray],
+    sym_free: list[Callable[[np.ndarray], np.ndarray]],
+    height_world: Callable[[np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """(X, Y, Z) bool: the voxels of ``within`` that no camera saw through (directly or in a
+    symmetric view), above the floor and behind their nearest surface point; the voxels holding
+    surface points always.
+    """
+    h = grid.h
     near = np.flatnonzero(within.ravel())
-    centres = (origin + np.stack(np.unravel_index(near, shape), axis=1) * h).astype(np.float32)
-    world = centres @ R.T.astype(np.float32) + t.astype(np.float32)
+    centres = grid.centres(near)
+    world = grid.to_world(centres)
     keep = ~free_world(world) & (height_world(world) >= -0.5 * h)
     # the closure lies behind the surface: a voxel in front of its nearest surface point is
     # space the scan says nothing about (beyond the sensor's range, a hole), not the object
-    _, nn0 = cKDTree(points).query(centres, k=1, workers=2)
-    keep &= np.einsum("ni,ni->n", centres - points[nn0], normals[nn0]) <= BEHIND_SLACK * h
+    _, nn0 = cKDTree(sp.points).query(centres, k=1, workers=2)
+    keep &= np.einsum("ni,ni->n", centres - sp.points[nn0], sp.normals[nn0]) <= BEHIND_SLACK * h
     if sym_free:
-        d_obs = _edt(~occ_obs).ravel()[near]
+        d_obs = _edt(~sp.occ_obs).ravel()[near]
         # a symmetric view may not carve next to what was observed
         may = keep & (d_obs > SNAP_VOXELS)
         for f in sym_free:
@@ -182,59 +287,85 @@ def fuse(
             may[sel[hit]] = False
     # the voxels holding the surface points are solid whatever the carving says: a sheet seen
     # from one side would otherwise lose the half of its voxels whose centres lie in front of it
-    keep |= occ.ravel()[near]
-    solid = np.zeros(shape, bool)
+    keep |= sp.occ.ravel()[near]
+    solid = np.zeros(grid.shape, bool)
     solid.ravel()[near[keep]] = True
-    if fill_between:
-        # the segments between opposite surfaces leave narrow channels (rounding, sensor
-        # holes); each would be an inner surface deep in the object: close them
-        r = BETWEEN_CLOSING
-        g = np.indices((2 * r + 1,) * 3) - r
-        ball = (g**2).sum(axis=0) <= r * r
+    return solid
 
-        def closed(m):
-            # in the box of m, r + 2 voxels wider (or to the grid's edge): the closing reaches no
-            # further, and the empty rim around it is the outside the hole filling needs
-            box = _box(m, r + 2)
-            mb = m[box]
-            c = ndimage.binary_closing(np.pad(mb, r + 1), ball)[
-                r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
-            ]
-            out = np.zeros_like(m)
-            out[box] = _fill_holes(mb | (c & ~free_all[box]))
-            return out
 
-        filled = closed(solid)
-        shell = closed(solid & within_closure)
-        # where the segments fill the object only in part (thick curved parts whose opposite
-        # sides were seen in patches) the voids between them are surfaces deep inside it: each
-        # region of the fill is kept only where it leaves less boundary than the thin closure
-        # alone, so a leg or a seat that closes cleanly keeps it beside a cushion that does not
-        solid = shell | _fill_regions(shell, filled & ~shell)
-    solid = _fill_holes(solid)
+def close_between(solid: np.ndarray, cand: Candidates) -> np.ndarray:
+    """(X, Y, Z) bool: ``solid`` with the narrow channels the segments between opposite surfaces
+    leave (rounding, sensor holes) closed, each region of the fill kept only where it leaves
+    less boundary than the thin closure alone (:func:`_fill_regions`).
+    """
+    free_all = cand.free_all
+    assert free_all is not None  # only with the fill between surfaces
+    r = BETWEEN_CLOSING
+    g = np.indices((2 * r + 1,) * 3) - r
+    ball = (g**2).sum(axis=0) <= r * r
+
+    def closed(m):
+        # in the box of m, r + 2 voxels wider (or to the grid's edge): the closing reaches no
+        # further, and the empty rim around it is the outside the hole filling needs
+        box = _box(m, r + 2)
+        mb = m[box]
+        c = ndimage.binary_closing(np.pad(mb, r + 1), ball)[
+            r + 1 : -r - 1, r + 1 : -r - 1, r + 1 : -r - 1
+        ]
+        out = np.zeros_like(m)
+        out[box] = _fill_holes(mb | (c & ~free_all[box]))
+        return out
+
+    filled = closed(solid)
+    shell = closed(solid & cand.within_closure)
+    # where the segments fill the object only in part (thick curved parts whose opposite
+    # sides were seen in patches) the voids between them are surfaces deep inside it: each
+    # region of the fill is kept only where it leaves less boundary than the thin closure
+    # alone, so a leg or a seat that closes cleanly keeps it beside a cushion that does not
+    return shell | _fill_regions(shell, filled & ~shell)
+
+
+def drop_pieces(solid: np.ndarray, occ_obs: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) bool: ``solid`` without the small pieces the scan barely saw (flying pixels, a
+    neighbour's edge): a piece stays if it has 2 % of the largest's voxels or 5 % of the most
+    observed one's observed voxels (``occ_obs``).
+    """
     lab, n = ndimage.label(solid)
-    if n > 1:
-        size = np.bincount(lab.ravel())
-        size[0] = 0
-        obs_in = np.bincount(lab.ravel(), weights=occ_obs.ravel(), minlength=n + 1)
-        # small pieces the scan barely saw are noise (flying pixels, a neighbour's edge)
-        good = (size >= 0.02 * size.max()) | (obs_in >= 0.05 * obs_in.max())
-        good[0] = False
-        solid = good[lab]
+    if n <= 1:
+        return solid
+    size = np.bincount(lab.ravel())
+    size[0] = 0
+    obs_in = np.bincount(lab.ravel(), weights=occ_obs.ravel(), minlength=n + 1)
+    good = (size >= 0.02 * size.max()) | (obs_in >= 0.05 * obs_in.max())
+    good[0] = False
+    return good[lab]
 
-    # distances: voxel solid first, then the exact distance to surface points near it
+
+def distances(solid: np.ndarray, h: float) -> np.ndarray:
+    """(X, Y, Z) float32 signed distances (world units) of the voxel solid ``solid``."""
     e_out = _edt(~solid) - 0.5
     # the inside distance runs to BACK_SHIFT voxels short of the solid's voxel boundary: the
     # unobserved side of a thin closure then lies about a voxel behind the surface it closes
     e_in = _edt(solid) - 0.5 - BACK_SHIFT
-    sdf = np.where(solid, -e_in, e_out).astype(np.float32) * h
+    return np.where(solid, -e_in, e_out).astype(np.float32) * h
+
+
+def surface_attributes(
+    grid: GridFrame, sp: SurfacePoints, solid: np.ndarray, sdf: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Near the surface, ``sdf`` (in place) made the exact distance to the nearest surface point;
+    returns rgb (X, Y, Z, 3) uint8 (the nearest point's colour, diffused beyond) and provenance
+    (X, Y, Z) uint8 (OBSERVED / MIRRORED / GUESSED near the surface, else 0).
+    """
+    shape, origin, h = grid.shape, grid.origin, grid.h
+    points, colors, kind = sp.points, sp.colors, sp.kind
     band = np.flatnonzero(np.abs(sdf.ravel()) <= (BAND_VOXELS + 1) * h)
     # points deep inside the solid are no surface (a copy landing in a filled region)
-    pidx = idx
+    pidx = sp.idx
     boundary = ndimage.binary_dilation(solid) & ~ndimage.binary_erosion(solid)
     on = boundary[pidx[:, 0], pidx[:, 1], pidx[:, 2]]
     tree = cKDTree(points[on]) if on.any() else None
-    sp_col, sp_n = colors[on], normals[on]
+    sp_col, sp_n = colors[on], sp.normals[on]
     rgb = np.zeros((*shape, 3), np.uint8)
     prov = np.zeros(shape, np.uint8)
     band_pts = origin + np.stack(np.unravel_index(band, shape), axis=1) * h
@@ -279,8 +410,7 @@ def fuse(
         hit = np.isfinite(d_seen)
         prov.ravel()[band[ks][hit]] = OBSERVED
         rgb.reshape(-1, 3)[band[ks][hit]] = colors[seen][nn_seen[hit]]
-    rgb = _diffuse(rgb, known, band)
-    return sdf, rgb, prov
+    return _diffuse(rgb, known, band), prov
 
 
 def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:

@@ -299,7 +299,7 @@ def read_frame(
     >>> from PIL import Image
     >>> from partscale import data, ingest
     >>> from partscale.complete import DEPTH_SCALE, read_frame
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> (seen,) = virtual_scan(ingest.load_mesh(data.table()), 1)
     >>> depth = np.rint(seen.depth * DEPTH_SCALE).astype(np.uint16)
     >>> Image.fromarray(depth).save("depth.png")
@@ -444,7 +444,7 @@ def frame_from_points(points, colors, pose=None) -> Frame:
     --------
     >>> from partscale import data, ingest
     >>> from partscale.complete import frame_from_points
-    >>> from partscale.complete.virtual import virtual_scan
+    >>> from partscale.evaluate import virtual_scan
     >>> (seen,) = virtual_scan(ingest.load_mesh(data.table()), 1, floor=False)
     >>> points, colors, _ = seen.points()
     >>> frame = frame_from_points(points, colors, seen.pose)

@@ -13,8 +13,8 @@ from collections.abc import Sequence
 import numpy as np
 from scipy import ndimage
 
+from ..complete import Frame
 from ..ingest import ColoredMesh
-from .scan import Frame
 
 ELEVATION_DEG = 25.0
 AZIMUTHS_DEG = {1: (35.0,), 3: (35.0, 155.0, 275.0)}
@@ -135,6 +135,14 @@ def virtual_scan(
         When the framed object lies beyond the sensor's range (``MAX_RANGE``) from a camera,
         where the sensor would read nothing of it: an object so large is not in metres (a Sweet
         Home 3D chair 9 units tall, in decimetres).
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> from partscale.evaluate import virtual_scan
+    >>> (frame,) = virtual_scan(ingest.load_mesh(data.table()), 1)
+    >>> frame.shape, frame.cropped
+    ((240, 320), False)
     """
     import trimesh
 

@@ -1,0 +1,155 @@
+"""partscale.complete's named steps, each on its own: the fusion's (points on the grid, carving,
+pieces, distances) on analytic voxel input, and the completion's (symmetries and the frame they
+fix, symmetric copies, the grid, the metadata) on a virtual scan of the shipped table, whose
+left-right mirror plane is known."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from partscale import data, ingest
+from partscale.complete import api, fuse
+from partscale.evaluate import virtual_scan
+
+NEVER = lambda p: np.zeros(len(p), bool)  # noqa: E731
+
+
+def _unit_grid(shape) -> fuse.GridFrame:
+    return fuse.GridFrame(np.eye(4), tuple(shape), np.zeros(3), 1.0)
+
+
+def _points(P, kind=fuse.OBSERVED):
+    P = np.asarray(P, float)
+    N = np.tile([0.0, 1.0, 0.0], (len(P), 1))
+    return P, np.full((len(P), 3), 128, np.uint8), np.full(len(P), kind, np.uint8), N
+
+
+def test_surface_on_grid_keeps_the_points_inside_and_marks_their_voxels():
+    grid = _unit_grid((8, 8, 8))
+    P, C, K, N = _points([[1.2, 2.0, 3.0], [7.4, 0, 0], [9.0, 1, 1], [-1.0, 0, 0]])
+    K[0] = fuse.MIRRORED
+    sp = fuse.surface_on_grid(grid, P, C, K, N)
+    # the two outside the grid (x 9 rounds past 7, x -1 below 0) are dropped
+    assert len(sp.points) == 2
+    assert sp.occ.sum() == 2 and sp.occ[1, 2, 3] and sp.occ[7, 0, 0]
+    # only the observed point's voxel is observed
+    assert sp.occ_obs.sum() == 1 and sp.occ_obs[7, 0, 0]
+
+
+def test_carve_drops_free_voxels_but_never_one_that_holds_a_surface_point():
+    grid = _unit_grid((10, 10, 10))
+    P, C, K, N = _points([[5.0, 5.0, 5.0]])
+    sp = fuse.surface_on_grid(grid, P, C, K, N)
+    within = np.zeros(grid.shape, bool)
+    within[3:8, 3:8, 3:8] = True
+    # everything at x >= 5 was seen through; the rest lies behind the point (normal +y: y <= 5)
+    solid = fuse.carve(grid, sp, within, lambda p: p[:, 0] >= 5, [], lambda p: p[:, 1] + 10)
+    assert solid[5, 5, 5]  # the point's own voxel, though free
+    assert not solid[6, 4, 4] and not solid[5, 4, 4]  # free
+    assert solid[4, 4, 4] and solid[3, 5, 7]  # not free, not in front of the point
+    assert not solid[4, 6, 4]  # in front of the point's surface by a voxel: unknown space
+    # a symmetric view's free space carves too, but not next to what was observed
+    solid2 = fuse.carve(grid, sp, within, NEVER, [lambda p: p[:, 2] <= 4], lambda p: p[:, 1] + 10)
+    assert not solid2[3, 3, 3] and not solid2[4, 4, 4]  # 1.73 voxels from the observed one
+    assert solid2[4, 5, 4] and solid2[5, 5, 4]  # within 1.5 voxels of it
+    assert solid2[4, 4, 5]  # where the symmetric view saw nothing free
+
+
+def test_drop_pieces_keeps_large_pieces_and_well_observed_small_ones():
+    solid = np.zeros((20, 20, 20), bool)
+    solid[2:12, 2:12, 2:12] = True  # 1000 voxels
+    solid[15, 15, 15] = True  # a speck nobody saw much of
+    solid[18, 2:4, 2:4] = True  # 4 voxels, all observed
+    obs = np.zeros_like(solid)
+    obs[18, 2:4, 2:4] = True
+    obs[2, 2:4, 2] = True
+    kept = fuse.drop_pieces(solid, obs)
+    assert kept[5, 5, 5] and kept[18, 2, 2]
+    assert not kept[15, 15, 15]
+    one = np.zeros_like(solid)
+    one[1:3, 1:3, 1:3] = True
+    assert fuse.drop_pieces(one, obs) is one  # a single piece is left as it is
+
+
+def test_distances_of_a_voxel_box_are_its_voxel_distances():
+    solid = np.zeros((20, 20, 20), bool)
+    solid[5:15, 5:15, 5:15] = True
+    h = 0.01
+    sdf = fuse.distances(solid, h)
+    assert sdf.dtype == np.float32
+    # outside: k voxels from the face, (k - 0.5) voxels; inside: drawn in by BACK_SHIFT
+    for k in (1, 2, 4):
+        assert sdf[14 + k, 10, 10] == pytest.approx((k - 0.5) * h, abs=1e-6)
+        assert sdf[15 - k, 10, 10] == pytest.approx(-(k - 0.5 - fuse.BACK_SHIFT) * h, abs=1e-6)
+
+
+@pytest.fixture(scope="module")
+def table_observation():
+    return api.observe(virtual_scan(ingest.load_mesh(data.table()), 1))
+
+
+def test_find_symmetries_turns_the_table_so_its_mirror_plane_is_x0(table_observation):
+    ob = table_observation
+    sy = api.find_symmetries(ob, 48, True)
+    assert sy.syms, "expected the table's left-right mirror plane"
+    m = sy.syms[0]
+    # in the turned upright frame the plane is x = 0: the mirror negates x and nothing else
+    assert np.allclose(m.A, np.diag([-1.0, 1.0, 1.0]), atol=1e-9)
+    assert np.abs(m.b).max() <= 1e-9
+    assert np.allclose(sy.Uinv @ sy.U, np.eye(4), atol=1e-12)
+    # up is the floor's normal (the floor was seen)
+    assert ob.floor is not None and sy.up_from == "floor"
+    assert np.allclose(sy.U[1, :3], ob.floor[0].normal, atol=1e-9)
+    # without symmetry: no planes, no turn, the observation's own frame
+    plain = api.find_symmetries(ob, 48, False)
+    assert not plain.syms and plain.rot is None and np.array_equal(plain.U, ob.U)
+
+
+def test_symmetric_copies_are_the_observed_points_mirrored_where_the_plane_holds(
+    table_observation,
+):
+    ob = table_observation
+    sy = api.find_symmetries(ob, 48, True)
+    s = api.symmetric_copies(ob, sy)
+    obs = s.kind == fuse.OBSERVED
+    assert obs.sum() == len(ob.points)  # the observed points are all kept
+    mir = s.points[~obs]
+    assert len(mir) > 0.2 * len(ob.points)
+    # the first plane's copies (all but those dropped in free space) are observed points with x
+    # negated (the plane is x = 0); the rest are the turning base's and the other plane's
+    from scipy.spatial import cKDTree
+
+    d, _ = cKDTree(s.points[obs] * [-1, 1, 1]).query(mir)
+    first = int(sy.syms[0].where(s.points[obs]).sum())
+    assert (d <= 1e-9).sum() >= first - s.n_dropped
+    n_rot = 0 if sy.rot is None else sy.rot.fold - 1
+    n_mirror = len(sy.syms) + (len(sy.syms) == 2)
+    assert len(s.views) == n_mirror + n_rot
+
+
+def test_plan_grid_puts_res_voxels_along_the_longest_side(table_observation):
+    ob = table_observation
+    sy = api.find_symmetries(ob, 48, False)
+    s = api.symmetric_copies(ob, sy)
+    for upright in (False, True):
+        opts = api.Settings(res=40, box=None, upright=upright, closure=1.5, source="t")
+        g = api.plan_grid(s, sy, opts)
+        ext = g.hi - g.lo
+        assert g.frame.h == pytest.approx(float(ext.max()) / 40, rel=1e-12)
+        # every surface point lies inside the grid, at least the band's width from its faces
+        ijk = (g.points - g.frame.origin) / g.frame.h
+        assert ijk.min() >= 2 and (np.asarray(g.frame.shape) - 1 - ijk).min() >= 2
+        frame = "upright" if upright else "input"
+        assert np.allclose(g.frame.grid_to_world, sy.Uinv if upright else np.eye(4)), frame
+
+
+def test_complete_reports_its_steps_by_name_and_its_shares_sum_to_one(table_observation):
+    said: list[str] = []
+    frames = virtual_scan(ingest.load_mesh(data.table()), 1)
+    c = api.complete(frames, res=32, symmetry=False, progress=lambda f, m: said.append(m))
+    steps = ["symmetries", "symmetric copies", "grid", "carving and closing", "guessed parts"]
+    assert [m for m in said if m in steps][: len(steps)] == steps
+    assert said[0] == "reading the scan" and said[-1] == "done"
+    done = c.meta["completion"]
+    assert done["observed"] + done["mirrored"] + done["guessed"] == pytest.approx(1.0, abs=2e-4)

@@ -67,6 +67,7 @@ from ..csdf import BAND_VOXELS, CSDF
 from ..edit import Edit, ResolvedEdit, recipe_from_history, resolve_edit
 from ..errors import InputError
 from ..surface import to_mesh
+from ..zones import SEAM_WINDOW, layer_step
 
 #: Two consecutive pitches on a line within this fraction of each other mark repeated elements.
 PERIOD_TOLERANCE = 0.15
@@ -75,9 +76,6 @@ MARGIN = 1.0
 #: Fewest samples a distribution needs before it is compared (a handful of stray runs, e.g. a
 #: bump a voxel high, would otherwise decide a region's error).
 MIN_SAMPLES = 20
-#: Seam jumps compare slices this many voxels apart, centred on the seam: wider than the scaling
-#: stage's blend (2 voxels either side of a join), which spreads a jump without removing it.
-SEAM_WINDOW = 5
 #: Most surface points / band voxels measured per comparison (a fixed-seed random subset).
 MAX_POINTS = 150_000
 
@@ -723,8 +721,7 @@ def slice_steps(
     either = near[i] | near[i + k]
     dc = np.linalg.norm(c[i + k].astype(np.float32) - c[i].astype(np.float32), axis=-1)
     f = s.astype(np.float32)
-    trend = k * ((f[i] - f[i - 1]) + (f[i + k + 1] - f[i + k])) / 2
-    js = np.minimum(np.abs((f[i + k] - f[i]) - trend) / h, 2 * BAND_VOXELS)
+    js = layer_step(f[i - 1], f[i], f[i + k], f[i + k + 1], h, k)
     n_both = both.sum(axis=(1, 2))
     n_either = either.sum(axis=(1, 2))
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -66,16 +66,19 @@ from .screw import Screw, find_screws
 from .snap import Move, describe_moves, record_snap, snap
 from .suggest import (
     AXES,
+    SEAM_WINDOW,
     BoundedRepeat,
     Candidate,
     axis_candidates,
     find_bounded_repeats,
+    layer_step,
     suggest,
 )
 from .warps import WarpCandidates, warp_candidates
 
 __all__ = [
     "AXES",
+    "SEAM_WINDOW",
     "AxisElements",
     "BoundedRepeat",
     "Candidate",
@@ -107,6 +110,7 @@ __all__ = [
     "find_screws",
     "fit",
     "fit_axis",
+    "layer_step",
     "local_features",
     "parse_length",
     "parse_size",

@@ -481,19 +481,61 @@ def join_islands(csdf: CSDF, axis: int, start: float, period: float) -> int:
     return max(0, loose(joined) - own)
 
 
+def layer_step(
+    before: np.ndarray,
+    first: np.ndarray,
+    last: np.ndarray,
+    after: np.ndarray,
+    h: float,
+    window: int = SEAM_WINDOW,
+) -> np.ndarray:
+    """The shape step between two layers of distances ``window`` layers apart, per voxel.
+
+    Parameters
+    ----------
+    before, first, last, after : (..., M, N) float32 arrays
+        Signed distances (negative inside) of the layer before the pair, the pair's two layers
+        (``first`` and ``last``, ``window`` layers apart) and the layer after it; any leading
+        axes are broadcast (a stack of pairs).
+    h : float
+        The voxel size.
+    window : int, optional
+        Layers between ``first`` and ``last``; :data:`SEAM_WINDOW` by default.
+
+    Returns
+    -------
+    (..., M, N) float32 array
+        ``|(last - first) - trend| / h``, clipped at ``2 * BAND_VOXELS``, the trend being what
+        the one-layer steps just outside the pair predict over the pair,
+        ``window * ((first - before) + (after - last)) / 2``: zero for a surface that
+        changes linearly (a slanted leg), the full step for a discontinuity however it was
+        blended within the pair. The seam measure of fit and of the evaluation.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.zones import layer_step
+    >>> ramp = [np.full((2, 2), v, np.float32) for v in (0.0, 0.1, 0.6, 0.7)]
+    >>> round(float(layer_step(*ramp, h=0.1).max()), 4)  # a linear field: no step
+    0.0
+    >>> jump = [np.full((2, 2), v, np.float32) for v in (0.0, 0.1, 0.68, 0.78)]
+    >>> round(float(layer_step(*jump, h=0.1).max()), 4)  # 0.08 more than the trend
+    0.8
+    """
+    trend = window * ((first - before) + (after - last)) / 2
+    return np.minimum(np.abs((last - first) - trend) / h, 2 * BAND_VOXELS)
+
+
 def _window_step(f: np.ndarray, h: float) -> float:
     """The shape step across a window of layers ``f`` (``SEAM_WINDOW + 3`` of them: one before
-    the pair compared, the pair :data:`SEAM_WINDOW` apart, one after): over the voxels within a
-    voxel of the surface on either layer of the pair, the mean of ``|(f[k] - f[0]) - trend|``
-    (voxels, at most ``2 * BAND_VOXELS``), the trend being what the one-layer steps just
-    outside the pair predict; NaN with fewer than 3 such voxels. The evaluation's seam shape
-    measure (:func:`partscale.evaluate.metrics.slice_steps`), for one window.
+    the pair compared, the pair :data:`SEAM_WINDOW` apart, one after): the mean
+    :func:`layer_step` over the voxels within a voxel of the surface on either layer of the
+    pair; NaN with fewer than 3 such voxels.
     """
     k = SEAM_WINDOW
     f = f.astype(np.float32)
     f0, fk = f[1], f[k + 1]
-    trend = k * ((f[1] - f[0]) + (f[k + 2] - f[k + 1])) / 2
-    step = np.minimum(np.abs((fk - f0) - trend) / h, 2 * BAND_VOXELS)
+    step = layer_step(f[0], f0, fk, f[k + 2], h)
     either = (np.abs(f0) <= h) | (np.abs(fk) <= h)
     if either.sum() < 3:
         return math.nan

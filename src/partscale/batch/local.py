@@ -36,7 +36,7 @@ from multiprocessing.reduction import send_handle
 from pathlib import Path
 from typing import Any, cast
 
-from .job import thread_env
+from .job import Spec, Task, thread_env
 
 POLL_SECONDS = 0.1
 START_FAILURES = 3
@@ -49,7 +49,6 @@ WARM_FROM = 3
 fewer load them each, side by side (the same wall time, and no warm-up object to run)."""
 """Grid size of the tiny object the template runs to load the kernels."""
 
-Task = dict[str, Any]
 Result = dict[str, Any]
 
 
@@ -195,6 +194,13 @@ class _Worker:
         self.task, self.threads, self.started, self.peak = task, threads, time.monotonic(), 0
         self.conn.send({**task, "threads": threads})
 
+    def done(self, outcome: Result) -> tuple[Task, Result]:
+        """Its task ended with ``outcome``: the task, and the outcome with its peak memory."""
+        task, self.task, self.threads = self.task, None, 0
+        assert task is not None  # a worker sends an outcome only for a task
+        outcome["peak_memory"] = max(outcome.get("peak_memory", 0), self.peak)
+        return task, outcome
+
     def kill(self, template: _Template) -> int | None:
         self.dead = True
         with contextlib.suppress(OSError):
@@ -263,7 +269,7 @@ def _warm_task(task: Task) -> Task:
     """``task``'s stages on the shipped table at :data:`WARM_RES` voxels (the template's warm-up)."""
     from ..data import table
 
-    spec = {**task["spec"], "res": WARM_RES, "fit": None}
+    spec: Spec = {**task["spec"], "res": WARM_RES, "fit": None}
     return {**task, "name": "warm", "path": str(table()), "spec": spec}
 
 
@@ -304,6 +310,150 @@ def _check(w: _Worker, timeout: float | None, memory: int | None, now: float) ->
     return None
 
 
+class _Clock:
+    """The phases of a run: start-up, object phase, end; and the objects' CPU seconds."""
+
+    def __init__(self) -> None:
+        self.t0 = time.perf_counter()
+        self.first = self.last = self.cpu = 0.0
+
+    def started(self) -> None:
+        """Tasks started: the object phase begins (at the first)."""
+        self.first = self.first or time.perf_counter()
+
+    def finished(self, outcome: Result) -> None:
+        """Count a task's CPU seconds (taken out of its outcome)."""
+        self.cpu += float(outcome.pop("cpu_seconds", 0.0))
+
+    def recorded(self) -> None:
+        """A task's end is recorded: the object phase lasts at least until now."""
+        self.last = time.perf_counter()
+
+    def figures(self) -> dict[str, float]:
+        first = self.first or self.t0
+        last = max(self.last, first)
+        return {
+            "startup_seconds": first - self.t0,
+            "objects_seconds": last - first,
+            "end_seconds": time.perf_counter() - last,
+            "objects_cpu_seconds": self.cpu,
+        }
+
+
+class _Pool:
+    """The workers forked from ``template``: grown, given tasks, read, watched and stopped."""
+
+    def __init__(
+        self,
+        template: _Template,
+        size: int,
+        threads: int,
+        timeout: float | None,
+        memory: int | None,
+    ):
+        self.template, self.size, self.threads = template, size, threads
+        self.timeout, self.memory = timeout, memory
+        self.cores = os.cpu_count() or 1
+        self.workers: list[_Worker] = []
+        self.retired: list[_Worker] = []
+
+    def busy(self) -> bool:
+        """Whether a worker has a task."""
+        return any(w.task is not None for w in self.workers)
+
+    def grow(self, pending: collections.deque[Task]) -> None:
+        """Fork the workers the pending tasks need: the first at once; from :data:`WARM_FROM`
+        workers, the others once the template has loaded the kernels (up to then they would
+        load them side by side, at no more cost).
+        """
+        template = self.template
+        self.workers = [w for w in self.workers if not w.dead]
+        warm_first = self.size >= WARM_FROM and not template.warm
+        room = (1 if warm_first else self.size) - len(self.workers)
+        self.workers += [_Worker(template) for _ in range(min(room, len(pending)))]
+        if warm_first and not template.warming and pending:
+            template.start_warm(_warm_task(pending[0]))
+
+    def dispatch(self, pending: collections.deque[Task]) -> list[Task]:
+        """Send pending tasks to the idle workers, largest first; the tasks started."""
+        busy = sum(w.threads for w in self.workers)
+        idle = [w for w in self.workers if w.task is None]
+        started = []
+        for i, w in enumerate(idle[: len(pending)]):
+            task = pending.popleft()
+            k = _threads_for(task, self.cores - busy, len(idle) - i, len(pending) + 1, self.threads)
+            w.send(task, k)
+            busy += k
+            started.append(task)
+        if not pending:
+            self._retire_idle()
+        return started
+
+    def _retire_idle(self) -> None:
+        """Tell the idle workers to stop now that nothing is pending: they exit while the last
+        objects run, so the end does not wait for them.
+        """
+        for w in [w for w in self.workers if w.task is None and not w.dead]:
+            with contextlib.suppress(OSError):
+                w.conn.send(None)
+            self.workers.remove(w)
+            self.retired.append(w)
+
+    def collect(self) -> list[tuple[Task, Result]]:
+        """The tasks that ended (waiting up to :data:`POLL_SECONDS` while any runs), then the
+        ones stopped for their time or memory, or whose worker died.
+        """
+        wait = POLL_SECONDS if self.busy() or self.template.warming else 0.0
+        conns: dict[Any, _Worker | None] = {w.conn: w for w in self.workers}
+        conns[self.template.conn] = None
+        ended: list[tuple[Task, Result]] = []
+        for conn in mp_connection.wait(list(conns), timeout=wait):
+            who = conns[conn]
+            if who is None:
+                self.template.poll_warm()
+                continue
+            try:
+                msg = cast(mp_connection.Connection, conn).recv()
+            except (EOFError, OSError):
+                who.gone = True  # its death is handled below
+                continue
+            if msg != "ready":
+                ended.append(who.done(msg))
+        return ended + self._watch()
+
+    def _watch(self) -> list[tuple[Task, Result]]:
+        """Stop the workers past their time or memory, replace the dead; their tasks failed."""
+        now = time.monotonic()
+        ended = []
+        for w in self.workers:
+            error = _check(w, self.timeout, self.memory, now)
+            if error is None:
+                continue
+            status = w.kill(self.template)
+            if w.task is not None:
+                error = _died(status) if error == "died" else error
+                ended.append(w.done(_failed(w, error)))
+        return ended
+
+    def stop(self) -> None:
+        """Tell every worker to stop; a worker exits at once, without tearing its interpreter
+        down, and the template waits for them all.
+        """
+        for w in self.workers:
+            with contextlib.suppress(OSError):
+                w.conn.send(None)
+        self.template.stop()
+        for w in self.workers + self.retired:
+            w.conn.close()
+
+    def kill(self) -> None:
+        """Kill every worker and the template (the batch was interrupted or failed)."""
+        for w in self.workers + self.retired:
+            with contextlib.suppress(OSError):
+                os.kill(w.pid, signal.SIGKILL)
+        self.template.kill()
+
+
 def run_local(
     tasks: Sequence[Task],
     *,
@@ -321,7 +471,9 @@ def run_local(
     Every task gets exactly one ``on_finish`` unless the batch is interrupted
     (KeyboardInterrupt propagates after the workers are killed; the caller marks what was
     running). Raises RuntimeError when workers cannot start at all (see ``log``).
-    ``template``: one :func:`start_template` started early (else one is started here).
+    ``template``: one :func:`start_template` started early (else one is started here). The
+    next tasks are sent before the callbacks record what started and ended, so no worker
+    waits for the status table.
 
     Returns
     -------
@@ -330,90 +482,32 @@ def run_local(
         started to last finished), ``end_seconds`` (the rest: stopping the workers) and
         ``objects_cpu_seconds`` (CPU time of the objects' jobs).
     """
-    t0 = time.perf_counter()
+    clock = _Clock()
     pending = collections.deque(sorted(tasks, key=task_size, reverse=True))
     if not pending:
         if template is not None:
             template.kill()
         return {}
-    cores = os.cpu_count() or 1
-    n = min(workers, len(pending))
     template = _ready_template(template, _template_env(threads, memory), log)
-    pool: list[_Worker] = []
-    first = last = cpu = 0.0
-
-    def finish(w: _Worker, result: Result) -> None:
-        nonlocal last, cpu
-        cpu += float(result.pop("cpu_seconds", 0.0))
-        task, w.task, w.threads = w.task, None, 0
-        assert task is not None  # a worker sends a result only for a task
-        result["peak_memory"] = max(result.get("peak_memory", 0), w.peak)
-        on_finish(task, result)
-        last = time.perf_counter()
-
+    pool = _Pool(template, min(workers, len(pending)), threads, timeout, memory)
     try:
-        while pending or any(w.task is not None for w in pool):
-            # the first worker forks at once; beyond WARM_FROM, the others once the template
-            # has loaded the kernels (up to then they load them side by side, at no more cost)
-            pool = [w for w in pool if not w.dead]
-            room = n - len(pool) if template.warm or n < WARM_FROM else 1 - len(pool)
-            pool += [_Worker(template) for _ in range(min(room, len(pending)))]
-            if n >= WARM_FROM and not (template.warm or template.warming):
-                template.start_warm(_warm_task(pending[0]))
-            busy = sum(w.threads for w in pool)
-            idle = [w for w in pool if w.task is None]
-            for i, w in enumerate(idle):
-                if not pending:
-                    break
-                task = pending.popleft()
-                k = _threads_for(task, cores - busy, len(idle) - i, len(pending) + 1, threads)
-                first = first or time.perf_counter()
+        while pending or pool.busy():
+            ended = pool.collect()
+            pool.grow(pending)
+            started = pool.dispatch(pending)
+            if started:
+                clock.started()
+            for task in started:
                 on_start(task)
-                w.send(task, k)
-                busy += k
-            conns: dict[Any, _Worker | None] = {w.conn: w for w in pool}
-            conns[template.conn] = None
-            for conn in mp_connection.wait(list(conns), timeout=POLL_SECONDS):
-                who = conns[conn]
-                if who is None:
-                    template.poll_warm()
-                    continue
-                try:
-                    msg = cast(mp_connection.Connection, conn).recv()
-                except (EOFError, OSError):
-                    who.gone = True  # its death is handled below
-                    continue
-                if msg != "ready":
-                    finish(who, msg)
-            now = time.monotonic()
-            for w in pool:
-                error = _check(w, timeout, memory, now)
-                if error is None:
-                    continue
-                status = w.kill(template)
-                if w.task is not None:
-                    error = _died(status) if error == "died" else error
-                    finish(w, _failed(w, error))
+            for task, outcome in ended:
+                clock.finished(outcome)
+                on_finish(task, outcome)
+                clock.recorded()
     except BaseException:
-        for w in pool:
-            with contextlib.suppress(OSError):
-                os.kill(w.pid, signal.SIGKILL)
-        template.kill()
+        pool.kill()
         raise
-    for w in pool:
-        with contextlib.suppress(OSError):
-            w.conn.send(None)  # a worker exits at once, without tearing its interpreter down
-    template.stop()  # it waits for them all
-    for w in pool:
-        w.conn.close()
-    first = first or t0
-    last = max(last, first)
-    return {
-        "startup_seconds": first - t0,
-        "objects_seconds": last - first,
-        "end_seconds": time.perf_counter() - last,
-        "objects_cpu_seconds": cpu,
-    }
+    pool.stop()
+    return clock.figures()
 
 
 def _failed(w: _Worker, error: str) -> Result:

@@ -5,17 +5,19 @@ One template process (:mod:`partscale.batch._worker`) imports the pipeline once,
 reads and hashes its inputs; workers fork from it in milliseconds. With more than two workers,
 the first forks at once, and while it starts on the largest object the template runs a tiny
 object through the batch's stages, so that the kernels are loaded (or compiled, once per
-machine) before the other workers fork from it: two loads instead of one per worker. The end of
-the batch tells each worker to stop; a worker exits at once, without tearing its interpreter
-down, so nothing waits one worker after another.
+machine) before the other workers fork from it: two loads instead of one per worker. Each
+worker starts its first object before the next one forks. A worker left idle once nothing is
+pending is told to stop; a worker exits at once, without tearing its interpreter down, so the
+end waits for no worker after another.
 
 The scheduler sends the largest objects first (voxels, then input bytes), one task at a time to
 each idle worker, with threads for that task from the cores not in use: every worker runs one
 thread while there are more objects than workers, the last objects get the cores their
-finished neighbours left (up to one thread per :data:`VOXELS_PER_THREAD` voxels). It watches every
-busy worker: a worker past ``timeout`` seconds or above ``memory`` bytes resident is killed, its
-object recorded failed with one line, and a new worker takes its place; so is one that dies on
-its own.
+finished neighbours left (up to one thread per :data:`VOXELS_PER_THREAD` voxels). The next tasks
+go out before the status table records what started and ended, so no worker waits for the
+table's writes. It watches every busy worker: a worker past ``timeout`` seconds or above
+``memory`` bytes resident is killed, its object recorded failed with one line, and a new worker
+takes its place; so is one that dies on its own.
 """
 
 from __future__ import annotations
@@ -341,7 +343,7 @@ class _Clock:
 
 
 class _Pool:
-    """The workers forked from ``template``: grown, given tasks, read, watched and stopped."""
+    """The workers forked from ``template``: forked and given tasks, read, watched, stopped."""
 
     def __init__(
         self,
@@ -361,30 +363,35 @@ class _Pool:
         """Whether a worker has a task."""
         return any(w.task is not None for w in self.workers)
 
-    def grow(self, pending: collections.deque[Task]) -> None:
-        """Fork the workers the pending tasks need: the first at once; from :data:`WARM_FROM`
-        workers, the others once the template has loaded the kernels (up to then they would
-        load them side by side, at no more cost).
+    def fill(self, pending: collections.deque[Task]) -> list[Task]:
+        """Send pending tasks, largest first, to the idle workers, then to workers forked one at
+        a time (each starts its task before the next is forked); the tasks started.
+
+        The first worker forks at once; from :data:`WARM_FROM` workers, the others once the
+        template has loaded the kernels (up to then they would load them side by side, at no
+        more cost). Once nothing is pending, the idle workers are told to stop.
         """
         template = self.template
         self.workers = [w for w in self.workers if not w.dead]
         warm_first = self.size >= WARM_FROM and not template.warm
         room = (1 if warm_first else self.size) - len(self.workers)
-        self.workers += [_Worker(template) for _ in range(min(room, len(pending)))]
-        if warm_first and not template.warming and pending:
-            template.start_warm(_warm_task(pending[0]))
-
-    def dispatch(self, pending: collections.deque[Task]) -> list[Task]:
-        """Send pending tasks to the idle workers, largest first; the tasks started."""
-        busy = sum(w.threads for w in self.workers)
         idle = [w for w in self.workers if w.task is None]
+        busy = sum(w.threads for w in self.workers)
         started = []
-        for i, w in enumerate(idle[: len(pending)]):
+        while pending and (idle or room > 0):
+            if idle:
+                w = idle.pop(0)
+            else:
+                w, room = _Worker(template), room - 1
+                self.workers.append(w)
             task = pending.popleft()
-            k = _threads_for(task, self.cores - busy, len(idle) - i, len(pending) + 1, self.threads)
+            can_start = len(idle) + max(room, 0) + 1  # this worker, the idle, the ones to fork
+            k = _threads_for(task, self.cores - busy, can_start, len(pending) + 1, self.threads)
             w.send(task, k)
             busy += k
             started.append(task)
+        if warm_first and not template.warming and pending:
+            template.start_warm(_warm_task(pending[0]))
         if not pending:
             self._retire_idle()
         return started
@@ -493,8 +500,7 @@ def run_local(
     try:
         while pending or pool.busy():
             ended = pool.collect()
-            pool.grow(pending)
-            started = pool.dispatch(pending)
+            started = pool.fill(pending)
             if started:
                 clock.started()
             for task in started:

@@ -256,3 +256,41 @@ def test_optional_values_are_the_stages_own_words():
 
     assert set(OPTIONAL_VALUES["--segment"][1]) == set(METHODS)
     assert set(OPTIONAL_VALUES["--render"][1]) == set(VIEWS)
+
+
+def test_stages_are_the_ones_the_options_use():
+    """The template imports these before its workers fork (options as given or checked)."""
+    assert job.stages({}) == ["ingest"]  # the CSDF itself
+    assert job.stages({"segment": "fast", "export": "glb"}) == ["ingest", "segment", "export"]
+    assert job.stages({"segment": False, "export": "csdf, none"}) == ["ingest"]
+    assert job.stages({"recipe": "r.json", "render": True, "export": []}) == [
+        "ingest",
+        "edit",
+        "zones",
+        "render",
+    ]
+    assert job.stages(job.batch_spec({"fit": "1 = 120%", "export": ("png",)})) == [
+        "ingest",
+        "edit",
+        "zones",
+        "export",
+    ]
+
+
+def test_a_row_asking_for_more_stages_than_the_batch_gets_them(tmp_path):
+    """The batch writes only CSDFs; one row also segments, exports GLB and renders: the
+    template imports those stages too, and the row's outputs are all written."""
+    table = data_path("kenney/table.glb")
+    m = tmp_path / "m.jsonl"
+    rows = [
+        {"path": str(table), "name": "plain"},
+        {"path": str(table), "name": "more", "segment": "fast", "export": "glb", "render": "top"},
+    ]
+    m.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    r = run([m], tmp_path / "out", res=32, workers=1)
+    assert r.ok and sorted(r.done) == ["more", "plain"], r.failed
+    assert sorted(p.name for p in (tmp_path / "out" / "plain").iterdir()) == ["plain.csdf.npz"]
+    assert sorted(p.name for p in (tmp_path / "out" / "more").iterdir()) == [
+        "more.glb",
+        "more.render-top.png",
+    ]

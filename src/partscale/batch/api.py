@@ -17,7 +17,7 @@ from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import status as status_mod
 from .inputs import Input, discover, shard
-from .job import Spec, Task, batch_spec, object_spec, options_hash
+from .job import Spec, Task, batch_spec, object_spec, options_hash, stages
 
 ENGINES = ("local", "ray")
 
@@ -219,13 +219,15 @@ def check_engine(
     )
 
 
-def _start_template(eng: Engine) -> Any:
-    """The local engine's worker template, started now (None for Ray)."""
+def _start_template(eng: Engine, options: dict[str, Any]) -> Any:
+    """The local engine's worker template, started now (None for Ray), importing the stages
+    the batch's ``options`` (as given) use.
+    """
     if eng.name != "local":
         return None
     from .local import start_template
 
-    return start_template(eng.threads, eng.memory)
+    return start_template(eng.threads, eng.memory, stages(options))
 
 
 def read_inputs(
@@ -507,20 +509,19 @@ def run(
     outdir = check_outdir(outdir)
     eng = check_engine(engine, workers, timeout, memory, address, retries)
     # the local engine's template imports the pipeline while this process reads the inputs
-    template = _start_template(eng)
+    options = {
+        "res": res,
+        "square": square,
+        "segment": segment,
+        "recipe": recipe,
+        "fit": fit,
+        "allow_deform": allow_deform,
+        "export": export,
+        "render": render,
+    }
+    template = _start_template(eng, options)
     try:
-        spec = batch_spec(
-            {
-                "res": res,
-                "square": square,
-                "segment": segment,
-                "recipe": recipe,
-                "fit": fit,
-                "allow_deform": allow_deform,
-                "export": export,
-                "render": render,
-            }
-        )
+        spec = batch_spec(options)
         report(0.0, "inputs: reading and hashing")
         objects = read_inputs(inputs, outdir, spec, rank=rank, world_size=world_size)
     except BaseException:

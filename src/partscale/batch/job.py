@@ -207,6 +207,44 @@ def _recipe_json(recipe: Any) -> Any:
         raise InputError(f"{path}: {exc}" if path is not None else str(exc)) from None
 
 
+def stages(options: Mapping[str, Any]) -> list[str]:
+    """The stages (packages of ``partscale``) a job with these options imports, in order.
+
+    ``options`` is a spec or options as given (unchecked: a value that is not off counts as
+    asked); the local engine's template imports these before its workers fork.
+
+    Examples
+    --------
+    >>> from partscale.batch.job import stages
+    >>> stages({"segment": "fast", "export": "glb"}), stages({"export": ["csdf"], "fit": None})
+    (['ingest', 'segment', 'export'], ['ingest'])
+    """
+    asked = [
+        ("segment", not _off(options.get("segment"))),
+        ("edit", not (_off(options.get("recipe")) and _off(options.get("fit")))),
+        ("zones", not (_off(options.get("recipe")) and _off(options.get("fit")))),
+        ("export", any(f != "csdf" for f in _words(options.get("export", DEFAULT_EXPORT)))),
+        ("render", not _off(options.get("render"))),
+    ]
+    return ["ingest", *(name for name, yes in asked if yes)]
+
+
+def _off(value: Any) -> bool:
+    return value is False or is_off(value)
+
+
+def _words(value: Any) -> list[str]:
+    """Formats as given (a list, or text separated by commas), lower case."""
+    items = (
+        value.split(",")
+        if isinstance(value, str)
+        else value
+        if isinstance(value, list | tuple)
+        else []
+    )
+    return [str(f).strip().lower().lstrip(".") for f in items if not is_off(f)]
+
+
 def options_hash(spec: Spec) -> str:
     """SHA-256 (hex) of the spec's canonical JSON."""
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()
@@ -219,7 +257,6 @@ def run_job(path: str | os.PathLike, name: str, spec: Spec, outdir: str | os.Pat
     there. Raises what the stages raise (:class:`InputError` for bad input).
     """
     from ..csdf import load as load_csdf
-    from ..edit import apply_recipe
     from ..ingest import load
 
     path, outdir = Path(path), Path(outdir)
@@ -238,7 +275,7 @@ def run_job(path: str | os.PathLike, name: str, spec: Spec, outdir: str | os.Pat
         c = segment(c, method=spec["segment"], cache=False)
     if spec["recipe"]:
         # parsed with the object's units; counts ("copies": "+1") made zone edits on it
-        from ..edit import Recipe
+        from ..edit import Recipe, apply_recipe
         from ..zones import resolve_counts
 
         recipe, _ = resolve_counts(c, Recipe.parse(spec["recipe"], units=c.meta.get("units")))

@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any, cast
 
 from .job import Spec, Task, thread_env
+from .job import stages as job_stages
 
 POLL_SECONDS = 0.1
 START_FAILURES = 3
@@ -69,7 +70,7 @@ def resident_memory(pid: int) -> int:
 class _Template:
     """The process the workers fork from (see :mod:`partscale.batch._worker`)."""
 
-    def __init__(self, env: dict[str, str]):
+    def __init__(self, env: dict[str, str], stages: Sequence[str]):
         here, there = Pipe()
         self.conn = here
         # its output goes here until the batch's log is known (:meth:`attach_log`)
@@ -82,6 +83,7 @@ class _Template:
                 "partscale.batch._worker",
                 str(there.fileno()),
                 str(os.getpid()),
+                *stages,
             ],
             env=env,
             pass_fds=(there.fileno(),),
@@ -90,6 +92,7 @@ class _Template:
             stderr=self.early,
         )
         there.close()
+        self.stages = set(stages)
         self.warming = self.warm = False
         self.log: Path | None = None
         # dropped unused (the batch refused its inputs), it is stopped and its file closed
@@ -151,6 +154,13 @@ class _Template:
         send_handle(self.conn, there.fileno(), self.proc.pid)
         there.close()
         return int(self._reply()), here
+
+    def import_stages(self, stages: Sequence[str]) -> None:
+        """Have it import ``stages`` too (a manifest row asked for more), before the next fork."""
+        more = [s for s in stages if s not in self.stages]
+        if more:
+            self.conn.send(("import", more))
+            self.stages.update(more)
 
     def start_warm(self, task: Task) -> None:
         self.conn.send(("warm", task))
@@ -275,20 +285,24 @@ def _warm_task(task: Task) -> Task:
     return {**task, "name": "warm", "path": str(table()), "spec": spec}
 
 
-def start_template(threads: int, memory: int | None) -> _Template:
-    """Start the process the workers fork from; it imports the pipeline while the batch reads
-    its inputs. Pass it to :func:`run_local` (dropped unused, it exits when its pipe closes).
+def start_template(threads: int, memory: int | None, stages: Sequence[str]) -> _Template:
+    """Start the process the workers fork from; it imports the pipeline's ``stages`` (see
+    :func:`~partscale.batch.job.stages`) while the batch reads its inputs. Pass it to
+    :func:`run_local` (dropped unused, it exits when its pipe closes).
     """
-    return _Template(_template_env(threads, memory))
+    return _Template(_template_env(threads, memory), stages)
 
 
-def _ready_template(template: _Template | None, env: dict[str, str], log: Path) -> _Template:
-    """``template`` (or a new one) once it has imported the pipeline; a few tries."""
+def _ready_template(
+    template: _Template | None, env: dict[str, str], log: Path, stages: Sequence[str]
+) -> _Template:
+    """``template`` (or a new one) once it has imported ``stages``; a few tries."""
     status: int | None = None
     for _ in range(START_FAILURES):
-        template = template or _Template(env)
+        template = template or _Template(env, stages)
         template.attach_log(log)
         if template.wait_ready():
+            template.import_stages(stages)
             return template
         status, template = _status(template.proc.returncode), None
     raise RuntimeError(f"batch workers fail to start ({_died(status)}); see {log}")
@@ -495,7 +509,8 @@ def run_local(
         if template is not None:
             template.kill()
         return {}
-    template = _ready_template(template, _template_env(threads, memory), log)
+    stages = list(dict.fromkeys(s for t in pending for s in job_stages(t["spec"])))
+    template = _ready_template(template, _template_env(threads, memory), log, stages)
     pool = _Pool(template, min(workers, len(pending)), threads, timeout, memory)
     try:
         while pending or pool.busy():

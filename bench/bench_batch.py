@@ -77,9 +77,9 @@ def phases(label: str, r, cpu: float, workers: int, base: float) -> tuple[float,
     return (r.seconds - ideal, r.seconds - base / share, start, phase, info["end_seconds"], busy)
 
 
-def in_process(objs: list[Path], res: int, tmp: Path) -> float:
+def in_process(objs: list[Path], res: int, tmp: Path) -> tuple[float, float]:
     """The baseline: each object's job run here, one after another on one thread, its kernels
-    loaded first (a warm-up object); the sum of the objects' own times."""
+    loaded first (a warm-up object); the sums of the objects' own wall and CPU seconds."""
     import numba
 
     from partscale.batch import job
@@ -90,10 +90,10 @@ def in_process(objs: list[Path], res: int, tmp: Path) -> float:
     numba.set_num_threads(1)
     try:
         job.execute({**task, "name": "warm", "path": str(objs[0])})
-        times = [job.execute({**task, "name": p.stem, "path": str(p)})["seconds"] for p in objs]
+        done = [job.execute({**task, "name": p.stem, "path": str(p)}) for p in objs]
     finally:
         numba.set_num_threads(before)
-    return float(sum(times))
+    return sum(d["seconds"] for d in done), sum(d["cpu_seconds"] for d in done)
 
 
 def small(args) -> None:
@@ -106,8 +106,11 @@ def small(args) -> None:
         tmp = Path(tmpdir)
         print(f"{len(objs)} small Kenney objects at --res {args.res}, fast segment, GLB export")
         for rep in range(args.repeat):
-            base = in_process(objs, args.res, tmp / f"base-{rep}")
-            print(f"baseline, in this process, one thread: object times {base:5.2f} s")
+            base, base_cpu = in_process(objs, args.res, tmp / f"base-{rep}")
+            print(
+                f"baseline, in this process, one thread: object times {base:5.2f} s, "
+                f"{base_cpu:5.2f} CPU seconds; load average {os.getloadavg()[0]:.1f}"
+            )
             for workers in args.workers:
                 out = tmp / f"w{workers}-{rep}"
                 cpu = _cpu()

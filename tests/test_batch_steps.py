@@ -260,9 +260,14 @@ def test_optional_values_are_the_stages_own_words():
 
 def test_stages_are_the_ones_the_options_use():
     """The template imports these before its workers fork (options as given or checked)."""
-    assert job.stages({}) == ["ingest"]  # the CSDF itself
-    assert job.stages({"segment": "fast", "export": "glb"}) == ["ingest", "segment", "export"]
-    assert job.stages({"segment": False, "export": "csdf, none"}) == ["ingest"]
+    assert job.stages({}) == ["ingest", "edit"]  # the CSDF itself; import reads edit's units
+    assert job.stages({"segment": "fast", "export": "glb"}) == [
+        "ingest",
+        "edit",
+        "segment",
+        "export",
+    ]
+    assert job.stages({"segment": False, "export": "csdf, none"}) == ["ingest", "edit"]
     assert job.stages({"recipe": "r.json", "render": True, "export": []}) == [
         "ingest",
         "edit",

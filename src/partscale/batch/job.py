@@ -211,22 +211,22 @@ def stages(options: Mapping[str, Any]) -> list[str]:
     """The stages (packages of ``partscale``) a job with these options imports, in order.
 
     ``options`` is a spec or options as given (unchecked: a value that is not off counts as
-    asked); the local engine's template imports these before its workers fork.
+    asked); the local engine's template imports these before its workers fork. Every job
+    imports ``ingest`` and ``edit`` (whose units the import reads).
 
     Examples
     --------
     >>> from partscale.batch.job import stages
     >>> stages({"segment": "fast", "export": "glb"}), stages({"export": ["csdf"], "fit": None})
-    (['ingest', 'segment', 'export'], ['ingest'])
+    (['ingest', 'edit', 'segment', 'export'], ['ingest', 'edit'])
     """
     asked = [
         ("segment", not _off(options.get("segment"))),
-        ("edit", not (_off(options.get("recipe")) and _off(options.get("fit")))),
         ("zones", not (_off(options.get("recipe")) and _off(options.get("fit")))),
         ("export", any(f != "csdf" for f in _words(options.get("export", DEFAULT_EXPORT)))),
         ("render", not _off(options.get("render"))),
     ]
-    return ["ingest", *(name for name, yes in asked if yes)]
+    return ["ingest", "edit", *(name for name, yes in asked if yes)]
 
 
 def _off(value: Any) -> bool:

@@ -299,3 +299,38 @@ def test_a_row_asking_for_more_stages_than_the_batch_gets_them(tmp_path):
         "more.glb",
         "more.render-top.png",
     ]
+
+
+def test_status_table_written_by_shards_in_turn_keeps_every_row(tmp_path):
+    """Two processes' tables on one OUTDIR (shards), writing in turn: each write merges the
+    other's rows, though a table reads the file again only when someone else wrote it."""
+    a, b = StatusTable(tmp_path), StatusTable(tmp_path)
+    a.update("one", state="running")
+    b.update("two", state="running")
+    a.update("one", state="done", outputs="one/one.glb")  # must keep b's row
+    b.update("two", state="failed", error='bad, "quoted"\nmesh')  # must keep a's new state
+    rows = read_status(tmp_path / "status.csv")
+    assert (rows["one"]["state"], rows["one"]["outputs"]) == ("done", "one/one.glb")
+    assert (rows["two"]["state"], rows["two"]["error"]) == ("failed", 'bad, "quoted"\nmesh')
+    a.update("three", state="running")
+    assert set(read_status(tmp_path / "status.csv")) == {"one", "two", "three"}
+
+
+def test_status_text_is_the_csv_of_every_row(tmp_path):
+    """The table's bytes are csv's own for its rows (quotes, commas, new lines), however
+    many times rows were written."""
+    import csv
+    import io
+
+    from partscale.batch.status import COLUMNS
+
+    t = StatusTable(tmp_path)
+    for i, error in enumerate(["", "a,b", 'say "x"', "line\nbreak"]):
+        t.update(f"n{i}", state="failed" if error else "done", error=error, attempts=1)
+    t.update("n0", seconds="1.5")
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+    w.writeheader()
+    for name in sorted(t.rows):
+        w.writerow(t.rows[name])
+    assert (tmp_path / "status.csv").read_text() == buf.getvalue()

@@ -1,11 +1,14 @@
 """Batch throughput and overhead: 1 worker vs 2, Ray beside local.
 
-``--small`` (a dozen small objects; use --res 64): each run prints its start-up (until the first
-object starts), object phase (first started to last finished) and end (the rest), the CPU busy
-share (CPU seconds of the batch and its workers over wall seconds times cores), the overhead
-(wall minus the sum of object times over the cores), how far the object phase is from that
-ideal share, and the CPU seconds the batch spends beside its objects' (robust to a busy
-machine, where the wall figures are not). Without ``--small``, every object of the data:
+``--small`` (a dozen small objects; use --res 64): each repeat first runs the objects one after
+another in this process on one thread (the baseline: the objects' own times), then the batch
+with 1 and 2 workers; each run prints its start-up (until the first object starts), object
+phase (first started to last finished) and end (the rest), the CPU busy share (CPU seconds of
+the batch and its workers over wall seconds times cores), the overhead (wall minus the sum of
+its object times over the cores, and against the baseline's), how far the object phase is
+from that ideal share, and the CPU seconds the batch spends beside its objects' (robust to a
+busy machine, where the wall figures are not); the end prints each figure's range over the
+repeats. Without ``--small``, every object of the data:
 
 Each object: import at --res, fast segmentation, a recipe edit (x zone 35%-65% stretched to
 105%), GLB export and an iso render. A corrupt file and an object imported at a resolution no
@@ -42,12 +45,15 @@ def _cpu() -> float:
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
-def phases(label: str, r, cpu: float, workers: int) -> None:
-    """Start-up, object phase and end of a local run, its CPU busy share and its overhead.
+def phases(label: str, r, cpu: float, workers: int, base: float) -> tuple[float, ...]:
+    """Start-up, object phase and end of a local run, its CPU busy share and its overhead, beside
+    ``base``, the same objects' own times run one after another in this process.
 
     Wall figures are only as good as the machine is quiet; the CPU figures are not: ``cpu``
     is every CPU second the batch and its workers spent, ``objects_cpu_seconds`` what the
     objects' jobs spent, the rest is what the batch adds (imports, loading kernels, the pool).
+    Returns (overhead, overhead against the baseline, start-up, object phase against the
+    ideal, end, CPU busy share).
     """
     cores = os.cpu_count() or 1
     rows = read_status(r.outdir / "status.csv")
@@ -56,29 +62,71 @@ def phases(label: str, r, cpu: float, workers: int) -> None:
     share = min(cores, workers)
     ideal = work / share
     start = r.seconds - info["objects_seconds"] - info["end_seconds"]
+    busy = cpu / (r.seconds * cores)
+    phase = info["objects_seconds"] / ideal - 1
     print(
         f"{label:<18} wall {r.seconds:5.2f} s = start-up {start:4.2f} + objects "
         f"{info['objects_seconds']:5.2f} + end {info['end_seconds']:4.2f}; CPU busy "
-        f"{cpu / (r.seconds * cores):4.0%} of {cores} cores; object times {work:5.2f} s / {share}"
-        f" = {ideal:5.2f} s: overhead {r.seconds - ideal:+5.2f} s (target <= 1 s), object "
-        f"phase {info['objects_seconds'] / ideal - 1:+4.0%} (target within 10 %); CPU: "
+        f"{busy:4.0%} of {cores} cores; object times {work:5.2f} s / {share}"
+        f" = {ideal:5.2f} s: overhead {r.seconds - ideal:+5.2f} s (target <= 1 s; against the "
+        f"baseline's {base:5.2f} s / {share}: {r.seconds - base / share:+5.2f} s), object "
+        f"phase {phase:+4.0%} (target within 10 %); CPU: "
         f"{cpu:5.2f} s, objects {info['objects_cpu_seconds']:5.2f} s, batch's own "
         f"{cpu - info['objects_cpu_seconds']:4.2f} s; load average {os.getloadavg()[0]:.1f}"
     )
+    return (r.seconds - ideal, r.seconds - base / share, start, phase, info["end_seconds"], busy)
+
+
+def in_process(objs: list[Path], res: int, tmp: Path) -> tuple[float, float]:
+    """The baseline: each object's job run here, one after another on one thread, its kernels
+    loaded first (a warm-up object); the sums of the objects' own wall and CPU seconds."""
+    import numba
+
+    from partscale.batch import job
+
+    spec = job.batch_spec({"res": res, "segment": "fast", "export": "glb"})
+    task = {"spec": spec, "outdir": str(tmp / "baseline")}
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        job.execute({**task, "name": "warm", "path": str(objs[0])})
+        done = [job.execute({**task, "name": p.stem, "path": str(p)}) for p in objs]
+    finally:
+        numba.set_num_threads(before)
+    return sum(d["seconds"] for d in done), sum(d["cpu_seconds"] for d in done)
 
 
 def small(args) -> None:
-    """A dozen small objects, 1 and 2 workers, phases printed; repeated ``args.repeat`` times."""
+    """A dozen small objects, 1 and 2 workers, phases printed beside the baseline (the same
+    objects run one after another in this process); repeated ``args.repeat`` times, and the
+    range of each figure over the repeats printed at the end."""
     objs = sorted((DATA / "kenney").glob("*.glb"), key=lambda p: p.stat().st_size)[:12]
+    seen: dict[int, list[tuple[float, ...]]] = {w: [] for w in args.workers}
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         print(f"{len(objs)} small Kenney objects at --res {args.res}, fast segment, GLB export")
         for rep in range(args.repeat):
+            base, base_cpu = in_process(objs, args.res, tmp / f"base-{rep}")
+            print(
+                f"baseline, in this process, one thread: object times {base:5.2f} s, "
+                f"{base_cpu:5.2f} CPU seconds; load average {os.getloadavg()[0]:.1f}"
+            )
             for workers in args.workers:
                 out = tmp / f"w{workers}-{rep}"
                 cpu = _cpu()
                 r = run(objs, out, res=args.res, segment="fast", export="glb", workers=workers)
-                phases(f"local, {workers} worker{'s' * (workers > 1)}", r, _cpu() - cpu, workers)
+                label = f"local, {workers} worker{'s' * (workers > 1)}"
+                seen[workers].append(phases(label, r, _cpu() - cpu, workers, base))
+    for workers, figures in seen.items():
+        cols = list(zip(*figures, strict=True))
+        names = ("overhead s", "vs baseline s", "start-up s", "object phase", "end s", "CPU busy")
+        text = ", ".join(
+            f"{n} {min(c):+.2f}..{max(c):+.2f}"
+            if n != "object phase" and n != "CPU busy"
+            else f"{n} {min(c):+.0%}..{max(c):+.0%}"
+            for n, c in zip(names, cols, strict=True)
+        )
+        print(f"{workers} worker(s) over {len(figures)} runs: {text}")
 
 
 def one(label, manifest, outdir, recipe, res, **kw):

@@ -1,9 +1,11 @@
-"""The local engine's process template: ``python -m partscale.batch._worker FD PARENT_PID``.
+"""The local engine's process template: ``python -m partscale.batch._worker FD PARENT_PID [STAGE...]``.
 
 Started once per batch by :mod:`partscale.batch.local` (numba's fork-safe ``workqueue`` threading
-layer and the thread caps already in its environment). It imports every stage, says ``"ready"``
-and then serves requests on its pipe:
+layer and the thread caps already in its environment), with the stages the batch uses as further
+arguments (``ingest segment export``...). It imports them, says ``"ready"`` and then serves
+requests on its pipe:
 
+- ``("import", stages)``: import these stages too (a manifest row asked for them).
 - ``("fork", None)`` followed by a pipe end (sent with ``send_handle``): fork a worker that runs
   tasks on that pipe; the reply is the worker's pid. A forked worker starts in milliseconds and
   shares the template's imported modules and loaded kernels.
@@ -27,6 +29,9 @@ import signal
 import sys
 from multiprocessing.connection import Connection
 from multiprocessing.reduction import recv_handle
+
+STAGES = ("ingest", "segment", "edit", "zones", "export", "render")
+"""The stages a job may import; the template imports those it is given (all by default)."""
 
 
 def _die_with_parent(parent: int) -> None:
@@ -107,13 +112,24 @@ def _warm(task: dict) -> None:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
+def _import(stages: list[str]) -> None:
+    """Import the pipeline's ``stages`` (and the job), once, so no worker's start, object time
+    or timeout includes it.
+    """
+    import importlib
+
+    from . import job  # noqa: F401
+
+    for stage in stages:
+        if stage in STAGES:
+            importlib.import_module(f"partscale.{stage}")
+
+
 def main() -> None:
     fd, parent = (int(a) for a in sys.argv[1:3])
     _die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    # import every stage now, once, so no worker's start, object time or timeout includes it
-    from .. import edit, export, ingest, render, segment  # noqa: F401
-    from . import job  # noqa: F401
+    _import(sys.argv[3:] or list(STAGES))
 
     ctl = Connection(fd)
     ctl.send("ready")
@@ -127,6 +143,8 @@ def main() -> None:
         kind, arg = msg
         if kind == "fork":
             _fork(ctl)
+        elif kind == "import":
+            _import(arg)
         elif kind == "warm":
             _warm(arg)
             ctl.send("warm")

@@ -6,25 +6,20 @@ import contextlib
 import os
 import signal
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .. import _schema
 from .._memory import available_memory
-from .._options import keyword_options
-from ..errors import InputError, shown
+from .._options import count, keyword_options, memory_size, seconds
+from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from . import status as status_mod
-from .inputs import discover, shard
-from .job import options_hash, resolve_options
+from .inputs import Input, discover, shard
+from .job import Spec, Task, batch_spec, object_spec, options_hash, stages
 
 ENGINES = ("local", "ray")
-MAX_TIMEOUT = 1e7
-"""Most seconds one object may be given (about 115 days)."""
-MAX_MEMORY = 1 << 50
-"""Largest memory size a worker may be given (1024 TiB): beyond any machine."""
 
 
 @dataclass
@@ -112,22 +107,7 @@ def parse_memory(value: str | int | None) -> int | None:
     ...
     partscale.errors.InputError: memory: expected a size such as 4GiB or 500MiB, got 'lots'
     """
-    if value is None:
-        return None
-    s = str(value)[:64].strip().lower().removesuffix("b").removesuffix("i")
-    mult = {"k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}.get(s[-1:], 1)
-    try:
-        if isinstance(value, int | float) and not isinstance(value, bool):
-            n = _schema.number(value, "memory")
-        else:
-            n = _schema.number(s[:-1] if mult > 1 else s, "memory", text=True) * mult
-    except InputError:
-        n = -1.0
-    if not n > 0:
-        raise InputError(f"memory: expected a size such as 4GiB or 500MiB, got {shown(value)}")
-    if n > MAX_MEMORY:
-        raise InputError(f"memory: expected at most {MAX_MEMORY >> 40} TiB, got {shown(value)}")
-    return int(n)
+    return None if value is None else memory_size(value, "memory")
 
 
 @contextlib.contextmanager
@@ -146,6 +126,290 @@ def _sigterm_as_interrupt() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGTERM, old)
+
+
+@dataclass(frozen=True)
+class Engine:
+    """The engine a batch runs on, its options checked (:func:`check_engine`).
+
+    Attributes
+    ----------
+    name : {"local", "ray"}
+    workers : int or None
+        Processes at once as asked (None: the cores, or Ray's CPUs).
+    processes : int
+        Processes at once on this machine (``workers`` or the cores).
+    threads : int
+        Threads per process: the cores shared by the processes.
+    timeout : float or None
+        Seconds one object may take.
+    memory : int
+        Resident bytes one process may use.
+    address : str or None
+        Ray cluster to join.
+    retries : int
+        Ray's retries of a task whose worker died.
+    """
+
+    name: str
+    workers: int | None
+    processes: int
+    threads: int
+    timeout: float | None
+    memory: int
+    address: str | None = None
+    retries: int = 1
+
+
+def check_outdir(outdir: str | os.PathLike) -> Path:
+    """The output folder as a path, refused where a file is in its place (nothing made yet)."""
+    path = Path(outdir)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{path}: expected an output folder, got a file")
+    return path
+
+
+def check_engine(
+    engine: str,
+    workers: int | None,
+    timeout: float | None,
+    memory: str | int | None,
+    address: str | None,
+    retries: int,
+) -> Engine:
+    """The engine's options checked once (:mod:`partscale._options`), the workers sized.
+
+    Raises :class:`InputError` for a bad value, for Ray not installed (engine ray) or for an
+    address without engine ray.
+
+    Examples
+    --------
+    >>> from partscale.batch.api import check_engine
+    >>> eng = check_engine("local", 2, 60, "1GiB", None, 1)
+    >>> eng.processes, eng.timeout, eng.memory
+    (2, 60.0, 1073741824)
+    """
+    if engine not in ENGINES:
+        raise InputError(f"engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
+    if engine == "ray":
+        from .ray_engine import require_ray
+
+        require_ray()
+    elif address is not None:
+        raise InputError(
+            f"address: expected only with engine ray, got it with {engine}", params=("engine",)
+        )
+    if workers is not None:
+        workers = count(workers, "workers")
+    if timeout is not None:
+        timeout = seconds(timeout, "timeout")
+    retries = count(retries, "retries", lo=0)
+    cores = os.cpu_count() or 1
+    processes = workers or cores
+    mem = parse_memory(memory)
+    return Engine(
+        name=engine,
+        workers=workers,
+        processes=processes,
+        threads=max(1, cores // processes),
+        timeout=timeout,
+        memory=mem if mem is not None else available_memory() // processes,
+        address=address,
+        retries=retries,
+    )
+
+
+def _start_template(eng: Engine, options: dict[str, Any]) -> Any:
+    """The local engine's worker template, started now (None for Ray), importing the stages
+    the batch's ``options`` (as given) use.
+    """
+    if eng.name != "local":
+        return None
+    from .local import start_template
+
+    return start_template(eng.threads, eng.memory, stages(options))
+
+
+def read_inputs(
+    inputs: Sequence[str | os.PathLike],
+    outdir: Path,
+    spec: Spec,
+    *,
+    rank: int = 0,
+    world_size: int = 1,
+) -> list[tuple[Input, Spec]]:
+    """The inputs of this shard (:func:`discover`, :func:`shard`), each with its checked spec.
+
+    ``spec`` is the batch's (:func:`~partscale.batch.job.batch_spec`); a manifest row's own
+    options are laid over it (:func:`~partscale.batch.job.object_spec`). ``outdir`` is never
+    read as an input.
+    """
+    items = shard(discover(inputs, exclude=outdir), rank, world_size)
+    return [(it, object_spec(spec, it.options, where=f"{it.path}")) for it in items]
+
+
+@dataclass
+class Plan:
+    """What a batch runs (:func:`plan`): its tasks, and the objects it leaves as they are.
+
+    Attributes
+    ----------
+    tasks : list of dict
+        One per object to run (``name``, ``path``, ``spec``, ``outdir``, ``input_hash``,
+        ``options_hash``, ``attempts``).
+    skipped : list of str
+        Done before with the same input and options, outputs present.
+    not_retried : list of (str, str)
+        Failed before with the same input and options, and their errors.
+    """
+
+    tasks: list[Task] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
+    not_retried: list[tuple[str, str]] = field(default_factory=list)
+
+
+def plan(
+    objects: Sequence[tuple[Input, Spec]],
+    outdir: Path,
+    previous: dict[str, dict[str, str]],
+    *,
+    retry_failed: bool = False,
+) -> Plan:
+    """Compare each object's input and options hashes with its ``previous`` status row.
+
+    An object done before with the same hashes and its outputs present is skipped; one failed
+    before with the same hashes is left (unless ``retry_failed``); every other one is a task.
+    """
+    out = Plan()
+    for it, spec in objects:
+        ih, oh = it.content_hash(), options_hash(spec)
+        prev = previous.get(it.name)
+        same = prev is not None and prev["input_hash"] == ih and prev["options_hash"] == oh
+        if same and prev is not None and prev["state"] == "done" and _outputs_present(outdir, prev):
+            out.skipped.append(it.name)
+        elif same and prev is not None and prev["state"] == "failed" and not retry_failed:
+            out.not_retried.append((it.name, prev["error"]))
+        else:
+            out.tasks.append(
+                {
+                    "name": it.name,
+                    "path": str(it.path),
+                    "spec": spec,
+                    "outdir": str(outdir.resolve()),
+                    "input_hash": ih,
+                    "options_hash": oh,
+                    "attempts": int(prev["attempts"] or 0) + 1 if prev else 1,  # checked on read
+                }
+            )
+    return out
+
+
+def _outputs_present(outdir: Path, row: dict[str, str]) -> bool:
+    return all((outdir / o).is_file() for o in row["outputs"].split(";") if o)
+
+
+class Recorder:
+    """Each object's start and end into the status table, the result and the progress callback.
+
+    ``on_start`` and ``on_finish`` are the engines' callbacks; :meth:`interrupted` marks the
+    objects still running when the batch was stopped.
+    """
+
+    def __init__(
+        self,
+        table: status_mod.StatusTable,
+        result: BatchResult,
+        report: Callable[[float, str], None],
+        *,
+        total: int,
+    ):
+        self.table, self.result, self.report, self.total = table, result, report, total
+        self.finished = 0
+        self.running: set[str] = set()
+
+    def on_start(self, task: Task) -> None:
+        """Task ``task`` started: its row says running."""
+        self.running.add(task["name"])
+        self.table.update(
+            task["name"],
+            input=task["path"],
+            state="running",
+            seconds="",
+            error="",
+            input_hash=task["input_hash"],
+            options_hash=task["options_hash"],
+            outputs="",
+            peak_memory_mib="",
+            started=status_mod.now(),
+            finished="",
+            attempts=task["attempts"],
+        )
+
+    def on_finish(self, task: Task, outcome: dict[str, Any]) -> None:
+        """Task ``task`` ended with ``outcome`` (:func:`~partscale.batch.job.execute`'s dict)."""
+        name, ok, result = task["name"], bool(outcome["ok"]), self.result
+        self.running.discard(name)
+        self.finished += 1
+        peak = int(outcome["peak_memory"] or 0)
+        self.table.update(
+            name,
+            state="done" if ok else "failed",
+            seconds=f"{outcome['seconds']:.3f}",
+            error=outcome["error"],
+            outputs=";".join(outcome["outputs"]),
+            peak_memory_mib=f"{peak / 2**20:.1f}" if peak else "",
+            finished=status_mod.now(),
+        )
+        if ok:
+            result.done.append(name)
+        else:
+            result.failed.append((name, outcome["error"]))
+        result.slowest.append((name, float(outcome["seconds"])))
+        result.peak_memory = max(result.peak_memory, peak)
+        word = "done" if ok else "failed"
+        self.report(self.finished / max(self.total, 1), f"objects: {word} {name}")
+
+    def interrupted(self) -> None:
+        """Mark the objects still running as interrupted (Ctrl-C or SIGTERM)."""
+        for name in sorted(self.running):
+            self.table.update(name, state="interrupted", finished=status_mod.now())
+            self.result.interrupted.append(name)
+
+
+def run_engine(
+    tasks: list[Task], eng: Engine, outdir: Path, recorder: Recorder, template: Any = None
+) -> dict[str, float]:
+    """Run ``tasks`` on the engine; what it reports (see :attr:`BatchResult.engine_info`)."""
+    if eng.name == "local":
+        from .local import run_local
+
+        return run_local(
+            tasks,
+            workers=eng.processes,
+            threads=eng.threads,
+            timeout=eng.timeout,
+            memory=eng.memory,
+            log=outdir / status_mod.LOG_NAME,
+            on_start=recorder.on_start,
+            on_finish=recorder.on_finish,
+            template=template,
+        )
+    from .local import worker_env
+    from .ray_engine import run_ray
+
+    env = worker_env(eng.threads, eng.memory)
+    env = {k: v for k, v in env.items() if k not in os.environ or os.environ[k] != v}
+    return run_ray(
+        tasks,
+        workers=eng.workers,
+        threads=eng.threads,
+        timeout=eng.timeout,
+        env=env,
+        address=eng.address,
+        retries=eng.retries,
+        on_start=recorder.on_start,
+        on_finish=recorder.on_finish,
+    )
 
 
 @keyword_options
@@ -213,7 +477,9 @@ def run(
     retry_failed : bool
         Rerun objects that failed before with the same input and options.
     progress : callable(fraction, message), optional
-        ``fraction`` = objects finished / objects to run.
+        ``fraction`` = objects finished / objects to run; ``message`` starts with the step's
+        name: ``options``, ``inputs`` (reading and hashing), ``plan`` (``"plan: N to run, M
+        already done"``), ``objects`` (``"objects: done NAME"`` as each ends), ``end``.
 
     Returns
     -------
@@ -238,169 +504,44 @@ def run(
     ['desk', 'table']
     """
     t0 = time.perf_counter()
-    if engine not in ENGINES:
-        raise InputError(f"engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
-    if engine == "ray":
-        from .ray_engine import require_ray
-
-        require_ray()
-    elif address is not None:
-        raise InputError(
-            f"address: expected only with engine ray, got it with {engine}", params=("engine",)
-        )
-    cores = os.cpu_count() or 1
-    if workers is not None and (
-        isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
-    ):
-        raise InputError(f"workers: expected an integer >= 1, got {workers!r}")
-    if timeout is not None:
-        _schema.number(timeout, "timeout", lo=0, hi=MAX_TIMEOUT, lo_open=True)
-    if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
-        raise InputError(f"retries: expected an integer >= 0, got {retries!r}")
-    outdir = Path(outdir)
-    if outdir.exists() and not outdir.is_dir():
-        raise InputError(f"{outdir}: expected an output folder, got a file")
-    n_workers = workers or cores
-    threads = max(1, cores // n_workers)
-    mem = parse_memory(memory)
-    if mem is None:
-        mem = available_memory() // n_workers
-    template = None
-    if engine == "local":
-        from .local import start_template
-
-        # it imports the pipeline while this process reads and hashes the inputs
-        template = start_template(threads, mem)
-    batch_opts = {
+    report = resolve(progress)
+    report(0.0, "options: checking")
+    outdir = check_outdir(outdir)
+    eng = check_engine(engine, workers, timeout, memory, address, retries)
+    # the local engine's template imports the pipeline while this process reads the inputs
+    options = {
         "res": res,
-        "square": square or None,
+        "square": square,
         "segment": segment,
         "recipe": recipe,
         "fit": fit,
-        "allow_deform": allow_deform or None,
+        "allow_deform": allow_deform,
         "export": export,
         "render": render,
     }
-    batch_opts = {k: v for k, v in batch_opts.items() if v is not None}
-    resolve_options(batch_opts, {}, where="batch")  # the batch's own options, checked once
-    items = shard(discover(inputs, exclude=outdir), rank, world_size)
-    specs = {it.name: resolve_options(batch_opts, it.options, where=f"{it.path}") for it in items}
+    template = _start_template(eng, options)
+    try:
+        spec = batch_spec(options)
+        report(0.0, "inputs: reading and hashing")
+        objects = read_inputs(inputs, outdir, spec, rank=rank, world_size=world_size)
+    except BaseException:
+        if template is not None:
+            template.kill()
+        raise
     outdir.mkdir(parents=True, exist_ok=True)
-
     table = status_mod.StatusTable(outdir)
-    result = BatchResult(outdir=outdir, status=table.path)
-    tasks = []
-    for it in items:
-        spec = specs[it.name]
-        ih, oh = it.content_hash(), options_hash(spec)
-        prev = table.previous.get(it.name)
-        same = prev is not None and prev["input_hash"] == ih and prev["options_hash"] == oh
-        if (
-            same
-            and prev is not None
-            and prev["state"] == "done"
-            and all((outdir / o).is_file() for o in prev["outputs"].split(";") if o)
-        ):
-            result.skipped.append(it.name)
-            continue
-        if same and prev is not None and prev["state"] == "failed" and not retry_failed:
-            result.not_retried.append((it.name, prev["error"]))
-            continue
-        tasks.append(
-            {
-                "name": it.name,
-                "path": str(it.path),
-                "spec": spec,
-                "outdir": str(outdir.resolve()),
-                "input_hash": ih,
-                "options_hash": oh,
-                "attempts": int(prev["attempts"] or 0) + 1 if prev else 1,  # checked on read
-            }
-        )
-
-    report = resolve(progress)
-    total = len(tasks)
-    finished = 0
-    running: set[str] = set()
-    report(0.0, f"{total} to run, {len(result.skipped)} already done")
-
-    def on_start(task: dict[str, Any]) -> None:
-        running.add(task["name"])
-        table.update(
-            task["name"],
-            input=task["path"],
-            state="running",
-            seconds="",
-            error="",
-            input_hash=task["input_hash"],
-            options_hash=task["options_hash"],
-            outputs="",
-            peak_memory_mib="",
-            started=status_mod.now(),
-            finished="",
-            attempts=task["attempts"],
-        )
-
-    def on_finish(task: dict[str, Any], res_: dict[str, Any]) -> None:
-        nonlocal finished
-        running.discard(task["name"])
-        finished += 1
-        ok = bool(res_["ok"])
-        table.update(
-            task["name"],
-            state="done" if ok else "failed",
-            seconds=f"{res_['seconds']:.3f}",
-            error=res_["error"],
-            outputs=";".join(res_["outputs"]),
-            peak_memory_mib=f"{res_['peak_memory'] / 2**20:.1f}" if res_["peak_memory"] else "",
-            finished=status_mod.now(),
-        )
-        if ok:
-            result.done.append(task["name"])
-        else:
-            result.failed.append((task["name"], res_["error"]))
-        result.slowest.append((task["name"], float(res_["seconds"])))
-        result.peak_memory = max(result.peak_memory, int(res_["peak_memory"] or 0))
-        word = "done" if ok else "failed"
-        report(finished / max(total, 1), f"{word} {task['name']}")
-
+    todo = plan(objects, outdir, table.previous, retry_failed=retry_failed)
+    result = BatchResult(
+        outdir=outdir, status=table.path, skipped=todo.skipped, not_retried=todo.not_retried
+    )
+    report(0.0, f"plan: {len(todo.tasks)} to run, {len(todo.skipped)} already done")
+    recorder = Recorder(table, result, report, total=len(todo.tasks))
     try:
         with _sigterm_as_interrupt():
-            if engine == "local":
-                from .local import run_local
-
-                result.engine_info = run_local(
-                    tasks,
-                    workers=n_workers,
-                    threads=threads,
-                    timeout=timeout,
-                    memory=mem,
-                    log=outdir / status_mod.LOG_NAME,
-                    on_start=on_start,
-                    on_finish=on_finish,
-                    template=template,
-                )
-            else:
-                from .local import worker_env
-                from .ray_engine import run_ray
-
-                env = worker_env(threads, mem)
-                env = {k: v for k, v in env.items() if k not in os.environ or os.environ[k] != v}
-                result.engine_info = run_ray(
-                    tasks,
-                    workers=workers,
-                    threads=threads,
-                    timeout=timeout,
-                    env=env,
-                    address=address,
-                    retries=retries,
-                    on_start=on_start,
-                    on_finish=on_finish,
-                )
+            result.engine_info = run_engine(todo.tasks, eng, outdir, recorder, template)
     except KeyboardInterrupt:
-        for name in sorted(running):
-            table.update(name, state="interrupted", finished=status_mod.now())
-            result.interrupted.append(name)
+        recorder.interrupted()
     result.slowest.sort(key=lambda x: -x[1])
     result.seconds = time.perf_counter() - t0
+    report(1.0, f"end: {len(result.done)} done, {len(result.failed)} failed")
     return result

@@ -1,7 +1,9 @@
 """The per-object job, the same in every engine: an input and its options -> its outputs.
 
-:func:`resolve_options` turns the batch's options and a manifest row into a *spec*, a plain
-JSON-able dict whose hash (:func:`options_hash`) decides whether a finished object is current.
+:func:`batch_spec` checks the batch's options once into a *spec*, a plain JSON-able dict whose
+hash (:func:`options_hash`) decides whether a finished object is current; :func:`object_spec`
+lays a manifest row's own options over it (through :mod:`partscale._options`, the vocabulary
+every entry point shares).
 :func:`run_job` is pure: it reads the input, writes every output atomically under
 ``OUTDIR/<name>/`` and returns their paths; the same input and spec give the same bytes.
 :func:`execute` wraps it for a worker: never raises, measures time and peak memory.
@@ -9,17 +11,18 @@ JSON-able dict whose hash (:func:`options_hash`) decides whether a finished obje
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
 import time
 import traceback
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict, cast
 
 from .. import __version__, release_freed_memory, reuse_freed_memory
 from .._files import staged_writes
+from .._options import ON_WORDS, check_res, choice, choices, is_off, yes_no
 from ..csdf import SUFFIX as CSDF_SUFFIX
 from ..errors import InputError, one_line, shown
 
@@ -39,112 +42,145 @@ THREAD_VARIABLES = (
     "NUMEXPR_NUM_THREADS",
     "PYTHON_CPU_COUNT",  # Python >= 3.13's os.cpu_count(); older ones get patched in the worker
 )
-_OFF = ("", "0", "false", "no", "none", "off")
-_ON = ("1", "true", "yes", "on")
 
 
-def resolve_options(batch: dict[str, Any], row: dict[str, Any], *, where: str) -> dict[str, Any]:
-    """The spec of one object: the batch's options overridden by its manifest row's.
+class Spec(TypedDict):
+    """One object's pipeline, checked and canonical (JSON-able; :func:`options_hash` hashes it)."""
 
-    Values may come as CSV strings (``"64"``, ``"glb,png"``, ``"false"``); the spec holds
-    checked, canonical values (the recipe's content, not its path). ``where`` names the object
-    in error messages.
+    version: str
+    res: int
+    square: bool
+    segment: str | None
+    recipe: Any
+    """The recipe's canonical JSON (or as given, where its lengths carry a unit); None: none."""
+    fit: list[str] | None
+    allow_deform: bool
+    export: list[str]
+    render: str | None
+
+
+class Task(TypedDict):
+    """One object to run, as every engine gets it (made by :func:`partscale.batch.api.plan`)."""
+
+    name: str
+    path: str
+    spec: Spec
+    outdir: str
+    input_hash: str
+    options_hash: str
+    attempts: int
+
+
+def batch_spec(options: Mapping[str, Any], *, where: str = "batch") -> Spec:
+    """The batch's own options checked once into the spec every object starts from.
+
+    Parameters
+    ----------
+    options : mapping
+        Any of ``res``, ``square``, ``segment``, ``recipe``, ``fit``, ``allow_deform``,
+        ``export``, ``render`` (typed, or as manifest text); the others take their defaults.
+    where : str
+        Names them in error messages.
+
+    Returns
+    -------
+    Spec
+        The checked, canonical spec (the recipe's content, not its path).
+
+    Examples
+    --------
+    >>> from partscale.batch.job import batch_spec
+    >>> spec = batch_spec({"res": "64", "export": "glb,png", "render": True})
+    >>> spec["res"], spec["export"], spec["render"], spec["segment"]
+    (64, ['glb', 'png'], 'iso', None)
     """
-    from ..ingest import check_res
+    base: Spec = {
+        "version": __version__,
+        "res": 128,
+        "square": False,
+        "segment": None,
+        "recipe": None,
+        "fit": None,
+        "allow_deform": False,
+        "export": list(DEFAULT_EXPORT),
+        "render": None,
+    }
+    return object_spec(base, options, where=where)
 
-    merged = {**batch, **row}
-    res = merged.get("res", 128)
-    if isinstance(res, str):
-        with contextlib.suppress(ValueError):
-            res = int(res.strip())
-    res = check_res(res, f"{where}: res")  # import's own bounds, checked before any work
-    square = _yes_no(merged, "square", where)
-    allow_deform = _yes_no(merged, "allow_deform", where)
 
-    seg = merged.get("segment")
-    if isinstance(seg, bool):
-        seg = "fast" if seg else None
-    if isinstance(seg, str) and seg.strip().lower() in _OFF:
-        seg = None
-    if seg is not None:
-        from ..segment import check_method
+def object_spec(base: Spec, row: Mapping[str, Any], *, where: str) -> Spec:
+    """One object's spec: ``base`` (see :func:`batch_spec`) with its manifest row's options.
 
-        seg = check_method(str(seg).strip().lower(), what=f"{where}: segment")
-
-    recipe = merged.get("recipe")
-    fit = merged.get("fit")
-    if isinstance(recipe, str) and recipe.strip().lower() in _OFF:
-        recipe = None
-    if isinstance(fit, str) and fit.strip().lower() in _OFF:
-        fit = None
-    if recipe is not None and fit is not None:
-        raise InputError(f"{where}: expected a recipe or a size (fit), got both")
-    if recipe is not None:
-        recipe = _recipe_json(recipe)
-    if fit is not None:
-        if not isinstance(fit, str | list | tuple):
-            raise InputError(f"{where}: size: expected 3 sizes (X Y Z), got {shown(fit)}")
-        size = fit.split() if isinstance(fit, str) else list(fit)
-        if len(size) != 3:
-            raise InputError(f"{where}: size: expected 3 sizes (X Y Z), got {fit!r}")
-        fit = [str(s) for s in size]
-
-    export = merged.get("export", DEFAULT_EXPORT)
-    if not isinstance(export, str | list | tuple):
-        raise InputError(
-            f"{where}: export: expected formats among {', '.join(EXPORT_FORMATS)}, got "
-            f"{shown(export)}"
-        )
-    if isinstance(export, str):
-        export = [] if export.strip().lower() in _OFF else export.split(",")
-    formats = []
-    for f in export:
-        f = str(f).strip().lower().lstrip(".")
-        if f not in EXPORT_FORMATS:
+    Only the row's own values are read (the batch's were checked once); values may come as CSV
+    text (``"64"``, ``"glb,png"``, ``"false"``, ``"none"``). ``where`` names the object in error
+    messages. Raises :class:`InputError` for a bad value, for a recipe and a size together, or
+    for no output at all.
+    """
+    spec = cast(Spec, dict(base))
+    for key, value in row.items():
+        if key not in OPTION_CHECKS:
             raise InputError(
-                f"{where}: export: expected formats among {', '.join(EXPORT_FORMATS)}, got {f!r}"
+                f"{where}: unknown option {key!r}; options are {', '.join(OPTION_CHECKS)}"
             )
-        if f not in formats:
-            formats.append(f)
-
-    render = merged.get("render")
-    if isinstance(render, bool):
-        render = "iso" if render else None
-    elif isinstance(render, str):
-        render = render.strip().lower()
-        render = None if render in _OFF else "iso" if render in ("1", "true", "yes") else render
-    if render is not None:
-        from ..render import VIEWS
-
-        if render not in VIEWS:
-            raise InputError(f"{where}: render: expected one of {', '.join(VIEWS)}, got {render!r}")
-    if not formats and render is None:
+        spec[key] = OPTION_CHECKS[key](value, where)  # type: ignore[literal-required]
+    if spec["recipe"] is not None and spec["fit"] is not None:
+        raise InputError(f"{where}: expected a recipe or a size (fit), got both")
+    if not spec["export"] and spec["render"] is None:
         raise InputError(
             f"{where}: expected at least one output (export or render), got none",
             params=("export", "render"),
         )
-    return {
-        "version": __version__,
-        "res": res,
-        "square": square,
-        "segment": seg,
-        "recipe": recipe,
-        "fit": fit,
-        "allow_deform": allow_deform,
-        "export": formats,
-        "render": render,
-    }
+    return spec
 
 
-def _yes_no(merged: dict[str, Any], key: str, where: str) -> bool:
-    """A yes/no option (``True``, ``"yes"``, ``"0"``...) of the merged options; default no."""
-    value = merged.get(key, False)
-    if isinstance(value, str):
-        word = value.strip().lower()
-        value = False if word in _OFF else True if word in _ON else value
-    if not isinstance(value, bool):
-        raise InputError(f"{where}: {key}: expected true or false, got {value!r}")
-    return value
+def _segment(value: Any, where: str) -> str | None:
+    if isinstance(value, bool):
+        return "fast" if value else None
+    if is_off(value):
+        return None
+    from ..segment import check_method
+
+    return check_method(str(value).strip().lower(), what=f"{where}: segment")
+
+
+def _recipe(value: Any, where: str) -> Any:
+    return None if is_off(value) else _recipe_json(value)
+
+
+def _size(value: Any, where: str) -> list[str] | None:
+    if is_off(value):
+        return None
+    if not isinstance(value, str | list | tuple):
+        raise InputError(f"{where}: size: expected 3 sizes (X Y Z), got {shown(value)}")
+    size = value.split() if isinstance(value, str) else list(value)
+    if len(size) != 3:
+        raise InputError(f"{where}: size: expected 3 sizes (X Y Z), got {value!r}")
+    return [str(s) for s in size]
+
+
+def _render(value: Any, where: str) -> str | None:
+    if isinstance(value, bool):
+        return "iso" if value else None
+    if is_off(value):
+        return None
+    if isinstance(value, str) and value.strip().lower() in ON_WORDS:
+        return "iso"
+    from ..render import VIEWS
+
+    return choice(value, f"{where}: render", VIEWS)
+
+
+OPTION_CHECKS: dict[str, Callable[[Any, str], Any]] = {
+    "res": lambda v, where: check_res(v, f"{where}: res", text=True),  # import's own bounds
+    "square": lambda v, where: yes_no(v, f"{where}: square", text=True),
+    "segment": _segment,
+    "recipe": _recipe,
+    "fit": _size,
+    "allow_deform": lambda v, where: yes_no(v, f"{where}: allow_deform", text=True),
+    "export": lambda v, where: choices(v, f"{where}: export", EXPORT_FORMATS, noun="formats"),
+    "render": _render,
+}
+"""Each option of a spec: its check, ``(value, where) -> canonical value``."""
 
 
 def _recipe_json(recipe: Any) -> Any:
@@ -171,21 +207,56 @@ def _recipe_json(recipe: Any) -> Any:
         raise InputError(f"{path}: {exc}" if path is not None else str(exc)) from None
 
 
-def options_hash(spec: dict[str, Any]) -> str:
+def stages(options: Mapping[str, Any]) -> list[str]:
+    """The stages (packages of ``partscale``) a job with these options imports, in order.
+
+    ``options`` is a spec or options as given (unchecked: a value that is not off counts as
+    asked); the local engine's template imports these before its workers fork. Every job
+    imports ``ingest`` and ``edit`` (whose units the import reads).
+
+    Examples
+    --------
+    >>> from partscale.batch.job import stages
+    >>> stages({"segment": "fast", "export": "glb"}), stages({"export": ["csdf"], "fit": None})
+    (['ingest', 'edit', 'segment', 'export'], ['ingest', 'edit'])
+    """
+    asked = [
+        ("segment", not _off(options.get("segment"))),
+        ("zones", not (_off(options.get("recipe")) and _off(options.get("fit")))),
+        ("export", any(f != "csdf" for f in _words(options.get("export", DEFAULT_EXPORT)))),
+        ("render", not _off(options.get("render"))),
+    ]
+    return ["ingest", "edit", *(name for name, yes in asked if yes)]
+
+
+def _off(value: Any) -> bool:
+    return value is False or is_off(value)
+
+
+def _words(value: Any) -> list[str]:
+    """Formats as given (a list, or text separated by commas), lower case."""
+    items = (
+        value.split(",")
+        if isinstance(value, str)
+        else value
+        if isinstance(value, list | tuple)
+        else []
+    )
+    return [str(f).strip().lower().lstrip(".") for f in items if not is_off(f)]
+
+
+def options_hash(spec: Spec) -> str:
     """SHA-256 (hex) of the spec's canonical JSON."""
     return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()
 
 
-def run_job(
-    path: str | os.PathLike, name: str, spec: dict[str, Any], outdir: str | os.PathLike
-) -> list[str]:
+def run_job(path: str | os.PathLike, name: str, spec: Spec, outdir: str | os.PathLike) -> list[str]:
     """Import, segment, edit and write one object; the outputs' paths relative to ``outdir``.
 
     Segmentation bypasses the segment cache, so results never depend on what earlier runs left
     there. Raises what the stages raise (:class:`InputError` for bad input).
     """
     from ..csdf import load as load_csdf
-    from ..edit import apply_recipe
     from ..ingest import load
 
     path, outdir = Path(path), Path(outdir)
@@ -204,7 +275,7 @@ def run_job(
         c = segment(c, method=spec["segment"], cache=False)
     if spec["recipe"]:
         # parsed with the object's units; counts ("copies": "+1") made zone edits on it
-        from ..edit import Recipe
+        from ..edit import Recipe, apply_recipe
         from ..zones import resolve_counts
 
         recipe, _ = resolve_counts(c, Recipe.parse(spec["recipe"], units=c.meta.get("units")))
@@ -296,7 +367,7 @@ def _cpu_seconds() -> float:
     return t.user + t.system + t.children_user + t.children_system
 
 
-def execute(task: dict[str, Any]) -> dict[str, Any]:
+def execute(task: Mapping[str, Any]) -> dict[str, Any]:
     """Run one task (``path``, ``name``, ``spec``, ``outdir``); never raises.
 
     Returns ``{"name", "ok", "outputs", "error", "seconds", "cpu_seconds", "peak_memory"}``;

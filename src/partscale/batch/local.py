@@ -5,17 +5,19 @@ One template process (:mod:`partscale.batch._worker`) imports the pipeline once,
 reads and hashes its inputs; workers fork from it in milliseconds. With more than two workers,
 the first forks at once, and while it starts on the largest object the template runs a tiny
 object through the batch's stages, so that the kernels are loaded (or compiled, once per
-machine) before the other workers fork from it: two loads instead of one per worker. The end of
-the batch tells each worker to stop; a worker exits at once, without tearing its interpreter
-down, so nothing waits one worker after another.
+machine) before the other workers fork from it: two loads instead of one per worker. Each
+worker starts its first object before the next one forks. A worker left idle once nothing is
+pending is told to stop; a worker exits at once, without tearing its interpreter down, so the
+end waits for no worker after another.
 
 The scheduler sends the largest objects first (voxels, then input bytes), one task at a time to
 each idle worker, with threads for that task from the cores not in use: every worker runs one
 thread while there are more objects than workers, the last objects get the cores their
-finished neighbours left (up to one thread per :data:`VOXELS_PER_THREAD` voxels). It watches every
-busy worker: a worker past ``timeout`` seconds or above ``memory`` bytes resident is killed, its
-object recorded failed with one line, and a new worker takes its place; so is one that dies on
-its own.
+finished neighbours left (up to one thread per :data:`VOXELS_PER_THREAD` voxels). The next tasks
+go out before the status table records what started and ended, so no worker waits for the
+table's writes. It watches every busy worker: a worker past ``timeout`` seconds or above
+``memory`` bytes resident is killed, its object recorded failed with one line, and a new worker
+takes its place; so is one that dies on its own.
 """
 
 from __future__ import annotations
@@ -36,7 +38,8 @@ from multiprocessing.reduction import send_handle
 from pathlib import Path
 from typing import Any, cast
 
-from .job import thread_env
+from .job import Spec, Task, thread_env
+from .job import stages as job_stages
 
 POLL_SECONDS = 0.1
 START_FAILURES = 3
@@ -49,7 +52,6 @@ WARM_FROM = 3
 fewer load them each, side by side (the same wall time, and no warm-up object to run)."""
 """Grid size of the tiny object the template runs to load the kernels."""
 
-Task = dict[str, Any]
 Result = dict[str, Any]
 
 
@@ -68,7 +70,7 @@ def resident_memory(pid: int) -> int:
 class _Template:
     """The process the workers fork from (see :mod:`partscale.batch._worker`)."""
 
-    def __init__(self, env: dict[str, str]):
+    def __init__(self, env: dict[str, str], stages: Sequence[str]):
         here, there = Pipe()
         self.conn = here
         # its output goes here until the batch's log is known (:meth:`attach_log`)
@@ -81,6 +83,7 @@ class _Template:
                 "partscale.batch._worker",
                 str(there.fileno()),
                 str(os.getpid()),
+                *stages,
             ],
             env=env,
             pass_fds=(there.fileno(),),
@@ -89,6 +92,7 @@ class _Template:
             stderr=self.early,
         )
         there.close()
+        self.stages = set(stages)
         self.warming = self.warm = False
         self.log: Path | None = None
         # dropped unused (the batch refused its inputs), it is stopped and its file closed
@@ -151,6 +155,13 @@ class _Template:
         there.close()
         return int(self._reply()), here
 
+    def import_stages(self, stages: Sequence[str]) -> None:
+        """Have it import ``stages`` too (a manifest row asked for more), before the next fork."""
+        more = [s for s in stages if s not in self.stages]
+        if more:
+            self.conn.send(("import", more))
+            self.stages.update(more)
+
     def start_warm(self, task: Task) -> None:
         self.conn.send(("warm", task))
         self.warming = True
@@ -194,6 +205,13 @@ class _Worker:
     def send(self, task: Task, threads: int) -> None:
         self.task, self.threads, self.started, self.peak = task, threads, time.monotonic(), 0
         self.conn.send({**task, "threads": threads})
+
+    def done(self, outcome: Result) -> tuple[Task, Result]:
+        """Its task ended with ``outcome``: the task, and the outcome with its peak memory."""
+        task, self.task, self.threads = self.task, None, 0
+        assert task is not None  # a worker sends an outcome only for a task
+        outcome["peak_memory"] = max(outcome.get("peak_memory", 0), self.peak)
+        return task, outcome
 
     def kill(self, template: _Template) -> int | None:
         self.dead = True
@@ -263,24 +281,28 @@ def _warm_task(task: Task) -> Task:
     """``task``'s stages on the shipped table at :data:`WARM_RES` voxels (the template's warm-up)."""
     from ..data import table
 
-    spec = {**task["spec"], "res": WARM_RES, "fit": None}
+    spec: Spec = {**task["spec"], "res": WARM_RES, "fit": None}
     return {**task, "name": "warm", "path": str(table()), "spec": spec}
 
 
-def start_template(threads: int, memory: int | None) -> _Template:
-    """Start the process the workers fork from; it imports the pipeline while the batch reads
-    its inputs. Pass it to :func:`run_local` (dropped unused, it exits when its pipe closes).
+def start_template(threads: int, memory: int | None, stages: Sequence[str]) -> _Template:
+    """Start the process the workers fork from; it imports the pipeline's ``stages`` (see
+    :func:`~partscale.batch.job.stages`) while the batch reads its inputs. Pass it to
+    :func:`run_local` (dropped unused, it exits when its pipe closes).
     """
-    return _Template(_template_env(threads, memory))
+    return _Template(_template_env(threads, memory), stages)
 
 
-def _ready_template(template: _Template | None, env: dict[str, str], log: Path) -> _Template:
-    """``template`` (or a new one) once it has imported the pipeline; a few tries."""
+def _ready_template(
+    template: _Template | None, env: dict[str, str], log: Path, stages: Sequence[str]
+) -> _Template:
+    """``template`` (or a new one) once it has imported ``stages``; a few tries."""
     status: int | None = None
     for _ in range(START_FAILURES):
-        template = template or _Template(env)
+        template = template or _Template(env, stages)
         template.attach_log(log)
         if template.wait_ready():
+            template.import_stages(stages)
             return template
         status, template = _status(template.proc.returncode), None
     raise RuntimeError(f"batch workers fail to start ({_died(status)}); see {log}")
@@ -304,6 +326,155 @@ def _check(w: _Worker, timeout: float | None, memory: int | None, now: float) ->
     return None
 
 
+class _Clock:
+    """The phases of a run: start-up, object phase, end; and the objects' CPU seconds."""
+
+    def __init__(self) -> None:
+        self.t0 = time.perf_counter()
+        self.first = self.last = self.cpu = 0.0
+
+    def started(self) -> None:
+        """Tasks started: the object phase begins (at the first)."""
+        self.first = self.first or time.perf_counter()
+
+    def finished(self, outcome: Result) -> None:
+        """Count a task's CPU seconds (taken out of its outcome)."""
+        self.cpu += float(outcome.pop("cpu_seconds", 0.0))
+
+    def recorded(self) -> None:
+        """A task's end is recorded: the object phase lasts at least until now."""
+        self.last = time.perf_counter()
+
+    def figures(self) -> dict[str, float]:
+        first = self.first or self.t0
+        last = max(self.last, first)
+        return {
+            "startup_seconds": first - self.t0,
+            "objects_seconds": last - first,
+            "end_seconds": time.perf_counter() - last,
+            "objects_cpu_seconds": self.cpu,
+        }
+
+
+class _Pool:
+    """The workers forked from ``template``: forked and given tasks, read, watched, stopped."""
+
+    def __init__(
+        self,
+        template: _Template,
+        size: int,
+        threads: int,
+        timeout: float | None,
+        memory: int | None,
+    ):
+        self.template, self.size, self.threads = template, size, threads
+        self.timeout, self.memory = timeout, memory
+        self.cores = os.cpu_count() or 1
+        self.workers: list[_Worker] = []
+        self.retired: list[_Worker] = []
+
+    def busy(self) -> bool:
+        """Whether a worker has a task."""
+        return any(w.task is not None for w in self.workers)
+
+    def fill(self, pending: collections.deque[Task]) -> list[Task]:
+        """Send pending tasks, largest first, to the idle workers, then to workers forked one at
+        a time (each starts its task before the next is forked); the tasks started.
+
+        The first worker forks at once; from :data:`WARM_FROM` workers, the others once the
+        template has loaded the kernels (up to then they would load them side by side, at no
+        more cost). Once nothing is pending, the idle workers are told to stop.
+        """
+        template = self.template
+        self.workers = [w for w in self.workers if not w.dead]
+        warm_first = self.size >= WARM_FROM and not template.warm
+        room = (1 if warm_first else self.size) - len(self.workers)
+        idle = [w for w in self.workers if w.task is None]
+        busy = sum(w.threads for w in self.workers)
+        started = []
+        while pending and (idle or room > 0):
+            if idle:
+                w = idle.pop(0)
+            else:
+                w, room = _Worker(template), room - 1
+                self.workers.append(w)
+            task = pending.popleft()
+            can_start = len(idle) + max(room, 0) + 1  # this worker, the idle, the ones to fork
+            k = _threads_for(task, self.cores - busy, can_start, len(pending) + 1, self.threads)
+            w.send(task, k)
+            busy += k
+            started.append(task)
+        if warm_first and not template.warming and pending:
+            template.start_warm(_warm_task(pending[0]))
+        if not pending:
+            self._retire_idle()
+        return started
+
+    def _retire_idle(self) -> None:
+        """Tell the idle workers to stop now that nothing is pending: they exit while the last
+        objects run, so the end does not wait for them.
+        """
+        for w in [w for w in self.workers if w.task is None and not w.dead]:
+            with contextlib.suppress(OSError):
+                w.conn.send(None)
+            self.workers.remove(w)
+            self.retired.append(w)
+
+    def collect(self) -> list[tuple[Task, Result]]:
+        """The tasks that ended (waiting up to :data:`POLL_SECONDS` while any runs), then the
+        ones stopped for their time or memory, or whose worker died.
+        """
+        wait = POLL_SECONDS if self.busy() or self.template.warming else 0.0
+        conns: dict[Any, _Worker | None] = {w.conn: w for w in self.workers}
+        conns[self.template.conn] = None
+        ended: list[tuple[Task, Result]] = []
+        for conn in mp_connection.wait(list(conns), timeout=wait):
+            who = conns[conn]
+            if who is None:
+                self.template.poll_warm()
+                continue
+            try:
+                msg = cast(mp_connection.Connection, conn).recv()
+            except (EOFError, OSError):
+                who.gone = True  # its death is handled below
+                continue
+            if msg != "ready":
+                ended.append(who.done(msg))
+        return ended + self._watch()
+
+    def _watch(self) -> list[tuple[Task, Result]]:
+        """Stop the workers past their time or memory, replace the dead; their tasks failed."""
+        now = time.monotonic()
+        ended = []
+        for w in self.workers:
+            error = _check(w, self.timeout, self.memory, now)
+            if error is None:
+                continue
+            status = w.kill(self.template)
+            if w.task is not None:
+                error = _died(status) if error == "died" else error
+                ended.append(w.done(_failed(w, error)))
+        return ended
+
+    def stop(self) -> None:
+        """Tell every worker to stop; a worker exits at once, without tearing its interpreter
+        down, and the template waits for them all.
+        """
+        for w in self.workers:
+            with contextlib.suppress(OSError):
+                w.conn.send(None)
+        self.template.stop()
+        for w in self.workers + self.retired:
+            w.conn.close()
+
+    def kill(self) -> None:
+        """Kill every worker and the template (the batch was interrupted or failed)."""
+        for w in self.workers + self.retired:
+            with contextlib.suppress(OSError):
+                os.kill(w.pid, signal.SIGKILL)
+        self.template.kill()
+
+
 def run_local(
     tasks: Sequence[Task],
     *,
@@ -321,7 +492,9 @@ def run_local(
     Every task gets exactly one ``on_finish`` unless the batch is interrupted
     (KeyboardInterrupt propagates after the workers are killed; the caller marks what was
     running). Raises RuntimeError when workers cannot start at all (see ``log``).
-    ``template``: one :func:`start_template` started early (else one is started here).
+    ``template``: one :func:`start_template` started early (else one is started here). The
+    next tasks are sent before the callbacks record what started and ended, so no worker
+    waits for the status table.
 
     Returns
     -------
@@ -330,90 +503,32 @@ def run_local(
         started to last finished), ``end_seconds`` (the rest: stopping the workers) and
         ``objects_cpu_seconds`` (CPU time of the objects' jobs).
     """
-    t0 = time.perf_counter()
+    clock = _Clock()
     pending = collections.deque(sorted(tasks, key=task_size, reverse=True))
     if not pending:
         if template is not None:
             template.kill()
         return {}
-    cores = os.cpu_count() or 1
-    n = min(workers, len(pending))
-    template = _ready_template(template, _template_env(threads, memory), log)
-    pool: list[_Worker] = []
-    first = last = cpu = 0.0
-
-    def finish(w: _Worker, result: Result) -> None:
-        nonlocal last, cpu
-        cpu += float(result.pop("cpu_seconds", 0.0))
-        task, w.task, w.threads = w.task, None, 0
-        assert task is not None  # a worker sends a result only for a task
-        result["peak_memory"] = max(result.get("peak_memory", 0), w.peak)
-        on_finish(task, result)
-        last = time.perf_counter()
-
+    stages = list(dict.fromkeys(s for t in pending for s in job_stages(t["spec"])))
+    template = _ready_template(template, _template_env(threads, memory), log, stages)
+    pool = _Pool(template, min(workers, len(pending)), threads, timeout, memory)
     try:
-        while pending or any(w.task is not None for w in pool):
-            # the first worker forks at once; beyond WARM_FROM, the others once the template
-            # has loaded the kernels (up to then they load them side by side, at no more cost)
-            pool = [w for w in pool if not w.dead]
-            room = n - len(pool) if template.warm or n < WARM_FROM else 1 - len(pool)
-            pool += [_Worker(template) for _ in range(min(room, len(pending)))]
-            if n >= WARM_FROM and not (template.warm or template.warming):
-                template.start_warm(_warm_task(pending[0]))
-            busy = sum(w.threads for w in pool)
-            idle = [w for w in pool if w.task is None]
-            for i, w in enumerate(idle):
-                if not pending:
-                    break
-                task = pending.popleft()
-                k = _threads_for(task, cores - busy, len(idle) - i, len(pending) + 1, threads)
-                first = first or time.perf_counter()
+        while pending or pool.busy():
+            ended = pool.collect()
+            started = pool.fill(pending)
+            if started:
+                clock.started()
+            for task in started:
                 on_start(task)
-                w.send(task, k)
-                busy += k
-            conns: dict[Any, _Worker | None] = {w.conn: w for w in pool}
-            conns[template.conn] = None
-            for conn in mp_connection.wait(list(conns), timeout=POLL_SECONDS):
-                who = conns[conn]
-                if who is None:
-                    template.poll_warm()
-                    continue
-                try:
-                    msg = cast(mp_connection.Connection, conn).recv()
-                except (EOFError, OSError):
-                    who.gone = True  # its death is handled below
-                    continue
-                if msg != "ready":
-                    finish(who, msg)
-            now = time.monotonic()
-            for w in pool:
-                error = _check(w, timeout, memory, now)
-                if error is None:
-                    continue
-                status = w.kill(template)
-                if w.task is not None:
-                    error = _died(status) if error == "died" else error
-                    finish(w, _failed(w, error))
+            for task, outcome in ended:
+                clock.finished(outcome)
+                on_finish(task, outcome)
+                clock.recorded()
     except BaseException:
-        for w in pool:
-            with contextlib.suppress(OSError):
-                os.kill(w.pid, signal.SIGKILL)
-        template.kill()
+        pool.kill()
         raise
-    for w in pool:
-        with contextlib.suppress(OSError):
-            w.conn.send(None)  # a worker exits at once, without tearing its interpreter down
-    template.stop()  # it waits for them all
-    for w in pool:
-        w.conn.close()
-    first = first or t0
-    last = max(last, first)
-    return {
-        "startup_seconds": first - t0,
-        "objects_seconds": last - first,
-        "end_seconds": time.perf_counter() - last,
-        "objects_cpu_seconds": cpu,
-    }
+    pool.stop()
+    return clock.figures()
 
 
 def _failed(w: _Worker, error: str) -> Result:

@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from ..errors import InputError, one_line
-from .job import execute, limit_threads
+from .job import Task, execute, limit_threads
 
 INSTALL_HINT = "pip install 'partscale[ray]'"
 OBJECT_STORE_BYTES = 128 << 20
@@ -35,13 +35,13 @@ def require_ray():
     return ray
 
 
-def _task(task: dict[str, Any], threads: int) -> dict[str, Any]:
+def _task(task: Task, threads: int) -> dict[str, Any]:
     limit_threads(threads)
     return execute(task)
 
 
 def run_ray(
-    tasks: Sequence[dict[str, Any]],
+    tasks: Sequence[Task],
     *,
     workers: int | None,
     threads: int,
@@ -49,8 +49,8 @@ def run_ray(
     env: dict[str, str],
     address: str | None,
     retries: int,
-    on_start: Callable[[dict[str, Any]], None],
-    on_finish: Callable[[dict[str, Any], dict[str, Any]], None],
+    on_start: Callable[[Task], None],
+    on_finish: Callable[[Task, dict[str, Any]], None],
 ) -> dict[str, float]:
     """Run ``tasks`` as Ray tasks; callbacks as in :func:`partscale.batch.local.run_local`.
 
@@ -72,7 +72,7 @@ def run_ray(
             kwargs.update(num_cpus=workers, object_store_memory=OBJECT_STORE_BYTES)
         ray.init(address=address, **kwargs)
     startup = time.perf_counter() - t0
-    inflight: dict[Any, tuple[dict[str, Any], float]] = {}
+    inflight: dict[Any, tuple[Task, float]] = {}
     try:
         if workers is None:
             workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
@@ -87,10 +87,10 @@ def run_ray(
             for ref in done:
                 task, started = inflight.pop(ref)
                 try:
-                    result = ray.get(ref)
+                    outcome = ray.get(ref)
                 except Exception as exc:  # the worker died past its retries, or was cancelled
-                    result = _failed(task, started, f"{type(exc).__name__}: {one_line(exc)}")
-                on_finish(task, result)
+                    outcome = _failed(task, started, f"{type(exc).__name__}: {one_line(exc)}")
+                on_finish(task, outcome)
             if timeout is not None:
                 now = time.monotonic()
                 for ref, (task, started) in list(inflight.items()):
@@ -113,7 +113,7 @@ def run_ray(
     return {"startup_seconds": startup}
 
 
-def _failed(task: dict[str, Any], started: float, error: str) -> dict[str, Any]:
+def _failed(task: Task, started: float, error: str) -> dict[str, Any]:
     # Ray's messages run over many lines with tracebacks: keep the first line
     return {
         "name": task["name"],

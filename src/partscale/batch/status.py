@@ -129,13 +129,27 @@ def check_row(row: dict[str, str], where: str) -> dict[str, str]:
     return row
 
 
-def _render(rows: dict[str, dict[str, str]]) -> str:
+def _render(
+    rows: dict[str, dict[str, str]], lines: dict[str, tuple[tuple[str, ...], str]] | None = None
+) -> str:
+    """The table's CSV text, rows sorted by name. ``lines`` keeps each row's line by name with
+    the values it was made from, so a row that has not changed is not formatted again.
+    """
+    lines = {} if lines is None else lines
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
-    w.writeheader()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(COLUMNS)
+    out = [buf.getvalue()]
     for name in sorted(rows):
-        w.writerow({c: rows[name].get(c, "") for c in COLUMNS})
-    return buf.getvalue()
+        values = tuple(rows[name].get(c, "") for c in COLUMNS)
+        kept = lines.get(name)
+        if kept is None or kept[0] != values:
+            buf.seek(0)
+            buf.truncate()
+            w.writerow(values)
+            kept = lines[name] = (values, buf.getvalue())
+        out.append(kept[1])
+    return "".join(out)
 
 
 @contextlib.contextmanager
@@ -167,6 +181,11 @@ class StatusTable:
         self.path = self.outdir / STATUS_NAME
         self.previous = read(self.path)
         self.rows: dict[str, dict[str, str]] = {}
+        # the table as this process last wrote it, and the file's stamp then: while the stamp
+        # holds, no other process wrote, and the table need not be read again
+        self._written: dict[str, dict[str, str]] = {}
+        self._stamp: tuple[int, int, int] | None = None
+        self._lines: dict[str, tuple[tuple[str, ...], str]] = {}
 
     def update(self, name: str, **fields: object) -> dict[str, str]:
         """Set fields of ``name``'s row (starting from its previous row) and write the table."""
@@ -181,10 +200,27 @@ class StatusTable:
         return row
 
     def write(self) -> None:
-        """Merge this process's rows into the table on disk, atomically, under the lock."""
+        """Merge this process's rows into the table on disk, atomically, under the lock.
+
+        The table is read again only when another process wrote it since this one did (its
+        file's inode, size or modification time changed), and only changed rows are formatted
+        again: a batch's own write costs about its changed rows, not a read, a check and a
+        formatting of every row.
+        """
         with _locked(self.outdir):
-            merged = read(self.path)
+            fresh = self._stamp is not None and self._stamp == _stamp(self.path)
+            merged = self._written if fresh else read(self.path)
             merged.update(self.rows)
-            text = _render(merged)
+            text = _render(merged, self._lines)
             with atomic_path(self.path) as tmp:
                 tmp.write_text(text, encoding="utf-8")
+            self._written, self._stamp = merged, _stamp(self.path)
+
+
+def _stamp(path: Path) -> tuple[int, int, int] | None:
+    """What tells one version of a file from another: its inode, size and modification time."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return st.st_ino, st.st_size, st.st_mtime_ns

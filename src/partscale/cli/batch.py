@@ -5,17 +5,22 @@ from __future__ import annotations
 import contextlib
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from . import _common
 
+if TYPE_CHECKING:
+    from ..batch import BatchResult
+
 OPTIONAL_VALUES = {
     "--segment": ("fast", ("fast", "coacd")),
     "--render": ("iso", ("iso", "front", "side", "top")),
 }
-"""Options whose value may be left out (typer has no such options): the default, and the values."""
+"""Options whose value may be left out (typer has no such options): the default, and the values
+(:data:`partscale.segment.METHODS` and :data:`partscale.render.VIEWS`, written out so that
+reading the command line imports neither stage)."""
 
 
 def optional_values(argv: list[str]) -> list[str]:
@@ -73,9 +78,13 @@ def _batch_bar():
         state: dict[str, int] = {}
 
         def callback(fraction: float, message: str) -> None:
-            if "total" not in state:  # the first call says how many are to run
-                state["total"] = int(message.split()[0]) if message[:1].isdigit() else 0
+            step, _, said = message.partition(": ")
+            if step == "plan":  # "plan: N to run, M already done"
+                state["total"] = int(said.split()[0])
                 bar.update(task, total=max(state["total"], 1), last=message)
+                return
+            if "total" not in state:  # the steps before the plan
+                bar.update(task, last=message)
                 return
             done = round(fraction * state["total"])
             speed = bar.tasks[0].speed
@@ -215,24 +224,30 @@ def batch(
             retry_failed=retry_failed,
             progress=bar,
         )
+    # unwrapped lines (rich would wrap long paths at the terminal width)
+    sys.stderr.write("".join(line + "\n" for line in summary(r)))
+    sys.stderr.flush()
+    code = exit_code(r)
+    if code:
+        raise typer.Exit(code)
 
-    def say(line: str) -> None:
-        sys.stderr.write(line + "\n")  # unwrapped: rich would wrap long paths
 
+def summary(r: BatchResult) -> list[str]:
+    """What the batch says when it ends: counts, the slowest objects, one line per failure."""
     counts = f"{len(r.done)} done, {len(r.failed)} failed, {len(r.skipped)} skipped (already done)"
     if r.not_retried:
         counts += f", {len(r.not_retried)} failed before (not retried: --retry-failed)"
     if r.interrupted:
         counts += f", {len(r.interrupted)} interrupted"
-    say(f"batch: {counts} in {_duration(r.seconds)}; status: {r.status}")
+    lines = [f"batch: {counts} in {_duration(r.seconds)}; status: {r.status}"]
     if r.slowest:
-        top = ", ".join(f"{n} {s:.1f} s" for n, s in r.slowest[:5])
-        say(f"slowest: {top}")
-    for name, error in [*r.failed, *r.not_retried]:
-        # one unwrapped line each (rich would wrap at the terminal width)
-        sys.stderr.write(f"failed: {name}: {' '.join(error.split())}\n")
-    sys.stderr.flush()
-    if r.interrupted:
-        raise typer.Exit(130)
-    if not r.ok:
-        raise typer.Exit(1)
+        lines.append("slowest: " + ", ".join(f"{n} {s:.1f} s" for n, s in r.slowest[:5]))
+    lines += [
+        f"failed: {name}: {' '.join(error.split())}" for name, error in [*r.failed, *r.not_retried]
+    ]
+    return lines
+
+
+def exit_code(r: BatchResult) -> int:
+    """130 when interrupted, 1 when an object failed (now or before), else 0."""
+    return 130 if r.interrupted else 0 if r.ok else 1

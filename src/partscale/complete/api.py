@@ -491,7 +491,7 @@ def complete(
     >>> bool(done["observed"] > 0.3)
     True
     """
-    from ..ingest import check_res
+    from .._options import check_res
 
     report = resolve(progress)
     res = check_res(res, source)

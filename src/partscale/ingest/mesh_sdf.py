@@ -43,7 +43,7 @@ import cc3d
 import numpy as np
 
 from .._memory import check_memory
-from .._options import keyword_options
+from .._options import MAX_RES, MIN_RES, check_res, keyword_options  # noqa: F401
 from .._workers import launch_numba_threads
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError, shown
@@ -61,49 +61,8 @@ with the grid)."""
 SLAB = 2  # x-layers per parallel work item
 RANDOM_CHUNK = 1 << 20  # random draws per chunk when sampling the far field's components
 BYTES_PER_VOXEL = 64  # peak working set of from_mesh per voxel (39-46 measured, temporaries too)
-MIN_RES = 16
-MAX_RES = 16384
-"""Largest ``--res``: far beyond any memory (the guard refuses much less), bounded so that
-grid arithmetic never overflows int64."""
 MAX_PAD = 4096
 """Largest ``--pad`` (same reason as :data:`MAX_RES`)."""
-
-
-def check_res(res: int | float, what: str) -> int:
-    """Validate a resolution (an int in [16, :data:`MAX_RES`]) before any arithmetic with it.
-
-    Parameters
-    ----------
-    res : int or float
-        Voxels along the object's longest side; a float must be whole.
-    what : str
-        Its name in the :class:`~partscale.errors.InputError`.
-
-    Returns
-    -------
-    int
-        The resolution.
-
-    Examples
-    --------
-    >>> from partscale.ingest import check_res
-    >>> check_res(64, "res")
-    64
-    >>> check_res(8, "res")
-    Traceback (most recent call last):
-    ...
-    partscale.errors.InputError: res: expected res in [16, 16384], got 8
-    """
-    if isinstance(res, float) and math.isfinite(res) and res.is_integer():
-        res = int(res)
-    if isinstance(res, bool) or not isinstance(res, int | np.integer):
-        raise InputError(f"{what}: expected an integer res, got {shown(res)}", params=("res",))
-    res = int(res)
-    if not MIN_RES <= res <= MAX_RES:
-        raise InputError(
-            f"{what}: expected res in [{MIN_RES}, {MAX_RES}], got {shown(res, 24)}", params=("res",)
-        )
-    return res
 
 
 def check_pad(pad: int | None, what: str) -> int:

@@ -226,32 +226,37 @@ export function createRaymarchMaterial(): THREE.RawShaderMaterial {
   });
 }
 
-// A one-row float render: evaluates the shader's own sourceCoordinate/toSource on given points,
-// so tests compare the GLSL (not a copy of it) with the Python maps.
-const evalFragment = /* glsl */ `
+// A one-row float render: evaluates the shader's own functions (GLSL, their source) on given
+// points p (uInput), writing fragColor as the statements `result` say, so tests compare the GLSL
+// (not a copy of it) with the Python maps.
+function evalFragmentOf(glsl: string, result: string): string {
+  return /* glsl */ `
 precision highp float;
 uniform highp sampler2D uInput;
-${REMAP_GLSL}
+${glsl}
 out vec4 fragColor;
 void main() {
   ivec2 ij = ivec2(gl_FragCoord.xy);
   vec4 p = texelFetch(uInput, ij, 0);
-  fragColor = vec4(toSource(p.xyz), 1.0);
+  ${result}
 }
 `;
+}
+// The remap's toSource: the source point of each output point.
+const evalFragment = evalFragmentOf(REMAP_GLSL, 'fragColor = vec4(toSource(p.xyz), 1.0);');
 const evalVertex = /* glsl */ `
 in vec3 position;
 void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }
 `;
 
-/** Map output points (N, 3) through the zones with the GLSL; returns source points (N, 3). */
-export function evalRemapOnGPU(
+/** Run ``fragmentShader`` (an eval fragment: uInput holds the points) on output points
+ *  (N, 3) in a one-row float render; returns its (N, 4) RGBA floats, flat. */
+function evalPointsOnGPU(
   renderer: THREE.WebGLRenderer,
-  zonesA: THREE.Vector4[],
-  zonesB: THREE.Vector4[],
-  count: number,
+  fragmentShader: string,
+  uniforms: Record<string, THREE.IUniform>,
   points: number[][],
-): number[][] {
+): Float32Array {
   const n = points.length;
   const data = new Float32Array(n * 4);
   points.forEach((p, i) => data.set([p[0], p[1], p[2], 1], i * 4));
@@ -261,61 +266,8 @@ export function evalRemapOnGPU(
   const mat = new THREE.RawShaderMaterial({
     glslVersion: THREE.GLSL3,
     vertexShader: evalVertex,
-    fragmentShader: evalFragment,
-    uniforms: {
-      uInput: { value: input },
-      uZoneCount: { value: count },
-      uZoneA: { value: zonesA },
-      uZoneB: { value: zonesB },
-    },
-  });
-  const quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), mat);
-  const scene = new THREE.Scene();
-  scene.add(quad);
-  const cam = new THREE.Camera();
-  const prev = renderer.getRenderTarget();
-  renderer.setRenderTarget(target);
-  renderer.render(scene, cam);
-  const out = new Float32Array(n * 4);
-  renderer.readRenderTargetPixels(target, 0, 0, n, 1, out);
-  renderer.setRenderTarget(prev);
-  target.dispose();
-  input.dispose();
-  mat.dispose();
-  quad.geometry.dispose();
-  return Array.from({ length: n }, (_, i) => [out[i * 4], out[i * 4 + 1], out[i * 4 + 2]]);
-}
-
-// The same for the warp's warpSource: (source point, weight) of each output point.
-const evalWarpFragment = /* glsl */ `
-precision highp float;
-uniform highp sampler2D uInput;
-${WARP_GLSL}
-out vec4 fragColor;
-void main() {
-  ivec2 ij = ivec2(gl_FragCoord.xy);
-  vec4 p = texelFetch(uInput, ij, 0);
-  float w;
-  vec3 s = warpSource(p.xyz, w);
-  fragColor = vec4(s, w);
-}
-`;
-
-/** Map output points (N, 3) through a warp (its packWarp uniforms) with the GLSL; returns
- *  (N, 4): the source point and its weight. */
-export function evalWarpOnGPU(renderer: THREE.WebGLRenderer, kind: number, data: number[], points: number[][]): number[][] {
-  const n = points.length;
-  const input = new Float32Array(n * 4);
-  points.forEach((p, i) => input.set([p[0], p[1], p[2], 1], i * 4));
-  const tex = new THREE.DataTexture(input, n, 1, THREE.RGBAFormat, THREE.FloatType);
-  tex.needsUpdate = true;
-  const target = new THREE.WebGLRenderTarget(n, 1, { type: THREE.FloatType, depthBuffer: false });
-  const uWarp = [0, 1, 2, 3].map((i) => new THREE.Vector4(...data.slice(4 * i, 4 * i + 4)));
-  const mat = new THREE.RawShaderMaterial({
-    glslVersion: THREE.GLSL3,
-    vertexShader: evalVertex,
-    fragmentShader: evalWarpFragment,
-    uniforms: { uInput: { value: tex }, uWarpKind: { value: kind }, uWarp: { value: uWarp } },
+    fragmentShader,
+    uniforms: { ...uniforms, uInput: { value: input } },
   });
   const quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), mat);
   const scene = new THREE.Scene();
@@ -327,8 +279,40 @@ export function evalWarpOnGPU(renderer: THREE.WebGLRenderer, kind: number, data:
   renderer.readRenderTargetPixels(target, 0, 0, n, 1, out);
   renderer.setRenderTarget(prev);
   target.dispose();
-  tex.dispose();
+  input.dispose();
   mat.dispose();
   quad.geometry.dispose();
-  return Array.from({ length: n }, (_, i) => [out[i * 4], out[i * 4 + 1], out[i * 4 + 2], out[i * 4 + 3]]);
+  return out;
+}
+
+/** Map output points (N, 3) through the zones with the GLSL; returns source points (N, 3). */
+export function evalRemapOnGPU(
+  renderer: THREE.WebGLRenderer,
+  zonesA: THREE.Vector4[],
+  zonesB: THREE.Vector4[],
+  count: number,
+  points: number[][],
+): number[][] {
+  const uniforms = {
+    uZoneCount: { value: count },
+    uZoneA: { value: zonesA },
+    uZoneB: { value: zonesB },
+  };
+  const out = evalPointsOnGPU(renderer, evalFragment, uniforms, points);
+  return points.map((_, i) => [out[i * 4], out[i * 4 + 1], out[i * 4 + 2]]);
+}
+
+// The warp's warpSource: (source point, weight) of each output point.
+const evalWarpFragment = evalFragmentOf(
+  WARP_GLSL,
+  'float w;\n  vec3 s = warpSource(p.xyz, w);\n  fragColor = vec4(s, w);',
+);
+
+/** Map output points (N, 3) through a warp (its packWarp uniforms) with the GLSL; returns
+ *  (N, 4): the source point and its weight. */
+export function evalWarpOnGPU(renderer: THREE.WebGLRenderer, kind: number, data: number[], points: number[][]): number[][] {
+  const uWarp = [0, 1, 2, 3].map((i) => new THREE.Vector4(...data.slice(4 * i, 4 * i + 4)));
+  const uniforms = { uWarpKind: { value: kind }, uWarp: { value: uWarp } };
+  const out = evalPointsOnGPU(renderer, evalWarpFragment, uniforms, points);
+  return points.map((_, i) => [out[i * 4], out[i * 4 + 1], out[i * 4 + 2], out[i * 4 + 3]]);
 }

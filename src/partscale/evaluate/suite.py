@@ -213,24 +213,9 @@ def _entry(obj: Any, i: int) -> Entry:
         if kind is not None and kind not in KINDS:
             raise InputError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
         if "recipe" in obj:
-            try:
-                recipe = Recipe.parse(obj["recipe"])
-            except InputError as exc:
-                raise InputError(f"recipe: {exc}") from None
-            return Entry(
-                name,
-                path,
-                None,
-                kind,
-                view,
-                str(obj.get("note", "")),
-                recipe=recipe,
-                elements=elements,
-            )
-        edit_obj = obj.get("edit")
-        if isinstance(edit_obj, dict) and "mode" in edit_obj:
-            raise InputError("edit.mode: expected none (the suite runs every mode), got one")
-        edit = Edit.parse(edit_obj, where="edit")
+            edit, recipe = None, _recipe(obj["recipe"])
+        else:
+            edit, recipe = _edit(obj.get("edit")), None
         return Entry(
             name,
             path,
@@ -238,11 +223,28 @@ def _entry(obj: Any, i: int) -> Entry:
             kind,
             view,
             str(obj.get("note", "")),
+            recipe=recipe,
             elements=elements,
-            hardware=hardware,
+            # hardware is judged on single-edit entries; a recipe entry's is not kept
+            hardware=hardware and recipe is None,
         )
     except InputError as exc:
         return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")
+
+
+def _recipe(obj: Any) -> Recipe:
+    """An entry's ``recipe`` key, parsed; errors name the key."""
+    try:
+        return Recipe.parse(obj)
+    except InputError as exc:
+        raise InputError(f"recipe: {exc}") from None
+
+
+def _edit(obj: Any) -> Edit:
+    """An entry's ``edit`` key, parsed: no ``mode`` (the suite runs every mode)."""
+    if isinstance(obj, dict) and "mode" in obj:
+        raise InputError("edit.mode: expected none (the suite runs every mode), got one")
+    return Edit.parse(obj, where="edit")
 
 
 def _elements(obj: Any) -> tuple[str, int] | None:

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._files import atomic_path, final_path, staged_writes
+from .._scenes import triangle_meshes
 from ..errors import InputError
 
 if TYPE_CHECKING:
@@ -224,16 +225,10 @@ def _unique(name: str, used: set[str]) -> str:
 
 def _meshes(scene) -> list[tuple[str, Any, np.ndarray, dict[str, Any]]]:
     """(node name, trimesh, 4x4 world transform, look) for every triangle mesh of ``scene``."""
-    import trimesh
-
-    out = []
-    for node in scene.graph.nodes_geometry:
-        matrix, gname = scene.graph[node]
-        mesh = scene.geometry[gname]
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-            continue
-        out.append((str(node), mesh, np.asarray(matrix, np.float64), _look(mesh)))
-    return out
+    return [
+        (str(node), mesh, np.asarray(matrix, np.float64), _look(mesh))
+        for node, _, mesh, matrix in triangle_meshes(scene)
+    ]
 
 
 def _look(mesh) -> dict[str, Any]:

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, overload
 
 import numpy as np
 
+from .._scenes import triangle_meshes
 from ..color import linear_to_srgb8, srgb_to_linear
 from ..errors import InputError, PartscaleWarning, one_line
 
@@ -222,14 +223,8 @@ def check_scene(scene, path: Path) -> None:
     ...
     partscale.errors.InputError: bad.glb: expected face indices in [0, 3) (the vertex count of ...), got [0, 5]
     """
-    import trimesh
-
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-    for node in scene.graph.nodes_geometry:
-        transform, geom_name = scene.graph[node]
-        geom = scene.geometry[geom_name]
-        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
-            continue
+    for node, geom_name, geom, transform in triangle_meshes(scene):
         v = np.asarray(geom.vertices, np.float64)
         if v.ndim != 2 or v.shape[1] != 3:
             raise InputError(
@@ -296,7 +291,6 @@ def scene_to_mesh(
     materials : dict, optional
         Material name -> :class:`Material` the reader made itself (used instead of trimesh's).
     """
-    import trimesh
     from trimesh.visual import ColorVisuals, TextureVisuals
 
     check_scene(scene, path)
@@ -305,11 +299,7 @@ def scene_to_mesh(
     verts, faces, mats, face_mat, uvs, colors = [], [], [], [], [], []
     any_uv = any_color = False
     n_v = 0
-    for node in scene.graph.nodes_geometry:
-        transform, geom_name = scene.graph[node]
-        geom = scene.geometry[geom_name]
-        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
-            continue
+    for _, _, geom, transform in triangle_meshes(scene):
         v = np.asarray(geom.vertices, np.float64)  # checked by check_scene
         v = v @ transform[:3, :3].T + transform[:3, 3]
         f = np.asarray(geom.faces, np.int64)

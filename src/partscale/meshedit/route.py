@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._memory import check_bytes
+from .._scenes import triangle_meshes
 from ..edit import Edit, Recipe, forward_coordinate, tile_count
 from ..errors import InputError, PartscaleWarning
 from ..ingest import load_mesh_scene
@@ -498,17 +499,10 @@ def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh
     >>> table.extents.round(2).tolist(), out.extents.round(2).tolist(), seams
     ([2.44, 0.95, 1.3], [3.66, 0.95, 1.3], [])
     """
-    import trimesh
-
-    instances = []
-    for node in scene.graph.nodes_geometry:
-        transform, name = scene.graph[node]
-        geom = scene.geometry[name]
-        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
-            continue
-        instances.append(
-            _Instance(node, geom, np.asarray(transform, float), _piece(geom, transform))
-        )
+    instances = [
+        _Instance(node, geom, np.asarray(transform, float), _piece(geom, transform))
+        for node, _, geom, transform in triangle_meshes(scene)
+    ]
     if not instances:
         raise InputError("mesh: expected triangles in the scene, got none")
     seams: list[Seam] = []

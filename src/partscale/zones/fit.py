@@ -698,9 +698,7 @@ def _add_steps(
     for sc in find_screws(csdf):
         if abs(sc.step[axis]) < csdf.voxel_size / 2:
             continue
-        n = _change(name, n, sc.count, in_all)
-        verb = f"add {n}" if n > 0 else f"remove {-n}"
-        _check_removal(name, n, sc.count, "flight")
+        n, verb = _stair_change(name, n, sc.count, in_all, "flight")
         note = (
             f"{name}: {verb} step(s) of the flight along {sc.axis} (each {_fmt(sc.going, units)} "
             f"going, {_fmt(sc.rise, units)} rise; {sc.count} steps, {100 * sc.support:.0f}% of "
@@ -711,9 +709,7 @@ def _add_steps(
     if axis != 1:
         return None
     for hx in find_helices(csdf):
-        n = _change(name, n, hx.count, in_all)
-        verb = f"add {n}" if n > 0 else f"remove {-n}"
-        _check_removal(name, n, hx.count, "spiral stair")
+        n, verb = _stair_change(name, n, hx.count, in_all, "spiral stair")
         note = (
             f"{name}: {verb} step(s) of the spiral stair (each turns {hx.angle:.1f} degrees about "
             f"the vertical through {_fmt(hx.center[0], units)}, {_fmt(hx.center[1], units)} and "
@@ -724,7 +720,7 @@ def _add_steps(
         return [hx.zone(n)], [note]
     for rot in find_rotations(csdf):
         n = _change(name, n, rot.count, in_all)
-        return _add_turned(rot, name, n, f"add {n}" if n > 0 else f"remove {-n}", units)
+        return _add_turned(rot, name, n, _verb(n), units)
     return None
 
 
@@ -780,13 +776,22 @@ def _most_on_ring(rot: Rotation) -> int:
     return max(rot.count, math.ceil(180.0 / rot.width) - 1) if rot.width > 0 else 360
 
 
-def _check_removal(name: str, n: int, count: int, what: str) -> None:
-    """Refuse removing all of a stair's ``count`` steps (one line)."""
+def _stair_change(name: str, n: int, count: int, in_all: bool, what: str) -> tuple[int, str]:
+    """The steps to add (negative: remove) of a stair of ``count`` (:func:`_change`) and the
+    note's verb; refused (one line) where that would remove all of them.
+    """
+    n = _change(name, n, count, in_all)
     if n < 0 and -n >= count:
         raise InputError(
             f"add {name}: expected to remove at most {count - 1} of the {what}'s {count} "
             f"steps, got {-n}"
         )
+    return n, _verb(n)
+
+
+def _verb(n: int) -> str:
+    """``add n`` or ``remove -n``: how a note says a change of ``n`` elements or steps."""
+    return f"add {n}" if n > 0 else f"remove {-n}"
 
 
 def add_axis(

@@ -196,10 +196,8 @@ def find_helices(csdf: CSDF) -> list[Helix]:
     >>> zones.find_helices(shapes.box((0, 0, 0), (1.0, 0.5, 0.5), voxel_size=0.05))
     []
     """
-    if not (csdf.sdf < 0).any():
-        return []
-    score = _Scorer(csdf)
-    if len(score.pts) == 0:
+    score = _scorer(csdf)
+    if score is None:
         return []
     for c in _axes(csdf, score):
         found = []
@@ -212,6 +210,14 @@ def find_helices(csdf: CSDF) -> list[Helix]:
             s, x = min((f for f in found if f[0] >= best - TIED), key=lambda f: abs(f[1][0]))
             return [_helix(csdf, score, s, x)]
     return []
+
+
+def _scorer(csdf: CSDF) -> _Scorer | None:
+    """The scorer of ``csdf``'s surface samples; None where it has no solid or no sample."""
+    if not (csdf.sdf < 0).any():
+        return None
+    score = _Scorer(csdf)
+    return score if len(score.pts) > 0 else None
 
 
 def _axes(csdf: CSDF, score: _Scorer) -> list[np.ndarray]:

@@ -40,7 +40,7 @@ from scipy import ndimage
 
 from ..csdf import CSDF
 from ..edit import RotationZone
-from .helix import _axes, _Scorer
+from .helix import _axes, _Scorer, _scorer
 from .helix import _refine as _refine_motion
 from .screw import DISCRETE, MIN_EXCLUSIVE, MIN_SUPPORT, TIED
 
@@ -164,10 +164,8 @@ def find_rotations(csdf: CSDF) -> list[Rotation]:
     >>> zones.find_rotations(shapes.box((0, 0, 0), (1.0, 0.5, 0.5), voxel_size=0.05))
     []
     """
-    if not (csdf.sdf < 0).any():
-        return []
-    score = _Scorer(csdf)
-    if len(score.pts) == 0:
+    score = _scorer(csdf)
+    if score is None:
         return []
     for c in _axes(csdf, score):
         found = []

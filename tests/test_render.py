@@ -62,6 +62,25 @@ def test_sphere_shows_its_colour_with_shading(sphere):
     assert lum.max() > 1.5 * lum.min()
 
 
+def test_colours_are_decoded_before_they_are_blended_as_the_page_does():
+    # black voxels left of x = 0, white from it: a ray between the two voxel centres sees half of
+    # each corner. Decoded first (as a GPU filters an sRGB texture) that is half the white's
+    # linear light; blending the sRGB codes first would give sRGB 128, a fifth of it.
+    h = 0.02
+    c = shapes.box((-0.2, -0.2, -0.2), (0.2, 0.2, 0.2), voxel_size=h)
+    x = c.origin[0] + np.arange(c.shape[0]) * h
+    rgb = np.where((x >= h / 4)[:, None, None, None], 255, 0).astype(np.uint8)
+    c = c.replace(rgb=np.ascontiguousarray(np.broadcast_to(rgb, c.rgb.shape)))
+    size = 400
+    frame = np.array([[-0.2, -0.2, -0.2], [0.2, 0.2, 0.2]])
+    image = render.render(c, view="front", size=size, frame=frame)
+    row = image[size // 2]
+    lit = to_linear(row[row.sum(axis=1) == row.sum(axis=1).max()][0])[0]  # white, shaded
+    mid = size / 2 - 0.5 + (float(x[x >= h / 4][0]) - h / 2) * size * (1 - 2 * render.MARGIN) / 0.4
+    between = to_linear(row[int(round(mid))])[0]
+    assert abs(between / lit - 0.5) <= 0.1, (between, lit)
+
+
 def test_same_frame_same_scale():
     frame = np.array([[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]])
     big = shapes.sphere((0, 0, 0), 0.4, voxel_size=H)

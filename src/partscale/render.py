@@ -4,7 +4,9 @@ Orthographic views of a Y-up object (glTF's convention: +y up, +z front, +x righ
 ``front`` looks along -z, ``side`` along -x (from the right), ``top`` along -y (front at the
 bottom of the image), ``iso`` along -(1, 1, 1) (from front-right-above). Every ray is marched at
 once by a numba kernel (parallel over rays) through the trilinear SDF in voxel units; shading is
-Lambert + ambient in linear light with normals from the SDF gradient, written back as sRGB.
+Lambert + ambient in linear light with normals from the SDF gradient, written back as sRGB. The
+colour grid's corners are decoded to linear light before they are blended, as a GPU filters an
+sRGB texture (the editor's page renders the same way).
 
 The camera fits a world box (``frame``, default the solid's bounds): its projection is centred
 and its larger projected extent spans ``size * (1 - 2 * MARGIN)`` pixels, so several objects
@@ -23,7 +25,7 @@ import numba
 import numpy as np
 
 from ._files import atomic_path
-from ._kernels import trilinear_point
+from ._kernels import grid_cell, trilinear_point
 from ._options import keyword_options
 from .color import linear_to_srgb, palette_colour, srgb8_to_linear
 from .csdf import CSDF
@@ -47,6 +49,8 @@ far side (ending it there drew such rays as background: 1-pixel cracks along thi
 AMBIENT = 0.35
 SCALE_BAR_BAND = 0.08
 """Fraction of the image height kept free at the bottom for the scale bar."""
+#: The 256 sRGB values' linear light: the colour grid is decoded corner by corner, then blended.
+_SRGB8_LINEAR = srgb8_to_linear(np.arange(256))
 
 # (towards the camera, screen up) per view, world coordinates
 _VIEW_AXES = {
@@ -224,10 +228,26 @@ def _normals(sdf, pts, out):
 
 
 @numba.njit(cache=True, parallel=True)
-def _colours(rgb, pts, out):
+def _colours(rgb, lut, pts, out):
+    """Linear-light colour (``out``, (P, 3) float64) at each point of ``pts`` (P, 3) voxel
+    indices: each corner's sRGB ``rgb`` (X, Y, Z, 3) uint8 decoded through ``lut`` (256,) before
+    the trilinear blend, as a GPU samples an sRGB texture (the editor's page does).
+    """
+    nx, ny, nz = rgb.shape[0], rgb.shape[1], rgb.shape[2]
     for r in numba.prange(pts.shape[0]):
+        i, fx = grid_cell(pts[r, 0], nx)
+        j, fy = grid_cell(pts[r, 1], ny)
+        k, fz = grid_cell(pts[r, 2], nz)
         for c in range(3):
-            out[r, c] = trilinear_point(rgb[..., c], pts[r, 0], pts[r, 1], pts[r, 2])
+            acc = 0.0
+            for di in range(2):
+                wx = fx if di else 1.0 - fx
+                for dj in range(2):
+                    wy = fy if dj else 1.0 - fy
+                    for dk in range(2):
+                        w = wx * wy * (fz if dk else 1.0 - fz)
+                        acc += w * lut[rgb[i + di, j + dj, k + dk, c]]
+            out[r, c] = acc
 
 
 def part_colors(csdf: CSDF) -> np.ndarray:
@@ -424,16 +444,16 @@ def render(
             np.clip(ijk[:, a], 0, csdf.shape[a] - 1, out=ijk[:, a])
         labels = csdf.parts[ijk[:, 0], ijk[:, 1], ijk[:, 2]]
         table = np.concatenate([part_colors(csdf), np.array([NO_PART_COLOR], np.uint8)])
-        base = table[np.where(labels >= 0, labels, len(table) - 1)].astype(np.float64)
+        base = srgb8_to_linear(table[np.where(labels >= 0, labels, len(table) - 1)])
     else:
-        base = np.empty_like(pts)
-        _colours(np.ascontiguousarray(csdf.rgb), pts, base)
+        base = np.empty_like(pts)  # linear light: decoded before filtering, as the page does
+        _colours(np.ascontiguousarray(csdf.rgb), _SRGB8_LINEAR, pts, base)
     # key light from above, slightly left and in front, so the three faces of a box differ
     light = -0.1 * cam.right + 0.45 * cam.up + 0.9 * cam.back
     light /= np.linalg.norm(light)
     lambert = np.clip(normals @ light, 0.0, 1.0)
     shade = AMBIENT + (1 - AMBIENT) * lambert
-    lin = srgb8_to_linear(np.clip(base, 0, 255)) * shade[:, None]
+    lin = base * shade[:, None]
     colours = np.rint(linear_to_srgb(lin) * 255).astype(np.uint8)
 
     image: np.ndarray = np.empty((size * size, 3), np.uint8)

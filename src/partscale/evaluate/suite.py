@@ -208,8 +208,7 @@ def _entry(obj: Any, i: int) -> Entry:
             raise InputError(f"expected an edit or a recipe (one), got {got}")
         view = choice(obj.get("view", "iso"), "view", VIEWS)
         kind = obj.get("kind")
-        if kind is not None and kind not in KINDS:
-            raise InputError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
+        kind = None if kind is None else choice(kind, "kind", KINDS)
         if "recipe" in obj:
             try:
                 recipe = Recipe.parse(obj["recipe"])

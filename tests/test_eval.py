@@ -27,10 +27,21 @@ def test_parse_suite_marks_bad_entries_and_keeps_the_rest():
                 {"name": "with-mode", "path": "a.glb", "edit": {**EDIT, "mode": "tile"}},
                 {"name": "no-path", "edit": EDIT},
                 {"name": "bad-view", "path": "a.glb", "edit": EDIT, "view": "under"},
+                {"name": "bad-kind", "path": "a.glb", "edit": EDIT, "kind": 3},
+                {"name": "bad-hw", "path": "a.glb", "edit": EDIT, "hardware": "yes"},
+                {"name": "cased", "path": "a.glb", "edit": EDIT, "view": " Top", "kind": "Solid"},
             ]
         }
     )
     errors = {e.name: e.error for e in suite.entries}
+    # the options every entry point shares are checked alike: one line, expected vs got
+    assert (
+        errors["bad-view"] == "bad-view: view: expected one of front, side, top, iso, got 'under'"
+    )
+    assert errors["bad-kind"] == "bad-kind: kind: expected one of solid, repeating, got 3"
+    assert errors["bad-hw"] == "bad-hw: hardware: expected true or false, got 'yes'"
+    cased = next(e for e in suite.entries if e.name == "cased")
+    assert cased.error is None and (cased.view, cased.kind) == ("top", "solid")
     assert errors["ok"] is None
     assert "axis" in errors["bad-axis"] and "x, y, z" in errors["bad-axis"]
     assert "mode" in errors["with-mode"]
@@ -47,6 +58,10 @@ def test_parse_suite_marks_bad_entries_and_keeps_the_rest():
         ({"entries": []}, "objects"),
         ({"objects": [{"name": "a", "path": "x", "edit": EDIT}] * 2}, "unique"),
         ({"objects": [{"name": "a", "path": "x", "edit": EDIT}], "res": 4}, "res"),
+        (
+            {"objects": [{"name": "a", "path": "x", "edit": EDIT}], "res": 64.5},
+            r"res: expected an integer in \[8, 1024\], got 64.5",
+        ),
     ],
 )
 def test_bad_suite_is_refused_as_a_whole(suite, fragment):

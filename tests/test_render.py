@@ -250,8 +250,17 @@ def test_render_refuses_bad_options(sphere):
         render.render(sphere, parts=True)
     with pytest.raises(InputError, match="front, side, top, iso"):
         render.render(sphere, view="back")
-    with pytest.raises(InputError, match="size"):
+    with pytest.raises(InputError) as err:
         render.render(sphere, size=8)
+    assert str(err.value) == (
+        f"size: expected an integer in [{render.MIN_SIZE}, {render.MAX_SIZE}], got 8"
+    )
+    # a view is read as batch manifests read it: without case or surrounding blanks
+    frame = [[0, 0, 0], [2, 1, 1]]
+    given, top = render.camera(" Top", frame, 100), render.camera("top", frame, 100)
+    assert given.up.tolist() == top.up.tolist() and given.back.tolist() == top.back.tolist()
+    with pytest.raises(InputError, match=r"^view: expected one of front, side, top, iso, got 5$"):
+        render.camera(5, frame, 100)
     with pytest.raises(TypeError, match="options are"):
         render.render(sphere, colour=True)
     with pytest.raises(InputError, match="frame"):

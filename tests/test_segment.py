@@ -262,6 +262,11 @@ def test_labels_survive_a_stretch(segmented):
         ({"max_parts": 0}, "max_parts"),
         ({"seed": -1}, "seed"),
         ({"method": "coacd", "preprocess_mode": "sometimes"}, "preprocess_mode"),
+        # counts: one line naming the option, what it takes and what came
+        ({"max_parts": 2.5}, r"^max_parts \(or None\): expected an integer >= 1, got 2.5$"),
+        ({"seed": True}, "^seed: expected an integer >= 0, got True$"),
+        ({"method": "fast", "max_depth": 0}, "^max_depth: expected an integer >= 1, got 0$"),
+        ({"method": "coacd", "mcts_max_depth": 1.0}, "^mcts_max_depth: expected an integer >= 1"),
     ],
 )
 def test_bad_options_are_refused(boxes, kwargs, fragment):

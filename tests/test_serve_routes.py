@@ -158,7 +158,10 @@ def test_parse_fit_add_and_save():
     assert routes.parse_fit({"size": [1, 2, 3], "allow_deform": True}) == ([1, 2, 3], True)
     for bad in ({"size": [1, 2]}, {"size": [1, 2, True]}, {"size": [1, 2, 3], "x": 1}, [1, 2, 3]):
         assert _refused(routes.parse_fit, bad).startswith('fit: expected {"size"')
-    assert "fit.allow_deform" in _refused(routes.parse_fit, {"size": [1, 2, 3], "allow_deform": 1})
+    # the editor reads yes/no as the command line, manifests and the library do (one check)
+    assert _refused(routes.parse_fit, {"size": [1, 2, 3], "allow_deform": 1}) == (
+        "fit.allow_deform: expected true or false, got 1"
+    )
 
     assert routes.parse_add({"axis": "y", "n": -2}) == ("y", -2)
     assert _refused(routes.parse_add, {"axis": "y"}).startswith("add: expected")
@@ -170,7 +173,9 @@ def test_parse_fit_add_and_save():
     assert routes.parse_save({}) == (False, None)
     assert routes.parse_save({"overwrite": True, "revision": 3}) == (True, 3)
     assert _refused(routes.parse_save, {"path": "/etc"}).startswith("save: expected")
-    assert _refused(routes.parse_save, {"overwrite": "yes"}).startswith("save.overwrite")
+    assert _refused(routes.parse_save, {"overwrite": "yes"}) == (
+        "save.overwrite: expected true or false, got 'yes'"
+    )
     assert _refused(routes.parse_save, {"revision": True}).startswith("save.revision")
 
 
@@ -181,9 +186,11 @@ def test_split_limits_takes_the_pages_limits_out_of_the_recipe():
     got, limits = routes.split_limits(body)
     assert got == recipe and limits == PageLimits(max_voxels_per_axis=256)
     assert "limits" in body  # the request's body is left as it came
-    assert "max_voxels_per_axis" in _refused(
-        routes.split_limits, {**recipe, "limits": {"max_voxels_per_axis": -1}}
-    )
+    for bad, got in ((-1, "-1"), (1.5, "1.5"), (True, "True"), (2**53 + 1, str(2**53 + 1))):
+        assert _refused(routes.split_limits, {**recipe, "limits": {"max_voxels": bad}}) == (
+            f"limits.max_voxels: expected an integer in [2, {2**53}], got {got}"
+        )
+    assert routes.split_limits({"limits": {"max_voxels": 2**53}})[1] == PageLimits(max_voxels=2**53)
 
 
 # -- state the routes keep --------------------------------------------------------------------

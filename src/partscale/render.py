@@ -26,7 +26,7 @@ import numpy as np
 
 from ._files import atomic_path
 from ._kernels import grid_cell, trilinear_point
-from ._options import keyword_options
+from ._options import choice, count, keyword_options
 from .color import linear_to_srgb, palette_colour, srgb8_to_linear
 from .csdf import CSDF
 from .errors import InputError
@@ -144,8 +144,7 @@ def camera(view: str, frame: np.ndarray, size: int, *, reserve_bottom: float = 0
     >>> cam.up.tolist(), round(cam.scale, 1)
     ([0.0, 0.0, -1.0], 45.0)
     """
-    if view not in _VIEW_AXES:
-        raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
+    view = choice(view, "view", VIEWS)
     back, up = (np.asarray(a, dtype=np.float64) for a in _VIEW_AXES[view])
     back = back / np.linalg.norm(back)
     right = np.cross(up, back)
@@ -400,14 +399,8 @@ def render(
     PosixPath('table.png')
     """
     report = resolve(progress)
-    if (
-        isinstance(size, bool)
-        or not isinstance(size, (int, np.integer))
-        or not (MIN_SIZE <= size <= MAX_SIZE)
-    ):
-        raise InputError(f"size: expected an integer in [{MIN_SIZE}, {MAX_SIZE}], got {size!r}")
-    if view not in VIEWS:
-        raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
+    size = count(size, "size", lo=MIN_SIZE, hi=MAX_SIZE)
+    view = choice(view, "view", VIEWS)
     if parts and csdf.n_parts == 0:
         raise InputError("parts: expected a segmented CSDF (segment it first), got no parts")
     bg = np.asarray(background, dtype=np.int64).reshape(-1)
@@ -420,7 +413,6 @@ def render(
         raise InputError(
             f"frame: expected a (2, 3) world box with min <= max, got {frame.tolist()}"
         )
-    size = int(size)
     cam = camera(view, frame, size, reserve_bottom=SCALE_BAR_BAND if scale_bar else 0.0)
 
     report(0.0, "tracing rays")

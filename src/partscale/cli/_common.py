@@ -12,6 +12,7 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from .._options import MAX_RES, MIN_RES
 from ..progress import ProgressCallback
 
 stderr = Console(stderr=True)
@@ -19,7 +20,7 @@ state = {"verbose": False}
 
 #: ``--res`` of the commands that import (``import``, ``complete``, ``batch``, ``eval``): one
 #: declaration, one help text.
-RES_HELP = "Voxels along the object's longest side, 16 to 16384."
+RES_HELP = f"Voxels along the object's longest side, {MIN_RES} to {MAX_RES}."
 Res = Annotated[int, typer.Option("--res", metavar="N", help=RES_HELP)]
 
 #: ``--size`` of ``fit`` and ``batch``: the target extents.

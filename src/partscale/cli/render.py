@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from .._options import choice, count
 from ..errors import InputError
 from . import _common
 from ._common import check_output, done, progress_bar
@@ -66,13 +67,8 @@ def render(
     from .. import render as render_mod
 
     check_output(output, suffixes=(".png",), what="an image file")
-    if view not in render_mod.VIEWS:
-        raise InputError(f"--view: expected one of {', '.join(render_mod.VIEWS)}, got {view!r}")
-    if not render_mod.MIN_SIZE <= pixels <= render_mod.MAX_SIZE:
-        raise InputError(
-            f"--pixels: expected an integer in [{render_mod.MIN_SIZE}, {render_mod.MAX_SIZE}], "
-            f"got {pixels}"
-        )
+    view = choice(view, "--view", render_mod.VIEWS)
+    pixels = count(pixels, "--pixels", lo=render_mod.MIN_SIZE, hi=render_mod.MAX_SIZE)
     if not output.parent.is_dir():
         raise InputError(
             f"{output}: expected an existing output folder, got none at {output.parent}"

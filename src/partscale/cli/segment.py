@@ -6,6 +6,7 @@ from typing import Annotated
 
 import typer
 
+from .._options import count
 from ..csdf import SUFFIX, load, save
 from ..errors import InputError
 from . import _common
@@ -65,8 +66,8 @@ def segment(
     check_method(method, what="--method")
     if not 0 < threshold <= 1:
         raise InputError(f"--threshold: expected a number in (0, 1], got {threshold}")
-    if max_parts is not None and max_parts < 1:
-        raise InputError(f"--max-parts: expected an integer >= 1, got {max_parts}")
+    if max_parts is not None:
+        count(max_parts, "--max-parts")
     relief = _noise(noise)
     _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     c = load(path)

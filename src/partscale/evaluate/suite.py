@@ -54,7 +54,7 @@ from typing import Any
 import numpy as np
 
 from .._files import atomic_path, check_writable, read_json
-from .._options import keyword_options
+from .._options import choice, count, keyword_options, yes_no
 from ..csdf import CSDF, SUFFIX, load
 from ..edit import Edit, Recipe, apply_edit, apply_recipe, naive_edit, resolve_edit
 from ..errors import InputError
@@ -83,6 +83,8 @@ RECIPE_MODES: dict[str, Callable[[CSDF, Entry], Recipe | None]] = {
 }
 KINDS = ("solid", "repeating")
 DEFAULT_RES = 128
+MIN_SUITE_RES, MAX_SUITE_RES = 8, 1024
+"""The ``res`` a suite (and its run) may ask for."""
 PANEL = 256
 
 
@@ -195,9 +197,7 @@ def _entry(obj: Any, i: int) -> Entry:
                 "view, note, elements, hardware"
             )
         elements = _elements(obj.get("elements"))
-        hardware = obj.get("hardware", False)
-        if not isinstance(hardware, bool):
-            raise InputError(f"hardware: expected true or false, got {hardware!r}")
+        hardware = yes_no(obj.get("hardware", False), "hardware")
         if hardware and elements is None:
             raise InputError("hardware: expected it with elements (the axis it is judged along)")
         path = obj.get("path")
@@ -206,12 +206,9 @@ def _entry(obj: Any, i: int) -> Entry:
         if ("edit" in obj) == ("recipe" in obj):
             got = "both" if "edit" in obj else "neither"
             raise InputError(f"expected an edit or a recipe (one), got {got}")
-        view = obj.get("view", "iso")
-        if view not in VIEWS:
-            raise InputError(f"view: expected one of {', '.join(VIEWS)}, got {view!r}")
+        view = choice(obj.get("view", "iso"), "view", VIEWS)
         kind = obj.get("kind")
-        if kind is not None and kind not in KINDS:
-            raise InputError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
+        kind = None if kind is None else choice(kind, "kind", KINDS)
         if "recipe" in obj:
             edit, recipe = None, _recipe(obj["recipe"])
         else:
@@ -286,9 +283,7 @@ def parse_suite(obj: Any, *, source: Path | None = None) -> Suite:
         )
     if obj.get("version", 1) != 1:
         raise InputError(f"{where}: expected version 1, got {obj['version']!r}")
-    res = obj.get("res", DEFAULT_RES)
-    if not isinstance(res, int) or isinstance(res, bool) or not 8 <= res <= 1024:
-        raise InputError(f"{where}: res: expected an integer in 8..1024, got {res!r}")
+    res = count(obj.get("res", DEFAULT_RES), f"{where}: res", lo=MIN_SUITE_RES, hi=MAX_SUITE_RES)
     entries = [_entry(o, i) for i, o in enumerate(obj["objects"])]
     if not entries:
         raise InputError(f"{where}: expected at least one object, got none")
@@ -761,9 +756,7 @@ def run_suite(
     t_start = time.perf_counter()
     if not isinstance(suite, Suite):
         suite = load_suite(suite)
-    res = suite.res if res is None else int(res)
-    if not 8 <= res <= 1024:
-        raise InputError(f"res: expected an integer in 8..1024, got {res}")
+    res = suite.res if res is None else count(res, "res", lo=MIN_SUITE_RES, hi=MAX_SUITE_RES)
     if segment is not None:
         _check_segment(segment)
     entries = suite.entries

@@ -15,6 +15,7 @@ import numpy as np
 
 from .._files import atomic_path, parse_json
 from .._memory import check_memory
+from .._options import count
 from ..csdf import CSDF
 from ..errors import InputError, PartscaleWarning, one_line
 from ..progress import ProgressCallback, resolve, scaled
@@ -159,13 +160,8 @@ def _check_options(
     if not (0 < thr <= 1):
         raise InputError(f"threshold: expected a number in (0, 1], got {threshold!r}")
     if max_parts is not None:
-        if isinstance(max_parts, bool) or not isinstance(max_parts, int | np.integer):
-            raise InputError(f"max_parts: expected an integer >= 1 or None, got {max_parts!r}")
-        if max_parts < 1:
-            raise InputError(f"max_parts: expected an integer >= 1 or None, got {max_parts}")
-        max_parts = int(max_parts)
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"seed: expected an integer >= 0, got {seed!r}")
+        max_parts = count(max_parts, "max_parts (or None)")
+    seed = count(seed, "seed", lo=0)
     tol = float(merge_tolerance)
     if not (np.isfinite(tol) and tol >= 0):
         raise InputError(f"merge_tolerance: expected a number >= 0 (voxels), got {tol}")
@@ -186,7 +182,7 @@ def _check_options(
             f"{method!r}; its options are: {', '.join(known)}"
         )
     check = coacd_method.check_params if method == "coacd" else fast.check_params
-    return method, thr, max_parts, int(seed), tol, noise, check(extra)
+    return method, thr, max_parts, seed, tol, noise, check(extra)
 
 
 def segment(

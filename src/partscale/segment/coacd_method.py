@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
+from .._options import count
 from ..errors import InputError
 from ..progress import ProgressCallback
 
@@ -40,15 +41,14 @@ def check_params(params: dict) -> dict:
             f"preprocess_mode: expected one of {', '.join(PREPROCESS_MODES)}, "
             f"got {out['preprocess_mode']!r}"
         )
-    for name in ("preprocess_resolution", "resolution", "mcts_nodes", "mcts_iterations"):
-        v = out[name]
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 1:
-            raise InputError(f"{name}: expected an integer >= 1, got {v!r}")
-        out[name] = int(v)
-    v = out["mcts_max_depth"]
-    if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 1:
-        raise InputError(f"mcts_max_depth: expected an integer >= 1, got {v!r}")
-    out["mcts_max_depth"] = int(v)
+    for name in (
+        "preprocess_resolution",
+        "resolution",
+        "mcts_nodes",
+        "mcts_iterations",
+        "mcts_max_depth",
+    ):
+        out[name] = count(out[name], name)
     out["max_convex_hull"] = int(out["max_convex_hull"])
     out["merge"] = bool(out["merge"])
     return out

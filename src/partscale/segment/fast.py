@@ -75,6 +75,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
 
+from .._options import count
 from .._workers import worker_pool
 from ..csdf import CSDF
 from ..errors import InputError
@@ -118,10 +119,7 @@ def check_params(params: dict) -> dict:
             raise InputError(f"{name}: expected a number > 0, got {out[name]!r}")
         out[name] = float(out[name])
     for name in ("max_depth", "min_voxels", "thin", "min_group"):
-        v = out[name]
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 1:
-            raise InputError(f"{name}: expected an integer >= 1, got {v!r}")
-        out[name] = int(v)
+        out[name] = count(out[name], name)
     return out
 
 

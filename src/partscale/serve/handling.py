@@ -85,6 +85,32 @@ async def json_body(request: Request) -> Any:
         raise HTTPError(400, str(exc)) from None
 
 
+def checked(check: Callable[..., T], *args: Any) -> T:
+    """``check(*args)``, one of the shared option checks (:mod:`partscale._options`), its
+    InputError the request's fault.
+
+    Raises
+    ------
+    HTTPError
+        400 with the check's one line (the option, what was expected, what came).
+
+    Examples
+    --------
+    >>> from partscale._options import yes_no
+    >>> from partscale.serve.handling import checked
+    >>> checked(yes_no, True, "save.overwrite")
+    True
+    >>> checked(yes_no, "yes", "save.overwrite")
+    Traceback (most recent call last):
+    ...
+    partscale.serve.handling.HTTPError: save.overwrite: expected true or false, got 'yes'
+    """
+    try:
+        return check(*args)
+    except InputError as exc:
+        raise HTTPError(400, str(exc)) from None
+
+
 def _quiet(fn: Callable[..., T], *args: Any) -> T:
     """``fn(*args)`` without numpy's floating-point warnings on the server's stderr (inputs
     are validated first; a request never learns of them).

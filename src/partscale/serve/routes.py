@@ -20,9 +20,18 @@ from starlette.responses import JSONResponse, Response
 from starlette.routing import Route
 
 from .. import zones
+from .._options import yes_no
 from ..edit import JSON_SCHEMA, Edit
 from ..errors import InputError
-from .handling import NO_STORE, HTTPError, content_disposition, error, json_body, run
+from .handling import (
+    NO_STORE,
+    HTTPError,
+    checked,
+    content_disposition,
+    error,
+    json_body,
+    run,
+)
 from .session import EditSession, PageLimits
 
 #: Most elements one /api/add adds or removes (the page asks for one; its GPU limits the rest).
@@ -97,10 +106,7 @@ def parse_fit(body: Any) -> tuple[list, bool]:
             'fit: expected {"size": [X, Y, Z], "allow_deform": false} (each "=", 2.1, '
             f'"210cm", "+20cm", "120%"), got {str(body)[:80]!r}',
         )
-    allow = body.get("allow_deform", False)
-    if not isinstance(allow, bool):
-        raise HTTPError(400, f"fit.allow_deform: expected true or false, got {str(allow)[:40]!r}")
-    return size, allow
+    return size, checked(yes_no, body.get("allow_deform", False), "fit.allow_deform")
 
 
 def parse_add(body: Any) -> tuple[str, int]:
@@ -134,9 +140,7 @@ def parse_save(body: Any) -> tuple[bool, int | None]:
             400,
             f"save: expected {{'overwrite': true|false, 'revision': N}}, got {str(body)[:80]!r}",
         )
-    overwrite = body.get("overwrite", False)
-    if not isinstance(overwrite, bool):
-        raise HTTPError(400, f"save.overwrite: expected true or false, got {overwrite!r}")
+    overwrite = checked(yes_no, body.get("overwrite", False), "save.overwrite")
     revision = body.get("revision")
     if revision is not None and (isinstance(revision, bool) or not isinstance(revision, int)):
         raise HTTPError(400, f"save.revision: expected an integer, got {str(revision)[:40]!r}")

@@ -18,8 +18,9 @@ from typing import Any, TypeVar
 import numba
 import numpy as np
 
+from .._options import count
 from ..csdf import CSDF, SUFFIX, load, save
-from ..errors import InputError
+from ..errors import InputError, shown
 from ..progress import ProgressCallback
 
 T = TypeVar("T")
@@ -435,15 +436,15 @@ class PageLimits:
         Raises
         ------
         InputError
-            Not such an object, another key, or a value that is not an integer >= 2.
+            Not such an object, another key, or a value that is not an integer in [2, 2**53].
         """
         names = ("max_voxels_per_axis", "max_voxels")
         if not isinstance(obj, dict) or set(obj) - set(names):
-            raise InputError(f"limits: expected an object with keys {names}, got {_short(obj)}")
-        for name, v in obj.items():
-            if isinstance(v, bool) or not isinstance(v, int) or not 2 <= v <= 1 << 53:
-                raise InputError(f"limits.{name}: expected an integer >= 2, got {_short(v)}")
-        return cls(**obj)
+            raise InputError(f"limits: expected an object with keys {names}, got {shown(obj)}")
+        # at most 2**53: the page's numbers are JavaScript doubles
+        return cls(
+            **{name: count(v, f"limits.{name}", lo=2, hi=1 << 53) for name, v in obj.items()}
+        )
 
     def check(self, shape: tuple[int, ...], what: str) -> None:
         """Raise :class:`InputError` unless a grid of ``shape`` fits.
@@ -466,11 +467,6 @@ class PageLimits:
                 f"{what}: expected at most {self.max_voxels} voxels (what this page can show), "
                 f"got {got} = {math.prod(shape)}"
             )
-
-
-def _short(x: Any) -> str:
-    text = repr(x)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 class EditSession:

@@ -51,6 +51,12 @@ def test_parse_suite_marks_bad_entries_and_keeps_the_rest():
         assert "\n" not in msg
 
 
+def test_a_recipe_entry_keeps_its_hardware_option():
+    obj = {"path": "a.glb", "recipe": {"edits": [EDIT]}, "elements": {"axis": "x", "count": 3}}
+    (entry,) = S.parse_suite({"objects": [{**obj, "name": "r", "hardware": True}]}).entries
+    assert entry.error is None and entry.recipe is not None and entry.hardware is True
+
+
 @pytest.mark.parametrize(
     ("suite", "fragment"),
     [

@@ -77,7 +77,7 @@ def test_colours_are_decoded_before_they_are_blended_as_the_page_does():
     row = image[size // 2]
     lit = to_linear(row[row.sum(axis=1) == row.sum(axis=1).max()][0])[0]  # white, shaded
     mid = size / 2 - 0.5 + (float(x[x >= h / 4][0]) - h / 2) * size * (1 - 2 * render.MARGIN) / 0.4
-    between = to_linear(row[int(round(mid))])[0]
+    between = to_linear(row[round(mid)])[0]
     assert abs(between / lit - 0.5) <= 0.1, (between, lit)
 
 

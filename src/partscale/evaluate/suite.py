@@ -222,8 +222,7 @@ def _entry(obj: Any, i: int) -> Entry:
             str(obj.get("note", "")),
             recipe=recipe,
             elements=elements,
-            # hardware is judged on single-edit entries; a recipe entry's is not kept
-            hardware=hardware and recipe is None,
+            hardware=hardware,
         )
     except InputError as exc:
         return Entry(name, str(obj.get("path", "")), None, error=f"{name}: {exc}")

@@ -711,7 +711,8 @@ def _blend_seams(
     wa, wb = wa.astype(np.float32), wb.astype(np.float32)
     kept = bool(pair.any())
     dominant, other = (np.empty_like(was) for _ in range(2))
-    _seam_samples(s3, o3, seam, a0, a1, wa, b0, b1, wb, was, kept, dominant, other)
+    layers = (seam, a0, a1, wa, b0, b1, wb)  # each seam layer's output layer and sources
+    _seam_samples(s3, o3, layers, was, kept, dominant, other)
     shape = (seam.size, *sdf.shape[1:])
     thin = keep_thin is not None
     if thin:
@@ -721,10 +722,7 @@ def _blend_seams(
         drop = hold = np.zeros(was.shape, bool)
     far = np.float32(keep_thin if thin else 0.0)
     beta = plan.beta[seam].astype(np.float32)
-    _seam_blend(
-        c3, o3, oc3, seam, a0, a1, wa, b0, b1, wb, beta, dominant, other, was, kept, thin, far,
-        drop, hold,
-    )  # fmt: skip
+    _seam_blend(c3, o3, oc3, layers, beta, dominant, other, was, kept, thin, far, drop, hold)
     if drop.any():
         # a cut sliver is left out: the other copy's part (its sample and colour are in)
         drop = drop.reshape(shape)
@@ -739,13 +737,16 @@ def _blend_seams(
 
 
 @nb.njit(cache=True, parallel=True)
-def _seam_samples(src, out, seam, a0, a1, wa, b0, b1, wb, was, kept, dominant, other):
+def _seam_samples(src, out, layers, was, kept, dominant, other):
     """For seam layer ``k`` (output layer ``seam[k]``), (P, Q) float32 each: ``other[k]``, the
     float32 blend of ``src`` layers ``b0[k]``, ``b1[k]`` by ``wb[k]`` (no exact copy at weight
     0: the arithmetic of the vectorised blend it replaces); ``dominant[k]`` likewise at ``a0``,
     ``a1``, ``wa``, or the output's value where ``kept`` and :func:`_resample_cols` kept a thin
-    element there (it differs from ``was``). src (P, N, Q), out (P, M, Q); rows in parallel.
+    element there (it differs from ``was``). ``layers``: ``(seam, a0, a1, wa, b0, b1, wb)``, (S,)
+    each, the layer indices as int64 and the weights as float32. src (P, N, Q), out (P, M, Q);
+    rows in parallel.
     """
+    seam, a0, a1, wa, b0, b1, wb = layers
     ns, nq = seam.shape[0], src.shape[2]
     for t in nb.prange(ns * src.shape[0]):
         k = t // src.shape[0]
@@ -769,34 +770,17 @@ def _seam_samples(src, out, seam, a0, a1, wa, b0, b1, wb, was, kept, dominant, o
 
 @nb.njit(cache=True, parallel=True)
 def _seam_blend(
-    src_rgb,
-    out,
-    out_rgb,
-    seam,
-    a0,
-    a1,
-    wa,
-    b0,
-    b1,
-    wb,
-    beta,
-    dominant,
-    other,
-    was,
-    kept,
-    thin,
-    far,
-    drop,
-    hold,
+    src_rgb, out, out_rgb, layers, beta, dominant, other, was, kept, thin, far, drop, hold
 ):
     """Blend the seam layers (in place): :func:`apply_plan`'s rule per voxel, float32.
 
     ``src_rgb`` (P, N, 3Q), ``out`` (P, M, Q), ``out_rgb`` (P, M, 3Q); ``dominant``, ``other``,
     ``was``, ``drop``, ``hold`` (S, P, Q) per seam layer ``k`` (output layer ``seam[k]``, blend
-    weight ``beta[k]``, rgb read as :func:`_seam_samples` reads the sdf). With ``thin``
-    (``keep_thin`` given, ``far`` its value), ``drop`` is narrowed to where a cut sliver is
-    left out (the other copy's sample and colour). Rows in parallel.
+    weight ``beta[k]``; ``layers`` and the rgb read as :func:`_seam_samples` reads the sdf).
+    With ``thin`` (``keep_thin`` given, ``far`` its value), ``drop`` is narrowed to where a cut
+    sliver is left out (the other copy's sample and colour). Rows in parallel.
     """
+    seam, a0, a1, wa, b0, b1, wb = layers
     ns, nq = seam.shape[0], out.shape[2]
     n_c = src_rgb.shape[2] // max(nq, 1)
     for t in nb.prange(ns * out.shape[0]):

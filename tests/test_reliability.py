@@ -310,6 +310,28 @@ def test_stale_temporaries_removed_on_next_write(ball_file, tmp_path):
     assert live.exists()
 
 
+def test_a_folder_is_swept_of_dead_writers_temporaries_once_per_process(tmp_path, monkeypatch):
+    import subprocess
+
+    from partscale import _files
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    stale = tmp_path / f".other.glb.{int(dead.stdout)}.abcd1234.tmp.glb"  # another file's
+    stale.write_bytes(b"x")
+    user = tmp_path / ".hidden.1.notours"  # a user's own hidden file: not ours, kept
+    user.write_bytes(b"y")
+    listed = []
+    real = os.listdir
+    monkeypatch.setattr(os, "listdir", lambda p: listed.append(p) or real(p))
+    for i in range(50):  # a batch writing many files into one folder
+        with _files.atomic_path(tmp_path / f"o{i}.txt") as tmp:
+            tmp.write_text("ok")
+    assert not stale.exists() and user.exists()
+    assert len(listed) == 1  # listed once, not once per file
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == [user.name]
+
+
 def test_sigterm_cleans_up_like_ctrl_c(ball_file, tmp_path, capsys, monkeypatch):
     real = np.lib.format.write_array
 

@@ -158,29 +158,40 @@ def _temp_prefix(path: Path) -> str:
     return f".{path.name}."
 
 
-_TEMP_PID = re.compile(r"\.(\d+)\.[a-z0-9_]{8}\.(tmp|probe)")
+_TEMP_FILE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[a-z0-9_]{8}\.(tmp|probe)")
+
+
+#: Folders this process has swept of dead writers' temporaries, with the pid that swept them (a
+#: forked worker sweeps again once).
+_SWEPT: dict[str, int] = {}
 
 
 def _remove_stale_temps(path: Path) -> None:
-    """Remove temporary files of ours beside ``path`` whose writing process has gone.
+    """Remove temporary files of ours in ``path``'s folder whose writing process has gone.
 
-    Our temporaries are named ``.<name>.<pid>.<random>.tmp<suffix>``; a kill -9 leaves them.
-    One whose process still runs (another writer of the same destination) is kept.
+    Our temporaries are named ``.<name>.<pid>.<random>.tmp<suffix>`` (or ``.probe``); a kill -9
+    leaves them. One whose process still runs (another writer) is kept. Each folder is swept
+    once per process, at its first write, so a batch writing thousands of files into one folder
+    lists it once, not once per file; what a writer killed later leaves is swept by the next
+    process that writes there.
     """
-    prefix = _temp_prefix(path)
+    folder = os.path.abspath(path.parent)
+    if _SWEPT.get(folder) == os.getpid():
+        return
     try:
-        names = [n for n in os.listdir(path.parent) if n.startswith(prefix)]
+        names = [n for n in os.listdir(folder) if n.startswith(".")]
     except OSError:
         return
+    _SWEPT[folder] = os.getpid()
     for name in names:
-        m = _TEMP_PID.match(name[len(prefix) - 1 :])
+        m = _TEMP_FILE.match(name)
         if m is None:
             continue
-        pid = int(m.group(1))
+        pid = int(m["pid"])
         if pid == os.getpid() or _alive(pid):
             continue
         with contextlib.suppress(OSError):
-            os.unlink(path.parent / name)
+            os.unlink(os.path.join(folder, name))
 
 
 _TEMP_NAME = re.compile(r"^\.(?P<name>.+)\.\d+\.[a-z0-9_]{8}\.tmp")

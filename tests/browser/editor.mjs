@@ -16,7 +16,10 @@
 //         sets its target; previewed, applied, undone; fitSize: then a fit previewed),
 //         plain: true (the page as users get it, without ?capture=1: load, drag the end plane,
 //         orbit; the drawing buffer's attribute, frames drawn, pixels read back, zone
-//         resolutions per pointer move) }
+//         resolutions per pointer move),
+//         picture: {camera, unlit} (only load, then the object alone, without the guides, from
+//         camera (the hooks' setCamera: position, target, up, fov, near, far), unlit if asked:
+//         picture.png, to compare with partscale.render's) }
 // Every other run loads the page with ?capture=1 (its canvas readable, frames GPU-timed).
 import { createRequire } from 'node:module';
 import { existsSync, readFileSync, writeFileSync } from 'node:fs';
@@ -326,6 +329,16 @@ try {
     p.framesOrbit = c2.frames - c1.frames;
     p.readPixels = await page.evaluate(() => window.__readPixels);
     result.plain = p;
+  } else if (args.picture) {
+    await page.evaluate(({ camera, unlit }) => {
+      const h = window.__partscale;
+      h.setGuides(false);
+      h.setUnlit(unlit);
+      h.setCamera(camera);
+    }, args.picture);
+    await idle();
+    await shot('picture.png');
+    result.picture = join(args.out, 'picture.png');
   } else if (args.benchmark) {
     result.benchmark = await page.evaluate((n) => window.__partscale.benchmark(n), args.benchmark);
     result.renderer = await page.evaluate(() => {

@@ -1,7 +1,7 @@
 // window.__partscale: what scripts (tests/browser/editor.mjs, bench/bench_editor.py) read and call.
 import type { Zone } from './recipe';
 import { toSource } from './remap';
-import type { Scene } from './scene';
+import type { CameraView, Scene } from './scene';
 import {
   type AppState,
   extents,
@@ -67,6 +67,11 @@ export interface Hooks {
   evalRemapTS(zones: Zone[], points: number[][]): number[][];
   /** Render n frames orbiting the object; mean and median GPU-synchronised frame time in ms. */
   benchmark(n?: number): { mean: number; median: number; n: number };
+  /** Look from a given camera (tests place it as partscale.render's). */
+  setCamera(view: CameraView): void;
+  /** Draw the colours as sampled, without the lights (tests compare them with
+   *  partscale.render's), or lit as users see them (false). */
+  setUnlit(unlit: boolean): void;
 }
 
 export function exposeHooks(store: Store, scene: Scene): Hooks {
@@ -120,6 +125,8 @@ export function exposeHooks(store: Store, scene: Scene): Hooks {
     evalRemap: scene.evalRemap,
     evalRemapTS: (zones, points) => points.map((p) => toSource(zones, p)),
     benchmark: scene.benchmark,
+    setCamera: scene.setCamera,
+    setUnlit: scene.setUnlit,
   };
   (window as unknown as { __partscale: Hooks }).__partscale = hooks;
   return hooks;

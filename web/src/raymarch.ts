@@ -39,6 +39,7 @@ uniform vec3 uBoxMax;
 uniform float uVoxel;
 uniform float uStepScale;    // smallest Jacobian of the zone maps: keeps steps safe when compressed
 uniform int uView;           // 0 colour, 1 parts, 2 distance slice
+uniform bool uUnlit;         // tests only (setUnlit): the colour as sampled, no light
 uniform int uSliceAxis;
 uniform float uSlicePos;
 in vec3 vWorld;
@@ -185,6 +186,12 @@ void main() {
   vec3 n = normalAt(p);
   vec3 albedo = uView == 1 ? texture(uParts, ((colourPoint(p) - uGridMin) / uGridSize).zyx).rgb
                            : sampleSource(p).rgb;
+  if (uUnlit) {
+    // tests compare the sampled colours alone with partscale.render's (whose lights differ)
+    fragColor = vec4(toSRGB(albedo), 1.0);
+    gl_FragDepth = depthOf(p);
+    return;
+  }
   vec3 l1 = normalize(vec3(0.45, 0.8, 0.55));
   vec3 l2 = normalize(vec3(-0.6, 0.25, -0.4));
   vec3 h = normalize(l1 - rd);
@@ -215,6 +222,7 @@ export function createRaymarchMaterial(): THREE.RawShaderMaterial {
       uVoxel: { value: 1 },
       uStepScale: { value: 1 },
       uView: { value: 0 },
+      uUnlit: { value: false },
       uSliceAxis: { value: 0 },
       uSlicePos: { value: 0 },
       uZoneCount: { value: 0 },

@@ -57,6 +57,22 @@ export interface Scene {
   setGuides(visible: boolean): void;
   /** Render n frames orbiting the object; mean and median GPU-synchronised frame time in ms. */
   benchmark(n?: number): { mean: number; median: number; n: number };
+  /** Tests: look as `view` says (the user's orbit goes on from there). */
+  setCamera(view: CameraView): void;
+  /** Tests: draw the colours as sampled, without the lights (true), or lit as users see them. */
+  setUnlit(unlit: boolean): void;
+}
+
+/** A camera for tests (tests/test_browser.py places it as partscale.render's): at `position`,
+ *  looking at `target` with `up` the screen's up (world units), `fov` the vertical field of view
+ *  in degrees, clipping at `near` and `far` from the camera. */
+export interface CameraView {
+  position: [number, number, number];
+  target: [number, number, number];
+  up: [number, number, number];
+  fov: number;
+  near: number;
+  far: number;
 }
 
 /** How the scene draws. fixedSize: canvas pixels, or null to fill its element. capture (tests
@@ -573,6 +589,18 @@ export function createScene(store: Store, view: HTMLElement, { fixedSize, captur
     return { mean: times.reduce((acc, t) => acc + t, 0) / n, median: times[Math.floor(n / 2)], n };
   }
 
+  function setCamera({ position, target, up, fov, near, far }: CameraView) {
+    camera.up.set(...up);
+    camera.position.set(...position);
+    camera.lookAt(...target);
+    camera.fov = fov;
+    camera.near = near;
+    camera.far = far;
+    camera.updateProjectionMatrix();
+    controls.target.set(...target);
+    requestRender();
+  }
+
   updateScene(store.get());
   resize();
 
@@ -605,5 +633,10 @@ export function createScene(store: Store, view: HTMLElement, { fixedSize, captur
       return evalRemapOnGPU(renderer, a, b, zones.length, points);
     },
     benchmark,
+    setCamera,
+    setUnlit(unlit: boolean) {
+      u.uUnlit.value = unlit;
+      requestRender();
+    },
   };
 }

@@ -1,7 +1,9 @@
 """End to end in headless Chromium: the page draws the object, previews a drag, applies, undoes,
 exports; it draws, previews, applies and undoes shaped zones (radial, oblique, a flight's and a
 spiral's steps); the shader's remap and warp maps (GLSL, on the GPU) and their TypeScript mirror
-match the Python maps (edit.source_coordinate, edit.warp_source);
+match the Python maps (edit.source_coordinate, edit.warp_source); the page draws an object's
+colours as partscale.render does (its sRGB 3D texture decoded before it is filtered), from the
+same camera;
 the page's zone rules, tile counts and part palette match Python's (the page's TypeScript run in
 node by tests/browser/page_node.mjs, no browser needed).
 
@@ -25,11 +27,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from PIL import Image
 
 import partscale
+from partscale import render as render_mod
 from partscale import shapes
 from partscale import zones as zones_mod
-from partscale.color import palette
+from partscale.color import palette, srgb8_to_linear
 from partscale.edit import (
     Edit,
     HelixZone,
@@ -1236,3 +1240,163 @@ def test_editor_previews_applies_and_undoes_one_more_arm_of_a_star_base(tmp_path
         assert sh["undone"]["solid_bounds"] == r["state0"]["solid_bounds"]
         assert sh["warpAfterUndo"] == sh["preview"]
         assert sh["undoneVsPreview"] <= 0.01 * total
+
+
+# -- colours: the page's picture against partscale.render's --------------------------------------
+PICTURE = 256
+#: the page's clear colour (scene.ts): partscale.render's background in these comparisons
+PAGE_BACKGROUND = (0x1D, 0x21, 0x26)
+#: the page's camera stands this many frame radii from the frame's centre, its field of view
+#: narrowed to partscale.render's scale: its rays are parallel to within a thousandth of a radian,
+#: so its perspective draws the frame as the orthographic camera does to a tenth of a pixel
+FAR = 1000.0
+#: a pixel's colour differs where one of its channels differs by more than this (of 255)
+DIFFERS = 8
+#: at most this share of the object's pixels is on the object in one picture only (its outline:
+#: the page's ray hits 0.05 voxel from the surface, partscale.render's 0.01; distances float16)
+SILHOUETTE_SHARE = 0.03
+#: at most this share of the pixels on the object in both pictures differs in colour
+COLOUR_SHARE = 0.015
+STRIPE_H = 0.02
+STRIPE_BOX = ((-0.2, -0.2, -0.1), (0.2, 0.2, 0.1))
+#: (above y = 0, below): each a pair of sRGB colours alternating along x
+STRIPE_COLOURS = (((0, 0, 0), (255, 255, 255)), ((200, 90, 40), (40, 120, 200)))
+#: where the colour changes along x: halfway between two voxel centres, every 5 voxels
+STRIPE_EDGES = tuple(STRIPE_BOX[0][0] + (5 * m - 0.5) * STRIPE_H for m in (1, 2, 3))
+
+
+def stripes() -> partscale.CSDF:
+    """A box 0.4 x 0.4 x 0.2 in stripes 5 voxels wide along x: black and white above y = 0,
+    ochre and blue below; its voxels are of one colour or the other (sharp changes)."""
+
+    def colour(p):
+        odd = (np.searchsorted(STRIPE_EDGES, p[:, 0]) % 2 == 1)[:, None]
+        top = (p[:, 1] > -STRIPE_H / 2)[:, None]
+        (a0, b0), (a1, b1) = STRIPE_COLOURS
+        return np.where(top, np.where(odd, b0, a0), np.where(odd, b1, a1))
+
+    lo, hi = STRIPE_BOX
+    return shapes.grid(
+        lambda p: shapes.box_sdf(p, lo, hi),
+        STRIPE_BOX,
+        voxel_size=STRIPE_H,
+        color=colour,
+        source="stripes",
+    )
+
+
+def page_camera(cam: render_mod.Camera, frame: np.ndarray) -> dict:
+    """The page's camera (the hooks' setCamera) for partscale.render's ``cam``: FAR frame radii
+    back from its centre, looking at it, its field of view spanning what ``cam``'s image does
+    at the centre."""
+    radius = 0.5 * float(np.linalg.norm(frame[1] - frame[0]))
+    far = FAR * radius
+    half = 0.5 * cam.size / cam.scale  # world half-height of the image at the centre
+    return {
+        "position": (cam.centre + far * cam.back).tolist(),
+        "target": cam.centre.tolist(),
+        "up": cam.up.tolist(),
+        "fov": float(np.degrees(2 * np.arctan(half / far))),
+        "near": far - 2 * radius,
+        "far": far + 2 * radius,
+    }
+
+
+def page_and_python(
+    tmp_path: Path, c: partscale.CSDF, view: str, monkeypatch
+) -> tuple[np.ndarray, np.ndarray, render_mod.Camera]:
+    """(page, python, camera): ``c`` unlit from partscale.render's camera for ``view`` (fitted
+    to the solid's bounds), PICTURE pixels square, by the page (in headless Chromium: no
+    guides, its hooks' setUnlit and setCamera) and by partscale.render (AMBIENT 1: each pixel
+    its colour as sampled), both (H, W, 3) uint8 sRGB; both saved in tmp_path."""
+    node, chromium = find_tools()
+    frame = c.surface_bounds()
+    cam = render_mod.camera(view, frame, PICTURE)
+    monkeypatch.setattr(render_mod, "AMBIENT", 1.0)  # shade = 1: no light
+    python = render_mod.render(c, view=view, size=PICTURE, frame=frame, background=PAGE_BACKGROUND)
+    render_mod.save_png(python, tmp_path / "python.png")
+    path = tmp_path / "object.csdf.npz"
+    partscale.save(c, path)
+    picture = {"camera": page_camera(cam, frame), "unlit": True}
+    with Server(path) as server:
+        r = run_page(
+            node, chromium, server.url, tmp_path, canvas=[PICTURE, PICTURE], picture=picture
+        )
+    assert r["errors"] == [], r["errors"]
+    page = np.asarray(Image.open(r["picture"]).convert("RGB"))
+    return page, python, cam
+
+
+def differing(page: np.ndarray, python: np.ndarray) -> tuple[float, float, np.ndarray]:
+    """(outline, colour, apart): the share of the object's pixels (on it in either picture)
+    that are on it in one picture only, the share of those on it in both whose colours differ
+    (a channel by more than DIFFERS), and where the pictures differ ((H, W) bool)."""
+    on_page = (page != PAGE_BACKGROUND).any(axis=-1)
+    on_python = (python != PAGE_BACKGROUND).any(axis=-1)
+    both = on_page & on_python
+    apart = np.abs(page.astype(np.int64) - python.astype(np.int64)).max(axis=-1) > DIFFERS
+    outline = (on_page ^ on_python).sum() / (on_page | on_python).sum()
+    return float(outline), float((apart & both).sum() / both.sum()), apart
+
+
+def assert_pictures_agree(page: np.ndarray, python: np.ndarray, where: Path) -> None:
+    """The shares :func:`differing` measures within SILHOUETTE_SHARE and COLOUR_SHARE (where
+    they differ: differs.png in ``where``, with both pictures)."""
+    outline, colour, apart = differing(page, python)
+    Image.fromarray((apart * 255).astype(np.uint8)).save(where / "differs.png")
+    assert outline <= SILHOUETTE_SHARE, f"outline {outline:.4f}; see {where}"
+    assert colour <= COLOUR_SHARE, f"colour {colour:.4f}; see {where}"
+
+
+@pytest.mark.browser
+def test_page_draws_sharp_colour_changes_as_partscale_render(tmp_path, monkeypatch):
+    """The page samples its colour 3D texture as partscale.render samples the colour grid:
+    each voxel's sRGB colour decoded to linear light, then blended trilinearly (the page's
+    texture is sRGB, which the GPU decodes before it filters). Both draw the same stripes from
+    partscale.render's front camera (the page's hook setCamera puts its perspective camera FAR
+    frame radii away: the orthographic projection to about a tenth of a pixel), unlit, as the
+    two light the object differently by design (the page: two lights fixed in the world and a
+    highlight; partscale.render: one light from the camera's side): the page with its hook
+    setUnlit, partscale.render with AMBIENT 1; the page's guides off, partscale.render's
+    background the page's.
+
+    At most SILHOUETTE_SHARE of the object's pixels is on it in one picture only (each
+    renderer's ray stops at its own distance from the surface) and at most COLOUR_SHARE of
+    those on it in both differ in colour by more than DIFFERS of 255. Across each change of
+    colour, halfway between the two voxels' centres, the page shows the two colours' linear
+    light half and half (black and white: half the white's light, sRGB 188), as
+    partscale.render does; a page that blended the sRGB values would show sRGB 128 there.
+    """
+    page, python, cam = page_and_python(tmp_path, stripes(), "front", monkeypatch)
+    cols = np.arange(PICTURE) + 0.5  # pixel centres
+    for y, (a, b) in zip((0.1, -0.1), STRIPE_COLOURS, strict=True):
+        # the row through the middle of the stripes' upper (black, white) or lower half
+        row = round(PICTURE / 2 - (y - cam.centre @ cam.up) * cam.scale - 0.5)
+        half = 0.5 * (srgb8_to_linear(a) + srgb8_to_linear(b))  # linear light, half and half
+        for edge in STRIPE_EDGES:
+            at = PICTURE / 2 + (edge - cam.centre @ cam.right) * cam.scale
+            for name, picture in (("page", page), ("python", python)):
+                lin = srgb8_to_linear(picture[row])
+                got = np.array([np.interp(at, cols, lin[:, k]) for k in range(3)])
+                assert np.abs(got - half).max() <= 0.01, (name, edge, got.tolist(), half)
+    assert_pictures_agree(page, python, tmp_path)
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize(
+    ("rel", "view"), [("sweethome3d/dresser.obj", "front"), ("khronos/SheenChair.glb", "iso")]
+)
+def test_page_draws_a_real_objects_colours_as_partscale_render(
+    tmp_path, monkeypatch, data, rel, view
+):
+    """Real objects at --res 128, the dresser (white doors, black handles, a brown top) and
+    the SheenChair (textured fabric and wood), from partscale.render's camera, unlit (as in
+    test_page_draws_sharp_colour_changes_as_partscale_render): at most SILHOUETTE_SHARE of the
+    object's pixels is on it in one picture only and at most COLOUR_SHARE of those on it in
+    both differ in colour by more than DIFFERS of 255."""
+    from partscale.ingest import load
+
+    find_tools()  # skips before the import when the browser is missing
+    c = load(data(rel), res=128)
+    page, python, _ = page_and_python(tmp_path, c, view, monkeypatch)
+    assert_pictures_agree(page, python, tmp_path)

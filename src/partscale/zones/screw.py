@@ -79,7 +79,8 @@ class Screw:
 
     Examples
     --------
-    A flight of six steps 0.2 long and 0.15 high along x (:func:`find_screws` finds one):
+    The repeat of a flight of six steps 0.2 long and 0.15 high along x, as :func:`find_screws`
+    reports one:
 
     >>> from partscale.zones import Screw
     >>> s = Screw("x", (0.2, 0.15, 0.0), 0.9, 6, 0.5)

@@ -225,7 +225,7 @@ def csdf_turn(csdf: CSDF) -> float | None:
     Parameters
     ----------
     csdf : CSDF
-        The object.
+        The object; only its distances are read.
 
     Returns
     -------

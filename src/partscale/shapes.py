@@ -349,3 +349,35 @@ def bookcase(
         voxel_size=voxel_size,
         margin=margin,
     )
+
+
+def door(*, voxel_size: float = 0.01, margin: int = 3) -> CSDF:
+    """A door with a knob: a board 0.8 wide, 1.2 high and 0.04 thick, a knob on its face.
+
+    The board spans ``[0, 0.8]`` on x, ``[0, 1.2]`` on y and ``[0, 0.04]`` on z; the knob
+    ``[0.62, 0.68]``, ``[0.55, 0.65]`` and ``[0.04, 0.08]``, standing out of the board's face.
+    The object the local-feature examples use (:func:`partscale.zones.local_features`).
+
+    Parameters
+    ----------
+    voxel_size, margin
+        As :func:`grid` takes them.
+
+    Returns
+    -------
+    CSDF
+        The door.
+
+    Examples
+    --------
+    >>> from partscale import shapes
+    >>> shapes.door().surface_bounds().round(2).tolist()
+    [[0.0, 0.0, 0.0], [0.8, 1.2, 0.08]]
+    """
+    parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]
+    return grid(
+        lambda p: boxes_sdf(p, parts),
+        [(0, 0, 0), (0.8, 1.2, 0.08)],
+        voxel_size=voxel_size,
+        margin=margin,
+    )

@@ -334,6 +334,10 @@ def merge_across_junctions(
     ----------
     labels : (X, Y, Z) int
         Parts 0..P-1, -1 where none.
+    tolerance : float
+        Voxels of concavity the union and what is left of ``s`` may each have.
+    min_voxels : int
+        :func:`make_connected`'s, for the pieces the merges leave.
 
     Returns
     -------
@@ -567,6 +571,12 @@ def merge_planar_groups(
     ----------
     labels : (X, Y, Z) int
         Parts 0..P-1, -1 where none.
+    tolerance : float
+        Voxels of concavity the union of a group may have.
+    thickness : float
+        Voxels: how thick the part a group grows from may be.
+    min_group : int
+        Fewest parts a group holds.
 
     Returns
     -------

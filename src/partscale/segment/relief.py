@@ -118,7 +118,7 @@ def relief_of(csdf: CSDF) -> float:
     Parameters
     ----------
     csdf : CSDF
-        The object.
+        The object (its colours are not read).
 
     Returns
     -------

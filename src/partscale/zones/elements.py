@@ -232,10 +232,9 @@ class AxisElements:
         Ordered along the axis.
     groups : tuple of Group
         Best first: :attr:`best` is the one a count edit uses.
-    lo, hi : float
-        The solid's extent along the axis (world units).
-    voxel_size : float
-        The object's voxel size.
+    lo, hi, voxel_size : float
+        The solid's extent along the axis (world units) and the object's voxel size, as its
+        :class:`Profile` holds them.
 
     Examples
     --------
@@ -573,7 +572,7 @@ def find_elements(csdf: CSDF, axis: str | int, *, prof: Profile | None = None) -
     csdf : CSDF
         The object.
     axis : {'x', 'y', 'z'} or {0, 1, 2}
-        The axis.
+        The axis the elements lie along.
     prof : Profile, optional
         The axis's :func:`~partscale.zones.profile` if the caller has it.
 

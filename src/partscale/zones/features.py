@@ -102,8 +102,7 @@ class Feature:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
-    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> door = shapes.door()
     >>> zones.axis_features(door, 0, [(4, 82)])[0].kind
     'shape'
     """
@@ -409,7 +408,7 @@ def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Fe
     csdf : CSDF
         The object.
     axis : int
-        0, 1 or 2.
+        0, 1 or 2: the axis the runs lie along.
     runs : list of (int, int)
         Runs of layers, inclusive ``(first, last)``.
 
@@ -421,8 +420,7 @@ def axis_features(csdf: CSDF, axis: int, runs: list[tuple[int, int]]) -> list[Fe
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
-    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> door = shapes.door()
     >>> [(f.first, f.last, f.kind) for f in zones.axis_features(door, 0, [(4, 82)])]
     [(65, 71, 'shape')]
     """
@@ -518,8 +516,7 @@ def whole_copies(
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
-    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> door = shapes.door()
     >>> knob = zones.axis_features(door, 0, [(4, 82)])
     >>> zones.whole_copies(knob, 10.0, 20.0, 4.0, 82.0), zones.whole_copies(knob, 60.0, 10.0, 4.0, 82.0)
     (True, False)
@@ -556,7 +553,7 @@ def local_features(
     csdf : CSDF
         The object.
     axis : {'x', 'y', 'z'} or {0, 1, 2}
-        The axis.
+        The axis ``zone`` lies along.
     zone : (float, float)
         The zone's planes, world units.
 
@@ -568,8 +565,7 @@ def local_features(
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
-    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> door = shapes.door()
     >>> [(round(a, 3), round(b, 3)) for a, b in zones.local_features(door, "x", (0.5, 0.75))]
     [(0.615, 0.685)]
     >>> zones.local_features(door, "x", (0.1, 0.4))
@@ -611,8 +607,7 @@ def feature_notes(csdf: CSDF, recipe: Recipe) -> list[str]:
     Examples
     --------
     >>> from partscale import shapes, zones
-    >>> parts = [((0, 0, 0), (0.8, 1.2, 0.04)), ((0.62, 0.55, 0.04), (0.68, 0.65, 0.08))]  # a door, a knob
-    >>> door = shapes.grid(lambda p: shapes.boxes_sdf(p, parts), [(0, 0, 0), (0.8, 1.2, 0.08)], voxel_size=0.01)
+    >>> door = shapes.door()
     >>> from partscale.edit import Edit, Recipe
     >>> print(zones.feature_notes(door, Recipe((Edit("x", 0.5, 0.75, 0.9),)))[0][:66])
     the stretch zone 0.5..0.75 m along x holds 1 local feature (a knob

@@ -812,7 +812,7 @@ def add_axis(
     csdf : CSDF
         The object.
     axis : int
-        0, 1 or 2.
+        0, 1 or 2: the axis to add along.
     n : int
         Elements to add (negative: remove); with ``in_all``, the elements wanted in all.
     in_all : bool
@@ -1074,7 +1074,7 @@ def fit_axis(
     csdf : CSDF
         The object.
     axis : int
-        0, 1 or 2.
+        0, 1 or 2: the axis fitted.
     target : float
         The extent wanted along the axis (object units).
     allow_deform : bool
@@ -1093,18 +1093,26 @@ def fit_axis(
     >>> [(e.mode, round(e.dest - e.end, 3)) for e in edits]
     [('tile', 0.3)]
     """
-    name = AXES[axis]
-    units = csdf.meta.get("units")
-    sb = csdf.surface_bounds()
-    lo, hi = float(sb[0, axis]), float(sb[1, axis])
-    h = csdf.voxel_size
-    change = round((target - (hi - lo)) / h) * h  # whole voxels: every edit moves content by voxels
+    name, units, lo, hi, change = _axis_change(csdf, axis, target)
     if change == 0:
         return [], [f"{name}: kept ({_fmt(hi - lo, units)}, target within half a voxel)"]
     prof = profile(csdf, axis)
     feats = axis_features(csdf, axis, calm_runs(prof))
     edits, why = _fit_axis(csdf, axis, target, prof, feats, allow_deform)
     return edits, why + _feature_note(edits, feats, prof, (name, units, lo))
+
+
+def _axis_change(
+    csdf: CSDF, axis: int, target: float
+) -> tuple[str, str | None, float, float, float]:
+    """Where :func:`fit_axis` starts from: the axis's name, the object's units, the surface's
+    extent ``(lo, hi)`` along ``axis``, and the change reaching ``target``, in whole voxels
+    (every edit moves content by voxels).
+    """
+    sb = csdf.surface_bounds()
+    lo, hi = float(sb[0, axis]), float(sb[1, axis])
+    h = csdf.voxel_size
+    return AXES[axis], csdf.meta.get("units"), lo, hi, round((target - (hi - lo)) / h) * h
 
 
 def _feature_note(
@@ -1163,12 +1171,8 @@ def _fit_axis(
     slabs or the copies (:func:`_absorb`), else refused or scaled globally
     (:func:`_last_resort`).
     """
-    name = AXES[axis]
-    units = csdf.meta.get("units")
-    sb = csdf.surface_bounds()
-    lo, hi = float(sb[0, axis]), float(sb[1, axis])
+    name, units, lo, hi, change = _axis_change(csdf, axis, target)
     h = csdf.voxel_size
-    change = round((target - (hi - lo)) / h) * h  # whole voxels: every edit moves content by voxels
     cands = axis_candidates(csdf, axis, prof=prof, features=feats)
     tiles = [c for c in cands if c.kind == "tile"]
     slabs = [c for c in cands if c.kind == "stretch"]

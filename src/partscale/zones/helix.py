@@ -33,6 +33,7 @@ between turns), so both sides agree there and the column and the handrail run on
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -61,12 +62,9 @@ class Helix:
 
     Parameters
     ----------
-    center : (float, float)
-        The vertical axis' place on x and z (world units).
-    angle : float
-        Degrees one step turns, from x toward z (negative: from z toward x).
-    rise : float
-        World units one step rises.
+    center, angle, rise
+        The vertical axis and one step's turn and rise, as :class:`~partscale.edit.HelixZone`
+        holds them (what :meth:`zone` passes on).
     support : float
         Share of moved surface samples landing on the surface.
     count : int
@@ -196,20 +194,35 @@ def find_helices(csdf: CSDF) -> list[Helix]:
     >>> zones.find_helices(shapes.box((0, 0, 0), (1.0, 0.5, 0.5), voxel_size=0.05))
     []
     """
-    score = _scorer(csdf)
-    if score is None:
-        return []
-    for c in _axes(csdf, score):
-        found = []
-        for x in _candidates(score, c):
-            x, s = _refine(score, x)
-            if _is_helix(score, x, s):
-                found.append((s, x))
+    for score, found in _motions(csdf, _candidates, _refine, _is_helix):
         if found:
             best = max(s for s, _ in found)
             s, x = min((f for f in found if f[0] >= best - TIED), key=lambda f: abs(f[1][0]))
             return [_helix(csdf, score, s, x)]
     return []
+
+
+def _motions(
+    csdf: CSDF,
+    starts: Callable[[_Scorer, np.ndarray], list[np.ndarray]],
+    refine: Callable[[_Scorer, np.ndarray], tuple[np.ndarray, float]],
+    keep: Callable[[_Scorer, np.ndarray, float], bool],
+) -> Iterator[tuple[_Scorer, list[tuple[float, np.ndarray]]]]:
+    """Per axis guess (:func:`_axes`), in turn: ``csdf``'s scorer and the supports and motions
+    ``(s, x)`` that ``refine`` makes of the coarse motions ``starts(score, c)`` about it and
+    ``keep(score, x, s)`` keeps (the search :func:`find_helices` and
+    :func:`~partscale.zones.find_rotations` share); nothing where there is no scorer.
+    """
+    score = _scorer(csdf)
+    if score is None:
+        return
+    for c in _axes(csdf, score):
+        found = []
+        for x0 in starts(score, c):
+            x, s = refine(score, x0)
+            if keep(score, x, s):
+                found.append((s, x))
+        yield score, found
 
 
 def _scorer(csdf: CSDF) -> _Scorer | None:

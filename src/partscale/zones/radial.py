@@ -43,14 +43,10 @@ class RadialFrame:
 
     Parameters
     ----------
-    axis : {'x', 'y', 'z'}
-        The axis the outline turns about.
-    center : (float, float)
-        On the two other axes, in order (world units).
-    sides : int
-        0 round, else the polygon's sides.
-    phase : float
-        Degrees: the first face normal's direction.
+    axis, center, sides, phase
+        The outline's axis, centre (world units), sides (0: round) and first face normal's
+        direction (degrees), as :class:`~partscale.edit.RadialZone` holds them (what
+        :meth:`zone` passes on).
     radius : float
         The outline's largest gauge radius (world units).
     residual : float

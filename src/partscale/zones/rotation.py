@@ -40,7 +40,7 @@ from scipy import ndimage
 
 from ..csdf import CSDF
 from ..edit import RotationZone
-from .helix import _axes, _Scorer, _scorer
+from .helix import _motions, _Scorer
 from .helix import _refine as _refine_motion
 from .screw import DISCRETE, MIN_EXCLUSIVE, MIN_SUPPORT, TIED
 
@@ -151,7 +151,8 @@ def find_rotations(csdf: CSDF) -> list[Rotation]:
     Parameters
     ----------
     csdf : CSDF
-        The object (up is +y).
+        The object (up is +y: the turns sought are about the vertical, as for
+        :func:`~partscale.zones.find_helices`).
 
     Returns
     -------
@@ -164,15 +165,7 @@ def find_rotations(csdf: CSDF) -> list[Rotation]:
     >>> zones.find_rotations(shapes.box((0, 0, 0), (1.0, 0.5, 0.5), voxel_size=0.05))
     []
     """
-    score = _scorer(csdf)
-    if score is None:
-        return []
-    for c in _axes(csdf, score):
-        found = []
-        for t in _candidates(score, c):
-            x, s = _refine(score, np.array([t, c[0], c[1]]))
-            if _is_rotation(score, x, s):
-                found.append((s, x))
+    for score, found in _motions(csdf, _turns, _refine, _is_rotation):
         if not found:
             continue
         best = max(s for s, _ in found)
@@ -204,6 +197,11 @@ def _candidates(score: _Scorer, c: np.ndarray) -> list[float]:
     idx = np.flatnonzero(peak)
     idx = idx[np.argsort(-s[idx])][:REFINED]
     return [float(angles[i]) for i in idx]
+
+
+def _turns(score: _Scorer, c: np.ndarray) -> list[np.ndarray]:
+    """:func:`_candidates` about the axis ``c`` as turns ``(angle, cx, cz)``."""
+    return [np.array([t, c[0], c[1]]) for t in _candidates(score, c)]
 
 
 def _refine(score: _Scorer, x: np.ndarray) -> tuple[np.ndarray, float]:

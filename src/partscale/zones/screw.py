@@ -79,12 +79,13 @@ class Screw:
 
     Examples
     --------
-    >>> from partscale import shapes, zones
-    >>> steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.15 * (i + 1), 0.8)) for i in range(6)]
-    >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), [(0, 0, 0), (1.2, 0.9, 0.8)], voxel_size=0.02)
-    >>> s = zones.find_screws(flight)[0]
-    >>> s.axis, s.count, round(s.going, 2), round(s.rise, 2)
-    ('x', 6, 0.2, 0.15)
+    The repeat of a flight of six steps 0.2 long and 0.15 high along x, as :func:`find_screws`
+    reports one:
+
+    >>> from partscale.zones import Screw
+    >>> s = Screw("x", (0.2, 0.15, 0.0), 0.9, 6, 0.5)
+    >>> s.going, s.rise, s.zone(1).to_json()
+    (0.2, 0.15, {'screw': {'axis': 'x', 'step': [0.2, 0.15, 0.0], 'cut': 0.5}, 'copies': 1})
     """
 
     axis: str
@@ -192,7 +193,7 @@ def find_screws(csdf: CSDF) -> list[Screw]:
     Parameters
     ----------
     csdf : CSDF
-        The object.
+        The object (up is +y: each step rises along it).
 
     Returns
     -------
@@ -205,8 +206,8 @@ def find_screws(csdf: CSDF) -> list[Screw]:
     >>> steps = [((0.2 * i, 0, 0), (0.2 * (i + 1), 0.15 * (i + 1), 0.8)) for i in range(6)]
     >>> flight = shapes.grid(lambda p: shapes.boxes_sdf(p, steps), [(0, 0, 0), (1.2, 0.9, 0.8)], voxel_size=0.02)
     >>> s = zones.find_screws(flight)[0]
-    >>> round(s.going, 2), round(s.rise, 2)
-    (0.2, 0.15)
+    >>> s.axis, s.count, round(s.going, 2), round(s.rise, 2)
+    ('x', 6, 0.2, 0.15)
     """
     if not (csdf.sdf < 0).any():
         return []

@@ -232,12 +232,11 @@ def describe_moves(moves: list[Move], units: str | None) -> str:
 
     Examples
     --------
-    >>> from partscale import shapes, zones
-    >>> bookcase = shapes.bookcase()
-    >>> from partscale.edit import Edit
-    >>> edit, moves = zones.snap(bookcase, Edit("y", 0.3, 0.62, 0.95, "tile"))
-    >>> zones.describe_moves(moves, "m")
-    'snap: moved start 0.3 -> 0.1625 (-0.1375 m), end 0.62 -> 0.4575 (-0.1625 m), to 0.95 -> 0.7525 (-0.1975 m)'
+    >>> from partscale import zones
+    >>> zones.describe_moves([zones.Move("start", 0.3, 0.1625), zones.Move("end", 0.62, 0.4575)], "m")
+    'snap: moved start 0.3 -> 0.1625 (-0.1375 m), end 0.62 -> 0.4575 (-0.1625 m)'
+    >>> zones.describe_moves([], "m")
+    'snap: the planes were already at a good position'
     """
     if not moves:
         return "snap: the planes were already at a good position"

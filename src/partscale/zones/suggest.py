@@ -839,7 +839,7 @@ def axis_candidates(
     csdf : CSDF
         The object.
     axis : {'x', 'y', 'z'} or {0, 1, 2}
-        The axis.
+        The axis the zones are sought along.
     prof : Profile, optional
         The axis's :func:`~partscale.zones.profile` if the caller has it.
     features : list of Feature, optional

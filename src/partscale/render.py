@@ -471,7 +471,7 @@ def save_png(image: np.ndarray, path: str | os.PathLike) -> Path:
     Returns
     -------
     pathlib.Path
-        The path written.
+        ``path``, now holding the PNG.
 
     Examples
     --------

@@ -99,9 +99,16 @@ def _object(
     }
 
 
-def _copies_edit(key: str, spec: dict[str, Any], description: str) -> dict[str, Any]:
+def _copies_edit(key: str, description: str, spec: dict[str, Any]) -> dict[str, Any]:
     """A JSON Schema edit ``{KEY: SPEC, "copies": N}`` (screw, helix, rotation)."""
     return _object({key: spec, "copies": {"type": "integer"}}, [key, "copies"], description)
+
+
+def _about_vertical(properties: dict[str, Any]) -> dict[str, Any]:
+    """JSON Schema properties of a turn by ``angle`` degrees about the vertical through
+    ``center`` (helix, rotation), then ``properties``.
+    """
+    return {"center": _array(_ref("length"), 2), "angle": {"type": "number"}, **properties}
 
 
 _LENGTH_PATTERN = r"^\s*[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?\s*(mm|cm|m)\s*$"
@@ -170,6 +177,8 @@ JSON_SCHEMA: dict[str, Any] = {
                         ),
                         _copies_edit(
                             "screw",
+                            "steps of a diagonal repetition: what lies beyond the "
+                            "plane cut across axis moves by copies times step",
                             _object(
                                 {
                                     "axis": {"enum": list(AXES)},
@@ -178,37 +187,36 @@ JSON_SCHEMA: dict[str, Any] = {
                                 },
                                 ["axis", "step", "cut"],
                             ),
-                            "steps of a diagonal repetition: what lies beyond the "
-                            "plane cut across axis moves by copies times step",
                         ),
                         _copies_edit(
                             "helix",
-                            _object(
-                                {
-                                    "center": _array(_ref("length"), 2),
-                                    "angle": {"type": "number"},
-                                    "rise": _ref("length"),
-                                    "cut": _ref("length"),
-                                },
-                                ["center", "angle", "rise", "cut"],
-                            ),
                             "steps of a helix (a spiral stair): what lies above the "
                             "level cut turns by copies times angle (degrees, from x toward z) "
                             "about the vertical through center and rises by copies times rise",
+                            _object(
+                                _about_vertical({"rise": _ref("length"), "cut": _ref("length")}),
+                                ["center", "angle", "rise", "cut"],
+                            ),
                         ),
                         _copies_edit(
                             "rotation",
+                            "elements repeated by a turn about the vertical (arms of "
+                            "a star base, chairs about a round table): count elements, the first "
+                            "at phase degrees and each next turned by angle degrees (from x toward "
+                            "z) about the vertical through center, between the radii hub and "
+                            "radius and the levels span; copies more (or fewer) of them, evenly "
+                            "spaced on a closed ring, continued along an open arc",
                             _object(
-                                {
-                                    "center": _array(_ref("length"), 2),
-                                    "angle": {"type": "number"},
-                                    "phase": {"type": "number"},
-                                    "count": {"type": "integer", "minimum": 2},
-                                    "closed": {"type": "boolean"},
-                                    "hub": _ref("length"),
-                                    "radius": _ref("length"),
-                                    "span": _ref("lengths"),
-                                },
+                                _about_vertical(
+                                    {
+                                        "phase": {"type": "number"},
+                                        "count": {"type": "integer", "minimum": 2},
+                                        "closed": {"type": "boolean"},
+                                        "hub": _ref("length"),
+                                        "radius": _ref("length"),
+                                        "span": _ref("lengths"),
+                                    }
+                                ),
                                 [
                                     "center",
                                     "angle",
@@ -220,12 +228,6 @@ JSON_SCHEMA: dict[str, Any] = {
                                     "span",
                                 ],
                             ),
-                            "elements repeated by a turn about the vertical (arms of "
-                            "a star base, chairs about a round table): count elements, the first "
-                            "at phase degrees and each next turned by angle degrees (from x toward "
-                            "z) about the vertical through center, between the radii hub and "
-                            "radius and the levels span; copies more (or fewer) of them, evenly "
-                            "spaced on a closed ring, continued along an open arc",
                         ),
                         _object(
                             {

@@ -82,6 +82,13 @@ def grid_cell(x, n):
 
 
 @nb.njit(cache=True, inline="always")
+def corner_weight(fx, fy, fz, di, dj, dk):
+    """The trilinear weight of a cell's corner ``(di, dj, dk)`` (each 0 or 1) at the fractions
+    ``(fx, fy, fz)`` past its lower corner: ``wx * wy * wz``, multiplied in that order."""
+    return (fx if di else 1.0 - fx) * (fy if dj else 1.0 - fy) * (fz if dk else 1.0 - fz)
+
+
+@nb.njit(cache=True, inline="always")
 def trilinear_point(volume, x, y, z):
     """Trilinear sample of ``volume`` (X, Y, Z), each axis at least 2 voxels, at the continuous
     voxel index ``(x, y, z)``, clamped to the grid; linear along x, then y, then z (float64
@@ -110,12 +117,10 @@ def trilinear_at(volume, x, y, z, out):
     k0 = min(int(z), nz - 2) if nz > 1 else 0
     fx, fy, fz = x - i0, y - j0, z - k0
     for di in range(2):
-        wx = fx if di else 1.0 - fx
         for dj in range(2):
-            wy = fy if dj else 1.0 - fy
             for dk in range(2):
                 # a zero weight's corner may lie beyond a one-voxel-thin grid
-                w = wx * wy * (fz if dk else 1.0 - fz)
+                w = corner_weight(fx, fy, fz, di, dj, dk)
                 if w == 0.0:
                     continue
                 for c in range(nc):

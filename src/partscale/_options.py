@@ -216,6 +216,28 @@ def memory_size(value: Any, what: str = "memory") -> int:
     return int(n)
 
 
+def preset(value: Any, what: str, allowed: Sequence[int], *, unit: str = "") -> int | None:
+    """None, or one of the whole numbers ``allowed`` (a size from a fixed list), as an int;
+    ``unit`` names what they count in the error (``"texels"``).
+
+    Examples
+    --------
+    >>> from partscale._options import preset
+    >>> preset(64, "size", (32, 64)), preset(None, "size", (32, 64))
+    (64, None)
+    >>> preset(48, "atlas", (32, 64), unit="texels")
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: atlas: expected one of 32, 64 texels, got 48
+    """
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value not in allowed:
+        listed = ", ".join(map(str, allowed)) + (f" {unit}" if unit else "")
+        raise InputError(f"{what}: expected one of {listed}, got {value!r}")
+    return int(value)
+
+
 def choice(value: Any, what: str, choices: Sequence[str]) -> str:
     """One of ``choices``, compared without case or surrounding blanks; returned as listed.
 

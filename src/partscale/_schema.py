@@ -73,7 +73,7 @@ def number(
     Returns
     -------
     float
-        The number.
+        ``value`` as a float, within the bounds.
 
     Examples
     --------

@@ -409,7 +409,7 @@ def check_number(x: Any, what: str) -> float:
     Returns
     -------
     float
-        The number.
+        ``x`` as a Python float.
 
     Examples
     --------
@@ -617,7 +617,7 @@ def save(
     Returns
     -------
     pathlib.Path
-        The path written.
+        ``path``, now holding the CSDF.
 
     Examples
     --------

@@ -25,7 +25,7 @@ import numba
 import numpy as np
 
 from ._files import atomic_path
-from ._kernels import grid_cell, trilinear_point
+from ._kernels import corner_weight, grid_cell, trilinear_point
 from ._options import choice, count, keyword_options
 from .color import linear_to_srgb, palette_colour, srgb8_to_linear
 from .csdf import CSDF
@@ -240,11 +240,9 @@ def _colours(rgb, lut, pts, out):
         for c in range(3):
             acc = 0.0
             for di in range(2):
-                wx = fx if di else 1.0 - fx
                 for dj in range(2):
-                    wy = fy if dj else 1.0 - fy
                     for dk in range(2):
-                        w = wx * wy * (fz if dk else 1.0 - fz)
+                        w = corner_weight(fx, fy, fz, di, dj, dk)
                         acc += w * lut[rgb[i + di, j + dj, k + dk, c]]
             out[r, c] = acc
 
@@ -471,7 +469,7 @@ def save_png(image: np.ndarray, path: str | os.PathLike) -> Path:
     Returns
     -------
     pathlib.Path
-        The path written.
+        ``path``, now holding the PNG.
 
     Examples
     --------

@@ -204,12 +204,8 @@ def sphere(center, radius, *, voxel_size: float, margin: int = 3, color=(60, 120
         The sphere's centre.
     radius : float
         Its radius.
-    voxel_size : float
-        Voxel edge length.
-    margin : int
-        Empty voxels around it.
-    color : (3,) int
-        sRGB colour.
+    voxel_size, margin, color
+        As for :func:`box`.
 
     Returns
     -------

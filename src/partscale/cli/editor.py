@@ -3,14 +3,15 @@ still works)."""
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated
 
 import typer
 
+from . import _common
+
 
 def editor(
-    path: Annotated[Path, typer.Argument(metavar="IN", help="A .csdf.npz file.")],
+    path: _common.CsdfIn,
     port: Annotated[
         int, typer.Option("--port", metavar="N", help="Port to serve on (0: any free one).")
     ] = 0,

@@ -74,6 +74,45 @@ MAX_EDITS = 64
 #: the result, and the count is refused before anything multiplies by it.
 MAX_COPIES = 100_000
 
+
+def _ref(name: str) -> dict[str, Any]:
+    """A JSON Schema reference to ``$defs/NAME`` of :data:`JSON_SCHEMA`."""
+    return {"$ref": f"#/$defs/{name}"}
+
+
+def _array(items: dict[str, Any], n: int) -> dict[str, Any]:
+    """A JSON Schema array of exactly ``n`` ``items``."""
+    return {"type": "array", "minItems": n, "maxItems": n, "items": items}
+
+
+def _object(
+    properties: dict[str, Any], required: list[str], description: str | None = None
+) -> dict[str, Any]:
+    """A JSON Schema object with these ``properties``, ``required`` ones and no others."""
+    head = {} if description is None else {"description": description}
+    return {
+        **head,
+        "type": "object",
+        "required": required,
+        "additionalProperties": False,
+        "properties": properties,
+    }
+
+
+def _copies_edit(key: str, description: str, spec: dict[str, Any]) -> dict[str, Any]:
+    """A JSON Schema edit ``{KEY: SPEC, "copies": N}`` (screw, helix, rotation)."""
+    return _object({key: spec, "copies": {"type": "integer"}}, [key, "copies"], description)
+
+
+def _about_vertical(properties: dict[str, Any]) -> dict[str, Any]:
+    """JSON Schema properties of a turn by ``angle`` degrees about the vertical through
+    ``center`` (helix, rotation), then ``properties``.
+    """
+    return {"center": _array(_ref("length"), 2), "angle": {"type": "number"}, **properties}
+
+
+_LENGTH_PATTERN = r"^\s*[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?\s*(mm|cm|m)\s*$"
+
 #: JSON Schema (draft 2020-12) of a recipe file; ``partscale scale --recipe`` and the web editor
 #: both produce and accept it.
 JSON_SCHEMA: dict[str, Any] = {
@@ -85,138 +124,100 @@ JSON_SCHEMA: dict[str, Any] = {
         "of the previous edit: an edit's planes are carried through the earlier edits on the "
         "same axis, and its destination keeps its change to - end."
     ),
-    "type": "object",
-    "required": ["edits"],
-    "additionalProperties": False,
-    "properties": {
-        "version": {"const": RECIPE_VERSION},
-        "edits": {
-            "type": "array",
-            "minItems": 1,
-            "maxItems": MAX_EDITS,
-            "items": {
-                "oneOf": [
-                    {
-                        "type": "object",
-                        "required": ["axis", "zone", "to"],
-                        "additionalProperties": False,
-                        "properties": {
-                            "axis": {"enum": list(AXES)},
-                            "zone": {"$ref": "#/$defs/zone"},
-                            "to": {"$ref": "#/$defs/position"},
-                            "mode": {"enum": list(MODES), "default": "stretch"},
-                        },
-                    },
-                    {
-                        "description": "a radial zone: the annulus R0..R1 about the axis "
-                        "through center becomes R0..to",
-                        "type": "object",
-                        "required": ["radial", "zone", "to"],
-                        "additionalProperties": False,
-                        "properties": {
-                            "radial": {
-                                "type": "object",
-                                "required": ["center"],
-                                "additionalProperties": False,
-                                "properties": {
-                                    "axis": {"enum": list(AXES), "default": "y"},
-                                    "center": {
-                                        "type": "array",
-                                        "minItems": 2,
-                                        "maxItems": 2,
-                                        "items": {"$ref": "#/$defs/length"},
+    **_object(
+        {
+            "version": {"const": RECIPE_VERSION},
+            "edits": {
+                "type": "array",
+                "minItems": 1,
+                "maxItems": MAX_EDITS,
+                "items": {
+                    "oneOf": [
+                        _object(
+                            {
+                                "axis": {"enum": list(AXES)},
+                                "zone": _ref("zone"),
+                                "to": _ref("position"),
+                                "mode": {"enum": list(MODES), "default": "stretch"},
+                            },
+                            ["axis", "zone", "to"],
+                        ),
+                        _object(
+                            {
+                                "radial": _object(
+                                    {
+                                        "axis": {"enum": list(AXES), "default": "y"},
+                                        "center": _array(_ref("length"), 2),
+                                        "sides": {"type": "integer", "default": 0},
+                                        "phase": {"type": "number", "default": 0},
+                                        "span": _ref("lengths"),
                                     },
-                                    "sides": {"type": "integer", "default": 0},
-                                    "phase": {"type": "number", "default": 0},
-                                    "span": {"$ref": "#/$defs/lengths"},
+                                    ["center"],
+                                ),
+                                "zone": _ref("lengths"),
+                                "to": _ref("length"),
+                            },
+                            ["radial", "zone", "to"],
+                            "a radial zone: the annulus R0..R1 about the axis "
+                            "through center becomes R0..to",
+                        ),
+                        _object(
+                            {
+                                "axis": {"enum": list(AXES)},
+                                "copies": {
+                                    "oneOf": [
+                                        {"type": "integer"},
+                                        {"type": "string", "pattern": r"^\s*[-+]?[0-9]+\s*$"},
+                                    ]
                                 },
                             },
-                            "zone": {"$ref": "#/$defs/lengths"},
-                            "to": {"$ref": "#/$defs/length"},
-                        },
-                    },
-                    {
-                        "description": "whole elements more or fewer along an axis (one more "
-                        "seat); resolved on the object into zone edits before it applies",
-                        "type": "object",
-                        "required": ["axis", "copies"],
-                        "additionalProperties": False,
-                        "properties": {
-                            "axis": {"enum": list(AXES)},
-                            "copies": {
-                                "oneOf": [
-                                    {"type": "integer"},
-                                    {"type": "string", "pattern": r"^\s*[-+]?[0-9]+\s*$"},
-                                ]
-                            },
-                        },
-                    },
-                    {
-                        "description": "steps of a diagonal repetition: what lies beyond the "
-                        "plane cut across axis moves by copies times step",
-                        "type": "object",
-                        "required": ["screw", "copies"],
-                        "additionalProperties": False,
-                        "properties": {
-                            "screw": {
-                                "type": "object",
-                                "required": ["axis", "step", "cut"],
-                                "additionalProperties": False,
-                                "properties": {
+                            ["axis", "copies"],
+                            "whole elements more or fewer along an axis (one more "
+                            "seat); resolved on the object into zone edits before it applies",
+                        ),
+                        _copies_edit(
+                            "screw",
+                            "steps of a diagonal repetition: what lies beyond the "
+                            "plane cut across axis moves by copies times step",
+                            _object(
+                                {
                                     "axis": {"enum": list(AXES)},
-                                    "step": {
-                                        "type": "array",
-                                        "minItems": 3,
-                                        "maxItems": 3,
-                                        "items": {"$ref": "#/$defs/length"},
-                                    },
-                                    "cut": {"$ref": "#/$defs/length"},
+                                    "step": _array(_ref("length"), 3),
+                                    "cut": _ref("length"),
                                 },
-                            },
-                            "copies": {"type": "integer"},
-                        },
-                    },
-                    {
-                        "description": "steps of a helix (a spiral stair): what lies above the "
-                        "level cut turns by copies times angle (degrees, from x toward z) about "
-                        "the vertical through center and rises by copies times rise",
-                        "type": "object",
-                        "required": ["helix", "copies"],
-                        "additionalProperties": False,
-                        "properties": {
-                            "helix": {
-                                "type": "object",
-                                "required": ["center", "angle", "rise", "cut"],
-                                "additionalProperties": False,
-                                "properties": {
-                                    "center": {
-                                        "type": "array",
-                                        "minItems": 2,
-                                        "maxItems": 2,
-                                        "items": {"$ref": "#/$defs/length"},
-                                    },
-                                    "angle": {"type": "number"},
-                                    "rise": {"$ref": "#/$defs/length"},
-                                    "cut": {"$ref": "#/$defs/length"},
-                                },
-                            },
-                            "copies": {"type": "integer"},
-                        },
-                    },
-                    {
-                        "description": "elements repeated by a turn about the vertical (arms of "
-                        "a star base, chairs about a round table): count elements, the first "
-                        "at phase degrees and each next turned by angle degrees (from x toward "
-                        "z) about the vertical through center, between the radii hub and "
-                        "radius and the levels span; copies more (or fewer) of them, evenly "
-                        "spaced on a closed ring, continued along an open arc",
-                        "type": "object",
-                        "required": ["rotation", "copies"],
-                        "additionalProperties": False,
-                        "properties": {
-                            "rotation": {
-                                "type": "object",
-                                "required": [
+                                ["axis", "step", "cut"],
+                            ),
+                        ),
+                        _copies_edit(
+                            "helix",
+                            "steps of a helix (a spiral stair): what lies above the "
+                            "level cut turns by copies times angle (degrees, from x toward z) "
+                            "about the vertical through center and rises by copies times rise",
+                            _object(
+                                _about_vertical({"rise": _ref("length"), "cut": _ref("length")}),
+                                ["center", "angle", "rise", "cut"],
+                            ),
+                        ),
+                        _copies_edit(
+                            "rotation",
+                            "elements repeated by a turn about the vertical (arms of "
+                            "a star base, chairs about a round table): count elements, the first "
+                            "at phase degrees and each next turned by angle degrees (from x toward "
+                            "z) about the vertical through center, between the radii hub and "
+                            "radius and the levels span; copies more (or fewer) of them, evenly "
+                            "spaced on a closed ring, continued along an open arc",
+                            _object(
+                                _about_vertical(
+                                    {
+                                        "phase": {"type": "number"},
+                                        "count": {"type": "integer", "minimum": 2},
+                                        "closed": {"type": "boolean"},
+                                        "hub": _ref("length"),
+                                        "radius": _ref("length"),
+                                        "span": _ref("lengths"),
+                                    }
+                                ),
+                                [
                                     "center",
                                     "angle",
                                     "phase",
@@ -226,78 +227,34 @@ JSON_SCHEMA: dict[str, Any] = {
                                     "radius",
                                     "span",
                                 ],
-                                "additionalProperties": False,
-                                "properties": {
-                                    "center": {
-                                        "type": "array",
-                                        "minItems": 2,
-                                        "maxItems": 2,
-                                        "items": {"$ref": "#/$defs/length"},
-                                    },
-                                    "angle": {"type": "number"},
-                                    "phase": {"type": "number"},
-                                    "count": {"type": "integer", "minimum": 2},
-                                    "closed": {"type": "boolean"},
-                                    "hub": {"$ref": "#/$defs/length"},
-                                    "radius": {"$ref": "#/$defs/length"},
-                                    "span": {"$ref": "#/$defs/lengths"},
-                                },
+                            ),
+                        ),
+                        _object(
+                            {
+                                "normal": _array({"type": "number"}, 3),
+                                "zone": _ref("lengths"),
+                                "to": _ref("length"),
+                                "mode": {"const": "stretch"},
                             },
-                            "copies": {"type": "integer"},
-                        },
-                    },
-                    {
-                        "description": "an oblique zone: the slab between the planes "
-                        "p . normal = START and = END becomes START..to",
-                        "type": "object",
-                        "required": ["normal", "zone", "to"],
-                        "additionalProperties": False,
-                        "properties": {
-                            "normal": {
-                                "type": "array",
-                                "minItems": 3,
-                                "maxItems": 3,
-                                "items": {"type": "number"},
-                            },
-                            "zone": {"$ref": "#/$defs/lengths"},
-                            "to": {"$ref": "#/$defs/length"},
-                            "mode": {"const": "stretch"},
-                        },
-                    },
-                ]
+                            ["normal", "zone", "to"],
+                            "an oblique zone: the slab between the planes "
+                            "p . normal = START and = END becomes START..to",
+                        ),
+                    ]
+                },
             },
         },
-    },
+        ["edits"],
+    ),
     "$defs": {
-        "zone": {
-            "type": "array",
-            "minItems": 2,
-            "maxItems": 2,
-            "items": {"$ref": "#/$defs/position"},
-        },
-        "lengths": {
-            "type": "array",
-            "minItems": 2,
-            "maxItems": 2,
-            "items": {"$ref": "#/$defs/length"},
-        },
-        "length": {
-            "oneOf": [
-                {"type": "number"},
-                {
-                    "type": "string",
-                    "pattern": r"^\s*[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?\s*(mm|cm|m)\s*$",
-                },
-            ]
-        },
+        "zone": _array(_ref("position"), 2),
+        "lengths": _array(_ref("length"), 2),
+        "length": {"oneOf": [{"type": "number"}, {"type": "string", "pattern": _LENGTH_PATTERN}]},
         "position": {
             "oneOf": [
                 {"type": "number"},
                 {"type": "string", "pattern": r"^-?[0-9]+(\.[0-9]+)?%$"},
-                {
-                    "type": "string",
-                    "pattern": r"^\s*[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?\s*(mm|cm|m)\s*$",
-                },
+                {"type": "string", "pattern": _LENGTH_PATTERN},
             ]
         },
     },

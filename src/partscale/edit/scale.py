@@ -328,7 +328,7 @@ def apply_recipe(
     Returns
     -------
     CSDF
-        The edited object.
+        The object after the last edit.
 
     Examples
     --------

@@ -112,9 +112,9 @@ def parse_size(spec: str | float, *, extent: float, units: str | None, what: str
     extent : float
         The current extent along the axis.
     units : str or None
-        The object's units.
+        The object's units: a unit suffix is taken only for ``'m'``, as by :func:`parse_length`.
     what : str
-        Its name in the :class:`~partscale.errors.InputError`.
+        Its name in errors, as for :func:`parse_length`.
 
     Returns
     -------

@@ -430,7 +430,7 @@ def apply_warp(
     Returns
     -------
     CSDF
-        The edited object.
+        The object with ``zone`` applied.
 
     Examples
     --------
@@ -566,7 +566,7 @@ def apply_screw(csdf: CSDF, zone: ScrewZone, *, record: dict[str, Any] | None = 
     Returns
     -------
     CSDF
-        The edited object.
+        The object with ``zone.copies`` more steps (fewer where it is negative).
 
     Examples
     --------

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from .._options import preset
 from ..csdf import CSDF
 from ..errors import InputError
 
@@ -25,12 +26,12 @@ def check_atlas(size: int | None) -> int | None:
     Parameters
     ----------
     size : int or None
-        The size asked for.
+        Texels a side, or None for no atlas.
 
     Returns
     -------
     int or None
-        The size.
+        ``size`` as an int (None stays None).
 
     Examples
     --------
@@ -42,13 +43,7 @@ def check_atlas(size: int | None) -> int | None:
     ...
     partscale.errors.InputError: atlas: expected one of 256, 512, 1024, 2048, 4096 texels, got 1000
     """
-    if size is None:
-        return None
-    if isinstance(size, bool) or not isinstance(size, int | np.integer) or size not in ATLAS_SIZES:
-        raise InputError(
-            f"atlas: expected one of {', '.join(map(str, ATLAS_SIZES))} texels, got {size!r}"
-        )
-    return int(size)
+    return preset(size, "atlas", ATLAS_SIZES, unit="texels")
 
 
 @numba.njit(cache=True)
@@ -160,13 +155,14 @@ def bake(
 
     Examples
     --------
-    >>> from partscale import data, export, ingest
+    >>> from partscale import export, shapes
     >>> from partscale.surface import to_mesh
-    >>> table = ingest.load(data.table(), res=64)
-    >>> mesh = export.simplify(to_mesh(table), voxel_size=table.voxel_size, faces=1000)
+    >>> box = shapes.box((0, 0, 0), (1.0, 0.5, 0.25), voxel_size=0.05)
+    >>> mesh = to_mesh(box)
     >>> vmap, faces, uv = export.unwrap(mesh.vertices, mesh.faces, 256)
-    >>> export.bake(table, mesh.vertices[vmap], faces, uv, 256).shape
-    (256, 256, 3)
+    >>> texture = export.bake(box, mesh.vertices[vmap], faces, uv, 256)
+    >>> texture.shape, texture[0, 0].tolist()
+    ((256, 256, 3), [200, 120, 60])
     """
     from scipy import ndimage
 

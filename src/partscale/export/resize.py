@@ -12,9 +12,8 @@ import numba
 import numpy as np
 
 from .._memory import check_memory
-from .._options import keyword_options
+from .._options import keyword_options, preset
 from ..csdf import CSDF
-from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 
 PRESET_SIZES = (32, 64, 128, 256)
@@ -30,7 +29,7 @@ def check_size(size: int | None, what: str = "size") -> int | None:
     Parameters
     ----------
     size : int or None
-        The size asked for.
+        Voxels along the longest side, or None to keep the grid.
     what : str
         Its name in the :class:`~partscale.errors.InputError`.
 
@@ -45,17 +44,7 @@ def check_size(size: int | None, what: str = "size") -> int | None:
     >>> check_size(64)
     64
     """
-    if size is None:
-        return None
-    if (
-        isinstance(size, bool)
-        or not isinstance(size, (int, np.integer))
-        or size not in PRESET_SIZES
-    ):
-        raise InputError(
-            f"{what}: expected one of {', '.join(map(str, PRESET_SIZES))}, got {size!r}"
-        )
-    return int(size)
+    return preset(size, what, PRESET_SIZES)
 
 
 def _axis_weights(n_src: int, src_index: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -94,7 +94,7 @@ def export_mesh(
     Returns
     -------
     pathlib.Path
-        The path written.
+        ``path`` (with an atlas, an OBJ's ``.mtl`` and ``.png`` beside it are written too).
 
     Examples
     --------

@@ -103,7 +103,7 @@ def load_mesh_scene(path: str | os.PathLike) -> trimesh.Scene:
     Raises
     ------
     InputError
-        Naming the file for a missing, unreadable, corrupt or empty mesh.
+        As :func:`load_mesh` raises it.
 
     Examples
     --------
@@ -140,7 +140,7 @@ def check_mesh_file(path: str | os.PathLike) -> Path:
     Parameters
     ----------
     path : str or os.PathLike
-        The mesh file.
+        A path given as a mesh file: checked, not read.
 
     Returns
     -------

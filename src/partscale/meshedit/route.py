@@ -600,37 +600,9 @@ def _to_trimesh(inst: _Instance):
     return mesh
 
 
-def load_scene(path: str | os.PathLike) -> trimesh.Scene:
-    """A mesh file as a trimesh Scene, vertices exactly as stored (no merging or reordering).
-
-    Read by :func:`partscale.ingest.load_mesh_scene`, with the import's conventions: an OBJ's
-    groups are nodes named after them, its ``Kd`` a display (sRGB) colour written as the linear
-    glTF base colour it shows, and its UVs kept where only some faces have them; a missing
-    material library or texture is said and the material's own colour used.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        A mesh file (one of :data:`MESH_SUFFIXES`).
-
-    Returns
-    -------
-    trimesh.Scene
-        Its meshes, materials and node transforms.
-
-    Raises
-    ------
-    partscale.errors.InputError
-        For a missing, unreadable or empty file.
-
-    Examples
-    --------
-    >>> from partscale import data, meshedit
-    >>> scene = meshedit.load_scene(data.table())
-    >>> len(scene.geometry), scene.extents.round(2).tolist()
-    (1, [2.44, 0.95, 1.3])
-    """
-    return load_mesh_scene(path)  # checked as import checks: triangles, indices, finite, extent
+load_scene = load_mesh_scene
+"""A mesh file as a trimesh Scene to edit: the route reads a mesh as the import does (checked for
+triangles, indices, finite values and extent), :func:`partscale.ingest.load_mesh_scene`."""
 
 
 def save_scene(scene: trimesh.Scene, path: str | os.PathLike) -> list[Path]:

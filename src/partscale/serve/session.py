@@ -324,13 +324,11 @@ def encode_parts(c: CSDF, axis: int = 0, start: int = 0, stop: int | None = None
 
     Examples
     --------
-    >>> import numpy as np
     >>> from partscale import shapes
     >>> from partscale.serve import encode_parts
     >>> box = shapes.box((0, 0, 0), (1, 0.5, 0.5), voxel_size=0.1)
-    >>> parts = np.frombuffer(encode_parts(box), "<i2")
-    >>> parts.size == box.sdf.size, np.unique(parts).tolist()
-    (True, [-1])
+    >>> len(encode_parts(box)) == 2 * box.sdf.size, set(encode_parts(box, 0, 0, 1).cast("h"))
+    (True, {-1})
     """
     box = _layers(axis, start, c.shape[axis] if stop is None else stop)
     return _frozen(np.array(c.parts[box], dtype="<i2", order="C")).cast("B")

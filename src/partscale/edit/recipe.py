@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Literal
 
@@ -490,9 +490,7 @@ class RadialZone:
             raise InputError(
                 f"{where}.radial.axis: expected one of x, y, z, got {shown(spec['axis'])}"
             )
-        center = spec["center"]
-        if not isinstance(center, list | tuple) or len(center) != 2:
-            raise InputError(f"{where}.radial.center: expected [A, B], got {shown(center)}")
+        center = _vector(spec, "center", "A, B", f"{where}.radial")
         sides = spec.get("sides", 0)
         if isinstance(sides, bool) or not isinstance(sides, int):
             raise InputError(f"{where}.radial.sides: expected a whole number, got {shown(sides)}")
@@ -625,30 +623,51 @@ class ScrewZone:
     @classmethod
     def parse(cls, obj: Any, *, where: str = "edit", units: str | None = None) -> ScrewZone:
         """Validate ``{"screw": {"axis", "step": [X, Y, Z], "cut": C}, "copies": N}``."""
-        _keys(obj, {"screw", "copies"}, {"screw", "copies"}, where)
-        spec = obj["screw"]
-        if not isinstance(spec, dict) or set(spec) != {"axis", "step", "cut"}:
-            raise InputError(f"{where}.screw: expected keys axis, step, cut, got {shown(spec)}")
+        spec = _count_spec(obj, "screw", ("axis", "step", "cut"), where)
         axis = str(spec["axis"]).lower()
         if axis not in AXES:
             raise InputError(
                 f"{where}.screw.axis: expected one of x, y, z, got {shown(spec['axis'])}"
             )
-        step = spec["step"]
-        if not isinstance(step, list | tuple) or len(step) != 3:
-            raise InputError(f"{where}.screw.step: expected [X, Y, Z], got {shown(step)}")
+        _vector(spec, "step", "X, Y, Z", f"{where}.screw")
         n = _copies(obj, where)
-        sv = [_number(v, f"{where}.screw.step", units) for v in step]
+        sv = [_number(v, f"{where}.screw.step", units) for v in spec["step"]]
         return cls(
             axis, (sv[0], sv[1], sv[2]), _number(spec["cut"], f"{where}.screw.cut", units), n
         )
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form (what recipes, histories and the editor's API hold)."""
-        return {
-            "screw": {"axis": self.axis, "step": list(self.step), "cut": self.cut},
-            "copies": self.copies,
-        }
+        return _count_json(self, "screw")
+
+
+def _count_json(edit: Any, key: str) -> dict[str, Any]:
+    """A count edit's JSON form: ``{key: {its fields but copies, tuples as lists}, "copies": N}``
+    (the fields in their declared order).
+    """
+    spec = {}
+    for f in fields(edit):
+        value = getattr(edit, f.name)
+        spec[f.name] = list(value) if isinstance(value, tuple) else value
+    copies = spec.pop("copies")
+    return {key: spec, "copies": copies}
+
+
+def _count_spec(obj: Any, key: str, fields: tuple[str, ...], where: str) -> dict[str, Any]:
+    """A count edit's ``{key: {fields...}, "copies": N}``: its spec, with exactly ``fields``."""
+    _keys(obj, {key, "copies"}, {key, "copies"}, where)
+    spec = obj[key]
+    if not isinstance(spec, dict) or set(spec) != set(fields):
+        raise InputError(f"{where}.{key}: expected keys {', '.join(fields)}, got {shown(spec)}")
+    return spec
+
+
+def _vector(spec: dict[str, Any], name: str, form: str, where: str) -> list[Any] | tuple[Any, ...]:
+    """``spec[name]``, a list of as many values as ``form`` names (``"X, Z"``), unconverted."""
+    value = spec[name]
+    if not isinstance(value, list | tuple) or len(value) != form.count(",") + 1:
+        raise InputError(f"{where}.{name}: expected [{form}], got {shown(value)}")
+    return value
 
 
 def _copies(obj: dict[str, Any], where: str, what: str = "a whole number") -> int:
@@ -709,17 +728,10 @@ class HelixZone:
         """Validate ``{"helix": {"center": [X, Z], "angle": DEG, "rise": R, "cut": Y},
         "copies": N}`` (lengths: numbers or with a unit; the angle in degrees).
         """
-        _keys(obj, {"helix", "copies"}, {"helix", "copies"}, where)
-        spec = obj["helix"]
-        if not isinstance(spec, dict) or set(spec) != {"center", "angle", "rise", "cut"}:
-            raise InputError(
-                f"{where}.helix: expected keys center, angle, rise, cut, got {shown(spec)}"
-            )
-        center = spec["center"]
-        if not isinstance(center, list | tuple) or len(center) != 2:
-            raise InputError(f"{where}.helix.center: expected [X, Z], got {shown(center)}")
+        spec = _count_spec(obj, "helix", ("center", "angle", "rise", "cut"), where)
+        _vector(spec, "center", "X, Z", f"{where}.helix")
         n = _copies(obj, where)
-        cv = [_number(v, f"{where}.helix.center", units) for v in center]
+        cv = [_number(v, f"{where}.helix.center", units) for v in spec["center"]]
         return cls(
             (cv[0], cv[1]),
             _number(spec["angle"], f"{where}.helix.angle", None),
@@ -730,15 +742,7 @@ class HelixZone:
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form (what recipes, histories and the editor's API hold)."""
-        return {
-            "helix": {
-                "center": [self.center[0], self.center[1]],
-                "angle": self.angle,
-                "rise": self.rise,
-                "cut": self.cut,
-            },
-            "copies": self.copies,
-        }
+        return _count_json(self, "helix")
 
 
 @dataclass(frozen=True)
@@ -798,16 +802,9 @@ class RotationZone:
         "hub", "radius", "span": [Y0, Y1]}, "copies": N}`` (lengths: numbers or with a unit;
         angles in degrees).
         """
-        _keys(obj, {"rotation", "copies"}, {"rotation", "copies"}, where)
-        spec = obj["rotation"]
-        keys = {"center", "angle", "phase", "count", "closed", "hub", "radius", "span"}
-        if not isinstance(spec, dict) or set(spec) != keys:
-            raise InputError(
-                f"{where}.rotation: expected keys {', '.join(sorted(keys))}, got {shown(spec)}"
-            )
-        center = spec["center"]
-        if not isinstance(center, list | tuple) or len(center) != 2:
-            raise InputError(f"{where}.rotation.center: expected [X, Z], got {shown(center)}")
+        keys = ("angle", "center", "closed", "count", "hub", "phase", "radius", "span")
+        spec = _count_spec(obj, "rotation", keys, where)
+        _vector(spec, "center", "X, Z", f"{where}.rotation")
         count = spec["count"]
         if isinstance(count, bool) or not isinstance(count, int) or count < 2:
             raise InputError(
@@ -818,10 +815,8 @@ class RotationZone:
                 f"{where}.rotation.closed: expected true or false, got {shown(spec['closed'])}"
             )
         n = _copies(obj, where)
-        cv = [_number(v, f"{where}.rotation.center", units) for v in center]
-        span = spec["span"]
-        if not isinstance(span, list | tuple) or len(span) != 2:
-            raise InputError(f"{where}.rotation.span: expected [Y0, Y1], got {shown(span)}")
+        cv = [_number(v, f"{where}.rotation.center", units) for v in spec["center"]]
+        span = _vector(spec, "span", "Y0, Y1", f"{where}.rotation")
         return cls(
             (cv[0], cv[1]),
             _number(spec["angle"], f"{where}.rotation.angle", None),
@@ -839,19 +834,7 @@ class RotationZone:
 
     def to_json(self) -> dict[str, Any]:
         """The JSON form (what recipes, histories and the editor's API hold)."""
-        return {
-            "rotation": {
-                "center": [self.center[0], self.center[1]],
-                "angle": self.angle,
-                "phase": self.phase,
-                "count": self.count,
-                "closed": self.closed,
-                "hub": self.hub,
-                "radius": self.radius,
-                "span": [self.span[0], self.span[1]],
-            },
-            "copies": self.copies,
-        }
+        return _count_json(self, "rotation")
 
 
 @dataclass(frozen=True)
@@ -1040,6 +1023,13 @@ def tile_count(length: float, target: float) -> int:
     return max(1, math.floor(target / length + 0.5 + 1e-9))
 
 
+def _global_factor(lo: float | None, hi: float | None, shift: float) -> tuple[float, float]:
+    """The ``global`` mode's fixed point ``lo`` and its scale factor (the length grows by ``shift``)."""
+    if lo is None or hi is None:
+        raise ValueError("global mode needs the solid's extent lo, hi")
+    return lo, (hi - lo + shift) / (hi - lo)
+
+
 def source_coordinate(
     y: np.ndarray,
     *,
@@ -1080,9 +1070,7 @@ def source_coordinate(
     y = np.asarray(y, dtype=np.float64)
     shift = dest - end
     if mode == "global":
-        if lo is None or hi is None:
-            raise ValueError("global mode needs the solid's extent lo, hi")
-        factor = (hi - lo + shift) / (hi - lo)
+        lo, factor = _global_factor(lo, hi, shift)
         return lo + (y - lo) / factor
     length, target = end - start, dest - start
     x = np.where(y < start, y, y - shift)
@@ -1122,12 +1110,8 @@ def forward_coordinate(
     ----------
     x : (N,) float64
         Coordinates before the edit.
-    mode : {'stretch', 'tile', 'global'}
-        The edit's mode.
-    start, end, dest : float
-        World zone ``[start, end]`` and the new position of ``end``.
-    lo, hi : float, optional
-        The solid's extent along the axis before the edit (``global`` only).
+    mode, start, end, dest, lo, hi
+        The edit, as :func:`source_coordinate` takes it.
 
     Returns
     -------
@@ -1137,16 +1121,19 @@ def forward_coordinate(
     Examples
     --------
     >>> import numpy as np
-    >>> from partscale.edit import forward_coordinate
-    >>> forward_coordinate(np.array([0.2, 0.5, 0.9]), mode="stretch", start=0.3, end=0.6, dest=0.8)
+    >>> from partscale.edit import forward_coordinate, source_coordinate
+    >>> edit = dict(mode="stretch", start=0.3, end=0.6, dest=0.8)
+    >>> planes = forward_coordinate(np.array([0.2, 0.5, 0.9]), **edit)
+    >>> planes
     array([0.2       , 0.63333333, 1.1       ])
+    >>> source_coordinate(planes, **edit)  # and back
+    array([0.2, 0.5, 0.9])
     """
     x = np.asarray(x, dtype=np.float64)
-    shift = dest - end
     if mode == "global":
-        if lo is None or hi is None:
-            raise ValueError("global mode needs the solid's extent lo, hi")
-        return lo + (x - lo) * ((hi - lo + shift) / (hi - lo))
+        lo, factor = _global_factor(lo, hi, dest - end)
+        return lo + (x - lo) * factor
+    shift = dest - end
     if mode == "stretch":
         scale = (dest - start) / (end - start)
     elif mode == "tile":

@@ -209,6 +209,25 @@ def test_no_group_on_a_table_or_a_flight_or_a_round_top():
     assert find_elements(round_table(), "x").best is None
 
 
+def test_a_row_of_slats_is_searched_within_a_bounded_number_of_comparisons(monkeypatch):
+    """Dozens of slats offer exponentially many ways to cut the axis into elements (a row of
+    64 took 1.2 million comparisons and over a minute): the search stays within three times
+    MAX_CHAIN_STEPS comparisons, and narrow boards a voxel or two apart stay separate
+    candidates instead of merging into one separator from end to end."""
+    from partscale.zones import elements, profile
+
+    calls = []
+    alike = elements._alike
+    monkeypatch.setattr(elements, "_alike", lambda *a: calls.append(1) or alike(*a))
+    bars, _ = shapes.bars(64, width=0.04, gap=0.04, height=0.1, depth=0.1, voxel_size=H)
+    find_elements(bars, "x")
+    assert 0 < len(calls) <= 3 * elements.MAX_CHAIN_STEPS, len(calls)
+    slats, _ = shapes.bars(12, width=0.06, gap=0.02, height=0.3, depth=0.3, voxel_size=H)
+    cands = elements._candidates(slats, profile(slats, 0))
+    assert len(cands) >= 12, cands
+    assert max(c.hi - c.lo for c in cands) <= 8 + 1e-9, cands  # one slat and its gap
+
+
 # -- count edits ----------------------------------------------------------------------------------
 
 

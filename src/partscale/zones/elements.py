@@ -101,6 +101,10 @@ MIN_COVER = 0.3
 SAMPLES = 16
 #: Most chains reported per axis.
 MAX_GROUPS = 3
+#: Most steps of the search for chains over every way of cutting the axis into elements (a few
+#: hundred on furniture; a row of dozens of slats has exponentially many): past it the search
+#: follows from each element only the neighbour that matches it best.
+MAX_CHAIN_STEPS = 20_000
 
 
 @dataclass(frozen=True)
@@ -366,13 +370,22 @@ def _candidates(csdf: CSDF, p: Profile) -> list[_Cand]:
             cands.append(_Cand(float(cut), float(cut), "gap", EDGE_SCORE))
     cands.sort(key=lambda c: (c.lo, c.hi))
     merged: list[_Cand] = []
+    boards: list[bool] = []  # whether each merged candidate holds a board
     for c in cands:
-        if merged and c.lo <= merged[-1].hi + 1.0:
+        board = c.kind == "board"
+        # touching candidates are one separator (a board's two faces), but two boards are two
+        # separators however close (a row of slats, narrow gaps between: no separator from
+        # end to end)
+        if merged and (
+            c.lo <= merged[-1].hi or (c.lo <= merged[-1].hi + 1.0 and not (board and boards[-1]))
+        ):
             m = merged[-1]
             both = m.kind if m.kind == c.kind else "edge"
             merged[-1] = _Cand(m.lo, max(m.hi, c.hi), both, max(m.strength, c.strength))
+            boards[-1] = boards[-1] or board
         else:
             merged.append(c)
+            boards.append(board)
     return merged
 
 
@@ -444,69 +457,131 @@ class _Chain:
     mirrored: tuple[bool, ...]  # each element against the first
 
 
+_Key = tuple[int, int]  # an element: the candidates it runs from and to
+
+
 def _chains(p: Profile, cands: list[_Cand]) -> list[_Chain]:
     """Every maximal chain of alike neighbouring elements between candidates (module, step 2).
 
     An element runs from the end of candidate ``a`` to the start of candidate ``b``; the next
     one from the end of a candidate ``c >= b`` on: the candidates ``b..c`` are the separator
     between them (a board's two faces, or a divider and the gaps beside it), narrower than
-    half of either element.
+    half of either element. Where there are too many ways to cut the axis to try them all
+    (:data:`MAX_CHAIN_STEPS`: a row of dozens of slats), elements holding a candidate as strong
+    as their ends are left out (they are rows of elements each, see :func:`_best_chains`), and
+    past that the search follows each element's best matched neighbour only.
     """
-    n = len(cands)
     i0, i1 = _solid_layers(p)
     shortest = max(MIN_ELEMENT, MIN_SHARE * (i1 - i0))
-    elems: dict[tuple[int, int], tuple[float, float]] = {}
-    for a, b in itertools.combinations(range(n), 2):
+    elems: dict[_Key, tuple[float, float]] = {}
+    for a, b in itertools.combinations(range(len(cands)), 2):
         e = (cands[a].hi, cands[b].lo)
         if e[1] - e[0] >= shortest and _unit(p, e):
             elems[(a, b)] = e
-    after: dict[int, list[tuple[int, int]]] = {}
-    for k in elems:
-        after.setdefault(k[0], []).append(k)
-    alike: dict[tuple[tuple[int, int], tuple[int, int]], tuple[float, bool] | None] = {}
+    try:
+        return _ChainSearch(p, cands, elems).run()
+    except _TooManyChains:
+        pass
+    plain = {k: e for k, e in elems.items() if _plain(cands, k)}
+    try:
+        return _ChainSearch(p, cands, plain).run()
+    except _TooManyChains:
+        return _ChainSearch(p, cands, plain, greedy=True).run()
 
-    def match(k1: tuple[int, int], k2: tuple[int, int]) -> tuple[float, bool] | None:
-        if (k1, k2) not in alike:
-            alike[(k1, k2)] = _alike(p, elems[k1], elems[k2])
-        return alike[(k1, k2)]
 
-    def successors(k: tuple[int, int]) -> list[tuple[int, int]]:
-        e = elems[k]
+def _plain(cands: list[_Cand], k: _Key) -> bool:
+    """Whether element ``k`` holds no candidate within :data:`STRENGTH_TOL` of its weaker end."""
+    weaker = min(cands[k[0]].strength, cands[k[1]].strength)
+    return all(c.strength < weaker - STRENGTH_TOL for c in cands[k[0] + 1 : k[1]])
+
+
+class _TooManyChains(Exception):
+    """A chain search passed :data:`MAX_CHAIN_STEPS` (see :func:`_chains`)."""
+
+
+class _ChainSearch:
+    """The depth-first search of :func:`_chains` over the elements ``elems``: every maximal
+    chain, or with ``greedy`` those that follow each element's best matched neighbour.
+    Raises :class:`_TooManyChains` past :data:`MAX_CHAIN_STEPS` steps and comparisons, unless
+    greedy.
+    """
+
+    def __init__(
+        self,
+        p: Profile,
+        cands: list[_Cand],
+        elems: dict[_Key, tuple[float, float]],
+        *,
+        greedy: bool = False,
+    ):
+        self.p, self.cands, self.elems, self.greedy = p, cands, elems, greedy
+        self.after: dict[int, list[_Key]] = {}
+        for k in elems:
+            self.after.setdefault(k[0], []).append(k)
+        self.alike: dict[tuple[_Key, _Key], tuple[float, bool] | None] = {}
+        self.steps = 0
+        self.out: list[_Chain] = []
+
+    def run(self) -> list[_Chain]:
+        for k in self.elems:
+            self.grow([k], [], [False])
+        return self.out
+
+    def step(self) -> None:
+        self.steps += 1
+        if self.steps > MAX_CHAIN_STEPS and not self.greedy:
+            raise _TooManyChains
+
+    def match(self, k1: _Key, k2: _Key) -> tuple[float, bool] | None:
+        if (k1, k2) not in self.alike:
+            self.step()
+            self.alike[(k1, k2)] = _alike(self.p, self.elems[k1], self.elems[k2])
+        return self.alike[(k1, k2)]
+
+    def successors(self, k: _Key) -> list[_Key]:
+        e, cands = self.elems[k], self.cands
         out = []
-        for c in range(k[1], n):
+        for c in range(k[1], len(cands)):
             sep = cands[c].hi - cands[k[1]].lo
             if sep > (e[1] - e[0]) / 2:
                 break
-            out += [f for f in after.get(c, []) if sep <= (elems[f][1] - elems[f][0]) / 2]
+            out += [
+                f for f in self.after.get(c, []) if sep <= (self.elems[f][1] - self.elems[f][0]) / 2
+            ]
         return out
 
-    out: list[_Chain] = []
+    def nexts(self, chain: list[_Key]) -> list[tuple[_Key, tuple[float, bool], bool]]:
+        """The elements that may follow ``chain``: each with its match to the last and whether
+        it is mirrored against the first; in a greedy search only the best matched.
+        """
+        found = []
+        for nxt in self.successors(chain[-1]):
+            m_prev = self.match(chain[-1], nxt)
+            m_first = self.match(chain[0], nxt) if len(chain) > 1 else m_prev
+            if m_prev is not None and m_first is not None:
+                found.append((nxt, m_prev, m_first[1]))
+        if self.greedy and found:
+            return [min(found, key=lambda f: f[1][0])]
+        return found
 
-    def grow(chain: list[tuple[int, int]], errs: list[float], mirr: list[bool]) -> None:
+    def grow(self, chain: list[_Key], errs: list[float], mirr: list[bool]) -> None:
+        self.step()
         grown = False
-        for nxt in successors(chain[-1]):
-            m_prev = match(chain[-1], nxt)
-            m_first = match(chain[0], nxt) if len(chain) > 1 else m_prev
-            if m_prev is None or m_first is None:
-                continue
+        for nxt, m_prev, mirrored in self.nexts(chain):
             grown = True
-            grow([*chain, nxt], [*errs, m_prev[0]], [*mirr, m_first[1]])
+            self.grow([*chain, nxt], [*errs, m_prev[0]], [*mirr, mirrored])
         if not grown and len(chain) >= 2:
             pairs = list(itertools.pairwise(chain))
-            kinds = tuple(cands[k[1]].kind if k[1] == f[0] else "board" for k, f in pairs)
-            out.append(
+            kinds = tuple(self.cands[k[1]].kind if k[1] == f[0] else "board" for k, f in pairs)
+            self.out.append(
                 _Chain(
-                    tuple(elems[k] for k in chain),
-                    tuple((cands[k[1]].lo, cands[f[0]].hi) for k, f in pairs),
+                    tuple(self.elems[k] for k in chain),
+                    tuple((self.cands[k[1]].lo, self.cands[f[0]].hi) for k, f in pairs),
                     kinds,
                     float(np.mean(errs)),
                     tuple(mirr),
                 )
             )
-
-    for k in elems:
-        grow([k], [], [False])
-    return out
 
 
 def _strength(cands: list[_Cand], lo: float, hi: float) -> float:

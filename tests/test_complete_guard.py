@@ -136,3 +136,63 @@ def test_floor_is_found_from_a_camera_pitched_45_degrees_down():
     P, _ = completion.surface_samples(c, 4000)
     slack = 0.05  # metres: the closure and the noise beyond the chair's box
     assert (P.min(0) >= G.min(0) - slack).all() and (P.max(0) <= G.max(0) + slack).all()
+
+
+def _desk():
+    """A desk (0.8 x 0.72 x 0.5 m): a top on four legs and a modesty panel at the back, mirror
+    symmetric across x only."""
+    parts = []
+    top = trimesh.creation.box((0.8, 0.04, 0.5))
+    top.apply_translation((0, 0.7, 0))
+    parts.append(top)
+    for x in (-0.35, 0.35):
+        for z in (-0.2, 0.2):
+            leg = trimesh.creation.box((0.05, 0.68, 0.05))
+            leg.apply_translation((x, 0.34, z))
+            parts.append(leg)
+    panel = trimesh.creation.box((0.8, 0.3, 0.03))
+    panel.apply_translation((0, 0.55, -0.22))
+    parts.append(panel)
+    return from_trimesh(trimesh.util.concatenate(parts), color=(150, 100, 60))
+
+
+@pytest.fixture(scope="module")
+def desk_scans():
+    """The desk seen once from 30 degrees above, with and without the floor under it."""
+    mesh = _desk()
+    return {
+        floor: virtual.virtual_scan(mesh, 1, floor=floor, elevation=30.0, azimuths=(30.0,))
+        for floor in (True, False)
+    }
+
+
+def test_symmetry_on_a_known_up_is_kept(desk_scans):
+    # the floor gives up: the mirror plane's copies stand and the completion is what comes back
+    c = complete(desk_scans[True], res=48)
+    m = c.meta["completion"]
+    assert m["up_from"] == "floor"
+    assert m["guard"]["kept"] == "completion" and m["guard"]["weak"] == []
+    assert m["mirrored"] > 0.05 and any(s["kind"] == "mirror" for s in m["symmetries"])
+
+
+def test_symmetry_on_the_cameras_up_gives_way_to_the_observed_scan(desk_scans):
+    # no floor, no level underside: up is the camera's own axis, 30 degrees off, and copies by
+    # it stand where the camera saw through: the scan as observed, closed, comes back, and says so
+    frames = desk_scans[False]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        c = complete(frames, res=48)
+    m = c.meta["completion"]
+    record = m["guard"]
+    assert record["kept"] == "observed" and record["weak"], record
+    assert "camera's axis for up" in record["reason"]
+    assert m["mirrored"] == 0.0 and m["symmetries"] == [] and m["struts"] == []
+    assert c.meta["history"][-1]["guard"] == "observed"
+    notes = [str(w.message) for w in caught if issubclass(w.category, PartscaleWarning)]
+    assert sum("camera's axis for up" in n for n in notes) == 1, notes
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PartscaleWarning)
+        forced = complete(frames, res=48, force_completion=True)
+    kept = forced.meta["completion"]
+    assert kept["guard"]["kept"] == "completion" and kept["mirrored"] > 0.0
+    assert "camera's axis for up" in kept["guard"]["reason"]

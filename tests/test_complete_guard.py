@@ -175,24 +175,43 @@ def test_symmetry_on_a_known_up_is_kept(desk_scans):
     assert m["mirrored"] > 0.05 and any(s["kind"] == "mirror" for s in m["symmetries"])
 
 
-def test_symmetry_on_the_cameras_up_gives_way_to_the_observed_scan(desk_scans):
-    # no floor, no level underside: up is the camera's own axis, 30 degrees off, and copies by
-    # it stand where the camera saw through: the scan as observed, closed, comes back, and says so
-    frames = desk_scans[False]
+@pytest.fixture(scope="module")
+def desk_without_floor(desk_scans):
+    """The desk completed from its view without a floor, and the warnings it gave."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        c = complete(frames, res=48)
+        c = complete(desk_scans[False], res=48)
+    return c, [str(w.message) for w in caught if issubclass(w.category, PartscaleWarning)]
+
+
+def test_symmetry_on_the_cameras_up_gives_way_to_the_observed_scan(desk_scans, desk_without_floor):
+    # no floor, no level underside: up is the camera's own axis, 30 degrees off, and so are the
+    # mirror planes found by it: the scan as observed, closed, comes back, and says so
+    c, notes = desk_without_floor
     m = c.meta["completion"]
     record = m["guard"]
     assert record["kept"] == "observed" and record["weak"], record
     assert "camera's axis for up" in record["reason"]
     assert m["mirrored"] == 0.0 and m["symmetries"] == [] and m["struts"] == []
     assert c.meta["history"][-1]["guard"] == "observed"
-    notes = [str(w.message) for w in caught if issubclass(w.category, PartscaleWarning)]
     assert sum("camera's axis for up" in n for n in notes) == 1, notes
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PartscaleWarning)
-        forced = complete(frames, res=48, force_completion=True)
+        forced = complete(desk_scans[False], res=48, force_completion=True)
     kept = forced.meta["completion"]
     assert kept["guard"]["kept"] == "completion" and kept["mirrored"] > 0.0
     assert "camera's axis for up" in kept["guard"]["reason"]
+
+
+def test_info_says_why_the_scan_was_kept_as_observed(desk_without_floor, tmp_path):
+    import json
+
+    from conftest import run_cli
+
+    from partscale import csdf
+
+    p = csdf.save(desk_without_floor[0], tmp_path / "desk.csdf.npz")
+    text = run_cli("info", p, check=True).stdout
+    assert "kept the scan as observed, closed" in text and "camera's axis for up" in text
+    summary = json.loads(run_cli("info", p, "--json", check=True).stdout)["completion"]
+    assert "camera's axis for up" in summary["guard_reason"]

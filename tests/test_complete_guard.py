@@ -215,3 +215,24 @@ def test_info_says_why_the_scan_was_kept_as_observed(desk_without_floor, tmp_pat
     assert "kept the scan as observed, closed" in text and "camera's axis for up" in text
     summary = json.loads(run_cli("info", p, "--json", check=True).stdout)["completion"]
     assert "camera's axis for up" in summary["guard_reason"]
+
+
+@pytest.mark.parametrize("violation, kept", [(0.1, "completion"), (0.3, "observed")])
+def test_a_turn_whose_copies_stand_in_free_space_gives_way(lamp_post, violation, kept):
+    # a 4-fold turn found on the scan: kept while its copies mostly land on what the scan saw,
+    # the scan as observed, closed, where more than a fifth stand where the cameras saw through
+    ob, observed = lamp_post
+    comp = dict(observed.meta["completion"])
+    comp["symmetries"] = [{"kind": "rotation", "fold": 4, "support": 0.8, "violation": violation}]
+    turned = observed.replace(meta={**observed.meta, "completion": comp})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = guard.choose(turned, ob.points, sure_carver(ob.frames, 0.0), lambda: observed)
+    record = out.meta["completion"]["guard"]
+    assert record["kept"] == kept
+    notes = [str(w.message) for w in caught if issubclass(w.category, PartscaleWarning)]
+    if kept == "observed":
+        assert "4-fold turn's copies stand where the cameras saw through" in record["reason"]
+        assert len(notes) == 1 and record["weak"]
+    else:
+        assert record["reason"] is None and not notes and record["weak"] == []

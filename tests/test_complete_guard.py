@@ -136,3 +136,103 @@ def test_floor_is_found_from_a_camera_pitched_45_degrees_down():
     P, _ = completion.surface_samples(c, 4000)
     slack = 0.05  # metres: the closure and the noise beyond the chair's box
     assert (P.min(0) >= G.min(0) - slack).all() and (P.max(0) <= G.max(0) + slack).all()
+
+
+def _desk():
+    """A desk (0.8 x 0.72 x 0.5 m): a top on four legs and a modesty panel at the back, mirror
+    symmetric across x only."""
+    parts = []
+    top = trimesh.creation.box((0.8, 0.04, 0.5))
+    top.apply_translation((0, 0.7, 0))
+    parts.append(top)
+    for x in (-0.35, 0.35):
+        for z in (-0.2, 0.2):
+            leg = trimesh.creation.box((0.05, 0.68, 0.05))
+            leg.apply_translation((x, 0.34, z))
+            parts.append(leg)
+    panel = trimesh.creation.box((0.8, 0.3, 0.03))
+    panel.apply_translation((0, 0.55, -0.22))
+    parts.append(panel)
+    return from_trimesh(trimesh.util.concatenate(parts), color=(150, 100, 60))
+
+
+@pytest.fixture(scope="module")
+def desk_scans():
+    """The desk seen once from 30 degrees above, with and without the floor under it."""
+    mesh = _desk()
+    return {
+        floor: virtual.virtual_scan(mesh, 1, floor=floor, elevation=30.0, azimuths=(30.0,))
+        for floor in (True, False)
+    }
+
+
+def test_symmetry_on_a_known_up_is_kept(desk_scans):
+    # the floor gives up: the mirror plane's copies stand and the completion is what comes back
+    c = complete(desk_scans[True], res=48)
+    m = c.meta["completion"]
+    assert m["up_from"] == "floor"
+    assert m["guard"]["kept"] == "completion" and m["guard"]["weak"] == []
+    assert m["mirrored"] > 0.05 and any(s["kind"] == "mirror" for s in m["symmetries"])
+
+
+@pytest.fixture(scope="module")
+def desk_without_floor(desk_scans):
+    """The desk completed from its view without a floor, and the warnings it gave."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        c = complete(desk_scans[False], res=48)
+    return c, [str(w.message) for w in caught if issubclass(w.category, PartscaleWarning)]
+
+
+def test_symmetry_on_the_cameras_up_gives_way_to_the_observed_scan(desk_scans, desk_without_floor):
+    # no floor, no level underside: up is the camera's own axis, 30 degrees off, and so are the
+    # mirror planes found by it: the scan as observed, closed, comes back, and says so
+    c, notes = desk_without_floor
+    m = c.meta["completion"]
+    record = m["guard"]
+    assert record["kept"] == "observed" and record["weak"], record
+    assert "camera's axis for up" in record["reason"]
+    assert m["mirrored"] == 0.0 and m["symmetries"] == [] and m["struts"] == []
+    assert c.meta["history"][-1]["guard"] == "observed"
+    assert sum("camera's axis for up" in n for n in notes) == 1, notes
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PartscaleWarning)
+        forced = complete(desk_scans[False], res=48, force_completion=True)
+    kept = forced.meta["completion"]
+    assert kept["guard"]["kept"] == "completion" and kept["mirrored"] > 0.0
+    assert "camera's axis for up" in kept["guard"]["reason"]
+
+
+def test_info_says_why_the_scan_was_kept_as_observed(desk_without_floor, tmp_path):
+    import json
+
+    from conftest import run_cli
+
+    from partscale import csdf
+
+    p = csdf.save(desk_without_floor[0], tmp_path / "desk.csdf.npz")
+    text = run_cli("info", p, check=True).stdout
+    assert "kept the scan as observed, closed" in text and "camera's axis for up" in text
+    summary = json.loads(run_cli("info", p, "--json", check=True).stdout)["completion"]
+    assert "camera's axis for up" in summary["guard_reason"]
+
+
+@pytest.mark.parametrize("violation, kept", [(0.1, "completion"), (0.3, "observed")])
+def test_a_turn_whose_copies_stand_in_free_space_gives_way(lamp_post, violation, kept):
+    # a 4-fold turn found on the scan: kept while its copies mostly land on what the scan saw,
+    # the scan as observed, closed, where more than a fifth stand where the cameras saw through
+    ob, observed = lamp_post
+    comp = dict(observed.meta["completion"])
+    comp["symmetries"] = [{"kind": "rotation", "fold": 4, "support": 0.8, "violation": violation}]
+    turned = observed.replace(meta={**observed.meta, "completion": comp})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = guard.choose(turned, ob.points, sure_carver(ob.frames, 0.0), lambda: observed)
+    record = out.meta["completion"]["guard"]
+    assert record["kept"] == kept
+    notes = [str(w.message) for w in caught if issubclass(w.category, PartscaleWarning)]
+    if kept == "observed":
+        assert "4-fold turn's copies stand where the cameras saw through" in record["reason"]
+        assert len(notes) == 1 and record["weak"]
+    else:
+        assert record["reason"] is None and not notes and record["weak"] == []

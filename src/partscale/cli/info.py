@@ -46,18 +46,25 @@ def summary(
         "parts": c.n_parts,
         "source": c.meta.get("source"),
         "history": c.meta.get("history", []),
-        "completion": {
-            k: v
-            for k, v in c.meta["completion"].items()
-            if k in ("observed", "mirrored", "guessed")
-        }
-        if isinstance(c.meta.get("completion"), dict)
-        else None,
+        "completion": _completion(c.meta.get("completion")),
         "thin_features": thin.to_json(),
         "relief": relief,
         # the turn about up that would square the walls (None: square, or no clear direction)
         "off_square_deg": None if turn is None else round(turn, 2),
     }
+
+
+def _completion(comp) -> dict | None:
+    """A completion's shares of the surface by kind and, where its guard kept the scan as
+    observed or was overruled, why (``guard_reason``); None for a CSDF not made by completion.
+    """
+    if not isinstance(comp, dict):
+        return None
+    out = {k: v for k, v in comp.items() if k in ("observed", "mirrored", "guessed")}
+    guard = comp.get("guard")
+    if isinstance(guard, dict) and guard.get("reason"):
+        out["guard_reason"] = guard["reason"]
+    return out
 
 
 def _relief(c: CSDF) -> dict | None:
@@ -109,6 +116,8 @@ def info(
             f"completion:  surface {k['observed']:.0%} observed, {k['mirrored']:.0%} mirrored, "
             f"{k['guessed']:.0%} guessed"
         )
+        if k.get("guard_reason"):
+            typer.echo(f"completion:  {k['guard_reason']}")
     if s["relief"]:
         r = s["relief"]
         added = r["segment_tolerance_added_voxels"]

@@ -2,6 +2,10 @@
 
 Method (what makes it robust on real assemblies of open and intersecting pieces)
 ---------------------------------------------------------------------------------
+0. Two-sided faces. A triangle stored once per winding (exporters make faces two-sided that
+   way) cancels in the winding number: where both its sides are outside and such faces close
+   up a body, one copy of each is kept, wound as its neighbours are, so that the body is solid
+   as a viewer shows it (:mod:`partscale.ingest._two_sided`).
 1. Classification. Each triangle is classified by libigl's generalized winding number ``w``
    just in front of it. Crossing an oriented triangle against its normal raises ``w`` by
    exactly 1, so the front value ``lo`` (the lower side) says it all: ``|lo| <= 1/4`` (outside
@@ -48,7 +52,7 @@ from .._workers import launch_numba_threads
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError, shown
 from ..progress import ProgressCallback, resolve
-from . import _distance, _far_field, _labels, _shading, _sign
+from . import _distance, _far_field, _labels, _shading, _sign, _two_sided
 from .mesh import ColoredMesh
 
 SUBDIVIDE = 4.0  # triangles longer than this many probe voxels are also probed near their corners
@@ -437,6 +441,47 @@ def _place(mesh: ColoredMesh, name: str, res: int, pad: int):
     return V, F, origin, h, tuple(int(s) for s in shape)
 
 
+def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> np.ndarray:
+    """(F',) int64 ids of the faces the import uses: one copy of each two-sided face.
+
+    A two-sided face (see :mod:`partscale.ingest._two_sided`) is a triangle stored as often
+    with one winding as with the other, the same whole ``w`` on both sides (``0.05 h`` off,
+    as the classification probes; within ``CLASS_CUTS[1]`` of 0, 1, 2, ...: outside, or
+    inside another solid), in a closed group of them (see the module). The copies kept
+    must read as a boundary: a group of them with ``w < CLASS_CUTS[0]`` in front of a copy
+    is wound the wrong way round, and is turned over; where that does not help either, it
+    keeps every copy (as imports did before; checked again, up to 3 times, as that changes
+    the others' ``w``). A mesh with none keeps every face.
+    """
+    pairs = _two_sided.opposite_pairs(V, F)
+    fwd = pairs.fwd
+    if len(fwd) == 0:
+        return np.arange(len(F))
+    tris = V[F[fwd]]
+    nrm = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    ln = np.linalg.norm(nrm, axis=1)
+    ok = ln > 1e-14 * max(1.0, float(np.abs(tris).max())) ** 2
+    probe = tris[ok].mean(axis=1) + 0.05 * h * nrm[ok] / ln[ok, None]
+    two = ~ok  # no area: it joins up the faces around it whichever copy is kept
+    w = _Winding(V, F)(probe, CLASS_CUTS)
+    two[ok] = (np.abs(w - np.round(w)) <= CLASS_CUTS[1]) & (w >= CLASS_CUTS[0])
+    choice, group = _two_sided.keep_one(pairs, two)
+    for step in range(4):
+        on = np.flatnonzero((choice != 0) & ok)
+        if len(on) == 0:
+            break
+        keep = _two_sided.kept(pairs, choice)
+        face = np.where(choice[on] > 0, fwd[on], pairs.rev[on])
+        t = V[F[face]]
+        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        w = _Winding(V, F[keep])(t.mean(axis=1) + 0.05 * h * n / ln[on, None], CLASS_CUTS)
+        bad = np.isin(group, group[on][w < CLASS_CUTS[0]])
+        if not bad.any():
+            break
+        choice[bad] = -choice[bad] if step == 0 else 0
+    return np.flatnonzero(_two_sided.kept(pairs, choice))
+
+
 def _classify(wn: _Winding, name: str, h: float, res: int) -> _Pieces:
     """Step 1: the pieces and their classes; refuses a mesh with no surface left."""
     sub, parent, corner_bary, cls = classify_pieces(wn, probe_size(h, res))
@@ -585,9 +630,11 @@ def from_mesh(
     res = check_res(res, name)
     pad = check_pad(pad, name)
     V, F, origin, h, shape = _place(mesh, name, res, pad)
-    wn = _Winding(V, F)
     report(0.0, "classifying pieces")
+    kept = _one_of_two_sided(V, F, probe_size(h, res))
+    wn = _Winding(V, F[kept])
     pieces = _classify(wn, name, h, res)
+    pieces.parent = kept[pieces.parent]
     report(0.15, "exact distances near the surface")
     d_b, id_b, thin = _boundary_band(pieces, origin, h, shape)
     sheet = np.concatenate([pieces.sheet, thin.thin])
@@ -609,11 +656,13 @@ def from_mesh(
         floor = BAND_VOXELS * h
         _far_field.far_field(band, origin, h, pieces.sub, win, thin.offset, sign, floor, sdf, rgb)
     report(1.0, "done")
-    meta = _import_meta(mesh, res, pad, len(F), thin, n_bubbles)
+    meta = _import_meta(mesh, res, pad, len(F), thin, n_bubbles, len(F) - len(kept))
     return make(sdf, rgb, None, origin, h, meta)
 
 
-def _import_meta(mesh: ColoredMesh, res: int, pad: int, n_faces: int, thin: _Thin, n_bubbles: int):
+def _import_meta(
+    mesh: ColoredMesh, res: int, pad: int, n_faces: int, thin: _Thin, n_bubbles: int, n_two: int
+):
     """The CSDF's meta: what import did, as ``partscale info`` shows it."""
     return {
         "source": mesh.source,
@@ -630,6 +679,7 @@ def _import_meta(mesh: ColoredMesh, res: int, pad: int, n_faces: int, thin: _Thi
                 "sheet_half_thickness_voxels": round(math.sqrt(3) / 2, 4),
                 **thin.record,
                 "filled_bubble_voxels": n_bubbles,
+                **({"two_sided_copies_dropped": n_two} if n_two else {}),
                 "band_voxels": BAND_VOXELS,
                 **({"notes": list(mesh.notes)} if mesh.notes else {}),
             }

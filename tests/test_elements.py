@@ -228,6 +228,30 @@ def test_a_row_of_slats_is_searched_within_a_bounded_number_of_comparisons(monke
     assert max(c.hi - c.lo for c in cands) <= 8 + 1e-9, cands  # one slat and its gap
 
 
+def _bar_widths(c):
+    """Widths (voxels) of the solid runs along x through the middle of the grid."""
+    row = c.sdf[:, c.shape[1] // 2, c.shape[2] // 2] < 0
+    step = np.diff(np.concatenate([[0], row.astype(int), [0]]))
+    return np.flatnonzero(step == -1) - np.flatnonzero(step == 1)
+
+
+@pytest.mark.parametrize("n", [1, -2])
+def test_one_more_slat_of_a_long_row_is_one_slat(n):
+    """24 slats: each is too short to be an element (MIN_SHARE), and two halves of twelve are
+    no pair a designer counts; "one more" adds one slat (one period), "-2" removes two, every
+    slat as wide as before and the row longer by exactly n periods (within half a voxel)."""
+    slats, _ = shapes.bars(24, width=0.06, gap=0.02, height=0.3, depth=0.3, voxel_size=H)
+    assert find_elements(slats, "x").best is None
+    recipe, why = fit(slats, add={"x": n})
+    verb = "add" if n > 0 else "remove"
+    assert why[0].startswith(f"x: {verb} {abs(n)} piece(s), a period of 8"), why
+    out = apply_recipe(slats, recipe)
+    widths = _bar_widths(out)
+    assert len(widths) == 24 + n, widths
+    assert set(widths.tolist()) <= set(_bar_widths(slats).tolist()), widths
+    assert abs(_extent(out, 0) - _extent(slats, 0) - n * 0.08) <= H / 2
+
+
 # -- count edits ----------------------------------------------------------------------------------
 
 

@@ -94,6 +94,9 @@ STRENGTH_TOL = 0.05
 #: A chain whose elements hold a candidate this much stronger than its weakest separator is
 #: no group (a bunk bed's two halves, each holding its posts, separated by a rail).
 STRONGER = 0.15
+#: Separators as strong as a chain's own inside each of its elements that make each a row of
+#: pieces rather than one element (two: a door's two grooves; three or more: a run of slats).
+ROW = 3
 #: Least share of the solid's length a group spans: two elements, or three or more.
 MIN_COVER_PAIR = 0.6
 MIN_COVER = 0.3
@@ -612,6 +615,8 @@ def _best_chains(p: Profile, cands: list[_Cand], chains: list[_Chain]) -> list[_
         )
         if inner > sep + STRONGER:
             return 0.0  # clearly stronger separators inside: these are rows of elements each
+        if _rows(cands, c, sep):
+            return 0.0  # each a row of pieces parted as strongly: a run of slats, not two halves
         if cover < (MIN_COVER_PAIR if n == 2 else MIN_COVER):
             return 0.0  # a pair that is not most of the object: a sofa's base and seat
         coarse = 0.5 if inner >= sep - STRENGTH_TOL else 1.0
@@ -628,6 +633,19 @@ def _best_chains(p: Profile, cands: list[_Cand], chains: list[_Chain]) -> list[_
         if len(kept) == MAX_GROUPS:
             break
     return kept
+
+
+def _rows(cands: list[_Cand], c: _Chain, sep: float) -> bool:
+    """Whether every element of ``c`` holds :data:`ROW` or more candidates within
+    :data:`STRENGTH_TOL` of its separators' strength ``sep``: each is a row of pieces itself
+    (a dozen slats of a row of two dozen), too short to be elements on their own
+    (:data:`MIN_SHARE`), not what a designer counts.
+    """
+    return all(
+        sum(a + 1 < k.lo and k.hi < b - 1 and k.strength >= sep - STRENGTH_TOL for k in cands)
+        >= ROW
+        for a, b in c.elements
+    )
 
 
 def _typical(lengths: list[float]) -> int:

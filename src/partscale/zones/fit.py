@@ -724,6 +724,37 @@ def _add_steps(
     return None
 
 
+def _add_periods(
+    csdf: CSDF, axis: int, n: int, in_all: bool
+) -> tuple[list[Edit | ScrewZone | HelixZone | RotationZone], list[str]] | None:
+    """``n`` more (or ``-n`` fewer) periods of a row of pieces too short to be elements each
+    (slats, fins, balusters: :data:`~partscale.zones.elements.MIN_SHARE`) where the whole
+    cross-section repeats along ``axis`` (the best tile of :func:`axis_candidates`), as
+    :func:`fit` tiles whole periods; and the note; None where nothing repeats.
+    """
+    prof = profile(csdf, axis)
+    feats = axis_features(csdf, axis, calm_runs(prof))
+    tiles = [c for c in axis_candidates(csdf, axis, prof=prof, features=feats) if c.kind == "tile"]
+    if not tiles:
+        return None
+    t = tiles[0]
+    assert t.count is not None and t.period is not None  # set for a tile
+    name, units = AXES[axis], csdf.meta.get("units")
+    n = _change(name, n, t.count, in_all)
+    if -n >= t.count:
+        raise InputError(
+            f"add {name}: expected to remove at most {t.count - 1} of the {t.count} repeats, "
+            f"got {-n}"
+        )
+    lo = float(csdf.surface_bounds()[0, axis])
+    done = _periods(csdf, prof, t, n * t.period, (name, units, lo), feats)
+    if done is None:
+        return None
+    tiled, note = done
+    note = note.replace(": tile ", ": add ", 1).replace(" more period(s) of ", " period(s) of ", 1)
+    return [tiled.edit], [note.replace(" period(s) of ", " piece(s), a period of ", 1)]
+
+
 def _change(name: str, n: int, count: int, in_all: bool) -> int:
     """The elements to add (negative: remove) for ``n`` more, or (``in_all``) ``n`` in all of
     ``count``; refused (one line) where that is no change or leaves none.
@@ -844,6 +875,8 @@ def add_axis(
     found = find_elements(csdf, axis)
     if found.best is None:
         steps = _add_steps(csdf, axis, n, in_all)
+        if steps is None:
+            steps = _add_periods(csdf, axis, n, in_all)
         if steps is not None:
             return steps
         raise InputError(

@@ -492,3 +492,23 @@ def test_gltf_broken_texture_is_said_on_the_mesh_route(tmp_path):
         load_scene(glb)
     with pytest.warns(PartscaleWarning, match=r"t\.glb: the base-colour texture .*unreadable"):
         ingest.load_mesh(glb)
+
+
+def test_a_mesh_in_with_a_csdf_out_is_refused_naming_import(cli, tmp_path):
+    """A mesh IN writes a mesh OUT; asked for a CSDF instead, scale and fit say so in one line
+    and name the import (they used to read the mesh as a CSDF: "expected a .csdf.npz ... got
+    File is not a zip file"), writing nothing."""
+    from conftest import assert_bad_input
+
+    src = tmp_path / "box.glb"
+    trimesh.creation.box((1.0, 0.5, 0.4)).export(src)
+    out = tmp_path / "out.csdf.npz"
+    for args in (
+        ("fit", "--add", "x", "1"),
+        ("scale", "--axis", "x", "--zone", "25%", "75%", "--by", "+10cm"),
+    ):
+        proc = cli(args[0], src, "-o", out, *args[1:])
+        assert_bad_input(
+            proc, "box.glb is a mesh", "expected a mesh out", "partscale import box.glb"
+        )
+        assert not out.exists()

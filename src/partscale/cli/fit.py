@@ -46,9 +46,9 @@ def fit(
     doors, shelf rows), absorb the rest in a slab of constant cross-section; says what it chose,
     and refuses (exit 2) where only a deformation would reach the size.
     """
-    from ..meshedit import check_square, is_mesh_route
+    from ..meshedit import check_route, check_square
 
-    mesh_route = is_mesh_route(src, output)
+    mesh_route = check_route(src, output)
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     check_square(square, mesh_route, src, output)

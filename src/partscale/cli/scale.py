@@ -161,9 +161,9 @@ def scale(
     radial zone (an annulus about the vertical) or an oblique one (planes square to any
     direction).
     """
-    from ..meshedit import check_square, is_mesh_route
+    from ..meshedit import check_route, check_square
 
-    mesh_route = is_mesh_route(src, output)
+    mesh_route = check_route(src, output)
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
     check_square(square, mesh_route, src, output)

@@ -15,12 +15,13 @@ Public API
 - :func:`mesh_frame` ``(path) -> MeshFrame``: a mesh's bounds and units where the CLI resolves
   ``--by``/``--copies`` (``--snap`` and ``fit`` use the mesh's CSDF: zones work on profiles).
 - :func:`is_mesh_route` ``(src, dst) -> bool``: whether an edit takes this route (a mesh in and
-  out); :func:`check_square`, :func:`edit_target` (what its options resolve against) and
+  out); :func:`check_route` (that, refusing a mesh in with a CSDF out), :func:`check_square`,
+  :func:`edit_target` (what its options resolve against) and
   :func:`report_lines` (what it says it did): the dispatch ``scale`` and ``fit`` share.
 """
 
 from ..ingest import MESH_SUFFIXES  # the mesh route reads what the CSDF route reads
-from .dispatch import check_square, edit_target, is_mesh_route, report_lines
+from .dispatch import check_route, check_square, edit_target, is_mesh_route, report_lines
 from .route import (
     OUTPUT_SUFFIXES,
     MeshEditResult,
@@ -42,6 +43,7 @@ __all__ = [
     "Seam",
     "apply_recipe_to_scene",
     "check_recipe",
+    "check_route",
     "check_square",
     "edit_mesh_file",
     "edit_target",

@@ -45,6 +45,50 @@ def is_mesh_route(src: str | os.PathLike, dst: str | os.PathLike) -> bool:
     return Path(src).suffix.lower() in MESH_SUFFIXES and Path(dst).suffix.lower() in OUTPUT_SUFFIXES
 
 
+def check_route(src: str | os.PathLike, dst: str | os.PathLike) -> bool:
+    """:func:`is_mesh_route`, refusing a mesh in with anything but a mesh out.
+
+    An edit of a mesh writes a mesh (the mesh route); a CSDF is made from a mesh by importing it
+    first, at a resolution the user chooses, so a mesh in and a CSDF out is refused (one line
+    naming ``partscale import``) rather than read as a CSDF.
+
+    Parameters
+    ----------
+    src, dst : str or os.PathLike
+        The input and the output file.
+
+    Returns
+    -------
+    bool
+        True for the mesh route, False for a CSDF in.
+
+    Raises
+    ------
+    InputError
+        ``src`` is a mesh and ``dst`` is no mesh.
+
+    Examples
+    --------
+    >>> from partscale.meshedit import check_route
+    >>> check_route("sofa.glb", "wider.obj"), check_route("sofa.csdf.npz", "wider.csdf.npz")
+    (True, False)
+    >>> check_route("sofa.glb", "wider.csdf.npz")
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: sofa.glb is a mesh: expected a mesh OUT (.glb, .obj, .ply, .usd, .usda, .usdc, .usdz), got wider.csdf.npz; for a CSDF, import it first (partscale import sofa.glb -o sofa.csdf.npz)
+    """
+    if is_mesh_route(src, dst):
+        return True
+    src = Path(src)
+    if src.suffix.lower() in MESH_SUFFIXES:
+        raise InputError(
+            f"{src.name} is a mesh: expected a mesh OUT ({', '.join(OUTPUT_SUFFIXES)}), got "
+            f"{Path(dst).name}; for a CSDF, import it first (partscale import {src.name} -o "
+            f"{src.stem}.csdf.npz)"
+        )
+    return False
+
+
 def check_square(square: bool, mesh_route: bool, src: Path, dst: Path) -> None:
     """Refuse ``square`` off the mesh route: a CSDF was squared (or not) when it was imported.
 

@@ -46,12 +46,13 @@ def fit(
     doors, shelf rows), absorb the rest in a slab of constant cross-section; says what it chose,
     and refuses (exit 2) where only a deformation would reach the size.
     """
-    from ..meshedit import check_route, check_square
+    from ..meshedit import check_route, check_square, is_mesh_route
 
-    mesh_route = check_route(src, output)
+    mesh_route = is_mesh_route(src, output)
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
-    check_square(square, mesh_route, src, output)
+    check_square(square, mesh_route, src, output)  # its own line for a mesh -> CSDF --square
+    check_route(src, output)
     check_usd(output)
     if recipe_out is not None:
         _common.check_output(recipe_out, suffixes=(".json",), what="a recipe JSON file")

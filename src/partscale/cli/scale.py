@@ -161,12 +161,13 @@ def scale(
     radial zone (an annulus about the vertical) or an oblique one (planes square to any
     direction).
     """
-    from ..meshedit import check_route, check_square
+    from ..meshedit import check_route, check_square, is_mesh_route
 
-    mesh_route = check_route(src, output)
+    mesh_route = is_mesh_route(src, output)
     if not mesh_route:
         _common.check_output(output, suffixes=(SUFFIX,), what="a CSDF file")
-    check_square(square, mesh_route, src, output)
+    check_square(square, mesh_route, src, output)  # its own line for a mesh -> CSDF --square
+    check_route(src, output)
     check_usd(output)
     dest_given = _given(("--to", to), ("--by", by), ("--copies", copies))
     if radial or normal is not None:

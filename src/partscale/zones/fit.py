@@ -602,12 +602,14 @@ def _periods(
     change: float,
     ax: tuple[str, str | None, float],
     features: list[Feature],
+    pieces: bool = False,
 ) -> tuple[_Tiled, str] | None:
     """Tile whole periods of the repeat ``t`` (the number of copies that brings the length
     closest to ``change``), or remove whole periods (a zone of them tiled to its start, 0 copies,
     so the rest keep their thickness and spacing), and the note; None where no whole period fits
     the change (less than half a period). ``ax``: the axis's name, the object's units and the
-    surface's min along it; ``features``: the axis's local features.
+    surface's min along it; ``features``: the axis's local features; ``pieces``: the note counts
+    pieces of a row, one a period (``fit --add``), not periods.
     """
     assert t.period is not None and t.count is not None  # set for a tile
     name, units, lo = ax
@@ -631,9 +633,13 @@ def _periods(
         e = s - k * period
         edit = Edit(name, s, e, s, "tile")
         copies = max((t.region[0], s), (e, t.region[1]), key=lambda z: z[1] - z[0])
+    if pieces:
+        lead = f"{name}: {'add' if k > 0 else 'remove'} {abs(k)} piece(s), a period of "
+    else:
+        lead = (f"{name}: tile {k} more" if k > 0 else f"{name}: remove {-k}") + " period(s) of "
     note = (
-        (f"{name}: tile {k} more" if k > 0 else f"{name}: remove {-k}") + f" period(s) of "
-        f"{_fmt(period, units)} ({t.reason}), zone {_fmt(s - lo, units)}..{_fmt(e - lo, units)} "
+        lead
+        + f"{_fmt(period, units)} ({t.reason}), zone {_fmt(s - lo, units)}..{_fmt(e - lo, units)} "
         f"from the {name} min" + ("" if k > 0 else " (tile to its start: 0 copies)")
     )
     return _Tiled(edit, k, t.region, (s, e), period, grow, copies), note
@@ -747,12 +753,11 @@ def _add_periods(
             f"got {-n}"
         )
     lo = float(csdf.surface_bounds()[0, axis])
-    done = _periods(csdf, prof, t, n * t.period, (name, units, lo), feats)
+    done = _periods(csdf, prof, t, n * t.period, (name, units, lo), feats, pieces=True)
     if done is None:
         return None
     tiled, note = done
-    note = note.replace(": tile ", ": add ", 1).replace(" more period(s) of ", " period(s) of ", 1)
-    return [tiled.edit], [note.replace(" period(s) of ", " piece(s), a period of ", 1)]
+    return [tiled.edit], [note]
 
 
 def _change(name: str, n: int, count: int, in_all: bool) -> int:

@@ -56,6 +56,34 @@ def test_carve_drops_free_voxels_but_never_one_that_holds_a_surface_point():
     assert solid2[4, 4, 5]  # where the symmetric view saw nothing free
 
 
+def test_nearest_surface_point_is_exact_near_the_surface_and_on_the_right_side_far_off():
+    # two walls of points, x = 2 (normal -x) and x = 37 (normal +x), each a fine sheet: every
+    # voxel of the slab between them lies behind its nearest wall, the voxels beyond in front
+    grid = _unit_grid((40, 24, 24))
+    y, z = np.meshgrid(np.arange(2, 22, 0.25), np.arange(2, 22, 0.25))
+    wall = np.stack([np.zeros(y.size), y.ravel(), z.ravel()], axis=1)
+    P = np.concatenate([wall + np.array([2.0, 0, 0]), wall + np.array([37.0, 0, 0])])
+    N = np.zeros_like(P)
+    N[: len(wall), 0], N[len(wall) :, 0] = -1.0, 1.0
+    sp = fuse.surface_on_grid(
+        grid, P, np.zeros((len(P), 3), np.uint8), np.zeros(len(P), np.uint8), N
+    )
+    flat = np.arange(int(np.prod(grid.shape)))
+    centres = grid.centres(flat)
+    nn = fuse.nearest_surface_point(centres, flat, sp, grid.h)
+    from scipy.spatial import cKDTree
+
+    d_exact, _ = cKDTree(sp.points).query(centres)
+    d = np.linalg.norm(centres - sp.points[nn], axis=1)
+    near = d_exact < fuse.NEAREST_EXACT_VOXELS * grid.h - 1e-9
+    assert np.allclose(d[near], d_exact[near])  # exact within the radius
+    # far off: a point within a voxel's diagonal of the nearest, on the same wall
+    assert (d[~near] <= d_exact[~near] + np.sqrt(3) * grid.h + 1e-9).all()
+    side = np.einsum("ni,ni->n", centres - sp.points[nn], sp.normals[nn]) <= 0
+    inside = (centres[:, 0] >= 2) & (centres[:, 0] <= 37)
+    assert (side == inside).all() and (~near & inside).sum() > 1000
+
+
 def test_drop_pieces_keeps_large_pieces_and_well_observed_small_ones():
     solid = np.zeros((20, 20, 20), bool)
     solid[2:12, 2:12, 2:12] = True  # 1000 voxels

@@ -64,6 +64,9 @@ BACK_SHIFT = 0.4
 changes side, so no thin sheet loses its voxels)."""
 BEHIND_SLACK = 0.5
 """Voxels in front of its nearest surface point that a voxel of the closure may lie."""
+NEAREST_EXACT_VOXELS = 4.0
+"""Voxels within which a voxel's nearest surface point is found exactly (beyond: a point of the
+nearest voxel holding one, :func:`nearest_surface_point`)."""
 DIFFUSE_SIGMA = 2.0
 
 
@@ -274,7 +277,7 @@ def carve(
     keep = ~free_world(world) & (height_world(world) >= -0.5 * h)
     # the closure lies behind the surface: a voxel in front of its nearest surface point is
     # space the scan says nothing about (beyond the sensor's range, a hole), not the object
-    _, nn0 = cKDTree(sp.points).query(centres, k=1, workers=2)
+    nn0 = nearest_surface_point(centres, near, sp, h)
     keep &= np.einsum("ni,ni->n", centres - sp.points[nn0], sp.normals[nn0]) <= BEHIND_SLACK * h
     if sym_free:
         d_obs = _edt(~sp.occ_obs).ravel()[near]
@@ -291,6 +294,34 @@ def carve(
     solid = np.zeros(grid.shape, bool)
     solid.ravel()[near[keep]] = True
     return solid
+
+
+def nearest_surface_point(
+    centres: np.ndarray, flat: np.ndarray, sp: SurfacePoints, h: float
+) -> np.ndarray:
+    """(M,) int64: for voxel ``centres`` (M, 3) (grid coordinates; flat indices ``flat`` (M,)),
+    the index of their nearest surface point of ``sp``: exact within ``NEAREST_EXACT_VOXELS``,
+    beyond it a point in the nearest voxel holding one.
+
+    A k-d tree's query costs about the surface area within the distance it must search: the
+    voxels deep inside a filled cabinet, 30 cm from flat walls of many points, took 17 s of
+    exact queries where the voxels' own nearest-feature transform takes 0.1 s. Far from the
+    surface which of a voxel's few nearest points is used does not change on which side of it
+    the voxel lies (0.3 % of the far voxels of a chair at --res 128, 0.02 % of a cabinet's).
+    """
+    d, nn = cKDTree(sp.points).query(
+        centres, k=1, distance_upper_bound=NEAREST_EXACT_VOXELS * h, workers=2
+    )
+    far = ~np.isfinite(d)
+    if far.any():
+        rep = np.zeros(sp.occ.shape, np.int64)
+        rep[sp.idx[:, 0], sp.idx[:, 1], sp.idx[:, 2]] = np.arange(len(sp.points))
+        feature = ndimage.distance_transform_edt(
+            ~sp.occ, return_distances=False, return_indices=True
+        )
+        v = feature.reshape(3, -1)[:, flat[far]]
+        nn[far] = rep[v[0], v[1], v[2]]
+    return nn
 
 
 def close_between(solid: np.ndarray, cand: Candidates) -> np.ndarray:

@@ -313,3 +313,26 @@ def test_the_legs_angles_about_the_hub_give_one_fold_or_none(angles, fold):
     )
     d = X / np.linalg.norm(X, axis=1)[:, None]
     assert _Arms(X, d, 0.01, np.zeros(2)).fold((5, 4)) == fold
+
+
+@pytest.mark.parametrize(
+    ("name", "view"),
+    [
+        ("kenney/kitchenCabinetDrawer.glb", dict(azimuths=(345.0,), elevation=45.0, floor=True)),
+        ("kenney/desk.glb", dict(azimuths=(322.0,), elevation=30.0, floor=False)),
+    ],
+)
+def test_a_plinth_or_a_frame_is_no_turning_base(name, view):
+    # a cabinet's plinth and a desk's frame land on themselves turned a quarter about their
+    # middle where one corner is seen, but no arms radiate from that axis: no rotation (the
+    # turned copies of a rectangle stood off the object in unseen space)
+    import dataclasses
+
+    from partscale import ingest
+    from partscale.complete import api
+    from partscale.evaluate import virtual_scan
+
+    mesh = ingest.load_mesh(data_path(name))
+    mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * 0.7)
+    sy = api.find_symmetries(api.observe(virtual_scan(mesh, **view)), 128, True)
+    assert sy.rot is None

@@ -71,6 +71,9 @@ ARM_MIN_POINTS = 5
 """Arm points (of ``ARM_SAMPLES``) that make an arm."""
 ARM_FOLD_DEG = 10.0
 """Degrees by which the angle between two arms may miss a multiple of a fold's step."""
+MIN_RADIAL = 0.8
+"""Mean |cosine| between the base's arms and the direction from the turn's axis above which
+the arms radiate from it (a star's legs; a box's bottom edges run across it)."""
 ARM_PARALLEL = 0.87
 """Arms whose lines meet must differ in direction: the mean resultant length of the voters'
 doubled angles stays below this (two arms 30 degrees apart; parallel runners give 1)."""
@@ -442,7 +445,9 @@ def rotation_axis(
     ``MAX_ROTATION_VIOLATION`` of its copies land where a camera saw through. The rotation is
     accepted when those pieces hold ``MIN_ROTATION_COVER`` of the base's points and its axis
     lies under the rest of the object (within the 2-98 percentile box of the points above the
-    base, where there are any), and applies only
+    base, where there are any), and the base is a star: its arms in plan (:class:`_Arms`, at
+    the footprint's own scale) radiate from the axis (:meth:`_Arms.radial` at least
+    ``MIN_RADIAL``). It applies only
     in their region (``Symmetry.region``: their cells turned through every step, so a copy of a
     scrap beside the base is never made).
     """
@@ -462,9 +467,11 @@ def rotation_axis(
     if len(above) >= 50:
         foot_lo, foot_hi = np.percentile(above, 2, axis=0), np.percentile(above, 98, axis=0)
         # a coarse grid's cell would let a 4-fold turn of a five-star land on its legs
-        cell = min(cell, float((foot_hi - foot_lo).max()) / ROTATION_CELLS_ACROSS)
+        across = float((foot_hi - foot_lo).max()) / ROTATION_CELLS_ACROSS
+        cell, arm_cell = min(cell, across), across
     else:
         foot_lo, foot_hi = np.full(2, -np.inf), np.full(2, np.inf)
+        arm_cell = cell
     piece = clusters(base, ROTATION_PIECE * cell)
     scorer = _Scorer(base, free, cell)
     bounds = (foot_lo, foot_hi)
@@ -473,12 +480,22 @@ def rotation_axis(
         turn = _turn(base, piece, scorer, cell, k, rng, bounds)
         if turn is not None:
             found.append((k, *turn))
+    if not found:
+        return None
+    # a base that turns is a star: arms whose lines meet at a hub on the axis. A box, a plinth
+    # or a table's frame also lands on itself turned about its middle where a side is seen (a
+    # 4-fold turn of a rectangle puts its long side on its short one), and turned copies of
+    # those stood off the object in unseen space (the wide benchmark's cabinets, desks, sofas)
+    arms = _Arms.of(base, arm_cell, np.random.default_rng(seed + 1))
+    if arms is None:
+        return None
+    radial = max(arms.radial(f[2]) for f in found)
+    if radial < MIN_RADIAL:
+        return None
     # a star's legs point at its hub, and the angles between them give its fold, however few
     # are seen and wherever the copies land: two straight legs map onto each other about any
-    # point of their bisector, where a fold of the wrong count can land better (its own
-    # generator, so bases without arms are unchanged)
-    arms = _Arms.of(base, cell, np.random.default_rng(seed + 1)) if len(found) > 1 else None
-    fold = arms.fold(tuple(f[0] for f in found)) if arms is not None else None
+    # point of their bisector, where a fold of the wrong count can land better
+    fold = arms.fold(tuple(f[0] for f in found)) if len(found) > 1 else None
     if fold is not None:
         found = [f for f in found if f[0] == fold]
     best = None
@@ -595,6 +612,19 @@ class _Arms:
         if abs(twice.mean()) > ARM_PARALLEL:
             return None
         return cls(X, d, cell, axes[best])
+
+    def radial(self, centre: np.ndarray) -> float:
+        """Mean |cosine| between the arm points' directions and their direction from ``centre``
+        (2,) (x, z), over the points beyond ``ARM_REACH`` cells of it: 1 for arms radiating
+        from it.
+        """
+        v = self.X - centre
+        r = np.hypot(v[:, 0], v[:, 1])
+        far = r >= ARM_REACH * self.cell
+        if not far.any():
+            return 0.0
+        cos = (v[far, 0] * self.d[far, 0] + v[far, 1] * self.d[far, 1]) / r[far]
+        return float(np.abs(cos).mean())
 
     def fold(self, folds: tuple[int, ...]) -> int | None:
         """The fold in ``folds`` whose step the angles between the arms about the hub are

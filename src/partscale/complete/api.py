@@ -8,7 +8,7 @@ import os
 import warnings
 import zlib
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +29,16 @@ from . import symmetry as sym_mod
 from . import tidy as tidy_mod
 from .carve import Carver, FreeGrid
 from .floor import base_plane, clusters, find_floor, floor_scraps, in_plane_axes
-from .scan import MAX_PIXEL, Frame, denoise, frame_from_points, read_frame, read_points, read_views
+from .scan import (
+    MAX_PIXEL,
+    Frame,
+    denoise,
+    frame_from_points,
+    read_frame,
+    read_points,
+    read_views,
+    upsample,
+)
 
 METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
 FLOOR_TOL = 0.015
@@ -59,6 +68,14 @@ NORMAL_NEIGHBOURS = 12
 CARVE_MARGIN = 0.5
 """Voxels a point must lie in front of a reading to be free space (absorbs sensor noise)."""
 
+
+UPSAMPLE_MAX = 4
+"""Largest factor a frame's pixels are upsampled by along each side (:func:`densify`)."""
+UPSAMPLE_ABOVE = 1.5
+"""Pixel width at the object, in voxels, above which a frame is upsampled: the closure
+(:data:`CLOSURE` voxels behind each point) joins points up to about this far apart."""
+UPSAMPLE_PIXELS = 8_000_000
+"""Most pixels an upsampled frame may have (a 640 x 480 frame 5 times over)."""
 
 MIN_UP_TILT_DEG = 0.5
 """Degrees below which the mirror plane's tilt does not correct up (the frame and the mirror
@@ -263,9 +280,10 @@ def _sym4(s: sym_mod.Symmetry) -> np.ndarray:
 class Observation:
     """What a scan says about one object: its points (N, 3) world and colours (N, 3) uint8,
     ``U`` (4, 4) world -> upright (y up, floor at 0, centred), the floor (Plane, inliers) or None,
-    the (denoised) frames, the points' unit normals (N, 3) world, facing their camera, and what
+    the (denoised) frames, the points' unit normals (N, 3) world, facing their camera, what
     gave up: ``"floor"``, ``"underside"`` (a level plane under the object that is no floor),
-    ``"base"`` (:func:`partscale.complete.floor.base_plane`) or ``"camera"`` (its -y axis).
+    ``"base"`` (:func:`partscale.complete.floor.base_plane`) or ``"camera"`` (its -y axis), and
+    the factor each frame was upsampled by (:func:`densify`; empty: none was).
     """
 
     frames: list
@@ -276,6 +294,7 @@ class Observation:
     normals: np.ndarray
     up_from: str = "camera"
     cluster_cell: float = CLUSTER_CELL
+    upsampled: tuple[int, ...] = ()
 
 
 def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
@@ -413,6 +432,54 @@ def observe_metric(
     return ob, None
 
 
+def densify(ob: Observation, res: int) -> Observation:
+    """The observation with its points read from its frames upsampled
+    (:func:`partscale.complete.scan.upsample`) where their pixels, at the object's depth, are
+    wider than the voxel of a grid ``res`` voxels along the object: a sparse scan's points would otherwise
+    close into a blob each, apart from their neighbours (a far view's fragment of a staircase
+    fell into 157 pieces, dropped as specks).
+
+    A frame whose pixels are wider than ``UPSAMPLE_ABOVE`` voxels is upsampled by the smallest
+    whole factor that makes them no wider than the voxel, at most ``UPSAMPLE_MAX`` and ``UPSAMPLE_PIXELS`` pixels; ``ob`` itself where none is needed.
+    What the observation found stays (up, the floor, which points are the object): the new
+    points are those within a coarse pixel of the object's and above its floor.
+    """
+    Qu = _apply(ob.U, ob.points)
+    h = float((Qu.max(axis=0) - Qu.min(axis=0)).max()) / res
+    ks, feet = [], []
+    for f in ob.frames:
+        z = (ob.points - f.pose[:3, 3]) @ f.pose[:3, 2]
+        z = z[z > 0]
+        foot = float(np.median(z)) / float(min(f.K[0, 0], f.K[1, 1])) if len(z) else 0.0
+        k = int(min(UPSAMPLE_MAX, math.ceil(foot / h - 1e-9))) if foot > UPSAMPLE_ABOVE * h else 1
+        H, W = f.shape
+        while k > 1 and H * W * k * k > UPSAMPLE_PIXELS:
+            k -= 1
+        ks.append(k)
+        feet.append(foot)
+    if max(ks) == 1:
+        return ob
+    from scipy.spatial import cKDTree
+
+    frames = [upsample(f, k) for f, k in zip(ob.frames, ks, strict=True)]
+    pts, cols, eyes = [], [], []
+    for f in frames:
+        p, c, _ = f.points()
+        pts.append(p)
+        cols.append(c)
+        eyes.append(np.broadcast_to(f.pose[:3, 3], p.shape))
+    P, C, E = np.concatenate(pts), np.concatenate(cols), np.concatenate(eyes)
+    # a coarse pixel's diagonal around the object's own points: what lies between them
+    reach = 1.5 * max(feet)
+    near = np.isfinite(cKDTree(ob.points).query(P, distance_upper_bound=reach, workers=2)[0])
+    if ob.floor is not None:
+        near &= _apply(ob.U, P)[:, 1] > 2 * FLOOR_TOL
+    P, C, E = P[near], C[near], E[near]
+    # the free space stays the frames' own: their pixels are the rays the sensor cast, and the
+    # silhouette's gaps and holes are sized in them
+    return replace(ob, points=P, colors=C, normals=normals(P, E), upsampled=tuple(ks))
+
+
 @keyword_options
 def complete(
     frames: list[Frame],
@@ -506,14 +573,17 @@ def complete(
             raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")
     ob, factor = observe_metric(frames, box=box, source=source, scale=scale)
+    dense = densify(ob, res)
     opts = Settings(res, box, bool(upright), closure, source, factor)
-    full = _complete(ob, opts, symmetry=symmetry, extras=True, report=report)
+    full = _complete(ob, opts, symmetry=symmetry, extras=True, report=report, dense=dense)
     # the space the cameras surely saw through: pixels without a reading say nothing
     carver = column_mod.sure_carver(ob.frames, 0.0)
 
     def observed() -> CSDF:
         report(0.9, "the scan as observed, closed")
-        return _complete(ob, opts, symmetry=False, extras=False, report=lambda f, m: None)
+        return _complete(
+            ob, opts, symmetry=False, extras=False, report=lambda f, m: None, dense=dense
+        )
 
     out = guard_mod.choose(full, ob.points, carver, observed, force=force_completion)
     report(1.0, "done")
@@ -627,8 +697,10 @@ def _complete(
     symmetry: bool,
     extras: bool,
     report: Callable[[float, str], None],
+    dense: Observation | None = None,
 ) -> CSDF:
-    """The completion of an observation; ``extras`` False: no guessed column or struts.
+    """The completion of an observation; ``extras`` False: no guessed column or struts; the
+    symmetries are found on ``ob``'s points and copy ``dense``'s (:func:`densify`) where given.
 
     The steps, each reported by name: the symmetries and the upright frame they fix
     (:func:`find_symmetries`), the symmetric copies of the surface (:func:`symmetric_copies`),
@@ -638,7 +710,8 @@ def _complete(
     report(0.15, "symmetries")
     sy = find_symmetries(ob, opts.res, symmetry)
     report(0.3, "symmetric copies")
-    surface = symmetric_copies(ob, sy)
+    dense = ob if dense is None else dense
+    surface = symmetric_copies(dense, sy)
     report(0.45, "grid")
     grid = plan_grid(surface, sy, opts)
     report(0.55, "carving and closing")
@@ -646,7 +719,7 @@ def _complete(
     report(0.8, "guessed parts")
     solid = guess_parts(ob, sy, surface, grid, solid, symmetry=symmetry, extras=extras)
     report(0.95, "metadata")
-    meta = completion_meta(ob, sy, surface, grid, solid, opts, symmetry=symmetry, extras=extras)
+    meta = completion_meta(dense, sy, surface, grid, solid, opts, symmetry=symmetry, extras=extras)
     g = grid.frame
     return make(solid.sdf, solid.rgb, None, g.origin, g.h, meta)
 
@@ -969,6 +1042,7 @@ def completion_meta(
         "guessed": round(counts[fuse_mod.GUESSED] / total, 4),
         "views": len(ob.frames),
         "points_observed": len(ob.points),
+        "upsampled": list(ob.upsampled) or None,
         "copies_dropped_in_free_space": surface.n_dropped,
         "specks_dropped": solid.n_specks,
         "contact_voxels_filled": solid.n_filled,

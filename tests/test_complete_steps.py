@@ -231,3 +231,23 @@ def test_a_sparse_far_scan_is_upsampled_and_keeps_what_it_saw():
     raw = completion.chamfer_fscore(api.observe(frames).points, G, tau)["fscore"]
     P, _ = completion.surface_samples(c)
     assert completion.chamfer_fscore(P, G, tau)["fscore"] >= raw - 0.01
+
+
+def test_a_board_thinner_than_a_voxel_seen_from_both_sides_keeps_its_solid():
+    # a board 0.8 voxel thick, its two faces read (normals out of each face), no free space:
+    # each voxel it holds lies ahead of one face, and made outside on that account the board
+    # vanished (three views of a bookcase lost a third of its boards)
+    grid = _unit_grid((20, 20, 12))
+    x, y = np.meshgrid(np.arange(3, 17, 0.25), np.arange(3, 17, 0.25))
+    face = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1)
+    P = np.concatenate([face + np.array([0, 0, 5.1]), face + np.array([0, 0, 5.9])])
+    N = np.zeros_like(P)
+    N[: len(face), 2], N[len(face) :, 2] = -1.0, 1.0
+    C = np.full((len(P), 3), 128, np.uint8)
+    K = np.full(len(P), fuse.OBSERVED, np.uint8)
+    sdf, _, _ = fuse.fuse(
+        np.eye(4), grid.shape, np.zeros(3), 1.0, P, C, K, N, NEVER, [], lambda p: p[:, 1] + 10, 1.5
+    )
+    inside = sdf[5:15, 5:15, :] < 0
+    assert inside.any(axis=2).all()  # solid across the whole board
+    assert not (sdf[5:15, 5:15, :4] < 0).any() and not (sdf[5:15, 5:15, 8:] < 0).any()

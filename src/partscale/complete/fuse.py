@@ -413,6 +413,14 @@ def surface_attributes(
     # passes through the points rather than ahead of them
     plane = np.einsum("ni,ni->n", band_pts - points[on][nn], sp_n[nn])
     ahead = close & (plane > 0)
+    # ... unless no solid voxel behind it stays inside: a board about a voxel thin, seen from
+    # both sides, has each voxel ahead of one face, and would vanish
+    idx = np.flatnonzero(ahead & (cur < 0))
+    stays = solid.copy()
+    stays.ravel()[band[idx]] = False
+    behind = np.rint((band_pts[idx] - sp_n[nn[idx]] * h - origin) / h).astype(np.int64)
+    behind = np.clip(behind, 0, np.array(shape) - 1)
+    ahead[idx[~stays[behind[:, 0], behind[:, 1], behind[:, 2]]]] = False
     cur = np.where(ahead, np.abs(cur), cur)
     exact = np.where(cur < 0, -np.minimum(dist, -cur), np.minimum(dist, cur))
     flat_sdf[band] = np.where(close, exact, cur).astype(np.float32)

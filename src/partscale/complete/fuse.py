@@ -59,6 +59,9 @@ around its start, at most this share hold only points turned off the axes (Sheen
 rounded cushion ends, three views: 0.64-0.91; the stool's rim, one view: median 0.38)."""
 SLAB_NEIGHBOURS = 32
 """Edge measurements of a face's thickness whose most common value carries it across the face."""
+PIECE_OBSERVED_VOXELS = 27
+"""Observed voxels that keep a piece whatever its share of the largest (:func:`drop_pieces`):
+a baluster of a railing seen in part, not a flying pixel."""
 BACK_SHIFT = 0.4
 """Voxels by which an unobserved boundary of the solid is drawn in (below 0.5: no voxel
 changes side, so no thin sheet loses its voxels)."""
@@ -368,6 +371,7 @@ def drop_pieces(solid: np.ndarray, occ_obs: np.ndarray) -> np.ndarray:
     size[0] = 0
     obs_in = np.bincount(lab.ravel(), weights=occ_obs.ravel(), minlength=n + 1)
     good = (size >= 0.02 * size.max()) | (obs_in >= 0.05 * obs_in.max())
+    good |= obs_in >= PIECE_OBSERVED_VOXELS
     good[0] = False
     return good[lab]
 

@@ -71,9 +71,9 @@ CARVE_MARGIN = 0.5
 
 UPSAMPLE_MAX = 4
 """Largest factor a frame's pixels are upsampled by along each side (:func:`densify`)."""
-UPSAMPLE_ABOVE = 1.5
-"""Pixel width at the object, in voxels, above which a frame is upsampled: the closure
-(:data:`CLOSURE` voxels behind each point) joins points up to about this far apart."""
+UPSAMPLE_ABOVE = 1.0
+"""Pixel width (or point spacing) at the object, in voxels, above which a frame is upsampled:
+points further apart than a voxel leave holes in the closure (a sofa's point cloud at 1.4)."""
 UPSAMPLE_PIXELS = 8_000_000
 """Most pixels an upsampled frame may have (a 640 x 480 frame 5 times over)."""
 
@@ -439,18 +439,25 @@ def densify(ob: Observation, res: int) -> Observation:
     close into a blob each, apart from their neighbours (a far view's fragment of a staircase
     fell into 157 pieces, dropped as specks).
 
-    A frame whose pixels are wider than ``UPSAMPLE_ABOVE`` voxels is upsampled by the smallest
+    A frame whose pixels (or the points' median spacing, where wider) are wider than
+    ``UPSAMPLE_ABOVE`` voxels is upsampled by the smallest
     whole factor that makes them no wider than the voxel, at most ``UPSAMPLE_MAX`` and ``UPSAMPLE_PIXELS`` pixels; ``ob`` itself where none is needed.
     What the observation found stays (up, the floor, which points are the object): the new
     points are those within a coarse pixel of the object's and above its floor.
     """
+    from scipy.spatial import cKDTree
+
     Qu = _apply(ob.U, ob.points)
     h = float((Qu.max(axis=0) - Qu.min(axis=0)).max()) / res
+    # the points' own spacing: a point cloud's frame has pixels about as wide as its points
+    # are apart, but only about half of them hold a point
+    spacing = float(np.median(cKDTree(ob.points).query(ob.points, k=2, workers=2)[0][:, 1]))
     ks, feet = [], []
     for f in ob.frames:
         z = (ob.points - f.pose[:3, 3]) @ f.pose[:3, 2]
         z = z[z > 0]
         foot = float(np.median(z)) / float(min(f.K[0, 0], f.K[1, 1])) if len(z) else 0.0
+        foot = max(foot, spacing)
         k = int(min(UPSAMPLE_MAX, math.ceil(foot / h - 1e-9))) if foot > UPSAMPLE_ABOVE * h else 1
         H, W = f.shape
         while k > 1 and H * W * k * k > UPSAMPLE_PIXELS:
@@ -459,8 +466,6 @@ def densify(ob: Observation, res: int) -> Observation:
         feet.append(foot)
     if max(ks) == 1:
         return ob
-    from scipy.spatial import cKDTree
-
     frames = [upsample(f, k) for f, k in zip(ob.frames, ks, strict=True)]
     pts, cols, eyes = [], [], []
     for f in frames:

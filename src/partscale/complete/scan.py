@@ -42,6 +42,9 @@ MAX_VIEWS = 1000
 DENOISE_JUMP = 0.03
 """Relative depth difference beyond which two neighbouring readings lie on different surfaces
 (a depth discontinuity; well above the sensor's noise: 5 mm at 2 m is 0.25 %)."""
+UPSAMPLE_READINGS = 2
+"""Readings among a fine pixel's four nearest coarse pixels that :func:`upsample` blends (a
+point cloud's frame leaves about half its pixels without a point)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -164,11 +167,11 @@ def denoise(frame: Frame, sigma: float = 1.0) -> Frame:
 def upsample(frame: Frame, k: int) -> Frame:
     """The frame at ``k`` times its pixels along each side: the same rays, read between them.
 
-    A pixel's depth is the bilinear blend of its four nearest readings where all four read the
-    same surface (within ``DENOISE_JUMP`` of each other); elsewhere each reading stays at the
-    middle of its own pixel, once, and the rest read nothing: no depth is made across an edge
-    or a hole. Colours are the nearest
-    pixel's. The intrinsics follow the finer pixels (``fx, fy`` times ``k``, pixel centres kept).
+    A pixel's depth is the bilinear blend of the readings among its four nearest pixels where at
+    least ``UPSAMPLE_READINGS`` of them read the same surface (within ``DENOISE_JUMP`` of each
+    other); elsewhere each reading stays at the middle of its own pixel, once, and the rest read
+    nothing: no depth is made across an edge, and none inside a hole wider than a pixel.
+    Colours are the nearest pixel's. The intrinsics follow the finer pixels (``fx, fy`` times ``k``, pixel centres kept).
 
     Parameters
     ----------
@@ -204,12 +207,24 @@ def upsample(frame: Frame, k: int) -> Frame:
     )
     y1, x1 = np.minimum(y0 + 1, H - 1), np.minimum(x0 + 1, W - 1)
     ty, tx = (ys - y0)[:, None], (xs - x0)[None, :]
-    c00, c01 = d[np.ix_(y0, x0)], d[np.ix_(y0, x1)]
-    c10, c11 = d[np.ix_(y1, x0)], d[np.ix_(y1, x1)]
-    lo = np.minimum(np.minimum(c00, c01), np.minimum(c10, c11))
-    hi = np.maximum(np.maximum(c00, c01), np.maximum(c10, c11))
-    blend = (c00 * (1 - tx) + c01 * tx) * (1 - ty) + (c10 * (1 - tx) + c11 * tx) * ty
-    same = (lo > 0) & (hi - lo < DENOISE_JUMP * np.maximum(lo, 1e-3))
+    corners = [d[np.ix_(y0, x0)], d[np.ix_(y0, x1)], d[np.ix_(y1, x0)], d[np.ix_(y1, x1)]]
+    weights = [(1 - ty) * (1 - tx), (1 - ty) * tx, ty * (1 - tx), ty * tx]
+    # the blend of the readings among the four (a hole of the sensor, or a point cloud's
+    # pixel nobody's point fell in, is left out and the rest weighed up)
+    lo = np.full((H * k, W * k), np.inf)
+    hi = np.zeros((H * k, W * k))
+    n = np.zeros((H * k, W * k), np.int64)
+    num = np.zeros((H * k, W * k))
+    den = np.zeros((H * k, W * k))
+    for c, w in zip(corners, weights, strict=True):
+        v = c > 0
+        lo = np.where(v, np.minimum(lo, c), lo)
+        hi = np.where(v, np.maximum(hi, c), hi)
+        n += v
+        num += np.where(v, w * c, 0.0)
+        den += np.where(v, w, 0.0)
+    blend = num / np.maximum(den, 1e-12)
+    same = (n >= UPSAMPLE_READINGS) & (hi - lo < DENOISE_JUMP * np.minimum(lo, 1e9))
     yn = np.minimum((np.arange(H * k) // k), H - 1)
     xn = np.minimum((np.arange(W * k) // k), W - 1)
     # elsewhere each reading once, at its own pixel's middle: copied over the whole pixel it

@@ -315,6 +315,20 @@ def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
     return n
 
 
+def _frame_points(frames: list[Frame]):
+    """The frames' readings: points (N, 3) world, colours (N, 3) uint8, their flat pixels in
+    the first frame (N,) (-1 for the other frames' points) and the eye that saw each (N, 3).
+    """
+    pts, cols, pixs, eyes = [], [], [], []
+    for i, f in enumerate(frames):
+        p, c, q = f.points()
+        pts.append(p)
+        cols.append(c)
+        pixs.append(q if i == 0 else np.full(len(q), -1))
+        eyes.append(np.broadcast_to(f.pose[:3, 3], p.shape))
+    return np.concatenate(pts), np.concatenate(cols), np.concatenate(pixs), np.concatenate(eyes)
+
+
 def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     """The object's observed points and the upright frame: what every completion starts from.
 
@@ -325,15 +339,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     # sensor noise would roughen every observed surface: smooth the range images (not the
     # frames made from meshes, whose points are kept as given)
     frames = [f if f.cropped else denoise(f) for f in frames]
-    pts, cols, pixs, eyes = [], [], [], []
-    for i, f in enumerate(frames):
-        p, c, q = f.points()
-        pts.append(p)
-        cols.append(c)
-        pixs.append(q if i == 0 else np.full(len(q), -1))
-        eyes.append(np.broadcast_to(f.pose[:3, 3], p.shape))
-    P, C, pix = np.concatenate(pts), np.concatenate(cols), np.concatenate(pixs)
-    E = np.concatenate(eyes)
+    P, C, pix, E = _frame_points(frames)
     if len(P) < 10:
         raise InputError(f"{source}: expected a scan with depth readings, got {len(P)} points")
     cropped = all(f.cropped for f in frames)
@@ -434,30 +440,26 @@ def observe_metric(
 
 def densify(ob: Observation, res: int) -> Observation:
     """The observation with its points read from its frames upsampled
-    (:func:`partscale.complete.scan.upsample`) where their pixels, at the object's depth, are
-    wider than the voxel of a grid ``res`` voxels along the object: a sparse scan's points would otherwise
-    close into a blob each, apart from their neighbours (a far view's fragment of a staircase
-    fell into 157 pieces, dropped as specks).
+    (:func:`partscale.complete.scan.upsample`) where their pixels at the object, or its points,
+    lie more than ``UPSAMPLE_ABOVE`` voxels of a grid ``res`` voxels along the object apart: a
+    sparse scan's points would otherwise close into a blob each, apart from their neighbours (a
+    far view's fragment of a staircase fell into 157 pieces, dropped as specks), or into a lace
+    of tunnels (a point cloud, whose frame leaves about half its pixels empty).
 
-    A frame whose pixels (or the points' median spacing, where wider) are wider than
-    ``UPSAMPLE_ABOVE`` voxels is upsampled by the smallest
-    whole factor that makes them no wider than the voxel, at most ``UPSAMPLE_MAX`` and ``UPSAMPLE_PIXELS`` pixels; ``ob`` itself where none is needed.
-    What the observation found stays (up, the floor, which points are the object): the new
-    points are those within a coarse pixel of the object's and above its floor.
+    Each frame by the smallest whole factor that brings them within a voxel, at most
+    ``UPSAMPLE_MAX`` and ``UPSAMPLE_PIXELS`` pixels; ``ob`` itself where none is needed. What
+    the observation found stays (up, the floor, which points are the object): the new points
+    are those within a coarse pixel of the object's and above its floor.
     """
-    from scipy.spatial import cKDTree
-
-    Qu = _apply(ob.U, ob.points)
-    h = float((Qu.max(axis=0) - Qu.min(axis=0)).max()) / res
-    # the points' own spacing: a point cloud's frame has pixels about as wide as its points
-    # are apart, but only about half of them hold a point
-    spacing = float(np.median(cKDTree(ob.points).query(ob.points, k=2, workers=2)[0][:, 1]))
+    p = metric_mod.of_points(ob.points, ob.U)
+    assert p.extent is not None  # the points' own extent, always measured
+    h = p.extent / res
     ks, feet = [], []
     for f in ob.frames:
         z = (ob.points - f.pose[:3, 3]) @ f.pose[:3, 2]
         z = z[z > 0]
         foot = float(np.median(z)) / float(min(f.K[0, 0], f.K[1, 1])) if len(z) else 0.0
-        foot = max(foot, spacing)
+        foot = max(foot, p.spacing)
         k = int(min(UPSAMPLE_MAX, math.ceil(foot / h - 1e-9))) if foot > UPSAMPLE_ABOVE * h else 1
         H, W = f.shape
         while k > 1 and H * W * k * k > UPSAMPLE_PIXELS:
@@ -466,14 +468,9 @@ def densify(ob: Observation, res: int) -> Observation:
         feet.append(foot)
     if max(ks) == 1:
         return ob
-    frames = [upsample(f, k) for f, k in zip(ob.frames, ks, strict=True)]
-    pts, cols, eyes = [], [], []
-    for f in frames:
-        p, c, _ = f.points()
-        pts.append(p)
-        cols.append(c)
-        eyes.append(np.broadcast_to(f.pose[:3, 3], p.shape))
-    P, C, E = np.concatenate(pts), np.concatenate(cols), np.concatenate(eyes)
+    from scipy.spatial import cKDTree
+
+    P, C, _, E = _frame_points([upsample(f, k) for f, k in zip(ob.frames, ks, strict=True)])
     # a coarse pixel's diagonal around the object's own points: what lies between them
     reach = 1.5 * max(feet)
     near = np.isfinite(cKDTree(ob.points).query(P, distance_upper_bound=reach, workers=2)[0])

@@ -201,10 +201,8 @@ def upsample(frame: Frame, k: int) -> Frame:
     # the source position of each fine pixel's centre, and its four neighbours
     ys = np.clip((np.arange(H * k) + 0.5) / k - 0.5, 0, H - 1)
     xs = np.clip((np.arange(W * k) + 0.5) / k - 0.5, 0, W - 1)
-    y0, x0 = (
-        np.minimum(ys.astype(np.int64), H - 2 if H > 1 else 0),
-        np.minimum(xs.astype(np.int64), W - 2 if W > 1 else 0),
-    )
+    y0 = np.minimum(ys.astype(np.int64), max(H - 2, 0))
+    x0 = np.minimum(xs.astype(np.int64), max(W - 2, 0))
     y1, x1 = np.minimum(y0 + 1, H - 1), np.minimum(x0 + 1, W - 1)
     ty, tx = (ys - y0)[:, None], (xs - x0)[None, :]
     corners = [d[np.ix_(y0, x0)], d[np.ix_(y0, x1)], d[np.ix_(y1, x0)], d[np.ix_(y1, x1)]]
@@ -224,7 +222,7 @@ def upsample(frame: Frame, k: int) -> Frame:
         num += np.where(v, w * c, 0.0)
         den += np.where(v, w, 0.0)
     blend = num / np.maximum(den, 1e-12)
-    same = (n >= UPSAMPLE_READINGS) & (hi - lo < DENOISE_JUMP * np.minimum(lo, 1e9))
+    same = (n >= UPSAMPLE_READINGS) & (hi - lo < DENOISE_JUMP * lo)
     yn = np.minimum((np.arange(H * k) // k), H - 1)
     xn = np.minimum((np.arange(W * k) // k), W - 1)
     # elsewhere each reading once, at its own pixel's middle: copied over the whole pixel it

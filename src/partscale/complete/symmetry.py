@@ -472,6 +472,14 @@ def rotation_axis(
     else:
         foot_lo, foot_hi = np.full(2, -np.inf), np.full(2, np.inf)
         arm_cell = cell
+    # a base that turns is a star: arms whose lines meet at a hub on the axis. A box, a plinth
+    # or a table's frame also lands on itself turned about its middle where a side is seen (a
+    # 4-fold turn of a rectangle puts its long side on its short one), and turned copies of
+    # those stood off the object in unseen space (the wide benchmark's cabinets, desks, sofas):
+    # without arms, no turn is searched; with them, it must turn about where they radiate from
+    arms = _Arms.of(base, arm_cell, np.random.default_rng(seed + 1))
+    if arms is None:
+        return None
     piece = clusters(base, ROTATION_PIECE * cell)
     scorer = _Scorer(base, free, cell)
     bounds = (foot_lo, foot_hi)
@@ -481,13 +489,6 @@ def rotation_axis(
         if turn is not None:
             found.append((k, *turn))
     if not found:
-        return None
-    # a base that turns is a star: arms whose lines meet at a hub on the axis. A box, a plinth
-    # or a table's frame also lands on itself turned about its middle where a side is seen (a
-    # 4-fold turn of a rectangle puts its long side on its short one), and turned copies of
-    # those stood off the object in unseen space (the wide benchmark's cabinets, desks, sofas)
-    arms = _Arms.of(base, arm_cell, np.random.default_rng(seed + 1))
-    if arms is None:
         return None
     radial = max(arms.radial(f[2]) for f in found)
     if radial < MIN_RADIAL:

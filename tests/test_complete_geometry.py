@@ -205,8 +205,8 @@ def test_a_width_carries_a_sharp_rim_across_but_not_a_rounded_cushion_end(rounde
 
     P, N = _long_cushion(rounded)
     shape = (100, 46, 30)
-    sure, unsure = fuse._slab(
-        P, N, np.rint(P).astype(np.int64), np.zeros(3), 1.0, shape, np.zeros(shape, bool)
+    _, sure, unsure = fuse._fills(
+        P, N, np.rint(P).astype(np.int64), np.zeros(3), 1.0, np.zeros(shape, bool)
     )
     # inside the part, away from its end: under the band, across its depth
     inner = (sure | unsure)[: 94 - 10, 22:38, 6:22]
@@ -233,3 +233,80 @@ def test_the_fusion_fills_enclosed_space_as_scipy_does():
         assert (want == _fill_holes(m)).all()
         grew += int(want.sum() > m.sum())
     assert grew >= 4  # enclosed pockets in several cases
+
+
+def _face(axis: int, at: float, way: float, ranges, step: float = 0.5):
+    """Points (N, 3) and normals on the plane ``axis = at`` facing ``way`` (+1 or -1) over
+    ``ranges``: (lo, hi) of the other two axes in order, every ``step`` voxels."""
+    others = [a for a in range(3) if a != axis]
+    u, v = np.meshgrid(*(np.arange(lo, hi + 1e-9, step) for lo, hi in ranges), indexing="ij")
+    P = np.zeros((u.size, 3))
+    P[:, axis] = at
+    P[:, others[0]], P[:, others[1]] = u.ravel(), v.ravel()
+    N = np.zeros_like(P)
+    N[:, axis] = way
+    return P, N
+
+
+def _points(*faces):
+    return np.concatenate([f[0] for f in faces]), np.concatenate([f[1] for f in faces])
+
+
+def test_a_top_seen_from_inside_its_compartment_is_as_thick_as_its_board():
+    # a cabinet open at the front (+z), y up: a top board 5 voxels thick (y 35-40) on side
+    # panels 4 thick. Its edges run down the side panels, 32 voxels: as a slab's thickness
+    # that carried the top down through the compartment's back, which no camera saw. Where
+    # the top's underside was seen (the front three quarters) it measures the board, and the
+    # top is carried no deeper than that anywhere
+    from partscale.complete import fuse
+
+    P, N = _points(
+        _face(1, 40, 1, [(4, 36), (4, 36)]),  # top
+        _face(0, 36, 1, [(8, 40), (4, 36)]),  # side panels, outside
+        _face(0, 4, -1, [(8, 40), (4, 36)]),
+        _face(0, 32, -1, [(8, 35), (4, 36)]),  # and inside
+        _face(0, 8, 1, [(8, 35), (4, 36)]),
+        _face(2, 36, 1, [(4, 36), (35, 40)]),  # front edges of the boards
+        _face(2, 36, 1, [(32, 36), (8, 35)]),
+        _face(2, 36, 1, [(4, 8), (8, 35)]),
+        _face(1, 35, -1, [(8, 32), (12, 36)]),  # the top's underside, front three quarters
+    )
+    shape = (44, 48, 44)
+    x, y, z = np.indices(shape)
+    cabinet = (x >= 4) & (x <= 36) & (y >= 8) & (y <= 40) & (z >= 4) & (z <= 36)
+    seen_free = (x >= 9) & (x <= 31) & (y >= 9) & (y <= 34) & (z >= 12)
+    _, sure, unsure = fuse._fills(
+        P, N, np.rint(P).astype(np.int64), np.zeros(3), 1.0, ~cabinet | seen_free
+    )
+    slab = sure | unsure
+    # the compartment's unseen back, below the top board, away from the side panels
+    assert not slab[12:29, 10:34, 6:11].any()
+    # the board itself is carried through
+    assert slab[12:29, 35:40, 6:11].mean() >= 0.95
+
+
+def test_no_thickness_is_measured_down_a_leg():
+    # a seat (y 36-40) on a leg 3 voxels square (x, z 4-7) joined below by a rail whose
+    # underside (y 10) was seen: marched down from the seat's top above the leg, the first
+    # surface facing up is the rail's underside, 30 voxels down along the leg's faces; that is
+    # no thickness of the seat. Where the seat's own underside was seen it is
+    from partscale.complete import fuse
+
+    P, N = _points(
+        _face(1, 40, 1, [(4, 36), (4, 36)]),  # seat top
+        _face(1, 36, -1, [(10, 36), (10, 36)]),  # its underside, away from the leg
+        _face(0, 4, -1, [(10, 35), (4, 7)]),  # the leg's four faces
+        _face(0, 7, 1, [(10, 35), (4, 7)]),
+        _face(2, 4, -1, [(4, 7), (10, 35)]),
+        _face(2, 7, 1, [(4, 7), (10, 35)]),
+        _face(1, 10, -1, [(4, 36), (4, 7)]),  # the rail's underside
+    )
+    shape = (40, 44, 40)
+    idx = np.rint(P).astype(np.int64)
+    facing = fuse._facing(N, idx, shape)
+    _, seen = fuse._between(P, N, np.zeros(3), 1.0, facing, np.zeros(shape, bool))
+    top = N[:, 1] > 0
+    over_leg = top & (P[:, 0] >= 5) & (P[:, 0] <= 6) & (P[:, 2] >= 5) & (P[:, 2] <= 6)
+    middle = top & (np.abs(P[:, 0] - 22) <= 6) & (np.abs(P[:, 2] - 22) <= 6)
+    assert over_leg.sum() >= 4 and not seen[over_leg].any()
+    assert (seen[middle] >= 3).all() and (seen[middle] <= 4).all()

@@ -58,7 +58,11 @@ only from a sharp edge: of the voxels holding points in the cube ``2 * SLAB_RING
 around its start, at most this share hold only points turned off the axes (SheenChair's
 rounded cushion ends, three views: 0.64-0.91; the stool's rim, one view: median 0.38)."""
 SLAB_NEIGHBOURS = 32
-"""Edge measurements of a face's thickness whose most common value carries it across the face."""
+"""Measurements of a face's thickness whose most common value carries it across the face."""
+SLAB_SEEN_FROM = 3
+"""Voxels behind a flat face from which its other side, seen, measures its thickness: the march
+to it starts two voxels in and the faces it finds are widened by one, so a side nearer than
+this is the same board read on both faces (a thin shelf), not a depth to carry across."""
 PIECE_OBSERVED_VOXELS = 27
 """Observed voxels that keep a piece whatever its share of the largest (:func:`drop_pieces`):
 a baluster of a railing seen in part, not a flying pixel."""
@@ -254,8 +258,7 @@ def candidates(
     if fill_between:
         centres_all = (origin + np.indices(shape).reshape(3, -1).T * h).astype(np.float32)
         free_all = free_world(grid.to_world(centres_all)).reshape(shape)
-        between = _between(sp.points, sp.normals, sp.idx, origin, h, shape, free_all)
-        sure, unsure = _slab(sp.points, sp.normals, sp.idx, origin, h, shape, free_all)
+        between, sure, unsure = _fills(sp.points, sp.normals, sp.idx, origin, h, free_all)
         within |= between | sure | unsure
         within_closure |= sure
     return Candidates(within, within_closure, free_all)
@@ -501,39 +504,64 @@ def _edge(solid: np.ndarray) -> np.ndarray:
     return solid & ~ndimage.binary_erosion(solid, border_value=0)
 
 
-def _between(points, normals, idx, origin, h, shape, free) -> np.ndarray:
+def _fills(points, normals, idx, origin, h, free) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Three (X, Y, Z) bool: the fill between opposite surfaces (:func:`_between`) and the
+    slabs, sure and unsure (:func:`_slab`), of surface ``points`` (N, 3) grid coordinates with
+    unit ``normals`` (N, 3) in voxels ``idx`` (N, 3) int of a grid (``origin``, voxel ``h``)
+    whose voxels no camera saw through are ``~free`` (X, Y, Z) bool.
+    """
+    facing = _facing(normals, idx, free.shape)
+    between, seen = _between(points, normals, origin, h, facing, free)
+    sure, unsure = _slab(points, normals, idx, origin, h, free, seen, facing)
+    return between, sure, unsure
+
+
+def _facing(normals: np.ndarray, idx: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """(X, Y, Z) uint8: which ways the points (``normals`` (N, 3) unit, in voxels ``idx`` (N, 3)
+    int) in and next to each voxel face, one bit per axis direction (bit ``2 * axis + 1`` for
+    the negative way), dilated by a 3x3x3 cube.
+    """
+    axis = np.argmax(np.abs(normals), axis=1)
+    neg = normals[np.arange(len(normals)), axis] < 0
+    bits = np.zeros(shape, np.uint8)
+    np.bitwise_or.at(
+        bits, (idx[:, 0], idx[:, 1], idx[:, 2]), (1 << (2 * axis + neg)).astype(np.uint8)
+    )
+    return _dilate_bits(bits)
+
+
+def _between(points, normals, origin, h, facing, free) -> tuple[np.ndarray, np.ndarray]:
     """(X, Y, Z) bool: voxels between a surface point and the first surface behind it that
     faces the other way (a leg's front and back, a seat's left and right side), within
     ``BETWEEN_VOXELS``, where no camera saw through any voxel of the segment: the thickness the
     scan measured, instead of a thin closure with the unseen back of its shell inside the
-    object.
+    object. And (N,) int64: the voxels behind each point at which that surface was found (0:
+    none). ``facing`` (X, Y, Z) uint8: the ways the points in and next to each voxel face.
     """
-    # which ways the points in and next to each voxel face: one bit per axis direction
-    axis = np.argmax(np.abs(normals), axis=1)
-    neg = normals[np.arange(len(normals)), axis] < 0
-    bit = (1 << (2 * axis + neg)).astype(np.uint8)
-    bits = np.zeros(shape, np.uint8)
-    np.bitwise_or.at(bits, (idx[:, 0], idx[:, 1], idx[:, 2]), bit)
-    # the six bits dilated by a 3x3x3 cube at once
-    dil = _dilate_bits(bits)
     dirs = np.zeros((6, 3))
     dirs[np.arange(6), np.arange(6) // 2] = np.where(np.arange(6) % 2 == 0, 1.0, -1.0)
-    opposite = ((normals @ dirs.T < -BETWEEN_FACING) * (1 << np.arange(6))).sum(axis=1)
-    out = np.zeros(shape, bool)
+    cos = normals @ dirs.T
+    opposite = ((cos < -BETWEEN_FACING) * (1 << np.arange(6))).sum(axis=1)
+    across = ((np.abs(cos) < BETWEEN_FACING) * (1 << np.arange(6))).sum(axis=1)
+    out = np.zeros(free.shape, bool)
+    seen = np.zeros(len(points), np.int64)
     _march(
         ((points - origin) / h).astype(np.float64),
         normals.astype(np.float64),
         opposite.astype(np.uint8),
-        dil,
+        across.astype(np.uint8),
+        facing,
         free,
         int(BETWEEN_VOXELS),
         out,
+        seen,
     )
-    return out
+    return out, seen
 
 
-def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.ndarray]:
-    """Two (X, Y, Z) bool, sure and unsure: each face carried in to the thickness its side faces show.
+def _slab(points, normals, idx, origin, h, free, seen, facing) -> tuple[np.ndarray, np.ndarray]:
+    """Two (X, Y, Z) bool, sure and unsure: each face carried in to the thickness its side faces
+    and its other side, where seen, show.
 
     Where a face ends at a convex edge, the face perpendicular to it there (a seat's front below
     its top, a leg's side beside its front) runs in from the edge as far as the part is thick: a
@@ -549,7 +577,14 @@ def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.
     edge lengthens a few, holes at an edge shorten a few) and is carried in along its face's
     axis to that depth through voxels no camera saw through: the thickness of a slab whose
     underside no camera saw, where the between-fill finds no opposite surface.
+
+    Where a camera saw the face's other side, ``SLAB_SEEN_FROM`` or more voxels behind a flat
+    point (``seen``, from :func:`_between`), that distance is a measurement too, and a carry
+    stops at the other side: a cabinet's top seen from inside an open compartment is as thick
+    as its board there, not as deep as the side panel its edge runs down, and is not carried
+    through the compartment's unseen back.
     """
+    shape = free.shape
     axis = np.argmax(np.abs(normals), axis=1)
     neg = normals[np.arange(len(normals)), axis] < 0
     cls = (2 * axis + neg).astype(np.int64)
@@ -592,14 +627,19 @@ def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.
         w = np.flatnonzero(wide)
         wide[w[share <= SLAB_RING_TURNED]] = False
         depth[wide] = 0
-    # thickness at every point, from the nearest edge measurements facing its way
+    # the other side seen behind a flat point: the part's thickness there (the fill between
+    # reaches the widened side, one voxel short of it)
+    other_side = flat & (seen >= SLAB_SEEN_FROM)
+    depth[other_side] = np.minimum(seen[other_side] + 1, int(BETWEEN_VOXELS))
+    # thickness at every point, from the nearest measurements facing its way
     t = np.zeros(len(points))
     agree = np.zeros(len(points), bool)
     for c in range(6):
         m = cls == c
         e = m & (depth >= 1)
         # a box's faces have edges all round (a seat's top: 14 % of its points measure); a
-        # rounded cushion gives a few scattered walks (0.3-2 %), no thickness
+        # rounded cushion gives a few scattered walks (0.3-2 %), no thickness, unless its
+        # other side was seen
         if e.sum() < SLAB_EDGE_SHARE * m.sum() or e.sum() == 0:
             continue
         k = min(SLAB_NEIGHBOURS, int(e.sum()))
@@ -619,10 +659,12 @@ def _slab(points, normals, idx, origin, h, shape, free) -> tuple[np.ndarray, np.
         t[m] = np.where(far, 0.0, mode)
         agree[m] = share >= SLAB_AGREE
     t[~flat] = 0.0
+    # the bit of the way a point's other side faces
+    other = (1 << (2 * axis + ~neg)).astype(np.uint8)
     sure = np.zeros(shape, bool)
-    _carry(p[agree], n_axis[agree], t[agree], free, sure)
+    _carry(p[agree], n_axis[agree], t[agree], free, sure, other[agree], facing)
     unsure = np.zeros(shape, bool)
-    _carry(p[~agree], n_axis[~agree], t[~agree], free, unsure)
+    _carry(p[~agree], n_axis[~agree], t[~agree], free, unsure, other[~agree], facing)
     return sure, unsure
 
 
@@ -697,7 +739,7 @@ def _slab_measure(p, n, side, near, bits, anyb, reach, depth, wide):
 
 
 @numba.njit(cache=True, parallel=True)
-def _carry(p, n, t, free, out):
+def _carry(p, n, t, free, out, other, facing):
     for i in numba.prange(p.shape[0]):
         steps = int(2 * t[i])
         for k in range(1, steps + 1):
@@ -706,10 +748,13 @@ def _carry(p, n, t, free, out):
             if not _in_grid(a, b, c, free.shape) or free[a, b, c]:
                 break
             out[a, b, c] = True
+            # the part's other side, seen: the slab ends there
+            if s >= 1.0 and facing[a, b, c] & other[i]:
+                break
 
 
 @numba.njit(cache=True, parallel=True)
-def _march(p, n, opposite, bits, free, reach, out):
+def _march(p, n, opposite, across, bits, free, reach, out, seen):
     for i in numba.prange(p.shape[0]):
         hit = 0
         for s in range(2, reach + 1):
@@ -733,6 +778,15 @@ def _march(p, n, opposite, bits, free, reach, out):
                 ok = False
                 break
         if ok:
+            # a thickness only through one part's inside: not down a leg or along a wall,
+            # beside faces turned across the way (a seat's top to a rail below its legs)
+            beside = 0
+            for s in range(2, hit):
+                a, b, c = _voxel_at(p, n, i, s)
+                if bits[a, b, c] & across[i]:
+                    beside += 1
+            if beside <= SLAB_GAP:
+                seen[i] = hit
             for k in range(2 * hit + 1):
                 t = 0.5 * k
                 a, b, c = _voxel_at(p, n, i, t)

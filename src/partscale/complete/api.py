@@ -63,6 +63,8 @@ FLOOR_BROAD_SHARE = 0.6
 radius FLOOR_BROAD_M (floors seen 0.95-0.99; the TUM yellow chair's star base 0.24)."""
 CLOSURE = 1.5
 """Voxels behind a surface point that the solid extends into space nobody saw (the closure)."""
+CLOSURE_SPACINGS = 1.5
+"""The scan's point spacings that the closure reaches at least (:func:`closure_for`)."""
 NORMAL_NEIGHBOURS = 12
 """Scan points whose spread gives a point's normal (the side a camera saw it from)."""
 CARVE_MARGIN = 0.5
@@ -438,7 +440,27 @@ def observe_metric(
     return ob, None
 
 
-def densify(ob: Observation, res: int) -> Observation:
+def closure_for(closure: float, measured: metric_mod.Plausibility, res: int) -> float:
+    """The closure in voxels: ``closure``, or ``CLOSURE_SPACINGS`` of the scan's point spacing
+    (``measured``) on a grid ``res`` voxels along the object where that is more. Where the
+    points lie more than a voxel apart (a fine grid, a far or sparse scan), a closure of so many
+    voxels is thinner than the gaps between them, and the solid closes into a lace of tunnels
+    (a sofa's frame at --res 256, its points 1.4 voxels apart: 202 tunnels, 62 at 3 voxels).
+
+    Examples
+    --------
+    >>> from partscale.complete.metric import Plausibility
+    >>> closure_for(1.5, Plausibility(1.0, 0.005), 128)  # points 0.64 voxel apart
+    1.5
+    >>> closure_for(1.5, Plausibility(1.0, 0.02), 128)  # 2.56 voxels apart
+    3.84
+    """
+    assert measured.extent is not None  # the points' own extent, always measured
+    apart = measured.spacing * res / measured.extent
+    return round(max(float(closure), CLOSURE_SPACINGS * apart), 2)
+
+
+def densify(ob: Observation, res: int, measured: metric_mod.Plausibility) -> Observation:
     """The observation with its points read from its frames upsampled
     (:func:`partscale.complete.scan.upsample`) where their pixels at the object, or its points,
     lie more than ``UPSAMPLE_ABOVE`` voxels of a grid ``res`` voxels along the object apart: a
@@ -449,9 +471,10 @@ def densify(ob: Observation, res: int) -> Observation:
     Each frame by the smallest whole factor that brings them within a voxel, at most
     ``UPSAMPLE_MAX`` and ``UPSAMPLE_PIXELS`` pixels; ``ob`` itself where none is needed. What
     the observation found stays (up, the floor, which points are the object): the new points
-    are those within a coarse pixel of the object's and above its floor.
+    are those within a coarse pixel of the object's and above its floor. ``measured``: the
+    observation's extent and point spacing (:func:`partscale.complete.metric.of_points`).
     """
-    p = metric_mod.of_points(ob.points, ob.U)
+    p = measured
     assert p.extent is not None  # the points' own extent, always measured
     h = p.extent / res
     ks, feet = [], []
@@ -575,8 +598,9 @@ def complete(
             raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")
     ob, factor = observe_metric(frames, box=box, source=source, scale=scale)
-    dense = densify(ob, res)
-    opts = Settings(res, box, bool(upright), closure, source, factor)
+    measured = metric_mod.of_points(ob.points, ob.U)
+    dense = densify(ob, res, measured)
+    opts = Settings(res, box, bool(upright), closure_for(closure, measured, res), source, factor)
     full = _complete(ob, opts, symmetry=symmetry, extras=True, report=report, dense=dense)
     # the space the cameras surely saw through: pixels without a reading say nothing
     carver = column_mod.sure_carver(ob.frames, 0.0)

@@ -22,7 +22,8 @@ def complete(
         Path | None,
         typer.Argument(
             metavar="SCAN",
-            help="Partial range mesh or point cloud (PLY, camera frame, metres).",
+            help="Partial range mesh or point cloud (PLY, camera frame, metres), cropped to the "
+            "object and the floor at its foot: all else in it counts as object.",
         ),
     ] = None,
     output: _common.CsdfOut = Path("completed.csdf.npz"),

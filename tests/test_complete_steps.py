@@ -271,7 +271,7 @@ def test_a_board_thinner_than_a_voxel_seen_from_both_sides_keeps_its_solid():
 @pytest.fixture(scope="module")
 def sofa_frame():
     """One range frame of a 3 m sofa from 30 degrees, 20 above, at 1.5 times the framing
-    distance (its pixels about 0.7 voxel apart at the object at --res 128)."""
+    distance (its points about 1.3 voxels apart at --res 128)."""
     from conftest import data_path
 
     mesh = ingest.load_mesh(data_path("polyhaven/sofa_03/sofa_03_1k.gltf"))
@@ -305,9 +305,9 @@ def test_a_sparse_point_cloud_closes_without_a_lace_of_tunnels(sofa_frame, tmp_p
 
 
 def test_on_a_fine_grid_the_closure_reaches_as_far_as_the_points_lie_apart(sofa_frame):
-    # at --res 256 the frame's points lie about 1.4 voxels apart even upsampled, and a closure
-    # of 1.5 voxels behind them closed into a lace of 202 tunnels: it reaches 1.5 point
-    # spacings instead (3.8 voxels, recorded), and the surface has 78
+    # at --res 256 the frame's points lie about 2.5 voxels apart (upsampled three times for
+    # the surface), and a closure of 1.5 voxels behind them closed into a lace of 202 tunnels:
+    # it reaches 1.5 point spacings instead (3.8 voxels, recorded), and the surface has 78
     from partscale.complete import complete
 
     c = complete([sofa_frame], res=256)

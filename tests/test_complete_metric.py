@@ -82,7 +82,7 @@ def test_a_chair_scanned_in_decimetres_is_warned_about_and_completed_at_its_real
 
 def test_a_metric_scan_gets_no_scale_warning_and_no_scale_in_its_history(chair):
     frames = virtual_scan(chair, 1)
-    ob, factor = api.observe_metric(frames)
+    ob, factor, _ = api.observe_metric(frames)
     assert factor is None
     p = metric_mod.of_points(ob.points, ob.U)
     assert p.plausible and 0.8 <= p.extent <= 1.1

@@ -397,7 +397,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
 
 def observe_metric(
     frames: list[Frame], *, box=None, source: str = "scan", scale: float | None = None
-) -> tuple[Observation, tuple[float, str] | None]:
+) -> tuple[Observation, tuple[float, str] | None, metric_mod.Plausibility]:
     """:func:`observe` the scan in metres: multiplied by ``scale`` where given; otherwise checked
     (:mod:`partscale.complete.metric`) and, where it is not plausible furniture in metres,
     warned about and observed at the guessed power of ten where there is one.
@@ -407,10 +407,13 @@ def observe_metric(
     Observation
     (float, str) or None
         The factor applied to the scan and ``"option"`` or ``"guessed"``; None where none was.
+    Plausibility
+        The observation's extent and point spacing (:func:`partscale.complete.metric.of_points`).
     """
     if scale is not None:
         s = metric_mod.check_scale(scale)
-        return observe(metric_mod.scale_frames(frames, s), box=box, source=source), (s, "option")
+        given = observe(metric_mod.scale_frames(frames, s), box=box, source=source)
+        return given, (s, "option"), metric_mod.of_points(given.points, given.U)
     ob: Observation | None
     try:
         ob = observe(frames, box=box, source=source)
@@ -422,7 +425,7 @@ def observe_metric(
     else:
         p = metric_mod.of_points(ob.points, ob.U)
         if p.plausible:
-            return ob, None
+            return ob, None, p
     factor = p.guess()
     scaled = None
     if factor is not None:
@@ -435,9 +438,9 @@ def observe_metric(
         factor = None  # nothing to guess, or nothing found at that scale: the scan as it is
     warnings.warn(metric_mod.warning(p, source, factor), PartscaleWarning, stacklevel=3)
     if scaled is not None and factor is not None:
-        return scaled, (factor, "guessed")
+        return scaled, (factor, "guessed"), metric_mod.of_points(scaled.points, scaled.U)
     assert ob is not None  # observed as it is (a failed observation raised above)
-    return ob, None
+    return ob, None, p  # measured on ob (a frame stands in only where no object was found)
 
 
 def closure_for(closure: float, measured: metric_mod.Plausibility, res: int) -> float:
@@ -599,8 +602,7 @@ def complete(
         if len(box) != 4 or box[2] <= box[0] or box[3] <= box[1]:
             raise InputError(f"box: expected x0 y0 x1 y1 with x0 < x1 and y0 < y1, got {list(box)}")
     report(0.0, "reading the scan")
-    ob, factor = observe_metric(frames, box=box, source=source, scale=scale)
-    measured = metric_mod.of_points(ob.points, ob.U)
+    ob, factor, measured = observe_metric(frames, box=box, source=source, scale=scale)
     dense = densify(ob, res, measured)
     opts = Settings(res, box, bool(upright), closure_for(closure, measured, res), source, factor)
     full = _complete(ob, opts, symmetry=symmetry, extras=True, report=report, dense=dense)

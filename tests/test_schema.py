@@ -393,12 +393,13 @@ def test_mesh_scenes_are_validated_on_both_routes(tmp_path, capsys, monkeypatch,
 
 
 def test_fit_does_not_print_a_plan_it_then_refuses(tmp_path, capsys, monkeypatch):
-    """A flight of stairs gets a step zone from --add, which the mesh route cannot cut: the
-    refusal comes alone, before any plan line."""
+    """A thousand more steps on a flight of stairs (a mesh, so through its CSDF) would need far
+    more memory than there is: the refusal comes alone, before any plan line."""
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", str(1 << 30))
     stairs = data_path("kenney/stairs.glb")
     out = tmp_path / "o.glb"
-    code, lines = run(capsys, monkeypatch, "fit", stairs, "-o", out, "--add", "x", "1")
-    assert_one_line(code, lines, "step zone", "mesh route")
+    code, lines = run(capsys, monkeypatch, "fit", stairs, "-o", out, "--add", "x", "1000")
+    assert_one_line(code, lines, "fit --add x 1000", "would need", "memory")
     assert not out.exists()
 
 

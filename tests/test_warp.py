@@ -352,6 +352,16 @@ def test_flight_step_found_and_one_more_added(solid):
         assert _pieces(out) <= _pieces(c)
 
 
+def _treads(mesh, quantum: float) -> np.ndarray:
+    """The heights of a flight's treads: its upward faces grouped by height (to ``quantum``),
+    the groups of more than half the largest one's area."""
+    up = mesh.face_normals[:, 1] > 0.9
+    ys = np.round(mesh.triangles_center[up][:, 1] / quantum) * quantum
+    levels = np.unique(ys)
+    area = np.array([mesh.area_faces[up][ys == y].sum() for y in levels])
+    return levels[area > 0.5 * area.max()]
+
+
 @pytest.mark.parametrize(
     "rel",
     ["kenney/stairsOpenSingle.glb", "kenney/stairs.glb", "sweethome3d/staircase.obj"],
@@ -370,11 +380,7 @@ def test_real_flights_step_and_one_more(rel):
     (s,) = find_screws(c)[:1]
     # the mesh's treads: upward faces grouped by height
     m = trimesh.load(path, force="mesh")
-    up = m.face_normals[:, 1] > 0.99
-    ys = np.round(m.triangles_center[up][:, 1] / (h / 4)) * (h / 4)
-    levels = np.unique(ys)
-    area = np.array([m.area_faces[up][ys == y].sum() for y in levels])
-    treads = levels[area > 0.5 * area.max()]  # the treads: the largest upward faces
+    treads = _treads(m, h / 4)
     rise = float(np.median(np.diff(treads)))
     scale = _extent(c, 1) / float(np.ptp(m.vertices[:, 1]))  # the import's units
     assert abs(s.rise - rise * scale) <= h / 2, (s.rise, rise * scale)
@@ -385,6 +391,45 @@ def test_real_flights_step_and_one_more(rel):
     # largest piece (they and what joins them) is no smaller: not split at the cut
     assert _pieces(out) <= _pieces(c) + 1, (_pieces(c), _pieces(out))
     assert _largest(out) >= _largest(c)
+
+
+@pytest.mark.parametrize(
+    "args", [("fit", "--add", "y", "1"), ("scale", "--axis", "y", "--copies", "+1")]
+)
+def test_one_more_step_on_a_mesh_goes_through_its_csdf(args, cli, tmp_path):
+    """One more step on a mesh in one command: the mesh route cannot cut along steps, so the
+    step zone is applied to the mesh's CSDF and the result written remeshed, saying so: the
+    flight has one more tread, every rise the source's within a voxel, one watertight piece."""
+    import trimesh
+
+    src = data_path("kenney/stairs_short.glb")
+    out = tmp_path / "more.glb"
+    proc = cli(args[0], src, "-o", out, *args[1:])
+    assert proc.returncode == 0, proc.stderr
+    assert "step zone is applied to the mesh's CSDF" in proc.stderr, proc.stderr
+    m0 = trimesh.load(src, force="mesh")
+    m1 = trimesh.load(out, force="mesh")
+    h = float(np.ptp(m0.vertices, axis=0).max()) / 128  # the default import's voxel
+    t0, t1 = _treads(m0, h / 2), _treads(m1, h)
+    assert len(t1) == len(t0) + 1, (t0, t1)
+    rise = float(np.median(np.diff(t0)))
+    assert np.all(np.abs(np.diff(t1) - rise) <= h), (np.diff(t1), rise)
+    assert m1.is_watertight and len(m1.split(only_watertight=False)) == 1
+
+
+def test_a_turned_mesh_is_not_remeshed_square(cli, tmp_path):
+    """A flight turned 20 degrees about up, edited --square: the steps would go through its
+    CSDF, remeshed turned square and never turned back: refused in one line, nothing written."""
+    import trimesh
+
+    m = trimesh.load(data_path("kenney/stairs_short.glb"), force="mesh")
+    m.apply_transform(trimesh.transformations.rotation_matrix(np.radians(20), [0, 1, 0]))
+    src = tmp_path / "turned.glb"
+    m.export(src)
+    out = tmp_path / "more.glb"
+    proc = cli("fit", src, "-o", out, "--add", "y", "1", "--square")
+    assert_bad_input(proc, "--square", "step zone", "import with --square")
+    assert not out.exists()
 
 
 @pytest.mark.slow

@@ -8,9 +8,16 @@ from typing import Annotated
 
 import typer
 
-from ..csdf import SUFFIX, load, save
+from ..csdf import SUFFIX, load
 from . import _common
-from .scale import SQUARE_OPTION, check_usd, output_option, scale_mesh
+from .scale import (
+    SQUARE_OPTION,
+    check_usd,
+    output_option,
+    remesh_note,
+    scale_mesh,
+    write_edited,
+)
 
 
 def fit(
@@ -64,12 +71,12 @@ def fit(
     recipe = _plan(c, mesh_route, size, add, allow_deform)
     from .._files import staged_writes
 
-    if mesh_route:
+    if mesh_route and remesh_note(c, recipe) is None:
         with staged_writes():  # the mesh and its recipe: both, or neither
             scale_mesh(src, output, recipe, square=square)
             _write_recipe(recipe, recipe_out)
         return
-    _apply_and_save(c, recipe, output, recipe_out)
+    _apply_and_save(c, recipe, output, recipe_out, remesh=mesh_route)
 
 
 def _object(src: Path, mesh_route: bool, square: bool):
@@ -93,14 +100,16 @@ def _plan(c, mesh_route: bool, size, add, allow_deform: bool):
         allow_deform=allow_deform,
     )
     _preflight(c, recipe, mesh_route, size, add)
+    if mesh_route and (note := remesh_note(c, recipe)):
+        why = [*why, note]
     for line in why:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     return recipe
 
 
-def _apply_and_save(c, recipe, output: Path, recipe_out: Path | None) -> None:
+def _apply_and_save(c, recipe, output: Path, recipe_out: Path | None, *, remesh: bool) -> None:
     """The CSDF route: ``recipe`` applied with a progress bar, what changed said, the object
-    and its recipe written (both, or neither)."""
+    (or with ``remesh``, its surface as a mesh) and its recipe written (both, or neither)."""
     from .._files import staged_writes
     from ..edit import apply_recipe, describe_changes
 
@@ -109,7 +118,7 @@ def _apply_and_save(c, recipe, output: Path, recipe_out: Path | None) -> None:
     for line in describe_changes(out.meta.get("history", [])[-len(recipe.edits) :], out):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
     with staged_writes():  # the object and its recipe: both, or neither
-        save(out, output)
+        write_edited(out, output, remesh=remesh)
         _write_recipe(recipe, recipe_out)
     sb = out.surface_bounds()
     ext = " x ".join(f"{v:.4g}" for v in sb[1] - sb[0])
@@ -123,12 +132,9 @@ def _preflight(c, recipe, mesh_route: bool, size, add) -> None:
     from ..edit import Recipe, check_recipe_memory
 
     Recipe.parse(recipe.to_json(), units=c.meta.get("units"))  # what --recipe-out writes reads back
-    if mesh_route:
-        from ..meshedit import check_recipe
-
-        check_recipe(recipe)
+    if mesh_route and remesh_note(c, recipe) is None:
         return
-    what = f"fit to {' x '.join(size)}" if size is not None else f"fit --add {add}"
+    what = f"fit to {' x '.join(size)}" if size is not None else f"fit --add {add[0]} {add[1]}"
     check_recipe_memory(c, recipe, what=what)
 
 

@@ -186,8 +186,9 @@ def scale(
         _check_recipe_alone(axis, zone, mode, dest_given, snap)
         c, rec = _recipe_file(src, recipe, mesh_route, square)
     elif zone is None and copies is not None and axis is not None:
-        rec = _element_recipe(src, mesh_route, axis, copies, mode, snap, square, dest_given)
-        c = None if mesh_route else load(src)
+        c, rec = _element_recipe(src, mesh_route, axis, copies, mode, snap, square, dest_given)
+        if mesh_route and remesh_note(c, rec):  # steps or a ring: through the mesh's CSDF
+            return _apply_and_save(c, rec, output, remesh=True)
     else:
         c, rec, moves = _zone_recipe(
             src,
@@ -313,8 +314,9 @@ def _resolved_counts(src: Path, c, rec, square: bool):
     return rec
 
 
-def _apply_and_save(c, rec, output: Path, moves=None) -> None:
-    """Apply ``rec`` to ``c`` with a progress bar, say what changed, write ``output``."""
+def _apply_and_save(c, rec, output: Path, moves=None, *, remesh: bool = False) -> None:
+    """Apply ``rec`` to ``c`` with a progress bar, say what changed, write ``output`` (with
+    ``remesh``, as a mesh: :func:`write_edited`)."""
     from ..edit import apply_recipe, describe_changes
     from ..zones import feature_notes
 
@@ -327,8 +329,9 @@ def _apply_and_save(c, rec, output: Path, moves=None) -> None:
     entries = out.meta.get("history", [])[-len(rec.edits) :]
     for line in describe_changes(entries, out) + feature_notes(c, rec):
         _common.stderr.print(line, highlight=False, soft_wrap=True)
-    save(out, output)
-    _common.done(f"wrote {output} ({' x '.join(map(str, out.shape))} voxels)")
+    write_edited(out, output, remesh=remesh)
+    grid = f"{' x '.join(map(str, out.shape))} voxels"
+    _common.done(f"wrote {output} ({'remeshed from ' * remesh}{grid})")
 
 
 def _warp_recipe(
@@ -449,6 +452,45 @@ def _object(src: Path, mesh_route: bool, snap: bool, square: bool = False):
     return edit_target(src, zones=snap, square=square)
 
 
+def remesh_note(c, rec) -> str | None:
+    """The line saying a mesh's edit goes through its CSDF ``c`` (``rec`` has a zone the mesh
+    route cannot cut: steps, a ring), or None where the mesh route applies ``rec``; refused
+    where ``c`` was turned square (the remeshed result would stay turned)."""
+    from ..meshedit import off_plane_zones
+
+    kinds = off_plane_zones(rec)
+    if not kinds:
+        return None
+    turned = (c.meta.get("history") or [{}])[0].get("turned_deg")  # what --square made
+    if turned:
+        raise InputError(
+            f"--square: expected a turn of 0 with a {kinds[0]} zone on the mesh route (its CSDF "
+            f"is remeshed, and would stay turned), got {turned:g} degrees; import with --square "
+            "and edit the CSDF"
+        )
+    sb = c.surface_bounds()
+    res = round(float((sb[1] - sb[0]).max()) / c.voxel_size)
+    return (
+        "note: the mesh route cuts only at planes across x, y or z; the "
+        f"{' and '.join(sorted(set(kinds)))} zone is applied to the mesh's CSDF ({res} voxels "
+        "along its longest side) and the result remeshed (vertex colours, not its UVs and "
+        "materials; for a finer grid: partscale import --res 256, then edit and export)"
+    )
+
+
+def write_edited(out, output: Path, *, remesh: bool) -> None:
+    """``out`` written to ``output``: the CSDF, or with ``remesh`` its surface as a coloured
+    mesh (:func:`partscale.export.export_mesh` at export's default budget), with progress."""
+    if not remesh:
+        save(out, output)
+        return
+    from ..export import export_mesh
+    from .export import DEFAULT_ERROR
+
+    with _common.progress_bar("remesh") as bar:
+        export_mesh(out, output, error=DEFAULT_ERROR, progress=bar)
+
+
 def scale_mesh(src: Path, output: Path, rec, *, square: bool = False) -> None:
     """The mesh route: ``rec`` applied to the mesh ``src``, written to ``output``, what it did
     said on stderr (:func:`partscale.meshedit.report_lines`)."""
@@ -483,7 +525,8 @@ def _edit(c, axis: str, zone, mode: str, *, to, by, copies):
 
 def _element_recipe(src: Path, mesh_route: bool, axis: str, copies: str, mode, snap, square, given):
     """``--copies`` with no ``--zone``: whole elements added or removed along ``axis``
-    (:func:`partscale.zones.elements.find_elements`); the choice is printed."""
+    (:func:`partscale.zones.elements.find_elements`), the choice printed; returns the CSDF
+    they were found on (a mesh's, on the mesh route) and the recipe."""
     from ..edit import AXES, Recipe
     from ..zones import add_axis
 
@@ -513,9 +556,11 @@ def _element_recipe(src: Path, mesh_route: bool, axis: str, copies: str, mode, s
     # N in all: the change is N less the count of the repeat add_axis uses (elements, steps,
     # a ring's elements)
     edits, notes = add_axis(c, ax, n, in_all=not text.startswith(("+", "-")))
-    for line in notes:
+    rec = Recipe(tuple(edits))
+    note = remesh_note(c, rec) if mesh_route else None
+    for line in [*notes, *([note] if note else [])]:
         _common.stderr.print(line, highlight=False, soft_wrap=True)
-    return Recipe(tuple(edits))
+    return c, rec
 
 
 def _copies_total(copies: str) -> int:

@@ -17,7 +17,9 @@ Public API
 - :func:`is_mesh_route` ``(src, dst) -> bool``: whether an edit takes this route (a mesh in and
   out); :func:`check_route` (that, refusing a mesh in with a CSDF out), :func:`check_square`,
   :func:`edit_target` (what its options resolve against) and
-  :func:`report_lines` (what it says it did): the dispatch ``scale`` and ``fit`` share.
+  :func:`report_lines` (what it says it did): the dispatch ``scale`` and ``fit`` share;
+  :func:`check_recipe` refuses a recipe with zones off the axis planes, :func:`off_plane_zones`
+  names them (``fit`` then edits the mesh's CSDF and remeshes it).
 """
 
 from ..ingest import MESH_SUFFIXES  # the mesh route reads what the CSDF route reads
@@ -32,6 +34,7 @@ from .route import (
     edit_mesh_file,
     load_scene,
     mesh_frame,
+    off_plane_zones,
     save_scene,
 )
 
@@ -50,6 +53,7 @@ __all__ = [
     "is_mesh_route",
     "load_scene",
     "mesh_frame",
+    "off_plane_zones",
     "report_lines",
     "save_scene",
 ]

@@ -429,14 +429,48 @@ def _planar(recipe: Recipe) -> list[Edit]:
     out = []
     for i, e in enumerate(recipe.edits):
         if not isinstance(e, Edit):
-            kind = {"radial": "radial", "screw": "step", "helix": "helix"}
-            got = next((v for k, v in kind.items() if k in e.to_json()), "oblique")
             raise InputError(
-                f"edits[{i}]: expected a zone across x, y or z on the mesh route, got a {got} "
+                f"edits[{i}]: expected a zone across x, y or z on the mesh route, got a {_kind(e)} "
                 "zone (import the mesh and edit its CSDF: partscale import, then scale)"
             )
         out.append(e)
     return out
+
+
+def off_plane_zones(recipe: Recipe) -> list[str]:
+    """The kinds of the recipe's zones the mesh route cannot cut, in order.
+
+    The mesh route cuts triangles at planes across x, y or z; ``fit`` applies a recipe with any
+    other zone (``"step"``, ``"radial"``, ``"helix"``, ``"oblique"``) to the mesh's CSDF
+    instead, and remeshes the result.
+
+    Parameters
+    ----------
+    recipe : partscale.edit.Recipe
+        The recipe.
+
+    Returns
+    -------
+    list of str
+        Empty where the mesh route applies the whole recipe.
+
+    Examples
+    --------
+    >>> from partscale import meshedit
+    >>> from partscale.edit import Recipe
+    >>> meshedit.off_plane_zones(Recipe.parse({"edits": [{"axis": "x", "zone": [0, 1], "to": 2}]}))
+    []
+    >>> meshedit.off_plane_zones(
+    ...     Recipe.parse({"edits": [{"normal": [1, 1, 0], "zone": [0, 1], "to": 2}]})
+    ... )
+    ['oblique']
+    """
+    return [_kind(e) for e in recipe.edits if not isinstance(e, Edit)]
+
+
+def _kind(edit) -> str:
+    kinds = {"radial": "radial", "screw": "step", "helix": "helix"}
+    return next((v for k, v in kinds.items() if k in edit.to_json()), "oblique")
 
 
 def check_recipe(recipe: Recipe) -> None:

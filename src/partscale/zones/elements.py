@@ -898,13 +898,25 @@ def count_zone(
     )
 
 
-def element_phrase(found: AxisElements) -> str:
+def length_text(x: float, units: str | None) -> str:
+    """A length as the notes write it: centimetres under a metre where ``units`` is ``"m"``
+    (``'26.0 cm'``, ``'1.200 m'``), else four figures in the object's units.
+    """
+    if units == "m":
+        return f"{x * 100:.1f} cm" if abs(x) < 1 else f"{x:.3f} m"
+    return f"{x:.4g}"
+
+
+def element_phrase(found: AxisElements, units: str | None = None) -> str:
     """A few words on the best group: ``'2 alike elements, mirrored, 0.84..0.85 m long'``.
 
     Parameters
     ----------
     found : AxisElements
         The elements along an axis.
+    units : str, optional
+        The object's units: lengths as :func:`length_text` writes them (bare numbers where
+        not given).
 
     Returns
     -------
@@ -917,11 +929,17 @@ def element_phrase(found: AxisElements) -> str:
     >>> bookcase = shapes.bookcase()
     >>> zones.element_phrase(zones.find_elements(bookcase, "y"))
     '3 alike elements, 0.26 long'
+    >>> zones.element_phrase(zones.find_elements(bookcase, "y"), "m")
+    '3 alike elements, 26.0 cm long'
     """
     g = found.best
     if g is None:
         return "no repeated element"
     lengths = [found.elements[i].length for i in g.members]
     lo, hi = min(lengths), max(lengths)
-    size = f"{lo:.3g}" if hi - lo < found.voxel_size else f"{lo:.3g}..{hi:.3g}"
+    if units is None:
+        size = f"{lo:.3g}" if hi - lo < found.voxel_size else f"{lo:.3g}..{hi:.3g}"
+    else:
+        size = length_text(lo, units)
+        size += "" if hi - lo < found.voxel_size else f"..{length_text(hi, units)}"
     return f"{len(g.members)} alike elements{', mirrored' if g.mirrored else ''}, {size} long"

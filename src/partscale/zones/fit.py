@@ -41,6 +41,7 @@ from ..edit import (
 from ..errors import InputError
 from ..progress import ProgressCallback, resolve
 from .elements import AxisElements, count_zone, element_phrase, find_elements
+from .elements import length_text as _fmt
 from .features import Feature, axis_features, feature_spans, whole_copies
 from .helix import find_helices
 from .profile import STEP, Profile, calm_runs, profile
@@ -105,12 +106,6 @@ MAX_SHRINK = 0.5
 SPREAD_FRACTION = 0.5
 #: ...nor slabs shorter than this many voxels.
 MIN_SPREAD_VOXELS = 10
-
-
-def _fmt(x: float, units: str | None) -> str:
-    if units == "m":
-        return f"{x * 100:.1f} cm" if abs(x) < 1 else f"{x:.3f} m"
-    return f"{x:.4g}"
 
 
 def _disjoint(c: Candidate, zone: tuple[float, float] | None) -> bool:
@@ -682,7 +677,7 @@ def _element_periods(
         copies = max((region[0], z.start), (z.end, region[1]), key=lambda r: r[1] - r[0])
     note = (
         (f"{ax_name}: add {k} element(s)" if k > 0 else f"{ax_name}: remove {-k} element(s)")
-        + f" ({element_phrase(found)}), zone {_fmt(z.start - lo, units)}..{_fmt(z.end - lo, units)}"
+        + f" ({element_phrase(found, units)}), zone {_fmt(z.start - lo, units)}..{_fmt(z.end - lo, units)}"
         f" from the {ax_name} min"
         + (f" tiled to {1 + k} copies" if k > 0 else " (tile to its start: 0 copies)")
     )
@@ -896,11 +891,12 @@ def add_axis(
     if n > 0:
         edit = Edit(name, z.start, z.end, z.start + (1 + n) * z.length, "tile")
         note = (
-            f"{name}: add {n} element(s) ({element_phrase(found)}), {where} tiled to {1 + n} copies"
+            f"{name}: add {n} element(s) ({element_phrase(found, units)}), {where} tiled to "
+            f"{1 + n} copies"
         )
     else:
         edit = Edit(name, z.start, z.end, z.start, "tile")
-        note = f"{name}: remove {-n} element(s) ({element_phrase(found)}), {where} cut out"
+        note = f"{name}: remove {-n} element(s) ({element_phrase(found, units)}), {where} cut out"
     if z.seam > MATCH_SEAM:
         note += (
             f"; its planes' cross-sections differ by {z.seam:.2f}, the copies' joins are blended"

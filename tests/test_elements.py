@@ -428,6 +428,29 @@ def test_real_two_seat_sofa_gets_a_third_seat(sofa2):
     assert seat_crowns(apply_recipe(sofa2, recipe)) == 3, why
 
 
+def test_real_sofa_mesh_gets_a_third_seat_without_cracks(cli, sofa2, tmp_path):
+    """sweethome3d/sofa2 as a mesh, one more seat: its seat's two planes cut its triangles
+    differently, so the mesh route's copies would meet with cracks; fit says so and goes
+    through the mesh's CSDF: one watertight piece, the surface of the CSDF edit that has three
+    seats (test above) within half a voxel."""
+    import trimesh
+
+    from partscale.surface import sample_linear
+
+    out = tmp_path / "three.glb"
+    proc = cli("fit", data_path("sweethome3d/sofa2.obj"), "-o", out, "--add", "x", "1")
+    assert proc.returncode == 0, proc.stderr
+    assert "seams cannot be welded on the mesh" in proc.stderr, proc.stderr
+    assert "warning: seam" not in proc.stderr  # not written with cracks, then warned about
+    m = trimesh.load(out, force="mesh")
+    assert m.is_watertight and len(m.split(only_watertight=False)) == 1
+    recipe, _ = fit(sofa2, None, add={"x": 1})
+    edited = apply_recipe(sofa2, recipe)
+    assert seat_crowns(edited) == 3
+    d = sample_linear(edited.sdf, edited.world_to_index(np.asarray(m.vertices)))
+    assert np.abs(d).max() <= edited.voxel_size / 2, np.abs(d).max() / edited.voxel_size
+
+
 def test_real_two_seat_sofa_45_percent_wider_is_three_seats(sofa2):
     recipe, why = fit(sofa2, ["145%", "=", "="])
     out = apply_recipe(sofa2, recipe)

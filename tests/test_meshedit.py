@@ -169,6 +169,24 @@ def test_unmatched_seam_is_reported():
     assert "--snap" in seams[0].message() and "CSDF route" in seams[0].message()
 
 
+def test_welded_only_writes_nothing_where_a_seam_cannot_be_welded(tmp_path):
+    """welded_only (what fit asks for its own zones): a wedge tiled, whose seams cannot be
+    welded, writes no file and says which seams; a box tiled the same way is written."""
+    from partscale.meshedit import edit_mesh_file
+
+    wedge = trimesh.Trimesh(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]],
+        [[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [0, 3, 5], [0, 5, 2], [1, 2, 5], [1, 5, 4]],
+    )
+    recipe = Recipe.parse([{"axis": "x", "zone": ["20%", "60%"], "to": "100%", "mode": "tile"}])
+    for name, mesh, welds in (("wedge", wedge, False), ("box", trimesh.creation.box(), True)):
+        src, dst = tmp_path / f"{name}.glb", tmp_path / f"{name}_tiled.glb"
+        mesh.export(src)
+        result = edit_mesh_file(src, dst, recipe, welded_only=True)
+        assert all(seam.ok for seam in result.seams) is welds
+        assert (result.written == [dst]) is welds and dst.exists() is welds
+
+
 def test_stretch_normals_follow_the_surface(data):
     """Normals inside a stretched zone are the stretched surface's (unit, renormalised)."""
     scene = load_scene(data(TABLE[0]))

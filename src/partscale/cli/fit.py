@@ -73,9 +73,10 @@ def fit(
 
     if mesh_route and remesh_note(c, recipe) is None:
         with staged_writes():  # the mesh and its recipe: both, or neither
-            scale_mesh(src, output, recipe, square=square)
-            _write_recipe(recipe, recipe_out)
-        return
+            if scale_mesh(src, output, recipe, square=square, csdf=c):
+                _write_recipe(recipe, recipe_out)
+                return
+    # a CSDF; or on a mesh, steps, a ring or seams that cannot be welded: through its CSDF
     _apply_and_save(c, recipe, output, recipe_out, remesh=mesh_route)
 
 

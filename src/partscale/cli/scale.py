@@ -187,8 +187,13 @@ def scale(
         c, rec = _recipe_file(src, recipe, mesh_route, square)
     elif zone is None and copies is not None and axis is not None:
         c, rec = _element_recipe(src, mesh_route, axis, copies, mode, snap, square, dest_given)
-        if mesh_route and remesh_note(c, rec):  # steps or a ring: through the mesh's CSDF
+        # on a mesh, steps, a ring or seams that cannot be welded go through the mesh's CSDF
+        if mesh_route and (
+            remesh_note(c, rec) or not scale_mesh(src, output, rec, square=square, csdf=c)
+        ):
             return _apply_and_save(c, rec, output, remesh=True)
+        if mesh_route:
+            return
     else:
         c, rec, moves = _zone_recipe(
             src,
@@ -204,7 +209,8 @@ def scale(
             snap=snap,
         )
     if mesh_route:
-        return scale_mesh(src, output, rec, square=square)
+        scale_mesh(src, output, rec, square=square)
+        return
     assert c is not None  # loaded unless mesh_route
     _apply_and_save(c, rec, output, moves)
 
@@ -461,20 +467,32 @@ def remesh_note(c, rec) -> str | None:
     kinds = off_plane_zones(rec)
     if not kinds:
         return None
-    turned = (c.meta.get("history") or [{}])[0].get("turned_deg")  # what --square made
+    turned = _turned(c)
     if turned:
         raise InputError(
             f"--square: expected a turn of 0 with a {kinds[0]} zone on the mesh route (its CSDF "
             f"is remeshed, and would stay turned), got {turned:g} degrees; import with --square "
             "and edit the CSDF"
         )
-    sb = c.surface_bounds()
-    res = round(float((sb[1] - sb[0]).max()) / c.voxel_size)
+    zones = " and ".join(sorted(set(kinds)))
+    return _remesh_line(
+        c, f"the mesh route cuts only at planes across x, y or z, not a {zones} zone"
+    )
+
+
+def _turned(c) -> float:
+    """Degrees ``--square`` turned the mesh's CSDF ``c`` by (0.0: not turned)."""
+    return float((c.meta.get("history") or [{}])[0].get("turned_deg") or 0.0)
+
+
+def _remesh_line(c, why: str) -> str:
+    """The note that the edit goes through the mesh's CSDF ``c`` (imported for its zones), and
+    ``why``."""
+    res = (c.meta.get("history") or [{}])[0].get("res")
     return (
-        "note: the mesh route cuts only at planes across x, y or z; the "
-        f"{' and '.join(sorted(set(kinds)))} zone is applied to the mesh's CSDF ({res} voxels "
-        "along its longest side) and the result remeshed (vertex colours, not its UVs and "
-        "materials; for a finer grid: partscale import --res 256, then edit and export)"
+        f"note: {why}: the edit is applied to the mesh's CSDF (imported at --res {res}) and the "
+        "result remeshed (vertex colours, not its UVs and materials; for a finer grid: "
+        "partscale import --res 256, then edit and export)"
     )
 
 
@@ -491,18 +509,33 @@ def write_edited(out, output: Path, *, remesh: bool) -> None:
         export_mesh(out, output, error=DEFAULT_ERROR, progress=bar)
 
 
-def scale_mesh(src: Path, output: Path, rec, *, square: bool = False) -> None:
+def scale_mesh(src: Path, output: Path, rec, *, square: bool = False, csdf=None) -> bool:
     """The mesh route: ``rec`` applied to the mesh ``src``, written to ``output``, what it did
-    said on stderr (:func:`partscale.meshedit.report_lines`)."""
+    said on stderr (:func:`partscale.meshedit.report_lines`). Given the mesh's ``csdf`` (zones
+    the tool chose, not the user), nothing is written where a tile seam cannot be welded, and
+    the note says the edit goes through that CSDF: returns whether the mesh was written."""
     from ..meshedit import edit_mesh_file, report_lines
 
-    lines, done = report_lines(edit_mesh_file(src, output, rec, square=square))
+    welded_only = csdf is not None and not _turned(csdf)  # turned: a remesh would stay turned
+    result = edit_mesh_file(src, output, rec, square=square, welded_only=welded_only)
+    if not result.written:
+        bad = [seam for seam in result.seams if not seam.ok]
+        gaps = sum(seam.unmatched for seam in bad)
+        total = sum(seam.unmatched + seam.welded for seam in bad)
+        why = (
+            f"the copies' seams cannot be welded on the mesh ({gaps} of {total} vertices "
+            "without a partner: the cross-sections at the zone's planes differ)"
+        )
+        _common.stderr.print(_remesh_line(csdf, why), highlight=False, soft_wrap=True)
+        return False
+    lines, done = report_lines(result)
     for kind, line in lines:
         if kind == "warning":
             typer.echo(f"warning: {line}", err=True)
         else:
             _common.stderr.print(line, highlight=False, soft_wrap=True)
     _common.done(done)
+    return True
 
 
 def _edit(c, axis: str, zone, mode: str, *, to, by, copies):

@@ -850,7 +850,12 @@ def _restore_turn(scene: trimesh.Scene, saved: dict) -> None:
 
 
 def edit_mesh_file(
-    src: str | os.PathLike, dst: str | os.PathLike, recipe: Recipe, *, square: bool = False
+    src: str | os.PathLike,
+    dst: str | os.PathLike,
+    recipe: Recipe,
+    *,
+    square: bool = False,
+    welded_only: bool = False,
 ) -> MeshEditResult:
     """Apply ``recipe`` to the mesh file ``src`` and write the edited mesh to ``dst``.
 
@@ -869,6 +874,10 @@ def edit_mesh_file(
         The edits (positions refer to the source mesh).
     square : bool
         Edit the mesh turned square (see above).
+    welded_only : bool
+        Write nothing where a tile seam cannot be welded (its copies would meet with cracks):
+        the result's ``written`` is then empty and its ``seams`` say which (``fit`` then edits
+        the mesh's CSDF instead).
 
     Returns
     -------
@@ -917,7 +926,8 @@ def edit_mesh_file(
         warnings.warn(w.message, w.category, stacklevel=2)
     if saved is not None:
         _restore_turn(out, saved)
-    written = save_scene(out, dst)
+    welded = all(seam.ok for seam in seams)
+    written = save_scene(out, dst) if welded or not welded_only else []
     faces = _face_count(scene), _face_count(out)
     if square:
         return MeshEditResult(written, *faces, seams, turned_deg=round(turn or 0.0, 2))

@@ -209,6 +209,19 @@ def test_no_group_on_a_table_or_a_flight_or_a_round_top():
     assert find_elements(round_table(), "x").best is None
 
 
+@pytest.mark.parametrize("rel", ["kenney/tableCross.glb", "kenney/stairsOpen.glb"])
+def test_two_halves_of_one_object_about_a_board_are_no_pair(rel, cli, tmp_path):
+    """A trestle table's crossed legs and their stretcher, a staircase's middle stringer: across
+    them the object's two halves mirror each other and reach its ends, nothing ending either:
+    no elements along z (one more of them tiled half a table, a crossed leg cut through);
+    fit --add z 1 refuses in one line, naming a resize by length."""
+    src = data_path(rel)
+    assert find_elements(import_file(src, res=128), "z").best is None
+    out = tmp_path / "o.glb"
+    assert_bad_input(cli("fit", src, "-o", out, "--add", "z", "1"), "found none", "by length")
+    assert not out.exists()
+
+
 def test_a_row_of_slats_is_searched_within_a_bounded_number_of_comparisons(monkeypatch):
     """Dozens of slats offer exponentially many ways to cut the axis into elements (a row of
     64 took 1.2 million comparisons and over a minute): the search stays within three times

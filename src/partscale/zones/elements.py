@@ -44,7 +44,9 @@ How they are found (:func:`find_elements`), from the CSDF's geometry and colour 
    no group where its elements hold a separator clearly stronger than those between them
    (:data:`STRONGER`: rows of elements each), or where it spans less of the solid than
    :data:`MIN_COVER_PAIR` (two elements) or :data:`MIN_COVER` (three or more): two alike
-   layers of a sofa's height (its base and its seat) are not what a designer counts.
+   layers of a sofa's height (its base and its seat) are not what a designer counts. Nor are
+   two mirrored halves reaching the object's ends across a board (:func:`_halves`: a trestle
+   table's crossed legs, a staircase's middle stringer).
 
 Every position is world units along the axis (``origin + index * voxel_size``); layer
 ``i``'s centre is at :meth:`partscale.csdf.CSDF.axis_coords` ``[i]``.
@@ -100,6 +102,8 @@ ROW = 3
 #: Least share of the solid's length a group spans: two elements, or three or more.
 MIN_COVER_PAIR = 0.6
 MIN_COVER = 0.3
+#: Layers within which a pair of mirrored halves reaches the solid's ends (:func:`_halves`).
+HALF_ENDS = 1.0
 #: Layers sampled along each element to compare two of them.
 SAMPLES = 16
 #: Most chains reported per axis.
@@ -619,6 +623,8 @@ def _best_chains(p: Profile, cands: list[_Cand], chains: list[_Chain]) -> list[_
             return 0.0  # each a row of pieces parted as strongly: a run of slats, not two halves
         if cover < (MIN_COVER_PAIR if n == 2 else MIN_COVER):
             return 0.0  # a pair that is not most of the object: a sofa's base and seat
+        if _halves(c, i0, i1):
+            return 0.0  # one symmetric object's two halves about a board: nothing ends them
         coarse = 0.5 if inner >= sep - STRENGTH_TOL else 1.0
         return cover * (1 - 1 / n) * (1 - 0.5 * c.err / MATCH) * coarse
 
@@ -633,6 +639,23 @@ def _best_chains(p: Profile, cands: list[_Cand], chains: list[_Chain]) -> list[_
         if len(kept) == MAX_GROUPS:
             break
     return kept
+
+
+def _halves(c: _Chain, i0: int, i1: int) -> bool:
+    """Whether ``c`` is the two mirrored halves of one object about a board in its middle (a
+    trestle table's crossed legs and their stretcher, a staircase's middle stringer), not two
+    elements: they reach the solid's first and last layers ``i0``, ``i1`` (within
+    :data:`HALF_ENDS` layers), where elements are ended by something (an armrest, a side panel,
+    a gap), and a board parts them; doors parted by a gap and overlaying the sides stay a
+    pair.
+    """
+    return (
+        len(c.elements) == 2
+        and c.mirrored[-1]
+        and c.kinds == ("board",)
+        and c.elements[0][0] - i0 <= HALF_ENDS
+        and i1 - c.elements[-1][1] <= HALF_ENDS
+    )
 
 
 def _rows(cands: list[_Cand], c: _Chain, sep: float) -> bool:

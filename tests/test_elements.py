@@ -464,6 +464,17 @@ def test_real_sofa_mesh_gets_a_third_seat_without_cracks(cli, sofa2, tmp_path):
     assert np.abs(d).max() <= edited.voxel_size / 2, np.abs(d).max() / edited.voxel_size
 
 
+def test_suggest_reads_a_mesh_as_fit_does(cli, tmp_path):
+    """suggest on a mesh (what a new user tries first): imported as fit imports it, the same
+    elements listed; a file that is neither is refused in one line naming both."""
+    proc = cli("suggest", data_path("sweethome3d/sofa2.obj"), "--axis", "x")
+    assert proc.returncode == 0, proc.stderr
+    assert "x: 2 alike elements, mirrored" in proc.stdout, proc.stdout
+    notes = tmp_path / "notes.txt"
+    notes.write_text("a sofa")
+    assert_bad_input(cli("suggest", notes), ".csdf.npz file or a mesh", "got .txt")
+
+
 def test_real_two_seat_sofa_45_percent_wider_is_three_seats(sofa2):
     recipe, why = fit(sofa2, ["145%", "=", "="])
     out = apply_recipe(sofa2, recipe)

@@ -71,6 +71,29 @@ def progress_bar(description: str) -> Iterator[ProgressCallback]:
         yield callback
 
 
+def csdf_or_mesh(path: Path, res: int | None = None):
+    """The CSDF a command reads: ``path`` itself, or a mesh imported at ``res`` (default: the
+    import's, as ``fit`` finds a mesh's zones) with a progress bar, as ``partscale import``
+    would."""
+    from ..csdf import SUFFIX, load
+
+    if path.name.lower().endswith(SUFFIX):
+        return load(path)
+    from ..errors import InputError
+    from ..ingest import MESH_SUFFIXES
+    from ..ingest import load as import_file
+
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise InputError(
+            f"{path}: expected a {SUFFIX} file or a mesh ({', '.join(MESH_SUFFIXES)}), got "
+            f"{path.suffix or 'no suffix'}"
+        )
+    with progress_bar(f"import {path.name}") as bar:
+        if res is None:
+            return import_file(path, progress=bar)
+        return import_file(path, res=res, progress=bar)
+
+
 def done(message: str) -> None:
     """One line on stderr saying what was written."""
     stderr.print(message, highlight=False)

@@ -10,7 +10,7 @@ import typer
 from .._options import choice, count
 from ..errors import InputError
 from . import _common
-from ._common import check_output, done, progress_bar
+from ._common import check_output, csdf_or_mesh, done, progress_bar
 
 MESH_RES = 256
 """Voxels along a mesh's longest side when it is imported to be drawn: finer than the default
@@ -73,7 +73,7 @@ def render(
         raise InputError(
             f"{output}: expected an existing output folder, got none at {output.parent}"
         )
-    c = _object(path, res)
+    c = csdf_or_mesh(path, res)
     if parts and c.n_parts == 0:
         raise InputError(
             f"--parts: expected a segmented CSDF (partscale segment), got no parts in {path.name}"
@@ -88,21 +88,3 @@ def render(
         )
         render_mod.save_png(image, output)
     done(f"wrote {output} ({pixels} x {pixels}, {view} view)")
-
-
-def _object(path: Path, res: int):
-    """The CSDF to draw: ``path`` itself, or a mesh imported at ``res``."""
-    from ..csdf import SUFFIX, load
-
-    if path.name.lower().endswith(SUFFIX):
-        return load(path)
-    from ..ingest import MESH_SUFFIXES
-    from ..ingest import load as import_file
-
-    if path.suffix.lower() not in MESH_SUFFIXES:
-        raise InputError(
-            f"{path}: expected a {SUFFIX} file or a mesh ({', '.join(MESH_SUFFIXES)}), got "
-            f"{path.suffix or 'no suffix'}"
-        )
-    with progress_bar(f"import {path.name}") as bar:
-        return import_file(path, res=res, progress=bar)

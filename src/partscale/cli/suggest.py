@@ -17,7 +17,14 @@ if TYPE_CHECKING:
 
 
 def suggest(
-    src: Annotated[Path, typer.Argument(metavar="IN", help="A .csdf.npz file.")],
+    src: Annotated[
+        Path,
+        typer.Argument(
+            metavar="IN",
+            help="A .csdf.npz file, or a mesh (.glb, .gltf, .obj, .ply) imported at 128 first, "
+            "as fit finds a mesh's zones.",
+        ),
+    ],
     axis: Annotated[
         str | None,
         typer.Option("--axis", metavar="AXIS", help="The axis: x, y or z.", show_default="all"),
@@ -44,14 +51,13 @@ def suggest(
 
     Example: partscale suggest sofa.csdf.npz --axis x
     """
-    from ..csdf import load
     from ..zones import suggest as suggest_zones
 
     if axis is not None and axis.lower() not in ("x", "y", "z"):
         raise InputError(f"--axis: expected one of x, y, z, got {axis!r}")
     if png is not None:
         _common.check_output(png, suffixes=(".png",), what="an image file")
-    c = load(src)
+    c = _common.csdf_or_mesh(src)  # a mesh as fit reads it: its CSDF at the import's default
     ax = axis.lower() if axis is not None else None
     cands = suggest_zones(c, ax)
     _warn_off_square(c, ax)

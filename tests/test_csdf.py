@@ -175,6 +175,20 @@ def _with_meta(arrays, **changes) -> dict:
     return {**arrays, "meta": np.array(json.dumps(meta))}
 
 
+def test_a_mesh_read_as_a_csdf_is_refused_naming_the_import(tmp_path, cli):
+    """info on a GLB (a new user's first try): one line naming what makes a CSDF of it; a
+    damaged .csdf.npz is not told to import anything."""
+    import trimesh
+
+    mesh = tmp_path / "box.glb"
+    trimesh.creation.box().export(mesh)
+    assert_bad_input(cli("info", mesh), "expected a .csdf.npz", "partscale import makes one")
+    damaged = tmp_path / "damaged.csdf.npz"
+    damaged.write_bytes(b"not a zip")
+    with pytest.raises(InputError, match=r"expected a \.csdf\.npz \(zip of \.npy arrays\), got"):
+        load(damaged)
+
+
 def test_load_refuses_damaged_compressed_data(tmp_path, ball):
     """Bytes flipped inside the compressed sdf member: an InputError wherever they land."""
     good = save(ball, tmp_path / "good.csdf.npz")

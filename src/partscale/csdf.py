@@ -788,8 +788,10 @@ def load(path: str | os.PathLike) -> CSDF:
     except InputError:
         raise
     except Exception as exc:  # zipfile, zlib, numpy's header parser: many kinds on damaged data
+        # another kind of file (a mesh where a CSDF is read): the way from one to the other
+        hint = "" if path.suffix.lower() == ".npz" else "; partscale import makes one from a mesh"
         raise InputError(
-            f"{path}: expected a .csdf.npz (zip of .npy arrays), got {one_line(exc)}"
+            f"{path}: expected a .csdf.npz (zip of .npy arrays{hint}), got {one_line(exc)}"
         ) from None
     compact = names is _COMPACT_NAMES
     for a in data.values():

@@ -169,6 +169,51 @@ def test_unmatched_seam_is_reported():
     assert "--snap" in seams[0].message() and "CSDF route" in seams[0].message()
 
 
+def test_a_cut_leaves_no_piece_of_no_area():
+    """A triangle whose corners lie in a line (modelling leaves some) is met by the plane at
+    one point of two edges: no piece with two corners at that point is made (each would leave
+    an edge met once: the surface read as open); a corner a rounding error off the plane is
+    on it (no sliver)."""
+    from partscale.meshedit.cut import Piece, cut
+
+    line = Piece(np.array([[0.0, 0, 0], [2, 0, 0], [1, 0, 0]]), np.array([[0, 1, 2]]))
+    near = Piece(np.array([[0.0, 0, 0], [0.5 + 1e-17, 1, 0], [1, 0, 0]]), np.array([[0, 1, 2]]))
+    for piece, plane in ((line, 0.5), (near, 0.5)):
+        out = cut(piece, 0, plane)
+        P = out.vertices[out.faces]
+        same = [(P[:, i] == P[:, (i + 1) % 3]).all(axis=1) for i in range(3)]
+        assert not np.any(same), out.faces
+        area = np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+        assert area.sum() == pytest.approx(
+            np.linalg.norm(np.cross(*(piece.vertices[1:] - piece.vertices[0]))), abs=1e-12
+        )
+
+
+@pytest.mark.parametrize("zone", [(-0.13, 0.13), (-0.3, -0.05)])
+def test_a_two_sided_box_stretched_still_imports_as_a_solid(zone, tmp_path):
+    """Every face stored once per winding (Kenney's cabinets and stairs): the pieces of a face
+    cut at a zone plane are stored once per winding too, so the result imports as the longer
+    solid (it read as a hollow, a third of its volume, where a face's two copies were cut
+    along different diagonals)."""
+    from partscale.ingest import load as import_file
+    from partscale.meshedit import edit_mesh_file
+
+    box = trimesh.creation.box((1.0, 0.6, 0.4))
+    two_sided = trimesh.Trimesh(box.vertices, np.concatenate([box.faces, box.faces[:, ::-1]]))
+    src, dst = tmp_path / "box.glb", tmp_path / "longer.glb"
+    two_sided.export(src)
+    recipe = Recipe.parse([{"axis": "x", "zone": list(zone), "to": zone[1] + 0.25}])
+    edit_mesh_file(src, dst, recipe)
+    c = import_file(dst, res=64)
+    assert c.meta["history"][0].get("two_sided_copies_dropped", 0) > 0
+    # the box 1.25 m long, one-sided, imported alike
+    plain = tmp_path / "plain.glb"
+    trimesh.creation.box((1.25, 0.6, 0.4)).export(plain)
+    p = import_file(plain, res=64)
+    volume, expected = ((x.sdf < 0).sum() * x.voxel_size**3 for x in (c, p))
+    assert abs(volume - expected) <= 0.02 * expected, (volume, expected)
+
+
 def test_welded_only_writes_nothing_where_a_seam_cannot_be_welded(tmp_path):
     """welded_only (what fit asks for its own zones): a wedge tiled, whose seams cannot be
     welded, writes no file and says which seams; a box tiled the same way is written."""

@@ -34,12 +34,19 @@ def cut(piece: Piece, axis: int, plane: float) -> Piece:
     closed) at exactly ``plane``; its attributes are interpolated from the edge's end points,
     ordered by side, so coincident edges (seams of UV charts) get bit-identical new vertices.
     Existing vertices and uncut triangles are kept unchanged and in order; the pieces of cut
-    triangles are appended, wound like their triangle.
+    triangles are appended, wound like their triangle (pieces of a triangle of no area that
+    have two corners at one point are dropped). A four-cornered piece is split at the
+    diagonal from its least corner by position, whatever the triangle's first corner: a face
+    stored once per winding (a two-sided face) is cut into pieces stored once per winding too.
     """
     V, F = piece.vertices, piece.faces
     if len(F) == 0:
         return piece
-    side = np.sign(V[:, axis] - plane).astype(np.int8)
+    # a corner within rounding of the plane lies on it: cut there, it would leave a sliver of
+    # no area (a degenerate triangle, and a two-sided face's copies cut apart)
+    off = V[:, axis] - plane
+    tol = 1e-12 * (float(np.ptp(V[:, axis])) + abs(plane))
+    side = np.where(np.abs(off) <= tol, 0, np.sign(off)).astype(np.int8)
     s = side[F]
     crossing = (s.min(axis=1) < 0) & (s.max(axis=1) > 0)
     if not crossing.any():
@@ -62,6 +69,10 @@ def cut(piece: Piece, axis: int, plane: float) -> Piece:
     cut_index = cut_index.reshape(-1, 3)  # cut vertex on edge (k, k+1) of each crossing triangle
     faces_out, owner_local = [], []
     tri_side = s[crossing]
+    # corners ranked by position (x, then y, then z): where to start a four-cornered piece
+    every = np.concatenate([V, new_v])
+    rank = np.empty(len(every), np.int64)
+    rank[np.lexsort((every[:, 2], every[:, 1], every[:, 0]))] = np.arange(len(every))
     for n in range(len(tri)):
         poly, sides = [], []
         for k in range(3):
@@ -72,11 +83,25 @@ def cut(piece: Piece, axis: int, plane: float) -> Piece:
                 sides.append(0)
         for keep in (-1, 1):
             sub = [v for v, sd in zip(poly, sides, strict=True) if sd * keep >= 0]
+            if len(sub) > 3:
+                first = min(range(len(sub)), key=lambda i: rank[sub[i]])
+                sub = sub[first:] + sub[:first]
             for j in range(1, len(sub) - 1):
                 faces_out.append((sub[0], sub[j], sub[j + 1]))
                 owner_local.append(n)
-    owner = np.flatnonzero(crossing)[np.asarray(owner_local, np.int64)]
-    faces = np.concatenate([F[~crossing], np.asarray(faces_out, np.int64).reshape(-1, 3)])
+    pieces = np.asarray(faces_out, np.int64).reshape(-1, 3)
+    # a triangle of no area (its corners in a line) is cut at one point of two of its edges:
+    # its pieces with two corners there are dropped (no area; each edge of theirs would be
+    # met once, and an importer would read the surface as open there)
+    P = every[pieces]
+    flat = (
+        (P[:, 0] == P[:, 1]).all(axis=1)
+        | (P[:, 1] == P[:, 2]).all(axis=1)
+        | (P[:, 2] == P[:, 0]).all(axis=1)
+    )
+    pieces = pieces[~flat]
+    owner = np.flatnonzero(crossing)[np.asarray(owner_local, np.int64)[~flat]]
+    faces = np.concatenate([F[~crossing], pieces])
     order = np.concatenate([np.flatnonzero(~crossing), owner])
     vattrs = {k: np.concatenate([v, v[p0] + t * (v[p1] - v[p0])]) for k, v in piece.vattrs.items()}
     fattrs = {k: v[order] for k, v in piece.fattrs.items()}

@@ -214,6 +214,25 @@ def test_a_two_sided_box_stretched_still_imports_as_a_solid(zone, tmp_path):
     assert abs(volume - expected) <= 0.02 * expected, (volume, expected)
 
 
+def test_a_real_two_sided_cabinet_stretched_still_imports_as_a_solid(tmp_path):
+    """Kenney's kitchenCabinetUpperDouble (two-sided walls, a one-sided back) 17.5 cm wider on
+    the mesh route: the strips its walls are cut into along the back's edge read a part of a
+    whole winding number at their probes; they follow the rest of their walls, and the result
+    imports as the wider cabinet (it read as a hollow shell, under half the source's volume)."""
+    from conftest import data_path
+
+    from partscale.ingest import load as import_file
+    from partscale.meshedit import edit_mesh_file
+
+    src, dst = data_path("kenney/kitchenCabinetUpperDouble.glb"), tmp_path / "wider.glb"
+    recipe = Recipe.parse([{"axis": "x", "zone": ["28.15%", "42.98%"], "to": "57.02%"}])
+    edit_mesh_file(src, dst, recipe)
+    before, after = (import_file(p, res=96) for p in (src, dst))
+    assert after.meta["history"][0].get("two_sided_copies_dropped", 0) > 0
+    v0, v1 = ((c.sdf < 0).sum() * c.voxel_size**3 for c in (before, after))
+    assert v0 <= v1 <= 1.25 * v0, (v0, v1)  # wider, by under a quarter (17.5 of 125 cm)
+
+
 def test_welded_only_writes_nothing_where_a_seam_cannot_be_welded(tmp_path):
     """welded_only (what fit asks for its own zones): a wedge tiled, whose seams cannot be
     welded, writes no file and says which seams; a box tiled the same way is written."""

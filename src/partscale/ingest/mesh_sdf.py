@@ -102,6 +102,9 @@ def grid_for_bounds(lo, hi, res: int, pad: int):
 
 CLASS_CUTS = (-0.25, 0.25, 0.75)
 """Winding-number values where a triangle's class changes (see :func:`classify_pieces`)."""
+MAX_UNSURE_SHARE = 0.05
+"""Largest share of a group of two-sided faces' area whose probes read a part of a whole
+number (slivers along an open face's edge): more, and the group keeps every copy."""
 INSIDE_CUTS = (0.5,)
 """Inside where ``w > 1/2``."""
 FAST_ACCURACY = 1.5
@@ -451,7 +454,10 @@ def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> np.ndarray:
     must read as a boundary: a group of them with ``w < CLASS_CUTS[0]`` in front of a copy
     is wound the wrong way round, and is turned over; where that does not help either, it
     keeps every copy (as imports did before; checked again, up to 3 times, as that changes
-    the others' ``w``). A mesh with none keeps every face.
+    the others' ``w``). A face whose probe reads a part of a whole (a sliver along an open
+    face's edge, where a wall was cut beside a one-sided back) follows its group where such
+    faces hold at most ``MAX_UNSURE_SHARE`` of the group's area; else the group keeps every
+    copy. A mesh with none keeps every face.
     """
     pairs = _two_sided.opposite_pairs(V, F)
     fwd = pairs.fwd
@@ -464,8 +470,21 @@ def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> np.ndarray:
     probe = tris[ok].mean(axis=1) + 0.05 * h * nrm[ok] / ln[ok, None]
     two = ~ok  # no area: it joins up the faces around it whichever copy is kept
     w = _Winding(V, F)(probe, CLASS_CUTS)
-    two[ok] = (np.abs(w - np.round(w)) <= CLASS_CUTS[1]) & (w >= CLASS_CUTS[0])
+    whole = np.abs(w - np.round(w)) <= CLASS_CUTS[1]
+    two[ok] = w >= CLASS_CUTS[0]
+    # a sliver along the edge of an open face (a wall's strip cut at a plane beside a one-sided
+    # back) reads a part of a whole at its probe: it follows its group, where most of the
+    # group's area reads whole
+    unsure = np.zeros(len(fwd), bool)
+    unsure[ok] = ~whole
     choice, group = _two_sided.keep_one(pairs, two)
+    linked = group >= 0
+    if linked.any():
+        area = np.zeros(len(fwd))
+        area[ok] = ln[ok]
+        total = np.bincount(group[linked], area[linked])
+        share = np.bincount(group[linked], (area * unsure)[linked]) / np.maximum(total, 1e-300)
+        choice[linked & (share[np.maximum(group, 0)] > MAX_UNSURE_SHARE)] = 0
     for step in range(4):
         on = np.flatnonzero((choice != 0) & ok)
         if len(on) == 0:

@@ -187,13 +187,11 @@ def scale(
         c, rec = _recipe_file(src, recipe, mesh_route, square)
     elif zone is None and copies is not None and axis is not None:
         c, rec = _element_recipe(src, mesh_route, axis, copies, mode, snap, square, dest_given)
-        # on a mesh, steps, a ring or seams that cannot be welded go through the mesh's CSDF
-        if mesh_route and (
-            remesh_note(c, rec) or not scale_mesh(src, output, rec, square=square, csdf=c)
-        ):
-            return _apply_and_save(c, rec, output, remesh=True)
         if mesh_route:
-            return
+            if remesh_note(c, rec) is None and scale_mesh(src, output, rec, square=square, csdf=c):
+                return
+            # steps, a ring, or seams that cannot be welded: through the mesh's CSDF
+            return _apply_and_save(c, rec, output, remesh=True)
     else:
         c, rec, moves = _zone_recipe(
             src,

@@ -51,7 +51,9 @@ def fit(
 ) -> None:
     """Resize to a target size or by whole elements: tile whole periods or elements (seats,
     doors, shelf rows), absorb the rest in a slab of constant cross-section; says what it chose,
-    and refuses (exit 2) where only a deformation would reach the size.
+    and refuses (exit 2) where only a deformation would reach the size. A mesh is edited on the
+    mesh route; where the zones chosen are steps or a ring, or the copies' seams cannot be
+    welded, through its CSDF instead, written remeshed (and said).
     """
     from ..meshedit import check_route, check_square, is_mesh_route
 

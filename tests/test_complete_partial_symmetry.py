@@ -41,3 +41,45 @@ def test_mirror_plane_found_from_the_back_and_one_side(name, floor):
     V = np.asarray(mesh.vertices)
     middle = (V[:, 0].max() + V[:, 0].min()) / 2
     assert abs(-sy.U[0, 3] / normal[0] - middle) <= 0.01
+
+
+def _plane_normals(sy) -> np.ndarray:
+    """(K, 3): the world normal of each mirror plane found (upright -> world by ``sy.Uinv``)."""
+    out = []
+    for s in sy.syms:
+        w, v = np.linalg.eig(s.A)
+        n = np.real(v[:, np.argmin(np.real(w))])
+        out.append(sy.Uinv[:3, :3] @ n)
+    return np.array(out)
+
+
+def test_a_cabinet_seen_from_its_corner_mirrors_along_its_walls():
+    """sweethome3d/kitchenCabinet (60 by 64 cm) seen from a front corner: its front and side,
+    both seen whole, are mirror images of each other about its diagonal (every copy lands on
+    the scan), while a plane along its walls copies half of what was seen into unseen space.
+    It is no square, and furniture stands square to its walls: every plane kept runs along
+    them (the diagonal, kept first, carried its side 4 cm past its front: F@1% 0.354 against
+    0.416 for the scan as it was)."""
+    mesh = ingest.load_mesh(data_path("sweethome3d/kitchenCabinet.obj"))
+    frames = virtual_scan(mesh, azimuths=(315.0,), elevation=15.0)
+    sy = api.find_symmetries(api.observe(frames), 128, True)
+    normals = _plane_normals(sy)
+    assert len(normals), "expected a mirror plane"
+    along = np.maximum(np.abs(normals[:, 0]), np.abs(normals[:, 2]))
+    assert np.all(along >= np.cos(np.radians(15.0))), normals
+
+
+def test_a_square_box_keeps_its_diagonal_mirror(tmp_path):
+    """A box square in plan (50 by 50 cm) seen from its corner: its diagonal is a mirror plane
+    as good as its walls' own, and is kept where it holds best."""
+    import trimesh
+
+    path = tmp_path / "box.glb"
+    trimesh.creation.box(
+        (0.5, 0.7, 0.5), trimesh.transformations.translation_matrix((0, 0.35, 0))
+    ).export(path)
+    frames = virtual_scan(ingest.load_mesh(path), azimuths=(45.0,), elevation=15.0)
+    sy = api.find_symmetries(api.observe(frames), 128, True)
+    normals = _plane_normals(sy)
+    diagonal = np.abs(np.abs(normals[:, 0]) - np.abs(normals[:, 2])) <= np.sin(np.radians(10.0))
+    assert diagonal.any(), normals

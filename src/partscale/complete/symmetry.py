@@ -24,6 +24,14 @@ from scipy.spatial import cKDTree
 from .carve import lookup
 
 MIN_SUPPORT = 0.3
+#: Walls in plan (:func:`_walls`): this share of the upright faces' normals within this many
+#: degrees of one direction or the one square to it. Unless the object spans as far along one
+#: as along the other (within WALL_SQUARE_CELLS cells), no mirror plane within
+#: WALL_DIAGONAL_DEG of their diagonal.
+WALL_SHARE = 0.6
+WALL_SPREAD_DEG = 5.0
+WALL_DIAGONAL_DEG = 15.0
+WALL_SQUARE_CELLS = 2.0
 MAX_VIOLATION = 0.06
 VIOLATION_WEIGHT = 4.0
 SAMPLES = 1500
@@ -201,10 +209,15 @@ def mirror_planes(
     S, SC = P[pick], C[pick]
     scorer = _Scorer(P, free, cell)
     top = float(P[:, 1].max())
+    # walls in plan, and not square: no mirror plane across their diagonal (see _best_plane)
+    walls = None if normals is None else _walls(np.asarray(normals, np.float64))
+    if walls is not None and _square_in_plan(P, walls, cell):
+        walls = None  # square: its diagonal may be a mirror plane as well as the walls' own
     found: list[Symmetry] = []
     pts, cols = S, SC
     for _ in range(max_planes):
-        best = _best_plane(pts, cols, scorer, cell, rng, [s.params["theta"] for s in found], top)
+        taken = [s.params["theta"] for s in found]
+        best = _best_plane(pts, cols, scorer, cell, rng, taken, top, walls)
         if best is None:
             break
         if normals is not None:
@@ -233,7 +246,49 @@ def mirror_planes(
     return found
 
 
-def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
+def _walls(normals: np.ndarray) -> float | None:
+    """The direction (radians, modulo a right angle) of the object's walls in plan: where at
+    least ``WALL_SHARE`` of its upright faces' normals (``normals`` (N, 3) unit, upright)
+    turn within ``WALL_SPREAD_DEG`` of one direction or the one square to it; else None (a
+    round object, or faces turned every way).
+    """
+    side = np.flatnonzero(np.abs(normals[:, 1]) < 0.3)
+    if len(side) < 50:
+        return None
+    phi = np.degrees(np.arctan2(normals[side, 2], normals[side, 0])) % 90.0
+    hist = np.bincount(np.floor(phi).astype(np.int64) % 90, minlength=90)
+    spread = int(WALL_SPREAD_DEG)
+    window = np.array(
+        [hist[np.arange(j - spread, j + spread + 1) % 90].sum() for j in range(90)], np.float64
+    )
+    best = int(np.argmax(window))
+    if window[best] < WALL_SHARE * len(side):
+        return None
+    return float(np.radians(best + 0.5))
+
+
+def _square_in_plan(P: np.ndarray, walls: float, cell: float) -> bool:
+    """Whether points ``P`` (N, 3) upright span as far along the walls' one direction
+    (``walls``, radians) as along the other, within ``WALL_SQUARE_CELLS`` cells: a square
+    stool or table, whose diagonal maps one side onto the other (a cabinet 60 by 64 cm is no
+    square: its diagonal would carry its side 4 cm past its front).
+    """
+    u = np.array([np.cos(walls), np.sin(walls)])
+    X = P[:, [0, 2]]
+    along = float(np.ptp(X @ u))
+    across = float(np.ptp(X @ np.array([-u[1], u[0]])))
+    return abs(along - across) <= WALL_SQUARE_CELLS * cell
+
+
+def _diagonal(theta: np.ndarray, walls: float) -> np.ndarray:
+    """(K,) bool: plane normals ``theta`` (radians) within ``WALL_DIAGONAL_DEG`` of the
+    diagonal between the walls' two directions.
+    """
+    off = np.degrees(np.asarray(theta) - walls) % 90.0
+    return np.abs(off - 45.0) <= WALL_DIAGONAL_DEG
+
+
+def _best_plane(S, SC, scorer, cell, rng, taken, top, walls=None) -> Symmetry | None:
     n = len(S)
     i = rng.integers(0, n, PAIRS)
     j = rng.integers(0, n, PAIRS)
@@ -258,8 +313,16 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top) -> Symmetry | None:
     for k in order:
         t0 = (ti[k] + 0.5) * np.pi / n_t
         d0 = d_lo + (di[k] + 0.5) * (d_hi - d_lo + 1e-9) / n_d
-        if not any(_angle_gap(t0, t) < np.radians(30) for t in taken):
-            peaks.append((t0, d0))
+        if any(_angle_gap(t0, t) < np.radians(30) for t in taken):
+            continue
+        # a box seen from a corner: the plane on its diagonal maps the face seen on one side
+        # onto the face seen on the other, and holds best (all it copies lands on the scan),
+        # where planes along its walls copy half of it into unseen space. A mirror across the
+        # diagonal swaps the walls' two directions: it holds only for an object as long along
+        # one as along the other, which one with ``walls`` is not (see mirror_planes)
+        if walls is not None and _diagonal(np.array([t0]), walls)[0]:
+            continue
+        peaks.append((t0, d0))
     if not peaks:
         return None
     slab = _slab_ids(S[:, 1], top)

@@ -18,8 +18,8 @@ Public API
   out); :func:`check_route` (that, refusing a mesh in with a CSDF out), :func:`check_square`,
   :func:`edit_target` (what its options resolve against) and
   :func:`report_lines` (what it says it did): the dispatch ``scale`` and ``fit`` share;
-  :func:`check_recipe` refuses a recipe with zones off the axis planes, :func:`off_plane_zones`
-  names them (``fit`` then edits the mesh's CSDF and remeshes it).
+  :func:`off_plane_zones` names a recipe's zones off the axis planes, which the mesh route
+  refuses (``fit`` then edits the mesh's CSDF and remeshes it).
 """
 
 from ..ingest import MESH_SUFFIXES  # the mesh route reads what the CSDF route reads
@@ -30,7 +30,6 @@ from .route import (
     MeshFrame,
     Seam,
     apply_recipe_to_scene,
-    check_recipe,
     edit_mesh_file,
     load_scene,
     mesh_frame,
@@ -45,7 +44,6 @@ __all__ = [
     "MeshFrame",
     "Seam",
     "apply_recipe_to_scene",
-    "check_recipe",
     "check_route",
     "check_square",
     "edit_mesh_file",

@@ -425,7 +425,9 @@ def _resolve(edit: Edit, lo: float, hi: float) -> tuple[float, float, float]:
 
 
 def _planar(recipe: Recipe) -> list[Edit]:
-    """The recipe's zones across an axis (see :func:`check_recipe`)."""
+    """The recipe's zones across an axis; refused (one line, naming the CSDF route) where one
+    is not (see :func:`off_plane_zones`).
+    """
     out = []
     for i, e in enumerate(recipe.edits):
         if not isinstance(e, Edit):
@@ -471,37 +473,6 @@ def off_plane_zones(recipe: Recipe) -> list[str]:
 def _kind(edit) -> str:
     kinds = {"radial": "radial", "screw": "step", "helix": "helix"}
     return next((v for k, v in kinds.items() if k in edit.to_json()), "oblique")
-
-
-def check_recipe(recipe: Recipe) -> None:
-    """Refuse (one line) a recipe the mesh route cannot apply, before any work.
-
-    The mesh route cuts triangles at planes square to an axis: a radial, oblique, step or
-    helix zone is refused, naming the CSDF route that applies it.
-
-    Parameters
-    ----------
-    recipe : partscale.edit.Recipe
-        The recipe.
-
-    Returns
-    -------
-    None
-        Raises :class:`~partscale.errors.InputError` naming the first edit it cannot apply.
-
-    Examples
-    --------
-    >>> from partscale import meshedit
-    >>> from partscale.edit import Recipe
-    >>> meshedit.check_recipe(Recipe.parse({"edits": [{"axis": "x", "zone": [0, 1], "to": 2}]}))
-    >>> meshedit.check_recipe(
-    ...     Recipe.parse({"edits": [{"normal": [1, 1, 0], "zone": [0, 1], "to": 2}]})
-    ... )
-    Traceback (most recent call last):
-    ...
-    partscale.errors.InputError: edits[0]: expected a zone across x, y or z on the mesh route, got a oblique zone ...
-    """
-    _planar(recipe)
 
 
 def apply_recipe_to_scene(scene: trimesh.Scene, recipe: Recipe) -> tuple[trimesh.Scene, list[Seam]]:

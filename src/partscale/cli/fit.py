@@ -70,10 +70,10 @@ def fit(
         from ..errors import InputError
 
         raise InputError("fit: expected --size X Y Z or --add AXIS N, got neither")
-    recipe = _plan(c, mesh_route, size, add, allow_deform)
+    recipe, remesh = _plan(c, mesh_route, size, add, allow_deform)
     from .._files import staged_writes
 
-    if mesh_route and remesh_note(c, recipe) is None:
+    if mesh_route and not remesh:
         with staged_writes():  # the mesh and its recipe: both, or neither
             if scale_mesh(src, output, recipe, square=square, csdf=c):
                 _write_recipe(recipe, recipe_out)
@@ -93,7 +93,8 @@ def _object(src: Path, mesh_route: bool, square: bool):
 
 
 def _plan(c, mesh_route: bool, size, add, allow_deform: bool):
-    """The recipe :func:`partscale.zones.fit` chooses, checked up front, and why (stderr)."""
+    """The recipe :func:`partscale.zones.fit` chooses, checked up front, and why (stderr); and
+    whether a mesh is edited through its CSDF (steps or a ring: :func:`.scale.remesh_note`)."""
     from ..zones import fit as fit_zones
 
     recipe, why = fit_zones(
@@ -102,12 +103,11 @@ def _plan(c, mesh_route: bool, size, add, allow_deform: bool):
         add=None if add is None else {add[0]: add[1]},
         allow_deform=allow_deform,
     )
-    _preflight(c, recipe, mesh_route, size, add)
-    if mesh_route and (note := remesh_note(c, recipe)):
-        why = [*why, note]
-    for line in why:  # one line each, unwrapped
+    note = remesh_note(c, recipe) if mesh_route else None
+    _preflight(c, recipe, mesh_route and note is None, size, add)
+    for line in [*why, *([note] if note else [])]:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
-    return recipe
+    return recipe, note is not None
 
 
 def _apply_and_save(c, recipe, output: Path, recipe_out: Path | None, *, remesh: bool) -> None:
@@ -128,14 +128,15 @@ def _apply_and_save(c, recipe, output: Path, recipe_out: Path | None, *, remesh:
     _common.done(f"wrote {output} (solid {ext} {out.meta.get('units') or ''})")
 
 
-def _preflight(c, recipe, mesh_route: bool, size, add) -> None:
+def _preflight(c, recipe, on_mesh: bool, size, add) -> None:
     """What applying the recipe checks up front, done before the plan is printed: a plan is
-    never shown and then refused (a step zone on the mesh route, a size too large for memory,
-    a recipe its own schema or the mixing rule refuses)."""
+    never shown and then refused (a size too large for memory, a recipe its own schema or the
+    mixing rule refuses). ``on_mesh``: applied to the mesh itself, whose route checks its
+    copies' memory as it makes them."""
     from ..edit import Recipe, check_recipe_memory
 
     Recipe.parse(recipe.to_json(), units=c.meta.get("units"))  # what --recipe-out writes reads back
-    if mesh_route and remesh_note(c, recipe) is None:
+    if on_mesh:
         return
     what = f"fit to {' x '.join(size)}" if size is not None else f"fit --add {add[0]} {add[1]}"
     check_recipe_memory(c, recipe, what=what)

@@ -158,12 +158,15 @@ def _desk():
 
 @pytest.fixture(scope="module")
 def desk_scans():
-    """The desk seen once from 30 degrees above, with and without the floor under it."""
+    """The desk seen once from 30 degrees above, with and without the floor under it, and
+    level without a floor ("level")."""
     mesh = _desk()
-    return {
+    out = {
         floor: virtual.virtual_scan(mesh, 1, floor=floor, elevation=30.0, azimuths=(30.0,))
         for floor in (True, False)
     }
+    out["level"] = virtual.virtual_scan(mesh, 1, floor=False, elevation=0.0, azimuths=(30.0,))
+    return out
 
 
 def test_symmetry_on_a_known_up_is_kept(desk_scans):
@@ -175,18 +178,30 @@ def test_symmetry_on_a_known_up_is_kept(desk_scans):
     assert m["mirrored"] > 0.05 and any(s["kind"] == "mirror" for s in m["symmetries"])
 
 
+def test_symmetry_on_the_faces_up_is_kept(desk_scans):
+    # no floor from 30 degrees above: the camera's own axis is 30 degrees off, the desk's level
+    # top and upright legs give up, and the mirror plane's copies stand on it
+    c = complete(desk_scans[False], res=48)
+    m = c.meta["completion"]
+    assert m["up_from"].startswith("faces")
+    assert np.degrees(np.arccos(np.clip(np.asarray(m["up"]) @ [0, 1, 0], -1, 1))) <= 1.0
+    assert m["guard"]["kept"] == "completion" and m["guard"]["weak"] == []
+    assert m["mirrored"] > 0.05
+
+
 @pytest.fixture(scope="module")
 def desk_without_floor(desk_scans):
-    """The desk completed from its view without a floor, and the warnings it gave."""
+    """The desk completed from its level view without a floor, and the warnings it gave."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        c = complete(desk_scans[False], res=48)
+        c = complete(desk_scans["level"], res=48)
     return c, [str(w.message) for w in caught if issubclass(w.category, PartscaleWarning)]
 
 
 def test_symmetry_on_the_cameras_up_gives_way_to_the_observed_scan(desk_scans, desk_without_floor):
-    # no floor, no level underside: up is the camera's own axis, 30 degrees off, and so are the
-    # mirror planes found by it: the scan as observed, closed, comes back, and says so
+    # seen level without a floor: no level face seen, no level underside: up is the camera's own
+    # axis (right here, but nothing in the scan says so), and so are the mirror planes found by
+    # it: the scan as observed, closed, comes back, and says so
     c, notes = desk_without_floor
     m = c.meta["completion"]
     record = m["guard"]
@@ -197,7 +212,7 @@ def test_symmetry_on_the_cameras_up_gives_way_to_the_observed_scan(desk_scans, d
     assert sum("camera's axis for up" in n for n in notes) == 1, notes
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PartscaleWarning)
-        forced = complete(desk_scans[False], res=48, force_completion=True)
+        forced = complete(desk_scans["level"], res=48, force_completion=True)
     kept = forced.meta["completion"]
     assert kept["guard"]["kept"] == "completion" and kept["mirrored"] > 0.0
     assert "camera's axis for up" in kept["guard"]["reason"]

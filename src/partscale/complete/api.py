@@ -43,6 +43,10 @@ from .scan import (
 METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
+FACES_FLOOR_TILT_DEG = 5.0
+"""Degrees from the up that the scan's faces give within which the floor is searched first."""
+FACES_AGAINST_DEG = 10.0
+"""Degrees from the faces' up beyond which a plane found near the camera's up is no floor."""
 CLUSTER_CELL = 0.03
 """Metres: points closer than about this are one object when isolating it automatically (at
 least; a sparser scan's cell is :data:`CLUSTER_SPACINGS` times its point spacing)."""
@@ -50,6 +54,9 @@ CLUSTER_SPACINGS = 4.0
 """The cell within which points are one object, in point spacings of the scan (the first frame's
 pixel footprint at its median depth): a scan sparser than CLUSTER_CELL / CLUSTER_SPACINGS (a
 far view, a coarse sensor) would otherwise fall apart into pieces of one object."""
+STANDS_WITHIN = 0.15
+"""Metres above the floor within which a cluster's lowest point stands on it (picked first when
+isolating automatically)."""
 MAX_OBJECT_EXTENT = 4.0
 """Metres: the largest object isolated automatically (a 3.3 m lounge sofa, a table for ten);
 larger clusters are walls or the room."""
@@ -111,6 +118,37 @@ def _is_floor(P: np.ndarray, plane, inliers: np.ndarray, cropped: bool) -> bool:
         return max(np.subtract(*np.percentile(X @ d, [98, 2])) for d in (a, b))
 
     return extent(P[inliers]) > 1.3 * extent(rest)
+
+
+def _faces_up(P: np.ndarray, pose: np.ndarray) -> np.ndarray | None:
+    """(3,) up from the scan's faces (:func:`partscale.complete.floor.faces_up`) where they
+    give it clearly, else None.
+    """
+    found = floor_mod.faces_up(P, pose)
+    return found.up if found.clear else None
+
+
+def _floor(P: np.ndarray, up: np.ndarray, faces: np.ndarray | None, cropped: bool):
+    """The floor (Plane, (N,) bool inliers) of the scan's points ``P`` (N, 3), or None: near
+    the ``faces``' up where they gave one (``FACES_FLOOR_TILT_DEG``), else near the camera's
+    ``up``; a camera pitched far down (a handheld scan from above) sees the floor farther off
+    its axis: searched there once more where it is a floor (broad, under all that stands on
+    it). A plane found near the camera's up that lies far off the faces' up (a chair's back
+    seen from above, a stair's riser) is no floor.
+    """
+    if faces is not None:
+        found = find_floor(P, faces, FLOOR_TOL, max_tilt=FACES_FLOOR_TILT_DEG)
+        if found is not None:
+            return found
+    found = find_floor(P, up, FLOOR_TOL)
+    if found is None and not cropped:
+        wide = find_floor(P, up, FLOOR_TOL, max_tilt=floor_mod.WIDE_TILT_DEG)
+        if wide is not None and _is_floor(P, wide[0], wide[1], cropped):
+            found = wide
+    if found is not None and faces is not None:
+        if found[0].normal @ faces < np.cos(np.radians(FACES_AGAINST_DEG)):
+            return None
+    return found
 
 
 def _broad(X: np.ndarray) -> float:
@@ -178,15 +216,32 @@ def _isolate(frames, P, pix, height, up, box, cropped, cell) -> np.ndarray:
         return above
     idx = np.flatnonzero(above)
     lab = clusters(P[idx], cell)
-    n = lab.max() + 1
-    H, W = frames[0].shape
-    best, best_key = -1, (np.inf, 0)
-    counts = np.bincount(lab, minlength=n)
-    for c in np.flatnonzero(counts >= max(200, 0.002 * len(idx))):
+    counts = np.bincount(lab)
+    best = _nearest_centre(frames[0].shape, P, pix, height, idx, lab, counts)
+    if best < 0:
+        raise InputError(
+            f"scan: expected an object of at most {MAX_OBJECT_EXTENT} m across above the floor, "
+            "got none; pick one with box",
+            params=("box",),
+        )
+    return _join_footprint(P, idx, lab, counts, best, up, cell)
+
+
+def _nearest_centre(shape, P, pix, height, idx, lab, counts) -> int:
+    """The label of the cluster nearest the image centre among those of an object's size
+    standing on the floor; where none stands on it, among all of an object's size (seen from
+    above or far off, a chair's legs or a table's may leave too few points to be one: the seat
+    or the top floats); -1 where none is of an object's size.
+    """
+    H, W = shape
+    picks = {True: (-1, (np.inf, 0)), False: (-1, (np.inf, 0))}
+    # a cluster of an object's points: 200 of them, a quarter of a sparse scan's (a far view)
+    least = max(min(200.0, 0.25 * len(idx)), 0.002 * len(idx), 30.0)
+    for c in np.flatnonzero(counts >= least):
         m = idx[lab == c]
         ext = P[m].max(axis=0) - P[m].min(axis=0)
-        if ext.max() > MAX_OBJECT_EXTENT or height[m].min() > 0.15:
-            continue  # a wall, the room, or something not standing on the floor
+        if ext.max() > MAX_OBJECT_EXTENT:
+            continue  # a wall or the room
         p0 = pix[m][pix[m] >= 0]
         if len(p0) == 0:
             continue
@@ -197,15 +252,10 @@ def _isolate(frames, P, pix, height, up, box, cropped, cell) -> np.ndarray:
         du = max(u.min() - W / 2, W / 2 - u.max(), 0.0)
         dv = max(v.min() - H / 2, H / 2 - v.max(), 0.0)
         key = (math.hypot(du, dv), -int(counts[c]))
-        if key < best_key:
-            best, best_key = int(c), key
-    if best < 0:
-        raise InputError(
-            "scan: expected an object standing on the floor (at most "
-            f"{MAX_OBJECT_EXTENT} m across), got none; pick one with box",
-            params=("box",),
-        )
-    return _join_footprint(P, idx, lab, counts, best, up, cell)
+        standing = bool(height[m].min() <= STANDS_WITHIN)
+        if key < picks[standing][1]:
+            picks[standing] = (int(c), key)
+    return picks[True][0] if picks[True][0] >= 0 else picks[False][0]
 
 
 def _join_footprint(P, idx, lab, counts, best, up, cell) -> np.ndarray:
@@ -284,7 +334,8 @@ class Observation:
     ``U`` (4, 4) world -> upright (y up, floor at 0, centred), the floor (Plane, inliers) or None,
     the (denoised) frames, the points' unit normals (N, 3) world, facing their camera, what
     gave up: ``"floor"``, ``"underside"`` (a level plane under the object that is no floor),
-    ``"base"`` (:func:`partscale.complete.floor.base_plane`) or ``"camera"`` (its -y axis), and
+    ``"base"`` (:func:`partscale.complete.floor.base_plane`), ``"faces"``
+    (:func:`partscale.complete.floor.faces_up`) or ``"camera"`` (its -y axis), and
     the factor each frame was upsampled by (:func:`densify`; empty: none was).
     """
 
@@ -347,13 +398,8 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     cropped = all(f.cropped for f in frames)
     cell = cluster_cell(frames[0])
     up = _up_prior(frames[0])
-    found = find_floor(P, up, FLOOR_TOL)
-    if found is None and not cropped:
-        # a camera pitched far down (a handheld scan from above): the floor lies farther off
-        # its axis; taken only where it is a floor (broad, under all that stands on it)
-        wide = find_floor(P, up, FLOOR_TOL, max_tilt=floor_mod.WIDE_TILT_DEG)
-        if wide is not None and _is_floor(P, wide[0], wide[1], cropped):
-            found = wide
+    faces = None if cropped else _faces_up(P, frames[0].pose)
+    found = _floor(P, up, faces, cropped)
     support = None
     if found is not None and not _is_floor(P, found[0], found[1], cropped):
         # a flat underside (a swivel chair's base, the legs of a star): it gives up, not a
@@ -369,6 +415,8 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         up_from = "base" if support is not None else up_from
     elif support is not None:
         up_from = "underside"
+    elif found is None and faces is not None:
+        up, up_from = faces, "faces"
     if found is not None:
         plane, _ = found
         up, floor_offset = plane.normal, plane.offset
@@ -791,7 +839,7 @@ def _mirrors_and_up(
     ob: Observation, U: np.ndarray, sub: np.ndarray, cell: float, free_up: FreeUp
 ) -> tuple[list[sym_mod.Symmetry], np.ndarray, str, float]:
     """Mirror planes of the scan's points ``sub`` in the upright frame ``U``; where up came from
-    no level plane (a base, the camera), up tilted to the first plane's tilt and the planes
+    no level plane (a base, the faces, the camera), up tilted to the first plane's tilt and the planes
     searched again in that frame. Returns the planes, the frame, where up came from, the tilt
     (degrees).
     """
@@ -799,7 +847,7 @@ def _mirrors_and_up(
     Qu, Nu0 = _apply(U, Q), QN @ U[:3, :3].T
     syms = sym_mod.mirror_planes(Qu[sub], QC[sub], free_up, cell, normals=Nu0[sub])
     up_from = ob.up_from
-    if not syms or up_from not in ("base", "camera"):
+    if not syms or up_from not in ("base", "camera", "faces"):
         return syms, U, up_from, 0.0
     # a mirror plane contains up: where up is no level plane's (a floor, an underside) the
     # plane tilted across itself to fit the scan best says how far up is off across it (a

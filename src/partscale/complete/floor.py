@@ -4,11 +4,15 @@ A floor is a plane whose normal lies within ``MAX_TILT_DEG`` of the up prior (th
 negative y axis), with at least ``MIN_INLIER_FRACTION`` of the points on it and almost none below
 it (a desk top has the floor and the chairs below it; the floor has only noise). Without a floor,
 the plane of an object's base (:func:`base_plane`) gives up, within the same bound of the prior.
+Furniture's faces are mostly level or upright: the direction most of a scan's flat patches lie
+square to (:func:`faces_up`) is up, found without a floor and, where it is clear, the prior the
+floor is searched near (a camera pitched far down sees the floor far off its own axis).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy import ndimage
@@ -21,6 +25,38 @@ object (a handheld scan from above) sees the floor 45 degrees off its own axis."
 MIN_INLIER_FRACTION = 0.04
 MAX_BELOW_FRACTION = 0.03
 ITERATIONS = 600
+FACES_SAMPLE = 6000
+"""Scan points whose neighbourhoods' flatness and normals :func:`faces_up` reads."""
+FACES_NEIGHBOURS = 12
+FACES_FLAT = 0.05
+"""A neighbourhood is a flat patch where its least spread (variance) is at most this share of
+the next."""
+FACES_SIGMA_DEG = 3.0
+"""Degrees of a patch's normal from level or upright over which its vote falls to 0.61."""
+FACES_PITCH_DEG = (-40.0, 85.0)
+"""Camera pitches (degrees down) :func:`faces_up` searches: from looking up at a tall shelf to
+looking almost straight down."""
+FACES_ROLL_DEG = 15.0
+"""Largest roll of the camera about its axis that :func:`faces_up` searches (hand-held)."""
+FACES_MIN_SCORE = 0.17
+"""The least mean vote (0 to 1.5: each patch votes up to 1 for level and
+``FACES_UPRIGHT_VOTE`` for upright) at which the faces give up."""
+FACES_MIN_LEVEL = 0.02
+"""The least mean level vote at which the faces give up: upright faces alone leave it open
+(a box's front seen level pins only the plane up lies in) or mislead (a lamp's shade, a shallow
+cone, seen from 15 degrees above held its normals square to an up 10 degrees off)."""
+FACES_UPRIGHT_VOTE = 0.5
+"""An upright patch's vote against a level one's (1): level pins up to its normal, upright
+only to a circle square to it (the normals round a cylinder, a rolled cushion along a bench,
+are all square to its axis, which would take their upright votes for up)."""
+FACES_DOWN = 0.02
+"""Mean level vote facing down (less that facing up) above which a candidate is the quarter
+turn off up: its level faces are the object's fronts, seen from below."""
+FACES_TILT_COST = 0.0005
+FACES_ROLL_COST = 0.002
+"""Vote per degree of pitch and of roll away from the camera's own up that a candidate pays:
+where the faces leave up open (a box's front seen level constrains only the plane up lies in)
+the camera's up, held level, wins."""
 BASE_MIN_SHARE = 0.03
 """Share of an object's points its base must hold to give up (:func:`base_plane`)."""
 BASE_MAX_FLATNESS = 0.5
@@ -231,3 +267,145 @@ def base_plane(points: np.ndarray, up_prior: np.ndarray, cell: float) -> Plane |
             return None
         plane, up = Plane(n, float(n @ c)), n
     return plane
+
+
+class FacesUp(NamedTuple):
+    """Up from a scan's faces (:func:`faces_up`): ``up`` (3,) unit, world; ``score`` its mean
+    vote (0 to 1.5); ``level`` the level patches' share of it (0 to 1); ``clear`` whether
+    they give up (``FACES_MIN_SCORE``, ``FACES_MIN_LEVEL``).
+    """
+
+    up: np.ndarray
+    score: float
+    level: float
+
+    @property
+    def clear(self) -> bool:
+        """Whether the faces give up: enough votes, and level faces among them."""
+        return self.score >= FACES_MIN_SCORE and self.level >= FACES_MIN_LEVEL
+
+
+def faces_up(points: np.ndarray, pose: np.ndarray, *, seed: int = 0) -> FacesUp:
+    """Up from the faces of a scan: the direction most of its flat patches lie level or upright
+    to, among the camera's pitches and small rolls.
+
+    Each sampled patch (``FACES_SAMPLE`` points' ``FACES_NEIGHBOURS`` nearest, flat within
+    ``FACES_FLAT``) votes for the candidates its normal is parallel to (a level face: a seat,
+    a top, a shelf, the floor) or square to (an upright face: a side, a door, a leg), with a
+    Gaussian of ``FACES_SIGMA_DEG``. The candidates are the camera's -y axis pitched by
+    ``FACES_PITCH_DEG`` about its x axis and rolled up to ``FACES_ROLL_DEG`` about its view
+    axis, a degree apart. A candidate's level faces must face up more than down (seen from
+    above, a top, not an underside): the candidate a quarter turn off, for which the object's
+    fronts are level and its tops upright, votes as well. The best is refined by least squares
+    on the patches within two sigmas of level or upright.
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+        World points of the whole scan (the room, the floor where seen, the object).
+    pose : (4, 4) float64
+        The first camera's pose, camera to world (x right, y down, z forward).
+
+    Returns
+    -------
+    FacesUp
+        The up found, its votes, and whether they give it clearly (``.clear``).
+
+    Examples
+    --------
+    >>> from partscale import data, ingest
+    >>> from partscale.evaluate import virtual_scan
+    >>> table = ingest.load_mesh(data.table())  # y up
+    >>> (f,) = virtual_scan(table, 1, elevation=40.0, floor=False)
+    >>> found = faces_up(f.points()[0], f.pose)
+    >>> bool(found.up @ [0, 1, 0] > 0.999), found.clear
+    (True, True)
+    """
+    from scipy.spatial import cKDTree
+
+    P = np.asarray(points, np.float64)
+    none = FacesUp(-np.asarray(pose, np.float64)[:3, 1], 0.0, 0.0)
+    if len(P) < FACES_NEIGHBOURS * 4:
+        return none
+    rng = np.random.default_rng(seed)
+    S = P[rng.choice(len(P), min(len(P), FACES_SAMPLE), replace=False)]
+    _, nn = cKDTree(P).query(S, k=FACES_NEIGHBOURS)
+    X = P[nn] - P[nn].mean(axis=1, keepdims=True)
+    w, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", X, X))
+    n = vec[w[:, 0] <= FACES_FLAT * w[:, 1], :, 0]
+    eye = np.asarray(pose, np.float64)[:3, 3]
+    n *= np.where(np.einsum("ni,ni->n", n, eye - S[w[:, 0] <= FACES_FLAT * w[:, 1]]) < 0, -1, 1)[
+        :, None
+    ]  # towards the camera
+    if len(n) < 30:
+        return none
+    U, cost = _up_candidates(np.asarray(pose, np.float64))
+    vote, level, face = _votes(n, U)
+    adj = np.where(face >= -FACES_DOWN, vote, -np.inf) - cost
+    k = int(np.argmax(adj))
+    if not np.isfinite(adj[k]):
+        return none
+    return FacesUp(_refine_up(n, U[k]), float(vote[k]), float(level[k]))
+
+
+def _up_candidates(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(K, 3) unit candidates for up (the camera's -y pitched and rolled, a degree apart) and
+    (K,) what each pays for its pitch and roll (``FACES_TILT_COST``, ``FACES_ROLL_COST``).
+    """
+    x, y, z = pose[:3, 0], pose[:3, 1], pose[:3, 2]
+    pitch = np.radians(np.arange(FACES_PITCH_DEG[0], FACES_PITCH_DEG[1] + 0.5, 1.0))
+    roll = np.radians(np.arange(-FACES_ROLL_DEG, FACES_ROLL_DEG + 0.5, 1.0))
+    T, R = (a.ravel()[:, None] for a in np.meshgrid(pitch, roll, indexing="ij"))
+    # a camera pitched down by t (rolled by r) sees up as cos t (its -y, rolled) - sin t z
+    U = np.cos(T) * (np.cos(R) * -y + np.sin(R) * x) - np.sin(T) * z
+    cost = FACES_TILT_COST * np.degrees(np.abs(T[:, 0])) + FACES_ROLL_COST * np.degrees(
+        np.abs(R[:, 0])
+    )
+    return U, cost
+
+
+def _votes(n: np.ndarray, U: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(K,) mean vote of normals ``n`` (M, 3) for candidates ``U`` (K, 3), (K,) its level
+    part, and (K,) the mean level vote facing up less that facing down (positive: tops seen;
+    negative: undersides).
+    """
+    sig = np.radians(FACES_SIGMA_DEG)
+    # the normals of a flat face agree: each direction once (to about half a degree), weighted
+    # by how many patches share it
+    dirs, inverse, count = np.unique(
+        np.round(n * 100).astype(np.int16), axis=0, return_inverse=True, return_counts=True
+    )
+    rep = np.zeros((len(dirs), 3))
+    np.add.at(rep, inverse.ravel(), n)
+    rep /= np.linalg.norm(rep, axis=1, keepdims=True)
+    w = (count / len(n)).astype(np.float32)
+    d = (rep @ U.T).astype(np.float32)  # (D, K)
+    a = np.abs(d)
+    # small angles: from level 1 - cos ~ angle^2 / 2; from upright |cos| ~ angle
+    level = np.exp(-(1.0 - a) / np.float32(sig**2))
+    upright = np.exp(np.float32(-0.5 / sig**2) * a * a)
+    lev = w @ level
+    vote = lev + FACES_UPRIGHT_VOTE * (w @ upright)
+    face = w @ (level * np.sign(d))
+    return vote.astype(np.float64), lev.astype(np.float64), face.astype(np.float64)
+
+
+def _refine_up(n: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """``up`` refined: the direction that least squares makes level to the normals ``n`` near
+    level and square to those near upright; kept where the patches leave it open (only one
+    upright direction seen) or it would move by more than two degrees.
+    """
+    band = np.sin(np.radians(2 * FACES_SIGMA_DEG))
+    u = up
+    for _ in range(2):
+        d = n @ u
+        lev, upr = n[np.abs(d) >= np.cos(np.radians(2 * FACES_SIGMA_DEG))], n[np.abs(d) <= band]
+        M = upr.T @ upr - lev.T @ lev
+        w, vec = np.linalg.eigh(M)
+        if w[1] - w[0] < 1e-3 * max(len(n), 1):
+            return u  # open: the smallest two agree
+        v = vec[:, 0] if vec[:, 0] @ u >= 0 else -vec[:, 0]
+        if v @ up < np.cos(np.radians(2.0)):
+            return u
+        u = v
+    return u

@@ -53,8 +53,8 @@ compared with the observed closure (sensor noise leaves a little of any result t
 MAX_STRUTS = 8
 """Struts beyond which the closure is taken to have failed (a handful join a chair's parts)."""
 WEAK_UP = ("camera", "camera+mirror")
-"""Where up came from (``meta['completion']['up_from']``) when no level plane gave it: the
-camera's down axis, corrected at most across the first mirror plane."""
+"""Where up came from (``meta['completion']['up_from']``) when neither a level plane nor the
+scan's faces gave it: the camera's down axis, corrected at most across the first mirror plane."""
 MAX_ROTATION_DOUBT = 0.2
 """Share of a rotation's turned copies standing where the cameras saw through (its
 ``violation``) above which the turn is doubtful: a base that turns (a swivel chair's star, a
@@ -167,7 +167,7 @@ def weak(comp: dict) -> list[str]:
     if syms and comp.get("up_from") in WEAK_UP:
         out.append(
             "its mirror planes and rotations rest on the camera's axis for up (no floor, flat "
-            "underside or base seen)"
+            "underside, base or level faces seen)"
         )
     for s in syms:
         if s.get("kind") == "rotation" and s.get("violation", 0.0) > MAX_ROTATION_DOUBT:

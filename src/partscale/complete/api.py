@@ -839,9 +839,9 @@ def _mirrors_and_up(
     ob: Observation, U: np.ndarray, sub: np.ndarray, cell: float, free_up: FreeUp
 ) -> tuple[list[sym_mod.Symmetry], np.ndarray, str, float]:
     """Mirror planes of the scan's points ``sub`` in the upright frame ``U``; where up came from
-    no level plane (a base, the faces, the camera), up tilted to the first plane's tilt and the planes
-    searched again in that frame. Returns the planes, the frame, where up came from, the tilt
-    (degrees).
+    no level plane (a base, the faces, the camera), up tilted to the first plane's tilt and the
+    planes searched again in that frame. Returns the planes, the frame, where up came from, the
+    tilt (degrees).
     """
     Q, QC, QN = ob.points, ob.colors, ob.normals
     Qu, Nu0 = _apply(U, Q), QN @ U[:3, :3].T

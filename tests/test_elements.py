@@ -464,6 +464,36 @@ def test_real_sofa_mesh_gets_a_third_seat_without_cracks(cli, sofa2, tmp_path):
     assert np.abs(d).max() <= edited.voxel_size / 2, np.abs(d).max() / edited.voxel_size
 
 
+def test_a_sofa_mesh_whose_csdf_edit_would_not_fit_keeps_the_mesh_route(
+    cli, sofa2, tmp_path, monkeypatch
+):
+    """Where the CSDF that unweldable seams go through would not fit in memory, fit says so
+    before any work and writes the mesh route's result with its seams as they are (it cut the
+    mesh, then refused in the CSDF's memory check)."""
+    import re
+
+    import trimesh
+
+    from partscale.edit import check_recipe_memory
+    from partscale.errors import MemoryLimitError
+
+    recipe, _ = fit(sofa2, None, add={"x": 1})
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", "1M")
+    with pytest.raises(MemoryLimitError) as caught:
+        check_recipe_memory(sofa2, recipe, what="three seats")
+    need = float(re.search(r"need ([\d.]+) MiB", str(caught.value)).group(1))
+    # below the CSDF edit's need, above the import's (a third less: two seats of three)
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", f"{need - 2:.1f}M")
+    out = tmp_path / "three.glb"
+    proc = cli("fit", data_path("sweethome3d/sofa2.obj"), "-o", out, "--add", "x", "1")
+    assert proc.returncode == 0, proc.stderr
+    assert "would go through the mesh's CSDF, too large here" in proc.stderr, proc.stderr
+    assert "warning: seam" in proc.stderr and "mesh route" in proc.stderr
+    m = trimesh.load(out, force="mesh")
+    # one seat (84 cm) longer
+    assert np.ptp(m.vertices[:, 0]) >= np.ptp(sofa2.surface_bounds()[:, 0]) + 0.8
+
+
 def test_suggest_reads_a_mesh_as_fit_does(cli, tmp_path):
     """suggest on a mesh (what a new user tries first): imported as fit imports it, the same
     elements listed; a file that is neither is refused in one line naming both."""

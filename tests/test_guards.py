@@ -111,6 +111,23 @@ def test_profile_of_a_long_object_is_refused_by_its_memory(
     only(tmp_path)
 
 
+@pytest.mark.parametrize(
+    "given, expected", [("500M", 500 << 20), ("2GiB", 2 << 30), ("4096", 4096)]
+)
+def test_the_memory_limit_is_read_as_a_size(given, expected, monkeypatch):
+    from partscale._memory import available_memory
+
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", given)
+    assert available_memory() == expected
+
+
+def test_a_memory_limit_that_is_no_size_is_refused_in_one_line(long_file, capsys, monkeypatch):
+    # it was read with float(): "30M" ended in a traceback
+    monkeypatch.setenv("PARTSCALE_MAX_MEMORY", "30 megs")
+    code, lines, _ = run(capsys, monkeypatch, "suggest", long_file)
+    assert_one_line(code, lines, "PARTSCALE_MAX_MEMORY", "expected a size", "30 megs")
+
+
 def test_profile_within_memory_still_works():
     from partscale import zones
 

@@ -9,13 +9,15 @@ from .errors import MemoryLimitError
 
 
 def available_memory() -> int:
-    """Bytes this process may use: ``PARTSCALE_MAX_MEMORY`` if set, else MemAvailable, less
-    where the process's address space is capped (``ulimit -v``, ``RLIMIT_AS``): the cap less
-    what the process has mapped already.
+    """Bytes this process may use: ``PARTSCALE_MAX_MEMORY`` if set (bytes, or a size such as
+    ``500M`` or ``4GiB``), else MemAvailable, less where the process's address space is capped
+    (``ulimit -v``, ``RLIMIT_AS``): the cap less what the process has mapped already.
     """
     env = os.environ.get("PARTSCALE_MAX_MEMORY")
     if env:
-        return int(float(env))
+        from ._options import memory_size
+
+        return memory_size(env, "PARTSCALE_MAX_MEMORY")
     have = _proc_field("/proc/meminfo", "MemAvailable:")
     have = 8 << 30 if have is None else have
     room = _address_space_room()

@@ -13,6 +13,7 @@ from . import _common
 from .scale import (
     SQUARE_OPTION,
     check_usd,
+    csdf_fallback,
     output_option,
     remesh_note,
     scale_mesh,
@@ -70,12 +71,12 @@ def fit(
         from ..errors import InputError
 
         raise InputError("fit: expected --size X Y Z or --add AXIS N, got neither")
-    recipe, remesh = _plan(c, mesh_route, size, add, allow_deform)
+    recipe, remesh, fallback = _plan(c, mesh_route, size, add, allow_deform)
     from .._files import staged_writes
 
     if mesh_route and not remesh:
         with staged_writes():  # the mesh and its recipe: both, or neither
-            if scale_mesh(src, output, recipe, square=square, csdf=c):
+            if scale_mesh(src, output, recipe, square=square, csdf=fallback):
                 _write_recipe(recipe, recipe_out)
                 return
     # a CSDF; or on a mesh, steps, a ring or seams that cannot be welded: through its CSDF
@@ -93,8 +94,10 @@ def _object(src: Path, mesh_route: bool, square: bool):
 
 
 def _plan(c, mesh_route: bool, size, add, allow_deform: bool):
-    """The recipe :func:`partscale.zones.fit` chooses, checked up front, and why (stderr); and
-    whether a mesh is edited through its CSDF (steps or a ring: :func:`.scale.remesh_note`)."""
+    """The recipe :func:`partscale.zones.fit` chooses, checked up front, and why (stderr);
+    whether a mesh is edited through its CSDF (steps or a ring: :func:`.scale.remesh_note`);
+    and on the mesh route, the CSDF it falls back to where seams cannot be welded (None where
+    that would not fit in memory: :func:`.scale.csdf_fallback`)."""
     from ..zones import fit as fit_zones
 
     recipe, why = fit_zones(
@@ -104,10 +107,13 @@ def _plan(c, mesh_route: bool, size, add, allow_deform: bool):
         allow_deform=allow_deform,
     )
     note = remesh_note(c, recipe) if mesh_route else None
-    _preflight(c, recipe, mesh_route and note is None, size, add)
+    what = f"fit to {' x '.join(size)}" if size is not None else f"fit --add {add[0]} {add[1]}"
+    _preflight(c, recipe, mesh_route and note is None, what)
     for line in [*why, *([note] if note else [])]:  # one line each, unwrapped
         _common.stderr.print(line, highlight=False, soft_wrap=True)
-    return recipe, note is not None
+    on_mesh = mesh_route and note is None
+    fallback = csdf_fallback(c, recipe, what=what) if on_mesh else None
+    return recipe, note is not None, fallback
 
 
 def _apply_and_save(c, recipe, output: Path, recipe_out: Path | None, *, remesh: bool) -> None:
@@ -128,7 +134,7 @@ def _apply_and_save(c, recipe, output: Path, recipe_out: Path | None, *, remesh:
     _common.done(f"wrote {output} (solid {ext} {out.meta.get('units') or ''})")
 
 
-def _preflight(c, recipe, on_mesh: bool, size, add) -> None:
+def _preflight(c, recipe, on_mesh: bool, what: str) -> None:
     """What applying the recipe checks up front, done before the plan is printed: a plan is
     never shown and then refused (a size too large for memory, a recipe its own schema or the
     mixing rule refuses). ``on_mesh``: applied to the mesh itself, whose route checks its
@@ -138,7 +144,6 @@ def _preflight(c, recipe, on_mesh: bool, size, add) -> None:
     Recipe.parse(recipe.to_json(), units=c.meta.get("units"))  # what --recipe-out writes reads back
     if on_mesh:
         return
-    what = f"fit to {' x '.join(size)}" if size is not None else f"fit --add {add[0]} {add[1]}"
     check_recipe_memory(c, recipe, what=what)
 
 

@@ -188,8 +188,10 @@ def scale(
     elif zone is None and copies is not None and axis is not None:
         c, rec = _element_recipe(src, mesh_route, axis, copies, mode, snap, square, dest_given)
         if mesh_route:
-            if remesh_note(c, rec) is None and scale_mesh(src, output, rec, square=square, csdf=c):
-                return
+            if remesh_note(c, rec) is None:
+                fallback = csdf_fallback(c, rec, what=f"scale --copies {copies}")
+                if scale_mesh(src, output, rec, square=square, csdf=fallback) or fallback is None:
+                    return
             # steps, a ring, or seams that cannot be welded: through the mesh's CSDF
             return _apply_and_save(c, rec, output, remesh=True)
     else:
@@ -505,6 +507,27 @@ def write_edited(out, output: Path, *, remesh: bool) -> None:
 
     with _common.progress_bar("remesh") as bar:
         export_mesh(out, output, error=DEFAULT_ERROR, progress=bar)
+
+
+def csdf_fallback(c, rec, *, what: str):
+    """``c``, the mesh's CSDF a mesh route edit falls back to where the copies' seams cannot be
+    welded, where ``rec`` applied to it fits in memory; else None, the line saying so printed:
+    the mesh route then writes its seams as they are (checked before any work, so a plan is
+    never followed by a refusal after the mesh was cut)."""
+    from ..edit import check_recipe_memory
+    from ..errors import MemoryLimitError
+
+    try:
+        check_recipe_memory(c, rec, what=what)
+    except MemoryLimitError as exc:
+        _common.stderr.print(
+            f"note: seams that cannot be welded would go through the mesh's CSDF, too large "
+            f"here ({exc}): they are written as they are",
+            highlight=False,
+            soft_wrap=True,
+        )
+        return None
+    return c
 
 
 def scale_mesh(src: Path, output: Path, rec, *, square: bool = False, csdf=None) -> bool:

@@ -332,11 +332,10 @@ def faces_up(points: np.ndarray, pose: np.ndarray, *, seed: int = 0) -> FacesUp:
     _, nn = cKDTree(P).query(S, k=FACES_NEIGHBOURS)
     X = P[nn] - P[nn].mean(axis=1, keepdims=True)
     w, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", X, X))
-    n = vec[w[:, 0] <= FACES_FLAT * w[:, 1], :, 0]
-    eye = np.asarray(pose, np.float64)[:3, 3]
-    n *= np.where(np.einsum("ni,ni->n", n, eye - S[w[:, 0] <= FACES_FLAT * w[:, 1]]) < 0, -1, 1)[
-        :, None
-    ]  # towards the camera
+    flat = w[:, 0] <= FACES_FLAT * w[:, 1]
+    n = vec[flat, :, 0]
+    towards = np.asarray(pose, np.float64)[:3, 3] - S[flat]  # the camera: tops face up
+    n[np.einsum("ni,ni->n", n, towards) < 0] *= -1
     if len(n) < 30:
         return none
     U, cost = _up_candidates(np.asarray(pose, np.float64))

@@ -178,6 +178,20 @@ def test_fit_stretches_a_table_and_refuses_below_its_rigid_parts(desk):
         fit(desk, ["5cm", "=", "="])
 
 
+def test_fit_says_where_a_change_asked_was_snapped_to_whole_voxels(desk):
+    # +3.5 voxels asked: the table grows by whole voxels, and a line gives both lengths; a
+    # change of whole voxels gets no such line
+    h = desk.voxel_size
+    recipe, why = fit(desk, [f"+{3.5 * h}", "=", "="])
+    grown = extent(apply_recipe(desk, recipe), 0) - extent(desk, 0)
+    assert abs(grown - 3.5 * h) >= 0.4 * h  # not what was asked ...
+    snapped = [w for w in why if "asked: edits move whole voxels" in w]
+    assert len(snapped) == 1, why  # ... and said
+    assert f"of the +{3.5 * h * 100:.1f} cm asked" in snapped[0], snapped  # the desk is in m
+    _, exact = fit(desk, [f"+{4 * h}", "=", "="])
+    assert not [w for w in exact if "asked" in w], exact
+
+
 @pytest.mark.parametrize("size", [["150cm", "=", "="], ["=", "90cm", "="]])
 def test_fit_stretch_planes_leave_no_seam_on_the_table(desk, size):
     """The table's legs meet the top and their sdf feels it a few voxels along: fit puts the

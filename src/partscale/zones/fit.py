@@ -1133,7 +1133,22 @@ def fit_axis(
     prof = profile(csdf, axis)
     feats = axis_features(csdf, axis, calm_runs(prof))
     edits, why = _fit_axis(csdf, axis, target, prof, feats, allow_deform)
-    return edits, why + _feature_note(edits, feats, prof, (name, units, lo))
+    return edits, why + _feature_note(edits, feats, prof, (name, units, lo)) + _snap_note(
+        name, units, change, target - (hi - lo), csdf.voxel_size
+    )
+
+
+def _snap_note(name: str, units: str | None, change: float, asked: float, h: float) -> list[str]:
+    """The line saying the change along an axis was snapped to whole voxels (``h``), where it
+    differs from the one ``asked``: a size asked is not quietly met only to half a voxel.
+    """
+    if abs(change - asked) <= 1e-6 * h:
+        return []
+    return [
+        f"{name}: {'+' if change > 0 else ''}{_fmt(change, units)} of the "
+        f"{'+' if asked > 0 else ''}{_fmt(asked, units)} asked: edits move whole voxels of "
+        f"{_fmt(h, units)}"
+    ]
 
 
 def _axis_change(

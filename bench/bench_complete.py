@@ -104,8 +104,8 @@ def main() -> int:
         if unit != 1.0:  # the truth and the scan both at the real size
             mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * unit)
         gt = ingest.from_mesh(mesh, res=128)
-        G, Gc = completion.surface_samples(gt)
-        tau = completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+        tau = completion.f_tau(gt)
+        G, Gc = completion.surface_samples(gt, tau=tau)
         diag = tau / completion.F_TAU
         for views in (1, 3):
             frames = virtual.virtual_scan(mesh, views)
@@ -119,7 +119,7 @@ def main() -> int:
             t = time.perf_counter()
             c = api.complete(frames, res=128)
             t_c = time.perf_counter() - t
-            P, Pc = completion.surface_samples(c)
+            P, Pc = completion.surface_samples(c, tau=tau)
             full = completion.chamfer_fscore(P, G, tau)
             col = (
                 completion.colour_error(P, Pc, G, Gc, tau)

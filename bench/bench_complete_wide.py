@@ -148,8 +148,8 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
     if s != 1.0:
         mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * s)
     gt = ingest.from_mesh(mesh, res=128)
-    G, _ = completion.surface_samples(gt)
-    tau = completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+    tau = completion.f_tau(gt)
+    G, _ = completion.surface_samples(gt, tau=tau)
     rows = []
     for v in views_of(i, n_single, n_triple):
         row = dict(rel=rel, cls=class_of(rel), tuned=rel in TUNED, n=len(v["azimuths"]), **v)
@@ -176,7 +176,7 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
             rows.append(row)
             continue
         row["seconds"] = time.perf_counter() - t
-        P, _ = completion.surface_samples(c)
+        P, _ = completion.surface_samples(c, tau=tau)
         row["full"] = completion.chamfer_fscore(P, G, tau)["fscore"]
         m = c.meta["completion"]
         row["kept"], row["struts"] = m["guard"]["kept"], len(m["struts"])

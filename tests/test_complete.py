@@ -87,15 +87,15 @@ def chair_runs():
 
     mesh = ingest.load_mesh(data_path("kenney/chair.glb"))
     gt = ingest.from_mesh(mesh, res=64)
-    G, Gc = completion.surface_samples(gt, 8000)
-    tau = completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+    tau = completion.f_tau(gt)
+    G, Gc = completion.surface_samples(gt, tau=tau)
     out = {}
     for views in (1, 3):
         frames = virtual.virtual_scan(mesh, views)
         observed = api.observe(frames).points
         raw = completion.chamfer_fscore(observed, G, tau)
         c = api.complete(frames, res=64)
-        P, Pc = completion.surface_samples(c, 8000)
+        P, Pc = completion.surface_samples(c, tau=tau)
         out[views] = (
             raw,
             completion.chamfer_fscore(P, G, tau),

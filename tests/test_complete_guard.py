@@ -101,8 +101,9 @@ def _chair2_truth():
     from partscale.evaluate import completion
 
     mesh = ingest.load_mesh(data_path("sweethome3d/chair2.obj"))
-    G, _ = completion.surface_samples(ingest.from_mesh(mesh, res=128))
-    return mesh, G, completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+    gt = ingest.from_mesh(mesh, res=128)
+    tau = completion.f_tau(gt)
+    return mesh, completion.surface_samples(gt, tau=tau)[0], tau
 
 
 def test_thin_sheet_chair_is_no_maze_of_struts():
@@ -118,7 +119,7 @@ def test_thin_sheet_chair_is_no_maze_of_struts():
     m = c.meta["completion"]
     assert len(m["struts"]) <= guard.MAX_STRUTS, (len(m["struts"]), m["guard"])
     raw = completion.chamfer_fscore(api.observe(frames).points, G, tau)["fscore"]
-    full = completion.chamfer_fscore(completion.surface_samples(c)[0], G, tau)["fscore"]
+    full = completion.chamfer_fscore(completion.surface_samples(c, tau=tau)[0], G, tau)["fscore"]
     assert full >= raw, (full, raw)
 
 

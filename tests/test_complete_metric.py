@@ -50,13 +50,14 @@ def _in_units(frames, unit):
 
 
 def _score(c, G, tau):
-    return completion.chamfer_fscore(completion.surface_samples(c, 6000)[0], G, tau)["fscore"]
+    return completion.chamfer_fscore(completion.surface_samples(c, tau=tau)[0], G, tau)["fscore"]
 
 
 def test_a_chair_scanned_in_decimetres_is_warned_about_and_completed_at_its_real_size(chair):
     frames = virtual_scan(chair, 1)
-    G, _ = completion.surface_samples(ingest.from_mesh(chair, res=RES), 6000)
-    tau = completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+    gt = ingest.from_mesh(chair, res=RES)
+    tau = completion.f_tau(gt)
+    G, _ = completion.surface_samples(gt, tau=tau)
     raw = completion.chamfer_fscore(api.observe(frames).points, G, tau)["fscore"]
     dm = _in_units(frames, 0.1)  # the chair reads 9.2 units tall
     with warnings.catch_warnings(record=True) as caught:

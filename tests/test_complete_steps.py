@@ -241,10 +241,11 @@ def test_a_sparse_far_scan_is_upsampled_and_keeps_what_it_saw():
     done = c.meta["completion"]
     assert done["upsampled"] and done["upsampled"][0] >= 2
     assert done["guard"]["evidence"]["on_surface"] >= 0.95 and not done["struts"]
-    G, _ = completion.surface_samples(ingest.from_mesh(mesh, res=128))
-    tau = completion.F_TAU * float(np.linalg.norm(G.max(0) - G.min(0)))
+    gt = ingest.from_mesh(mesh, res=128)
+    tau = completion.f_tau(gt)
+    G, _ = completion.surface_samples(gt, tau=tau)
     raw = completion.chamfer_fscore(api.observe(frames).points, G, tau)["fscore"]
-    P, _ = completion.surface_samples(c)
+    P, _ = completion.surface_samples(c, tau=tau)
     assert completion.chamfer_fscore(P, G, tau)["fscore"] >= raw - 0.01
 
 

@@ -7,13 +7,14 @@
 - :mod:`.suite`: every suite object in every mode, with figures and tables (``partscale eval``).
 - :mod:`.virtual` and :mod:`.completion`: virtual scans of complete objects as a Kinect-like
   sensor sees them (:func:`virtual_scan`), and a completion scored against the complete object
-  (:func:`chamfer_fscore`, :func:`surface_samples`, :func:`colour_error`, :data:`F_TAU`).
+  (:func:`chamfer_fscore`, :func:`f_tau`, :func:`surface_samples`, :func:`colour_error`,
+  :data:`F_TAU`).
 - :func:`metric_score`, :func:`failures_of`, :func:`winners`: how the suite's report scores a
   result on one metric, lists its failures (:data:`CRITERIA` thresholds) and picks the best modes.
 """
 
 from .compare import score_edit
-from .completion import F_TAU, chamfer_fscore, colour_error, surface_samples
+from .completion import F_TAU, chamfer_fscore, colour_error, f_tau, surface_samples
 from .metrics import Reference, Zone, Zones, evaluate, zones_from_history
 from .report import CRITERIA, failures_of, metric_score, winners
 from .suite import COMPARED_MODES, RECIPE_MODES, Suite, SuiteResult, load_suite, run_suite
@@ -32,6 +33,7 @@ __all__ = [
     "chamfer_fscore",
     "colour_error",
     "evaluate",
+    "f_tau",
     "failures_of",
     "load_suite",
     "metric_score",

@@ -56,6 +56,29 @@ def test_carve_drops_free_voxels_but_never_one_that_holds_a_surface_point():
     assert solid2[4, 4, 5]  # where the symmetric view saw nothing free
 
 
+def test_floor_reach_carries_a_leg_cut_at_the_floor_band_down_to_the_floor():
+    # a leg's front (x = 5, z = 5) seen from y = 4 up (the scan's points below the cut at 3 were
+    # taken for the floor) and a seat's front seen from y = 7 up, at x = 12: heights are y
+    grid = _unit_grid((16, 12, 10))
+    leg = [[5.0, y, 5.0] for y in np.arange(4.0, 9.0, 0.5)]
+    seat = [[12.0, y, 5.0] for y in np.arange(7.0, 9.0, 0.5)]
+    P, C, K, N = _points(leg + seat)
+    sp = fuse.surface_on_grid(grid, P, C, K, N)
+    closed = fuse._edt(~sp.occ) <= 1.5
+    reach = fuse.floor_reach(grid, sp, closed, NEVER, lambda p: p[:, 1], 3.0)
+    assert reach[5, 0:4, 5].all()  # the leg's voxels down to the floor
+    assert reach[4, 0, 5] and reach[5, 0, 6]  # and its closure's, as wide as it is
+    assert not reach[12, :7].any()  # the seat ends far above the cut: it floats
+    assert not reach[:, 5:].any()  # nothing above the cut's band
+    # where a camera saw through the voxels below (x >= 5 free below y = 2), the carry stops
+    seen = fuse.floor_reach(
+        grid, sp, closed, lambda p: (p[:, 0] >= 5) & (p[:, 1] < 2), lambda p: p[:, 1], 3.0
+    )
+    assert seen[4, 0:4, 5].all() and seen[5, 2:4, 5].all() and not seen[5:, :2].any()
+    # nothing within reach of the cut: nothing carried
+    assert not fuse.floor_reach(grid, sp, closed, NEVER, lambda p: p[:, 1] + 10, 3.0).any()
+
+
 def test_nearest_surface_point_is_exact_near_the_surface_and_on_the_right_side_far_off():
     # two walls of points, x = 2 (normal -x) and x = 37 (normal +x), each a fine sheet: every
     # voxel of the slab between them lies behind its nearest wall, the voxels beyond in front
@@ -195,6 +218,21 @@ def test_complete_reports_its_steps_by_name_and_its_shares_sum_to_one(table_obse
     assert said[0] == "reading the scan" and said[-1] == "done"
     done = c.meta["completion"]
     assert done["observed"] + done["mirrored"] + done["guessed"] == pytest.approx(1.0, abs=2e-4)
+
+
+def test_a_chair_standing_on_the_floor_is_completed_down_to_it():
+    # the scan's points within 3 cm of the floor are taken for the floor, the legs' feet with
+    # them: the completed legs reach the floor (they ended 2 cm, 3 voxels, above it), and not
+    # below it
+    from conftest import data_path
+
+    mesh = ingest.load_mesh(data_path("kenney/chair.glb"))
+    floor = float(np.asarray(mesh.vertices)[:, 1].min())
+    c = api.complete(virtual_scan(mesh, 1), res=128)
+    from partscale.evaluate import surface_samples
+
+    lowest = surface_samples(c, 20000)[0][:, 1].min() - floor
+    assert -c.voxel_size <= lowest <= 0.5 * c.voxel_size, (lowest, c.voxel_size)
 
 
 def test_upsample_reads_between_pixels_on_a_surface_never_across_an_edge():

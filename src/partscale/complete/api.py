@@ -1018,6 +1018,7 @@ def fuse_solid(
         sym_free,
         height_world,
         opts.closure,
+        floor_cut=None if ob.floor is None else 2 * FLOOR_TOL,
     )
     if not (sdf < 0).any():
         raise InputError(f"{opts.source}: expected a solid after completion, got none (all carved)")

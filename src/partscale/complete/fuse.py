@@ -3,10 +3,11 @@
 The solid is every voxel within ``closure`` voxels of a surface point (observed, or a symmetric
 copy that the free space allows) that no camera saw through, directly or in a symmetric view
 (the mirror image of a free voxel is free unless it is next to the observed surface), and that
-is above the floor; enclosed cavities are filled. So the observed surface bounds the solid where
-it was seen, a mirrored surface where it was mirrored, and elsewhere the solid is closed
-``closure`` voxels behind the surface: the conservative closure (thin, never a blob in space
-the scan says nothing about).
+is above the floor; enclosed cavities are filled. The solid that reaches the band above the
+floor where the scan's points were taken for the floor goes on down to it (a chair's feet). So
+the observed surface bounds the solid where it was seen, a mirrored surface where it was
+mirrored, and elsewhere the solid is closed ``closure`` voxels behind the surface: the
+conservative closure (thin, never a blob in space the scan says nothing about).
 
 Distances: near surface points, the exact distance to the nearest point (so the zero level
 passes through the observed and mirrored points, not through voxel corners); elsewhere the
@@ -75,6 +76,9 @@ NEAREST_EXACT_VOXELS = 4.0
 """Voxels within which a voxel's nearest surface point is found exactly (beyond: a point of the
 nearest voxel holding one, :func:`nearest_surface_point`)."""
 DIFFUSE_SIGMA = 2.0
+FLOOR_REACH_VOXELS = 1.5
+"""Voxels above the floor cut within which the solid near a surface point goes on straight down
+to the floor (:func:`floor_reach`)."""
 
 
 def _edt(mask: np.ndarray) -> np.ndarray:
@@ -181,6 +185,7 @@ def fuse(
     height_world: Callable[[np.ndarray], np.ndarray],
     closure: float,
     fill_between: bool = True,
+    floor_cut: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Solid, SDF, colour and provenance on the grid.
 
@@ -202,6 +207,9 @@ def fuse(
     height_world : world points -> height above the floor.
     closure : voxels behind the surface that close it where nothing else does.
     fill_between : fill the solid between opposite surfaces (:func:`_between`).
+    floor_cut : the height (world units) below which the scan's points were taken for the floor,
+        or None where no floor was found: the solid down to the cut goes on to the floor
+        (:func:`floor_reach`).
 
     Returns
     -------
@@ -211,6 +219,9 @@ def fuse(
     grid = GridFrame(grid_to_world, tuple(int(s) for s in shape), origin, h)
     sp = surface_on_grid(grid, points, colors, kind, normals)
     cand = candidates(grid, sp, free_world, closure, fill_between)
+    if floor_cut is not None:
+        reach = floor_reach(grid, sp, cand.within_closure, free_world, height_world, floor_cut)
+        cand = Candidates(cand.within | reach, cand.within_closure | reach, cand.free_all)
     solid = carve(grid, sp, cand.within, free_world, sym_free, height_world)
     if cand.free_all is not None:
         solid = close_between(solid, cand)
@@ -262,6 +273,65 @@ def candidates(
         within |= between | sure | unsure
         within_closure |= sure
     return Candidates(within, within_closure, free_all)
+
+
+def floor_reach(
+    grid: GridFrame,
+    sp: SurfacePoints,
+    closed: np.ndarray,
+    free_world: Callable[[np.ndarray], np.ndarray],
+    height_world: Callable[[np.ndarray], np.ndarray],
+    cut: float,
+) -> np.ndarray:
+    """(X, Y, Z) bool: the voxels straight below the solid's foot down to the floor.
+
+    The scan's points within ``cut`` (world units) of the floor were taken for the floor, with
+    the bottom of everything standing on it: a chair's legs ended 2 cm above the floor. Where a
+    surface point lies within ``FLOOR_REACH_VOXELS`` of the cut, the part it belongs to stands on
+    the floor: the voxels of ``closed`` (X, Y, Z) bool (the closure) near such points and below
+    the cut's band are carried down along the up direction to the floor, each until a camera
+    saw through a voxel below it (a copy mirrored beside the object, where the floor was seen,
+    stays where it is; the carving then keeps only what lies behind its nearest surface point).
+    """
+    h = grid.h
+    near = np.flatnonzero(closed.ravel())
+    centres = grid.centres(near)
+    height = height_world(grid.to_world(centres))
+    top = cut + FLOOR_REACH_VOXELS * h
+    low_points = height_world(grid.to_world(sp.points.astype(np.float32))) <= top
+    out = np.zeros(grid.shape, bool)
+    if not low_points.any():
+        return out
+    foot = (height <= top) & (
+        cKDTree(sp.points[low_points]).query(centres, distance_upper_bound=2 * h)[0] < np.inf
+    )
+    start, start_h = centres[foot], height[foot]
+    if not len(start):
+        return out
+    # the up direction in grid coordinates: height is affine in the grid's coordinates
+    o = np.zeros((1, 3), np.float32)
+    h0 = height_world(grid.to_world(o))[0]
+    up = np.array(
+        [
+            height_world(grid.to_world(np.eye(3, dtype=np.float32)[k : k + 1]))[0] - h0
+            for k in range(3)
+        ]
+    )
+    up /= np.linalg.norm(up)
+    shape = np.asarray(grid.shape)
+    alive = np.ones(len(start), bool)
+    for k in range(1, int(np.ceil(2 * top / h)) + 2):
+        down = 0.5 * k * h
+        alive &= start_h - down >= -0.5 * h
+        go = np.flatnonzero(alive)
+        if not len(go):
+            break
+        idx = np.rint((start[go] - down * up - grid.origin) / h).astype(np.int64)
+        ok = ((idx >= 0) & (idx < shape)).all(axis=1)
+        ok[ok] = ~free_world(grid.to_world(grid.origin + idx[ok] * h))
+        alive[go[~ok]] = False
+        out[idx[ok, 0], idx[ok, 1], idx[ok, 2]] = True
+    return out
 
 
 def carve(

@@ -294,18 +294,16 @@ def floor_reach(
     stays where it is; the carving then keeps only what lies behind its nearest surface point).
     """
     h = grid.h
-    near = np.flatnonzero(closed.ravel())
-    centres = grid.centres(near)
-    height = height_world(grid.to_world(centres))
     top = cut + FLOOR_REACH_VOXELS * h
-    low_points = height_world(grid.to_world(sp.points.astype(np.float32))) <= top
     out = np.zeros(grid.shape, bool)
+    low_points = height_world(grid.to_world(sp.points.astype(np.float32))) <= top
     if not low_points.any():
         return out
-    foot = (height <= top) & (
-        cKDTree(sp.points[low_points]).query(centres, distance_upper_bound=2 * h)[0] < np.inf
-    )
-    start, start_h = centres[foot], height[foot]
+    centres = grid.centres(np.flatnonzero(closed.ravel()))
+    height = height_world(grid.to_world(centres))
+    centres, height = centres[height <= top], height[height <= top]
+    near = cKDTree(sp.points[low_points]).query(centres, distance_upper_bound=2 * h)[0] < np.inf
+    start, start_h = centres[near], height[near]
     if not len(start):
         return out
     # the up direction in grid coordinates: height is affine in the grid's coordinates

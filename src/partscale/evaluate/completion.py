@@ -58,6 +58,7 @@ def surface_samples(
 
     Dense enough to score at 1 % of its diagonal: a surface against itself scores 1.
 
+    >>> from partscale.evaluate import chamfer_fscore, f_tau
     >>> box = shapes.box((0, 0, 0), (0.4, 0.2, 0.2), voxel_size=0.01)
     >>> tau = f_tau(box)
     >>> a, b = surface_samples(box, tau=tau, seed=0)[0], surface_samples(box, tau=tau, seed=1)[0]
@@ -75,8 +76,18 @@ def surface_samples(
 
 
 def f_tau(csdf: CSDF) -> float:
-    """The F-score's ``tau`` for scoring against ``csdf``: :data:`F_TAU` times the diagonal of
-    its zero surface's bounding box (world units).
+    """The F-score's distance for scoring against a complete object.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The complete object (its zero surface).
+
+    Returns
+    -------
+    float
+        :data:`F_TAU` times the diagonal of the zero surface's bounding box (world units): the
+        ``tau`` of :func:`chamfer_fscore` and :func:`surface_samples`.
 
     Examples
     --------

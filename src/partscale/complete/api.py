@@ -40,7 +40,7 @@ from .scan import (
     upsample,
 )
 
-METHOD = "carve+floor+symmetry+between+slab+closure+column+strut"
+METHOD = "carve+floor+symmetry+between+slab+closure+reach+column+strut"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
 FACES_FLOOR_TILT_DEG = 5.0
@@ -1115,7 +1115,7 @@ def completion_meta(
     found: Any = ob.floor
     col = solid.column
     completion = {
-        "method": METHOD if extras else "carve+floor+between+slab+closure",
+        "method": METHOD if extras else "carve+floor+between+slab+closure+reach",
         "observed": round(counts[fuse_mod.OBSERVED] / total, 4),
         "mirrored": round(counts[fuse_mod.MIRRORED] / total, 4),
         "guessed": round(counts[fuse_mod.GUESSED] / total, 4),

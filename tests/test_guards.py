@@ -315,6 +315,22 @@ def test_complete_refuses_an_absurd_box(tmp_path, capsys, monkeypatch):
     only(tmp_path, "d.png", "k.json")
 
 
+@pytest.mark.parametrize(
+    ("option", "typed"),
+    [("--box", ["370", "230", "540", "440"]), ("--camera", ["1", "0", "0", "0"])],
+)
+def test_complete_names_the_form_of_numbers_typed_with_spaces(
+    tmp_path, capsys, monkeypatch, option, typed
+):
+    # unquoted, the option takes the first number and the rest would be stray arguments: the
+    # option itself is refused, naming the form it expects
+    code, lines, _ = run(
+        capsys, monkeypatch, "complete", "x.ply", option, *typed, "-o", tmp_path / "o.csdf.npz"
+    )
+    assert_one_line(code, lines, option, "separated by commas", f"got '{typed[0]}'")
+    only(tmp_path)
+
+
 def test_save_refuses_meta_its_own_reader_would_refuse(tmp_path):
     box = shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.1)
     odd = box.replace(meta={**box.meta, "box": [0, 0, 10**30, 10**30]})

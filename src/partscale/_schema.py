@@ -302,7 +302,10 @@ def numbers_text(
     """
     parts = text.replace(",", " ").split()
     if len(parts) != n:
-        raise InputError(f"{what}: expected {n} numbers, got {shown(text)}")
+        raise InputError(
+            f"{what}: expected {n} numbers separated by commas (or spaces, in quotes), "
+            f"got {shown(text)}"
+        )
     return [number(p, what, lo=lo, hi=hi, text=True) for p in parts]
 
 

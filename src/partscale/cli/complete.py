@@ -17,6 +17,23 @@ def _numbers(text: str | None, n: int, what: str, limit: float) -> list[float] |
     return _schema.numbers_text(text, n, what, lo=-limit, hi=limit)
 
 
+def _box_option(text: str | None) -> str | None:
+    """``--box`` checked as the option is read: typed with spaces, the box ends at its first
+    number and the rest would be refused as stray arguments, not as a box."""
+    from ..complete import MAX_PIXEL
+
+    _numbers(text, 4, "--box", MAX_PIXEL)
+    return text
+
+
+def _camera_option(text: str | None) -> str | None:
+    """``--camera`` checked as the option is read (see :func:`_box_option`)."""
+    from ..complete import MAX_COORDINATE
+
+    _numbers(text, 16, "--camera", MAX_COORDINATE)
+    return text
+
+
 def complete(
     scan: Annotated[
         Path | None,
@@ -57,7 +74,10 @@ def complete(
     camera: Annotated[
         str | None,
         typer.Option(
-            "--camera", metavar="POSE", help="Camera-to-world pose: 16 numbers, row major."
+            "--camera",
+            metavar="POSE",
+            help="Camera-to-world pose: 16 numbers, row major.",
+            callback=_camera_option,
         ),
     ] = None,
     box: Annotated[
@@ -66,6 +86,7 @@ def complete(
             "--box",
             metavar="X0,Y0,X1,Y1",
             help="Pixel box of the object in the (first) frame.",
+            callback=_box_option,
         ),
     ] = None,
     upright: Annotated[

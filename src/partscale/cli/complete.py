@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
@@ -17,21 +18,18 @@ def _numbers(text: str | None, n: int, what: str, limit: float) -> list[float] |
     return _schema.numbers_text(text, n, what, lo=-limit, hi=limit)
 
 
-def _box_option(text: str | None) -> str | None:
-    """``--box`` checked as the option is read: typed with spaces, the box ends at its first
-    number and the rest would be refused as stray arguments, not as a box."""
-    from ..complete import MAX_PIXEL
+def _checked(n: int, what: str, limit: str) -> Callable[[str | None], str | None]:
+    """A callback checking an option of ``n`` numbers as it is read (``limit``: the name of
+    their bound in :mod:`partscale.complete`): typed with spaces, the option ends at its first
+    number and the rest would be refused as stray arguments, not as the option."""
 
-    _numbers(text, 4, "--box", MAX_PIXEL)
-    return text
+    def check(text: str | None) -> str | None:
+        from .. import complete as complete_mod
 
+        _numbers(text, n, what, getattr(complete_mod, limit))
+        return text
 
-def _camera_option(text: str | None) -> str | None:
-    """``--camera`` checked as the option is read (see :func:`_box_option`)."""
-    from ..complete import MAX_COORDINATE
-
-    _numbers(text, 16, "--camera", MAX_COORDINATE)
-    return text
+    return check
 
 
 def complete(
@@ -77,7 +75,7 @@ def complete(
             "--camera",
             metavar="POSE",
             help="Camera-to-world pose: 16 numbers, row major.",
-            callback=_camera_option,
+            callback=_checked(16, "--camera", "MAX_COORDINATE"),
         ),
     ] = None,
     box: Annotated[
@@ -86,7 +84,7 @@ def complete(
             "--box",
             metavar="X0,Y0,X1,Y1",
             help="Pixel box of the object in the (first) frame.",
-            callback=_box_option,
+            callback=_checked(4, "--box", "MAX_PIXEL"),
         ),
     ] = None,
     upright: Annotated[

@@ -42,7 +42,10 @@ from .scan import (
 
 METHOD = "carve+floor+symmetry+between+slab+closure+reach+column+strut"
 FLOOR_TOL = 0.015
-"""Metres: RANSAC inlier distance of the floor, and the height below which points are floor."""
+"""Metres: RANSAC inlier distance of the floor."""
+FLOOR_CUT = 2 * FLOOR_TOL
+"""Metres above the floor below which the scan's points are taken for the floor (and with them
+the bottom of what stands on it, which the fusion carries down to the floor again)."""
 FACES_FLOOR_TILT_DEG = 5.0
 """Degrees from the up that the scan's faces give within which the floor is searched first."""
 FACES_AGAINST_DEG = 10.0
@@ -105,7 +108,7 @@ def _is_floor(P: np.ndarray, plane, inliers: np.ndarray, cropped: bool) -> bool:
     of a star base, wider than the seat, do not) and, in a cropped scan, reaches beyond what
     stands on it (in a full frame the rest is the room, wider than the floor seen).
     """
-    rest = P[~inliers & (plane.height(P) > 2 * FLOOR_TOL)]
+    rest = P[~inliers & (plane.height(P) > FLOOR_CUT)]
     if len(rest) < 10:
         return True
     a, b = in_plane_axes(plane.normal)
@@ -182,7 +185,7 @@ def _up_prior(frame: Frame) -> np.ndarray:
 
 def _isolate(frames, P, pix, height, up, box, cropped, cell) -> np.ndarray:
     """(N,) bool: the object's points (above the floor, in the box, or found automatically)."""
-    above = height > 2 * FLOOR_TOL
+    above = height > FLOOR_CUT
     if not above.any():
         raise InputError(
             "scan: expected an object above the floor, got only floor (or no points above it)"
@@ -427,7 +430,7 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
             up = support.normal
         floor_offset = None
         height = P @ up
-        height = height - height.min() + 3 * FLOOR_TOL  # every point is object
+        height = height - height.min() + FLOOR_CUT + FLOOR_TOL  # every point is object
     obj = _isolate(frames, P, pix, height, up, box, cropped, cell)
     if up_from == "underside" and support is not None:
         # the level plane under an object that is no floor: scraps of the floor the scan kept
@@ -549,7 +552,7 @@ def densify(ob: Observation, res: int, measured: metric_mod.Plausibility) -> Obs
     reach = 1.5 * max(feet)
     near = np.isfinite(cKDTree(ob.points).query(P, distance_upper_bound=reach, workers=2)[0])
     if ob.floor is not None:
-        near &= _apply(ob.U, P)[:, 1] > 2 * FLOOR_TOL
+        near &= _apply(ob.U, P)[:, 1] > FLOOR_CUT
     P, C, E = P[near], C[near], E[near]
     # the free space stays the frames' own: their pixels are the rays the sensor cast, and the
     # silhouette's gaps and holes are sized in them
@@ -1018,7 +1021,7 @@ def fuse_solid(
         sym_free,
         height_world,
         opts.closure,
-        floor_cut=None if ob.floor is None else 2 * FLOOR_TOL,
+        floor_cut=None if ob.floor is None else FLOOR_CUT,
     )
     if not (sdf < 0).any():
         raise InputError(f"{opts.source}: expected a solid after completion, got none (all carved)")

@@ -79,6 +79,29 @@ def test_floor_reach_carries_a_leg_cut_at_the_floor_band_down_to_the_floor():
     assert not fuse.floor_reach(grid, sp, closed, NEVER, lambda p: p[:, 1] + 10, 3.0).any()
 
 
+def test_floor_base_carries_a_bins_bottom_down_to_the_floor():
+    # a bin (x, z 2-12) whose walls were carried down to the floor by the floor reach, its
+    # bottom (solid from y = 3, the cut) above a hollow skirt; a seat at x 14-18 from y = 7;
+    # heights are y, the floor at y = 0 (voxel centres at 0, 1, 2, ...)
+    grid = _unit_grid((20, 12, 16))
+    solid = np.zeros(grid.shape, bool)
+    solid[2:13, 3:10, 2:13] = True
+    solid[2, 0:3, 2:13] = solid[12, 0:3, 2:13] = True
+    solid[2:13, 0:3, 2] = solid[2:13, 0:3, 12] = True
+    solid[14:19, 7:9, 2:13] = True
+    base = fuse.floor_base(grid, solid, NEVER, lambda p: p[:, 1], 3.0)
+    assert (base >= solid).all()  # nothing removed
+    assert base[3:12, 0:3, 3:12].all()  # the skirt's inside, down to the floor
+    assert not base[14:19, :7].any()  # the seat ends far above the cut: it floats
+    # where a camera saw through the voxels below (x >= 8 free below y = 2), the carry stops
+    seen = fuse.floor_base(
+        grid, solid, lambda p: (p[:, 0] >= 8) & (p[:, 1] < 2), lambda p: p[:, 1], 3.0
+    )
+    assert seen[3:8, 0:3, 3:12].all() and not seen[8:12, 0:2, 3:12].any()
+    # no floor within reach of the bottom: nothing added
+    assert (fuse.floor_base(grid, solid, NEVER, lambda p: p[:, 1] + 10, 3.0) == solid).all()
+
+
 def test_nearest_surface_point_is_exact_near_the_surface_and_on_the_right_side_far_off():
     # two walls of points, x = 2 (normal -x) and x = 37 (normal +x), each a fine sheet: every
     # voxel of the slab between them lies behind its nearest wall, the voxels beyond in front
@@ -352,3 +375,18 @@ def test_on_a_fine_grid_the_closure_reaches_as_far_as_the_points_lie_apart(sofa_
     c = complete([sofa_frame], res=256)
     assert c.meta["history"][-1]["closure_voxels"] >= 3.0
     assert _tunnels(c) < 120
+
+
+def test_drop_pieces_takes_a_rod_touching_along_edges_for_one_piece():
+    # a rod a voxel thick across the grid's axes touches itself only along edges: as pieces of
+    # one voxel each it would be dropped, voxel by voxel; as one piece it is observed on
+    # PIECE_OBSERVED_VOXELS voxels and stays
+    solid = np.zeros((80, 80, 80), bool)
+    obs = np.zeros_like(solid)
+    solid[2:78, 2:78, 2:40] = True
+    obs[2:78, 2:78, 2] = obs[2:78, 2:78, 39] = True
+    n = fuse.PIECE_OBSERVED_VOXELS
+    k = np.arange(n)
+    solid[10 + k, 10 + k, 60] = obs[10 + k, 10 + k, 60] = True
+    kept = fuse.drop_pieces(solid, obs)
+    assert kept[10 + k, 10 + k, 60].all()

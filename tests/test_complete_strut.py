@@ -181,3 +181,21 @@ def test_what_a_strut_joins_is_read_by_one_labelling_as_scipy_propagates_it():
         assert (want == _reached(seed, solid)).all()
         grew += int(want.sum() > seed.sum())
     assert grew >= 10  # most seeds reach more of the solid
+
+
+def test_pieces_touching_along_an_edge_get_no_strut():
+    # a rod a voxel thick across the axes touches the seat only along edges: the contact fill
+    # joins it (tidy.fill_contacts), no strut is drawn and nothing is added
+    from edt import edt
+
+    solid = np.zeros((40, 40, 70), bool)
+    solid[5:35, 3:10, 5:35] = True
+    k = np.arange(20)
+    solid[20, 10 + k, 35 + k] = True  # each voxel touches the next (and the seat) along an edge
+    e_out = edt(np.ascontiguousarray(~solid)) - 0.5
+    e_in = edt(np.ascontiguousarray(solid)) - 0.5
+    sdf = (np.where(solid, -e_in, e_out) * H).astype(np.float32)
+    prov = np.where(np.abs(sdf) <= H, 1, 0).astype(np.uint8)
+    assert _pieces(sdf) == 21
+    out, _, struts = _struts(sdf, prov, np.zeros(3), _nothing_free)
+    assert struts == [] and (out == sdf).all()

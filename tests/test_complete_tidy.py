@@ -118,3 +118,24 @@ def test_raw_frame_yellow_chair_is_watertight_without_specks():
     assert size.min() >= SPECK_SHARE * size.max()
     assert n <= 10, f"expected the chair's few parts, got {n} solid components"
     assert c.meta["completion"]["specks_dropped"] >= 100
+
+
+def test_a_chain_of_pieces_touching_at_edges_is_a_thin_part_not_specks():
+    # a rod about a voxel thick lying across the grid's axes is a staircase of voxels that touch
+    # only along edges: 45 pieces of one voxel (6-connected), each under SPECK_SHARE of the body,
+    # together above it (a railing's baluster seen from three views fell apart into such pieces)
+    from partscale.complete.tidy import SPECK_SHARE, drop_specks
+
+    solid = np.zeros((70, 50, 40), bool)
+    solid[2:20, 2:20, 2:20] = True  # the body, 5832 voxels
+    k = np.arange(45)
+    solid[22 + k, 2 + k, 30] = True  # the rod: 45 voxels, each touching the next along an edge
+    solid[60 + np.arange(3), 2 + np.arange(3), 5] = True  # a short chain: 3 voxels, noise
+    solid[20, 20, 10] = True  # a bump touching the body along an edge only: noise
+    solid[40, 45, 10] = True  # a speck
+    assert 3 < SPECK_SHARE * 5832 < 45
+    out, n = drop_specks(_sdf_of(solid), 0.01)
+    kept = out < 0
+    assert kept[22 + k, 2 + k, 30].all()
+    assert not kept[60:63, 2:5, 5].any() and not kept[20, 20, 10] and not kept[40, 45, 10]
+    assert n == 5  # the short chain's three voxels, the bump and the speck

@@ -26,6 +26,7 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from ..csdf import BAND_VOXELS
+from . import tidy as tidy_mod
 
 OBSERVED, MIRRORED, GUESSED = 1, 2, 3
 KINDS = {OBSERVED: "observed", MIRRORED: "mirrored", GUESSED: "guessed"}
@@ -190,8 +191,10 @@ def fuse(
     """Solid, SDF, colour and provenance on the grid.
 
     The steps: the points on the grid (:func:`surface_on_grid`), the voxels that may be solid
-    (:func:`candidates`), those no camera saw through (:func:`carve`), the channels between
-    filled segments closed (:func:`close_between`), holes filled and specks dropped
+    (:func:`candidates`) with the closure's foot carried to the floor (:func:`floor_reach`),
+    those no camera saw through (:func:`carve`), the bottom of what stands on the floor carried
+    down to it (:func:`floor_base`), the channels between filled segments closed
+    (:func:`close_between`), holes filled and specks dropped
     (:func:`drop_pieces`), the distances (:func:`distances`) and the colours and provenance
     near the surface (:func:`surface_attributes`).
 
@@ -209,7 +212,7 @@ def fuse(
     fill_between : fill the solid between opposite surfaces (:func:`_between`).
     floor_cut : the height (world units) below which the scan's points were taken for the floor,
         or None where no floor was found: the solid down to the cut goes on to the floor
-        (:func:`floor_reach`).
+        (:func:`floor_reach`, :func:`floor_base`).
 
     Returns
     -------
@@ -223,6 +226,8 @@ def fuse(
         reach = floor_reach(grid, sp, cand.within_closure, free_world, height_world, floor_cut)
         cand = Candidates(cand.within | reach, cand.within_closure | reach, cand.free_all)
     solid = carve(grid, sp, cand.within, free_world, sym_free, height_world)
+    if floor_cut is not None:
+        solid = floor_base(grid, solid, free_world, height_world, floor_cut)
     if cand.free_all is not None:
         solid = close_between(solid, cand)
     solid = drop_pieces(_fill_holes(solid), sp.occ_obs)
@@ -303,7 +308,42 @@ def floor_reach(
     height = height_world(grid.to_world(centres))
     centres, height = centres[height <= top], height[height <= top]
     near = cKDTree(sp.points[low_points]).query(centres, distance_upper_bound=2 * h)[0] < np.inf
-    start, start_h = centres[near], height[near]
+    return _down_to_floor(grid, centres[near], height[near], free_world, height_world)
+
+
+def floor_base(
+    grid: GridFrame,
+    solid: np.ndarray,
+    free_world: Callable[[np.ndarray], np.ndarray],
+    height_world: Callable[[np.ndarray], np.ndarray],
+    cut: float,
+) -> np.ndarray:
+    """(X, Y, Z) bool: ``solid`` with its bottom carried down to the floor where it ends within
+    ``FLOOR_REACH_VOXELS`` of the floor's ``cut`` (world units): the whole underside of a part
+    standing on the floor, not only the closure along its walls (:func:`floor_reach`). A bin's
+    base left a hollow skirt 3 cm high, its walls carried down and the bottom between them at
+    the cut. Each column stops where a camera saw through a voxel below it.
+    """
+    top = cut + FLOOR_REACH_VOXELS * grid.h
+    centres = grid.centres(np.flatnonzero(solid.ravel()))
+    height = height_world(grid.to_world(centres))
+    low = height <= top
+    return solid | _down_to_floor(grid, centres[low], height[low], free_world, height_world)
+
+
+def _down_to_floor(
+    grid: GridFrame,
+    start: np.ndarray,
+    start_h: np.ndarray,
+    free_world: Callable[[np.ndarray], np.ndarray],
+    height_world: Callable[[np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """(X, Y, Z) bool: the voxels straight below grid points ``start`` (N, 3) float, at heights
+    ``start_h`` (N,) above the floor, down to the floor; each column stops at the first voxel a
+    camera saw through (``free_world``).
+    """
+    h = grid.h
+    out = np.zeros(grid.shape, bool)
     if not len(start):
         return out
     # the up direction in grid coordinates: height is affine in the grid's coordinates
@@ -318,7 +358,7 @@ def floor_reach(
     up /= np.linalg.norm(up)
     shape = np.asarray(grid.shape)
     alive = np.ones(len(start), bool)
-    for k in range(1, int(np.ceil(2 * top / h)) + 2):
+    for k in range(1, int(np.ceil(2 * start_h.max() / h)) + 2):
         down = 0.5 * k * h
         alive &= start_h - down >= -0.5 * h
         go = np.flatnonzero(alive)
@@ -432,10 +472,11 @@ def close_between(solid: np.ndarray, cand: Candidates) -> np.ndarray:
 
 def drop_pieces(solid: np.ndarray, occ_obs: np.ndarray) -> np.ndarray:
     """(X, Y, Z) bool: ``solid`` without the small pieces the scan barely saw (flying pixels, a
-    neighbour's edge): a piece stays if it has 2 % of the largest's voxels or 5 % of the most
-    observed one's observed voxels (``occ_obs``).
+    neighbour's edge); a piece is what touches by a face, an edge or a corner (a rod a voxel
+    thick across the grid's axes is one piece, not one per voxel). A piece stays if it has 2 %
+    of the largest's voxels or 5 % of the most observed one's observed voxels (``occ_obs``).
     """
-    lab, n = ndimage.label(solid)
+    lab, n = ndimage.label(solid, structure=tidy_mod.CORNERS)
     if n <= 1:
         return solid
     size = np.bincount(lab.ravel())

@@ -21,6 +21,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..csdf import BAND_VOXELS
+from . import tidy as tidy_mod
 
 MAX_GAP_SHARE = 0.2
 """Share of the object's longest side that a strut may span through outside space (its path's
@@ -71,7 +72,9 @@ def add_struts(
     mirror=None,
 ) -> tuple[np.ndarray, np.ndarray, list[Strut]]:
     """The SDF (X, Y, Z) float32 (world units, negative inside) and provenance (X, Y, Z) uint8
-    with every solid piece (6-connected) apart from the largest joined to it by a strut where
+    with every solid piece (26-connected: pieces touching along an edge or at a corner are
+    joined by :func:`partscale.complete.tidy.fill_contacts`) apart from the largest joined to it
+    by a strut where
     one spanning at most ``max_gap`` (world units) avoids the sure free space; the struts'
     surface marked ``guessed``. ``sure_free``: points (N, 3) in the grid's frame -> (N,) bool;
     ``origin`` (3,) the grid's first voxel centre; ``mirror``, optional: points (N, 3) in the
@@ -81,7 +84,8 @@ def add_struts(
     made.
     """
     solid = sdf < 0
-    lab, n = ndimage.label(solid)
+    # pieces touching along an edge or at a corner are one: the contact fill joins them
+    lab, n = ndimage.label(solid, structure=tidy_mod.CORNERS)
     if n < 2:
         return sdf, prov, []
     size = np.bincount(lab.ravel())

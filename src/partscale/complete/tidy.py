@@ -5,8 +5,11 @@ Two rules on the sign of the completed SDF (solid where ``sdf < 0``), applied af
 - Specks: a solid component (6-connected) smaller than ``SPECK_SHARE`` of the largest one is
   scan noise (flying pixels, a few readings a thin closure turned solid) and becomes outside:
   free-floating, or a bump touching a part only along an edge or at a corner (26-connected
-  pieces, which keep those bumps joined by the next rule, scored lower on the bench). The
-  share is of volumes, so it does not change with the resolution.
+  pieces, which keep those bumps joined by the next rule, scored lower on the bench). Small
+  components that touch one another along edges or at corners and together reach the share are
+  a thin part lying across the grid's axes, a staircase of voxels (a railing's baluster about a
+  voxel thick, seen from three views, fell into hundreds of such pieces), and stay; the next
+  rule joins them. The share is of volumes, so it does not change with the resolution.
 - Manifold voxels: two solid voxels that touch only along an edge (a 2x2 face whose solid voxels
   are diagonal) or only at a corner (a 2x2x2 cube whose solid, or whose outside, voxels are two
   opposite corners alone) leave marching cubes a choice it makes differently from each side: the
@@ -23,14 +26,17 @@ SPECK_SHARE = 0.007
 """A solid component under this share of the largest one's voxels is a speck (dropped). On the
 four TUM scans at --res 128 the specks reach 0.0045 of the largest, the smallest parts kept
 (a caster, a leg's end) 0.0104."""
+CORNERS = np.ones((3, 3, 3), bool)
+"""Connectivity of voxels touching by a face, along an edge or at a corner (26 neighbours)."""
 FILL_VOXELS = 0.1
 """Voxels inside the surface a filled voxel's SDF is set to (the fusion's own nearest value)."""
 
 
 def drop_specks(sdf: np.ndarray, h: float) -> tuple[np.ndarray, int]:
     """(X, Y, Z) float32 SDF without solid (6-connected) components under ``SPECK_SHARE`` of the
-    largest, and how many were dropped. A dropped voxel takes its distance's magnitude (outside, as near the
-    surface as it was inside).
+    largest (unless they are links of a thin part: small components touching along edges or at
+    corners, together reaching the share), and how many were dropped. A dropped voxel takes
+    its distance's magnitude (outside, as near the surface as it was inside).
     """
     lab, n = ndimage.label(sdf < 0)
     if n < 2:
@@ -39,6 +45,16 @@ def drop_specks(sdf: np.ndarray, h: float) -> tuple[np.ndarray, int]:
     size[0] = 0
     small = size < SPECK_SHARE * size.max()
     small[0] = False
+    if not small.any():
+        return sdf, 0
+    # small pieces touching one another along edges or at corners, together as large as a part
+    # kept, are a thin part across the grid's axes (a staircase of voxels), not specks
+    chains, _ = ndimage.label(small[lab], structure=CORNERS)
+    chain_size = np.bincount(chains.ravel())
+    chain_size[0] = 0
+    thin_part = chain_size >= SPECK_SHARE * size.max()
+    thin_part[0] = False
+    small[np.unique(lab[thin_part[chains]])] = False
     if not small.any():
         return sdf, 0
     drop = small[lab]

@@ -331,6 +331,19 @@ def test_complete_names_the_form_of_numbers_typed_with_spaces(
     only(tmp_path)
 
 
+@pytest.mark.parametrize("command", ["fit", "batch"])
+def test_size_typed_with_commas_is_refused_as_the_size(tmp_path, capsys, monkeypatch, command):
+    # '--size =,+20cm,= -o out' takes '-o' and the file for the other two extents: refused as
+    # the size, naming the form, not as a missing -o
+    target = tmp_path / "t.csdf.npz"
+    partscale.save(shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.1), target)
+    out = tmp_path / "o.csdf.npz"
+    args = (command, target, "--size", "=,+20cm,=", "-o", out)
+    code, lines, _ = run(capsys, monkeypatch, *args)
+    assert_one_line(code, lines, "--size", "separated by spaces", "got '=,+20cm,=' '-o'")
+    only(tmp_path, "t.csdf.npz")
+
+
 def test_save_refuses_meta_its_own_reader_would_refuse(tmp_path):
     box = shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.1)
     odd = box.replace(meta={**box.meta, "box": [0, 0, 10**30, 10**30]})

@@ -23,17 +23,47 @@ state = {"verbose": False}
 RES_HELP = f"Voxels along the object's longest side, {MIN_RES} to {MAX_RES}."
 Res = Annotated[int, typer.Option("--res", metavar="N", help=RES_HELP)]
 
-#: ``--size`` of ``fit`` and ``batch``: the target extents.
 #: ``--allow-deform`` of the commands that fit (``fit``, ``batch``): one help text.
 ALLOW_DEFORM_HELP = (
     "Where no zone reaches the size part-aware, stretch thin slabs or scale globally instead "
     "of refusing"
 )
 
+#: ``--size`` of ``fit`` and ``batch``: the target extents.
 SIZE_HELP = (
     "Target extents along x, y and z: = (unchanged), 2.1 (object units), 210cm / 2100mm / 80in, "
     "+20cm / -5cm (change), or 120% (of the current extent)."
 )
+
+
+def check_size(value: tuple[str, str, str] | None) -> tuple[str, str, str] | None:
+    """``--size``'s callback: the three extents checked as they are read. Typed with commas
+    (``--size =,+20cm,= -o out``) the option takes the next two words for its other extents and
+    the command is then refused for a missing ``-o``, which says nothing of the size.
+
+    >>> check_size(("=", "+20cm", "120%"))
+    ('=', '+20cm', '120%')
+    >>> check_size(("=,+20cm,=", "-o", "out.csdf.npz"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    partscale.errors.InputError: --size: expected three extents X Y Z separated by spaces ...
+    """
+    if value is None:
+        return None
+    from ..edit import parse_size
+    from ..errors import InputError
+
+    if any("," in v or (v.startswith("-") and v[1:2].isalpha()) for v in value):
+        got = " ".join(repr(v) for v in value)
+        raise InputError(
+            "--size: expected three extents X Y Z separated by spaces (each =, 2.1, 210cm, "
+            f"+20cm or 120%), got {got}"
+        )
+    for v in value:
+        # the form only: the extent and the object's units are known once it is read
+        parse_size(v, extent=1e6, units="m", what="--size")
+    return value
+
 
 #: ``--square`` of ``import``, ``scale``, ``fit`` and ``batch``: what it means (each adds how).
 SQUARE_HELP = "Turn the mesh about up so its walls run along x and z"

@@ -132,7 +132,9 @@ def batch(
     ] = None,
     size: Annotated[
         tuple[str, str, str] | None,
-        typer.Option("--size", metavar="X Y Z", help=_common.SIZE_HELP),
+        typer.Option(
+            "--size", metavar="X Y Z", help=_common.SIZE_HELP, callback=_common.check_size
+        ),
     ] = None,
     allow_deform: Annotated[
         bool,

@@ -28,7 +28,9 @@ def fit(
     output: Annotated[Path, output_option("for a mesh IN.")],
     size: Annotated[
         tuple[str, str, str] | None,
-        typer.Option("--size", metavar="X Y Z", help=_common.SIZE_HELP),
+        typer.Option(
+            "--size", metavar="X Y Z", help=_common.SIZE_HELP, callback=_common.check_size
+        ),
     ] = None,
     add: Annotated[
         tuple[str, int] | None,

@@ -216,6 +216,36 @@ def test_a_width_carries_a_sharp_rim_across_but_not_a_rounded_cushion_end(rounde
         assert inner.mean() >= 0.5
 
 
+@pytest.mark.parametrize("band", [None, 1e9])
+def test_a_width_is_carried_only_from_a_band_not_from_a_cabinets_side(monkeypatch, band):
+    # a cabinet 90 long, 70 tall and 60 deep seen on its top and its right end, every edge
+    # sharp: walked in from an edge, each face runs on past the reach along the other (a
+    # width). A rim a few voxels high is carried across by it (the test above); a face as tall
+    # or deep as the width is not: carried in, it would fill what no camera saw of a cabinet
+    # open at the front (a TV unit's space under each shelf, from three views). SLAB_BAND
+    # raised past any face (band=1e9) carries it: the rule is what keeps the inside empty
+    from partscale.complete import fuse
+
+    # two faces with one edge each: too few of their points measure for SLAB_EDGE_SHARE (a real
+    # cabinet's faces have edges all round, and shelves', doors' and sensor holes' edges)
+    monkeypatch.setattr(fuse, "SLAB_EDGE_SHARE", 0.001)
+    if band is not None:
+        monkeypatch.setattr(fuse, "SLAB_BAND", band)
+    lo, hi = (4, 4, 4), (94, 74, 64)
+    top, n_top = _grid_face(lo, hi, 1, 1)
+    end, n_end = _grid_face(lo, hi, 0, 1)
+    P, N = np.concatenate([top, end]), np.concatenate([n_top, n_end])
+    shape = (100, 80, 70)
+    _, sure, unsure = fuse._fills(
+        P, N, np.rint(P).astype(np.int64), np.zeros(3), 1.0, np.zeros(shape, bool)
+    )
+    inner = (sure | unsure)[10:88, 10:68, 10:58]
+    if band is None:
+        assert inner.mean() <= 0.01
+    else:
+        assert inner.mean() >= 0.5
+
+
 def test_the_fusion_fills_enclosed_space_as_scipy_does():
     # holes are filled by labelling the empty space once (faces of the array are outside),
     # not by scipy's dilation repeated until nothing changes: the same voxels

@@ -1192,6 +1192,7 @@ def _history(ob: Observation, sy: Symmetries, opts: Settings, *, symmetry: bool)
         "slab_neighbours": fuse_mod.SLAB_NEIGHBOURS,
         "slab_agree": fuse_mod.SLAB_AGREE,
         "slab_edge_share": fuse_mod.SLAB_EDGE_SHARE,
+        "slab_band": fuse_mod.SLAB_BAND,
         "carve_margin_voxels": CARVE_MARGIN,
         "speck_share": tidy_mod.SPECK_SHARE,
         "column_radius_m": [column_mod.MIN_RADIUS, column_mod.MAX_RADIUS],

@@ -59,6 +59,10 @@ SLAB_RING_TURNED = 0.6
 only from a sharp edge: of the voxels holding points in the cube ``2 * SLAB_RING + 1`` wide
 around its start, at most this share hold only points turned off the axes (SheenChair's
 rounded cushion ends, three views: 0.64-0.91; the stool's rim, one view: median 0.38)."""
+SLAB_BAND = 0.5
+"""A width carried as a thickness (:data:`SLAB_RING_TURNED`) comes from a band: the face it is
+carried from spans at most this share of that width across (a stool's rim, a few voxels high,
+carried across the seat), not a side panel as tall as the cabinet is deep."""
 SLAB_NEIGHBOURS = 32
 """Measurements of a face's thickness whose most common value carries it across the face."""
 SLAB_SEEN_FROM = 3
@@ -681,7 +685,9 @@ def _slab(points, normals, idx, origin, h, free, seen, facing) -> tuple[np.ndarr
     ``BETWEEN_VOXELS`` measured a width (a seat's front walked from its end): it counts only from
     a sharp edge (a stool's flat rim), not from a rounded one, where most voxels around the
     point hold only points turned off the axes (a cushion's end: carried in, its flat band
-    would be a sheet across the thick cushion). Every point takes the most common
+    would be a sheet across the thick cushion), and only along a band: a face spanning at most
+    ``SLAB_BAND`` of that width across (a rim), not a cabinet's side panel as tall as the
+    cabinet is deep (carried in, it fills what no camera saw under each shelf). Every point takes the most common
     of its ``SLAB_NEIGHBOURS`` nearest measurements facing the same way (a leg flush below an
     edge lengthens a few, holes at an edge shorten a few) and is carried in along its face's
     axis to that depth through voxels no camera saw through: the thickness of a slab whose
@@ -722,6 +728,7 @@ def _slab(points, normals, idx, origin, h, free, seen, facing) -> tuple[np.ndarr
     )
     # a width is carried (as a thickness) only from a sharp edge: a rounded end's flat band is
     # ringed by points turned off the axes, a stool's flat rim is not
+    wide_walk = wide.copy()
     if wide.any():
         # by voxels, not points: a scan samples a curve as densely as it likes
         held = np.zeros(shape, np.float32)
@@ -735,6 +742,13 @@ def _slab(points, normals, idx, origin, h, free, seen, facing) -> tuple[np.ndarr
         )
         w = np.flatnonzero(wide)
         wide[w[share <= SLAB_RING_TURNED]] = False
+        # and only along a band: a face narrow across (a rim), not one as wide or tall as the
+        # width it would be carried (a cabinet's side panel, carried in by its top's width,
+        # fills the unseen space under each shelf)
+        rim = np.flatnonzero(wide_walk & ~wide)
+        band = np.zeros(len(rim), np.int64)
+        _band(p[rim], axis[rim].astype(np.int64), cls[rim], near, band)
+        wide[rim[band > SLAB_BAND * depth[rim]]] = True
         depth[wide] = 0
     # the other side seen behind a flat point: the part's thickness there (the fill between
     # reaches the widened side, one voxel short of it)
@@ -845,6 +859,42 @@ def _slab_measure(p, n, side, near, bits, anyb, reach, depth, wide):
         wide[i] = not ended
         # the side face's last voxel lies up to two voxels (the widening) past its points
         depth[i] = max(last - 2, 0)
+
+
+@numba.njit(cache=True, parallel=True)
+def _band(p, axis, cls, near, band):
+    # a face's extent through each point (voxels), the least over the two axes across its
+    # normal: walked both ways through voxels next to points facing its way, gaps of SLAB_GAP
+    # stepped over
+    for i in numba.prange(p.shape[0]):
+        v0 = (int(np.rint(p[i, 0])), int(np.rint(p[i, 1])), int(np.rint(p[i, 2])))
+        bit = 1 << cls[i]
+        least = 1 << 30
+        for ax in range(3):
+            if ax == axis[i]:
+                continue
+            extent = 0
+            for sign in (-1, 1):
+                last = 0
+                s = 0
+                while True:
+                    s += 1
+                    a, b, c = v0
+                    if ax == 0:
+                        a += sign * s
+                    elif ax == 1:
+                        b += sign * s
+                    else:
+                        c += sign * s
+                    if not _in_grid(a, b, c, near.shape):
+                        break
+                    if near[a, b, c] & bit:
+                        last = s
+                    elif s - last > SLAB_GAP:
+                        break
+                extent += last
+            least = min(least, extent)
+        band[i] = least
 
 
 @numba.njit(cache=True, parallel=True)

@@ -59,9 +59,9 @@ def check_size(value: tuple[str, str, str] | None) -> tuple[str, str, str] | Non
             "--size: expected three extents X Y Z separated by spaces (each =, 2.1, 210cm, "
             f"+20cm or 120%), got {got}"
         )
-    for v in value:
+    for axis, v in zip("xyz", value, strict=True):
         # the form only: the extent and the object's units are known once it is read
-        parse_size(v, extent=1e6, units="m", what="--size")
+        parse_size(v, extent=1e6, units="m", what=f"size {axis}")
     return value
 
 

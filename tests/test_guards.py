@@ -331,16 +331,36 @@ def test_complete_names_the_form_of_numbers_typed_with_spaces(
     only(tmp_path)
 
 
-@pytest.mark.parametrize("command", ["fit", "batch"])
-def test_size_typed_with_commas_is_refused_as_the_size(tmp_path, capsys, monkeypatch, command):
-    # '--size =,+20cm,= -o out' takes '-o' and the file for the other two extents: refused as
-    # the size, naming the form, not as a missing -o
+@pytest.mark.parametrize(
+    ("args", "option", "got"),
+    [
+        (["fit", "--size", "=,+20cm,=", "-o"], "--size", "got '=,+20cm,=' '-o'"),
+        (["batch", "--size", "=,+20cm,=", "-o"], "--size", "got '=,+20cm,=' '-o'"),
+        (["fit", "--add", "x,1", "-o"], "--add", "got 'x,1' '-o'"),
+        (["scale", "--axis", "x", "--zone", "40%,60%", "--to", "120%", "-o"], "--zone", "'--to'"),
+        (["scale", "--radial", "--center", "0,0", "--to", "30cm", "-o"], "--center", "'--to'"),
+    ],
+)
+def test_values_typed_with_commas_are_refused_as_the_option(
+    tmp_path, capsys, monkeypatch, args, option, got
+):
+    # an option of several values typed with commas takes the next words (an option, its
+    # value) for its other values: refused as that option, naming the form, not as a missing
+    # -o or a stray argument further on
     target = tmp_path / "t.csdf.npz"
     partscale.save(shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.1), target)
-    out = tmp_path / "o.csdf.npz"
-    args = (command, target, "--size", "=,+20cm,=", "-o", out)
+    command, *rest = args
+    code, lines, _ = run(capsys, monkeypatch, command, target, *rest, tmp_path / "o.csdf.npz")
+    assert_one_line(code, lines, option, "separated by spaces", got)
+    only(tmp_path, "t.csdf.npz")
+
+
+def test_add_names_a_count_that_is_not_whole(tmp_path, capsys, monkeypatch):
+    target = tmp_path / "t.csdf.npz"
+    partscale.save(shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.1), target)
+    args = ("fit", target, "--add", "x", "one", "-o", tmp_path / "o.csdf.npz")
     code, lines, _ = run(capsys, monkeypatch, *args)
-    assert_one_line(code, lines, "--size", "separated by spaces", "got '=,+20cm,=' '-o'")
+    assert_one_line(code, lines, "--add", "whole number", "got 'one'")
     only(tmp_path, "t.csdf.npz")
 
 

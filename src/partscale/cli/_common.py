@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import contextlib
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -36,33 +36,47 @@ SIZE_HELP = (
 )
 
 
-def check_size(value: tuple[str, str, str] | None) -> tuple[str, str, str] | None:
-    """``--size``'s callback: the three extents checked as they are read. Typed with commas
-    (``--size =,+20cm,= -o out``) the option takes the next two words for its other extents and
-    the command is then refused for a missing ``-o``, which says nothing of the size.
+def spaced(name: str, form: str, parse: Callable[[tuple], Any] | None = None) -> Callable:
+    """A callback for an option of several values (``name``, e.g. ``--zone``; ``form``, e.g.
+    ``START END``), checked as it is read. Typed with commas (``--zone 40%,60% --to 120%``) the
+    option takes the next words for its other values (``--to``), and the command is refused for
+    a stray argument or a missing ``-o``, which says nothing of the option. ``parse``: checks
+    and converts the values once they are known to be spaced.
 
-    >>> check_size(("=", "+20cm", "120%"))
-    ('=', '+20cm', '120%')
-    >>> check_size(("=,+20cm,=", "-o", "out.csdf.npz"))  # doctest: +ELLIPSIS
+    >>> spaced("--zone", "START END")(("40%", "60%"))
+    ('40%', '60%')
+    >>> spaced("--zone", "START END")(("40%,60%", "--to"))
     Traceback (most recent call last):
     ...
-    partscale.errors.InputError: --size: expected three extents X Y Z separated by spaces ...
+    partscale.errors.InputError: --zone: expected START END separated by spaces, got '40%,60%' '--to'
     """
-    if value is None:
-        return None
-    from ..edit import parse_size
-    from ..errors import InputError
 
-    if any("," in v or (v.startswith("-") and v[1:2].isalpha()) for v in value):
-        got = " ".join(repr(v) for v in value)
-        raise InputError(
-            "--size: expected three extents X Y Z separated by spaces (each =, 2.1, 210cm, "
-            f"+20cm or 120%), got {got}"
-        )
+    def check(value: tuple | None) -> Any:
+        from ..errors import InputError
+
+        if value is None:
+            return None
+        text = [str(v) for v in value]
+        if any("," in v or (v.startswith("-") and v[1:2].isalpha()) for v in text):
+            got = " ".join(repr(v) for v in text)
+            raise InputError(f"{name}: expected {form} separated by spaces, got {got}")
+        return value if parse is None else parse(value)
+
+    return check
+
+
+def _size_form(value: tuple[str, str, str]) -> tuple[str, str, str]:
+    """The form of each extent of ``--size`` (the extent and the object's units are known once
+    it is read)."""
+    from ..edit import parse_size
+
     for axis, v in zip("xyz", value, strict=True):
-        # the form only: the extent and the object's units are known once it is read
         parse_size(v, extent=1e6, units="m", what=f"size {axis}")
     return value
+
+
+#: ``--size``'s callback (``fit``, ``batch``).
+check_size = spaced("--size", "three extents X Y Z (each =, 2.1, 210cm, +20cm or 120%)", _size_form)
 
 
 #: ``--square`` of ``import``, ``scale``, ``fit`` and ``batch``: what it means (each adds how).

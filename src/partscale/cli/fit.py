@@ -21,6 +21,19 @@ from .scale import (
 )
 
 
+def _whole_count(value: tuple[str, str]) -> tuple[str, str]:
+    """``--add``'s N: a whole number of elements (negative removes)."""
+    from ..errors import InputError
+
+    try:
+        int(value[1])
+    except ValueError:
+        raise InputError(
+            f"--add: expected AXIS N, N a whole number of elements (-N removes), got {value[1]!r}"
+        ) from None
+    return value
+
+
 def fit(
     src: Annotated[
         Path, typer.Argument(metavar="IN", help="A .csdf.npz file, or a mesh (mesh route).")
@@ -33,10 +46,11 @@ def fit(
         ),
     ] = None,
     add: Annotated[
-        tuple[str, int] | None,
+        tuple[str, str] | None,
         typer.Option(
             "--add",
             metavar="AXIS N",
+            callback=_common.spaced("--add", "AXIS N", _whole_count),
             help="Add N elements (seats, doors, shelf rows, steps) along AXIS; -N removes N. "
             "With y, also the elements of a ring about the vertical (a star base's arms, chairs "
             "about a round table), spaced evenly again.",
@@ -105,7 +119,7 @@ def _plan(c, mesh_route: bool, size, add, allow_deform: bool):
     recipe, why = fit_zones(
         c,
         list(size) if size is not None else None,
-        add=None if add is None else {add[0]: add[1]},
+        add=None if add is None else {add[0]: int(add[1])},
         allow_deform=allow_deform,
     )
     note = remesh_note(c, recipe) if mesh_route else None

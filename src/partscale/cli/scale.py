@@ -47,6 +47,7 @@ Zone = Annotated[
     typer.Option(
         "--zone",
         metavar="START END",
+        callback=_common.spaced("--zone", "START END"),
         help="The zone's planes: object units, with a unit (30cm, 300mm, 0.3m, 12in) or % "
         "of the extent (0% at its min). Omitted with --copies: whole elements (seats, "
         "doors, shelf rows, steps) of the repeat found along --axis (y: also the arms of a "
@@ -108,7 +109,11 @@ Radial = Annotated[
 Center = Annotated[
     tuple[str, str] | None,
     typer.Option(
-        "--center", metavar="X Z", help="With --radial: the axis' position.", show_default="found"
+        "--center",
+        metavar="X Z",
+        help="With --radial: the axis' position.",
+        show_default="found",
+        callback=_common.spaced("--center", "X Z"),
     ),
 ]
 Sides = Annotated[
@@ -125,6 +130,7 @@ Span = Annotated[
     typer.Option(
         "--span",
         metavar="LO HI",
+        callback=_common.spaced("--span", "LO HI"),
         help="With --radial: only the levels between LO and HI along y (a lamp's base).",
     ),
 ]

@@ -44,7 +44,7 @@ from .elements import AxisElements, count_zone, element_phrase, find_elements
 from .elements import length_text as _fmt
 from .features import Feature, axis_features, feature_spans, whole_copies
 from .helix import find_helices
-from .profile import STEP, Profile, calm_runs, profile
+from .profile import SCAN_LAYERS, STEP, Profile, calm_runs, from_scan, profile
 from .radial import find_radial, radial_zones
 from .rotation import Rotation, find_rotations
 from .screw import find_screws
@@ -1223,13 +1223,18 @@ def _fit_axis(
     name, units, lo, hi, change = _axis_change(csdf, axis, target)
     h = csdf.voxel_size
     cands = axis_candidates(csdf, axis, prof=prof, features=feats)
-    tiles = [c for c in cands if c.kind == "tile"]
+    scan = from_scan(csdf)
+    # a completed scan's repeats are taken only when asked for (add_axis): its noise makes
+    # elements of a plain body (a bin's, a table's top)
+    tiles = [c for c in cands if c.kind == "tile" and not scan]
     slabs = [c for c in cands if c.kind == "stretch"]
     # a shrink is spread over many slabs: a drifting run shrinks whole, not at each piece
     chains = _drift_chains(slabs, prof)
     if cands:
         _check_shrinkable(tiles, chains, target, hi - lo, h, (name, units))
-    tiled, edits, why = _whole_periods(csdf, axis, prof, tiles, change, feats)
+    tiled, edits, why = (
+        (None, [], []) if scan else _whole_periods(csdf, axis, prof, tiles, change, feats)
+    )
     left = change if tiled is None else change - tiled.grow
     if abs(left) <= h / 2:
         return edits, why
@@ -1479,7 +1484,18 @@ def fit(
     if not edits:
         raise InputError("size: expected a change on some axis, got the current size")
     planar = [e for e in edits if isinstance(e, Edit)]
-    return Recipe(tuple(edits)), why + _off_square(csdf, planar)
+    return Recipe(tuple(edits)), why + _off_square(csdf, planar) + _scan_note(csdf, size)
+
+
+def _scan_note(csdf: CSDF, size: Sequence[str | float]) -> list[str]:
+    """The line saying how a completed scan's sizes were fitted (where one was asked for)."""
+    if not from_scan(csdf) or all(str(v).strip() == "=" for v in size):
+        return []
+    return [
+        f"a completed scan: its cross-sections compared over {SCAN_LAYERS} layers (its surface "
+        "carries the sensor's noise), sizes reached by stretching, its elements repeated only "
+        "when asked for (--add)"
+    ]
 
 
 def _targets(

@@ -80,6 +80,19 @@ SHIFT_STEP = 0.25
 #: Constant slab: neighbouring layers closer than :data:`STEP` (see :func:`calm_runs`), its two
 #: ends closer than DRIFT.
 DRIFT = 0.06
+#: :data:`DRIFT` on a completed scan (:attr:`Profile.scan`): the distance from a constant run's
+#: first layer to its others does not grow there but stays at the scan's noise, 0.03-0.08 once
+#: averaged (a bookcase's shelves 0.03, a pedal bin's body 0.07), where a mesh's is 0.
+SCAN_DRIFT = 0.12
+
+
+def drift_limit(p: Profile) -> float:
+    """The drift (:data:`DRIFT`, on a scan :data:`SCAN_DRIFT`) within which a slab's layers are
+    one constant section.
+    """
+    return SCAN_DRIFT if p.scan else DRIFT
+
+
 #: A boundary between elements changes the cross-section area by this share of the largest one.
 PROMINENCE = 0.05
 #: Copies of one element, voxelised at different phases, differ in width and spacing this much.
@@ -397,7 +410,7 @@ def _check_chain(
     """
     for e in chain:  # an element has a shape of its own: no constant slab (see module)
         i = np.arange(int(np.ceil(e[0])), int(np.floor(e[1])) + 1)
-        if p.distance(i[:, None], i[None, :]).max(initial=0.0) < DRIFT:
+        if p.distance(i[:, None], i[None, :]).max(initial=0.0) < drift_limit(p):
             return None
     errs, mirrored = [], False
     for e, f in itertools.pairwise(chain):
@@ -735,10 +748,11 @@ def constant_slabs(
     spans = feature_spans(feats)
     out = []
     for first, last in runs:
-        # split where the drift from the slab's start exceeds DRIFT (a slowly changing section)
+        # split where the drift from the slab's start exceeds the limit (a slowly changing
+        # section)
         while last - first + 1 >= MIN_SLAB:
             drift = p.distance(np.full(last - first + 1, first), np.arange(first, last + 1))
-            over = np.flatnonzero(drift >= DRIFT)
+            over = np.flatnonzero(drift >= drift_limit(p))
             end = int(over[0] - 1 + first) if over.size else last
             if end - first + 1 >= MIN_SLAB:
                 beside = any(first - 2 <= b < first or end < a <= end + 2 for a, b in spans)
@@ -981,7 +995,7 @@ def _slab_candidates(p: Profile, csdf: CSDF, feats: list[Feature]) -> list[Candi
         if e - s < 2 * h:
             continue
         length = (e - s) / extent
-        score = (1 - drift / DRIFT) * min(1.0, 0.3 + length)
+        score = (1 - drift / drift_limit(p)) * min(1.0, 0.3 + length)
         out.append(
             Candidate(
                 axis=name,

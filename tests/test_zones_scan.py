@@ -10,6 +10,7 @@ from scipy import ndimage
 from partscale import edit, ingest, shapes, zones
 from partscale.complete import complete
 from partscale.csdf import make
+from partscale.errors import InputError
 from partscale.evaluate import virtual_scan
 
 H = 0.01
@@ -82,3 +83,12 @@ def test_fit_on_completed_table_stretches_between_legs(table_scan):
     longer = edit.apply_recipe(table_scan, recipe)
     got = longer.surface_bounds()[1, a] - longer.surface_bounds()[0, a]
     assert abs(got - 1.2 * ext[a]) <= 1.5 * table_scan.voxel_size
+
+
+def test_rough_scan_has_no_elements_made_of_noise():
+    # "one more element" on a plain body: the scan's bumps are no grooves between elements
+    # (read as a mesh's, the same surface holds "3 alike elements" along y)
+    assert zones.find_elements(_rough_block(scan=False), "y").groups
+    assert not zones.find_elements(_rough_block(scan=True), "y").groups
+    with pytest.raises(InputError, match="found none"):
+        zones.fit(_rough_block(scan=True), add={"y": 1})

@@ -59,11 +59,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy import ndimage
 from scipy.signal import find_peaks
 
 from ..csdf import CSDF
 from ..edit import AXES
-from .profile import Profile, _axis_index, profile
+from .profile import SCAN_LAYERS, Profile, _axis_index, from_scan, profile
 from .suggest import MATCH, QUANTILE, SHIFT_STEP, _boundaries, _solid_layers, join_islands
 
 #: A layer pair is a separator candidate where this share of the visible surface changes there.
@@ -315,6 +316,11 @@ def edge_score(csdf: CSDF, axis: int) -> np.ndarray:
     h = np.float32(csdf.voxel_size)
     s = np.moveaxis(csdf.sdf, axis, 0) / h
     rgb = np.moveaxis(csdf.rgb, axis, 0)
+    if from_scan(csdf):
+        # a completed scan's surface and colours averaged along the axis as its profile is
+        # (profile.SCAN_LAYERS): its noise would be edges at every layer
+        s = ndimage.uniform_filter1d(s, SCAN_LAYERS, axis=0, mode="nearest")
+        rgb = ndimage.uniform_filter1d(rgb.astype(np.float32), SCAN_LAYERS, axis=0, mode="nearest")
     best = np.zeros(s.shape[0] - 1)
     for depth, colour, present in _views(s, rgb):
         both = present[1:] & present[:-1]

@@ -226,6 +226,41 @@ def copies(tmp: Path) -> None:
     print("wrote docs/gallery/editor.png, docs/gallery/eval_contact_sheet.png")
 
 
+def table_scan(tmp: Path) -> None:
+    from partscale import data, load, save
+    from partscale.complete import completion_colors
+
+    s = data.table_scan()
+    c = tmp / "table_scan.csdf.npz"
+    ps(
+        "complete", "--depth", s / "depth.png", "--color", s / "color.jpg",
+        "--intrinsics", s / "intrinsics.json", "-o", c, "--upright",
+    )  # fmt: skip
+    kinds = tmp / "kinds.csdf.npz"
+    done = load(c)
+    save(done.replace(rgb=completion_colors(done)), kinds)
+    longer = tmp / "table_scan_longer.csdf.npz"
+    ps("fit", c, "-o", longer, "--size", "120%", "=", "=")
+    frame = Image.open(s / "color.jpg").convert("RGB").resize((PIXELS, PIXELS * 3 // 4))
+    panels(
+        [c, kinds, longer],
+        ["completed from one frame", "observed, mirrored, guessed", "fit --size 120% = ="],
+        OUT / "table_scan.png",
+    )
+    sheet = Image.open(OUT / "table_scan.png")
+    out = Image.new("RGB", (sheet.width + PIXELS, sheet.height), "white")
+    out.paste(frame, (0, 26 + PIXELS // 8))
+    ImageDraw.Draw(out).text(
+        (PIXELS // 2, 4), "the depth frame (colour)", fill=(40, 40, 40),
+        font=ImageFont.load_default(size=15), anchor="mt",
+    )  # fmt: skip
+    out.paste(sheet, (PIXELS, 0))
+    out.save(OUT / "table_scan.png", optimize=True)
+    print(
+        f"wrote docs/gallery/table_scan.png ({(OUT / 'table_scan.png').stat().st_size // 1024} KB)"
+    )
+
+
 PICTURES: dict[str, Callable[[Path], None]] = {
     "table_demo": table_demo,
     "table_fit": table_fit,
@@ -234,6 +269,7 @@ PICTURES: dict[str, Callable[[Path], None]] = {
     "bookcase_add": bookcase_add,
     "round_radial": round_radial,
     "stairs_step": stairs_step,
+    "table_scan": table_scan,
     "batch": many,
     "copies": copies,
 }

@@ -6,7 +6,8 @@ One home for the CLI's help conventions:
 - a default is shown one way: typer's ``[default: X]`` after the help (``show_default`` text where
   the value is worked out at run time), never in the help's prose;
 - every subcommand ends with examples (:data:`EXAMPLES`) that run, in order, in one folder, on the
-  table shipped with the package (``python -m partscale.data table`` prints its path);
+  table shipped with the package (``python -m partscale.data table`` prints its path) and, for
+  ``complete``, the frame of it shipped beside (``python -m partscale.data table-scan``);
 - an old option spelling keeps working for one release (:data:`DEPRECATED`), with one note line.
 """
 
@@ -46,7 +47,11 @@ EXAMPLES: dict[str, list[str]] = {
         "partscale render table_longer.glb -o table_longer_mesh.png",
     ],
     "complete": [
-        "partscale complete table_longer.ply -o table_completed.csdf.npz --res 64",
+        'partscale complete --depth "$(python -m partscale.data table-scan)/depth.png" '
+        '--color "$(python -m partscale.data table-scan)/color.jpg" '
+        '--intrinsics "$(python -m partscale.data table-scan)/intrinsics.json" '
+        "-o table_completed.csdf.npz --upright",
+        "partscale fit table_completed.csdf.npz -o table_completed_longer.csdf.npz --size 120% = =",
     ],
     "eval": ["partscale eval --original table.csdf.npz --edited table_longer.csdf.npz"],
     "batch": [
@@ -69,8 +74,10 @@ DEPRECATED: dict[str, dict[str, str]] = {
 def epilog(command: str) -> str:
     """The ``--help`` epilog of ``command``: its examples, one per line."""
     lines = "\n".join(f"  {e}" for e in EXAMPLES[command])
+    sample = "table-scan" if command == "complete" else "table"
+    what = "a depth frame of the table" if command == "complete" else "the table"
     return (
-        "Examples (on the table shipped with partscale; `python -m partscale.data table` "
+        f"Examples (on {what} shipped with partscale; `python -m partscale.data {sample}` "
         f"prints its path):\n{lines}"
     )
 

@@ -77,6 +77,9 @@ CLOSURE_SPACINGS = 1.5
 """The scan's point spacings that the closure reaches at least (:func:`closure_for`)."""
 NORMAL_NEIGHBOURS = 12
 """Scan points whose spread gives a point's normal (the side a camera saw it from)."""
+SQUARE_COSINE = 0.9
+"""|Cosine| between a second mirror plane's normal and the upright z above which the two planes
+cross square (:func:`lengthwise`)."""
 CARVE_MARGIN = 0.5
 """Voxels a point must lie in front of a reading to be free space (absorbs sensor noise)."""
 
@@ -585,8 +588,9 @@ def complete(
         Pixel rectangle of the first frame holding the object (default: found automatically:
         the object standing on the floor nearest the image centre; a cropped scan is all object).
     upright : bool
-        Write the grid in the upright frame (floor at y = 0, y up, the mirror plane at x = 0)
-        instead of the input's frame.
+        Write the grid in the upright frame (floor at y = 0, y up, the mirror plane at x = 0;
+        with two mirror planes, x along the longer side: :func:`lengthwise`) instead of the
+        input's frame.
     symmetry : bool
         Look for and apply mirror planes and rotations (off: the closure alone).
     closure : float
@@ -961,7 +965,7 @@ def plan_grid(surface: Surface, sy: Symmetries, opts: Settings) -> Grid:
     closure and the band, in the upright frame or the input's (``upright``); refused where it
     would not fit in memory.
     """
-    grid_to_world = sy.Uinv if opts.upright else np.eye(4)
+    grid_to_world = sy.Uinv @ lengthwise(surface.points, sy.syms) if opts.upright else np.eye(4)
     world_to_grid = np.linalg.inv(grid_to_world)
     Sg = _apply(world_to_grid @ sy.Uinv, surface.points)
     SNg = surface.normals @ (world_to_grid @ sy.Uinv)[:3, :3].T
@@ -980,6 +984,38 @@ def plan_grid(surface: Surface, sy: Symmetries, opts: Settings) -> Grid:
     shape_t = tuple(int(s) for s in shape)
     check_memory(shape_t, 40, what=f"{opts.source} at res {opts.res}", params=("res",))
     return Grid(fuse_mod.GridFrame(grid_to_world, shape_t, origin, h), Sg, SNg, lo, hi)
+
+
+def lengthwise(points: np.ndarray, syms: list[sym_mod.Symmetry]) -> np.ndarray:
+    """(4, 4) float64: the upright output grid's axes in the upright frame (the first mirror
+    plane at x = 0): turned a quarter about up where a second mirror plane crosses the first
+    square (z = 0) and the object is longer along z, so that x runs along its length.
+
+    An object with one mirror plane has a left and a right (a chair, a sofa, a cabinet): x is
+    across that plane, as a catalogue gives its width. One with two (a table, a bed) has no
+    front; catalogues give the longer side first, and ``fit --size`` reads its x as that.
+    ``points`` (N, 3) float64 are its surface, upright.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.complete.api import lengthwise
+    >>> lengthwise(np.zeros((2, 3)), []).tolist() == np.eye(4).tolist()
+    True
+    """
+    R = np.eye(4)
+    mirrors = [s for s in syms if s.kind == "mirror"]
+    if len(mirrors) < 2 or len(points) == 0:
+        return R
+    # the second plane's normal: the reflection's -1 eigenvector
+    w, v = np.linalg.eigh(mirrors[1].A)
+    normal = v[:, int(np.argmin(w))]
+    ext = points.max(axis=0) - points.min(axis=0)
+    if abs(normal[2]) < SQUARE_COSINE or ext[2] <= ext[0]:
+        return R
+    # grid x along upright z, grid z along upright -x (a turn about y: right-handed)
+    R[:3, :3] = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    return R
 
 
 def fuse_solid(

@@ -173,8 +173,8 @@ def test_parts_the_sensor_separated_stay_one_object():
 
 
 def test_upright_table_runs_along_x():
-    # the shipped table (2.4 x 1.3 m, two mirror planes) from one view at 60 degrees: the first
-    # plane found is the one across its depth, and x was its depth (1.4 m, z 2.7 m); written
+    # the shipped table (2.4 x 1.3 m, two mirror planes) from one view at 90 degrees: the first
+    # plane found is the one across its depth, and x was its depth (1.4 m, z 2.5 m); written
     # upright, its length is x, as a catalogue gives it first and fit --size reads it
     import warnings
 
@@ -182,7 +182,7 @@ def test_upright_table_runs_along_x():
     from partscale.complete import complete
     from partscale.evaluate import virtual_scan
 
-    frames = virtual_scan(ingest.load_mesh(data.table()), azimuths=(60.0,), elevation=25.0)
+    frames = virtual_scan(ingest.load_mesh(data.table()), azimuths=(90.0,), elevation=25.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         c = complete(frames, res=64, upright=True)
@@ -192,3 +192,31 @@ def test_upright_table_runs_along_x():
     # the grid's frame in the scan's world is still a rotation: the turn is recorded in it
     R = np.asarray(c.meta["completion"]["to_input_frame"])[:3, :3]
     assert np.allclose(R @ R.T, np.eye(3), atol=1e-6)
+
+
+def test_upright_l_shape_without_a_mirror_lies_along_its_walls():
+    # an L-shaped block (arms 1.2 and 0.9 m, no mirror plane) seen 20 degrees off one arm:
+    # upright, the grid's x and z follow the camera unless laid along its walls, and its
+    # extents were the diagonal's (a slanted outline to fit, which it reads as curved)
+    import warnings
+
+    import trimesh
+
+    from partscale.complete import complete
+    from partscale.evaluate import virtual_scan
+    from partscale.ingest import from_trimesh
+
+    a = trimesh.creation.box([0.85, 0.4, 0.35])  # two blocks side by side: the scan sees
+    a.apply_translation([0.775, 0.2, 0.175])  # only their outside
+    b = trimesh.creation.box([0.35, 0.4, 0.9])
+    b.apply_translation([0.175, 0.2, 0.45])
+    ell = trimesh.util.concatenate([a, b])
+    ell.apply_translation([-0.6, 0.0, -0.45])
+    frames = virtual_scan(from_trimesh(ell), azimuths=(20.0,), elevation=30.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c = complete(frames, res=64, upright=True)
+    assert not c.meta["completion"]["symmetries"]
+    ext = np.ptp(c.surface_bounds(), axis=0)
+    # along its walls: 1.2 by 0.9 (within the scan's unseen back); askew it spans more
+    assert ext[0] <= 1.2 + 0.1 and ext[2] <= 0.9 + 0.1

@@ -875,6 +875,52 @@ def _mirrors_and_up(
     return syms, U, up_from + "+mirror", up_tilt
 
 
+def along_walls(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """(4, 4) float64: grid -> upright, a turn about up that lays the grid's x and z along the
+    object's walls in plan, x along the longer, z as near the camera's way as it can be; the
+    identity where its faces run no two ways square to each other (a round object).
+
+    Without a mirror plane the upright frame's x and z follow the camera; the upright output
+    grid then ran askew across an L-shaped sofa seen 20 degrees off its front, and ``fit`` read
+    its straight back and seat as a slanted outline (refused: "round or curved there").
+    ``points`` and ``normals`` (N, 3) float64 are the surface, upright (:func:`lengthwise`
+    calls it where no mirror plane was found).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from partscale.complete.api import along_walls
+    >>> a = np.radians(20.0)
+    >>> n = np.array([[np.cos(a), 0, np.sin(a)], [-np.sin(a), 0, np.cos(a)]] * 100)
+    >>> p = np.c_[np.linspace(-1, 1, 200), np.zeros(200), np.zeros(200)] @ [[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]
+    >>> V = along_walls(p, n)
+    >>> np.round(np.degrees(np.arctan2(V[2, 0], V[0, 0])), 1)  # the grid's x, upright
+    np.float64(20.0)
+    """
+    V = np.eye(4)
+    walls = sym_mod.walls_direction(normals)
+    if walls is None or len(points) == 0:
+        return V
+    # the direction to a degree: the mean of the upright faces' within the window found (a
+    # quarter turn is one period: their angles times four averaged on the circle)
+    side = normals[np.abs(normals[:, 1]) < 0.3]
+    phi = np.arctan2(side[:, 2], side[:, 0])
+    near = np.abs((np.degrees(phi - walls) + 45.0) % 90.0 - 45.0) <= sym_mod.WALL_SPREAD_DEG
+    walls = float(np.angle(np.exp(4j * phi[near]).mean())) / 4.0
+    best = None
+    for k in range(4):
+        a = walls + k * np.pi / 2
+        ex = np.array([np.cos(a), 0.0, np.sin(a)])
+        ez = np.array([-np.sin(a), 0.0, np.cos(a)])
+        key = (float(np.ptp(points @ ex)) > float(np.ptp(points @ ez)), float(ez[2]))
+        if best is None or key > best[0]:
+            best = (key, ex, ez)
+    assert best is not None
+    # columns: the grid's axes in the upright frame (grid -> upright, as lengthwise's turn)
+    V[:3, :3] = np.stack([best[1], [0.0, 1.0, 0.0], best[2]], axis=1)
+    return V
+
+
 def _plane_at_x0(
     syms: list[sym_mod.Symmetry], U: np.ndarray
 ) -> tuple[list[sym_mod.Symmetry], np.ndarray]:
@@ -965,7 +1011,8 @@ def plan_grid(surface: Surface, sy: Symmetries, opts: Settings) -> Grid:
     closure and the band, in the upright frame or the input's (``upright``); refused where it
     would not fit in memory.
     """
-    grid_to_world = sy.Uinv @ lengthwise(surface.points, sy.syms) if opts.upright else np.eye(4)
+    turn = lengthwise(surface.points, surface.normals, sy.syms) if opts.upright else np.eye(4)
+    grid_to_world = sy.Uinv @ turn if opts.upright else turn
     world_to_grid = np.linalg.inv(grid_to_world)
     Sg = _apply(world_to_grid @ sy.Uinv, surface.points)
     SNg = surface.normals @ (world_to_grid @ sy.Uinv)[:3, :3].T
@@ -986,25 +1033,28 @@ def plan_grid(surface: Surface, sy: Symmetries, opts: Settings) -> Grid:
     return Grid(fuse_mod.GridFrame(grid_to_world, shape_t, origin, h), Sg, SNg, lo, hi)
 
 
-def lengthwise(points: np.ndarray, syms: list[sym_mod.Symmetry]) -> np.ndarray:
+def lengthwise(points: np.ndarray, normals: np.ndarray, syms: list[sym_mod.Symmetry]) -> np.ndarray:
     """(4, 4) float64: the upright output grid's axes in the upright frame (the first mirror
     plane at x = 0): turned a quarter about up where a second mirror plane crosses the first
-    square (z = 0) and the object is longer along z, so that x runs along its length.
+    square (z = 0) and the object is longer along z, so that x runs along its length; with no
+    mirror plane, along its walls (:func:`along_walls`).
 
     An object with one mirror plane has a left and a right (a chair, a sofa, a cabinet): x is
     across that plane, as a catalogue gives its width. One with two (a table, a bed) has no
     front; catalogues give the longer side first, and ``fit --size`` reads its x as that.
-    ``points`` (N, 3) float64 are its surface, upright.
+    ``points`` and ``normals`` (N, 3) float64 are its surface, upright.
 
     Examples
     --------
     >>> import numpy as np
     >>> from partscale.complete.api import lengthwise
-    >>> lengthwise(np.zeros((2, 3)), []).tolist() == np.eye(4).tolist()
+    >>> lengthwise(np.zeros((2, 3)), np.zeros((2, 3)), []).tolist() == np.eye(4).tolist()
     True
     """
     R = np.eye(4)
     mirrors = [s for s in syms if s.kind == "mirror"]
+    if not mirrors:
+        return along_walls(points, normals)
     if len(mirrors) < 2 or len(points) == 0:
         return R
     # the second plane's normal: the reflection's -1 eigenvector

@@ -24,7 +24,7 @@ from scipy.spatial import cKDTree
 from .carve import lookup
 
 MIN_SUPPORT = 0.3
-#: Walls in plan (:func:`_walls`): this share of the upright faces' normals within this many
+#: Walls in plan (:func:`walls_direction`): this share of the upright faces' normals within this many
 #: degrees of one direction or the one square to it. Unless the object spans as far along one
 #: as along the other (within WALL_SQUARE_CELLS cells), no mirror plane within
 #: WALL_DIAGONAL_DEG of their diagonal.
@@ -210,7 +210,7 @@ def mirror_planes(
     scorer = _Scorer(P, free, cell)
     top = float(P[:, 1].max())
     # walls in plan, and not square: no mirror plane across their diagonal (see _best_plane)
-    walls = None if normals is None else _walls(np.asarray(normals, np.float64))
+    walls = None if normals is None else walls_direction(np.asarray(normals, np.float64))
     if walls is not None and _square_in_plan(P, walls, cell):
         walls = None  # square: its diagonal may be a mirror plane as well as the walls' own
     found: list[Symmetry] = []
@@ -246,7 +246,7 @@ def mirror_planes(
     return found
 
 
-def _walls(normals: np.ndarray) -> float | None:
+def walls_direction(normals: np.ndarray) -> float | None:
     """The direction (radians, modulo a right angle) of the object's walls in plan: where at
     least ``WALL_SHARE`` of its upright faces' normals (``normals`` (N, 3) unit, upright)
     turn within ``WALL_SPREAD_DEG`` of one direction or the one square to it; else None (a

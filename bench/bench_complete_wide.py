@@ -15,6 +15,11 @@ others.
     .venv/bin/python bench/bench_complete_wide.py --quick      # 6 objects, one view each
     .venv/bin/python bench/bench_complete_wide.py --views 1    # every object, one view each
     .venv/bin/python bench/bench_complete_wide.py              # every object, 6 single views + 2 triples
+    .venv/bin/python bench/bench_complete_wide.py --views 1 --triples 0 --world-yaw 30 --upright
+
+The scan's world is the object's own frame (its walls along the axes) unless ``--world-yaw``
+turns it, as a real camera's frame is; the completion, written in that world's frame by default,
+is then voxelized askew to the object (``--upright``: in its own upright frame).
 """
 
 from __future__ import annotations
@@ -142,7 +147,26 @@ def views_of(i: int, n_single: int, n_triple: int) -> list[dict]:
     return out
 
 
-def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[dict]:
+def turned(deg: float) -> np.ndarray:
+    """(4, 4) float64: a turn by ``deg`` degrees about y (up)."""
+    a = np.radians(deg)
+    R = np.eye(4)
+    R[:3, :3] = [[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]]
+    return R
+
+
+def in_object_frame(c, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """Surface samples ``P`` (N, 3) of a completion ``c`` (grid frame) in the object's frame:
+    through the grid's frame in the scan's world (``to_input_frame``) and the world's turn ``R``
+    undone."""
+    T = np.asarray(c.meta["completion"]["to_input_frame"], np.float64)
+    return (P @ T[:3, :3].T + T[:3, 3]) @ R[:3, :3]
+
+
+def run_one(
+    rel: str, i: int, n_single: int, n_triple: int, res: int, world_yaw: float = 0.0,
+    upright: bool = False,
+) -> list[dict]:  # fmt: skip
     mesh = ingest.load_mesh(DATA / rel)
     s = scale_of(rel)
     if s != 1.0:
@@ -158,18 +182,21 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
         except ValueError as exc:  # the virtual sensor: out of its range
             print(f"  {Path(rel).stem:30s} not scanned: {exc}", flush=True)
             continue
+        # the scan's world: the object's own frame, or turned about up (a camera's frame)
+        R = turned(world_yaw)
+        frames = [dataclasses.replace(f, pose=R @ f.pose) for f in frames]
         try:
             ob = api.observe(frames)
         except InputError as exc:  # no object found: neither import nor completion has one
             print(f"  {Path(rel).stem:30s} no object found in the scan: {exc}", flush=True)
             rows.append({**row, "raw": np.nan, "full": np.nan, "kept": "failed", "struts": 0})
             continue
-        row["raw"] = completion.chamfer_fscore(ob.points, G, tau)["fscore"]
+        row["raw"] = completion.chamfer_fscore(ob.points @ R[:3, :3], G, tau)["fscore"]
         t = time.perf_counter()
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", PartscaleWarning)
-                c = complete(frames, res=res)
+                c = complete(frames, res=res, upright=upright)
         except InputError as exc:
             print(f"  {Path(rel).stem:30s} completion failed: {exc}", flush=True)
             row.update(full=np.nan, kept="failed", seconds=time.perf_counter() - t, struts=0)
@@ -177,7 +204,7 @@ def run_one(rel: str, i: int, n_single: int, n_triple: int, res: int) -> list[di
             continue
         row["seconds"] = time.perf_counter() - t
         P, _ = completion.surface_samples(c, tau=tau)
-        row["full"] = completion.chamfer_fscore(P, G, tau)["fscore"]
+        row["full"] = completion.chamfer_fscore(in_object_frame(c, P, R), G, tau)["fscore"]
         m = c.meta["completion"]
         row["kept"], row["struts"] = m["guard"]["kept"], len(m["struts"])
         rows.append(row)
@@ -224,6 +251,14 @@ def main() -> int:
     ap.add_argument("--triples", type=int, default=2, help="three-view scans per object")
     ap.add_argument("--only", default=None, help="only objects whose path contains this")
     ap.add_argument("--res", type=int, default=128)
+    ap.add_argument(
+        "--world-yaw",
+        type=float,
+        default=0.0,
+        help="turn the scan's world this many degrees about up: a camera's frame, not the "
+        "object's own (its axes then lie askew to the object's walls)",
+    )
+    ap.add_argument("--upright", action="store_true", help="complete with upright=True")
     args = ap.parse_args()
     objs = QUICK if args.quick else objects()
     n_single, n_triple = (1, 0) if args.quick else (args.views, args.triples)
@@ -234,7 +269,7 @@ def main() -> int:
         if not (DATA / rel).exists():
             print(f"skip {rel}: missing")
             continue
-        rows += run_one(rel, i, n_single, n_triple, args.res)
+        rows += run_one(rel, i, n_single, n_triple, args.res, args.world_yaw, args.upright)
     for n in (1, 3):
         rn = [r for r in rows if r["n"] == n]
         if not rn:

@@ -229,7 +229,11 @@ def test_plan_grid_puts_res_voxels_along_the_longest_side(table_observation):
         ijk = (g.points - g.frame.origin) / g.frame.h
         assert ijk.min() >= 2 and (np.asarray(g.frame.shape) - 1 - ijk).min() >= 2
         frame = "upright" if upright else "input"
-        assert np.allclose(g.frame.grid_to_world, sy.Uinv if upright else np.eye(4)), frame
+        # upright: laid along the walls (no mirror plane searched for here)
+        turned = sy.Uinv @ api.lengthwise(s.points, s.normals, sy.syms)
+        assert np.allclose(g.frame.grid_to_world, turned if upright else np.eye(4)), frame
+        R = g.frame.grid_to_world[:3, :3]
+        assert np.allclose(R @ R.T, np.eye(3), atol=1e-9)
 
 
 def test_complete_reports_its_steps_by_name_and_its_shares_sum_to_one(table_observation):

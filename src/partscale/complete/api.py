@@ -695,8 +695,9 @@ def into_input_frame(c: CSDF) -> CSDF:
 
     Made in the scan's frame, a completion was voxelized askew to the object wherever the
     scan's world is not the object's own frame (a camera's is not): with the world turned 30
-    degrees about up, the wide benchmark's 40 single views of untuned objects scored a median
-    F@1% of 0.526 against 0.551 made upright (its 12 tuned objects 0.653 against 0.810).
+    degrees about up (``bench_complete_wide.py --world-yaw 30``), the 40 single views of
+    untuned objects scored a median F@1% of 0.527 made so, 0.558 made upright and resampled
+    (its 12 tuned objects 0.653 and 0.808).
 
     Parameters
     ----------
@@ -974,7 +975,7 @@ def _mirrors_and_up(
     return syms, U, up_from + "+mirror", up_tilt
 
 
-def along_walls(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+def along_walls(points: np.ndarray, walls: float | None) -> np.ndarray:
     """(4, 4) float64: grid -> upright, a turn about up that lays the grid's x and z along the
     object's walls in plan, x along the longer, z as near the camera's way as it can be; the
     identity where its faces run no two ways square to each other (a round object).
@@ -982,8 +983,8 @@ def along_walls(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     Without a mirror plane the upright frame's x and z follow the camera; the upright output
     grid then ran askew across an L-shaped sofa seen 20 degrees off its front, and ``fit`` read
     its straight back and seat as a slanted outline (refused: "round or curved there").
-    ``points`` and ``normals`` (N, 3) float64 are the surface, upright (:func:`lengthwise`
-    calls it where no mirror plane was found).
+    ``points`` (N, 3) float64 are the surface, upright; ``walls`` the direction of its walls
+    (:func:`partscale.complete.symmetry.walls_direction` of its normals, radians) or None.
 
     Examples
     --------
@@ -992,20 +993,14 @@ def along_walls(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     >>> a = np.radians(20.0)
     >>> n = np.array([[np.cos(a), 0, np.sin(a)], [-np.sin(a), 0, np.cos(a)]] * 100)
     >>> p = np.c_[np.linspace(-1, 1, 200), np.zeros(200), np.zeros(200)] @ [[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]
-    >>> V = along_walls(p, n)
+    >>> from partscale.complete.symmetry import walls_direction
+    >>> V = along_walls(p, walls_direction(n))
     >>> np.round(np.degrees(np.arctan2(V[2, 0], V[0, 0])), 1)  # the grid's x, upright
     np.float64(20.0)
     """
     V = np.eye(4)
-    walls = sym_mod.walls_direction(normals)
     if walls is None or len(points) == 0:
         return V
-    # the direction to a degree: the mean of the upright faces' within the window found (a
-    # quarter turn is one period: their angles times four averaged on the circle)
-    side = normals[np.abs(normals[:, 1]) < 0.3]
-    phi = np.arctan2(side[:, 2], side[:, 0])
-    near = np.abs((np.degrees(phi - walls) + 45.0) % 90.0 - 45.0) <= sym_mod.WALL_SPREAD_DEG
-    walls = float(np.angle(np.exp(4j * phi[near]).mean())) / 4.0
     best = None
     for k in range(4):
         a = walls + k * np.pi / 2
@@ -1159,7 +1154,7 @@ def lengthwise(points: np.ndarray, normals: np.ndarray, syms: list[sym_mod.Symme
     # 0.660 from three views)
     askew = walls is not None and abs((np.degrees(walls) + 45.0) % 90.0 - 45.0) > WALLS_ASKEW_DEG
     if not mirrors or askew:
-        return along_walls(points, normals)
+        return along_walls(points, walls)
     if len(mirrors) < 2 or len(points) == 0:
         return R
     # the second plane's normal: the reflection's -1 eigenvector

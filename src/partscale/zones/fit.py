@@ -1226,7 +1226,7 @@ def _fit_axis(
     scan = from_scan(csdf)
     # a completed scan's repeats are taken only when asked for (add_axis): its noise makes
     # elements of a plain body (a bin's, a table's top)
-    tiles = [c for c in cands if c.kind == "tile" and not scan]
+    tiles = [] if scan else [c for c in cands if c.kind == "tile"]
     slabs = [c for c in cands if c.kind == "stretch"]
     # a shrink is spread over many slabs: a drifting run shrinks whole, not at each piece
     chains = _drift_chains(slabs, prof)

@@ -289,9 +289,9 @@ def test_upsample_reads_between_pixels_on_a_surface_never_across_an_edge():
 
 
 def test_a_sparse_far_scan_is_upsampled_and_keeps_what_it_saw():
-    # a round table's fragment seen from 2.5 m by a 320 x 240 sensor: its pixels are twice the
-    # voxel of a 128 grid across the fragment, so each reading closed into a speck of its own
-    # (dropped, or joined by struts); upsampled, the fragment closes whole
+    # a chair 0.95 m tall seen from 3 m by a 320 x 240 sensor: its pixels are over a voxel of a
+    # 128 grid across it, so readings closed into specks of their own (dropped, or joined by
+    # struts); upsampled, the chair closes whole
     import dataclasses
 
     from conftest import data_path
@@ -299,9 +299,9 @@ def test_a_sparse_far_scan_is_upsampled_and_keeps_what_it_saw():
     from partscale.complete import complete
     from partscale.evaluate import completion
 
-    mesh = ingest.load_mesh(data_path("kenney/tableRound.glb"))
+    mesh = ingest.load_mesh(data_path("kenney/chair.glb"))
     mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * 0.7)
-    frames = virtual_scan(mesh, azimuths=(307.0,), elevation=15.0, floor=False)
+    frames = virtual_scan(mesh, azimuths=(307.0,), elevation=15.0, floor=False, distance=1.5)
     c = complete(frames, res=128)
     done = c.meta["completion"]
     assert done["upsampled"] and done["upsampled"][0] >= 2
@@ -394,3 +394,4 @@ def test_drop_pieces_takes_a_rod_touching_along_edges_for_one_piece():
     solid[10 + k, 10 + k, 60] = obs[10 + k, 10 + k, 60] = True
     kept = fuse.drop_pieces(solid, obs)
     assert kept[10 + k, 10 + k, 60].all()
+

@@ -66,6 +66,13 @@ larger clusters are walls or the room."""
 JOIN_WITHIN = 0.9
 """Share of a cluster standing within an object's footprint (or of the object within the
 cluster's) that makes it part of the object when isolating automatically."""
+STACK_GAP = 0.25
+"""Metres between the boxes of two clusters one over the other within which they are one
+object when isolating automatically (a riser's height and a tread's thickness: an open stair's
+treads; a table's top over its pedestal)."""
+MAX_JOINS = 32
+"""Rounds of joining clusters to the object (each round joins those touching it so far: a
+stair of 16 treads joins in 16)."""
 FLOOR_CELL_M = 0.02
 FLOOR_BROAD_M = 0.04
 FLOOR_BROAD_SHARE = 0.6
@@ -272,45 +279,68 @@ def _nearest_centre(shape, P, pix, height, idx, lab, counts) -> int:
 
 def _join_footprint(P, idx, lab, counts, best, up, cell) -> np.ndarray:
     """(N,) bool: cluster ``best`` of the points ``P[idx]`` (labels ``lab``) and the clusters
-    standing over its footprint.
+    standing over its footprint or stacked on it.
 
     Parts of the same object the sensor separated (a swivel chair's seat above its base, with
     the gas-lift column lost along silhouettes; a stool's leg cut off its seat along the seat's
     shadow; a table's top above its legs; a star base wider than the seat): a cluster joins when
     its centre stands over the object's footprint, or nearly all of it within the footprint, or
-    nearly all of the object within the cluster's (the cluster picked may be the leg).
+    nearly all of the object within the cluster's (the cluster picked may be the leg), or it
+    lies over or under the object, their boxes within :data:`STACK_GAP` (a round
+    table's top over its pedestal, seen from above: the top hides its own underside and the
+    pedestal's head; an open stair's treads, one over the next).
     """
     a, b = in_plane_axes(up)
     flat = np.stack([P[idx] @ a, P[idx] @ b], axis=1)
-
-    def within(X, Y):
-        # the share of footprint points X inside the box around footprint points Y
-        lo_, hi_ = Y.min(axis=0) - cell, Y.max(axis=0) + cell
-        return float(((X >= lo_) & (X <= hi_)).all(axis=1).mean())
-
+    height = P[idx] @ up
     members = {int(best)}
-    for _ in range(3):
+    for _ in range(MAX_JOINS):
         m = np.isin(lab, list(members))
-        lo_m, hi_m = flat[m].min(axis=0) - cell, flat[m].max(axis=0) + cell
         grew = False
         for c in np.flatnonzero(counts >= 30):
             if c in members:
                 continue
             mc = lab == c
-            centre = flat[mc].mean(axis=0)
-            over = bool(((centre >= lo_m) & (centre <= hi_m)).all())
-            if not over and max(within(flat[mc], flat[m]), within(flat[m], flat[mc])) < JOIN_WITHIN:
+            if not _joins(flat[mc], flat[m], height[mc], height[m], cell):
                 continue
             both = P[idx[m | mc]]
             if (both.max(axis=0) - both.min(axis=0)).max() > MAX_OBJECT_EXTENT:
                 continue
             members.add(int(c))
+            m = m | mc
             grew = True
         if not grew:
             break
     out = np.zeros(len(P), bool)
     out[idx[np.isin(lab, list(members))]] = True
     return out
+
+
+def _joins(flat_c, flat_m, h_c, h_m, cell) -> bool:
+    """Whether a cluster (footprint points ``flat_c`` (n, 2), heights ``h_c`` (n,)) is part of
+    the object found so far (``flat_m``, ``h_m``): see :func:`_join_footprint`.
+    """
+
+    def within(X, Y):
+        # the share of footprint points X inside the box around footprint points Y
+        lo_, hi_ = Y.min(axis=0) - cell, Y.max(axis=0) + cell
+        return float(((X >= lo_) & (X <= hi_)).all(axis=1).mean())
+
+    lo_m, hi_m = flat_m.min(axis=0) - cell, flat_m.max(axis=0) + cell
+    centre = flat_c.mean(axis=0)
+    if bool(((centre >= lo_m) & (centre <= hi_m)).all()):
+        return True
+    if max(within(flat_c, flat_m), within(flat_m, flat_c)) >= JOIN_WITHIN:
+        return True
+    # one over the other (heights apart) and their boxes within STACK_GAP of each other
+    rise = max(float(h_c.min() - h_m.max()), float(h_m.min() - h_c.max()))
+    apart = np.maximum(
+        0.0,
+        np.maximum(
+            flat_c.min(axis=0) - flat_m.max(axis=0), flat_m.min(axis=0) - flat_c.max(axis=0)
+        ),
+    )
+    return rise >= 0.0 and math.hypot(rise, *apart) <= STACK_GAP
 
 
 def _upright(up: np.ndarray, forward: np.ndarray, floor_offset: float, centre: np.ndarray):

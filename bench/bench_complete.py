@@ -103,7 +103,7 @@ def main() -> int:
         mesh = ingest.load_mesh(path)
         if unit != 1.0:  # the truth and the scan both at the real size
             mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * unit)
-        gt = ingest.from_mesh(mesh, res=128)
+        gt = completion.exterior(ingest.from_mesh(mesh, res=128))  # what a view can reach
         tau = completion.f_tau(gt)
         G, Gc = completion.surface_samples(gt, tau=tau)
         diag = tau / completion.F_TAU

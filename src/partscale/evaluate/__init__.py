@@ -14,7 +14,14 @@
 """
 
 from .compare import score_edit
-from .completion import F_TAU, chamfer_fscore, colour_error, f_tau, surface_samples
+from .completion import (
+    F_TAU,
+    chamfer_fscore,
+    colour_error,
+    exterior,
+    f_tau,
+    surface_samples,
+)
 from .metrics import Reference, Zone, Zones, evaluate, zones_from_history
 from .report import CRITERIA, failures_of, metric_score, winners
 from .suite import COMPARED_MODES, RECIPE_MODES, Suite, SuiteResult, load_suite, run_suite
@@ -33,6 +40,7 @@ __all__ = [
     "chamfer_fscore",
     "colour_error",
     "evaluate",
+    "exterior",
     "f_tau",
     "failures_of",
     "load_suite",

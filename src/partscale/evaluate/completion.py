@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from ..csdf import CSDF
@@ -73,6 +74,51 @@ def surface_samples(
     pts, _ = trimesh.sample.sample_surface(mesh, n, seed=seed)
     rgb = sample_linear(csdf.rgb, csdf.world_to_index(pts))
     return np.asarray(pts), np.clip(np.rint(rgb), 0, 255).astype(np.uint8)
+
+
+def exterior(csdf: CSDF) -> CSDF:
+    """The CSDF with its sealed cavities made solid: the surface a sensor can see from outside.
+
+    A closed cabinet modelled with its inside (a carcass behind shut doors) has the inside's
+    walls for surface too, though no view of the object reaches them: a completion scored
+    against them loses recall it could never have. An empty voxel belongs to a sealed cavity
+    when no path of face-neighbouring empty voxels joins it to the grid's border; its distance's
+    sign is turned (negative: inside), so the cavity's walls are no longer a zero crossing. The
+    distances are no longer true distances there; the zero surface is the exterior's.
+
+    Parameters
+    ----------
+    csdf : CSDF
+        The complete object.
+
+    Returns
+    -------
+    CSDF
+        The same grid, ``sdf`` (X, Y, Z) float32 negative in every sealed cavity; ``csdf``
+        itself where it has none.
+
+    Examples
+    --------
+    A box with a sealed hole inside it: the hole's walls are no surface of the exterior.
+
+    >>> import numpy as np
+    >>> from partscale import shapes
+    >>> from partscale.evaluate import exterior
+    >>> box = shapes.box((0, 0, 0), (1, 1, 1), voxel_size=0.05)
+    >>> hollow = box.replace(sdf=np.maximum(box.sdf, -box.sdf - 0.1))  # walls 0.1 thick
+    >>> centre = tuple(n // 2 for n in hollow.shape)
+    >>> bool(hollow.sdf[centre] > 0), bool(exterior(hollow).sdf[centre] > 0)
+    (True, False)
+    """
+    empty = csdf.sdf > 0
+    label, _ = ndimage.label(empty)  # face-neighbours: a diagonal contact is no opening
+    rim = np.concatenate(
+        [side.ravel() for a in range(3) for side in (np.take(label, 0, a), np.take(label, -1, a))]
+    )
+    sealed = empty & ~np.isin(label, np.unique(rim))
+    if not sealed.any():
+        return csdf
+    return csdf.replace(sdf=np.where(sealed, -csdf.sdf, csdf.sdf).astype(np.float32))
 
 
 def f_tau(csdf: CSDF) -> float:

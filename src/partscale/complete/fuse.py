@@ -34,7 +34,15 @@ KIND_COLORS = {OBSERVED: (70, 150, 230), MIRRORED: (240, 170, 40), GUESSED: (220
 """Display colours of the three kinds of surface (``render --completion``): blue, amber, red."""
 SNAP_VOXELS = 1.5
 BETWEEN_VOXELS = 64
-"""Voxels behind a surface point within which an opposite surface fills the solid between."""
+"""Voxels behind a surface point within which an opposite surface measures the part's
+thickness there for the slabs (:func:`_slab`), and the longest walk of a slab's side face that
+measures a thickness and not a width. Farther, a march measures across an object (a table
+top's edges, a cabinet's sides), no part's thickness: carried in from the faces' edges, such
+widths thickened a table's top and filled a television unit's open shelves."""
+BETWEEN_REACH = 256
+"""Voxels behind a surface point within which an opposite surface fills the solid between (a
+closed cabinet's sides, however wide): the fill stays only where it leaves less boundary than
+the thin closure (:func:`close_between`)."""
 BETWEEN_CLOSING = 2
 """Voxels: radius of the closing that seals the channels between filled segments."""
 BETWEEN_FACING = 0.5
@@ -243,6 +251,11 @@ def fuse(
         solid = floor_base(grid, solid, free_world, height_world, floor_cut)
     if cand.free_all is not None:
         solid = close_between(solid, cand)
+        if floor_cut is not None:
+            # the fill between a closed box's walls ends at the cut, and carried down alone
+            # the slab below it adds boundary, so the regions' test drops it: a cabinet
+            # stood 3 cm off the floor
+            solid = floor_base(grid, solid, free_world, height_world, floor_cut)
     solid = drop_pieces(_fill_holes(solid), sp.occ_obs)
     sdf = distances(solid, h)
     rgb, prov = surface_attributes(grid, sp, solid, sdf)
@@ -344,6 +357,19 @@ def floor_base(
     return solid | _down_to_floor(grid, centres[low], height[low], free_world, height_world)
 
 
+def _grid_up(grid: GridFrame, height_world: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """(3,) float64 unit: the up direction in ``grid``'s coordinates (height is affine in them)."""
+    o = np.zeros((1, 3), np.float32)
+    h0 = height_world(grid.to_world(o))[0]
+    up = np.array(
+        [
+            height_world(grid.to_world(np.eye(3, dtype=np.float32)[k : k + 1]))[0] - h0
+            for k in range(3)
+        ]
+    )
+    return up / np.linalg.norm(up)
+
+
 def _down_to_floor(
     grid: GridFrame,
     start: np.ndarray,
@@ -359,16 +385,7 @@ def _down_to_floor(
     out = np.zeros(grid.shape, bool)
     if not len(start):
         return out
-    # the up direction in grid coordinates: height is affine in the grid's coordinates
-    o = np.zeros((1, 3), np.float32)
-    h0 = height_world(grid.to_world(o))[0]
-    up = np.array(
-        [
-            height_world(grid.to_world(np.eye(3, dtype=np.float32)[k : k + 1]))[0] - h0
-            for k in range(3)
-        ]
-    )
-    up /= np.linalg.norm(up)
+    up = _grid_up(grid, height_world)
     shape = np.asarray(grid.shape)
     alive = np.ones(len(start), bool)
     for k in range(1, int(np.ceil(2 * start_h.max() / h)) + 2):
@@ -594,10 +611,12 @@ def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:
 
 def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
     """(X, Y, Z) bool: the connected regions of ``extra`` (the fill beyond ``shell``) whose union
-    with ``shell`` has fewer boundary voxels (:func:`_edge`) than ``shell`` alone.
+    with ``shell`` has less boundary (:func:`_faces`) than ``shell`` alone.
 
     Each region is judged in its own box, one voxel wider than it (the voxels whose side it can
-    change) and two wider for the erosion, so the cost follows the fill, not the grid.
+    change), so the cost follows the fill, not the grid. The boundary is counted in voxel
+    faces, not boundary voxels: a wall one voxel thick has two sides, and counted once, a
+    closed cabinet's thin hollow shell had less boundary than the cabinet filled.
     """
     lab, n = ndimage.label(extra)
     keep = np.zeros(n + 1, bool)
@@ -605,25 +624,22 @@ def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
     for k, sl in enumerate(ndimage.find_objects(lab), start=1):
         if sl is None:
             continue
-        lo = [max(s.start - 2, 0) for s in sl]
-        hi = [min(s.stop + 2, d) for s, d in zip(sl, shape, strict=True)]
-        win = tuple(slice(a, b) for a, b in zip(lo, hi, strict=True))
-        # the counted box: one voxel around the region (inside the window's own edge, where the
-        # erosion would see outside that is not there, unless that edge is the grid's)
-        inner = tuple(
-            slice(max(s.start - 1, 0) - a, min(s.stop + 1, d) - a)
-            for s, a, d in zip(sl, lo, shape, strict=True)
+        # one voxel around the region: the voxels whose side it can change
+        win = tuple(
+            slice(max(s.start - 1, 0), min(s.stop + 1, d)) for s, d in zip(sl, shape, strict=True)
         )
         sh = shell[win]
-        with_k = sh | (lab[win] == k)
-        keep[k] = _edge(with_k)[inner].sum() < _edge(sh)[inner].sum()
+        keep[k] = _faces(sh | (lab[win] == k)) < _faces(sh)
     keep[0] = False
     return keep[lab]
 
 
-def _edge(solid: np.ndarray) -> np.ndarray:
-    """(X, Y, Z) bool: voxels of ``solid`` next to a voxel outside it (6-neighbourhood)."""
-    return solid & ~ndimage.binary_erosion(solid, border_value=0)
+def _faces(solid: np.ndarray) -> int:
+    """The number of voxel faces between ``solid`` (X, Y, Z) bool and the space outside it
+    (beyond the array's edge: outside).
+    """
+    s = np.pad(solid, 1)
+    return sum(int(np.count_nonzero(np.diff(s, axis=a))) for a in range(3))
 
 
 def _fills(points, normals, idx, origin, h, free) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -674,6 +690,7 @@ def _between(points, normals, origin, h, facing, free) -> tuple[np.ndarray, np.n
         across.astype(np.uint8),
         facing,
         free,
+        int(BETWEEN_REACH),
         int(BETWEEN_VOXELS),
         out,
         seen,
@@ -928,7 +945,7 @@ def _carry(p, n, t, free, out, other, facing):
 
 
 @numba.njit(cache=True, parallel=True)
-def _march(p, n, opposite, across, bits, free, reach, out, seen):
+def _march(p, n, opposite, across, bits, free, reach, measure, out, seen):
     for i in numba.prange(p.shape[0]):
         hit = 0
         for s in range(2, reach + 1):
@@ -959,7 +976,7 @@ def _march(p, n, opposite, across, bits, free, reach, out, seen):
                 a, b, c = _voxel_at(p, n, i, s)
                 if bits[a, b, c] & across[i]:
                     beside += 1
-            if beside <= SLAB_GAP:
+            if beside <= SLAB_GAP and hit <= measure:
                 seen[i] = hit
             for k in range(2 * hit + 1):
                 t = 0.5 * k

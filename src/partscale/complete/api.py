@@ -930,7 +930,9 @@ def _complete(
     report(0.45, "grid")
     grid = plan_grid(surface, sy, opts)
     report(0.55, "carving and closing")
-    solid = fuse_solid(ob, sy, surface, grid, opts)
+    # the scan as observed (no extras) is closed thinly: filled between opposite faces or
+    # carried in as slabs, a side seen alone grew a block behind it that no camera saw
+    solid = fuse_solid(ob, sy, surface, grid, opts, fill_between=extras)
     report(0.8, "guessed parts")
     solid = guess_parts(ob, sy, surface, grid, solid, symmetry=symmetry, extras=extras)
     report(0.95, "metadata")
@@ -1199,10 +1201,16 @@ def lengthwise(points: np.ndarray, normals: np.ndarray, syms: list[sym_mod.Symme
 
 
 def fuse_solid(
-    ob: Observation, sy: Symmetries, surface: Surface, grid: Grid, opts: Settings
+    ob: Observation,
+    sy: Symmetries,
+    surface: Surface,
+    grid: Grid,
+    opts: Settings,
+    *,
+    fill_between: bool = True,
 ) -> Solid:
     """The solid the surface, the free space (seen, and in each symmetric view) and the floor
-    give (:func:`partscale.complete.fuse.fuse`).
+    give (:func:`partscale.complete.fuse.fuse`; ``fill_between`` False: the closure alone).
     """
     g = grid.frame
     U, Uinv, carver = sy.U, sy.Uinv, sy.carver
@@ -1237,6 +1245,7 @@ def fuse_solid(
         sym_free,
         height_world,
         opts.closure,
+        fill_between=fill_between,
         floor_cut=None if ob.floor is None else FLOOR_CUT,
     )
     if not (sdf < 0).any():
@@ -1334,7 +1343,7 @@ def completion_meta(
     found: Any = ob.floor
     col = solid.column
     completion = {
-        "method": METHOD if extras else "carve+floor+between+slab+closure+reach",
+        "method": METHOD if extras else "carve+floor+closure+reach",
         "observed": round(counts[fuse_mod.OBSERVED] / total, 4),
         "mirrored": round(counts[fuse_mod.MIRRORED] / total, 4),
         "guessed": round(counts[fuse_mod.GUESSED] / total, 4),

@@ -252,3 +252,21 @@ def test_a_turn_whose_copies_stand_in_free_space_gives_way(lamp_post, violation,
         assert len(notes) == 1 and record["weak"]
     else:
         assert record["reason"] is None and not notes and record["weak"] == []
+
+
+def test_the_scan_kept_as_observed_is_closed_thinly():
+    # Sweet Home's radiator seen level from its side without a floor: its symmetries rest on
+    # the camera's axis for up, so the scan is kept as observed; closed, it grew a block up to
+    # 29 voxels deep behind the side no camera saw past (filled between faces, carried in as
+    # slabs): every voxel of it now lies within 3 voxels of what the camera saw
+    from scipy.spatial import cKDTree
+
+    mesh = ingest.load_mesh(data_path("sweethome3d/electricRadiator.obj"))
+    frames = virtual.virtual_scan(mesh, azimuths=(292.0,), elevation=0.0, floor=False)
+    with pytest.warns(PartscaleWarning, match="as observed"):
+        c = complete(frames, res=128)
+    assert c.meta["completion"]["guard"]["kept"] == "observed"
+    T = np.asarray(c.meta["completion"]["to_input_frame"], np.float64)
+    solid = c.origin + np.argwhere(c.sdf < 0) * c.voxel_size
+    d = cKDTree(api.observe(frames).points).query(solid @ T[:3, :3].T + T[:3, 3])[0]
+    assert d.max() <= 3 * c.voxel_size

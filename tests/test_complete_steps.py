@@ -419,3 +419,23 @@ def test_the_benchmarks_truth_is_the_exterior_a_sensor_can_see():
     assert inside.mean() >= 0.25  # the carcass's inside: 32 % of the samples
     bookcase = ingest.from_mesh(ingest.load_mesh(data_path("sweethome3d/bookcase.obj")), res=128)
     assert exterior(bookcase) is bookcase
+
+
+def test_a_closed_cabinet_from_three_views_is_completed_solid_down_to_the_floor():
+    # a closed box 0.9 m wide, 0.8 tall, 0.6 deep: 128 voxels between its sides, beyond the
+    # slabs' reach; filled between them, it came out a hollow shell a voxel or two thick (the
+    # shell had fewer boundary voxels than the box filled), and filled, 3 cm off the floor
+    import trimesh
+
+    from partscale.complete import complete
+    from partscale.ingest import from_trimesh
+
+    b = trimesh.creation.box(extents=[0.9, 0.8, 0.6])
+    b.apply_translation([0, 0.4, 0])
+    box = from_trimesh(b, color=(200, 180, 150))
+    c = complete(virtual_scan(box, 3), res=128, upright=True)
+    solid = c.sdf < 0
+    ys = c.origin[1] + np.arange(c.shape[1]) * c.voxel_size
+    centre = solid[c.shape[0] // 2, :, c.shape[2] // 2]
+    assert centre[(ys > 0.02) & (ys < 0.78)].all()  # solid through its middle
+    assert ys[np.flatnonzero(centre)].min() <= 0.5 * c.voxel_size  # down to the floor

@@ -294,25 +294,27 @@ def _join_footprint(P, idx, lab, counts, best, up, cell) -> np.ndarray:
     flat = np.stack([P[idx] @ a, P[idx] @ b], axis=1)
     height = P[idx] @ up
     members = {int(best)}
+    m = lab == best
+    flat_m, h_m, P_m = flat[m], height[m], P[idx[m]]  # the object so far, taken once a join
     for _ in range(MAX_JOINS):
-        m = np.isin(lab, list(members))
         grew = False
         for c in np.flatnonzero(counts >= 30):
             if c in members:
                 continue
             mc = lab == c
-            if not _joins(flat[mc], flat[m], height[mc], height[m], cell):
+            if not _joins(flat[mc], flat_m, height[mc], h_m, cell):
                 continue
-            both = P[idx[m | mc]]
+            both = np.concatenate([P_m, P[idx[mc]]])
             if (both.max(axis=0) - both.min(axis=0)).max() > MAX_OBJECT_EXTENT:
                 continue
             members.add(int(c))
-            m = m | mc
+            m |= mc
+            flat_m, h_m, P_m = flat[m], height[m], both
             grew = True
         if not grew:
             break
     out = np.zeros(len(P), bool)
-    out[idx[np.isin(lab, list(members))]] = True
+    out[idx[m]] = True
     return out
 
 

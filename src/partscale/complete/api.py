@@ -71,8 +71,8 @@ STACK_GAP = 0.25
 object when isolating automatically (a riser's height and a tread's thickness: an open stair's
 treads; a table's top over its pedestal)."""
 MAX_JOINS = 32
-"""Rounds of joining clusters to the object (each round joins those touching it so far: a
-stair of 16 treads joins in 16)."""
+"""Rounds of trying every cluster against the object when isolating automatically (a cluster
+joins as soon as the object reaches it; a round that joins none ends the search)."""
 FLOOR_CELL_M = 0.02
 FLOOR_BROAD_M = 0.04
 FLOOR_BROAD_SHARE = 0.6
@@ -295,7 +295,9 @@ def _join_footprint(P, idx, lab, counts, best, up, cell) -> np.ndarray:
     height = P[idx] @ up
     members = {int(best)}
     m = lab == best
-    flat_m, h_m, P_m = flat[m], height[m], P[idx[m]]  # the object so far, taken once a join
+    # the object so far, taken again only when a cluster joins
+    flat_m, h_m = flat[m], height[m]
+    lo, hi = P[idx[m]].min(axis=0), P[idx[m]].max(axis=0)
     for _ in range(MAX_JOINS):
         grew = False
         for c in np.flatnonzero(counts >= 30):
@@ -304,12 +306,13 @@ def _join_footprint(P, idx, lab, counts, best, up, cell) -> np.ndarray:
             mc = lab == c
             if not _joins(flat[mc], flat_m, height[mc], h_m, cell):
                 continue
-            both = np.concatenate([P_m, P[idx[mc]]])
-            if (both.max(axis=0) - both.min(axis=0)).max() > MAX_OBJECT_EXTENT:
+            Pc = P[idx[mc]]
+            lo_c, hi_c = np.minimum(lo, Pc.min(axis=0)), np.maximum(hi, Pc.max(axis=0))
+            if (hi_c - lo_c).max() > MAX_OBJECT_EXTENT:
                 continue
             members.add(int(c))
             m |= mc
-            flat_m, h_m, P_m = flat[m], height[m], both
+            flat_m, h_m, lo, hi = flat[m], height[m], lo_c, hi_c
             grew = True
         if not grew:
             break

@@ -213,9 +213,9 @@ def fuse(
 
     The steps: the points on the grid (:func:`surface_on_grid`), the voxels that may be solid
     (:func:`candidates`) with the closure's foot carried to the floor (:func:`floor_reach`),
-    those no camera saw through (:func:`carve`), the bottom of what stands on the floor carried
-    down to it (:func:`floor_base`), the channels between filled segments closed
-    (:func:`close_between`), holes filled and specks dropped
+    those no camera saw through (:func:`carve`), the channels between filled segments closed
+    (:func:`close_between`), the bottom of what stands on the floor carried down to it
+    (:func:`floor_base`), holes filled and specks dropped
     (:func:`drop_pieces`), the distances (:func:`distances`) and the colours and provenance
     near the surface (:func:`surface_attributes`).
 
@@ -247,15 +247,13 @@ def fuse(
         reach = floor_reach(grid, sp, cand.within_closure, free_world, height_world, floor_cut)
         cand = Candidates(cand.within | reach, cand.within_closure | reach, cand.free_all)
     solid = carve(grid, sp, cand.within, free_world, sym_free, height_world)
-    if floor_cut is not None:
-        solid = floor_base(grid, solid, free_world, height_world, floor_cut)
     if cand.free_all is not None:
         solid = close_between(solid, cand)
-        if floor_cut is not None:
-            # the fill between a closed box's walls ends at the cut, and carried down alone
-            # the slab below it adds boundary, so the regions' test drops it: a cabinet
-            # stood 3 cm off the floor
-            solid = floor_base(grid, solid, free_world, height_world, floor_cut)
+    if floor_cut is not None:
+        # after the closing: carried down before it, the slab under a closed box's fill was a
+        # region of its own that added boundary, and the regions' test dropped it (a cabinet
+        # stood 3 cm off the floor)
+        solid = floor_base(grid, solid, free_world, height_world, floor_cut)
     solid = drop_pieces(_fill_holes(solid), sp.occ_obs)
     sdf = distances(solid, h)
     rgb, prov = surface_attributes(grid, sp, solid, sdf)

@@ -439,3 +439,71 @@ def test_a_closed_cabinet_from_three_views_is_completed_solid_down_to_the_floor(
     centre = solid[c.shape[0] // 2, :, c.shape[2] // 2]
     assert centre[(ys > 0.02) & (ys < 0.78)].all()  # solid through its middle
     assert ys[np.flatnonzero(centre)].min() <= 0.5 * c.voxel_size  # down to the floor
+
+
+@pytest.mark.parametrize(("azimuth", "elevation"), [(30.0, 15.0), (120.0, 0.0)])
+def test_a_closed_cabinet_from_one_view_is_completed_solid_not_an_open_shell(azimuth, elevation):
+    # the same box from one camera that sees its front and one side: the fill between its
+    # sides (one seen, one mirrored) is a body with a ragged back and tunnels where the sensor's
+    # holes lie on both sides; weighed by its faces alone it lost to the thin shell, and the
+    # completion was a box open at the back
+    import trimesh
+
+    from partscale.complete import complete
+    from partscale.ingest import from_trimesh
+
+    b = trimesh.creation.box(extents=[0.9, 0.8, 0.6])
+    b.apply_translation([0, 0.4, 0])
+    box = from_trimesh(b, color=(200, 180, 150))
+    scan = virtual_scan(box, azimuths=(azimuth,), elevation=elevation)
+    c = complete(scan, res=128, upright=True)
+    solid = c.sdf < 0
+    volume = solid.sum() * c.voxel_size**3
+    assert volume >= 0.8 * (0.9 * 0.8 * 0.6)  # an open shell: 5 % of it
+    assert volume <= 1.15 * (0.9 * 0.8 * 0.6)
+
+
+def test_fill_regions_keeps_a_body_and_drops_sheets_that_leave_voids():
+    # a U-shaped thin shell (front and two sides, open at the back); a body filling it with a
+    # ragged back (more faces than the open shell) is kept, unless the camera saw the space
+    # behind it (a compartment it looked into); sheets one voxel thick across it, 6 voxels
+    # apart, each a pair of surfaces inside the object, are not
+    shell = np.zeros((40, 40, 40), bool)
+    shell[4:36, 4:36, 34:36] = True  # front
+    shell[4:6, 4:36, 4:36] = shell[34:36, 4:36, 4:36] = True  # sides
+    body = np.zeros_like(shell)
+    body[6:34, 4:36, 4:34] = True
+    rng = np.random.default_rng(0)
+    for i in range(6, 34):
+        for j in range(4, 36):
+            body[i, j, 4 : 4 + rng.integers(0, 4)] = False  # a ragged back
+    assert fuse._faces(shell | body) > fuse._faces(shell)
+    unseen = np.zeros_like(shell)
+    assert fuse._fill_regions(shell, body, unseen).sum() == body.sum()
+    seen_behind = unseen.copy()
+    seen_behind[:, :, :4] = True
+    assert not fuse._fill_regions(shell, body, seen_behind).any()
+    sheets = np.zeros_like(shell)
+    sheets[6:34, 4:36, 8:34:6] = True
+    assert not fuse._fill_regions(shell, sheets, unseen).any()
+
+
+def test_close_tunnels_closes_small_unseen_holes_through_the_fill_only():
+    # a block with three holes through it along x: a tunnel 5 voxels across (closed), the same
+    # where the camera saw through it (stays), and a window 20 voxels across (stays)
+    fill = np.zeros((30, 60, 40), bool)
+    fill[5:25, 5:55, 5:35] = True
+    g = np.indices(fill.shape[1:])
+    tunnel = (g[0] - 15) ** 2 + (g[1] - 12) ** 2 <= 2.5**2
+    seen_tunnel = (g[0] - 40) ** 2 + (g[1] - 12) ** 2 <= 2.5**2
+    window = (np.abs(g[0] - 30) < 10) & (np.abs(g[1] - 26) < 6)
+    for hole in (tunnel, seen_tunnel, window):
+        fill[5:25][:, hole] = False
+    free = np.zeros_like(fill)
+    free[:, seen_tunnel] = True
+    out = fuse._close_tunnels(fill, free)
+    assert out[5:25][:, tunnel].all()
+    assert not out[:, seen_tunnel].any()
+    assert not out[5:25][:, window].any()
+    assert (out >= fill).all()
+    assert not fuse._close_tunnels(np.zeros_like(fill), free).any()  # no fill: none

@@ -99,6 +99,15 @@ NEAREST_EXACT_VOXELS = 4.0
 nearest voxel holding one, :func:`nearest_surface_point`)."""
 DIFFUSE_SIGMA = 2.0
 FLOOR_REACH_VOXELS = 1.5
+ENCLOSED_SHARE = 0.25
+"""A fill region with this share of its faces on the thin closure may be the body behind it."""
+BULK_RADIUS = 2
+BULK_SHARE = 0.6
+"""A body keeps this share of its voxels through an opening by a ball of ``BULK_RADIUS``."""
+RIM_SEEN = 0.04
+"""A body behind an open shell: at most this share of the voxels around it seen through."""
+TUNNEL_VOXELS = 200
+"""Holes in a slice of the fill up to this many voxels (a disc 16 voxels across) are tunnels."""
 """Voxels above the floor cut within which the solid near a surface point goes on straight down
 to the floor (:func:`floor_reach`)."""
 
@@ -469,7 +478,8 @@ def nearest_surface_point(
 def close_between(solid: np.ndarray, cand: Candidates) -> np.ndarray:
     """(X, Y, Z) bool: ``solid`` with the narrow channels the segments between opposite surfaces
     leave (rounding, sensor holes) closed, each region of the fill kept only where it leaves
-    less boundary than the thin closure alone (:func:`_fill_regions`).
+    less boundary than the thin closure alone or is the body behind it (:func:`_fill_regions`),
+    and the tunnels through what is kept closed (:func:`_close_tunnels`).
     """
     free_all = cand.free_all
     assert free_all is not None  # only with the fill between surfaces
@@ -494,8 +504,9 @@ def close_between(solid: np.ndarray, cand: Candidates) -> np.ndarray:
     # where the segments fill the object only in part (thick curved parts whose opposite
     # sides were seen in patches) the voids between them are surfaces deep inside it: each
     # region of the fill is kept only where it leaves less boundary than the thin closure
-    # alone, so a leg or a seat that closes cleanly keeps it beside a cushion that does not
-    return shell | _fill_regions(shell, filled & ~shell)
+    # alone, so a leg or a seat that closes cleanly keeps it beside a cushion that does not,
+    # or where it is the body behind an open shell (a cabinet seen from the front)
+    return shell | _close_tunnels(_fill_regions(shell, filled & ~shell, free_all), free_all)
 
 
 def drop_pieces(solid: np.ndarray, occ_obs: np.ndarray) -> np.ndarray:
@@ -607,9 +618,18 @@ def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:
     return tuple(box)
 
 
-def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
+def _fill_regions(shell: np.ndarray, extra: np.ndarray, free: np.ndarray) -> np.ndarray:
     """(X, Y, Z) bool: the connected regions of ``extra`` (the fill beyond ``shell``) whose union
-    with ``shell`` has less boundary (:func:`_faces`) than ``shell`` alone.
+    with ``shell`` has less boundary (:func:`_faces`) than ``shell`` alone, or that are the
+    body behind an open shell: at least ``ENCLOSED_SHARE`` of the region's faces on the shell,
+    the space around the rest unseen (:func:`_unseen_rim`; ``free`` (X, Y, Z) bool: the voxels
+    a camera saw through), and a body, not sheets (:func:`_bulk`).
+
+    A closed cabinet seen from the front and one side is a shell open at the back (its front,
+    its seen side and the mirrored one), and the fill between its sides a body whose back is
+    as ragged as the sides' readings end: more boundary than the open shell, which is the
+    worse result (from behind, a box with no back). A compartment the camera looked into (a
+    shelf's, between its boards) has seen space around it, and stays open.
 
     Each region is judged in its own box, one voxel wider than it (the voxels whose side it can
     change), so the cost follows the fill, not the grid. The boundary is counted in voxel
@@ -626,10 +646,62 @@ def _fill_regions(shell: np.ndarray, extra: np.ndarray) -> np.ndarray:
         win = tuple(
             slice(max(s.start - 1, 0), min(s.stop + 1, d)) for s, d in zip(sl, shape, strict=True)
         )
-        sh = shell[win]
-        keep[k] = _faces(sh | (lab[win] == k)) < _faces(sh)
+        sh, region = shell[win], lab[win] == k
+        union, alone = _faces(sh | region), _faces(region)
+        # the faces the region shares with the shell: each counted once in each alone
+        shared = (alone + _faces(sh) - union) / 2
+        keep[k] = union < _faces(sh) or (
+            shared >= ENCLOSED_SHARE * alone
+            and _unseen_rim(region, sh, free[win])
+            and _bulk(region)
+        )
     keep[0] = False
     return keep[lab]
+
+
+def _close_tunnels(fill: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) bool: ``fill`` with its tunnels closed: the holes of its slices across each
+    axis of at most ``TUNNEL_VOXELS`` voxels where no camera saw through.
+
+    The fill between two opposite sides is marched from their points; a hole in the sensor's
+    reading of one side, mirrored onto the other, leaves no point at either end, and the fill a
+    tunnel through the object.
+    """
+    if not fill.any():
+        return fill
+    box = _box(fill, 1)
+    f = fill[box]
+    out = f.copy()
+    for ax in range(3):
+        across = np.zeros((3, 3, 3), bool)
+        plane = [slice(None)] * 3
+        plane[ax] = slice(1, 2)
+        across[tuple(plane)] = ndimage.generate_binary_structure(3, 1)[tuple(plane)]
+        holes, _ = ndimage.label(ndimage.binary_fill_holes(f, structure=across) & ~f, across)
+        small = np.bincount(holes.ravel()) <= TUNNEL_VOXELS
+        small[0] = False
+        out |= small[holes]
+    fill = fill.copy()
+    fill[box] |= out & ~free[box]
+    return fill
+
+
+def _unseen_rim(region: np.ndarray, shell: np.ndarray, free: np.ndarray) -> bool:
+    """Whether a camera saw through at most ``RIM_SEEN`` of the voxels around ``region`` (X, Y,
+    Z) bool, outside it and ``shell``; ``free`` (X, Y, Z) bool: the voxels it saw through.
+    """
+    rim = ndimage.binary_dilation(region) & ~region & ~shell
+    return bool(np.count_nonzero(free[rim]) <= RIM_SEEN * np.count_nonzero(rim))
+
+
+def _bulk(region: np.ndarray) -> bool:
+    """Whether ``region`` (X, Y, Z) bool is a body rather than sheets or rods: an opening by a
+    ball of radius ``BULK_RADIUS`` voxels keeps at least ``BULK_SHARE`` of its voxels.
+    """
+    r = BULK_RADIUS
+    g = np.indices((2 * r + 1,) * 3) - r
+    opened = ndimage.binary_opening(np.pad(region, r + 1), (g**2).sum(axis=0) <= r * r)
+    return bool(opened.sum() >= BULK_SHARE * region.sum())
 
 
 def _faces(solid: np.ndarray) -> int:

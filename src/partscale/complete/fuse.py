@@ -99,6 +99,8 @@ NEAREST_EXACT_VOXELS = 4.0
 nearest voxel holding one, :func:`nearest_surface_point`)."""
 DIFFUSE_SIGMA = 2.0
 FLOOR_REACH_VOXELS = 1.5
+"""Voxels above the floor cut within which the solid near a surface point goes on straight down
+to the floor (:func:`floor_reach`)."""
 ENCLOSED_SHARE = 0.25
 """A fill region with this share of its faces on the thin closure may be the body behind it."""
 BULK_RADIUS = 2
@@ -108,8 +110,6 @@ RIM_SEEN = 0.04
 """A body behind an open shell: at most this share of the voxels around it seen through."""
 TUNNEL_VOXELS = 200
 """Holes in a slice of the fill up to this many voxels (a disc 16 voxels across) are tunnels."""
-"""Voxels above the floor cut within which the solid near a surface point goes on straight down
-to the floor (:func:`floor_reach`)."""
 
 
 def _edt(mask: np.ndarray) -> np.ndarray:

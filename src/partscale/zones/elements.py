@@ -629,7 +629,7 @@ def _best_chains(p: Profile, cands: list[_Cand], chains: list[_Chain]) -> list[_
             return 0.0  # each a row of pieces parted as strongly: a run of slats, not two halves
         if cover < (MIN_COVER_PAIR if n == 2 else MIN_COVER):
             return 0.0  # a pair that is not most of the object: a sofa's base and seat
-        if _halves(c, i0, i1):
+        if _halves(p, c, i0, i1):
             return 0.0  # one symmetric object's two halves about a board: nothing ends them
         coarse = 0.5 if inner >= sep - STRENGTH_TOL else 1.0
         return cover * (1 - 1 / n) * (1 - 0.5 * c.err / MATCH) * coarse
@@ -647,17 +647,18 @@ def _best_chains(p: Profile, cands: list[_Cand], chains: list[_Chain]) -> list[_
     return kept
 
 
-def _halves(c: _Chain, i0: int, i1: int) -> bool:
+def _halves(p: Profile, c: _Chain, i0: int, i1: int) -> bool:
     """Whether ``c`` is the two mirrored halves of one object about a board in its middle (a
     trestle table's crossed legs and their stretcher, a staircase's middle stringer), not two
     elements: they reach the solid's first and last layers ``i0``, ``i1`` (within
     :data:`HALF_ENDS` layers), where elements are ended by something (an armrest, a side panel,
     a gap), and a board parts them; doors parted by a gap and overlaying the sides stay a
-    pair.
+    pair. Halves whose cross-section barely changes along them (:func:`_calm`: a staircase's
+    treads either side of its stringer) match as well mirrored as not, and count as mirrored.
     """
     return (
         len(c.elements) == 2
-        and c.mirrored[-1]
+        and (c.mirrored[-1] or all(_calm(p, e) for e in c.elements))
         and c.kinds == ("board",)
         and c.elements[0][0] - i0 <= HALF_ENDS
         and i1 - c.elements[-1][1] <= HALF_ENDS

@@ -647,10 +647,10 @@ def _fill_regions(shell: np.ndarray, extra: np.ndarray, free: np.ndarray) -> np.
             slice(max(s.start - 1, 0), min(s.stop + 1, d)) for s, d in zip(sl, shape, strict=True)
         )
         sh, region = shell[win], lab[win] == k
-        union, alone = _faces(sh | region), _faces(region)
+        union, alone, shell_faces = _faces(sh | region), _faces(region), _faces(sh)
         # the faces the region shares with the shell: each counted once in each alone
-        shared = (alone + _faces(sh) - union) / 2
-        keep[k] = union < _faces(sh) or (
+        shared = (alone + shell_faces - union) / 2
+        keep[k] = union < shell_faces or (
             shared >= ENCLOSED_SHARE * alone
             and _unseen_rim(region, sh, free[win])
             and _bulk(region)

@@ -483,9 +483,10 @@ def close_between(solid: np.ndarray, cand: Candidates) -> np.ndarray:
     """
     free_all = cand.free_all
     assert free_all is not None  # only with the fill between surfaces
+    from skimage.morphology import ball as make_ball
+
     r = BETWEEN_CLOSING
-    g = np.indices((2 * r + 1,) * 3) - r
-    ball = (g**2).sum(axis=0) <= r * r
+    ball = make_ball(r).astype(bool)
 
     def closed(m):
         # in the box of m, r + 2 voxels wider (or to the grid's edge): the closing reaches no
@@ -621,9 +622,8 @@ def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:
 def _fill_regions(shell: np.ndarray, extra: np.ndarray, free: np.ndarray) -> np.ndarray:
     """(X, Y, Z) bool: the connected regions of ``extra`` (the fill beyond ``shell``) whose union
     with ``shell`` has less boundary (:func:`_faces`) than ``shell`` alone, or that are the
-    body behind an open shell: at least ``ENCLOSED_SHARE`` of the region's faces on the shell,
-    the space around the rest unseen (:func:`_unseen_rim`; ``free`` (X, Y, Z) bool: the voxels
-    a camera saw through), and a body, not sheets (:func:`_bulk`).
+    body behind an open shell (:func:`_behind_shell`; ``free`` (X, Y, Z) bool: the voxels a
+    camera saw through).
 
     A closed cabinet seen from the front and one side is a shell open at the back (its front,
     its seen side and the mirrored one), and the fill between its sides a body whose back is
@@ -647,16 +647,25 @@ def _fill_regions(shell: np.ndarray, extra: np.ndarray, free: np.ndarray) -> np.
             slice(max(s.start - 1, 0), min(s.stop + 1, d)) for s, d in zip(sl, shape, strict=True)
         )
         sh, region = shell[win], lab[win] == k
-        union, alone, shell_faces = _faces(sh | region), _faces(region), _faces(sh)
-        # the faces the region shares with the shell: each counted once in each alone
-        shared = (alone + shell_faces - union) / 2
-        keep[k] = union < shell_faces or (
-            shared >= ENCLOSED_SHARE * alone
-            and _unseen_rim(region, sh, free[win])
-            and _bulk(region)
-        )
+        union, shell_faces = _faces(sh | region), _faces(sh)
+        keep[k] = union < shell_faces or _behind_shell(region, sh, free[win], union, shell_faces)
     keep[0] = False
     return keep[lab]
+
+
+def _behind_shell(
+    region: np.ndarray, shell: np.ndarray, free: np.ndarray, union: int, shell_faces: int
+) -> bool:
+    """Whether ``region`` (X, Y, Z) bool is the body behind the open ``shell`` (X, Y, Z) bool:
+    ``ENCLOSED_SHARE`` of its faces on the shell, the space around the rest unseen
+    (:func:`_unseen_rim`; ``free`` (X, Y, Z) bool: the voxels a camera saw through) and a body,
+    not sheets (:func:`_bulk`); ``union`` and ``shell_faces``: the faces (:func:`_faces`) of the
+    two together and of the shell alone. Cheapest test first: most regions fail the share.
+    """
+    alone = _faces(region)
+    # the faces the region shares with the shell: each counted once in each alone
+    shared = (alone + shell_faces - union) / 2
+    return shared >= ENCLOSED_SHARE * alone and _unseen_rim(region, shell, free) and _bulk(region)
 
 
 def _close_tunnels(fill: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -698,9 +707,10 @@ def _bulk(region: np.ndarray) -> bool:
     """Whether ``region`` (X, Y, Z) bool is a body rather than sheets or rods: an opening by a
     ball of radius ``BULK_RADIUS`` voxels keeps at least ``BULK_SHARE`` of its voxels.
     """
+    from skimage.morphology import ball
+
     r = BULK_RADIUS
-    g = np.indices((2 * r + 1,) * 3) - r
-    opened = ndimage.binary_opening(np.pad(region, r + 1), (g**2).sum(axis=0) <= r * r)
+    opened = ndimage.binary_opening(np.pad(region, r + 1), ball(r).astype(bool))
     return bool(opened.sum() >= BULK_SHARE * region.sum())
 
 

@@ -1252,6 +1252,7 @@ def fuse_solid(
         opts.closure,
         fill_between=fill_between,
         floor_cut=None if ob.floor is None else FLOOR_CUT,
+        sure_free=column_mod.sure_carver(ob.frames, CARVE_MARGIN * g.h).free,
     )
     if not (sdf < 0).any():
         raise InputError(f"{opts.source}: expected a solid after completion, got none (all carved)")

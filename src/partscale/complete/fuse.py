@@ -700,8 +700,13 @@ def _slice_holes(
         plane = [slice(None)] * 3
         plane[ax] = slice(1, 2)
         across[tuple(plane)] = ndimage.generate_binary_structure(3, 1)[tuple(plane)]
-        holes, k = ndimage.label(ndimage.binary_fill_holes(m, structure=across) & ~m, across)
+        # the empty regions of each slice that reach no face of the array: one labelling (the
+        # repeated dilation of ndimage.binary_fill_holes took 0.1 s an axis at 150^3)
+        holes, k = ndimage.label(~m, across)
         small = np.bincount(holes.ravel(), minlength=k + 1) <= most
+        for face in range(m.ndim):
+            for end in (0, -1):
+                small[holes.take(end, axis=face)] = False
         small[0] = False
         if (deepest is not None or faces is not None) and small.any():
             # judged by the run of holes through consecutive slices, each slice's its own label

@@ -170,9 +170,7 @@ def _strut(sdf, prov, lab, p, n, joined, box, step: _Step) -> Strut | None:
     free[ask] = step.sure_free(origin + (idx + i0) * h)
     cost = np.where(free, np.inf, 1.0)
     mcp = MCP_Geometric(cost, fully_connected=True)
-    # the search stops at the first voxel of the object it reaches: the nearest (all of them
-    # searched, the ball of the reach cost 0.3-0.9 s a strut)
-    costs, _ = mcp.find_costs(np.argwhere(src), np.argwhere(target), find_all_ends=False)
+    costs, _ = mcp.find_costs(np.argwhere(src))
     at = np.where(target & np.isfinite(costs), costs, np.inf)
     k = int(np.argmin(at))
     # a step costs its length in voxels; the first step out of the piece and the last into the

@@ -689,9 +689,9 @@ def _slice_holes(
     ``most`` voxels, labelled 1.. (a voxel in holes across two axes takes the later's label; 0:
     no hole); with ``deepest``, only those of a run of holes in consecutive slices at most
     ``deepest`` slices long; with ``faces`` (3, X, Y, Z) int8 (per axis: +1 on the voxels of
-    surface points facing along it, -1 on the others'), only those with more points facing
-    across their slice than along it within ``HOLE_NEAR`` voxels: through a sheet, not along a
-    tube or a slit between two boards.
+    surface points whose normal lies along the axis, so facing across the slices across it, -1
+    on the other points' voxels), only those whose run has more voxels of +1 than of -1 within
+    ``HOLE_NEAR`` voxels: through a sheet, not along a tube or between two boards.
     """
     out = np.zeros(m.shape, np.int32)
     n = 0

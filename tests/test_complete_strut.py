@@ -96,6 +96,59 @@ def test_a_strut_goes_around_what_the_camera_saw_through():
     assert struts[0].gap > 0.06  # longer than straight down
 
 
+def test_the_strut_is_the_shortest_path_though_a_longer_one_lies_near_the_piece(monkeypatch):
+    # the search starts in a ball around the piece and grows it: a winding path found within
+    # the first ball (over a wall the camera saw through, to a post of the object) is not taken
+    # when a shorter one (straight down to the base) leaves that ball
+    from edt import edt
+
+    from partscale.complete import strut
+
+    monkeypatch.setattr(strut, "FIRST_BALL", 8)
+    solid = np.zeros((30, 45, 20), bool)
+    solid[2:28, 0:21, 2:18] = True  # the object's base, its top at y = 20
+    solid[19:21, 0:34, 5:15] = True  # a post of the object rising beside the piece
+    solid[10:14, 30:34, 5:15] = True  # the piece, 9 voxels above the base
+    wall = np.zeros(solid.shape, bool)
+    wall[15:18, 21:38, :] = True  # seen through: between the piece and the post
+
+    def free_wall(p):
+        i = np.rint(p / H).astype(int)
+        return wall[i[:, 0], i[:, 1], i[:, 2]]
+
+    e_out = edt(np.ascontiguousarray(~solid)) - 0.5
+    e_in = edt(np.ascontiguousarray(solid)) - 0.5
+    sdf = (np.where(solid, -e_in, e_out) * H).astype(np.float32)
+    prov = np.where(np.abs(sdf) <= H, 1, 0).astype(np.uint8)
+    _, _, struts = _struts(sdf, prov, np.zeros(3), free_wall, max_gap=0.4)
+    assert len(struts) == 1
+    assert struts[0].gap <= 0.09 + 1e-6  # the 9 voxels down; over the wall is 0.127
+    assert struts[0].end[1] <= 20.5 * H  # it ends on the base, not on the post
+
+
+@pytest.mark.parametrize("gap", [12, 20])
+def test_a_piece_beyond_the_first_ball_is_joined_over_the_shortest_path(gap):
+    from skimage.graph import MCP_Geometric
+
+    from partscale.complete.strut import FIRST_BALL
+
+    assert gap > FIRST_BALL
+    sdf, prov, origin = _two_blocks(gap=gap)
+    core = np.zeros(sdf.shape, bool)
+    core[8:32, 10 : 10 + gap, 13:40] = True  # seen through: under the back and in front of it
+
+    def free_in_front(p):
+        i = np.rint(p / H).astype(int)
+        return core[i[:, 0], i[:, 1], i[:, 2]]
+
+    lab, _ = ndimage.label(sdf < 0)
+    costs, _ = MCP_Geometric(np.where(core, np.inf, 1.0)).find_costs(np.argwhere(lab == 2))
+    truth = (costs[lab == 1].min() - 1.0) * H  # the shortest path over the whole grid
+    _, _, struts = _struts(sdf, prov, origin, free_in_front, max_gap=0.4)
+    assert len(struts) == 1
+    assert struts[0].gap <= truth + 1e-6
+
+
 def _mirror_x(p):
     # the plane x = 19.5 voxels, holding everywhere
     return np.c_[39 * H - p[:, 0], p[:, 1], p[:, 2]], np.ones(len(p), bool)

@@ -29,6 +29,9 @@ length between the two solids): the TUM chairs' backs hang 14-15 cm above their 
 of the chair's height) on a bar no scan reads."""
 RADIUS = 0.012
 """Metres: the strut's radius (a chair back's bar, a leg's end, 2-3 cm across)."""
+FIRST_BALL = 8
+"""Voxels: the radius of the first ball the struts' search covers around a piece (then doubled
+up to the reach of the longest strut allowed)."""
 MIN_RADIUS_VOXELS = 1.2
 """The strut's radius in voxels at least, so that a path's face neighbours are solid (a path
 moving diagonally stays 6-connected)."""
@@ -145,46 +148,73 @@ class _Step:
 
 def _strut(sdf, prov, lab, p, n, joined, box, step: _Step) -> Strut | None:
     """Adds the strut of piece ``p`` of ``lab`` (``n`` voxels, bounding ``box``) to ``sdf``
-    and ``prov`` in place; the :class:`Strut` or None. Only the box grown by the reach is read.
+    and ``prov`` in place; the :class:`Strut` or None.
+
+    The shortest path is searched in a ball around the piece that grows (``FIRST_BALL`` voxels,
+    then doubled, up to the reach of ``max_gap``): a path of length ``c`` voxels stays within
+    ``c`` of the voxel it starts from, so a path found no longer than the ball's radius is the
+    shortest of all, and most pieces hang a few voxels from the object (a search over the whole
+    reach costs its cube).
+    """
+    h, max_gap = step.h, step.max_gap
+    reach = int(np.ceil(max_gap / h)) + 2
+    radius = min(FIRST_BALL, reach)
+    while True:
+        found = _shortest(sdf, lab, p, joined, box, step, radius)
+        if found is None:
+            if radius >= reach:
+                return None
+            radius = min(2 * radius, reach)
+            continue
+        cost, path = found
+        if cost <= radius or radius >= reach:
+            break
+        radius = min(max(2 * radius, int(np.ceil(cost))), reach)
+    # a step costs its length in voxels; the first step out of the piece and the last into the
+    # object span one voxel of outside space between them
+    gap = (cost - 1.0) * h
+    if gap > max_gap:
+        return None
+    added = _draw(sdf, prov, path, step)
+    mirrored = 0
+    if step.mirror is not None:
+        mirrored = _mirrored(sdf, prov, path, joined, step, step.mirror)
+    ends = step.origin + path[[0, -1]] * h
+    return Strut(n, ends[0], ends[1], gap, added, mirrored)
+
+
+def _shortest(sdf, lab, p, joined, box, step: _Step, radius: int):
+    """The shortest path from piece ``p`` of ``lab`` to ``joined`` through the voxels within
+    ``radius`` (voxels) of the piece that no view saw surely free: its length in voxels and
+    (K, 3) int voxel indices, or None. Only the piece's ``box`` grown by the radius is read.
     """
     from skimage.graph import MCP_Geometric
 
-    origin, h, max_gap = step.origin, step.h, step.max_gap
-    reach = int(np.ceil(max_gap / h)) + 2
     shape = np.array(sdf.shape)
-    i0 = np.maximum([b.start - reach for b in box], 0)
-    i1 = np.minimum([b.stop + reach for b in box], shape)
+    i0 = np.maximum([b.start - radius - 1 for b in box], 0)
+    i1 = np.minimum([b.stop + radius + 1 for b in box], shape)
     sl = tuple(slice(int(a), int(b)) for a, b in zip(i0, i1, strict=True))
     target = joined[sl]
     if not target.any():
         return None
     src = lab[sl] == p
     solid = sdf[sl] < 0
-    # only voxels within the reach of the piece are passable (a path's cost is its length, so
-    # one that leaves the reach is longer than the bound: the search stays in the ball), and of
-    # them the outside ones are asked
-    near = ndimage.distance_transform_edt(~src) <= reach
+    # only voxels within the radius of the piece are passable, and of them the outside ones
+    # are asked
+    near = ndimage.distance_transform_edt(~src) <= radius
     ask = ~solid & near
     idx = np.argwhere(ask)
     free = ~near
-    free[ask] = step.sure_free(origin + (idx + i0) * h)
+    free[ask] = step.sure_free(step.origin + (idx + i0) * step.h)
     cost = np.where(free, np.inf, 1.0)
     mcp = MCP_Geometric(cost, fully_connected=True)
     costs, _ = mcp.find_costs(np.argwhere(src))
     at = np.where(target & np.isfinite(costs), costs, np.inf)
     k = int(np.argmin(at))
-    # a step costs its length in voxels; the first step out of the piece and the last into the
-    # object span one voxel of outside space between them
-    gap = (float(at.flat[k]) - 1.0) * h
-    if not np.isfinite(at.flat[k]) or gap > max_gap:
+    if not np.isfinite(at.flat[k]):
         return None
     path = np.array(mcp.traceback(np.unravel_index(k, at.shape))) + i0
-    added = _draw(sdf, prov, path, step)
-    mirrored = 0
-    if step.mirror is not None:
-        mirrored = _mirrored(sdf, prov, path, joined, step, step.mirror)
-    ends = origin + path[[0, -1]] * h
-    return Strut(n, ends[0], ends[1], gap, added, mirrored)
+    return float(at.flat[k]), path
 
 
 def _draw(sdf, prov, path, step: _Step) -> int:

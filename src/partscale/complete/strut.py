@@ -197,18 +197,23 @@ def _shortest(sdf, lab, p, joined, box, step: _Step, radius: int):
     target = joined[sl]
     if not target.any():
         return None
-    src = lab[sl] == p
+    piece = lab[sl] == p
     solid = sdf[sl] < 0
+    # a path leaves the piece from a voxel on its rim and ends at the first voxel of the object
+    # it meets, on the object's rim: the insides of both are never passed through (searching
+    # them cost more than the space between)
+    rim = piece & ~ndimage.binary_erosion(piece, tidy_mod.CORNERS)
+    inner = (piece & ~rim) | ndimage.binary_erosion(target, tidy_mod.CORNERS)
     # only voxels within the radius of the piece are passable, and of them the outside ones
     # are asked
-    near = ndimage.distance_transform_edt(~src) <= radius
+    near = ndimage.distance_transform_edt(~rim) <= radius
     ask = ~solid & near
     idx = np.argwhere(ask)
-    free = ~near
+    free = ~near | inner
     free[ask] = step.sure_free(step.origin + (idx + i0) * step.h)
     cost = np.where(free, np.inf, 1.0)
     mcp = MCP_Geometric(cost, fully_connected=True)
-    costs, _ = mcp.find_costs(np.argwhere(src))
+    costs, _ = mcp.find_costs(np.argwhere(rim))
     at = np.where(target & np.isfinite(costs), costs, np.inf)
     k = int(np.argmin(at))
     if not np.isfinite(at.flat[k]):

@@ -242,3 +242,26 @@ def test_an_object_whose_legs_the_sensor_barely_saw_is_still_found():
     assert ob.up_from == "floor"
     y = ob.points[:, 1]
     assert y.max() >= 0.6 and y.min() <= 0.1  # the back's top, and a leg's foot
+
+
+def test_the_faces_votes_are_the_kernels_summed_over_every_direction():
+    # the votes are reckoned a block of directions at a time, skipping the pairs whose kernel
+    # is below exp(-20): the sums are those of the kernels over every pair, to float precision
+    from partscale.complete import floor
+
+    rng = np.random.default_rng(3)
+    n = rng.normal(size=(3 * floor.VOTES_BLOCK + 17, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    n[: floor.VOTES_BLOCK] = [0.0, 1.0, 0.0]  # a level face, seen many times
+    U, _ = floor._up_candidates(np.eye(4))
+    vote, level, face = floor._votes(n, U)
+    d = n @ U.T
+    s2 = np.radians(floor.FACES_SIGMA_DEG) ** 2
+    lev = np.exp(-(1.0 - np.abs(d)) / s2)
+    want_level = lev.mean(axis=0)
+    want_vote = want_level + floor.FACES_UPRIGHT_VOTE * np.exp(-0.5 * d * d / s2).mean(axis=0)
+    want_face = (lev * np.sign(d)).mean(axis=0)
+    assert np.abs(level - want_level).max() <= 1e-5 * want_level.max()
+    assert np.abs(vote - want_vote).max() <= 1e-5 * want_vote.max()
+    assert np.abs(face - want_face).max() <= 1e-5 * np.abs(want_face).max()
+    assert want_level.max() > 0.2  # the level face counts

@@ -52,6 +52,10 @@ are all square to its axis, which would take their upright votes for up)."""
 FACES_DOWN = 0.02
 """Mean level vote facing down (less that facing up) above which a candidate is the quarter
 turn off up: its level faces are the object's fronts, seen from below."""
+VOTES_BLOCK = 256
+"""Directions whose votes for all the candidates up are reckoned at once (:func:`_votes`)."""
+VOTES_CUT = 20.0
+"""A direction's vote for a candidate below exp(-VOTES_CUT) of its weight counts as none."""
 FACES_TILT_COST = 0.0005
 FACES_ROLL_COST = 0.002
 """Vote per degree of pitch and of roll away from the camera's own up that a candidate pays:
@@ -378,15 +382,24 @@ def _votes(n: np.ndarray, U: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     np.add.at(rep, inverse.ravel(), n)
     rep /= np.linalg.norm(rep, axis=1, keepdims=True)
     w = (count / len(n)).astype(np.float32)
-    d = (rep @ U.T).astype(np.float32)  # (D, K)
-    a = np.abs(d)
-    # small angles: from level 1 - cos ~ angle^2 / 2; from upright |cos| ~ angle
-    level = np.exp(-(1.0 - a) / np.float32(sig**2))
-    upright = np.exp(np.float32(-0.5 / sig**2) * a * a)
-    lev = w @ level
-    vote = lev + FACES_UPRIGHT_VOTE * (w @ upright)
-    face = w @ (level * np.sign(d))
-    return vote.astype(np.float64), lev.astype(np.float64), face.astype(np.float64)
+    lev, upr, face = (np.zeros(len(U)) for _ in range(3))
+    Ut = U.T.astype(np.float32)
+    # a block of directions at a time: the (D, K) products of a curved object's thousands of
+    # directions and thousands of candidates would be arrays of a hundred megabytes each
+    for b in range(0, len(rep), VOTES_BLOCK):
+        d = rep[b : b + VOTES_BLOCK].astype(np.float32) @ Ut  # (block, K)
+        a = np.abs(d)
+        wb = w[b : b + VOTES_BLOCK]
+        # small angles: from level 1 - cos ~ angle^2 / 2; from upright |cos| ~ angle
+        # a pair beyond about six sigmas of level or of upright weighs below exp(-VOTES_CUT):
+        # nothing, and not reckoned
+        x = (a - 1.0) / np.float32(sig**2)
+        level = np.exp(x, out=np.zeros_like(x), where=x > -VOTES_CUT)
+        lev += wb @ level
+        x = np.float32(-0.5 / sig**2) * a * a
+        upr += wb @ np.exp(x, out=np.zeros_like(x), where=x > -VOTES_CUT)
+        face += wb @ np.copysign(level, d)
+    return lev + FACES_UPRIGHT_VOTE * upr, lev, face
 
 
 def _refine_up(n: np.ndarray, up: np.ndarray) -> np.ndarray:

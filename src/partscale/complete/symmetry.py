@@ -365,10 +365,12 @@ def _best_plane(S, SC, scorer, cell, rng, taken, top, walls=None) -> Symmetry | 
 
 
 def _mirror_fit(sym, P: np.ndarray, N: np.ndarray, cell: float):
-    """``cost(A, b)``: how far a reflection ``x -> A x + b`` carries the points where ``sym``
-    holds (at most ``REFINE_SAMPLES`` of them, a fixed-seed sample; returned too, (M, 3)) from
-    scan points ``P`` whose normals ``N`` face the same way: the mean nearest distance, capped
-    at ``cell`` so points without a counterpart weigh alike everywhere.
+    """``cost(refl)``: for reflections ``x -> A x + b`` (a list of ``(A, b)``), how far each
+    carries the points where ``sym`` holds (at most ``REFINE_SAMPLES`` of them, a fixed-seed
+    sample; returned too, (M, 3)) from scan points ``P`` whose normals ``N`` face the same
+    way: (K,) the mean nearest distance, capped at ``cell`` so points without a counterpart
+    weigh alike everywhere. All the reflections' points are searched at once (a search of a
+    few thousand points costs its threads' start more than its work).
     """
     from scipy.spatial import cKDTree
 
@@ -379,13 +381,18 @@ def _mirror_fit(sym, P: np.ndarray, N: np.ndarray, cell: float):
         X, XN = X[k], XN[k]
     tree = cKDTree(P)
 
-    def cost(A: np.ndarray, b: np.ndarray) -> float:
+    def cost(refl: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+        A = np.stack([a for a, _ in refl])  # (K, 3, 3)
+        b = np.stack([v for _, v in refl])  # (K, 3)
+        moved = np.einsum("kij,nj->kni", A, X) + b[:, None, :]
         dist, nn = tree.query(
-            X @ A.T + b, k=REFINE_NEIGHBOURS, distance_upper_bound=cell, workers=2
+            moved.reshape(-1, 3), k=REFINE_NEIGHBOURS, distance_upper_bound=cell, workers=2
         )
         ok = np.isfinite(dist)
-        facing = np.einsum("nj,nkj->nk", XN @ A.T, N[np.where(ok, nn, 0)]) > REFINE_FACING
-        return float(np.where(ok & facing, dist, cell).min(axis=1).mean())
+        turned = np.einsum("kij,nj->kni", A, XN).reshape(-1, 3)
+        facing = np.einsum("nj,nkj->nk", turned, N[np.where(ok, nn, 0)]) > REFINE_FACING
+        capped = np.where(ok & facing, dist, cell).min(axis=1)
+        return capped.reshape(len(refl), len(X)).mean(axis=1)
 
     return cost, X
 
@@ -399,9 +406,6 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
     """
     fit, _ = _mirror_fit(sym, P, N, cell)
 
-    def cost(t, d):
-        return fit(*_mirror(t, d))
-
     t, d = sym.params["theta"], sym.params["offset"]
     # coarse to fine: offset (cells), angle (degrees), offset again
     for what, steps in (
@@ -414,7 +418,7 @@ def _refine_plane(sym: Symmetry, P: np.ndarray, N: np.ndarray, cell: float) -> S
             cands = [(t, d + x * cell) for x in steps]
         else:
             cands = [(t + np.radians(x), d) for x in steps]
-        t, d = min(cands, key=lambda c: cost(*c))
+        t, d = cands[int(np.argmin(fit([_mirror(*c) for c in cands])))]
     t, d = _canonical(t, d)
     A, b = _mirror(t, d)
     return Symmetry(
@@ -450,9 +454,9 @@ def tilted_plane(
         n = np.cos(phi) * n0 + np.sin(phi) * np.array([0.0, 1.0, 0.0])
         return n, d0 * np.cos(phi) + pivot * np.sin(phi) + d
 
-    def cost(phi, d):
+    def reflection(phi, d):
         n, off = plane(phi, d)
-        return fit(np.eye(3) - 2 * np.outer(n, n), 2 * off * n)
+        return np.eye(3) - 2 * np.outer(n, n), 2 * off * n
 
     phi, d = 0.0, 0.0
     lim = np.radians(MAX_PLANE_TILT_DEG)
@@ -466,7 +470,7 @@ def tilted_plane(
             cands = [(float(np.clip(phi + x, -lim, lim)), d) for x in steps]
         else:
             cands = [(phi, d + x) for x in steps]
-        phi, d = min(cands, key=lambda c: cost(*c))
+        phi, d = cands[int(np.argmin(fit([reflection(*c) for c in cands])))]
     return plane(phi, d)
 
 

@@ -25,6 +25,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from .._workers import thread_map
 from ..csdf import BAND_VOXELS
 from . import tidy as tidy_mod
 
@@ -514,8 +515,8 @@ def close_between(solid: np.ndarray, cand: Candidates) -> np.ndarray:
         out[box] = _fill_holes(mb | (c & ~free_all[box]))
         return out
 
-    filled = closed(solid)
-    shell = closed(solid & cand.within_closure)
+    # the two closings are independent and ndimage lets go of the GIL: a thread each
+    filled, shell = thread_map(closed, [solid, solid & cand.within_closure])
     # where the segments fill the object only in part (thick curved parts whose opposite
     # sides were seen in patches) the voids between them are surfaces deep inside it: each
     # region of the fill is kept only where it leaves less boundary than the thin closure
@@ -695,37 +696,47 @@ def _slice_holes(
     """
     out = np.zeros(m.shape, np.int32)
     n = 0
-    for ax in range(3):
-        across = np.zeros((3, 3, 3), bool)
-        plane = [slice(None)] * 3
-        plane[ax] = slice(1, 2)
-        across[tuple(plane)] = ndimage.generate_binary_structure(3, 1)[tuple(plane)]
-        # the empty regions of each slice that reach no face of the array: one labelling (the
-        # repeated dilation of ndimage.binary_fill_holes took 0.1 s an axis at 150^3)
-        holes, k = ndimage.label(~m, across)
-        small = np.bincount(holes.ravel(), minlength=k + 1) <= most
-        for face in range(m.ndim):
-            for end in (0, -1):
-                small[holes.take(end, axis=face)] = False
-        small[0] = False
-        if (deepest is not None or faces is not None) and small.any():
-            # judged by the run of holes through consecutive slices, each slice's its own label
-            runs, r = ndimage.label(small[holes])
-            bad = np.zeros(r + 1, bool)
-            if deepest is not None:
-                spans = [0] + [sl[ax].stop - sl[ax].start for sl in ndimage.find_objects(runs)]
-                bad |= np.asarray(spans) > deepest
-            if faces is not None:
-                near = ndimage.maximum_filter(runs, 2 * HOLE_NEAR + 1)
-                at = np.flatnonzero(faces[ax])
-                score = np.bincount(near.flat[at], weights=faces[ax].flat[at], minlength=r + 1)
-                bad |= score <= 0
-            bad[0] = False
-            small[np.unique(holes[bad[runs]])] = False
+    # the three axes' labellings are independent and ndimage lets go of the GIL: a thread each
+    for holes, k, small in thread_map(
+        lambda ax: _axis_holes(m, ax, most, deepest, faces), range(m.ndim)
+    ):
         lab = np.where(small, np.arange(k + 1) + n, 0).astype(np.int32)[holes]
         out = np.where(lab > 0, lab, out)
         n += k
     return out
+
+
+def _axis_holes(m, ax, most, deepest, faces) -> tuple[np.ndarray, int, np.ndarray]:
+    """:func:`_slice_holes` across axis ``ax``: the empty regions of the slices labelled
+    (X, Y, Z) int32, their number and (k + 1,) bool which of them are holes kept.
+    """
+    across = np.zeros((3, 3, 3), bool)
+    plane = [slice(None)] * 3
+    plane[ax] = slice(1, 2)
+    across[tuple(plane)] = ndimage.generate_binary_structure(3, 1)[tuple(plane)]
+    # the empty regions of each slice that reach no face of the array: one labelling (the
+    # repeated dilation of ndimage.binary_fill_holes took 0.1 s an axis at 150^3)
+    holes, k = ndimage.label(~m, across)
+    small = np.bincount(holes.ravel(), minlength=k + 1) <= most
+    for face in range(m.ndim):
+        for end in (0, -1):
+            small[holes.take(end, axis=face)] = False
+    small[0] = False
+    if (deepest is not None or faces is not None) and small.any():
+        # judged by the run of holes through consecutive slices, each slice's its own label
+        runs, r = ndimage.label(small[holes])
+        bad = np.zeros(r + 1, bool)
+        if deepest is not None:
+            spans = [0] + [sl[ax].stop - sl[ax].start for sl in ndimage.find_objects(runs)]
+            bad |= np.asarray(spans) > deepest
+        if faces is not None:
+            near = ndimage.maximum_filter(runs, 2 * HOLE_NEAR + 1)
+            at = np.flatnonzero(faces[ax])
+            score = np.bincount(near.flat[at], weights=faces[ax].flat[at], minlength=r + 1)
+            bad |= score <= 0
+        bad[0] = False
+        small[np.unique(holes[bad[runs]])] = False
+    return holes, k, small
 
 
 def close_holes(
@@ -1170,16 +1181,18 @@ def _diffuse(rgb: np.ndarray, known: np.ndarray, band: np.ndarray) -> np.ndarray
         rgb[...] = 160
         return rgb
     w = known.astype(np.float32)
-    den = ndimage.gaussian_filter(w, DIFFUSE_SIGMA, truncate=3.0)
     flat_known = known.ravel()
     todo = band[~flat_known[band]]
-    blurred = np.empty((len(todo), 3), np.float32)
-    for c in range(3):
-        num = ndimage.gaussian_filter(
-            rgb[..., c].astype(np.float32) * w, DIFFUSE_SIGMA, truncate=3.0
-        )
-        blurred[:, c] = num.ravel()[todo] / np.maximum(den.ravel()[todo], 1e-12)
-    reached = den.ravel()[todo] > 1e-4
+
+    def blur(c: int) -> np.ndarray:
+        # the weights' blur (c = 3), or a channel's weighted; a thread each (ndimage lets go of
+        # the GIL), only the band's values kept
+        a = w if c == 3 else rgb[..., c].astype(np.float32) * w
+        return ndimage.gaussian_filter(a, DIFFUSE_SIGMA, truncate=3.0).ravel()[todo]
+
+    *num, den = thread_map(blur, range(4))
+    blurred = np.stack(num, axis=1) / np.maximum(den, 1e-12)[:, None]
+    reached = den > 1e-4
     flat = rgb.reshape(-1, 3)
     flat[todo[reached]] = np.clip(np.rint(blurred[reached]), 0, 255).astype(np.uint8)
     have = known.copy()

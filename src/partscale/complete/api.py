@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import _schema
 from .._options import keyword_options
+from .._workers import thread_map
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError, PartscaleWarning
 from ..progress import ProgressCallback, resolve
@@ -782,20 +783,25 @@ def into_input_frame(c: CSDF) -> CSDF:
     rgb = np.empty((*shape, 3), np.uint8)
     kinds = np.empty(shape, np.uint8)
     jk = np.indices(shape[1:], dtype=np.float64).reshape(2, -1)
-    for i in range(shape[0]):  # a slab at a time: the coordinates of one are small
+
+    def slab(i: int) -> None:  # a slab at a time: the coordinates of one are small
         w = np.vstack([np.full(jk.shape[1], float(i)), jk]) * h + lo[:, None]
         g = (back[:3, :3] @ w + back[:3, 3][:, None] - origin) / h
         d = ndimage.map_coordinates(c.sdf, g, order=1, mode="constant", cval=far)
         near = np.rint(g).astype(np.int64)
         inside = ((near >= 0) & (near < np.asarray(c.shape)[:, None])).all(axis=0)
         nc = np.clip(near, 0, np.asarray(c.shape)[:, None] - 1)
+        at = np.ravel_multi_index(tuple(nc), c.shape)  # the nearest old voxel, once
         # a sheet a voxel thick falls between the new voxels' centres: the nearest old voxel
         # keeps it solid (interpolated, its distances stay above zero)
-        solid = inside & (c.sdf[nc[0], nc[1], nc[2]] < 0)
+        solid = inside & (c.sdf.ravel()[at] < 0)
         d = np.where(solid, np.minimum(d, -KEEP_INSIDE * h), d)
         sdf[i] = d.reshape(shape[1:])
-        rgb[i] = c.rgb[nc[0], nc[1], nc[2]].reshape(*shape[1:], 3)
-        kinds[i] = np.where(inside, prov[nc[0], nc[1], nc[2]], 0).reshape(shape[1:])
+        rgb[i] = c.rgb.reshape(-1, 3)[at].reshape(*shape[1:], 3)
+        kinds[i] = np.where(inside, prov.ravel()[at], 0).reshape(shape[1:])
+
+    # the slabs on threads (interpolation and numpy's gathers let go of the GIL)
+    thread_map(slab, range(shape[0]))
     # the staircase of a turned grid touches itself along edges: filled as the fusion's own
     sdf, _ = tidy_mod.fill_contacts(sdf, h)
     meta = dict(c.meta)

@@ -74,3 +74,37 @@ def test_a_library_session_that_imports_then_segments_prints_no_numba_fork_note(
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert int(proc.stdout.split()[-1]) >= 2
     assert "fork" not in proc.stderr, proc.stderr[-2000:]
+
+
+def test_thread_map_called_from_its_own_threads_runs_the_items_in_turn(monkeypatch):
+    # a function mapped on the pool that maps again would wait on the pool's own threads: the
+    # inner map runs in turn on the thread it was called from, and every result comes back
+    import threading
+
+    from partscale import _workers
+
+    monkeypatch.setattr(_workers.os, "cpu_count", lambda: 2)
+    _workers.reset_pools()
+    try:
+        inner_threads: list[str] = []
+
+        def inner(x):
+            inner_threads.append(threading.current_thread().name)
+            return x * x
+
+        def outer(x):
+            return sum(_workers.thread_map(inner, range(x)))
+
+        # more outer items than threads: each pool thread holds one and maps again (on a thread
+        # of the test's own, so that a pool waiting on itself fails the test, not hangs it)
+        got: list = []
+        t = threading.Thread(
+            target=lambda: got.extend(_workers.thread_map(outer, range(2, 8))), daemon=True
+        )
+        t.start()
+        t.join(timeout=60)
+        assert not t.is_alive(), "the pool waits on its own threads"
+        assert got == [sum(i * i for i in range(n)) for n in range(2, 8)]
+        assert all(name.startswith(_workers._PREFIX) for name in inner_threads)
+    finally:
+        _workers.reset_pools()

@@ -14,22 +14,28 @@ from multiprocessing import connection as mp_connection
 from typing import Any, cast
 
 _POOL: ThreadPoolExecutor | None = None
+_PREFIX = "partscale-pool"
+"""The names of the pool's threads begin so (:func:`thread_map` knows its own)."""
 
 
 def thread_map(fn: Callable, items: Iterable) -> list:
     """``[fn(x) for x in items]`` on a thread per core, results in the order of ``items``.
 
-    For work that releases the GIL (qhull, KD-tree searches, ``nogil`` numba kernels). One pool
-    serves the whole process; ``fn`` must not call :func:`thread_map` itself (the pool could be
-    waiting on its own workers).
+    For work that releases the GIL (qhull, KD-tree searches, ``nogil`` numba kernels, ndimage).
+    One pool serves the whole process; called from one of its own threads (``fn`` calling
+    :func:`thread_map` again) it runs the items in turn, as the pool could otherwise be waiting
+    on its own workers.
     """
+    import threading
+
     global _POOL
     items = list(items)
-    if len(items) < 2 or (os.cpu_count() or 1) < 2:
+    nested = threading.current_thread().name.startswith(_PREFIX)
+    if len(items) < 2 or (os.cpu_count() or 1) < 2 or nested:
         return [fn(x) for x in items]
     if _POOL is None:
         launch_numba_threads()
-        _POOL = ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="partscale")
+        _POOL = ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix=_PREFIX)
     return list(_POOL.map(fn, items))
 
 

@@ -219,6 +219,31 @@ def test_symmetry_on_the_cameras_up_gives_way_to_the_observed_scan(desk_scans, d
     assert "camera's axis for up" in kept["guard"]["reason"]
 
 
+def test_a_completion_the_guard_would_set_aside_for_its_symmetries_is_not_made(
+    desk_scans, monkeypatch
+):
+    # the symmetries are found first: where they rest on the camera's axis for up, the scan as
+    # observed is what comes back whatever the completion's evidence, so only it is fused
+    from partscale.complete import api
+
+    fused = []
+    real = api.fuse_solid
+
+    def counted(*args, **kwargs):
+        fused.append(kwargs.get("fill_between"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(api, "fuse_solid", counted)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PartscaleWarning)
+        c = complete(desk_scans["level"], res=48)
+    record = c.meta["completion"]["guard"]
+    assert record["kept"] == "observed" and record["weak"]
+    assert fused == [False]  # the observed closure alone (no fill between faces)
+    assert record["evidence"] is None
+    assert record["evidence_observed"]["on_surface"] >= guard.MIN_ON_SURFACE
+
+
 def test_info_says_why_the_scan_was_kept_as_observed(desk_without_floor, tmp_path):
     import json
 

@@ -706,7 +706,6 @@ def complete(
     # lies askew to the object's walls (a camera's frame), and the steps that read faces along
     # the grid's axes then miss them (into_input_frame)
     opts = Settings(res, box, True, closure_for(closure, measured, res), source, factor)
-    full = _complete(ob, opts, symmetry=symmetry, extras=True, report=report, dense=dense)
     # the space the cameras surely saw through: pixels without a reading say nothing
     carver = column_mod.sure_carver(ob.frames, 0.0)
 
@@ -716,7 +715,18 @@ def complete(
             ob, opts, symmetry=False, extras=False, report=lambda f, m: None, dense=dense
         )
 
-    out = guard_mod.choose(full, ob.points, carver, observed, force=force_completion)
+    report(0.15, "symmetries")
+    sy = find_symmetries(ob, opts.res, symmetry)
+    weak = guard_mod.weak({"up_from": sy.up_from, "symmetries": _symmetries_meta(sy)})
+    if weak and not force_completion:
+        # symmetries on a guessed up or a doubtful turn: the guard keeps the scan as observed
+        # whatever the completion's evidence, so the completion is not made
+        out = guard_mod.give_way(observed(), ob.points, carver, weak)
+    else:
+        full = _complete(
+            ob, opts, symmetry=symmetry, extras=True, report=report, dense=dense, sy=sy
+        )
+        out = guard_mod.choose(full, ob.points, carver, observed, force=force_completion)
     if not upright:
         report(0.97, "into the scan's frame")
         out = into_input_frame(out)
@@ -924,17 +934,20 @@ def _complete(
     extras: bool,
     report: Callable[[float, str], None],
     dense: Observation | None = None,
+    sy: Symmetries | None = None,
 ) -> CSDF:
     """The completion of an observation; ``extras`` False: no guessed column or struts; the
-    symmetries are found on ``ob``'s points and copy ``dense``'s (:func:`densify`) where given.
+    symmetries are found on ``ob``'s points (``sy``: found already) and copy ``dense``'s
+    (:func:`densify`) where given.
 
     The steps, each reported by name: the symmetries and the upright frame they fix
     (:func:`find_symmetries`), the symmetric copies of the surface (:func:`symmetric_copies`),
     the grid (:func:`plan_grid`), the carved and closed solid (:func:`fuse_solid`), the guessed
     parts (:func:`guess_parts`) and the metadata (:func:`completion_meta`).
     """
-    report(0.15, "symmetries")
-    sy = find_symmetries(ob, opts.res, symmetry)
+    if sy is None:
+        report(0.15, "symmetries")
+        sy = find_symmetries(ob, opts.res, symmetry)
     report(0.3, "symmetric copies")
     dense = ob if dense is None else dense
     surface = symmetric_copies(dense, sy)

@@ -16,7 +16,8 @@ Nothing but the scan is known about the object, so a completion is judged by wha
   of them stand where the cameras saw through, the turn is doubtful (:func:`weak`).
 
 Where the symmetries rest on a guessed up or a doubtful turn (the weak stages), the scan as
-observed, closed (no symmetric copies, no guessed column or struts) is returned. On the wide
+observed, closed (no symmetric copies, no guessed column or struts) is returned, and the
+completion is not made (:func:`give_way`: the symmetries, found first, tell). On the wide
 virtual-scan benchmark the observed closure beat copies made by the camera's up on 7 of the 9
 such scans of the tuned objects (by up to 0.17 F@1 %) and lost on 2 seen by a level camera
 (0.04, 0.11); on the other objects' single views it beat them by 0.08 to 0.17 on 3 of 7 and
@@ -70,6 +71,8 @@ MARGIN_FREE = 0.1
 """Share of the surface in seen free space by which a completion must exceed the observed
 closure to give way to it: sensor noise along thin parts puts a few percent of a sound
 completion there (a real frame's swivel chair, its turned star base: 5 % beyond its closure)."""
+
+_GAVE_WAY = "kept the scan as observed, closed, not the completion: "
 
 
 @dataclass(frozen=True)
@@ -231,14 +234,47 @@ def choose(
         degenerate = ev.struts > MAX_STRUTS
         if weak_stages or degenerate or _worse(ev, ev_alt):
             record["kept"] = "observed"
-            record["reason"] = (
-                "kept the scan as observed, closed, not the completion: " + "; ".join(problems)
-            )
+            record["reason"] = _GAVE_WAY + "; ".join(problems)
             kept = alt
     elif problems:
         record["reason"] = "completion kept as forced, although " + "; ".join(problems)
+    return _recorded(kept, record)
+
+
+def give_way(observed: CSDF, points: np.ndarray, carver: Carver, weak_stages: list[str]) -> CSDF:
+    """The scan as observed, closed, kept without the completion being made, where its
+    symmetries are weak (``weak_stages``, from :func:`weak` of the symmetries found): what
+    :func:`choose` keeps whatever the completion's evidence. Recorded as :func:`choose` does,
+    ``evidence`` None (no completion was made).
+
+    Parameters
+    ----------
+    observed : CSDF
+        The scan as observed, closed.
+    points : (N, 3) float64
+        The observed points of the object, scan world.
+    carver : Carver
+        The free-space test of the scan's frames.
+    weak_stages : list of str
+        Why the symmetries cannot be trusted, one phrase each (not empty).
+
+    Returns
+    -------
+    CSDF
+        ``observed`` with its ``meta['completion']['guard']`` record.
+    """
+    record: dict = {"kept": "observed", "reason": _GAVE_WAY + "; ".join(weak_stages)}
+    record["forced"] = False
+    record["evidence"] = None
+    record["weak"] = list(weak_stages)
+    record["evidence_observed"] = evidence(observed, points, carver).as_dict()
+    return _recorded(observed, record)
+
+
+def _recorded(kept: CSDF, record: dict) -> CSDF:
+    """``kept`` with the guard's ``record`` in its metadata and history, its reason warned."""
     if record["reason"] is not None:
-        warnings.warn(record["reason"], PartscaleWarning, stacklevel=3)
+        warnings.warn(record["reason"], PartscaleWarning, stacklevel=4)
     # most of it guessed: recorded (the command's summary says so), not warned about: a result
     # the caller asked for without symmetry is guessed wherever the scan did not look
     record["mostly_guessed"] = float(kept.meta["completion"]["guessed"]) > MAX_GUESSED

@@ -96,23 +96,28 @@ def test_a_strut_goes_around_what_the_camera_saw_through():
     assert struts[0].gap > 0.06  # longer than straight down
 
 
-def test_the_strut_is_the_shortest_path_though_a_longer_one_lies_near_the_piece(monkeypatch):
-    # the search starts in a ball around the piece and grows it: a winding path found within
-    # the first ball (over a wall the camera saw through, to a post of the object) is not taken
-    # when a shorter one (straight down to the base) leaves that ball
+def test_the_strut_is_the_shortest_path_though_a_longer_one_winds_near_the_piece(monkeypatch):
+    # the search starts among the voxels near both the piece and the object and widens: a path
+    # found there that winds (through an opening at the top of one wall the camera saw
+    # through, down between the walls, out through an opening at the bottom of the other) is
+    # not taken when a shorter one (over both walls) leaves that first search
     from edt import edt
+    from skimage.graph import MCP_Geometric
 
     from partscale.complete import strut
 
     monkeypatch.setattr(strut, "FIRST_BALL", 8)
-    solid = np.zeros((30, 45, 20), bool)
-    solid[2:28, 0:21, 2:18] = True  # the object's base, its top at y = 20
-    solid[19:21, 0:34, 5:15] = True  # a post of the object rising beside the piece
-    solid[10:14, 30:34, 5:15] = True  # the piece, 9 voxels above the base
-    wall = np.zeros(solid.shape, bool)
-    wall[15:18, 21:38, :] = True  # seen through: between the piece and the post
+    solid = np.zeros((24, 30, 40), bool)
+    solid[2:10, 0:20, 5:35] = True  # the piece
+    solid[14:22, 0:20, 5:35] = True  # the object, 4 voxels from it
+    solid[14:22, 0:3, 0:40] = True  # (the larger)
+    wall = np.zeros(solid.shape, bool)  # two walls seen through between them, 24 voxels tall
+    wall[11, 0:24, :] = True
+    wall[13, 0:24, :] = True
+    wall[11, 17:19, 18:22] = False  # an opening near the top of the first
+    wall[13, 3:5, 18:22] = False  # and one near the bottom of the second
 
-    def free_wall(p):
+    def free_walls(p):
         i = np.rint(p / H).astype(int)
         return wall[i[:, 0], i[:, 1], i[:, 2]]
 
@@ -120,10 +125,13 @@ def test_the_strut_is_the_shortest_path_though_a_longer_one_lies_near_the_piece(
     e_in = edt(np.ascontiguousarray(solid)) - 0.5
     sdf = (np.where(solid, -e_in, e_out) * H).astype(np.float32)
     prov = np.where(np.abs(sdf) <= H, 1, 0).astype(np.uint8)
-    _, _, struts = _struts(sdf, prov, np.zeros(3), free_wall, max_gap=0.4)
+    lab, _ = ndimage.label(solid)
+    costs, _ = MCP_Geometric(np.where(wall, np.inf, 1.0)).find_costs(np.argwhere(lab == 1))
+    truth = (costs[lab == 2].min() - 1.0) * H  # over the walls: 0.122; winding: 0.158
+    _, _, struts = _struts(sdf, prov, np.zeros(3), free_walls, max_gap=0.4)
     assert len(struts) == 1
-    assert struts[0].gap <= 0.09 + 1e-6  # the 9 voxels down; over the wall is 0.127
-    assert struts[0].end[1] <= 20.5 * H  # it ends on the base, not on the post
+    assert struts[0].gap <= truth + 1e-6 and truth < 0.13
+    assert struts[0].start[1] >= 19 * H  # over the top, not through the openings
 
 
 @pytest.mark.parametrize("gap", [12, 20])

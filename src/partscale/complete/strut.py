@@ -150,11 +150,12 @@ def _strut(sdf, prov, lab, p, n, joined, box, step: _Step) -> Strut | None:
     """Adds the strut of piece ``p`` of ``lab`` (``n`` voxels, bounding ``box``) to ``sdf``
     and ``prov`` in place; the :class:`Strut` or None.
 
-    The shortest path is searched in a ball around the piece that grows (``FIRST_BALL`` voxels,
-    then doubled, up to the reach of ``max_gap``): a path of length ``c`` voxels stays within
-    ``c`` of the voxel it starts from, so a path found no longer than the ball's radius is the
-    shortest of all, and most pieces hang a few voxels from the object (a search over the whole
-    reach costs its cube).
+    The shortest path is searched among the voxels whose distances to the piece and to the
+    object add up to at most a radius that grows (``FIRST_BALL`` voxels, then doubled, up to
+    the reach of ``max_gap``): a path of length ``c`` voxels passes only voxels whose distances
+    add up to ``c`` at most, so a path found no longer than the radius is the shortest of all,
+    and most pieces hang a few voxels from the object (a search over the whole reach around a
+    large piece costs the cube of the reach times its surface).
     """
     h, max_gap = step.h, step.max_gap
     reach = int(np.ceil(max_gap / h)) + 2
@@ -184,9 +185,10 @@ def _strut(sdf, prov, lab, p, n, joined, box, step: _Step) -> Strut | None:
 
 
 def _shortest(sdf, lab, p, joined, box, step: _Step, radius: int):
-    """The shortest path from piece ``p`` of ``lab`` to ``joined`` through the voxels within
-    ``radius`` (voxels) of the piece that no view saw surely free: its length in voxels and
-    (K, 3) int voxel indices, or None. Only the piece's ``box`` grown by the radius is read.
+    """The shortest path from piece ``p`` of ``lab`` to ``joined`` through the voxels no view
+    saw surely free whose distances to the two add up to at most ``radius`` (voxels): its
+    length in voxels and (K, 3) int voxel indices, or None. Only the piece's ``box`` grown by
+    the radius is read.
     """
     from skimage.graph import MCP_Geometric
 
@@ -204,9 +206,11 @@ def _shortest(sdf, lab, p, joined, box, step: _Step, radius: int):
     # them cost more than the space between)
     rim = piece & ~ndimage.binary_erosion(piece, tidy_mod.CORNERS)
     inner = (piece & ~rim) | ndimage.binary_erosion(target, tidy_mod.CORNERS)
-    # only voxels within the radius of the piece are passable, and of them the outside ones
-    # are asked
-    near = ndimage.distance_transform_edt(~rim) <= radius
+    # a path no longer than the radius passes only voxels whose distances to the piece and to
+    # the object add up to the radius at most: only those are passable, and of them the
+    # outside ones are asked (the shell around a large piece away from the object is not)
+    apart = ndimage.distance_transform_edt(~rim) + ndimage.distance_transform_edt(~target)
+    near = apart <= radius + 1e-6
     ask = ~solid & near
     idx = np.argwhere(ask)
     free = ~near | inner

@@ -526,7 +526,8 @@ def _surface_of(solid: np.ndarray) -> fuse.SurfacePoints:
     return fuse.surface_on_grid(_unit_grid(solid.shape), P, C, K, N)
 
 
-def test_close_holes_shuts_unseen_holes_through_a_sheet_only():
+@pytest.mark.parametrize("fine", [False, True], ids=["on threads", "a fine grid, in turn"])
+def test_close_holes_shuts_unseen_holes_through_a_sheet_only(fine, monkeypatch):
     # a board two voxels thick with three holes through it along z: one 6 voxels across that
     # no camera saw through (a sensor's blotch: closed), the same where the camera saw through
     # (a gap between slats: stays), and a window 20 voxels across (stays); a tube along z, its
@@ -556,6 +557,14 @@ def test_close_holes_shuts_unseen_holes_through_a_sheet_only():
         i = np.rint(P).astype(int)
         return seen[i[:, 0], i[:, 1], i[:, 2]]
 
+    if fine:
+        # a grid above THREAD_VOXELS: the axes' labellings one after another (each holds
+        # arrays of the whole grid), with the same result
+        def no_threads(fn, items):
+            raise AssertionError("threads on a fine grid")
+
+        monkeypatch.setattr(fuse, "THREAD_VOXELS", 0)
+        monkeypatch.setattr(fuse, "thread_map", no_threads)
     grid = _unit_grid(solid.shape)
     out = fuse.close_holes(solid, grid, _surface_of(solid), free)
     assert out[blotch, 5:7].all()

@@ -114,11 +114,24 @@ TUNNEL_VOXELS = 200
 SHEET_VOXELS = 6
 """A hole through a thin part goes through at most this many slices (a tube's inside, a bin's
 seen from the side, runs on along it: not a hole, :func:`close_holes`)."""
+THREAD_VOXELS = 2**24
+"""Voxels up to which independent steps over the whole grid run on threads at once (each
+holds arrays of the grid; on a finer grid one after another, so that the memory a completion
+needs stays what its check counted)."""
 HOLE_NEAR = 2
 """Voxels around a hole within which the surface points tell a sheet from a slit."""
 HOLE_SEEN = 0.1
 """A hole through a thin part with at most this share of its voxels seen through: no camera
 looked through it (:func:`close_holes`)."""
+
+
+def _map(fn: Callable, items, voxels: int) -> list:
+    """``[fn(x) for x in items]``, on threads (:func:`partscale._workers.thread_map`) where the
+    grid has at most ``THREAD_VOXELS`` ``voxels``: each item holds arrays of the whole grid.
+    """
+    if voxels <= THREAD_VOXELS:
+        return thread_map(fn, items)
+    return [fn(x) for x in items]
 
 
 def _edt(mask: np.ndarray) -> np.ndarray:
@@ -516,7 +529,7 @@ def close_between(solid: np.ndarray, cand: Candidates) -> np.ndarray:
         return out
 
     # the two closings are independent and ndimage lets go of the GIL: a thread each
-    filled, shell = thread_map(closed, [solid, solid & cand.within_closure])
+    filled, shell = _map(closed, [solid, solid & cand.within_closure], solid.size)
     # where the segments fill the object only in part (thick curved parts whose opposite
     # sides were seen in patches) the voids between them are surfaces deep inside it: each
     # region of the fill is kept only where it leaves less boundary than the thin closure
@@ -697,8 +710,8 @@ def _slice_holes(
     out = np.zeros(m.shape, np.int32)
     n = 0
     # the three axes' labellings are independent and ndimage lets go of the GIL: a thread each
-    for holes, k, small in thread_map(
-        lambda ax: _axis_holes(m, ax, most, deepest, faces), range(m.ndim)
+    for holes, k, small in _map(
+        lambda ax: _axis_holes(m, ax, most, deepest, faces), range(m.ndim), m.size
     ):
         lab = np.where(small, np.arange(k + 1) + n, 0).astype(np.int32)[holes]
         out = np.where(lab > 0, lab, out)
@@ -1190,7 +1203,7 @@ def _diffuse(rgb: np.ndarray, known: np.ndarray, band: np.ndarray) -> np.ndarray
         a = w if c == 3 else rgb[..., c].astype(np.float32) * w
         return ndimage.gaussian_filter(a, DIFFUSE_SIGMA, truncate=3.0).ravel()[todo]
 
-    *num, den = thread_map(blur, range(4))
+    *num, den = _map(blur, range(4), known.size)
     blurred = np.stack(num, axis=1) / np.maximum(den, 1e-12)[:, None]
     reached = den > 1e-4
     flat = rgb.reshape(-1, 3)

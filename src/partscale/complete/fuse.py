@@ -135,9 +135,16 @@ def _map(fn: Callable, items, voxels: int) -> list:
 
 
 def _edt(mask: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) float32: each voxel's distance in voxels to the nearest False voxel of
+    ``mask`` (X, Y, Z) bool, 0 on them.
+
+    The mask goes to ``edt`` as uint8 (the same bytes): edt 3.1 takes a bool array on a
+    path 3-5x slower than the same zeros and ones as uint8, with the same result.
+    """
     import edt
 
-    return edt.edt(np.ascontiguousarray(mask), parallel=2).astype(np.float32)
+    data = np.ascontiguousarray(mask).view(np.uint8)
+    return edt.edt(data, parallel=2).astype(np.float32, copy=False)
 
 
 def _fill_holes(mask: np.ndarray) -> np.ndarray:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from partscale import data, ingest
 from partscale.complete import api, fuse
@@ -158,6 +159,16 @@ def test_drop_pieces_keeps_a_small_piece_seen_well_beside_a_large_one():
     solid[70, 70, 50 : 50 + n - 1] = obs[70, 70, 50 : 50 + n - 1] = True  # one voxel fewer
     kept = fuse.drop_pieces(solid, obs)
     assert kept[60, 60, 50] and not kept[70, 70, 50]
+
+
+def test_edt_is_the_exact_distance_to_the_nearest_false_voxel():
+    # a random mask, and a strided view of one (the bytes handed on as uint8 must be its own)
+    rng = np.random.default_rng(3)
+    big = rng.random((31, 26, 40)) < 0.97
+    for mask in (big, big[::2, :, 1::3]):
+        d = fuse._edt(mask)
+        assert d.dtype == np.float32 and d.shape == mask.shape
+        np.testing.assert_allclose(d, ndimage.distance_transform_edt(mask), atol=1e-5)
 
 
 def test_distances_of_a_voxel_box_are_its_voxel_distances():

@@ -108,3 +108,40 @@ def test_thread_map_called_from_its_own_threads_runs_the_items_in_turn(monkeypat
         assert all(name.startswith(_workers._PREFIX) for name in inner_threads)
     finally:
         _workers.reset_pools()
+
+
+def test_thread_soon_runs_beside_the_caller_and_inline_on_the_pools_own_threads(monkeypatch):
+    # started at once on a pool thread, while the caller goes on; the result (or its error)
+    # comes back when asked for; from a pool thread it runs on that thread when asked for
+    import threading
+
+    from partscale import _workers
+
+    monkeypatch.setattr(_workers.os, "cpu_count", lambda: 2)
+    _workers.reset_pools()
+    try:
+        started = threading.Event()
+
+        def work():
+            started.set()
+            return threading.current_thread().name
+
+        later = _workers.thread_soon(work)
+        # it started before the caller asked for it
+        assert started.wait(timeout=60), "thread_soon did not start its work"
+        assert later().startswith(_workers._PREFIX)
+
+        def fails():
+            raise ValueError("expected in the caller")
+
+        with pytest.raises(ValueError, match="expected in the caller"):
+            _workers.thread_soon(fails)()
+
+        def from_pool(_):
+            inner = _workers.thread_soon(lambda: threading.current_thread().name)
+            return inner(), threading.current_thread().name
+
+        (inner_name, outer_name), _ = _workers.thread_map(from_pool, range(2))
+        assert inner_name == outer_name
+    finally:
+        _workers.reset_pools()

@@ -26,17 +26,42 @@ def thread_map(fn: Callable, items: Iterable) -> list:
     :func:`thread_map` again) it runs the items in turn, as the pool could otherwise be waiting
     on its own workers.
     """
+    items = list(items)
+    pool = _pool() if len(items) >= 2 else None
+    if pool is None:
+        return [fn(x) for x in items]
+    return list(pool.map(fn, items))
+
+
+def thread_soon(fn: Callable[[], Any]) -> Callable[[], Any]:
+    """``fn()`` started now on the pool, beside the caller's own work (for work that releases
+    the GIL, as :func:`thread_map`); returns a callable that waits for and returns its result.
+    With one core, or from one of the pool's own threads, ``fn`` runs when that is called.
+
+    Examples
+    --------
+    >>> from partscale._workers import thread_soon
+    >>> later = thread_soon(lambda: sum(range(10)))
+    >>> later()
+    45
+    """
+    pool = _pool()
+    return fn if pool is None else pool.submit(fn).result
+
+
+def _pool() -> ThreadPoolExecutor | None:
+    """The process's thread pool (made on first use), or None where work runs in the caller's
+    thread: one core, or the caller is one of the pool's threads.
+    """
     import threading
 
     global _POOL
-    items = list(items)
-    nested = threading.current_thread().name.startswith(_PREFIX)
-    if len(items) < 2 or (os.cpu_count() or 1) < 2 or nested:
-        return [fn(x) for x in items]
+    if (os.cpu_count() or 1) < 2 or threading.current_thread().name.startswith(_PREFIX):
+        return None
     if _POOL is None:
         launch_numba_threads()
         _POOL = ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix=_PREFIX)
-    return list(_POOL.map(fn, items))
+    return _POOL
 
 
 def launch_numba_threads() -> None:

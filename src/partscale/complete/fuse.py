@@ -25,7 +25,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from .._workers import thread_map
+from .._workers import thread_map, thread_soon
 from ..csdf import BAND_VOXELS
 from . import tidy as tidy_mod
 
@@ -134,6 +134,22 @@ def _map(fn: Callable, items, voxels: int) -> list:
     return [fn(x) for x in items]
 
 
+def _soon(fn: Callable[[], np.ndarray], voxels: int) -> Callable[[], np.ndarray]:
+    """``fn()`` started on the pool's other thread where the grid has at most ``THREAD_VOXELS``
+    ``voxels`` (:func:`partscale._workers.thread_soon`), else run when asked for (above it,
+    its arrays of the whole grid would be held beside the caller's); returns the callable that
+    gives its result.
+    """
+    return thread_soon(fn) if voxels <= THREAD_VOXELS else fn
+
+
+def nearest_voxels(occ: np.ndarray) -> np.ndarray:
+    """(3, X, Y, Z) int32: for every voxel, the indices of the nearest voxel of ``occ``
+    (X, Y, Z) bool (``ndimage.distance_transform_edt``'s feature transform).
+    """
+    return ndimage.distance_transform_edt(~occ, return_distances=False, return_indices=True)
+
+
 def _edt(mask: np.ndarray) -> np.ndarray:
     """(X, Y, Z) float32: each voxel's distance in voxels to the nearest False voxel of
     ``mask`` (X, Y, Z) bool, 0 on them.
@@ -195,6 +211,18 @@ class GridFrame:
         """(M, 3) float32 grid coordinates of the voxels at flat indices ``flat`` (M,)."""
         ijk = np.stack(np.unravel_index(flat, self.shape), axis=1)
         return (self.origin + ijk * self.h).astype(np.float32)
+
+    def all_centres(self) -> np.ndarray:
+        """(X * Y * Z, 3) float32 grid coordinates of every voxel in flat order: the values
+        :meth:`centres` gives (each axis's coordinates computed once, then broadcast).
+        """
+        out = np.empty((*self.shape, 3), np.float32)
+        for a, n in enumerate(self.shape):
+            along = (self.origin[a] + np.arange(n) * self.h).astype(np.float32)
+            view = [None] * len(self.shape)
+            view[a] = slice(None)
+            out[..., a] = along[tuple(view)]
+        return out.reshape(-1, 3)
 
     def to_world(self, centres: np.ndarray) -> np.ndarray:
         """(M, 3) float32 world coordinates of grid points ``centres`` (M, 3) float32."""
@@ -285,11 +313,14 @@ def fuse(
     """
     grid = GridFrame(grid_to_world, tuple(int(s) for s in shape), origin, h)
     sp = surface_on_grid(grid, points, colors, kind, normals)
+    # the carving's far voxels need each voxel's nearest voxel holding a point: started now, on
+    # the other core beside the candidates (ndimage lets go of the GIL)
+    feature = _soon(lambda: nearest_voxels(sp.occ), sp.occ.size)
     cand = candidates(grid, sp, free_world, closure, fill_between)
     if floor_cut is not None:
         reach = floor_reach(grid, sp, cand.within_closure, free_world, height_world, floor_cut)
         cand = Candidates(cand.within | reach, cand.within_closure | reach, cand.free_all)
-    solid = carve(grid, sp, cand.within, free_world, sym_free, height_world)
+    solid = carve(grid, sp, cand.within, free_world, sym_free, height_world, feature)
     if cand.free_all is not None:
         solid = close_between(solid, cand)
     solid = close_holes(solid, grid, sp, free_world if sure_free is None else sure_free)
@@ -340,8 +371,7 @@ def candidates(
     within_closure = within.copy()
     free_all = None
     if fill_between:
-        centres_all = (origin + np.indices(shape).reshape(3, -1).T * h).astype(np.float32)
-        free_all = free_world(grid.to_world(centres_all)).reshape(shape)
+        free_all = free_world(grid.to_world(grid.all_centres())).reshape(shape)
         between, sure, unsure = _fills(sp.points, sp.normals, sp.idx, origin, h, free_all)
         within |= between | sure | unsure
         within_closure |= sure
@@ -451,10 +481,12 @@ def carve(
     free_world: Callable[[np.ndarray], np.ndarray],
     sym_free: list[Callable[[np.ndarray], np.ndarray]],
     height_world: Callable[[np.ndarray], np.ndarray],
+    feature: Callable[[], np.ndarray] | None = None,
 ) -> np.ndarray:
     """(X, Y, Z) bool: the voxels of ``within`` that no camera saw through (directly or in a
     symmetric view), above the floor and behind their nearest surface point; the voxels holding
-    surface points always.
+    surface points always. ``feature``: gives :func:`nearest_voxels` of ``sp.occ`` (made here
+    where None).
     """
     h = grid.h
     near = np.flatnonzero(within.ravel())
@@ -463,7 +495,7 @@ def carve(
     keep = ~free_world(world) & (height_world(world) >= -0.5 * h)
     # the closure lies behind the surface: a voxel in front of its nearest surface point is
     # space the scan says nothing about (beyond the sensor's range, a hole), not the object
-    nn0 = nearest_surface_point(centres, near, sp, h)
+    nn0 = nearest_surface_point(centres, near, sp, h, feature)
     keep &= np.einsum("ni,ni->n", centres - sp.points[nn0], sp.normals[nn0]) <= BEHIND_SLACK * h
     if sym_free:
         d_obs = _edt(~sp.occ_obs).ravel()[near]
@@ -483,11 +515,16 @@ def carve(
 
 
 def nearest_surface_point(
-    centres: np.ndarray, flat: np.ndarray, sp: SurfacePoints, h: float
+    centres: np.ndarray,
+    flat: np.ndarray,
+    sp: SurfacePoints,
+    h: float,
+    feature: Callable[[], np.ndarray] | None = None,
 ) -> np.ndarray:
     """(M,) int64: for voxel ``centres`` (M, 3) (grid coordinates; flat indices ``flat`` (M,)),
     the index of their nearest surface point of ``sp``: exact within ``NEAREST_EXACT_VOXELS``,
-    beyond it a point in the nearest voxel holding one.
+    beyond it a point in the nearest voxel holding one (``feature``: gives
+    :func:`nearest_voxels` of ``sp.occ``, made here where None).
 
     A k-d tree's query costs about the surface area within the distance it must search: the
     voxels deep inside a filled cabinet, 30 cm from flat walls of many points, took 17 s of
@@ -502,10 +539,8 @@ def nearest_surface_point(
     if far.any():
         rep = np.zeros(sp.occ.shape, np.int64)
         rep[sp.idx[:, 0], sp.idx[:, 1], sp.idx[:, 2]] = np.arange(len(sp.points))
-        feature = ndimage.distance_transform_edt(
-            ~sp.occ, return_distances=False, return_indices=True
-        )
-        v = feature.reshape(3, -1)[:, flat[far]]
+        nearest = nearest_voxels(sp.occ) if feature is None else feature()
+        v = nearest.reshape(3, -1)[:, flat[far]]
         nn[far] = rep[v[0], v[1], v[2]]
     return nn
 

@@ -336,3 +336,23 @@ def test_a_plinth_or_a_frame_is_no_turning_base(name, view):
     mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * 0.7)
     sy = api.find_symmetries(api.observe(virtual_scan(mesh, **view)), 128, True)
     assert sy.rot is None
+
+
+def test_the_arms_neighbourhood_sums_are_numpys_sums_over_both_ways_of_each_pair():
+    # the kernel adds each pair to both its points in the order np.bincount adds over (i, j),
+    # then (j, i), then each point itself: the same sums, bit for bit
+    from scipy.spatial import cKDTree
+
+    from partscale.complete.symmetry import _pair_sums
+
+    X = _star_points(0.05)[:, [0, 2]]
+    pairs = cKDTree(X).query_pairs(0.04, output_type="ndarray")
+    i = np.concatenate([pairs[:, 0], pairs[:, 1], np.arange(len(X))])
+    j = np.concatenate([pairs[:, 1], pairs[:, 0], np.arange(len(X))])
+    Y = X[j] - X[i]
+    want = [Y[:, 0], Y[:, 1], Y[:, 0] ** 2, Y[:, 0] * Y[:, 1], Y[:, 1] ** 2]
+    n, sums = _pair_sums(X, pairs)
+    assert len(pairs) > 10 * len(X)  # every point has neighbours
+    np.testing.assert_array_equal(n, np.bincount(i, minlength=len(X)))
+    for q, w in enumerate(want):
+        np.testing.assert_array_equal(sums[q], np.bincount(i, w, len(X)))

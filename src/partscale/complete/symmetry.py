@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
@@ -652,15 +653,11 @@ class _Arms:
         X = base[:, [0, 2]]
         pairs = cKDTree(X).query_pairs(ARM_REACH * cell, output_type="ndarray")
         # each point's neighbourhood covariance in plan, summed over the pairs (and itself)
-        i = np.concatenate([pairs[:, 0], pairs[:, 1], np.arange(len(X))])
-        j = np.concatenate([pairs[:, 1], pairs[:, 0], np.arange(len(X))])
-        n = np.bincount(i, minlength=len(X)).astype(np.float64)
-        Y = X[j] - X[i]  # offsets keep the sums well conditioned
-        mx = np.bincount(i, Y[:, 0], len(X)) / n
-        mz = np.bincount(i, Y[:, 1], len(X)) / n
-        a = np.bincount(i, Y[:, 0] ** 2, len(X)) / n - mx * mx
-        b = np.bincount(i, Y[:, 0] * Y[:, 1], len(X)) / n - mx * mz
-        c = np.bincount(i, Y[:, 1] ** 2, len(X)) / n - mz * mz
+        n, sums = _pair_sums(X, pairs)
+        mx, mz = sums[0] / n, sums[1] / n
+        a = sums[2] / n - mx * mx
+        b = sums[3] / n - mx * mz
+        c = sums[4] / n - mz * mz
         half = np.sqrt(np.maximum(((a - c) / 2) ** 2 + b * b, 0.0))
         major, minor = (a + c) / 2 + half, (a + c) / 2 - half
         on = (n >= 6) & (1.0 - minor / np.maximum(major, 1e-300) >= ARM_LINEARITY)
@@ -737,6 +734,36 @@ class _Arms:
             if off.max() <= ARM_FOLD_DEG:
                 fits.append(k)
         return fits[0] if len(fits) == 1 else None
+
+
+@numba.njit(cache=True)
+def _pair_sums(X, pairs):
+    """Each point's count of neighbours (itself included) and (5, M) sums over them of the
+    offsets (dx, dz), dx^2, dx dz and dz^2 (offsets keep the sums well conditioned), for
+    points X (M, 2) float64 and neighbour ``pairs`` (P, 2) int (i < j, each once).
+
+    A pair adds to both its points: in the order ``np.bincount`` would add over every pair
+    (i, j), then every (j, i), then each point with itself, so the sums are the same bit for
+    bit; one pass over the pairs instead of a gathered (2P, 2) array of offsets (1.1 million
+    pairs of a cabinet's walls seen from above: 0.2 s).
+    """
+    m = X.shape[0]
+    n = np.ones(m)
+    out = np.zeros((5, m))
+    for way in range(2):
+        for k in range(pairs.shape[0]):
+            i, j = pairs[k, way], pairs[k, 1 - way]
+            dx, dz = X[j, 0] - X[i, 0], X[j, 1] - X[i, 1]
+            out[0, i] += dx
+            out[1, i] += dz
+            out[2, i] += dx * dx
+            out[3, i] += dx * dz
+            out[4, i] += dz * dz
+            n[i] += 1.0
+    for i in range(m):  # each point is its own neighbour, at offset zero
+        for q in range(5):
+            out[q, i] += 0.0
+    return n, out
 
 
 def _arm_votes(axes: np.ndarray, X: np.ndarray, d: np.ndarray, cell: float) -> np.ndarray:

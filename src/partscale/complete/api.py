@@ -912,12 +912,13 @@ class Grid:
 
 @dataclass(frozen=True, eq=False)
 class Solid:
-    """The completed field: ``sdf`` (X, Y, Z) float32, ``rgb`` (X, Y, Z, 3) uint8, ``prov``
-    (X, Y, Z) uint8 and what the steps after the fusion added or dropped.
+    """The completed field: ``sdf`` (X, Y, Z) float32, ``colours`` a callable giving rgb
+    (X, Y, Z, 3) uint8 (made beside the steps after the fusion: :func:`fuse_mod.fuse`),
+    ``prov`` (X, Y, Z) uint8 and what the steps after the fusion added or dropped.
     """
 
     sdf: np.ndarray
-    rgb: np.ndarray
+    colours: Callable[[], np.ndarray]
     prov: np.ndarray
     column: column_mod.Column | None = None
     n_column: int = 0
@@ -962,7 +963,7 @@ def _complete(
     report(0.95, "metadata")
     meta = completion_meta(dense, sy, surface, grid, solid, opts, symmetry=symmetry, extras=extras)
     g = grid.frame
-    return make(solid.sdf, solid.rgb, None, g.origin, g.h, meta)
+    return make(solid.sdf, solid.colours(), None, g.origin, g.h, meta)
 
 
 def find_symmetries(ob: Observation, res: int, symmetry: bool) -> Symmetries:
@@ -1256,7 +1257,7 @@ def fuse_solid(
     def height_world(pw):
         return _apply(U, pw)[:, 1]
 
-    sdf, rgb, prov = fuse_mod.fuse(
+    sdf, colours, prov = fuse_mod.fuse(
         g.grid_to_world,
         g.shape,
         g.origin,
@@ -1275,7 +1276,7 @@ def fuse_solid(
     )
     if not (sdf < 0).any():
         raise InputError(f"{opts.source}: expected a solid after completion, got none (all carved)")
-    return Solid(sdf, rgb, prov)
+    return Solid(sdf, colours, prov)
 
 
 def guess_parts(
@@ -1330,7 +1331,7 @@ def guess_parts(
     sdf, n_filled = tidy_mod.fill_contacts(sdf, h)
     # beyond the band, distances to what the steps since the fusion added
     sdf = fuse_mod.bound_far(sdf, h)
-    return Solid(sdf, solid.rgb, prov, col, n_column, n_specks, tuple(struts), n_filled)
+    return Solid(sdf, solid.colours, prov, col, n_column, n_specks, tuple(struts), n_filled)
 
 
 def _mirror_in_grid(syms: list[sym_mod.Symmetry], grid_to_up: np.ndarray):

@@ -221,9 +221,9 @@ class GridFrame:
         out = np.empty((*self.shape, 3), np.float32)
         for a, n in enumerate(self.shape):
             along = (self.origin[a] + np.arange(n) * self.h).astype(np.float32)
-            view = [None] * len(self.shape)
-            view[a] = slice(None)
-            out[..., a] = along[tuple(view)]
+            shape = [1] * len(self.shape)
+            shape[a] = n
+            out[..., a] = along.reshape(shape)
         return out.reshape(-1, 3)
 
     def to_world(self, centres: np.ndarray) -> np.ndarray:
@@ -287,7 +287,7 @@ def fuse(
     fill_between: bool = True,
     floor_cut: float | None = None,
     sure_free: Callable[[np.ndarray], np.ndarray] | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, Callable[[], np.ndarray], np.ndarray]:
     """Solid, SDF, colour and provenance on the grid.
 
     The steps: the points on the grid (:func:`surface_on_grid`), the voxels that may be solid
@@ -320,8 +320,10 @@ def fuse(
 
     Returns
     -------
-    sdf (X, Y, Z) float32, rgb (X, Y, Z, 3) uint8, provenance (X, Y, Z) uint8 (0 away from the
-    surface, else OBSERVED / MIRRORED / GUESSED).
+    sdf (X, Y, Z) float32; the colours: a callable giving rgb (X, Y, Z, 3) uint8, filled on the
+    pool's other thread while the caller goes on (:meth:`NearColours.filled`: the steps after
+    the fusion read no colours); provenance (X, Y, Z) uint8 (0 away from the surface, else
+    OBSERVED / MIRRORED / GUESSED).
     """
     grid = GridFrame(grid_to_world, tuple(int(s) for s in shape), origin, h)
     sp = surface_on_grid(grid, points, colors, kind, normals)
@@ -343,8 +345,8 @@ def fuse(
         solid = floor_base(grid, solid, free_world, height_world, floor_cut)
     solid = drop_pieces(_fill_holes(solid), sp.occ_obs)
     sdf = distances(solid, h)
-    rgb, prov = surface_attributes(grid, sp, solid, sdf)
-    return sdf, rgb, prov
+    near, prov = surface_attributes(grid, sp, solid, sdf)
+    return sdf, _soon(near.filled, solid.size), prov
 
 
 def surface_on_grid(
@@ -619,12 +621,31 @@ def distances(solid: np.ndarray, h: float) -> np.ndarray:
     return np.where(solid, -e_in, e_out).astype(np.float32) * h
 
 
+@dataclass(frozen=True, eq=False)
+class NearColours:
+    """The colours near the surface: ``rgb`` (X, Y, Z, 3) uint8 the nearest surface point's at
+    the voxels of the band ``band`` (M,) int64 flat indices within ``SNAP_VOXELS`` of one,
+    ``known`` (X, Y, Z) bool those voxels.
+    """
+
+    rgb: np.ndarray
+    known: np.ndarray
+    band: np.ndarray
+
+    def filled(self) -> np.ndarray:
+        """(X, Y, Z, 3) uint8: every voxel's colour, diffused from the known ones (in place of
+        ``rgb``; :func:`_diffuse`).
+        """
+        return _diffuse(self.rgb, self.known, self.band)
+
+
 def surface_attributes(
     grid: GridFrame, sp: SurfacePoints, solid: np.ndarray, sdf: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[NearColours, np.ndarray]:
     """Near the surface, ``sdf`` (in place) made the exact distance to the nearest surface point;
-    returns rgb (X, Y, Z, 3) uint8 (the nearest point's colour, diffused beyond) and provenance
-    (X, Y, Z) uint8 (OBSERVED / MIRRORED / GUESSED near the surface, else 0).
+    returns the colours near the surface (the nearest point's; :meth:`NearColours.filled`
+    diffuses them beyond) and provenance (X, Y, Z) uint8 (OBSERVED / MIRRORED / GUESSED near
+    the surface, else 0).
     """
     shape, origin, h = grid.shape, grid.origin, grid.h
     points, colors, kind = sp.points, sp.colors, sp.kind
@@ -687,7 +708,7 @@ def surface_attributes(
         hit = np.isfinite(d_seen)
         prov.ravel()[band[ks][hit]] = OBSERVED
         rgb.reshape(-1, 3)[band[ks][hit]] = colors[seen][nn_seen[hit]]
-    return _diffuse(rgb, known, band), prov
+    return NearColours(rgb, known, band), prov
 
 
 def _box(m: np.ndarray, margin: int) -> tuple[slice, ...]:

@@ -260,3 +260,15 @@ def test_pieces_touching_along_an_edge_get_no_strut():
     assert _pieces(sdf) == 21
     out, _, struts = _struts(sdf, prov, np.zeros(3), _nothing_free)
     assert struts == [] and (out == sdf).all()
+
+
+@pytest.mark.parametrize("share", [0.5, 0.99, 0.9995])
+def test_the_struts_distances_are_scipys_exact_distances_bit_for_bit(share):
+    # the struts' search compares sums of two distances with its radius: they must be the
+    # exact distances scipy gives, not close ones
+    from partscale.complete.strut import _distances
+
+    mask = np.random.default_rng(5).random((37, 44, 29)) < share
+    got = _distances(mask)
+    assert got.dtype == np.float64
+    np.testing.assert_array_equal(got, ndimage.distance_transform_edt(mask))

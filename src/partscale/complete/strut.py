@@ -209,7 +209,7 @@ def _shortest(sdf, lab, p, joined, box, step: _Step, radius: int):
     # a path no longer than the radius passes only voxels whose distances to the piece and to
     # the object add up to the radius at most: only those are passable, and of them the
     # outside ones are asked (the shell around a large piece away from the object is not)
-    apart = ndimage.distance_transform_edt(~rim) + ndimage.distance_transform_edt(~target)
+    apart = _distances(~rim) + _distances(~target)
     near = apart <= radius + 1e-6
     ask = ~solid & near
     idx = np.argwhere(ask)
@@ -226,6 +226,19 @@ def _shortest(sdf, lab, p, joined, box, step: _Step, radius: int):
     return float(at.flat[k]), path
 
 
+def _distances(mask: np.ndarray) -> np.ndarray:
+    """(X, Y, Z) float64: each voxel's distance in voxels to the nearest False voxel of
+    ``mask`` (X, Y, Z) bool, as ``ndimage.distance_transform_edt`` gives it bit for bit (the
+    square root of the exact squared distance, an integer), from ``edt``'s squared distances
+    on two threads (3x faster on a strut's box; the mask handed on as uint8, which edt runs
+    faster than bool).
+    """
+    import edt
+
+    sq = edt.edtsq(np.ascontiguousarray(mask).view(np.uint8), parallel=2)
+    return np.sqrt(sq.astype(np.float64))
+
+
 def _draw(sdf, prov, path, step: _Step) -> int:
     """Unites the strut along ``path`` (K, 3) voxel indices into ``sdf`` and ``prov`` in place
     (carved by the sure free space); the voxels it made solid.
@@ -238,7 +251,7 @@ def _draw(sdf, prov, path, step: _Step) -> int:
     sl = tuple(slice(int(a), int(b)) for a, b in zip(i0, i1, strict=True))
     on = np.zeros(tuple(i1 - i0), bool)
     on[tuple((path - i0).T)] = True
-    d = (ndimage.distance_transform_edt(~on) * h - r).astype(np.float32)
+    d = (_distances(~on) * h - r).astype(np.float32)
     old = sdf[sl].copy()
     take = d < old
     ask = take & (old >= 0)

@@ -217,7 +217,12 @@ def _shortest(sdf, lab, p, joined, box, step: _Step, radius: int):
     free[ask] = step.sure_free(step.origin + (idx + i0) * step.h)
     cost = np.where(free, np.inf, 1.0)
     mcp = MCP_Geometric(cost, fully_connected=True)
-    costs, _ = mcp.find_costs(np.argwhere(rim))
+    # the rim voxels a path can leave from: passable, beside a passable voxel that is no start
+    # (the search costs a Python step per start, and a large piece's rim is mostly far)
+    leave = rim & ~free & ndimage.binary_dilation(~free & ~rim, tidy_mod.CORNERS)
+    if not leave.any():
+        return None
+    costs, _ = mcp.find_costs(np.argwhere(leave))
     at = np.where(target & np.isfinite(costs), costs, np.inf)
     k = int(np.argmin(at))
     if not np.isfinite(at.flat[k]):

@@ -28,7 +28,7 @@ from . import metric as metric_mod
 from . import strut as strut_mod
 from . import symmetry as sym_mod
 from . import tidy as tidy_mod
-from .carve import Carver, FreeGrid
+from .carve import Carver, FreeGrid, affine_rows
 from .floor import base_plane, clusters, find_floor, floor_scraps, in_plane_axes
 from .scan import (
     MAX_PIXEL,
@@ -365,9 +365,7 @@ def _upright(up: np.ndarray, forward: np.ndarray, floor_offset: float, centre: n
 
 
 def _apply(T: np.ndarray, P: np.ndarray) -> np.ndarray:
-    P = np.asarray(P)
-    dt = np.float32 if P.dtype == np.float32 else np.float64
-    return P @ T[:3, :3].T.astype(dt) + T[:3, 3].astype(dt)
+    return affine_rows(P, T[:3, :3], T[:3, 3])
 
 
 def _sym4(s: sym_mod.Symmetry) -> np.ndarray:

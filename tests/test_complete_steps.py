@@ -171,6 +171,27 @@ def test_edt_is_the_exact_distance_to_the_nearest_false_voxel():
         np.testing.assert_allclose(d, ndimage.distance_transform_edt(mask), atol=1e-5)
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_points_mapped_in_blocks_are_the_whole_product_bit_for_bit(dtype):
+    # across several blocks and a short last one: each row's product is the one a single
+    # product of all rows gives, so mapping in blocks changes no completion
+    from partscale.complete.carve import ROWS, affine_rows
+
+    rng = np.random.default_rng(7)
+    P = rng.normal(size=(2 * ROWS + 123, 3)).astype(dtype)
+    a = 0.4
+    A = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]) * 1.7
+    b = np.array([0.3, -1.2, 2.5])
+    got = affine_rows(P, A, b)
+    assert got.dtype == dtype and got.shape == P.shape
+    np.testing.assert_array_equal(got, P @ A.T.astype(dtype) + b.astype(dtype))
+
+
+def test_grid_centres_of_every_voxel_are_those_of_their_flat_indices():
+    grid = fuse.GridFrame(np.eye(4), (5, 7, 4), np.array([-0.3, 0.1, 2.0]), 0.013)
+    np.testing.assert_array_equal(grid.all_centres(), grid.centres(np.arange(5 * 7 * 4)))
+
+
 def test_distances_of_a_voxel_box_are_its_voxel_distances():
     solid = np.zeros((20, 20, 20), bool)
     solid[5:15, 5:15, 5:15] = True

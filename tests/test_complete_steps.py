@@ -622,3 +622,37 @@ def test_a_cabinet_seen_from_above_its_front_has_no_holes_where_the_sensor_had_n
     mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * 0.7)  # Kenney units
     c = complete(virtual_scan(mesh, azimuths=(200.0,), elevation=30.0), res=128, upright=True)
     assert _tunnels(c) <= 10  # 3 as made today
+
+
+def test_a_completions_memory_grows_per_voxel_within_what_its_check_counts():
+    # the check before any work refuses what would not fit: the working set (numpy's arrays on
+    # every thread, traced) grows with the grid by no more than it counts a voxel, the colours
+    # filled on a thread beside the guessed parts included (the scan's own arrays come on top)
+    import dataclasses
+    import math
+    import tracemalloc
+
+    from conftest import data_path
+
+    from partscale.complete import complete
+
+    # a closed cabinet seen from above its front: filled, its struts searched (Kenney's, at
+    # its real size)
+    mesh = ingest.load_mesh(data_path("kenney/kitchenCabinetDrawer.glb"))
+    mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * 0.7)
+    frames = virtual_scan(mesh, azimuths=(345.0,), elevation=45.0)
+    complete(frames, res=32, symmetry=False)  # the kernels compiled, the pool started
+    peaks, sizes = [], []
+    for res in (100, 170):
+        tracemalloc.start()
+        try:
+            before = tracemalloc.get_traced_memory()[0]
+            c = complete(frames, res=res, upright=True)
+            peaks.append(tracemalloc.get_traced_memory()[1] - before)
+        finally:
+            tracemalloc.stop()
+        sizes.append(math.prod(c.shape))
+    assert sizes[1] <= fuse.THREAD_VOXELS  # the steps ran on threads at once
+    assert sizes[1] >= 3 * sizes[0]
+    per_voxel = (peaks[1] - peaks[0]) / (sizes[1] - sizes[0])
+    assert per_voxel <= fuse.peak_bytes(sizes[1]) / sizes[1], per_voxel

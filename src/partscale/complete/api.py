@@ -1178,7 +1178,13 @@ def plan_grid(surface: Surface, sy: Symmetries, opts: Settings) -> Grid:
     from .._memory import check_memory
 
     shape_t = tuple(int(s) for s in shape)
-    check_memory(shape_t, 40, what=f"{opts.source} at res {opts.res}", params=("res",))
+    n = math.prod(shape_t)
+    check_memory(
+        shape_t,
+        fuse_mod.peak_bytes(n) / n,
+        what=f"{opts.source} at res {opts.res}",
+        params=("res",),
+    )
     return Grid(fuse_mod.GridFrame(grid_to_world, shape_t, origin, h), Sg, SNg, lo, hi)
 
 

@@ -119,6 +119,14 @@ THREAD_VOXELS = 2**24
 """Voxels up to which independent steps over the whole grid run on threads at once (each
 holds arrays of the grid; on a finer grid one after another, so that the memory a completion
 needs stays what its check counted)."""
+PEAK_BYTES_PER_VOXEL = 64
+"""The completion's peak working memory per voxel of its grid where its steps run one after
+another (above ``THREAD_VOXELS``): Kenney's kitchen drawer cabinet at --res 256, 18.7 million
+voxels, peaked at 1042 MB (56 bytes a voxel, the scan's points and tables included)."""
+PEAK_BYTES_PER_VOXEL_THREADED = 96
+"""The same where independent steps run on threads at once (at most ``THREAD_VOXELS``): 89
+bytes a voxel more between --res 160 and 200 of the same cabinet (the colours filled beside
+the guessed parts)."""
 HOLE_NEAR = 2
 """Voxels around a hole within which the surface points tell a sheet from a slit."""
 HOLE_SEEN = 0.1
@@ -133,6 +141,21 @@ def _map(fn: Callable, items, voxels: int) -> list:
     if voxels <= THREAD_VOXELS:
         return thread_map(fn, items)
     return [fn(x) for x in items]
+
+
+def peak_bytes(voxels: int) -> int:
+    """Bytes the completion's working set peaks at on a grid of ``voxels`` voxels
+    (``PEAK_BYTES_PER_VOXEL``, or ``PEAK_BYTES_PER_VOXEL_THREADED`` where its steps run on
+    threads at once), for the memory check before any work.
+
+    Examples
+    --------
+    >>> from partscale.complete.fuse import peak_bytes
+    >>> peak_bytes(100**3) // 10**6, peak_bytes(300**3) // 10**9
+    (96, 1)
+    """
+    per = PEAK_BYTES_PER_VOXEL_THREADED if voxels <= THREAD_VOXELS else PEAK_BYTES_PER_VOXEL
+    return int(per * voxels)
 
 
 def _soon(fn: Callable[[], np.ndarray], voxels: int) -> Callable[[], np.ndarray]:

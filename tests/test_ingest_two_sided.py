@@ -132,24 +132,25 @@ def _coloured(mesh: trimesh.Trimesh, material: np.ndarray, colors) -> ingest.Col
     return dataclasses.replace(base, face_material=material.astype(np.int32), materials=mats)
 
 
-def test_open_two_sided_plane_is_a_board_coloured_on_each_side():
+@pytest.mark.parametrize("copies", [1, 2])
+def test_open_two_sided_plane_is_a_board_coloured_on_each_side(copies):
     """A drawer front modelled as one square stored once per winding (Kenney's bathroom
-    cabinet): the copies cancel in w, so it read as a boundary with outside on both sides and
-    was lost. It imports as a thin board across the cabinet's opening, each side the colour of
-    the copy facing it (red in front, blue behind)."""
+    cabinet), or twice: the copies cancel in w, so it read as a boundary with outside on both
+    sides and was lost. It imports as a thin board across the cabinet's opening, each side the
+    colour of the copies facing it (red in front, blue behind)."""
     z = 0.45  # in the opening, 5 cm behind the cabinet's front
     plate = trimesh.Trimesh(
         [[0.1, 0.1, z], [0.9, 0.1, z], [0.9, 0.7, z], [0.1, 0.7, z]], [[0, 1, 2], [0, 2, 3]]
     )
-    front = plate.faces  # normal +z
+    n = len(CABINET.vertices)
+    front = plate.faces + n  # normal +z
+    back = np.roll(front[:, ::-1], 1, axis=1)  # the other winding, from another corner
     mesh = trimesh.Trimesh(
         np.concatenate([CABINET.vertices, plate.vertices]),
-        np.concatenate(
-            [CABINET.faces, front + len(CABINET.vertices), front[:, ::-1] + len(CABINET.vertices)]
-        ),
+        np.concatenate([CABINET.faces, *[front] * copies, *[back] * copies]),
         process=False,
     )
-    material = np.r_[np.zeros(len(CABINET.faces)), np.ones(2), np.full(2, 2)]
+    material = np.r_[np.zeros(len(CABINET.faces)), np.ones(2 * copies), np.full(2 * copies, 2)]
     c = ingest.from_mesh(
         _coloured(mesh, material, [(200, 200, 200), (220, 30, 30), (30, 30, 220)]), res=64
     )

@@ -12,9 +12,10 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
    (outside on one side, inside on the other): a *boundary* of the solid, kept exactly;
    ``lo >= 3/4``: *buried* inside another piece, ignored; anything else (``lo`` fractional or
    below -1/4): an *open sheet* (cloth, a single-sided board). A boundary whose copy with the
-   other winding lies on it reads outside behind it too (``w <= 1/2``): an open sheet. Triangles longer than ``SUBDIVIDE`` voxels are
-   also probed towards their corners; where the probes disagree (a board partly buried in
-   another) they are split into pieces of ``SUBDIVIDE_MIXED`` voxels classified one by one.
+   other winding lies on it reads outside behind it too (``w <= 1/2``): an open sheet.
+   Triangles longer than ``SUBDIVIDE`` voxels are also probed towards their corners; where
+   the probes disagree (a board partly buried in another) they are split into pieces of
+   ``SUBDIVIDE_MIXED`` voxels classified one by one.
    Above ``PROBE_RES`` voxels the classification keeps a ``PROBE_RES`` grid's scale: a
    piece's class is the same at every finer resolution.
 2. Thin pieces. Open sheets, and closed pieces thinner than the grid can hold (shelves, back
@@ -503,15 +504,13 @@ def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> tuple[np.ndarra
             break
         choice[bad] = -choice[bad] if step == 0 else 0
     keep = np.flatnonzero(_two_sided.kept(pairs, choice))
-    g = pairs.pair[keep]
-    both = (g >= 0) & (choice[np.maximum(g, 0)] == 0)
-    # each copy's twin: the first copy of the other winding
-    twin = np.where(
-        pairs.fwd[np.maximum(g, 0)] == keep,
-        pairs.rev[np.maximum(g, 0)],
-        pairs.fwd[np.maximum(g, 0)],
-    )
-    return keep, np.where(both, twin, -1)
+    g = np.maximum(pairs.pair[keep], 0)
+    both = (pairs.pair[keep] >= 0) & (choice[g] == 0)
+    # each copy's twin: the first copy of the other winding (a copy winds as its pair's
+    # fwd copy where its corners are theirs turned round)
+    a, b = pairs.W[keep], pairs.W[pairs.fwd[g]]
+    same = (a == b).all(1) | (a == np.roll(b, 1, 1)).all(1) | (a == np.roll(b, 2, 1)).all(1)
+    return keep, np.where(both, np.where(same, pairs.rev[g], pairs.fwd[g]), -1)
 
 
 def _classify(wn: _Winding, name: str, h: float, res: int) -> _Pieces:

@@ -3,6 +3,8 @@ bodies they close up are solid, as a viewer shows them; pairs inside a solid sta
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import trimesh
@@ -118,3 +120,87 @@ def test_real_two_sided_bodies_span_the_mesh(rel):
     err = np.abs(c.surface_bounds() - np.stack([V.min(axis=0), V.max(axis=0)])) / c.voxel_size
     assert err.max() <= 1.0, err
     assert c.meta["history"][0]["two_sided_copies_dropped"] > 0
+
+
+def _coloured(mesh: trimesh.Trimesh, material: np.ndarray, colors) -> ingest.ColoredMesh:
+    """``mesh`` with face ``f`` of flat sRGB colour ``colors[material[f]]``."""
+    from partscale.color import srgb_to_linear
+    from partscale.ingest.mesh import Material
+
+    base = ingest.from_trimesh(mesh)
+    mats = tuple(Material(srgb_to_linear(np.asarray(c, np.float32) / 255.0)) for c in colors)
+    return dataclasses.replace(base, face_material=material.astype(np.int32), materials=mats)
+
+
+def test_open_two_sided_plane_is_a_board_coloured_on_each_side():
+    """A drawer front modelled as one square stored once per winding (Kenney's bathroom
+    cabinet): the copies cancel in w, so it read as a boundary with outside on both sides and
+    was lost. It imports as a thin board across the cabinet's opening, each side the colour of
+    the copy facing it (red in front, blue behind)."""
+    z = 0.45  # in the opening, 5 cm behind the cabinet's front
+    plate = trimesh.Trimesh(
+        [[0.1, 0.1, z], [0.9, 0.1, z], [0.9, 0.7, z], [0.1, 0.7, z]], [[0, 1, 2], [0, 2, 3]]
+    )
+    front = plate.faces  # normal +z
+    mesh = trimesh.Trimesh(
+        np.concatenate([CABINET.vertices, plate.vertices]),
+        np.concatenate(
+            [CABINET.faces, front + len(CABINET.vertices), front[:, ::-1] + len(CABINET.vertices)]
+        ),
+        process=False,
+    )
+    material = np.r_[np.zeros(len(CABINET.faces)), np.ones(2), np.full(2, 2)]
+    c = ingest.from_mesh(
+        _coloured(mesh, material, [(200, 200, 200), (220, 30, 30), (30, 30, 220)]), res=64
+    )
+    h = c.voxel_size
+    xy = np.array([[x, y] for x in (0.3, 0.5, 0.7) for y in (0.2, 0.4, 0.6)])
+
+    def at(dz):
+        p = np.c_[xy, np.full(len(xy), z + dz)]
+        return tuple(np.round(c.world_to_index(p)).astype(int).T)
+
+    assert (c.sdf[at(0.0)] < 0).all(), c.sdf[at(0.0)] / h  # the board is solid
+    assert (c.sdf[at(2 * h)] > 0).all() and (c.sdf[at(-2 * h)] > 0).all()  # and thin
+    assert (c.rgb[at(h)] == (220, 30, 30)).all(), c.rgb[at(h)]
+    assert (c.rgb[at(-h)] == (30, 30, 220)).all(), c.rgb[at(-h)]
+
+
+def test_a_plane_stored_twice_triangulated_differently_is_a_board():
+    """A square stored once per winding, split along one diagonal one way and along the other
+    the other way (no triangle has an opposite copy, so it is no two-sided pair): the copies
+    cancel in w all the same, and it imports as a thin board, not lost."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    F = np.array([[0, 1, 2], [0, 2, 3], [1, 0, 3], [1, 3, 2]])  # up; down, the other diagonal
+    mesh = trimesh.Trimesh(V, F, process=False)
+    c = ingest.from_mesh(ingest.from_trimesh(mesh), res=32)
+    h = c.voxel_size
+    xy = np.array([[x, y] for x in (0.25, 0.5, 0.75) for y in (0.25, 0.5, 0.75)])
+    idx = tuple(np.round(c.world_to_index(np.c_[xy, np.zeros(len(xy))])).astype(int).T)
+    assert (c.sdf[idx] < 0).all(), c.sdf[idx] / h
+
+
+@pytest.mark.parametrize(
+    "rel",
+    [
+        "kenney/bathroomCabinetDrawer.glb",  # drawer fronts: two-sided planes (18 % was off)
+        "sweethome3d/chair2.obj",  # side panels stored twice, triangulated apart (25 %)
+    ],
+)
+def test_real_what_a_camera_sees_is_on_the_import(rel):
+    """What cameras all round see of the mesh lies on the import's surface (within 1.5
+    voxels), 99.5 % of it from every view; the shares in brackets were off before."""
+    from scipy.spatial import cKDTree
+
+    from partscale.evaluate import virtual_scan
+    from partscale.surface import to_mesh
+
+    mesh = ingest.load_mesh(data_path(rel))
+    c = ingest.from_mesh(mesh, res=96)
+    S, _ = trimesh.sample.sample_surface(to_mesh(c, attributes=False), 200_000, seed=0)
+    tree = cKDTree(S)
+    az = tuple(np.arange(0.0, 360.0, 45.0))
+    for frame in virtual_scan(mesh, azimuths=az, elevation=20.0, noise=0.0, holes=0.0, floor=False):
+        P, _, _ = frame.points()
+        d, _ = tree.query(P)
+        assert (d <= 1.5 * c.voxel_size).mean() >= 0.995

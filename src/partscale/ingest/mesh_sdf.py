@@ -8,10 +8,11 @@ Method (what makes it robust on real assemblies of open and intersecting pieces)
    as a viewer shows it (:mod:`partscale.ingest._two_sided`).
 1. Classification. Each triangle is classified by libigl's generalized winding number ``w``
    just in front of it. Crossing an oriented triangle against its normal raises ``w`` by
-   exactly 1, so the front value ``lo`` (the lower side) says it all: ``|lo| <= 1/4`` (outside
-   on one side, inside on the other): a *boundary* of the solid, kept exactly; ``lo >= 3/4``:
-   *buried* inside another piece, ignored; anything else (``lo`` fractional or below -1/4): an
-   *open sheet* (cloth, a single-sided board). Triangles longer than ``SUBDIVIDE`` voxels are
+   exactly 1, so the front value ``lo`` (the lower side) says nearly all: ``|lo| <= 1/4``
+   (outside on one side, inside on the other): a *boundary* of the solid, kept exactly;
+   ``lo >= 3/4``: *buried* inside another piece, ignored; anything else (``lo`` fractional or
+   below -1/4): an *open sheet* (cloth, a single-sided board). A boundary whose copy with the
+   other winding lies on it reads outside behind it too (``w <= 1/2``): an open sheet. Triangles longer than ``SUBDIVIDE`` voxels are
    also probed towards their corners; where the probes disagree (a board partly buried in
    another) they are split into pieces of ``SUBDIVIDE_MIXED`` voxels classified one by one.
    Above ``PROBE_RES`` voxels the classification keeps a ``PROBE_RES`` grid's scale: a
@@ -444,8 +445,11 @@ def _place(mesh: ColoredMesh, name: str, res: int, pad: int):
     return V, F, origin, h, tuple(int(s) for s in shape)
 
 
-def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> np.ndarray:
-    """(F',) int64 ids of the faces the import uses: one copy of each two-sided face.
+def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """The faces the import uses: ``kept`` (F',) int64 ids, one copy of each two-sided face
+    where that closes a body, and ``twin`` (F',) int64 the opposite copy of those still
+    stored with both windings (-1: none). Such copies cancel in ``w``: a surface of no body,
+    which :func:`classify_pieces` alone would read as a boundary with outside on both sides.
 
     A two-sided face (see :mod:`partscale.ingest._two_sided`) is a triangle stored as often
     with one winding as with the other, the same whole ``w`` on both sides (``0.05 h`` off,
@@ -462,7 +466,7 @@ def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> np.ndarray:
     pairs = _two_sided.opposite_pairs(V, F)
     fwd = pairs.fwd
     if len(fwd) == 0:
-        return np.arange(len(F))
+        return np.arange(len(F)), np.full(len(F), -1, np.int64)
     tris = V[F[fwd]]
     nrm = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     ln = np.linalg.norm(nrm, axis=1)
@@ -498,17 +502,44 @@ def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> np.ndarray:
         if not bad.any():
             break
         choice[bad] = -choice[bad] if step == 0 else 0
-    return np.flatnonzero(_two_sided.kept(pairs, choice))
+    keep = np.flatnonzero(_two_sided.kept(pairs, choice))
+    g = pairs.pair[keep]
+    both = (g >= 0) & (choice[np.maximum(g, 0)] == 0)
+    # each copy's twin: the first copy of the other winding
+    twin = np.where(
+        pairs.fwd[np.maximum(g, 0)] == keep,
+        pairs.rev[np.maximum(g, 0)],
+        pairs.fwd[np.maximum(g, 0)],
+    )
+    return keep, np.where(both, twin, -1)
 
 
 def _classify(wn: _Winding, name: str, h: float, res: int) -> _Pieces:
     """Step 1: the pieces and their classes; refuses a mesh with no surface left."""
     sub, parent, corner_bary, cls = classify_pieces(wn, probe_size(h, res))
+    cls[_bounding_nothing(wn, sub, cls, probe_size(h, res))] = 2
     boundary = np.nonzero(cls == 0)[0]
     sheet = np.nonzero(cls == 2)[0]
     if len(boundary) + len(sheet) == 0:
         raise InputError(f"{name}: expected a surface, got only degenerate or buried triangles")
     return _Pieces(sub, parent, corner_bary, cls, boundary, sheet)
+
+
+def _bounding_nothing(wn: _Winding, sub: np.ndarray, cls: np.ndarray, h: float) -> np.ndarray:
+    """(B,) int64 the pieces classified boundary (``cls`` 0; ``sub`` (P, 3, 3) float64) with
+    no inside behind them either: ``w <= 1/2`` a probe ``0.05 h`` behind their centroid.
+
+    Outside in front of a face, a boundary has the inside behind it. A face whose copy with
+    the other winding lies on it (a two-sided face left as it is, or copies triangulated
+    differently, as Sweet Home's chair's side panels are) cancels in ``w``: it reads outside
+    on both sides, bounds nothing, and was lost. It is an open sheet, as a one-sided panel is.
+    """
+    on = np.flatnonzero(cls == 0)
+    t = sub[on]
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    w = wn(t.mean(axis=1) - 0.05 * h * n, INSIDE_CUTS)
+    return on[w <= INSIDE_CUTS[0]]
 
 
 def _boundary_band(pieces: _Pieces, origin, h: float, shape):
@@ -593,8 +624,13 @@ def _compose_band(sign, d_b, id_b, boundary, f_s, id_s, sheet, h: float):
     return sdf, win, band
 
 
-def _band_colour(mesh: ColoredMesh, name: str, pieces: _Pieces, win, band, origin, h, report):
-    """Step 6 in the band: (X, Y, Z, 3) uint8 sRGB, set at the band voxels only."""
+def _band_colour(
+    mesh: ColoredMesh, name: str, pieces: _Pieces, twin, win, band, origin, h, report
+):  # fmt: skip
+    """Step 6 in the band: (X, Y, Z, 3) uint8 sRGB, set at the band voxels only. ``twin``
+    (F,) int64: each face's opposite copy where both are used (-1: none): a voxel behind
+    such a face takes the colour of the copy facing it (:func:`_facing`).
+    """
     shape = band.shape
     band_idx = np.flatnonzero(band)
     if len(band_idx) == 0:
@@ -603,9 +639,36 @@ def _band_colour(mesh: ColoredMesh, name: str, pieces: _Pieces, win, band, origi
     bary = _distance.voxel_closest(band_idx, np.array(shape), origin, h, pieces.sub, w_b)
     report(0.75, "colour from the texture")
     pbary = _shading.corner_mix(w_b, bary, pieces.corner_bary)
+    face = pieces.parent[w_b]
+    if (twin >= 0).any():
+        centres = origin + np.stack(np.unravel_index(band_idx, shape), axis=1) * h
+        face, pbary = _facing(mesh, twin, face, pbary, centres)
     rgb = np.empty((*shape, 3), np.uint8)
-    rgb.reshape(-1, 3)[band_idx] = mesh.color_at(pieces.parent[w_b], pbary)
+    rgb.reshape(-1, 3)[band_idx] = mesh.color_at(face, pbary)
     return rgb
+
+
+def _facing(mesh: ColoredMesh, twin, face, bary, points):
+    """The copy of a two-sided face that faces each point: ``face`` (N,) int64 and ``bary``
+    (N, 3) float64 the closest point's barycentrics in it, turned to the opposite copy
+    ``twin[face]`` (and that point's barycentrics in it) where ``points`` (N, 3) lie behind
+    ``face``. A two-sided face's copies may carry different colours (a drawer front: wood
+    outside, white inside); nearest by distance alone, they tie.
+    """
+    V = np.asarray(mesh.vertices, np.float64)
+    F = np.asarray(mesh.faces, np.int64)
+    on = np.flatnonzero(twin[face] >= 0)
+    tri = V[F[face[on]]]
+    q = np.einsum("nc,ncd->nd", bary[on], tri)
+    nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    behind = on[np.einsum("nd,nd->n", points[on] - q, nrm) < 0]
+    face, bary = face.copy(), bary.copy()
+    if len(behind):
+        other = twin[face[behind]]
+        q = np.einsum("nc,ncd->nd", bary[behind], V[F[face[behind]]])
+        _, bary[behind] = _distance.closest_points(q, V[F], other)
+        face[behind] = other
+    return face, bary
 
 
 @keyword_options
@@ -650,7 +713,7 @@ def from_mesh(
     pad = check_pad(pad, name)
     V, F, origin, h, shape = _place(mesh, name, res, pad)
     report(0.0, "classifying pieces")
-    kept = _one_of_two_sided(V, F, probe_size(h, res))
+    kept, twin = _one_of_two_sided(V, F, probe_size(h, res))
     wn = _Winding(V, F[kept])
     pieces = _classify(wn, name, h, res)
     pieces.parent = kept[pieces.parent]
@@ -667,7 +730,9 @@ def from_mesh(
     del d_b, id_b, f_s, id_s
     n_bubbles = _fill_bubbles(sdf, sign, h)  # flips signs only: the band stays
     report(0.65, "distances beyond the band")
-    rgb = _band_colour(mesh, name, pieces, win, band, origin, h, report)
+    twin_of = np.full(len(F), -1, np.int64)
+    twin_of[kept] = twin
+    rgb = _band_colour(mesh, name, pieces, twin_of, win, band, origin, h, report)
     if not band.all():
         report(0.8, "distances beyond the band")
         # beyond the band a distance is at least the band's: the floor guards the feature

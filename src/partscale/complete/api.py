@@ -780,6 +780,11 @@ def into_input_frame(c: CSDF) -> CSDF:
     world = corners @ T[:3, :3].T + T[:3, 3]
     pad = (BAND_VOXELS + 2) * h
     lo, hi = world.min(axis=0) - pad, world.max(axis=0) + pad
+    # the new lattice through the image of the old grid's middle voxel: where the turn is
+    # small (a camera level with the object's walls), new centres fall on old ones near it
+    mid = np.asarray(c.origin, np.float64) + (np.asarray(c.shape) // 2) * h
+    anchor = T[:3, :3] @ mid + T[:3, 3]
+    lo = anchor - np.ceil((anchor - lo) / h - 1e-9) * h
     shape = tuple(int(n) for n in np.ceil((hi - lo) / h - 1e-9).astype(np.int64) + 1)
     check_memory(shape, 40, what=f"{c.meta.get('source', 'the completion')} in its scan's frame")
     # each new voxel's centre in the old grid's index space: (T^-1 w - origin) / h

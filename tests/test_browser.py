@@ -28,6 +28,7 @@ import numpy as np
 import pytest
 import trimesh
 from PIL import Image
+from scipy import ndimage
 
 import partscale
 from partscale import render as render_mod
@@ -1327,22 +1328,34 @@ def page_and_python(
     return page, python, cam
 
 
-def differing(page: np.ndarray, python: np.ndarray) -> tuple[float, float, np.ndarray]:
+def differing(
+    page: np.ndarray, python: np.ndarray, *, edges: bool = True
+) -> tuple[float, float, np.ndarray]:
     """(outline, colour, apart): the share of the object's pixels (on it in either picture)
     that are on it in one picture only, the share of those on it in both whose colours differ
-    (a channel by more than DIFFERS), and where the pictures differ ((H, W) bool)."""
+    (a channel by more than DIFFERS), and where the pictures differ ((H, W) bool). ``edges``
+    False: a page's pixel whose colour lies within DIFFERS of the range of python's 3 x 3
+    pixels around it does not differ (next to a change of colour, a tenth of a pixel moves the
+    change across the pixel's centre)."""
     on_page = (page != PAGE_BACKGROUND).any(axis=-1)
     on_python = (python != PAGE_BACKGROUND).any(axis=-1)
     both = on_page & on_python
-    apart = np.abs(page.astype(np.int64) - python.astype(np.int64)).max(axis=-1) > DIFFERS
+    a, b = page.astype(np.int64), python.astype(np.int64)
+    apart = np.abs(a - b).max(axis=-1) > DIFFERS
+    if not edges:
+        lo = ndimage.minimum_filter(b, size=(3, 3, 1)) - DIFFERS
+        hi = ndimage.maximum_filter(b, size=(3, 3, 1)) + DIFFERS
+        apart &= ((a < lo) | (a > hi)).any(axis=-1)
     outline = (on_page ^ on_python).sum() / (on_page | on_python).sum()
     return float(outline), float((apart & both).sum() / both.sum()), apart
 
 
-def assert_pictures_agree(page: np.ndarray, python: np.ndarray, where: Path) -> None:
+def assert_pictures_agree(
+    page: np.ndarray, python: np.ndarray, where: Path, *, edges: bool = True
+) -> None:
     """The shares :func:`differing` measures within SILHOUETTE_SHARE and COLOUR_SHARE (where
-    they differ: differs.png in ``where``, with both pictures)."""
-    outline, colour, apart = differing(page, python)
+    they differ: differs.png in ``where``, with both pictures; ``edges`` as there)."""
+    outline, colour, apart = differing(page, python, edges=edges)
     Image.fromarray((apart * 255).astype(np.uint8)).save(where / "differs.png")
     assert outline <= SILHOUETTE_SHARE, f"outline {outline:.4f}; see {where}"
     assert colour <= COLOUR_SHARE, f"colour {colour:.4f}; see {where}"
@@ -1393,10 +1406,13 @@ def test_page_draws_a_real_objects_colours_as_partscale_render(
     the SheenChair (textured fabric and wood), from partscale.render's camera, unlit (as in
     test_page_draws_sharp_colour_changes_as_partscale_render): at most SILHOUETTE_SHARE of the
     object's pixels is on it in one picture only and at most COLOUR_SHARE of those on it in
-    both differ in colour by more than DIFFERS of 255."""
+    both differ in colour by more than DIFFERS of 255, next to a change of colour left out:
+    there (a line across the dresser's front under its top) a shift of the camera by a tenth
+    of a pixel, the object a voxel taller, moved the share from 0.6 % to 1.7 %; how the two
+    draw a change of colour is the stripes' test."""
     from partscale.ingest import load
 
     find_tools()  # skips before the import when the browser is missing
     c = load(data(rel), res=128)
     page, python, _ = page_and_python(tmp_path, c, view, monkeypatch)
-    assert_pictures_agree(page, python, tmp_path)
+    assert_pictures_agree(page, python, tmp_path, edges=False)

@@ -608,6 +608,48 @@ def test_close_holes_shuts_unseen_holes_through_a_sheet_only(fine, monkeypatch):
     assert not fuse.close_holes(empty, grid, _surface_of(solid), free).any()
 
 
+def test_close_lids_fills_a_thin_plate_at_the_top_of_a_low_rim_only():
+    # y is up. A table top seen from its own height: its edge a rim 3 voxels tall, with a gap
+    # in each slice where the sensor missed it (whole over the three): a plate 2 voxels thick
+    # at the rim's top fills it, not the rim's height. A rim as tall, where a camera saw
+    # through the middle: stays open. A bin's wall, 20 voxels tall: stays open. A shelf's
+    # front edge between two sides and a back that run on above it: its plate at the edge's
+    # top, not above
+    up = lambda P: np.asarray(P)[:, 1]  # noqa: E731
+    solid = np.zeros((120, 40, 60), bool)
+
+    def rim(x0, x1, z0, z1, y0, y1):
+        solid[x0:x1, y0:y1, z0:z1] = True
+        solid[x0 + 1 : x1 - 1, y0:y1, z0 + 1 : z1 - 1] = False
+
+    rim(5, 35, 5, 35, 20, 23)  # the table's top
+    for y, x in ((20, 10), (21, 20), (22, 30)):
+        solid[x, y, 5] = False  # one voxel missing from its front edge, a different one a slice
+    rim(40, 70, 5, 35, 20, 23)  # seen through
+    rim(75, 95, 5, 25, 5, 25)  # the bin
+    solid[100:118, 5:35, 40] = solid[100:118, 5:35, 58] = True  # the shelf's sides
+    solid[100, 5:35, 40:59] = True  # its back
+    solid[117, 14:16, 40:59] = True  # its front edge, 2 voxels tall
+
+    seen = np.zeros_like(solid)
+    seen[50:60, :, 15:25] = True
+
+    def free(P):
+        i = np.rint(P).astype(int)
+        return seen[i[:, 0], i[:, 1], i[:, 2]]
+
+    out = fuse.close_lids(solid, _unit_grid(solid.shape), up, free)
+    assert (out >= solid).all()
+    assert out[6:34, 21:23, 6:34].all()  # the table's plate: the rim's top two slices
+    assert not out[6:34, 20, 6:34].any()
+    assert not (out ^ solid)[40:100].any()  # seen through; the bin
+    assert out[101:117, 14:16, 41:58].all()  # the shelf, at its edge's height
+    assert not (out ^ solid)[100:118, 16:].any()
+    extra = (out ^ solid).sum()
+    assert extra == 28 * 2 * 28 + 16 * 2 * 17  # nothing else (the rim's gaps stay notches)
+    assert not fuse.close_lids(np.zeros_like(solid), _unit_grid(solid.shape), up, free).any()
+
+
 def test_a_cabinet_seen_from_above_its_front_has_no_holes_where_the_sensor_had_none():
     # Kenney's bedside cabinet in one frame from 30 degrees above, 20 degrees off its front:
     # its front and top, closed thinly behind the readings, had about 75 holes through them

@@ -127,6 +127,20 @@ PEAK_BYTES_PER_VOXEL_THREADED = 96
 """The same where independent steps run on threads at once (at most ``THREAD_VOXELS``): 89
 bytes a voxel more between --res 160 and 200 of the same cabinet (the colours filled beside
 the guessed parts)."""
+LID_SLICES = 6
+"""Level slices a plate's rim spans at most (a table top's edge, an apron flush below it); a
+bin's wall, or a cabinet's, runs through many more."""
+LID_REACH = 3
+"""Slices either side of a level slice whose voxels close its rim (:func:`close_lids`)."""
+LID_CLEAR = 8
+LID_COVERED = 0.1
+"""Slices above a plate's top within which solid over more than ``LID_COVERED`` of it makes
+its rim a frame under something else, not a plate's edge (:func:`close_lids`)."""
+LID_THICK = 2
+"""Slices of the plate a rim encloses, down from the rim's top: as thin as the closure (how
+thick it is no camera saw; a table's top flush with its apron is a rim as tall as both)."""
+LID_LEVEL = 0.99
+"""|Cosine| between up and the nearest grid axis above which the grid's slices are level."""
 HOLE_NEAR = 2
 """Voxels around a hole within which the surface points tell a sheet from a slit."""
 HOLE_SEEN = 0.1
@@ -305,7 +319,8 @@ def fuse(
     (:func:`candidates`) with the closure's foot carried to the floor (:func:`floor_reach`),
     those no camera saw through (:func:`carve`), the channels between filled segments closed
     (:func:`close_between`), the holes the sensor left through thin parts closed
-    (:func:`close_holes`), the bottom of what stands on the floor carried down to it
+    (:func:`close_holes`), the plates that low rims enclose (:func:`close_lids`; with
+    ``fill_between`` only), the bottom of what stands on the floor carried down to it
     (:func:`floor_base`), holes filled and specks dropped
     (:func:`drop_pieces`), the distances (:func:`distances`) and the colours and provenance
     near the surface (:func:`surface_attributes`).
@@ -349,6 +364,10 @@ def fuse(
     if cand.free_all is not None:
         solid = close_between(solid, cand)
     solid = close_holes(solid, grid, sp, free_world if sure_free is None else sure_free)
+    if fill_between:
+        solid = close_lids(
+            solid, grid, height_world, free_world if sure_free is None else sure_free
+        )
     if floor_cut is not None:
         # after the closing: carried down before it, the slab under a closed box's fill was a
         # region of its own that added boundary, and the regions' test dropped it (a cabinet
@@ -883,6 +902,82 @@ def close_holes(
     shut = (size > 0) & (share <= HOLE_SEEN)
     out = solid.copy()
     out[box] |= shut[holes] & (holes > 0)
+    return out
+
+
+def close_lids(
+    solid: np.ndarray,
+    grid: GridFrame,
+    height_world: Callable[[np.ndarray], np.ndarray],
+    sure_free: Callable[[np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """(X, Y, Z) bool: ``solid`` with the plates its rims enclose filled: the holes of its
+    level slices (across up), each slice taken with the ``LID_REACH`` slices either side of it
+    (a rim read by a noisy sensor is whole only over a few slices), of any size, in a run of at
+    most ``LID_SLICES`` slices beyond those; filled between the lowest and the highest slice of
+    the rim around them, where no camera surely saw through (at most ``HOLE_SEEN`` of them in
+    ``sure_free``).
+
+    A table's top seen from its own height shows its edge all round and nothing of its face:
+    closed thinly, it was a ring. A rim no taller than a plate's edge that encloses what no
+    camera saw is the edge of a plate; a bin's wall, as tall as the bin, is not.
+    """
+    up = _grid_up(grid, height_world)
+    ax = int(np.argmax(np.abs(up)))
+    if not solid.any() or abs(up[ax]) < LID_LEVEL:
+        return solid
+    box = _box(solid, LID_REACH + 1)
+    m = solid[box]
+    wide = ndimage.maximum_filter1d(m.view(np.uint8), 2 * LID_REACH + 1, axis=ax).astype(bool)
+    holes, _, small = _axis_holes(wide, ax, wide.size, LID_SLICES + 2 * LID_REACH, None)
+    if not small[1:].any():
+        return solid
+    # a hole through consecutive slices is one plate's
+    lab, _ = ndimage.label(small[holes])
+    # the rim of each plate: the solid voxels beside it in its slices with none above them;
+    # its top, the slice most of them lie in (a wall that runs on above the plate, a
+    # bookcase's side beside a shelf, has its top elsewhere)
+    size = [3, 3, 3]
+    size[ax] = 1
+    near = ndimage.maximum_filter(lab, size=size)
+    above = np.zeros_like(m)
+    step = [slice(None)] * 3
+    step[ax] = slice(0, -1)
+    nxt = [slice(None)] * 3
+    nxt[ax] = slice(1, None)
+    above[tuple(step)] = m[tuple(nxt)]
+    rim = np.flatnonzero((m & ~above & (near > 0)).ravel())
+    n = int(lab.max()) + 1
+    per = np.zeros((n, m.shape[ax]), np.int64)
+    np.add.at(per, (near.ravel()[rim], np.unravel_index(rim, m.shape)[ax]), 1)
+    top = np.where(per.any(axis=1), np.argmax(per, axis=1), -1)
+    flat = np.flatnonzero(lab.ravel())
+    lf = lab.ravel()[flat]
+    at = np.unravel_index(flat, m.shape)[ax]
+    inside = (at <= top[lf]) & (at > top[lf] - LID_THICK)
+    flat, lf = flat[inside], lf[inside]
+    if not len(flat):
+        return solid
+    lo = np.array([b.start for b in box])
+    sub = GridFrame(grid.grid_to_world, m.shape, grid.origin + lo * grid.h, grid.h)
+    seen = sure_free(sub.to_world(sub.centres(flat)))
+    count = np.bincount(lf, minlength=n)
+    share = np.bincount(lf, weights=seen, minlength=n) / np.maximum(count, 1)
+    # a plate's face is open above it: solid a few slices over most of it (a chair's seat
+    # over the rails between its legs) makes the rim a frame, not a plate's edge
+    cover = np.zeros(len(flat), bool)
+    ijk = np.stack(np.unravel_index(flat, m.shape), axis=1)
+    for k in range(1, LID_CLEAR + 1):
+        q = ijk.copy()
+        q[:, ax] += k
+        ok = q[:, ax] < m.shape[ax]
+        cover[ok] |= m[q[ok, 0], q[ok, 1], q[ok, 2]]
+    covered = np.bincount(lf, weights=cover, minlength=n) / np.maximum(count, 1)
+    shut = (count > 0) & (share <= HOLE_SEEN) & (covered <= LID_COVERED)
+    out = solid.copy()
+    fill = np.zeros(m.shape, bool)
+    fill.ravel()[flat[shut[lf]]] = True
+    out[box] |= fill
     return out
 
 

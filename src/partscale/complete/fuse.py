@@ -914,9 +914,11 @@ def close_lids(
     """(X, Y, Z) bool: ``solid`` with the plates its rims enclose filled: the holes of its
     level slices (across up), each slice taken with the ``LID_REACH`` slices either side of it
     (a rim read by a noisy sensor is whole only over a few slices), of any size, in a run of at
-    most ``LID_SLICES`` slices beyond those; filled between the lowest and the highest slice of
-    the rim around them, where no camera surely saw through (at most ``HOLE_SEEN`` of them in
-    ``sure_free``).
+    most ``LID_SLICES`` slices beyond those; each run a plate ``LID_THICK`` slices thick down
+    from its rim's top (:func:`_rim_tops`), filled where no camera surely saw through it (at
+    most ``HOLE_SEEN`` of it in ``sure_free``) and nothing stands over it (at most
+    ``LID_COVERED`` of it under solid within ``LID_CLEAR`` slices: a chair's seat over the
+    rails between its legs makes them a frame, not a plate's edge).
 
     A table's top seen from its own height shows its edge all round and nothing of its face:
     closed thinly, it was a ring. A rim no taller than a plate's edge that encloses what no
@@ -934,23 +936,8 @@ def close_lids(
         return solid
     # a hole through consecutive slices is one plate's
     lab, _ = ndimage.label(small[holes])
-    # the rim of each plate: the solid voxels beside it in its slices with none above them;
-    # its top, the slice most of them lie in (a wall that runs on above the plate, a
-    # bookcase's side beside a shelf, has its top elsewhere)
-    size = [3, 3, 3]
-    size[ax] = 1
-    near = ndimage.maximum_filter(lab, size=size)
-    above = np.zeros_like(m)
-    step = [slice(None)] * 3
-    step[ax] = slice(0, -1)
-    nxt = [slice(None)] * 3
-    nxt[ax] = slice(1, None)
-    above[tuple(step)] = m[tuple(nxt)]
-    rim = np.flatnonzero((m & ~above & (near > 0)).ravel())
-    n = int(lab.max()) + 1
-    per = np.zeros((n, m.shape[ax]), np.int64)
-    np.add.at(per, (near.ravel()[rim], np.unravel_index(rim, m.shape)[ax]), 1)
-    top = np.where(per.any(axis=1), np.argmax(per, axis=1), -1)
+    top = _rim_tops(m, lab, ax)
+    n = len(top)
     flat = np.flatnonzero(lab.ravel())
     lf = lab.ravel()[flat]
     at = np.unravel_index(flat, m.shape)[ax]
@@ -963,15 +950,12 @@ def close_lids(
     seen = sure_free(sub.to_world(sub.centres(flat)))
     count = np.bincount(lf, minlength=n)
     share = np.bincount(lf, weights=seen, minlength=n) / np.maximum(count, 1)
-    # a plate's face is open above it: solid a few slices over most of it (a chair's seat
-    # over the rails between its legs) makes the rim a frame, not a plate's edge
     cover = np.zeros(len(flat), bool)
     ijk = np.stack(np.unravel_index(flat, m.shape), axis=1)
-    for k in range(1, LID_CLEAR + 1):
-        q = ijk.copy()
-        q[:, ax] += k
-        ok = q[:, ax] < m.shape[ax]
-        cover[ok] |= m[q[ok, 0], q[ok, 1], q[ok, 2]]
+    for _ in range(LID_CLEAR):  # each slice above, in turn
+        ijk[:, ax] += 1
+        ok = ijk[:, ax] < m.shape[ax]
+        cover[ok] |= m[ijk[ok, 0], ijk[ok, 1], ijk[ok, 2]]
     covered = np.bincount(lf, weights=cover, minlength=n) / np.maximum(count, 1)
     shut = (count > 0) & (share <= HOLE_SEEN) & (covered <= LID_COVERED)
     out = solid.copy()
@@ -979,6 +963,25 @@ def close_lids(
     fill.ravel()[flat[shut[lf]]] = True
     out[box] |= fill
     return out
+
+
+def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> np.ndarray:
+    """(L + 1,) int64: for each plate ``lab`` (X, Y, Z) int32 labels 1..L in ``m`` (X, Y, Z)
+    bool, the slice across ``ax`` (up) of its rim's top: of the voxels of ``m`` beside it in
+    its slices with none above them, the slice most lie in (a wall that runs on above the
+    plate, a bookcase's side beside a shelf, has its top elsewhere); -1 where none.
+    """
+    size = [3, 3, 3]
+    size[ax] = 1
+    near = ndimage.maximum_filter(lab, size=size)
+    above = np.zeros_like(m)
+    lower, upper = [slice(None)] * 3, [slice(None)] * 3
+    lower[ax], upper[ax] = slice(0, -1), slice(1, None)
+    above[tuple(lower)] = m[tuple(upper)]
+    rim = np.flatnonzero((m & ~above & (near > 0)).ravel())
+    per = np.zeros((int(lab.max()) + 1, m.shape[ax]), np.int64)
+    np.add.at(per, (near.ravel()[rim], np.unravel_index(rim, m.shape)[ax]), 1)
+    return np.where(per.any(axis=1), np.argmax(per, axis=1), -1)
 
 
 def _close_tunnels(fill: np.ndarray, free: np.ndarray) -> np.ndarray:

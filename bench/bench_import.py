@@ -88,7 +88,7 @@ def band_p99(c, mesh, n: int = 100_000) -> float | None:
     band = band[rng.choice(len(band), min(len(band), n), replace=False)]
     d2, fi, _ = igl.point_mesh_squared_distance(c.index_to_world(band), V, F)
     res = c.meta["history"][0]["res"]
-    sub, parent, _, cls = ms.classify_pieces(ms._Winding(V, F), ms.probe_size(h, res))
+    sub, parent, _, cls, _ = ms.classify_pieces(ms._Winding(V, F), ms.probe_size(h, res))
     boundary = np.nonzero(cls == 0)[0]
     sheet = np.nonzero(cls == 2)[0]
     thick = math.sqrt(3) / 2 * h  # the import's half-thickness of thickened pieces

@@ -179,7 +179,8 @@ def classify_pieces(wn: _Winding, h: float):
     as many at any resolution above ``PROBE_RES`` as at ``PROBE_RES``.
 
     Returns prim (P, 3, 3) float64, parent (P,) int64 (source triangle), corner_bary (P, 3, 3)
-    (barycentrics of each primitive corner in its source triangle) and cls (P,) int8.
+    (barycentrics of each primitive corner in its source triangle), cls (P,) int8 and front
+    (P,) float64, ``w`` at the probe in front of each primitive's centroid (nan: degenerate).
     """
     tris = wn.V[wn.F]
     n_tri = len(tris)
@@ -203,6 +204,8 @@ def classify_pieces(wn: _Winding, h: float):
     w = wn(np.concatenate(probes), CLASS_CUTS)
     cls = np.full(n_tri, -1, np.int8)
     cls[okid] = _class_of(w[: len(okid)])
+    w_tri = np.full(n_tri, np.nan)
+    w_tri[okid] = w[: len(okid)]
     corner_cls = _class_of(w[len(okid) :]).reshape(3, -1)
     mixed = big[(corner_cls != cls[big]).any(axis=0)]
     whole = np.ones(n_tri, bool)
@@ -212,6 +215,7 @@ def classify_pieces(wn: _Winding, h: float):
     parent = [wid]
     bary = [np.broadcast_to(np.eye(3), (len(wid), 3, 3))]
     pcls = [cls[wid]]
+    front = [w_tri[wid]]
     # refine only where the probes disagree: bisect, probe the halves, keep what agrees (a
     # sliver of another class between the probes can be missed: surfaces may be off by up to
     # about a voxel right at the curves where pieces intersect)
@@ -234,12 +238,14 @@ def classify_pieces(wn: _Winding, h: float):
         parent.append(par[done])
         bary.append(b[done])
         pcls.append(c[done])
+        front.append(w[: len(t)][done])
         t, b, par = t[~done], b[~done], par[~done]
     return (
         np.concatenate(prim),
         np.concatenate(parent),
         np.concatenate(bary),
         np.concatenate(pcls),
+        np.concatenate(front),
     )
 
 
@@ -518,8 +524,8 @@ def _one_of_two_sided(V: np.ndarray, F: np.ndarray, h: float) -> tuple[np.ndarra
 
 def _classify(wn: _Winding, name: str, h: float, res: int) -> _Pieces:
     """Step 1: the pieces and their classes; refuses a mesh with no surface left."""
-    sub, parent, corner_bary, cls = classify_pieces(wn, probe_size(h, res))
-    cls[_bounding_nothing(wn, sub, cls, probe_size(h, res))] = 2
+    sub, parent, corner_bary, cls, front = classify_pieces(wn, probe_size(h, res))
+    cls[_bounding_nothing(wn, sub, cls, front, probe_size(h, res))] = 2
     boundary = np.nonzero(cls == 0)[0]
     sheet = np.nonzero(cls == 2)[0]
     if len(boundary) + len(sheet) == 0:
@@ -527,24 +533,24 @@ def _classify(wn: _Winding, name: str, h: float, res: int) -> _Pieces:
     return _Pieces(sub, parent, corner_bary, cls, boundary, sheet)
 
 
-def _bounding_nothing(wn: _Winding, sub: np.ndarray, cls: np.ndarray, h: float) -> np.ndarray:
+def _bounding_nothing(
+    wn: _Winding, sub: np.ndarray, cls: np.ndarray, front: np.ndarray, h: float
+) -> np.ndarray:
     """(B,) int64 the pieces classified boundary (``cls`` 0; ``sub`` (P, 3, 3) float64) across
     which ``w`` does not step: less than 1/2 higher a probe ``0.05 h`` behind their centroid
-    than one as far in front.
+    than in front of it (``front`` (P,) float64, the classification's probe).
 
-    Crossing a face against its normal raises ``w`` by 1, whatever else the mesh holds (a
-    leaky body's faces too: outside -0.3, inside 0.7). A face whose copy with the other winding
-    lies on it (a two-sided face left as it is, or copies triangulated differently, as Sweet
-    Home's chair's side panels are) cancels that step: it reads outside on both sides, bounds
-    nothing, and was lost. It is an open sheet, as a one-sided panel is.
+    Crossing a face against its normal raises ``w`` by 1. A face whose copy with the other
+    winding lies on it (a two-sided face left as it is, or copies triangulated differently, as
+    Sweet Home's chair's side panels are) cancels that step: it reads outside on both sides,
+    bounds nothing, and was lost. It is an open sheet, as a one-sided panel is.
     """
     on = np.flatnonzero(cls == 0)
     t = sub[on]
     n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
-    c = t.mean(axis=1)
-    w = wn(np.concatenate([c + 0.05 * h * n, c - 0.05 * h * n]), INSIDE_CUTS)
-    return on[w[len(on) :] - w[: len(on)] < STEP_CUT]
+    behind = wn(t.mean(axis=1) - 0.05 * h * n, INSIDE_CUTS)
+    return on[behind - front[on] < STEP_CUT]
 
 
 def _boundary_band(pieces: _Pieces, origin, h: float, shape):

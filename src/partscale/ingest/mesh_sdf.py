@@ -635,9 +635,7 @@ def _compose_band(sign, d_b, id_b, boundary, f_s, id_s, sheet, h: float):
     return sdf, win, band
 
 
-def _band_colour(
-    mesh: ColoredMesh, name: str, pieces: _Pieces, twin, win, band, origin, h, report
-):  # fmt: skip
+def _band_colour(mesh: ColoredMesh, name: str, pieces: _Pieces, twin, win, band, origin, h, report):
     """Step 6 in the band: (X, Y, Z, 3) uint8 sRGB, set at the band voxels only. ``twin``
     (F,) int64: each face's opposite copy where both are used (-1: none): a voxel behind
     such a face takes the colour of the copy facing it (:func:`_facing`).
@@ -672,12 +670,12 @@ def _facing(mesh: ColoredMesh, twin, face, bary, points):
     tri = V[F[face[on]]]
     q = np.einsum("nc,ncd->nd", bary[on], tri)
     nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    behind = on[np.einsum("nd,nd->n", points[on] - q, nrm) < 0]
+    back = np.einsum("nd,nd->n", points[on] - q, nrm) < 0
+    behind = on[back]
     face, bary = face.copy(), bary.copy()
     if len(behind):
         other = twin[face[behind]]
-        q = np.einsum("nc,ncd->nd", bary[behind], V[F[face[behind]]])
-        _, bary[behind] = _distance.closest_points(q, V[F], other)
+        _, bary[behind] = _distance.closest_points(q[back], V[F[other]], np.arange(len(other)))
         face[behind] = other
     return face, bary
 

@@ -363,11 +363,10 @@ def fuse(
     solid = carve(grid, sp, cand.within, free_world, sym_free, height_world, feature)
     if cand.free_all is not None:
         solid = close_between(solid, cand)
-    solid = close_holes(solid, grid, sp, free_world if sure_free is None else sure_free)
+    seen_through = free_world if sure_free is None else sure_free
+    solid = close_holes(solid, grid, sp, seen_through)
     if fill_between:
-        solid = close_lids(
-            solid, grid, height_world, free_world if sure_free is None else sure_free
-        )
+        solid = close_lids(solid, grid, height_world, seen_through)
     if floor_cut is not None:
         # after the closing: carried down before it, the slab under a closed box's fill was a
         # region of its own that added boundary, and the regions' test dropped it (a cabinet

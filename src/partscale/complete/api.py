@@ -41,7 +41,7 @@ from .scan import (
     upsample,
 )
 
-METHOD = "carve+floor+symmetry+between+slab+closure+reach+column+strut"
+METHOD = "carve+floor+symmetry+between+slab+body+closure+reach+column+strut"
 FLOOR_TOL = 0.015
 """Metres: RANSAC inlier distance of the floor."""
 FLOOR_CUT = 2 * FLOOR_TOL

@@ -27,6 +27,7 @@ from scipy.spatial import cKDTree
 
 from .._workers import thread_map, thread_soon
 from ..csdf import BAND_VOXELS
+from . import body as body_mod
 from . import tidy as tidy_mod
 from .carve import affine_rows
 
@@ -320,7 +321,8 @@ def fuse(
     those no camera saw through (:func:`carve`), the channels between filled segments closed
     (:func:`close_between`), the holes the sensor left through thin parts closed
     (:func:`close_holes`), the plates that low rims enclose (:func:`close_lids`; with
-    ``fill_between`` only), the bottom of what stands on the floor carried down to it
+    ``fill_between`` only), the bodies under tops behind walls that reach down toward the floor
+    (:func:`fill_bodies`; with ``fill_between`` and a floor), the bottom of what stands on the floor carried down to it
     (:func:`floor_base`), holes filled and specks dropped
     (:func:`drop_pieces`), the distances (:func:`distances`) and the colours and provenance
     near the surface (:func:`surface_attributes`).
@@ -367,6 +369,8 @@ def fuse(
     solid = close_holes(solid, grid, sp, seen_through)
     if fill_between:
         solid = close_lids(solid, grid, height_world, seen_through)
+    if cand.free_all is not None and floor_cut is not None:
+        solid = fill_bodies(solid, grid, sp, height_world, seen_through, cand.free_all)
     if floor_cut is not None:
         # after the closing: carried down before it, the slab under a closed box's fill was a
         # region of its own that added boundary, and the regions' test dropped it (a cabinet
@@ -962,6 +966,34 @@ def close_lids(
     fill.ravel()[flat[shut[lf]]] = True
     out[box] |= fill
     return out
+
+
+def fill_bodies(
+    solid: np.ndarray,
+    grid: GridFrame,
+    sp: SurfacePoints,
+    height_world: Callable[[np.ndarray], np.ndarray],
+    sure_free: Callable[[np.ndarray], np.ndarray],
+    free: np.ndarray,
+) -> np.ndarray:
+    """(X, Y, Z) bool: ``solid`` with the bodies under its tops filled
+    (:func:`partscale.complete.body.close_bodies`): under a top, behind a wall that reaches
+    most of the way down to the floor, what no camera surely saw through (``sure_free``) is a
+    body's inside, never where any camera saw through (``free`` (X, Y, Z) bool). On a level
+    grid only, and only where the floor was found (without it, a ray under a desk reads nothing
+    and its knee space is unseen).
+    """
+    up = _grid_up(grid, height_world)
+    ax = int(np.argmax(np.abs(up)))
+    if not solid.any() or abs(up[ax]) < LID_LEVEL:
+        return solid
+    slices = np.repeat(grid.origin[None, :].astype(np.float32), grid.shape[ax], axis=0)
+    slices[:, ax] += np.arange(grid.shape[ax], dtype=np.float32) * np.float32(grid.h)
+    heights = height_world(grid.to_world(slices)).astype(np.float64)
+    unseen = ~sure_free(grid.to_world(grid.all_centres())).reshape(grid.shape)
+    return body_mod.close_bodies(
+        solid, sp.idx, sp.normals, ax, bool(up[ax] < 0), heights, grid.h, unseen, free
+    )
 
 
 def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> np.ndarray:

@@ -20,6 +20,7 @@ from .._workers import thread_map
 from ..csdf import BAND_VOXELS, CSDF, make
 from ..errors import InputError, PartscaleWarning
 from ..progress import ProgressCallback, resolve
+from . import body as body_mod
 from . import column as column_mod
 from . import floor as floor_mod
 from . import fuse as fuse_mod
@@ -1453,6 +1454,8 @@ def _history(ob: Observation, sy: Symmetries, opts: Settings, *, symmetry: bool)
         "slab_agree": fuse_mod.SLAB_AGREE,
         "slab_edge_share": fuse_mod.SLAB_EDGE_SHARE,
         "slab_band": fuse_mod.SLAB_BAND,
+        "body_wall_share": body_mod.BODY_WALL,
+        "body_top_share": body_mod.BODY_SHARE,
         "carve_margin_voxels": CARVE_MARGIN,
         "speck_share": tidy_mod.SPECK_SHARE,
         "column_radius_m": [column_mod.MIN_RADIUS, column_mod.MAX_RADIUS],

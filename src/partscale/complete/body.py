@@ -70,7 +70,7 @@ def close_bodies(
         its wall's bottom).
     free : (X, Y, Z) bool
         The voxels any camera saw through, sensor holes included: never filled (a body's fill
-        never puts surface where the cameras saw nothing).
+        never puts surface where a camera saw through it).
 
     Examples
     --------

@@ -990,7 +990,11 @@ def fill_bodies(
     slices = np.repeat(grid.origin[None, :].astype(np.float32), grid.shape[ax], axis=0)
     slices[:, ax] += np.arange(grid.shape[ax], dtype=np.float32) * np.float32(grid.h)
     heights = height_world(grid.to_world(slices)).astype(np.float64)
-    unseen = ~sure_free(grid.to_world(grid.all_centres())).reshape(grid.shape)
+    # what the cameras surely saw through lies within what they saw through: only the voxels
+    # seen through are asked
+    unseen = np.ones(grid.shape, bool)
+    seen = np.flatnonzero(free.ravel())
+    unseen.ravel()[seen] = ~sure_free(grid.to_world(grid.centres(seen)))
     return body_mod.close_bodies(
         solid, sp.idx, sp.normals, ax, bool(up[ax] < 0), heights, grid.h, unseen, free
     )

@@ -650,6 +650,28 @@ def test_close_lids_fills_a_thin_plate_at_the_top_of_a_low_rim_only():
     assert not fuse.close_lids(np.zeros_like(solid), _unit_grid(solid.shape), up, free).any()
 
 
+def test_close_lids_takes_a_thick_plate_s_edge_by_its_size():
+    # y is up. A coffee table's top, a solid plate, seen from below its top at three sides: its
+    # edge a rim 12 voxels tall round 68 x 50 voxels no camera saw: a plate (a rim up to a
+    # quarter of its narrower width tall is a plate's edge, more than the 6 slices of a table's
+    # top and apron). The
+    # same rim round 18 x 18 voxels (a bin, a box open at its top): stays open
+    up = lambda P: np.asarray(P)[:, 1]  # noqa: E731
+    solid = np.zeros((110, 30, 60), bool)
+
+    def rim(x0, x1, z0, z1, y0, y1):
+        solid[x0:x1, y0:y1, z0:z1] = True
+        solid[x0 + 1 : x1 - 1, y0:y1, z0 + 1 : z1 - 1] = False
+
+    rim(5, 75, 5, 57, 10, 22)  # the coffee table's top
+    rim(85, 105, 5, 25, 10, 22)  # the box
+    out = fuse.close_lids(solid, _unit_grid(solid.shape), up, lambda P: np.zeros(len(P), bool))
+    assert out[6:74, 20:22, 6:56].all()  # the plate: the rim's top two slices
+    assert not out[6:74, :20, 6:56].any()
+    assert not (out ^ solid)[80:].any()  # the box
+    assert (out ^ solid).sum() == 68 * 2 * 50
+
+
 def test_a_cabinet_seen_from_above_its_front_has_no_holes_where_the_sensor_had_none():
     # Kenney's bedside cabinet in one frame from 30 degrees above, 20 degrees off its front:
     # its front and top, closed thinly behind the readings, had about 75 holes through them

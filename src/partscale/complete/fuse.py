@@ -129,8 +129,12 @@ PEAK_BYTES_PER_VOXEL_THREADED = 96
 bytes a voxel more between --res 160 and 200 of the same cabinet (the colours filled beside
 the guessed parts)."""
 LID_SLICES = 6
-"""Level slices a plate's rim spans at most (a table top's edge, an apron flush below it); a
-bin's wall, or a cabinet's, runs through many more."""
+LID_ASPECT = 0.25
+"""Level slices a plate's rim spans at most (a table top's edge, an apron flush below it): the
+larger of ``LID_SLICES`` and ``LID_ASPECT`` times the narrower width of what it encloses (a
+plate is thin for its size: Kenney's coffee table's top, a solid plate, is an edge 12 slices
+tall round 75 voxels of unseen top). A bin's wall, or a cabinet's, as tall as it is wide or
+taller, runs through many more."""
 LID_REACH = 3
 """Slices either side of a level slice whose voxels close its rim (:func:`close_lids`)."""
 LID_CLEAR = 8
@@ -916,12 +920,13 @@ def close_lids(
 ) -> np.ndarray:
     """(X, Y, Z) bool: ``solid`` with the plates its rims enclose filled: the holes of its
     level slices (across up), each slice taken with the ``LID_REACH`` slices either side of it
-    (a rim read by a noisy sensor is whole only over a few slices), of any size, in a run of at
-    most ``LID_SLICES`` slices beyond those; each run a plate ``LID_THICK`` slices thick down
-    from its rim's top (:func:`_rim_tops`), filled where no camera surely saw through it (at
-    most ``HOLE_SEEN`` of it in ``sure_free``) and nothing stands over it (at most
-    ``LID_COVERED`` of it under solid within ``LID_CLEAR`` slices: a chair's seat over the
-    rails between its legs makes them a frame, not a plate's edge).
+    (a rim read by a noisy sensor is whole only over a few slices), of any size, in a run
+    through no more slices beyond those than a plate's edge spans (:func:`_plates`); each run
+    a plate ``LID_THICK`` slices thick down from its rim's top (:func:`_rim_tops`), filled
+    where no camera surely saw through it (at most ``HOLE_SEEN`` of it in ``sure_free``) and
+    nothing stands over it (at most ``LID_COVERED`` of it under solid within ``LID_CLEAR``
+    slices: a chair's seat over the rails between its legs makes them a frame, not a plate's
+    edge).
 
     A table's top seen from its own height shows its edge all round and nothing of its face:
     closed thinly, it was a ring. A rim no taller than a plate's edge that encloses what no
@@ -934,11 +939,12 @@ def close_lids(
     box = _box(solid, LID_REACH + 1)
     m = solid[box]
     wide = ndimage.maximum_filter1d(m.view(np.uint8), 2 * LID_REACH + 1, axis=ax).astype(bool)
-    holes, _, small = _axis_holes(wide, ax, wide.size, LID_SLICES + 2 * LID_REACH, None)
+    holes, _, small = _axis_holes(wide, ax, wide.size, None, None)
     if not small[1:].any():
         return solid
     # a hole through consecutive slices is one plate's
     lab, _ = ndimage.label(small[holes])
+    lab = np.where(_plates(lab, ax)[lab], lab, 0)
     top = _rim_tops(m, lab, ax)
     n = len(top)
     flat = np.flatnonzero(lab.ravel())
@@ -998,6 +1004,22 @@ def fill_bodies(
     return body_mod.close_bodies(
         solid, sp.idx, sp.normals, ax, bool(up[ax] < 0), heights, grid.h, unseen, free
     )
+
+
+def _plates(lab: np.ndarray, ax: int) -> np.ndarray:
+    """(L + 1,) bool: which runs of holes ``lab`` (X, Y, Z) int32 labels 1..L through the
+    level slices (across ``ax``, up), each slice widened ``LID_REACH`` slices either way, span
+    no more slices beyond those than a plate's edge: ``LID_SLICES``, or ``LID_ASPECT`` of the
+    run's narrower level width where that is more; False for 0.
+    """
+    keep = np.zeros(int(lab.max()) + 1, bool)
+    for k, sl in enumerate(ndimage.find_objects(lab), start=1):
+        if sl is None:
+            continue
+        sizes = [s.stop - s.start for s in sl]
+        width = min(size for a, size in enumerate(sizes) if a != ax)
+        keep[k] = sizes[ax] - 2 * LID_REACH <= max(LID_SLICES, LID_ASPECT * width)
+    return keep
 
 
 def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> np.ndarray:

@@ -869,15 +869,17 @@ class FreeUp:
 @dataclass(eq=False)
 class Symmetries:
     """The upright frame ``U`` (4, 4) world -> upright (``Uinv`` back; the first mirror plane at
-    x = 0) and the symmetries found in it: mirror planes ``syms``, a turning base's ``rot`` (or None), where up
-    came from and by how many degrees the mirror plane tilted it, the symmetry tests' voxel
-    ``hs`` and ``cell`` (metres), the scan's free space (``carver``, ``free_up`` upright).
+    x = 0) and the symmetries found in it: mirror planes ``syms``, a turning base's ``rot`` (or
+    None), a round object's ``turn`` (or None), where up came from and by how many degrees the
+    mirror plane tilted it, the symmetry tests' voxel ``hs`` and ``cell`` (metres), the scan's
+    free space (``carver``, ``free_up`` upright).
     """
 
     U: np.ndarray
     Uinv: np.ndarray
     syms: list[sym_mod.Symmetry]
     rot: sym_mod.Symmetry | None
+    turn: sym_mod.Symmetry | None
     up_from: str
     up_tilt: float
     hs: float
@@ -973,7 +975,8 @@ def _complete(
 def find_symmetries(ob: Observation, res: int, symmetry: bool) -> Symmetries:
     """The observation's mirror planes and rotation (none without ``symmetry``) and the upright
     frame they fix: up corrected by the first plane's tilt where no level plane gave it, the
-    first plane turned to x = 0.
+    first plane turned to x = 0; without a turning base, the turn of a round object
+    (:func:`partscale.complete.symmetry.revolution`).
     """
     Q = ob.points
     U = ob.U
@@ -1000,7 +1003,12 @@ def find_symmetries(ob: Observation, res: int, symmetry: bool) -> Symmetries:
         syms, U = _plane_at_x0(syms, U)
         free_up.turn(U)
     rot = sym_mod.rotation_axis(_apply(U, Q)[sub], free_up, cell) if symmetry else None
-    return Symmetries(U, np.linalg.inv(U), syms, rot, up_from, up_tilt, hs, cell, carver, free_up)
+    turn = None
+    if symmetry and rot is None:
+        turn = sym_mod.revolution(_apply(U, Q)[sub], ob.normals[sub] @ U[:3, :3].T, free_up, cell)
+    return Symmetries(
+        U, np.linalg.inv(U), syms, rot, turn, up_from, up_tilt, hs, cell, carver, free_up
+    )
 
 
 def _mirrors_and_up(
@@ -1108,8 +1116,8 @@ def _plane_at_x0(
 
 def symmetric_copies(ob: Observation, sy: Symmetries) -> Surface:
     """The observed surface (upright) and its copies by the group the mirrors generate (two
-    planes: also their composition) and then the base's rotations; copies that land where a
-    camera saw through are dropped.
+    planes: also their composition) and then the turns (a base's, a round object's); copies
+    that land where a camera saw through are dropped.
     """
     U = sy.U
     Qu, QC = _apply(U, ob.points), ob.colors
@@ -1131,8 +1139,7 @@ def symmetric_copies(ob: Observation, sy: Symmetries) -> Surface:
         surf_n.append(Nu[w] @ g[:3, :3].T)
         kind.append(np.full(len(cp), fuse_mod.MIRRORED, np.uint8))
     rot_steps: list[tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]] = []
-    rot = sy.rot
-    if rot is not None:
+    for rot in (r for r in (sy.rot, sy.turn) if r is not None):
         allp, allc, alln = np.concatenate(surf), np.concatenate(surf_c), np.concatenate(surf_n)
         low = rot.where(allp)
         from scipy.spatial import cKDTree
@@ -1421,11 +1428,11 @@ def _symmetries_meta(sy: Symmetries) -> list[dict]:
         }
         for s in sy.syms
     ]
-    rot = sy.rot
-    if rot is not None:
+    for rot in (r for r in (sy.rot, sy.turn) if r is not None):
         out.append(
             {
                 "kind": "rotation",
+                "of": "round object" if rot.params.get("round") else "base",
                 "fold": rot.fold,
                 "support": round(rot.support, 3),
                 "violation": round(rot.violation, 3),

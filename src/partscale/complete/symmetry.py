@@ -10,6 +10,10 @@ Everything here works in the *upright* frame: y up, the floor at y = 0.
 - Rotations: 4- and 5-fold about a vertical axis, for the lowest part of the object (the bases of
   swivel chairs and tables), the axis found by a coarse-to-fine search, accepted piece by piece
   (:func:`rotation_axis`) and applied only in the region of the pieces it holds for.
+- Round objects (a bin, a lamp, a round table, a stool's round seat on its pedestal): level
+  slabs whose points lie on an arc of one circle about one vertical axis, their faces turned
+  out from it, make a turn of the whole (:func:`revolution`): a regular polygon's fold where
+  the faces say so, else ``ROUND_FOLD`` steps round a circle.
 """
 
 from __future__ import annotations
@@ -92,6 +96,38 @@ MIN_COVER = 0.6
 """A symmetry must hold on slabs holding at least this fraction of the points."""
 MAX_PLANE_TILT_DEG = 10.0
 """Degrees a vertical mirror plane may tilt across itself to fit the scan (:func:`tilted_plane`)."""
+
+
+ROUND_SLABS = 12
+"""Level slabs of the object's height tested for a round section (:func:`revolution`)."""
+ROUND_MIN_POINTS = 40
+ROUND_SPAN_DEG = 120.0
+"""Degrees of arc a slab's points must span about their circle's centre: less does not place
+the centre (a flat face fits a wide circle over a few degrees)."""
+ROUND_RESIDUAL = 0.08
+"""Median distance of a slab's points from their circle, as a share of its radius: a regular
+octagon's faces lie within 0.04 of it, a hexagon's 0.06; two sides of a box at a corner 0.29."""
+ROUND_FACING = 0.8
+ROUND_FACING_SHARE = 0.8
+"""Share of a round slab's side-facing points whose faces turn out from the axis (cosine at
+least ``ROUND_FACING``): a ring of legs stands on a circle but faces every way."""
+ROUND_MIN_RADIUS = 2.0
+"""Cells: a slab's circle at least this wide places its centre (a pole's does not)."""
+ROUND_AXIS = 0.1
+"""Share of the radius (at least a cell) within which the round slabs' centres, and a pole's,
+lie of the axis: further, up is askew (a lamp's shade seen with up 6 degrees off, its centres
+drifting 5 cm over 25 cm of height)."""
+ROUND_SHARE = 0.3
+ROUND_HELD = 0.8
+"""Shares of the object's points in its round slabs, and in those and the slabs within their
+cylinder (a lid, a pole, a foot), for the whole to turn: a chair with a round seat does not."""
+ROUND_POLYGON = 0.7
+"""Concentration (:func:`_fold_of`) above which the faces' directions give a polygon's fold."""
+ROUND_FOLD = 8
+"""Steps of the turn round a circle: a view sees about a third of it, so copies 45 degrees apart
+overlap each other and the scan."""
+ROUND_VIOLATION = 0.1
+"""Share of the round part's turned copies allowed where a camera saw through."""
 
 
 @dataclass(frozen=True)
@@ -872,3 +908,188 @@ class _Region:
         ok = ((idx >= 0) & (idx < self.occ.shape)).all(axis=1)
         idx = np.where(ok[:, None], idx, 0)
         return ok & self.occ[idx[:, 0], idx[:, 1], idx[:, 2]]
+
+
+def _circle(x: np.ndarray, z: np.ndarray) -> tuple[float, float, float]:
+    """The circle (cx, cz, r) through points (x, z) (M,) each, by algebraic least squares."""
+    A = np.stack([x, z, np.ones_like(x)], axis=1)
+    (d, e, f), *_ = np.linalg.lstsq(A, -(x * x + z * z), rcond=None)
+    cx, cz = -d / 2.0, -e / 2.0
+    return float(cx), float(cz), float(np.sqrt(max(cx * cx + cz * cz - f, 0.0)))
+
+
+@dataclass(frozen=True)
+class _Section:
+    """A level slab's fit: its points' count, circle centre (2,), radius, whether it is round
+    (:func:`_section`) and the azimuths (K,) of its side faces' normals.
+    """
+
+    n: int
+    centre: np.ndarray
+    radius: float
+    round: bool
+    azimuths: np.ndarray
+
+
+def _section(P: np.ndarray, N: np.ndarray, cell: float) -> _Section:
+    """The fit of one slab's points P (M, 3) with normals N (M, 3), upright: round when its
+    points span ``ROUND_SPAN_DEG`` of arc about their circle, lie within ``ROUND_RESIDUAL`` of
+    its radius of it, the circle is ``ROUND_MIN_RADIUS`` cells wide or more and the side faces
+    turn out from its centre (``ROUND_FACING_SHARE``).
+    """
+    x, z = P[:, 0], P[:, 2]
+    cx, cz, r = _circle(x, z)
+    d = np.hypot(x - cx, z - cz)
+    side = np.abs(N[:, 1]) < 0.5
+    az = np.arctan2(N[side, 2], N[side, 0])
+    ok = r >= ROUND_MIN_RADIUS * cell and side.sum() >= ROUND_MIN_POINTS // 2
+    if ok:
+        th = np.sort(np.arctan2(z - cz, x - cx))
+        gap = np.diff(np.append(th, th[0] + 2 * np.pi)).max()
+        out = (np.cos(az) * (x[side] - cx) + np.sin(az) * (z[side] - cz)) / np.maximum(
+            d[side], 1e-12
+        )
+        ok = bool(
+            np.degrees(2 * np.pi - gap) >= ROUND_SPAN_DEG
+            and np.median(np.abs(d - r)) <= ROUND_RESIDUAL * r
+            and (out >= ROUND_FACING).mean() >= ROUND_FACING_SHARE
+        )
+    return _Section(len(P), np.array([cx, cz]), r, ok, az)
+
+
+def _on_axis(fit: _Section, centre: np.ndarray, cell: float) -> bool:
+    """Whether a slab's circle ``fit`` is centred on the axis at ``centre`` (2,): within
+    ``ROUND_AXIS`` of its radius, or a cell.
+    """
+    return bool(np.hypot(*(fit.centre - centre)) <= max(ROUND_AXIS * fit.radius, cell))
+
+
+def _fold_of(azimuths: np.ndarray) -> int:
+    """The fold of a regular polygon whose faces point along ``azimuths`` (K,) radians: the k
+    in 3..12 whose k-th circular moment ``|mean exp(i k phi)|`` is highest (all the faces'
+    directions a multiple of 360/k degrees apart: 1), the least of those within 5 % of it (a
+    hexagon's faces are also 12-fold), where it is at least ``ROUND_POLYGON``; a circle's (no
+    such k): ``ROUND_FOLD``.
+
+    >>> _fold_of(np.radians(np.repeat([0.0, 45.0, 90.0], 20)))
+    8
+    >>> _fold_of(np.radians(np.linspace(0.0, 150.0, 60)))
+    8
+    >>> _fold_of(np.radians(np.repeat([10.0, 70.0, 130.0], 20)))
+    6
+    """
+    moment = np.array([abs(np.exp(1j * k * azimuths).mean()) for k in range(3, 13)])
+    if moment.max() < ROUND_POLYGON:
+        return ROUND_FOLD
+    return 3 + int(np.flatnonzero(moment >= 0.95 * moment.max())[0])
+
+
+def revolution(
+    points: np.ndarray,
+    normals: np.ndarray,
+    free: Callable[[np.ndarray], np.ndarray],
+    cell: float,
+) -> Symmetry | None:
+    """The turn of a round object about its vertical axis, or None.
+
+    points, normals : (N, 3) upright (y up, the floor at 0) points and their unit normals;
+    free : callable on (M, 3) upright points -> (M,) bool, the space a camera saw through;
+    cell : the support tolerance, world units.
+
+    The object's height is cut into ``ROUND_SLABS`` level slabs; each is fitted a circle
+    (:func:`_section`). The round slabs whose centres agree (within ``ROUND_AXIS`` of their
+    radius of the median centre) place the axis. The whole turns when they hold
+    ``ROUND_SHARE`` of the points and, with the slabs that lie within their widest circle (a
+    lid, a pole, a foot on the axis), ``ROUND_HELD``, and at most ``ROUND_VIOLATION`` of the
+    turned copies land where a camera saw through. The turn's step is a regular polygon's
+    (:func:`_fold_of` on the round slabs' side faces) or a circle's ``ROUND_FOLD``; it applies
+    at the heights of those slabs (``Symmetry.bands``).
+
+    Examples
+    --------
+    A round bin's front seen from one side: a half cylinder of radius 0.2 m, faces turned out.
+
+    >>> t = np.linspace(-1.2, 1.2, 60)
+    >>> y = np.linspace(0.0, 0.6, 30)
+    >>> T, Y = np.meshgrid(t, y)
+    >>> P = np.stack([0.2 * np.sin(T), Y, 0.2 * np.cos(T)], axis=-1).reshape(-1, 3)
+    >>> N = np.stack([np.sin(T), 0 * T, np.cos(T)], axis=-1).reshape(-1, 3)
+    >>> turn = revolution(P, N, lambda q: np.zeros(len(q), bool), 0.01)
+    >>> turn.fold, abs(turn.params["axis_x"]) < 1e-6, abs(turn.params["axis_z"]) < 1e-6
+    (8, True, True)
+    """
+    P, N = np.asarray(points, np.float64), np.asarray(normals, np.float64)
+    top = float(P[:, 1].max())
+    if len(P) < ROUND_MIN_POINTS or top <= 0:
+        return None
+    slab = np.clip((P[:, 1] / top * ROUND_SLABS).astype(np.int64), 0, ROUND_SLABS - 1)
+    fits = {
+        k: _section(P[slab == k], N[slab == k], cell)
+        for k in range(ROUND_SLABS)
+        if (slab == k).sum() >= ROUND_MIN_POINTS
+    }
+    found = [k for k, f in fits.items() if f.round]
+    if not found:
+        return None
+    centre = np.median([fits[k].centre for k in found], axis=0)
+    found = [k for k in found if _on_axis(fits[k], centre, cell)]
+    if not found:
+        return None
+    radius = max(fits[k].radius for k in found)
+    off = np.hypot(P[:, 0] - centre[0], P[:, 2] - centre[1])
+    # the other slabs within the widest circle: a lid, a foot; a pole only on the axis (off it,
+    # up is askew, and turned about a level axis the pole would sweep a cone)
+    within = [
+        k
+        for k in range(ROUND_SLABS)
+        if k not in found
+        and (slab == k).any()
+        and (off[slab == k] <= 1.1 * radius + cell).mean() >= 0.95
+        and (
+            k not in fits
+            or fits[k].radius >= ROUND_MIN_RADIUS * cell
+            or _on_axis(fits[k], centre, cell)
+        )
+    ]
+    held = np.isin(slab, found + within)
+    if np.isin(slab, found).mean() < ROUND_SHARE or held.mean() < ROUND_HELD:
+        return None
+    fold = _fold_of(np.concatenate([fits[k].azimuths for k in found]))
+    A, b = _rotation(2 * np.pi / fold, *centre)
+    copies = [P[held]]
+    for _ in range(fold - 1):
+        copies.append(copies[-1] @ A.T + b)
+    sup, vio = _Scorer(P, free, cell)(np.stack(copies[1:]))
+    if vio.mean() > ROUND_VIOLATION:
+        return None
+    return Symmetry(
+        "rotation",
+        A,
+        b,
+        float(sup.mean()),
+        float(vio.mean()),
+        fold=fold,
+        bands=_slab_bands(sorted(found + within), top),
+        params={
+            "fold": fold,
+            "axis_x": float(centre[0]),
+            "axis_z": float(centre[1]),
+            "radius": float(radius),
+            "round": True,
+        },
+    )
+
+
+def _slab_bands(slabs: list[int], top: float) -> tuple:
+    """The height intervals of the runs of consecutive ``slabs`` (sorted ids of
+    ``ROUND_SLABS`` slabs up to ``top``), the lowest open below and the highest above.
+    """
+    bands: list[list[float]] = []
+    for k in slabs:
+        lo = -np.inf if k == 0 else k * top / ROUND_SLABS
+        hi = np.inf if k == ROUND_SLABS - 1 else (k + 1) * top / ROUND_SLABS
+        if bands and bands[-1][1] == lo:
+            bands[-1][1] = hi
+        else:
+            bands.append([lo, hi])
+    return tuple((a, b) for a, b in bands)

@@ -114,9 +114,9 @@ least ``ROUND_FACING``): a ring of legs stands on a circle but faces every way."
 ROUND_MIN_RADIUS = 2.0
 """Cells: a slab's circle at least this wide places its centre (a pole's does not)."""
 ROUND_AXIS = 0.1
-"""Share of the radius (at least a cell) within which the round slabs' centres, and a pole's,
-lie of the axis: further, up is askew (a lamp's shade seen with up 6 degrees off, its centres
-drifting 5 cm over 25 cm of height)."""
+"""Share of the radius (at least a cell) within which the round slabs' centres lie of the axis:
+further, up is askew (a lamp's shade seen with up 6 degrees off, its centres drifting 5 cm over
+25 cm of height)."""
 ROUND_SHARE = 0.3
 ROUND_HELD = 0.8
 """Shares of the object's points in its round slabs, and in those and the slabs within their
@@ -957,6 +957,34 @@ def _section(P: np.ndarray, N: np.ndarray, cell: float) -> _Section:
     return _Section(len(P), np.array([cx, cz]), r, ok, az)
 
 
+def _common_centre(P: np.ndarray, slab: np.ndarray, slabs: list[int]) -> np.ndarray:
+    """(2,) the centre (x, z) of the circles through the points P (N, 3) of each of ``slabs``
+    (ids in ``slab`` (N,)) about one centre, each its own radius (algebraic least squares).
+    """
+    m = np.isin(slab, slabs)
+    x, z = P[m, 0], P[m, 2]
+    own = (slab[m][:, None] == np.asarray(slabs)[None, :]).astype(np.float64)
+    A = np.concatenate([x[:, None], z[:, None], own], axis=1)
+    sol, *_ = np.linalg.lstsq(A, -(x * x + z * z), rcond=None)
+    return np.array([-sol[0] / 2.0, -sol[1] / 2.0])
+
+
+def _within(Q: np.ndarray, centre: np.ndarray, radius: float, cell: float) -> bool:
+    """Whether a slab's points Q (M, 2) (x, z) belong to the round part about ``centre`` (2,):
+    within its widest circle (``radius``; a lid, a foot), and where they are as thin as a pole
+    (within ``ROUND_MIN_RADIUS`` cells of their mean), their mean within a cell of the axis (off
+    it, up is askew, and turned about a level axis a pole sweeps a cone).
+    """
+    if not len(Q):
+        return False
+    if (np.hypot(*(Q - centre).T) <= 1.1 * radius + cell).mean() < 0.95:
+        return False
+    mean = Q.mean(axis=0)
+    if np.hypot(*(Q - mean).T).max() > ROUND_MIN_RADIUS * cell:
+        return True
+    return bool(np.hypot(*(mean - centre)) <= cell)
+
+
 def _on_axis(fit: _Section, centre: np.ndarray, cell: float) -> bool:
     """Whether a slab's circle ``fit`` is centred on the axis at ``centre`` (2,): within
     ``ROUND_AXIS`` of its radius, or a cell.
@@ -1035,21 +1063,16 @@ def revolution(
     found = [k for k in found if _on_axis(fits[k], centre, cell)]
     if not found:
         return None
+    # one axis for them all: their circles fitted about a shared centre
+    centre = _common_centre(P, slab, found)
+    found = [k for k in found if _on_axis(fits[k], centre, cell)]
+    if not found:
+        return None
     radius = max(fits[k].radius for k in found)
-    off = np.hypot(P[:, 0] - centre[0], P[:, 2] - centre[1])
-    # the other slabs within the widest circle: a lid, a foot; a pole only on the axis (off it,
-    # up is askew, and turned about a level axis the pole would sweep a cone)
     within = [
         k
         for k in range(ROUND_SLABS)
-        if k not in found
-        and (slab == k).any()
-        and (off[slab == k] <= 1.1 * radius + cell).mean() >= 0.95
-        and (
-            k not in fits
-            or fits[k].radius >= ROUND_MIN_RADIUS * cell
-            or _on_axis(fits[k], centre, cell)
-        )
+        if k not in found and _within(P[slab == k, :][:, [0, 2]], centre, radius, cell)
     ]
     held = np.isin(slab, found + within)
     if np.isin(slab, found).mean() < ROUND_SHARE or held.mean() < ROUND_HELD:

@@ -126,8 +126,12 @@ ROUND_POLYGON = 0.7
 ROUND_FOLD = 8
 """Steps of the turn round a circle: a view sees about a third of it, so copies 45 degrees apart
 overlap each other and the scan."""
-ROUND_VIOLATION = 0.1
-"""Share of the round part's turned copies allowed where a camera saw through."""
+ROUND_SUPPORT = 0.15
+ROUND_VIOLATION = 0.06
+"""Shares of the round part's turned copies that must land on the scan (a view sees a third of
+a round side or more, and the copies a step or two round overlap it: a bin 0.29, a round table
+0.30; a bookcase's front seen level, whose slabs fitted wide circles, 0.01) and that may land
+where a camera saw through."""
 
 
 @dataclass(frozen=True)
@@ -1028,8 +1032,8 @@ def revolution(
     (:func:`_section`). The round slabs whose centres agree (within ``ROUND_AXIS`` of their
     radius of the median centre) place the axis. The whole turns when they hold
     ``ROUND_SHARE`` of the points and, with the slabs that lie within their widest circle (a
-    lid, a pole, a foot on the axis), ``ROUND_HELD``, and at most ``ROUND_VIOLATION`` of the
-    turned copies land where a camera saw through. The turn's step is a regular polygon's
+    lid, a pole, a foot on the axis), ``ROUND_HELD``, ``ROUND_SUPPORT`` of the turned copies
+    land on the scan and at most ``ROUND_VIOLATION`` where a camera saw through. The turn's step is a regular polygon's
     (:func:`_fold_of` on the round slabs' side faces) or a circle's ``ROUND_FOLD``; it applies
     at the heights of those slabs (``Symmetry.bands``).
 
@@ -1083,7 +1087,7 @@ def revolution(
     for _ in range(fold - 1):
         copies.append(copies[-1] @ A.T + b)
     sup, vio = _Scorer(P, free, cell)(np.stack(copies[1:]))
-    if vio.mean() > ROUND_VIOLATION:
+    if sup.mean() < ROUND_SUPPORT or vio.mean() > ROUND_VIOLATION:
         return None
     return Symmetry(
         "rotation",

@@ -1144,15 +1144,21 @@ def symmetric_copies(ob: Observation, sy: Symmetries) -> Surface:
         low = rot.where(allp)
         from scipy.spatial import cKDTree
 
-        tree = cKDTree(allp)
+        there = allp
+        tree = cKDTree(there)
         step = np.eye(4)
         for _ in range(rot.fold - 1):
             step = _sym4(rot) @ step
             rot_steps.append((step.copy(), rot.where))
             cp = _apply(step, allp[low])
             # a turned copy completes what the scan lacks; on surface already there it would
-            # only double it a little off
+            # only double it a little off. A round side's arc turned by a step shorter than the
+            # arc lands on the copies before it too (a base's legs turned land apart): those
+            # count as there (Kenney's bin from one view: 4.7 -> 3.0 s, the same F-score)
             new = tree.query(cp, distance_upper_bound=sy.cell, workers=2)[0] > sy.cell
+            if rot.params.get("round"):
+                there = np.concatenate([there, cp[new]])
+                tree = cKDTree(there)
             surf.append(cp[new])
             surf_c.append(allc[low][new])
             surf_n.append(alln[low][new] @ step[:3, :3].T)

@@ -608,6 +608,13 @@ def test_close_holes_shuts_unseen_holes_through_a_sheet_only(fine, monkeypatch):
     assert not fuse.close_holes(empty, grid, _surface_of(solid), free).any()
 
 
+def _rim(solid: np.ndarray, x0: int, x1: int, z0: int, z1: int, y0: int, y1: int) -> None:
+    """A level rectangle's rim one voxel thick set in ``solid`` (y up): x0..x1, z0..z1 around,
+    y0..y1 tall."""
+    solid[x0:x1, y0:y1, z0:z1] = True
+    solid[x0 + 1 : x1 - 1, y0:y1, z0 + 1 : z1 - 1] = False
+
+
 def test_close_lids_fills_a_thin_plate_at_the_top_of_a_low_rim_only():
     # y is up. A table top seen from its own height: its edge a rim 3 voxels tall, with a gap
     # in each slice where the sensor missed it (whole over the three): a plate 2 voxels thick
@@ -617,16 +624,11 @@ def test_close_lids_fills_a_thin_plate_at_the_top_of_a_low_rim_only():
     # top, not above
     up = lambda P: np.asarray(P)[:, 1]  # noqa: E731
     solid = np.zeros((120, 40, 60), bool)
-
-    def rim(x0, x1, z0, z1, y0, y1):
-        solid[x0:x1, y0:y1, z0:z1] = True
-        solid[x0 + 1 : x1 - 1, y0:y1, z0 + 1 : z1 - 1] = False
-
-    rim(5, 35, 5, 35, 20, 23)  # the table's top
+    _rim(solid, 5, 35, 5, 35, 20, 23)  # the table's top
     for y, x in ((20, 10), (21, 20), (22, 30)):
         solid[x, y, 5] = False  # one voxel missing from its front edge, a different one a slice
-    rim(40, 70, 5, 35, 20, 23)  # seen through
-    rim(75, 95, 5, 25, 5, 25)  # the bin
+    _rim(solid, 40, 70, 5, 35, 20, 23)  # seen through
+    _rim(solid, 75, 95, 5, 25, 5, 25)  # the bin
     solid[100:118, 5:35, 40] = solid[100:118, 5:35, 58] = True  # the shelf's sides
     solid[100, 5:35, 40:59] = True  # its back
     solid[117, 14:16, 40:59] = True  # its front edge, 2 voxels tall
@@ -654,17 +656,12 @@ def test_close_lids_takes_a_thick_plate_s_edge_by_its_size():
     # y is up. A coffee table's top, a solid plate, seen from below its top at three sides: its
     # edge a rim 12 voxels tall round 68 x 50 voxels no camera saw: a plate (a rim up to a
     # quarter of its narrower width tall is a plate's edge, more than the 6 slices of a table's
-    # top and apron). The
-    # same rim round 18 x 18 voxels (a bin, a box open at its top): stays open
+    # top and apron). The same rim round 18 x 18 voxels (a bin, a box open at its top): stays
+    # open
     up = lambda P: np.asarray(P)[:, 1]  # noqa: E731
     solid = np.zeros((110, 30, 60), bool)
-
-    def rim(x0, x1, z0, z1, y0, y1):
-        solid[x0:x1, y0:y1, z0:z1] = True
-        solid[x0 + 1 : x1 - 1, y0:y1, z0 + 1 : z1 - 1] = False
-
-    rim(5, 75, 5, 57, 10, 22)  # the coffee table's top
-    rim(85, 105, 5, 25, 10, 22)  # the box
+    _rim(solid, 5, 75, 5, 57, 10, 22)  # the coffee table's top
+    _rim(solid, 85, 105, 5, 25, 10, 22)  # the box
     out = fuse.close_lids(solid, _unit_grid(solid.shape), up, lambda P: np.zeros(len(P), bool))
     assert out[6:74, 20:22, 6:56].all()  # the plate: the rim's top two slices
     assert not out[6:74, :20, 6:56].any()

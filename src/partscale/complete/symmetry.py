@@ -1030,12 +1030,13 @@ def revolution(
 
     The object's height is cut into ``ROUND_SLABS`` level slabs; each is fitted a circle
     (:func:`_section`). The round slabs whose centres agree (within ``ROUND_AXIS`` of their
-    radius of the median centre) place the axis. The whole turns when they hold
-    ``ROUND_SHARE`` of the points and, with the slabs that lie within their widest circle (a
-    lid, a pole, a foot on the axis), ``ROUND_HELD``, ``ROUND_SUPPORT`` of the turned copies
-    land on the scan and at most ``ROUND_VIOLATION`` where a camera saw through. The turn's step is a regular polygon's
-    (:func:`_fold_of` on the round slabs' side faces) or a circle's ``ROUND_FOLD``; it applies
-    at the heights of those slabs (``Symmetry.bands``).
+    radius of the median centre) place the axis: their circles fitted about one centre
+    (:func:`_common_centre`). The whole turns when they hold ``ROUND_SHARE`` of the points
+    and, with the slabs that lie within their widest circle (:func:`_within`: a lid, a foot, a
+    pole on the axis), ``ROUND_HELD``, where ``ROUND_SUPPORT`` of the turned copies land on
+    the scan and at most ``ROUND_VIOLATION`` where a camera saw through. The turn's step is a
+    regular polygon's (:func:`_fold_of` on the round slabs' side faces) or a circle's
+    ``ROUND_FOLD``; it applies at the heights of those slabs (``Symmetry.bands``).
 
     Examples
     --------
@@ -1076,7 +1077,7 @@ def revolution(
     within = [
         k
         for k in range(ROUND_SLABS)
-        if k not in found and _within(P[slab == k, :][:, [0, 2]], centre, radius, cell)
+        if k not in found and _within(P[slab == k][:, [0, 2]], centre, radius, cell)
     ]
     held = np.isin(slab, found + within)
     if np.isin(slab, found).mean() < ROUND_SHARE or held.mean() < ROUND_HELD:

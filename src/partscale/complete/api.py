@@ -1484,6 +1484,8 @@ def _history(ob: Observation, sy: Symmetries, opts: Settings, *, symmetry: bool)
         "cluster_cell_m": ob.cluster_cell,
         "symmetry_min_support": sym_mod.MIN_SUPPORT,
         "symmetry_max_violation": sym_mod.MAX_VIOLATION,
+        "round_residual": sym_mod.ROUND_RESIDUAL,
+        "round_support": sym_mod.ROUND_SUPPORT,
         # the voxel the symmetry tests measured in: the grid's, never finer than SYMMETRY_RES's
         "symmetry_voxel_m": round(sy.hs, 6),
         "symmetry_res": SYMMETRY_RES,

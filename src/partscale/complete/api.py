@@ -1002,10 +1002,11 @@ def find_symmetries(ob: Observation, res: int, symmetry: bool) -> Symmetries:
     if syms:
         syms, U = _plane_at_x0(syms, U)
         free_up.turn(U)
-    rot = sym_mod.rotation_axis(_apply(U, Q)[sub], free_up, cell) if symmetry else None
+    Qs = _apply(U, Q)[sub]
+    rot = sym_mod.rotation_axis(Qs, free_up, cell) if symmetry else None
     turn = None
     if symmetry and rot is None:
-        turn = sym_mod.revolution(_apply(U, Q)[sub], ob.normals[sub] @ U[:3, :3].T, free_up, cell)
+        turn = sym_mod.revolution(Qs, ob.normals[sub] @ U[:3, :3].T, free_up, cell)
     return Symmetries(
         U, np.linalg.inv(U), syms, rot, turn, up_from, up_tilt, hs, cell, carver, free_up
     )

@@ -924,11 +924,10 @@ def _circle(x: np.ndarray, z: np.ndarray) -> tuple[float, float, float]:
 
 @dataclass(frozen=True)
 class _Section:
-    """A level slab's fit: its points' count, circle centre (2,), radius, whether it is round
+    """A level slab's fit: its circle's centre (2,) and radius, whether it is round
     (:func:`_section`) and the azimuths (K,) of its side faces' normals.
     """
 
-    n: int
     centre: np.ndarray
     radius: float
     round: bool
@@ -958,7 +957,7 @@ def _section(P: np.ndarray, N: np.ndarray, cell: float) -> _Section:
             and np.median(np.abs(d - r)) <= ROUND_RESIDUAL * r
             and (out >= ROUND_FACING).mean() >= ROUND_FACING_SHARE
         )
-    return _Section(len(P), np.array([cx, cz]), r, ok, az)
+    return _Section(np.array([cx, cz]), r, ok, az)
 
 
 def _common_centre(P: np.ndarray, slab: np.ndarray, slabs: list[int]) -> np.ndarray:
@@ -1056,10 +1055,11 @@ def revolution(
     if len(P) < ROUND_MIN_POINTS or top <= 0:
         return None
     slab = np.clip((P[:, 1] / top * ROUND_SLABS).astype(np.int64), 0, ROUND_SLABS - 1)
+    of = [slab == k for k in range(ROUND_SLABS)]
     fits = {
-        k: _section(P[slab == k], N[slab == k], cell)
-        for k in range(ROUND_SLABS)
-        if (slab == k).sum() >= ROUND_MIN_POINTS
+        k: _section(P[m], N[m], cell)
+        for k, m in enumerate(of)
+        if np.count_nonzero(m) >= ROUND_MIN_POINTS
     }
     found = [k for k, f in fits.items() if f.round]
     if not found:
@@ -1077,7 +1077,7 @@ def revolution(
     within = [
         k
         for k in range(ROUND_SLABS)
-        if k not in found and _within(P[slab == k][:, [0, 2]], centre, radius, cell)
+        if k not in found and _within(P[of[k]][:, [0, 2]], centre, radius, cell)
     ]
     held = np.isin(slab, found + within)
     if np.isin(slab, found).mean() < ROUND_SHARE or held.mean() < ROUND_HELD:

@@ -818,6 +818,10 @@ def into_input_frame(c: CSDF) -> CSDF:
     thread_map(slab, range(shape[0]))
     # the staircase of a turned grid touches itself along edges: filled as the fusion's own
     sdf, _ = tidy_mod.fill_contacts(sdf, h)
+    # beyond the old grid the new voxels took its largest distance: a sphere tracer entering
+    # there stepped that far at once, through a table's top (a completion's picture showed half
+    # of it); bounded by the distance to the solid, as the fusion's own far values are
+    sdf = fuse_mod.bound_far(sdf, h)
     meta = dict(c.meta)
     done = {**comp, "frame": "input", "to_input_frame": np.eye(4).tolist()}
     done["provenance"] = _encode(kinds)

@@ -55,8 +55,9 @@ def summary(
 
 
 def _completion(comp) -> dict | None:
-    """A completion's shares of the surface by kind and, where its guard kept the scan as
-    observed or was overruled, why (``guard_reason``); None for a CSDF not made by completion.
+    """A completion's shares of the surface by kind, where its guard kept the scan as observed
+    or was overruled, why (``guard_reason``), and what makes it look broken (``caveats``: pieces
+    apart, standing above the floor); None for a CSDF not made by completion.
     """
     if not isinstance(comp, dict):
         return None
@@ -64,6 +65,8 @@ def _completion(comp) -> dict | None:
     guard = comp.get("guard")
     if isinstance(guard, dict) and guard.get("reason"):
         out["guard_reason"] = guard["reason"]
+    if isinstance(guard, dict) and guard.get("caveats"):
+        out["caveats"] = list(guard["caveats"])
     return out
 
 
@@ -118,6 +121,8 @@ def info(
         )
         if k.get("guard_reason"):
             typer.echo(f"completion:  {k['guard_reason']}")
+        for line in k.get("caveats", []):
+            typer.echo(f"completion:  {line}")
     if s["relief"]:
         r = s["relief"]
         added = r["segment_tolerance_added_voxels"]

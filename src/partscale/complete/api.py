@@ -1396,6 +1396,8 @@ def completion_meta(
     total = max(counts[1:].sum(), 1.0)
     found: Any = ob.floor
     col = solid.column
+    inside = solid.sdf < 0
+    n_pieces, apart = pieces(inside)
     completion = {
         "method": METHOD if extras else "carve+floor+closure+reach",
         "observed": round(counts[fuse_mod.OBSERVED] / total, 4),
@@ -1412,6 +1414,9 @@ def completion_meta(
         "floor": None
         if found is None
         else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
+        "pieces": n_pieces,
+        "apart": apart,
+        "above_floor": None if found is None else above_floor(inside, g, found[0]),
         "up": sy.U[1, :3].round(6).tolist(),
         "up_from": sy.up_from,
         "up_tilt_by_mirror_deg": round(sy.up_tilt, 3),
@@ -1423,6 +1428,39 @@ def completion_meta(
     }
     history = _history(ob, sy, opts, symmetry=symmetry)
     return {"source": opts.source, "units": "m", "history": [history], "completion": completion}
+
+
+def pieces(solid: np.ndarray) -> tuple[int, float]:
+    """The number of pieces of ``solid`` (X, Y, Z) bool (voxels touching by a face, an edge or a
+    corner are one piece, as :func:`partscale.complete.strut.add_struts` joins them) and the
+    share of its voxels outside the largest, rounded to 4 places.
+
+    >>> import numpy as np
+    >>> s = np.zeros((6, 3, 3), bool)
+    >>> s[0, 1, 1] = s[1, 2, 2] = s[4, 1, 1] = True  # two touching at a corner, one apart
+    >>> pieces(s)
+    (2, 0.3333)
+    """
+    from scipy import ndimage
+
+    lab, n = ndimage.label(solid, structure=tidy_mod.CORNERS)
+    if n < 2:
+        return int(n), 0.0
+    size = np.bincount(lab.ravel())[1:]
+    return int(n), round(1.0 - float(size.max()) / float(size.sum()), 4)
+
+
+def above_floor(solid: np.ndarray, grid: fuse_mod.GridFrame, floor) -> float | None:
+    """Metres from the ``floor`` (a :class:`partscale.complete.floor.Plane` in the scan's
+    world) up to the lowest face of ``solid`` (X, Y, Z) bool on ``grid`` (whose ``to_world``
+    gives the scan's world): its lowest voxel centre less half a voxel, rounded to the
+    millimetre; None without a solid.
+    """
+    at = np.flatnonzero(solid.ravel())
+    if not len(at):
+        return None
+    lowest = float(floor.height(grid.to_world(grid.centres(at))).min()) - 0.5 * grid.h
+    return round(lowest, 3)
 
 
 def _symmetries_meta(sy: Symmetries) -> list[dict]:

@@ -64,6 +64,15 @@ up to a quarter (:data:`partscale.complete.symmetry.MAX_ROTATION_VIOLATION`), an
 objects the completion was tuned on stay below 0.17 over all of them (92 virtual scans)."""
 MAX_GUESSED = 0.5
 """Share of guessed surface above which the record says most of the result is guessed."""
+APART_SHARE = 0.02
+"""Share of a result's solid outside its largest piece from which its pieces apart are said
+(:func:`caveats`): a smaller fragment (a sliver beside a cabinet's side, 0.7 %) is recorded
+(``completion['pieces']``, ``completion['apart']``), not said."""
+FLOATS_ABOVE = 0.15
+"""Metres above the floor found beyond which a result does not stand on it (what holds it up,
+a table's pedestal under its top, was not seen; or it hangs on a wall): said in one line
+(:func:`caveats`), as :data:`partscale.complete.api.STANDS_WITHIN` tells an object standing on
+the floor from one above it."""
 MARGIN = 0.01
 """Shares within this of each other are the same evidence: the completion adds unseen surface,
 which is its point, and is kept unless the scan speaks clearly against it."""
@@ -271,6 +280,36 @@ def give_way(observed: CSDF, points: np.ndarray, carver: Carver, weak_stages: li
     return _recorded(observed, record)
 
 
+def caveats(completion: dict) -> list[str]:
+    """One line each for what makes a result look broken although it is what the scan holds:
+    pieces apart (``completion['pieces']`` above one, ``APART_SHARE`` or more of the solid
+    outside the largest, ``completion['apart']``: what joins them was not seen) and a result
+    standing more than ``FLOATS_ABOVE`` above the floor found (``completion['above_floor']``:
+    what holds it up was not seen).
+
+    >>> caveats({"pieces": 2, "apart": 0.1, "above_floor": 0.63})  # doctest: +NORMALIZE_WHITESPACE
+    ['the result is 2 pieces apart (10% of it outside the largest): what joins them was not
+     seen; scan it from another side', 'the result stands 0.63 m above the floor seen: what
+     holds it up was not seen (or it hangs on a wall); scan it from lower down']
+    >>> caveats({"pieces": 2, "apart": 0.007, "above_floor": 0.0})  # a sliver
+    []
+    """
+    out = []
+    n, apart = int(completion.get("pieces") or 1), float(completion.get("apart") or 0.0)
+    if n > 1 and apart >= APART_SHARE:
+        out.append(
+            f"the result is {n} pieces apart ({apart:.0%} of it outside the largest): what "
+            "joins them was not seen; scan it from another side"
+        )
+    above = completion.get("above_floor")
+    if above is not None and above > FLOATS_ABOVE:
+        out.append(
+            f"the result stands {above:.2f} m above the floor seen: what holds it up was not "
+            "seen (or it hangs on a wall); scan it from lower down"
+        )
+    return out
+
+
 def _recorded(kept: CSDF, record: dict) -> CSDF:
     """``kept`` with the guard's ``record`` in its metadata and history, its reason warned."""
     if record["reason"] is not None:
@@ -278,6 +317,10 @@ def _recorded(kept: CSDF, record: dict) -> CSDF:
     # most of it guessed: recorded (the command's summary says so), not warned about: a result
     # the caller asked for without symmetry is guessed wherever the scan did not look
     record["mostly_guessed"] = float(kept.meta["completion"]["guessed"]) > MAX_GUESSED
+    # a result in pieces, or above the floor: what holds it together or up was not seen
+    record["caveats"] = caveats(kept.meta["completion"])
+    for line in record["caveats"]:
+        warnings.warn(line, PartscaleWarning, stacklevel=4)
     meta = dict(kept.meta)
     meta["completion"] = {**kept.meta["completion"], "guard": record}
     history = [dict(h) for h in meta.get("history", [])]

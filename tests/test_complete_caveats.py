@@ -39,8 +39,9 @@ def two_pieces():
 
 
 def test_a_plate_over_a_base_with_nothing_between_is_said_to_be_two_pieces(two_pieces):
-    # no strut spans 0.65 m (a fifth of the object's size at most): the result is the two
-    # pieces the scan holds, and one line says so
+    # no strut spans 0.65 m (a fifth of the object's size at most), and no pedestal stands
+    # where the camera saw under the plate: the result is the two pieces the scan holds, and
+    # one line says so
     c, said = two_pieces
     m = c.meta["completion"]
     assert m["pieces"] == 2 and not m["struts"]

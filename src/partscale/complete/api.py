@@ -1332,7 +1332,12 @@ def guess_parts(
     def sure_free_up(pu):
         return sure.free(_apply(Uinv, pu))
 
-    col = column_mod.find_column(surface.points, sy.rot, sure_free_up, h) if symmetry else None
+    col = None
+    if symmetry:
+        col = column_mod.find_column(surface.points, sy.rot, sure_free_up, h)
+        if col is None and sy.rot is None:
+            # no turning base: a pedestal under a top, on the mirror planes' crossing
+            col = column_mod.find_pedestal(surface.points, sy.syms, sure_free_up, h)
     n_column = 0
     grid_to_up = sy.U @ g.grid_to_world
     if col is not None:

@@ -1,4 +1,5 @@
-"""A swivel chair's column: the gas lift between a turning base's hub and the seat.
+"""A swivel chair's column, the gas lift between a turning base's hub and the seat, and a
+pedestal between a table's plinth and its top.
 
 Sensors rarely read it (a thin black cylinder: the TUM frame's depth is 0 over its pixels), so
 the completion would leave the seat floating above its base. Where a rotation of the base was
@@ -18,6 +19,11 @@ legs' turned copies starting farther out), the hub is guessed too: a disc about 
 reaching a voxel past the legs' inner ends, from their lowest point to the column's foot,
 when those ends lie within the turn's own hub test (``symmetry.HUB_SHARE`` of the base's
 radius) and the disc is no taller than its radius.
+
+Without a turning base, a top over a plinth with nothing seen between them (a pedestal table
+seen from above its top, which hides the pedestal) gets the same column on the crossing of two
+mirror planes (:func:`find_pedestal`): Kenney's round table from three views 30 degrees above
+was its top and its plinth apart, and is one piece with it.
 """
 
 from __future__ import annotations
@@ -53,6 +59,9 @@ SURE_MARGIN_VOXELS = 1.0
 """Voxels a point must lie in front of the readings to be surely free."""
 RADIUS_STEP = 0.0025
 """Metres between the radii tried, from ``MAX_RADIUS`` down."""
+PEDESTAL_CROSS_DEG = 30.0
+"""Degrees at least between two mirror planes whose crossing is a pedestal's axis
+(:func:`find_pedestal`)."""
 
 
 @dataclass(frozen=True)
@@ -71,6 +80,7 @@ class Column:
     contradicted: float
     hub_radius: float = 0.0
     hub_bottom: float = 0.0
+    of: str = "turning base"
 
     def as_dict(self) -> dict:
         """The column as JSON-ready numbers (``meta['completion']['column']``)."""
@@ -83,6 +93,7 @@ class Column:
             "contradicted": round(self.contradicted, 4),
             "hub_radius": round(self.hub_radius, 6),
             "hub_bottom": round(self.hub_bottom, 6),
+            "of": self.of,
         }
 
 
@@ -144,8 +155,23 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
         best = max(best, run)
     if best < MIN_GAP_VOXELS:
         return None
-    # the largest radius whose surface the sure free space leaves alone (the ends excluded:
-    # the hub's and the seat's own edges)
+    radius, share = _radius(x, z, bottom, top, free_up, h)
+    if share > MAX_CONTRADICTED:
+        return None  # the cameras saw through where even the thinnest column would stand
+    hub_bottom = float(P[near & low, 1].min()) if hub_radius else 0.0
+    if hub_radius and bottom - hub_bottom > hub_radius:
+        # a hub is a squat disc where the legs meet: surface that high so near the axis is
+        # something else (a column seen off the axis), not the legs' inner ends
+        return None
+    return Column(x, z, bottom, top, radius, share, hub_radius, hub_bottom)
+
+
+def _radius(x: float, z: float, bottom: float, top: float, free_up, h: float):
+    """The largest radius in [``MIN_RADIUS``, ``MAX_RADIUS``] of a column on (``x``, ``z``) from
+    ``bottom`` to ``top`` whose surface the sure free space ``free_up`` leaves alone (its ends
+    excluded: the hub's and the seat's own edges), and the share of that surface surely free
+    (above 0 only at ``MIN_RADIUS``).
+    """
     a = np.linspace(0.0, 2 * np.pi, 48, endpoint=False)
     heights = np.arange(bottom + h, top - h + 1e-9, h / 2)
     if len(heights) == 0:
@@ -165,14 +191,76 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
         radius = float(r)
         if share == 0.0:
             break
-    if share > MAX_CONTRADICTED:
-        return None  # the cameras saw through where even the thinnest column would stand
-    hub_bottom = float(P[near & low, 1].min()) if hub_radius else 0.0
-    if hub_radius and bottom - hub_bottom > hub_radius:
-        # a hub is a squat disc where the legs meet: surface that high so near the axis is
-        # something else (a column seen off the axis), not the legs' inner ends
+    return radius, share
+
+
+def find_pedestal(points: np.ndarray, mirrors, free_up, h: float) -> Column | None:
+    """The column of a pedestal under a top, or None.
+
+    Where two of the vertical mirror planes ``mirrors`` (upright
+    :class:`~partscale.complete.symmetry.Symmetry`, kind "mirror") cross at
+    ``PEDESTAL_CROSS_DEG`` or more (a round or square table, a bar stool on a disc) and a
+    stretch of height at least ``MIN_GAP_VOXELS`` tall holds no surface anywhere (the top is
+    carried by nothing seen: the legs of a four-legged table span every height), a column
+    stands on their crossing from the highest surface below that stretch to the lowest above
+    it, when what lies below and what lies above both surround the crossing (points within
+    each quarter turn about it), as thick as the sure free space ``free_up`` allows
+    (:func:`find_column`'s radii); None where it contradicts even the thinnest.
+
+    points : (N, 3) upright surface points (observed and copies); h : the grid's voxel.
+    """
+    axis = _crossing(mirrors)
+    if axis is None:
         return None
-    return Column(x, z, bottom, top, radius, share, hub_radius, hub_bottom)
+    x, z = axis
+    P = np.asarray(points, np.float64)
+    gap = _empty_stretch(P[:, 1], h)
+    if gap is None:
+        return None
+    bottom, top = gap
+    for part in (P[P[:, 1] <= bottom], P[P[:, 1] >= top]):
+        quarter = (np.arctan2(part[:, 2] - z, part[:, 0] - x) // (np.pi / 2)).astype(np.int64)
+        if len(part) < MIN_POINTS or len(np.unique(quarter)) < 4:
+            return None
+    radius, share = _radius(x, z, bottom, top, free_up, h)
+    if share > MAX_CONTRADICTED:
+        return None
+    return Column(x, z, bottom, top, radius, share, of="pedestal")
+
+
+def _crossing(mirrors) -> tuple[float, float] | None:
+    """(x, z) where the first two vertical mirror planes at ``PEDESTAL_CROSS_DEG`` or more to
+    each other cross (each ``params`` ``theta``, ``offset``: the plane
+    ``x cos(theta) + z sin(theta) = offset``); None where no two do.
+    """
+    planes = [(m.params["theta"], m.params["offset"]) for m in mirrors if m.kind == "mirror"]
+    for (t1, d1), (t2, d2) in itertools.combinations(planes, 2):
+        if abs(np.sin(t1 - t2)) >= np.sin(np.radians(PEDESTAL_CROSS_DEG)):
+            A = np.array([[np.cos(t1), np.sin(t1)], [np.cos(t2), np.sin(t2)]])
+            x, z = np.linalg.solve(A, [d1, d2])
+            return float(x), float(z)
+    return None
+
+
+def _empty_stretch(y: np.ndarray, h: float) -> tuple[float, float] | None:
+    """(bottom, top): the heights of the surface below and above the tallest stretch of voxel
+    heights holding at most ``EMPTY_SHARE`` of heights ``y`` (N,) each, at least
+    ``MIN_GAP_VOXELS`` of them; None where there is none.
+    """
+    if len(y) < 2:
+        return None
+    edges = np.arange(float(y.min()), float(y.max()) + h, h)
+    counts = np.histogram(y, bins=edges)[0]
+    empty = np.concatenate([[False], counts <= EMPTY_SHARE * len(y), [False]])
+    change = np.flatnonzero(np.diff(empty.astype(np.int8)))
+    starts, ends = change[::2], change[1::2]  # runs of empty bins [start, end)
+    if not len(starts):
+        return None
+    k = int(np.argmax(ends - starts))
+    if ends[k] - starts[k] < MIN_GAP_VOXELS:
+        return None
+    lo, hi = edges[starts[k]], edges[ends[k]]
+    return float(y[y <= lo].max()), float(y[y >= hi].min())
 
 
 def add_column(

@@ -111,3 +111,26 @@ def test_a_round_table_seen_only_from_above_its_top_says_it_stands_above_the_flo
     m = c.meta["completion"]
     assert m["above_floor"] >= 0.4
     assert any("above the floor seen" in s for s in m["guard"]["caveats"])
+
+
+@pytest.mark.parametrize("distance", [0.5, 1.0])
+def test_an_object_the_camera_framed_too_closely_is_said_to_run_out_of_its_frame(distance):
+    # a bench 3 m long seen from half the distance that frames it: its ends and its foot lie
+    # beyond the image; framed whole, nothing is said
+    from partscale.complete import complete
+    from partscale.evaluate import virtual_scan
+
+    frames = virtual_scan(
+        _boxes(((0, 0.4, 0), (3.0, 0.8, 0.9))), azimuths=(10.0,), elevation=15.0, distance=distance
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c = complete(frames, res=64)
+    m = c.meta["completion"]
+    (sides,) = m["cut_by_frame"]
+    said = [s for s in m["guard"]["caveats"] if "runs out of the camera's frame" in s]
+    if distance < 1.0:
+        assert {"left", "right"} <= set(sides) and len(said) == 1
+        assert "left" in said[0] and "right" in said[0]
+    else:
+        assert sides == [] and said == []

@@ -8,7 +8,7 @@ import os
 import warnings
 import zlib
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -99,6 +99,12 @@ CARVE_MARGIN = 0.5
 """Voxels a point must lie in front of a reading to be free space (absorbs sensor noise)."""
 
 
+BORDER_PIXELS = 2
+CUT_PIXELS = 5
+CUT_SHARE = 0.002
+"""An object's pixels within ``BORDER_PIXELS`` of a side of the image, at least ``CUT_PIXELS``
+of them and ``CUT_SHARE`` of its pixels in that frame, run out of it there
+(:func:`cut_by_frames`)."""
 UPSAMPLE_MAX = 4
 """Largest factor a frame's pixels are upsampled by along each side (:func:`densify`)."""
 UPSAMPLE_ABOVE = 1.0
@@ -383,7 +389,8 @@ class Observation:
     gave up: ``"floor"``, ``"underside"`` (a level plane under the object that is no floor),
     ``"base"`` (:func:`partscale.complete.floor.base_plane`), ``"faces"``
     (:func:`partscale.complete.floor.faces_up`) or ``"camera"`` (its -y axis), and
-    the factor each frame was upsampled by (:func:`densify`; empty: none was).
+    the factor each frame was upsampled by (:func:`densify`; empty: none was) and, for each
+    frame, the sides of its image the object runs out of (:func:`cut_by_frames`).
     """
 
     frames: list
@@ -395,6 +402,7 @@ class Observation:
     up_from: str = "camera"
     cluster_cell: float = CLUSTER_CELL
     upsampled: tuple[int, ...] = ()
+    cut: list = field(default_factory=list)
 
 
 def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
@@ -416,17 +424,53 @@ def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
 
 
 def _frame_points(frames: list[Frame]):
-    """The frames' readings: points (N, 3) world, colours (N, 3) uint8, their flat pixels in
-    the first frame (N,) (-1 for the other frames' points) and the eye that saw each (N, 3).
+    """The frames' readings: points (N, 3) world, colours (N, 3) uint8, their flat pixels (N,)
+    in the frame that read each, that frame's index (N,) and the eye that saw each (N, 3).
     """
-    pts, cols, pixs, eyes = [], [], [], []
+    pts, cols, pixs, ids, eyes = [], [], [], [], []
     for i, f in enumerate(frames):
         p, c, q = f.points()
         pts.append(p)
         cols.append(c)
-        pixs.append(q if i == 0 else np.full(len(q), -1))
+        pixs.append(q)
+        ids.append(np.full(len(q), i))
         eyes.append(np.broadcast_to(f.pose[:3, 3], p.shape))
-    return np.concatenate(pts), np.concatenate(cols), np.concatenate(pixs), np.concatenate(eyes)
+    out = (pts, cols, pixs, ids, eyes)
+    return tuple(np.concatenate(a) for a in out)
+
+
+def cut_by_frames(frames: list[Frame], pixels: np.ndarray, ids: np.ndarray) -> list[list[str]]:
+    """For each frame, the sides of its image (``"left"``, ``"right"``, ``"top"``,
+    ``"bottom"``) that the object's pixels reach: within ``BORDER_PIXELS`` of the side, at
+    least ``CUT_PIXELS`` of them and ``CUT_SHARE`` of the object's pixels in that frame (the
+    object runs on beyond what the camera framed); none for a frame made from a cropped mesh
+    or point cloud (framed to hold it all). ``pixels`` (N,) int64: the object's flat pixels,
+    ``ids`` (N,) the frame that read each.
+
+    >>> import numpy as np
+    >>> from partscale.complete import Frame
+    >>> f = Frame(np.ones((10, 20), np.float32), None, np.eye(3), np.eye(4))
+    >>> rows, cols = np.mgrid[4:10, 0:8]  # a block reaching the left and the bottom
+    >>> cut_by_frames([f], (rows * 20 + cols).ravel(), np.zeros(48, int))
+    [['left', 'bottom']]
+    """
+    out: list[list[str]] = []
+    for i, f in enumerate(frames):
+        q = pixels[ids == i]
+        if f.cropped or not len(q):
+            out.append([])
+            continue
+        H, W = f.shape
+        v, u = np.divmod(q, W)
+        near = {
+            "left": u < BORDER_PIXELS,
+            "right": u >= W - BORDER_PIXELS,
+            "top": v < BORDER_PIXELS,
+            "bottom": v >= H - BORDER_PIXELS,
+        }
+        least = max(CUT_PIXELS, CUT_SHARE * len(q))
+        out.append([side for side, m in near.items() if m.sum() >= least])
+    return out
 
 
 def observe(frames: list[Frame], *, box=None, source: str = "scan"):
@@ -439,7 +483,8 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
     # sensor noise would roughen every observed surface: smooth the range images (not the
     # frames made from meshes, whose points are kept as given)
     frames = [f if f.cropped else denoise(f) for f in frames]
-    P, C, pix, E = _frame_points(frames)
+    P, C, q, fid, E = _frame_points(frames)
+    pix = np.where(fid == 0, q, -1)  # the first frame's pixels: where a box is drawn
     if len(P) < 10:
         raise InputError(f"{source}: expected a scan with depth readings, got {len(P)} points")
     cropped = all(f.cropped for f in frames)
@@ -487,7 +532,8 @@ def observe(frames: list[Frame], *, box=None, source: str = "scan"):
         floor_offset = float((Q @ up).min())
     centre = Q.mean(axis=0)
     U = _upright(up, frames[0].pose[:3, 2], floor_offset, centre)
-    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from, cell)
+    cut = cut_by_frames(frames, q[obj], fid[obj])
+    return Observation(frames, Q, QC, U, found, normals(Q, E[obj]), up_from, cell, cut=cut)
 
 
 def observe_metric(
@@ -591,7 +637,7 @@ def densify(ob: Observation, res: int, measured: metric_mod.Plausibility) -> Obs
         return ob
     from scipy.spatial import cKDTree
 
-    P, C, _, E = _frame_points([upsample(f, k) for f, k in zip(ob.frames, ks, strict=True)])
+    P, C, _, _, E = _frame_points([upsample(f, k) for f, k in zip(ob.frames, ks, strict=True)])
     # a coarse pixel's diagonal around the object's own points: what lies between them
     reach = 1.5 * max(feet)
     near = np.isfinite(cKDTree(ob.points).query(P, distance_upper_bound=reach, workers=2)[0])
@@ -1419,6 +1465,7 @@ def completion_meta(
         "floor": None
         if found is None
         else {"normal": found[0].normal.round(6).tolist(), "offset": round(found[0].offset, 6)},
+        "cut_by_frame": [list(c) for c in ob.cut],
         "pieces": n_pieces,
         "apart": apart,
         "above_floor": None if found is None else above_floor(inside, g, found[0]),

@@ -283,7 +283,9 @@ def give_way(observed: CSDF, points: np.ndarray, carver: Carver, weak_stages: li
 def caveats(completion: dict) -> list[str]:
     """One line each for what makes a result look broken although it is what the scan holds:
     pieces apart (``completion['pieces']`` above one, ``APART_SHARE`` or more of the solid
-    outside the largest, ``completion['apart']``: what joins them was not seen) and a result
+    outside the largest, ``completion['apart']``: what joins them was not seen), an object that
+    runs out of every frame (``completion['cut_by_frame']``, the sides of each frame's image it
+    reaches: what lies beyond was not seen) and a result
     standing more than ``FLOATS_ABOVE`` above the floor found (``completion['above_floor']``:
     what holds it up was not seen).
 
@@ -293,6 +295,11 @@ def caveats(completion: dict) -> list[str]:
      holds it up was not seen (or it hangs on a wall); scan it from lower down']
     >>> caveats({"pieces": 2, "apart": 0.007, "above_floor": 0.0})  # a sliver
     []
+    >>> caveats({"cut_by_frame": [["left", "right", "bottom"]]})  # doctest: +NORMALIZE_WHITESPACE
+    ["the object runs out of the camera's frame (left, right and bottom): what lies beyond was
+     not seen; step back to take all of it in"]
+    >>> caveats({"cut_by_frame": [["left"], []]})  # the second frame holds all of it
+    []
     """
     out = []
     n, apart = int(completion.get("pieces") or 1), float(completion.get("apart") or 0.0)
@@ -300,6 +307,15 @@ def caveats(completion: dict) -> list[str]:
         out.append(
             f"the result is {n} pieces apart ({apart:.0%} of it outside the largest): what "
             "joins them was not seen; scan it from another side"
+        )
+    cut = completion.get("cut_by_frame") or []
+    if cut and all(cut):
+        sides = list(dict.fromkeys(side for sides in cut for side in sides))
+        where = " and ".join([", ".join(sides[:-1]), sides[-1]] if len(sides) > 1 else sides)
+        every = "the camera's frame" if len(cut) == 1 else "every camera's frame"
+        out.append(
+            f"the object runs out of {every} ({where}): what lies beyond was not seen; step "
+            "back to take all of it in"
         )
     above = completion.get("above_floor")
     if above is not None and above > FLOATS_ABOVE:

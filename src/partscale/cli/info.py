@@ -57,7 +57,8 @@ def summary(
 def _completion(comp) -> dict | None:
     """A completion's shares of the surface by kind, where its guard kept the scan as observed
     or was overruled, why (``guard_reason``), and what makes it look broken (``caveats``: pieces
-    apart, standing above the floor); None for a CSDF not made by completion.
+    apart, running out of the camera's frame, standing above the floor); None for a CSDF not
+    made by completion.
     """
     if not isinstance(comp, dict):
         return None

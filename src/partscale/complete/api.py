@@ -1468,7 +1468,8 @@ def completion_meta(
         "cut_by_frame": [list(c) for c in ob.cut],
         "pieces": n_pieces,
         "apart": apart,
-        "above_floor": None if found is None else above_floor(inside, g, found[0]),
+        # the lowest solid voxel is a surface voxel (nothing solid below it): those alone
+        "above_floor": None if found is None else above_floor(inside & surface_vox, g, found[0]),
         "up": sy.U[1, :3].round(6).tolist(),
         "up_from": sy.up_from,
         "up_tilt_by_mirror_deg": round(sy.up_tilt, 3),

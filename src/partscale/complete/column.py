@@ -148,12 +148,8 @@ def find_column(points: np.ndarray, rotation, free_up, h: float) -> Column | Non
     # a seat carried by its column alone: somewhere between hub and seat a stretch of height
     # holds no surface anywhere (the legs of a four-legged chair span every height)
     counts = np.histogram(P[:, 1], bins=np.arange(bottom, top + h, h))[0]
-    empty = counts <= EMPTY_SHARE * len(P)
-    run = best = 0
-    for e in empty:
-        run = run + 1 if e else 0
-        best = max(best, run)
-    if best < MIN_GAP_VOXELS:
+    starts, ends = _empty_runs(counts, len(P))
+    if not len(starts) or (ends - starts).max() < MIN_GAP_VOXELS:
         return None
     radius, share = _radius(x, z, bottom, top, free_up, h)
     if share > MAX_CONTRADICTED:
@@ -250,10 +246,7 @@ def _empty_stretch(y: np.ndarray, h: float) -> tuple[float, float] | None:
     if len(y) < 2:
         return None
     edges = np.arange(float(y.min()), float(y.max()) + h, h)
-    counts = np.histogram(y, bins=edges)[0]
-    empty = np.concatenate([[False], counts <= EMPTY_SHARE * len(y), [False]])
-    change = np.flatnonzero(np.diff(empty.astype(np.int8)))
-    starts, ends = change[::2], change[1::2]  # runs of empty bins [start, end)
+    starts, ends = _empty_runs(np.histogram(y, bins=edges)[0], len(y))
     if not len(starts):
         return None
     k = int(np.argmax(ends - starts))
@@ -261,6 +254,19 @@ def _empty_stretch(y: np.ndarray, h: float) -> tuple[float, float] | None:
         return None
     lo, hi = edges[starts[k]], edges[ends[k]]
     return float(y[y <= lo].max()), float(y[y >= hi].min())
+
+
+def _empty_runs(counts: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The runs of bins of ``counts`` (B,) holding at most ``EMPTY_SHARE`` of ``n`` points each
+    (flying pixels): their first bins (R,) and the bins just past them (R,).
+
+    >>> import numpy as np
+    >>> _empty_runs(np.array([9, 0, 0, 9, 0, 9]), 100)
+    (array([1, 4]), array([3, 5]))
+    """
+    empty = np.concatenate([[False], counts <= EMPTY_SHARE * n, [False]])
+    change = np.flatnonzero(np.diff(empty.astype(np.int8)))
+    return change[::2], change[1::2]
 
 
 def add_column(

@@ -81,7 +81,8 @@ def test_a_standing_table_is_one_piece_on_the_floor_and_nothing_is_said():
 
 
 def test_above_floor_is_the_lowest_face_over_the_plane():
-    # a solid whose lowest voxel centre lies 0.30 m over the plane y = 0.05: its face 0.25 m
+    # a solid whose lowest voxel centre lies 0.45 m over the plane y = 0.05 (centres at
+    # y = 0.5 .. 0.7, voxels 0.1 m): its lowest face, half a voxel lower, 0.40 m
     from partscale.complete.api import above_floor
     from partscale.complete.floor import Plane
     from partscale.complete.fuse import GridFrame

@@ -285,9 +285,8 @@ def caveats(completion: dict) -> list[str]:
     pieces apart (``completion['pieces']`` above one, ``APART_SHARE`` or more of the solid
     outside the largest, ``completion['apart']``: what joins them was not seen), an object that
     runs out of every frame (``completion['cut_by_frame']``, the sides of each frame's image it
-    reaches: what lies beyond was not seen) and a result
-    standing more than ``FLOATS_ABOVE`` above the floor found (``completion['above_floor']``:
-    what holds it up was not seen).
+    reaches: what lies beyond was not seen) and a result standing more than ``FLOATS_ABOVE``
+    above the floor found (``completion['above_floor']``: what holds it up was not seen).
 
     >>> caveats({"pieces": 2, "apart": 0.1, "above_floor": 0.63})  # doctest: +NORMALIZE_WHITESPACE
     ['the result is 2 pieces apart (10% of it outside the largest): what joins them was not

@@ -8,7 +8,7 @@ import os
 import warnings
 import zlib
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -59,9 +59,6 @@ CLUSTER_SPACINGS = 4.0
 """The cell within which points are one object, in point spacings of the scan (the first frame's
 pixel footprint at its median depth): a scan sparser than CLUSTER_CELL / CLUSTER_SPACINGS (a
 far view, a coarse sensor) would otherwise fall apart into pieces of one object."""
-STANDS_WITHIN = 0.15
-"""Metres above the floor within which a cluster's lowest point stands on it (picked first when
-isolating automatically)."""
 MAX_OBJECT_EXTENT = 4.0
 """Metres: the largest object isolated automatically (a 3.3 m lounge sofa, a table for ten);
 larger clusters are walls or the room."""
@@ -279,7 +276,7 @@ def _nearest_centre(shape, P, pix, height, idx, lab, counts) -> int:
         du = max(u.min() - W / 2, W / 2 - u.max(), 0.0)
         dv = max(v.min() - H / 2, H / 2 - v.max(), 0.0)
         key = (math.hypot(du, dv), -int(counts[c]))
-        standing = bool(height[m].min() <= STANDS_WITHIN)
+        standing = bool(height[m].min() <= floor_mod.STANDS_WITHIN)
         if key < picks[standing][1]:
             picks[standing] = (int(c), key)
     return picks[True][0] if picks[True][0] >= 0 else picks[False][0]
@@ -402,7 +399,7 @@ class Observation:
     up_from: str = "camera"
     cluster_cell: float = CLUSTER_CELL
     upsampled: tuple[int, ...] = ()
-    cut: list = field(default_factory=list)
+    cut: tuple[tuple[str, ...], ...] = ()
 
 
 def normals(points: np.ndarray, eyes: np.ndarray) -> np.ndarray:
@@ -439,7 +436,9 @@ def _frame_points(frames: list[Frame]):
     return tuple(np.concatenate(a) for a in out)
 
 
-def cut_by_frames(frames: list[Frame], pixels: np.ndarray, ids: np.ndarray) -> list[list[str]]:
+def cut_by_frames(
+    frames: list[Frame], pixels: np.ndarray, ids: np.ndarray
+) -> tuple[tuple[str, ...], ...]:
     """For each frame, the sides of its image (``"left"``, ``"right"``, ``"top"``,
     ``"bottom"``) that the object's pixels reach: within ``BORDER_PIXELS`` of the side, at
     least ``CUT_PIXELS`` of them and ``CUT_SHARE`` of the object's pixels in that frame (the
@@ -452,13 +451,13 @@ def cut_by_frames(frames: list[Frame], pixels: np.ndarray, ids: np.ndarray) -> l
     >>> f = Frame(np.ones((10, 20), np.float32), None, np.eye(3), np.eye(4))
     >>> rows, cols = np.mgrid[4:10, 0:8]  # a block reaching the left and the bottom
     >>> cut_by_frames([f], (rows * 20 + cols).ravel(), np.zeros(48, int))
-    [['left', 'bottom']]
+    (('left', 'bottom'),)
     """
-    out: list[list[str]] = []
+    out: list[tuple[str, ...]] = []
     for i, f in enumerate(frames):
         q = pixels[ids == i]
         if f.cropped or not len(q):
-            out.append([])
+            out.append(())
             continue
         H, W = f.shape
         v, u = np.divmod(q, W)
@@ -469,8 +468,8 @@ def cut_by_frames(frames: list[Frame], pixels: np.ndarray, ids: np.ndarray) -> l
             "bottom": v >= H - BORDER_PIXELS,
         }
         least = max(CUT_PIXELS, CUT_SHARE * len(q))
-        out.append([side for side, m in near.items() if m.sum() >= least])
-    return out
+        out.append(tuple(side for side, m in near.items() if m.sum() >= least))
+    return tuple(out)
 
 
 def observe(frames: list[Frame], *, box=None, source: str = "scan"):

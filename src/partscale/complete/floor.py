@@ -22,6 +22,10 @@ WIDE_TILT_DEG = 60.0
 """Degrees between the floor's normal and the up prior in the second search of a full sensor
 frame that found no floor within ``MAX_TILT_DEG``: a camera held pitched 45 degrees down at an
 object (a handheld scan from above) sees the floor 45 degrees off its own axis."""
+STANDS_WITHIN = 0.15
+"""Metres above the floor within which something stands on it: a cluster picked first when
+isolating an object automatically, and a result said to stand above the floor seen beyond it
+(:func:`partscale.complete.guard.caveats`: what holds it up was not seen)."""
 MIN_INLIER_FRACTION = 0.04
 MAX_BELOW_FRACTION = 0.03
 ITERATIONS = 600

@@ -40,6 +40,7 @@ from ..csdf import CSDF
 from ..errors import PartscaleWarning
 from ..surface import sample_linear
 from .carve import Carver
+from .floor import STANDS_WITHIN
 
 ON_SURFACE_VOXELS = 1.5
 """Voxels from the completion's zero surface within which an observed point counts as kept."""
@@ -68,11 +69,6 @@ APART_SHARE = 0.02
 """Share of a result's solid outside its largest piece from which its pieces apart are said
 (:func:`caveats`): a smaller fragment (a sliver beside a cabinet's side, 0.7 %) is recorded
 (``completion['pieces']``, ``completion['apart']``), not said."""
-FLOATS_ABOVE = 0.15
-"""Metres above the floor found beyond which a result does not stand on it (what holds it up,
-a table's pedestal under its top, was not seen; or it hangs on a wall): said in one line
-(:func:`caveats`), as :data:`partscale.complete.api.STANDS_WITHIN` tells an object standing on
-the floor from one above it."""
 MARGIN = 0.01
 """Shares within this of each other are the same evidence: the completion adds unseen surface,
 which is its point, and is kept unless the scan speaks clearly against it."""
@@ -285,8 +281,9 @@ def caveats(completion: dict) -> list[str]:
     pieces apart (``completion['pieces']`` above one, ``APART_SHARE`` or more of the solid
     outside the largest, ``completion['apart']``: what joins them was not seen), an object that
     runs out of every frame (``completion['cut_by_frame']``, the sides of each frame's image it
-    reaches: what lies beyond was not seen) and a result standing more than ``FLOATS_ABOVE``
-    above the floor found (``completion['above_floor']``: what holds it up was not seen).
+    reaches: what lies beyond was not seen) and a result standing more than
+    :data:`partscale.complete.floor.STANDS_WITHIN` above the floor found
+    (``completion['above_floor']``: what holds it up was not seen).
 
     >>> caveats({"pieces": 2, "apart": 0.1, "above_floor": 0.63})  # doctest: +NORMALIZE_WHITESPACE
     ['the result is 2 pieces apart (10% of it outside the largest): what joins them was not
@@ -317,7 +314,7 @@ def caveats(completion: dict) -> list[str]:
             "back to take all of it in"
         )
     above = completion.get("above_floor")
-    if above is not None and above > FLOATS_ABOVE:
+    if above is not None and above > STANDS_WITHIN:
         out.append(
             f"the result stands {above:.2f} m above the floor seen: what holds it up was not "
             "seen (or it hangs on a wall); scan it from lower down"

@@ -669,6 +669,38 @@ def test_close_lids_takes_a_thick_plate_s_edge_by_its_size():
     assert (out ^ solid).sum() == 68 * 2 * 50
 
 
+def test_close_lids_makes_an_object_s_top_as_thick_as_a_top_where_nothing_saw_under_it():
+    # y is up, 5 mm voxels. A table 40 slices tall on four legs: its top's edge a rim 3 slices
+    # tall (36-38) at the top of the object, a shelf's frame 3 slices tall (10-12) lower down.
+    # The top is LID_TOP (30 mm, 6 slices: 33-38) thick where no camera saw under its edge,
+    # and as thick as its edge (36-38) along its front, where one saw up to the edge; the
+    # shelf LID_THICK (2)
+    h = 0.005
+    up = lambda P: np.asarray(P)[:, 1]  # noqa: E731
+    solid = np.zeros((50, 45, 40), bool)
+    _rim(solid, 5, 45, 5, 35, 36, 39)  # the top's edge
+    _rim(solid, 5, 45, 5, 35, 10, 13)  # the shelf's frame
+    for x, z in ((5, 5), (43, 5), (5, 33), (43, 33)):
+        solid[x : x + 2, 0:39, z : z + 2] = True  # the legs
+    seen = np.zeros_like(solid)
+    seen[:, 20:36, 6:10] = True  # a camera looked under the top's front edge
+
+    def free(P):
+        i = np.rint(np.asarray(P) / h).astype(int)
+        return seen[i[:, 0], i[:, 1], i[:, 2]]
+
+    grid = fuse.GridFrame(np.eye(4), solid.shape, np.zeros(3), h)
+    out = fuse.close_lids(solid, grid, up, free)
+    assert fuse.LID_TOP / h == pytest.approx(6)
+    assert out[7:43, 33:39, 10:34].all()  # the top, 6 slices, where nothing saw under it
+    assert out[7:43, 36:39, 6:10].all()  # along its front: its edge's 3 slices
+    assert not out[7:43, 33:36, 6:10].any()
+    assert not (out ^ solid)[:, 13:33].any()  # nothing between them
+    assert out[6:44, 11:13, 6:34].all()  # the shelf: its rim's top two slices
+    assert not (out ^ solid)[:, 10].any()
+    assert (out >= solid).all()
+
+
 def test_a_cabinet_seen_from_above_its_front_has_no_holes_where_the_sensor_had_none():
     # Kenney's bedside cabinet in one frame from 30 degrees above, 20 degrees off its front:
     # its front and top, closed thinly behind the readings, had about 75 holes through them

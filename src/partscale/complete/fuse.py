@@ -135,6 +135,13 @@ larger of ``LID_SLICES`` and ``LID_ASPECT`` times the narrower width of what it 
 plate is thin for its size: Kenney's coffee table's top, a solid plate, is an edge 12 slices
 tall round 75 voxels of unseen top). A bin's wall, or a cabinet's, as tall as it is wide or
 taller, runs through many more."""
+RIM_SHARE = 0.5
+"""Share of the most common slice's count of a rim's tops that a slice beside it holds to be
+part of the plate's edge (:func:`_rim_tops`)."""
+RIM_SHARP = 0.25
+"""Share of that count above which a slice just beyond the edge makes it a rounded one (a
+cushion's edge tails off: SheenChair's seat, 0.45; a shelf's board ends sharply: 0.04-0.12),
+whose thickness its tops do not measure."""
 LID_REACH = 3
 """Slices either side of a level slice whose voxels close its rim (:func:`close_lids`)."""
 LID_CLEAR = 8
@@ -955,8 +962,8 @@ def close_lids(
     # a hole through consecutive slices is one plate's
     lab, _ = ndimage.label(small[holes])
     lab = np.where(_plates(lab, ax)[lab], lab, 0)
-    top = _rim_tops(m, lab, ax)
-    thick = _lid_slices(m, top, ax, grid.h)
+    top, edge = _rim_tops(m, lab, ax)
+    thick = np.maximum(_lid_slices(m, top, ax, grid.h), edge)
     n = len(top)
     flat = np.flatnonzero(lab.ravel())
     lf = lab.ravel()[flat]
@@ -1053,11 +1060,27 @@ def _lid_slices(m: np.ndarray, top: np.ndarray, ax: int, h: float) -> np.ndarray
     return np.where(at_top, max(LID_THICK, round(LID_TOP / h)), LID_THICK).astype(np.int64)
 
 
-def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> np.ndarray:
-    """(L + 1,) int64: for each plate ``lab`` (X, Y, Z) int32 labels 1..L in ``m`` (X, Y, Z)
-    bool, the slice across ``ax`` (up) of its rim's top: of the voxels of ``m`` beside it in
-    its slices with none above them, the slice most lie in (a wall that runs on above the
-    plate, a bookcase's side beside a shelf, has its top elsewhere); -1 where none.
+def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> tuple[np.ndarray, np.ndarray]:
+    """(L + 1,) int64 each: for each plate ``lab`` (X, Y, Z) int32 labels 1..L in ``m`` (X, Y,
+    Z) bool, the slice across ``ax`` (up) of its rim's top and the slices its edge spans (0
+    and -1 where it has none).
+
+    The voxels of ``m`` beside the plate in its slices with none above them have their tops
+    where the rim's solid ends: along the edge's top, and down the inner side of the closure
+    behind the edge's face, as tall as that face (a shelf's board 20 mm thick, seen at its
+    front edge, closed behind it, has tops over its 5 slices at 4 mm). The edge: the run of
+    slices round the one most tops lie in (a wall that runs on above the plate, a bookcase's
+    side beside a shelf, has its top elsewhere) where at least ``RIM_SHARE`` as many lie; the
+    top: its highest slice. Where a slice just beyond that run holds more than ``RIM_SHARP``
+    as many, the edge is rounded (a cushion's): the top is the most common slice, and no
+    edge is measured (0).
+
+    >>> m = np.zeros((8, 6, 8), bool); m[:, :4] = True  # a board, slices 0-3
+    >>> m[2:6, :, 2:6] = False  # its hole
+    >>> m[1, 3] = m[6, 3] = False  # the rim's tops: at slice 2 along two sides, 3 along two
+    >>> lab = np.zeros(m.shape, np.int32); lab[2:6, :, 2:6] = 1
+    >>> [a.tolist() for a in _rim_tops(m, lab, 1)]  # top slice 3, an edge 2 slices tall
+    [[-1, 3], [0, 2]]
     """
     size = [3, 3, 3]
     size[ax] = 1
@@ -1069,7 +1092,23 @@ def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> np.ndarray:
     rim = np.flatnonzero((m & ~above & (near > 0)).ravel())
     per = np.zeros((int(lab.max()) + 1, m.shape[ax]), np.int64)
     np.add.at(per, (near.ravel()[rim], np.unravel_index(rim, m.shape)[ax]), 1)
-    return np.where(per.any(axis=1), np.argmax(per, axis=1), -1)
+    mode = np.argmax(per, axis=1)
+    # the run of slices round the mode holding RIM_SHARE of its count: the edge
+    held = per >= RIM_SHARE * per[np.arange(len(per)), mode][:, None]
+    n = per.shape[1]
+    idx = np.arange(n)
+    gap_above = np.where(~held & (idx[None, :] > mode[:, None]), idx[None, :], n).min(axis=1)
+    gap_below = np.where(~held & (idx[None, :] < mode[:, None]), idx[None, :], -1).max(axis=1)
+    # a board's edge ends sharply; a cushion's rounded one tails off: its most common top
+    rows = np.arange(len(per))
+    beyond = np.maximum(
+        np.where(gap_above < n, per[rows, np.minimum(gap_above, n - 1)], 0),
+        np.where(gap_below >= 0, per[rows, np.maximum(gap_below, 0)], 0),
+    )
+    sharp = beyond <= RIM_SHARP * per[rows, mode]
+    has = per.any(axis=1)
+    top = np.where(has, np.where(sharp, gap_above - 1, mode), -1)
+    return top, np.where(has & sharp, gap_above - gap_below - 1, 0)
 
 
 def _close_tunnels(fill: np.ndarray, free: np.ndarray) -> np.ndarray:

@@ -1062,8 +1062,8 @@ def _lid_slices(m: np.ndarray, top: np.ndarray, ax: int, h: float) -> np.ndarray
 
 def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> tuple[np.ndarray, np.ndarray]:
     """(L + 1,) int64 each: for each plate ``lab`` (X, Y, Z) int32 labels 1..L in ``m`` (X, Y,
-    Z) bool, the slice across ``ax`` (up) of its rim's top and the slices its edge spans (0
-    and -1 where it has none).
+    Z) bool, the slice across ``ax`` (up) of its rim's top and the slices its edge spans (-1
+    and 0 where it has none).
 
     The voxels of ``m`` beside the plate in its slices with none above them have their tops
     where the rim's solid ends: along the edge's top, and down the inner side of the closure

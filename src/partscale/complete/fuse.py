@@ -1092,20 +1092,20 @@ def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> tuple[np.ndarray, np.n
     rim = np.flatnonzero((m & ~above & (near > 0)).ravel())
     per = np.zeros((int(lab.max()) + 1, m.shape[ax]), np.int64)
     np.add.at(per, (near.ravel()[rim], np.unravel_index(rim, m.shape)[ax]), 1)
+    rows, n = np.arange(len(per)), per.shape[1]
     mode = np.argmax(per, axis=1)
+    most = per[rows, mode]
     # the run of slices round the mode holding RIM_SHARE of its count: the edge
-    held = per >= RIM_SHARE * per[np.arange(len(per)), mode][:, None]
-    n = per.shape[1]
-    idx = np.arange(n)
-    gap_above = np.where(~held & (idx[None, :] > mode[:, None]), idx[None, :], n).min(axis=1)
-    gap_below = np.where(~held & (idx[None, :] < mode[:, None]), idx[None, :], -1).max(axis=1)
+    held = per >= RIM_SHARE * most[:, None]
+    idx = np.arange(n)[None, :]
+    gap_above = np.where(~held & (idx > mode[:, None]), idx, n).min(axis=1)
+    gap_below = np.where(~held & (idx < mode[:, None]), idx, -1).max(axis=1)
     # a board's edge ends sharply; a cushion's rounded one tails off: its most common top
-    rows = np.arange(len(per))
     beyond = np.maximum(
         np.where(gap_above < n, per[rows, np.minimum(gap_above, n - 1)], 0),
         np.where(gap_below >= 0, per[rows, np.maximum(gap_below, 0)], 0),
     )
-    sharp = beyond <= RIM_SHARP * per[rows, mode]
+    sharp = beyond <= RIM_SHARP * most
     has = per.any(axis=1)
     top = np.where(has, np.where(sharp, gap_above - 1, mode), -1)
     return top, np.where(has & sharp, gap_above - gap_below - 1, 0)

@@ -674,7 +674,8 @@ def test_close_lids_makes_an_object_s_top_as_thick_as_a_top_where_nothing_saw_un
     # tall (36-38) at the top of the object, a shelf's frame 3 slices tall (10-12) lower down.
     # The top is LID_TOP (30 mm, 6 slices: 33-38) thick where no camera saw under its edge,
     # and as thick as its edge (36-38) along its front, where one saw up to the edge; the
-    # shelf LID_THICK (2)
+    # shelf as thick as its frame's face (3 slices, seen to end: fuse._edge_faces), more than
+    # LID_THICK (2)
     h = 0.005
     up = lambda P: np.asarray(P)[:, 1]  # noqa: E731
     solid = np.zeros((50, 45, 40), bool)
@@ -696,8 +697,8 @@ def test_close_lids_makes_an_object_s_top_as_thick_as_a_top_where_nothing_saw_un
     assert out[7:43, 36:39, 6:10].all()  # along its front: its edge's 3 slices
     assert not out[7:43, 33:36, 6:10].any()
     assert not (out ^ solid)[:, 13:33].any()  # nothing between them
-    assert out[6:44, 11:13, 6:34].all()  # the shelf: its rim's top two slices
-    assert not (out ^ solid)[:, 10].any()
+    assert out[6:44, 10:13, 6:34].all()  # the shelf: its frame's three slices
+    assert not (out ^ solid)[:, :10].any()
     assert (out >= solid).all()
 
 

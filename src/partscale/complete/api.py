@@ -1566,6 +1566,7 @@ def _history(ob: Observation, sy: Symmetries, opts: Settings, *, symmetry: bool)
         "lid_top_m": fuse_mod.LID_TOP,
         "lid_edge_share": fuse_mod.RIM_SHARE,
         "lid_edge_sharp": fuse_mod.RIM_SHARP,
+        "lid_face_m": fuse_mod.LID_FACE,
         "body_wall_share": body_mod.BODY_WALL,
         "body_top_share": body_mod.BODY_SHARE,
         "carve_margin_voxels": CARVE_MARGIN,

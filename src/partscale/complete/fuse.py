@@ -160,6 +160,10 @@ behind an apron flush with its edge). Two slices of a 1.5 m table at 128 (23 mm,
 voxels' centres up to the edge's points) left Sweet Home's table's underside, 29 % of its
 surface, 2 cm over the true one; the same two slices at 256 would be half as thick."""
 LID_TOP_SLICES = 2
+LID_FACE = 0.06
+"""Metres: a plate's outer face seen from its rim's top down to at most this far is its edge
+(:func:`_edge_faces`; a table's top is 18-60 mm thick). A face running on further is an
+apron's or a wall's, flush with the edge, and tells nothing of the plate's thickness."""
 LID_LEVEL = 0.99
 """|Cosine| between up and the nearest grid axis above which the grid's slices are level."""
 HOLE_NEAR = 2
@@ -938,7 +942,8 @@ def close_lids(
     level slices (across up), each slice taken with the ``LID_REACH`` slices either side of it
     (a rim read by a noisy sensor is whole only over a few slices), of any size, in a run
     through no more slices beyond those than a plate's edge spans (:func:`_plates`); each run
-    a plate ``LID_THICK`` slices thick down from its rim's top (:func:`_rim_tops`; at the
+    a plate ``LID_THICK`` slices thick down from its rim's top (:func:`_rim_tops`; as tall as
+    its edge's face where that is seen to end within ``LID_FACE``, :func:`_edge_faces`; at the
     object's top ``LID_TOP`` metres, :func:`_lid_slices`, beyond ``LID_THICK`` slices only
     where no camera surely saw under its edge), filled where no camera surely saw through its
     top ``LID_THICK`` slices (at most ``HOLE_SEEN`` of them in ``sure_free``) and nothing
@@ -963,7 +968,8 @@ def close_lids(
     lab, _ = ndimage.label(small[holes])
     lab = np.where(_plates(lab, ax)[lab], lab, 0)
     top, edge = _rim_tops(m, lab, ax)
-    thick = np.maximum(_lid_slices(m, top, ax, grid.h), edge)
+    face = _edge_faces(m, lab, ax, top, grid.h)
+    thick = np.maximum(np.maximum(_lid_slices(m, top, ax, grid.h), edge), face)
     n = len(top)
     flat = np.flatnonzero(lab.ravel())
     lf = lab.ravel()[flat]
@@ -1109,6 +1115,48 @@ def _rim_tops(m: np.ndarray, lab: np.ndarray, ax: int) -> tuple[np.ndarray, np.n
     has = per.any(axis=1)
     top = np.where(has, np.where(sharp, gap_above - 1, mode), -1)
     return top, np.where(has & sharp, gap_above - gap_below - 1, 0)
+
+
+def _edge_faces(m: np.ndarray, lab: np.ndarray, ax: int, top: np.ndarray, h: float) -> np.ndarray:
+    """(L + 1,) int64: for each plate ``lab`` (X, Y, Z) int32 labels 1..L in ``m`` (X, Y, Z)
+    bool with its rim's top slice ``top`` (L + 1,) (:func:`_rim_tops`, up along ``ax`` towards
+    higher indices), the slices its outer face spans down from that top: the median run of
+    solid down from the top along the outline of the plate with its rim (what the cameras saw
+    of its edge, closed behind); 0 where that is more than ``LID_FACE`` metres (``h`` a voxel's
+    side) or the plate has no top.
+
+    A table's top seen from above its height shows its edge's face down to its underside, and
+    the space under that seen free; the closure behind the face is as tall. Its rim's tops, all
+    at the top's face, do not measure it.
+
+    >>> m = np.zeros((10, 8, 10), bool); m[:, 2:7] = True  # a top 5 slices thick, 2-6
+    >>> m[3:7, :, 3:7] = False  # its unseen middle
+    >>> lab = np.zeros(m.shape, np.int32); lab[3:7, :, 3:7] = 1
+    >>> _edge_faces(m, lab, 1, np.array([-1, 6]), 0.01).tolist()  # 10 mm voxels
+    [0, 5]
+    >>> _edge_faces(m, lab, 1, np.array([-1, 6]), 0.005).tolist()  # 25 mm: within 60 mm
+    [0, 5]
+    >>> _edge_faces(m, lab, 1, np.array([-1, 6]), 0.02).tolist()  # 100 mm: an apron's
+    [0, 0]
+    """
+    mm, ll = np.moveaxis(m, ax, -1), np.moveaxis(lab, ax, -1)
+    # run[..., s]: solid slices from s down, s included
+    run = np.zeros(mm.shape, np.int16)
+    run[..., 0] = mm[..., 0]
+    for s in range(1, mm.shape[-1]):
+        run[..., s] = (run[..., s - 1] + 1) * mm[..., s]
+    face = np.zeros(len(top), np.int64)
+    reach = LID_FACE / h
+    for s in np.unique(top[top >= 0]):
+        cc, _ = ndimage.label(mm[..., s] | (ll[..., s] > 0))
+        for k in np.flatnonzero(top == s):
+            ids = np.unique(cc[ll[..., s] == k])
+            disc = ndimage.binary_fill_holes(np.isin(cc, ids[ids > 0]))
+            outline = disc & ~ndimage.binary_erosion(disc) & mm[..., s]
+            if outline.any():
+                r = float(np.median(run[..., s][outline]))
+                face[k] = round(r) if r <= reach else 0
+    return face
 
 
 def _close_tunnels(fill: np.ndarray, free: np.ndarray) -> np.ndarray:

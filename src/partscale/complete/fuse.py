@@ -1148,15 +1148,38 @@ def _edge_faces(m: np.ndarray, lab: np.ndarray, ax: int, top: np.ndarray, h: flo
     face = np.zeros(len(top), np.int64)
     reach = LID_FACE / h
     for s in np.unique(top[top >= 0]):
-        cc, _ = ndimage.label(mm[..., s] | (ll[..., s] > 0))
+        holes = ll[..., s]
+        cc, _ = ndimage.label(mm[..., s] | (holes > 0))
+        pieces, plates = ndimage.find_objects(cc), ndimage.find_objects(holes)
+        known: dict[tuple[int, ...], int] = {}  # plates in the same pieces share an outline
         for k in np.flatnonzero(top == s):
-            ids = np.unique(cc[ll[..., s] == k])
-            disc = ndimage.binary_fill_holes(np.isin(cc, ids[ids > 0]))
-            outline = disc & ~ndimage.binary_erosion(disc) & mm[..., s]
-            if outline.any():
-                r = float(np.median(run[..., s][outline]))
-                face[k] = round(r) if r <= reach else 0
+            if k > len(plates) or plates[k - 1] is None:
+                continue
+            ids = np.unique(cc[plates[k - 1]][holes[plates[k - 1]] == k])
+            if tuple(ids) not in known:
+                known[tuple(ids)] = _outline_run(cc, ids, pieces, mm[..., s], run[..., s], reach)
+            face[k] = known[tuple(ids)]
     return face
+
+
+def _outline_run(
+    cc: np.ndarray, ids: np.ndarray, pieces: list, solid: np.ndarray, run: np.ndarray, reach: float
+) -> int:
+    """The median of ``run`` (A, B) int16 along the outline of the pieces ``ids`` of ``cc`` (A,
+    B) int32 labels (their boxes ``pieces``, :func:`scipy.ndimage.find_objects`), their holes
+    filled, where ``solid`` (A, B) bool; 0 where that is more than ``reach`` or there is none.
+    """
+    # within the box of the pieces: the slice may hold many
+    box = tuple(
+        slice(min(pieces[i - 1][a].start for i in ids), max(pieces[i - 1][a].stop for i in ids))
+        for a in range(2)
+    )
+    disc = ndimage.binary_fill_holes(np.isin(cc[box], ids))
+    outline = disc & ~ndimage.binary_erosion(disc) & solid[box]
+    if not outline.any():
+        return 0
+    r = float(np.median(run[box][outline]))
+    return round(r) if r <= reach else 0
 
 
 def _close_tunnels(fill: np.ndarray, free: np.ndarray) -> np.ndarray:

@@ -434,6 +434,43 @@ def test_a_table_s_top_is_as_thick_as_its_edge_s_face_seen_from_above():
     assert made >= 0.8 * truth
 
 
+def _plate_heights(obj) -> np.ndarray:
+    """(P,) metres: the middle of each plate a line up through the middle of ``obj``'s plan
+    crosses, above its lowest surface, lowest first."""
+    sb = obj.surface_bounds()
+    i, _, k = np.rint(((sb[0] + sb[1]) / 2 - obj.origin) / obj.voxel_size).astype(int)
+    col = obj.sdf[i, :, k]
+    j = np.flatnonzero((col[:-1] < 0) != (col[1:] < 0))
+    y = obj.origin[1] + (j - col[j] / (col[j + 1] - col[j])) * obj.voxel_size - sb[0][1]
+    return (y[0::2] + y[1::2]) / 2
+
+
+def test_a_bookcase_s_shelves_seen_end_on_repeat_those_seen_from_above():
+    # Sweet Home's bookcase (2.1 m tall, eight shelves and its top 28 cm apart) from three
+    # views 15 degrees above its middle: the cameras stand at 1.9 m, and the three highest
+    # shelves are seen end on (their faces too obliquely for a reading, 60-75 points of their
+    # front edges each). They were missing (F@1% 0.830, below the raw scan's 0.860); carried
+    # on from the five below them (fuse.repeat_plates), each lies within 3 cm of the true one
+    import warnings
+
+    from conftest import data_path
+
+    from partscale import ingest
+    from partscale.complete import complete
+    from partscale.evaluate.virtual import virtual_scan
+
+    mesh = ingest.load_mesh(data_path("sweethome3d/bookcase.obj"))
+    frames = virtual_scan(mesh, azimuths=(40.0, 160.0, 280.0), elevation=15.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c = complete(frames, res=128, upright=True)
+    truth = _plate_heights(ingest.from_mesh(mesh, res=128))
+    assert len(truth) == 8
+    made = _plate_heights(c)
+    for y in truth[-3:]:  # the three highest
+        assert np.abs(made - y).min() <= 0.03
+
+
 def test_a_shelf_seen_at_its_edge_is_as_thick_as_its_edge():
     # Sweet Home's bedside table (0.5 m tall, four legs, a top and two shelves 18 mm thick)
     # from three level views: each shelf's edge is seen all round and nothing of its faces.

@@ -702,6 +702,50 @@ def test_close_lids_makes_an_object_s_top_as_thick_as_a_top_where_nothing_saw_un
     assert (out >= solid).all()
 
 
+def _bookcase() -> np.ndarray:
+    """y up, unit voxels: two side panels 58 slices tall, shelves 2 slices thick every 10 from
+    slice 5, whole at 5, 15 and 25 (seen from above), only their front edges (a strip one
+    voxel deep along z = 5) at 35 and 45 (seen end on); nothing at 55."""
+    solid = np.zeros((30, 60, 20), bool)
+    solid[2:4, 0:58, 5:15] = solid[26:28, 0:58, 5:15] = True  # the sides
+    for y in (5, 15, 25):
+        solid[2:28, y : y + 2, 5:15] = True
+    for y in (35, 45):
+        solid[4:26, y : y + 2, 5:6] = True
+    return solid
+
+
+def test_repeat_plates_carries_a_bookcase_s_shelves_on_where_their_edges_are_seen():
+    # the shelves at 35 and 45 are carried on at the spacing, as thick and as deep as the
+    # whole ones; at 55 the sides run on but no edge was seen: no shelf
+    solid = _bookcase()
+    up = lambda P: np.asarray(P)[:, 1]  # noqa: E731
+    never = lambda P: np.zeros(len(P), bool)  # noqa: E731
+    out = fuse.repeat_plates(solid, _unit_grid(solid.shape), _surface_of(solid), up, never)
+    assert out[2:28, 35:37, 5:15].all()
+    assert out[2:28, 45:47, 5:15].all()
+    assert not (out ^ solid)[:, :35].any()
+    assert not (out ^ solid)[:, 37:45].any()
+    assert not (out ^ solid)[:, 47:].any()
+
+
+def test_repeat_plates_carries_no_shelf_a_camera_saw_through_nor_a_stair_s_treads():
+    solid = _bookcase()
+    up = lambda P: np.asarray(P)[:, 1]  # noqa: E731
+    # a camera saw through where the shelf at 45 would be: only the one at 35 is carried on
+    seen = lambda P: np.abs(np.asarray(P)[:, 1] - 45.5) < 1.5  # noqa: E731
+    out = fuse.repeat_plates(solid, _unit_grid(solid.shape), _surface_of(solid), up, seen)
+    assert out[2:28, 35:37, 5:15].all()
+    assert not (out ^ solid)[:, 40:].any()
+    # a stair's treads, each 8 voxels on from the one below, overlap too little to repeat
+    stair = np.zeros((40, 40, 10), bool)
+    for k in range(4):
+        stair[8 * k : 8 * k + 10, 5 + 8 * k : 7 + 8 * k, :] = True
+    never = lambda P: np.zeros(len(P), bool)  # noqa: E731
+    out = fuse.repeat_plates(stair, _unit_grid(stair.shape), _surface_of(stair), up, never)
+    assert (out == stair).all()
+
+
 def test_a_cabinet_seen_from_above_its_front_has_no_holes_where_the_sensor_had_none():
     # Kenney's bedside cabinet in one frame from 30 degrees above, 20 degrees off its front:
     # its front and top, closed thinly behind the readings, had about 75 holes through them

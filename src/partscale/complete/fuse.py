@@ -164,6 +164,18 @@ LID_FACE = 0.06
 """Metres: a plate's outer face seen from its rim's top down to at most this far is its edge
 (:func:`_edge_faces`; a table's top is 18-60 mm thick). A face running on further is an
 apron's or a wall's, flush with the edge, and tells nothing of the plate's thickness."""
+REPEAT_AREA = 0.5
+"""A level slice holding at least this share of the largest slice's solid is a plate's
+(:func:`repeat_plates`: a shelf's, across a bookcase; its sides hold a tenth)."""
+REPEAT_MIN = 3
+REPEAT_SPACING = 0.1
+"""Plates repeat where at least ``REPEAT_MIN`` of them follow one another at spacings within
+this share (and 1.5 slices) of their median spacing, each overlapping the next in plan by
+``REPEAT_OVERLAP`` of the smaller (a stair's treads step sideways: they do not repeat)."""
+REPEAT_OVERLAP = 0.6
+REPEAT_EDGE = 0.15
+"""Share of a repeated plate's outline that observed points at its height, and none just above
+or below it, mark (its front edge, seen end on) for the plate to go on there."""
 LID_LEVEL = 0.99
 """|Cosine| between up and the nearest grid axis above which the grid's slices are level."""
 HOLE_NEAR = 2
@@ -345,7 +357,7 @@ def fuse(
     those no camera saw through (:func:`carve`), the channels between filled segments closed
     (:func:`close_between`), the holes the sensor left through thin parts closed
     (:func:`close_holes`), the plates that low rims enclose (:func:`close_lids`; with
-    ``fill_between`` only), the bodies under tops behind walls that reach down toward the floor
+    ``fill_between`` only) and the repeated ones carried on (:func:`repeat_plates`), the bodies under tops behind walls that reach down toward the floor
     (:func:`fill_bodies`; with ``fill_between`` and a floor), the bottom of what stands on the
     floor carried down to it (:func:`floor_base`), holes filled and specks dropped
     (:func:`drop_pieces`), the distances (:func:`distances`) and the colours and provenance
@@ -393,6 +405,7 @@ def fuse(
     solid = close_holes(solid, grid, sp, seen_through)
     if fill_between:
         solid = close_lids(solid, grid, height_world, seen_through)
+        solid = repeat_plates(solid, grid, sp, height_world, seen_through)
     if cand.free_all is not None and floor_cut is not None:
         solid = fill_bodies(solid, grid, sp, height_world, seen_through, cand.free_all)
     if floor_cut is not None:
@@ -998,6 +1011,133 @@ def close_lids(
     fill = np.zeros(m.shape, bool)
     fill.ravel()[flat[shut[lf] & (thin | ~seen)]] = True
     out[box] |= fill
+    return out
+
+
+def repeat_plates(
+    solid: np.ndarray,
+    grid: GridFrame,
+    sp: SurfacePoints,
+    height_world: Callable[[np.ndarray], np.ndarray],
+    sure_free: Callable[[np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """(X, Y, Z) bool: ``solid`` with its repeated level plates (a bookcase's shelves) carried on
+    at their spacing, within its height, where observed points mark the plate's outline at that
+    height and none just above or below it (its edge, seen end on), and no camera surely saw
+    through it (at most ``HOLE_SEEN`` of it in ``sure_free``).
+
+    A bookcase's upper shelves seen from standing height are seen end on: their faces too
+    obliquely for a reading, their front edges as a few points each. The lower ones, seen from
+    above, are whole, and they repeat (:func:`_repeated`): the plate is their common outline,
+    as thick as they are.
+    """
+    up = _grid_up(grid, height_world)
+    ax = int(np.argmax(np.abs(up)))
+    if not solid.any() or abs(up[ax]) < LID_LEVEL:
+        return solid
+    m = np.moveaxis(solid, ax, -1)
+    run = _repeated(m)
+    if run is None:
+        return solid
+    centres, thick, plan = run
+    obs = np.moveaxis(sp.occ_obs, ax, -1)
+    level = np.flatnonzero(m.any(axis=(0, 1)))
+    out = m.copy()
+    for c in _carried(centres, float(np.median(np.diff(centres))), level.min(), level.max()):
+        lo = round(c - (thick - 1) / 2)
+        hi = lo + thick
+        if lo < 0 or hi > m.shape[-1] or m[..., lo:hi][plan].mean() > 0.5:
+            continue  # beyond the grid, or the plate is there
+        if _edge_seen(obs, plan, lo, hi) and _seen_through(grid, plan, lo, hi, ax, sure_free):
+            out[..., lo:hi] |= plan[..., None]
+    return np.moveaxis(out, -1, ax)
+
+
+def _edge_seen(obs: np.ndarray, plan: np.ndarray, lo: int, hi: int) -> bool:
+    """Whether observed points ``obs`` (A, B, S) bool, level slices along the last axis, mark
+    at least ``REPEAT_EDGE`` of the outline of ``plan`` (A, B) bool in slices ``lo``..``hi``
+    (a slice either side allowed), with none in the two slices beyond either side: a plate's
+    edge, not a wall running past it (a bookcase's side panel).
+    """
+    outline = plan & ~ndimage.binary_erosion(plan)
+    near = ndimage.binary_dilation(outline)
+    band = obs[..., max(lo - 1, 0) : hi + 1].any(axis=-1)
+    beside = obs[..., max(lo - 3, 0) : max(lo - 1, 0)].any(axis=-1)
+    beside |= obs[..., hi + 1 : hi + 3].any(axis=-1)
+    return bool((near & band & ~beside).sum() >= REPEAT_EDGE * outline.sum())
+
+
+def _seen_through(
+    grid: GridFrame,
+    plan: np.ndarray,
+    lo: int,
+    hi: int,
+    ax: int,
+    sure_free: Callable[[np.ndarray], np.ndarray],
+) -> bool:
+    """Whether no camera surely saw through the plate ``plan`` (A, B) bool in level slices
+    ``lo``..``hi`` along ``ax`` of ``grid`` (at most ``HOLE_SEEN`` of it in ``sure_free``).
+    """
+    cols = np.argwhere(plan)
+    cells = np.concatenate([np.c_[cols, np.full(len(cols), k)] for k in range(lo, hi)])
+    ijk = np.insert(cells[:, :2], ax, cells[:, 2], axis=1)  # back to the grid's axes
+    flat = np.ravel_multi_index(tuple(ijk.T), grid.shape)
+    return bool(sure_free(grid.to_world(grid.centres(flat))).mean() <= HOLE_SEEN)
+
+
+def _repeated(m: np.ndarray) -> tuple[np.ndarray, int, np.ndarray] | None:
+    """The longest run of plates in ``m`` (A, B, S) bool, level slices along its last axis,
+    that repeat: their centres (K,) float64 (slices), their thickness (slices) and their common
+    plan (A, B) bool (where at least half of them hold solid); None where no ``REPEAT_MIN``
+    plates repeat.
+    """
+    area = m.sum(axis=(0, 1))
+    if area.max() == 0:
+        return None
+    big = area >= REPEAT_AREA * area.max()
+    lab, n = ndimage.label(big)
+    if n < REPEAT_MIN:
+        return None
+    spans = ndimage.find_objects(lab)
+    centres = np.array([(s[0].start + s[0].stop - 1) / 2 for s in spans])
+    thick = np.array([s[0].stop - s[0].start for s in spans])
+    plans = [m[..., s[0]].any(axis=-1) for s in spans]
+    best: list[int] = []
+    for i in range(n):
+        seq = [i]
+        for j in range(i + 1, n):
+            gap = centres[j] - centres[seq[-1]]
+            first = centres[seq[1]] - centres[seq[0]] if len(seq) > 1 else gap
+            a, b = plans[seq[-1]], plans[j]
+            over = (a & b).sum() / max(min(a.sum(), b.sum()), 1)
+            if abs(gap - first) <= max(1.5, REPEAT_SPACING * first) and over >= REPEAT_OVERLAP:
+                seq.append(j)
+            else:
+                break
+        if len(seq) > len(best):
+            best = seq
+    if len(best) < REPEAT_MIN:
+        return None
+    plan = np.mean([plans[k] for k in best], axis=0) >= 0.5
+    return centres[best], int(np.median(thick[best])), plan
+
+
+def _carried(centres: np.ndarray, spacing: float, lowest: int, highest: int) -> list[float]:
+    """Slices (centres) a run of plates at ``centres`` (K,), ``spacing`` apart, goes on at, both
+    ways, within ``lowest`` and ``highest`` (the solid's slices).
+
+    >>> _carried(np.array([2.0, 12.0, 22.0]), 10.0, 0, 45)
+    [32.0, 42.0]
+    """
+    out: list[float] = []
+    c = float(centres[-1]) + spacing
+    while c <= highest:
+        out.append(c)
+        c += spacing
+    c = float(centres[0]) - spacing
+    while c >= lowest:
+        out.append(c)
+        c -= spacing
     return out
 
 

@@ -381,11 +381,10 @@ def _plates_at_centre(obj) -> np.ndarray:
     return np.diff(y)[::2]
 
 
-def test_a_table_s_top_seen_from_its_own_height_is_as_thick_as_a_top():
-    # Sweet Home's table (its 30 mm top flush with its apron) from three level views: nothing
-    # seen measures its top's thickness. Closed two slices thick (at --res 128) it was 16 mm
-    # between its surfaces, its underside, 29 % of its surface, 2 cm over the true one; a
-    # top's thickness (fuse.LID_TOP, 30 mm) makes it 27 mm
+def _truth_and_completion(rel: str, azimuths: tuple, elevation: float, scale: float = 1.0):
+    """The test object ``rel`` (its vertices times ``scale``: metres) voxelised at --res 128,
+    and its completion at 128 from virtual views at ``azimuths`` and ``elevation`` (degrees)."""
+    import dataclasses
     import warnings
 
     from conftest import data_path
@@ -394,12 +393,22 @@ def test_a_table_s_top_seen_from_its_own_height_is_as_thick_as_a_top():
     from partscale.complete import complete
     from partscale.evaluate.virtual import virtual_scan
 
-    mesh = ingest.load_mesh(data_path("sweethome3d/table.obj"))
-    frames = virtual_scan(mesh, azimuths=(87.0, 207.0, 327.0), elevation=0.0)
+    mesh = ingest.load_mesh(data_path(rel))
+    mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * scale)
+    frames = virtual_scan(mesh, azimuths=azimuths, elevation=elevation)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         c = complete(frames, res=128, upright=True)
-    (truth,) = _plates_at_centre(ingest.from_mesh(mesh, res=128))
+    return ingest.from_mesh(mesh, res=128), c
+
+
+def test_a_table_s_top_seen_from_its_own_height_is_as_thick_as_a_top():
+    # Sweet Home's table (its 30 mm top flush with its apron) from three level views: nothing
+    # seen measures its top's thickness. Closed two slices thick (at --res 128) it was 16 mm
+    # between its surfaces, its underside, 29 % of its surface, 2 cm over the true one; a
+    # top's thickness (fuse.LID_TOP, 30 mm) makes it 27 mm
+    t, c = _truth_and_completion("sweethome3d/table.obj", (87.0, 207.0, 327.0), 0.0)
+    (truth,) = _plates_at_centre(t)
     assert truth == pytest.approx(0.030, abs=0.002)
     (made,) = _plates_at_centre(c)
     assert made >= 0.8 * truth
@@ -413,22 +422,10 @@ def test_a_table_s_top_is_as_thick_as_its_edge_s_face_seen_from_above():
     # the space under it seen free. Closed as a top (fuse.LID_TOP, 3 slices at --res 128), it
     # was 21 mm between its surfaces, its underside (half its surface) 3 cm over the true one;
     # as tall as its edge's face (fuse._edge_faces), 0.8 of it at least
-    import dataclasses
-    import warnings
-
-    from conftest import data_path
-
-    from partscale import ingest
-    from partscale.complete import complete
-    from partscale.evaluate.virtual import virtual_scan
-
-    mesh = ingest.load_mesh(data_path("sweethome3d/squareTable.obj"))
-    mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * 0.74 / 1.30)
-    frames = virtual_scan(mesh, azimuths=(336.0, 96.0, 216.0), elevation=15.0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        c = complete(frames, res=128, upright=True)
-    (truth,) = _plates_at_centre(ingest.from_mesh(mesh, res=128))
+    t, c = _truth_and_completion(
+        "sweethome3d/squareTable.obj", (336.0, 96.0, 216.0), 15.0, scale=0.74 / 1.30
+    )
+    (truth,) = _plates_at_centre(t)
     assert truth == pytest.approx(0.057, abs=0.003)
     (made,) = _plates_at_centre(c)
     assert made >= 0.8 * truth
@@ -451,20 +448,8 @@ def test_a_bookcase_s_shelves_seen_end_on_repeat_those_seen_from_above():
     # shelves are seen end on (their faces too obliquely for a reading, 60-75 points of their
     # front edges each). They were missing (F@1% 0.830, below the raw scan's 0.860); carried
     # on from the five below them (fuse.repeat_plates), each lies within 3 cm of the true one
-    import warnings
-
-    from conftest import data_path
-
-    from partscale import ingest
-    from partscale.complete import complete
-    from partscale.evaluate.virtual import virtual_scan
-
-    mesh = ingest.load_mesh(data_path("sweethome3d/bookcase.obj"))
-    frames = virtual_scan(mesh, azimuths=(40.0, 160.0, 280.0), elevation=15.0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        c = complete(frames, res=128, upright=True)
-    truth = _plate_heights(ingest.from_mesh(mesh, res=128))
+    t, c = _truth_and_completion("sweethome3d/bookcase.obj", (40.0, 160.0, 280.0), 15.0)
+    truth = _plate_heights(t)
     assert len(truth) == 8
     made = _plate_heights(c)
     for y in truth[-3:]:  # the three highest
@@ -476,22 +461,13 @@ def test_a_shelf_seen_at_its_edge_is_as_thick_as_its_edge():
     # from three level views: each shelf's edge is seen all round and nothing of its faces.
     # Closed two slices (7 mm at --res 128) thick under the edge's most common top, its lower
     # shelf was 5 mm between its surfaces; as tall as its edge (fuse._rim_tops), 16 mm
-    import dataclasses
-    import warnings
-
-    from conftest import data_path
-
-    from partscale import ingest
-    from partscale.complete import complete
-    from partscale.evaluate.virtual import virtual_scan
-
-    mesh = ingest.load_mesh(data_path("sweethome3d/bedsideTable.obj"))
-    mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * 0.5 / 5.02)  # dm
-    frames = virtual_scan(mesh, azimuths=(3.0, 123.0, 243.0), elevation=0.0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        c = complete(frames, res=128, upright=True)
-    truth = _plates_at_centre(ingest.from_mesh(mesh, res=128))
+    t, c = _truth_and_completion(
+        "sweethome3d/bedsideTable.obj",
+        (3.0, 123.0, 243.0),
+        0.0,
+        scale=0.5 / 5.02,  # dm
+    )
+    truth = _plates_at_centre(t)
     assert truth == pytest.approx([0.018] * 3, abs=0.001)  # the shelves and the top
     made = _plates_at_centre(c)
     assert len(made) == 3

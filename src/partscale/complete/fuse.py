@@ -357,8 +357,9 @@ def fuse(
     those no camera saw through (:func:`carve`), the channels between filled segments closed
     (:func:`close_between`), the holes the sensor left through thin parts closed
     (:func:`close_holes`), the plates that low rims enclose (:func:`close_lids`; with
-    ``fill_between`` only) and the repeated ones carried on (:func:`repeat_plates`), the bodies under tops behind walls that reach down toward the floor
-    (:func:`fill_bodies`; with ``fill_between`` and a floor), the bottom of what stands on the
+    ``fill_between`` only) and the repeated ones carried on (:func:`repeat_plates`), the
+    bodies under tops behind walls that reach down toward the floor (:func:`fill_bodies`;
+    with ``fill_between`` and a floor), the bottom of what stands on the
     floor carried down to it (:func:`floor_base`), holes filled and specks dropped
     (:func:`drop_pieces`), the distances (:func:`distances`) and the colours and provenance
     near the surface (:func:`surface_attributes`).

@@ -527,6 +527,19 @@ def _grid_up(grid: GridFrame, height_world: Callable[[np.ndarray], np.ndarray]) 
     return up / np.linalg.norm(up)
 
 
+def _level_axis(
+    grid: GridFrame, height_world: Callable[[np.ndarray], np.ndarray]
+) -> tuple[int, bool] | None:
+    """The axis of ``grid`` nearest up and whether up runs towards its lower indices; None
+    where the grid's slices across it are not level (its cosine with up under ``LID_LEVEL``).
+    """
+    up = _grid_up(grid, height_world)
+    ax = int(np.argmax(np.abs(up)))
+    if abs(up[ax]) < LID_LEVEL:
+        return None
+    return ax, bool(up[ax] < 0)
+
+
 def _down_to_floor(
     grid: GridFrame,
     start: np.ndarray,
@@ -968,10 +981,10 @@ def close_lids(
     closed thinly, it was a ring. A rim no taller than a plate's edge that encloses what no
     camera saw is the edge of a plate; a bin's wall, as tall as the bin, is not.
     """
-    up = _grid_up(grid, height_world)
-    ax = int(np.argmax(np.abs(up)))
-    if not solid.any() or abs(up[ax]) < LID_LEVEL:
+    level = _level_axis(grid, height_world)
+    if not solid.any() or level is None:
         return solid
+    ax, _ = level
     box = _box(solid, LID_REACH + 1)
     m = solid[box]
     wide = ndimage.maximum_filter1d(m.view(np.uint8), 2 * LID_REACH + 1, axis=ax).astype(bool)
@@ -1032,35 +1045,35 @@ def repeat_plates(
     above, are whole, and they repeat (:func:`_repeated`): the plate is their common outline,
     as thick as they are.
     """
-    up = _grid_up(grid, height_world)
-    ax = int(np.argmax(np.abs(up)))
-    if not solid.any() or abs(up[ax]) < LID_LEVEL:
+    level = _level_axis(grid, height_world)
+    if not solid.any() or level is None:
         return solid
+    ax, _ = level
     m = np.moveaxis(solid, ax, -1)
     run = _repeated(m)
     if run is None:
         return solid
     centres, thick, plan = run
     obs = np.moveaxis(sp.occ_obs, ax, -1)
-    level = np.flatnonzero(m.any(axis=(0, 1)))
+    slices = np.flatnonzero(m.any(axis=(0, 1)))
+    outline = plan & ~ndimage.binary_erosion(plan)
     out = m.copy()
-    for c in _carried(centres, float(np.median(np.diff(centres))), level.min(), level.max()):
+    for c in _carried(centres, float(np.median(np.diff(centres))), slices.min(), slices.max()):
         lo = round(c - (thick - 1) / 2)
         hi = lo + thick
         if lo < 0 or hi > m.shape[-1] or m[..., lo:hi][plan].mean() > 0.5:
             continue  # beyond the grid, or the plate is there
-        if _edge_seen(obs, plan, lo, hi) and _seen_through(grid, plan, lo, hi, ax, sure_free):
+        if _edge_seen(obs, outline, lo, hi) and _seen_through(grid, plan, lo, hi, ax, sure_free):
             out[..., lo:hi] |= plan[..., None]
     return np.moveaxis(out, -1, ax)
 
 
-def _edge_seen(obs: np.ndarray, plan: np.ndarray, lo: int, hi: int) -> bool:
+def _edge_seen(obs: np.ndarray, outline: np.ndarray, lo: int, hi: int) -> bool:
     """Whether observed points ``obs`` (A, B, S) bool, level slices along the last axis, mark
-    at least ``REPEAT_EDGE`` of the outline of ``plan`` (A, B) bool in slices ``lo``..``hi``
-    (a slice either side allowed), with none in the two slices beyond either side: a plate's
-    edge, not a wall running past it (a bookcase's side panel).
+    at least ``REPEAT_EDGE`` of a plate's ``outline`` (A, B) bool in slices ``lo``..``hi`` (a
+    voxel and a slice either side allowed), with none in the two slices beyond either side: a
+    plate's edge, not a wall running past it (a bookcase's side panel).
     """
-    outline = plan & ~ndimage.binary_erosion(plan)
     near = ndimage.binary_dilation(outline)
     band = obs[..., max(lo - 1, 0) : hi + 1].any(axis=-1)
     beside = obs[..., max(lo - 3, 0) : max(lo - 1, 0)].any(axis=-1)
@@ -1157,10 +1170,10 @@ def fill_bodies(
     grid only, and only where the floor was found (without it, a ray under a desk reads nothing
     and its knee space is unseen).
     """
-    up = _grid_up(grid, height_world)
-    ax = int(np.argmax(np.abs(up)))
-    if not solid.any() or abs(up[ax]) < LID_LEVEL:
+    level = _level_axis(grid, height_world)
+    if not solid.any() or level is None:
         return solid
+    ax, downward = level
     slices = np.repeat(grid.origin[None, :].astype(np.float32), grid.shape[ax], axis=0)
     slices[:, ax] += np.arange(grid.shape[ax], dtype=np.float32) * np.float32(grid.h)
     heights = height_world(grid.to_world(slices)).astype(np.float64)
@@ -1170,7 +1183,7 @@ def fill_bodies(
     seen = np.flatnonzero(free.ravel())
     unseen.ravel()[seen] = ~sure_free(grid.to_world(grid.centres(seen)))
     return body_mod.close_bodies(
-        solid, sp.idx, sp.normals, ax, bool(up[ax] < 0), heights, grid.h, unseen, free
+        solid, sp.idx, sp.normals, ax, downward, heights, grid.h, unseen, free
     )
 
 

@@ -83,3 +83,66 @@ def test_a_square_box_keeps_its_diagonal_mirror(tmp_path):
     normals = _plane_normals(sy)
     diagonal = np.abs(np.abs(normals[:, 0]) - np.abs(normals[:, 2])) <= np.sin(np.radians(10.0))
     assert diagonal.any(), normals
+
+
+def _table_seen_from_its_end() -> tuple[np.ndarray, object]:
+    """A table's scan (M, 3) upright points, seen from its -x end: its top (1 m, 2 m long)
+    whole and the two legs of the near end; and its mirror plane across its length (x = 0),
+    accepted where the top holds it (the top's slab of heights)."""
+    from partscale.complete import symmetry
+
+    g = np.linspace(-1.0, 1.0, 81)
+    top = np.array([[x, 1.0, z] for x in g for z in g[20:61]])
+    legs = np.array([[-0.9, y, z] for y in np.linspace(0.0, 0.95, 40) for z in (-0.4, 0.4)])
+    P = np.concatenate([top, legs])
+    A, b = symmetry._mirror(0.0, 0.0)
+    top_band = symmetry._bands(np.arange(symmetry.SLABS) == symmetry.SLABS - 1, 1.0)
+    return P, symmetry.Symmetry("mirror", A, b, 0.98, 0.0, bands=top_band)
+
+
+@pytest.mark.parametrize("seen_under", [False, True])
+def test_a_firm_plane_goes_on_where_its_copies_land_unseen(seen_under):
+    from partscale.complete import symmetry
+
+    P, sym = _table_seen_from_its_end()
+    # the far end's legs would stand under the top; seen_under: a camera saw through there
+    free = (lambda Q: (Q[:, 0] > 0.5) & (Q[:, 1] < 0.9)) if seen_under else (lambda Q: Q[:, 0] > 9)
+    out = symmetry._held_where_unseen(sym, P, symmetry._Scorer(P, free, 0.025), 1.0)
+    legs = np.array([[0.9, 0.3, 0.4]])
+    if seen_under:
+        assert out.bands == sym.bands and not out.where(legs).any()
+    else:
+        # the legs' heights take the copy, recorded as the unseen ones
+        assert out.where(legs).all()
+        assert len(out.params["unseen_bands"]) == symmetry.SLABS - 1
+
+
+def test_a_table_seen_from_one_end_45_degrees_above_has_its_far_legs():
+    # Kenney's coffee table (0.93 m long, four legs) from its end, 45 degrees above: the top is
+    # seen whole, the far legs stand under it, unseen. The plane across its length, held by the
+    # top, was applied to the top only: the far legs were missing, 15 voxels from the solid.
+    # Applied where its copies land unseen (symmetry.UNSEEN_SUPPORT), every leg is there
+    import warnings
+
+    from scipy import ndimage
+
+    from partscale.complete import complete
+    from partscale.surface import sample_linear
+
+    mesh = ingest.load_mesh(data_path("kenney/tableCoffee.glb"))
+    mesh = dataclasses.replace(mesh, vertices=np.asarray(mesh.vertices) * KENNEY_M)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c = complete(virtual_scan(mesh, azimuths=(270.0,), elevation=45.0), res=128)
+    truth = ingest.from_mesh(mesh, res=128)
+    # the truth's legs halfway up, their middles in the world
+    sb = truth.surface_bounds()
+    j = round(float((sb[0][1] + sb[1][1]) / 2 - truth.origin[1]) / truth.voxel_size)
+    lab, n = ndimage.label(truth.sdf[:, j, :] < 0)
+    assert n == 4
+    ik = np.array(ndimage.center_of_mass(lab > 0, lab, range(1, n + 1)))
+    ijk = np.stack([ik[:, 0], np.full(n, j), ik[:, 1]], axis=1)
+    legs = truth.origin + ijk * truth.voxel_size
+    T = np.linalg.inv(np.asarray(c.meta["completion"]["to_input_frame"]))
+    at = (legs @ T[:3, :3].T + T[:3, 3] - c.origin) / c.voxel_size
+    assert (sample_linear(c.sdf, at) <= 0.0).all()

@@ -1516,16 +1516,20 @@ def above_floor(solid: np.ndarray, grid: fuse_mod.GridFrame, floor) -> float | N
 
 
 def _symmetries_meta(sy: Symmetries) -> list[dict]:
-    """The mirror planes (support, violation, the heights where each holds) and the rotation."""
+    """The mirror planes (support, violation, the heights where each is applied, and of those
+    the heights where its copies land only where no camera looked) and the rotation.
+    """
+
+    def heights(bands) -> list[list[float]]:
+        return [[max(a, -1e9), min(b, 1e9)] for a, b in bands]
+
     out: list[dict] = [
         {
             "kind": "mirror",
             "support": round(s.support, 3),
             "violation": round(s.violation, 3),
-            "heights": [
-                [a, b] if np.isfinite([a, b]).all() else [max(a, -1e9), min(b, 1e9)]
-                for a, b in s.bands
-            ],
+            "heights": heights(s.bands),
+            "heights_unseen": heights(s.params.get("unseen_bands", ())),
         }
         for s in sy.syms
     ]

@@ -6,7 +6,10 @@ Everything here works in the *upright* frame: y up, the floor at y = 0.
   similar colour each vote for the plane that swaps them (angle, offset); the strongest peaks are
   refined and scored by mirroring the whole scan: ``support`` is the fraction of mirrored points
   that land on the scan, ``violation`` the fraction that land where a camera saw through (free
-  space). A plane is accepted when ``violation <= MAX_VIOLATION`` and ``support >= MIN_SUPPORT``.
+  space). A plane is accepted when ``violation <= MAX_VIOLATION`` and ``support >= MIN_SUPPORT``,
+  and applied at the heights where it holds; a plane held firmly there (``UNSEEN_SUPPORT``) is
+  applied too at heights whose copies land only where no camera looked
+  (:func:`_held_where_unseen`).
 - Rotations: 4- and 5-fold about a vertical axis, for the lowest part of the object (the bases of
   swivel chairs and tables), the axis found by a coarse-to-fine search, accepted piece by piece
   (:func:`rotation_axis`) and applied only in the region of the pieces it holds for.
@@ -19,7 +22,7 @@ Everything here works in the *upright* frame: y up, the floor at y = 0.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numba
 import numpy as np
@@ -38,6 +41,12 @@ WALL_SPREAD_DEG = 5.0
 WALL_DIAGONAL_DEG = 15.0
 WALL_SQUARE_CELLS = 2.0
 MAX_VIOLATION = 0.06
+UNSEEN_SUPPORT = 0.9
+"""Support of a mirror plane, over the heights where its copies land on the scan, from which it
+is applied too at the heights where they land only where no camera looked (none where a camera
+saw through): a table seen from one end, 45 degrees above, shows its top whole and the legs of
+the near end; the far legs stand under the top, unseen, and the plane across its length, held
+by the top, copies the near legs there."""
 VIOLATION_WEIGHT = 4.0
 SAMPLES = 1500
 PAIRS = 60000
@@ -277,7 +286,7 @@ def mirror_planes(
                     bands=_bands(ok[0], top),
                     params={**best.params, "cover": float(covered[0])},
                 )
-        found.append(best)
+        found.append(_held_where_unseen(best, pts, scorer, top))
         # the next plane votes with the mirrored copy too (a table: left-right, then front-back)
         pts = np.concatenate([pts, best.apply(pts)])
         cols = np.concatenate([cols, cols])
@@ -285,6 +294,27 @@ def mirror_planes(
             keep = rng.choice(len(pts), 2 * SAMPLES, replace=False)
             pts, cols = pts[keep], cols[keep]
     return found
+
+
+def _held_where_unseen(sym: Symmetry, pts: np.ndarray, scorer: _Scorer, top: float) -> Symmetry:
+    """``sym`` applied too at the heights where no copy of ``pts`` (M, 3) lands where a camera
+    saw through, where it holds with ``UNSEEN_SUPPORT`` or more (over the heights it was
+    accepted at, whose copies land on the scan): a band of heights whose copies land only
+    where no camera looked says nothing against it, and says nothing for it. ``params`` records
+    the heights it is applied at for that reason (``unseen_bands``).
+    """
+    if sym.support < UNSEEN_SUPPORT:
+        return sym
+    _, vio = scorer(sym.apply(pts)[None])
+    slab = _slab_ids(pts[:, 1], top)
+    n = np.bincount(slab, minlength=SLABS)
+    nv = np.bincount(slab, weights=vio[0].astype(np.float64), minlength=SLABS)
+    ok = (n > 0) & (nv <= MAX_VIOLATION * n)
+    bands = _bands(ok, top)
+    added = [b for b in bands if b not in sym.bands]
+    if not added:
+        return sym
+    return replace(sym, bands=bands, params={**sym.params, "unseen_bands": added})
 
 
 def walls_direction(normals: np.ndarray) -> float | None:

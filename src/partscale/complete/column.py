@@ -241,12 +241,24 @@ def _crossing(mirrors) -> tuple[float, float] | None:
 def _empty_stretch(y: np.ndarray, h: float) -> tuple[float, float] | None:
     """(bottom, top): the heights of the surface below and above the tallest stretch of voxel
     heights holding at most ``EMPTY_SHARE`` of heights ``y`` (N,) each, at least
-    ``MIN_GAP_VOXELS`` of them; None where there is none.
+    ``MIN_GAP_VOXELS`` of them, with surface below and above it; None where there is none.
+
+    >>> import numpy as np
+    >>> y = np.concatenate([np.zeros(50), np.full(50, 0.5)])
+    >>> _empty_stretch(y, 0.1)
+    (0.0, 0.5)
+    >>> # two flying pixels high above the top: a stretch with no surface above it is no gap
+    >>> print(_empty_stretch(np.concatenate([np.linspace(0.0, 0.3, 2000), [0.62, 0.77]]), 0.05))
+    None
     """
     if len(y) < 2:
         return None
     edges = np.arange(float(y.min()), float(y.max()) + h, h)
-    starts, ends = _empty_runs(np.histogram(y, bins=edges)[0], len(y))
+    counts = np.histogram(y, bins=edges)[0]
+    starts, ends = _empty_runs(counts, len(y))
+    # between surface: a run from the lowest bin or to the highest holds the extremes' few points
+    inside = (starts > 0) & (ends < len(counts))
+    starts, ends = starts[inside], ends[inside]
     if not len(starts):
         return None
     k = int(np.argmax(ends - starts))

@@ -196,3 +196,25 @@ def test_a_plane_moves_to_the_middle_of_the_free_space_s_plateau(seen, flat, mov
 
     d = symmetry._centred_in_free(0.0, 0.012, X, fit, free, cell)
     assert abs(d) <= 0.25 * cell if moves else d == 0.012
+
+
+def test_a_firm_plane_goes_on_only_under_where_it_holds():
+    # a chair's legs and seat hold the plane across them front to back; its back rises above
+    # the seat at the rear only, and its copies would land unseen over the seat's front edge:
+    # the plane goes on under the heights it holds at, not above them
+    from partscale.complete import symmetry
+
+    g = np.linspace(-0.4, 0.4, 33)
+    legs = np.array(
+        [[x, y, z] for y in np.linspace(0.0, 0.45, 20) for x in (-0.4, 0.4) for z in (-0.4, 0.4)]
+    )
+    seat = np.array([[x, 0.45, z] for x in g for z in g])
+    back = np.array([[x, y, -0.4] for x in g for y in np.linspace(0.5, 1.0, 20)])
+    P = np.concatenate([legs, seat, back])
+    A, b = symmetry._mirror(np.pi / 2, 0.0)  # the plane z = 0
+    held = symmetry._bands(np.arange(symmetry.SLABS) < 4, 1.0)  # up to the seat
+    sym = symmetry.Symmetry("mirror", A, b, 0.98, 0.0, bands=held)
+    out = symmetry._held_where_unseen(
+        sym, P, symmetry._Scorer(P, lambda Q: Q[:, 0] > 9, 0.025), 1.0
+    )
+    assert not out.where(np.array([[0.0, 0.8, 0.4]])).any()

@@ -309,18 +309,25 @@ def mirror_planes(
 
 def _held_where_unseen(sym: Symmetry, pts: np.ndarray, scorer: _Scorer, top: float) -> Symmetry:
     """``sym`` applied too at the heights where no copy of ``pts`` (M, 3) lands where a camera
-    saw through, where it holds with ``UNSEEN_SUPPORT`` or more (over the heights it was
-    accepted at, whose copies land on the scan): a band of heights whose copies land only
-    where no camera looked says nothing against it, and says nothing for it. ``params`` records
-    the heights it is applied at for that reason (``unseen_bands``).
+    saw through, below the highest it was accepted at, where it holds with ``UNSEEN_SUPPORT``
+    or more (over the heights it was accepted at, whose copies land on the scan): a band of
+    heights whose copies land only where no camera looked says nothing against it, and says
+    nothing for it. ``params`` records the heights it is applied at for that reason
+    (``unseen_bands``).
     """
     if sym.support < UNSEEN_SUPPORT:
         return sym
-    _, vio = scorer(sym.apply(pts)[None])
+    sup, vio = scorer(sym.apply(pts)[None])
     slab = _slab_ids(pts[:, 1], top)
     n = np.bincount(slab, minlength=SLABS)
     nv = np.bincount(slab, weights=vio[0].astype(np.float64), minlength=SLABS)
+    ns = np.bincount(slab, weights=sup[0].astype(np.float64), minlength=SLABS)
     ok = (n > 0) & (nv <= MAX_VIOLATION * n)
+    # only under the highest height where the copies land on the scan: what a top hides under
+    # it, not what rises above it (a chair's back, copied across the plane its legs and seat
+    # hold front to back, stood over the seat's front edge)
+    held = np.flatnonzero(ok & (ns >= MIN_SUPPORT * n))
+    ok &= np.arange(SLABS) <= (held.max() if len(held) else -1)
     bands = _bands(ok, top)
     added = [b for b in bands if b not in sym.bands]
     if not added:

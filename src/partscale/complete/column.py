@@ -253,7 +253,10 @@ def _empty_stretch(y: np.ndarray, h: float) -> tuple[float, float] | None:
     """
     if len(y) < 2:
         return None
-    edges = np.arange(float(y.min()), float(y.max()) + h, h)
+    # bins of h from the lowest height, the highest inside the last (an arange to the highest
+    # plus h may end a rounding short of it and leave it out)
+    lo_y = float(y.min())
+    edges = lo_y + h * np.arange(int(np.floor((float(y.max()) - lo_y) / h)) + 2)
     counts = np.histogram(y, bins=edges)[0]
     starts, ends = _empty_runs(counts, len(y))
     # between surface: a run from the lowest bin or to the highest holds the extremes' few points
